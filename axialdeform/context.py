@@ -1,0 +1,91 @@
+"""An offscreen OpenGL 3.3 core context (EGL) and an offscreen render target."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import ContextError
+
+__all__ = ["create_context", "Offscreen", "GL_REQUIRE"]
+
+GL_REQUIRE = 330
+
+_HELP = (
+    "install an EGL driver: on Debian/Ubuntu 'apt-get install libegl1 libgl1-mesa-dri' "
+    "(Mesa's llvmpipe runs without a GPU); on other systems the vendor's OpenGL/EGL driver"
+)
+
+
+def create_context(backend: str = "egl"):
+    """A standalone (windowless) moderngl context, OpenGL 3.3 core or newer.
+
+    Raises :class:`ContextError` saying which system packages provide one.
+    """
+    try:
+        import moderngl
+    except ImportError as exc:  # pragma: no cover - moderngl is a dependency
+        raise ContextError(f"moderngl is not installed ({exc}); pip install moderngl") from None
+    try:
+        ctx = moderngl.create_standalone_context(backend=backend, require=GL_REQUIRE)
+    except Exception as exc:
+        raise ContextError(f"no OpenGL {GL_REQUIRE // 100}.{GL_REQUIRE % 100 // 10} context via {backend.upper()} ({exc}); {_HELP}") from None
+    if ctx.version_code < GL_REQUIRE:
+        version = ctx.version_code
+        ctx.release()
+        raise ContextError(f"the {backend.upper()} context is OpenGL {version}, expected {GL_REQUIRE} or newer; {_HELP}")
+    return ctx
+
+
+class Offscreen:
+    """A multisampled colour + depth framebuffer of ``size = (width, height)``
+    pixels, resolved into a plain one for reading back.
+
+    ``use()`` binds it and sets the viewport; ``read()`` returns
+    ``(height, width, 3) uint8`` with the first row at the top.
+    """
+
+    def __init__(self, ctx, size: tuple[int, int], samples: int = 4):
+        width, height = (int(size[0]), int(size[1]))
+        if width <= 0 or height <= 0 or width > 16384 or height > 16384:
+            raise ContextError(f"image size: expected 1..16384 pixels each way, found {width}x{height}")
+        self.ctx = ctx
+        self.size = (width, height)
+        samples = min(samples, ctx.max_samples) if samples > 1 else 0
+        self._color = ctx.renderbuffer(self.size, 4, samples=samples)
+        self._depth = ctx.depth_renderbuffer(self.size, samples=samples)
+        self.fbo = ctx.framebuffer(self._color, self._depth)
+        if samples:
+            self._resolved_color = ctx.renderbuffer(self.size, 4)
+            self._resolved = ctx.framebuffer(self._resolved_color)
+        else:
+            self._resolved_color = None
+            self._resolved = self.fbo
+        self._released = False
+
+    def use(self, background=(0.93, 0.94, 0.96)) -> None:
+        self.fbo.use()
+        self.ctx.viewport = (0, 0) + self.size
+        self.fbo.clear(*background, 1.0, depth=1.0)
+
+    def read(self) -> np.ndarray:
+        if self._resolved is not self.fbo:
+            self.ctx.copy_framebuffer(self._resolved, self.fbo)
+        data = self._resolved.read(components=3, alignment=1)
+        img = np.frombuffer(data, dtype=np.uint8).reshape(self.size[1], self.size[0], 3)
+        return img[::-1].copy()
+
+    def release(self) -> None:
+        if self._released:
+            return
+        self._released = True
+        for obj in (self.fbo, self._color, self._depth):
+            obj.release()
+        if self._resolved_color is not None:
+            self._resolved.release()
+            self._resolved_color.release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.release()

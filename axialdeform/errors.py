@@ -1,0 +1,46 @@
+"""One error family: every failure the library raises on purpose is an
+:class:`AxialDeformError`, and its message says what was expected and what
+was found (and, for files, which file and which field)."""
+
+from __future__ import annotations
+
+__all__ = [
+    "AxialDeformError",
+    "MeshError",
+    "ParamError",
+    "ParamFileError",
+    "MeshMismatchError",
+    "ShaderError",
+    "ContextError",
+]
+
+
+class AxialDeformError(Exception):
+    """Base class of every error raised by axialdeform."""
+
+
+class MeshError(AxialDeformError, ValueError):
+    """A base mesh that cannot be used (unreadable, empty, several meshes,
+    non-finite coordinates, zero extent)."""
+
+
+class ParamError(AxialDeformError, ValueError):
+    """Parameter values of the wrong shape or with non-finite numbers."""
+
+
+class ParamFileError(ParamError):
+    """A parameter file that cannot be read: bad magic, version, length,
+    checksum, column count or number."""
+
+
+class MeshMismatchError(ParamFileError):
+    """A binary parameter file that was made for a different base mesh."""
+
+
+class ShaderError(AxialDeformError, RuntimeError):
+    """A GLSL source that cannot be assembled or compiled; the message names
+    the file, the stage and the line."""
+
+
+class ContextError(AxialDeformError, RuntimeError):
+    """No OpenGL 3.3 core context could be created."""

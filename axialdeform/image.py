@@ -1,0 +1,70 @@
+"""Step 6 of the data flow: pictures.  Render every instance offscreen with a
+camera that frames them all, and save PNGs atomically (Pillow)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from .atomic import atomic_path
+from .camera import UP_VECTORS, Camera, frame_instances
+from .context import Offscreen, create_context
+from .errors import AxialDeformError
+from .renderer import MODES, AxialRenderer
+
+__all__ = ["render_image", "save_png", "parse_size"]
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"800x600"`` -> ``(800, 600)``."""
+    try:
+        w, h = (int(x) for x in str(text).lower().split("x"))
+    except ValueError:
+        raise AxialDeformError(f"size: expected WIDTHxHEIGHT such as 800x600, found {text!r}") from None
+    if not (0 < w <= 16384 and 0 < h <= 16384):
+        raise AxialDeformError(f"size: expected 1..16384 pixels each way, found {text!r}")
+    return w, h
+
+
+def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, camera: Camera | None = None,
+                 up: str = "y", samples: int = 4, background=(0.93, 0.94, 0.96), renderer=None) -> np.ndarray:
+    """Render all instances to an ``(height, width, 3) uint8`` image.
+
+    ``modes`` is one mode or a sequence of modes drawn side by side with the
+    same parameters and camera (e.g. ``("solid", "wireframe")``).
+    A context is created (EGL) if ``ctx`` is None and released afterwards.
+    """
+    modes = (modes,) if isinstance(modes, str) else tuple(modes)
+    for m in modes:
+        if m not in MODES:
+            raise AxialDeformError(f"mode: expected one of {', '.join(MODES)}, found {m!r}")
+    own_ctx = ctx is None
+    ctx = create_context() if own_ctx else ctx
+    try:
+        w, h = size
+        cam = camera or frame_instances(mesh, params, w / h, up=up)
+        view, proj = cam.view(), cam.projection(w / h)
+        r = renderer or AxialRenderer(ctx, mesh, params)
+        try:
+            with Offscreen(ctx, (w, h), samples=samples) as target:
+                panels = []
+                for m in modes:
+                    target.use(background)
+                    r.render(view, proj, m, up=UP_VECTORS[up])
+                    panels.append(target.read())
+        finally:
+            if renderer is None:
+                r.release()
+        return np.concatenate(panels, axis=1)
+    finally:
+        if own_ctx:
+            ctx.release()
+
+
+def save_png(path: str | os.PathLike, image: np.ndarray) -> None:
+    """Write an ``(h, w, 3|4) uint8`` array as PNG, atomically."""
+    from PIL import Image
+
+    with atomic_path(path, suffix=".png") as tmp:
+        Image.fromarray(np.ascontiguousarray(image)).save(tmp, format="PNG")

@@ -1,0 +1,226 @@
+"""Step 1 of the data flow: the base mesh.
+
+A :class:`BaseMesh` is what every later step needs from a mesh file:
+positions, unit vertex normals and triangles, in the file's own vertex order.
+Files are read with trimesh (OBJ, PLY, STL, OFF, GLB/glTF) with
+``process=False`` so nothing is merged or reordered.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass, field
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from .axis import ControlAxis
+from .errors import MeshError
+
+__all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "area_weighted_normals"]
+
+#: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``).
+BUNDLED_MESHES = ("stone", "leaf")
+
+_SUPPORTED = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
+
+
+@dataclass(frozen=True, eq=False)
+class BaseMesh:
+    """One triangle mesh, ready to be deformed and drawn.
+
+    Attributes
+    ----------
+    positions : (n, 3) float32
+        Vertex positions in model units, in the file's vertex order.
+    normals : (n, 3) float32
+        Unit vertex normals: the file's own where it has them, else
+        area-weighted normals of the faces around each vertex.
+    faces : (m, 3) uint32
+        Triangles as indices into ``positions`` (n-gons are triangulated).
+    name : str
+        Where the mesh came from (a file path or a bundled mesh name).
+    normals_from_file : bool
+        True when ``normals`` were read from the file.
+    """
+
+    positions: np.ndarray
+    normals: np.ndarray
+    faces: np.ndarray
+    name: str = "<mesh>"
+    normals_from_file: bool = False
+    _axis: ControlAxis | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        pos = np.ascontiguousarray(self.positions, dtype=np.float32)
+        nrm = np.ascontiguousarray(self.normals, dtype=np.float32)
+        faces = np.ascontiguousarray(self.faces, dtype=np.uint32)
+        if pos.ndim != 2 or pos.shape[1] != 3 or len(pos) == 0:
+            raise MeshError(f"{self.name}: expected vertex positions of shape (n, 3) with n > 0, found {pos.shape}")
+        if nrm.shape != pos.shape:
+            raise MeshError(f"{self.name}: expected normals of shape {pos.shape}, found {nrm.shape}")
+        if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
+            raise MeshError(f"{self.name}: expected at least one triangle (faces of shape (m, 3)), found {faces.shape}")
+        if not np.isfinite(pos).all():
+            bad = int(np.argwhere(~np.isfinite(pos).all(axis=1))[0, 0])
+            raise MeshError(f"{self.name}: vertex {bad} has a non-finite coordinate {pos[bad].tolist()}; expected finite numbers")
+        if faces.max() >= len(pos):
+            raise MeshError(f"{self.name}: a face refers to vertex {int(faces.max())}, but the mesh has {len(pos)} vertices")
+        object.__setattr__(self, "positions", pos)
+        object.__setattr__(self, "normals", nrm)
+        object.__setattr__(self, "faces", faces)
+        # raises MeshError on a zero extent
+        object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name))
+
+    @property
+    def axis(self) -> ControlAxis:
+        """The control axis of this mesh (see :mod:`axialdeform.axis`)."""
+        assert self._axis is not None
+        return self._axis
+
+    @property
+    def vertex_count(self) -> int:
+        return len(self.positions)
+
+    @cached_property
+    def fingerprint(self) -> bytes:
+        """32-byte SHA-256 of the positions (float32) and faces (uint32),
+        little-endian: identifies the base mesh a parameter file was made for."""
+        h = hashlib.sha256()
+        h.update(self.positions.astype("<f4").tobytes())
+        h.update(self.faces.astype("<u4").tobytes())
+        return h.digest()
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        """(k, 2) uint32 unique undirected edges of the triangles (for wireframe)."""
+        e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        e = np.sort(e, axis=1)
+        return np.unique(e, axis=0).astype(np.uint32)
+
+    def to_trimesh(self, positions: np.ndarray | None = None, normals: np.ndarray | None = None):
+        """A ``trimesh.Trimesh`` with these faces and the given (or own) positions/normals."""
+        import trimesh
+
+        return trimesh.Trimesh(
+            vertices=self.positions if positions is None else positions,
+            faces=self.faces,
+            vertex_normals=self.normals if normals is None else normals,
+            process=False,
+        )
+
+
+def area_weighted_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unit vertex normals, each the area-weighted mean of its faces' normals.
+
+    positions : (n, 3) float; faces : (m, 3) int.  Returns (n, 3) float32.
+    A vertex with no face area around it gets ``(0, 0, 1)``.
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64)
+    tri = p[f]
+    # the cross product's length is twice the triangle's area: area weighting
+    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    idx = f.ravel()
+    w = np.repeat(fn, 3, axis=0)
+    vn = np.stack([np.bincount(idx, weights=w[:, k], minlength=len(p)) for k in range(3)], axis=1)
+    return _unit_or_default(vn)
+
+
+def _unit_or_default(v: np.ndarray) -> np.ndarray:
+    length = np.linalg.norm(v, axis=1)
+    ok = length > 1e-30
+    out = np.zeros_like(v, dtype=np.float64)
+    out[ok] = v[ok] / length[ok, None]
+    out[~ok] = (0.0, 0.0, 1.0)
+    return out.astype(np.float32)
+
+
+def bundled_mesh_path(name: str) -> Path:
+    """Path of a mesh shipped with the package: ``"stone"`` or ``"leaf"``."""
+    if name not in BUNDLED_MESHES:
+        raise MeshError(f"unknown bundled mesh {name!r}; expected one of {', '.join(BUNDLED_MESHES)}")
+    return Path(str(resources.files("axialdeform.meshes").joinpath(f"{name}.obj")))
+
+
+def load_mesh(source: str | os.PathLike) -> BaseMesh:
+    """Read a base mesh from a file, or a bundled mesh by name (``"stone"``, ``"leaf"``).
+
+    Raises :class:`MeshError` (naming the file) for a missing or unreadable
+    file, a scene with several meshes, no faces, non-finite coordinates or a
+    longest extent of zero.
+    """
+    if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
+        path = bundled_mesh_path(source)
+    else:
+        path = Path(source)
+    name = str(source)
+    if not path.exists():
+        raise MeshError(f"{name}: no such mesh file")
+    if path.is_dir():
+        raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(_SUPPORTED)})")
+    if path.suffix.lower() not in _SUPPORTED:
+        raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(_SUPPORTED)}")
+    try:
+        import trimesh
+
+        loaded = trimesh.load(str(path), process=False)
+    except Exception as exc:  # trimesh raises many kinds of errors on bad files
+        raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
+    mesh, transform = _single_mesh(loaded, name)
+    positions = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+    if len(positions) == 0 or len(faces) == 0:
+        raise MeshError(f"{name}: the mesh has {len(positions)} vertices and {len(faces)} faces; expected triangles")
+    if not np.isfinite(positions).all():
+        bad = int(np.argwhere(~np.isfinite(positions).all(axis=1))[0, 0])
+        raise MeshError(f"{name}: vertex {bad} has a non-finite coordinate {positions[bad].tolist()}; expected finite numbers")
+    file_normals = _file_vertex_normals(mesh, len(positions))
+    if transform is not None:
+        positions = positions @ transform[:3, :3].T + transform[:3, 3]
+        if file_normals is not None:
+            file_normals = file_normals @ np.linalg.inv(transform[:3, :3])  # inverse transpose
+    if file_normals is not None:
+        length = np.linalg.norm(file_normals, axis=1)
+        usable = np.isfinite(length) & (length > 1e-12)
+        computed = area_weighted_normals(positions, faces) if not usable.all() else None
+        normals = np.where(usable[:, None], file_normals / np.where(usable, length, 1.0)[:, None], computed if computed is not None else 0.0)
+    else:
+        normals = area_weighted_normals(positions, faces)
+    return BaseMesh(positions, normals, faces, name=name, normals_from_file=file_normals is not None)
+
+
+def _single_mesh(loaded, name: str):
+    """The one triangle mesh in what trimesh loaded, and its node transform."""
+    import trimesh
+
+    if isinstance(loaded, trimesh.Scene):
+        nodes = [n for n in loaded.graph.nodes_geometry if isinstance(loaded.geometry.get(loaded.graph[n][1]), trimesh.Trimesh)]
+        if len(nodes) == 0:
+            raise MeshError(f"{name}: the file holds no triangle mesh; expected exactly one")
+        if len(nodes) > 1:
+            raise MeshError(f"{name}: the file holds {len(nodes)} meshes; expected exactly one (merge them first)")
+        transform, geom_name = loaded.graph[nodes[0]]
+        mesh = loaded.geometry[geom_name]
+        return mesh, (None if np.allclose(transform, np.eye(4)) else np.asarray(transform, dtype=np.float64))
+    if isinstance(loaded, trimesh.Trimesh):
+        return loaded, None
+    raise MeshError(f"{name}: the file holds a {type(loaded).__name__} without faces; expected a triangle mesh")
+
+
+def _file_vertex_normals(mesh, n: int) -> np.ndarray | None:
+    """The vertex normals the file itself supplied, or None.
+
+    trimesh keeps normals given at load time in its cache under
+    ``vertex_normals``; asking ``mesh.vertex_normals`` otherwise computes them,
+    which is not what we want here."""
+    cache = getattr(mesh, "_cache", None)
+    if cache is None or "vertex_normals" not in cache:
+        return None
+    vn = np.asarray(cache["vertex_normals"], dtype=np.float64)
+    if vn.shape != (n, 3):
+        return None
+    return vn

@@ -1,0 +1,420 @@
+"""Step 3 of the data flow: the 16 numbers per instance, and their files.
+
+One instance is ``d1u d1v d2u d2v d3u d3v d4u d4v d5u d5v px py pz rx ry rz``
+(offsets in model units, position in world units, angles in radians applied
+about fixed X, then Y, then Z).  In memory a set of instances is a
+``(n, 16) float32`` array.
+
+Files
+-----
+* **text** (``.txt``, ``.csv``, ``.dat``; and anything that does not start
+  with the binary magic): 16 numbers a line, separated by commas or white
+  space; lines starting with ``#`` are comments.
+* **binary** (``.adp``): see ``docs/parameter-files.md``.  A fixed header
+  (magic, version, encoding, count, the axis and a SHA-256 fingerprint of the
+  base mesh it was made for), the payload (float32, 64 bytes per instance, or
+  uint16 quantized, 32 bytes per instance) and a CRC-32 trailer over header
+  and payload.
+
+NaN and infinite parameters are refused everywhere (reading, writing,
+uploading) with a :class:`ParamError`: a non-finite number has no shape.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import struct
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import atomic_write_bytes
+from .axis import AXIS_NAMES, ControlAxis
+from .errors import MeshMismatchError, ParamError, ParamFileError
+
+__all__ = [
+    "FIELDS",
+    "OFFSETS",
+    "POSITION",
+    "ANGLES",
+    "as_params",
+    "make_params",
+    "ParamFile",
+    "read_param_file",
+    "read_params",
+    "write_params",
+    "format_text",
+    "parse_text",
+    "encode_binary",
+    "decode_binary",
+    "quantization_error_bound",
+    "MAGIC",
+    "BINARY_SUFFIXES",
+    "TEXT_SUFFIXES",
+]
+
+#: names of the 16 columns, in file order
+FIELDS = (
+    "d1u", "d1v", "d2u", "d2v", "d3u", "d3v", "d4u", "d4v", "d5u", "d5v",
+    "px", "py", "pz", "rx", "ry", "rz",
+)
+OFFSETS = slice(0, 10)
+POSITION = slice(10, 13)
+ANGLES = slice(13, 16)
+
+BINARY_SUFFIXES = (".adp",)
+TEXT_SUFFIXES = (".txt", ".csv", ".dat")
+
+MAGIC = b"\x89ADP\r\n\x1a\n"
+VERSION = 1
+ENCODING_FLOAT32 = 0
+ENCODING_UINT16 = 1
+_ENCODINGS = {ENCODING_FLOAT32: ("float32", 64), ENCODING_UINT16: ("uint16-quantized", 32)}
+# magic, version, encoding, header size, count, axis, 3 pad, reserved, lo, L, fingerprint, 16 reserved
+_HEADER = struct.Struct("<8sHHIQb3xIdd32s16x")
+HEADER_SIZE = _HEADER.size  # 96
+_QUANT = struct.Struct("<16f16f")  # per-column minimum, per-column step
+_TRAILER = struct.Struct("<I")
+_MAX_TEXT_LINE = 4096
+
+
+def as_params(values, *, name: str = "parameters") -> np.ndarray:
+    """Check and convert to a C-contiguous ``(n, 16) float32`` array.
+
+    A single record of 16 numbers becomes ``(1, 16)``.  Raises
+    :class:`ParamError` for a wrong shape or a non-finite number.
+    """
+    try:
+        arr = np.asarray(values, dtype=np.float32)
+    except (TypeError, ValueError) as exc:
+        raise ParamError(f"{name}: expected numbers, found {type(values).__name__} ({exc})") from None
+    if arr.ndim == 1 and arr.shape[0] == 16:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 16:
+        raise ParamError(f"{name}: expected an array of shape (n, 16), found {arr.shape}")
+    finite = np.isfinite(arr)
+    if not finite.all():
+        row, col = (int(x) for x in np.argwhere(~finite)[0])
+        raise ParamError(
+            f"{name}: instance {row}, field {FIELDS[col]}: expected a finite number, found {arr[row, col]}"
+        )
+    return np.ascontiguousarray(arr)
+
+
+def make_params(offsets=None, positions=None, angles=None, count: int | None = None) -> np.ndarray:
+    """Assemble ``(n, 16)`` parameters from parts.
+
+    offsets : (n, 5, 2) model units; positions : (n, 3) world units;
+    angles : (n, 3) radians.  Missing parts are zero.
+    """
+    parts = [x for x in (offsets, positions, angles) if x is not None]
+    n = count if count is not None else (len(np.asarray(parts[0])) if parts else 0)
+    out = np.zeros((n, 16), dtype=np.float32)
+    if offsets is not None:
+        out[:, OFFSETS] = np.asarray(offsets, dtype=np.float32).reshape(n, 10)
+    if positions is not None:
+        out[:, POSITION] = np.asarray(positions, dtype=np.float32).reshape(n, 3)
+    if angles is not None:
+        out[:, ANGLES] = np.asarray(angles, dtype=np.float32).reshape(n, 3)
+    return as_params(out)
+
+
+# --------------------------------------------------------------------- text
+
+
+def format_text(values: np.ndarray, header: str | None = None) -> str:
+    """The text form: one instance a line, 16 numbers separated by spaces.
+
+    Numbers are written with 9 significant digits, which round-trips float32
+    exactly.  ``header`` lines are written as ``#`` comments.
+    """
+    values = as_params(values)
+    lines = ["# " + line for line in (header or "").splitlines()]
+    lines.append("# " + " ".join(FIELDS))
+    body = np.char.mod("%.9g", values.astype(np.float64))
+    lines.extend(" ".join(row) for row in body.tolist())
+    return "\n".join(lines) + "\n"
+
+
+def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
+    """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ParamFileError(
+            f"{name}: not a parameter file: byte {exc.start} is not UTF-8 text and the file does not start with the binary magic"
+        ) from None
+    rows: list[list[str]] = []
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        if len(line) > _MAX_TEXT_LINE:
+            raise ParamFileError(f"{name}: line {lineno} is {len(line)} characters long; expected at most {_MAX_TEXT_LINE}")
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        tokens = [tok for tok in re.split(r"[,\s]+", stripped) if tok]
+        if len(tokens) != 16:
+            raise ParamFileError(f"{name}: line {lineno}: expected 16 numbers, found {len(tokens)}")
+        rows.append(tokens)
+    if not rows:
+        return np.zeros((0, 16), dtype=np.float32)
+    try:
+        arr = np.array(rows, dtype=np.float64)
+    except ValueError:
+        arr = None
+    if arr is None:
+        # find the offending token for the message (only on the error path)
+        for k, row in enumerate(rows):
+            for c, tok in enumerate(row):
+                try:
+                    float(tok)
+                except ValueError:
+                    raise ParamFileError(
+                        f"{name}: instance {k}, field {FIELDS[c]}: expected a number, found {tok[:40]!r}"
+                    ) from None
+    with np.errstate(over="ignore"):
+        arr32 = arr.astype(np.float32)
+    return as_params(arr32, name=name)
+
+
+# ------------------------------------------------------------------- binary
+
+
+@dataclass(frozen=True)
+class ParamFile:
+    """What a parameter file holds.
+
+    values : (n, 16) float32 — the parameters (decoded if quantized).
+    format : ``"text"`` or ``"binary"``.
+    encoding : ``"text"``, ``"float32"`` or ``"uint16-quantized"``.
+    axis : the control axis it was made for, or None if not recorded.
+    mesh_fingerprint : 32-byte SHA-256 of the base mesh, or None.
+    checksum : CRC-32 stored in the file (binary only; verified on read).
+    size : file size in bytes.
+    """
+
+    values: np.ndarray
+    format: str
+    encoding: str
+    axis: ControlAxis | None = None
+    mesh_fingerprint: bytes | None = None
+    checksum: int | None = None
+    size: int = 0
+    version: int | None = None
+
+    @property
+    def count(self) -> int:
+        return len(self.values)
+
+
+def quantization_error_bound(values: np.ndarray) -> np.ndarray:
+    """Per-column bound on ``|decoded - original|`` of the quantized form: (16,) float64.
+
+    Each column is stored as ``min + q * step`` with ``q`` a uint16 and
+    ``step = (max - min) / 65535``, so the rounding error is at most
+    ``step / 2``; the float32 arithmetic of the decode adds at most one
+    float32 ulp of the column's largest magnitude.
+    """
+    v = as_params(values).astype(np.float64)
+    if len(v) == 0:
+        return np.zeros(16)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    mag = np.maximum(np.abs(lo), np.abs(hi))
+    return (hi - lo) / 65535.0 / 2.0 + mag * 2.0**-23
+
+
+def _quantize(values: np.ndarray) -> tuple[bytes, bytes]:
+    v = values.astype(np.float64)
+    lo = v.min(axis=0) if len(v) else np.zeros(16)
+    hi = v.max(axis=0) if len(v) else np.zeros(16)
+    lo32 = lo.astype(np.float32)
+    step32 = ((hi - lo.astype(np.float32).astype(np.float64)) / 65535.0).astype(np.float32)
+    # a step that rounds to a value whose 65535 multiple falls short of the range is widened by one ulp
+    short = lo32.astype(np.float64) + 65535.0 * step32.astype(np.float64) < hi
+    step32[short] = np.nextafter(step32[short], np.float32(np.inf))
+    safe = np.where(step32 > 0, step32.astype(np.float64), 1.0)
+    q = np.rint((v - lo32.astype(np.float64)) / safe)
+    q = np.clip(q, 0, 65535).astype("<u2")
+    return _QUANT.pack(*lo32.tolist(), *step32.tolist()), q.tobytes()
+
+
+def _dequantize(table: bytes, payload: bytes, count: int) -> np.ndarray:
+    raw = _QUANT.unpack(table)
+    lo = np.array(raw[:16], dtype=np.float64)
+    step = np.array(raw[16:], dtype=np.float64)
+    q = np.frombuffer(payload, dtype="<u2", count=count * 16).reshape(count, 16).astype(np.float64)
+    return (lo + q * step).astype(np.float32)
+
+
+def encode_binary(
+    values: np.ndarray,
+    *,
+    axis: ControlAxis | None = None,
+    mesh_fingerprint: bytes | None = None,
+    quantize: bool = False,
+) -> bytes:
+    """The binary form of ``values`` (see ``docs/parameter-files.md``)."""
+    values = as_params(values)
+    if mesh_fingerprint is not None and len(mesh_fingerprint) != 32:
+        raise ParamError(f"mesh fingerprint: expected 32 bytes, found {len(mesh_fingerprint)}")
+    encoding = ENCODING_UINT16 if quantize else ENCODING_FLOAT32
+    header = _HEADER.pack(
+        MAGIC, VERSION, encoding, HEADER_SIZE, len(values),
+        -1 if axis is None else axis.index, 0,
+        0.0 if axis is None else axis.lo, 0.0 if axis is None else axis.length,
+        mesh_fingerprint or bytes(32),
+    )
+    if quantize:
+        table, payload = _quantize(values)
+        body = header + table + payload
+    else:
+        body = header + values.astype("<f4").tobytes()
+    return body + _TRAILER.pack(zlib.crc32(body))
+
+
+def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
+    """Parse the binary form; every check happens before any allocation that
+    depends on the declared count."""
+    if len(data) < HEADER_SIZE + _TRAILER.size:
+        raise ParamFileError(
+            f"{name}: truncated: {len(data)} bytes, expected at least {HEADER_SIZE + _TRAILER.size} (header + checksum)"
+        )
+    magic, version, encoding, header_size, count, axis_index, _res, lo, length, fingerprint = _HEADER.unpack_from(data)
+    if magic != MAGIC:
+        raise ParamFileError(f"{name}: magic: expected {MAGIC!r}, found {magic!r}")
+    if version != VERSION:
+        raise ParamFileError(f"{name}: version: expected {VERSION}, found {version} (written by a newer axialdeform?)")
+    if encoding not in _ENCODINGS:
+        raise ParamFileError(f"{name}: encoding: expected 0 (float32) or 1 (uint16-quantized), found {encoding}")
+    if header_size != HEADER_SIZE:
+        raise ParamFileError(f"{name}: header size: expected {HEADER_SIZE}, found {header_size}")
+    enc_name, record = _ENCODINGS[encoding]
+    table = _QUANT.size if encoding == ENCODING_UINT16 else 0
+    expected = HEADER_SIZE + table + count * record + _TRAILER.size  # Python int: no overflow
+    if len(data) != expected:
+        raise ParamFileError(
+            f"{name}: count: the header declares {count} instances ({expected} bytes), but the file has {len(data)} bytes"
+            + (" (truncated?)" if len(data) < expected else "")
+        )
+    (stored,) = _TRAILER.unpack_from(data, len(data) - _TRAILER.size)
+    actual = zlib.crc32(memoryview(data)[: len(data) - _TRAILER.size])
+    if stored != actual:
+        raise ParamFileError(f"{name}: checksum: stored CRC-32 {stored:08x}, computed {actual:08x}; the file is corrupt")
+    if axis_index not in (-1, 0, 1, 2):
+        raise ParamFileError(f"{name}: axis: expected -1 (not recorded), 0, 1 or 2, found {axis_index}")
+    axis = None
+    if axis_index >= 0:
+        try:
+            axis = ControlAxis(index=axis_index, lo=lo, length=length)
+        except Exception as exc:
+            raise ParamFileError(f"{name}: axis: {exc}") from None
+    payload = memoryview(data)[HEADER_SIZE + table : len(data) - _TRAILER.size]
+    if encoding == ENCODING_UINT16:
+        values = _dequantize(bytes(data[HEADER_SIZE : HEADER_SIZE + table]), payload, count)
+    else:
+        values = np.frombuffer(payload, dtype="<f4", count=count * 16).reshape(count, 16).astype(np.float32)
+    values = as_params(values, name=name)
+    return ParamFile(
+        values=values, format="binary", encoding=enc_name, axis=axis,
+        mesh_fingerprint=None if fingerprint == bytes(32) else fingerprint,
+        checksum=stored, size=len(data), version=version,
+    )
+
+
+# -------------------------------------------------------------------- files
+
+
+def _is_binary_suffix(path: Path) -> bool:
+    return path.suffix.lower() in BINARY_SUFFIXES
+
+
+def read_param_file(path: str | os.PathLike) -> ParamFile:
+    """Read a parameter file, text or binary (told apart by the magic bytes)."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ParamFileError(f"{path}: no such parameter file") from None
+    except IsADirectoryError:
+        raise ParamFileError(f"{path}: is a folder; expected a parameter file") from None
+    except OSError as exc:
+        raise ParamFileError(f"{path}: cannot read: {exc.strerror}") from None
+    if data[: len(MAGIC)] == MAGIC or (_is_binary_suffix(path) and data[:1] == MAGIC[:1]):
+        return decode_binary(data, str(path))
+    if _is_binary_suffix(path) and b"\0" in data[:64]:
+        raise ParamFileError(f"{path}: magic: expected {MAGIC!r}, found {bytes(data[:8])!r}")
+    values = parse_text(data, str(path))
+    return ParamFile(values=values, format="text", encoding="text", size=len(data))
+
+
+def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
+    """Raise :class:`MeshMismatchError` if ``pf`` records a base mesh other than ``mesh``."""
+    if pf.mesh_fingerprint is not None and pf.mesh_fingerprint != mesh.fingerprint:
+        raise MeshMismatchError(
+            f"{name}: made for a different base mesh (fingerprint {pf.mesh_fingerprint.hex()[:16]}, "
+            f"expected {mesh.fingerprint.hex()[:16]} of {mesh.name}); use the mesh it was made for, "
+            "or override the check (allow_mesh_mismatch=True / --ignore-mesh-mismatch)"
+        )
+    if pf.axis is not None:
+        a = mesh.axis
+        if pf.axis.index != a.index or not np.isclose(pf.axis.lo, a.lo) or not np.isclose(pf.axis.length, a.length):
+            raise MeshMismatchError(
+                f"{name}: made for {pf.axis.describe()}, but {mesh.name} has {a.describe()}; "
+                "use the mesh it was made for, or override the check"
+            )
+
+
+def read_params(path: str | os.PathLike, mesh=None, *, allow_mesh_mismatch: bool = False) -> np.ndarray:
+    """Read a parameter file (text or binary) into ``(n, 16) float32``.
+
+    If ``mesh`` is given and the file records the base mesh it was made for,
+    a different mesh raises :class:`MeshMismatchError` unless
+    ``allow_mesh_mismatch`` is true.
+    """
+    pf = read_param_file(path)
+    if mesh is not None and not allow_mesh_mismatch:
+        check_mesh(pf, mesh, str(path))
+    return pf.values
+
+
+def write_params(
+    path: str | os.PathLike,
+    values: np.ndarray,
+    mesh=None,
+    *,
+    quantize: bool = False,
+    axis: ControlAxis | None = None,
+    mesh_fingerprint: bytes | None = None,
+) -> Path:
+    """Write parameters atomically; the format follows the extension.
+
+    ``.adp`` is binary (float32, or uint16 with ``quantize=True``); ``.txt``,
+    ``.csv`` and ``.dat`` are text.  ``mesh`` (a :class:`BaseMesh`) records
+    the axis and fingerprint of the base mesh in a binary file.
+    """
+    path = Path(path)
+    values = as_params(values)
+    if mesh is not None:
+        axis, mesh_fingerprint = mesh.axis, mesh.fingerprint
+    if _is_binary_suffix(path):
+        data = encode_binary(values, axis=axis, mesh_fingerprint=mesh_fingerprint, quantize=quantize)
+    elif path.suffix.lower() in TEXT_SUFFIXES:
+        if quantize:
+            raise ParamFileError(f"{path}: the quantized form is binary only; expected a {'/'.join(BINARY_SUFFIXES)} file name")
+        header = "axialdeform parameters: " + ("unknown axis" if axis is None else axis.describe())
+        if mesh is not None:
+            header += f"\nbase mesh: {mesh.name} (sha256 {mesh.fingerprint.hex()})"
+        data = format_text(values, header).encode("utf-8")
+    else:
+        raise ParamFileError(
+            f"{path}: unknown parameter file type {path.suffix!r}; expected {', '.join(BINARY_SUFFIXES)} (binary) "
+            f"or {', '.join(TEXT_SUFFIXES)} (text)"
+        )
+    atomic_write_bytes(path, data)
+    return path
+
+
+def axis_letter(index: int) -> str:
+    return AXIS_NAMES[index]

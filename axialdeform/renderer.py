@@ -1,0 +1,221 @@
+"""The renderer: one base mesh, every instance bent by its own control axis
+in the vertex shader, all instances in ONE instanced draw call.
+
+Use it inside your own moderngl program::
+
+    import axialdeform as ad
+    mesh = ad.load_mesh("stone")
+    params = ad.random_params(mesh, 1000, seed=1)
+    with ad.AxialRenderer(ctx, mesh, params) as r:
+        r.render(view, proj, mode="solid")      # pyrr matrices, as built by pyrr
+
+``view`` and ``proj`` are (4, 4) matrices in pyrr's layout (what
+``pyrr.matrix44.create_look_at`` / ``create_perspective_projection``
+return); the shader computes ``clip = proj * view * world``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .buffers import InstanceBuffer, MeshBuffers
+from .errors import AxialDeformError, ParamError
+from .shaders import build_program
+
+__all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS"]
+
+MODES = ("solid", "flat", "wireframe")
+_MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
+#: default base colours (linear RGB) by bundled mesh name
+DEFAULT_COLORS = {"stone": (0.62, 0.58, 0.52), "leaf": (0.38, 0.62, 0.22)}
+_CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
+
+
+class AxialRenderer:
+    """Draws ``count`` deformed instances of one base mesh.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+        The caller's context (GL 3.3 core or newer).
+    mesh : BaseMesh
+        The base mesh.
+    params : (n, 16) float32, optional
+        The 16 numbers per instance.
+    capacity : int, optional
+        Instances to reserve room for (``set_params`` up to it never reallocates).
+    bend : bool
+        False draws only rotation + position (the "all the same" method).
+    """
+
+    def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True):
+        self.ctx = ctx
+        self.mesh = mesh
+        self.bend = bend
+        self._released = False
+        self._objects = []
+        defines = {} if bend else {"AXIAL_NO_BEND": 1}
+        try:
+            self.program = build_program(ctx, "scene.vert", "scene.frag", defines=defines)
+            self._objects.append(self.program)
+            self.mesh_buffers = MeshBuffers(ctx, mesh)
+            self.instances = InstanceBuffer(ctx, params, capacity)
+            self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
+            self._vao_edges = self._vertex_array(self.program, self.mesh_buffers.edges)
+        except BaseException:
+            self.release()
+            raise
+        self._capture = None  # (program, vao, scratch instances, output) built on first capture
+        self._set_axis_uniforms(self.program)
+        self.color = DEFAULT_COLORS.get(str(mesh.name), (0.62, 0.58, 0.52))
+        self.line_color = (0.12, 0.14, 0.18)
+
+    # ------------------------------------------------------------ plumbing
+    def _vertex_array(self, program, index_buffer, instance_buffer=None):
+        content = [self.mesh_buffers.content(program), (instance_buffer or self.instances).content(program)]
+        vao = self.ctx.vertex_array(program, content, index_buffer=index_buffer, index_element_size=4)
+        self._objects.append(vao)
+        return vao
+
+    def _set_axis_uniforms(self, program) -> None:
+        axis = self.mesh.axis
+        for name, value in (("u_axis", axis.index), ("u_lo", axis.lo), ("u_len", axis.length)):
+            if name in program:
+                program[name].value = value
+
+    def _check(self) -> None:
+        if self._released:
+            raise AxialDeformError("this AxialRenderer was released; create a new one")
+
+    # ------------------------------------------------------------ parameters
+    @property
+    def count(self) -> int:
+        """Number of instances drawn."""
+        return self.instances.count
+
+    def set_params(self, params) -> None:
+        """Replace all parameters; the buffer is reallocated only if the count grows past its capacity."""
+        self._check()
+        self.instances.set(params)
+
+    def update_params(self, params, start: int = 0) -> None:
+        """Overwrite the instances ``start .. start + len(params) - 1`` in place."""
+        self._check()
+        self.instances.update(params, start)
+
+    # ------------------------------------------------------------ drawing
+    def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
+               color=None, line_color=None, ambient: float = 0.35) -> None:
+        """Draw every instance into the currently bound framebuffer, in one draw call.
+
+        view, projection : (4, 4) pyrr-layout matrices.
+        mode : ``"solid"`` (analytic normals), ``"flat"`` (face normals of the
+        deformed triangles) or ``"wireframe"`` (the mesh's edges as lines).
+        """
+        import moderngl
+
+        self._check()
+        if mode not in _MODE_INDEX:
+            raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
+        view = np.asarray(view, dtype=np.float32).reshape(4, 4)
+        projection = np.asarray(projection, dtype=np.float32).reshape(4, 4)
+        prog = self.program
+        prog["u_view"].write(view.tobytes())
+        prog["u_proj"].write(projection.tobytes())
+        uniforms = {
+            "u_mode": _MODE_INDEX[mode],
+            "u_color": tuple(color or self.color),
+            "u_line_color": tuple(line_color or self.line_color),
+            "u_light_dir": tuple(_unit(light_dir)),
+            "u_up": tuple(_unit(up)),
+            "u_eye": tuple(np.linalg.inv(view.astype(np.float64))[3, :3]),
+            "u_ambient": float(ambient),
+        }
+        for name, value in uniforms.items():
+            if name in prog:
+                prog[name].value = value
+        if self.count == 0:
+            return
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        if mode == "wireframe":
+            self._vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
+        else:
+            self._vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
+
+    # ------------------------------------------------------------ capture
+    def capture(self, start: int = 0, count: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """World positions and normals as the GPU computes them, by transform
+        feedback of the drawing vertex shader.
+
+        Returns two ``(count, vertices, 3) float32`` arrays in the base mesh's
+        vertex order, for instances ``start .. start + count - 1``.
+        """
+        import moderngl
+
+        self._check()
+        count = self.count - start if count is None else int(count)
+        if start < 0 or count < 0 or start + count > self.count:
+            raise ParamError(f"capture: instances {start}..{start + count - 1} are outside 0..{self.count - 1}")
+        v = self.mesh.vertex_count
+        per_instance = v * 24
+        chunk = max(1, min(count, _CAPTURE_BYTES // per_instance))
+        if self._capture is None or self._capture[2].capacity < chunk:
+            self._release_capture()
+            prog = build_program(self.ctx, "scene.vert", defines={} if self.bend else {"AXIAL_NO_BEND": 1},
+                                 varyings=("v_world", "v_normal"))
+            self._set_axis_uniforms(prog)
+            scratch = InstanceBuffer(self.ctx, capacity=chunk)
+            vao = self.ctx.vertex_array(prog, [self.mesh_buffers.content(prog), scratch.content(prog)])
+            output = self.ctx.buffer(reserve=chunk * per_instance)
+            # a draw needs a complete framebuffer even with rasterization
+            # discarded; a surfaceless EGL context has none of its own
+            color = self.ctx.renderbuffer((1, 1))
+            fbo = self.ctx.framebuffer(color)
+            self._capture = (prog, vao, scratch, output, fbo, color)
+        prog, vao, scratch, output, fbo, _ = self._capture
+        out = np.empty((count, v, 6), dtype=np.float32)
+        previous = self.ctx.fbo
+        fbo.use()
+        try:
+            for a in range(0, count, chunk):  # chunks bound GPU memory; each is one transform-feedback draw
+                k = min(chunk, count - a)
+                self.ctx.copy_buffer(scratch.buffer, self.instances.buffer, size=k * 64, read_offset=(start + a) * 64)
+                scratch.count = k
+                vao.transform(output, mode=moderngl.POINTS, vertices=v, instances=k)
+                out[a : a + k] = np.frombuffer(output.read(size=k * per_instance), dtype="f4").reshape(k, v, 6)
+        finally:
+            if previous is not None:
+                previous.use()
+        return out[..., :3].copy(), out[..., 3:].copy()
+
+    def _release_capture(self) -> None:
+        if self._capture is not None:
+            prog, vao, scratch, output, fbo, color = self._capture
+            for obj in (vao, prog, scratch, output, fbo, color):
+                obj.release()
+            self._capture = None
+
+    # ------------------------------------------------------------ lifetime
+    def release(self) -> None:
+        """Free every GL object; safe to call twice.  Never called from ``__del__``."""
+        if self._released:
+            return
+        self._released = True
+        self._release_capture() if hasattr(self, "_capture") else None
+        for obj in reversed(self._objects):
+            obj.release()
+        self._objects.clear()
+        for holder in ("mesh_buffers", "instances"):
+            if hasattr(self, holder):
+                getattr(self, holder).release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def _unit(v) -> np.ndarray:
+    v = np.asarray(v, dtype=np.float64)
+    return v / max(np.linalg.norm(v), 1e-12)

@@ -1,0 +1,38 @@
+// scene.vert -- one instanced draw of the base mesh, every instance bent by
+// its own control axis.  Also the capture program (transform feedback of
+// v_world and v_normal): what is drawn is exactly what is captured.
+#include "axial.glsl"
+
+uniform mat4 u_view;        // pyrr layout, uploaded as-is: clip = u_proj * u_view * world
+uniform mat4 u_proj;
+uniform int u_axis;         // control axis of the base mesh: 0 x, 1 y, 2 z
+uniform float u_lo;         // min coordinate along the axis
+uniform float u_len;        // L = max - min along the axis
+
+in vec3 in_position;        // base mesh, model units
+in vec3 in_normal;          // unit vertex normal
+
+// the instanced attribute buffer (divisor 1): the 16 numbers
+in vec4 i_d12;
+in vec4 i_d34;
+in vec2 i_d5;
+in vec3 i_position;
+in vec3 i_angles;
+
+out vec3 v_world;           // world position
+out vec3 v_normal;          // world normal (analytic)
+flat out float v_shade;     // per-instance brightness variation, 0.85 .. 1.15
+
+float instance_hash(int i) {
+    uint h = uint(i) * 747796405u + 2891336453u;
+    h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
+    h = (h >> 22u) ^ h;
+    return float(h) / 4294967295.0;
+}
+
+void main() {
+    AxialInstance inst = AxialInstance(i_d12, i_d34, i_d5, i_position, i_angles);
+    axial_world(in_position, in_normal, u_axis, u_lo, u_len, inst, v_world, v_normal);
+    v_shade = 0.85 + 0.3 * instance_hash(gl_InstanceID);
+    gl_Position = u_proj * u_view * vec4(v_world, 1.0);
+}
