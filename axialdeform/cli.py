@@ -16,6 +16,11 @@ __all__ = ["main", "build_parser"]
 
 DEMO_COUNT = 2500
 
+#: modules that add sub-commands: each defines ``add_parser(subparsers)``
+#: (which calls ``subparsers.add_parser(NAME, ...)`` and
+#: ``set_defaults(handler=run)``) and ``run(args) -> None``.
+PLUGINS: tuple[str, ...] = ()
+
 
 def _angle_range(text: str) -> tuple[float, float]:
     try:
@@ -93,6 +98,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("dst")
     c.add_argument("--mesh", help="record the axis and fingerprint of this base mesh")
     c.add_argument("--quantize", action="store_true", help="write the compact 32-byte form")
+
+    import importlib
+
+    for module in PLUGINS:
+        importlib.import_module(module).add_parser(sub)
     return p
 
 
@@ -201,7 +211,8 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        COMMANDS[args.command](args)
+        handler = getattr(args, "handler", None) or COMMANDS[args.command]
+        handler(args)
     except AxialDeformError as exc:
         print(f"axialdeform {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -1,0 +1,54 @@
+"""Shared fixtures.  GL tests get ONE EGL context per session; every test
+that uses it is checked for ``ctx.error == "GL_NO_ERROR"`` afterwards.
+A GL test never skips: no context is a failure (here and in CI)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import axialdeform as ad
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = ROOT.parent / "shared" / "data" / "meshes"
+
+
+def shared_mesh(rel: str) -> Path:
+    """A mesh from ../shared/data/meshes; missing shared data is a failure, not a skip."""
+    path = SHARED / rel
+    assert path.exists(), f"test data {path} is missing (expected the shared/ folder beside the checkout)"
+    return path
+
+
+@pytest.fixture(scope="session")
+def gl():
+    ctx = ad.create_context()  # raises ContextError: the test fails, it does not skip
+    yield ctx
+    ctx.release()
+
+
+@pytest.fixture
+def ctx(gl):
+    assert gl.error == "GL_NO_ERROR", "a previous test left a GL error behind"
+    yield gl
+    err = gl.error
+    assert err == "GL_NO_ERROR", f"GL error after the test: {err}"
+
+
+@pytest.fixture(scope="session")
+def stone():
+    return ad.load_mesh("stone")
+
+
+@pytest.fixture(scope="session")
+def leaf():
+    return ad.load_mesh("leaf")
+
+
+def make_mesh(positions, faces, name="<test>"):
+    from axialdeform.mesh import area_weighted_normals
+
+    positions = np.asarray(positions, dtype=np.float64)
+    return ad.BaseMesh(positions, area_weighted_normals(positions, faces), faces, name=name)
