@@ -16,6 +16,7 @@ from .bake import bake
 from .camera import Camera, frame_instances, instance_bounds
 from .context import Offscreen, create_context
 from .deform import deform, rotation_matrices
+from .ground import GroundPlane
 from .errors import (
     AxialDeformError,
     ContextError,
@@ -29,7 +30,7 @@ from .image import render_image, save_png
 from .mesh import BUNDLED_MESHES, BaseMesh, bundled_mesh_path, load_mesh
 from .params import FIELDS, as_params, make_params, read_param_file, read_params, write_params
 from .renderer import MODES, AxialRenderer
-from .shaders import assemble, build_program, deformation_glsl
+from .shaders import assemble, assemble_text, build_program, deformation_glsl
 from .variation import random_params
 
 try:
@@ -39,8 +40,8 @@ except PackageNotFoundError:  # running from a source tree that was never instal
 
 __all__ = [
     "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
-    "FIELDS", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError",
-    "as_params", "assemble", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
+    "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError",
+    "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds", "load_mesh", "make_params", "random_params",
     "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "write_params",
 ]

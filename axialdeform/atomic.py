@@ -1,17 +1,55 @@
 """Atomic writes: a write never leaves a half-written file where a good one
 was.  Data goes to a temporary file in the destination's folder, is flushed
 and fsynced, and only then renamed over the destination (``os.replace`` is
-atomic on POSIX and Windows)."""
+atomic on POSIX and Windows).
+
+Temporary files are named ``.NAME.axtmpPID-XXXXXXXX[SUFFIX].part`` beside
+the destination (``PID``: the writing process).  A writer killed mid-write
+(SIGKILL, power loss) cannot clean up and leaves its ``.part`` file behind;
+the first atomic write of a later process into the same folder removes every
+``.part`` of this form whose writer is no longer running, so at most the
+leftovers of writers killed since then exist at any time."""
 
 from __future__ import annotations
 
 import contextlib
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Iterator
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text"]
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "sweep_stale_parts"]
+
+_PART = re.compile(r"^\..*\.axtmp(\d+)-[^.]*.*\.part$")
+_swept: set[str] = set()
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # exists (another user's) or unknown: keep its file
+    return True
+
+
+def sweep_stale_parts(folder: str | os.PathLike) -> list[Path]:
+    """Remove the ``.part`` files of writers in ``folder`` that are no longer
+    running; returns the paths removed.  Files of live processes are kept."""
+    removed = []
+    with contextlib.suppress(OSError):
+        with os.scandir(folder) as entries:
+            for entry in entries:
+                m = _PART.match(entry.name)
+                if m and not _alive(int(m.group(1))):
+                    with contextlib.suppress(OSError):
+                        os.unlink(entry.path)
+                        removed.append(Path(entry.path))
+    return removed
 
 
 @contextlib.contextmanager
@@ -29,8 +67,12 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
+    key = os.path.abspath(folder)
+    if key not in _swept:  # once per folder and process: cheap even for folders of many files
+        _swept.add(key)
+        sweep_stale_parts(folder)
     fd, tmp_name = tempfile.mkstemp(
-        prefix=f".{path.name}.", suffix=(path.suffix if suffix is None else suffix) + ".part",
+        prefix=f".{path.name}.axtmp{os.getpid()}-", suffix=(path.suffix if suffix is None else suffix) + ".part",
         dir=folder,
     )
     os.close(fd)

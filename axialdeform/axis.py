@@ -25,6 +25,10 @@ __all__ = ["ControlAxis", "AXIS_NAMES", "PERPENDICULAR"]
 AXIS_NAMES = ("x", "y", "z")
 #: the two coordinates an offset moves, per axis index, in increasing order
 PERPENDICULAR = ((1, 2), (0, 2), (0, 1))
+#: supported range of the axis length L (model units): float32 keeps full
+#: precision for the deformation of meshes of this size (see docs/reliability.md)
+MIN_LENGTH = 1e-30
+MAX_LENGTH = 1e36
 
 
 @dataclass(frozen=True)
@@ -66,6 +70,13 @@ class ControlAxis:
         length = float(extents[index])
         if not length > 0:
             raise MeshError(f"{name}: the mesh's longest extent is {length}; expected a mesh that is not a single point")
+        # the GPU works in float32: below MIN_LENGTH the Bezier terms (offsets x weights)
+        # become subnormal and are flushed to zero; above MAX_LENGTH positions overflow
+        if not (MIN_LENGTH <= length <= MAX_LENGTH):
+            raise MeshError(
+                f"{name}: the mesh's longest extent L={length:.6g} ({AXIS_NAMES[index]}) is outside the supported range "
+                f"{MIN_LENGTH:g}..{MAX_LENGTH:g} model units (float32 on the GPU); expected a mesh rescaled into it"
+            )
         return cls(index=index, lo=float(mins[index]), length=length, center=tuple(float(c) for c in (mins + maxs) / 2))
 
     @property

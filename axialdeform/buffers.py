@@ -3,8 +3,10 @@
 * :class:`MeshBuffers` — the base mesh once: interleaved position + normal
   (24 bytes a vertex), triangle indices and edge indices (for wireframe).
 * :class:`InstanceBuffer` — the 16 numbers of every instance in ONE buffer,
-  read with divisor 1 (64 bytes an instance); replacing all of it or a slice
-  writes in place while the count is unchanged.
+  read with divisor 1 (64 bytes an instance, or 32 with ``quantized=True``:
+  uint16 per number plus a per-column ``min``/``step`` table passed as
+  uniforms and decoded in the vertex shader, ``AXIAL_QUANTIZED``); replacing
+  all of it or a slice writes in place while the count is unchanged.
 
 Both hold their ``ctx``; ``release()`` is safe to call twice and nothing is
 released from ``__del__``.
@@ -15,14 +17,28 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import ParamError
-from .params import as_params
+from .params import as_params, dequantize_params, quantize_params
 
-__all__ = ["MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES"]
+__all__ = [
+    "MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES",
+    "QUANTIZED_FORMAT", "QUANTIZED_ATTRIBUTES", "QUANTIZED_RECORD_BYTES",
+]
 
 #: layout of one instance record in the instanced attribute buffer
 INSTANCE_FORMAT = ("4f", "4f", "2f", "3f", "3f")
 INSTANCE_ATTRIBUTES = ("i_d12", "i_d34", "i_d5", "i_position", "i_angles")
 RECORD_BYTES = 64
+#: the quantized layout: 16 uint16 read as four integer ``uvec4`` attributes
+QUANTIZED_FORMAT = ("4u2", "4u2", "4u2", "4u2")
+QUANTIZED_ATTRIBUTES = ("i_q0", "i_q1", "i_q2", "i_q3")
+QUANTIZED_RECORD_BYTES = 32
+
+
+def _format_bytes(fmt: str) -> int:
+    """Bytes of one moderngl attribute format such as ``"4f"`` or ``"4u2"``."""
+    count = int(fmt[0])
+    size = int(fmt[-1]) if fmt[-1].isdigit() else 4
+    return count * size
 
 
 def _content(buffer, formats, names, program, per_instance=False):
@@ -35,7 +51,7 @@ def _content(buffer, formats, names, program, per_instance=False):
             fmt.append(f)
             used.append(name)
         else:
-            fmt.append(f"{int(f[0]) * 4}x")
+            fmt.append(f"{_format_bytes(f)}x")
     return (buffer, " ".join(fmt) + ("/i" if per_instance else ""), *used)
 
 
@@ -70,32 +86,71 @@ class InstanceBuffer:
 
     ``capacity`` instances fit without reallocating; ``set`` with a larger
     count grows it (orphaning the old storage), a smaller count keeps it.
+
+    With ``quantized=True`` each instance is 16 uint16 (32 bytes), the
+    quantization of :func:`axialdeform.params.quantize_params`; ``qmin`` and
+    ``qstep`` ((16,) float32) are the per-column table the vertex shader
+    needs (uniforms ``u_qmin``/``u_qstep``, four ``vec4`` each).
     """
 
-    def __init__(self, ctx, params=None, capacity: int | None = None):
+    def __init__(self, ctx, params=None, capacity: int | None = None, *, quantized: bool = False):
         self.ctx = ctx
+        self.quantized = bool(quantized)
+        self.record_bytes = QUANTIZED_RECORD_BYTES if self.quantized else RECORD_BYTES
+        self.qmin = np.zeros(16, dtype=np.float32)
+        self.qstep = np.zeros(16, dtype=np.float32)
         values = as_params(np.zeros((0, 16)) if params is None else params)
         self.count = len(values)
         self.capacity = max(int(capacity or 0), self.count, 1)
-        self.buffer = ctx.buffer(reserve=self.capacity * RECORD_BYTES)
+        self.buffer = ctx.buffer(reserve=self.capacity * self.record_bytes)
         self.reallocations = 0
         if self.count:
-            self.buffer.write(values.tobytes())
+            self.buffer.write(self._encode_all(values))
         self._released = False
 
+    def _encode_all(self, values: np.ndarray) -> bytes:
+        if not self.quantized:
+            return values.tobytes()
+        self.qmin, self.qstep, q = quantize_params(values)
+        return q.astype("<u2").tobytes()
+
+    def _encode_part(self, values: np.ndarray) -> bytes:
+        """Encode with the current table; values outside its range are refused."""
+        if not self.quantized:
+            return values.tobytes()
+        v = values.astype(np.float64)
+        lo, step = self.qmin.astype(np.float64), self.qstep.astype(np.float64)
+        q = np.rint((v - lo) / np.where(step > 0, step, 1.0))
+        fits = (q >= 0) & (q <= 65535) & ((step > 0) | (v == lo))
+        if not fits.all():
+            row, col = (int(x) for x in np.argwhere(~fits)[0])
+            raise ParamError(
+                f"update: instance {row}, field {col}: {v[row, col]:.9g} is outside the quantized range "
+                f"{lo[col]:.9g}..{lo[col] + 65535 * step[col]:.9g} of the buffer; "
+                "expected values inside it (call set() with every instance to re-quantize)"
+            )
+        return q.astype("<u2").tobytes()
+
+    @property
+    def formats(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """The attribute formats and names of this buffer's layout."""
+        if self.quantized:
+            return QUANTIZED_FORMAT, QUANTIZED_ATTRIBUTES
+        return INSTANCE_FORMAT, INSTANCE_ATTRIBUTES
+
     def content(self, program):
-        return _content(self.buffer, INSTANCE_FORMAT, INSTANCE_ATTRIBUTES, program, per_instance=True)
+        return _content(self.buffer, *self.formats, program, per_instance=True)
 
     def set(self, params) -> None:
         """Replace every instance; reallocates only if the count outgrows the capacity."""
         values = as_params(params)
         if len(values) > self.capacity:
             self.capacity = len(values)
-            self.buffer.orphan(self.capacity * RECORD_BYTES)
+            self.buffer.orphan(self.capacity * self.record_bytes)
             self.reallocations += 1
         self.count = len(values)
         if self.count:
-            self.buffer.write(values.tobytes())
+            self.buffer.write(self._encode_all(values))
 
     def update(self, params, start: int = 0) -> None:
         """Overwrite instances ``start .. start + len(params) - 1`` in place."""
@@ -107,11 +162,14 @@ class InstanceBuffer:
                 "expected 0 <= start and start + len(params) <= count (use set() to change the count)"
             )
         if len(values):
-            self.buffer.write(values.tobytes(), offset=start * RECORD_BYTES)
+            self.buffer.write(self._encode_part(values), offset=start * self.record_bytes)
 
     def read(self) -> np.ndarray:
-        """The parameters on the GPU, ``(count, 16) float32``."""
-        data = self.buffer.read(size=self.count * RECORD_BYTES)
+        """The parameters on the GPU, ``(count, 16) float32`` (decoded if quantized)."""
+        data = self.buffer.read(size=self.count * self.record_bytes)
+        if self.quantized:
+            q = np.frombuffer(data, dtype="<u2").reshape(self.count, 16)
+            return dequantize_params(self.qmin, self.qstep, q)
         return np.frombuffer(data, dtype="f4").reshape(self.count, 16).copy()
 
     def release(self) -> None:

@@ -19,7 +19,7 @@ DEMO_COUNT = 2500
 #: modules that add sub-commands: each defines ``add_parser(subparsers)``
 #: (which calls ``subparsers.add_parser(NAME, ...)`` and
 #: ``set_defaults(handler=run)``) and ``run(args) -> None``.
-PLUGINS: tuple[str, ...] = ()
+PLUGINS: tuple[str, ...] = ("axialdeform.export", "axialdeform.fit", "axialdeform.viewer", "axialdeform.bench")
 
 
 def _angle_range(text: str) -> tuple[float, float]:

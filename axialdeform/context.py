@@ -6,7 +6,7 @@ import numpy as np
 
 from .errors import ContextError
 
-__all__ = ["create_context", "Offscreen", "GL_REQUIRE"]
+__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer"]
 
 GL_REQUIRE = 330
 
@@ -34,6 +34,29 @@ def create_context(backend: str = "egl"):
         ctx.release()
         raise ContextError(f"the {backend.upper()} context is OpenGL {version}, expected {GL_REQUIRE} or newer; {_HELP}")
     return ctx
+
+
+def _alive(obj) -> bool:
+    import moderngl
+
+    return obj is not None and not isinstance(obj.mglo, moderngl.InvalidObject)
+
+
+def bind_framebuffer(ctx, fbo) -> None:
+    """Bind ``fbo`` if it is still alive, else the default framebuffer (0).
+
+    moderngl re-binds "the bound framebuffer" after creating a new one; if
+    that one was deleted, GL reports GL_INVALID_OPERATION.  Always leaving a
+    live framebuffer bound avoids it.
+    """
+    (fbo if _alive(fbo) else ctx.detect_framebuffer(0)).use()
+
+
+def release_framebuffer(ctx, fbo) -> None:
+    """Release ``fbo``, first un-binding it if it is the bound one."""
+    if ctx.fbo is fbo:
+        ctx.detect_framebuffer(0).use()
+    fbo.release()
 
 
 class Offscreen:
@@ -78,11 +101,12 @@ class Offscreen:
         if self._released:
             return
         self._released = True
-        for obj in (self.fbo, self._color, self._depth):
-            obj.release()
         if self._resolved_color is not None:
-            self._resolved.release()
+            release_framebuffer(self.ctx, self._resolved)
             self._resolved_color.release()
+        release_framebuffer(self.ctx, self.fbo)
+        self._color.release()
+        self._depth.release()
 
     def __enter__(self):
         return self

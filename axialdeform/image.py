@@ -28,12 +28,15 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, camera: Camera | None = None,
-                 up: str = "y", samples: int = 4, background=(0.93, 0.94, 0.96), renderer=None) -> np.ndarray:
+                 up: str = "y", samples: int = 4, background=(0.93, 0.94, 0.96), renderer=None,
+                 **render_options) -> np.ndarray:
     """Render all instances to an ``(height, width, 3) uint8`` image.
 
     ``modes`` is one mode or a sequence of modes drawn side by side with the
     same parameters and camera (e.g. ``("solid", "wireframe")``).
     A context is created (EGL) if ``ctx`` is None and released afterwards.
+    ``render_options`` go to :meth:`AxialRenderer.render` (``color``,
+    ``line_color``, ``light_dir``, ``ambient``).
     """
     modes = (modes,) if isinstance(modes, str) else tuple(modes)
     for m in modes:
@@ -51,7 +54,7 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
                 panels = []
                 for m in modes:
                     target.use(background)
-                    r.render(view, proj, m, up=UP_VECTORS[up])
+                    r.render(view, proj, m, up=UP_VECTORS[up], **render_options)
                     panels.append(target.read())
         finally:
             if renderer is None:

@@ -55,7 +55,8 @@ class BaseMesh:
     _axis: ControlAxis | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
-        pos = np.ascontiguousarray(self.positions, dtype=np.float32)
+        with np.errstate(over="ignore", invalid="ignore"):  # out-of-range coordinates are refused below
+            pos = np.ascontiguousarray(self.positions, dtype=np.float32)
         nrm = np.ascontiguousarray(self.normals, dtype=np.float32)
         faces = np.ascontiguousarray(self.faces, dtype=np.uint32)
         if pos.ndim != 2 or pos.shape[1] != 3 or len(pos) == 0:
@@ -64,6 +65,7 @@ class BaseMesh:
             raise MeshError(f"{self.name}: expected normals of shape {pos.shape}, found {nrm.shape}")
         if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
             raise MeshError(f"{self.name}: expected at least one triangle (faces of shape (m, 3)), found {faces.shape}")
+        _check_float32_range(np.asarray(self.positions, dtype=np.float64), self.name)
         if not np.isfinite(pos).all():
             bad = int(np.argwhere(~np.isfinite(pos).all(axis=1))[0, 0])
             raise MeshError(f"{self.name}: vertex {bad} has a non-finite coordinate {pos[bad].tolist()}; expected finite numbers")
@@ -113,6 +115,23 @@ class BaseMesh:
         )
 
 
+_F32_MAX = float(np.finfo(np.float32).max)
+
+
+def _check_float32_range(positions: np.ndarray, name: str) -> None:
+    """Raise :class:`MeshError` if a finite float64 coordinate does not fit in float32
+    (the GPU and every buffer hold float32)."""
+    p = np.asarray(positions, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        big = np.isfinite(p) & (np.abs(p) > _F32_MAX)
+    if big.any():
+        bad = int(np.argwhere(big.any(axis=1))[0, 0])
+        raise MeshError(
+            f"{name}: vertex {bad} has coordinate {float(p[bad][big[bad]][0]):.6g}, which does not fit in float32; "
+            f"expected magnitudes up to {_F32_MAX:.6g} (scale the mesh down)"
+        )
+
+
 def area_weighted_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Unit vertex normals, each the area-weighted mean of its faces' normals.
 
@@ -121,6 +140,11 @@ def area_weighted_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarra
     """
     p = np.asarray(positions, dtype=np.float64)
     f = np.asarray(faces, dtype=np.int64)
+    # scale to unit size first: the result does not depend on the scale, and
+    # neither 1e-30 (cross products underflow the cut-off) nor 1e30 meshes lose normals
+    scale = float(np.max(np.abs(p - p.mean(axis=0)))) if len(p) else 0.0
+    if np.isfinite(scale) and scale > 0:
+        p = (p - p.mean(axis=0)) / scale
     tri = p[f]
     # the cross product's length is twice the triangle's area: area weighting
     fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -164,21 +188,32 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(_SUPPORTED)})")
     if path.suffix.lower() not in _SUPPORTED:
         raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(_SUPPORTED)}")
-    try:
-        import trimesh
+    simple = _read_simple_obj(path) if path.suffix.lower() == ".obj" else None
+    if simple is not None:  # fast path: no trimesh import (about 1 s) for plain triangle OBJ files
+        positions, faces, simple_normals = simple
+        transform = None
+    else:
+        try:
+            import trimesh
 
-        loaded = trimesh.load(str(path), process=False)
-    except Exception as exc:  # trimesh raises many kinds of errors on bad files
-        raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
-    mesh, transform = _single_mesh(loaded, name)
-    positions = np.asarray(mesh.vertices, dtype=np.float64)
-    faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+            loaded = trimesh.load(str(path), process=False)
+        except Exception as exc:  # trimesh raises many kinds of errors on bad files
+            raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
+        mesh, transform = _single_mesh(loaded, name)
+        positions = np.asarray(mesh.vertices, dtype=np.float64)
+        faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(positions) == 0 or len(faces) == 0:
         raise MeshError(f"{name}: the mesh has {len(positions)} vertices and {len(faces)} faces; expected triangles")
     if not np.isfinite(positions).all():
         bad = int(np.argwhere(~np.isfinite(positions).all(axis=1))[0, 0])
         raise MeshError(f"{name}: vertex {bad} has a non-finite coordinate {positions[bad].tolist()}; expected finite numbers")
-    file_normals = _file_vertex_normals(mesh, len(positions))
+    _check_float32_range(positions, name)
+    if faces.min() < 0 or faces.max() >= len(positions):
+        raise MeshError(
+            f"{name}: a face refers to vertex {int(faces.min() if faces.min() < 0 else faces.max())}, "
+            f"but the mesh has {len(positions)} vertices; expected indices 0..{len(positions) - 1}"
+        )
+    file_normals = simple_normals if simple is not None else _file_vertex_normals(mesh, len(positions))
     if transform is not None:
         positions = positions @ transform[:3, :3].T + transform[:3, 3]
         if file_normals is not None:
@@ -191,6 +226,51 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     else:
         normals = area_weighted_normals(positions, faces)
     return BaseMesh(positions, normals, faces, name=name, normals_from_file=file_normals is not None)
+
+
+def _read_simple_obj(path: Path):
+    """Positions (n, 3) float64, faces (m, 3) int64 and file normals (n, 3)
+    float64 or None of a *plain* triangle OBJ file, read without trimesh; None
+    for anything else (trimesh then reads it).
+
+    Plain means: only comments, ``v x y z``, ``vn x y z`` and triangle ``f``
+    lines; corners ``i`` (no ``vn`` lines) or ``i//i`` (as many ``vn`` as
+    ``v``); positive indices; every vertex used.  For such a file trimesh
+    (``process=False``) returns exactly these arrays, in this order.
+    """
+    try:
+        text = path.read_bytes().decode("ascii")
+    except (OSError, UnicodeDecodeError):
+        return None
+    v, vn, f = [], [], []
+    kinds = {"v": v, "vn": vn, "f": f}
+    for line in text.splitlines():
+        tok = line.split()
+        if not tok or tok[0].startswith("#"):
+            continue
+        target = kinds.get(tok[0])
+        if target is None or len(tok) != 4:
+            return None
+        target.append(tok[1:])
+    if not v or not f:
+        return None
+    try:
+        positions = np.array(v, dtype=np.float64)
+        corners = np.array(f).ravel()
+        if vn:
+            split = np.char.partition(corners, "//")
+            if len(vn) != len(v) or not (split[:, 1] == "//").all() or not (split[:, 0] == split[:, 2]).all():
+                return None
+            corners = split[:, 0]
+            normals = np.array(vn, dtype=np.float64)
+        else:
+            normals = None
+        faces = corners.astype(np.int64).reshape(-1, 3) - 1
+    except ValueError:  # a token that is not a plain number / integer
+        return None
+    if faces.min() < 0 or faces.max() >= len(positions) or np.bincount(faces.ravel(), minlength=len(positions)).min() == 0:
+        return None
+    return positions, faces, normals
 
 
 def _single_mesh(loaded, name: str):

@@ -51,6 +51,8 @@ __all__ = [
     "encode_binary",
     "decode_binary",
     "quantization_error_bound",
+    "quantize_params",
+    "dequantize_params",
     "MAGIC",
     "BINARY_SUFFIXES",
     "TEXT_SUFFIXES",
@@ -81,26 +83,26 @@ _TRAILER = struct.Struct("<I")
 _MAX_TEXT_LINE = 4096
 
 
-def as_params(values, *, name: str = "parameters") -> np.ndarray:
+def as_params(values, *, name: str = "parameters", error: type = ParamError, rows=None) -> np.ndarray:
     """Check and convert to a C-contiguous ``(n, 16) float32`` array.
 
     A single record of 16 numbers becomes ``(1, 16)``.  Raises
-    :class:`ParamError` for a wrong shape or a non-finite number.
+    :class:`ParamError` (or ``error``) for a wrong shape or a non-finite
+    number; ``rows`` optionally names each row (e.g. its line in a file).
     """
     try:
         arr = np.asarray(values, dtype=np.float32)
     except (TypeError, ValueError) as exc:
-        raise ParamError(f"{name}: expected numbers, found {type(values).__name__} ({exc})") from None
+        raise error(f"{name}: expected numbers, found {type(values).__name__} ({exc})") from None
     if arr.ndim == 1 and arr.shape[0] == 16:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != 16:
-        raise ParamError(f"{name}: expected an array of shape (n, 16), found {arr.shape}")
+        raise error(f"{name}: expected an array of shape (n, 16), found {arr.shape}")
     finite = np.isfinite(arr)
     if not finite.all():
         row, col = (int(x) for x in np.argwhere(~finite)[0])
-        raise ParamError(
-            f"{name}: instance {row}, field {FIELDS[col]}: expected a finite number, found {arr[row, col]}"
-        )
+        where = f"instance {row}" if rows is None else rows[row]
+        raise error(f"{name}: {where}, field {FIELDS[col]}: expected a finite number, found {arr[row, col]}")
     return np.ascontiguousarray(arr)
 
 
@@ -142,12 +144,13 @@ def format_text(values: np.ndarray, header: str | None = None) -> str:
 def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
     """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``."""
     try:
-        text = data.decode("utf-8")
+        text = bytes(data).decode("utf-8-sig")  # a leading byte-order mark is tolerated
     except UnicodeDecodeError as exc:
         raise ParamFileError(
             f"{name}: not a parameter file: byte {exc.start} is not UTF-8 text and the file does not start with the binary magic"
         ) from None
     rows: list[list[str]] = []
+    linenos: list[int] = []
     for lineno, line in enumerate(text.splitlines(), start=1):
         if len(line) > _MAX_TEXT_LINE:
             raise ParamFileError(f"{name}: line {lineno} is {len(line)} characters long; expected at most {_MAX_TEXT_LINE}")
@@ -158,6 +161,7 @@ def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
         if len(tokens) != 16:
             raise ParamFileError(f"{name}: line {lineno}: expected 16 numbers, found {len(tokens)}")
         rows.append(tokens)
+        linenos.append(lineno)
     if not rows:
         return np.zeros((0, 16), dtype=np.float32)
     try:
@@ -172,11 +176,20 @@ def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
                     float(tok)
                 except ValueError:
                     raise ParamFileError(
-                        f"{name}: instance {k}, field {FIELDS[c]}: expected a number, found {tok[:40]!r}"
+                        f"{name}: line {linenos[k]}, field {FIELDS[c]}: expected a number, found {tok[:40]!r}"
                     ) from None
-    with np.errstate(over="ignore"):
-        arr32 = arr.astype(np.float32)
-    return as_params(arr32, name=name)
+        # numpy refused what Python's float() accepts: parse token by token
+        arr = np.array([[float(tok) for tok in row] for row in rows], dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        arr32 = arr.astype(np.float32)  # beyond float32's range becomes inf and is refused below
+    overflow = np.isfinite(arr) & ~np.isfinite(arr32)
+    if overflow.any():
+        k, c = (int(x) for x in np.argwhere(overflow)[0])
+        raise ParamFileError(
+            f"{name}: line {linenos[k]}, field {FIELDS[c]}: {arr[k, c]:.9g} does not fit in float32; "
+            f"expected a finite number of magnitude at most {float(np.finfo(np.float32).max):.7g}"
+        )
+    return as_params(arr32, name=name, error=ParamFileError, rows=[f"line {n}" for n in linenos])
 
 
 # ------------------------------------------------------------------- binary
@@ -225,6 +238,35 @@ def quantization_error_bound(values: np.ndarray) -> np.ndarray:
     return (hi - lo) / 65535.0 / 2.0 + mag * 2.0**-23
 
 
+def quantize_params(values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The uint16 quantization of the binary file form, as arrays.
+
+    values : (n, 16) float — parameters.
+    Returns ``lo`` (16,) float32 (per-column minimum), ``step`` (16,) float32
+    (per-column step, ``(max - min) / 65535`` widened by at most one ulp) and
+    ``q`` (n, 16) uint16, so that a value decodes as ``lo + q * step``
+    (:func:`dequantize_params`).  The GPU quantized instance buffer
+    (``AxialRenderer(..., quantized=True)``) stores exactly these.
+    """
+    values = as_params(values)
+    table, payload = _quantize(values)
+    raw = _QUANT.unpack(table)
+    q = np.frombuffer(payload, dtype="<u2").reshape(len(values), 16).astype(np.uint16)
+    return np.array(raw[:16], dtype=np.float32), np.array(raw[16:], dtype=np.float32), q
+
+
+def dequantize_params(lo, step, q) -> np.ndarray:
+    """``lo + q * step`` per column, computed in float64 and rounded to float32: (n, 16).
+
+    lo, step : (16,) float32; q : (n, 16) uint16.  The same decode as a
+    quantized binary file.
+    """
+    lo = np.asarray(lo, dtype=np.float32).reshape(16)
+    step = np.asarray(step, dtype=np.float32).reshape(16)
+    q = np.asarray(q, dtype="<u2").reshape(-1, 16)
+    return _dequantize(_QUANT.pack(*lo.tolist(), *step.tolist()), q.tobytes(), len(q))
+
+
 def _quantize(values: np.ndarray) -> tuple[bytes, bytes]:
     v = values.astype(np.float64)
     lo = v.min(axis=0) if len(v) else np.zeros(16)
@@ -245,7 +287,8 @@ def _dequantize(table: bytes, payload: bytes, count: int) -> np.ndarray:
     lo = np.array(raw[:16], dtype=np.float64)
     step = np.array(raw[16:], dtype=np.float64)
     q = np.frombuffer(payload, dtype="<u2", count=count * 16).reshape(count, 16).astype(np.float64)
-    return (lo + q * step).astype(np.float32)
+    with np.errstate(over="ignore", invalid="ignore"):  # a non-finite result is refused by as_params
+        return (lo + q * step).astype(np.float32)
 
 
 def encode_binary(
@@ -277,6 +320,12 @@ def encode_binary(
 def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
     """Parse the binary form; every check happens before any allocation that
     depends on the declared count."""
+    head = bytes(data[: len(MAGIC)])
+    if head != MAGIC[: len(head)]:  # say "not this format" before "too short"
+        raise ParamFileError(
+            f"{name}: magic: expected {MAGIC!r}, found {head!r}; not a binary parameter file "
+            f"(the text form uses {', '.join(TEXT_SUFFIXES)})"
+        )
     if len(data) < HEADER_SIZE + _TRAILER.size:
         raise ParamFileError(
             f"{name}: truncated: {len(data)} bytes, expected at least {HEADER_SIZE + _TRAILER.size} (header + checksum)"
@@ -315,7 +364,7 @@ def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
         values = _dequantize(bytes(data[HEADER_SIZE : HEADER_SIZE + table]), payload, count)
     else:
         values = np.frombuffer(payload, dtype="<f4", count=count * 16).reshape(count, 16).astype(np.float32)
-    values = as_params(values, name=name)
+    values = as_params(values, name=name, error=ParamFileError)
     return ParamFile(
         values=values, format="binary", encoding=enc_name, axis=axis,
         mesh_fingerprint=None if fingerprint == bytes(32) else fingerprint,
@@ -334,6 +383,9 @@ def read_param_file(path: str | os.PathLike) -> ParamFile:
     """Read a parameter file, text or binary (told apart by the magic bytes)."""
     path = Path(path)
     try:
+        if path.exists() and not path.is_dir() and not path.is_file():
+            # a FIFO or a device (/dev/zero) might never end: refuse before reading
+            raise ParamFileError(f"{path}: not a regular file; expected a parameter file")
         data = path.read_bytes()
     except FileNotFoundError:
         raise ParamFileError(f"{path}: no such parameter file") from None
@@ -341,10 +393,8 @@ def read_param_file(path: str | os.PathLike) -> ParamFile:
         raise ParamFileError(f"{path}: is a folder; expected a parameter file") from None
     except OSError as exc:
         raise ParamFileError(f"{path}: cannot read: {exc.strerror}") from None
-    if data[: len(MAGIC)] == MAGIC or (_is_binary_suffix(path) and data[:1] == MAGIC[:1]):
+    if data[: len(MAGIC)] == MAGIC or _is_binary_suffix(path):
         return decode_binary(data, str(path))
-    if _is_binary_suffix(path) and b"\0" in data[:64]:
-        raise ParamFileError(f"{path}: magic: expected {MAGIC!r}, found {bytes(data[:8])!r}")
     values = parse_text(data, str(path))
     return ParamFile(values=values, format="text", encoding="text", size=len(data))
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers
+from .context import bind_framebuffer, release_framebuffer
 from .errors import AxialDeformError, ParamError
 from .shaders import build_program
 
@@ -27,7 +28,7 @@ __all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS"]
 MODES = ("solid", "flat", "wireframe")
 _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
 #: default base colours (linear RGB) by bundled mesh name
-DEFAULT_COLORS = {"stone": (0.62, 0.58, 0.52), "leaf": (0.38, 0.62, 0.22)}
+DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
 _CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
 
 
@@ -46,33 +47,45 @@ class AxialRenderer:
         Instances to reserve room for (``set_params`` up to it never reallocates).
     bend : bool
         False draws only rotation + position (the "all the same" method).
+    quantized : bool
+        Store each instance as 16 uint16 (32 bytes of GPU memory instead of
+        64), decoded in the vertex shader (``glsl/quantized.glsl``) with the
+        per-column table of :func:`axialdeform.params.quantize_params`; what
+        is drawn and captured is the deformation of the dequantized numbers.
     """
 
-    def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True):
+    def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
+                 quantized: bool = False):
         self.ctx = ctx
         self.mesh = mesh
         self.bend = bend
+        self.quantized = bool(quantized)
         self._released = False
         self._objects = []
         defines = {} if bend else {"AXIAL_NO_BEND": 1}
+        if self.quantized:
+            defines["AXIAL_QUANTIZED"] = 1
+        self._defines = defines
         try:
             self.program = build_program(ctx, "scene.vert", "scene.frag", defines=defines)
             self._objects.append(self.program)
             self.mesh_buffers = MeshBuffers(ctx, mesh)
-            self.instances = InstanceBuffer(ctx, params, capacity)
+            self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
             self._vao_edges = self._vertex_array(self.program, self.mesh_buffers.edges)
         except BaseException:
             self.release()
             raise
         self._capture = None  # (program, vao, scratch instances, output) built on first capture
+        self._tint = None  # (program, triangles vao, edges vao, buffer) built by the first set_tint
+        self._tint_count = None  # colours in the tint buffer; None: tint off
         self._set_axis_uniforms(self.program)
-        self.color = DEFAULT_COLORS.get(str(mesh.name), (0.62, 0.58, 0.52))
+        self.color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
         self.line_color = (0.12, 0.14, 0.18)
 
     # ------------------------------------------------------------ plumbing
-    def _vertex_array(self, program, index_buffer, instance_buffer=None):
-        content = [self.mesh_buffers.content(program), (instance_buffer or self.instances).content(program)]
+    def _vertex_array(self, program, index_buffer, instance_buffer=None, extra=()):
+        content = [self.mesh_buffers.content(program), (instance_buffer or self.instances).content(program), *extra]
         vao = self.ctx.vertex_array(program, content, index_buffer=index_buffer, index_element_size=4)
         self._objects.append(vao)
         return vao
@@ -82,6 +95,24 @@ class AxialRenderer:
         for name, value in (("u_axis", axis.index), ("u_lo", axis.lo), ("u_len", axis.length)):
             if name in program:
                 program[name].value = value
+        self._set_quant_uniforms(program)
+
+    def _set_quant_uniforms(self, program) -> None:
+        """The per-column decode table of a quantized instance buffer (no-op otherwise)."""
+        if "u_qmin" in program:
+            program["u_qmin"].write(self.instances.qmin.astype("f4").tobytes())
+            program["u_qstep"].write(self.instances.qstep.astype("f4").tobytes())
+
+    def _refresh_quant_uniforms(self) -> None:
+        if not self.quantized:
+            return
+        import moderngl
+
+        programs = [o for o in self._objects if isinstance(o, moderngl.Program)]
+        if self._capture is not None:
+            programs.append(self._capture[0])
+        for prog in programs:
+            self._set_quant_uniforms(prog)
 
     def _check(self) -> None:
         if self._released:
@@ -97,11 +128,48 @@ class AxialRenderer:
         """Replace all parameters; the buffer is reallocated only if the count grows past its capacity."""
         self._check()
         self.instances.set(params)
+        self._refresh_quant_uniforms()
 
     def update_params(self, params, start: int = 0) -> None:
         """Overwrite the instances ``start .. start + len(params) - 1`` in place."""
         self._check()
         self.instances.update(params, start)
+
+    # ------------------------------------------------------------ optional tint
+    def set_tint(self, colors) -> None:
+        """Give every instance its own base colour; ``None`` goes back to ``color``.
+
+        colors : (count, 3) linear RGB in 0..1, one row per instance in the
+            order of the parameters, or None.
+
+        The colours live in a second instanced buffer (12 bytes an instance)
+        read by a variant of the program compiled with ``AXIAL_TINT``; the
+        draw stays ONE instanced call.  A renderer that never calls this keeps
+        the plain program and pays nothing.  Calling it again with the same
+        count overwrites the buffer in place.
+        """
+        self._check()
+        if colors is None:
+            self._tint_count = None
+            return
+        values = np.ascontiguousarray(colors, dtype=np.float32)
+        if values.ndim != 2 or values.shape[1] != 3 or not np.isfinite(values).all():
+            raise ParamError(f"tint: expected (count, 3) finite linear RGB, found shape {values.shape}")
+        if self._tint is None:
+            prog = build_program(self.ctx, "scene.vert", "scene.frag", defines={**self._defines, "AXIAL_TINT": 1})
+            self._objects.append(prog)
+            buffer = self.ctx.buffer(reserve=max(len(values), self.instances.capacity, 1) * 12)
+            self._objects.append(buffer)
+            tint = (buffer, "3f/i", "i_tint")
+            self._set_axis_uniforms(prog)
+            self._tint = (prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=[tint]),
+                          self._vertex_array(prog, self.mesh_buffers.edges, extra=[tint]), buffer)
+        buffer = self._tint[3]
+        if values.nbytes > buffer.size:
+            buffer.orphan(values.nbytes)
+        if len(values):
+            buffer.write(values.tobytes())
+        self._tint_count = len(values)
 
     # ------------------------------------------------------------ drawing
     def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
@@ -119,7 +187,12 @@ class AxialRenderer:
             raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
         view = np.asarray(view, dtype=np.float32).reshape(4, 4)
         projection = np.asarray(projection, dtype=np.float32).reshape(4, 4)
-        prog = self.program
+        tinted = self._tint_count is not None
+        if tinted and self._tint_count != self.count:
+            raise ParamError(f"tint: {self._tint_count} colours for {self.count} instances; "
+                             "call set_tint with one colour per instance (or None)")
+        prog = self._tint[0] if tinted else self.program
+        vao_edges, vao_triangles = (self._tint[2], self._tint[1]) if tinted else (self._vao_edges, self._vao_triangles)
         prog["u_view"].write(view.tobytes())
         prog["u_proj"].write(projection.tobytes())
         uniforms = {
@@ -138,9 +211,9 @@ class AxialRenderer:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
         if mode == "wireframe":
-            self._vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
+            vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
         else:
-            self._vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
+            vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
 
     # ------------------------------------------------------------ capture
     def capture(self, start: int = 0, count: int | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -161,10 +234,10 @@ class AxialRenderer:
         chunk = max(1, min(count, _CAPTURE_BYTES // per_instance))
         if self._capture is None or self._capture[2].capacity < chunk:
             self._release_capture()
-            prog = build_program(self.ctx, "scene.vert", defines={} if self.bend else {"AXIAL_NO_BEND": 1},
+            prog = build_program(self.ctx, "scene.vert", defines=dict(self._defines),
                                  varyings=("v_world", "v_normal"))
             self._set_axis_uniforms(prog)
-            scratch = InstanceBuffer(self.ctx, capacity=chunk)
+            scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized)
             vao = self.ctx.vertex_array(prog, [self.mesh_buffers.content(prog), scratch.content(prog)])
             output = self.ctx.buffer(reserve=chunk * per_instance)
             # a draw needs a complete framebuffer even with rasterization
@@ -179,19 +252,20 @@ class AxialRenderer:
         try:
             for a in range(0, count, chunk):  # chunks bound GPU memory; each is one transform-feedback draw
                 k = min(chunk, count - a)
-                self.ctx.copy_buffer(scratch.buffer, self.instances.buffer, size=k * 64, read_offset=(start + a) * 64)
+                rec = self.instances.record_bytes
+                self.ctx.copy_buffer(scratch.buffer, self.instances.buffer, size=k * rec, read_offset=(start + a) * rec)
                 scratch.count = k
                 vao.transform(output, mode=moderngl.POINTS, vertices=v, instances=k)
                 out[a : a + k] = np.frombuffer(output.read(size=k * per_instance), dtype="f4").reshape(k, v, 6)
         finally:
-            if previous is not None:
-                previous.use()
+            bind_framebuffer(self.ctx, previous)  # give the caller back their framebuffer
         return out[..., :3].copy(), out[..., 3:].copy()
 
     def _release_capture(self) -> None:
         if self._capture is not None:
             prog, vao, scratch, output, fbo, color = self._capture
-            for obj in (vao, prog, scratch, output, fbo, color):
+            release_framebuffer(self.ctx, fbo)
+            for obj in (vao, prog, scratch, output, color):
                 obj.release()
             self._capture = None
 

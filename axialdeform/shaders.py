@@ -14,10 +14,10 @@ from importlib import resources
 
 from .errors import ShaderError
 
-__all__ = ["GLSL_VERSION", "shader_source", "assemble", "deformation_glsl", "build_program", "Assembled"]
+__all__ = ["GLSL_VERSION", "shader_source", "assemble", "assemble_text", "deformation_glsl", "build_program", "Assembled"]
 
 GLSL_VERSION = "#version 330 core"
-_INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"\s*$')
+_INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"\s*(?://.*)?$')
 _STAGES = ("vertex_shader", "fragment_shader", "geometry_shader")
 
 
@@ -73,10 +73,44 @@ def assemble(name: str, defines: dict | None = None, loader=shader_source) -> As
                 expand(m.group(1), stack + (fname,))
                 lines.append(f"#line {lineno + 1} {number}")
             else:
-                lines.append(line)
+                # moderngl expands any '#include "x"' it still sees, even in a
+                # comment: defuse the ones that are not directives
+                lines.append(line.replace("#include", "#-include"))
 
     expand(name, ())
     out.source = "\n".join(lines) + "\n"
+    return out
+
+
+def assemble_text(source: str, name: str = "<string>", defines: dict | None = None) -> Assembled:
+    """Expand ``#include "axial.glsl"`` (or any file of the package's
+    ``glsl/`` folder) in the text of YOUR OWN shader.
+
+    source : the shader text.  A ``#version`` line is optional; if present it
+        must be the first non-blank line and is kept (else ``#version 330 core``).
+    name : how error locations name your text (``Assembled.locate``).
+    defines : ``#define KEY VALUE`` lines to add after ``#version``.
+
+    Every file keeps its own ``#line`` numbering, so compiler errors point at
+    the line of your text.  Returns an :class:`Assembled`; pass its
+    ``.source`` to ``ctx.program``.
+    """
+    lines = str(source).splitlines()
+    version = None
+    for i, line in enumerate(lines):
+        if not line.strip():
+            continue
+        if re.match(r"^\s*#\s*version\b", line):
+            version, lines[i] = line.strip(), ""  # a blank line keeps the numbering
+        break
+    text = "\n".join(lines)
+
+    def loader(fname: str) -> str:
+        return text if fname == name else shader_source(fname)
+
+    out = assemble(name, defines, loader=loader)
+    if version is not None:
+        out.source = version + out.source[len(GLSL_VERSION):]
     return out
 
 
@@ -104,17 +138,20 @@ def _translate_log(log: str, stages: dict[str, Assembled]) -> str:
     return "; ".join(messages) if messages else log.strip()
 
 
-def build_program(ctx, vertex: str, fragment: str | None = None, *, defines: dict | None = None, varyings=()):
+def build_program(ctx, vertex: str, fragment: str | None = None, *, defines: dict | None = None, varyings=(),
+                  loader=None):
     """Compile and link a program from files of ``glsl/``.
 
-    Raises :class:`ShaderError` whose message names the file, the stage and
-    the line of each compiler error.
+    ``loader(name) -> str`` replaces :func:`shader_source` (your own files,
+    tests).  Raises :class:`ShaderError` whose message names the file, the
+    stage and the line of each compiler error.
     """
     import moderngl
 
-    stages = {"vertex_shader": assemble(vertex, defines)}
+    loader = shader_source if loader is None else loader
+    stages = {"vertex_shader": assemble(vertex, defines, loader=loader)}
     if fragment is not None:
-        stages["fragment_shader"] = assemble(fragment, defines)
+        stages["fragment_shader"] = assemble(fragment, defines, loader=loader)
     try:
         return ctx.program(**{k: v.source for k, v in stages.items()}, varyings=list(varyings))
     except moderngl.Error as exc:

@@ -2,6 +2,8 @@
 // its own control axis.  Also the capture program (transform feedback of
 // v_world and v_normal): what is drawn is exactly what is captured.
 #include "axial.glsl"
+// AXIAL_QUANTIZED: the 32-byte instance record and its decode
+#include "quantized.glsl"
 
 uniform mat4 u_view;        // pyrr layout, uploaded as-is: clip = u_proj * u_view * world
 uniform mat4 u_proj;
@@ -18,6 +20,10 @@ in vec4 i_d34;
 in vec2 i_d5;
 in vec3 i_position;
 in vec3 i_angles;
+#ifdef AXIAL_TINT
+in vec3 i_tint;             // optional second instanced buffer: the instance's base colour (linear RGB)
+flat out vec3 v_tint;
+#endif
 
 out vec3 v_world;           // world position
 out vec3 v_normal;          // world normal (analytic)
@@ -31,8 +37,15 @@ float instance_hash(int i) {
 }
 
 void main() {
+#ifdef AXIAL_QUANTIZED
+    AxialInstance inst = axial_dequantize();
+#else
     AxialInstance inst = AxialInstance(i_d12, i_d34, i_d5, i_position, i_angles);
+#endif
     axial_world(in_position, in_normal, u_axis, u_lo, u_len, inst, v_world, v_normal);
     v_shade = 0.85 + 0.3 * instance_hash(gl_InstanceID);
+#ifdef AXIAL_TINT
+    v_tint = i_tint;
+#endif
     gl_Position = u_proj * u_view * vec4(v_world, 1.0);
 }

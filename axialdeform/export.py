@@ -1,0 +1,491 @@
+"""glTF 2.0 export of deformed instances, in two layouts (``docs/interop.md``).
+
+* **baked** (:func:`export_baked`): one mesh per instance holding its
+  deformed world positions and normals (:func:`axialdeform.bake.bake`), each
+  referenced by its own node.  Any glTF viewer shows the exact shapes.
+* **instanced** (:func:`export_instanced`): the base mesh once, drawn by one
+  node with ``EXT_mesh_gpu_instancing``.  Per instance the extension carries
+  ``TRANSLATION`` (VEC3 float, the position ``p``), ``ROTATION`` (VEC4 float,
+  the unit quaternion ``x, y, z, w`` of ``R = Rz·Ry·Rx``) and the
+  application-specific attributes
+
+  ===============  ======  ===============================================
+  name             type    contents (float32, per instance)
+  ===============  ======  ===============================================
+  ``_AXIAL_D12``   VEC4    ``d1u d1v d2u d2v`` (model units)
+  ``_AXIAL_D34``   VEC4    ``d3u d3v d4u d4v`` (model units)
+  ``_AXIAL_D5``    VEC2    ``d5u d5v`` (model units)
+  ``_AXIAL_ANGLES`` VEC3   ``rx ry rz`` (radians), the original angles
+  ===============  ======  ===============================================
+
+  and the node's ``extras["axialdeform"]`` records the control axis
+  (``index``, ``lo``, ``length``) and the SHA-256 fingerprint of the base
+  mesh.  A viewer that knows the extension but not the deformation draws the
+  undeformed base mesh at each instance's position and orientation; a viewer
+  without the extension draws the base mesh once.  :func:`read_instanced_glb`
+  reads the 16 numbers back bit for bit.
+
+Coordinates are written as they are: glTF says +Y is up and units are
+metres, and nothing here re-orients or rescales the model.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import atomic_write_bytes
+from .errors import AxialDeformError
+from .params import ANGLES, POSITION, as_params
+
+__all__ = [
+    "GltfError",
+    "LAYOUTS",
+    "INSTANCING",
+    "EXTRAS_KEY",
+    "ATTRIBUTES",
+    "export_glb",
+    "export_baked",
+    "export_instanced",
+    "read_instanced_glb",
+    "quaternions_from_angles",
+    "matrices_from_quaternions",
+    "add_parser",
+    "run",
+]
+
+LAYOUTS = ("baked", "instanced")
+#: the glTF extension that draws one mesh many times
+INSTANCING = "EXT_mesh_gpu_instancing"
+#: key of the dictionary this library writes into ``extras``
+EXTRAS_KEY = "axialdeform"
+#: the application-specific per-instance attributes: name -> (type, columns of the 16 numbers)
+ATTRIBUTES = {
+    "_AXIAL_D12": ("VEC4", (0, 1, 2, 3)),
+    "_AXIAL_D34": ("VEC4", (4, 5, 6, 7)),
+    "_AXIAL_D5": ("VEC2", (8, 9)),
+    "_AXIAL_ANGLES": ("VEC3", (13, 14, 15)),
+}
+_FORMAT_VERSION = 1
+
+# glTF enums
+_FLOAT, _UINT16, _UINT32 = 5126, 5123, 5125
+_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
+_TRIANGLES = 4
+_COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
+_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
+
+
+class GltfError(AxialDeformError, ValueError):
+    """A glTF file that cannot be written or read back as axialdeform instances
+    (wrong extension, missing attribute, unexpected accessor type)."""
+
+
+# ---------------------------------------------------------------- quaternions
+
+
+def quaternions_from_angles(angles: np.ndarray) -> np.ndarray:
+    """Unit quaternions of ``R = Rz(rz)·Ry(ry)·Rx(rx)``.
+
+    Parameters
+    ----------
+    angles : (n, 3) float, radians
+        ``rx ry rz`` per instance.
+
+    Returns
+    -------
+    (n, 4) float64
+        ``x, y, z, w`` (the glTF order), the Hamilton product ``qz ⊗ qy ⊗ qx``
+        (pyrr's ``quaternion.cross``), normalised, sign chosen so ``w >= 0``.
+    """
+    from pyrr import quaternion
+
+    a = np.asarray(angles, dtype=np.float64).reshape(-1, 3)
+    half = 0.5 * a
+    s, c = np.sin(half), np.cos(half)
+    zero = np.zeros(len(a))
+    # pyrr quaternions are (x, y, z, w); quaternion.cross unpacks the first
+    # axis, so (4, n) arrays multiply n quaternions at once
+    qx = np.stack([s[:, 0], zero, zero, c[:, 0]])
+    qy = np.stack([zero, s[:, 1], zero, c[:, 1]])
+    qz = np.stack([zero, zero, s[:, 2], c[:, 2]])
+    q = quaternion.cross(qz, quaternion.cross(qy, qx)).T
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q[q[:, 3] < 0] *= -1.0
+    return q
+
+
+def matrices_from_quaternions(quats: np.ndarray) -> np.ndarray:
+    """Rotation matrices (column-vector convention, ``v -> R @ v``) of unit
+    quaternions ``(n, 4)`` in ``x, y, z, w`` order: ``(n, 3, 3)`` float64."""
+    q = np.asarray(quats, dtype=np.float64).reshape(-1, 4)
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    x, y, z, w = q.T
+    r = np.empty((len(q), 3, 3))
+    r[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    r[:, 0, 1] = 2 * (x * y - z * w)
+    r[:, 0, 2] = 2 * (x * z + y * w)
+    r[:, 1, 0] = 2 * (x * y + z * w)
+    r[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    r[:, 1, 2] = 2 * (y * z - x * w)
+    r[:, 2, 0] = 2 * (x * z - y * w)
+    r[:, 2, 1] = 2 * (y * z + x * w)
+    r[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    return r
+
+
+# --------------------------------------------------------------------- writing
+
+
+class _Builder:
+    """Collects binary data and glTF objects for one GLB (pygltflib underneath)."""
+
+    def __init__(self) -> None:
+        import pygltflib as g
+
+        self.g = g
+        self.gltf = g.GLTF2(asset=g.Asset(version="2.0", generator="axialdeform"))
+        self.chunks: list[bytes] = []
+        self.offset = 0
+
+    def view(self, data: np.ndarray, target: int | None = None, stride: int | None = None) -> int:
+        raw = np.ascontiguousarray(data).tobytes()
+        pad = (-len(raw)) % 4  # every bufferView starts 4-byte aligned
+        self.gltf.bufferViews.append(
+            self.g.BufferView(buffer=0, byteOffset=self.offset, byteLength=len(raw), target=target, byteStride=stride)
+        )
+        self.chunks.append(raw + bytes(pad))
+        self.offset += len(raw) + pad
+        return len(self.gltf.bufferViews) - 1
+
+    def accessor(self, view: int, component: int, count: int, kind: str, *, offset: int = 0,
+                 bounds: np.ndarray | None = None, name: str | None = None) -> int:
+        acc = self.g.Accessor(bufferView=view, byteOffset=offset, componentType=component, count=int(count),
+                              type=kind, name=name)
+        if bounds is not None:
+            acc.min = [float(x) for x in bounds.min(axis=0)]
+            acc.max = [float(x) for x in bounds.max(axis=0)]
+        self.gltf.accessors.append(acc)
+        return len(self.gltf.accessors) - 1
+
+    def indices(self, mesh) -> int:
+        faces = mesh.faces
+        small = mesh.vertex_count <= 65535
+        data = faces.astype("<u2" if small else "<u4").ravel()
+        view = self.view(data, target=_ELEMENT_ARRAY_BUFFER)
+        return self.accessor(view, _UINT16 if small else _UINT32, data.size, "SCALAR", name="indices")
+
+    def finish(self) -> bytes:
+        blob = b"".join(self.chunks)
+        self.gltf.buffers.append(self.g.Buffer(byteLength=len(blob)))
+        self.gltf.set_binary_blob(blob)
+        return b"".join(self.gltf.save_to_bytes())
+
+
+def _mesh_extras(mesh, count: int, layout: str) -> dict:
+    a = mesh.axis
+    return {
+        "version": _FORMAT_VERSION,
+        "layout": layout,
+        "count": int(count),
+        "axis": {"index": a.index, "name": a.name, "lo": float(a.lo), "length": float(a.length)},
+        "mesh_fingerprint": mesh.fingerprint.hex(),
+        "mesh_vertices": mesh.vertex_count,
+    }
+
+
+def _check_glb_path(path) -> Path:
+    path = Path(path)
+    if path.suffix.lower() != ".glb":
+        raise GltfError(f"{path}: expected a .glb file name (binary glTF), found {path.suffix or 'no extension'!r}")
+    if path.is_dir():
+        raise GltfError(f"{path}: is a folder; expected a .glb file name")
+    return path
+
+
+def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
+    """The GLB bytes of the baked layout (see :func:`export_baked`)."""
+    params = as_params(params)
+    if positions is None or normals is None:
+        from .bake import bake
+
+        positions, normals = bake(mesh, params, "cpu")
+    if len(params) == 0:
+        raise GltfError("baked export: expected at least one instance, found 0")
+    positions = np.ascontiguousarray(positions, dtype="<f4")
+    normals = np.ascontiguousarray(normals, dtype="<f4")
+    n, v = positions.shape[:2]
+    if positions.shape != (n, mesh.vertex_count, 3) or normals.shape != positions.shape:
+        raise GltfError(
+            f"baked arrays: expected positions and normals of shape ({len(params)}, {mesh.vertex_count}, 3), "
+            f"found {positions.shape} and {normals.shape}"
+        )
+    b = _Builder()
+    g = b.g
+    idx = b.indices(mesh)
+    # all instances share one bufferView per attribute; each accessor starts at its instance
+    pos_view = b.view(positions, target=_ARRAY_BUFFER, stride=12)
+    nrm_view = b.view(normals, target=_ARRAY_BUFFER, stride=12)
+    lo, hi = positions.min(axis=1), positions.max(axis=1)  # (n, 3): bounds per instance, vectorized
+    digits = max(6, len(str(max(n - 1, 0))))
+    for k in range(n):  # glTF objects per instance (JSON), not per vertex
+        name = f"instance_{k:0{digits}d}"
+        pa = b.accessor(pos_view, _FLOAT, v, "VEC3", offset=k * v * 12, bounds=np.stack([lo[k], hi[k]]), name=name + "_POSITION")
+        na = b.accessor(nrm_view, _FLOAT, v, "VEC3", offset=k * v * 12, name=name + "_NORMAL")
+        b.gltf.meshes.append(g.Mesh(name=name, primitives=[
+            g.Primitive(attributes=g.Attributes(POSITION=pa, NORMAL=na), indices=idx, mode=_TRIANGLES)]))
+        b.gltf.nodes.append(g.Node(name=name, mesh=k, extras={EXTRAS_KEY: {"instance": k}}))
+    b.gltf.scenes.append(g.Scene(name="axialdeform baked", nodes=list(range(n)),
+                                 extras={EXTRAS_KEY: _mesh_extras(mesh, n, "baked")}))
+    b.gltf.scene = 0
+    return b.finish()
+
+
+def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, normals=None) -> Path:
+    """Write one glTF mesh per instance with its deformed world geometry.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The ``.glb`` to write (atomically).
+    mesh : BaseMesh
+    params : (n, 16) float32
+    positions, normals : (n, v, 3) float32, optional
+        Already baked geometry (e.g. from the GPU); baked on the CPU if omitted.
+
+    Every instance is a node ``instance_NNNNNN`` with its own mesh (POSITION,
+    NORMAL, world units) and the base mesh's triangles; the scene's
+    ``extras["axialdeform"]`` records the axis and the mesh fingerprint.
+    """
+    path = _check_glb_path(path)
+    atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals))
+    return path
+
+
+def encode_instanced(mesh, params) -> bytes:
+    """The GLB bytes of the instanced layout (see :func:`export_instanced`)."""
+    params = as_params(params)
+    n = len(params)
+    if n == 0:
+        raise GltfError("instanced export: expected at least one instance (EXT_mesh_gpu_instancing needs count >= 1)")
+    b = _Builder()
+    g = b.g
+    pos = b.accessor(b.view(mesh.positions.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
+                     bounds=mesh.positions, name="base_POSITION")
+    nrm = b.accessor(b.view(mesh.normals.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
+                     name="base_NORMAL")
+    idx = b.indices(mesh)
+    b.gltf.meshes.append(g.Mesh(name="base", primitives=[
+        g.Primitive(attributes=g.Attributes(POSITION=pos, NORMAL=nrm), indices=idx, mode=_TRIANGLES)]))
+    # per-instance data: no bufferView target (they are not vertex attributes)
+    columns = {
+        "TRANSLATION": ("VEC3", params[:, POSITION]),
+        "ROTATION": ("VEC4", quaternions_from_angles(params[:, ANGLES]).astype(np.float32)),
+    }
+    columns.update({name: (kind, params[:, list(cols)]) for name, (kind, cols) in ATTRIBUTES.items()})
+    attributes = {}
+    for name, (kind, data) in columns.items():
+        data = np.ascontiguousarray(data, dtype="<f4")
+        attributes[name] = b.accessor(b.view(data), _FLOAT, n, kind, name=name)
+    extras = _mesh_extras(mesh, n, "instanced")
+    extras["attributes"] = {name: _field_names(cols) for name, (_k, cols) in ATTRIBUTES.items()}
+    b.gltf.nodes.append(g.Node(name="axialdeform instances", mesh=0,
+                               extensions={INSTANCING: {"attributes": attributes}},
+                               extras={EXTRAS_KEY: extras}))
+    b.gltf.scenes.append(g.Scene(name="axialdeform instanced", nodes=[0]))
+    b.gltf.scene = 0
+    b.gltf.extensionsUsed = [INSTANCING]
+    return b.finish()
+
+
+def _field_names(cols) -> list[str]:
+    from .params import FIELDS
+
+    return [FIELDS[c] for c in cols]
+
+
+def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
+    """Write the base mesh once plus ``EXT_mesh_gpu_instancing`` (see the module docs).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The ``.glb`` to write (atomically).
+    mesh : BaseMesh
+    params : (n, 16) float32, n >= 1
+    """
+    path = _check_glb_path(path)
+    atomic_write_bytes(path, encode_instanced(mesh, params))
+    return path
+
+
+def export_glb(path: str | os.PathLike, mesh, params, layout: str = "baked") -> Path:
+    """Write ``params`` for ``mesh`` as a GLB in ``layout`` ``"baked"`` or ``"instanced"``."""
+    if layout == "baked":
+        return export_baked(path, mesh, params)
+    if layout == "instanced":
+        return export_instanced(path, mesh, params)
+    raise GltfError(f"layout: expected one of {', '.join(LAYOUTS)}, found {layout!r}")
+
+
+# --------------------------------------------------------------------- reading
+
+
+def _read_accessor(gltf, blob: bytes, index, name: str, where: str) -> np.ndarray:
+    if not isinstance(index, int) or not 0 <= index < len(gltf.accessors):
+        raise GltfError(f"{where}: {name}: expected an accessor index, found {index!r}")
+    acc = gltf.accessors[index]
+    if acc.componentType not in _DTYPES or acc.type not in _COMPONENTS or acc.bufferView is None:
+        raise GltfError(f"{where}: {name}: unsupported accessor ({acc.type} of component type {acc.componentType}, "
+                        f"bufferView {acc.bufferView})")
+    view = gltf.bufferViews[acc.bufferView]
+    dtype = np.dtype(_DTYPES[acc.componentType]).newbyteorder("<")
+    comps = _COMPONENTS[acc.type]
+    item = dtype.itemsize * comps
+    stride = view.byteStride or item
+    start = (view.byteOffset or 0) + (acc.byteOffset or 0)
+    need = start + (acc.count - 1) * stride + item if acc.count else start
+    if need > (view.byteOffset or 0) + view.byteLength or need > len(blob):
+        raise GltfError(f"{where}: {name}: accessor {index} runs past its bufferView (truncated file?)")
+    arr = np.ndarray((acc.count, comps), dtype=dtype, buffer=blob, offset=start, strides=(stride, dtype.itemsize))
+    out = np.array(arr)
+    if acc.normalized and dtype.kind in "iu":
+        info = np.iinfo(dtype)
+        out = np.maximum(out.astype(np.float64) / info.max, -1.0) if dtype.kind == "i" else out / info.max
+    return out
+
+
+def read_instanced_glb(path: str | os.PathLike):
+    """Read a GLB written by :func:`export_instanced` back.
+
+    Returns
+    -------
+    mesh : BaseMesh
+        The base mesh (positions, normals, triangles exactly as written).
+    params : (n, 16) float32
+        The 16 numbers per instance, bit for bit as exported: offsets from
+        ``_AXIAL_D12/_AXIAL_D34/_AXIAL_D5``, position from ``TRANSLATION``,
+        angles from ``_AXIAL_ANGLES`` (or, if a file lacks it, from the
+        ``ROTATION`` quaternion: same rotation, angles possibly different).
+
+    Raises :class:`GltfError` for a file without an instanced node, and
+    :class:`MeshMismatchError` if the recorded fingerprint does not match
+    the base mesh in the file.
+    """
+    import pygltflib
+
+    from .errors import MeshMismatchError
+    from .mesh import BaseMesh
+
+    path = Path(path)
+    where = str(path)
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise GltfError(f"{where}: no such file") from None
+    except OSError as exc:
+        raise GltfError(f"{where}: cannot read: {exc.strerror}") from None
+    try:
+        gltf = pygltflib.GLTF2.load_from_bytes(data)
+    except Exception as exc:  # pygltflib raises IOError, struct.error, JSON errors
+        raise GltfError(f"{where}: not a binary glTF file ({type(exc).__name__}: {exc})") from None
+    blob = gltf.binary_blob() or b""
+    nodes = [node for node in gltf.nodes if (node.extensions or {}).get(INSTANCING) and node.mesh is not None]
+    if len(nodes) != 1:
+        raise GltfError(f"{where}: expected exactly one node with {INSTANCING}, found {len(nodes)}")
+    node = nodes[0]
+    attrs = node.extensions[INSTANCING].get("attributes", {})
+    missing = [k for k in ("TRANSLATION", "_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5") if k not in attrs]
+    if missing or ("_AXIAL_ANGLES" not in attrs and "ROTATION" not in attrs):
+        raise GltfError(f"{where}: {INSTANCING} attributes: expected TRANSLATION, ROTATION and "
+                        f"{', '.join(ATTRIBUTES)}; missing {', '.join(missing) or 'ROTATION'}")
+    cols = {name: _read_accessor(gltf, blob, attrs[name], name, where) for name in attrs}
+    counts = {len(v) for v in cols.values()}
+    if len(counts) != 1:
+        raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
+    n = counts.pop()
+    params = np.zeros((n, 16), dtype=np.float32)
+    for name, (kind, idx) in ATTRIBUTES.items():
+        if name in cols:
+            if cols[name].shape[1] != _COMPONENTS[kind]:
+                raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
+            params[:, list(idx)] = cols[name]
+    params[:, POSITION] = cols["TRANSLATION"]
+    if "_AXIAL_ANGLES" not in cols:
+        from .fit import angles_from_matrices
+
+        params[:, ANGLES] = angles_from_matrices(matrices_from_quaternions(cols["ROTATION"]))
+
+    mesh_def = gltf.meshes[node.mesh]
+    if len(mesh_def.primitives) != 1:
+        raise GltfError(f"{where}: mesh {node.mesh}: expected one primitive, found {len(mesh_def.primitives)}")
+    prim = mesh_def.primitives[0]
+    if prim.mode not in (None, _TRIANGLES) or prim.indices is None:
+        raise GltfError(f"{where}: mesh {node.mesh}: expected indexed triangles (mode 4)")
+    positions = _read_accessor(gltf, blob, prim.attributes.POSITION, "POSITION", where)
+    faces = _read_accessor(gltf, blob, prim.indices, "indices", where).reshape(-1, 3)
+    if prim.attributes.NORMAL is not None:
+        normals = _read_accessor(gltf, blob, prim.attributes.NORMAL, "NORMAL", where)
+        from_file = True
+    else:
+        from .mesh import area_weighted_normals
+
+        normals, from_file = area_weighted_normals(positions, faces), False
+    mesh = BaseMesh(positions, normals, faces, name=where, normals_from_file=from_file)
+    extras = (node.extras or {}).get(EXTRAS_KEY, {})
+    recorded = extras.get("mesh_fingerprint")
+    if recorded is not None and recorded != mesh.fingerprint.hex():
+        raise MeshMismatchError(f"{where}: extras mesh_fingerprint {recorded[:16]} does not match the base mesh in the "
+                                f"file ({mesh.fingerprint.hex()[:16]}); the file was altered")
+    return mesh, as_params(params, name=where)
+
+
+def read_extras(path: str | os.PathLike) -> dict:
+    """The ``extras["axialdeform"]`` dictionaries of a GLB's scenes and nodes (for tools and tests)."""
+    import pygltflib
+
+    gltf = pygltflib.GLTF2.load_binary(str(path))
+    out = {}
+    for kind, items in (("scene", gltf.scenes), ("node", gltf.nodes)):
+        for k, item in enumerate(items):
+            if item.extras and EXTRAS_KEY in item.extras:
+                out[f"{kind}/{k}"] = json.loads(json.dumps(item.extras[EXTRAS_KEY]))
+    return out
+
+
+# ------------------------------------------------------------------------- CLI
+
+
+def add_parser(subparsers) -> None:
+    """Register ``axialdeform export``."""
+    e = subparsers.add_parser("export", help="write instances as a glTF binary (.glb)", description=(
+        "Write MESH deformed by PARAMS to a .glb. --baked (default): one mesh per instance with its deformed "
+        "world positions and normals; opens in any glTF viewer. --instanced: the base mesh once plus "
+        "EXT_mesh_gpu_instancing (TRANSLATION, ROTATION and the offsets as _AXIAL_* attributes); "
+        "see docs/interop.md. Coordinates are written as they are (no re-orientation to glTF's +Y up)."))
+    e.add_argument("mesh")
+    e.add_argument("params")
+    e.add_argument("-o", "--output", required=True, help="the .glb to write")
+    layout = e.add_mutually_exclusive_group()
+    layout.add_argument("--baked", dest="layout", action="store_const", const="baked",
+                        help="one deformed mesh per instance (default)")
+    layout.add_argument("--instanced", dest="layout", action="store_const", const="instanced",
+                        help="base mesh once + EXT_mesh_gpu_instancing")
+    e.set_defaults(layout="baked")
+    e.add_argument("--ignore-mesh-mismatch", action="store_true", help="use PARAMS even if made for another mesh")
+    e.set_defaults(handler=run)
+
+
+def run(args) -> None:
+    """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
+    from .mesh import load_mesh
+    from .params import read_params
+
+    out = _check_glb_path(args.output)
+    mesh = load_mesh(args.mesh)
+    params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+    path = export_glb(out, mesh, params, args.layout)
+    print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

@@ -1,0 +1,487 @@
+"""Fitting: recover the 16 numbers of instances from meshes that already exist.
+
+Given a base mesh and variants with its topology (same vertices in the same
+order, each a bent, rotated and moved copy), find for each variant the
+offsets ``d1..d5``, the position ``p`` and the angles ``rx ry rz`` with
+``W ≈ R·(V + E(Σ B_i(t) d_i)) + p`` (``docs/axial-deformation.md``).
+
+Method (``docs/interop.md``), per instance, vectorized over vertices:
+
+* ``t`` comes from the base mesh, so the model is linear in the offsets and
+  the position once ``R`` is known;
+* start: ``R, p`` by Kabsch alignment of the base mesh onto the variant
+  (no scaling), offsets zero;
+* then alternate: offsets and position by linear least squares for the
+  current ``R``; ``R, p`` by Kabsch for the current offsets; and, because
+  bending and rotation interact (a tilt of the axis looks much like a linear
+  bend), a joint Gauss-Newton step on all free parameters that is kept only
+  if it lowers the error.  Stop when a round no longer lowers the error.
+* canonical form: the five offsets have zero mean per component (a shift
+  shared by all five is a translation); the fit solves in a basis of
+  zero-mean offsets, so it returns that form.
+
+The residual reported is the distance between the variant and the shape the
+fitted float32 parameters actually give (:func:`axialdeform.deform.deform`),
+RMS and maximum over the vertices, as a fraction of the axis length ``L``.
+A variant that the method did not make (noise, a scaled copy, another mesh)
+gets an honest residual; fits above ``max_residual`` are flagged.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .deform import bernstein, deform
+from .errors import AxialDeformError, MeshError
+from .params import ANGLES, OFFSETS, POSITION, as_params
+
+__all__ = [
+    "TopologyError",
+    "ResidualError",
+    "FitResult",
+    "DEFAULT_MAX_RESIDUAL",
+    "MESH_SUFFIXES",
+    "angles_from_matrices",
+    "kabsch",
+    "fit_instance",
+    "fit_params",
+    "fit_files",
+    "load_variant",
+    "variant_paths",
+    "add_parser",
+    "run",
+]
+
+#: default limit on the worst vertex distance of a fit, as a fraction of L
+DEFAULT_MAX_RESIDUAL = 1e-3
+#: mesh files a variants folder may hold (others are ignored)
+MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
+
+
+class TopologyError(MeshError):
+    """A variant whose vertex or triangle count (or triangles) differ from the base mesh's."""
+
+
+class ResidualError(AxialDeformError):
+    """Fits whose residual exceeds the allowed limit."""
+
+
+# ------------------------------------------------------------------ rotations
+
+
+def angles_from_matrices(matrices: np.ndarray) -> np.ndarray:
+    """Angles ``rx ry rz`` (radians) with ``R = Rz(rz)·Ry(ry)·Rx(rx)``.
+
+    Parameters
+    ----------
+    matrices : (..., 3, 3) float
+        Rotation matrices (column-vector convention).
+
+    Returns
+    -------
+    (..., 3) float64
+        ``ry = atan2(-R[2,0], hypot(R[0,0], R[1,0]))`` in ``[-pi/2, pi/2]``,
+        ``rx = atan2(R[2,1], R[2,2])``, ``rz = atan2(R[1,0], R[0,0])``.  At
+        gimbal lock (``cos ry`` below 1e-9: rx and rz turn about the same
+        axis) ``rz = 0`` and ``rx`` carries the whole turn.  The matrix is
+        reproduced; the angles need not equal the ones that made it.
+    """
+    r = np.asarray(matrices, dtype=np.float64)
+    cy = np.hypot(r[..., 0, 0], r[..., 1, 0])
+    ry = np.arctan2(-r[..., 2, 0], cy)
+    locked = cy < 1e-9
+    rx = np.where(locked, np.arctan2(-r[..., 1, 2], r[..., 1, 1]), np.arctan2(r[..., 2, 1], r[..., 2, 2]))
+    rz = np.where(locked, 0.0, np.arctan2(r[..., 1, 0], r[..., 0, 0]))
+    return np.stack([rx, ry, rz], axis=-1)
+
+
+def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation and translation (no scaling) that best map ``source`` onto ``target``.
+
+    Parameters
+    ----------
+    source, target : (v, 3) float
+        Corresponding points.
+
+    Returns
+    -------
+    R : (3, 3) float64
+        Proper rotation (det +1) minimising ``Σ |R·s + p - t|²``.
+    p : (3,) float64
+    """
+    s = np.asarray(source, dtype=np.float64)
+    t = np.asarray(target, dtype=np.float64)
+    sc, tc = s.mean(axis=0), t.mean(axis=0)
+    h = (s - sc).T @ (t - tc)
+    u, _sv, vt = np.linalg.svd(h)
+    d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
+    rot = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    return rot, tc - rot @ sc
+
+
+def _rodrigues(w: np.ndarray) -> np.ndarray:
+    """Rotation matrix of the rotation vector ``w`` (3,) radians."""
+    theta = float(np.linalg.norm(w))
+    k = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+    if theta < 1e-12:
+        return np.eye(3) + k
+    k /= theta
+    return np.eye(3) + np.sin(theta) * k + (1.0 - np.cos(theta)) * (k @ k)
+
+
+# ---------------------------------------------------------------------- fitting
+
+
+# an orthonormal basis of the zero-mean vectors of length 5: the canonical offsets
+_CANONICAL = np.linalg.svd(np.eye(5) - 1.0 / 5.0)[0][:, :4]  # (5, 4)
+
+
+class _Model:
+    """What the fit needs from the base mesh, computed once."""
+
+    def __init__(self, mesh) -> None:
+        axis = mesh.axis
+        self.axis = axis
+        self.length = axis.length
+        self.base = mesh.positions.astype(np.float64)  # (v, 3)
+        self.i, self.j = axis.perpendicular
+        # (v, 4): the Bernstein weights in the canonical basis; D(t) = basis @ z, z (4, 2)
+        self.basis = bernstein(axis.parameter(self.base), 4) @ _CANONICAL
+
+    def bent(self, z: np.ndarray) -> np.ndarray:
+        """``V'`` (v, 3) for canonical offset coordinates ``z`` (4, 2)."""
+        out = self.base.copy()
+        disp = self.basis @ z
+        out[:, self.i] += disp[:, 0]
+        out[:, self.j] += disp[:, 1]
+        return out
+
+    def linear_offsets(self, rot: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Offsets ``z`` (4, 2) and position ``p`` (3,) minimising the error for a fixed ``R``.
+
+        ``W - R·V = R·E(basis z) + p`` is linear in ``(z, p)``: an (3v, 11) system."""
+        v = len(self.base)
+        rhs = (target - self.base @ rot.T).reshape(-1)
+        a = np.empty((v, 3, 11))
+        a[:, :, :4] = rot[None, :, self.i, None] * self.basis[:, None, :]
+        a[:, :, 4:8] = rot[None, :, self.j, None] * self.basis[:, None, :]
+        a[:, :, 8:] = np.eye(3)[None]
+        sol = np.linalg.lstsq(a.reshape(3 * v, 11), rhs, rcond=None)[0]
+        return sol[:8].reshape(2, 4).T, sol[8:]
+
+    def normal_equations(self, rot, z, pos, target):
+        """``JᵀJ`` (14, 14) and ``Jᵀr`` (14,) of the joint problem in (rotation
+        vector, canonical offsets, position), linearised at the current state."""
+        v = len(self.base)
+        q = self.bent(z) @ rot.T  # R·V', (v, 3)
+        resid = (target - q - pos).reshape(-1)
+        a = np.empty((v, 3, 14))
+        # d(ω × q)/dω = -[q]×
+        a[:, 0, 0], a[:, 0, 1], a[:, 0, 2] = 0.0, q[:, 2], -q[:, 1]
+        a[:, 1, 0], a[:, 1, 1], a[:, 1, 2] = -q[:, 2], 0.0, q[:, 0]
+        a[:, 2, 0], a[:, 2, 1], a[:, 2, 2] = q[:, 1], -q[:, 0], 0.0
+        a[:, :, 3:7] = rot[None, :, self.i, None] * self.basis[:, None, :]
+        a[:, :, 7:11] = rot[None, :, self.j, None] * self.basis[:, None, :]
+        a[:, :, 11:] = np.eye(3)[None]
+        a = a.reshape(3 * v, 14)
+        return a.T @ a, a.T @ resid
+
+    @staticmethod
+    def apply(step, rot, z, pos):
+        return _rodrigues(step[:3]) @ rot, z + step[3:11].reshape(2, 4).T, pos + step[11:]
+
+    def error(self, rot, z, pos, target) -> float:
+        d = self.bent(z) @ rot.T + pos - target
+        return float(np.einsum("vc,vc->", d, d))
+
+
+def fit_instance(mesh, target: np.ndarray, *, max_iterations: int = 100, model: _Model | None = None):
+    """Fit the 16 numbers of one variant.
+
+    Parameters
+    ----------
+    mesh : BaseMesh
+        The base mesh (its vertices give ``t`` and the axis).
+    target : (v, 3) float
+        The variant's world positions, in the base mesh's vertex order.
+    max_iterations : int
+        Upper bound on alternation rounds.
+
+    Returns
+    -------
+    params : (16,) float64
+        Canonical offsets (zero mean per component), position, angles (radians).
+    iterations : int
+        Rounds used.
+    """
+    m = model or _Model(mesh)
+    w = np.asarray(target, dtype=np.float64)
+    rot, pos = kabsch(m.base, w)
+    z = np.zeros((4, 2))
+    best = m.error(rot, z, pos, w)
+    floor = 1e-30 * m.length**2 * len(w)  # below this the fit is exact to float64
+    lam = 1e-3
+    rounds = 0
+    for rounds in range(1, max_iterations + 1):
+        # alternate: the exact optimum of each block given the other
+        z, pos = m.linear_offsets(rot, w)
+        rot, pos = kabsch(m.bent(z), w)
+        err = m.error(rot, z, pos, w)
+        # joint Levenberg-Marquardt step: follows the valley where tilting the
+        # axis and bending it linearly look alike (flat or thin meshes)
+        jtj, jtr = m.normal_equations(rot, z, pos, w)
+        damp = np.diag(np.diag(jtj)) + 1e-12 * np.trace(jtj) * np.eye(14)
+        for _ in range(16):
+            step = np.linalg.lstsq(jtj + lam * damp, jtr, rcond=None)[0]
+            trial = m.apply(step, rot, z, pos)
+            trial_err = m.error(*trial, w)
+            if trial_err < err:
+                (rot, z, pos), err = trial, trial_err
+                lam = max(lam / 4.0, 1e-9)
+                break
+            lam = min(lam * 8.0, 1e9)
+        # converged when a round no longer lowers the squared error noticeably
+        if best - err <= 1e-12 * best or err <= floor:
+            best = min(best, err)
+            break
+        best = err
+    d = _CANONICAL @ z  # (5, 2), zero mean per component
+    out = np.empty(16)
+    out[OFFSETS] = d.reshape(10)
+    out[POSITION] = pos
+    out[ANGLES] = angles_from_matrices(rot)
+    return out, rounds
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Fitted parameters and how well they reproduce the variants.
+
+    Attributes
+    ----------
+    params : (n, 16) float32
+        Canonical parameters, one row per variant.
+    rms : (n,) float64
+        RMS vertex distance between variant and fitted shape, fraction of L.
+    max : (n,) float64
+        Largest vertex distance, fraction of L.
+    iterations : (n,) int
+        Alternation rounds per variant.
+    max_residual : float
+        The limit (fraction of L) the ``exceeds`` flags are judged against.
+    names : tuple of str
+        Where each variant came from (file names, or ``variant K``).
+    """
+
+    params: np.ndarray
+    rms: np.ndarray
+    max: np.ndarray
+    iterations: np.ndarray
+    max_residual: float = DEFAULT_MAX_RESIDUAL
+    names: tuple = ()
+
+    @property
+    def exceeds(self) -> np.ndarray:
+        """(n,) bool: the fits whose largest vertex distance is above ``max_residual``."""
+        return self.max > self.max_residual
+
+    @property
+    def worst(self) -> int:
+        """Index of the variant with the largest residual (-1 if none)."""
+        return int(np.argmax(self.max)) if len(self.max) else -1
+
+    def check(self) -> None:
+        """Raise :class:`ResidualError` if any fit exceeds ``max_residual``."""
+        bad = int(self.exceeds.sum())
+        if bad:
+            k = self.worst
+            raise ResidualError(
+                f"{bad} of {len(self.max)} fits exceed the residual limit {self.max_residual:g} L "
+                f"(worst: {self.names[k] if self.names else f'variant {k}'}, max {self.max[k]:.3g} L, "
+                f"rms {self.rms[k]:.3g} L); the variants were not made by this deformation of this base mesh, "
+                "or use --allow-residual / a larger --max-residual"
+            )
+
+
+def _residuals(mesh, params32: np.ndarray, target: np.ndarray) -> tuple[float, float]:
+    """RMS and max vertex distance (fraction of L) of the shape ``params32`` gives."""
+    shape = deform(mesh.axis, mesh.positions, mesh.normals, params32[None])[0][0].astype(np.float64)
+    dist = np.linalg.norm(shape - target, axis=1)
+    return float(np.sqrt(np.mean(dist**2))) / mesh.axis.length, float(dist.max()) / mesh.axis.length
+
+
+def _check_shape(mesh, positions: np.ndarray, name: str) -> np.ndarray:
+    pos = np.asarray(positions, dtype=np.float64)
+    if pos.ndim != 2 or pos.shape[1] != 3 or len(pos) != mesh.vertex_count:
+        found = len(pos) if pos.ndim == 2 else pos.shape
+        raise TopologyError(
+            f"{name}: has {found} vertices, expected {mesh.vertex_count} (the base mesh {mesh.name}'s count, "
+            "same order)"
+        )
+    if not np.isfinite(pos).all():
+        raise MeshError(f"{name}: has non-finite vertex coordinates; expected finite numbers")
+    return pos
+
+
+def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress):
+    model = _Model(mesh)
+    params = np.empty((count, 16), dtype=np.float32)
+    rms, mx, its, names = np.empty(count), np.empty(count), np.empty(count, dtype=np.int64), []
+    for k, (name, positions) in enumerate(items):  # one instance at a time; vertices vectorized
+        target = _check_shape(mesh, positions, name)
+        values, its[k] = fit_instance(mesh, target, max_iterations=max_iterations, model=model)
+        params[k] = values.astype(np.float32)
+        rms[k], mx[k] = _residuals(mesh, params[k], target)
+        names.append(name)
+        if progress is not None:
+            progress.update(1)
+    return FitResult(as_params(params), rms, mx, its, float(max_residual), tuple(names))
+
+
+def fit_params(mesh, variants, *, max_residual: float = DEFAULT_MAX_RESIDUAL, max_iterations: int = 100,
+               progress=None) -> FitResult:
+    """Fit every variant given as vertex positions.
+
+    Parameters
+    ----------
+    mesh : BaseMesh
+    variants : (n, v, 3) float, or a sequence of n (v, 3) arrays
+        World positions of each variant in the base mesh's vertex order.
+    max_residual : float
+        Limit on the largest vertex distance, fraction of L (flags only;
+        call :meth:`FitResult.check` to raise).
+    progress : tqdm-like, optional
+        ``update(1)`` per variant.
+    """
+    variants = list(variants) if not isinstance(variants, np.ndarray) else variants
+    items = ((f"variant {k}", v) for k, v in enumerate(variants))
+    return _fit_all(mesh, items, len(variants), max_residual=max_residual, max_iterations=max_iterations,
+                    progress=progress)
+
+
+def load_variant(path: str | os.PathLike, mesh) -> np.ndarray:
+    """Vertex positions ``(v, 3) float64`` of a variant mesh file, checked against ``mesh``.
+
+    Raises :class:`TopologyError` naming the file if its vertex count, triangle
+    count or triangles differ from the base mesh's.
+    """
+    from .mesh import load_mesh
+
+    variant = load_mesh(path)
+    name = str(path)
+    if variant.vertex_count != mesh.vertex_count:
+        raise TopologyError(f"{name}: has {variant.vertex_count} vertices, expected {mesh.vertex_count} "
+                            f"(the base mesh {mesh.name}'s count, same order)")
+    if len(variant.faces) != len(mesh.faces):
+        raise TopologyError(f"{name}: has {len(variant.faces)} triangles, expected {len(mesh.faces)} "
+                            f"(the base mesh {mesh.name}'s count)")
+    if not np.array_equal(variant.faces, mesh.faces):
+        k = int(np.argwhere((variant.faces != mesh.faces).any(axis=1))[0, 0])
+        raise TopologyError(f"{name}: triangle {k} is {variant.faces[k].tolist()}, expected {mesh.faces[k].tolist()} "
+                            f"as in the base mesh {mesh.name} (same vertices in the same order)")
+    return variant.positions.astype(np.float64)
+
+
+def variant_paths(inputs) -> list[Path]:
+    """The variant files: the given files in order, or the mesh files of ONE folder sorted by name."""
+    paths = [Path(p) for p in inputs]
+    if not paths:
+        raise AxialDeformError("variants: expected mesh files or one folder of mesh files, found none")
+    folders = [p for p in paths if p.is_dir()]
+    if folders:
+        if len(paths) != 1:
+            raise AxialDeformError(f"variants: a folder ({folders[0]}) must be the only VARIANTS argument; "
+                                   f"found {len(paths)} arguments")
+        found = sorted((p for p in paths[0].iterdir() if p.is_file() and p.suffix.lower() in MESH_SUFFIXES
+                        and not p.name.startswith(".")), key=lambda p: p.name)
+        if not found:
+            raise AxialDeformError(f"{paths[0]}: no mesh files ({', '.join(MESH_SUFFIXES)}) in the folder")
+        return found
+    return paths
+
+
+def fit_files(mesh, paths, *, max_residual: float = DEFAULT_MAX_RESIDUAL, max_iterations: int = 100,
+              progress=None) -> FitResult:
+    """Load and fit variant mesh files one at a time (see :func:`fit_params`)."""
+    paths = [Path(p) for p in paths]
+    items = ((str(p), load_variant(p, mesh)) for p in paths)
+    return _fit_all(mesh, items, len(paths), max_residual=max_residual, max_iterations=max_iterations,
+                    progress=progress)
+
+
+# ------------------------------------------------------------------------- CLI
+
+
+def _fraction(text: str) -> float:
+    import argparse
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a fraction of L, found {text!r}") from None
+    if not (np.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a finite fraction of L >= 0, found {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, found {text!r}")
+    return value
+
+
+def add_parser(subparsers) -> None:
+    """Register ``axialdeform fit``."""
+    f = subparsers.add_parser("fit", help="recover parameters from existing variant meshes", description=(
+        "Fit the 16 numbers of each variant of BASE: VARIANTS are mesh files with BASE's vertices in the same "
+        "order, or ONE folder whose mesh files, sorted by name, are instances 0, 1, 2, ... The output is binary "
+        "for .adp, text for .txt/.csv/.dat. Exit 2 if a fit's largest vertex distance exceeds --max-residual."))
+    f.add_argument("base")
+    f.add_argument("variants", nargs="+")
+    f.add_argument("-o", "--output", required=True, help="parameter file to write")
+    f.add_argument("--max-residual", type=_fraction, default=DEFAULT_MAX_RESIDUAL,
+                   help="largest allowed vertex distance, fraction of L (default: %(default)g)")
+    f.add_argument("--allow-residual", action="store_true",
+                   help="write the parameters even if fits exceed --max-residual (they are still reported)")
+    f.add_argument("--max-iterations", type=_positive_int, default=100, help="alternation rounds per variant (default: %(default)s)")
+    f.set_defaults(handler=run)
+
+
+def run(args) -> None:
+    """``axialdeform fit BASE VARIANTS... -o PARAMS``."""
+    from tqdm import tqdm
+
+    from .mesh import load_mesh
+    from .params import write_params
+
+    out = Path(args.output)
+    mesh = load_mesh(args.base)
+    is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
+    paths = variant_paths(args.variants)
+    with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:
+        result = fit_files(mesh, paths, max_residual=args.max_residual, max_iterations=args.max_iterations,
+                           progress=bar)
+    if not args.allow_residual:
+        result.check()
+    path = write_params(out, result.params, mesh)
+    k = result.worst
+    print(f"wrote {path} ({len(paths)} instances, {path.stat().st_size} bytes)")
+    print(f"worst residual: max {result.max[k]:.3g} L, rms {result.rms[k]:.3g} L ({result.names[k]})")
+    bad = int(result.exceeds.sum())
+    if bad:
+        print(f"warning: {bad} of {len(paths)} fits exceed the residual limit {result.max_residual:g} L", file=sys.stderr)
+    if is_folder:
+        variant_bytes = sum(p.stat().st_size for p in paths)
+        print(f"size ratio: {variant_bytes} bytes of variants / {path.stat().st_size} bytes of parameters "
+              f"= {variant_bytes / path.stat().st_size:.1f}x")

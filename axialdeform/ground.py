@@ -1,0 +1,129 @@
+"""An optional ground plane under the instances: its own small program
+(``glsl/ground.vert`` + ``glsl/ground.frag``), drawn in its own call, never
+part of the instanced draw.  It shares the instances' light model
+(``glsl/lighting.glsl``), so both read as one scene::
+
+    ground = ad.GroundPlane(ctx)
+    ground.fit(mesh, params)                  # centre, size and height from the instances
+    target.use(background)
+    ground.render(view, proj, background=background)
+    renderer.render(view, proj, "solid")
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .axis import AXIS_NAMES
+from .errors import AxialDeformError
+from .shaders import build_program
+
+__all__ = ["GroundPlane", "GROUND_COLOR"]
+
+#: default ground colour (linear RGB): dry sand
+GROUND_COLOR = (0.50, 0.45, 0.37)
+
+
+class GroundPlane:
+    """A square across the world up axis, lit like the instances, fading out
+    at its edge.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+    up : ``"x"``, ``"y"`` or ``"z"``
+        World up axis; the plane is across it.
+    color : (3,) linear RGB
+    cell : float
+        Grid spacing in world units (0: no grid).
+    """
+
+    def __init__(self, ctx, *, up: str = "y", color=GROUND_COLOR, cell: float = 0.0):
+        if up not in AXIS_NAMES:
+            raise AxialDeformError(f"ground up axis: expected one of x, y, z, found {up!r}")
+        self.ctx = ctx
+        self.up = up
+        self.color = tuple(float(c) for c in color)
+        self.cell = float(cell)
+        self.center = np.zeros(3)
+        self.radius = 10.0
+        self._released = False
+        self.program = build_program(ctx, "ground.vert", "ground.frag")
+        try:
+            self.vao = ctx.vertex_array(self.program, [])
+        except BaseException:
+            self.program.release()
+            raise
+
+    @property
+    def up_vector(self) -> np.ndarray:
+        """(3,) unit world up."""
+        return np.eye(3)[AXIS_NAMES.index(self.up)]
+
+    def fit(self, mesh, params, *, margin: float = 1.6, sink: float = 0.35) -> "GroundPlane":
+        """Place the plane under the instances.
+
+        The square is centred under the instances' bounding spheres and
+        ``margin`` times as wide as they spread; it lies ``sink`` times the
+        typical sphere radius above their lowest point (so instances rest in
+        it rather than float over it).  Returns ``self``.
+        """
+        from .camera import instance_bounds
+
+        centers, radii = instance_bounds(mesh, params)
+        if len(centers) == 0:
+            return self
+        a = AXIS_NAMES.index(self.up)
+        lo = (centers - radii[:, None]).min(axis=0)
+        hi = (centers + radii[:, None]).max(axis=0)
+        center = (lo + hi) / 2
+        others = [i for i in range(3) if i != a]
+        self.radius = float(margin * np.linalg.norm((hi - lo)[others]) / 2 + np.median(radii))
+        center[a] = np.percentile(centers[:, a] - radii, 5) + sink * float(np.median(radii))
+        self.center = center
+        return self
+
+    def render(self, view, projection, *, background=(0.93, 0.94, 0.96), light_dir=(0.35, 0.85, 0.4),
+               ambient: float = 0.35) -> None:
+        """Draw the plane into the bound framebuffer (depth test on).
+
+        view, projection : (4, 4) pyrr-layout matrices; background : the
+        framebuffer's clear colour (sRGB) that the plane fades into.
+        """
+        import moderngl
+
+        if self._released:
+            raise AxialDeformError("this GroundPlane was released; create a new one")
+        view = np.asarray(view, dtype=np.float32).reshape(4, 4)
+        a = AXIS_NAMES.index(self.up)
+        axis_u, axis_v = (np.eye(3)[i] for i in range(3) if i != a)
+        light = np.asarray(light_dir, dtype=np.float64)
+        prog = self.program
+        prog["u_view"].write(view.tobytes())
+        prog["u_proj"].write(np.asarray(projection, dtype=np.float32).reshape(4, 4).tobytes())
+        uniforms = {
+            "u_center": tuple(self.center), "u_axis_u": tuple(axis_u), "u_axis_v": tuple(axis_v),
+            "u_radius": self.radius, "u_color": self.color, "u_background": tuple(background[:3]),
+            "u_light_dir": tuple(light / max(np.linalg.norm(light), 1e-12)), "u_up": tuple(self.up_vector),
+            "u_eye": tuple(np.linalg.inv(view.astype(np.float64))[3, :3]), "u_ambient": float(ambient),
+            "u_cell": self.cell,
+        }
+        for name, value in uniforms.items():
+            if name in prog:
+                prog[name].value = value
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        self.vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
+
+    def release(self) -> None:
+        """Free the GL objects; safe to call twice."""
+        if self._released:
+            return
+        self._released = True
+        self.vao.release()
+        self.program.release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()

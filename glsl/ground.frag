@@ -1,0 +1,33 @@
+// ground.frag -- the ground plane: lit like the instances (lighting.glsl),
+// a faint grid every u_cell world units, fading into the background colour
+// towards the edge of the square so it has no hard horizon.
+#include "lighting.glsl"
+
+uniform vec3 u_color;       // ground colour (linear RGB)
+uniform vec3 u_background;  // colour it fades to (sRGB, as the framebuffer is cleared)
+uniform vec3 u_light_dir;   // unit vector towards the light
+uniform vec3 u_up;          // world up = the plane's normal
+uniform vec3 u_eye;
+uniform float u_ambient;
+uniform float u_cell;       // grid spacing, world units (0: no grid)
+uniform vec3 u_axis_u;
+uniform vec3 u_axis_v;
+
+in vec3 v_world;
+in vec2 v_plane;
+
+out vec4 f_color;
+
+void main() {
+    vec3 to_eye = normalize(u_eye - v_world);
+    vec3 base = u_color;
+    if (u_cell > 0.0) {
+        vec2 g = vec2(dot(v_world, u_axis_u), dot(v_world, u_axis_v)) / u_cell;
+        vec2 w = fwidth(g);
+        vec2 line = 1.0 - clamp(abs(fract(g - 0.5) - 0.5) / max(w, 1e-6), 0.0, 1.0);
+        base *= 1.0 - 0.12 * max(line.x, line.y) * (1.0 - clamp(max(w.x, w.y) * 2.0, 0.0, 1.0));
+    }
+    vec3 lit = to_srgb(shade_surface(base, u_up, to_eye, u_light_dir, u_up, u_ambient, 0.0));
+    float fade = smoothstep(0.55, 1.0, length(v_plane));
+    f_color = vec4(mix(lit, u_background, fade), 1.0);
+}

@@ -1,0 +1,128 @@
+"""The command line end to end, including its error exits."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import axialdeform as ad
+from axialdeform.cli import build_parser, main
+from conftest import shared_mesh
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+def test_demo_writes_a_png_and_says_where(tmp_path):
+    res = run("demo", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    out = tmp_path / "axialdeform-demo.png"
+    assert str(out) in res.stdout
+    img = np.asarray(Image.open(out))
+    assert img.shape[1] == 2 * img.shape[0] * 4 // 3 and img.std() > 10
+
+
+def test_random_info_convert_render_bake(tmp_path, capsys):
+    params = tmp_path / "p.adp"
+    assert main(["random", "stone", "-n", "300", "--seed", "4", "--bend", "0.2", "--placement", "disc", "-o", str(params)]) == 0
+    assert main(["info", str(params)]) == 0
+    out = capsys.readouterr().out
+    assert "instances: 300" in out and "checksum:  CRC-32" in out and "OK" in out and "axis x" in out
+    assert main(["convert", str(params), str(tmp_path / "p.txt")]) == 0
+    assert main(["convert", str(tmp_path / "p.txt"), str(tmp_path / "q.adp"), "--mesh", "stone", "--quantize"]) == 0
+    assert (tmp_path / "q.adp").stat().st_size < params.stat().st_size / 1.9
+    assert np.array_equal(ad.read_params(tmp_path / "p.txt"), ad.read_params(params))
+    for mode in ("solid", "flat", "wireframe"):
+        png = tmp_path / f"{mode}.png"
+        assert main(["render", "stone", str(tmp_path / "p.txt"), "-o", str(png), "--mode", mode, "--size", "200x150"]) == 0
+        assert Image.open(png).size == (200, 150)
+    assert main(["bake", "stone", str(params), "-o", str(tmp_path / "cpu.npz")]) == 0
+    assert main(["bake", "stone", str(params), "-o", str(tmp_path / "gpu.npz"), "--engine", "gpu"]) == 0
+    cpu, gpu = np.load(tmp_path / "cpu.npz"), np.load(tmp_path / "gpu.npz")
+    assert cpu["positions"].shape == (300, 58, 3) and cpu["positions"].dtype == np.float32
+    L = ad.load_mesh("stone").axis.length
+    assert np.abs(cpu["positions"] - gpu["positions"]).max() <= 1e-5 * L
+    assert np.abs(cpu["normals"] - gpu["normals"]).max() <= 1e-5
+
+
+@pytest.mark.parametrize("fmt", ["obj", "ply", "glb"])
+def test_bake_to_a_folder_of_meshes(tmp_path, fmt):
+    stone = ad.load_mesh("stone")
+    values = ad.random_params(stone, 5, seed=1, bend=0.2)
+    ad.write_params(tmp_path / "p.txt", values)
+    assert main(["bake", "stone", str(tmp_path / "p.txt"), "-o", str(tmp_path / "out"), "--format", fmt]) == 0
+    files = sorted((tmp_path / "out").iterdir())
+    assert len(files) == 5
+    expected, _ = ad.deform(stone.axis, stone.positions, stone.normals, values)
+    back = ad.load_mesh(files[3])
+    assert back.vertex_count == 58 and np.allclose(back.positions, expected[3], atol=1e-5)
+
+
+def test_off_origin_ply_with_normals_along_each_axis(tmp_path):
+    """The 'done when' check: meshes not in the repository, axes x, y, z, off the origin."""
+    import trimesh
+
+    base = ad.load_mesh(shared_mesh("base/rock_caustics.obj"))
+    for k, perm in enumerate(([0, 1, 2], [1, 0, 2], [1, 2, 0])):
+        tm = base.to_trimesh(base.positions[:, perm] + [100.0, -50.0, 25.0], base.normals[:, perm])
+        mesh_path = tmp_path / f"rock_{k}.ply"
+        mesh_path.write_bytes(trimesh.exchange.ply.export_ply(tm, vertex_normal=True))
+        mesh = ad.load_mesh(mesh_path)
+        assert mesh.axis.index == k and mesh.normals_from_file
+        params = tmp_path / f"p{k}.adp"
+        assert main(["random", str(mesh_path), "-n", "1000", "--seed", str(k), "--bend", "0.2", "-o", str(params)]) == 0
+        assert main(["bake", str(mesh_path), str(params), "-o", str(tmp_path / "g.npz"), "--engine", "gpu"]) == 0
+        assert main(["bake", str(mesh_path), str(params), "-o", str(tmp_path / "c.npz"), "--engine", "cpu"]) == 0
+        g, c = np.load(tmp_path / "g.npz"), np.load(tmp_path / "c.npz")
+        ref, ref_n = ad.deform(mesh.axis, mesh.positions, mesh.normals, ad.read_params(params))
+        assert np.abs(g["positions"] - ref).max() <= 1e-5 * mesh.axis.length
+        assert np.array_equal(c["positions"], ref) and np.array_equal(c["normals"], ref_n)
+
+
+@pytest.mark.parametrize("args,message", [
+    (["render", "stone", "{tmp}/missing.adp", "-o", "{tmp}/x.png"], "no such parameter file"),
+    (["render", "{tmp}/missing.obj", "{tmp}/p.txt", "-o", "{tmp}/x.png"], "no such mesh file"),
+    (["render", "leaf", "{tmp}/p.adp", "-o", "{tmp}/x.png"], "made for a different base mesh"),
+    (["render", "stone", "{tmp}/bad.txt", "-o", "{tmp}/x.png"], "line 1: expected 16 numbers, found 2"),
+    (["render", "stone", "{tmp}/p.txt", "-o", "{tmp}/x.png", "--size", "big"], "size: expected WIDTHxHEIGHT"),
+    (["info", "{tmp}/cut.adp"], "truncated"),
+    (["convert", "{tmp}/p.txt", "{tmp}/p.xyz"], "unknown parameter file type"),
+    (["bake", "stone", "{tmp}/p.txt", "-o", "{tmp}/p.txt/x.npz"], "Not a directory|not a folder"),
+    (["random", "{tmp}/bad.txt", "-n", "3", "-o", "{tmp}/r.adp"], "unsupported mesh file type"),
+])
+def test_user_errors_exit_2_with_one_line(tmp_path, args, message):
+    stone = ad.load_mesh("stone")
+    values = ad.random_params(stone, 4, seed=1)
+    ad.write_params(tmp_path / "p.adp", values, stone)
+    ad.write_params(tmp_path / "p.txt", values)
+    (tmp_path / "bad.txt").write_text("1 2\n")
+    (tmp_path / "cut.adp").write_bytes((tmp_path / "p.adp").read_bytes()[:50])
+    res = run(*[a.format(tmp=tmp_path) for a in args])
+    assert res.returncode == 2, (res.stdout, res.stderr)
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
+    assert lines[0].startswith("axialdeform ") and "error" in lines[0]
+    import re
+
+    assert re.search(message, lines[0]), lines[0]
+
+
+def test_ignore_mesh_mismatch(tmp_path):
+    stone = ad.load_mesh("stone")
+    ad.write_params(tmp_path / "p.adp", ad.random_params(stone, 4, seed=1), stone)
+    assert main(["render", "leaf", str(tmp_path / "p.adp"), "-o", str(tmp_path / "x.png"), "--size", "64x48",
+                 "--ignore-mesh-mismatch"]) == 0
+
+
+def test_help_everywhere():
+    parser = build_parser()
+    commands = parser._subparsers._group_actions[0].choices
+    assert {"demo", "random", "render", "bake", "info", "convert"} <= set(commands)
+    for name in commands:
+        res = run(name, "--help")
+        assert res.returncode == 0 and "usage: axialdeform " + name in res.stdout, name
+    res = run()
+    assert res.returncode == 2 and "usage" in res.stderr

@@ -1,0 +1,182 @@
+"""The GPU path: capture == CPU reference, one draw call, deterministic
+pictures, solid and wireframe silhouettes agree, buffer updates in place."""
+
+import numpy as np
+import pytest
+import trimesh
+from scipy import ndimage
+
+import axialdeform as ad
+from axialdeform.context import Offscreen
+from conftest import shared_mesh
+
+
+def z_axis_ply_off_origin(tmp_path, stone):
+    """The stone turned so its long axis is z, moved off the origin, saved as PLY with normals."""
+    perm = [1, 2, 0]  # x -> z
+    tm = stone.to_trimesh(stone.positions[:, perm] * 3.0 + [5.0, -40.0, 12.5], stone.normals[:, perm])
+    path = tmp_path / "stone_z.ply"
+    path.write_bytes(trimesh.exchange.ply.export_ply(tm, vertex_normal=True))
+    return path
+
+
+def meshes_for_all_axes(tmp_path, stone, leaf):
+    z = ad.load_mesh(z_axis_ply_off_origin(tmp_path, stone))
+    assert z.normals_from_file and z.axis.name == "z"
+    return {"x": stone, "y": leaf, "z": z, "rock": ad.load_mesh(shared_mesh("base/rock_caustics.obj"))}
+
+
+def test_gpu_capture_equals_cpu_reference(ctx, tmp_path, stone, leaf):
+    for name, mesh in meshes_for_all_axes(tmp_path, stone, leaf).items():
+        L = mesh.axis.length
+        params = ad.random_params(mesh, 1200, seed=11, bend=0.2, placement="disc", tilt=(-3, 3))
+        with ad.AxialRenderer(ctx, mesh, params) as r:
+            gpu_pos, gpu_nrm = r.capture()
+        cpu_pos, cpu_nrm = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
+        assert gpu_pos.shape == (1200, mesh.vertex_count, 3)
+        assert np.abs(gpu_pos - cpu_pos).max() <= 1e-5 * L, name
+        assert np.abs(gpu_nrm - cpu_nrm).max() <= 1e-5, name
+        # and the bend is really there (not a trivially equal zero deformation)
+        rigid = ad.deform(mesh.axis, mesh.positions, mesh.normals, np.hstack([np.zeros((1200, 10), np.float32), params[:, 10:]]))[0]
+        assert np.abs(cpu_pos - rigid).max() > 0.05 * L
+
+
+def test_capture_in_chunks_and_slices(ctx, stone, monkeypatch):
+    import axialdeform.renderer as R
+
+    params = ad.random_params(stone, 100, seed=2, bend=0.3)
+    monkeypatch.setattr(R, "_CAPTURE_BYTES", 58 * 24 * 7)  # 7 instances per pass
+    with ad.AxialRenderer(ctx, stone, params) as r:
+        pos, nrm = r.capture(start=13, count=40)
+    cpu_pos, _ = ad.deform(stone.axis, stone.positions, stone.normals, params[13:53])
+    assert np.abs(pos - cpu_pos).max() <= 1e-5 * stone.axis.length
+
+
+def test_no_bend_program_is_rigid(ctx, stone):
+    params = ad.random_params(stone, 50, seed=3, bend=0.3)
+    with ad.AxialRenderer(ctx, stone, params, bend=False) as r:
+        pos, _ = r.capture()
+    rigid = params.copy()
+    rigid[:, :10] = 0
+    assert np.abs(pos - ad.deform(stone.axis, stone.positions, stone.normals, rigid)[0]).max() <= 1e-5 * stone.axis.length
+
+
+def test_one_draw_call_draws_every_instance(ctx, stone, monkeypatch):
+    """All instances in ONE instanced draw call."""
+    import moderngl
+
+    calls = []
+    original = moderngl.VertexArray.render
+
+    def spy(self, *args, **kwargs):
+        calls.append(kwargs.get("instances"))
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(moderngl.VertexArray, "render", spy)
+    params = ad.random_params(stone, 3000, seed=1)
+    for mode in ad.MODES:
+        calls.clear()
+        img = ad.render_image(stone, params, (160, 120), mode, ctx=ctx)
+        assert calls == [3000], mode
+        assert (img != img[0, 0]).any()
+
+
+def test_same_parameters_give_identical_pixels(ctx, stone):
+    params = ad.random_params(stone, 1500, seed=4, bend=0.15)
+    a = ad.render_image(stone, params, (320, 240), ("solid", "flat", "wireframe"), ctx=ctx)
+    b = ad.render_image(stone, params, (320, 240), ("solid", "flat", "wireframe"), ctx=ctx)
+    assert np.array_equal(a, b)
+    other = ad.render_image(stone, ad.random_params(stone, 1500, seed=5, bend=0.15), (320, 240), "solid", ctx=ctx)
+    assert not np.array_equal(a[:, :320], other)
+
+
+def _mask(img, background):
+    return np.abs(img.astype(int) - background).sum(axis=2) > 12
+
+
+def test_solid_and_wireframe_cover_the_same_silhouette(ctx, stone):
+    params = ad.random_params(stone, 60, seed=8, bend=0.25, spacing=2.5 * stone.axis.length)
+    # a black background: every lit stone pixel and every line differs from it
+    img = ad.render_image(stone, params, (480, 360), ("solid", "wireframe"), ctx=ctx, samples=0,
+                          background=(0, 0, 0), line_color=(1, 1, 1))
+    bg = img[0, 0].astype(int)
+    solid, wire = _mask(img[:, :480], bg), _mask(img[:, 480:], bg)
+    assert solid.mean() > 0.02
+    # every wire pixel lies on a stone...
+    assert (wire & ~ndimage.binary_dilation(solid, iterations=1)).sum() <= 0.002 * wire.sum()
+    # ...and the filled wireframe covers the stones; lines and triangles
+    # rasterize their borders differently, so compare up to one pixel
+    filled = ndimage.binary_fill_holes(ndimage.binary_closing(wire, iterations=2))
+    assert (solid & ~ndimage.binary_dilation(filled)).sum() <= 0.002 * solid.sum()
+    assert (filled & ~ndimage.binary_dilation(solid)).sum() <= 0.002 * filled.sum()
+    assert filled.sum() > 0.9 * solid.sum()
+    # blobs: one per visible stone, the same count in both
+    assert ndimage.label(solid)[1] == ndimage.label(filled)[1]
+
+
+def test_flat_and_solid_differ_only_in_shading(ctx, stone):
+    params = ad.random_params(stone, 40, seed=8, bend=0.25, spacing=2.5 * stone.axis.length)
+    img = ad.render_image(stone, params, (320, 240), ("solid", "flat"), ctx=ctx, samples=0)
+    bg = img[0, 0].astype(int)
+    solid, flat = _mask(img[:, :320], bg), _mask(img[:, 320:], bg)
+    assert (solid ^ flat).sum() <= 0.01 * solid.sum()
+    assert not np.array_equal(img[:, :320], img[:, 320:])
+
+
+def test_parameter_updates_write_in_place(ctx, stone):
+    params = ad.random_params(stone, 500, seed=1, bend=0.1)
+    with ad.AxialRenderer(ctx, stone, params) as r:
+        glo = r.instances.buffer.glo
+        new = ad.random_params(stone, 500, seed=2, bend=0.1)
+        r.set_params(new)
+        r.update_params(params[100:150], start=100)
+        expected = new.copy()
+        expected[100:150] = params[100:150]
+        assert np.array_equal(r.instances.read(), expected)
+        assert r.instances.buffer.glo == glo and r.instances.reallocations == 0
+        pos, _ = r.capture(start=100, count=50)
+        assert np.abs(pos - ad.deform(stone.axis, stone.positions, stone.normals, params[100:150])[0]).max() < 1e-5 * stone.axis.length
+        r.set_params(params[:10])  # fewer: no reallocation
+        assert r.count == 10 and r.instances.reallocations == 0
+        r.set_params(ad.random_params(stone, 900, seed=3))  # more than the capacity: grows once
+        assert r.count == 900 and r.instances.reallocations == 1
+        with pytest.raises(ad.ParamError, match="do not fit"):
+            r.update_params(params[:5], start=898)
+
+
+def test_release_is_safe_twice_and_use_after_release_fails(ctx, stone):
+    r = ad.AxialRenderer(ctx, stone, ad.random_params(stone, 5))
+    r.capture()
+    r.release()
+    r.release()
+    with pytest.raises(ad.AxialDeformError, match="released"):
+        r.render(np.eye(4), np.eye(4))
+
+
+def test_render_with_callers_pyrr_matrices(ctx, stone):
+    """The documented matrix convention: pyrr matrices as they come, clip = proj * view * world."""
+    import pyrr
+
+    params = ad.make_params(positions=[[0.0, 0.0, 0.0]])
+    view = pyrr.matrix44.create_look_at([0.0, 0.0, 5.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    proj = pyrr.matrix44.create_perspective_projection(40.0, 1.0, 0.1, 100.0)
+    with ad.AxialRenderer(ctx, stone, params) as r, Offscreen(ctx, (64, 64), samples=0) as target:
+        target.use()
+        r.render(view, proj)
+        img = target.read()
+        # the stone (long along x, centred) is drawn in the middle, wider than tall
+        mask = _mask(img, img[0, 0].astype(int))
+        ys, xs = np.nonzero(mask)
+        assert abs(xs.mean() - 31.5) < 2 and abs(ys.mean() - 31.5) < 2
+        assert np.ptp(xs) > 1.5 * np.ptp(ys)
+        # moved right in world x -> right in the picture
+        r.set_params(ad.make_params(positions=[[1.0, 0.0, 0.0]]))
+        target.use()
+        r.render(view, proj)
+        assert np.nonzero(_mask(target.read(), img[0, 0].astype(int)))[1].mean() > xs.mean() + 5
+
+
+def test_bad_mode_is_an_error(ctx, stone):
+    with ad.AxialRenderer(ctx, stone, ad.random_params(stone, 2)) as r:
+        with pytest.raises(ad.AxialDeformError, match="render mode: expected one of solid, flat, wireframe"):
+            r.render(np.eye(4), np.eye(4), mode="points")

@@ -1,0 +1,56 @@
+"""A built wheel, installed into a fresh virtual environment, still finds
+its shaders and meshes (the package data list is checked against the tree)."""
+
+import os
+import subprocess
+import sys
+import sysconfig
+import venv
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
+    dist = tmp_path / "dist"
+    build = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(dist), str(ROOT)],
+                           capture_output=True, text=True)
+    assert build.returncode == 0, build.stderr[-2000:]
+    (wheel,) = dist.glob("axialdeform-*.whl")
+    names = set(zipfile.ZipFile(wheel).namelist())
+    shaders = [p.name for p in (ROOT / "glsl").iterdir() if p.suffix in (".glsl", ".vert", ".frag")]
+    meshes = [p.name for p in (ROOT / "axialdeform" / "meshes").glob("*.obj")]
+    assert shaders and meshes
+    missing = [f"axialdeform/glsl/{n}" for n in shaders if f"axialdeform/glsl/{n}" not in names]
+    missing += [f"axialdeform/meshes/{n}" for n in meshes if f"axialdeform/meshes/{n}" not in names]
+    assert not missing, f"the wheel lacks {missing}"
+
+    # a fresh venv: only the wheel's axialdeform; the dependencies come from this
+    # interpreter's site-packages through a plain path entry (its .pth files,
+    # such as an editable install of axialdeform, are not processed)
+    env_dir = tmp_path / "venv"
+    venv.create(env_dir, with_pip=True)
+    py = env_dir / ("Scripts" if os.name == "nt" else "bin") / "python"
+    site = subprocess.run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    deps = {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}
+    Path(site, "_deps.pth").write_text("\n".join(sorted(deps)) + "\n")
+    inst = subprocess.run([str(py), "-m", "pip", "install", "--no-deps", "-q", str(wheel)], capture_output=True, text=True)
+    assert inst.returncode == 0, inst.stderr[-2000:]
+
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    check = subprocess.run([str(py), "-c", (
+        "import axialdeform as ad, sys; "
+        "assert ad.__file__.startswith(sys.prefix), ad.__file__; "
+        "print(ad.__file__); print(ad.__version__); "
+        "m = ad.load_mesh('leaf'); print(m.vertex_count); "
+        "print(len(ad.deformation_glsl()))"
+    )], capture_output=True, text=True, cwd=work)
+    assert check.returncode == 0, check.stderr
+    assert str(env_dir) in check.stdout and "0+unknown" not in check.stdout
+    script = env_dir / "bin" / "axialdeform"
+    demo = subprocess.run([str(script), "demo", "-n", "60", "--size", "96x64", "-o", "d.png"], capture_output=True, text=True, cwd=work)
+    assert demo.returncode == 0, demo.stderr
+    assert (work / "d.png").stat().st_size > 1000
