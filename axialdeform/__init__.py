@@ -20,11 +20,14 @@ from .ground import GroundPlane
 from .errors import (
     AxialDeformError,
     ContextError,
+    GltfError,
     MeshError,
     MeshMismatchError,
     ParamError,
     ParamFileError,
+    ResidualError,
     ShaderError,
+    TopologyError,
 )
 from .image import render_image, save_png
 from .mesh import BUNDLED_MESHES, BaseMesh, bundled_mesh_path, load_mesh
@@ -40,7 +43,7 @@ except PackageNotFoundError:  # running from a source tree that was never instal
 
 __all__ = [
     "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
-    "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError",
+    "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds", "load_mesh", "make_params", "random_params",
     "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "write_params",

@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import stat
 import tempfile
 from pathlib import Path
 from typing import Iterator
@@ -23,6 +24,12 @@ __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "sweep_stal
 
 _PART = re.compile(r"^\..*\.axtmp(\d+)-[^.]*.*\.part$")
 _swept: set[str] = set()
+
+
+def _default_mode() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
 
 
 def _alive(pid: int) -> bool:
@@ -82,6 +89,9 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         # flush the data to disk before the rename makes it visible
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
+        # mkstemp makes the file 0600: give it the mode a plain open() would
+        # (the replaced file's, else 0666 less the umask)
+        os.chmod(tmp, stat.S_IMODE(path.stat().st_mode) if path.exists() else _default_mode())
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):

@@ -113,13 +113,17 @@ def _progress(total: int, desc: str):
 
 
 def cmd_demo(args) -> None:
+    from .camera import frame_instances
     from .image import parse_size, render_image, save_png
     from .mesh import load_mesh
     from .variation import random_params
 
     mesh = load_mesh("stone")
-    params = random_params(mesh, args.count, seed=args.seed, bend=0.12, spacing=1.15 * mesh.axis.length)
-    image = render_image(mesh, params, parse_size(args.size), ("solid", "wireframe"))
+    params = random_params(mesh, args.count, seed=args.seed, bend=0.14, placement="disc",
+                           spacing=0.9 * mesh.axis.length, tilt=(-0.2, 0.2))
+    size = parse_size(args.size)
+    camera = frame_instances(mesh, params, size[0] / size[1], elevation=30.0, azimuth=20.0, margin=-1.2)
+    image = render_image(mesh, params, size, ("solid", "wireframe"), camera=camera)
     save_png(args.output, image)
     print(f"wrote {Path(args.output).resolve()} ({args.count} stones, solid | wireframe, {image.shape[1]}x{image.shape[0]})")
 
@@ -158,7 +162,17 @@ def cmd_bake(args) -> None:
     from .bake import bake, write_mesh_folder, write_npz
 
     mesh, params = _load(args)
-    positions, normals = bake(mesh, params, args.engine)
+    if args.engine == "cpu" and len(params) > 20_000:  # long work: deform in blocks and show progress
+        import numpy as np
+
+        positions = np.empty((len(params), mesh.vertex_count, 3), np.float32)
+        normals = np.empty_like(positions)
+        with _progress(len(params), "deforming") as bar:
+            for a in range(0, len(params), 10_000):
+                positions[a : a + 10_000], normals[a : a + 10_000] = bake(mesh, params[a : a + 10_000], "cpu")
+                bar.update(len(positions[a : a + 10_000]))
+    else:
+        positions, normals = bake(mesh, params, args.engine)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)

@@ -12,6 +12,9 @@ __all__ = [
     "MeshMismatchError",
     "ShaderError",
     "ContextError",
+    "TopologyError",
+    "ResidualError",
+    "GltfError",
 ]
 
 
@@ -44,3 +47,17 @@ class ShaderError(AxialDeformError, RuntimeError):
 
 class ContextError(AxialDeformError, RuntimeError):
     """No OpenGL 3.3 core context could be created."""
+
+
+class TopologyError(MeshError):
+    """A variant mesh whose vertex or triangle count (or triangles) differ
+    from the base mesh's (``axialdeform fit``)."""
+
+
+class ResidualError(AxialDeformError):
+    """Fits whose residual exceeds the allowed limit (``axialdeform fit``)."""
+
+
+class GltfError(AxialDeformError, ValueError):
+    """A glTF file that cannot be written or read back as axialdeform
+    instances (wrong extension, missing attribute, unexpected accessor type)."""

@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write_bytes
-from .errors import AxialDeformError
+from .errors import AxialDeformError, GltfError
 from .params import ANGLES, POSITION, as_params
 
 __all__ = [
@@ -77,11 +77,6 @@ _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
 _TRIANGLES = 4
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
-
-
-class GltfError(AxialDeformError, ValueError):
-    """A glTF file that cannot be written or read back as axialdeform instances
-    (wrong extension, missing attribute, unexpected accessor type)."""
 
 
 # ---------------------------------------------------------------- quaternions

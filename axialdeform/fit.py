@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .deform import bernstein, deform
-from .errors import AxialDeformError, MeshError
+from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
 __all__ = [
@@ -61,14 +61,6 @@ __all__ = [
 DEFAULT_MAX_RESIDUAL = 1e-3
 #: mesh files a variants folder may hold (others are ignored)
 MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
-
-
-class TopologyError(MeshError):
-    """A variant whose vertex or triangle count (or triangles) differ from the base mesh's."""
-
-
-class ResidualError(AxialDeformError):
-    """Fits whose residual exceeds the allowed limit."""
 
 
 # ------------------------------------------------------------------ rotations

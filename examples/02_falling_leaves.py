@@ -80,7 +80,7 @@ class FallingLeaves:
 
 def save_gif(path, frames, fps):
     """Frames ``(h, w, 3) uint8`` -> an endless animated GIF, written atomically."""
-    images = [Image.fromarray(f).quantize(colors=128, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    images = [Image.fromarray(f).quantize(colors=64, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
               for f in frames]
     with ad.atomic.atomic_path(path, suffix=".gif") as tmp:
         images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],

@@ -218,3 +218,27 @@ def test_view_command_errors_are_one_line(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     assert proc.stderr.startswith("axialdeform view: error:") and "Traceback" not in proc.stderr
+
+
+def test_viewer_animates_the_leaves_in_place():
+    import importlib.util
+
+    from axialdeform.viewer import Viewer
+
+    spec = importlib.util.spec_from_file_location("falling_leaves", EXAMPLES_DIR / "02_falling_leaves.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    leaves = module.FallingLeaves(80)
+    v = Viewer.create(ad.load_mesh("leaf"), leaves.at(0.0), animate=leaves.at, tint=leaves.colours(),
+                      headless=True, size=(120, 90))
+    try:
+        v.step(2)
+        a = v.screenshot()
+        v.step(3)
+        assert np.abs(a.astype(int) - v.screenshot()).mean() > 0.1
+        assert v.renderer.instances.reallocations == 0
+        with pytest.raises(ad.ParamError):
+            Viewer.create(ad.load_mesh("leaf"), leaves.at(0.0)[:5], animate=leaves.at, headless=True)
+    finally:
+        v.release()
+        v.wnd.destroy()

@@ -169,3 +169,15 @@ def test_write_is_atomic_and_keeps_the_old_file_on_error(tmp_path, values):
         ad.write_params(path, bad)
     assert path.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["p.adp"]  # no temporary files left
+
+
+def test_atomic_writes_get_ordinary_permissions(tmp_path, values):
+    import os
+
+    path = ad.write_params(tmp_path / "p.adp", values)
+    mask = os.umask(0)
+    os.umask(mask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~mask
+    os.chmod(path, 0o640)
+    ad.write_params(path, values)
+    assert path.stat().st_mode & 0o777 == 0o640  # a replaced file keeps its mode
