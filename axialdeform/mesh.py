@@ -188,20 +188,15 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(_SUPPORTED)})")
     if path.suffix.lower() not in _SUPPORTED:
         raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(_SUPPORTED)}")
-    simple = _read_simple_obj(path) if path.suffix.lower() == ".obj" else None
-    if simple is not None:  # fast path: no trimesh import (about 1 s) for plain triangle OBJ files
-        positions, faces, simple_normals = simple
-        transform = None
-    else:
-        try:
-            import trimesh
+    try:
+        import trimesh
 
-            loaded = trimesh.load(str(path), process=False)
-        except Exception as exc:  # trimesh raises many kinds of errors on bad files
-            raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
-        mesh, transform = _single_mesh(loaded, name)
-        positions = np.asarray(mesh.vertices, dtype=np.float64)
-        faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+        loaded = trimesh.load(str(path), process=False)
+    except Exception as exc:  # trimesh raises many kinds of errors on bad files
+        raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
+    mesh, transform = _single_mesh(loaded, name)
+    positions = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(positions) == 0 or len(faces) == 0:
         raise MeshError(f"{name}: the mesh has {len(positions)} vertices and {len(faces)} faces; expected triangles")
     if not np.isfinite(positions).all():
@@ -213,7 +208,7 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
             f"{name}: a face refers to vertex {int(faces.min() if faces.min() < 0 else faces.max())}, "
             f"but the mesh has {len(positions)} vertices; expected indices 0..{len(positions) - 1}"
         )
-    file_normals = simple_normals if simple is not None else _file_vertex_normals(mesh, len(positions))
+    file_normals = _file_vertex_normals(mesh, len(positions))
     if transform is not None:
         positions = positions @ transform[:3, :3].T + transform[:3, 3]
         if file_normals is not None:
@@ -226,51 +221,6 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     else:
         normals = area_weighted_normals(positions, faces)
     return BaseMesh(positions, normals, faces, name=name, normals_from_file=file_normals is not None)
-
-
-def _read_simple_obj(path: Path):
-    """Positions (n, 3) float64, faces (m, 3) int64 and file normals (n, 3)
-    float64 or None of a *plain* triangle OBJ file, read without trimesh; None
-    for anything else (trimesh then reads it).
-
-    Plain means: only comments, ``v x y z``, ``vn x y z`` and triangle ``f``
-    lines; corners ``i`` (no ``vn`` lines) or ``i//i`` (as many ``vn`` as
-    ``v``); positive indices; every vertex used.  For such a file trimesh
-    (``process=False``) returns exactly these arrays, in this order.
-    """
-    try:
-        text = path.read_bytes().decode("ascii")
-    except (OSError, UnicodeDecodeError):
-        return None
-    v, vn, f = [], [], []
-    kinds = {"v": v, "vn": vn, "f": f}
-    for line in text.splitlines():
-        tok = line.split()
-        if not tok or tok[0].startswith("#"):
-            continue
-        target = kinds.get(tok[0])
-        if target is None or len(tok) != 4:
-            return None
-        target.append(tok[1:])
-    if not v or not f:
-        return None
-    try:
-        positions = np.array(v, dtype=np.float64)
-        corners = np.array(f).ravel()
-        if vn:
-            split = np.char.partition(corners, "//")
-            if len(vn) != len(v) or not (split[:, 1] == "//").all() or not (split[:, 0] == split[:, 2]).all():
-                return None
-            corners = split[:, 0]
-            normals = np.array(vn, dtype=np.float64)
-        else:
-            normals = None
-        faces = corners.astype(np.int64).reshape(-1, 3) - 1
-    except ValueError:  # a token that is not a plain number / integer
-        return None
-    if faces.min() < 0 or faces.max() >= len(positions) or np.bincount(faces.ravel(), minlength=len(positions)).min() == 0:
-        return None
-    return positions, faces, normals
 
 
 def _single_mesh(loaded, name: str):

@@ -102,7 +102,7 @@ def test_report_structure(quick):
     report = (out / "report" / "bench.md").read_text()
     for heading in ("## Machine and settings", "## Goals", "## Table 1", "## Table 2", "## Time to the first frame",
                     "## Time per later frame", "## Ratios", "## Where the first frame's time goes", "## Fig. 9",
-                    "## Deformation throughput"):
+                    "## Deformation throughput", "## Paired frame times"):
         assert heading in report, heading
     # the thesis's numbers beside ours
     for thesis in ("103906", "1450", "9100", "7120", "8900", "4.65"):
@@ -116,6 +116,10 @@ def test_report_structure(quick):
     assert {g["goal"] for g in details["goals"]} >= {"axial frame_s / same frame_s",
                                                      "loaded first_frame_s / axial first_frame_s"}
     assert {r["engine"] for r in details["throughput"]} == {"cpu (numpy deform)", "gpu (AxialRenderer.capture)"}
+    assert {r["mode"] for r in details["paired"]} == set(bench.BENCH_MODES)
+    # the same parameters give the same shapes: CPU-deformed files against the vertex shader, wireframe
+    (wire,) = [r for r in details["pictures"] if r["mode"] == "wireframe"]
+    assert wire["differing_pixels"] < 0.01
 
 
 def test_plots_are_pngs(quick):
