@@ -18,12 +18,13 @@ ENGINES = ("cpu", "gpu")
 MESH_FORMATS = ("obj", "ply", "glb")
 
 
-def bake(mesh, params, engine: str = "cpu", *, ctx=None) -> tuple[np.ndarray, np.ndarray]:
+def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
     in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
-    or ``"gpu"`` (transform feedback of the drawing vertex shader)."""
+    or ``"gpu"`` (transform feedback of the drawing vertex shader).
+    ``progress``: optional object with ``update(instances_done)`` (a tqdm bar)."""
     if engine == "cpu":
-        return deform(mesh.axis, mesh.positions, mesh.normals, params)
+        return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
     if engine != "gpu":
         raise AxialDeformError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
     from .context import create_context
@@ -33,7 +34,7 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None) -> tuple[np.ndarray, np
     ctx = create_context() if own else ctx
     try:
         with AxialRenderer(ctx, mesh, params) as r:
-            return r.capture()
+            return r.capture(progress=progress)
     finally:
         if own:
             ctx.release()

@@ -162,17 +162,8 @@ def cmd_bake(args) -> None:
     from .bake import bake, write_mesh_folder, write_npz
 
     mesh, params = _load(args)
-    if args.engine == "cpu" and len(params) > 20_000:  # long work: deform in blocks and show progress
-        import numpy as np
-
-        positions = np.empty((len(params), mesh.vertex_count, 3), np.float32)
-        normals = np.empty_like(positions)
-        with _progress(len(params), "deforming") as bar:
-            for a in range(0, len(params), 10_000):
-                positions[a : a + 10_000], normals[a : a + 10_000] = bake(mesh, params[a : a + 10_000], "cpu")
-                bar.update(len(positions[a : a + 10_000]))
-    else:
-        positions, normals = bake(mesh, params, args.engine)
+    with _progress(len(params), f"deforming ({args.engine})") as bar:
+        positions, normals = bake(mesh, params, args.engine, progress=bar)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)

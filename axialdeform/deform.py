@@ -95,12 +95,14 @@ def deform(
     params: np.ndarray,
     *,
     chunk_vertices: int = 4_000_000,
+    progress=None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """World-space positions and normals of every instance (the CPU reference).
 
     axis : ControlAxis of the base mesh.
     positions, normals : (v, 3) float — base mesh, file vertex order.
     params : (n, 16) float — the 16 numbers per instance.
+    progress : optional object with ``update(instances_done)`` (a tqdm bar).
     Returns ``W = R·V' + p`` and ``R·n'``, each (n, v, 3) float32.
     """
     params = as_params(params)
@@ -114,4 +116,6 @@ def deform(
         rot = rotation_matrices(block[:, ANGLES])
         out_pos[a : a + step] = np.einsum("nij,nvj->nvi", rot, moved) + block[:, None, POSITION]
         out_nrm[a : a + step] = np.einsum("nij,nvj->nvi", rot, bent)
+        if progress is not None:
+            progress.update(len(block))
     return out_pos, out_nrm

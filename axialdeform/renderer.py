@@ -216,12 +216,13 @@ class AxialRenderer:
             vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
 
     # ------------------------------------------------------------ capture
-    def capture(self, start: int = 0, count: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def capture(self, start: int = 0, count: int | None = None, progress=None) -> tuple[np.ndarray, np.ndarray]:
         """World positions and normals as the GPU computes them, by transform
         feedback of the drawing vertex shader.
 
         Returns two ``(count, vertices, 3) float32`` arrays in the base mesh's
         vertex order, for instances ``start .. start + count - 1``.
+        ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
         """
         import moderngl
 
@@ -257,6 +258,8 @@ class AxialRenderer:
                 scratch.count = k
                 vao.transform(output, mode=moderngl.POINTS, vertices=v, instances=k)
                 out[a : a + k] = np.frombuffer(output.read(size=k * per_instance), dtype="f4").reshape(k, v, 6)
+                if progress is not None:
+                    progress.update(k)
         finally:
             bind_framebuffer(self.ctx, previous)  # give the caller back their framebuffer
         return out[..., :3].copy(), out[..., 3:].copy()
