@@ -70,7 +70,7 @@ class ControlAxis:
         length = float(extents[index])
         if not length > 0:
             raise MeshError(f"{name}: the mesh's longest extent is {length}; expected a mesh that is not a single point")
-        # the GPU works in float32: below MIN_LENGTH the Bezier terms (offsets x weights)
+        # the GPU works in float32: below MIN_LENGTH the curve terms (offsets x weights)
         # become subnormal and are flushed to zero; above MAX_LENGTH positions overflow
         if not (MIN_LENGTH <= length <= MAX_LENGTH):
             raise MeshError(
