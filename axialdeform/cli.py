@@ -174,19 +174,41 @@ def cmd_bake(args) -> None:
         print(f"wrote {len(files)} {args.format} files to {out}/ ({args.engine})")
 
 
-def cmd_info(args) -> None:
-    from .params import read_param_file
+def cmd_info(args) -> int | None:
+    """Header, count and checksum verdict; a corrupt binary file still shows
+    its header, then the verdict fails with status 2."""
+    from .axis import ControlAxis
+    from .params import MAGIC, BINARY_SUFFIXES, read_binary_header, read_param_file
 
-    pf = read_param_file(args.params)
-    print(f"file:      {args.params} ({pf.size} bytes)")
-    print(f"format:    {pf.format}" + (f" v{pf.version}" if pf.version else "") + f", {pf.encoding}")
-    print(f"instances: {pf.count}" + (f" ({(pf.size / pf.count):.1f} bytes each)" if pf.count else ""))
-    print(f"axis:      {pf.axis.describe() if pf.axis else 'not recorded'}")
-    print(f"mesh:      {'sha256 ' + pf.mesh_fingerprint.hex() if pf.mesh_fingerprint else 'not recorded'}")
-    if pf.format == "binary":
-        print(f"checksum:  CRC-32 {pf.checksum:08x} OK")
-    else:
-        print("checksum:  none (text form)")
+    path = Path(args.params)
+    try:
+        data = path.read_bytes()
+    except OSError:
+        data = b""
+    if path.is_file() and (data[: len(MAGIC)] == MAGIC or path.suffix.lower() in BINARY_SUFFIXES):
+        h = read_binary_header(data, str(path))  # structural errors: one line, exit 2
+        axis = ControlAxis(h.axis_index, h.lo, h.length).describe() if h.axis_index >= 0 else "not recorded"
+        rows = [("file", f"{path} ({h.size} bytes)"), ("format", f"binary v{h.version}, {h.encoding_name}"),
+                ("instances", f"{h.count}" + (f" ({h.size / h.count:.1f} bytes each)" if h.count else "")),
+                ("axis", axis),
+                ("mesh", "sha256 " + h.fingerprint.hex() if any(h.fingerprint) else "not recorded"),
+                ("checksum", f"CRC-32 {h.stored_crc:08x} " + ("OK" if h.checksum_ok else
+                                                               f"MISMATCH (computed {h.computed_crc:08x})"))]
+        for key, value in rows:
+            print(f"{key + ':':<11}{value}")
+        if not h.checksum_ok:
+            print(f"axialdeform info: error: {path}: checksum: the file is corrupt", file=sys.stderr)
+            return 2
+        read_param_file(path)  # the values too: finite numbers, valid axis
+        return None
+    pf = read_param_file(path)
+    print(f"file:      {path} ({pf.size} bytes)")
+    print(f"format:    text, {pf.count} lines of 16 numbers")
+    print(f"instances: {pf.count}" + (f" ({pf.size / pf.count:.1f} bytes each)" if pf.count else ""))
+    print("axis:      not recorded (text form)")
+    print("mesh:      not recorded (text form)")
+    print("checksum:  none (text form)")
+    return None
 
 
 def cmd_convert(args) -> None:
@@ -217,7 +239,9 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         handler = getattr(args, "handler", None) or COMMANDS[args.command]
-        handler(args)
+        status = handler(args)
+        if status:
+            return int(status)
     except AxialDeformError as exc:
         print(f"axialdeform {args.command}: error: {exc}", file=sys.stderr)
         return 2

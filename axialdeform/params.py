@@ -50,6 +50,8 @@ __all__ = [
     "parse_text",
     "encode_binary",
     "decode_binary",
+    "read_binary_header",
+    "BinaryHeader",
     "quantization_error_bound",
     "quantize_params",
     "dequantize_params",
@@ -317,9 +319,40 @@ def encode_binary(
     return body + _TRAILER.pack(zlib.crc32(body))
 
 
-def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
-    """Parse the binary form; every check happens before any allocation that
-    depends on the declared count."""
+@dataclass(frozen=True)
+class BinaryHeader:
+    """The header of a binary parameter file, with both checksums.
+
+    Structural checks (magic, version, encoding, header size, a length that
+    matches the count) have passed; ``checksum_ok`` says whether the CRC-32
+    stored in the file matches the one computed over header and payload.
+    """
+
+    version: int
+    encoding: int
+    count: int
+    axis_index: int
+    lo: float
+    length: float
+    fingerprint: bytes
+    stored_crc: int
+    computed_crc: int
+    size: int
+
+    @property
+    def checksum_ok(self) -> bool:
+        return self.stored_crc == self.computed_crc
+
+    @property
+    def encoding_name(self) -> str:
+        return _ENCODINGS[self.encoding][0]
+
+
+def read_binary_header(data: bytes, name: str = "<binary>") -> BinaryHeader:
+    """Check the structure of a binary parameter file and read its header.
+
+    Every check happens before any allocation that depends on the declared
+    count; the CRC-32 is computed but not judged (see ``checksum_ok``)."""
     head = bytes(data[: len(MAGIC)])
     if head != MAGIC[: len(head)]:  # say "not this format" before "too short"
         raise ParamFileError(
@@ -339,7 +372,7 @@ def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
         raise ParamFileError(f"{name}: encoding: expected 0 (float32) or 1 (uint16-quantized), found {encoding}")
     if header_size != HEADER_SIZE:
         raise ParamFileError(f"{name}: header size: expected {HEADER_SIZE}, found {header_size}")
-    enc_name, record = _ENCODINGS[encoding]
+    record = _ENCODINGS[encoding][1]
     table = _QUANT.size if encoding == ENCODING_UINT16 else 0
     expected = HEADER_SIZE + table + count * record + _TRAILER.size  # Python int: no overflow
     if len(data) != expected:
@@ -348,9 +381,22 @@ def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
             + (" (truncated?)" if len(data) < expected else "")
         )
     (stored,) = _TRAILER.unpack_from(data, len(data) - _TRAILER.size)
-    actual = zlib.crc32(memoryview(data)[: len(data) - _TRAILER.size])
-    if stored != actual:
-        raise ParamFileError(f"{name}: checksum: stored CRC-32 {stored:08x}, computed {actual:08x}; the file is corrupt")
+    computed = zlib.crc32(memoryview(data)[: len(data) - _TRAILER.size])
+    return BinaryHeader(version, encoding, count, axis_index, lo, length, fingerprint, stored, computed, len(data))
+
+
+def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
+    """Parse the binary form (see :func:`read_binary_header` for the checks
+    before the checksum, which must match)."""
+    h = read_binary_header(data, name)
+    if not h.checksum_ok:
+        raise ParamFileError(
+            f"{name}: checksum: stored CRC-32 {h.stored_crc:08x}, computed {h.computed_crc:08x}; the file is corrupt"
+        )
+    encoding, count, axis_index, lo, length, fingerprint = h.encoding, h.count, h.axis_index, h.lo, h.length, h.fingerprint
+    enc_name = h.encoding_name
+    table = _QUANT.size if encoding == ENCODING_UINT16 else 0
+    stored, version = h.stored_crc, h.version
     if axis_index not in (-1, 0, 1, 2):
         raise ParamFileError(f"{name}: axis: expected -1 (not recorded), 0, 1 or 2, found {axis_index}")
     axis = None

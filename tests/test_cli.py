@@ -126,3 +126,18 @@ def test_help_everywhere():
         assert res.returncode == 0 and "usage: axialdeform " + name in res.stdout, name
     res = run()
     assert res.returncode == 2 and "usage" in res.stderr
+
+
+def test_info_gives_a_checksum_verdict_on_a_corrupt_file(tmp_path):
+    stone = ad.load_mesh("stone")
+    path = ad.write_params(tmp_path / "p.adp", ad.random_params(stone, 10, seed=1), stone)
+    data = bytearray(path.read_bytes())
+    data[300] ^= 0x01
+    (tmp_path / "bad.adp").write_bytes(bytes(data))
+    res = run("info", tmp_path / "bad.adp")
+    assert res.returncode == 2
+    assert "instances: 10" in res.stdout and "MISMATCH" in res.stdout and "axis x" in res.stdout
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "checksum" in lines[0] and "Traceback" not in res.stderr
+    ok = run("info", path)
+    assert ok.returncode == 0 and "OK" in ok.stdout and "MISMATCH" not in ok.stdout
