@@ -823,7 +823,6 @@ def _why_missed(details, by, counts) -> list[str]:
     for g in missed:
         if g["goal"].startswith("loaded first_frame_s") and axial and loaded:
             per_file = (loaded["stages_s"]["read"] - loaded["stages_s"]["context"]) / c
-            fixed = axial["first_frame_s"]
             need = c * per_file / (GOALS["first_frame_speedup"] - 1)
             out.append(
                 f"- **loaded / axial first frame @ {c}**: axial's first frame is almost all fixed cost "

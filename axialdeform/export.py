@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write_bytes
-from .errors import AxialDeformError, GltfError
+from .errors import GltfError
 from .params import ANGLES, POSITION, as_params
 
 __all__ = [
