@@ -201,6 +201,13 @@ def _scene_kwargs(mesh, scene: dict) -> dict:
     return kw
 
 
+class _Counter:
+    """Adapts a ``progress(n)`` callable to the ``update(n)`` interface."""
+
+    def __init__(self, fn):
+        self.update = fn
+
+
 def _obj_name(i: int) -> str:
     return f"instance_{i:06d}.obj"
 
@@ -233,7 +240,8 @@ class _Scene:
 
         self.mesh, self.mesh_path, self.count, self.seed, self.scene = mesh, mesh_path, count, seed, scene
         self.params = random_params(mesh, count, seed, **_scene_kwargs(mesh, scene))
-        key = hashlib.sha256(mesh_path.read_bytes() + self.params.tobytes()).hexdigest()[:20]
+        # the writer's identity is part of the key: files from another writer are never reused
+        key = hashlib.sha256(b"bake.write_mesh_folder obj\0" + mesh_path.read_bytes() + self.params.tobytes()).hexdigest()[:20]
         self.dir = cache / f"{mesh_path.stem}-{count}-{key}"
         self.dir.mkdir(parents=True, exist_ok=True)
         self.adp = self.dir / "params.adp"
@@ -255,25 +263,16 @@ class _Scene:
                 f"bench cache {self.dir}: about {need >> 20} MiB needed for {self.count} OBJ files, "
                 f"{free >> 20} MiB free; use --cache DIR on a larger disk or leave out this count"
             )
-        from .deform import deform
+        from .bake import bake, write_mesh_folder
 
         tmp = self.dir / f"objs.tmp-{os.getpid()}"
         shutil.rmtree(tmp, ignore_errors=True)
-        tmp.mkdir()
-        v = self.mesh.vertex_count
-        body = "v %.9g %.9g %.9g\n" * v + "vn %.9g %.9g %.9g\n" * v
-        f = self.mesh.faces.astype(np.int64) + 1
-        faces = "".join(f"f {a}//{a} {b}//{b} {c}//{c}\n" for a, b, c in f.tolist())
-        step = 5000
-        for a in range(0, self.count, step):  # deformation vectorized per chunk; files written one by one
-            pos, nrm = deform(self.mesh.axis, self.mesh.positions, self.mesh.normals, self.params[a : a + step])
-            values = np.concatenate([pos.reshape(len(pos), -1), nrm.reshape(len(nrm), -1)], axis=1).astype(np.float64)
-            for k, row in enumerate(values.tolist()):
-                i = a + k
-                text = f"# axialdeform bench: instance {i} of {self.count}, deformed by the CPU reference\n"
-                (tmp / _obj_name(i)).write_text(text + body % tuple(row) + faces, encoding="ascii")
-                if progress is not None:
-                    progress(1)
+        # the "load every one" data is exactly what `axialdeform bake MESH PARAMS -o DIR` writes
+        positions, normals = bake(self.mesh, self.params, "cpu")
+        written = write_mesh_folder(tmp, self.mesh, positions, normals, "obj",
+                                    progress=None if progress is None else _Counter(progress))
+        if written and written[0].name != _obj_name(0):
+            raise AxialDeformError(f"bench cache: expected files named like {_obj_name(0)}, found {written[0].name}")
         os.replace(tmp, self.folder)  # the folder appears complete or not at all
         return self.folder
 
@@ -1021,8 +1020,8 @@ def _report(records, details, plots) -> str:
     add("## Notes\n")
     add("- `same` reads one mesh file; its placement (positions, angles) is computed in the child, as in the thesis's "
         "Table 1 (constant 10.4 KB).")
-    add("- `loaded` files are written once into the cache (deformed by the CPU reference, `v`/`vn`/`f i//i`, 9 "
-        "significant digits) and read, parsed, uploaded and drawn one by one in every run. At 100 000 it runs once "
+    add("- `loaded` files are written once into the cache by `bake.write_mesh_folder` (what `axialdeform bake MESH "
+        "PARAMS -o DIR` writes: the CPU reference, exported by trimesh with positions and normals) and read, parsed, uploaded and drawn one by one in every run. At 100 000 it runs once "
         "per mode (100 000 files); at 10 000 twice.")
     add("- `axial-quantized` reads the 32-byte-per-instance file; "
         + ("the GPU instance buffer is quantized too (16 uint16 per instance)."
