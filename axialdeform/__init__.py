@@ -9,14 +9,6 @@ The data flow, one module each::
 deformed instances out; ``cli.py`` is the ``axialdeform`` command.
 """
 
-from importlib.metadata import PackageNotFoundError, version as _version
-
-from .axis import ControlAxis
-from .bake import bake
-from .camera import Camera, frame_instances, instance_bounds
-from .context import Offscreen, create_context
-from .deform import deform, rotation_matrices
-from .ground import GroundPlane
 from .errors import (
     AxialDeformError,
     ContextError,
@@ -29,17 +21,57 @@ from .errors import (
     ShaderError,
     TopologyError,
 )
-from .image import render_image, save_png
-from .mesh import BUNDLED_MESHES, BaseMesh, bundled_mesh_path, load_mesh
-from .params import FIELDS, as_params, make_params, read_param_file, read_params, write_params
-from .renderer import MODES, AxialRenderer
-from .shaders import assemble, assemble_text, build_program, deformation_glsl
-from .variation import random_params
 
-try:
-    __version__ = _version("axialdeform")
-except PackageNotFoundError:  # running from a source tree that was never installed
-    __version__ = "0+unknown"
+# These two share their names with their modules (axialdeform.bake,
+# axialdeform.deform), so they are bound now: importing the submodule later
+# must not replace the function.
+from .bake import bake
+from .deform import deform, rotation_matrices
+
+# The other public names and the module each lives in.  They are imported on first
+# use (PEP 562), so ``import axialdeform`` -- and every CLI start and every
+# benchmark child -- pays only for what it touches.
+_LAZY = {
+    "ControlAxis": "axis",
+    "Camera": "camera", "frame_instances": "camera", "instance_bounds": "camera",
+    "Offscreen": "context", "create_context": "context",
+    "GroundPlane": "ground",
+    "render_image": "image", "save_png": "image",
+    "BUNDLED_MESHES": "mesh", "BaseMesh": "mesh", "bundled_mesh_path": "mesh", "load_mesh": "mesh",
+    "FIELDS": "params", "as_params": "params", "make_params": "params", "read_param_file": "params",
+    "read_params": "params", "write_params": "params",
+    "MODES": "renderer", "AxialRenderer": "renderer",
+    "assemble": "shaders", "assemble_text": "shaders", "build_program": "shaders", "deformation_glsl": "shaders",
+    "random_params": "variation",
+}
+
+
+def __getattr__(name: str):
+    if name == "__version__":
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            value = version("axialdeform")
+        except PackageNotFoundError:  # running from a source tree that was never installed
+            value = "0+unknown"
+    elif name in _LAZY:
+        from importlib import import_module
+
+        value = getattr(import_module(f".{_LAZY[name]}", __name__), name)
+    else:
+        from importlib import import_module
+        from importlib.util import find_spec
+
+        if name.startswith("_") or find_spec(f"{__name__}.{name}") is None:
+            raise AttributeError(f"module 'axialdeform' has no attribute {name!r}")
+        value = import_module(f".{name}", __name__)  # a submodule: axialdeform.params, ...
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY) | {"__version__"})
+
 
 __all__ = [
     "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",

@@ -52,9 +52,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .bench_child import obj_name as _obj_name
+from .bench_child import scene_kwargs as _scene_kwargs
 from .errors import AxialDeformError
 
-__all__ = ["run_bench", "add_parser", "run", "METHODS", "COUNTS", "BENCH_MODES", "RECORD_KEYS", "THESIS"]
+__all__ = ["BENCH_MODES", "COUNTS", "METHODS", "RECORD_KEYS", "THESIS", "add_parser", "run", "run_bench"]
 
 METHODS = ("same", "loaded", "axial", "axial-quantized")
 COUNTS = (100, 1000, 10000, 100000)
@@ -77,128 +79,9 @@ GOAL_COUNT = 10000
 SCENE = {"bend": 0.12, "spacing_factor": 1.15, "placement": "grid"}
 LEAF_SCENE = {"count": 1000, "placement": "box", "bend": 0.12}
 _KB = 1024.0
-_CHILD = "import sys; from axialdeform.bench import _child_main; _child_main(sys.argv[1])"
-
-
-# ===================================================================== child
-
-
-def _child_main(spec_text: str) -> None:
-    """Entry point of one measurement process (``python -c``); prints
-    ``FIRST`` when its first frame is finished, then one ``RESULT {json}`` line."""
-    stamps = {"imported": time.time()}  # the interpreter and axialdeform (this module's package) are loaded
-    spec = json.loads(spec_text)
-    import moderngl
-
-    from .context import Offscreen, create_context
-
-    ctx = create_context()
-    target = Offscreen(ctx, tuple(spec["size"]), samples=spec["samples"])
-    stamps["context"] = time.time()
-    view = np.asarray(spec["view"], dtype=np.float32)
-    proj = np.asarray(spec["proj"], dtype=np.float32)
-    mode = spec["mode"]
-    draw, info = _SETUPS[spec["method"]](ctx, spec, view, proj, mode, moderngl, stamps)
-    stamps["uploaded"] = time.time()
-    target.use()
-    draw()
-    ctx.finish()
-    stamps["first_frame"] = time.time()
-    print("FIRST", flush=True)
-    for _ in range(spec["warmup"]):
-        target.use()
-        draw()
-        ctx.finish()
-    frames = []
-    for _ in range(spec["frames"]):
-        t = time.perf_counter()
-        target.use()
-        draw()
-        ctx.finish()
-        frames.append(time.perf_counter() - t)
-    if spec.get("image"):
-        from .image import save_png
-
-        save_png(spec["image"], target.read())
-    info["trimesh_imported"] = "trimesh" in sys.modules
-    info["gl_error"] = ctx.error
-    print("RESULT " + json.dumps({"stamps": stamps, "frames": frames, "info": info}), flush=True)
-
-
-def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
-    from .mesh import load_mesh
-    from .renderer import AxialRenderer
-    from .variation import random_params
-
-    mesh = load_mesh(spec["mesh"])
-    # the placement is computed, not read: the thesis's "all the same" reads one mesh only
-    params = random_params(mesh, spec["count"], spec["seed"], **_scene_kwargs(mesh, spec["scene"]))
-    stamps["read"] = time.time()
-    r = AxialRenderer(ctx, mesh, params, bend=False)
-    return (lambda: r.render(view, proj, mode)), {}
-
-
-def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
-    from .mesh import load_mesh
-    from .params import read_params
-    from .renderer import AxialRenderer
-
-    mesh = load_mesh(spec["mesh"])
-    params = read_params(spec["params"], mesh)
-    stamps["read"] = time.time()
-    gpu_quantized = False
-    if spec["method"] == "axial-quantized":
-        try:  # a renderer with a quantized instance buffer keeps 32 bytes an instance on the GPU too
-            r = AxialRenderer(ctx, mesh, params, quantized=True)
-            gpu_quantized = True
-        except TypeError:
-            r = AxialRenderer(ctx, mesh, params)
-    else:
-        r = AxialRenderer(ctx, mesh, params)
-    return (lambda: r.render(view, proj, mode)), {"gpu_quantized": gpu_quantized}
-
-
-def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
-    """Read every pre-deformed OBJ file with load_mesh, one VBO/IBO/VAO each."""
-    from .mesh import load_mesh
-    from .renderer import AxialRenderer
-
-    folder = Path(spec["folder"])
-    count = spec["count"]
-    wire = mode == "wireframe"
-    renderer = None
-    vaos = []
-    for i in range(count):  # one file, one upload, one VAO per instance: what this method is
-        mesh = load_mesh(folder / _obj_name(i))
-        if renderer is None:
-            # the drawing program (no bend, identity instance attributes): same shading as the others
-            renderer = AxialRenderer(ctx, mesh, np.zeros((0, 16), np.float32), bend=False)
-            prog = renderer.program
-        vbo = ctx.buffer(np.hstack([mesh.positions, mesh.normals]).astype("f4").tobytes())
-        indices = mesh.edges if wire else mesh.faces
-        ibo = ctx.buffer(np.ascontiguousarray(indices, dtype="u4").tobytes())
-        vao = ctx.vertex_array(prog, [(vbo, "3f 3f", "in_position", "in_normal")], index_buffer=ibo, index_element_size=4)
-        vaos.append((vao, int(indices.size), vbo, ibo))
-    stamps["read"] = time.time()
-    primitive = moderngl.LINES if wire else moderngl.TRIANGLES
-
-    def draw():
-        renderer.render(view, proj, mode)  # no instances: sets the uniforms only
-        ctx.enable(moderngl.DEPTH_TEST)
-        for vao, n, _, _ in vaos:
-            vao.render(primitive, vertices=n)
-
-    return draw, {}
-
-
-_SETUPS = {"same": _setup_same, "loaded": _setup_loaded, "axial": _setup_axial, "axial-quantized": _setup_axial}
-
-
-def _scene_kwargs(mesh, scene: dict) -> dict:
-    kw = {"bend": scene["bend"], "placement": scene["placement"]}
-    if "spacing_factor" in scene:
-        kw["spacing"] = scene["spacing_factor"] * mesh.axis.length
-    return kw
+#: optional packages that ``import trimesh`` imports itself when they are installed
+_TRIMESH_EAGER = ("scipy", "networkx")
+_CHILD = "import sys; from axialdeform.bench_child import main; main(sys.argv[1])"
 
 
 class _Counter:
@@ -207,9 +90,6 @@ class _Counter:
     def __init__(self, fn):
         self.update = fn
 
-
-def _obj_name(i: int) -> str:
-    return f"instance_{i:06d}.obj"
 
 
 # ==================================================================== parent: data
@@ -356,6 +236,16 @@ def _machine() -> dict:
         pass
     info = {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform(),
             "numpy": np.__version__}
+    from importlib.metadata import PackageNotFoundError, version
+    from importlib.util import find_spec
+
+    try:
+        info["trimesh"] = version("trimesh")
+    except PackageNotFoundError:  # pragma: no cover - trimesh is a dependency
+        info["trimesh"] = "?"
+    # trimesh imports these at its own import when they are installed (not dependencies of axialdeform):
+    # they decide what reading the first mesh costs in a fresh process
+    info["trimesh_optional_installed"] = [m for m in _TRIMESH_EAGER if find_spec(m) is not None]
     try:
         import moderngl
 
@@ -402,7 +292,7 @@ def _startup_costs(repeats: int) -> dict:
     for name, code in (("python -c pass", "pass"), ("import numpy", "import numpy"),
                        ("import axialdeform", "import axialdeform"),
                        ("import axialdeform.bench + moderngl", "import axialdeform.bench, moderngl"),
-                       ("import trimesh (the mesh loader; pulls in scipy when installed)", "import trimesh")):
+                       ("import trimesh (the mesh loader, with numpy)", "import trimesh")):
         times = []
         for _ in range(repeats):
             t = time.perf_counter()
@@ -662,8 +552,12 @@ def run_bench(
         stats.append({**rec, "repeats": len(rs), "frames_per_repeat": frames, "first_frame_min_s": min(first),
                       "first_frame_max_s": max(first), "frame_min_s": min(frame), "frame_max_s": max(frame),
                       "stages_s": stage, "info": rs[0]["info"], "first_frame_all_s": first, "frame_all_s": frame})
+    culling = {r["info"].get("cull_back_faces") for rs in runs.values() for r in rs}
+    if len(culling) > 1:  # a fair comparison draws every method the same way
+        raise AxialDeformError(f"bench: the methods drew with different face culling ({sorted(map(str, culling))}); "
+                               "expected one setting for all (is every loaded file as closed as the base mesh?)")
     order = {m: i for i, m in enumerate(METHODS)}
-    key = lambda r: (r["count"], BENCH_MODES.index(r["mode"]), order[r["method"]])  # noqa: E731
+    key = lambda r: (r["count"], BENCH_MODES.index(r["mode"]), order[r["method"]])
     records.sort(key=key)
     stats.sort(key=key)
     details = {
@@ -673,10 +567,10 @@ def run_bench(
         "load_average_after": _load_average(),
         "wall_s": time.perf_counter() - t_start,
         "settings": {"mesh": base_name, "mesh_file": str(mesh_path), "mesh_bytes": mesh_path.stat().st_size,
-                     "vertices": base.vertex_count, "triangles": int(len(base.faces)), "edges": int(len(base.edges)),
+                     "vertices": base.vertex_count, "triangles": len(base.faces), "edges": len(base.edges),
                      "counts": list(counts), "modes": list(modes), "methods": list(methods), "repeats": repeats,
                      "frames": frames, "warmup": warmup, "size": list(size), "samples": samples, "seed": seed,
-                     "scene": SCENE, "quick": quick, "cache": str(cache)},
+                     "scene": SCENE, "quick": quick, "cache": str(cache), "cull_back_faces": bool(base.is_volume)},
         "stats": stats,
         "leaf": None if leaf_result is None else _leaf_summary(leaf_result),
         "throughput": tp,
@@ -744,13 +638,16 @@ def _goals(stats, leaf, scenes, paired=None) -> list[dict]:
 
 
 def _bytes_per_instance(scenes, method) -> tuple[float, float] | None:
-    """(marginal bytes per instance between the two largest counts, bytes per instance of the largest file)."""
+    """(marginal bytes per instance between the two largest counts -- with one count, the
+    records' bytes per instance --, bytes per instance of the largest file)."""
     cs = sorted(scenes)
-    path = lambda c: scenes[c].adp if method == "axial" else scenes[c].adp_q  # noqa: E731
+    path = lambda c: scenes[c].adp if method == "axial" else scenes[c].adp_q
     big = cs[-1]
     total = path(big).stat().st_size / big
-    if len(cs) < 2:
-        return total, total
+    if len(cs) < 2:  # one count: the records' bytes, the file less its fixed header, table and checksum
+        from .params import read_binary_header
+
+        return read_binary_header(path(big).read_bytes(), str(path(big))).payload_bytes / big, total
     small = cs[-2]
     return (path(big).stat().st_size - path(small).stat().st_size) / (big - small), total
 
@@ -798,7 +695,7 @@ def _fmt_s(x: float) -> str:
 
 
 def _why_missed(details, by, counts) -> list[str]:
-    """A profile of each missed first-frame goal, from the measured stages."""
+    """A profile of each missed goal, from the measured stages."""
     missed = [g for g in details["goals"] if not g["met"]]
     if not missed:
         return []
@@ -806,12 +703,18 @@ def _why_missed(details, by, counts) -> list[str]:
     startup = details.get("startup_s", {})
     bare = startup.get("python -c pass", 0.0)
     trimesh_s = next((v for k, v in startup.items() if k.startswith("import trimesh")), None)
+    extras = details.get("machine", {}).get("trimesh_optional_installed") or []
+    loader = ""
+    if trimesh_s is not None:
+        loader = (f"starting Python and importing the mesh loader (`import trimesh`, numpy included, {trimesh_s:.3f} s in a "
+                  f"fresh process; `python -c pass` alone {bare:.3f} s")
+        loader += (f"; trimesh imports {' and '.join(extras)} itself because they are installed here, "
+                   "which an environment with only axialdeform's dependencies does not have)" if extras else ")")
     c = GOAL_COUNT if GOAL_COUNT in counts else counts[-1]
     axial, loaded = by.get(("axial", c, "solid")), by.get(("loaded", c, "solid"))
     stages = ("imported", "context", "read", "uploaded", "first_frame")
 
-    def split(st):
-        g = st["stages_s"]
+    def split(g):
         prev, parts = 0.0, []
         for k in stages:
             if k in g:
@@ -821,33 +724,35 @@ def _why_missed(details, by, counts) -> list[str]:
 
     for g in missed:
         if g["goal"].startswith("loaded first_frame_s") and axial and loaded:
+            st = axial["stages_s"]
             per_file = (loaded["stages_s"]["read"] - loaded["stages_s"]["context"]) / c
-            need = c * per_file / (GOALS["first_frame_speedup"] - 1)
+            allowed = loaded["first_frame_s"] / GOALS["first_frame_speedup"]
+            context = st["context"] - st["imported"]
+            floor = (trimesh_s or bare) + context + axial["frame_s"]
             out.append(
-                f"- **loaded / axial first frame @ {c}**: axial's first frame is almost all fixed cost "
-                f"({split(axial)}); loaded adds {per_file * 1e3:.2f} ms per file (read, parse, upload). "
-                f"The ratio is about (fixed + N x per-file) / fixed, so {GOALS['first_frame_speedup']:g}x at N = {c} "
-                f"needs a fixed cost under {need:.2f} s, less than starting Python and importing the mesh loader: "
-                f"`python -c pass` {bare:.3f} s" + (f", `import trimesh` {trimesh_s:.3f} s (it imports scipy when "
-                "installed; trimesh is the project's one mesh loader, for the base mesh as for every loaded file)"
-                if trimesh_s is not None else "") + ".")
+                f"- **loaded / axial first frame @ {c}**: the goal allows axial {allowed:.3f} s (loaded's "
+                f"{loaded['first_frame_s']:.2f} s / {GOALS['first_frame_speedup']:g}); axial took "
+                f"{axial['first_frame_s']:.3f} s ({split(st)}). Loaded's time grows by {per_file * 1e3:.2f} ms a file "
+                f"(trimesh parse, upload, one VAO); axial's is almost all fixed, and most of that fixed part is a floor "
+                f"no change to the method removes: {loader or 'starting Python'}, the EGL context ({context:.3f} s) and "
+                f"one draw of the {c} instances ({axial['frame_s']:.3f} s for a later frame, which every method pays; "
+                f"the first frame also compiles the shaders). That floor, {floor:.3f} s, is above {allowed:.3f} s, so "
+                f"the goal is out of reach here while trimesh reads the meshes of both methods (the issue asks for the "
+                f"same loader). Causes found by profiling and fixed: back faces of closed meshes are culled "
+                f"(`AxialRenderer` default: the draw takes about 40 % less on llvmpipe, for every method), "
+                f"`import axialdeform` is lazy, and the bench child imports only what one measurement needs.")
             big = max(counts)
             ab, lb = by.get(("axial", big, "solid")), by.get(("loaded", big, "solid"))
             if ab and lb and big != c:
-                out.append(f"  At {big} instances the ratio is {lb['first_frame_s'] / ab['first_frame_s']:.1f}x.")
+                r = lb["first_frame_s"] / ab["first_frame_s"]
+                out.append(f"  At {big} instances the ratio is {r:.1f}x "
+                           f"({'meets' if r >= GOALS['first_frame_speedup'] else 'misses'} the {GOALS['first_frame_speedup']:g}x).")
         elif g["goal"].startswith("1000-leaf") and details.get("leaf"):
             leaf = details["leaf"]
-            prev, parts = 0.0, []
-            for k in stages:
-                if k in leaf["stages_s"]:
-                    parts.append(f"{k} {leaf['stages_s'][k] - prev:.3f} s")
-                    prev = leaf["stages_s"][k]
             out.append(
-                f"- **1000-leaf first frame**: {', '.join(parts)}. The `read` stage is reading the leaf with trimesh, "
-                "dominated by importing trimesh in the fresh process"
-                + (f" ({trimesh_s:.3f} s alone)" if trimesh_s is not None else "")
-                + "; the deformation, upload and draw of 1000 leaves take the rest. A process that already has "
-                "trimesh imported (any running application) pays only the stages after it.")
+                f"- **1000-leaf first frame**: {split(leaf['stages_s'])}. Most of it is "
+                + (loader or "starting Python") + "; the context, the deformation and the draw of 1000 leaves take the "
+                "rest. A process that already has trimesh imported (any running application) pays only the later stages.")
         else:
             out.append(f"- **{g['goal']}**: measured {g['measured']}, target {g['target']}.")
     out.append("")
@@ -870,12 +775,16 @@ def _report(records, details, plots) -> str:
     add("## Machine and settings\n")
     add(f"- CPU: {mc['cpu']} ({mc['cores']} cores visible), memory {mc.get('memory_gib', '?')} GiB")
     add(f"- GL renderer: {mc.get('gl_renderer')} ({mc.get('gl_version', '?')}), moderngl {mc.get('moderngl', '?')}")
-    add(f"- Python {mc['python']}, numpy {mc['numpy']}, {mc['platform']}")
+    add(f"- Python {mc['python']}, numpy {mc['numpy']}, trimesh {mc.get('trimesh', '?')}, {mc['platform']}")
+    if "trimesh_optional_installed" in mc:
+        extra = ", ".join(mc["trimesh_optional_installed"]) or "none (only axialdeform's dependencies)"
+        add(f"- installed packages that `import trimesh` loads when present: {extra}")
     add(f"- load average (1, 5, 15 min) before: {details['load_average_before']}, after: {details['load_average_after']}"
         " (the machine may be shared: timings are noisy when these are high)")
     add(f"- mesh: {se['mesh']} ({se['vertices']} vertices, {se['triangles']} triangles, {se['edges']} edges, "
         f"{se['mesh_bytes']} bytes); scene: {se['scene']}; seed {se['seed']}")
-    add(f"- target: offscreen {se['size'][0]}x{se['size'][1]}, MSAA samples {se['samples']}, depth test; camera "
+    add(f"- target: offscreen {se['size'][0]}x{se['size'][1]}, MSAA samples {se['samples']}, depth test, back faces "
+        f"{'culled' if se.get('cull_back_faces') else 'drawn'} (every method alike); camera "
         "framing every instance (`camera.frame_instances`), the same for every method of a count")
     add(f"- repeats: {se['repeats']} child processes per method x count x mode (fewer where a run is long: 1 at "
         f"100 000, 2 for `loaded` at 10 000: see n in the tables); {se['warmup']} warm-up frames (1 from 10 000 on), "
@@ -942,7 +851,7 @@ def _report(records, details, plots) -> str:
     add("|---|---|---|---|---|---|")
     for c in counts:
         for mode in modes:
-            g = lambda m, f: by[(m, c, mode)][f] if (m, c, mode) in by else None  # noqa: E731
+            g = lambda m, f: by[(m, c, mode)][f] if (m, c, mode) in by else None
             def ratio(a, b):
                 return "-" if a is None or b is None else f"{a / b:.3f}"
             add(f"| {c} | {mode} | {ratio(g('axial', 'frame_s'), g('same', 'frame_s'))} | "

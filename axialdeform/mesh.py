@@ -103,6 +103,34 @@ class BaseMesh:
         e = np.sort(e, axis=1)
         return np.unique(e, axis=0).astype(np.uint32)
 
+    @cached_property
+    def is_volume(self) -> bool:
+        """True when the mesh bounds a volume with outward-facing triangles,
+        as ``trimesh.Trimesh.is_volume`` means it: after merging vertices at
+        equal positions, every directed edge occurs once and its reverse once
+        (closed, consistently wound), and the signed volume is positive
+        (counter-clockwise seen from outside).
+
+        Only then can back faces be culled without changing the picture;
+        :class:`~axialdeform.renderer.AxialRenderer` does that by default.
+        """
+        _, ids = np.unique(self.positions, axis=0, return_inverse=True)
+        f = ids.reshape(-1)[self.faces].astype(np.int64)
+        if ((f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 2] == f[:, 0])).any():
+            return False
+        n = int(f.max()) + 1
+        a, b = f.ravel(), f[:, [1, 2, 0]].ravel()  # directed edges a -> b
+        forward = np.sort(a * n + b)
+        if (forward[1:] == forward[:-1]).any():
+            return False
+        reverse = np.sort(b * n + a)
+        if not np.array_equal(forward, reverse):
+            return False
+        p = self.positions.astype(np.float64)
+        v = p[self.faces]
+        volume = np.einsum("ij,ij->", v[:, 0], np.cross(v[:, 1], v[:, 2])) / 6.0
+        return bool(volume > 0.0)
+
     def to_trimesh(self, positions: np.ndarray | None = None, normals: np.ndarray | None = None):
         """A ``trimesh.Trimesh`` with these faces and the given (or own) positions/normals."""
         import trimesh

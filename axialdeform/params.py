@@ -347,6 +347,13 @@ class BinaryHeader:
     def encoding_name(self) -> str:
         return _ENCODINGS[self.encoding][0]
 
+    @property
+    def payload_bytes(self) -> int:
+        """Bytes of the instance records alone: the file less its header,
+        decode table (quantized files) and checksum."""
+        table = _QUANT.size if self.encoding == ENCODING_UINT16 else 0
+        return self.size - HEADER_SIZE - table - _TRAILER.size
+
 
 def read_binary_header(data: bytes, name: str = "<binary>") -> BinaryHeader:
     """Check the structure of a binary parameter file and read its header.

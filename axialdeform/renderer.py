@@ -16,6 +16,8 @@ return); the shader computes ``clip = proj * view * world``.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers
@@ -52,13 +54,23 @@ class AxialRenderer:
         64), decoded in the vertex shader (``glsl/quantized.glsl``) with the
         per-column table of :func:`axialdeform.params.quantize_params`; what
         is drawn and captured is the deformation of the dequantized numbers.
+    cull_back_faces : bool or None
+        Skip the triangles that face away from the camera (GL back-face
+        culling, three.js's ``side: FrontSide``).  ``None`` (the default)
+        culls exactly when the base mesh bounds a volume with outward
+        triangles (:attr:`BaseMesh.is_volume`): then no back face can be
+        seen and the picture is the same, drawn in about half the time on a
+        software rasterizer.  Open meshes (a leaf) stay two-sided.  Culled
+        draws set ``ctx.front_face = "ccw"`` and ``ctx.cull_face = "back"``
+        and leave ``CULL_FACE`` disabled afterwards.
     """
 
     def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
-                 quantized: bool = False):
+                 quantized: bool = False, cull_back_faces: bool | None = None):
         self.ctx = ctx
         self.mesh = mesh
         self.bend = bend
+        self.cull_back_faces = bool(mesh.is_volume) if cull_back_faces is None else bool(cull_back_faces)
         self.quantized = bool(quantized)
         self._released = False
         self._objects = []
@@ -210,10 +222,29 @@ class AxialRenderer:
         if self.count == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
-        if mode == "wireframe":
+        if mode == "wireframe":  # lines are never culled
             vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
-        else:
+            return
+        with self.culling():
             vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
+
+    @contextmanager
+    def culling(self):
+        """The face-culling state of this renderer's triangle draws, for code
+        that draws the same mesh with its own vertex arrays (a no-op when
+        :attr:`cull_back_faces` is False)."""
+        if not self.cull_back_faces:
+            yield
+            return
+        import moderngl
+
+        self.ctx.front_face = "ccw"
+        self.ctx.cull_face = "back"
+        self.ctx.enable(moderngl.CULL_FACE)
+        try:
+            yield
+        finally:
+            self.ctx.disable(moderngl.CULL_FACE)
 
     # ------------------------------------------------------------ capture
     def capture(self, start: int = 0, count: int | None = None, progress=None) -> tuple[np.ndarray, np.ndarray]:

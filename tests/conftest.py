@@ -31,6 +31,9 @@ def gl():
 
 @pytest.fixture
 def ctx(gl):
+    # a test that opened a window of its own (the viewer) leaves that window's
+    # context current; GL calls go to the current context, so make ours current
+    gl.__enter__()
     assert gl.error == "GL_NO_ERROR", "a previous test left a GL error behind"
     yield gl
     err = gl.error

@@ -141,3 +141,24 @@ def test_info_gives_a_checksum_verdict_on_a_corrupt_file(tmp_path):
     assert len(lines) == 1 and "checksum" in lines[0] and "Traceback" not in res.stderr
     ok = run("info", path)
     assert ok.returncode == 0 and "OK" in ok.stdout and "MISMATCH" not in ok.stdout
+
+
+def test_import_is_lazy_and_every_public_name_resolves():
+    """``import axialdeform`` (every CLI start, every bench child) loads no GL,
+    mesh or matrix library until one is used; the public names all resolve,
+    and importing a submodule does not shadow a function of the same name."""
+    code = (
+        "import sys, axialdeform as ad\n"
+        "heavy = sorted(m for m in ('moderngl', 'trimesh', 'pyrr', 'PIL', 'importlib.metadata') if m in sys.modules)\n"
+        "assert not heavy, heavy\n"
+        "import axialdeform.deform, axialdeform.bake\n"
+        "assert callable(ad.deform) and callable(ad.bake), (ad.deform, ad.bake)\n"
+        "missing = [n for n in ad.__all__ if not hasattr(ad, n)]\n"
+        "assert not missing, missing\n"
+        "assert set(ad.__all__) <= set(dir(ad))\n"
+        "assert ad.params.FIELDS == ad.FIELDS and ad.__version__\n"
+        "try:\n    ad.no_such_name\nexcept AttributeError as e:\n    assert 'no_such_name' in str(e)\n"
+        "else:\n    raise SystemExit('no AttributeError')\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr

@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 import axialdeform as ad
-from conftest import shared_mesh
+from conftest import make_mesh, shared_mesh
 
 
 def test_bundled_meshes():
@@ -88,3 +88,25 @@ def test_real_meshes_load(rel):
     mesh = ad.load_mesh(shared_mesh(rel))
     assert np.isfinite(mesh.normals).all() and mesh.axis.length > 0
     assert len(mesh.fingerprint) == 32
+
+
+@pytest.mark.parametrize("rel", ["base/rock_trimesh.obj", "base/rock_caustics.obj", "base/grass_blade_flora.obj",
+                                 "edge_cases/cube.OBJ", "edge_cases/tet.ply", "edge_cases/mirror.ply",
+                                 "edge_cases/wallhole.obj", "edge_cases/joined_tetrahedra.obj",
+                                 "edge_cases/not_convex.obj", "edge_cases/plane.ply", "gltf/cubevc.glb",
+                                 "gltf/monkey.glb", "classic/bunny_trimesh.ply"])
+def test_is_volume_agrees_with_trimesh(rel):
+    mesh = ad.load_mesh(shared_mesh(rel))
+    tm = trimesh.Trimesh(mesh.positions, mesh.faces, process=False)
+    tm.merge_vertices(merge_tex=True, merge_norm=True)  # merge by position only, as is_volume does
+    assert mesh.is_volume == bool(tm.is_volume)
+
+
+def test_is_volume_needs_closed_consistent_outward_triangles(stone, leaf):
+    assert stone.is_volume and not leaf.is_volume
+    inside_out = make_mesh(stone.positions, stone.faces[:, ::-1])
+    assert not inside_out.is_volume
+    one_flipped = stone.faces.copy()
+    one_flipped[0] = one_flipped[0, ::-1]
+    assert not make_mesh(stone.positions, one_flipped).is_volume
+    assert not make_mesh(stone.positions, stone.faces[1:]).is_volume  # a hole

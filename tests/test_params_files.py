@@ -181,3 +181,14 @@ def test_atomic_writes_get_ordinary_permissions(tmp_path, values):
     os.chmod(path, 0o640)
     ad.write_params(path, values)
     assert path.stat().st_mode & 0o777 == 0o640  # a replaced file keeps its mode
+
+
+@pytest.mark.parametrize("quantize, record", [(False, 64), (True, 32)])
+def test_header_says_the_record_bytes(tmp_path, stone, quantize, record):
+    from axialdeform.params import read_binary_header
+
+    for n in (0, 1, 777):
+        path = ad.write_params(tmp_path / f"p{n}.adp", ad.random_params(stone, n, seed=1), stone, quantize=quantize)
+        h = read_binary_header(path.read_bytes(), str(path))
+        assert h.count == n and h.size == path.stat().st_size
+        assert h.payload_bytes == record * n

@@ -180,3 +180,46 @@ def test_bad_mode_is_an_error(ctx, stone):
     with ad.AxialRenderer(ctx, stone, ad.random_params(stone, 2)) as r:
         with pytest.raises(ad.AxialDeformError, match="render mode: expected one of solid, flat, wireframe"):
             r.render(np.eye(4), np.eye(4), mode="points")
+
+
+def _picture(ctx, renderers, view, proj, size=(320, 240)):
+    with Offscreen(ctx, size, samples=0) as target:
+        target.use()
+        ctx.clear(0.9, 0.9, 0.9)
+        for r in renderers:
+            r.render(view, proj, "solid")
+        return target.read().astype(int)
+
+
+def test_back_faces_are_culled_only_where_nothing_changes(ctx, stone, leaf):
+    """Default culling: on for a closed outward mesh (same picture, fewer
+    triangles rasterized), off for an open one (two-sided leaves), and the
+    draw leaves CULL_FACE off for whatever is drawn next."""
+    from axialdeform.camera import frame_instances
+
+    stones = ad.random_params(stone, 300, seed=3, bend=0.2)
+    leaves = ad.random_params(leaf, 300, seed=3, bend=0.2)
+    cam = frame_instances(stone, stones, 320 / 240)
+    view, proj = cam.view(), cam.projection(320 / 240)
+    with ad.AxialRenderer(ctx, stone, stones) as auto, \
+            ad.AxialRenderer(ctx, stone, stones, cull_back_faces=False) as two_sided:
+        assert auto.cull_back_faces and not two_sided.cull_back_faces
+        a, b = _picture(ctx, [auto], view, proj), _picture(ctx, [two_sided], view, proj)
+        assert (np.abs(a - b).max(axis=2) > 2).sum() <= 3  # silhouettes may differ by a pixel's rounding
+    lcam = frame_instances(leaf, leaves, 320 / 240)
+    lview, lproj = lcam.view(), lcam.projection(320 / 240)
+    with ad.AxialRenderer(ctx, leaf, leaves) as auto, \
+            ad.AxialRenderer(ctx, leaf, leaves, cull_back_faces=True) as culled, \
+            ad.AxialRenderer(ctx, stone, stones) as stone_r:
+        assert not auto.cull_back_faces
+        two = _picture(ctx, [auto], lview, lproj)
+        one = _picture(ctx, [culled], lview, lproj)
+        assert (np.abs(two - one).max(axis=2) > 30).sum() > 500  # culling does drop the leaves' backs
+        # a culled draw first (the stones, far behind the near plane or not) must not cull the leaves after it
+        after = _picture(ctx, [stone_r, auto], lview, lproj)
+        alone = _picture(ctx, [stone_r], lview, lproj)
+        leaf_px = np.abs(two - 0.9 * 255).max(axis=2) > 30
+        stone_px = np.abs(alone - 0.9 * 255).max(axis=2) > 30
+        only_leaf = leaf_px & ~stone_px
+        assert only_leaf.sum() > 500
+        assert np.array_equal(after[only_leaf], two[only_leaf])

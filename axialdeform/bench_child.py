@@ -1,0 +1,144 @@
+"""One measurement of ``axialdeform bench``, in its own fresh process.
+
+The parent (:mod:`axialdeform.bench`) starts ``python -c`` with a JSON spec;
+this module sets up one method (``same``, ``loaded``, ``axial``,
+``axial-quantized``), prints ``FIRST`` as soon as its first frame is finished
+(``ctx.finish()``), then draws the warm-up and timed frames and prints one
+``RESULT {json}`` line.  It imports only what a measurement needs, so the
+harness adds as little as it can to the time of every method alike.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def main(spec_text: str) -> None:
+    """Entry point of one measurement process (``python -c``); prints
+    ``FIRST`` when its first frame is finished, then one ``RESULT {json}`` line."""
+    stamps = {"imported": time.time()}  # the interpreter and axialdeform (this module's package) are loaded
+    spec = json.loads(spec_text)
+    import moderngl
+
+    from .context import Offscreen, create_context
+
+    ctx = create_context()
+    target = Offscreen(ctx, tuple(spec["size"]), samples=spec["samples"])
+    stamps["context"] = time.time()
+    view = np.asarray(spec["view"], dtype=np.float32)
+    proj = np.asarray(spec["proj"], dtype=np.float32)
+    mode = spec["mode"]
+    draw, info = _SETUPS[spec["method"]](ctx, spec, view, proj, mode, moderngl, stamps)
+    stamps["uploaded"] = time.time()
+    target.use()
+    draw()
+    ctx.finish()
+    stamps["first_frame"] = time.time()
+    print("FIRST", flush=True)
+    for _ in range(spec["warmup"]):
+        target.use()
+        draw()
+        ctx.finish()
+    frames = []
+    for _ in range(spec["frames"]):
+        t = time.perf_counter()
+        target.use()
+        draw()
+        ctx.finish()
+        frames.append(time.perf_counter() - t)
+    if spec.get("image"):
+        from .image import save_png
+
+        save_png(spec["image"], target.read())
+    info["trimesh_imported"] = "trimesh" in sys.modules
+    info["gl_error"] = ctx.error
+    print("RESULT " + json.dumps({"stamps": stamps, "frames": frames, "info": info}), flush=True)
+
+
+def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
+    from .mesh import load_mesh
+    from .renderer import AxialRenderer
+    from .variation import random_params
+
+    mesh = load_mesh(spec["mesh"])
+    # the placement is computed, not read: the thesis's "all the same" reads one mesh only
+    params = random_params(mesh, spec["count"], spec["seed"], **scene_kwargs(mesh, spec["scene"]))
+    stamps["read"] = time.time()
+    r = AxialRenderer(ctx, mesh, params, bend=False)
+    return (lambda: r.render(view, proj, mode)), {"cull_back_faces": r.cull_back_faces}
+
+
+def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
+    from .mesh import load_mesh
+    from .params import read_params
+    from .renderer import AxialRenderer
+
+    mesh = load_mesh(spec["mesh"])
+    params = read_params(spec["params"], mesh)
+    stamps["read"] = time.time()
+    gpu_quantized = False
+    if spec["method"] == "axial-quantized":
+        try:  # a renderer with a quantized instance buffer keeps 32 bytes an instance on the GPU too
+            r = AxialRenderer(ctx, mesh, params, quantized=True)
+            gpu_quantized = True
+        except TypeError:
+            r = AxialRenderer(ctx, mesh, params)
+    else:
+        r = AxialRenderer(ctx, mesh, params)
+    return (lambda: r.render(view, proj, mode)), {"gpu_quantized": gpu_quantized, "cull_back_faces": r.cull_back_faces}
+
+
+def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
+    """Read every pre-deformed OBJ file with load_mesh, one VBO/IBO/VAO each."""
+    from .mesh import load_mesh
+    from .renderer import AxialRenderer
+
+    folder = Path(spec["folder"])
+    count = spec["count"]
+    wire = mode == "wireframe"
+    renderer = None
+    vaos = []
+    for i in range(count):  # one file, one upload, one VAO per instance: what this method is
+        mesh = load_mesh(folder / obj_name(i))
+        if renderer is None:
+            # the drawing program (no bend, identity instance attributes): same shading as the others
+            renderer = AxialRenderer(ctx, mesh, np.zeros((0, 16), np.float32), bend=False)
+            prog = renderer.program
+        vbo = ctx.buffer(np.hstack([mesh.positions, mesh.normals]).astype("f4").tobytes())
+        indices = mesh.edges if wire else mesh.faces
+        ibo = ctx.buffer(np.ascontiguousarray(indices, dtype="u4").tobytes())
+        vao = ctx.vertex_array(prog, [(vbo, "3f 3f", "in_position", "in_normal")], index_buffer=ibo, index_element_size=4)
+        vaos.append((vao, int(indices.size), vbo, ibo))
+    stamps["read"] = time.time()
+    primitive = moderngl.LINES if wire else moderngl.TRIANGLES
+
+    def draw():
+        renderer.render(view, proj, mode)  # no instances: sets the uniforms only
+        ctx.enable(moderngl.DEPTH_TEST)
+        # the same face culling as the instanced methods (back faces of a closed mesh skipped)
+        with (contextlib.nullcontext() if wire else renderer.culling()):
+            for vao, n, _, _ in vaos:
+                vao.render(primitive, vertices=n)
+
+    return draw, {"cull_back_faces": renderer.cull_back_faces}
+
+
+_SETUPS = {"same": _setup_same, "loaded": _setup_loaded, "axial": _setup_axial, "axial-quantized": _setup_axial}
+
+
+def scene_kwargs(mesh, scene: dict) -> dict:
+    kw = {"bend": scene["bend"], "placement": scene["placement"]}
+    if "spacing_factor" in scene:
+        kw["spacing"] = scene["spacing_factor"] * mesh.axis.length
+    return kw
+
+
+def obj_name(i: int) -> str:
+    return f"instance_{i:06d}.obj"
+
