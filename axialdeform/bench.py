@@ -81,7 +81,17 @@ LEAF_SCENE = {"count": 1000, "placement": "box", "bend": 0.12}
 _KB = 1024.0
 #: optional packages that ``import trimesh`` imports itself when they are installed
 _TRIMESH_EAGER = ("scipy", "networkx")
-_CHILD = "import sys; from axialdeform.bench_child import main; main(sys.argv[1])"
+_CHILD = "from axialdeform.bench_child import main; main(sys.argv[1])"
+
+
+def _python_c(code: str, *args: str) -> list[str]:
+    """argv of ``python -c code args``, importing exactly what this process
+    imports: the child gets this process's ``sys.path`` instead of its own
+    (``python -c`` would put the current folder first, and a source checkout
+    there -- whose shaders are not packaged -- would shadow the installed
+    axialdeform)."""
+    prefix = f"import sys; sys.path[:] = {list(sys.path)!r}; "
+    return [sys.executable, "-c", prefix + code, *args]
 
 
 class _Counter:
@@ -187,7 +197,7 @@ def _run_child(spec: dict, timeout: float) -> dict:
     with tempfile.TemporaryFile("w+") as err:
         wall0 = time.time()
         t0 = time.perf_counter()
-        proc = subprocess.Popen([sys.executable, "-c", _CHILD, json.dumps(spec)], stdout=subprocess.PIPE,
+        proc = subprocess.Popen(_python_c(_CHILD, json.dumps(spec)), stdout=subprocess.PIPE,
                                 stderr=err, text=True)
         first = None
         result = None
@@ -296,7 +306,7 @@ def _startup_costs(repeats: int) -> dict:
         times = []
         for _ in range(repeats):
             t = time.perf_counter()
-            subprocess.run([sys.executable, "-c", code], check=True)
+            subprocess.run(_python_c(code), check=True)
             times.append(time.perf_counter() - t)
         out[name] = statistics.median(times)
     return out

@@ -154,3 +154,15 @@ def test_cli_registers_bench():
     assert "axialdeform.bench" in PLUGINS
     args = build_parser().parse_args(["bench", "--quick"])
     assert args.handler is bench.run
+
+
+def test_children_import_the_parents_axialdeform(tmp_path, monkeypatch):
+    """Run from a folder holding something else called axialdeform (a source
+    checkout, say): the children must still import what the parent imports."""
+    decoy = tmp_path / "cwd" / "axialdeform"
+    decoy.mkdir(parents=True)
+    (decoy / "__init__.py").write_text("raise ImportError('the decoy axialdeform was imported')\n")
+    monkeypatch.chdir(decoy.parent)
+    records = bench.run_bench(counts=(10,), modes=("solid",), methods=("axial",), frames=1, warmup=0, repeats=1,
+                              size=(32, 24), cache=tmp_path / "cache", leaf=False, throughput=False, progress=False)
+    assert [r["method"] for r in records] == ["axial"]
