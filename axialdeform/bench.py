@@ -25,14 +25,17 @@ Figures per method x count x mode (the records of ``--json``):
     over repeats.
 ``frame_s``
     median seconds of one later frame (clear + draw + ``ctx.finish()``) after
-    warm-up; per child the median of ``frames`` frames, then the median over
-    repeats (Fig. 6).
+    warm-up (Fig. 6).  Per count x mode ONE process sets up every method and
+    draws them in turn (A B C D A B C D ...), ``frames`` rounds, so that load
+    from elsewhere on a shared machine -- which moves separate processes'
+    frame times by tens of percent -- hits all methods alike.
 ``shapes_per_s``
     ``count / frame_s`` (Table 2).
 
-Each measurement runs in its own child process (``python -c``, entry point
-:func:`_child_main`); the methods are interleaved (A B C D A B C D ...) so
-that drift hits all of them alike.  The ``loaded`` meshes are cached on disk
+Each first frame is measured in its own child process (``python -c``, entry
+point :func:`axialdeform.bench_child.main`), the methods interleaved (A B C D
+A B C D ...) so that drift hits all of them alike; the frame times come from
+:func:`axialdeform.bench_child.interleaved`.  The ``loaded`` meshes are cached on disk
 between runs, keyed by the mesh and the parameters; reading them is always
 real.  Use it from Python with :func:`run_bench`.
 """
@@ -79,9 +82,12 @@ GOAL_COUNT = 10000
 SCENE = {"bend": 0.12, "spacing_factor": 1.15, "placement": "grid"}
 LEAF_SCENE = {"count": 1000, "placement": "box", "bend": 0.12}
 _KB = 1024.0
+#: frames each first-frame child also times (a cross-check only: ``frame_s`` comes from the interleaved process)
+_SEPARATE_FRAMES = 3
 #: optional packages that ``import trimesh`` imports itself when they are installed
 _TRIMESH_EAGER = ("scipy", "networkx")
 _CHILD = "from axialdeform.bench_child import main; main(sys.argv[1])"
+_CHILD_FRAMES = "from axialdeform.bench_child import interleaved; interleaved(sys.argv[1])"
 
 
 def _python_c(code: str, *args: str) -> list[str]:
@@ -346,41 +352,35 @@ def _throughput(mesh, counts, seed: int, repeats: int) -> list[dict]:
     return rows
 
 
-def _paired(mesh, count: int, modes, seed: int, size, samples: int, pairs: int) -> list[dict]:
-    """Frame time of ``axial`` against ``same`` in ONE process, frames alternating
-    (same, axial, same, axial, ...), so that load on a shared machine hits both
-    alike.  Returns per mode the medians and the median of the per-pair ratios."""
-    from .context import Offscreen, create_context
-    from .renderer import AxialRenderer
-    from .variation import random_params
+def _run_frames_child(spec: dict, timeout: float) -> dict:
+    """The frame-time process of one count x mode (all methods interleaved);
+    returns ``{method: [seconds, ...]}`` and each method's info."""
+    proc = subprocess.run(_python_c(_CHILD_FRAMES, json.dumps(spec)), capture_output=True, text=True, timeout=timeout)
+    result = next((json.loads(line[7:]) for line in proc.stdout.splitlines() if line.startswith("RESULT ")), None)
+    if proc.returncode != 0 or result is None:
+        raise AxialDeformError(f"bench frame-time child x {spec['methods'][0]['count']} ({spec['mode']}) failed with "
+                               f"status {proc.returncode}: {proc.stderr[-2000:].strip() or 'no message'}")
+    if result["gl_error"] != "GL_NO_ERROR":
+        raise AxialDeformError(f"bench frame-time child x {spec['methods'][0]['count']} ({spec['mode']}): "
+                               f"expected GL_NO_ERROR, found {result['gl_error']}")
+    return result
 
-    params = random_params(mesh, count, seed, **_scene_kwargs(mesh, SCENE))
-    view, proj = (np.asarray(x, dtype=np.float32) for x in _camera(mesh, params, size))
+
+def _pair_rows(frames: dict) -> list[dict]:
+    """axial against same from the interleaved frames: each round drew both
+    within a few milliseconds, so the per-round ratio cancels machine load."""
     rows = []
-    ctx = create_context()
-    try:
-        with Offscreen(ctx, size, samples=samples) as target, \
-                AxialRenderer(ctx, mesh, params, bend=False) as same, AxialRenderer(ctx, mesh, params) as axial:
-            for mode in modes:
-                times = {"same": [], "axial": []}
-                for k in range(pairs + 2):  # the first two pairs are warm-up
-                    for name, r in (("same", same), ("axial", axial)):
-                        t = time.perf_counter()
-                        target.use()
-                        r.render(view, proj, mode)
-                        ctx.finish()
-                        if k >= 2:
-                            times[name].append(time.perf_counter() - t)
-                ratios = np.array(times["axial"]) / np.array(times["same"])
-                rows.append({"count": count, "mode": mode, "pairs": pairs,
-                             "same_frame_s": statistics.median(times["same"]),
-                             "axial_frame_s": statistics.median(times["axial"]),
-                             "ratio_of_medians": statistics.median(times["axial"]) / statistics.median(times["same"]),
-                             "median_pair_ratio": float(np.median(ratios)),
-                             "pair_ratio_q25": float(np.quantile(ratios, 0.25)),
-                             "pair_ratio_q75": float(np.quantile(ratios, 0.75))})
-    finally:
-        ctx.release()
+    for (c, mode), by_method in sorted(frames.items(), key=lambda kv: (kv[0][0], BENCH_MODES.index(kv[0][1]))):
+        if "same" not in by_method or "axial" not in by_method:
+            continue
+        same, axial = np.asarray(by_method["same"]), np.asarray(by_method["axial"])
+        ratios = axial / same
+        rows.append({"count": c, "mode": mode, "pairs": len(ratios),
+                     "same_frame_s": float(np.median(same)), "axial_frame_s": float(np.median(axial)),
+                     "ratio_of_medians": float(np.median(axial) / np.median(same)),
+                     "median_pair_ratio": float(np.median(ratios)),
+                     "pair_ratio_q25": float(np.quantile(ratios, 0.25)),
+                     "pair_ratio_q75": float(np.quantile(ratios, 0.75))})
     return rows
 
 
@@ -433,11 +433,12 @@ def run_bench(
     modes, methods : sequences of str
         Subsets of :data:`BENCH_MODES` and :data:`METHODS`.
     repeats : int
-        Child processes per method x count x mode (fewer where one run takes
-        long: 1 at 100 000, 2 for ``loaded`` at 10 000).  From 10 000 on one
-        warm-up frame is drawn.
+        First-frame child processes per method x count x mode (fewer where
+        one run takes long: 1 at 100 000, 2 for ``loaded`` at 10 000).
     frames, warmup : int
-        Frames timed (median) and frames drawn before them, per child.
+        Rounds timed (median) and rounds drawn before them in the one
+        process per count x mode that draws the methods in turn (from 10 000
+        on, one warm-up round).
     size : (width, height)
         Pixels of the offscreen target; ``samples`` its MSAA samples (0: none).
     out : path, optional
@@ -490,7 +491,8 @@ def run_bench(
                     if rep < _repeats_for(m, c, repeats):
                         plan.append((c, mode, rep, m))
     obj_total = sum(c for c in counts) if "loaded" in methods else 0
-    total = len(plan) + obj_total + (leaf_repeats if leaf else 0) + (1 if throughput else 0) + 1
+    total = (len(plan) + len(counts) * len(modes) + obj_total + (leaf_repeats if leaf else 0)
+             + (1 if throughput else 0) + 1)
     bar = tqdm(total=total, desc="bench", unit="step", disable=not progress, file=sys.stderr)
     try:
         if "loaded" in methods:
@@ -509,13 +511,27 @@ def run_bench(
             bar.set_postfix_str(f"{m} x {c} {mode} #{rep + 1}")
             sc = scenes[c]
             spec = {"method": m, "count": c, "mode": mode, "size": list(size), "samples": samples,
-                    "view": cameras[c][0], "proj": cameras[c][1], "warmup": min(warmup, 1) if c >= 10000 else warmup,
-                    "frames": frames, "seed": seed, "scene": SCENE, "mesh": str(mesh_path),
+                    "view": cameras[c][0], "proj": cameras[c][1], "warmup": 0, "frames": _SEPARATE_FRAMES,
+                    "seed": seed, "scene": SCENE, "mesh": str(mesh_path),
                     "params": str(sc.adp_q if m == "axial-quantized" else sc.adp), "folder": str(sc.folder)}
             if frames_dir is not None and rep == 0 and c == image_count:
                 spec["image"] = str(frames_dir / f"{m}-{c}-{mode}.png")
             runs.setdefault((m, c, mode), []).append(_run_child(spec, timeout))
             bar.update(1)
+        # frame times: one process per count x mode, the methods drawn in turn
+        interleaved: dict[tuple, dict] = {}
+        for c in counts:
+            sc = scenes[c]
+            for mode in modes:
+                bar.set_postfix_str(f"frame times x {c} {mode} ({', '.join(methods)} in turn)")
+                subs = [{"method": m, "count": c, "seed": seed, "scene": SCENE, "mesh": str(mesh_path),
+                         "params": str(sc.adp_q if m == "axial-quantized" else sc.adp), "folder": str(sc.folder)}
+                        for m in methods]
+                spec = {"mode": mode, "size": list(size), "samples": samples, "view": cameras[c][0],
+                        "proj": cameras[c][1], "warmup": min(warmup, 1) if c >= 10000 else warmup, "frames": frames,
+                        "methods": subs}
+                interleaved[(c, mode)] = _run_frames_child(spec, timeout)["frames"]
+                bar.update(1)
         leaf_result = None
         if leaf:
             leaf_mesh = load_mesh("leaf")
@@ -527,19 +543,15 @@ def run_bench(
             for rep in range(leaf_repeats):
                 bar.set_postfix_str(f"leaf scene #{rep + 1}")
                 spec = {"method": "axial", "count": ls.count, "mode": "solid", "size": list(size), "samples": samples,
-                        "view": view, "proj": proj, "warmup": 1, "frames": frames, "seed": seed, "scene": ls.scene,
+                        "view": view, "proj": proj, "warmup": 0, "frames": _SEPARATE_FRAMES, "seed": seed, "scene": ls.scene,
                         "mesh": str(leaf_path), "params": str(ls.adp), "folder": ""}
                 if frames_dir is not None and rep == 0:
                     spec["image"] = str(frames_dir / "leaf-1000-solid.png")
                 leaf_runs.append(_run_child(spec, timeout))
                 bar.update(1)
             leaf_result = {"count": ls.count, "file_bytes": ls.file_bytes("axial"), "runs": leaf_runs}
-        paired = None
-        if "same" in methods and "axial" in methods:
-            bar.set_postfix_str("paired same/axial frames")
-            pc = GOAL_COUNT if GOAL_COUNT in counts else max(counts)
-            paired = _paired(base, pc, modes, seed, size, samples, 10 if quick else 30)
-            bar.update(1)
+        paired = _pair_rows(interleaved)
+        bar.update(1)
         tp = None
         if throughput:
             bar.set_postfix_str("deformation throughput")
@@ -553,15 +565,18 @@ def run_bench(
     stats = []
     for (m, c, mode), rs in runs.items():
         first = [r["first_frame_s"] for r in rs]
-        frame = [r["frame_s"] for r in rs]
+        separate = [r["frame_s"] for r in rs]
+        frame = interleaved[(c, mode)][m]
         rec = {"method": m, "count": c, "mode": mode, "file_bytes": scenes[c].file_bytes(m),
                "first_frame_s": statistics.median(first), "frame_s": statistics.median(frame)}
         rec["shapes_per_s"] = c / rec["frame_s"]
         records.append({k: rec[k] for k in RECORD_KEYS})
         stage = {k: statistics.median(r["stamps"][k] for r in rs) for k in rs[0]["stamps"]}
-        stats.append({**rec, "repeats": len(rs), "frames_per_repeat": frames, "first_frame_min_s": min(first),
-                      "first_frame_max_s": max(first), "frame_min_s": min(frame), "frame_max_s": max(frame),
-                      "stages_s": stage, "info": rs[0]["info"], "first_frame_all_s": first, "frame_all_s": frame})
+        stats.append({**rec, "repeats": len(rs), "frames_interleaved": len(frame), "first_frame_min_s": min(first),
+                      "first_frame_max_s": max(first), "frame_q25_s": float(np.quantile(frame, 0.25)),
+                      "frame_q75_s": float(np.quantile(frame, 0.75)), "stages_s": stage, "info": rs[0]["info"],
+                      "first_frame_all_s": first, "frame_all_s": frame,
+                      "frame_separate_s": statistics.median(separate), "frame_separate_all_s": separate})
     culling = {r["info"].get("cull_back_faces") for rs in runs.values() for r in rs}
     if len(culling) > 1:  # a fair comparison draws every method the same way
         raise AxialDeformError(f"bench: the methods drew with different face culling ({sorted(map(str, culling))}); "
@@ -624,14 +639,15 @@ def _goals(stats, leaf, scenes, paired=None) -> list[dict]:
     same, axial, loaded = by.get(("same", c, "solid")), by.get(("axial", c, "solid")), by.get(("loaded", c, "solid"))
     if same and axial:
         ratio = axial["frame_s"] / same["frame_s"]
+        pair = next((r for r in paired or () if r["count"] == c and r["mode"] == "solid"), None)
+        note = "medians of frames drawn in turn in one process"
+        if pair:
+            note += (f"; median of the {pair['pairs']} per-round ratios {pair['median_pair_ratio']:.3f} "
+                     f"[quartiles {pair['pair_ratio_q25']:.3f} .. {pair['pair_ratio_q75']:.3f}]")
+        note += (f"; cross-check from the first-frame processes, {axial['repeats']} each: "
+                 f"{axial['frame_separate_s'] / same['frame_separate_s']:.3f}")
         add("axial frame_s / same frame_s", f"<= {GOALS['frame_ratio']}", round(ratio, 3), ratio <= GOALS["frame_ratio"],
-            "medians of separate processes")
-    for row in paired or ():
-        if row["mode"] == "solid":
-            add("axial / same frame time, paired in one process", f"<= {GOALS['frame_ratio']}",
-                round(row["median_pair_ratio"], 3), row["median_pair_ratio"] <= GOALS["frame_ratio"],
-                f"median of {row['pairs']} alternating pairs; quartiles {row['pair_ratio_q25']:.3f} .. "
-                f"{row['pair_ratio_q75']:.3f}", count=row["count"])
+            note)
     if loaded and axial:
         speed = loaded["first_frame_s"] / axial["first_frame_s"]
         add("loaded first_frame_s / axial first_frame_s", f">= {GOALS['first_frame_speedup']:g}", round(speed, 1),
@@ -669,8 +685,11 @@ def _plots(plt, stats, out: Path) -> dict:
     from .atomic import atomic_path
 
     files = {}
-    for key, field, title in (("fig5", "first_frame", "Time to the first frame (cf. thesis Fig. 5)"),
-                              ("fig6", "frame", "Time per later frame (cf. thesis Fig. 6)")):
+    for key, field, title, lo_key, hi_key, bars in (
+            ("fig5", "first_frame", "Time to the first frame (cf. thesis Fig. 5)", "first_frame_min_s",
+             "first_frame_max_s", "min..max over processes"),
+            ("fig6", "frame", "Time per later frame (cf. thesis Fig. 6)", "frame_q25_s", "frame_q75_s",
+             "quartiles of the frames")):
         modes = [m for m in BENCH_MODES if any(s["mode"] == m for s in stats)]
         fig, axes = plt.subplots(1, len(modes), figsize=(5.5 * len(modes), 4.2), squeeze=False)
         for ax, mode in zip(axes[0], modes):
@@ -680,13 +699,13 @@ def _plots(plt, stats, out: Path) -> dict:
                     continue
                 x = np.array([s["count"] for s in rows])
                 y = np.array([s[f"{field}_s"] for s in rows])
-                lo = y - np.array([s[f"{field}_min_s"] for s in rows])
-                hi = np.array([s[f"{field}_max_s"] for s in rows]) - y
+                lo = y - np.array([s[lo_key] for s in rows])
+                hi = np.array([s[hi_key] for s in rows]) - y
                 ax.errorbar(x, y, yerr=[lo, hi], marker="o", capsize=3, label=method)
             ax.set_xscale("log")
             ax.set_yscale("log")
             ax.set_xlabel("instances")
-            ax.set_ylabel("seconds (median; bars: min..max)")
+            ax.set_ylabel(f"seconds (median; bars: {bars})")
             ax.set_title(f"{mode}")
             ax.grid(True, which="both", alpha=0.3)
             ax.legend()
@@ -796,13 +815,13 @@ def _report(records, details, plots) -> str:
     add(f"- target: offscreen {se['size'][0]}x{se['size'][1]}, MSAA samples {se['samples']}, depth test, back faces "
         f"{'culled' if se.get('cull_back_faces') else 'drawn'} (every method alike); camera "
         "framing every instance (`camera.frame_instances`), the same for every method of a count")
-    add(f"- repeats: {se['repeats']} child processes per method x count x mode (fewer where a run is long: 1 at "
-        f"100 000, 2 for `loaded` at 10 000: see n in the tables); {se['warmup']} warm-up frames (1 from 10 000 on), "
-        f"then {se['frames']} timed frames per child"
-        + (" (**--quick**)" if se["quick"] else ""))
-    add("- methods interleaved (same, loaded, axial, axial-quantized, same, ...); each run is a fresh `python -c` "
-        "process; `first_frame_s` is measured by the parent from just before starting it to the child's report after "
-        "`ctx.finish()`; files are in the OS page cache (warm reads, as in any second run)\n")
+    add(f"- first frame: {se['repeats']} fresh child processes per method x count x mode (fewer where a run is long: "
+        "1 at 100 000, 2 for `loaded` at 10 000: see n in the tables), methods interleaved (same, loaded, axial, "
+        "axial-quantized, same, ...); `first_frame_s` is measured by the parent from just before starting the child "
+        "to the child's report after `ctx.finish()`; files are in the OS page cache (warm reads, as in any second run)")
+    add(f"- later frames: per count x mode one process sets up every method and draws them in turn; "
+        f"{se['warmup']} warm-up rounds (1 from 10 000 on), then {se['frames']} timed rounds; `frame_s` is the median"
+        + (" (**--quick**)" if se["quick"] else "") + "\n")
 
     add("## Goals (this machine, solid)\n")
     add("| goal | target | measured | met |")
@@ -839,11 +858,16 @@ def _report(records, details, plots) -> str:
                                           for c in counts for mode in modes) + " |")
     add("")
 
-    for field, title, fig in (("first_frame", "Time to the first frame (Fig. 5)", "fig5"),
-                              ("frame", "Time per later frame (Fig. 6)", "fig6")):
+    for field, title, fig, lo_key, hi_key, how in (
+            ("first_frame", "Time to the first frame (Fig. 5)", "fig5", "first_frame_min_s", "first_frame_max_s",
+             "median [min .. max] over fresh processes (n = processes)"),
+            ("frame", "Time per later frame (Fig. 6)", "fig6", "frame_q25_s", "frame_q75_s",
+             "median [quartiles] of the timed frames (n = frames); per count and mode ONE process draws the methods "
+             "in turn (same, loaded, axial, axial-quantized, same, ...), so that load from elsewhere on the machine "
+             "hits all of them alike")):
         add(f"## {title}\n")
         add(f"![{title}]({plots.get(fig, '')})\n")
-        add("median [min .. max] over repeats (n = repeats)\n")
+        add(how + "\n")
         add("| method | mode | " + " | ".join(str(c) for c in counts) + " |")
         add("|---" * (2 + len(counts)) + "|")
         for m in methods:
@@ -851,8 +875,9 @@ def _report(records, details, plots) -> str:
                 cells = []
                 for c in counts:
                     s = by.get((m, c, mode))
-                    cells.append("-" if s is None else f"{_fmt_s(s[field + '_s'])} [{_fmt_s(s[field + '_min_s'])} .. "
-                                 f"{_fmt_s(s[field + '_max_s'])}] (n={s['repeats']})")
+                    n = s["repeats"] if field == "first_frame" else s["frames_interleaved"] if s else 0
+                    cells.append("-" if s is None else f"{_fmt_s(s[field + '_s'])} [{_fmt_s(s[lo_key])} .. "
+                                 f"{_fmt_s(s[hi_key])}] (n={n})")
                 add(f"| {m} | {mode} | " + " | ".join(cells) + " |")
         add("")
 
@@ -916,8 +941,9 @@ def _report(records, details, plots) -> str:
 
     if details.get("paired"):
         add("## Paired frame times: axial against same in one process\n")
-        add("Frames alternate same, axial, same, axial, ... in one process (2 warm-up pairs), so load from other "
-            "work on the machine hits both alike; this isolates the cost of the bend in the vertex shader.\n")
+        add("From the frame-time processes above: in every round `same` and `axial` are drawn one after the other, "
+            "so the per-round ratio cancels load from elsewhere on the machine; this isolates the cost of the bend "
+            "in the vertex shader.\n")
         add("| count | mode | pairs | same (median) | axial (median) | axial / same: median of pair ratios [quartiles] |")
         add("|---|---|---|---|---|---|")
         for r in details["paired"]:

@@ -61,6 +61,39 @@ def main(spec_text: str) -> None:
     print("RESULT " + json.dumps({"stamps": stamps, "frames": frames, "info": info}), flush=True)
 
 
+def interleaved(spec_text: str) -> None:
+    """Entry point of the frame-time process of one count x mode: every
+    method is set up in this one process, then the frames go round the
+    methods (A B C D A B C D ...), each ``clear + draw + ctx.finish()``
+    timed, so that load from elsewhere on the machine hits all methods
+    alike.  Prints one ``RESULT {json}`` line with each method's frame times
+    (the warm-up rounds left out)."""
+    spec = json.loads(spec_text)
+    import moderngl
+
+    from .context import Offscreen, create_context
+
+    ctx = create_context()
+    target = Offscreen(ctx, tuple(spec["size"]), samples=spec["samples"])
+    view = np.asarray(spec["view"], dtype=np.float32)
+    proj = np.asarray(spec["proj"], dtype=np.float32)
+    setups = []
+    for sub in spec["methods"]:
+        draw, info = _SETUPS[sub["method"]](ctx, sub, view, proj, spec["mode"], moderngl, {})
+        setups.append((sub["method"], draw, info))
+    frames = {name: [] for name, _, _ in setups}
+    for k in range(spec["warmup"] + spec["frames"]):
+        for name, draw, _ in setups:
+            t = time.perf_counter()
+            target.use()
+            draw()
+            ctx.finish()
+            if k >= spec["warmup"]:
+                frames[name].append(time.perf_counter() - t)
+    info = {name: i for name, _, i in setups}
+    print("RESULT " + json.dumps({"frames": frames, "info": info, "gl_error": ctx.error}), flush=True)
+
+
 def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
     from .mesh import load_mesh
     from .renderer import AxialRenderer
