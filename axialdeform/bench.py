@@ -490,17 +490,20 @@ def run_bench(
                 for m in methods:
                     if rep < _repeats_for(m, c, repeats):
                         plan.append((c, mode, rep, m))
-    obj_total = sum(c for c in counts) if "loaded" in methods else 0
+    # OBJ files still to write (a cached folder is not a step: the bar's estimate follows the real work)
+    obj_total = sum(c for c in counts if not scenes[c].folder.is_dir()) if "loaded" in methods else 0
     total = (len(plan) + len(counts) * len(modes) + obj_total + (leaf_repeats if leaf else 0)
              + (1 if throughput else 0) + 1)
     bar = tqdm(total=total, desc="bench", unit="step", disable=not progress, file=sys.stderr)
     try:
         if "loaded" in methods:
             for c in counts:
+                if scenes[c].folder.is_dir():
+                    continue
                 bar.set_postfix_str(f"OBJ files x {c}")
                 before = bar.n
                 scenes[c].ensure_objs(progress=bar.update)
-                bar.update(before + c - bar.n)  # a cached folder counts as done
+                bar.update(before + c - bar.n)
         cameras = {c: _camera(base, scenes[c].params, size) for c in counts}
         frames_dir = Path(out) / "frames" if out is not None else None
         if frames_dir is not None:
