@@ -307,7 +307,7 @@ def _startup_costs(repeats: int) -> dict:
     out = {}
     for name, code in (("python -c pass", "pass"), ("import numpy", "import numpy"),
                        ("import axialdeform", "import axialdeform"),
-                       ("import axialdeform.bench + moderngl", "import axialdeform.bench, moderngl"),
+                       ("import axialdeform.bench_child + moderngl", "import axialdeform.bench_child, moderngl"),
                        ("import trimesh (the mesh loader, with numpy)", "import trimesh")):
         times = []
         for _ in range(repeats):

@@ -24,34 +24,23 @@ def main(spec_text: str) -> None:
     ``FIRST`` when its first frame is finished, then one ``RESULT {json}`` line."""
     stamps = {"imported": time.time()}  # the interpreter and axialdeform (this module's package) are loaded
     spec = json.loads(spec_text)
-    import moderngl
-
-    from .context import Offscreen, create_context
-
-    ctx = create_context()
-    target = Offscreen(ctx, tuple(spec["size"]), samples=spec["samples"])
+    ctx, target, view, proj = _open(spec)
     stamps["context"] = time.time()
-    view = np.asarray(spec["view"], dtype=np.float32)
-    proj = np.asarray(spec["proj"], dtype=np.float32)
-    mode = spec["mode"]
-    draw, info = _SETUPS[spec["method"]](ctx, spec, view, proj, mode, moderngl, stamps)
+    draw, info = _setup(ctx, spec, view, proj, spec["mode"], stamps)
     stamps["uploaded"] = time.time()
     target.use()
     draw()
     ctx.finish()
     stamps["first_frame"] = time.time()
     print("FIRST", flush=True)
-    for _ in range(spec["warmup"]):
-        target.use()
-        draw()
-        ctx.finish()
     frames = []
-    for _ in range(spec["frames"]):
+    for k in range(spec["warmup"] + spec["frames"]):
         t = time.perf_counter()
         target.use()
         draw()
         ctx.finish()
-        frames.append(time.perf_counter() - t)
+        if k >= spec["warmup"]:
+            frames.append(time.perf_counter() - t)
     if spec.get("image"):
         from .image import save_png
 
@@ -69,18 +58,8 @@ def interleaved(spec_text: str) -> None:
     alike.  Prints one ``RESULT {json}`` line with each method's frame times
     (the warm-up rounds left out)."""
     spec = json.loads(spec_text)
-    import moderngl
-
-    from .context import Offscreen, create_context
-
-    ctx = create_context()
-    target = Offscreen(ctx, tuple(spec["size"]), samples=spec["samples"])
-    view = np.asarray(spec["view"], dtype=np.float32)
-    proj = np.asarray(spec["proj"], dtype=np.float32)
-    setups = []
-    for sub in spec["methods"]:
-        draw, info = _SETUPS[sub["method"]](ctx, sub, view, proj, spec["mode"], moderngl, {})
-        setups.append((sub["method"], draw, info))
+    ctx, target, view, proj = _open(spec)
+    setups = [(sub["method"], *_setup(ctx, sub, view, proj, spec["mode"], {})) for sub in spec["methods"]]
     frames = {name: [] for name, _, _ in setups}
     for k in range(spec["warmup"] + spec["frames"]):
         for name, draw, _ in setups:
@@ -92,6 +71,22 @@ def interleaved(spec_text: str) -> None:
                 frames[name].append(time.perf_counter() - t)
     info = {name: i for name, _, i in setups}
     print("RESULT " + json.dumps({"frames": frames, "info": info, "gl_error": ctx.error}), flush=True)
+
+
+def _open(spec: dict):
+    """The context, the offscreen target and the camera of a measurement."""
+    from .context import Offscreen, create_context
+
+    ctx = create_context()
+    target = Offscreen(ctx, tuple(spec["size"]), samples=spec["samples"])
+    return ctx, target, np.asarray(spec["view"], dtype=np.float32), np.asarray(spec["proj"], dtype=np.float32)
+
+
+def _setup(ctx, spec: dict, view, proj, mode: str, stamps: dict):
+    """``(draw, info)`` of the method ``spec["method"]``, set up in ``ctx``."""
+    import moderngl
+
+    return _SETUPS[spec["method"]](ctx, spec, view, proj, mode, moderngl, stamps)
 
 
 def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
@@ -115,16 +110,9 @@ def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
     mesh = load_mesh(spec["mesh"])
     params = read_params(spec["params"], mesh)
     stamps["read"] = time.time()
-    gpu_quantized = False
-    if spec["method"] == "axial-quantized":
-        try:  # a renderer with a quantized instance buffer keeps 32 bytes an instance on the GPU too
-            r = AxialRenderer(ctx, mesh, params, quantized=True)
-            gpu_quantized = True
-        except TypeError:
-            r = AxialRenderer(ctx, mesh, params)
-    else:
-        r = AxialRenderer(ctx, mesh, params)
-    return (lambda: r.render(view, proj, mode)), {"gpu_quantized": gpu_quantized, "cull_back_faces": r.cull_back_faces}
+    # the quantized method keeps its 32 bytes an instance on the GPU too
+    r = AxialRenderer(ctx, mesh, params, quantized=spec["method"] == "axial-quantized")
+    return (lambda: r.render(view, proj, mode)), {"gpu_quantized": r.quantized, "cull_back_faces": r.cull_back_faces}
 
 
 def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
