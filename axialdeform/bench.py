@@ -771,7 +771,7 @@ def _why_missed(details, by, counts) -> list[str]:
                 f"the first frame also compiles the shaders). That floor, {floor:.3f} s, is above {allowed:.3f} s, so "
                 f"the goal is out of reach here while trimesh reads the meshes of both methods (the issue asks for the "
                 f"same loader). Causes found by profiling and fixed: back faces of closed meshes are culled "
-                f"(`AxialRenderer` default: the draw takes about 40 % less on llvmpipe, for every method), "
+                f"(`AxialRenderer` default: the draw takes about a third less on llvmpipe, for every method), "
                 f"`import axialdeform` is lazy, and the bench child imports only what one measurement needs.")
             big = max(counts)
             ab, lb = by.get(("axial", big, "solid")), by.get(("loaded", big, "solid"))

@@ -143,7 +143,7 @@ def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
         renderer.render(view, proj, mode)  # no instances: sets the uniforms only
         ctx.enable(moderngl.DEPTH_TEST)
         # the same face culling as the instanced methods (back faces of a closed mesh skipped)
-        with (contextlib.nullcontext() if wire else renderer.culling()):
+        with (contextlib.nullcontext() if wire else renderer.culling(view, proj)):
             for vao, n, _, _ in vaos:
                 vao.render(primitive, vertices=n)
 

@@ -59,9 +59,10 @@ class AxialRenderer:
         culling, three.js's ``side: FrontSide``).  ``None`` (the default)
         culls exactly when the base mesh bounds a volume with outward
         triangles (:attr:`BaseMesh.is_volume`): then no back face can be
-        seen and the picture is the same, drawn in about half the time on a
+        seen and the picture is the same, drawn in about a third less time on a
         software rasterizer.  Open meshes (a leaf) stay two-sided.  Culled
-        draws set ``ctx.front_face = "ccw"`` and ``ctx.cull_face = "back"``
+        draws set ``ctx.front_face`` (``"ccw"``; ``"cw"`` for a mirroring
+        camera, such as a reflection pass) and ``ctx.cull_face = "back"``,
         and leave ``CULL_FACE`` disabled afterwards.
     """
 
@@ -225,20 +226,25 @@ class AxialRenderer:
         if mode == "wireframe":  # lines are never culled
             vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
             return
-        with self.culling():
+        with self.culling(view, projection):
             vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
 
     @contextmanager
-    def culling(self):
+    def culling(self, view=None, projection=None):
         """The face-culling state of this renderer's triangle draws, for code
         that draws the same mesh with its own vertex arrays (a no-op when
-        :attr:`cull_back_faces` is False)."""
+        :attr:`cull_back_faces` is False).
+
+        With ``view`` and ``projection`` a mirroring camera (a reflection
+        pass: the two matrices together turn handedness) swaps which winding
+        faces the camera, as three.js does for mirrored objects."""
         if not self.cull_back_faces:
             yield
             return
         import moderngl
 
-        self.ctx.front_face = "ccw"
+        mirrored = view is not None and projection is not None and _mirrors(view, projection)
+        self.ctx.front_face = "cw" if mirrored else "ccw"
         self.ctx.cull_face = "back"
         self.ctx.enable(moderngl.CULL_FACE)
         try:
@@ -322,6 +328,16 @@ class AxialRenderer:
 
     def __exit__(self, *exc) -> None:
         self.release()
+
+
+def _mirrors(view, projection) -> bool:
+    """True when ``projection * view`` flips handedness.  A camera that does
+    not (``pyrr`` look-at + perspective or orthographic) has a negative
+    determinant, because GL's projections turn the right-handed eye space
+    into left-handed clip space."""
+    det = np.linalg.det(np.asarray(view, dtype=np.float64).reshape(4, 4)) * \
+        np.linalg.det(np.asarray(projection, dtype=np.float64).reshape(4, 4))
+    return bool(det > 0.0)
 
 
 def _unit(v) -> np.ndarray:

@@ -206,6 +206,12 @@ def test_back_faces_are_culled_only_where_nothing_changes(ctx, stone, leaf):
         assert auto.cull_back_faces and not two_sided.cull_back_faces
         a, b = _picture(ctx, [auto], view, proj), _picture(ctx, [two_sided], view, proj)
         assert (np.abs(a - b).max(axis=2) > 2).sum() <= 3  # silhouettes may differ by a pixel's rounding
+        # a mirroring camera (a reflection pass) turns the winding round: still the same picture as two-sided
+        mirror = np.diag([-1.0, 1.0, 1.0, 1.0]).astype(np.float32)
+        mview = (np.asarray(view, np.float32) @ mirror).astype(np.float32)  # pyrr layout: view, then mirror x
+        ma, mb = _picture(ctx, [auto], mview, proj), _picture(ctx, [two_sided], mview, proj)
+        assert (np.abs(ma - mb).max(axis=2) > 2).sum() <= 3
+        assert (np.abs(ma - a).max(axis=2) > 30).sum() > 500  # the mirrored picture is another picture
     lcam = frame_instances(leaf, leaves, 320 / 240)
     lview, lproj = lcam.view(), lcam.projection(320 / 240)
     with ad.AxialRenderer(ctx, leaf, leaves) as auto, \
