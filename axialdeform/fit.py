@@ -5,7 +5,8 @@ order, each a bent, rotated and moved copy), find for each variant the
 offsets ``d1..d5``, the position ``p`` and the angles ``rx ry rz`` with
 ``W ≈ R·(V + E(Σ B_i(t) d_i)) + p`` (``docs/axial-deformation.md``).
 
-Method (``docs/interop.md``), per instance, vectorized over vertices:
+Method (``docs/interop.md``), for every instance, vectorized over the
+vertices and over batches of instances:
 
 * ``t`` comes from the base mesh, so the model is linear in the offsets and
   the position once ``R`` is known;
@@ -97,33 +98,47 @@ def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
     Parameters
     ----------
-    source, target : (v, 3) float
-        Corresponding points.
+    source, target : (..., v, 3) float
+        Corresponding points; leading dimensions broadcast (one base mesh
+        against n variants: ``(v, 3)`` and ``(n, v, 3)``).
 
     Returns
     -------
-    R : (3, 3) float64
-        Proper rotation (det +1) minimising ``Σ |R·s + p - t|²``.
-    p : (3,) float64
+    R : (..., 3, 3) float64
+        Proper rotations (det +1) minimising ``Σ |R·s + p - t|²``.
+    p : (..., 3) float64
     """
     s = np.asarray(source, dtype=np.float64)
     t = np.asarray(target, dtype=np.float64)
-    sc, tc = s.mean(axis=0), t.mean(axis=0)
-    h = (s - sc).T @ (t - tc)
+    sc, tc = s.mean(axis=-2, keepdims=True), t.mean(axis=-2, keepdims=True)
+    h = np.swapaxes(s - sc, -1, -2) @ (t - tc)
     u, _sv, vt = np.linalg.svd(h)
-    d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
-    rot = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
-    return rot, tc - rot @ sc
+    v, ut = np.swapaxes(vt, -1, -2), np.swapaxes(u, -1, -2)
+    d = np.sign(np.linalg.det(v @ ut))
+    flip = np.ones(h.shape[:-1])
+    flip[..., 2] = np.where(d == 0.0, 1.0, d)
+    rot = v @ (flip[..., :, None] * ut)
+    return rot, tc[..., 0, :] - (rot @ sc[..., 0, :, None])[..., 0]
 
 
 def _rodrigues(w: np.ndarray) -> np.ndarray:
-    """Rotation matrix of the rotation vector ``w`` (3,) radians."""
-    theta = float(np.linalg.norm(w))
-    k = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-    if theta < 1e-12:
-        return np.eye(3) + k
-    k /= theta
-    return np.eye(3) + np.sin(theta) * k + (1.0 - np.cos(theta)) * (k @ k)
+    """Rotation matrices (n, 3, 3) of the rotation vectors ``w`` (n, 3) radians."""
+    w = np.asarray(w, dtype=np.float64)
+    theta = np.linalg.norm(w, axis=-1)
+    k = np.zeros(w.shape[:-1] + (3, 3))
+    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -w[..., 2], w[..., 1], -w[..., 0]
+    k[..., 1, 0], k[..., 2, 0], k[..., 2, 1] = w[..., 2], -w[..., 1], w[..., 0]
+    small = theta < 1e-12
+    safe = np.where(small, 1.0, theta)
+    kn = k / safe[..., None, None]
+    rodrigues = np.eye(3) + np.sin(safe)[..., None, None] * kn + (1.0 - np.cos(safe))[..., None, None] * (kn @ kn)
+    return np.where(small[..., None, None], np.eye(3) + k, rodrigues)
+
+
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Least-squares solutions ``x`` (n, k) of the stacked systems ``a`` (n, m, k) ``x = b`` (n, m),
+    minimum-norm where a system is rank-deficient (what ``np.linalg.lstsq`` gives for one)."""
+    return (np.linalg.pinv(a) @ b[..., None])[..., 0]
 
 
 # ---------------------------------------------------------------------- fitting
@@ -134,7 +149,9 @@ _CANONICAL = np.linalg.svd(np.eye(5) - 1.0 / 5.0)[0][:, :4]  # (5, 4)
 
 
 class _Model:
-    """What the fit needs from the base mesh, computed once."""
+    """What the fit needs from the base mesh, computed once.  Every method
+    works on a batch of n instances: ``rot`` (n, 3, 3), ``z`` (n, 4, 2),
+    ``pos`` (n, 3), ``target`` (n, v, 3)."""
 
     def __init__(self, mesh) -> None:
         axis = mesh.axis
@@ -146,54 +163,111 @@ class _Model:
         self.basis = bernstein(axis.parameter(self.base), 4) @ _CANONICAL
 
     def bent(self, z: np.ndarray) -> np.ndarray:
-        """``V'`` (v, 3) for canonical offset coordinates ``z`` (4, 2)."""
-        out = self.base.copy()
-        disp = self.basis @ z
-        out[:, self.i] += disp[:, 0]
-        out[:, self.j] += disp[:, 1]
+        """``V'`` (n, v, 3) for canonical offset coordinates ``z`` (n, 4, 2)."""
+        out = np.repeat(self.base[None], len(z), axis=0)
+        disp = self.basis @ z  # (n, v, 2)
+        out[..., self.i] += disp[..., 0]
+        out[..., self.j] += disp[..., 1]
         return out
 
-    def linear_offsets(self, rot: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Offsets ``z`` (4, 2) and position ``p`` (3,) minimising the error for a fixed ``R``.
+    def _offset_columns(self, rot: np.ndarray, a: np.ndarray, first: int) -> None:
+        """Fill ``a[..., first:first + 8]`` with d(R·E(basis z))/dz."""
+        a[..., first:first + 4] = rot[:, None, :, self.i, None] * self.basis[None, :, None, :]
+        a[..., first + 4:first + 8] = rot[:, None, :, self.j, None] * self.basis[None, :, None, :]
 
-        ``W - R·V = R·E(basis z) + p`` is linear in ``(z, p)``: an (3v, 11) system."""
-        v = len(self.base)
-        rhs = (target - self.base @ rot.T).reshape(-1)
-        a = np.empty((v, 3, 11))
-        a[:, :, :4] = rot[None, :, self.i, None] * self.basis[:, None, :]
-        a[:, :, 4:8] = rot[None, :, self.j, None] * self.basis[:, None, :]
-        a[:, :, 8:] = np.eye(3)[None]
-        sol = np.linalg.lstsq(a.reshape(3 * v, 11), rhs, rcond=None)[0]
-        return sol[:8].reshape(2, 4).T, sol[8:]
+    def linear_offsets(self, rot: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Offsets ``z`` (n, 4, 2) and positions ``p`` (n, 3) minimising the error for fixed ``R``.
+
+        ``W - R·V = R·E(basis z) + p`` is linear in ``(z, p)``: n systems of (3v, 11)."""
+        n, v = len(rot), len(self.base)
+        rhs = (target - self.base @ np.swapaxes(rot, -1, -2)).reshape(n, -1)
+        a = np.empty((n, v, 3, 11))
+        self._offset_columns(rot, a, 0)
+        a[..., 8:] = np.eye(3)
+        sol = _solve(a.reshape(n, 3 * v, 11), rhs)
+        return np.swapaxes(sol[:, :8].reshape(n, 2, 4), 1, 2), sol[:, 8:]
 
     def normal_equations(self, rot, z, pos, target):
-        """``JᵀJ`` (14, 14) and ``Jᵀr`` (14,) of the joint problem in (rotation
+        """``JᵀJ`` (n, 14, 14) and ``Jᵀr`` (n, 14) of the joint problem in (rotation
         vector, canonical offsets, position), linearised at the current state."""
-        v = len(self.base)
-        q = self.bent(z) @ rot.T  # R·V', (v, 3)
-        resid = (target - q - pos).reshape(-1)
-        a = np.empty((v, 3, 14))
+        n, v = len(rot), len(self.base)
+        q = self.bent(z) @ np.swapaxes(rot, -1, -2)  # R·V', (n, v, 3)
+        resid = (target - q - pos[:, None]).reshape(n, -1)
+        a = np.empty((n, v, 3, 14))
         # d(ω × q)/dω = -[q]×
-        a[:, 0, 0], a[:, 0, 1], a[:, 0, 2] = 0.0, q[:, 2], -q[:, 1]
-        a[:, 1, 0], a[:, 1, 1], a[:, 1, 2] = -q[:, 2], 0.0, q[:, 0]
-        a[:, 2, 0], a[:, 2, 1], a[:, 2, 2] = q[:, 1], -q[:, 0], 0.0
-        a[:, :, 3:7] = rot[None, :, self.i, None] * self.basis[:, None, :]
-        a[:, :, 7:11] = rot[None, :, self.j, None] * self.basis[:, None, :]
-        a[:, :, 11:] = np.eye(3)[None]
-        a = a.reshape(3 * v, 14)
-        return a.T @ a, a.T @ resid
+        a[..., 0, 0], a[..., 0, 1], a[..., 0, 2] = 0.0, q[..., 2], -q[..., 1]
+        a[..., 1, 0], a[..., 1, 1], a[..., 1, 2] = -q[..., 2], 0.0, q[..., 0]
+        a[..., 2, 0], a[..., 2, 1], a[..., 2, 2] = q[..., 1], -q[..., 0], 0.0
+        self._offset_columns(rot, a, 3)
+        a[..., 11:] = np.eye(3)
+        a = a.reshape(n, 3 * v, 14)
+        at = np.swapaxes(a, -1, -2)
+        return at @ a, (at @ resid[..., None])[..., 0]
 
     @staticmethod
     def apply(step, rot, z, pos):
-        return _rodrigues(step[:3]) @ rot, z + step[3:11].reshape(2, 4).T, pos + step[11:]
+        dz = np.swapaxes(step[:, 3:11].reshape(-1, 2, 4), 1, 2)
+        return _rodrigues(step[:, :3]) @ rot, z + dz, pos + step[:, 11:]
 
-    def error(self, rot, z, pos, target) -> float:
-        d = self.bent(z) @ rot.T + pos - target
-        return float(np.einsum("vc,vc->", d, d))
+    def error(self, rot, z, pos, target) -> np.ndarray:
+        """Squared error (n,) of each instance."""
+        d = self.bent(z) @ np.swapaxes(rot, -1, -2) + pos[:, None] - target
+        return np.einsum("nvc,nvc->n", d, d)
+
+
+def _fit_batch(m: _Model, targets: np.ndarray, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
+    """Fit n variants at once: ``targets`` (n, v, 3) float64 -> params (n, 16)
+    float64 (canonical) and rounds (n,) int.  Every instance follows exactly
+    the steps it would follow alone; the converged ones drop out of the batch."""
+    w = targets
+    n = len(w)
+    rot, pos = kabsch(m.base, w)
+    z = np.zeros((n, 4, 2))
+    best = m.error(rot, z, pos, w)
+    floor = 1e-30 * m.length**2 * w.shape[1]  # below this the fit is exact to float64
+    lam = np.full(n, 1e-3)
+    rounds = np.zeros(n, dtype=np.int64)
+    active = np.arange(n)
+    eye = np.eye(14)
+    for r in range(1, max_iterations + 1):
+        if not active.size:
+            break
+        wa, la = w[active], lam[active]
+        # alternate: the exact optimum of each block given the other
+        za, pa = m.linear_offsets(rot[active], wa)
+        ra, pa = kabsch(m.bent(za), wa)
+        err = m.error(ra, za, pa, wa)
+        # joint Levenberg-Marquardt step: follows the valley where tilting the
+        # axis and bending it linearly look alike (flat or thin meshes)
+        jtj, jtr = m.normal_equations(ra, za, pa, wa)
+        damp = np.diagonal(jtj, axis1=1, axis2=2)[..., None] * eye + 1e-12 * np.trace(jtj, axis1=1, axis2=2)[:, None, None] * eye
+        pending = np.arange(len(active))
+        for _ in range(16):
+            if not pending.size:
+                break
+            step = _solve(jtj[pending] + la[pending, None, None] * damp[pending], jtr[pending])
+            trial = m.apply(step, ra[pending], za[pending], pa[pending])
+            trial_err = m.error(*trial, wa[pending])
+            ok = trial_err < err[pending]
+            took = pending[ok]
+            ra[took], za[took], pa[took], err[took] = trial[0][ok], trial[1][ok], trial[2][ok], trial_err[ok]
+            la[took] = np.maximum(la[took] / 4.0, 1e-9)
+            la[pending[~ok]] = np.minimum(la[pending[~ok]] * 8.0, 1e9)
+            pending = pending[~ok]
+        rot[active], z[active], pos[active], lam[active], rounds[active] = ra, za, pa, la, r
+        # converged when a round no longer lowers the squared error noticeably
+        done = (best[active] - err <= 1e-12 * best[active]) | (err <= floor)
+        best[active] = np.where(done, np.minimum(best[active], err), err)
+        active = active[~done]
+    out = np.empty((n, 16))
+    out[:, OFFSETS] = (_CANONICAL @ z).reshape(n, 10)  # (n, 5, 2): zero mean per component
+    out[:, POSITION] = pos
+    out[:, ANGLES] = angles_from_matrices(rot)
+    return out, rounds
 
 
 def fit_instance(mesh, target: np.ndarray, *, max_iterations: int = 100, model: _Model | None = None):
-    """Fit the 16 numbers of one variant.
+    """Fit the 16 numbers of one variant (:func:`fit_params` fits many at once).
 
     Parameters
     ----------
@@ -211,43 +285,8 @@ def fit_instance(mesh, target: np.ndarray, *, max_iterations: int = 100, model: 
     iterations : int
         Rounds used.
     """
-    m = model or _Model(mesh)
-    w = np.asarray(target, dtype=np.float64)
-    rot, pos = kabsch(m.base, w)
-    z = np.zeros((4, 2))
-    best = m.error(rot, z, pos, w)
-    floor = 1e-30 * m.length**2 * len(w)  # below this the fit is exact to float64
-    lam = 1e-3
-    rounds = 0
-    for rounds in range(1, max_iterations + 1):
-        # alternate: the exact optimum of each block given the other
-        z, pos = m.linear_offsets(rot, w)
-        rot, pos = kabsch(m.bent(z), w)
-        err = m.error(rot, z, pos, w)
-        # joint Levenberg-Marquardt step: follows the valley where tilting the
-        # axis and bending it linearly look alike (flat or thin meshes)
-        jtj, jtr = m.normal_equations(rot, z, pos, w)
-        damp = np.diag(np.diag(jtj)) + 1e-12 * np.trace(jtj) * np.eye(14)
-        for _ in range(16):
-            step = np.linalg.lstsq(jtj + lam * damp, jtr, rcond=None)[0]
-            trial = m.apply(step, rot, z, pos)
-            trial_err = m.error(*trial, w)
-            if trial_err < err:
-                (rot, z, pos), err = trial, trial_err
-                lam = max(lam / 4.0, 1e-9)
-                break
-            lam = min(lam * 8.0, 1e9)
-        # converged when a round no longer lowers the squared error noticeably
-        if best - err <= 1e-12 * best or err <= floor:
-            best = min(best, err)
-            break
-        best = err
-    d = _CANONICAL @ z  # (5, 2), zero mean per component
-    out = np.empty(16)
-    out[OFFSETS] = d.reshape(10)
-    out[POSITION] = pos
-    out[ANGLES] = angles_from_matrices(rot)
-    return out, rounds
+    params, rounds = _fit_batch(model or _Model(mesh), np.asarray(target, dtype=np.float64)[None], max_iterations)
+    return params[0], int(rounds[0])
 
 
 @dataclass(frozen=True)
@@ -300,11 +339,11 @@ class FitResult:
             )
 
 
-def _residuals(mesh, params32: np.ndarray, target: np.ndarray) -> tuple[float, float]:
-    """RMS and max vertex distance (fraction of L) of the shape ``params32`` gives."""
-    shape = deform(mesh.axis, mesh.positions, mesh.normals, params32[None])[0][0].astype(np.float64)
-    dist = np.linalg.norm(shape - target, axis=1)
-    return float(np.sqrt(np.mean(dist**2))) / mesh.axis.length, float(dist.max()) / mesh.axis.length
+def _residuals(mesh, params32: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """RMS and max vertex distance (n,) (fraction of L) of the shapes ``params32`` (n, 16) give."""
+    shapes = deform(mesh.axis, mesh.positions, mesh.normals, params32)[0].astype(np.float64)
+    dist = np.linalg.norm(shapes - targets, axis=2)
+    return np.sqrt(np.mean(dist**2, axis=1)) / mesh.axis.length, dist.max(axis=1) / mesh.axis.length
 
 
 def _check_shape(mesh, positions: np.ndarray, name: str) -> np.ndarray:
@@ -320,18 +359,35 @@ def _check_shape(mesh, positions: np.ndarray, name: str) -> np.ndarray:
     return pos
 
 
+#: float64 bytes of the largest work array of a batch (n, 3v, 14): bounds the instances fitted at once
+_BATCH_BYTES = 64 << 20
+
+
 def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress):
     model = _Model(mesh)
     params = np.empty((count, 16), dtype=np.float32)
     rms, mx, its, names = np.empty(count), np.empty(count), np.empty(count, dtype=np.int64), []
-    for k, (name, positions) in enumerate(items):  # one instance at a time; vertices vectorized
-        target = _check_shape(mesh, positions, name)
-        values, its[k] = fit_instance(mesh, target, max_iterations=max_iterations, model=model)
-        params[k] = values.astype(np.float32)
-        rms[k], mx[k] = _residuals(mesh, params[k], target)
-        names.append(name)
+    batch = max(1, _BATCH_BYTES // (mesh.vertex_count * 3 * 14 * 8))
+    chunk: list[np.ndarray] = []
+
+    def flush(end: int) -> None:  # fit the variants [end - len(chunk), end) together
+        start = end - len(chunk)
+        targets = np.stack(chunk)
+        values, its[start:end] = _fit_batch(model, targets, max_iterations)
+        params[start:end] = values.astype(np.float32)
+        rms[start:end], mx[start:end] = _residuals(mesh, params[start:end], targets)
         if progress is not None:
-            progress.update(1)
+            progress.update(len(chunk))
+        chunk.clear()
+
+    k = 0
+    for k, (name, positions) in enumerate(items, 1):  # files are read one by one; the fit runs per batch
+        chunk.append(_check_shape(mesh, positions, name))
+        names.append(name)
+        if len(chunk) == batch:
+            flush(k)
+    if chunk:
+        flush(k)
     return FitResult(as_params(params), rms, mx, its, float(max_residual), tuple(names))
 
 
@@ -348,7 +404,7 @@ def fit_params(mesh, variants, *, max_residual: float = DEFAULT_MAX_RESIDUAL, ma
         Limit on the largest vertex distance, fraction of L (flags only;
         call :meth:`FitResult.check` to raise).
     progress : tqdm-like, optional
-        ``update(1)`` per variant.
+        ``update(k)`` after each batch of k variants.
     """
     variants = list(variants) if not isinstance(variants, np.ndarray) else variants
     items = ((f"variant {k}", v) for k, v in enumerate(variants))
@@ -399,7 +455,7 @@ def variant_paths(inputs) -> list[Path]:
 
 def fit_files(mesh, paths, *, max_residual: float = DEFAULT_MAX_RESIDUAL, max_iterations: int = 100,
               progress=None) -> FitResult:
-    """Load and fit variant mesh files one at a time (see :func:`fit_params`)."""
+    """Read variant mesh files one at a time and fit them in batches (see :func:`fit_params`)."""
     paths = [Path(p) for p in paths]
     items = ((str(p), load_variant(p, mesh)) for p in paths)
     return _fit_all(mesh, items, len(paths), max_residual=max_residual, max_iterations=max_iterations,

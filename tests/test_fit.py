@@ -256,3 +256,24 @@ def test_cli_fit_folder_with_files_exits_2(variant_folder, tmp_path, capsys):
     first = sorted(folder.glob("*.obj"))[0]
     assert main(["fit", "stone", str(folder), str(first), "-o", str(tmp_path / "x.adp")]) == 2
     assert "must be the only" in capsys.readouterr().err
+
+
+def test_batches_fit_like_single_instances(stone, monkeypatch):
+    """fit_params fits many variants at once (in batches bounded by memory);
+    each comes out as fit_instance gives it alone, at every batch boundary."""
+    _, positions = _variants(stone, count=23, seed=11, bend=0.25)
+    whole = fit.fit_params(stone, positions)
+    monkeypatch.setattr(fit, "_BATCH_BYTES", 5 * stone.vertex_count * 3 * 14 * 8)  # batches of 5: 5+5+5+5+3
+    updates = []
+
+    class Progress:
+        def update(self, n):
+            updates.append(n)
+
+    batched = fit.fit_params(stone, positions, progress=Progress())
+    assert updates == [5, 5, 5, 5, 3]
+    alone = np.array([fit.fit_instance(stone, p)[0] for p in positions], dtype=np.float32)
+    for result in (whole, batched):
+        assert np.abs(result.params - alone).max() <= 1e-5 * stone.axis.length
+        assert result.max.max() <= TOL
+    assert batched.names == tuple(f"variant {k}" for k in range(23))
