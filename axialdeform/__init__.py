@@ -1,15 +1,17 @@
 """axialdeform: thousands of individually different shapes from one base mesh.
 
-The data flow, one module each::
+Three layers, one folder each (an upper layer may import a lower one, never
+the reverse; ``tests/test_layers.py`` reads the imports and enforces it):
 
-    mesh.py -> axis.py -> params.py (+ variation.py) -> buffers.py -> shaders.py
-    -> renderer.py -> image.py
-
-``deform.py`` is the CPU reference of the same maths; ``bake.py`` writes
-deformed instances out; ``cli.py`` is the ``axialdeform`` command.
+* ``core/`` -- pure numpy, no GL: mesh -> axis -> params (+ variation) ->
+  deform (the CPU reference), fit, bake, export;
+* ``gl/``   -- moderngl: context, shaders (``glsl/``), buffers, renderer,
+  ground, camera, image;
+* the application -- ``cli/`` (the ``axialdeform`` command), ``bench/`` and
+  ``viewer.py``.
 """
 
-from .errors import (
+from .core.errors import (
     AxialDeformError,
     ContextError,
     GltfError,
@@ -22,27 +24,27 @@ from .errors import (
     TopologyError,
 )
 
-# These two share their names with their modules (axialdeform.bake,
-# axialdeform.deform), so they are bound now: importing the submodule later
+# These two share their names with their modules (axialdeform.core.bake,
+# axialdeform.core.deform), so they are bound now: importing the submodule later
 # must not replace the function.
-from .bake import bake
-from .deform import deform, rotation_matrices
+from .core.bake import bake
+from .core.deform import deform, rotation_matrices
 
 # The other public names and the module each lives in.  They are imported on first
 # use (PEP 562), so ``import axialdeform`` -- and every CLI start and every
 # benchmark child -- pays only for what it touches.
 _LAZY = {
-    "ControlAxis": "axis",
-    "Camera": "camera", "frame_instances": "camera", "instance_bounds": "camera",
-    "Offscreen": "context", "create_context": "context",
-    "GroundPlane": "ground",
-    "render_image": "image", "save_png": "image",
-    "BUNDLED_MESHES": "mesh", "BaseMesh": "mesh", "bundled_mesh_path": "mesh", "load_mesh": "mesh",
-    "FIELDS": "params", "as_params": "params", "make_params": "params", "read_param_file": "params",
-    "read_params": "params", "write_params": "params",
-    "MODES": "renderer", "AxialRenderer": "renderer",
-    "assemble": "shaders", "assemble_text": "shaders", "build_program": "shaders", "deformation_glsl": "shaders",
-    "random_params": "variation",
+    "ControlAxis": "core.axis",
+    "Camera": "gl.camera", "frame_instances": "gl.camera", "instance_bounds": "gl.camera",
+    "Offscreen": "gl.context", "create_context": "gl.context",
+    "GroundPlane": "gl.ground",
+    "render_image": "gl.image", "save_png": "gl.image",
+    "BUNDLED_MESHES": "core.mesh", "BaseMesh": "core.mesh", "bundled_mesh_path": "core.mesh", "load_mesh": "core.mesh",
+    "FIELDS": "core.params", "as_params": "core.params", "make_params": "core.params", "read_param_file": "core.params",
+    "read_params": "core.params", "write_params": "core.params",
+    "MODES": "gl.renderer", "AxialRenderer": "gl.renderer",
+    "assemble": "gl.shaders", "assemble_text": "gl.shaders", "build_program": "gl.shaders", "deformation_glsl": "gl.shaders",
+    "random_params": "core.variation",
 }
 
 
@@ -64,7 +66,7 @@ def __getattr__(name: str):
 
         if name.startswith("_") or find_spec(f"{__name__}.{name}") is None:
             raise AttributeError(f"module 'axialdeform' has no attribute {name!r}")
-        value = import_module(f".{name}", __name__)  # a submodule: axialdeform.params, ...
+        value = import_module(f".{name}", __name__)  # a submodule: axialdeform.core.params, ...
     globals()[name] = value
     return value
 

@@ -31,9 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .camera import UP_VECTORS, frame_instances, instance_bounds
-from .errors import AxialDeformError, ContextError, ParamError
-from .renderer import MODES
+from .gl.camera import UP_VECTORS, frame_instances, instance_bounds
+from .core.errors import AxialDeformError, ContextError, ParamError
+from .gl.renderer import MODES
 
 __all__ = ["Viewer", "add_parser", "run", "KEY_ACTIONS"]
 
@@ -74,8 +74,8 @@ class _ViewerMixin:
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        from .ground import GroundPlane
-        from .renderer import AxialRenderer
+        from .gl.ground import GroundPlane
+        from .gl.renderer import AxialRenderer
 
         s = self.scene
         self.mesh = s["mesh"]
@@ -126,7 +126,7 @@ class _ViewerMixin:
 
     def matrices(self):
         """Current ``(view, projection)``, (4, 4) float32 pyrr layout."""
-        from .camera import Camera
+        from .gl.camera import Camera
 
         up = np.asarray(UP_VECTORS[self.up])
         side = np.roll(up, 1)
@@ -184,7 +184,7 @@ class _ViewerMixin:
     def regenerate(self, seed: int) -> None:
         """New offsets (the individual shapes) from ``seed``; placement and
         orientation stay.  Written in place: the count does not change."""
-        from .variation import random_params
+        from .core.variation import random_params
 
         self.seed = int(seed)
         fresh = random_params(self.mesh, len(self.base), seed=self.seed, bend=self.bend)
@@ -253,7 +253,7 @@ class _ViewerMixin:
 
     def save_screenshot(self, path) -> None:
         """Write the last drawn frame as a PNG, atomically."""
-        from .image import save_png
+        from .gl.image import save_png
 
         save_png(path, self.screenshot())
 
@@ -280,7 +280,7 @@ class Viewer:
         with (bend as a fraction of L); headless : moderngl-window's headless
         window on an EGL context (no display needed).
         """
-        from .params import as_params
+        from .core.params import as_params
 
         mglw = _window_config_base()
         params = as_params(params)
@@ -336,10 +336,10 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> None:
     """The ``view`` command."""
-    from .image import parse_size
-    from .mesh import load_mesh
-    from .params import read_params
-    from .variation import random_params
+    from .gl.image import parse_size
+    from .core.mesh import load_mesh
+    from .core.params import read_params
+    from .core.variation import random_params
 
     mesh = load_mesh(args.mesh)
     if args.params:

@@ -82,7 +82,7 @@ def save_gif(path, frames, fps):
     """Frames ``(h, w, 3) uint8`` -> an endless animated GIF, written atomically."""
     images = [Image.fromarray(f).quantize(colors=64, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
               for f in frames]
-    with ad.atomic.atomic_path(path, suffix=".gif") as tmp:
+    with ad.core.atomic.atomic_path(path, suffix=".gif") as tmp:
         images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
                        duration=int(1000 / fps), loop=0, optimize=True)
 
@@ -98,7 +98,7 @@ def main():
     ap.add_argument("--quick", action="store_true", help="150 leaves, 6 small frames (tests)")
     ap.add_argument("--window", action="store_true", help="watch it live in the viewer")
     args = ap.parse_args()
-    count, frames, size = (150, 6, (200, 150)) if args.quick else (args.count, args.frames, ad.image.parse_size(args.size))
+    count, frames, size = (150, 6, (200, 150)) if args.quick else (args.count, args.frames, ad.gl.image.parse_size(args.size))
 
     mesh = ad.load_mesh("leaf")
     leaves = FallingLeaves(count, args.seed, size=16.0 * (count / 1000) ** (1 / 3))

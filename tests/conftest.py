@@ -51,7 +51,7 @@ def leaf():
 
 
 def make_mesh(positions, faces, name="<test>"):
-    from axialdeform.mesh import area_weighted_normals
+    from axialdeform.core.mesh import area_weighted_normals
 
     positions = np.asarray(positions, dtype=np.float64)
     return ad.BaseMesh(positions, area_weighted_normals(positions, faces), faces, name=name)

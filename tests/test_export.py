@@ -1,4 +1,4 @@
-"""glTF export (axialdeform.export), checked by the Khronos glTF validator.
+"""glTF export (axialdeform.core.export), checked by the Khronos glTF validator.
 
 The validator is the npm package ``gltf-validator`` pinned in
 ``tests/gltf-validator/package.json``; install it with
@@ -19,9 +19,9 @@ import pytest
 import trimesh
 
 import axialdeform as ad
-from axialdeform import export
+from axialdeform.core import export
 from axialdeform.cli import main
-from axialdeform.params import ANGLES
+from axialdeform.core.params import ANGLES
 
 VALIDATOR = Path(__file__).resolve().parent / "gltf-validator"
 INSTALL = "npm ci --prefix tests/gltf-validator"

@@ -1,4 +1,4 @@
-"""Fitting the 16 numbers to meshes that already exist (axialdeform.fit)."""
+"""Fitting the 16 numbers to meshes that already exist (axialdeform.core.fit)."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
-from axialdeform import fit
-from axialdeform.bake import write_mesh_folder
+from axialdeform.core import fit
+from axialdeform.core.bake import write_mesh_folder
 from axialdeform.cli import main
-from axialdeform.params import ANGLES, OFFSETS, POSITION
+from axialdeform.core.params import ANGLES, OFFSETS, POSITION
 
 from conftest import make_mesh, shared_mesh
 

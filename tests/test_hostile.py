@@ -23,9 +23,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import axialdeform as ad
-from axialdeform import params as P
-from axialdeform.deform import deform
-from axialdeform.errors import AxialDeformError, MeshError, ParamError, ParamFileError, ShaderError
+from axialdeform.core import params as P
+from axialdeform.core.deform import deform
+from axialdeform.core.errors import AxialDeformError, MeshError, ParamError, ParamFileError, ShaderError
 
 from conftest import SHARED, make_mesh
 
@@ -440,7 +440,7 @@ def test_no_gl_context_says_what_to_install(monkeypatch):
 
 
 def test_broken_shader_names_file_stage_and_line(ctx):
-    from axialdeform.shaders import assemble, build_program, shader_source
+    from axialdeform.gl.shaders import assemble, build_program, shader_source
 
     files = {
         "broken.vert": '#include "helper.glsl"\nin vec3 in_position;\nvoid main() {\n    gl_Position = vec4(in_position, 1.0)\n}\n',
@@ -461,7 +461,7 @@ def test_broken_shader_names_file_stage_and_line(ctx):
 
 
 def test_include_cycle_and_missing_include():
-    from axialdeform.shaders import assemble
+    from axialdeform.gl.shaders import assemble
 
     files = {"a.glsl": '#include "b.glsl"\n', "b.glsl": '#include "a.glsl"\n'}
     with pytest.raises(ShaderError, match=r"#include cycle: a.glsl -> b.glsl -> a.glsl"):

@@ -40,7 +40,7 @@ def test_file_normals_are_used(tmp_path, stone):
 
 
 def test_area_weighted_normals():
-    from axialdeform.mesh import area_weighted_normals
+    from axialdeform.core.mesh import area_weighted_normals
 
     # two triangles sharing vertex 0: a big one in z=0 (normal +z) and a small one in x=0 (normal +x)
     pos = np.array([[0, 0, 0], [4, 0, 0], [0, 4, 0], [0, 0, 0.0], [0, 1, 0], [0, 0, 1]], float)

@@ -27,9 +27,9 @@ import pyrr
 import pytest
 
 import axialdeform as ad
-from axialdeform.atomic import sweep_stale_parts
-from axialdeform.deform import deform
-from axialdeform.params import dequantize_params, quantize_params
+from axialdeform.core.atomic import sweep_stale_parts
+from axialdeform.core.deform import deform
+from axialdeform.core.params import dequantize_params, quantize_params
 
 from conftest import make_mesh
 
@@ -80,7 +80,7 @@ class CountingContext:
 
 WRITER = r"""
 import sys, numpy as np
-from axialdeform.params import write_params
+from axialdeform.core.params import write_params
 path, n = sys.argv[1], int(sys.argv[2])
 base = np.arange(n * 16, dtype=np.float32).reshape(n, 16) % 1000
 k = int(sys.argv[3])
@@ -130,7 +130,7 @@ def test_killed_writer_leaves_previous_file_intact(tmp_path):
 
 
 def test_failed_write_keeps_old_file(tmp_path):
-    from axialdeform.atomic import atomic_path
+    from axialdeform.core.atomic import atomic_path
 
     path = ad.write_params(tmp_path / "p.txt", np.ones((2, 16)))
     with pytest.raises(RuntimeError):

@@ -7,7 +7,7 @@ import trimesh
 from scipy import ndimage
 
 import axialdeform as ad
-from axialdeform.context import Offscreen
+from axialdeform.gl.context import Offscreen
 from conftest import shared_mesh
 
 
@@ -42,7 +42,7 @@ def test_gpu_capture_equals_cpu_reference(ctx, tmp_path, stone, leaf):
 
 
 def test_capture_in_chunks_and_slices(ctx, stone, monkeypatch):
-    import axialdeform.renderer as R
+    import axialdeform.gl.renderer as R
 
     params = ad.random_params(stone, 100, seed=2, bend=0.3)
     monkeypatch.setattr(R, "_CAPTURE_BYTES", 58 * 24 * 7)  # 7 instances per pass
@@ -195,7 +195,7 @@ def test_back_faces_are_culled_only_where_nothing_changes(ctx, stone, leaf):
     """Default culling: on for a closed outward mesh (same picture, fewer
     triangles rasterized), off for an open one (two-sided leaves), and the
     draw leaves CULL_FACE off for whatever is drawn next."""
-    from axialdeform.camera import frame_instances
+    from axialdeform.gl.camera import frame_instances
 
     stones = ad.random_params(stone, 300, seed=3, bend=0.2)
     leaves = ad.random_params(leaf, 300, seed=3, bend=0.2)

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 import axialdeform as ad
-from axialdeform.shaders import assemble, build_program
+from axialdeform.gl.shaders import assemble, build_program
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -42,7 +42,7 @@ def test_version_in_an_included_file_is_refused():
 
 
 def test_compile_error_names_file_stage_and_line(ctx, monkeypatch):
-    import axialdeform.shaders as S
+    import axialdeform.gl.shaders as S
 
     files = {
         "bad.vert": '#include "lib.glsl"\nin vec3 p;\nvoid main() { gl_Position = vec4(f(p), 1.0); }\n',

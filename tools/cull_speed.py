@@ -17,8 +17,8 @@ import time
 import numpy as np
 
 import axialdeform as ad
-from axialdeform.camera import frame_instances
-from axialdeform.image import parse_size
+from axialdeform.gl.camera import frame_instances
+from axialdeform.gl.image import parse_size
 
 
 def main() -> None:

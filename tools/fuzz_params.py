@@ -26,8 +26,8 @@ from collections import Counter
 
 import numpy as np
 
-from axialdeform import params as P
-from axialdeform.errors import AxialDeformError
+from axialdeform.core import params as P
+from axialdeform.core.errors import AxialDeformError
 
 
 def corpus(rng: np.random.Generator) -> list[tuple[str, bytes]]:

@@ -24,9 +24,9 @@ import numpy as np
 import pyrr
 
 import axialdeform as ad
-from axialdeform.atomic import atomic_write_text
-from axialdeform.image import parse_size
-from axialdeform.mesh import area_weighted_normals
+from axialdeform.core.atomic import atomic_write_text
+from axialdeform.gl.image import parse_size
+from axialdeform.core.mesh import area_weighted_normals
 
 TETRA_V = np.array([(0, 0, 0), (1, 0, 0), (0.3, 0.8, 0), (0.3, 0.3, 0.7)], dtype=np.float64) * (2, 1, 1)
 TETRA_F = np.array([(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)])

@@ -6,8 +6,8 @@ process start:
 * ``same`` — the base mesh instanced ``N`` times with position and
   orientation only (``AxialRenderer(..., bend=False)``); reads one mesh file.
 * ``loaded`` — ``N`` meshes pre-deformed by the CPU reference
-  (:func:`axialdeform.deform.deform`), one OBJ file each, read one by one with
-  :func:`axialdeform.mesh.load_mesh`, uploaded (one VBO/IBO/VAO each) and
+  (:func:`axialdeform.core.deform.deform`), one OBJ file each, read one by one with
+  :func:`axialdeform.core.mesh.load_mesh`, uploaded (one VBO/IBO/VAO each) and
   drawn with one draw call each.
 * ``axial`` — one base mesh + one binary parameter file (``.adp``, float32),
   deformed in the vertex shader, one instanced draw call;
@@ -33,9 +33,9 @@ Figures per method x count x mode (the records of ``--json``):
     ``count / frame_s`` (Table 2).
 
 Each first frame is measured in its own child process (``python -c``, entry
-point :func:`axialdeform.bench_child.main`), the methods interleaved (A B C D
+point :func:`axialdeform.bench.child.main`), the methods interleaved (A B C D
 A B C D ...) so that drift hits all of them alike; the frame times come from
-:func:`axialdeform.bench_child.interleaved`.  The ``loaded`` meshes are cached on disk
+:func:`axialdeform.bench.child.interleaved`.  The ``loaded`` meshes are cached on disk
 between runs, keyed by the mesh and the parameters; reading them is always
 real.  Use it from Python with :func:`run_bench`.
 """
@@ -55,9 +55,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .bench_child import obj_name as _obj_name
-from .bench_child import scene_kwargs as _scene_kwargs
-from .errors import AxialDeformError
+from .child import obj_name as _obj_name
+from .child import scene_kwargs as _scene_kwargs
+from ..core.errors import AxialDeformError
 
 __all__ = ["BENCH_MODES", "COUNTS", "METHODS", "RECORD_KEYS", "THESIS", "add_parser", "run", "run_bench"]
 
@@ -86,8 +86,8 @@ _KB = 1024.0
 _SEPARATE_FRAMES = 3
 #: optional packages that ``import trimesh`` imports itself when they are installed
 _TRIMESH_EAGER = ("scipy", "networkx")
-_CHILD = "from axialdeform.bench_child import main; main(sys.argv[1])"
-_CHILD_FRAMES = "from axialdeform.bench_child import interleaved; interleaved(sys.argv[1])"
+_CHILD = "from axialdeform.bench.child import main; main(sys.argv[1])"
+_CHILD_FRAMES = "from axialdeform.bench.child import interleaved; interleaved(sys.argv[1])"
 
 
 def _python_c(code: str, *args: str) -> list[str]:
@@ -119,7 +119,7 @@ def _cache_root(cache) -> Path:
 
 
 def _mesh_file(source) -> Path:
-    from .mesh import BUNDLED_MESHES, bundled_mesh_path
+    from ..core.mesh import BUNDLED_MESHES, bundled_mesh_path
 
     if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
         return bundled_mesh_path(source)
@@ -131,8 +131,8 @@ class _Scene:
     the folder of pre-deformed OBJ files (cached by mesh + parameters)."""
 
     def __init__(self, mesh, mesh_path: Path, count: int, seed: int, scene: dict, cache: Path):
-        from .params import write_params
-        from .variation import random_params
+        from ..core.params import write_params
+        from ..core.variation import random_params
 
         self.mesh, self.mesh_path, self.count, self.seed, self.scene = mesh, mesh_path, count, seed, scene
         self.params = random_params(mesh, count, seed, **_scene_kwargs(mesh, scene))
@@ -159,7 +159,7 @@ class _Scene:
                 f"bench cache {self.dir}: about {need >> 20} MiB needed for {self.count} OBJ files, "
                 f"{free >> 20} MiB free; use --cache DIR on a larger disk or leave out this count"
             )
-        from .bake import bake, write_mesh_folder
+        from ..core.bake import bake, write_mesh_folder
 
         tmp = self.dir / f"objs.tmp-{os.getpid()}"
         shutil.rmtree(tmp, ignore_errors=True)
@@ -187,7 +187,7 @@ class _Scene:
 
 
 def _camera(mesh, params, size) -> tuple[list, list]:
-    from .camera import frame_instances
+    from ..gl.camera import frame_instances
 
     cam = frame_instances(mesh, params, size[0] / size[1])
     return cam.view().astype(float).tolist(), cam.projection(size[0] / size[1]).astype(float).tolist()
@@ -265,7 +265,7 @@ def _machine() -> dict:
     try:
         import moderngl
 
-        from .context import create_context
+        from ..gl.context import create_context
 
         info["moderngl"] = moderngl.__version__
         ctx = create_context()
@@ -307,7 +307,7 @@ def _startup_costs(repeats: int) -> dict:
     out = {}
     for name, code in (("python -c pass", "pass"), ("import numpy", "import numpy"),
                        ("import axialdeform", "import axialdeform"),
-                       ("import axialdeform.bench_child + moderngl", "import axialdeform.bench_child, moderngl"),
+                       ("import axialdeform.bench.child + moderngl", "import axialdeform.bench.child, moderngl"),
                        ("import trimesh (the mesh loader, with numpy)", "import trimesh")):
         times = []
         for _ in range(repeats):
@@ -320,10 +320,10 @@ def _startup_costs(repeats: int) -> dict:
 
 def _throughput(mesh, counts, seed: int, repeats: int) -> list[dict]:
     """Vertices deformed per second: CPU reference and GPU capture (with read-back)."""
-    from .context import create_context
-    from .deform import deform
-    from .renderer import AxialRenderer
-    from .variation import random_params
+    from ..gl.context import create_context
+    from ..core.deform import deform
+    from ..gl.renderer import AxialRenderer
+    from ..core.variation import random_params
 
     rows = []
     ctx = create_context()
@@ -453,8 +453,8 @@ def run_bench(
     """
     from tqdm import tqdm
 
-    from .atomic import atomic_write_text
-    from .mesh import load_mesh
+    from ..core.atomic import atomic_write_text
+    from ..core.mesh import load_mesh
 
     plt = _import_pyplot() if out is not None else None  # fail early, not after the run
     if quick:
@@ -674,7 +674,7 @@ def _bytes_per_instance(scenes, method) -> tuple[float, float] | None:
     big = cs[-1]
     total = path(big).stat().st_size / big
     if len(cs) < 2:  # one count: the records' bytes, the file less its fixed header, table and checksum
-        from .params import read_binary_header
+        from ..core.params import read_binary_header
 
         return read_binary_header(path(big).read_bytes(), str(path(big))).payload_bytes / big, total
     small = cs[-2]
@@ -685,7 +685,7 @@ def _bytes_per_instance(scenes, method) -> tuple[float, float] | None:
 
 
 def _plots(plt, stats, out: Path) -> dict:
-    from .atomic import atomic_path
+    from ..core.atomic import atomic_path
 
     files = {}
     for key, field, title, lo_key, hi_key, bars in (
@@ -933,7 +933,7 @@ def _report(records, details, plots) -> str:
 
     if details["throughput"]:
         add("## Deformation throughput (vertices deformed per second)\n")
-        add("CPU: `axialdeform.deform` (numpy, float64, positions + normals). GPU: `AxialRenderer.capture` (transform "
+        add("CPU: `axialdeform.core.deform` (numpy, float64, positions + normals). GPU: `AxialRenderer.capture` (transform "
             "feedback of the drawing vertex shader, including the read-back to numpy).\n")
         add("| engine | instances | vertices | seconds (median [min .. max]) | vertices / s |")
         add("|---|---|---|---|---|")
@@ -1019,7 +1019,7 @@ def _csv(text: str, name: str) -> tuple[str, ...]:
 
 def run(args) -> None:
     """Handler of ``axialdeform bench``."""
-    from .image import parse_size
+    from ..gl.image import parse_size
 
     counts = COUNTS
     if args.counts:

@@ -22,7 +22,7 @@ import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers
 from .context import bind_framebuffer, release_framebuffer
-from .errors import AxialDeformError, ParamError
+from ..core.errors import AxialDeformError, ParamError
 from .shaders import build_program
 
 __all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS"]
@@ -52,7 +52,7 @@ class AxialRenderer:
     quantized : bool
         Store each instance as 16 uint16 (32 bytes of GPU memory instead of
         64), decoded in the vertex shader (``glsl/quantized.glsl``) with the
-        per-column table of :func:`axialdeform.params.quantize_params`; what
+        per-column table of :func:`axialdeform.core.params.quantize_params`; what
         is drawn and captured is the deformation of the dequantized numbers.
     cull_back_faces : bool or None
         Skip the triangles that face away from the camera (GL back-face

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ParamError
-from .params import as_params, dequantize_params, quantize_params
+from ..core.errors import ParamError
+from ..core.params import as_params, dequantize_params, quantize_params
 
 __all__ = [
     "MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES",
@@ -88,7 +88,7 @@ class InstanceBuffer:
     count grows it (orphaning the old storage), a smaller count keeps it.
 
     With ``quantized=True`` each instance is 16 uint16 (32 bytes), the
-    quantization of :func:`axialdeform.params.quantize_params`; ``qmin`` and
+    quantization of :func:`axialdeform.core.params.quantize_params`; ``qmin`` and
     ``qstep`` ((16,) float32) are the per-column table the vertex shader
     needs (uniforms ``u_qmin``/``u_qstep``, four ``vec4`` each).
     """

@@ -10,7 +10,7 @@ import math
 import sys
 from pathlib import Path
 
-from .errors import AxialDeformError
+from ..core.errors import AxialDeformError
 
 __all__ = ["main", "build_parser"]
 
@@ -19,7 +19,7 @@ DEMO_COUNT = 2500
 #: modules that add sub-commands: each defines ``add_parser(subparsers)``
 #: (which calls ``subparsers.add_parser(NAME, ...)`` and
 #: ``set_defaults(handler=run)``) and ``run(args) -> None``.
-PLUGINS: tuple[str, ...] = ("axialdeform.export", "axialdeform.fit", "axialdeform.viewer", "axialdeform.bench")
+PLUGINS: tuple[str, ...] = ("axialdeform.core.export", "axialdeform.core.fit", "axialdeform.viewer", "axialdeform.bench")
 
 
 def _angle_range(text: str) -> tuple[float, float]:
@@ -35,10 +35,10 @@ def _angle_range(text: str) -> tuple[float, float]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
-    from .bake import ENGINES, MESH_FORMATS
-    from .renderer import MODES
-    from .variation import PLACEMENTS
+    from .. import __version__
+    from ..core.bake import ENGINES, MESH_FORMATS
+    from ..gl.renderer import MODES
+    from ..core.variation import PLACEMENTS
 
     p = argparse.ArgumentParser(
         prog="axialdeform",
@@ -113,10 +113,10 @@ def _progress(total: int, desc: str):
 
 
 def cmd_demo(args) -> None:
-    from .camera import frame_instances
-    from .image import parse_size, render_image, save_png
-    from .mesh import load_mesh
-    from .variation import random_params
+    from ..gl.camera import frame_instances
+    from ..gl.image import parse_size, render_image, save_png
+    from ..core.mesh import load_mesh
+    from ..core.variation import random_params
 
     mesh = load_mesh("stone")
     params = random_params(mesh, args.count, seed=args.seed, bend=0.14, placement="disc",
@@ -129,9 +129,9 @@ def cmd_demo(args) -> None:
 
 
 def cmd_random(args) -> None:
-    from .mesh import load_mesh
-    from .params import write_params
-    from .variation import random_params
+    from ..core.mesh import load_mesh
+    from ..core.params import write_params
+    from ..core.variation import random_params
 
     mesh = load_mesh(args.mesh)
     params = random_params(mesh, args.count, args.seed, bend=args.bend, placement=args.placement,
@@ -141,8 +141,8 @@ def cmd_random(args) -> None:
 
 
 def _load(args):
-    from .mesh import load_mesh
-    from .params import read_params
+    from ..core.mesh import load_mesh
+    from ..core.params import read_params
 
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
@@ -150,7 +150,7 @@ def _load(args):
 
 
 def cmd_render(args) -> None:
-    from .image import parse_size, render_image, save_png
+    from ..gl.image import parse_size, render_image, save_png
 
     mesh, params = _load(args)
     image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up)
@@ -159,7 +159,7 @@ def cmd_render(args) -> None:
 
 
 def cmd_bake(args) -> None:
-    from .bake import bake, write_mesh_folder, write_npz
+    from ..core.bake import bake, write_mesh_folder, write_npz
 
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
@@ -177,8 +177,8 @@ def cmd_bake(args) -> None:
 def cmd_info(args) -> int | None:
     """Header, count and checksum verdict; a corrupt binary file still shows
     its header, then the verdict fails with status 2."""
-    from .axis import ControlAxis
-    from .params import MAGIC, BINARY_SUFFIXES, read_binary_header, read_param_file
+    from ..core.axis import ControlAxis
+    from ..core.params import MAGIC, BINARY_SUFFIXES, read_binary_header, read_param_file
 
     path = Path(args.params)
     try:
@@ -212,8 +212,8 @@ def cmd_info(args) -> int | None:
 
 
 def cmd_convert(args) -> None:
-    from .mesh import load_mesh
-    from .params import check_mesh, read_param_file, write_params
+    from ..core.mesh import load_mesh
+    from ..core.params import check_mesh, read_param_file, write_params
 
     pf = read_param_file(args.src)
     mesh = load_mesh(args.mesh) if args.mesh else None

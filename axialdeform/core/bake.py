@@ -27,8 +27,8 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None) -> tuple
         return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
     if engine != "gpu":
         raise AxialDeformError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
-    from .context import create_context
-    from .renderer import AxialRenderer
+    from ..gl.context import create_context
+    from ..gl.renderer import AxialRenderer
 
     own = ctx is None
     ctx = create_context() if own else ctx

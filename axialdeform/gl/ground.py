@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .axis import AXIS_NAMES
-from .errors import AxialDeformError
+from ..core.axis import AXIS_NAMES
+from ..core.errors import AxialDeformError
 from .shaders import build_program
 
 __all__ = ["GroundPlane", "GROUND_COLOR"]

@@ -42,7 +42,7 @@ def main(spec_text: str) -> None:
         if k >= spec["warmup"]:
             frames.append(time.perf_counter() - t)
     if spec.get("image"):
-        from .image import save_png
+        from ..gl.image import save_png
 
         save_png(spec["image"], target.read())
     info["trimesh_imported"] = "trimesh" in sys.modules
@@ -75,7 +75,7 @@ def interleaved(spec_text: str) -> None:
 
 def _open(spec: dict):
     """The context, the offscreen target and the camera of a measurement."""
-    from .context import Offscreen, create_context
+    from ..gl.context import Offscreen, create_context
 
     ctx = create_context()
     target = Offscreen(ctx, tuple(spec["size"]), samples=spec["samples"])
@@ -90,9 +90,9 @@ def _setup(ctx, spec: dict, view, proj, mode: str, stamps: dict):
 
 
 def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
-    from .mesh import load_mesh
-    from .renderer import AxialRenderer
-    from .variation import random_params
+    from ..core.mesh import load_mesh
+    from ..gl.renderer import AxialRenderer
+    from ..core.variation import random_params
 
     mesh = load_mesh(spec["mesh"])
     # the placement is computed, not read: the thesis's "all the same" reads one mesh only
@@ -103,9 +103,9 @@ def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
 
 
 def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
-    from .mesh import load_mesh
-    from .params import read_params
-    from .renderer import AxialRenderer
+    from ..core.mesh import load_mesh
+    from ..core.params import read_params
+    from ..gl.renderer import AxialRenderer
 
     mesh = load_mesh(spec["mesh"])
     params = read_params(spec["params"], mesh)
@@ -117,8 +117,8 @@ def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
 
 def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
     """Read every pre-deformed OBJ file with load_mesh, one VBO/IBO/VAO each."""
-    from .mesh import load_mesh
-    from .renderer import AxialRenderer
+    from ..core.mesh import load_mesh
+    from ..gl.renderer import AxialRenderer
 
     folder = Path(spec["folder"])
     count = spec["count"]

@@ -12,7 +12,7 @@ import re
 from dataclasses import dataclass, field
 from importlib import resources
 
-from .errors import ShaderError
+from ..core.errors import ShaderError
 
 __all__ = ["GLSL_VERSION", "shader_source", "assemble", "assemble_text", "deformation_glsl", "build_program", "Assembled"]
 

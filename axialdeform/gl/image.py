@@ -7,10 +7,10 @@ import os
 
 import numpy as np
 
-from .atomic import atomic_path
+from ..core.atomic import atomic_path
 from .camera import UP_VECTORS, Camera, frame_instances
 from .context import Offscreen, create_context
-from .errors import AxialDeformError
+from ..core.errors import AxialDeformError
 from .renderer import MODES, AxialRenderer
 
 __all__ = ["render_image", "save_png", "parse_size"]

@@ -1,7 +1,7 @@
 """glTF 2.0 export of deformed instances, in two layouts (``docs/interop.md``).
 
 * **baked** (:func:`export_baked`): one mesh per instance holding its
-  deformed world positions and normals (:func:`axialdeform.bake.bake`), each
+  deformed world positions and normals (:func:`axialdeform.core.bake.bake`), each
   referenced by its own node.  Any glTF viewer shows the exact shapes.
 * **instanced** (:func:`export_instanced`): the base mesh once, drawn by one
   node with ``EXT_mesh_gpu_instancing``.  Per instance the extension carries

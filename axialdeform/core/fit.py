@@ -22,7 +22,7 @@ vertices and over batches of instances:
   zero-mean offsets, so it returns that form.
 
 The residual reported is the distance between the variant and the shape the
-fitted float32 parameters actually give (:func:`axialdeform.deform.deform`),
+fitted float32 parameters actually give (:func:`axialdeform.core.deform.deform`),
 RMS and maximum over the vertices, as a fraction of the axis length ``L``.
 A variant that the method did not make (noise, a scaled copy, another mesh)
 gets an honest residual; fits above ``max_residual`` are flagged.

@@ -79,7 +79,7 @@ class BaseMesh:
 
     @property
     def axis(self) -> ControlAxis:
-        """The control axis of this mesh (see :mod:`axialdeform.axis`)."""
+        """The control axis of this mesh (see :mod:`axialdeform.core.axis`)."""
         assert self._axis is not None
         return self._axis
 
@@ -112,7 +112,7 @@ class BaseMesh:
         (counter-clockwise seen from outside).
 
         Only then can back faces be culled without changing the picture;
-        :class:`~axialdeform.renderer.AxialRenderer` does that by default.
+        :class:`~axialdeform.gl.renderer.AxialRenderer` does that by default.
         """
         _, ids = np.unique(self.positions, axis=0, return_inverse=True)
         f = ids.reshape(-1)[self.faces].astype(np.int64)

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pyrr
 
-from .params import ANGLES, OFFSETS, POSITION, as_params
-from .deform import rotation_matrices
+from ..core.params import ANGLES, OFFSETS, POSITION, as_params
+from ..core.deform import rotation_matrices
 
 __all__ = ["Camera", "instance_bounds", "frame_instances", "UP_VECTORS"]
 
