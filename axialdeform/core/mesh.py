@@ -45,6 +45,16 @@ class BaseMesh:
         Where the mesh came from (a file path or a bundled mesh name).
     normals_from_file : bool
         True when ``normals`` were read from the file.
+    uvs : (n, 2) float32 or None
+        Texture coordinates (OBJ convention: ``v = 0`` is the image's bottom).
+    colors : (n, 4) float32 or None
+        Linear RGBA vertex colours.
+    tangents : (n, 4) float32 or None
+        Unit tangent (xyz) and handedness (w = ±1), present where a part has
+        a normal map (computed by :func:`~axialdeform.core.material.compute_tangents`).
+    parts : tuple of Part
+        Ranges of ``faces`` each drawn with its own material (one part
+        covering every face by default).  All parts share ONE control axis.
     """
 
     positions: np.ndarray
@@ -52,6 +62,10 @@ class BaseMesh:
     faces: np.ndarray
     name: str = "<mesh>"
     normals_from_file: bool = False
+    uvs: np.ndarray | None = None
+    colors: np.ndarray | None = None
+    tangents: np.ndarray | None = None
+    parts: tuple = ()
     _axis: ControlAxis | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
@@ -74,6 +88,7 @@ class BaseMesh:
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "normals", nrm)
         object.__setattr__(self, "faces", faces)
+        _check_appearance(self, len(pos), len(faces))
         # raises MeshError on a zero extent
         object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name))
 
@@ -82,6 +97,24 @@ class BaseMesh:
         """The control axis of this mesh (see :mod:`axialdeform.core.axis`)."""
         assert self._axis is not None
         return self._axis
+
+    def part(self, name: str):
+        """The :class:`~axialdeform.core.material.Part` called ``name``
+        (:class:`MeshError` listing the names if there is none)."""
+        for p in self.parts:
+            if p.name == name:
+                return p
+        raise MeshError(f"{self.name}: no part {name!r}; expected one of {', '.join(repr(p.name) for p in self.parts)}")
+
+    @property
+    def part_names(self) -> tuple:
+        return tuple(p.name for p in self.parts)
+
+    @property
+    def has_appearance(self) -> bool:
+        """True when the mesh carries UVs, colours, several parts or a non-default material."""
+        return (self.uvs is not None or self.colors is not None or len(self.parts) > 1
+                or not self.parts[0].material.is_default)
 
     @property
     def vertex_count(self) -> int:
@@ -216,57 +249,100 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(_SUPPORTED)})")
     if path.suffix.lower() not in _SUPPORTED:
         raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(_SUPPORTED)}")
+    if not path.is_file():
+        raise MeshError(f"{name}: is not a regular file; expected a mesh file ({', '.join(_SUPPORTED)})")
+    from .material import SafeResolver, compute_tangents, gather_parts
+
+    resolver = SafeResolver(path.parent)
     try:
         import trimesh
 
-        loaded = trimesh.load(str(path), process=False)
+        loaded = trimesh.load(str(path), process=False, resolver=resolver)
+        if path.suffix.lower() == ".obj" and isinstance(loaded, trimesh.Trimesh):
+            loaded = _obj_objects(loaded, trimesh.load(str(path), process=False, resolver=SafeResolver(path.parent),
+                                                       split_objects=True))
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
-    mesh, transform = _single_mesh(loaded, name)
-    positions = np.asarray(mesh.vertices, dtype=np.float64)
-    faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+    gathered = gather_parts(loaded, name, failed=resolver.failed)
+    all_positions, all_faces, all_normals = [], [], []
+    offset = 0
+    for mesh, transform in gathered["geometries"]:
+        positions = np.asarray(mesh.vertices, dtype=np.float64)
+        faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+        if not np.isfinite(positions).all():
+            bad = int(np.argwhere(~np.isfinite(positions).all(axis=1))[0, 0]) + offset
+            raise MeshError(f"{name}: vertex {bad} has a non-finite coordinate {positions[bad - offset].tolist()}; expected finite numbers")
+        _check_float32_range(positions, name)
+        if len(faces) and (faces.min() < 0 or faces.max() >= len(positions)):
+            raise MeshError(
+                f"{name}: a face refers to vertex {int(faces.min() if faces.min() < 0 else faces.max())}, "
+                f"but the mesh has {len(positions)} vertices; expected indices 0..{len(positions) - 1}"
+            )
+        file_normals = _file_vertex_normals(mesh, len(positions))
+        if transform is not None:
+            positions = positions @ transform[:3, :3].T + transform[:3, 3]
+            if file_normals is not None:
+                file_normals = file_normals @ np.linalg.inv(transform[:3, :3])  # inverse transpose
+        all_positions.append(positions)
+        all_faces.append(faces + offset)
+        all_normals.append(file_normals if file_normals is not None else np.full((len(positions), 3), np.nan))
+        offset += len(positions)
+    positions = np.concatenate(all_positions)
+    faces = np.concatenate(all_faces)
     if len(positions) == 0 or len(faces) == 0:
         raise MeshError(f"{name}: the mesh has {len(positions)} vertices and {len(faces)} faces; expected triangles")
-    if not np.isfinite(positions).all():
-        bad = int(np.argwhere(~np.isfinite(positions).all(axis=1))[0, 0])
-        raise MeshError(f"{name}: vertex {bad} has a non-finite coordinate {positions[bad].tolist()}; expected finite numbers")
     _check_float32_range(positions, name)
-    if faces.min() < 0 or faces.max() >= len(positions):
-        raise MeshError(
-            f"{name}: a face refers to vertex {int(faces.min() if faces.min() < 0 else faces.max())}, "
-            f"but the mesh has {len(positions)} vertices; expected indices 0..{len(positions) - 1}"
-        )
-    file_normals = _file_vertex_normals(mesh, len(positions))
-    if transform is not None:
-        positions = positions @ transform[:3, :3].T + transform[:3, 3]
-        if file_normals is not None:
-            file_normals = file_normals @ np.linalg.inv(transform[:3, :3])  # inverse transpose
-    if file_normals is not None:
+    file_normals = np.concatenate(all_normals)
+    has_file_normals = bool(np.isfinite(file_normals).all(axis=1).any())
+    if has_file_normals:
         length = np.linalg.norm(file_normals, axis=1)
         usable = np.isfinite(length) & (length > 1e-12)
         computed = area_weighted_normals(positions, faces) if not usable.all() else None
         normals = np.where(usable[:, None], file_normals / np.where(usable, length, 1.0)[:, None], computed if computed is not None else 0.0)
     else:
         normals = area_weighted_normals(positions, faces)
-    return BaseMesh(positions, normals, faces, name=name, normals_from_file=file_normals is not None)
+    uvs, colors, parts = gathered["uvs"], gathered["colors"], gathered["parts"]
+    tangents = None
+    if uvs is not None and any(p.material.normal_texture is not None for p in parts):
+        tangents = compute_tangents(positions, normals, uvs, faces)
+    return BaseMesh(positions, normals, faces, name=name, normals_from_file=has_file_normals,
+                    uvs=uvs, colors=colors, tangents=tangents, parts=tuple(parts))
 
 
-def _single_mesh(loaded, name: str):
-    """The one triangle mesh in what trimesh loaded, and its node transform."""
+def _obj_objects(merged, split):
+    """An OBJ's ``o`` objects as the parts of a scene, in the order that keeps
+    the merged mesh's vertex and face order (so its fingerprint does not
+    change); ``merged`` itself when they cannot be put in that order."""
     import trimesh
 
-    if isinstance(loaded, trimesh.Scene):
-        nodes = [n for n in loaded.graph.nodes_geometry if isinstance(loaded.geometry.get(loaded.graph[n][1]), trimesh.Trimesh)]
-        if len(nodes) == 0:
-            raise MeshError(f"{name}: the file holds no triangle mesh; expected exactly one")
-        if len(nodes) > 1:
-            raise MeshError(f"{name}: the file holds {len(nodes)} meshes; expected exactly one (merge them first)")
-        transform, geom_name = loaded.graph[nodes[0]]
-        mesh = loaded.geometry[geom_name]
-        return mesh, (None if np.allclose(transform, np.eye(4)) else np.asarray(transform, dtype=np.float64))
-    if isinstance(loaded, trimesh.Trimesh):
-        return loaded, None
-    raise MeshError(f"{name}: the file holds a {type(loaded).__name__} without faces; expected a triangle mesh")
+    if not isinstance(split, trimesh.Scene):
+        return merged
+    nodes = [n for n in split.graph.nodes_geometry if isinstance(split.geometry.get(split.graph[n][1]), trimesh.Trimesh)]
+    if len(nodes) < 2:
+        return merged
+    verts = np.asarray(merged.vertices)
+
+    def first_index(node):
+        g = split.geometry[split.graph[node][1]]
+        gv = np.asarray(g.vertices)
+        if not len(gv):
+            return -1
+        for o in np.flatnonzero((verts == gv[0]).all(axis=1)):  # where its vertices sit in the merged mesh
+            if o + len(gv) <= len(verts) and np.array_equal(verts[o:o + len(gv)], gv):
+                return int(o)
+        return -1
+
+    nodes.sort(key=first_index)
+    geoms = [split.geometry[split.graph[n][1]] for n in nodes]
+    offsets = np.cumsum([0] + [len(g.vertices) for g in geoms])[:-1]
+    v = np.concatenate([np.asarray(g.vertices) for g in geoms])
+    f = np.concatenate([np.asarray(g.faces) + o for g, o in zip(geoms, offsets)])
+    if v.shape != verts.shape or not np.array_equal(v, verts) or not np.array_equal(f, np.asarray(merged.faces)):
+        return merged
+    scene = trimesh.Scene()
+    for node, g in zip(nodes, geoms):
+        scene.add_geometry(g, node_name=str(node), geom_name=str(node))
+    return scene
 
 
 def _file_vertex_normals(mesh, n: int) -> np.ndarray | None:
@@ -282,3 +358,33 @@ def _file_vertex_normals(mesh, n: int) -> np.ndarray | None:
     if vn.shape != (n, 3):
         return None
     return vn
+
+
+def _check_appearance(mesh: "BaseMesh", n: int, m: int) -> None:
+    """Validate and normalise uvs/colors/tangents/parts of a BaseMesh in place."""
+    from .material import Part
+
+    for key, width in (("uvs", 2), ("colors", 4), ("tangents", 4)):
+        value = getattr(mesh, key)
+        if value is None:
+            continue
+        arr = np.ascontiguousarray(value, dtype=np.float32)
+        if key == "colors" and arr.ndim == 2 and arr.shape[1] == 3:
+            arr = np.hstack([arr, np.ones((len(arr), 1), np.float32)])
+        if arr.ndim != 2 or arr.shape != (n, width):
+            what = {"uvs": "texture coordinates", "colors": "vertex colours", "tangents": "tangents"}[key]
+            raise MeshError(f"{mesh.name}: {arr.shape[0] if arr.ndim else 0} {what} for {n} vertices; "
+                            f"expected shape ({n}, {width})")
+        if not np.isfinite(arr).all():
+            raise MeshError(f"{mesh.name}: {key}: expected finite numbers")
+        object.__setattr__(mesh, key, arr)
+    parts = tuple(mesh.parts) or (Part(name=Path(str(mesh.name)).stem or "mesh", start=0, count=m),)
+    end = 0
+    for p in parts:
+        if p.start != end or p.count < 0:
+            raise MeshError(f"{mesh.name}: part {p.name!r} covers faces {p.start}..{p.start + p.count - 1}; "
+                            f"expected parts in order without gaps, starting at face {end}")
+        end = p.start + p.count
+    if end != m:
+        raise MeshError(f"{mesh.name}: the parts cover {end} faces; expected all {m}")
+    object.__setattr__(mesh, "parts", parts)

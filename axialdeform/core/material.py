@@ -1,0 +1,379 @@
+"""Appearance of a base mesh: UVs, vertex colours, materials and parts.
+
+Everything here is read through trimesh's visuals and materials (no
+hand-written file parser):
+
+* :class:`Material` — base colour factor (linear RGBA) and texture (sRGB
+  RGBA pixels), alpha mode (``OPAQUE``, ``MASK`` with ``alpha_cutoff``,
+  ``BLEND``), double-sidedness and a normal map (linear RGB pixels);
+* :class:`Part` — a contiguous range of the base mesh's triangles drawn with
+  one material (a glTF primitive, an OBJ ``usemtl`` group);
+* :func:`gather_parts` — every triangle mesh of a loaded trimesh scene, node
+  transforms applied, concatenated into ONE vertex/face set with its parts,
+  UVs, colours and (where a normal map asks) tangents;
+* :func:`compute_tangents` — per-vertex tangents ``(n, 4)`` (xyz + handedness
+  w) from positions, normals, UVs and triangles, vectorized.
+
+A texture file that is missing, unreadable or not a regular file (a FIFO, a
+device) is never opened: :class:`SafeResolver` checks first, the loader warns
+(:class:`AssetWarning`, naming the file and the material) and the part is
+drawn with its base colour.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import MeshError
+
+__all__ = [
+    "Material", "Part", "AssetWarning", "ALPHA_MODES", "DEFAULT_MATERIAL",
+    "gather_parts", "compute_tangents", "SafeResolver", "srgb_to_linear", "linear_to_srgb",
+]
+
+ALPHA_MODES = ("OPAQUE", "MASK", "BLEND")
+
+
+class AssetWarning(UserWarning):
+    """Something of a mesh's appearance could not be used (a texture file);
+    the mesh still loads and the part is drawn with its base colour."""
+
+
+def srgb_to_linear(c):
+    """sRGB-encoded values in 0..1 to linear (the exact piecewise curve)."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(c):
+    """Linear values in 0..1 to sRGB encoding (the exact piecewise curve)."""
+    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
+    return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+
+
+@dataclass(frozen=True, eq=False)
+class Material:
+    """How one part looks (the glTF metallic-roughness subset we draw).
+
+    Attributes
+    ----------
+    name : str
+    base_color : (4,) float32
+        Linear RGBA factor (glTF ``baseColorFactor``), multiplied with the
+        texture and the vertex colour.
+    texture : (h, w, 4) uint8 or None
+        sRGB-encoded RGBA pixels of the base colour texture, first row at the
+        top of the image (glTF/OBJ UV ``v = 0`` is the image's top after the
+        loader's flip; see :func:`gather_parts`).
+    texture_name : str or None
+        Where the texture came from (a file name, or ``"embedded"``).
+    alpha_mode : str
+        ``"OPAQUE"``, ``"MASK"`` (fragments with alpha < ``alpha_cutoff`` are
+        discarded) or ``"BLEND"`` (drawn after opaque parts, unsorted).
+    alpha_cutoff : float
+    double_sided : bool
+        Light the back of a face as its front and never cull it.
+    normal_texture : (h, w, 4) uint8 or None
+        Tangent-space normal map (linear).
+    """
+
+    name: str = "default"
+    base_color: np.ndarray = field(default_factory=lambda: np.ones(4, dtype=np.float32))
+    texture: np.ndarray | None = None
+    texture_name: str | None = None
+    alpha_mode: str = "OPAQUE"
+    alpha_cutoff: float = 0.5
+    double_sided: bool = False
+    normal_texture: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        color = np.asarray(self.base_color, dtype=np.float32).reshape(-1)
+        if color.size == 3:
+            color = np.append(color, np.float32(1.0))
+        if color.shape != (4,) or not np.isfinite(color).all():
+            raise MeshError(f"material {self.name!r}: base colour: expected 3 or 4 finite numbers, found {self.base_color!r}")
+        object.__setattr__(self, "base_color", color)
+        if self.alpha_mode not in ALPHA_MODES:
+            raise MeshError(f"material {self.name!r}: alpha mode: expected one of {', '.join(ALPHA_MODES)}, found {self.alpha_mode!r}")
+        for key in ("texture", "normal_texture"):
+            img = getattr(self, key)
+            if img is not None:
+                img = np.ascontiguousarray(img, dtype=np.uint8)
+                if img.ndim != 3 or img.shape[2] != 4 or img.shape[0] == 0 or img.shape[1] == 0:
+                    raise MeshError(f"material {self.name!r}: {key}: expected (h, w, 4) uint8 pixels, found {img.shape}")
+                object.__setattr__(self, key, img)
+
+    @property
+    def is_default(self) -> bool:
+        """True for a white, opaque, single-sided, untextured material."""
+        return (self.texture is None and self.normal_texture is None and self.alpha_mode == "OPAQUE"
+                and not self.double_sided and bool(np.all(self.base_color == 1.0)))
+
+
+DEFAULT_MATERIAL = Material()
+
+
+@dataclass(frozen=True)
+class Part:
+    """Triangles ``start .. start + count - 1`` of a base mesh, drawn with ``material``."""
+
+    name: str
+    start: int
+    count: int
+    material: Material = DEFAULT_MATERIAL
+
+
+# --------------------------------------------------------------------- files
+
+
+class SafeResolver:
+    """A trimesh resolver for the files a mesh refers to (``.mtl``, textures,
+    glTF buffers): only regular files in the mesh's folder tree are read, so a
+    FIFO or a device never blocks; every refusal or failure is recorded in
+    ``failed`` as ``(name, reason)`` for the loader's warning."""
+
+    def __init__(self, folder: str | os.PathLike):
+        self.parent = os.path.abspath(os.fspath(folder))
+        self.failed: list[tuple[str, str]] = []
+
+    def _path(self, name: str) -> str:
+        name = str(name).replace("\\", "/")
+        return name if os.path.isabs(name) else os.path.join(self.parent, name)
+
+    def get(self, name: str) -> bytes:
+        path = self._path(name)
+        try:
+            st = os.stat(path)
+        except OSError as exc:
+            self.failed.append((str(name), exc.strerror or "cannot be read"))
+            raise
+        if not stat.S_ISREG(st.st_mode):
+            self.failed.append((str(name), "is not a regular file"))
+            raise OSError(f"{name}: not a regular file")
+        try:
+            fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+            with os.fdopen(fd, "rb") as fh:
+                return fh.read()
+        except OSError as exc:
+            self.failed.append((str(name), exc.strerror or "cannot be read"))
+            raise
+
+    __getitem__ = get
+
+    def get_base(self):  # trimesh asks for it when writing
+        return self.parent
+
+    def namespaced(self, namespace):
+        return SafeResolver(os.path.join(self.parent, namespace))
+
+    def keys(self):
+        return iter(())
+
+    def write(self, name, data):  # pragma: no cover - never used for loading
+        raise OSError("read-only resolver")
+
+
+# --------------------------------------------------------------------- visuals
+
+
+def _pixels(image) -> np.ndarray | None:
+    """A PIL image (or None) as (h, w, 4) uint8 RGBA."""
+    if image is None:
+        return None
+    try:
+        return np.asarray(image.convert("RGBA"), dtype=np.uint8)
+    except Exception:  # a broken embedded image: treated as missing
+        return None
+
+
+def _material_of(visual, fallback_name: str) -> Material:
+    import trimesh
+
+    mat = getattr(visual, "material", None)
+    if mat is None:
+        return Material(name=fallback_name)
+    if isinstance(mat, trimesh.visual.material.SimpleMaterial):
+        name = mat.name or fallback_name
+        diffuse = np.asarray(getattr(mat, "diffuse", (255, 255, 255, 255)), dtype=np.float64).reshape(-1)[:4] / 255.0
+        color = np.concatenate([srgb_to_linear(diffuse[:3]), diffuse[3:4] if diffuse.size > 3 else [1.0]])
+        texture = _pixels(getattr(mat, "image", None))
+        if texture is not None and (texture == texture[0, 0]).all():
+            # one colour (trimesh's stand-in for "no material"): the base colour says the same
+            px = texture[0, 0].astype(np.float64) / 255.0
+            color = np.concatenate([srgb_to_linear(px[:3]), px[3:4]])
+            texture = None
+        # a texture replaces the diffuse colour of the .mtl (what viewers show)
+        if texture is not None:
+            color = np.array([1.0, 1.0, 1.0, color[3]])
+        alpha_mode = "OPAQUE"
+        if texture is not None and (texture[..., 3] < 255).any():
+            alpha_mode = "MASK"  # an OBJ texture with holes: a cut-out
+        elif color[3] < 1.0:
+            alpha_mode = "BLEND"
+        return Material(name=name, base_color=color, texture=texture,
+                        texture_name=None if texture is None else "map_Kd", alpha_mode=alpha_mode)
+    # PBRMaterial
+    name = getattr(mat, "name", None) or fallback_name
+    factor = getattr(mat, "baseColorFactor", None)
+    # trimesh keeps glTF's linear factor as uint8 0..255
+    color = np.ones(4) if factor is None else np.asarray(factor, dtype=np.float64).reshape(-1)[:4] / 255.0
+    texture = _pixels(getattr(mat, "baseColorTexture", None))
+    normal = _pixels(getattr(mat, "normalTexture", None))
+    cutoff = getattr(mat, "alphaCutoff", None)
+    return Material(name=name, base_color=color, texture=texture,
+                    texture_name=None if texture is None else "embedded",
+                    alpha_mode=(getattr(mat, "alphaMode", None) or "OPAQUE").upper(),
+                    alpha_cutoff=0.5 if cutoff is None else float(cutoff),
+                    double_sided=bool(getattr(mat, "doubleSided", False)),
+                    normal_texture=normal)
+
+
+def _uvs_of(geom, n: int, file_name: str) -> np.ndarray | None:
+    uv = getattr(geom.visual, "uv", None)
+    if uv is None:
+        return None
+    uv = np.asarray(uv, dtype=np.float64)
+    if uv.ndim != 2 or uv.shape[1] < 2 or len(uv) != n:
+        raise MeshError(f"{file_name}: {len(uv)} texture coordinates for {n} vertices; expected one (u, v) per vertex")
+    uv = uv[:, :2]
+    if not np.isfinite(uv).all():
+        raise MeshError(f"{file_name}: a texture coordinate is not a finite number")
+    # trimesh flips glTF's v (top-down) to OBJ's bottom-up convention; we keep
+    # OBJ's: v = 0 is the bottom row of the image
+    return uv
+
+
+def _colors_of(geom, n: int, file_name: str) -> np.ndarray | None:
+    visual = geom.visual
+    colors = None
+    if getattr(visual, "kind", None) == "vertex" and hasattr(visual, "vertex_colors"):
+        colors = visual.vertex_colors
+    else:
+        attrs = getattr(visual, "vertex_attributes", None) or {}
+        if "color" in attrs:
+            colors = attrs["color"]
+    if colors is None:
+        return None
+    colors = np.asarray(colors)
+    if colors.ndim != 2 or colors.shape[1] not in (3, 4) or len(colors) != n:
+        raise MeshError(f"{file_name}: {len(colors)} vertex colours for {n} vertices; expected one colour per vertex")
+    c = colors.astype(np.float64)
+    if colors.dtype.kind in "ui":
+        c = c / 255.0
+    if c.shape[1] == 3:
+        c = np.hstack([c, np.ones((n, 1))])
+    if not np.isfinite(c).all():
+        raise MeshError(f"{file_name}: a vertex colour is not a finite number")
+    # vertex colours are sRGB-encoded in files; we keep them linear
+    c[:, :3] = srgb_to_linear(np.clip(c[:, :3], 0.0, 1.0))
+    return c
+
+
+def gather_parts(loaded, file_name: str, failed=()) -> dict:
+    """Every triangle mesh of what ``trimesh.load`` returned, as one mesh.
+
+    Returns a dict with ``geometries`` (list of ``(trimesh.Trimesh, transform
+    (4, 4) or None)`` in scene order), ``uvs`` ((n, 2) float64 or None),
+    ``colors`` ((n, 4) float64 linear or None) and ``parts`` (list of
+    :class:`Part` whose ``start``/``count`` index the concatenated faces).
+    A part without UVs in a multi-part mesh with UVs gets UV (0, 0); one
+    without colours gets white.  ``failed``: the resolver's ``(name, reason)``
+    list, turned into :class:`AssetWarning`\\ s naming the file and material.
+    """
+    import trimesh
+
+    if isinstance(loaded, trimesh.Scene):
+        items = []
+        order = {key: i for i, key in enumerate(loaded.geometry)}  # the file's order
+        nodes = sorted(loaded.graph.nodes_geometry, key=lambda nd: (order.get(loaded.graph[nd][1], 0), str(nd)))
+        for node in nodes:
+            transform, geom_name = loaded.graph[node]
+            geom = loaded.geometry.get(geom_name)
+            if isinstance(geom, trimesh.Trimesh):
+                t = None if np.allclose(transform, np.eye(4)) else np.asarray(transform, dtype=np.float64)
+                items.append((str(node), geom, t))
+        if not items:
+            raise MeshError(f"{file_name}: the file holds no triangle mesh; expected at least one")
+    elif isinstance(loaded, trimesh.Trimesh):
+        items = [("", loaded, None)]
+    else:
+        raise MeshError(f"{file_name}: the file holds a {type(loaded).__name__} without faces; expected a triangle mesh")
+
+    uvs, colors, parts, geometries = [], [], [], []
+    start = 0
+    for node, geom, transform in items:
+        n = len(geom.vertices)
+        faces = np.asarray(getattr(geom, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+        uvs.append(_uvs_of(geom, n, file_name))
+        colors.append(_colors_of(geom, n, file_name))
+        fallback = node or Path(file_name).stem
+        material = _material_of(geom.visual, fallback)
+        part_name = node or material.name or fallback
+        parts.append(Part(name=part_name, start=start, count=len(faces), material=material))
+        geometries.append((geom, transform))
+        start += len(faces)
+    names = [p.name for p in parts]
+    if len(set(names)) != len(names):  # unique part names: suffix repeats
+        seen: dict[str, int] = {}
+        renamed = []
+        for p in parts:
+            k = seen.get(p.name, 0)
+            seen[p.name] = k + 1
+            renamed.append(p if k == 0 else Part(f"{p.name}.{k}", p.start, p.count, p.material))
+        parts = renamed
+    sizes = [len(g.vertices) for g, _ in geometries]
+    any_uv = any(u is not None for u in uvs)
+    any_color = any(c is not None for c in colors)
+    uv_all = np.concatenate([u if u is not None else np.zeros((k, 2)) for u, k in zip(uvs, sizes)]) if any_uv else None
+    col_all = np.concatenate([c if c is not None else np.ones((k, 4)) for c, k in zip(colors, sizes)]) if any_color else None
+    for texture, reason in failed:
+        untextured = sorted({p.material.name for p in parts if p.material.texture is None})
+        warnings.warn(AssetWarning(
+            f"{file_name}: {texture!r} (texture or material file) {reason}; material {', '.join(repr(m) for m in untextured) or '?'} "
+            "drawn with its base colour"), stacklevel=3)
+    return {"geometries": geometries, "uvs": uv_all, "colors": col_all, "parts": parts}
+
+
+# --------------------------------------------------------------------- tangents
+
+
+def compute_tangents(positions, normals, uvs, faces) -> np.ndarray:
+    """Per-vertex tangents for normal mapping, the usual per-triangle
+    accumulation (Lengyel): ``(n, 4) float32``, xyz unit and orthogonal to the
+    normal, w = ±1 the handedness of the UV frame (bitangent = w · n × t).
+
+    positions, normals : (n, 3) float; uvs : (n, 2) float; faces : (m, 3) int.
+    A vertex whose UVs are degenerate gets any unit vector orthogonal to its normal.
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    nrm = np.asarray(normals, dtype=np.float64)
+    uv = np.asarray(uvs, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64)
+    e1, e2 = p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]]
+    d1, d2 = uv[f[:, 1]] - uv[f[:, 0]], uv[f[:, 2]] - uv[f[:, 0]]
+    det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+    r = np.where(np.abs(det) > 1e-20, 1.0 / np.where(det == 0, 1.0, det), 0.0)
+    sdir = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) * r[:, None]
+    tdir = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) * r[:, None]
+    idx = f.ravel()
+    n = len(p)
+    tan = np.stack([np.bincount(idx, np.repeat(sdir[:, k], 3), minlength=n) for k in range(3)], axis=1)
+    bit = np.stack([np.bincount(idx, np.repeat(tdir[:, k], 3), minlength=n) for k in range(3)], axis=1)
+    # Gram-Schmidt against the normal
+    t = tan - nrm * np.einsum("ij,ij->i", nrm, tan)[:, None]
+    length = np.linalg.norm(t, axis=1)
+    bad = length < 1e-12
+    if bad.any():  # any vector orthogonal to the normal
+        helper = np.where(np.abs(nrm[bad, 0:1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+        alt = np.cross(nrm[bad], helper)
+        t[bad] = alt
+        length[bad] = np.linalg.norm(alt, axis=1)
+    t /= np.maximum(length, 1e-30)[:, None]
+    w = np.where(np.einsum("ij,ij->i", np.cross(nrm, t), bit) < 0.0, -1.0, 1.0)
+    return np.hstack([t, w[:, None]]).astype(np.float32)
