@@ -37,7 +37,8 @@ _LAZY = {
     "ControlAxis": "core.axis",
     "Camera": "gl.camera", "frame_instances": "gl.camera", "instance_bounds": "gl.camera",
     "Offscreen": "gl.context", "create_context": "gl.context",
-    "GroundPlane": "gl.ground",
+    "GroundPlane": "gl.ground", "ShadowMap": "gl.shadow",
+    "Material": "core.material", "Part": "core.material", "AssetWarning": "core.material",
     "render_image": "gl.image", "save_png": "gl.image",
     "BUNDLED_MESHES": "core.mesh", "BaseMesh": "core.mesh", "bundled_mesh_path": "core.mesh", "load_mesh": "core.mesh",
     "FIELDS": "core.params", "as_params": "core.params", "make_params": "core.params", "read_param_file": "core.params",
@@ -77,7 +78,7 @@ def __dir__():
 
 __all__ = [
     "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
-    "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
+    "FIELDS", "GroundPlane", "ShadowMap", "Material", "Part", "AssetWarning", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds", "load_mesh", "make_params", "random_params",
     "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "write_params",

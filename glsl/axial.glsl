@@ -27,6 +27,14 @@ vec3 axial_embed(vec2 w, int axis) {
     return vec3(w.x, w.y, 0.0);
 }
 
+// The slope D'(t) of the displacement: degree-3 Bernstein weights.
+vec2 axial_slope(float t, AxialInstance inst) {
+    float s = 1.0 - t;
+    vec2 d1 = inst.d12.xy, d2 = inst.d12.zw, d3 = inst.d34.xy, d4 = inst.d34.zw, d5 = inst.d5;
+    return 4.0 * ((s * s * s) * (d2 - d1) + (3.0 * t * s * s) * (d3 - d2)
+                + (3.0 * t * t * s) * (d4 - d3) + (t * t * t) * (d5 - d4));
+}
+
 // Bend one model-space vertex and its unit normal along the instance's
 // 4th-degree Bezier control axis.
 void axial_bend(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance inst,
@@ -37,9 +45,7 @@ void axial_bend(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance ins
     // degree-4 Bernstein weights: the displacement D(t)
     vec2 disp = (s * s * s * s) * d1 + (4.0 * t * s * s * s) * d2 + (6.0 * t * t * s * s) * d3
               + (4.0 * t * t * t * s) * d4 + (t * t * t * t) * d5;
-    // degree-3 Bernstein weights: the slope D'(t)
-    vec2 slope = 4.0 * ((s * s * s) * (d2 - d1) + (3.0 * t * s * s) * (d3 - d2)
-                      + (3.0 * t * t * s) * (d4 - d3) + (t * t * t) * (d5 - d4));
+    vec2 slope = axial_slope(t, inst);
     v_out = v + axial_embed(disp, axis);
     n_out = n;
     n_out[axis] -= dot(axial_embed(slope, axis), n) / len;
@@ -66,4 +72,17 @@ void axial_world(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance in
     mat3 rot = axial_rotation(inst.angles);
     w_out = rot * bent_v + inst.position;
     wn_out = rot * bent_n;
+}
+
+// A surface tangent (normal mapping) through the same map: a tangent is a
+// differential of the position, so it transforms by the Jacobian
+// J = I + E(D'(t)) e_a^T / len of the bend (the normal above by cof(J)),
+// then by R.  Returns the unit world tangent.
+vec3 axial_world_tangent(vec3 v, vec3 tangent, int axis, float lo, float len, AxialInstance inst) {
+    vec3 bent = tangent;
+#ifndef AXIAL_NO_BEND
+    float t = clamp((v[axis] - lo) / len, 0.0, 1.0);
+    bent += axial_embed(axial_slope(t, inst), axis) * (tangent[axis] / len);
+#endif
+    return normalize(axial_rotation(inst.angles) * bent);
 }

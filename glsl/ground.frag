@@ -2,6 +2,9 @@
 // a faint grid every u_cell world units, fading into the background colour
 // towards the edge of the square so it has no hard horizon.
 #include "lighting.glsl"
+#ifdef AXIAL_SHADOW
+#include "shadow.glsl"
+#endif
 
 uniform vec3 u_color;       // ground colour (linear RGB)
 uniform vec3 u_background;  // colour it fades to (sRGB, as the framebuffer is cleared)
@@ -27,7 +30,11 @@ void main() {
         vec2 line = 1.0 - clamp(abs(fract(g - 0.5) - 0.5) / max(w, 1e-6), 0.0, 1.0);
         base *= 1.0 - 0.12 * max(line.x, line.y) * (1.0 - clamp(max(w.x, w.y) * 2.0, 0.0, 1.0));
     }
-    vec3 lit = to_srgb(shade_surface(base, u_up, to_eye, u_light_dir, u_up, u_ambient, 0.0));
+    float sun = 1.0;
+#ifdef AXIAL_SHADOW
+    sun = shadow_visibility(v_world, u_up, u_light_dir);
+#endif
+    vec3 lit = to_srgb(shade_surface_shadowed(base, u_up, to_eye, u_light_dir, u_up, u_ambient, 0.0, sun));
     float fade = smoothstep(0.55, 1.0, length(v_plane));
     f_color = vec4(mix(lit, u_background, fade), 1.0);
 }

@@ -25,6 +25,17 @@ in vec3 i_tint;             // optional second instanced buffer: the instance's 
 flat out vec3 v_tint;
 #endif
 
+#ifdef AXIAL_MATERIAL
+// the mesh's appearance (gl/material.py): texture coordinates, linear vertex
+// colour and tangent (xyz, handedness w); they do not bend, the tangent does
+in vec2 in_uv;
+in vec4 in_color;
+in vec4 in_tangent;
+out vec2 v_uv;
+out vec4 v_color;
+out vec4 v_tangent;         // world tangent (by J, then R) + handedness
+#endif
+
 out vec3 v_world;           // world position
 out vec3 v_normal;          // world normal (analytic)
 flat out float v_shade;     // per-instance brightness variation, 0.85 .. 1.15
@@ -43,6 +54,11 @@ void main() {
     AxialInstance inst = AxialInstance(i_d12, i_d34, i_d5, i_position, i_angles);
 #endif
     axial_world(in_position, in_normal, u_axis, u_lo, u_len, inst, v_world, v_normal);
+#ifdef AXIAL_MATERIAL
+    v_uv = in_uv;
+    v_color = in_color;
+    v_tangent = vec4(axial_world_tangent(in_position, in_tangent.xyz, u_axis, u_lo, u_len, inst), in_tangent.w);
+#endif
     v_shade = 0.85 + 0.3 * instance_hash(gl_InstanceID);
 #ifdef AXIAL_TINT
     v_tint = i_tint;

@@ -206,8 +206,11 @@ def _material_of(visual, fallback_name: str) -> Material:
         if texture is not None and (texture == texture[0, 0]).all():
             # one colour (trimesh's stand-in for "no material"): the base colour says the same
             px = texture[0, 0].astype(np.float64) / 255.0
-            color = np.concatenate([srgb_to_linear(px[:3]), px[3:4]])
             texture = None
+            if np.abs(px * 255 - np.asarray(trimesh.visual.DEFAULT_COLOR, dtype=np.float64)).max() > 3.0:
+                color = np.concatenate([srgb_to_linear(px[:3]), px[3:4]])
+            else:  # no material at all
+                color = np.ones(4)
         # a texture replaces the diffuse colour of the .mtl (what viewers show)
         if texture is not None:
             color = np.array([1.0, 1.0, 1.0, color[3]])

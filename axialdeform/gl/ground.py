@@ -49,6 +49,7 @@ class GroundPlane:
         self.radius = 10.0
         self._released = False
         self.program = build_program(ctx, "ground.vert", "ground.frag")
+        self._shadowed = None  # (program, vao) receiving a ShadowMap, built on first use
         try:
             self.vao = ctx.vertex_array(self.program, [])
         except BaseException:
@@ -84,11 +85,13 @@ class GroundPlane:
         return self
 
     def render(self, view, projection, *, background=(0.93, 0.94, 0.96), light_dir=(0.35, 0.85, 0.4),
-               ambient: float = 0.35) -> None:
+               ambient: float = 0.35, shadow=None) -> None:
         """Draw the plane into the bound framebuffer (depth test on).
 
         view, projection : (4, 4) pyrr-layout matrices; background : the
-        framebuffer's clear colour (sRGB) that the plane fades into.
+        framebuffer's clear colour (sRGB) that the plane fades into;
+        shadow : a drawn :class:`~axialdeform.gl.shadow.ShadowMap` (the
+        instances' shadows on the ground), or None.
         """
         import moderngl
 
@@ -98,7 +101,13 @@ class GroundPlane:
         a = AXIS_NAMES.index(self.up)
         axis_u, axis_v = (np.eye(3)[i] for i in range(3) if i != a)
         light = np.asarray(light_dir, dtype=np.float64)
-        prog = self.program
+        prog, vao = self.program, self.vao
+        if shadow is not None:
+            if self._shadowed is None:
+                sp = build_program(self.ctx, "ground.vert", "ground.frag", defines={"AXIAL_SHADOW": 1})
+                self._shadowed = (sp, self.ctx.vertex_array(sp, []))
+            prog, vao = self._shadowed
+            shadow.bind(prog)
         prog["u_view"].write(view.tobytes())
         prog["u_proj"].write(np.asarray(projection, dtype=np.float32).reshape(4, 4).tobytes())
         uniforms = {
@@ -112,13 +121,16 @@ class GroundPlane:
             if name in prog:
                 prog[name].value = value
         self.ctx.enable(moderngl.DEPTH_TEST)
-        self.vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
+        vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
 
     def release(self) -> None:
         """Free the GL objects; safe to call twice."""
         if self._released:
             return
         self._released = True
+        if self._shadowed is not None:
+            self._shadowed[1].release()
+            self._shadowed[0].release()
         self.vao.release()
         self.program.release()
 

@@ -21,6 +21,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers
+from .material import AppearanceBuffer, GpuMaterials
 from .context import bind_framebuffer, release_framebuffer
 from ..core.errors import AxialDeformError, ParamError
 from .shaders import build_program
@@ -63,13 +64,30 @@ class AxialRenderer:
         software rasterizer.  Open meshes (a leaf) stay two-sided.  Culled
         draws set ``ctx.front_face`` (``"ccw"``; ``"cw"`` for a mirroring
         camera, such as a reflection pass) and ``ctx.cull_face = "back"``,
-        and leave ``CULL_FACE`` disabled afterwards.
+        and leave ``CULL_FACE`` disabled afterwards.  A double-sided
+        material's part is never culled.
+    parts : sequence of str, optional
+        Names of the base mesh's parts to draw (all by default); see
+        :attr:`BaseMesh.parts`.  Every part is one instanced draw call over
+        the same instance buffer, and all share the mesh's ONE control axis.
+
+    A mesh with UVs, vertex colours, several parts or a material
+    (:attr:`BaseMesh.has_appearance`) is drawn with ``AXIAL_MATERIAL``:
+    textures (sRGB), vertex colours, ``MASK`` cut-outs, ``BLEND`` parts after
+    the opaque ones (unsorted, without depth writes), normal maps and
+    two-sided lighting where the material is double-sided.
     """
 
     def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
-                 quantized: bool = False, cull_back_faces: bool | None = None):
+                 quantized: bool = False, cull_back_faces: bool | None = None, parts=None):
         self.ctx = ctx
         self.mesh = mesh
+        self.parts = tuple(mesh.parts) if parts is None else tuple(
+            mesh.part(n) for n in ([parts] if isinstance(parts, str) else parts))
+        if not self.parts:
+            raise AxialDeformError(f"{mesh.name}: parts: expected at least one part name, found none")
+        # opaque and cut-out parts first, blended ones last (unsorted)
+        self._draw_order = sorted(self.parts, key=lambda p: p.material.alpha_mode == "BLEND")
         self.bend = bend
         self.cull_back_faces = bool(mesh.is_volume) if cull_back_faces is None else bool(cull_back_faces)
         self.quantized = bool(quantized)
@@ -78,14 +96,28 @@ class AxialRenderer:
         defines = {} if bend else {"AXIAL_NO_BEND": 1}
         if self.quantized:
             defines["AXIAL_QUANTIZED"] = 1
+        if mesh.has_appearance:
+            defines["AXIAL_MATERIAL"] = 1
         self._defines = defines
+        self.appearance = None
+        self.materials = None
+        self._variants = {}
         try:
             self.program = build_program(ctx, "scene.vert", "scene.frag", defines=defines)
             self._objects.append(self.program)
             self.mesh_buffers = MeshBuffers(ctx, mesh)
+            if mesh.has_appearance:
+                self.appearance = AppearanceBuffer(ctx, mesh)
+                self.materials = GpuMaterials(ctx, mesh)
+            self._part_edges = None
+            if len(self.parts) != len(mesh.parts):  # wireframe of the chosen parts only
+                faces = np.concatenate([mesh.faces[p.start:p.start + p.count] for p in self.parts])
+                e = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0).astype("u4")
+                self._part_edges = (ctx.buffer(e.tobytes()), int(e.size))
+                self._objects.append(self._part_edges[0])
             self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
-            self._vao_edges = self._vertex_array(self.program, self.mesh_buffers.edges)
+            self._vao_edges = self._vertex_array(self.program, self._edge_buffer)
         except BaseException:
             self.release()
             raise
@@ -97,8 +129,18 @@ class AxialRenderer:
         self.line_color = (0.12, 0.14, 0.18)
 
     # ------------------------------------------------------------ plumbing
+    @property
+    def _edge_buffer(self):
+        return self.mesh_buffers.edges if self._part_edges is None else self._part_edges[0]
+
+    @property
+    def _edge_count(self) -> int:
+        return self.mesh_buffers.edge_indices if self._part_edges is None else self._part_edges[1]
+
     def _vertex_array(self, program, index_buffer, instance_buffer=None, extra=()):
         content = [self.mesh_buffers.content(program), (instance_buffer or self.instances).content(program), *extra]
+        if self.appearance is not None:
+            content.append(self.appearance.content(program))
         vao = self.ctx.vertex_array(program, content, index_buffer=index_buffer, index_element_size=4)
         self._objects.append(vao)
         return vao
@@ -176,7 +218,7 @@ class AxialRenderer:
             tint = (buffer, "3f/i", "i_tint")
             self._set_axis_uniforms(prog)
             self._tint = (prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=[tint]),
-                          self._vertex_array(prog, self.mesh_buffers.edges, extra=[tint]), buffer)
+                          self._vertex_array(prog, self._edge_buffer, extra=[tint]), buffer)
         buffer = self._tint[3]
         if values.nbytes > buffer.size:
             buffer.orphan(values.nbytes)
@@ -185,13 +227,64 @@ class AxialRenderer:
         self._tint_count = len(values)
 
     # ------------------------------------------------------------ drawing
+    def _variant(self, tinted: bool, shadowed: bool):
+        """(program, triangles vao, edges vao) of the plain, tinted and/or shadow-receiving program."""
+        if not shadowed:
+            if tinted:
+                return self._tint[0], self._tint[1], self._tint[2]
+            return self.program, self._vao_triangles, self._vao_edges
+        key = (tinted, shadowed)
+        if key not in self._variants:
+            defines = {**self._defines, "AXIAL_SHADOW": 1}
+            extra = []
+            if tinted:
+                defines["AXIAL_TINT"] = 1
+                extra = [(self._tint[3], "3f/i", "i_tint")]
+            prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
+            self._objects.append(prog)
+            self._set_axis_uniforms(prog)
+            self._variants[key] = (prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=extra),
+                                   self._vertex_array(prog, self._edge_buffer, extra=extra))
+        return self._variants[key]
+
+    def _draw_parts(self, prog, vao, view, projection, *, depth_only: bool = False) -> None:
+        """One instanced draw per part: opaque and cut-out parts, then blended ones."""
+        import moderngl
+
+        fbo = self.ctx.fbo
+        for part in self._draw_order:
+            if part.count == 0:
+                continue
+            material = part.material
+            if self.materials is not None:
+                self.materials.bind(prog, material, self.color)
+            blend = material.alpha_mode == "BLEND" and not depth_only
+            if blend:
+                self.ctx.enable(moderngl.BLEND)
+                self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
+                fbo.depth_mask = False
+            try:
+                with self.culling(view, projection, enabled=not material.double_sided):
+                    vao.render(moderngl.TRIANGLES, vertices=part.count * 3, first=part.start * 3, instances=self.count)
+            finally:
+                if blend:
+                    fbo.depth_mask = True
+                    self.ctx.disable(moderngl.BLEND)
+
     def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
-               color=None, line_color=None, ambient: float = 0.35) -> None:
-        """Draw every instance into the currently bound framebuffer, in one draw call.
+               color=None, line_color=None, ambient: float = 0.35, shadow=None, hidden_line: bool = False) -> None:
+        """Draw every instance into the currently bound framebuffer: one
+        instanced draw call per part (one for a single-part mesh).
 
         view, projection : (4, 4) pyrr-layout matrices.
         mode : ``"solid"`` (analytic normals), ``"flat"`` (face normals of the
         deformed triangles) or ``"wireframe"`` (the mesh's edges as lines).
+        shadow : a :class:`~axialdeform.gl.shadow.ShadowMap` already drawn
+        (:meth:`render_shadow`) from the same ``light_dir``: the sun is
+        shadowed by the instances (the ambient is not).
+        hidden_line : in wireframe mode, first fill the depth buffer with the
+        triangles (no colour), so only the lines of the front-most surface
+        show (one more instanced draw per part).
         """
         import moderngl
 
@@ -204,8 +297,8 @@ class AxialRenderer:
         if tinted and self._tint_count != self.count:
             raise ParamError(f"tint: {self._tint_count} colours for {self.count} instances; "
                              "call set_tint with one colour per instance (or None)")
-        prog = self._tint[0] if tinted else self.program
-        vao_edges, vao_triangles = (self._tint[2], self._tint[1]) if tinted else (self._vao_edges, self._vao_triangles)
+        shadowed = shadow is not None and mode != "wireframe"
+        prog, vao_triangles, vao_edges = self._variant(tinted, shadowed)
         prog["u_view"].write(view.tobytes())
         prog["u_proj"].write(projection.tobytes())
         uniforms = {
@@ -220,17 +313,66 @@ class AxialRenderer:
         for name, value in uniforms.items():
             if name in prog:
                 prog[name].value = value
+        if shadowed:
+            shadow.bind(prog)
         if self.count == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
         if mode == "wireframe":  # lines are never culled
-            vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
+            if hidden_line:
+                self._depth_prepass(prog, vao_triangles, view, projection)
+            try:
+                vao_edges.render(moderngl.LINES, vertices=self._edge_count, instances=self.count)
+            finally:
+                self.ctx.depth_func = "<"
             return
-        with self.culling(view, projection):
-            vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
+        if color is not None and self.materials is not None:
+            keep, self.color = self.color, tuple(color)
+            try:
+                self._draw_parts(prog, vao_triangles, view, projection)
+            finally:
+                self.color = keep
+            return
+        self._draw_parts(prog, vao_triangles, view, projection)
+
+    def _depth_prepass(self, prog, vao, view, projection) -> None:
+        """Triangles into the depth buffer only (colour kept by a (0, 1) blend),
+        pushed back a little so the lines on them pass the ``<=`` test."""
+        import moderngl
+
+        prog["u_mode"].value = 0
+        self.ctx.enable(moderngl.BLEND)
+        self.ctx.blend_func = moderngl.ZERO, moderngl.ONE
+        self.ctx.polygon_offset = 1.0, 1.0
+        try:
+            self._draw_parts(prog, vao, view, projection, depth_only=True)
+        finally:
+            self.ctx.polygon_offset = 0.0, 0.0
+            self.ctx.disable(moderngl.BLEND)
+            self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
+            prog["u_mode"].value = 2
+        self.ctx.depth_func = "<="
+
+    def render_shadow(self, shadow) -> None:
+        """Draw every instance into ``shadow`` (a :class:`~axialdeform.gl.shadow.ShadowMap`,
+        fitted with :meth:`ShadowMap.fit`): one instanced depth draw per part;
+        ``MASK`` cut-outs cast cut-out shadows.  Restores the caller's framebuffer."""
+        self._check()
+        prog, vao, _ = self._variant(False, False)
+        with shadow.target():
+            if self.count == 0:
+                return
+            prog["u_view"].write(np.asarray(shadow.view, dtype=np.float32).tobytes())
+            prog["u_proj"].write(np.asarray(shadow.projection, dtype=np.float32).tobytes())
+            if "u_mode" in prog:
+                prog["u_mode"].value = 0
+            import moderngl
+
+            self.ctx.enable(moderngl.DEPTH_TEST)
+            self._draw_parts(prog, vao, None, None, depth_only=True)
 
     @contextmanager
-    def culling(self, view=None, projection=None):
+    def culling(self, view=None, projection=None, enabled: bool = True):
         """The face-culling state of this renderer's triangle draws, for code
         that draws the same mesh with its own vertex arrays (a no-op when
         :attr:`cull_back_faces` is False).
@@ -238,7 +380,7 @@ class AxialRenderer:
         With ``view`` and ``projection`` a mirroring camera (a reflection
         pass: the two matrices together turn handedness) swaps which winding
         faces the camera, as three.js does for mirrored objects."""
-        if not self.cull_back_faces:
+        if not self.cull_back_faces or not enabled:
             yield
             return
         import moderngl
@@ -319,8 +461,8 @@ class AxialRenderer:
         for obj in reversed(self._objects):
             obj.release()
         self._objects.clear()
-        for holder in ("mesh_buffers", "instances"):
-            if hasattr(self, holder):
+        for holder in ("mesh_buffers", "instances", "appearance", "materials"):
+            if getattr(self, holder, None) is not None:
                 getattr(self, holder).release()
 
     def __enter__(self):

@@ -1,0 +1,132 @@
+"""A shadow map from the key light (the sun of ``glsl/lighting.glsl``).
+
+::
+
+    shadow = ad.ShadowMap(ctx).fit(mesh, params, light_dir)
+    renderer.render_shadow(shadow)               # instances -> depth map, one draw per part
+    target.use(background)
+    ground.render(view, proj, shadow=shadow)     # instances shadow the ground ...
+    renderer.render(view, proj, shadow=shadow)   # ... and each other
+
+An orthographic camera looks along ``-light_dir`` at a box around every
+instance's bounding sphere; ``glsl/shadow.glsl`` samples the depth texture
+with hardware comparison and a 3x3 filter.  Holds its ``ctx``; ``release()``
+is safe twice; nothing is released from ``__del__``.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+import numpy as np
+
+from ..core.errors import AxialDeformError
+from .context import bind_framebuffer, release_framebuffer
+
+__all__ = ["ShadowMap", "SHADOW_UNIT"]
+
+#: texture unit of the shadow map (the material textures use 1 and 2)
+SHADOW_UNIT = 3
+
+
+class ShadowMap:
+    """A ``size`` x ``size`` depth texture and the light's view/projection.
+
+    Attributes
+    ----------
+    view, projection : (4, 4) float32
+        pyrr-layout matrices of the light camera (set by :meth:`fit`).
+    """
+
+    def __init__(self, ctx, size: int = 2048):
+        self.ctx = ctx
+        limit = int(ctx.info.get("GL_MAX_TEXTURE_SIZE", 2048))
+        self.size = int(max(16, min(int(size), limit)))
+        self.view = np.eye(4, dtype=np.float32)
+        self.projection = np.eye(4, dtype=np.float32)
+        self.offset = 0.0
+        self._released = False
+        self.texture = ctx.depth_texture((self.size, self.size))
+        try:
+            self.texture.compare_func = "<="
+            self.texture.repeat_x = False
+            self.texture.repeat_y = False
+            self.fbo = ctx.framebuffer(depth_attachment=self.texture)
+        except BaseException:
+            self.texture.release()
+            raise
+
+    def fit(self, mesh, params, light_dir=(0.35, 0.85, 0.4), *, extra=None) -> "ShadowMap":
+        """Aim the light camera at every instance (their bounding spheres);
+        ``extra``: (k, 4) more spheres ``x, y, z, r`` to keep inside (a ground).  Returns self."""
+        import pyrr
+
+        from .camera import instance_bounds
+
+        centers, radii = instance_bounds(mesh, params)
+        spheres = np.hstack([centers, radii[:, None]]) if len(centers) else np.zeros((0, 4))
+        if extra is not None:
+            spheres = np.vstack([spheres, np.asarray(extra, dtype=np.float64).reshape(-1, 4)])
+        if len(spheres) == 0:
+            return self
+        light = np.asarray(light_dir, dtype=np.float64)
+        light = light / max(np.linalg.norm(light), 1e-12)
+        lo = (spheres[:, :3] - spheres[:, 3:]).min(axis=0)
+        hi = (spheres[:, :3] + spheres[:, 3:]).max(axis=0)
+        center = (lo + hi) / 2
+        radius = float(np.linalg.norm(hi - lo) / 2) or 1.0
+        helper = (0.0, 1.0, 0.0) if abs(light[1]) < 0.95 else (1.0, 0.0, 0.0)
+        eye = center + light * radius * 2.0
+        self.view = pyrr.matrix44.create_look_at(eye, center, helper, dtype=np.float32)
+        self.projection = pyrr.matrix44.create_orthogonal_projection(
+            -radius, radius, -radius, radius, radius * 0.5, radius * 3.5, dtype=np.float32)
+        # normal offset: about two shadow texels in world units
+        self.offset = 2.0 * (2.0 * radius / self.size)
+        return self
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """(4, 4) float32 world -> light clip, pyrr layout (``view @ projection``)."""
+        return (np.asarray(self.view, np.float64) @ np.asarray(self.projection, np.float64)).astype(np.float32)
+
+    @contextmanager
+    def target(self):
+        """Bind the depth framebuffer (cleared) for the depth pass; the caller's
+        framebuffer and viewport come back afterwards."""
+        if self._released:
+            raise AxialDeformError("this ShadowMap was released; create a new one")
+        previous, viewport = self.ctx.fbo, self.ctx.viewport
+        self.fbo.use()
+        self.ctx.viewport = (0, 0, self.size, self.size)
+        self.fbo.clear(depth=1.0)
+        try:
+            yield
+        finally:
+            bind_framebuffer(self.ctx, previous)
+            self.ctx.viewport = viewport
+
+    def bind(self, program) -> None:
+        """The uniforms of ``glsl/shadow.glsl`` and the texture on :data:`SHADOW_UNIT`."""
+        if self._released:
+            raise AxialDeformError("this ShadowMap was released; create a new one")
+        self.texture.use(SHADOW_UNIT)
+        values = {"u_shadow_map": SHADOW_UNIT, "u_shadow_offset": float(self.offset),
+                  "u_shadow_texel": 1.0 / self.size}
+        for name, value in values.items():
+            if name in program:
+                program[name].value = value
+        if "u_light_matrix" in program:
+            program["u_light_matrix"].write(self.matrix.tobytes())
+
+    def release(self) -> None:
+        if self._released:
+            return
+        self._released = True
+        release_framebuffer(self.ctx, self.fbo)
+        self.texture.release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
