@@ -119,3 +119,28 @@ def deform(
         if progress is not None:
             progress.update(len(block))
     return out_pos, out_nrm
+
+
+def deform_tangents(axis: ControlAxis, positions: np.ndarray, tangents: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """World-space unit tangents of every instance (normal mapping), the CPU
+    twin of ``axial_world_tangent`` in ``glsl/axial.glsl``.
+
+    A tangent is a differential of the position, so it moves by the bend's
+    Jacobian ``J = I + E(D'(t)) e_a^T / L`` (the normal by ``cof(J)``), then by ``R``.
+
+    positions : (v, 3) float; tangents : (v, 3) or (v, 4) float (w, the
+    handedness, is dropped: it does not change); params : (n, 16) float.
+    Returns (n, v, 3) float32.
+    """
+    params = as_params(params).astype(np.float64)
+    p = np.asarray(positions, dtype=np.float64)
+    tan = np.asarray(tangents, dtype=np.float64)[:, :3]
+    _, slope = axis_offsets(axis, axis.parameter(p), params[:, OFFSETS].reshape(-1, 5, 2))
+    i, j = axis.perpendicular
+    bent = np.broadcast_to(tan, slope.shape[:2] + (3,)).copy()
+    along = tan[:, axis.index] / axis.length
+    bent[..., i] += slope[..., 0] * along
+    bent[..., j] += slope[..., 1] * along
+    world = np.einsum("nij,nvj->nvi", rotation_matrices(params[:, ANGLES]), bent)
+    world /= np.maximum(np.linalg.norm(world, axis=-1, keepdims=True), 1e-300)
+    return world.astype(np.float32)

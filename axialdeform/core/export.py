@@ -166,18 +166,100 @@ class _Builder:
         self.gltf.accessors.append(acc)
         return len(self.gltf.accessors) - 1
 
-    def indices(self, mesh) -> int:
-        faces = mesh.faces
+    def indices(self, mesh, faces=None, name: str = "indices") -> int:
+        faces = mesh.faces if faces is None else faces
         small = mesh.vertex_count <= 65535
         data = faces.astype("<u2" if small else "<u4").ravel()
         view = self.view(data, target=_ELEMENT_ARRAY_BUFFER)
-        return self.accessor(view, _UINT16 if small else _UINT32, data.size, "SCALAR", name="indices")
+        return self.accessor(view, _UINT16 if small else _UINT32, data.size, "SCALAR", name=name)
+
+    def appearance(self, mesh) -> "_Appearance":
+        """The mesh's parts (indices + material each) and its UV/colour accessors, written once."""
+        return _Appearance(self, mesh)
 
     def finish(self) -> bytes:
         blob = b"".join(self.chunks)
         self.gltf.buffers.append(self.g.Buffer(byteLength=len(blob)))
         self.gltf.set_binary_blob(blob)
         return b"".join(self.gltf.save_to_bytes())
+
+
+def _png(pixels: np.ndarray) -> bytes:
+    import io
+
+    from PIL import Image
+
+    out = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8), "RGBA").save(out, format="PNG")
+    return out.getvalue()
+
+
+class _Appearance:
+    """glTF objects for a base mesh's appearance: per part an index accessor
+    and a material (base colour factor + embedded PNG texture, alpha mode and
+    cutoff, double-sidedness, normal map), shared TEXCOORD_0 (glTF's ``v``
+    points down the image: ``1 - v``) and COLOR_0 (linear RGBA float)."""
+
+    def __init__(self, b: _Builder, mesh) -> None:
+        g = b.g
+        self.mesh = mesh
+        self.attributes: dict[str, int] = {}
+        if mesh.uvs is not None:
+            uv = np.column_stack([mesh.uvs[:, 0], 1.0 - mesh.uvs[:, 1]]).astype("<f4")
+            self.attributes["TEXCOORD_0"] = b.accessor(b.view(uv, target=_ARRAY_BUFFER), _FLOAT, len(uv), "VEC2",
+                                                       name="TEXCOORD_0")
+        if mesh.colors is not None:
+            col = np.clip(mesh.colors, 0.0, 1.0).astype("<f4")
+            self.attributes["COLOR_0"] = b.accessor(b.view(col, target=_ARRAY_BUFFER), _FLOAT, len(col), "VEC4",
+                                                    name="COLOR_0")
+        self.parts = []  # (name, indices accessor, material index or None)
+        materials: dict[int, int] = {}
+        single = len(mesh.parts) == 1
+        for part in mesh.parts:
+            if part.count == 0:
+                continue
+            m = part.material
+            if id(m) not in materials and not (single and m.is_default):
+                materials[id(m)] = self._material(b, m)
+            faces = mesh.faces[part.start:part.start + part.count]
+            idx = b.indices(mesh, faces, name="indices" if single else f"{part.name}_indices")
+            self.parts.append((part.name, idx, materials.get(id(m))))
+        if b.gltf.textures:
+            b.gltf.samplers = [g.Sampler(magFilter=9729, minFilter=9987, wrapS=10497, wrapT=10497)]
+
+    def _texture(self, b: _Builder, pixels: np.ndarray, name: str) -> int:
+        g = b.g
+        view = b.view(np.frombuffer(_png(pixels), dtype=np.uint8))
+        b.gltf.images.append(g.Image(bufferView=view, mimeType="image/png", name=name))
+        b.gltf.textures.append(g.Texture(sampler=0, source=len(b.gltf.images) - 1, name=name))
+        return len(b.gltf.textures) - 1
+
+    def _material(self, b: _Builder, m) -> int:
+        g = b.g
+        pbr = g.PbrMetallicRoughness(baseColorFactor=[float(c) for c in m.base_color], metallicFactor=0.0,
+                                     roughnessFactor=0.9)
+        if m.texture is not None and self.mesh.uvs is not None:
+            pbr.baseColorTexture = g.TextureInfo(index=self._texture(b, m.texture, f"{m.name}_baseColor"))
+        mat = g.Material(name=m.name, pbrMetallicRoughness=pbr, alphaMode=m.alpha_mode,
+                         doubleSided=bool(m.double_sided))
+        if m.alpha_mode == "MASK":
+            mat.alphaCutoff = float(m.alpha_cutoff)
+        else:
+            mat.alphaCutoff = None
+        if m.normal_texture is not None and self.mesh.uvs is not None and self.mesh.tangents is not None:
+            mat.normalTexture = g.NormalMaterialTexture(index=self._texture(b, m.normal_texture, f"{m.name}_normal"))
+        b.gltf.materials.append(mat)
+        return len(b.gltf.materials) - 1
+
+    def primitives(self, attributes: dict) -> list:
+        import pygltflib as g
+
+        out = []
+        for _name, idx, material in self.parts:
+            out.append(g.Primitive(attributes=g.Attributes(**attributes, **self.attributes), indices=idx,
+                                   material=material, mode=_TRIANGLES))
+        return out
+
 
 
 def _mesh_extras(mesh, count: int, layout: str) -> dict:
@@ -220,18 +302,27 @@ def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
         )
     b = _Builder()
     g = b.g
-    idx = b.indices(mesh)
+    look = b.appearance(mesh)
     # all instances share one bufferView per attribute; each accessor starts at its instance
     pos_view = b.view(positions, target=_ARRAY_BUFFER, stride=12)
     nrm_view = b.view(normals, target=_ARRAY_BUFFER, stride=12)
+    tan_view = None
+    if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
+        from .deform import deform_tangents
+
+        tangents = np.concatenate([deform_tangents(mesh.axis, mesh.positions, mesh.tangents, params),
+                                   np.broadcast_to(mesh.tangents[None, :, 3:], (n, v, 1))], axis=2).astype("<f4")
+        tan_view = b.view(np.ascontiguousarray(tangents), target=_ARRAY_BUFFER, stride=16)
     lo, hi = positions.min(axis=1), positions.max(axis=1)  # (n, 3): bounds per instance, vectorized
     digits = max(6, len(str(max(n - 1, 0))))
     for k in range(n):  # glTF objects per instance (JSON), not per vertex
         name = f"instance_{k:0{digits}d}"
         pa = b.accessor(pos_view, _FLOAT, v, "VEC3", offset=k * v * 12, bounds=np.stack([lo[k], hi[k]]), name=name + "_POSITION")
         na = b.accessor(nrm_view, _FLOAT, v, "VEC3", offset=k * v * 12, name=name + "_NORMAL")
-        b.gltf.meshes.append(g.Mesh(name=name, primitives=[
-            g.Primitive(attributes=g.Attributes(POSITION=pa, NORMAL=na), indices=idx, mode=_TRIANGLES)]))
+        attributes = {"POSITION": pa, "NORMAL": na}
+        if tan_view is not None:
+            attributes["TANGENT"] = b.accessor(tan_view, _FLOAT, v, "VEC4", offset=k * v * 16, name=name + "_TANGENT")
+        b.gltf.meshes.append(g.Mesh(name=name, primitives=look.primitives(attributes)))
         b.gltf.nodes.append(g.Node(name=name, mesh=k, extras={EXTRAS_KEY: {"instance": k}}))
     b.gltf.scenes.append(g.Scene(name="axialdeform baked", nodes=list(range(n)),
                                  extras={EXTRAS_KEY: _mesh_extras(mesh, n, "baked")}))
@@ -272,9 +363,12 @@ def encode_instanced(mesh, params) -> bytes:
                      bounds=mesh.positions, name="base_POSITION")
     nrm = b.accessor(b.view(mesh.normals.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
                      name="base_NORMAL")
-    idx = b.indices(mesh)
-    b.gltf.meshes.append(g.Mesh(name="base", primitives=[
-        g.Primitive(attributes=g.Attributes(POSITION=pos, NORMAL=nrm), indices=idx, mode=_TRIANGLES)]))
+    look = b.appearance(mesh)
+    attributes = {"POSITION": pos, "NORMAL": nrm}
+    if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
+        attributes["TANGENT"] = b.accessor(b.view(mesh.tangents.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT,
+                                           mesh.vertex_count, "VEC4", name="base_TANGENT")
+    b.gltf.meshes.append(g.Mesh(name="base", primitives=look.primitives(attributes)))
     # per-instance data: no bufferView target (they are not vertex attributes)
     columns = {
         "TRANSLATION": ("VEC3", params[:, POSITION]),
@@ -415,13 +509,17 @@ def read_instanced_glb(path: str | os.PathLike):
         params[:, ANGLES] = angles_from_matrices(matrices_from_quaternions(cols["ROTATION"]))
 
     mesh_def = gltf.meshes[node.mesh]
-    if len(mesh_def.primitives) != 1:
-        raise GltfError(f"{where}: mesh {node.mesh}: expected one primitive, found {len(mesh_def.primitives)}")
+    if not mesh_def.primitives:
+        raise GltfError(f"{where}: mesh {node.mesh}: expected at least one primitive, found none")
     prim = mesh_def.primitives[0]
-    if prim.mode not in (None, _TRIANGLES) or prim.indices is None:
-        raise GltfError(f"{where}: mesh {node.mesh}: expected indexed triangles (mode 4)")
+    for other in mesh_def.primitives:  # one primitive per part, all over the same vertices
+        if other.mode not in (None, _TRIANGLES) or other.indices is None:
+            raise GltfError(f"{where}: mesh {node.mesh}: expected indexed triangles (mode 4)")
+        if other.attributes.POSITION != prim.attributes.POSITION:
+            raise GltfError(f"{where}: mesh {node.mesh}: expected every primitive to share one POSITION accessor")
     positions = _read_accessor(gltf, blob, prim.attributes.POSITION, "POSITION", where)
-    faces = _read_accessor(gltf, blob, prim.indices, "indices", where).reshape(-1, 3)
+    faces = np.concatenate([_read_accessor(gltf, blob, q.indices, "indices", where).reshape(-1, 3)
+                            for q in mesh_def.primitives])
     if prim.attributes.NORMAL is not None:
         normals = _read_accessor(gltf, blob, prim.attributes.NORMAL, "NORMAL", where)
         from_file = True
