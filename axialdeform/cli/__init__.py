@@ -171,7 +171,9 @@ def cmd_bake(args) -> None:
     else:
         with _progress(len(positions), "writing meshes") as bar:
             files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar)
-        print(f"wrote {len(files)} {args.format} files to {out}/ ({args.engine})")
+        meshes = [f for f in files if f.suffix == "." + args.format]
+        beside = f" + {len(files) - len(meshes)} material/texture files" if len(files) > len(meshes) else ""
+        print(f"wrote {len(meshes)} {args.format} files{beside} to {out}/ ({args.engine})")
 
 
 def cmd_info(args) -> int | None:

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_path
+from .atomic import atomic_path, atomic_write_bytes
+from .material import to_trimesh_with_appearance
 from .deform import deform
 from .errors import AxialDeformError
 
@@ -57,11 +58,31 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
     folder.mkdir(parents=True, exist_ok=True)
     digits = max(6, len(str(max(len(positions) - 1, 0))))
     written = []
+    plain = not mesh.has_appearance
+    shared_written = False
     for i in range(len(positions)):  # one file per instance: file I/O, not maths
         path = folder / f"instance_{i:0{digits}d}.{fmt}"
-        tm = mesh.to_trimesh(positions[i], normals[i])
-        with atomic_path(path) as tmp:
-            tm.export(str(tmp), file_type=fmt)
+        if plain:
+            tm = mesh.to_trimesh(positions[i], normals[i])
+            with atomic_path(path) as tmp:
+                tm.export(str(tmp), file_type=fmt)
+        elif fmt == "obj":
+            # every instance shares one material.mtl and its textures beside the files
+            from trimesh.exchange.obj import export_obj
+
+            tm = to_trimesh_with_appearance(mesh, positions[i], normals[i])
+            text, extra = export_obj(tm, include_normals=True, include_texture=True, return_texture=True,
+                                     mtl_name="material.mtl")
+            if not shared_written:
+                for name, data in extra.items():
+                    atomic_write_bytes(folder / name, data)
+                    written.append(folder / name)
+                shared_written = True
+            atomic_write_bytes(path, text.encode("utf-8"))
+        else:
+            tm = to_trimesh_with_appearance(mesh, positions[i], normals[i])
+            with atomic_path(path) as tmp:
+                tm.export(str(tmp), file_type=fmt)
         written.append(path)
         if progress is not None:
             progress.update(1)

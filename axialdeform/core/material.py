@@ -380,3 +380,67 @@ def compute_tangents(positions, normals, uvs, faces) -> np.ndarray:
     t /= np.maximum(length, 1e-30)[:, None]
     w = np.where(np.einsum("ij,ij->i", np.cross(nrm, t), bit) < 0.0, -1.0, 1.0)
     return np.hstack([t, w[:, None]]).astype(np.float32)
+
+
+# --------------------------------------------------------------------- back to trimesh
+
+
+def _trimesh_material(m: Material):
+    """A trimesh PBRMaterial for ``m`` (texture as a PIL image)."""
+    import trimesh
+    from PIL import Image
+
+    factor = np.clip(np.round(np.asarray(m.base_color, dtype=np.float64) * 255.0), 0, 255).astype(np.uint8)
+    return trimesh.visual.material.PBRMaterial(
+        name=m.name,
+        baseColorFactor=factor,
+        baseColorTexture=None if m.texture is None else Image.fromarray(m.texture, "RGBA"),
+        normalTexture=None if m.normal_texture is None else Image.fromarray(m.normal_texture, "RGBA"),
+        alphaMode=m.alpha_mode,
+        alphaCutoff=float(m.alpha_cutoff) if m.alpha_mode == "MASK" else None,
+        doubleSided=bool(m.double_sided),
+        metallicFactor=0.0,
+        roughnessFactor=0.9,
+    )
+
+
+def to_trimesh_with_appearance(mesh, positions=None, normals=None):
+    """The base mesh (or one deformed instance: ``positions``/``normals``
+    (v, 3)) as trimesh objects that keep the appearance: a ``Trimesh`` for a
+    single part, else a ``Scene`` with one ``Trimesh`` per part (named after
+    it).  UVs and the material go into ``TextureVisuals``; a mesh with
+    colours but no UVs gets ``ColorVisuals`` (sRGB uint8)."""
+    import trimesh
+
+    pos = mesh.positions if positions is None else np.asarray(positions)
+    nrm = mesh.normals if normals is None else np.asarray(normals)
+
+    def visual(material: Material):
+        if mesh.uvs is not None:
+            return trimesh.visual.TextureVisuals(uv=mesh.uvs, material=_trimesh_material(material))
+        if mesh.colors is not None:
+            c = np.hstack([linear_to_srgb(mesh.colors[:, :3]), np.clip(mesh.colors[:, 3:], 0, 1)])
+            return trimesh.visual.ColorVisuals(vertex_colors=np.round(c * 255).astype(np.uint8))
+        if not material.is_default:
+            return trimesh.visual.TextureVisuals(material=_trimesh_material(material))
+        return None
+
+    if len(mesh.parts) == 1:
+        return trimesh.Trimesh(vertices=pos, faces=mesh.faces, vertex_normals=nrm, visual=visual(mesh.parts[0].material),
+                               process=False)
+    scene = trimesh.Scene()
+    for part in mesh.parts:
+        faces = mesh.faces[part.start:part.start + part.count]
+        used = np.unique(faces)
+        remap = np.zeros(len(pos), dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        sub = trimesh.Trimesh(vertices=pos[used], faces=remap[faces], vertex_normals=nrm[used], process=False)
+        v = visual(part.material)
+        if v is not None:
+            if isinstance(v, trimesh.visual.TextureVisuals) and v.uv is not None:
+                v = trimesh.visual.TextureVisuals(uv=mesh.uvs[used], material=v.material)
+            elif isinstance(v, trimesh.visual.ColorVisuals):
+                v = trimesh.visual.ColorVisuals(vertex_colors=v.vertex_colors[used])
+            sub.visual = v
+        scene.add_geometry(sub, node_name=part.name, geom_name=part.name)
+    return scene
