@@ -100,7 +100,7 @@ def main():
     args = ap.parse_args()
     count, frames, size = (150, 6, (200, 150)) if args.quick else (args.count, args.frames, ad.gl.image.parse_size(args.size))
 
-    mesh = ad.load_mesh("leaf")
+    mesh = ad.load_mesh("leafcard")  # a textured card with an alpha cut-out (tools/make_leaf_card.py)
     leaves = FallingLeaves(count, args.seed, size=16.0 * (count / 1000) ** (1 / 3))
     if args.window:
         from axialdeform.viewer import Viewer
@@ -117,15 +117,20 @@ def main():
     background = (0.82, 0.87, 0.93)
     ctx = ad.create_context()
     images = []
+    light = (0.35, 0.85, 0.4)
     with ad.AxialRenderer(ctx, mesh, leaves.at(0.0)) as r, ad.GroundPlane(ctx, color=(0.30, 0.27, 0.20)) as ground, \
-            ad.Offscreen(ctx, size) as target:
-        r.set_tint(leaves.colours(args.seed))
+            ad.Offscreen(ctx, size) as target, ad.ShadowMap(ctx, 1024) as shadow:
+        # the tint multiplies the leaf texture: autumn colours over its veins
+        r.set_tint(leaves.colours(args.seed) / np.array([0.30, 0.50, 0.10]).mean() * 0.6)
         ground.center, ground.radius = np.zeros(3), 1.2 * side
         for i in range(frames):
-            r.update_params(leaves.at(i / args.fps))   # same count: written in place
+            params = leaves.at(i / args.fps)
+            r.update_params(params)   # same count: written in place
+            shadow.fit(mesh, params, light, extra=[[*ground.center, ground.radius]])
+            r.render_shadow(shadow)   # the leaves' shadows: one more instanced draw
             target.use(background)
-            ground.render(view, proj, background=background)
-            r.render(view, proj, "solid")
+            ground.render(view, proj, background=background, light_dir=light, shadow=shadow)
+            r.render(view, proj, "solid", light_dir=light, shadow=shadow)
             images.append(target.read())
         assert r.instances.reallocations == 0, "the instance buffer was reallocated"
     ctx.release()

@@ -34,7 +34,7 @@ class Meadow(mglw.WindowConfig):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.mesh = ad.load_mesh("leaf")
+        self.mesh = ad.load_mesh("leafcard")  # textured card, alpha cut-out (tools/make_leaf_card.py)
         n = self.count
         rng = np.random.default_rng(5)
         self.params = ad.random_params(self.mesh, n, seed=5, bend=0.05, placement="disc", spacing=0.6,
@@ -43,7 +43,7 @@ class Meadow(mglw.WindowConfig):
         self.xz = self.params[:, [10, 12]].astype(np.float64)
         self.stiffness = rng.uniform(0.6, 1.4, n)
         self.renderer = ad.AxialRenderer(self.ctx, self.mesh, self.params)
-        self.renderer.color = (0.16, 0.36, 0.07)
+        self.shadow = ad.ShadowMap(self.ctx, 2048)
         self.ground = ad.GroundPlane(self.ctx, color=(0.30, 0.26, 0.16)).fit(self.mesh, self.params, sink=0.0)
         self.ground.center[1] = 0.0
         radius = float(np.abs(self.xz).max())
@@ -59,10 +59,13 @@ class Meadow(mglw.WindowConfig):
         self.renderer.update_params(self.params)              # in place, every frame
 
         background = (0.78, 0.86, 0.95)
+        light = (0.35, 0.85, 0.4)
+        self.shadow.fit(self.mesh, self.params, light, extra=[[*self.ground.center, 0.6 * self.ground.radius]])
+        self.renderer.render_shadow(self.shadow)              # blades shadow the ground and each other
         self.ctx.clear(*background, 1.0, depth=1.0)
         view, proj = self.camera.view(), self.camera.projection(self.wnd.aspect_ratio)
-        self.ground.render(view, proj, background=background)
-        self.renderer.render(view, proj, "solid")
+        self.ground.render(view, proj, background=background, light_dir=light, shadow=self.shadow)
+        self.renderer.render(view, proj, "solid", light_dir=light, shadow=self.shadow)
 
 
 def main():

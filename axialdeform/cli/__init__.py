@@ -53,6 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("-n", "--count", type=int, default=DEMO_COUNT, help="number of stones (default: %(default)s)")
     d.add_argument("--size", default="800x600", help="size of each panel, WIDTHxHEIGHT (default: %(default)s)")
     d.add_argument("--seed", type=int, default=2003, help="random seed (default: %(default)s)")
+    d.add_argument("--fast", action="store_true", help="no multisampling, ground, shadows or hidden lines")
 
     r = sub.add_parser("random", help="write random parameters for a mesh", description=(
         "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf'); "
@@ -77,6 +78,9 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--size", default="800x600", help="WIDTHxHEIGHT (default: %(default)s)")
     rd.add_argument("--up", choices=("x", "y", "z"), default="y")
     rd.add_argument("--ignore-mesh-mismatch", action="store_true", help="use PARAMS even if made for another mesh")
+    rd.add_argument("--part", action="append", metavar="NAME",
+                    help="draw only this part of the mesh (repeatable; default: every part)")
+    rd.add_argument("--fast", action="store_true", help="no multisampling, ground, shadows or hidden lines")
 
     b = sub.add_parser("bake", help="write every deformed instance out", description=(
         "Deform every instance and write OUT: an .npz with arrays 'positions' and 'normals', each "
@@ -123,7 +127,7 @@ def cmd_demo(args) -> None:
                            spacing=0.9 * mesh.axis.length, tilt=(-0.2, 0.2))
     size = parse_size(args.size)
     camera = frame_instances(mesh, params, size[0] / size[1], elevation=30.0, azimuth=20.0, margin=-1.2)
-    image = render_image(mesh, params, size, ("solid", "wireframe"), camera=camera)
+    image = render_image(mesh, params, size, ("solid", "wireframe"), camera=camera, fast=args.fast)
     save_png(args.output, image)
     print(f"wrote {Path(args.output).resolve()} ({args.count} stones, solid | wireframe, {image.shape[1]}x{image.shape[0]})")
 
@@ -153,7 +157,7 @@ def cmd_render(args) -> None:
     from ..gl.image import parse_size, render_image, save_png
 
     mesh, params = _load(args)
-    image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up)
+    image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up, fast=args.fast, parts=args.part)
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(params)} instances, {args.mode}, {image.shape[1]}x{image.shape[0]})")
 
@@ -239,6 +243,17 @@ COMMANDS = {
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    import warnings
+
+    from ..core.material import AssetWarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, AssetWarning):  # one line, no source context
+            print(f"axialdeform {args.command}: warning: {message}", file=sys.stderr)
+        else:
+            previous(message, category, filename, lineno, file, line)
+
+    previous, warnings.showwarning = warnings.showwarning, show
     try:
         handler = getattr(args, "handler", None) or COMMANDS[args.command]
         status = handler(args)
@@ -254,6 +269,8 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"axialdeform {args.command}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        warnings.showwarning = previous
     return 0
 
 

@@ -22,8 +22,9 @@ from .errors import MeshError
 
 __all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "area_weighted_normals"]
 
-#: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``).
-BUNDLED_MESHES = ("stone", "leaf")
+#: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``,
+#: or ``NAME.glb`` for the textured leaf card of ``tools/make_leaf_card.py``).
+BUNDLED_MESHES = ("stone", "leaf", "leafcard")
 
 _SUPPORTED = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
@@ -225,10 +226,11 @@ def _unit_or_default(v: np.ndarray) -> np.ndarray:
 
 
 def bundled_mesh_path(name: str) -> Path:
-    """Path of a mesh shipped with the package: ``"stone"`` or ``"leaf"``."""
+    """Path of a mesh shipped with the package: ``"stone"``, ``"leaf"`` or ``"leafcard"``."""
     if name not in BUNDLED_MESHES:
         raise MeshError(f"unknown bundled mesh {name!r}; expected one of {', '.join(BUNDLED_MESHES)}")
-    return Path(str(resources.files("axialdeform.meshes").joinpath(f"{name}.obj")))
+    suffix = ".glb" if name == "leafcard" else ".obj"
+    return Path(str(resources.files("axialdeform.meshes").joinpath(f"{name}{suffix}")))
 
 
 def load_mesh(source: str | os.PathLike) -> BaseMesh:
