@@ -1,0 +1,376 @@
+"""Real assets (issue 12): UVs, vertex colours, materials, multi-part meshes,
+from the file to the picture to glTF/OBJ and back."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import axialdeform as ad
+from axialdeform.core.deform import deform_tangents
+from axialdeform.core.errors import ContextError, MeshError
+from axialdeform.core.material import AssetWarning, compute_tangents
+
+from conftest import shared_mesh
+
+ALPHA_TEST = "assets/AlphaBlendModeTest.glb"
+VALIDATOR = Path(__file__).resolve().parent / "gltf-validator"
+
+
+def _validate(*paths):
+    node = shutil.which("node")
+    if node is None or not (VALIDATOR / "node_modules" / "gltf-validator").exists():
+        pytest.fail("node and the Khronos validator are needed (npm ci --prefix tests/gltf-validator)")
+    out = subprocess.run([node, str(VALIDATOR / "validate.js"), *map(str, paths)], capture_output=True, text=True,
+                         check=True, timeout=120).stdout
+    reports = json.loads(out)
+    return reports if isinstance(reports, list) else [reports]
+
+
+def _textured_card(folder: Path, *, mtl="card.mtl", texture="tex.png", cut=True) -> Path:
+    """A 1 x 2 card with UVs and an .mtl/.png: the texture's left half is red, the right
+    half blue; with ``cut`` the left half's alpha is 0 (a cut-out)."""
+    from PIL import Image
+
+    img = np.zeros((8, 8, 4), np.uint8)
+    img[..., 3] = 255
+    img[:, :4, 0] = 255
+    img[:, 4:, 2] = 255
+    if cut:
+        img[:, :4, 3] = 0
+    Image.fromarray(img, "RGBA").save(folder / "tex.png")
+    (folder / "card.mtl").write_text(f"newmtl Leafy\nKd 1 1 1\nmap_Kd {texture}\n")
+    obj = folder / "card.obj"
+    obj.write_text(f"mtllib {mtl}\no card\nv 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\n"
+                   "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\n"
+                   "usemtl Leafy\nf 1/1/1 2/2/2 3/3/3\nf 1/1/1 3/3/3 4/4/4\n")
+    return obj
+
+
+# ------------------------------------------------------------------ loading
+
+
+def test_alpha_blend_mode_test_loads_nine_parts_one_axis():
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    assert len(mesh.parts) == 9
+    assert sum(p.count for p in mesh.parts) == len(mesh.faces)
+    modes = {p.name: (p.material.alpha_mode, p.material.alpha_cutoff) for p in mesh.parts}
+    assert modes["TestCutoff25"] == ("MASK", 0.25) and modes["TestCutoff75"] == ("MASK", 0.75)
+    assert modes["TestCutoffDefault"] == ("MASK", 0.5)
+    assert modes["TestBlend"][0] == "BLEND" and modes["TestOpaque"][0] == "OPAQUE"
+    assert all(p.material.texture is not None for p in mesh.parts)
+    assert mesh.uvs.shape == (mesh.vertex_count, 2)
+    bed = mesh.part("Bed").material
+    assert bed.normal_texture is not None and mesh.tangents is not None  # tangents computed for the normal map
+    # ONE control axis over every vertex of every part
+    extent = mesh.positions.max(axis=0) - mesh.positions.min(axis=0)
+    assert mesh.axis.index == int(np.argmax(extent)) and np.isclose(mesh.axis.length, extent.max())
+    with pytest.raises(MeshError, match="no part 'Nope'; expected one of 'TestCutoff25'"):
+        mesh.part("Nope")
+
+
+def test_obj_objects_become_parts_in_the_file_vertex_order():
+    path = shared_mesh("edge_cases/two_objects.obj")
+    mesh = ad.load_mesh(path)
+    assert [p.name for p in mesh.parts] == ["cube", "tetra"]
+    merged = trimesh.load(path, process=False)  # what the file held before parts existed
+    assert np.array_equal(mesh.positions, np.asarray(merged.vertices, np.float32))
+    assert np.array_equal(mesh.faces, merged.faces)  # same fingerprint as before
+
+
+def test_several_meshes_in_one_file_are_parts():
+    for rel, parts in (("edge_cases/multibody.stl", 2), ("gltf/simple_pole.glb", 11)):
+        mesh = ad.load_mesh(shared_mesh(rel))
+        assert len(mesh.parts) == parts, rel
+
+
+def test_vertex_colours_and_textures():
+    vc = ad.load_mesh(shared_mesh("gltf/cubevc.glb"))
+    assert vc.colors.shape == (vc.vertex_count, 4)
+    assert np.allclose(vc.colors, [1, 0, 1, 1])  # the file's COLOR_0 is magenta throughout
+    quads = ad.load_mesh(shared_mesh("edge_cases/box_vertex_colors_quads_moderngl.obj"))
+    assert quads.colors is not None and np.allclose(quads.colors[0], [1, 0, 0, 1])
+    assert len(np.unique(quads.colors.round(3), axis=0)) > 1
+    box = ad.load_mesh(shared_mesh("gltf/BoxTextured.glb"))
+    assert box.uvs.shape == (24, 2) and box.parts[0].material.texture.shape[2] == 4
+
+
+def test_obj_with_mtl_and_png(tmp_path):
+    mesh = ad.load_mesh(_textured_card(tmp_path))
+    m = mesh.parts[0].material
+    assert m.name == "Leafy" and m.alpha_mode == "MASK"  # the texture has holes: a cut-out
+    assert m.texture.shape == (8, 8, 4)
+    assert np.allclose(mesh.uvs, [[0, 0], [1, 0], [1, 1], [0, 1]])
+
+
+def test_missing_or_special_texture_warns_and_loads(tmp_path):
+    obj = _textured_card(tmp_path, texture="gone.png")
+    with pytest.warns(AssetWarning, match=r"card.obj: 'gone.png' .* material 'Leafy' drawn with its base colour"):
+        mesh = ad.load_mesh(obj)
+    assert mesh.parts[0].material.texture is None
+    # a FIFO as texture is never opened: the load finishes (in a child, so a hang fails by timeout)
+    fifo = tmp_path / "pipe.png"
+    import os
+
+    os.mkfifo(fifo)
+    _textured_card(tmp_path, texture="pipe.png")
+    code = ("import warnings, axialdeform as ad\n"
+            "with warnings.catch_warnings(record=True) as w:\n"
+            "    warnings.simplefilter('always')\n"
+            f"    m = ad.load_mesh({str(obj)!r})\n"
+            "print(m.parts[0].material.texture is None, [str(x.message) for x in w])\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("True") and "pipe.png" in out.stdout and "not a regular file" in out.stdout
+
+
+def test_uv_and_colour_count_mismatch_is_a_mesh_error():
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    nrm = np.tile([0.0, 0, 1], (3, 1))
+    faces = np.array([[0, 1, 2]])
+    with pytest.raises(MeshError, match=r"tri.obj: 2 texture coordinates for 3 vertices"):
+        ad.BaseMesh(pos, nrm, faces, name="tri.obj", uvs=np.zeros((2, 2)))
+    with pytest.raises(MeshError, match=r"tri.obj: 4 vertex colours for 3 vertices"):
+        ad.BaseMesh(pos, nrm, faces, name="tri.obj", colors=np.ones((4, 4)))
+
+
+def test_tangents_follow_the_uv_frame():
+    # a flat card in z = 0 whose u runs along +x: tangent +x, handedness +1; mirrored u: -x
+    pos = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    nrm = np.tile([0.0, 0, 1], (4, 1))
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    uv = pos[:, :2]
+    t = compute_tangents(pos, nrm, uv, faces)
+    assert np.allclose(t, [[1, 0, 0, 1]] * 4, atol=1e-6)
+    t = compute_tangents(pos, nrm, np.column_stack([1 - uv[:, 0], uv[:, 1]]), faces)
+    assert np.allclose(t, [[-1, 0, 0, -1]] * 4, atol=1e-6)
+
+
+# ------------------------------------------------------------------ GPU
+
+
+def test_gpu_capture_equals_cpu_for_every_part(ctx):
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    params = ad.random_params(mesh, 40, seed=3, bend=0.2)
+    cpu_pos, cpu_nrm = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
+    with ad.AxialRenderer(ctx, mesh, params) as r:
+        pos, nrm = r.capture()
+    tol = 1e-5 * mesh.axis.length
+    for part in mesh.parts:
+        used = np.unique(mesh.faces[part.start:part.start + part.count])
+        assert np.abs(pos[:, used] - cpu_pos[:, used]).max() <= tol, part.name
+        assert np.abs(nrm[:, used] - cpu_nrm[:, used]).max() <= 1e-4, part.name
+
+
+def test_gpu_tangents_bend_by_the_jacobian(ctx):
+    """axial_world_tangent (glsl/axial.glsl) against deform_tangents, and both
+    stay orthogonal to the bent normal (a tangent by J, a normal by cof(J))."""
+    from axialdeform.gl.buffers import InstanceBuffer, MeshBuffers
+    from axialdeform.gl.material import AppearanceBuffer
+    from axialdeform.gl.shaders import build_program
+
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    params = ad.random_params(mesh, 16, seed=5, bend=0.3)
+    prog = build_program(ctx, "scene.vert", defines={"AXIAL_MATERIAL": 1}, varyings=("v_tangent",))
+    buffers, inst, look = MeshBuffers(ctx, mesh), InstanceBuffer(ctx, params), AppearanceBuffer(ctx, mesh)
+    for name, value in (("u_axis", mesh.axis.index), ("u_lo", mesh.axis.lo), ("u_len", mesh.axis.length)):
+        prog[name].value = value
+    vao = ctx.vertex_array(prog, [buffers.content(prog), inst.content(prog), look.content(prog)])
+    out = ctx.buffer(reserve=len(params) * mesh.vertex_count * 16)
+    color = ctx.renderbuffer((1, 1))
+    fbo = ctx.framebuffer(color)
+    previous = ctx.fbo
+    fbo.use()
+    import moderngl
+
+    from axialdeform.gl.context import bind_framebuffer, release_framebuffer
+
+    vao.transform(out, mode=moderngl.POINTS, vertices=mesh.vertex_count, instances=len(params))
+    gpu = np.frombuffer(out.read(), "f4").reshape(len(params), mesh.vertex_count, 4)
+    bind_framebuffer(ctx, previous)
+    release_framebuffer(ctx, fbo)
+    for obj in (vao, out, prog, color):
+        obj.release()
+    for obj in (buffers, inst, look):
+        obj.release()
+    cpu = deform_tangents(mesh.axis, mesh.positions, mesh.tangents, params)
+    assert np.abs(gpu[..., :3] - cpu).max() < 1e-4
+    assert np.array_equal(gpu[..., 3], np.broadcast_to(mesh.tangents[:, 3], gpu.shape[:2]))
+    _, normals = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
+    base_dot = np.einsum("vi,vi->v", mesh.tangents[:, :3], mesh.normals)
+    bent_dot = np.einsum("nvi,nvi->nv", cpu, normals)
+    assert np.abs(bent_dot - base_dot).max() < 1e-3  # J t . cof(J) n / |..| keeps t.n = 0
+
+
+def _front_camera(mesh, params):
+    return ad.frame_instances(mesh, params, 1.0, elevation=0.0, azimuth=90.0, margin=0.05)
+
+
+def test_texture_and_cutout_drawn(ctx, tmp_path):
+    mesh = ad.load_mesh(_textured_card(tmp_path))
+    params = np.zeros((1, 16), np.float32)
+    bg = (0.0, 0.0, 0.0)
+    img = ad.render_image(mesh, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(mesh, params),
+                          background=bg, fast=True, ambient=1.0).astype(int)
+    # the card's red half (u < 0.5) is cut out: only the blue half is drawn
+    def columns(image):
+        return int((image.sum(axis=2) > 30).any(axis=0).sum())
+
+    def red(image):
+        return int(((image[..., 0] > 2 * image[..., 2]) & (image[..., 0] > 60)).sum())
+
+    def blue(image):
+        return int(((image[..., 2] > 2 * image[..., 0]) & (image[..., 2] > 60)).sum())
+
+    assert red(img) == 0 and blue(img) > 100
+    # without the cut (an opaque texture) the red half shows too, and the card is twice as wide
+    opaque = ad.load_mesh(_textured_card(tmp_path, cut=False))
+    img2 = ad.render_image(opaque, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(opaque, params),
+                           background=bg, fast=True, ambient=1.0).astype(int)
+    assert red(img2) > 100 and blue(img2) > 100
+    assert 1.6 < columns(img2) / columns(img) < 2.4
+
+
+def test_missing_texture_part_drawn_with_base_colour(ctx, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AssetWarning)
+        mesh = ad.load_mesh(_textured_card(tmp_path, texture="gone.png"))
+    params = np.zeros((1, 16), np.float32)
+    img = ad.render_image(mesh, params, (48, 48), "solid", ctx=ctx, camera=_front_camera(mesh, params),
+                          background=(0, 0, 0), fast=True)
+    drawn = img[img.sum(axis=2) > 0]
+    assert len(drawn) > 200  # the whole card, in its (white) base colour
+    assert (np.abs(drawn[:, 0].astype(int) - drawn[:, 2]) < 40).all()
+
+
+def test_texture_too_large_is_a_clear_error(tmp_path):
+    from axialdeform.gl.material import GpuMaterials
+
+    class SmallContext:  # a context whose limit is 4 pixels: refused before any GL call
+        info = {"GL_MAX_TEXTURE_SIZE": 4}
+        max_anisotropy = 1.0
+
+    mesh = ad.load_mesh(_textured_card(tmp_path))
+    with pytest.raises(ContextError, match=r"card.obj: the base colour texture of material 'Leafy' is 8x8 pixels; "
+                                           r"this GL context allows at most 4x4"):
+        GpuMaterials(SmallContext(), mesh)
+
+
+def test_one_instanced_draw_per_part_and_part_choice(ctx, monkeypatch):
+    import moderngl
+
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    params = ad.random_params(mesh, 30, seed=2)
+    calls = []
+    original = moderngl.VertexArray.render
+
+    def spy(self, *args, **kwargs):
+        calls.append((kwargs.get("instances"), kwargs.get("vertices")))
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(moderngl.VertexArray, "render", spy)
+    full = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, fast=True)
+    assert sorted(v for _, v in calls) == sorted(p.count * 3 for p in mesh.parts)
+    assert all(n == 30 for n, _ in calls)
+    calls.clear()
+    bed = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, fast=True, parts=["Bed"])
+    assert calls == [(30, mesh.part("Bed").count * 3)]
+    assert not np.array_equal(full, bed)
+    with pytest.raises(MeshError, match="no part 'Nope'"):
+        ad.AxialRenderer(ctx, mesh, params, parts=["Nope"])
+
+
+def test_shadows_darken_the_ground_and_hidden_lines_hide(ctx, stone):
+    params = ad.random_params(stone, 60, seed=4, bend=0.1, spacing=2.0 * stone.axis.length)
+    with_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, samples=0)
+    no_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, samples=0, fast=True, ground=True)
+    darker = (with_shadow.astype(int).sum(axis=2) < no_shadow.astype(int).sum(axis=2) - 30).mean()
+    assert darker > 0.01, f"{darker:.1%} of the pixels darker with shadows"
+    lines = dict(background=(0, 0, 0), line_color=(1, 1, 1), samples=0, ground=False)
+    few = params[:4]  # big on the screen: the back edges are apart from the front ones
+    hidden = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, **lines)
+    every = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, fast=True, **lines)
+    on_hidden, on_every = (hidden.sum(axis=2) > 100).sum(), (every.sum(axis=2) > 100).sum()
+    assert 0 < on_hidden < 0.8 * on_every, (on_hidden, on_every)  # back lines removed
+    assert ((hidden.sum(axis=2) > 100) & ~(every.sum(axis=2) > 100)).sum() <= 0.02 * on_hidden
+
+
+# ------------------------------------------------------------------ out again
+
+
+def test_exported_glbs_keep_the_material_and_pass_the_validator(tmp_path):
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    params = ad.random_params(mesh, 3, seed=1)
+    from axialdeform.core.export import export_baked, export_instanced, read_instanced_glb
+
+    baked, inst = export_baked(tmp_path / "b.glb", mesh, params), export_instanced(tmp_path / "i.glb", mesh, params)
+    for report in _validate(baked, inst):
+        assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
+    for path in (baked, inst):
+        scene = trimesh.load(path)
+        textured = [g for g in scene.geometry.values() if getattr(g.visual.material, "baseColorTexture", None) is not None]
+        assert textured and textured[0].visual.uv is not None
+        modes = {g.visual.material.alphaMode for g in scene.geometry.values()}
+        assert {"MASK", "BLEND"} <= modes
+    back, p = read_instanced_glb(inst)
+    assert back.fingerprint == mesh.fingerprint and np.array_equal(p, params)
+
+
+def test_vertex_colour_glb_passes_the_validator(tmp_path):
+    from axialdeform.core.export import export_baked
+
+    mesh = ad.load_mesh(shared_mesh("gltf/cubevc.glb"))
+    path = export_baked(tmp_path / "vc.glb", mesh, ad.random_params(mesh, 2, seed=1))
+    assert _validate(path)[0]["issues"]["numErrors"] == 0
+    g = next(iter(trimesh.load(path).geometry.values()))
+    assert g.visual.kind == "vertex"
+
+
+def test_bake_obj_writes_vt_mtllib_and_the_texture(tmp_path):
+    from axialdeform.cli import main
+
+    obj = _textured_card(tmp_path)
+    assert main(["random", str(obj), "-n", "3", "-o", str(tmp_path / "p.adp")]) == 0
+    out = tmp_path / "baked"
+    assert main(["bake", str(obj), str(tmp_path / "p.adp"), "-o", str(out), "--format", "obj"]) == 0
+    text = (out / "instance_000000.obj").read_text()
+    assert "mtllib material.mtl" in text and "\nvt " in text
+    back = trimesh.load(out / "instance_000002.obj", process=False)
+    assert back.visual.uv.shape == (4, 2)
+    assert np.asarray(back.visual.material.image).shape[:2] == (8, 8)
+    for fmt in ("glb", "ply"):
+        folder = tmp_path / fmt
+        assert main(["bake", str(obj), str(tmp_path / "p.adp"), "-o", str(folder), "--format", fmt]) == 0
+        g = trimesh.load(folder / f"instance_000001.{fmt}", force="mesh", process=False)
+        assert g.visual.uv is not None and len(g.visual.uv) == 4
+
+
+def test_cli_render_part_and_unknown_part(tmp_path, capsys):
+    from axialdeform.cli import main
+
+    mesh = str(shared_mesh("edge_cases/two_objects.obj"))
+    assert main(["random", mesh, "-n", "4", "-o", str(tmp_path / "p.adp")]) == 0
+    assert main(["render", mesh, str(tmp_path / "p.adp"), "-o", str(tmp_path / "x.png"), "--size", "64x48",
+                 "--part", "tetra", "--fast"]) == 0
+    capsys.readouterr()
+    assert main(["render", mesh, str(tmp_path / "p.adp"), "-o", str(tmp_path / "y.png"), "--size", "64x48",
+                 "--part", "sphere"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no part 'sphere'; expected one of 'cube', 'tetra'" in err[0]
+
+
+def test_bundled_leaf_card():
+    mesh = ad.load_mesh("leafcard")
+    m = mesh.parts[0].material
+    assert m.alpha_mode == "MASK" and m.double_sided and m.texture is not None
+    alpha = m.texture[..., 3]
+    assert (alpha == 0).mean() > 0.2 and (alpha == 255).mean() > 0.2  # a real cut-out
+    assert mesh.axis.name == "y" and mesh.uvs is not None
