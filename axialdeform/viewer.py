@@ -93,6 +93,12 @@ class _ViewerMixin:
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
+        self.fast = bool(s.get("fast", False))
+        self.shadow = None
+        if not self.fast:  # shadows from the key light, redrawn each frame (one instanced draw per part)
+            from .gl.shadow import ShadowMap
+
+            self.shadow = ShadowMap(self.ctx, 2048)
         self.fps = 0.0
         self.frames = 0
         self.screenshots = 0
@@ -200,6 +206,7 @@ class _ViewerMixin:
         shown = np.array(params, dtype=np.float32)
         shown[:, :10] *= self.bend_scale
         self.renderer.update_params(shown)
+        self._shown = shown
 
     # ------------------------------------------------------------ drawing
     def on_render(self, time_s: float, frame_time: float):
@@ -207,11 +214,20 @@ class _ViewerMixin:
         if self.animate is not None:
             self._upload(self.animate(time_s))
         view, proj = self.matrices()
+        light = (0.35, 0.85, 0.4)
+        shadow = self.shadow
+        if shadow is not None:
+            g = self.ground
+            shadow.fit(self.mesh, getattr(self, "_shown", self.base), light,
+                       extra=[[*g.center, 0.5 * g.radius]] if self.show_ground else None)
+            self.wnd.use()
+            self.renderer.render_shadow(shadow)
         self.wnd.use()
         self.ctx.clear(*BACKGROUND, 1.0, depth=1.0)
         if self.show_ground:
-            self.ground.render(view, proj, background=BACKGROUND)
-        self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up])
+            self.ground.render(view, proj, background=BACKGROUND, light_dir=light, shadow=shadow)
+        self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up], light_dir=light, shadow=shadow,
+                             hidden_line=not self.fast)
         self.frames += 1
         now = time.perf_counter()  # measured, not the timer's frame_time (headless steps are simulated)
         if self._last_frame is not None and now > self._last_frame:
@@ -264,6 +280,8 @@ class _ViewerMixin:
         """Free the renderer and the ground plane (the window keeps its context)."""
         self.renderer.release()
         self.ground.release()
+        if self.shadow is not None:
+            self.shadow.release()
 
 
 class Viewer:
@@ -271,14 +289,16 @@ class Viewer:
 
     @staticmethod
     def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int = 0,
-               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4):
+               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
+               fast: bool = False):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
         ``f(t_seconds) -> (n, 16)`` called every frame; tint : optional (n, 3)
         linear RGB per instance; seed, bend : what ``N`` regenerates offsets
         with (bend as a fraction of L); headless : moderngl-window's headless
-        window on an EGL context (no display needed).
+        window on an EGL context (no display needed); fast : no shadows,
+        hidden lines or multisampling (``samples`` is then 0).
         """
         from .core.params import as_params
 
@@ -287,8 +307,8 @@ class Viewer:
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground)
-        app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": samples})
+                     up=up, ground=ground, fast=fast)
+        app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": 0 if fast else samples})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]
         if headless:
@@ -327,6 +347,7 @@ def add_parser(subparsers) -> None:
     v.add_argument("--up", choices=("x", "y", "z"), default="y")
     v.add_argument("--size", default="960x720", help="WIDTHxHEIGHT (default: %(default)s)")
     v.add_argument("--no-ground", action="store_true", help="start without the ground plane")
+    v.add_argument("--fast", action="store_true", help="no shadows, hidden lines or multisampling")
     v.add_argument("--headless", action="store_true", help="no window: draw --frames frames offscreen (EGL)")
     v.add_argument("--frames", type=int, default=3, help="frames to draw with --headless (default: %(default)s)")
     v.add_argument("--screenshot", help="PNG of the last frame (with --headless)")
@@ -349,7 +370,7 @@ def run(args) -> None:
     if args.frames < 1:
         raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=args.seed,
-                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground)
+                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground, fast=args.fast)
     if not args.headless:
         import moderngl_window as mglw
 
