@@ -1,7 +1,10 @@
 """``axialdeform bench``: the thesis's evaluation (§3.1), reproduced and compared.
 
 Three ways to draw ``N`` similar shapes, all real, each timed from a fresh
-process start:
+process start.  Every method draws the plain picture the thesis timed, the
+``fast=True`` path of :func:`axialdeform.gl.image.render_image`: no
+multisampling (``samples=0`` by default), no shadow map, no ground, no
+hidden-line pre-pass:
 
 * ``same`` — the base mesh instanced ``N`` times with position and
   orientation only (``AxialRenderer(..., bend=False)``); reads one mesh file.
