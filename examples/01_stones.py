@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import axialdeform as ad
+from axialdeform.gl.image import parse_size
 
 
 def river_bank(mesh, count, seed):
@@ -64,7 +65,7 @@ def main():
     ap.add_argument("--quick", action="store_true", help="600 stones, small pictures (tests)")
     ap.add_argument("--window", action="store_true", help="open the scene in the interactive viewer")
     args = ap.parse_args()
-    count, size = (600, (320, 240)) if args.quick else (args.count, ad.gl.image.parse_size(args.size))
+    count, size = (600, (320, 240)) if args.quick else (args.count, parse_size(args.size))
 
     mesh = ad.load_mesh("stone")
     params = river_bank(mesh, count, args.seed)

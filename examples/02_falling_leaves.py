@@ -17,6 +17,7 @@ import numpy as np
 from PIL import Image
 
 import axialdeform as ad
+from axialdeform.gl.image import parse_size
 
 # where each control point sits along the leaf (t of P1..P5) and a zero-mean
 # curl profile over them: the tip and stem bend one way, the middle the other
@@ -98,7 +99,7 @@ def main():
     ap.add_argument("--quick", action="store_true", help="150 leaves, 6 small frames (tests)")
     ap.add_argument("--window", action="store_true", help="watch it live in the viewer")
     args = ap.parse_args()
-    count, frames, size = (150, 6, (200, 150)) if args.quick else (args.count, args.frames, ad.gl.image.parse_size(args.size))
+    count, frames, size = (150, 6, (200, 150)) if args.quick else (args.count, args.frames, parse_size(args.size))
 
     mesh = ad.load_mesh("leafcard")  # a textured card with an alpha cut-out (tools/make_leaf_card.py)
     leaves = FallingLeaves(count, args.seed, size=16.0 * (count / 1000) ** (1 / 3))

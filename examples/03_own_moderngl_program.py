@@ -23,6 +23,7 @@ import numpy as np
 import pyrr
 
 import axialdeform as ad
+from axialdeform.gl.image import parse_size
 
 VERTEX = """
 #version 330 core
@@ -71,7 +72,7 @@ def main():
     ap.add_argument("--size", default="640x480")
     ap.add_argument("--quick", action="store_true", help="200 stones, a small picture (tests)")
     args = ap.parse_args()
-    count, (w, h) = (200, (320, 240)) if args.quick else (args.count, ad.gl.image.parse_size(args.size))
+    count, (w, h) = (200, (320, 240)) if args.quick else (args.count, parse_size(args.size))
 
     mesh = ad.load_mesh("stone")
     params = ad.random_params(mesh, count, seed=3, bend=0.25, placement="disc")   # (count, 16) float32
