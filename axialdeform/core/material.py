@@ -210,7 +210,7 @@ def _material_of(visual, fallback_name: str) -> Material:
             if np.abs(px * 255 - np.asarray(trimesh.visual.DEFAULT_COLOR, dtype=np.float64)).max() > 3.0:
                 color = np.concatenate([srgb_to_linear(px[:3]), px[3:4]])
             else:  # no material at all
-                color = np.ones(4)
+                return Material(name=name)
         # a texture replaces the diffuse colour of the .mtl (what viewers show)
         if texture is not None:
             color = np.array([1.0, 1.0, 1.0, color[3]])
@@ -219,8 +219,10 @@ def _material_of(visual, fallback_name: str) -> Material:
             alpha_mode = "MASK"  # an OBJ texture with holes: a cut-out
         elif color[3] < 1.0:
             alpha_mode = "BLEND"
+        # OBJ has no notion of sides; viewers light both (as the plain path does)
         return Material(name=name, base_color=color, texture=texture,
-                        texture_name=None if texture is None else "map_Kd", alpha_mode=alpha_mode)
+                        texture_name=None if texture is None else "map_Kd", alpha_mode=alpha_mode,
+                        double_sided=True)
     # PBRMaterial
     name = getattr(mat, "name", None) or fallback_name
     factor = getattr(mat, "baseColorFactor", None)

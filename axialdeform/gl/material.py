@@ -109,7 +109,8 @@ class GpuMaterials:
             "u_has_texture": base is not None,
             "u_alpha_mode": ALPHA_MODE_INDEX[material.alpha_mode],
             "u_alpha_cutoff": float(material.alpha_cutoff),
-            "u_double_sided": bool(material.double_sided),
+            # no material at all (colours or UVs only): both sides lit, as for a plain mesh
+            "u_double_sided": bool(material.double_sided or material.is_default),
             "u_has_normal_map": normal is not None,
             "u_texture": _TEXTURE_UNIT,
             "u_normal_map": _NORMAL_UNIT,
