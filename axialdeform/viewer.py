@@ -227,7 +227,7 @@ class _ViewerMixin:
         if self.show_ground:
             self.ground.render(view, proj, background=BACKGROUND, light_dir=light, shadow=shadow)
         self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up], light_dir=light, shadow=shadow,
-                             hidden_line=not self.fast)
+                             hidden_line=False if self.fast else "fill")
         self.frames += 1
         now = time.perf_counter()  # measured, not the timer's frame_time (headless steps are simulated)
         if self._last_frame is not None and now > self._last_frame:

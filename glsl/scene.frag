@@ -2,7 +2,10 @@
 //   u_mode 0 "solid": the analytic normals from the vertex shader;
 //   u_mode 1 "flat": the face normal of the deformed triangle, from the
 //            screen-space derivatives of the world position;
-//   u_mode 2 "wireframe": unlit line colour.
+//   u_mode 2 "wireframe": unlit line colour;
+//   u_mode 3 the fill of a hidden-line wireframe: the solid shading, washed
+//            out towards white, under the lines (so dense instances still
+//            read as shapes).
 // The base colour is u_color, or the instance's own colour when the program
 // is built with AXIAL_TINT (the optional per-instance tint buffer).
 // AXIAL_MATERIAL (gl/material.py): base colour = factor * vertex colour *
@@ -16,6 +19,7 @@
 uniform int u_mode;
 uniform vec3 u_color;       // base colour (linear RGB)
 uniform vec3 u_line_color;
+uniform float u_line_alpha; // lines over a hidden-line fill are blended (1: opaque)
 uniform vec3 u_light_dir;   // unit vector towards the light, world space
 uniform vec3 u_up;          // world up, for the hemisphere ambient
 uniform vec3 u_eye;         // camera position, world space
@@ -60,7 +64,7 @@ void main() {
     base4.rgb *= v_tint;
 #endif
     if (u_mode == 2) {
-        f_color = vec4(u_line_color, 1.0);
+        f_color = vec4(u_line_color, u_line_alpha);
         return;
     }
     vec3 n = (u_mode == 1) ? normalize(cross(dFdx(v_world), dFdy(v_world))) : normalize(v_normal);
@@ -83,5 +87,6 @@ void main() {
     sun = shadow_visibility(v_world, n, u_light_dir);
 #endif
     vec3 lit = shade_surface_shadowed(base4.rgb * v_shade, n, to_eye, u_light_dir, u_up, u_ambient, 0.12, sun);
+    if (u_mode == 3) lit = mix(lit, vec3(1.0), 0.6);
     f_color = vec4(to_srgb(lit), base4.a);
 }

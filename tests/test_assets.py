@@ -296,11 +296,18 @@ def test_shadows_darken_the_ground_and_hidden_lines_hide(ctx, stone):
     assert darker > 0.01, f"{darker:.1%} of the pixels darker with shadows"
     lines = dict(background=(0, 0, 0), line_color=(1, 1, 1), samples=0, ground=False)
     few = params[:4]  # big on the screen: the back edges are apart from the front ones
-    hidden = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, **lines)
+    hidden = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, hidden_line=True, **lines)
     every = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, fast=True, **lines)
     on_hidden, on_every = (hidden.sum(axis=2) > 100).sum(), (every.sum(axis=2) > 100).sum()
     assert 0 < on_hidden < 0.8 * on_every, (on_hidden, on_every)  # back lines removed
     assert ((hidden.sum(axis=2) > 100) & ~(every.sum(axis=2) > 100)).sum() <= 0.02 * on_hidden
+    # the default fills the faces (washed out) under the front lines, with the dark line colour
+    filled = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, samples=0, ground=False,
+                             background=(0, 0, 0), line_color=(0, 0, 0))
+    solid = ad.render_image(stone, few, (320, 240), "solid", ctx=ctx, fast=True, background=(0, 0, 0))
+    covered, silhouette = (filled.astype(int).sum(axis=2) > 30), (solid.astype(int).sum(axis=2) > 30)
+    assert (covered & silhouette).sum() >= 0.95 * silhouette.sum()  # the faces, not just lines
+    assert ((hidden.astype(int).sum(axis=2) > 30) & silhouette).sum() < 0.9 * silhouette.sum()
 
 
 # ------------------------------------------------------------------ out again

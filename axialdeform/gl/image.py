@@ -31,7 +31,8 @@ def parse_size(text: str) -> tuple[int, int]:
 
 def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, camera: Camera | None = None,
                  up: str = "y", samples: int = 4, background=(0.93, 0.94, 0.96), renderer=None,
-                 fast: bool = False, ground: bool | None = None, parts=None, **render_options) -> np.ndarray:
+                 fast: bool = False, ground: bool | None = None, parts=None, hidden_line=None,
+                 **render_options) -> np.ndarray:
     """Render all instances to an ``(height, width, 3) uint8`` image.
 
     ``modes`` is one mode or a sequence of modes drawn side by side with the
@@ -46,7 +47,10 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
     other) and hidden-line wireframes (lines of the front-most surface only).
     ``fast=True`` turns all of them off (no multisampling, no ground, no
     shadow, every edge drawn): what the benchmark times.  ``ground`` overrides
-    the ground alone; ``parts`` picks the base mesh's parts to draw.
+    the ground alone, ``hidden_line`` the wireframe style (default ``"fill"``:
+    front-most edges over washed-out faces; ``True``: front-most edges only;
+    ``False``: every edge; see :meth:`AxialRenderer.render`); ``parts``
+    picks the base mesh's parts to draw.
     """
     modes = (modes,) if isinstance(modes, str) else tuple(modes)
     for m in modes:
@@ -78,7 +82,8 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
                     if plane is not None:
                         plane.render(view, proj, background=background, light_dir=light,
                                      ambient=render_options.get("ambient", 0.35), shadow=shadow)
-                    r.render(view, proj, m, up=UP_VECTORS[up], shadow=shadow, hidden_line=not fast,
+                    r.render(view, proj, m, up=UP_VECTORS[up], shadow=shadow,
+                             hidden_line=("fill" if not fast else False) if hidden_line is None else hidden_line,
                              **render_options)
                     panels.append(target.read())
         finally:

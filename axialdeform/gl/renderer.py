@@ -272,7 +272,7 @@ class AxialRenderer:
                     self.ctx.disable(moderngl.BLEND)
 
     def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
-               color=None, line_color=None, ambient: float = 0.35, shadow=None, hidden_line: bool = False) -> None:
+               color=None, line_color=None, ambient: float = 0.35, shadow=None, hidden_line=False) -> None:
         """Draw every instance into the currently bound framebuffer: one
         instanced draw call per part (one for a single-part mesh).
 
@@ -284,7 +284,9 @@ class AxialRenderer:
         shadowed by the instances (the ambient is not).
         hidden_line : in wireframe mode, first fill the depth buffer with the
         triangles (no colour), so only the lines of the front-most surface
-        show (one more instanced draw per part).
+        show (one more instanced draw per part); ``"fill"`` also paints the
+        triangles, lit and washed out towards white, under the lines (dense
+        instances then read as shapes, not blobs).
         """
         import moderngl
 
@@ -297,7 +299,7 @@ class AxialRenderer:
         if tinted and self._tint_count != self.count:
             raise ParamError(f"tint: {self._tint_count} colours for {self.count} instances; "
                              "call set_tint with one colour per instance (or None)")
-        shadowed = shadow is not None and mode != "wireframe"
+        shadowed = shadow is not None and (mode != "wireframe" or hidden_line == "fill")
         prog, vao_triangles, vao_edges = self._variant(tinted, shadowed)
         prog["u_view"].write(view.tobytes())
         prog["u_proj"].write(projection.tobytes())
@@ -320,11 +322,19 @@ class AxialRenderer:
         self.ctx.enable(moderngl.DEPTH_TEST)
         if mode == "wireframe":  # lines are never culled
             if hidden_line:
-                self._depth_prepass(prog, vao_triangles, view, projection)
+                self._depth_prepass(prog, vao_triangles, view, projection, fill=hidden_line == "fill")
+            fill = hidden_line == "fill"
+            if "u_line_alpha" in prog:
+                prog["u_line_alpha"].value = 0.45 if fill else 1.0
+            if fill:  # the shaded fill shows through the lines
+                self.ctx.enable(moderngl.BLEND)
+                self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
             try:
                 vao_edges.render(moderngl.LINES, vertices=self._edge_count, instances=self.count)
             finally:
                 self.ctx.depth_func = "<"
+                if fill:
+                    self.ctx.disable(moderngl.BLEND)
             return
         if color is not None and self.materials is not None:
             keep, self.color = self.color, tuple(color)
@@ -335,21 +345,24 @@ class AxialRenderer:
             return
         self._draw_parts(prog, vao_triangles, view, projection)
 
-    def _depth_prepass(self, prog, vao, view, projection) -> None:
-        """Triangles into the depth buffer only (colour kept by a (0, 1) blend),
-        pushed back a little so the lines on them pass the ``<=`` test."""
+    def _depth_prepass(self, prog, vao, view, projection, fill: bool) -> None:
+        """The triangles first, pushed back a little so the lines on them pass
+        the ``<=`` test: into the depth buffer only (colour kept by a (0, 1)
+        blend), or with ``fill`` also drawn washed-out (``u_mode`` 3)."""
         import moderngl
 
-        prog["u_mode"].value = 0
-        self.ctx.enable(moderngl.BLEND)
-        self.ctx.blend_func = moderngl.ZERO, moderngl.ONE
+        prog["u_mode"].value = 3 if fill else 0
+        if not fill:
+            self.ctx.enable(moderngl.BLEND)
+            self.ctx.blend_func = moderngl.ZERO, moderngl.ONE
         self.ctx.polygon_offset = 1.0, 1.0
         try:
             self._draw_parts(prog, vao, view, projection, depth_only=True)
         finally:
             self.ctx.polygon_offset = 0.0, 0.0
-            self.ctx.disable(moderngl.BLEND)
-            self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
+            if not fill:
+                self.ctx.disable(moderngl.BLEND)
+                self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
             prog["u_mode"].value = 2
         self.ctx.depth_func = "<="
 
