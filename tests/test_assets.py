@@ -381,3 +381,13 @@ def test_bundled_leaf_card():
     alpha = m.texture[..., 3]
     assert (alpha == 0).mean() > 0.2 and (alpha == 255).mean() > 0.2  # a real cut-out
     assert mesh.axis.name == "y" and mesh.uvs is not None
+
+
+def test_flat_and_wireframe_work_for_textured_parts(ctx):
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    params = ad.random_params(mesh, 6, seed=4, bend=0.1)
+    img = ad.render_image(mesh, params, (128, 96), ("solid", "flat", "wireframe"), ctx=ctx, ground=False,
+                          background=(0, 0, 0))
+    panels = [img[:, i * 128:(i + 1) * 128].astype(int).sum(axis=2) > 30 for i in range(3)]
+    assert all(p.mean() > 0.02 for p in panels)
+    assert not np.array_equal(img[:, :128], img[:, 128:256])  # flat shading differs from smooth
