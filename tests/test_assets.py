@@ -391,3 +391,30 @@ def test_flat_and_wireframe_work_for_textured_parts(ctx):
     panels = [img[:, i * 128:(i + 1) * 128].astype(int).sum(axis=2) > 30 for i in range(3)]
     assert all(p.mean() > 0.02 for p in panels)
     assert not np.array_equal(img[:, :128], img[:, 128:256])  # flat shading differs from smooth
+
+
+def test_normal_map_changes_the_shading(ctx):
+    import dataclasses
+
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    # the file's normal map is subtle; a strong one (wide stripes tilted +-40 degrees about v) shows the path works
+    stripes = np.zeros((64, 64, 4), np.uint8)
+    tilt = np.where((np.arange(64) // 8) % 2 == 0, 0.64, -0.64)
+    stripes[..., 0] = np.round((tilt[None, :] * 0.5 + 0.5) * 255)
+    stripes[..., 1] = 128
+    stripes[..., 2] = np.round((np.sqrt(1 - tilt**2)[None, :] * 0.5 + 0.5) * 255)
+    stripes[..., 3] = 255
+
+    def with_normal_map(image):
+        parts = tuple(dataclasses.replace(p, material=dataclasses.replace(p.material, normal_texture=image))
+                      for p in mesh.parts)
+        return dataclasses.replace(mesh, parts=parts, _axis=None)
+
+    plain, bumpy = with_normal_map(None), with_normal_map(stripes)
+    params = np.zeros((1, 16), np.float32)
+    cam = ad.frame_instances(mesh, params, 4 / 3, elevation=10.0, azimuth=90.0, margin=-0.3)
+    kw = dict(ctx=ctx, camera=cam, fast=True, parts=["Bed"])
+    a = ad.render_image(bumpy, params, (160, 120), "solid", **kw).astype(int)
+    b = ad.render_image(plain, params, (160, 120), "solid", **kw).astype(int)
+    differ = (np.abs(a - b).sum(axis=2) > 6).mean()
+    assert differ > 0.02, f"the normal map changed {differ:.1%} of the pixels"
