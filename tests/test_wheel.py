@@ -20,7 +20,7 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
     (wheel,) = dist.glob("axialdeform-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
     shaders = [p.name for p in (ROOT / "glsl").iterdir() if p.suffix in (".glsl", ".vert", ".frag")]
-    meshes = [p.name for p in (ROOT / "axialdeform" / "meshes").glob("*.obj")]
+    meshes = [p.name for p in (ROOT / "axialdeform" / "meshes").iterdir() if p.suffix in (".obj", ".glb")]
     assert shaders and meshes
     missing = [f"axialdeform/glsl/{n}" for n in shaders if f"axialdeform/glsl/{n}" not in names]
     missing += [f"axialdeform/meshes/{n}" for n in meshes if f"axialdeform/meshes/{n}" not in names]
@@ -46,6 +46,7 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
         "assert ad.__file__.startswith(sys.prefix), ad.__file__; "
         "print(ad.__file__); print(ad.__version__); "
         "m = ad.load_mesh('leaf'); print(m.vertex_count); "
+        "c = ad.load_mesh('leafcard'); assert c.parts[0].material.texture is not None; "
         "print(len(ad.deformation_glsl()))"
     )], capture_output=True, text=True, cwd=work)
     assert check.returncode == 0, check.stderr
