@@ -89,7 +89,7 @@ class _ViewerMixin:
             raise AxialDeformError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
         self.bend_scale = 1.0
         self.show_ground = bool(s.get("ground", True))
-        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base)
+        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, parts=s.get("parts"))
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
@@ -290,7 +290,7 @@ class Viewer:
     @staticmethod
     def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int = 0,
                bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
-               fast: bool = False):
+               fast: bool = False, parts=None):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
@@ -298,7 +298,8 @@ class Viewer:
         linear RGB per instance; seed, bend : what ``N`` regenerates offsets
         with (bend as a fraction of L); headless : moderngl-window's headless
         window on an EGL context (no display needed); fast : no shadows,
-        hidden lines or multisampling (``samples`` is then 0).
+        hidden lines or multisampling (``samples`` is then 0); parts : names
+        of the mesh's parts to draw (all by default).
         """
         from .core.params import as_params
 
@@ -307,7 +308,7 @@ class Viewer:
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground, fast=fast)
+                     up=up, ground=ground, fast=fast, parts=parts)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": 0 if fast else samples})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]
@@ -348,6 +349,7 @@ def add_parser(subparsers) -> None:
     v.add_argument("--size", default="960x720", help="WIDTHxHEIGHT (default: %(default)s)")
     v.add_argument("--no-ground", action="store_true", help="start without the ground plane")
     v.add_argument("--fast", action="store_true", help="no shadows, hidden lines or multisampling")
+    v.add_argument("--part", action="append", metavar="NAME", help="draw only this part of the mesh (repeatable)")
     v.add_argument("--headless", action="store_true", help="no window: draw --frames frames offscreen (EGL)")
     v.add_argument("--frames", type=int, default=3, help="frames to draw with --headless (default: %(default)s)")
     v.add_argument("--screenshot", help="PNG of the last frame (with --headless)")
@@ -370,7 +372,8 @@ def run(args) -> None:
     if args.frames < 1:
         raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=args.seed,
-                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground, fast=args.fast)
+                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground, fast=args.fast,
+                           parts=args.part)
     if not args.headless:
         import moderngl_window as mglw
 
