@@ -418,3 +418,32 @@ def test_normal_map_changes_the_shading(ctx):
     b = ad.render_image(plain, params, (160, 120), "solid", **kw).astype(int)
     differ = (np.abs(a - b).sum(axis=2) > 6).mean()
     assert differ > 0.02, f"the normal map changed {differ:.1%} of the pixels"
+
+
+def test_textures_are_sampled_as_srgb(ctx, tmp_path):
+    """A texture of sRGB 128 grey draws like an untextured base colour of its
+    linear value (0.216), not like 0.5: the texture is decoded as sRGB."""
+    import dataclasses
+
+    from axialdeform.core.material import srgb_to_linear
+
+    mesh = ad.load_mesh(_textured_card(tmp_path, cut=False))
+    grey = np.full((16, 16, 4), 128, np.uint8)
+    grey[..., 3] = 255
+
+    def with_material(**kw):
+        part = mesh.parts[0]
+        return dataclasses.replace(mesh, parts=(dataclasses.replace(part, material=dataclasses.replace(part.material, **kw)),),
+                                   _axis=None)
+
+    textured = with_material(texture=grey, base_color=(1, 1, 1, 1))
+    linear = float(srgb_to_linear(128 / 255))
+    coloured = with_material(texture=None, base_color=(linear, linear, linear, 1))
+    wrong = with_material(texture=None, base_color=(0.5, 0.5, 0.5, 1))
+    params = np.zeros((1, 16), np.float32)
+    kw = dict(ctx=ctx, camera=_front_camera(mesh, params), fast=True, background=(0, 0, 0))
+    a, b, c = (ad.render_image(m, params, (48, 48), "solid", **kw).astype(int) for m in (textured, coloured, wrong))
+    inside = b.sum(axis=2) > 0
+    assert inside.mean() > 0.05
+    assert np.abs(a - b)[inside].max() <= 3
+    assert np.abs(c - b)[inside].mean() > 20  # the test would see a linear upload
