@@ -1,7 +1,8 @@
 """Step 1 of the data flow: the base mesh.
 
 A :class:`BaseMesh` is what every later step needs from a mesh file:
-positions, unit vertex normals and triangles, in the file's own vertex order.
+positions, unit vertex normals and triangles, in the file's own vertex order,
+plus its appearance (UVs, vertex colours, parts with materials).
 Files are read with trimesh (OBJ, PLY, STL, OFF, GLB/glTF) with
 ``process=False`` so nothing is merged or reordered.
 """
@@ -236,9 +237,16 @@ def bundled_mesh_path(name: str) -> Path:
 def load_mesh(source: str | os.PathLike) -> BaseMesh:
     """Read a base mesh from a file, or a bundled mesh by name (``"stone"``, ``"leaf"``).
 
+    A file with several meshes (glTF nodes/primitives, STL bodies, OBJ ``o``
+    objects or ``usemtl`` groups) becomes ONE base mesh with several
+    :attr:`BaseMesh.parts` (node transforms applied, the file's vertex order
+    kept); UVs, vertex colours and materials come along
+    (:mod:`axialdeform.core.material`).
+
     Raises :class:`MeshError` (naming the file) for a missing or unreadable
-    file, a scene with several meshes, no faces, non-finite coordinates or a
-    longest extent of zero.
+    file, no faces, non-finite coordinates, UVs or colours whose count does
+    not match the vertices, or a longest extent of zero.  A texture that
+    cannot be read is an :class:`~axialdeform.core.material.AssetWarning`.
     """
     if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
         path = bundled_mesh_path(source)
