@@ -268,7 +268,7 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         import trimesh
 
         loaded = trimesh.load(str(path), process=False, resolver=resolver)
-        if path.suffix.lower() == ".obj" and isinstance(loaded, trimesh.Trimesh):
+        if path.suffix.lower() == ".obj" and isinstance(loaded, trimesh.Trimesh) and _obj_object_count(path) > 1:
             loaded = _obj_objects(loaded, trimesh.load(str(path), process=False, resolver=SafeResolver(path.parent),
                                                        split_objects=True))
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
@@ -317,6 +317,15 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         tangents = compute_tangents(positions, normals, uvs, faces)
     return BaseMesh(positions, normals, faces, name=name, normals_from_file=has_file_normals,
                     uvs=uvs, colors=colors, tangents=tangents, parts=tuple(parts))
+
+
+def _obj_object_count(path: Path) -> int:
+    """How many ``o NAME`` lines an OBJ file has (a byte scan, so only files
+    with several objects pay for the second, splitting load)."""
+    import re
+
+    with open(path, "rb") as fh:
+        return len(re.findall(rb"(?m)^[ \t]*o[ \t]", fh.read()))
 
 
 def _obj_objects(merged, split):
