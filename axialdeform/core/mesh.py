@@ -301,7 +301,8 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     faces = np.concatenate(all_faces)
     if len(positions) == 0 or len(faces) == 0:
         raise MeshError(f"{name}: the mesh has {len(positions)} vertices and {len(faces)} faces; expected triangles")
-    _check_float32_range(positions, name)
+    if any(t is not None for _, t in gathered["geometries"]):
+        _check_float32_range(positions, name)  # a node transform can push a coordinate out of range
     file_normals = np.concatenate(all_normals)
     has_file_normals = bool(np.isfinite(file_normals).all(axis=1).any())
     if has_file_normals:
