@@ -447,3 +447,23 @@ def test_textures_are_sampled_as_srgb(ctx, tmp_path):
     assert inside.mean() > 0.05
     assert np.abs(a - b)[inside].max() <= 3
     assert np.abs(c - b)[inside].mean() > 20  # the test would see a linear upload
+
+
+def test_gltf_with_a_missing_or_fifo_image_still_loads(tmp_path):
+    import os
+
+    files = trimesh.load(shared_mesh("gltf/BoxTextured.glb")).export(file_type="gltf")
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    doc = json.loads((tmp_path / "model.gltf").read_text())
+    for uri in ("missing.png", "pipe.png"):
+        doc["images"] = [{"uri": uri}]
+        (tmp_path / f"{uri}.gltf").write_text(json.dumps(doc))
+    with pytest.warns(AssetWarning, match=r"missing.png.gltf: 'missing.png' .* material 'Texture' drawn with its base"):
+        mesh = ad.load_mesh(tmp_path / "missing.png.gltf")
+    assert mesh.parts[0].material.texture is None and mesh.uvs is not None
+    os.mkfifo(tmp_path / "pipe.png")
+    code = f"import axialdeform as ad; m = ad.load_mesh({str(tmp_path / 'pipe.png.gltf')!r}); print(m.parts[0].material.texture)"
+    out = subprocess.run([sys.executable, "-W", "always", "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and out.stdout.strip() == "None", out.stderr
+    assert "'pipe.png' (texture or material file) is not a regular file" in out.stderr
