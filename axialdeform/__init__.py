@@ -28,7 +28,8 @@ from .core.errors import (
 # axialdeform.core.deform), so they are bound now: importing the submodule later
 # must not replace the function.
 from .core.bake import bake
-from .core.deform import deform, rotation_matrices
+from .core.deform import deform
+from .core.transforms import rotation_matrices
 
 # The other public names and the module each lives in.  They are imported on first
 # use (PEP 562), so ``import axialdeform`` -- and every CLI start and every

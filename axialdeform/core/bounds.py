@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .deform import rotation_matrices
+from .transforms import rotation_matrices
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
 __all__ = ["instance_bounds", "scene_box", "box_corners"]
