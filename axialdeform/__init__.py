@@ -12,6 +12,7 @@ the reverse; ``tests/test_layers.py`` reads the imports and enforces it):
 """
 
 from .core.errors import (
+    ArgumentError,
     AxialDeformError,
     ContextError,
     GltfError,
@@ -77,7 +78,7 @@ def __dir__():
 
 
 __all__ = [
-    "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
+    "ArgumentError", "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
     "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds",

@@ -160,6 +160,8 @@ def scene_kwargs(mesh, scene: dict) -> dict:
     return kw
 
 
-def obj_name(i: int) -> str:
-    return f"instance_{i:06d}.obj"
+def obj_name(i: int, count: int = 0) -> str:
+    from ..core.bake import instance_name
+
+    return instance_name(i, count, ".obj")
 

@@ -163,7 +163,12 @@ def cmd_bake(args) -> None:
 
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar)
+        if args.engine == "gpu":
+            from ..gl.capture import bake_gpu
+
+            positions, normals = bake_gpu(mesh, params, progress=bar)
+        else:
+            positions, normals = bake(mesh, params, args.engine, progress=bar)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)

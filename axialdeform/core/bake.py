@@ -1,5 +1,6 @@
 """Baking: every instance's deformed world positions and normals, by the CPU
-reference or the GPU capture, to an ``.npz`` or a folder of mesh files."""
+reference (or an engine passed in, such as the GPU capture of
+:mod:`axialdeform.gl.capture`), to an ``.npz`` or a folder of mesh files."""
 
 from __future__ import annotations
 
@@ -10,34 +11,42 @@ import numpy as np
 
 from .atomic import atomic_path
 from .deform import deform
-from .errors import AxialDeformError
+from .errors import AxialDeformError, ArgumentError
 
-__all__ = ["bake", "write_npz", "write_mesh_folder", "ENGINES", "MESH_FORMATS"]
+__all__ = ["bake", "write_npz", "write_mesh_folder", "instance_name", "ENGINES", "MESH_FORMATS"]
 
+#: names of the engines ``axialdeform bake --engine`` offers (``"gpu"``: :func:`axialdeform.gl.capture.bake_gpu`)
 ENGINES = ("cpu", "gpu")
 MESH_FORMATS = ("obj", "ply", "glb")
 
 
-def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None) -> tuple[np.ndarray, np.ndarray]:
+def bake(mesh, params, engine="cpu", *, progress=None, **engine_options) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
-    in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
-    or ``"gpu"`` (transform feedback of the drawing vertex shader).
-    ``progress``: optional object with ``update(instances_done)`` (a tqdm bar)."""
-    if engine == "cpu":
-        return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
-    if engine != "gpu":
-        raise AxialDeformError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
-    from ..gl.context import create_context
-    from ..gl.renderer import AxialRenderer
+    in the base mesh's vertex order.
 
-    own = ctx is None
-    ctx = create_context() if own else ctx
-    try:
-        with AxialRenderer(ctx, mesh, params) as r:
-            return r.capture(progress=progress)
-    finally:
-        if own:
-            ctx.release()
+    engine : ``"cpu"`` or a callable
+        ``"cpu"``: the numpy reference (:func:`axialdeform.core.deform.deform`).
+        A callable ``engine(mesh, params, progress=..., **engine_options)``
+        does the work instead, e.g. the GPU capture
+        :func:`axialdeform.gl.capture.bake_gpu` (``ctx=`` is one of its options).
+    progress : optional object with ``update(instances_done)`` (a tqdm bar).
+    """
+    if callable(engine):
+        return engine(mesh, params, progress=progress, **engine_options)
+    if engine != "cpu":
+        hint = " (the GPU engine is axialdeform.gl.capture.bake_gpu: pass it as engine=)" if engine == "gpu" else ""
+        raise ArgumentError(f"engine: expected 'cpu' or a callable, found {engine!r}{hint}")
+    if engine_options:
+        raise ArgumentError(f"engine 'cpu' takes no options, found {', '.join(sorted(engine_options))}")
+    return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
+
+
+def instance_name(i: int, count: int = 0, suffix: str = "") -> str:
+    """The name of instance ``i`` of ``count`` wherever instances are files or
+    glTF nodes: ``instance_000012`` + ``suffix`` (e.g. ``".obj"``), zero-padded
+    to 6 digits or to as many as ``count - 1`` needs, so names sort in order."""
+    digits = max(6, len(str(max(int(count) - 1, 0))))
+    return f"instance_{int(i):0{digits}d}{suffix}"
 
 
 def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarray) -> None:
@@ -55,10 +64,9 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
     if folder.exists() and not folder.is_dir():
         raise AxialDeformError(f"{folder}: exists and is not a folder")
     folder.mkdir(parents=True, exist_ok=True)
-    digits = max(6, len(str(max(len(positions) - 1, 0))))
     written = []
     for i in range(len(positions)):  # one file per instance: file I/O, not maths
-        path = folder / f"instance_{i:0{digits}d}.{fmt}"
+        path = folder / instance_name(i, len(positions), f".{fmt}")
         tm = mesh.to_trimesh(positions[i], normals[i])
         with atomic_path(path) as tmp:
             tm.export(str(tmp), file_type=fmt)

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write_bytes
+from .bake import instance_name
 from .errors import GltfError
 from .params import ANGLES, POSITION, as_params
 from .transforms import angles_from_matrices, matrices_from_quaternions, quaternions_from_angles
@@ -173,9 +174,8 @@ def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
     pos_view = b.view(positions, target=_ARRAY_BUFFER, stride=12)
     nrm_view = b.view(normals, target=_ARRAY_BUFFER, stride=12)
     lo, hi = positions.min(axis=1), positions.max(axis=1)  # (n, 3): bounds per instance, vectorized
-    digits = max(6, len(str(max(n - 1, 0))))
     for k in range(n):  # glTF objects per instance (JSON), not per vertex
-        name = f"instance_{k:0{digits}d}"
+        name = instance_name(k, n)
         pa = b.accessor(pos_view, _FLOAT, v, "VEC3", offset=k * v * 12, bounds=np.stack([lo[k], hi[k]]), name=name + "_POSITION")
         na = b.accessor(nrm_view, _FLOAT, v, "VEC3", offset=k * v * 12, name=name + "_NORMAL")
         b.gltf.meshes.append(g.Mesh(name=name, primitives=[

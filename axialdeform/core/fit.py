@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from .deform import bernstein, deform, displace
+from .mesh import MESH_SUFFIXES  # mesh files a variants folder may hold (others are ignored)
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .params import ANGLES, OFFSETS, POSITION, as_params
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
@@ -61,8 +62,6 @@ __all__ = [
 
 #: default limit on the worst vertex distance of a fit, as a fraction of L
 DEFAULT_MAX_RESIDUAL = 1e-3
-#: mesh files a variants folder may hold (others are ignored)
-MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
 
 def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

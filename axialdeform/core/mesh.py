@@ -20,12 +20,13 @@ import numpy as np
 from .axis import ControlAxis
 from .errors import MeshError
 
-__all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "area_weighted_normals"]
+__all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "MESH_SUFFIXES", "area_weighted_normals"]
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``).
 BUNDLED_MESHES = ("stone", "leaf")
 
-_SUPPORTED = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
+#: File name suffixes of the mesh files this library reads (base meshes, fit variants).
+MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
 
 @dataclass(frozen=True, eq=False)
@@ -213,9 +214,9 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     if not path.exists():
         raise MeshError(f"{name}: no such mesh file")
     if path.is_dir():
-        raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(_SUPPORTED)})")
-    if path.suffix.lower() not in _SUPPORTED:
-        raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(_SUPPORTED)}")
+        raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(MESH_SUFFIXES)}")
     try:
         import trimesh
 

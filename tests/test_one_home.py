@@ -1,0 +1,47 @@
+"""Issue 11, item 2: each piece of shared logic has one home that the others call."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+import axialdeform as ad
+from axialdeform.core import bake as bake_mod
+from axialdeform.core import export, fit, mesh
+
+
+def test_instance_names_come_from_one_function(tmp_path, stone):
+    from axialdeform.bench import child
+
+    assert bake_mod.instance_name(12) == "instance_000012"
+    assert bake_mod.instance_name(3, 2_000_000, ".ply") == "instance_0000003.ply"
+    assert child.obj_name(7) == bake_mod.instance_name(7, 0, ".obj")
+    params = ad.random_params(stone, 3, seed=1)
+    pos, nrm = ad.bake(stone, params)
+    files = bake_mod.write_mesh_folder(tmp_path / "f", stone, pos, nrm, "obj")
+    assert [f.name for f in files] == [bake_mod.instance_name(i, 3, ".obj") for i in range(3)]
+    for mod in (export, child):
+        assert 'f"instance_{' not in inspect.getsource(mod), mod.__name__
+
+
+def test_mesh_suffixes_are_one_constant():
+    assert fit.MESH_SUFFIXES is mesh.MESH_SUFFIXES
+    assert ".obj" in mesh.MESH_SUFFIXES and ".glb" in mesh.MESH_SUFFIXES
+    assert inspect.getsource(fit).count('".ply"') == 0
+
+
+def test_core_bake_needs_no_gl_and_takes_an_engine(stone, ctx):
+    from axialdeform.gl.capture import bake_gpu
+
+    src = inspect.getsource(bake_mod)
+    assert "..gl" not in src and "moderngl" not in src
+    params = ad.random_params(stone, 4, seed=2, bend=0.2)
+    cpu, _ = ad.bake(stone, params)
+    gpu, _ = ad.bake(stone, params, engine=bake_gpu, ctx=ctx)
+    assert np.abs(gpu - cpu).max() < 1e-4 * stone.axis.length
+    with pytest.raises(ad.ArgumentError, match="bake_gpu"):
+        ad.bake(stone, params, "gpu")
+    with pytest.raises(ValueError, match="engine"):
+        ad.bake(stone, params, "fast")
