@@ -45,3 +45,18 @@ def test_core_bake_needs_no_gl_and_takes_an_engine(stone, ctx):
         ad.bake(stone, params, "gpu")
     with pytest.raises(ValueError, match="engine"):
         ad.bake(stone, params, "fast")
+
+
+def test_quantized_encoding_lives_in_params(stone):
+    from axialdeform.core import params as params_mod
+    from axialdeform.gl import buffers
+
+    values = ad.random_params(stone, 50, seed=3, bend=0.2)
+    lo, step, q = params_mod.quantize_params(values)
+    assert np.array_equal(params_mod.quantize_with_table(values, lo, step), q)
+    outside = values[:2].copy()
+    outside[1, 10] = values[:, 10].max() + 1.0
+    with pytest.raises(ad.ParamError, match="instance 1, field 10"):
+        params_mod.quantize_with_table(outside, lo, step)
+    src = inspect.getsource(buffers)
+    assert "np.rint" not in src and "65535" not in src

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ParamError
-from ..core.params import as_params, dequantize_params, quantize_params
+from ..core.params import as_params, dequantize_params, quantize_params, quantize_with_table
 
 __all__ = [
     "MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES",
@@ -118,17 +118,7 @@ class InstanceBuffer:
         """Encode with the current table; values outside its range are refused."""
         if not self.quantized:
             return values.tobytes()
-        v = values.astype(np.float64)
-        lo, step = self.qmin.astype(np.float64), self.qstep.astype(np.float64)
-        q = np.rint((v - lo) / np.where(step > 0, step, 1.0))
-        fits = (q >= 0) & (q <= 65535) & ((step > 0) | (v == lo))
-        if not fits.all():
-            row, col = (int(x) for x in np.argwhere(~fits)[0])
-            raise ParamError(
-                f"update: instance {row}, field {col}: {v[row, col]:.9g} is outside the quantized range "
-                f"{lo[col]:.9g}..{lo[col] + 65535 * step[col]:.9g} of the buffer; "
-                "expected values inside it (call set() with every instance to re-quantize)"
-            )
+        q = quantize_with_table(values, self.qmin, self.qstep, name="update")
         return q.astype("<u2").tobytes()
 
     @property
