@@ -38,7 +38,7 @@ from .core.transforms import rotation_matrices
 _LAZY = {
     "ControlAxis": "core.axis",
     "Camera": "gl.camera", "frame_instances": "gl.camera", "instance_bounds": "core.bounds", "scene_box": "core.bounds",
-    "Offscreen": "gl.context", "create_context": "gl.context",
+    "Offscreen": "gl.context", "create_context": "gl.context", "read_pixels": "gl.context",
     "GroundPlane": "gl.ground",
     "render_image": "gl.image", "save_png": "gl.image",
     "BUNDLED_MESHES": "core.mesh", "BaseMesh": "core.mesh", "bundled_mesh_path": "core.mesh", "load_mesh": "core.mesh",
@@ -83,5 +83,5 @@ __all__ = [
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds",
     "scene_box", "load_mesh", "make_params", "random_params",
-    "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "write_params",
+    "read_param_file", "read_params", "read_pixels", "render_image", "rotation_matrices", "save_png", "write_params",
 ]

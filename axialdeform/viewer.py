@@ -238,17 +238,11 @@ class _ViewerMixin:
 
     def screenshot(self) -> np.ndarray:
         """The last drawn frame, ``(height, width, 3) uint8``, first row at the top."""
-        w, h = self.wnd.buffer_size
-        color = self.ctx.renderbuffer((w, h), 4)
-        fbo = self.ctx.framebuffer(color)
-        try:
-            self.ctx.copy_framebuffer(fbo, self.wnd.fbo)
-            data = fbo.read(components=3, alignment=1)
-        finally:
-            fbo.release()
-            color.release()
+        from .gl.context import read_pixels
+
+        image = read_pixels(self.ctx, self.wnd.fbo, resolve=True)
         self.wnd.use()
-        return np.frombuffer(data, dtype=np.uint8).reshape(h, w, 3)[::-1].copy()
+        return image
 
     def save_screenshot(self, path) -> None:
         """Write the last drawn frame as a PNG, atomically."""

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..core.errors import ContextError
 
-__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer"]
+__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels"]
 
 GL_REQUIRE = 330
 
@@ -59,6 +59,37 @@ def release_framebuffer(ctx, fbo) -> None:
     fbo.release()
 
 
+def read_pixels(ctx, fbo, *, resolve: bool | None = None) -> np.ndarray:
+    """The colour of ``fbo`` as ``(height, width, 3) uint8``, first row at the
+    top (OpenGL's first row is the bottom one: this is the one place that
+    flips it).
+
+    resolve : bool or None
+        Copy into a plain single-sample framebuffer first (needed for a
+        multisampled one, e.g. a window's).  ``None``: when ``fbo`` has a
+        multisampled colour attachment or none that moderngl knows of (a
+        window's default framebuffer).  The bound framebuffer is left as it was.
+    """
+    w, h = (int(x) for x in fbo.size)
+    if resolve is None:
+        attachments = fbo.color_attachments
+        resolve = not attachments or any(getattr(a, "samples", 0) for a in attachments)
+    if resolve:
+        previous = ctx.fbo
+        color = ctx.renderbuffer((w, h), 4)
+        plain = ctx.framebuffer(color)
+        try:
+            ctx.copy_framebuffer(plain, fbo)
+            data = plain.read(components=3, alignment=1)
+        finally:
+            release_framebuffer(ctx, plain)
+            color.release()
+            bind_framebuffer(ctx, previous)
+    else:
+        data = fbo.read(components=3, alignment=1)
+    return np.frombuffer(data, dtype=np.uint8).reshape(h, w, 3)[::-1].copy()
+
+
 class Offscreen:
     """A multisampled colour + depth framebuffer of ``size = (width, height)``
     pixels, resolved into a plain one for reading back.
@@ -93,9 +124,7 @@ class Offscreen:
     def read(self) -> np.ndarray:
         if self._resolved is not self.fbo:
             self.ctx.copy_framebuffer(self._resolved, self.fbo)
-        data = self._resolved.read(components=3, alignment=1)
-        img = np.frombuffer(data, dtype=np.uint8).reshape(self.size[1], self.size[0], 3)
-        return img[::-1].copy()
+        return read_pixels(self.ctx, self._resolved, resolve=False)
 
     def release(self) -> None:
         if self._released:
