@@ -25,14 +25,12 @@ From Python::
 from __future__ import annotations
 
 import logging
-import math
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .core.bounds import scene_box
-from .gl.camera import UP_VECTORS, frame_instances
+from .gl.camera import UP_VECTORS, OrbitCamera
 from .core.errors import AxialDeformError, ContextError, ParamError
 from .gl.renderer import MODES
 
@@ -112,12 +110,19 @@ class _ViewerMixin:
     # ------------------------------------------------------------ camera
     def reset_camera(self) -> None:
         """Frame every instance (azimuth 35 deg, elevation 30 deg)."""
-        cam = frame_instances(self.mesh, self.base, self._aspect(), up=self.up, elevation=30.0)
-        self.target = cam.target
-        self.distance = float(np.linalg.norm(cam.eye - cam.target))
-        self.azimuth, self.elevation = 35.0, 30.0
-        lo, hi = scene_box(self.mesh, self.base)
-        self.extent = float(np.linalg.norm(hi - lo)) / 2 + 1e-6
+        self.orbit = OrbitCamera.framing(self.mesh, self.base, self._aspect(), up=self.up, azimuth=35.0, elevation=30.0)
+
+    @property
+    def azimuth(self) -> float:
+        return self.orbit.azimuth
+
+    @property
+    def elevation(self) -> float:
+        return self.orbit.elevation
+
+    @property
+    def distance(self) -> float:
+        return self.orbit.distance
 
     def _aspect(self) -> float:
         w, h = self.wnd.buffer_size
@@ -125,27 +130,15 @@ class _ViewerMixin:
 
     def matrices(self):
         """Current ``(view, projection)``, (4, 4) float32 pyrr layout."""
-        from .gl.camera import Camera
-
-        up = np.asarray(UP_VECTORS[self.up])
-        side = np.roll(up, 1)
-        fwd = np.cross(side, up)
-        az, el = math.radians(self.azimuth), math.radians(self.elevation)
-        to_eye = math.cos(el) * (math.cos(az) * fwd + math.sin(az) * side) + math.sin(el) * up
-        eye = self.target + self.distance * to_eye
-        reach = self.extent * 3.0  # the ground reaches past the instances
-        cam = Camera(eye, self.target, up, fovy=35.0, near=max(self.distance - reach, self.distance * 2e-3),
-                     far=self.distance + reach)
-        return cam.view(), cam.projection(self._aspect())
+        return self.orbit.matrices(self._aspect())
 
     def on_mouse_drag_event(self, x, y, dx, dy):
         """Orbit: 0.3 degrees per pixel."""
-        self.azimuth = (self.azimuth - 0.3 * dx) % 360.0
-        self.elevation = float(np.clip(self.elevation + 0.3 * dy, -5.0, 89.0))
+        self.orbit.orbit(-0.3 * dx, 0.3 * dy)
 
     def on_mouse_scroll_event(self, x_offset, y_offset):
         """Zoom: 10 % per scroll step."""
-        self.distance = float(np.clip(self.distance * 0.9 ** y_offset, 1e-3 * self.extent, 50.0 * self.extent))
+        self.orbit.zoom(0.9 ** y_offset)
 
     # ------------------------------------------------------------ keys
     def on_key_event(self, key, action, modifiers):
