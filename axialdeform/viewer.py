@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .gl.camera import UP_VECTORS, OrbitCamera
-from .core.errors import AxialDeformError, ContextError, ParamError
+from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
 from .gl.renderer import MODES
 
 __all__ = ["Viewer", "add_parser", "run", "KEY_ACTIONS"]
@@ -51,7 +51,7 @@ def _window_config_base():
     try:
         import moderngl_window as mglw
     except ImportError as exc:  # pragma: no cover - a dependency
-        raise ContextError(f"moderngl-window is not installed ({exc}); pip install 'moderngl-window>=2.4'") from None
+        raise ContextError(f"moderngl-window is not installed ({exc}); pip install 'moderngl-window>=3.0'") from None
     return mglw
 
 
@@ -85,7 +85,7 @@ class _ViewerMixin:
         self.up = s.get("up", "y")
         self.mode = s.get("mode", "solid")
         if self.mode not in MODES:
-            raise AxialDeformError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
+            raise ArgumentError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
         self.bend_scale = 1.0
         self.show_ground = bool(s.get("ground", True))
         self.renderer = AxialRenderer(self.ctx, self.mesh, self.base)

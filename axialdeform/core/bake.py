@@ -59,7 +59,7 @@ def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarra
 def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None) -> list[Path]:
     """One mesh file per instance (``instance_000000.obj`` …), each written atomically."""
     if fmt not in MESH_FORMATS:
-        raise AxialDeformError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
+        raise ArgumentError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise AxialDeformError(f"{folder}: exists and is not a folder")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .arrays import as_array
 from .axis import ControlAxis
 from .params import ANGLES, OFFSETS, POSITION, as_params
 from .transforms import rotation_matrices
@@ -102,6 +103,8 @@ def deform(
     Returns ``W = R·V' + p`` and ``R·n'``, each (n, v, 3) float32.
     """
     params = as_params(params)
+    positions = as_array(positions, (None, 3), "positions")
+    normals = as_array(normals, (len(positions), 3), "normals")
     n, v = len(params), len(positions)
     out_pos = np.empty((n, v, 3), dtype=np.float32)
     out_nrm = np.empty((n, v, 3), dtype=np.float32)

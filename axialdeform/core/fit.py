@@ -299,13 +299,24 @@ def _residuals(mesh, params32: np.ndarray, targets: np.ndarray) -> tuple[np.ndar
     return np.sqrt(np.mean(dist**2, axis=1)) / mesh.axis.length, dist.max(axis=1) / mesh.axis.length
 
 
+def _in_loaded_order(mesh, pos: np.ndarray) -> np.ndarray:
+    """Positions given in the file's own vertex order (``mesh.source_count``
+    of them) put into the loaded order; loaded-order positions unchanged."""
+    if len(pos) == mesh.vertex_count or len(pos) != mesh.source_count or (mesh.source_index < 0).any():
+        return pos
+    return pos[mesh.source_index]
+
+
 def _check_shape(mesh, positions: np.ndarray, name: str) -> np.ndarray:
     pos = np.asarray(positions, dtype=np.float64)
+    if pos.ndim == 2 and pos.shape[1] == 3:
+        pos = _in_loaded_order(mesh, pos)
     if pos.ndim != 2 or pos.shape[1] != 3 or len(pos) != mesh.vertex_count:
         found = len(pos) if pos.ndim == 2 else pos.shape
+        also = f" or {mesh.source_count} (its file's own order)" if mesh.source_count != mesh.vertex_count else ""
         raise TopologyError(
             f"{name}: has {found} vertices, expected {mesh.vertex_count} (the base mesh {mesh.name}'s count, "
-            "same order)"
+            f"same order){also}"
         )
     if not np.isfinite(pos).all():
         raise MeshError(f"{name}: has non-finite vertex coordinates; expected finite numbers")
@@ -352,7 +363,9 @@ def fit_params(mesh, variants, *, max_residual: float = DEFAULT_MAX_RESIDUAL, ma
     ----------
     mesh : BaseMesh
     variants : (n, v, 3) float, or a sequence of n (v, 3) arrays
-        World positions of each variant in the base mesh's vertex order.
+        World positions of each variant in the base mesh's vertex order
+        (``mesh.vertex_count`` rows), or in its file's own vertex order
+        (``mesh.source_count`` rows; see ``BaseMesh.source_index``).
     max_residual : float
         Limit on the largest vertex distance, fraction of L (flags only;
         call :meth:`FitResult.check` to raise).
@@ -375,6 +388,16 @@ def load_variant(path: str | os.PathLike, mesh) -> np.ndarray:
 
     variant = load_mesh(path)
     name = str(path)
+    if not (variant.vertex_count == mesh.vertex_count and np.array_equal(variant.faces, mesh.faces)):
+        # the same file vertices and triangles, split or ordered differently by the reader
+        # (an OBJ written with other UV seams, or none): compare and map in the file's own order
+        same_file_triangles = (len(variant.faces) == len(mesh.faces) and variant.source_count == mesh.source_count
+                               and not (variant.source_index < 0).any() and not (mesh.source_index < 0).any()
+                               and np.array_equal(variant.source_index[variant.faces], mesh.source_index[mesh.faces]))
+        if same_file_triangles:
+            file_positions = np.zeros((variant.source_count, 3))
+            file_positions[variant.source_index] = variant.positions
+            return file_positions[mesh.source_index]
     if variant.vertex_count != mesh.vertex_count:
         raise TopologyError(f"{name}: has {variant.vertex_count} vertices, expected {mesh.vertex_count} "
                             f"(the base mesh {mesh.name}'s count, same order)")

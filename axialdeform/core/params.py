@@ -115,15 +115,28 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
     offsets : (n, 5, 2) model units; positions : (n, 3) world units;
     angles : (n, 3) radians.  Missing parts are zero.
     """
-    parts = [x for x in (offsets, positions, angles) if x is not None]
-    n = count if count is not None else (len(np.asarray(parts[0])) if parts else 0)
+    from .arrays import as_array
+
+    parts = {}
+    for name, value, shape in (("offsets", offsets, (None, 5, 2)), ("positions", positions, (None, 3)),
+                               ("angles", angles, (None, 3))):
+        if value is not None:
+            arr = as_array(value, shape, name, np.float32, error=ParamError)
+            if len(shape) == 3 and arr.shape == (5, 2):
+                arr = arr[None]
+            parts[name] = arr
+    lengths = {len(a) for a in parts.values()} | ({int(count)} if count is not None else set())
+    if len(lengths) > 1:
+        found = ", ".join(f"{k} {len(a)}" for k, a in parts.items()) + (f", count {count}" if count is not None else "")
+        raise ParamError(f"make_params: expected the same number of instances in every part, found {found}")
+    n = lengths.pop() if lengths else 0
     out = np.zeros((n, 16), dtype=np.float32)
-    if offsets is not None:
-        out[:, OFFSETS] = np.asarray(offsets, dtype=np.float32).reshape(n, 10)
-    if positions is not None:
-        out[:, POSITION] = np.asarray(positions, dtype=np.float32).reshape(n, 3)
-    if angles is not None:
-        out[:, ANGLES] = np.asarray(angles, dtype=np.float32).reshape(n, 3)
+    if "offsets" in parts:
+        out[:, OFFSETS] = parts["offsets"].reshape(n, 10)
+    if "positions" in parts:
+        out[:, POSITION] = parts["positions"]
+    if "angles" in parts:
+        out[:, ANGLES] = parts["angles"]
     return as_params(out)
 
 
@@ -258,13 +271,14 @@ def quantize_params(values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.array(raw[:16], dtype=np.float32), np.array(raw[16:], dtype=np.float32), q
 
 
-def quantize_with_table(values, lo, step, *, name: str = "update") -> np.ndarray:
+def quantize_with_table(values, lo, step, *, name: str = "update", setter: str = "set()") -> np.ndarray:
     """Encode ``values`` with an existing table (``lo``, ``step`` from
     :func:`quantize_params`): ``q`` (n, 16) uint16.
 
     values : (n, 16) float; lo, step : (16,) float32.  A value outside the
     table's range ``lo .. lo + 65535 * step`` raises :class:`ParamError`
-    naming ``name``, the instance and the field (no clipping).
+    naming ``name``, the instance and the field (no clipping), and pointing
+    to ``setter`` (the call that re-quantizes every instance).
     """
     v = as_params(values).astype(np.float64)
     lo = np.asarray(lo, dtype=np.float32).reshape(16).astype(np.float64)
@@ -276,7 +290,7 @@ def quantize_with_table(values, lo, step, *, name: str = "update") -> np.ndarray
         raise ParamError(
             f"{name}: instance {row}, field {col}: {v[row, col]:.9g} is outside the quantized range "
             f"{lo[col]:.9g}..{lo[col] + 65535 * step[col]:.9g} of the buffer; "
-            "expected values inside it (call set() with every instance to re-quantize)"
+            f"expected values inside it (call {setter} with every instance to re-quantize)"
         )
     return q.astype(np.uint16)
 

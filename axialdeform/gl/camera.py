@@ -12,6 +12,7 @@ import numpy as np
 import pyrr
 
 from ..core.bounds import outline_points, scene_box
+from ..core.arrays import as_array
 from ..core.errors import ArgumentError
 
 __all__ = ["Camera", "OrbitCamera", "frame_instances", "frame_points", "orbit_axes", "UP_VECTORS"]
@@ -23,9 +24,9 @@ class Camera:
     """A perspective camera: eye, target, up, vertical field of view (degrees)."""
 
     def __init__(self, eye, target, up=(0.0, 1.0, 0.0), fovy: float = 35.0, near: float = 0.01, far: float = 100.0):
-        self.eye = np.asarray(eye, dtype=np.float64)
-        self.target = np.asarray(target, dtype=np.float64)
-        self.up = np.asarray(up, dtype=np.float64)
+        self.eye = as_array(eye, (3,), "eye")
+        self.target = as_array(target, (3,), "target")
+        self.up = as_array(up, (3,), "up")
         self.fovy, self.near, self.far = float(fovy), float(near), float(far)
 
     def view(self) -> np.ndarray:
@@ -64,8 +65,8 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     that the outline is centred.  Returns ``target : (3,) float64`` and the
     distance.
     """
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    r = np.asarray(radii, dtype=np.float64).reshape(-1)
+    pts = as_array(points, (None, 3), "points")
+    r = as_array(radii, (len(pts),), "radii")
     if not 0.0 <= margin < 1.0:
         raise ArgumentError(f"margin: expected a fraction in [0, 1), found {margin!r}")
     if aspect <= 0 or not 0 < fovy < 180:
@@ -126,7 +127,7 @@ class OrbitCamera:
                  fovy: float = 35.0, extent: float = 1.0):
         if up not in UP_VECTORS:
             raise ArgumentError(f"up: expected one of x, y, z, found {up!r}")
-        self.target = np.asarray(target, dtype=np.float64).reshape(3)
+        self.target = as_array(target, (3,), "target")
         self.distance, self.azimuth, self.elevation = float(distance), float(azimuth), float(elevation)
         self.up, self.fovy, self.extent = up, float(fovy), float(extent)
 

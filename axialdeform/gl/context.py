@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.errors import ContextError
+from ..core.errors import ArgumentError, ContextError
 
-__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels"]
+__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels", "require_framebuffer"]
 
 GL_REQUIRE = 330
 
@@ -50,6 +50,21 @@ def bind_framebuffer(ctx, fbo) -> None:
     live framebuffer bound avoids it.
     """
     (fbo if _alive(fbo) else ctx.detect_framebuffer(0)).use()
+
+
+def require_framebuffer(ctx, what: str = "draw") -> None:
+    """Raise :class:`ContextError` unless a usable framebuffer is bound.
+
+    A surfaceless (EGL, windowless) context has no default framebuffer: a
+    draw there only leaves ``GL_INVALID_FRAMEBUFFER_OPERATION`` behind and
+    draws nothing.  So does a framebuffer that was released while bound.
+    """
+    fbo = ctx.fbo
+    if fbo is None or not _alive(fbo) or 0 in tuple(fbo.size):
+        raise ContextError(
+            f"{what}: no usable framebuffer is bound (a windowless context has none of its own); "
+            "expected one bound first, e.g. Offscreen(ctx, (w, h)).use() or ctx.simple_framebuffer((w, h)).use()"
+        )
 
 
 def release_framebuffer(ctx, fbo) -> None:
@@ -101,7 +116,7 @@ class Offscreen:
     def __init__(self, ctx, size: tuple[int, int], samples: int = 4):
         width, height = (int(size[0]), int(size[1]))
         if width <= 0 or height <= 0 or width > 16384 or height > 16384:
-            raise ContextError(f"image size: expected 1..16384 pixels each way, found {width}x{height}")
+            raise ArgumentError(f"image size: expected 1..16384 pixels each way, found {width}x{height}")
         self.ctx = ctx
         self.size = (width, height)
         samples = min(samples, ctx.max_samples) if samples > 1 else 0

@@ -21,8 +21,9 @@ from contextlib import contextmanager
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers
-from .context import bind_framebuffer, release_framebuffer
-from ..core.errors import AxialDeformError, ParamError
+from .context import bind_framebuffer, release_framebuffer, require_framebuffer
+from ..core.errors import ArgumentError, AxialDeformError, ParamError
+from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .shaders import build_program
 
 __all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS"]
@@ -105,9 +106,7 @@ class AxialRenderer:
 
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
-        for name, value in (("u_axis", axis.index), ("u_lo", axis.lo), ("u_len", axis.length)):
-            if name in program:
-                program[name].value = value
+        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length})
         self._set_quant_uniforms(program)
 
     def _set_quant_uniforms(self, program) -> None:
@@ -146,7 +145,7 @@ class AxialRenderer:
     def update_params(self, params, start: int = 0) -> None:
         """Overwrite the instances ``start .. start + len(params) - 1`` in place."""
         self._check()
-        self.instances.update(params, start)
+        self.instances.update(params, start, setter="set_params()")
 
     # ------------------------------------------------------------ optional tint
     def set_tint(self, colors) -> None:
@@ -197,29 +196,24 @@ class AxialRenderer:
 
         self._check()
         if mode not in _MODE_INDEX:
-            raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
-        view = np.asarray(view, dtype=np.float32).reshape(4, 4)
-        projection = np.asarray(projection, dtype=np.float32).reshape(4, 4)
+            raise ArgumentError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
+        view, projection = camera_matrices(view, projection)
+        require_framebuffer(self.ctx, "AxialRenderer.render")
         tinted = self._tint_count is not None
         if tinted and self._tint_count != self.count:
             raise ParamError(f"tint: {self._tint_count} colours for {self.count} instances; "
                              "call set_tint with one colour per instance (or None)")
         prog = self._tint[0] if tinted else self.program
         vao_edges, vao_triangles = (self._tint[2], self._tint[1]) if tinted else (self._vao_edges, self._vao_triangles)
-        prog["u_view"].write(view.tobytes())
-        prog["u_proj"].write(projection.tobytes())
-        uniforms = {
+        set_camera_uniforms(prog, view, projection)
+        set_uniforms(prog, {
             "u_mode": _MODE_INDEX[mode],
             "u_color": tuple(color or self.color),
             "u_line_color": tuple(line_color or self.line_color),
             "u_light_dir": tuple(_unit(light_dir)),
             "u_up": tuple(_unit(up)),
-            "u_eye": tuple(np.linalg.inv(view.astype(np.float64))[3, :3]),
             "u_ambient": float(ambient),
-        }
-        for name, value in uniforms.items():
-            if name in prog:
-                prog[name].value = value
+        })
         if self.count == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
