@@ -1,6 +1,6 @@
 """Step 2 of the data flow: the control axis of a base mesh.
 
-Conventions (``docs/axial-deformation.md`` of the project, thesis §2.2.1):
+Conventions (``docs/method.md``, "The control axis"; thesis §2.2.1):
 
 * the axis ``a`` is the coordinate with the longest bounding-box extent;
   ties go to the first of x, y, z;

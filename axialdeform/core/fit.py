@@ -3,7 +3,7 @@
 Given a base mesh and variants with its topology (same vertices in the same
 order, each a bent, rotated and moved copy), find for each variant the
 offsets ``d1..d5``, the position ``p`` and the angles ``rx ry rz`` with
-``W ≈ R·(V + E(Σ B_i(t) d_i)) + p`` (``docs/axial-deformation.md``).
+``W ≈ R·(V + E(Σ B_i(t) d_i)) + p`` (``docs/method.md``).
 
 Method (``docs/interop.md``), for every instance, vectorized over the
 vertices and over batches of instances:
