@@ -60,3 +60,17 @@ def test_quantized_encoding_lives_in_params(stone):
         params_mod.quantize_with_table(outside, lo, step)
     src = inspect.getsource(buffers)
     assert "np.rint" not in src and "65535" not in src
+
+
+def test_conventions_are_cited_from_docs_method():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    method = (root / "docs" / "method.md").read_text(encoding="utf-8")
+    for term in ("Rz(rz) · Ry(ry) · Rx(rx)", "V'   = V + E(D(t))", "n' = normalize", "d1u d1v", "s tw tp",
+                 "(x, z)", "t = (V[a] − lo) / L"):
+        assert term in method, term
+    files = [*root.glob("axialdeform/**/*.py"), *root.glob("glsl/*"), *root.glob("docs/*.md")]
+    cited = [f for f in files if "axial-deformation.md" in f.read_text(encoding="utf-8", errors="replace")]
+    assert not cited, cited
+    assert "docs/method.md" in (root / "glsl" / "axial.glsl").read_text()
