@@ -74,3 +74,40 @@ def test_conventions_are_cited_from_docs_method():
     cited = [f for f in files if "axial-deformation.md" in f.read_text(encoding="utf-8", errors="replace")]
     assert not cited, cited
     assert "docs/method.md" in (root / "glsl" / "axial.glsl").read_text()
+
+
+def test_camera_uniforms_and_read_back_have_one_home():
+    from pathlib import Path
+
+    from axialdeform import viewer
+    from axialdeform.gl import context, ground, renderer
+
+    for mod in (renderer, ground):
+        src = inspect.getsource(mod)
+        assert "set_camera_uniforms(" in src and '["u_view"]' not in src and "np.linalg.inv(view" not in src
+        assert "for name, value in" not in src
+    root = Path(__file__).resolve().parent.parent
+    sources = [inspect.getsource(viewer), inspect.getsource(context.Offscreen)]
+    sources += [p.read_text() for p in sorted((root / "examples").glob("*.py"))]
+    for src in sources:
+        assert "reshape(h, w, 3)[::-1]" not in src and ".read(components=3" not in src
+    assert inspect.getsource(viewer).count("math.cos") == 0  # the orbit is gl.camera.OrbitCamera's
+
+
+def test_read_pixels_puts_the_top_row_first(ctx):
+    from axialdeform.gl.context import release_framebuffer
+
+    fbo = ctx.simple_framebuffer((4, 2))
+    try:
+        fbo.use()
+        ctx.viewport = (0, 0, 4, 2)
+        fbo.clear(0.0, 0.0, 0.0, 1.0)
+        ctx.scissor = (0, 1, 4, 1)  # GL row 1 = the top row of the picture
+        fbo.clear(1.0, 1.0, 1.0, 1.0)
+        ctx.scissor = None
+        image = ad.read_pixels(ctx, fbo)
+        assert image.shape == (2, 4, 3)
+        assert (image[0] == 255).all() and (image[1] == 0).all()
+        assert np.array_equal(ad.read_pixels(ctx, fbo, resolve=True), image)
+    finally:
+        release_framebuffer(ctx, fbo)
