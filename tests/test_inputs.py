@@ -34,6 +34,9 @@ def test_argument_error_is_both():
     lambda m: ad.render_image(m, np.zeros((1, 16)), modes="shiny"),
     lambda m: ad.BaseMesh.from_arrays(np.zeros((4, 2)), [[0, 1, 2]]),
     lambda m: ad.BaseMesh.from_arrays(np.eye(3), [[0, 1, 7]]),
+    lambda m: ad.load_mesh(5),
+    lambda m: m.axis.parameter(np.zeros((3, 2))),
+    lambda m: ad.render_image(m, np.zeros((1, 16)), (0, 10)),
 ])
 def test_wrong_values_and_shapes_get_our_value_error(stone, call):
     with pytest.raises(ValueError) as info:
@@ -51,6 +54,10 @@ def test_a_3x3_view_matrix_is_refused_by_renderer_and_ground(ctx, stone):
             r.render(np.eye(3), np.eye(4))
         with pytest.raises(ad.ArgumentError, match="projection"):
             ground.render(np.eye(4), np.eye(4)[:3])
+        with pytest.raises(ad.ArgumentError, match="light_dir"):
+            r.render(np.eye(4), np.eye(4), light_dir=(1, 2))
+        with pytest.raises(ad.ArgumentError, match="ground color"):
+            ad.GroundPlane(ctx, color=(1, 2))
 
 
 def test_drawing_without_a_framebuffer_raises(ctx, stone):

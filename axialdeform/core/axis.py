@@ -102,6 +102,10 @@ class ControlAxis:
     def parameter(self, positions: np.ndarray) -> np.ndarray:
         """``t = (V[a] - lo) / L`` clamped to [0, 1]; ``positions`` (n, 3) -> (n,) float64."""
         p = np.asarray(positions, dtype=np.float64)
+        if p.ndim == 0 or p.shape[-1] != 3:
+            from .errors import ArgumentError
+
+            raise ArgumentError(f"positions: expected an array of shape (n, 3), found {p.shape}")
         return np.clip((p[..., self.index] - self.lo) / self.length, 0.0, 1.0)
 
     def embed(self, uv: np.ndarray) -> np.ndarray:

@@ -259,6 +259,9 @@ def load_mesh(source) -> BaseMesh:
         name = f"<{type(source).__name__}>"
         mesh, transform = _single_mesh(source, name)
         return _from_trimesh(mesh, transform, name, None)
+    if not isinstance(source, (str, os.PathLike)):
+        raise MeshError(f"load_mesh: expected a file path, a bundled mesh name ({', '.join(BUNDLED_MESHES)}), "
+                        f"a trimesh.Trimesh or a BaseMesh, found {type(source).__name__}")
     if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
         path = bundled_mesh_path(source)
     else:

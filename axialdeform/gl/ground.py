@@ -18,6 +18,7 @@ from ..core.axis import AXIS_NAMES
 from ..core.bounds import instance_bounds, scene_box
 from ..core.errors import ArgumentError, AxialDeformError
 from .context import require_framebuffer
+from ..core.arrays import as_array
 from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .shaders import build_program
 
@@ -46,7 +47,7 @@ class GroundPlane:
             raise ArgumentError(f"ground up axis: expected one of x, y, z, found {up!r}")
         self.ctx = ctx
         self.up = up
-        self.color = tuple(float(c) for c in color)
+        self.color = tuple(as_array(color, (3,), "ground color").tolist())
         self.cell = float(cell)
         self.center = np.zeros(3)
         self.radius = 10.0
@@ -98,7 +99,10 @@ class GroundPlane:
         require_framebuffer(self.ctx, "GroundPlane.render")
         a = AXIS_NAMES.index(self.up)
         axis_u, axis_v = (np.eye(3)[i] for i in range(3) if i != a)
-        light = np.asarray(light_dir, dtype=np.float64)
+        light = as_array(light_dir, (3,), "light_dir")
+        background = as_array(background, (None,), "background")
+        if len(background) not in (3, 4):
+            raise ArgumentError(f"background: expected 3 or 4 numbers (RGB[A]), found {len(background)}")
         prog = self.program
         set_camera_uniforms(prog, view, projection)
         set_uniforms(prog, {

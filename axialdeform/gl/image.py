@@ -45,7 +45,7 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
     own_ctx = ctx is None
     ctx = create_context() if own_ctx else ctx
     try:
-        w, h = size
+        w, h = parse_size(f"{size[0]}x{size[1]}")
         cam = camera or frame_instances(mesh, params, w / h, up=up)
         view, proj = cam.view(), cam.projection(w / h)
         r = renderer or AxialRenderer(ctx, mesh, params)

@@ -23,6 +23,7 @@ import numpy as np
 from .buffers import InstanceBuffer, MeshBuffers
 from .context import bind_framebuffer, release_framebuffer, require_framebuffer
 from ..core.errors import ArgumentError, AxialDeformError, ParamError
+from ..core.arrays import as_array
 from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .shaders import build_program
 
@@ -210,8 +211,8 @@ class AxialRenderer:
             "u_mode": _MODE_INDEX[mode],
             "u_color": tuple(color or self.color),
             "u_line_color": tuple(line_color or self.line_color),
-            "u_light_dir": tuple(_unit(light_dir)),
-            "u_up": tuple(_unit(up)),
+            "u_light_dir": tuple(_unit(light_dir, "light_dir")),
+            "u_up": tuple(_unit(up, "up")),
             "u_ambient": float(ambient),
         })
         if self.count == 0:
@@ -334,6 +335,6 @@ def _mirrors(view, projection) -> bool:
     return bool(det > 0.0)
 
 
-def _unit(v) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
+def _unit(v, name: str = "direction") -> np.ndarray:
+    v = as_array(v, (3,), name)
     return v / max(np.linalg.norm(v), 1e-12)
