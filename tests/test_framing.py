@@ -19,7 +19,8 @@ def _extent(image):
 
 
 @pytest.mark.parametrize("name, count, size", [("stone", 1, (320, 240)), ("stone", 150, (320, 240)),
-                                               ("leaf", 200, (200, 300)), ("leaf", 1, (240, 240))])
+                                               ("leaf", 200, (200, 300)), ("leaf", 1, (240, 240)),
+                                               ("stone", 3000, (200, 150))])  # 3000: framed by spheres
 def test_automatic_framing_fills_80_percent_and_cuts_nothing(ctx, name, count, size):
     mesh = ad.load_mesh(name)
     params = ad.random_params(mesh, count, seed=4, bend=0.15)

@@ -64,7 +64,7 @@ def _support_indices(positions: np.ndarray, directions: int = 194) -> np.ndarray
     return np.unique(np.argmax((p - p.mean(axis=0)) @ dirs.T, axis=0))
 
 
-def outline_points(mesh, params, *, budget: int = 2_000_000) -> tuple[np.ndarray, np.ndarray]:
+def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
     """Points (with radii) whose spheres hold the deformed instances, as
     tightly as ``budget`` allows: what a camera must keep in view.
 
@@ -77,7 +77,7 @@ def outline_points(mesh, params, *, budget: int = 2_000_000) -> tuple[np.ndarray
       the base mesh (radius 0; outlines within a few percent of exact);
     * else the instance spheres of :func:`instance_bounds` (always hold).
     """
-    from .deform import deform
+    from .deform import bernstein, displace
 
     params = as_params(params)
     n, v = len(params), mesh.vertex_count
@@ -89,5 +89,9 @@ def outline_points(mesh, params, *, budget: int = 2_000_000) -> tuple[np.ndarray
         idx = _support_indices(mesh.positions)
         if n * len(idx) > budget:
             return instance_bounds(mesh, params)
-    world, _ = deform(mesh.axis, mesh.positions[idx], mesh.normals[idx], params)
-    return world.reshape(-1, 3).astype(np.float64), np.zeros(n * len(idx))
+    pts = mesh.positions[idx].astype(np.float64)
+    p64 = params.astype(np.float64)
+    disp = np.einsum("vk,nkc->nvc", bernstein(mesh.axis.parameter(pts), 4), p64[:, OFFSETS].reshape(-1, 5, 2))
+    world = displace(mesh.axis, pts, disp) @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2)
+    world += p64[:, None, POSITION]
+    return world.reshape(-1, 3), np.zeros(n * len(idx))

@@ -59,39 +59,56 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     """Target and distance of an orbit camera that just sees every sphere.
 
     points : (m, 3) float; radii : (m,) float (0 for points).
-    The eye looks along ``-to_eye`` (:func:`orbit_axes`); it is placed as
-    close as it can be with every sphere inside the picture less ``margin``
-    (a fraction of the field of view), and the target is moved sideways so
-    that the outline is centred.  Returns ``target : (3,) float64`` and the
-    distance.
+    The eye looks along ``-to_eye`` (:func:`orbit_axes`).  Each side of the
+    picture (less ``margin``, a fraction of the field of view) is a plane
+    through the eye; a sphere is inside when it is on the inner side of all
+    four by its radius.  That is linear in the eye's position, so the
+    closest eye is solved for directly: in the tighter direction the
+    outline touches both sides, in the other it has equal room on both.
+    Returns ``target : (3,) float64`` (on the view axis, level with the
+    outline's centre) and the eye's distance from it.
     """
     pts = as_array(points, (None, 3), "points")
     r = as_array(radii, (len(pts),), "radii")
     if not 0.0 <= margin < 1.0:
         raise ArgumentError(f"margin: expected a fraction in [0, 1), found {margin!r}")
-    if aspect <= 0 or not 0 < fovy < 180:
+    if not aspect > 0 or not 0 < fovy < 180:
         raise ArgumentError(f"camera: expected aspect > 0 and 0 < fovy < 180, found aspect {aspect!r}, fovy {fovy!r}")
     if len(pts) == 0:
         pts, r = np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]), np.zeros(2)
     to_eye, right, cam_up = orbit_axes(up, azimuth, elevation)
-    tan_y = np.tan(np.radians(fovy) / 2) * (1 - margin)
-    tan_x = tan_y * aspect
-    sin_x, sin_y = tan_x / np.hypot(1.0, tan_x), tan_y / np.hypot(1.0, tan_y)
-    target = ((pts - r[:, None]).min(axis=0) + (pts + r[:, None]).max(axis=0)) / 2
-
-    def fit(target):
-        rel = pts - target
-        x, y, z = rel @ right, rel @ cam_up, rel @ to_eye
-        need = z + np.maximum(np.abs(x) / tan_x + r / sin_x, np.abs(y) / tan_y + r / sin_y)
-        return x, y, z, max(float(need.max()), 1e-9)
-
-    for _ in range(6):  # centre the projected outline: a few fixed-point steps
-        x, y, z, d = fit(target)
-        depth = np.maximum(d - z, 1e-12)
-        u = ((x - r) / depth).min() + ((x + r) / depth).max()
-        v = ((y - r) / depth).min() + ((y + r) / depth).max()
-        target = target + (right * u + cam_up * v) * (d / 2)
-    return target, fit(target)[3]
+    half_y = np.arctan(np.tan(np.radians(fovy) / 2) * (1 - margin))
+    half_x = np.arctan(np.tan(half_y) * aspect)
+    cx, sx, cy, sy = np.cos(half_x), np.sin(half_x), np.cos(half_y), np.sin(half_y)
+    # inward normals of the right, left, top and bottom planes
+    normals = np.stack([-cx * right - sx * to_eye, cx * right - sx * to_eye,
+                        -cy * cam_up - sy * to_eye, cy * cam_up - sy * to_eye])
+    # a sphere is inside plane k when (p - eye) . n_k >= r, i.e. eye . n_k <= c_k
+    c = (pts @ normals.T - r[:, None]).min(axis=0)
+    # eye = a right + b cam_up + e to_eye: the smallest e with room for a and b
+    ex, ey = -(c[0] + c[1]) / (2 * sx), -(c[2] + c[3]) / (2 * sy)
+    e = max(ex, ey)
+    a = (c[1] - c[0]) / (2 * cx)
+    b = (c[3] - c[2]) / (2 * cy)
+    eye = a * right + b * cam_up + e * to_eye
+    # the tighter direction touches both sides, so it is centred; the other has
+    # equal room measured across the planes, not in the picture: centre it there
+    slack_axis, half = (cam_up, half_y) if ex >= ey else (right, half_x)
+    for _ in range(3):
+        rel = pts - eye
+        depth = np.maximum(-(rel @ to_eye), 1e-12)
+        across = rel @ slack_axis
+        lo, hi = ((across - r) / depth).min(), ((across + r) / depth).max()
+        shift = (lo + hi) / 2 * float(np.median(depth))
+        moved = eye + shift * slack_axis
+        rel = pts - moved
+        depth = np.maximum(-(rel @ to_eye), 1e-12)
+        if ((np.abs(rel @ slack_axis) + r / np.cos(half)) / depth > np.tan(half) * (1 + 1e-9)).any():
+            break  # would cut something off: keep the last placement
+        eye = moved
+    center = ((pts - r[:, None]).min(axis=0) + (pts + r[:, None]).max(axis=0)) / 2
+    distance = max(float((eye - center) @ to_eye), 1e-9)
+    return eye - distance * to_eye, distance
 
 
 def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35.0,
