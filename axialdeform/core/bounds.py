@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .deform import bernstein, displace
 from .transforms import rotation_matrices
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
@@ -74,11 +75,10 @@ def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, 
     * every deformed vertex (radius 0) when ``n * vertices <= budget``
       (exact);
     * else the deformed vertices that are extreme along 200 directions of
-      the base mesh (radius 0; outlines within a few percent of exact);
+      the base mesh (radius 0; an approximation: a bent instance may reach
+      a little past them, which the framing's margin covers);
     * else the instance spheres of :func:`instance_bounds` (always hold).
     """
-    from .deform import bernstein, displace
-
     params = as_params(params)
     n, v = len(params), mesh.vertex_count
     if n == 0:
