@@ -102,7 +102,7 @@ def test_moderngl_window_version_message_agrees_with_pyproject():
 def test_update_params_error_names_set_params(ctx, stone):
     params = ad.random_params(stone, 4, seed=1)
     with ad.AxialRenderer(ctx, stone, params) as r:
-        with pytest.raises(ad.ParamError, match=r"set_params\(\)"):
+        with pytest.raises(ad.ParamError, match=r"^update_params: .*set_params\(\)"):
             r.update_params(params, start=2)
     with ad.AxialRenderer(ctx, stone, params, quantized=True) as r:
         big = params[:1].copy()

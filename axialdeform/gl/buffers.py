@@ -114,11 +114,11 @@ class InstanceBuffer:
         self.qmin, self.qstep, q = quantize_params(values)
         return q.astype("<u2").tobytes()
 
-    def _encode_part(self, values: np.ndarray, setter: str = "set()") -> bytes:
+    def _encode_part(self, values: np.ndarray, setter: str = "set()", name: str = "update") -> bytes:
         """Encode with the current table; values outside its range are refused."""
         if not self.quantized:
             return values.tobytes()
-        q = quantize_with_table(values, self.qmin, self.qstep, name="update", setter=setter)
+        q = quantize_with_table(values, self.qmin, self.qstep, name=name, setter=setter)
         return q.astype("<u2").tobytes()
 
     @property
@@ -142,19 +142,20 @@ class InstanceBuffer:
         if self.count:
             self.buffer.write(self._encode_all(values))
 
-    def update(self, params, start: int = 0, *, setter: str = "set()") -> None:
+    def update(self, params, start: int = 0, *, setter: str = "set()", name: str = "update") -> None:
         """Overwrite instances ``start .. start + len(params) - 1`` in place.
 
-        setter : how error messages name the call that replaces every instance."""
+        name, setter : how error messages name this call and the one that
+        replaces every instance (a wrapper such as ``AxialRenderer`` passes its own)."""
         values = as_params(params)
         start = int(start)
         if start < 0 or start + len(values) > self.count:
             raise ParamError(
-                f"update: instances {start}..{start + len(values) - 1} do not fit in the {self.count} instances drawn; "
+                f"{name}: instances {start}..{start + len(values) - 1} do not fit in the {self.count} instances drawn; "
                 f"expected 0 <= start and start + len(params) <= count (use {setter} to change the count)"
             )
         if len(values):
-            self.buffer.write(self._encode_part(values, setter), offset=start * self.record_bytes)
+            self.buffer.write(self._encode_part(values, setter, name), offset=start * self.record_bytes)
 
     def read(self) -> np.ndarray:
         """The parameters on the GPU, ``(count, 16) float32`` (decoded if quantized)."""

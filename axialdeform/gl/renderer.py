@@ -146,7 +146,7 @@ class AxialRenderer:
     def update_params(self, params, start: int = 0) -> None:
         """Overwrite the instances ``start .. start + len(params) - 1`` in place."""
         self._check()
-        self.instances.update(params, start, setter="set_params()")
+        self.instances.update(params, start, setter="set_params()", name="update_params")
 
     # ------------------------------------------------------------ optional tint
     def set_tint(self, colors) -> None:
