@@ -25,10 +25,10 @@ from .core.errors import (
     TopologyError,
 )
 
-# These two share their names with their modules (axialdeform.core.bake,
+# These two share their names with their modules (axialdeform.gl.bake,
 # axialdeform.core.deform), so they are bound now: importing the submodule later
 # must not replace the function.
-from .core.bake import bake
+from .gl.bake import bake
 from .core.deform import deform
 from .core.transforms import rotation_matrices
 
@@ -37,7 +37,7 @@ from .core.transforms import rotation_matrices
 # benchmark child -- pays only for what it touches.
 _LAZY = {
     "ControlAxis": "core.axis",
-    "Camera": "gl.camera", "OrbitCamera": "gl.camera", "frame_instances": "gl.camera", "bake_gpu": "gl.capture", "instance_bounds": "core.bounds", "scene_box": "core.bounds",
+    "Camera": "gl.camera", "OrbitCamera": "gl.camera", "frame_instances": "gl.camera", "instance_bounds": "core.bounds", "scene_box": "core.bounds",
     "Offscreen": "gl.context", "create_context": "gl.context", "read_pixels": "gl.context",
     "GroundPlane": "gl.ground",
     "render_image": "gl.image", "save_png": "gl.image",
@@ -80,7 +80,7 @@ def __dir__():
 __all__ = [
     "ArgumentError", "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
     "FIELDS", "GroundPlane", "MODES", "OrbitCamera", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
-    "as_params", "assemble", "assemble_text", "bake", "bake_gpu", "build_program", "bundled_mesh_path", "create_context", "deform",
+    "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds",
     "scene_box", "load_mesh", "make_params", "random_params",
     "read_param_file", "read_params", "read_pixels", "render_image", "rotation_matrices", "save_png", "write_params",

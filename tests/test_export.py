@@ -19,7 +19,6 @@ import pytest
 import trimesh
 
 import axialdeform as ad
-from axialdeform.gl.capture import bake_gpu
 from axialdeform.core import export
 from axialdeform.cli import main
 from axialdeform.core.params import ANGLES
@@ -193,7 +192,7 @@ def test_reader_refuses_other_files(scenes, tmp_path):
 
 def test_gpu_baked_export_is_valid(ctx, stone, tmp_path, validate):
     params = ad.random_params(stone, 5, seed=8)
-    positions, normals = bake_gpu(stone, params, ctx=ctx)
+    positions, normals = ad.bake(stone, params, "gpu", ctx=ctx)
     path = export.export_baked(tmp_path / "gpu.glb", stone, params, positions=positions, normals=normals)
     (report,) = validate(path)
     _assert_valid(report)

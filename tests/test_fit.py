@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
-from axialdeform.gl.capture import bake_gpu
 from axialdeform.core import fit
 from axialdeform.core.bake import write_mesh_folder
 from axialdeform.cli import main
@@ -176,7 +175,7 @@ def test_variant_paths(tmp_path):
 def test_fit_gpu_captured_variants(ctx, leaf):
     """Variants captured from the drawing vertex shader fit like the CPU ones."""
     params, _ = _variants(leaf, count=10, seed=4)
-    positions, _ = bake_gpu(leaf, params, ctx=ctx)
+    positions, _ = ad.bake(leaf, params, "gpu", ctx=ctx)
     result = fit.fit_params(leaf, positions)
     _assert_reproduces(leaf, result.params, positions)
     assert np.abs(ad.rotation_matrices(params[:, ANGLES]) - ad.rotation_matrices(result.params[:, ANGLES])).max() < TOL

@@ -36,7 +36,8 @@ def _angle_range(text: str) -> tuple[float, float]:
 
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
-    from ..core.bake import ENGINES, MESH_FORMATS
+    from ..core.bake import MESH_FORMATS
+    from ..gl.bake import ENGINES
     from ..gl.renderer import MODES
     from ..core.variation import PLACEMENTS
 
@@ -159,16 +160,12 @@ def cmd_render(args) -> None:
 
 
 def cmd_bake(args) -> None:
-    from ..core.bake import bake, write_mesh_folder, write_npz
+    from ..core.bake import write_mesh_folder, write_npz
+    from ..gl.bake import bake
 
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
-        if args.engine == "gpu":
-            from ..gl.capture import bake_gpu
-
-            positions, normals = bake_gpu(mesh, params, progress=bar)
-        else:
-            positions, normals = bake(mesh, params, args.engine, progress=bar)
+        positions, normals = bake(mesh, params, args.engine, progress=bar)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)

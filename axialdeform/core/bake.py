@@ -1,6 +1,6 @@
 """Baking: every instance's deformed world positions and normals, by the CPU
-reference (or an engine passed in, such as the GPU capture of
-:mod:`axialdeform.gl.capture`), to an ``.npz`` or a folder of mesh files."""
+reference (the GPU capture: :mod:`axialdeform.gl.bake`), to an ``.npz`` or a
+folder of mesh files."""
 
 from __future__ import annotations
 
@@ -11,33 +11,18 @@ import numpy as np
 
 from .atomic import atomic_path
 from .deform import deform
-from .errors import AxialDeformError, ArgumentError
+from .errors import ArgumentError, AxialDeformError
 
-__all__ = ["bake", "write_npz", "write_mesh_folder", "instance_name", "ENGINES", "MESH_FORMATS"]
+__all__ = ["bake_cpu", "instance_name", "write_npz", "write_mesh_folder", "MESH_FORMATS"]
 
-#: names of the engines ``axialdeform bake --engine`` offers (``"gpu"``: :func:`axialdeform.gl.capture.bake_gpu`)
-ENGINES = ("cpu", "gpu")
 MESH_FORMATS = ("obj", "ply", "glb")
 
 
-def bake(mesh, params, engine="cpu", *, progress=None, **engine_options) -> tuple[np.ndarray, np.ndarray]:
+def bake_cpu(mesh, params, *, progress=None) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
-    in the base mesh's vertex order.
-
-    engine : ``"cpu"`` or a callable
-        ``"cpu"``: the numpy reference (:func:`axialdeform.core.deform.deform`).
-        A callable ``engine(mesh, params, progress=..., **engine_options)``
-        does the work instead, e.g. the GPU capture
-        :func:`axialdeform.gl.capture.bake_gpu` (``ctx=`` is one of its options).
-    progress : optional object with ``update(instances_done)`` (a tqdm bar).
-    """
-    if callable(engine):
-        return engine(mesh, params, progress=progress, **engine_options)
-    if engine != "cpu":
-        hint = " (the GPU engine is axialdeform.gl.capture.bake_gpu: pass it as engine=)" if engine == "gpu" else ""
-        raise ArgumentError(f"engine: expected 'cpu' or a callable, found {engine!r}{hint}")
-    if engine_options:
-        raise ArgumentError(f"engine 'cpu' takes no options, found {', '.join(sorted(engine_options))}")
+    in the base mesh's vertex order, by the numpy reference (:func:`deform`).
+    ``progress``: optional object with ``update(instances_done)``.  The GPU
+    engine and the switch between them: :func:`axialdeform.gl.bake.bake`."""
     return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
 
 
