@@ -62,7 +62,8 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     The eye looks along ``-to_eye`` (:func:`orbit_axes`).  Each side of the
     picture (less ``margin``, a fraction of the field of view) is a plane
     through the eye; a sphere is inside when it is on the inner side of all
-    four by its radius.  That is linear in the eye's position, so the
+    four by its radius (a negative ``margin`` lets the outline run past the
+    edges: a close-up).  That is linear in the eye's position, so the
     closest eye is solved for directly: in the tighter direction the
     outline touches both sides, in the other it has equal room on both.
     Returns ``target : (3,) float64`` (on the view axis, level with the
@@ -70,8 +71,8 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     """
     pts = as_array(points, (None, 3), "points")
     r = as_array(radii, (len(pts),), "radii")
-    if not 0.0 <= margin < 1.0:
-        raise ArgumentError(f"margin: expected a fraction in [0, 1), found {margin!r}")
+    if not margin < 1.0:
+        raise ArgumentError(f"margin: expected a fraction below 1 (negative: crop past the edges), found {margin!r}")
     if not aspect > 0 or not 0 < fovy < 180:
         raise ArgumentError(f"camera: expected aspect > 0 and 0 < fovy < 180, found aspect {aspect!r}, fovy {fovy!r}")
     if len(pts) == 0:
