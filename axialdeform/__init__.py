@@ -24,10 +24,10 @@ from .core.errors import (
     TopologyError,
 )
 
-# These two share their names with their modules (axialdeform.core.bake,
+# These two share their names with their modules (axialdeform.gl.bake,
 # axialdeform.core.deform), so they are bound now: importing the submodule later
 # must not replace the function.
-from .core.bake import bake
+from .gl.bake import bake
 from .core.deform import deform, rotation_matrices
 
 # The other public names and the module each lives in.  They are imported on first

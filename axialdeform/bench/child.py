@@ -33,7 +33,7 @@ def main(spec_text: str) -> None:
     draw()
     ctx.finish()
     stamps["first_frame"] = time.time()
-    print("FIRST", flush=True)
+    _say("FIRST")
     frames = []
     for k in range(spec["warmup"] + spec["frames"]):
         t = time.perf_counter()
@@ -48,7 +48,7 @@ def main(spec_text: str) -> None:
         save_png(spec["image"], target.read())
     info["trimesh_imported"] = "trimesh" in sys.modules
     info["gl_error"] = ctx.error
-    print("RESULT " + json.dumps({"stamps": stamps, "frames": frames, "info": info}), flush=True)
+    _say("RESULT " + json.dumps({"stamps": stamps, "frames": frames, "info": info}))
 
 
 def interleaved(spec_text: str) -> None:
@@ -71,7 +71,13 @@ def interleaved(spec_text: str) -> None:
             if k >= spec["warmup"]:
                 frames[name].append(time.perf_counter() - t)
     info = {name: i for name, _, i in setups}
-    print("RESULT " + json.dumps({"frames": frames, "info": info, "gl_error": ctx.error}), flush=True)
+    _say("RESULT " + json.dumps({"frames": frames, "info": info, "gl_error": ctx.error}))
+
+
+def _say(line: str) -> None:
+    """One line of the protocol with the parent (stdout, flushed at once)."""
+    sys.stdout.write(line + "\n")
+    sys.stdout.flush()
 
 
 def _open(spec: dict):

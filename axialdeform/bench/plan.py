@@ -122,12 +122,12 @@ class Scene:
                 f"bench cache {self.dir}: about {need >> 20} MiB needed for {self.count} OBJ files, "
                 f"{free >> 20} MiB free; use --cache DIR on a larger disk or leave out this count"
             )
-        from ..core.bake import bake, write_mesh_folder
+        from ..core.bake import bake_cpu, write_mesh_folder
 
         tmp = self.dir / f"objs.tmp-{os.getpid()}"
         shutil.rmtree(tmp, ignore_errors=True)
         # the "load every one" data is exactly what `axialdeform bake MESH PARAMS -o DIR` writes
-        positions, normals = bake(self.mesh, self.params, "cpu")
+        positions, normals = bake_cpu(self.mesh, self.params)
         written = write_mesh_folder(tmp, self.mesh, positions, normals, "obj",
                                     progress=None if progress is None else _Counter(progress))
         if written and written[0].name != obj_name(0):

@@ -8,7 +8,8 @@ from ._common import add_mesh_mismatch, load, progress_bar
 
 
 def add_parser(sub) -> None:
-    from ..core.bake import ENGINES, MESH_FORMATS
+    from ..core.bake import MESH_FORMATS
+    from ..gl.bake import ENGINES
 
     b = sub.add_parser("bake", help="write every deformed instance out", description=(
         "Deform every instance and write OUT: an .npz with arrays 'positions' and 'normals', each "
@@ -24,7 +25,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-    from ..core.bake import bake, write_mesh_folder, write_npz
+    from ..core.bake import write_mesh_folder, write_npz
+    from ..gl.bake import bake
 
     mesh, params = load(args)
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:

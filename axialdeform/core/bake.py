@@ -1,5 +1,6 @@
 """Baking: every instance's deformed world positions and normals, by the CPU
-reference or the GPU capture, to an ``.npz`` or a folder of mesh files."""
+reference (the GPU capture: :mod:`axialdeform.gl.bake`), to an ``.npz`` or a
+folder of mesh files."""
 
 from __future__ import annotations
 
@@ -12,32 +13,17 @@ from .atomic import atomic_path
 from .deform import deform
 from .errors import AxialDeformError
 
-__all__ = ["bake", "write_npz", "write_mesh_folder", "ENGINES", "MESH_FORMATS"]
+__all__ = ["bake_cpu", "write_npz", "write_mesh_folder", "MESH_FORMATS"]
 
-ENGINES = ("cpu", "gpu")
 MESH_FORMATS = ("obj", "ply", "glb")
 
 
-def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None) -> tuple[np.ndarray, np.ndarray]:
+def bake_cpu(mesh, params, *, progress=None) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
-    in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
-    or ``"gpu"`` (transform feedback of the drawing vertex shader).
-    ``progress``: optional object with ``update(instances_done)`` (a tqdm bar)."""
-    if engine == "cpu":
-        return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
-    if engine != "gpu":
-        raise AxialDeformError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
-    from ..gl.context import create_context
-    from ..gl.renderer import AxialRenderer
-
-    own = ctx is None
-    ctx = create_context() if own else ctx
-    try:
-        with AxialRenderer(ctx, mesh, params) as r:
-            return r.capture(progress=progress)
-    finally:
-        if own:
-            ctx.release()
+    in the base mesh's vertex order, by the numpy reference (:func:`deform`).
+    ``progress``: optional object with ``update(instances_done)``.  The GPU
+    engine and the switch between them: :func:`axialdeform.gl.bake.bake`."""
+    return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
 
 
 def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarray) -> None:

@@ -205,9 +205,9 @@ def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
     """The GLB bytes of the baked layout (see :func:`export_baked`)."""
     params = as_params(params)
     if positions is None or normals is None:
-        from .bake import bake
+        from .bake import bake_cpu
 
-        positions, normals = bake(mesh, params, "cpu")
+        positions, normals = bake_cpu(mesh, params)
     if len(params) == 0:
         raise GltfError("baked export: expected at least one instance, found 0")
     positions = np.ascontiguousarray(positions, dtype="<f4")
