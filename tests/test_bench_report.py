@@ -64,6 +64,7 @@ def test_missed_goal_is_explained_by_measured_stages():
     assert "1.25" in text and "`read`: +100.0 ms" in text
 
 
+@pytest.mark.slow
 def test_report_numbers_are_the_measurements(details, tmp_path):
     path = report.write_report(details, tmp_path)
     text = path.read_text()
@@ -95,6 +96,7 @@ def test_readme_summary_is_rendered_from_the_committed_measurements(details):
     assert m[1] == report.summary(details)
 
 
+@pytest.mark.slow
 def test_report_from_cli(details, tmp_path, capsys):
     src = tmp_path / "in" / "bench-details.json"
     src.parent.mkdir()

@@ -392,7 +392,8 @@ def run_bench(
                     "params": str(sc.params_file(m)), "folder": str(sc.folder)}
             if frames_dir is not None and rep == 0 and c == image_count:
                 spec["image"] = str(frames_dir / f"{m}-{c}-{mode}.png")
-            runs.setdefault((m, c, mode), []).append(_run_child(spec, timeout))
+            result = _run_child(spec, timeout)  # (an interrupted child leaves no empty case behind)
+            runs.setdefault((m, c, mode), []).append(result)
             step(1, f"{m} x {c} {mode} #{rep + 1}")
         # frame times: one process per count x mode, the methods drawn in turn
         for c in counts:

@@ -50,9 +50,9 @@ def camera_from_args(mesh, params, size, args):
     if np.linalg.norm(np.cross(forward, up)) <= 1e-9 * np.linalg.norm(forward):
         raise AxialDeformError(f"--eye / --target: the view direction {tuple(forward)} is parallel to the up "
                                f"axis {args.up}; expected a direction that is not straight up or down (or use --up)")
-    lo, hi = instance_bounds(mesh, params)
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-    far = float(np.linalg.norm(corners - eye, axis=1).max()) * 1.05 + 1e-6
+    centers, radii = instance_bounds(mesh, params)  # a sphere around each instance
+    reach = np.linalg.norm(centers - eye, axis=1) + radii if len(centers) else np.ones(1)
+    far = float(reach.max()) * 1.05 + 1e-6
     return Camera(eye, target, up, fov, near=far * 1e-3, far=far)
 
 
