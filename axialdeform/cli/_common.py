@@ -53,6 +53,12 @@ def positive_int(text: str) -> int:
     return value
 
 
+def add_mesh_and_params(p) -> None:
+    """The MESH and PARAMS positional arguments of the commands that read both."""
+    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
+    p.add_argument("params", help="parameter file (.adp binary, .txt/.csv/.dat text)")
+
+
 def add_mesh_mismatch(p) -> None:
     p.add_argument("--ignore-mesh-mismatch", action="store_true",
                    help="use PARAMS even if made for another mesh (default: refuse)")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_mesh_mismatch, load, progress_bar
+from ._common import add_mesh_and_params, add_mesh_mismatch, load, progress_bar
 
 
 def add_parser(sub) -> None:
@@ -15,8 +15,7 @@ def add_parser(sub) -> None:
         "Deform every instance and write OUT: an .npz with arrays 'positions' and 'normals', each "
         "(instances, vertices, 3) float32 in world space and the mesh file's vertex order; or a folder "
         "with one mesh file per instance."))
-    b.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
-    b.add_argument("params", help="parameter file (.adp binary, .txt/.csv/.dat text)")
+    add_mesh_and_params(b)
     b.add_argument("-o", "--output", required=True, help="an .npz file or a folder (required, no default)")
     b.add_argument("--engine", choices=ENGINES, default="cpu", help="who deforms: numpy or the GPU (default: %(default)s)")
     b.add_argument("--format", choices=MESH_FORMATS, default="obj", help="mesh file type when OUT is a folder (default: %(default)s)")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import add_mesh_mismatch, load
+from ._common import add_mesh_and_params, add_mesh_mismatch, load
 
 
 def add_parser(sub) -> None:
@@ -11,8 +11,7 @@ def add_parser(sub) -> None:
         "world positions and normals; opens in any glTF viewer. --instanced: the base mesh once plus "
         "EXT_mesh_gpu_instancing (TRANSLATION, ROTATION and the offsets as _AXIAL_* attributes); "
         "see docs/interop.md. Coordinates are written as they are (no re-orientation to glTF's +Y up)."))
-    e.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
-    e.add_argument("params", help="parameter file (.adp binary, .txt/.csv/.dat text)")
+    add_mesh_and_params(e)
     e.add_argument("-o", "--output", required=True, help="the .glb to write (required, no default)")
     layout = e.add_mutually_exclusive_group()
     layout.add_argument("--baked", dest="layout", action="store_const", const="baked",

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import AXES, add_mesh_mismatch, load, vec3
+from ._common import AXES, add_mesh_and_params, add_mesh_mismatch, load, vec3
 
 
 def add_parser(sub) -> None:
@@ -11,8 +11,7 @@ def add_parser(sub) -> None:
     rd = sub.add_parser("render", help="render instances to a PNG", description=(
         "Render MESH deformed by PARAMS. Without --eye/--target/--fov the camera frames every instance; "
         "any of them replaces that part of the automatic camera."))
-    rd.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
-    rd.add_argument("params", help="parameter file (.adp binary, .txt/.csv/.dat text)")
+    add_mesh_and_params(rd)
     rd.add_argument("-o", "--output", required=True, help="PNG to write (required, no default)")
     rd.add_argument("--mode", choices=MODES, default="solid", help="how to draw (default: %(default)s)")
     rd.add_argument("--size", default="800x600", help="WIDTHxHEIGHT (default: %(default)s)")
