@@ -34,7 +34,9 @@ from .gl.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
 from .gl.renderer import MODES
 
-__all__ = ["Viewer", "add_parser", "run", "KEY_ACTIONS"]
+__all__ = ["Viewer", "KEY_ACTIONS"]
+
+_log = logging.getLogger(__name__)
 
 #: key name -> what it does (names are moderngl-window's key attribute names)
 KEY_ACTIONS = {
@@ -80,7 +82,9 @@ class _ViewerMixin:
         self.mesh = s["mesh"]
         self.base = np.array(s["params"], dtype=np.float32)
         self.animate = s.get("animate")
-        self.seed = int(s.get("seed", 0))
+        seed = s.get("seed")
+        self.seed = None if seed is None else int(seed)  # None: the parameters came from elsewhere (a file)
+        self.on_screenshot = s.get("on_screenshot")
         self.bend = float(s.get("bend", 0.08))
         self.up = s.get("up", "y")
         self.mode = s.get("mode", "solid")
@@ -156,7 +160,7 @@ class _ViewerMixin:
         elif what == "next mode":
             self.mode = MODES[(MODES.index(self.mode) + 1) % len(MODES)]
         elif what == "new seed":
-            self.regenerate(self.seed + 1)
+            self.regenerate(0 if self.seed is None else self.seed + 1)
         elif what == "more bend":
             self.set_bend_scale(self.bend_scale * 1.25)
         elif what == "less bend":
@@ -169,7 +173,9 @@ class _ViewerMixin:
             path = Path(f"axialdeform-view-{self.screenshots:03d}.png")
             self.screenshots += 1
             self.save_screenshot(path)
-            print(f"wrote {path.resolve()}")
+            _log.info("wrote %s", path.resolve())
+            if self.on_screenshot is not None:
+                self.on_screenshot(path.resolve())
         self._update_title(force=True)
 
     # ------------------------------------------------------------ parameters
@@ -214,8 +220,9 @@ class _ViewerMixin:
 
     def status(self) -> str:
         """What the title bar shows."""
+        seed = "" if self.seed is None else f" - seed {self.seed}"
         return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances - {self.mode} - "
-                f"bend x{self.bend_scale:.2f} - seed {self.seed} - {self.fps:.0f} fps")
+                f"bend x{self.bend_scale:.2f}{seed} - {self.fps:.0f} fps")
 
     def _update_title(self, force: bool = False) -> None:
         now = time.perf_counter()
@@ -256,14 +263,18 @@ class Viewer:
     """Builds and runs the viewer window (see the module docstring)."""
 
     @staticmethod
-    def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int = 0,
-               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4):
+    def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int | None = None,
+               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
+               on_screenshot=None):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
         ``f(t_seconds) -> (n, 16)`` called every frame; tint : optional (n, 3)
-        linear RGB per instance; seed, bend : what ``N`` regenerates offsets
-        with (bend as a fraction of L); headless : moderngl-window's headless
+        linear RGB per instance; seed : the seed ``params`` were made with,
+        shown in the title (None: not known, e.g. read from a file; ``N`` then
+        starts at 0); bend : what ``N`` regenerates offsets with (a fraction
+        of L); on_screenshot : optional ``f(path)`` called after the S key
+        wrote a screenshot; headless : moderngl-window's headless
         window on an EGL context (no display needed).
         """
         from .core.params import as_params
@@ -273,7 +284,7 @@ class Viewer:
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground)
+                     up=up, ground=ground, on_screenshot=on_screenshot)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": samples})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]
@@ -296,56 +307,3 @@ class Viewer:
         viewer = cls.create(mesh, params, **kwargs)
         mglw.run_window_config_instance(viewer)
 
-
-# ---------------------------------------------------------------- the command
-def add_parser(subparsers) -> None:
-    """Register ``axialdeform view`` (the cli.PLUGINS hook)."""
-    v = subparsers.add_parser("view", help="look at instances in an interactive window", description=(
-        "Open MESH (a file, or 'stone' / 'leaf') deformed by PARAMS (or by random parameters) in a window: "
-        "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
-        "UP/DOWN bend amplitude, G ground, R reset camera, S screenshot, ESC quit."))
-    v.add_argument("mesh")
-    v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
-    v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
-    v.add_argument("--seed", type=int, default=0)
-    v.add_argument("--bend", type=float, default=0.08, help="offset amplitude for N, fraction of L (default: %(default)s)")
-    v.add_argument("--mode", choices=MODES, default="solid")
-    v.add_argument("--up", choices=("x", "y", "z"), default="y")
-    v.add_argument("--size", default="960x720", help="WIDTHxHEIGHT (default: %(default)s)")
-    v.add_argument("--no-ground", action="store_true", help="start without the ground plane")
-    v.add_argument("--headless", action="store_true", help="no window: draw --frames frames offscreen (EGL)")
-    v.add_argument("--frames", type=int, default=3, help="frames to draw with --headless (default: %(default)s)")
-    v.add_argument("--screenshot", help="PNG of the last frame (with --headless)")
-    v.add_argument("--ignore-mesh-mismatch", action="store_true")
-    v.set_defaults(handler=run)
-
-
-def run(args) -> None:
-    """The ``view`` command."""
-    from .gl.image import parse_size
-    from .core.mesh import load_mesh
-    from .core.params import read_params
-    from .core.variation import random_params
-
-    mesh = load_mesh(args.mesh)
-    if args.params:
-        params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
-    else:
-        params = random_params(mesh, args.count, seed=args.seed, bend=args.bend, up=args.up)
-    if args.frames < 1:
-        raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
-    viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=args.seed,
-                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground)
-    if not args.headless:
-        import moderngl_window as mglw
-
-        mglw.run_window_config_instance(viewer)
-        return
-    try:
-        viewer.step(args.frames)
-        if args.screenshot:
-            viewer.save_screenshot(args.screenshot)
-        print(viewer.status() + (f" - wrote {args.screenshot}" if args.screenshot else ""))
-    finally:
-        viewer.release()
-        viewer.wnd.destroy()

@@ -55,8 +55,7 @@ __all__ = [
     "read_instanced_glb",
     "quaternions_from_angles",
     "matrices_from_quaternions",
-    "add_parser",
-    "run",
+    "check_glb_path",
 ]
 
 LAYOUTS = ("baked", "instanced")
@@ -141,7 +140,8 @@ def _mesh_extras(mesh, count: int, layout: str) -> dict:
     }
 
 
-def _check_glb_path(path) -> Path:
+def check_glb_path(path) -> Path:
+    """``path`` as a Path when it names a .glb file that is not a folder; else :class:`GltfError`."""
     path = Path(path)
     if path.suffix.lower() != ".glb":
         raise GltfError(f"{path}: expected a .glb file name (binary glTF), found {path.suffix or 'no extension'!r}")
@@ -203,7 +203,7 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     NORMAL, world units) and the base mesh's triangles; the scene's
     ``extras["axialdeform"]`` records the axis and the mesh fingerprint.
     """
-    path = _check_glb_path(path)
+    path = check_glb_path(path)
     atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals))
     return path
 
@@ -260,7 +260,7 @@ def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
     mesh : BaseMesh
     params : (n, 16) float32, n >= 1
     """
-    path = _check_glb_path(path)
+    path = check_glb_path(path)
     atomic_write_bytes(path, encode_instanced(mesh, params))
     return path
 
@@ -399,35 +399,3 @@ def read_extras(path: str | os.PathLike) -> dict:
 
 
 # ------------------------------------------------------------------------- CLI
-
-
-def add_parser(subparsers) -> None:
-    """Register ``axialdeform export``."""
-    e = subparsers.add_parser("export", help="write instances as a glTF binary (.glb)", description=(
-        "Write MESH deformed by PARAMS to a .glb. --baked (default): one mesh per instance with its deformed "
-        "world positions and normals; opens in any glTF viewer. --instanced: the base mesh once plus "
-        "EXT_mesh_gpu_instancing (TRANSLATION, ROTATION and the offsets as _AXIAL_* attributes); "
-        "see docs/interop.md. Coordinates are written as they are (no re-orientation to glTF's +Y up)."))
-    e.add_argument("mesh")
-    e.add_argument("params")
-    e.add_argument("-o", "--output", required=True, help="the .glb to write")
-    layout = e.add_mutually_exclusive_group()
-    layout.add_argument("--baked", dest="layout", action="store_const", const="baked",
-                        help="one deformed mesh per instance (default)")
-    layout.add_argument("--instanced", dest="layout", action="store_const", const="instanced",
-                        help="base mesh once + EXT_mesh_gpu_instancing")
-    e.set_defaults(layout="baked")
-    e.add_argument("--ignore-mesh-mismatch", action="store_true", help="use PARAMS even if made for another mesh")
-    e.set_defaults(handler=run)
-
-
-def run(args) -> None:
-    """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
-    from .mesh import load_mesh
-    from .params import read_params
-
-    out = _check_glb_path(args.output)
-    mesh = load_mesh(args.mesh)
-    params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
-    path = export_glb(out, mesh, params, args.layout)
-    print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

@@ -31,7 +31,6 @@ gets an honest residual; fits above ``max_residual`` are flagged.
 from __future__ import annotations
 
 import os
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,8 +55,6 @@ __all__ = [
     "fit_files",
     "load_variant",
     "variant_paths",
-    "add_parser",
-    "run",
 ]
 
 #: default limit on the worst vertex distance of a fit, as a fraction of L
@@ -437,75 +434,3 @@ def fit_files(mesh, paths, *, max_residual: float = DEFAULT_MAX_RESIDUAL, max_it
     return _fit_all(mesh, items, len(paths), max_residual=max_residual, max_iterations=max_iterations,
                     progress=progress)
 
-
-# ------------------------------------------------------------------------- CLI
-
-
-def _fraction(text: str) -> float:
-    import argparse
-
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a fraction of L, found {text!r}") from None
-    if not (np.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"expected a finite fraction of L >= 0, found {text!r}")
-    return value
-
-
-def _positive_int(text: str) -> int:
-    import argparse
-
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, found {text!r}")
-    return value
-
-
-def add_parser(subparsers) -> None:
-    """Register ``axialdeform fit``."""
-    f = subparsers.add_parser("fit", help="recover parameters from existing variant meshes", description=(
-        "Fit the 16 numbers of each variant of BASE: VARIANTS are mesh files with BASE's vertices in the same "
-        "order, or ONE folder whose mesh files, sorted by name, are instances 0, 1, 2, ... The output is binary "
-        "for .adp, text for .txt/.csv/.dat. Exit 2 if a fit's largest vertex distance exceeds --max-residual."))
-    f.add_argument("base")
-    f.add_argument("variants", nargs="+")
-    f.add_argument("-o", "--output", required=True, help="parameter file to write")
-    f.add_argument("--max-residual", type=_fraction, default=DEFAULT_MAX_RESIDUAL,
-                   help="largest allowed vertex distance, fraction of L (default: %(default)g)")
-    f.add_argument("--allow-residual", action="store_true",
-                   help="write the parameters even if fits exceed --max-residual (they are still reported)")
-    f.add_argument("--max-iterations", type=_positive_int, default=100, help="alternation rounds per variant (default: %(default)s)")
-    f.set_defaults(handler=run)
-
-
-def run(args) -> None:
-    """``axialdeform fit BASE VARIANTS... -o PARAMS``."""
-    from tqdm import tqdm
-
-    from .mesh import load_mesh
-    from .params import write_params
-
-    out = Path(args.output)
-    mesh = load_mesh(args.base)
-    is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
-    paths = variant_paths(args.variants)
-    with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:
-        result = fit_files(mesh, paths, max_residual=args.max_residual, max_iterations=args.max_iterations,
-                           progress=bar)
-    if not args.allow_residual:
-        result.check()
-    path = write_params(out, result.params, mesh)
-    k = result.worst
-    print(f"wrote {path} ({len(paths)} instances, {path.stat().st_size} bytes)")
-    print(f"worst residual: max {result.max[k]:.3g} L, rms {result.rms[k]:.3g} L ({result.names[k]})")
-    bad = int(result.exceeds.sum())
-    if bad:
-        print(f"warning: {bad} of {len(paths)} fits exceed the residual limit {result.max_residual:g} L", file=sys.stderr)
-    if is_folder:
-        variant_bytes = sum(p.stat().st_size for p in paths)
-        print(f"size ratio: {variant_bytes} bytes of variants / {path.stat().st_size} bytes of parameters "
-              f"= {variant_bytes / path.stat().st_size:.1f}x")

@@ -56,19 +56,25 @@ def _content(buffer, formats, names, program, per_instance=False):
 
 
 class MeshBuffers:
-    """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh."""
+    """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh.
 
-    def __init__(self, ctx, mesh):
+    ``indices`` names the index buffers to build: ``"triangles"`` and/or
+    ``"edges"`` (one left out stays ``None``)."""
+
+    def __init__(self, ctx, mesh, indices=("triangles", "edges")):
         self.ctx = ctx
         self.mesh = mesh
         self.vertex_count = mesh.vertex_count
+        self.triangles = self.edges = None
+        self._released = False
         interleaved = np.hstack([mesh.positions, mesh.normals]).astype("f4")
         self.vbo = ctx.buffer(interleaved.tobytes())
-        self.triangles = ctx.buffer(mesh.faces.astype("u4").tobytes())
-        self.edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
+        if "triangles" in indices:
+            self.triangles = ctx.buffer(mesh.faces.astype("u4").tobytes())
+        if "edges" in indices:
+            self.edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
         self.triangle_indices = int(mesh.faces.size)
         self.edge_indices = int(mesh.edges.size)
-        self._released = False
 
     def content(self, program):
         return _content(self.vbo, ("3f", "3f"), ("in_position", "in_normal"), program)
@@ -78,7 +84,8 @@ class MeshBuffers:
             return
         self._released = True
         for b in (self.vbo, self.triangles, self.edges):
-            b.release()
+            if b is not None:
+                b.release()
 
 
 class InstanceBuffer:
