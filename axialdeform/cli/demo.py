@@ -27,7 +27,7 @@ def run(args) -> None:
     params = random_params(mesh, args.count, seed=args.seed, bend=0.14, placement="disc",
                            spacing=0.9 * mesh.axis.length, tilt=(-0.2, 0.2))
     size = parse_size(args.size)
-    camera = frame_instances(mesh, params, size[0] / size[1], elevation=30.0, azimuth=20.0, margin=-1.2)
+    camera = frame_instances(mesh, params, size[0] / size[1], elevation=30.0, azimuth=20.0)
     image = render_image(mesh, params, size, ("solid", "wireframe"), camera=camera)
     save_png(args.output, image)
     print(f"wrote {Path(args.output).resolve()} ({args.count} stones, solid | wireframe, {image.shape[1]}x{image.shape[0]})")

@@ -32,7 +32,8 @@ def camera_from_args(mesh, params, size, args):
     import numpy as np
 
     from ..core.errors import AxialDeformError
-    from ..gl.camera import Camera, UP_VECTORS, frame_instances, instance_bounds
+    from ..core.bounds import instance_bounds
+    from ..gl.camera import Camera, UP_VECTORS, frame_instances
 
     fov = 35.0 if args.fov is None else float(args.fov)
     if not 0.0 < fov < 180.0:
