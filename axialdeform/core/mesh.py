@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import resources
@@ -21,13 +22,14 @@ import numpy as np
 from .axis import ControlAxis
 from .errors import MeshError
 
-__all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "area_weighted_normals"]
+__all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "MESH_SUFFIXES", "area_weighted_normals"]
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``,
 #: or ``NAME.glb`` for the textured leaf card of ``tools/make_leaf_card.py``).
 BUNDLED_MESHES = ("stone", "leaf", "leafcard")
 
-_SUPPORTED = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
+#: File name suffixes of the mesh files this library reads (base meshes, fit variants).
+MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,6 +59,13 @@ class BaseMesh:
     parts : tuple of Part
         Ranges of ``faces`` each drawn with its own material (one part
         covering every face by default).  All parts share ONE control axis.
+    source_index : (n,) int64
+        For each vertex, the index of the vertex in the file it came from
+        (``-1`` where none could be matched).  The identity unless the
+        reader split or dropped vertices: trimesh splits an OBJ's ``v``
+        at UV and normal seams and drops the ones no face uses.
+    source_count : int
+        How many vertices the file itself lists (OBJ: its ``v`` lines).
     """
 
     positions: np.ndarray
@@ -68,7 +77,32 @@ class BaseMesh:
     colors: np.ndarray | None = None
     tangents: np.ndarray | None = None
     parts: tuple = ()
+    source_index: np.ndarray | None = None
+    source_count: int | None = None
     _axis: ControlAxis | None = field(default=None, repr=False)
+
+    @classmethod
+    def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> "BaseMesh":
+        """A mesh from arrays: ``vertices : (n, 3) float``, ``faces : (m, 3) int``
+        and optional unit ``normals : (n, 3) float`` (else area-weighted ones)."""
+        from .arrays import as_array
+
+        vertices = as_array(vertices, (None, 3), f"{name}: vertices", error=MeshError)
+        faces = as_array(faces, (None, 3), f"{name}: faces", np.int64, error=MeshError)
+        if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
+            raise MeshError(f"{name}: faces: expected indices 0..{len(vertices) - 1}, found {int(faces.min())}..{int(faces.max())}")
+        if normals is None:
+            if not np.isfinite(vertices).all():
+                bad = int(np.argwhere(~np.isfinite(vertices).all(axis=1))[0, 0])
+                raise MeshError(f"{name}: vertex {bad} has a non-finite coordinate {vertices[bad].tolist()}; expected finite numbers")
+            normals = area_weighted_normals(vertices, faces)
+        else:
+            normals = as_array(normals, (len(vertices), 3), f"{name}: normals", error=MeshError)
+        return cls(vertices, normals, faces, name=name, normals_from_file=False)
+
+    def __repr__(self) -> str:
+        return (f"BaseMesh({self.name!r}, {self.vertex_count} vertices, {len(self.faces)} triangles, "
+                f"axis {'xyz'[self.axis.index]}, L={self.axis.length:.6g})")
 
     def __post_init__(self) -> None:
         with np.errstate(over="ignore", invalid="ignore"):  # out-of-range coordinates are refused below
@@ -90,6 +124,17 @@ class BaseMesh:
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "normals", nrm)
         object.__setattr__(self, "faces", faces)
+        if self.source_index is None:
+            index = np.arange(len(pos), dtype=np.int64)
+        else:
+            index = np.ascontiguousarray(self.source_index, dtype=np.int64)
+            if index.shape != (len(pos),):
+                raise MeshError(f"{self.name}: expected source_index of shape ({len(pos)},), found {index.shape}")
+        object.__setattr__(self, "source_index", index)
+        count = int(index.max()) + 1 if self.source_count is None else int(self.source_count)
+        if count <= index.max():
+            raise MeshError(f"{self.name}: source_index refers to file vertex {int(index.max())}, but source_count is {count}")
+        object.__setattr__(self, "source_count", count)
         _check_appearance(self, len(pos), len(faces))
         # raises MeshError on a zero extent
         object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name))
@@ -234,8 +279,10 @@ def bundled_mesh_path(name: str) -> Path:
     return Path(str(resources.files("axialdeform.meshes").joinpath(f"{name}{suffix}")))
 
 
-def load_mesh(source: str | os.PathLike) -> BaseMesh:
-    """Read a base mesh from a file, or a bundled mesh by name (``"stone"``, ``"leaf"``).
+def load_mesh(source) -> BaseMesh:
+    """Read a base mesh from a file, a bundled mesh by name (``"stone"``,
+    ``"leaf"``), or take a ``trimesh.Trimesh`` (or a ``trimesh.Scene`` with one
+    mesh) already in memory.
 
     A file with several meshes (glTF nodes/primitives, STL bodies, OBJ ``o``
     objects or ``usemtl`` groups) becomes ONE base mesh with several
@@ -247,7 +294,17 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     file, no faces, non-finite coordinates, UVs or colours whose count does
     not match the vertices, or a longest extent of zero.  A texture that
     cannot be read is an :class:`~axialdeform.core.material.AssetWarning`.
+    ``source_index`` maps each vertex to the file's own vertex order
+    (``docs/parameter-files.md``, "Vertex order").
     """
+    if isinstance(source, BaseMesh):
+        return source
+    if type(source).__module__.startswith("trimesh"):
+        name = f"<{type(source).__name__}>"
+        return _from_loaded(source, name)
+    if not isinstance(source, (str, os.PathLike)):
+        raise MeshError(f"load_mesh: expected a file path, a bundled mesh name ({', '.join(BUNDLED_MESHES)}), "
+                        f"a trimesh.Trimesh or a BaseMesh, found {type(source).__name__}")
     if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
         path = bundled_mesh_path(source)
     else:
@@ -256,12 +313,12 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     if not path.exists():
         raise MeshError(f"{name}: no such mesh file")
     if path.is_dir():
-        raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(_SUPPORTED)})")
-    if path.suffix.lower() not in _SUPPORTED:
-        raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(_SUPPORTED)}")
+        raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(MESH_SUFFIXES)}")
     if not path.is_file():
-        raise MeshError(f"{name}: is not a regular file; expected a mesh file ({', '.join(_SUPPORTED)})")
-    from .material import SafeResolver, compute_tangents, gather_parts
+        raise MeshError(f"{name}: is not a regular file; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
+    from .material import SafeResolver
 
     resolver = SafeResolver(path.parent)
     try:
@@ -273,8 +330,17 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
                                                        split_objects=True))
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
-    gathered = gather_parts(loaded, name, failed=resolver.failed)
-    all_positions, all_faces, all_normals = [], [], []
+    file_positions = _obj_positions(path) if path.suffix.lower() == ".obj" else None
+    return _from_loaded(loaded, name, file_positions, resolver.failed)
+
+
+def _from_loaded(loaded, name: str, file_positions=None, failed=()) -> BaseMesh:
+    """One BaseMesh from what trimesh loaded (a Trimesh, or a Scene whose
+    meshes become parts, node transforms applied)."""
+    from .material import compute_tangents, gather_parts
+
+    gathered = gather_parts(loaded, name, failed=failed)
+    all_positions, all_faces, all_normals, raw_positions = [], [], [], []
     offset = 0
     for mesh, transform in gathered["geometries"]:
         positions = np.asarray(mesh.vertices, dtype=np.float64)
@@ -288,6 +354,7 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
                 f"{name}: a face refers to vertex {int(faces.min() if faces.min() < 0 else faces.max())}, "
                 f"but the mesh has {len(positions)} vertices; expected indices 0..{len(positions) - 1}"
             )
+        raw_positions.append(positions)
         file_normals = _file_vertex_normals(mesh, len(positions))
         if transform is not None:
             positions = positions @ transform[:3, :3].T + transform[:3, 3]
@@ -303,6 +370,7 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         raise MeshError(f"{name}: the mesh has {len(positions)} vertices and {len(faces)} faces; expected triangles")
     if any(t is not None for _, t in gathered["geometries"]):
         _check_float32_range(positions, name)  # a node transform can push a coordinate out of range
+    source_index, source_count = _source_index(np.concatenate(raw_positions), file_positions)
     file_normals = np.concatenate(all_normals)
     has_file_normals = bool(np.isfinite(file_normals).all(axis=1).any())
     if has_file_normals:
@@ -317,7 +385,33 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     if uvs is not None and any(p.material.normal_texture is not None for p in parts):
         tangents = compute_tangents(positions, normals, uvs, faces)
     return BaseMesh(positions, normals, faces, name=name, normals_from_file=has_file_normals,
-                    uvs=uvs, colors=colors, tangents=tangents, parts=tuple(parts))
+                    uvs=uvs, colors=colors, tangents=tangents, parts=tuple(parts),
+                    source_index=source_index, source_count=source_count)
+
+
+def _obj_positions(path: Path) -> np.ndarray | None:
+    """The ``v`` lines of an OBJ file, ``(k, 3) float64`` in file order (None if unreadable)."""
+    try:
+        data = path.read_bytes()
+        rows = re.findall(rb"^[ \t]*v[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)", data, re.M)
+        return np.array(rows, dtype=np.float64).reshape(-1, 3)
+    except (OSError, ValueError):
+        return None
+
+
+def _source_index(positions: np.ndarray, file_positions: np.ndarray | None) -> tuple[np.ndarray | None, int | None]:
+    """For each loaded vertex the first file vertex at exactly its position
+    (-1 if none), and the file's vertex count; (None, None) without a file list."""
+    if file_positions is None or len(file_positions) == 0:
+        return None, None
+    k = len(file_positions)
+    if k == len(positions) and np.array_equal(file_positions, positions):
+        return np.arange(k, dtype=np.int64), k
+    _, ids = np.unique(np.concatenate([file_positions, positions]), axis=0, return_inverse=True)
+    ids = ids.reshape(-1)
+    first = np.full(int(ids.max()) + 1, -1, dtype=np.int64)
+    first[ids[:k][::-1]] = np.arange(k - 1, -1, -1)  # the smallest file index wins
+    return first[ids[k:]], k
 
 
 def _obj_object_count(path: Path) -> int:

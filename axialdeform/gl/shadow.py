@@ -61,7 +61,7 @@ class ShadowMap:
         ``extra``: (k, 4) more spheres ``x, y, z, r`` to keep inside (a ground).  Returns self."""
         import pyrr
 
-        from .camera import instance_bounds
+        from ..core.bounds import instance_bounds
 
         centers, radii = instance_bounds(mesh, params)
         spheres = np.hstack([centers, radii[:, None]]) if len(centers) else np.zeros((0, 4))
