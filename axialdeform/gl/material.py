@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ContextError
+from .uniforms import set_uniforms
 
 __all__ = ["AppearanceBuffer", "GpuMaterials", "ALPHA_MODE_INDEX", "GL_SRGB8_ALPHA8"]
 
@@ -115,9 +116,7 @@ class GpuMaterials:
             "u_texture": _TEXTURE_UNIT,
             "u_normal_map": _NORMAL_UNIT,
         }
-        for name, value in values.items():
-            if name in program:
-                program[name].value = value
+        set_uniforms(program, values)
         if base is not None:
             base.use(_TEXTURE_UNIT)
         if normal is not None:

@@ -320,8 +320,7 @@ class AxialRenderer:
             if hidden_line:
                 self._depth_prepass(prog, vao_triangles, view, projection, fill=hidden_line == "fill")
             fill = hidden_line == "fill"
-            if "u_line_alpha" in prog:
-                prog["u_line_alpha"].value = 0.45 if fill else 1.0
+            set_uniforms(prog, {"u_line_alpha": 0.45 if fill else 1.0})
             if fill:  # the shaded fill shows through the lines
                 self.ctx.enable(moderngl.BLEND)
                 self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
@@ -347,7 +346,7 @@ class AxialRenderer:
         blend), or with ``fill`` also drawn washed-out (``u_mode`` 3)."""
         import moderngl
 
-        prog["u_mode"].value = 3 if fill else 0
+        set_uniforms(prog, {"u_mode": 3 if fill else 0})
         if not fill:
             self.ctx.enable(moderngl.BLEND)
             self.ctx.blend_func = moderngl.ZERO, moderngl.ONE
@@ -359,7 +358,7 @@ class AxialRenderer:
             if not fill:
                 self.ctx.disable(moderngl.BLEND)
                 self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-            prog["u_mode"].value = 2
+            set_uniforms(prog, {"u_mode": 2})
         self.ctx.depth_func = "<="
 
     def render_shadow(self, shadow) -> None:
@@ -371,10 +370,8 @@ class AxialRenderer:
         with shadow.target():
             if self.count == 0:
                 return
-            prog["u_view"].write(np.asarray(shadow.view, dtype=np.float32).tobytes())
-            prog["u_proj"].write(np.asarray(shadow.projection, dtype=np.float32).tobytes())
-            if "u_mode" in prog:
-                prog["u_mode"].value = 0
+            set_camera_uniforms(prog, shadow.view, shadow.projection)
+            set_uniforms(prog, {"u_mode": 0})
             import moderngl
 
             self.ctx.enable(moderngl.DEPTH_TEST)

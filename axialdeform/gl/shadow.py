@@ -22,6 +22,7 @@ import numpy as np
 
 from ..core.errors import AxialDeformError
 from .context import bind_framebuffer, release_framebuffer
+from .uniforms import set_uniforms
 
 __all__ = ["ShadowMap", "SHADOW_UNIT"]
 
@@ -110,13 +111,8 @@ class ShadowMap:
         if self._released:
             raise AxialDeformError("this ShadowMap was released; create a new one")
         self.texture.use(SHADOW_UNIT)
-        values = {"u_shadow_map": SHADOW_UNIT, "u_shadow_offset": float(self.offset),
-                  "u_shadow_texel": 1.0 / self.size}
-        for name, value in values.items():
-            if name in program:
-                program[name].value = value
-        if "u_light_matrix" in program:
-            program["u_light_matrix"].write(self.matrix.tobytes())
+        set_uniforms(program, {"u_shadow_map": SHADOW_UNIT, "u_shadow_offset": float(self.offset),
+                               "u_shadow_texel": 1.0 / self.size, "u_light_matrix": self.matrix})
 
     def release(self) -> None:
         if self._released:
