@@ -20,7 +20,10 @@ from .core.errors import (
     ParamError,
     ParamFileError,
     ResidualError,
+    SceneError,
+    ScatterError,
     ShaderError,
+    TooFewError,
     TopologyError,
 )
 
@@ -45,6 +48,7 @@ _LAZY = {
     "MODES": "gl.renderer", "AxialRenderer": "gl.renderer",
     "assemble": "gl.shaders", "assemble_text": "gl.shaders", "build_program": "gl.shaders", "deformation_glsl": "gl.shaders",
     "random_params": "core.variation",
+    "scatter": "core.scatter", "load_surface": "core.scatter",
 }
 
 
@@ -77,8 +81,8 @@ def __dir__():
 
 __all__ = [
     "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
-    "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
+    "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ScatterError", "SceneError", "ShaderError", "TooFewError", "GltfError", "ResidualError", "TopologyError",
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds", "load_mesh", "make_params", "random_params",
-    "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "write_params",
+    "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "scatter", "load_surface", "write_params",
 ]
