@@ -197,16 +197,14 @@ def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=Non
         path = Path(source)
         if path.suffix.lower() in IMAGE_SUFFIXES:
             return surface_from_heights(_read_grey(path, "SURFACE"), up=up, height_scale=height_scale,
-                                        extent=extent, name=str(path))
+                                        extent=extent, name=f"SURFACE {path}")
         from .errors import MeshError
         from .mesh import load_mesh
 
         try:
             base = load_mesh(path)
         except MeshError as exc:
-            if "faces" in str(exc) and "vertices" in str(exc):
-                raise ScatterError(f"{exc} (SURFACE)") from None
-            raise
+            raise ScatterError(f"SURFACE {exc}") from None
         return _make_surface(trimesh.Trimesh(base.positions, base.faces, process=False), u, str(path))
     return surface_from_heights(source, up=up, height_scale=height_scale, extent=extent)
 
