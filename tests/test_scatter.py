@@ -17,6 +17,7 @@ from PIL import Image
 from scipy.spatial import cKDTree
 
 import axialdeform as ad
+from axialdeform.cli import main
 from axialdeform.core.scatter import load_surface, poisson_greedy, surface_from_heights
 from conftest import shared_mesh
 
@@ -83,6 +84,7 @@ def test_density_rows_run_along_z_top_row_at_smallest_z(stone):
     assert np.abs(params[:, 11]).max() == 0.0  # flat map at height 0
 
 
+@pytest.mark.slow
 def test_same_seed_same_bytes_other_seed_other_bytes(terrain, tmp_path):
     path, _, _ = terrain
     args = ["scatter", path, "stone", "-n", "150", "--min-distance", "0.5", "--up", "z", "--align-to-normal", "0.7",
@@ -145,6 +147,7 @@ def test_height_map_image_surface(tmp_path, stone):
     assert np.isclose(corner[1], grey[0, 39] / 255 * 5.0)
 
 
+@pytest.mark.slow
 def test_too_few_writes_what_fits_and_exits_2_unless_allowed(terrain, tmp_path):
     path, _, _ = terrain
     res = run("scatter", path, "stone", "-n", "100000", "--min-distance", "1.0", "--up", "z", "-o", tmp_path / "f.adp")
@@ -162,7 +165,8 @@ def test_too_few_writes_what_fits_and_exits_2_unless_allowed(terrain, tmp_path):
     assert len(info.value.params) == len(got)
 
 
-def test_bad_input_one_line_exit_2(terrain, tmp_path):
+@pytest.mark.slow
+def test_bad_input_one_line_exit_2(terrain, tmp_path, capsys):
     path, _, _ = terrain
     Image.new("L", (1, 1), 128).save(tmp_path / "one.png")
     Image.new("L", (8, 8), 0).save(tmp_path / "black.png")
@@ -175,13 +179,15 @@ def test_bad_input_one_line_exit_2(terrain, tmp_path):
         ([path, "stone", "--up", "z", "--min-distance", "100"], "min-distance"),
         ([path, "stone", "--up", "z", "--align-to-normal", "1.5"], "align-to-normal"),
     ]
-    for args, expect in cases:
-        out = tmp_path / "x.adp"
-        res = run("scatter", *args, "-n", "10", "-o", out)
-        assert res.returncode == 2, (args, res.stderr)
-        err = res.stderr.strip()
-        assert "\n" not in err and "Traceback" not in err and expect in err, (args, err)
+    out = tmp_path / "x.adp"
+    for args, expect in cases:  # in-process (fast); one subprocess below checks the real exit
+        assert main(["scatter", *map(str, args), "-n", "10", "-o", str(out)]) == 2, args
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and err.startswith("axialdeform scatter: error: ") and expect in err, (args, err)
         assert not out.exists()
+    res = run("scatter", path, "stone", "--up", "z", "--scale", "0:1", "-n", "10", "-o", out)
+    assert res.returncode == 2 and "Traceback" not in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    assert not out.exists()
 
 
 def test_speed_sized_run_is_vectorized_and_correct():
