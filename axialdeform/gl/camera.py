@@ -14,7 +14,7 @@ import pyrr
 from ..core.params import ANGLES, OFFSETS, POSITION, as_params
 from ..core.deform import rotation_matrices
 
-__all__ = ["Camera", "instance_bounds", "frame_instances", "UP_VECTORS"]
+__all__ = ["frame_box", "Camera", "instance_bounds", "frame_instances", "UP_VECTORS"]
 
 UP_VECTORS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -66,6 +66,14 @@ def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35
     else:
         lo = (centers - radii[:, None]).min(axis=0)
         hi = (centers + radii[:, None]).max(axis=0)
+    return frame_box(lo, hi, aspect, up=up, fovy=fovy, azimuth=azimuth, elevation=elevation, margin=margin)
+
+
+def frame_box(lo, hi, aspect: float, up: str = "y", fovy: float = 35.0, azimuth: float = 35.0,
+              elevation: float = 35.0, margin: float = 0.03) -> Camera:
+    """A camera that sees the whole box ``lo``..``hi`` (each (3,) world units);
+    see :func:`frame_instances`."""
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     target = (lo + hi) / 2
     up_vec = np.asarray(UP_VECTORS[up])
     side = np.roll(up_vec, 1)
