@@ -72,7 +72,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     rd = sub.add_parser("render", help="render instances to a PNG", description="Render MESH deformed by PARAMS, framed automatically.")
     rd.add_argument("mesh")
-    rd.add_argument("params")
+    rd.add_argument("params", nargs="?", help="parameter file (left out when MESH is a scene file, .toml)")
     rd.add_argument("-o", "--output", required=True)
     rd.add_argument("--mode", choices=MODES, default="solid")
     rd.add_argument("--size", default="800x600", help="WIDTHxHEIGHT (default: %(default)s)")
@@ -84,7 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(instances, vertices, 3) float32 in world space and the mesh file's vertex order; or a folder "
         "with one mesh file per instance."))
     b.add_argument("mesh")
-    b.add_argument("params")
+    b.add_argument("params", nargs="?", help="parameter file (left out when MESH is a scene file, .toml)")
     b.add_argument("-o", "--output", required=True)
     b.add_argument("--engine", choices=ENGINES, default="cpu")
     b.add_argument("--format", choices=MESH_FORMATS, default="obj", help="mesh file type when OUT is a folder")
@@ -141,6 +141,20 @@ def cmd_random(args) -> None:
     print(f"wrote {path} ({len(params)} instances, {path.stat().st_size} bytes)")
 
 
+def _scene(args):
+    """The scene when MESH is a scene file (and PARAMS is left out), else None."""
+    from ..core.errors import AxialDeformError
+    from ..core.scene import is_scene_file, load_scene
+
+    if not is_scene_file(args.mesh):
+        if args.params is None:
+            raise AxialDeformError(f"PARAMS: expected a parameter file after MESH {args.mesh} (or a scene file .toml as MESH)")
+        return None
+    if args.params is not None:
+        raise AxialDeformError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
+    return load_scene(args.mesh)
+
+
 def _load(args):
     from ..core.mesh import load_mesh
     from ..core.params import read_params
@@ -153,6 +167,15 @@ def _load(args):
 def cmd_render(args) -> None:
     from ..gl.image import parse_size, render_image, save_png
 
+    scene = _scene(args)
+    if scene is not None:
+        from ..gl.scene import render_scene
+
+        image = render_scene(scene, parse_size(args.size), args.mode)
+        save_png(args.output, image)
+        print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
+              f"{image.shape[1]}x{image.shape[0]})")
+        return
     mesh, params = _load(args)
     image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up)
     save_png(args.output, image)
@@ -162,6 +185,21 @@ def cmd_render(args) -> None:
 def cmd_bake(args) -> None:
     from ..core.bake import bake, write_mesh_folder, write_npz
 
+    scene = _scene(args)
+    if scene is not None:
+        from ..core.bake import write_scene_npz
+
+        out = Path(args.output)
+        if out.suffix.lower() != ".npz":
+            raise AxialDeformError(f"{out}: a scene bakes to one .npz (arrays positions_LAYER, normals_LAYER); "
+                                   f"expected a .npz file name")
+        baked = {}
+        for layer in scene.layers:
+            with _progress(len(layer.params), f"{layer.name} ({args.engine})") as bar:
+                baked[layer.name] = bake(layer.mesh, layer.params, args.engine, progress=bar)
+        write_scene_npz(out, baked)
+        print(f"wrote {out}: {', '.join(f'{k} {v[0].shape}' for k, v in baked.items())} float32 ({args.engine})")
+        return
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar)

@@ -296,6 +296,42 @@ def encode_instanced(mesh, params) -> bytes:
     return b.finish()
 
 
+def encode_scene(scene) -> bytes:
+    """GLB bytes of a whole scene (:mod:`axialdeform.core.scene`): the terrain and
+    one mesh per layer holding all its instances' deformed world geometry
+    (CPU reference), each with its layer's colour as a PBR material."""
+    import trimesh
+
+    from .deform import deform
+
+    out = trimesh.Scene()
+    parts = [("terrain", scene.terrain, None, scene.terrain_color)] if scene.terrain is not None else []
+    parts += [(layer.name, layer.mesh, layer.params, layer.color) for layer in scene.layers if len(layer.params)]
+    if not parts:
+        raise GltfError(f"{scene.path}: the scene has nothing to export; expected a terrain or a layer with instances")
+    for name, mesh, params, color in parts:
+        if params is None:
+            pos, nrm = mesh.positions[None], mesh.normals[None]
+        else:
+            pos, nrm = deform(mesh.axis, mesh.positions, mesh.normals, params)
+        n, v = pos.shape[:2]
+        faces = (np.asarray(mesh.faces)[None] + (v * np.arange(n))[:, None, None]).reshape(-1, 3)
+        rgb = tuple(color) if color is not None else (0.6, 0.6, 0.6)
+        material = trimesh.visual.material.PBRMaterial(name=name, baseColorFactor=[*rgb, 1.0],
+                                                       metallicFactor=0.0, roughnessFactor=0.9)
+        tm = trimesh.Trimesh(pos.reshape(-1, 3), faces, vertex_normals=nrm.reshape(-1, 3), process=False,
+                             visual=trimesh.visual.TextureVisuals(material=material))
+        out.add_geometry(tm, geom_name=name, node_name=name)
+    return out.export(file_type="glb")
+
+
+def export_scene(path: str | os.PathLike, scene) -> Path:
+    """Write :func:`encode_scene` to ``path`` (a ``.glb``), atomically."""
+    path = _check_glb_path(path)
+    atomic_write_bytes(path, encode_scene(scene))
+    return path
+
+
 def _field_names(cols) -> list[str]:
     from .params import FIELDS
 
@@ -461,8 +497,8 @@ def add_parser(subparsers) -> None:
         "world positions and normals; opens in any glTF viewer. --instanced: the base mesh once plus "
         "EXT_mesh_gpu_instancing (TRANSLATION, ROTATION and the offsets as _AXIAL_* attributes); "
         "see docs/interop.md. Coordinates are written as they are (no re-orientation to glTF's +Y up)."))
-    e.add_argument("mesh")
-    e.add_argument("params")
+    e.add_argument("mesh", help="base mesh, or a scene file (.toml: every layer into one GLB, baked)")
+    e.add_argument("params", nargs="?", help="parameter file (left out for a scene file)")
     e.add_argument("-o", "--output", required=True, help="the .glb to write")
     layout = e.add_mutually_exclusive_group()
     layout.add_argument("--baked", dest="layout", action="store_const", const="baked",
@@ -480,6 +516,19 @@ def run(args) -> None:
     from .params import read_params
 
     out = _check_glb_path(args.output)
+    from .scene import is_scene_file, load_scene
+
+    if is_scene_file(args.mesh):
+        if args.params is not None:
+            raise GltfError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
+        if args.layout != "baked":
+            raise GltfError("--instanced: a scene exports baked (one mesh per layer); expected --baked or no layout flag")
+        scene = load_scene(args.mesh)
+        path = export_scene(out, scene)
+        print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, baked, {path.stat().st_size} bytes)")
+        return
+    if args.params is None:
+        raise GltfError(f"PARAMS: expected a parameter file after MESH {args.mesh} (or a scene file .toml as MESH)")
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     path = export_glb(out, mesh, params, args.layout)

@@ -300,19 +300,24 @@ def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
     if not isinstance(layers, list):
         raise src.error("expected [[layer]] tables", "layer", None, 0)
     for nth, layer in enumerate(layers):
-        scene.layers.append(_read_layer(src, layer, nth, scene, surface, scale_counts))
+        if not isinstance(layer, dict):
+            raise src.error("expected [[layer]] tables", "layer", None, 0)
+        name = layer.get("name", f"layer{len(scene.layers) + 1}")
+        if any(done.name == name for done in scene.layers):
+            raise src.error(f"a second layer named {name!r}; expected unique layer names", "name", "layer", nth)
+        scene.layers.append(_read_layer(src, layer, nth, scene, surface, scale_counts, name))
 
 
-def _read_layer(src, layer, nth, scene, surface, scale_counts) -> Layer:
+def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name) -> Layer:
     from .mesh import load_mesh
     from .params import read_params
 
     _check_keys(src, layer, _LAYER, f"layer {nth + 1}", "layer", nth)
     if "mesh" not in layer:
         raise src.error("every layer needs a mesh (a file or 'stone' / 'leaf')", "layer", "layer", nth)
-    name = layer.get("name", f"layer{nth + 1}")
-    if not isinstance(name, str):
-        raise src.error(f"expected a string, found {name!r}", "name", "layer", nth)
+    name = layer.get("name", default_name)
+    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
+        raise src.error(f"expected a name of letters, digits, _ . -, found {name!r}", "name", "layer", nth)
     mesh_value = layer["mesh"]
     from .mesh import BUNDLED_MESHES
 
