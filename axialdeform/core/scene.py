@@ -299,9 +299,13 @@ def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
     layers = data.get("layer", [])
     if not isinstance(layers, list):
         raise src.error("expected [[layer]] tables", "layer", None, 0)
-    for nth, layer in enumerate(layers):
+    for nth, layer in enumerate(layers):  # every key first: no loading before the file is known good
         if not isinstance(layer, dict):
             raise src.error("expected [[layer]] tables", "layer", None, 0)
+        _check_keys(src, layer, _LAYER, f"layer {nth + 1}", "layer", nth)
+        if isinstance(layer.get("scatter"), dict):
+            _check_keys(src, layer["scatter"], _SCATTER, f"layer {nth + 1} scatter", "layer", nth)
+    for nth, layer in enumerate(layers):
         name = layer.get("name", f"layer{len(scene.layers) + 1}")
         if any(done.name == name for done in scene.layers):
             raise src.error(f"a second layer named {name!r}; expected unique layer names", "name", "layer", nth)
