@@ -94,6 +94,7 @@ class Layer:
     params: np.ndarray
     color: tuple | None = None
     wind: bool = False
+    lift: np.ndarray | None = None  # (n,) float32: height a scatter recipe's ``lift`` added along up
 
 
 @dataclass
@@ -342,7 +343,8 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name) -> 
         with _wrap(src, "params", "layer", nth):
             params = read_params(file, mesh)
     else:
-        params = _scatter_layer(src, layer["scatter"], nth, mesh, scene, surface, scale_counts)
+        params, lift = _scatter_layer(src, layer["scatter"], nth, mesh, scene, surface, scale_counts)
+        return Layer(name=name, mesh=mesh, params=params, color=color, wind=wind, lift=lift)
     return Layer(name=name, mesh=mesh, params=params, color=color, wind=wind)
 
 
@@ -382,10 +384,12 @@ def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.n
     lift = _numbers(src, recipe.get("lift", [0.0, 0.0]), "lift", "layer", nth, (1, 2))
     with _wrap(src, "scatter", "layer", nth):
         params = scatter(where, mesh, count, up=scene.up, **kwargs)
-    if any(lift):
-        lo, hi = lift[0], lift[-1]
-        rng = np.random.Generator(np.random.PCG64(int(kwargs.get("seed", 0)) + 7919))
-        up_i = "xyz".index(scene.up)
-        params = params.copy()
-        params[:, 10 + up_i] += (lo + (hi - lo) * rng.random(len(params))).astype(np.float32)
-    return params
+    if not any(lift):
+        return params, None
+    lo, hi = lift[0], lift[-1]
+    rng = np.random.Generator(np.random.PCG64(int(kwargs.get("seed", 0)) + 7919))
+    up_i = "xyz".index(scene.up)
+    params = params.copy()
+    added = (lo + (hi - lo) * rng.random(len(params))).astype(np.float32)
+    params[:, 10 + up_i] += added
+    return params, added

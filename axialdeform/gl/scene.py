@@ -75,6 +75,16 @@ class SceneRenderer:
             self.release()
             raise
 
+    def layer(self, name: str) -> AxialRenderer:
+        """The renderer of the layer called ``name`` (e.g. to ``update_params`` it each frame)."""
+        start = 1 if self.scene.terrain is not None else 0
+        for layer, (renderer, _, _) in zip(self.scene.layers, self.renderers[start:]):
+            if layer.name == name:
+                return renderer
+        from ..core.errors import SceneError
+
+        raise SceneError(f"layer: expected one of {', '.join(x.name for x in self.scene.layers)}, found {name!r}")
+
     def render(self, view, projection, mode: str = "solid", *, time: float = 0.0) -> None:
         """Draw everything into the bound framebuffer; ``time`` drives the wind of layers with ``wind = true``."""
         up = UP_VECTORS[self.scene.up]
