@@ -247,3 +247,54 @@ def test_extend_and_make_params():
     assert make_params(count=2).shape == (2, 16)
     with pytest.raises(ad.ParamError, match="field s: expected a scale s > 0"):
         make_params(count=1, scale=0.0)
+
+
+# ---------------------------------------------------------------- command line
+
+
+def _run(*args, cwd=None):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+@pytest.mark.parametrize("args,expected", [
+    (("--scale", "0:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
+    (("--scale", "2:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
+    (("--taper", "1.5"), r"--taper: expected a number < 1"),
+    (("--twist", "nan"), r"--twist: expected a finite number"),
+])
+def test_cli_random_bad_extension_is_one_line_exit_2(tmp_path, args, expected):
+    import re
+
+    proc = _run("random", "leaf", "-n", "5", *args, "-o", tmp_path / "x.adp")
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and re.search(expected, lines[0]), proc.stderr
+    assert not (tmp_path / "x.adp").exists()
+
+
+def test_cli_random_extended_then_bake_cpu_and_gpu_with_wind_agree(tmp_path, leaf):
+    out = tmp_path / "e.adp"
+    proc = _run("random", "leaf", "-n", "300", "--seed", "4", "--scale", "0.5:1.5", "--twist", "1.2", "--taper", "0.6",
+                "--placement", "disc", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    e = ad.read_params(out, leaf)
+    assert e.shape == (300, 19)
+    assert 0.5 <= e[:, 16].min() and e[:, 16].max() <= 1.5 and np.abs(e[:, 17]).max() <= 1.2
+    assert 0 <= e[:, 18].min() and e[:, 18].max() <= 0.6
+    np.testing.assert_array_equal(e[:, :16], ad.random_params(leaf, 300, 4, placement="disc"))
+    for engine in ("cpu", "gpu"):
+        proc = _run("bake", "leaf", out, "-o", tmp_path / f"{engine}.npz", "--engine", engine, "--time", "2.5",
+                    "--wind", "0.25,0.6,0.9,5", "--wind-dir", "1,0,0.5")
+        assert proc.returncode == 0, proc.stderr
+    cpu, gpu = np.load(tmp_path / "cpu.npz"), np.load(tmp_path / "gpu.npz")
+    L = leaf.axis.length
+    reach = max(1.0, float(np.abs(e[:, 10:13]).max()) / L)
+    assert np.abs(cpu["positions"] - gpu["positions"]).max() <= 1e-5 * L * reach
+    assert np.abs(cpu["normals"] - gpu["normals"]).max() <= 1e-5
+    still = ad.bake(leaf, e, "cpu")
+    assert np.abs(cpu["positions"] - still[0]).max() > 0.05 * L  # the wind did move them
+    proc = _run("render", "leaf", out, "-o", tmp_path / "r.png", "--size", "96x64", "--wind", "0.25", "--time", "1")
+    assert proc.returncode == 0 and (tmp_path / "r.png").stat().st_size > 0, proc.stderr
