@@ -275,6 +275,7 @@ def test_cli_random_bad_extension_is_one_line_exit_2(tmp_path, args, expected):
     assert not (tmp_path / "x.adp").exists()
 
 
+@pytest.mark.slow
 def test_cli_random_extended_then_bake_cpu_and_gpu_with_wind_agree(tmp_path, leaf):
     out = tmp_path / "e.adp"
     proc = _run("random", "leaf", "-n", "300", "--seed", "4", "--scale", "0.5:1.5", "--twist", "1.2", "--taper", "0.6",
@@ -298,3 +299,30 @@ def test_cli_random_extended_then_bake_cpu_and_gpu_with_wind_agree(tmp_path, lea
     assert np.abs(cpu["positions"] - still[0]).max() > 0.05 * L  # the wind did move them
     proc = _run("render", "leaf", out, "-o", tmp_path / "r.png", "--size", "96x64", "--wind", "0.25", "--time", "1")
     assert proc.returncode == 0 and (tmp_path / "r.png").stat().st_size > 0, proc.stderr
+
+
+# ---------------------------------------------------------------- fit --extended
+
+
+@pytest.mark.slow
+def test_fit_extended_recovers_scale_twist_taper(stone, tmp_path):
+    from axialdeform.core.fit import fit_params
+
+    p = extended(stone, n=6, seed=8)
+    p[:, 17] = np.clip(p[:, 17], -1.5, 1.5)
+    shapes = ad.bake(stone, p)[0]
+    res = fit_params(stone, shapes, extended=True)
+    assert res.params.shape == (6, 19)
+    assert res.max.max() < 1e-5
+    np.testing.assert_allclose(res.params[:, 16:], p[:, 16:], atol=1e-4)
+    # the 16-number fit cannot reproduce them: the extension is really needed
+    assert fit_params(stone, shapes).max.max() > 1e-3
+    # and from the command line
+    folder = tmp_path / "variants"
+    from axialdeform.core.bake import write_mesh_folder
+
+    write_mesh_folder(folder, stone, shapes, ad.bake(stone, p)[1], "obj")
+    out = tmp_path / "fit.adp"
+    proc = _run("fit", "stone", folder, "-o", out, "--extended")
+    assert proc.returncode == 0, proc.stderr
+    np.testing.assert_allclose(ad.read_params(out, stone)[:, 16:], p[:, 16:], atol=1e-4)
