@@ -140,3 +140,27 @@ def test_wind_parse_and_bad_values():
         Wind(direction=(0, 0, 0))
     with pytest.raises(ad.ParamError, match="time"):
         w.cycles(float("nan"))
+
+
+def test_viewer_animates_the_wind_and_v_toggles_it(leaf):
+    from axialdeform.viewer import Viewer
+
+    p = blades(leaf, n=150)
+    v = Viewer.create(leaf, p, headless=True, size=(160, 120), wind=WIND)
+    try:
+        assert v.renderer.extended and v.renderer.wind is WIND
+        v.step(2)
+        a = v.screenshot()
+        v.step(5, dt=0.2)
+        b = v.screenshot()
+        assert np.abs(a.astype(int) - b).max() > 0  # the blades moved
+        assert "wind 0.3" in v.status()
+        v.on_key_event("v", v.wnd.keys.ACTION_PRESS, None)
+        assert v.renderer.wind is None
+        v.step()
+        c = v.screenshot()
+        v.step(3, dt=0.2)
+        assert np.array_equal(c, v.screenshot())  # still
+    finally:
+        v.release()
+        v.wnd.destroy()
