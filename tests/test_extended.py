@@ -247,3 +247,125 @@ def test_extend_and_make_params():
     assert make_params(count=2).shape == (2, 16)
     with pytest.raises(ad.ParamError, match="field s: expected a scale s > 0"):
         make_params(count=1, scale=0.0)
+
+
+# ---------------------------------------------------------------- command line
+
+
+def _run(*args, cwd=None):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+@pytest.mark.parametrize("args,expected", [
+    (("--scale", "0:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
+    (("--scale", "2:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
+    (("--taper", "1.5"), r"--taper: expected a number < 1"),
+    (("--twist", "nan"), r"--twist: expected a finite number"),
+])
+def test_cli_random_bad_extension_is_one_line_exit_2(tmp_path, args, expected):
+    import re
+
+    proc = _run("random", "leaf", "-n", "5", *args, "-o", tmp_path / "x.adp")
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and re.search(expected, lines[0]), proc.stderr
+    assert not (tmp_path / "x.adp").exists()
+
+
+@pytest.mark.slow
+def test_cli_random_extended_then_bake_cpu_and_gpu_with_wind_agree(tmp_path, leaf):
+    out = tmp_path / "e.adp"
+    proc = _run("random", "leaf", "-n", "300", "--seed", "4", "--scale", "0.5:1.5", "--twist", "1.2", "--taper", "0.6",
+                "--placement", "disc", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    e = ad.read_params(out, leaf)
+    assert e.shape == (300, 19)
+    assert 0.5 <= e[:, 16].min() and e[:, 16].max() <= 1.5 and np.abs(e[:, 17]).max() <= 1.2
+    assert 0 <= e[:, 18].min() and e[:, 18].max() <= 0.6
+    np.testing.assert_array_equal(e[:, :16], ad.random_params(leaf, 300, 4, placement="disc"))
+    for engine in ("cpu", "gpu"):
+        proc = _run("bake", "leaf", out, "-o", tmp_path / f"{engine}.npz", "--engine", engine, "--time", "2.5",
+                    "--wind", "0.25,0.6,0.9,5", "--wind-dir", "1,0,0.5")
+        assert proc.returncode == 0, proc.stderr
+    cpu, gpu = np.load(tmp_path / "cpu.npz"), np.load(tmp_path / "gpu.npz")
+    L = leaf.axis.length
+    reach = max(1.0, float(np.abs(e[:, 10:13]).max()) / L)
+    assert np.abs(cpu["positions"] - gpu["positions"]).max() <= 1e-5 * L * reach
+    assert np.abs(cpu["normals"] - gpu["normals"]).max() <= 1e-5
+    still = ad.bake(leaf, e, "cpu")
+    assert np.abs(cpu["positions"] - still[0]).max() > 0.05 * L  # the wind did move them
+    proc = _run("render", "leaf", out, "-o", tmp_path / "r.png", "--size", "96x64", "--wind", "0.25", "--time", "1")
+    assert proc.returncode == 0 and (tmp_path / "r.png").stat().st_size > 0, proc.stderr
+
+
+# ---------------------------------------------------------------- fit --extended
+
+
+@pytest.mark.slow
+def test_fit_extended_recovers_scale_twist_taper(stone, tmp_path):
+    from axialdeform.core.fit import fit_params
+
+    p = extended(stone, n=6, seed=8)
+    p[:, 17] = np.clip(p[:, 17], -1.5, 1.5)
+    shapes = ad.bake(stone, p)[0]
+    res = fit_params(stone, shapes, extended=True)
+    assert res.params.shape == (6, 19)
+    assert res.max.max() < 1e-5
+    np.testing.assert_allclose(res.params[:, 16:], p[:, 16:], atol=1e-4)
+    # the 16-number fit cannot reproduce them: the extension is really needed
+    assert fit_params(stone, shapes).max.max() > 1e-3
+    # and from the command line
+    folder = tmp_path / "variants"
+    from axialdeform.core.bake import write_mesh_folder
+
+    write_mesh_folder(folder, stone, shapes, ad.bake(stone, p)[1], "obj")
+    out = tmp_path / "fit.adp"
+    proc = _run("fit", "stone", folder, "-o", out, "--extended")
+    assert proc.returncode == 0, proc.stderr
+    np.testing.assert_allclose(ad.read_params(out, stone)[:, 16:], p[:, 16:], atol=1e-4)
+
+
+# ---------------------------------------------------------------- golden bytes of the 16-number forms
+
+#: sha256 of the three forms of _golden_values(), written by the code BEFORE the extension
+#: (commit 50bd219): 16-number files must stay byte-identical
+GOLDEN_16 = {
+    "float32": (548, "6b9762f3296c124f98818f5b5077a0d0b762cd7c885f71e20df3441ebacc3dab"),
+    "quantized": (452, "8ff252ddb801d9859f65b12408748404f7004415e7157acc47b820695d5974c6"),
+    "text": (1314, "25878adbbf71929152ff897672eafda7d7802aa4253fbcb62064ef83b18faf13"),
+}
+
+
+def _golden_values():
+    v = (np.arange(7 * 16, dtype=np.float64).reshape(7, 16) * 0.37 - 11.0).astype(np.float32)
+    v[:, 13:] = np.sin(v[:, 13:])
+    return v
+
+
+def _forms(values):
+    from axialdeform.core import params as P
+    from axialdeform.core.axis import ControlAxis
+
+    ax, fp = ControlAxis(1, -0.25, 2.5), bytes(range(32))
+    return {"float32": P.encode_binary(values, axis=ax, mesh_fingerprint=fp),
+            "quantized": P.encode_binary(values, axis=ax, mesh_fingerprint=fp, quantize=True),
+            "text": P.format_text(values, "golden").encode()}
+
+
+def test_16_number_files_are_byte_identical_to_before_the_extension():
+    import hashlib
+
+    from axialdeform.core import params as P
+
+    values = _golden_values()
+    for name, data in _forms(values).items():
+        assert (len(data), hashlib.sha256(data).hexdigest()) == GOLDEN_16[name], name
+    back = P.decode_binary(_forms(values)["float32"]).values
+    np.testing.assert_array_equal(back, values)
+    # the same numbers as extended instances are a different (version 2) file that decodes to the same shapes
+    ext = _forms(extend_params(values))
+    assert P.read_binary_header(ext["float32"]).version == 2 and len(ext["float32"]) == 96 + 7 * 76 + 4
+    np.testing.assert_array_equal(P.decode_binary(ext["float32"]).values[:, :16], values)

@@ -38,12 +38,8 @@ def scene_camera(scene, aspect: float) -> Camera:
     lows, highs = [], []
     for layer in scene.layers:
         if len(layer.params):
-            c, r = instance_bounds(layer.mesh, layer.params)
+            c, r = instance_bounds(layer.mesh, layer.params, wind=scene.wind if layer.wind else None)
             r = np.broadcast_to(r, (len(c),))
-            if layer.params.shape[1] == 19:  # a scaled instance's sphere scales about its position
-                s = layer.params[:, 16].astype(np.float64)
-                p = layer.params[:, 10:13].astype(np.float64)
-                c, r = p + s[:, None] * (c - p), r * s
             lows.append((c - r[:, None]).min(axis=0))
             highs.append((c + r[:, None]).max(axis=0))
     if scene.terrain is not None:
