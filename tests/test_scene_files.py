@@ -150,8 +150,11 @@ def test_cli_render_bake_export_accept_a_scene(small, tmp_path, capsys, validate
     baked = np.load(npz)
     scene = load_scene(small)
     for layer in scene.layers:
-        expected, _ = ad.deform(layer.mesh.axis, layer.mesh.positions, layer.mesh.normals, layer.params)
+        still, _ = ad.deform(layer.mesh.axis, layer.mesh.positions, layer.mesh.normals, layer.params)
+        expected, _ = ad.bake(layer.mesh, layer.params, "cpu", wind=scene.wind if layer.wind else None, time=0.0)
         assert np.array_equal(baked[f"positions_{layer.name}"], expected)
+        # the [wind] reaches the layers with wind = true only
+        assert np.array_equal(expected, still) == (not layer.wind)
     glb = tmp_path / "scene.glb"
     assert main(["export", str(small), "-o", str(glb)]) == 0
     (report,) = validate(glb)
