@@ -95,6 +95,11 @@ class _ViewerMixin:
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
+        self.extra = None  # the other layers and the terrain of a scene file
+        if s.get("extra") is not None:
+            from .gl.scene import SceneRenderer
+
+            self.extra = SceneRenderer(self.ctx, s["extra"])
         self.fps = 0.0
         self.frames = 0
         self.screenshots = 0
@@ -220,6 +225,8 @@ class _ViewerMixin:
         if self.show_ground:
             self.ground.render(view, proj, background=BACKGROUND)
         self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up], time=time_s)  # wind: uniforms only
+        if self.extra is not None:
+            self.extra.render(view, proj, self.mode, time=time_s)
         self.frames += 1
         now = time.perf_counter()  # measured, not the timer's frame_time (headless steps are simulated)
         if self._last_frame is not None and now > self._last_frame:
@@ -274,6 +281,8 @@ class _ViewerMixin:
         """Free the renderer and the ground plane (the window keeps its context)."""
         self.renderer.release()
         self.ground.release()
+        if self.extra is not None:
+            self.extra.release()
 
 
 class Viewer:
@@ -282,7 +291,7 @@ class Viewer:
     @staticmethod
     def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int = 0,
                bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
-               wind=None):
+               wind=None, extra=None):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
@@ -291,7 +300,8 @@ class Viewer:
         with (bend as a fraction of L); headless : moderngl-window's headless
         window on an EGL context (no display needed); wind : an
         :class:`axialdeform.Wind` animated on the GPU (``V`` toggles it).
-        params may be (n, 19): extended instances.
+        params may be (n, 19): extended instances.  extra : a loaded scene
+        (:mod:`axialdeform.core.scene`) drawn too, every frame, in the same mode.
         """
         from .core.params import as_params
 
@@ -300,7 +310,7 @@ class Viewer:
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground, wind=wind)
+                     up=up, ground=ground, wind=wind, extra=extra)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": samples})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]
@@ -331,7 +341,7 @@ def add_parser(subparsers) -> None:
         "Open MESH (a file, or 'stone' / 'leaf') deformed by PARAMS (or by random parameters) in a window: "
         "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
         "UP/DOWN bend amplitude, G ground, V wind, R reset camera, S screenshot, ESC quit."))
-    v.add_argument("mesh")
+    v.add_argument("mesh", help="base mesh, or a scene file (.toml: its first layer is the one N and UP/DOWN change)")
     v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
     v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
     v.add_argument("--seed", type=int, default=0)
@@ -368,15 +378,35 @@ def run(args) -> None:
         if len(direction) != 3:
             raise ParamError(f"--wind-dir: expected X,Y,Z (three numbers), found {args.wind_dir!r}")
         wind = Wind.parse(args.wind, direction=direction)
-    mesh = load_mesh(args.mesh)
-    if args.params:
+    from .core.scene import is_scene_file, load_scene
+
+    extra = None
+    if is_scene_file(args.mesh):
+        if args.params:
+            raise AxialDeformError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
+        scene = load_scene(args.mesh)
+        if not scene.layers:
+            raise AxialDeformError(f"{args.mesh}: the scene has no layer; expected at least one [[layer]]")
+        first = scene.layers[0]
+        if wind is not None:
+            scene.wind = wind
+        wind = scene.wind if first.wind else None
+        from dataclasses import replace
+
+        extra = replace(scene, layers=scene.layers[1:])
+        mesh, params = first.mesh, first.params
+        args.up, args.no_ground = scene.up, True
+    elif args.params:
+        mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     else:
+        mesh = load_mesh(args.mesh)
         params = random_params(mesh, args.count, seed=args.seed, bend=args.bend, up=args.up)
     if args.frames < 1:
         raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=args.seed,
-                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground, wind=wind)
+                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground, wind=wind,
+                           extra=extra)
     if not args.headless:
         import moderngl_window as mglw
 

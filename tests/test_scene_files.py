@@ -138,6 +138,7 @@ def test_include_adds_layers_and_bad_values_are_caught(tmp_path):
     assert "broken.toml" in msg and "TOML" in msg
 
 
+@pytest.mark.slow
 def test_cli_render_bake_export_accept_a_scene(small, tmp_path, capsys, validate):  # noqa: F811
     png = tmp_path / "scene.png"
     assert main(["render", str(small), "-o", str(png), "--size", "160x120"]) == 0
@@ -183,3 +184,17 @@ def test_the_landscape_scene_loads():
     scene = load_scene(LANDSCAPE, scale_counts=0.1)
     assert [layer.name for layer in scene.layers] == ["stones", "grass", "trunks", "leaves"]
     assert scene.terrain is not None and all(len(layer.params) > 0 for layer in scene.layers)
+
+
+@pytest.mark.slow
+def test_view_command_shows_a_scene_headless(small, tmp_path):
+    import subprocess
+    import sys
+
+    shot = tmp_path / "view.png"
+    proc = subprocess.run([sys.executable, "-m", "axialdeform", "view", str(small), "--headless", "--frames", "2",
+                           "--size", "160x120", "--screenshot", str(shot)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "12 instances" in proc.stdout  # the first layer is the viewer's own
+    image = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    assert ((image[..., 0] - image[..., 2]) > 60).sum() > 3  # the orange leaves of the second layer are drawn too
