@@ -209,7 +209,7 @@ def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=Non
     return surface_from_heights(source, up=up, height_scale=height_scale, extent=extent)
 
 
-def load_density(source, name: str = "density") -> np.ndarray:
+def load_density(source, name: str = "<array>") -> np.ndarray:
     """A density map: (rows, cols) float64 in [0, 1] from an image path or an array."""
     if isinstance(source, (str, os.PathLike)):
         name = str(source)
