@@ -378,23 +378,12 @@ def run(args) -> None:
         if len(direction) != 3:
             raise ParamError(f"--wind-dir: expected X,Y,Z (three numbers), found {args.wind_dir!r}")
         wind = Wind.parse(args.wind, direction=direction)
-    from .core.scene import is_scene_file, load_scene
+    from .cli import scenes
 
     extra = None
-    if is_scene_file(args.mesh):
-        if args.params:
-            raise AxialDeformError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
-        scene = load_scene(args.mesh)
-        if not scene.layers:
-            raise AxialDeformError(f"{args.mesh}: the scene has no layer; expected at least one [[layer]]")
-        first = scene.layers[0]
-        if wind is not None:
-            scene.wind = wind
-        wind = scene.wind if first.wind else None
-        from dataclasses import replace
-
-        extra = replace(scene, layers=scene.layers[1:])
-        mesh, params = first.mesh, first.params
+    scene = scenes.scene_of(args, params_optional=True)
+    if scene is not None:
+        mesh, params, wind, extra = scenes.viewer_inputs(scene, wind)
         args.up, args.no_ground = scene.up, True
     elif args.params:
         mesh = load_mesh(args.mesh)

@@ -202,20 +202,6 @@ def cmd_random(args) -> None:
     print(f"wrote {path} ({len(params)} instances, {path.stat().st_size} bytes)")
 
 
-def _scene(args):
-    """The scene when MESH is a scene file (and PARAMS is left out), else None."""
-    from ..core.errors import AxialDeformError
-    from ..core.scene import is_scene_file, load_scene
-
-    if not is_scene_file(args.mesh):
-        if args.params is None:
-            raise AxialDeformError(f"PARAMS: expected a parameter file after MESH {args.mesh} (or a scene file .toml as MESH)")
-        return None
-    if args.params is not None:
-        raise AxialDeformError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
-    return load_scene(args.mesh)
-
-
 def _load(args):
     from ..core.mesh import load_mesh
     from ..core.params import read_params
@@ -228,18 +214,12 @@ def _load(args):
 def cmd_render(args) -> None:
     from ..gl.image import parse_size, render_image, save_png
 
-    wind = _wind(args)
-    scene = _scene(args)
-    if scene is not None:
-        from ..gl.scene import render_scene
+    from . import scenes
 
-        if wind is not None:  # --wind replaces the scene's [wind]
-            scene.wind = wind
-        image = render_scene(scene, parse_size(args.size), args.mode, time=args.time)
-        save_png(args.output, image)
-        print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
-              f"{image.shape[1]}x{image.shape[0]})")
-        return
+    wind = _wind(args)
+    scene = scenes.scene_of(args)
+    if scene is not None:
+        return scenes.render(scene, args, wind)
     mesh, params = _load(args)
     image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up,
                          **({"wind": wind, "time": args.time} if wind is not None else {}))
@@ -250,25 +230,12 @@ def cmd_render(args) -> None:
 def cmd_bake(args) -> None:
     from ..core.bake import bake, write_mesh_folder, write_npz
 
-    wind = _wind(args)
-    scene = _scene(args)
-    if scene is not None:
-        from ..core.bake import write_scene_npz
+    from . import scenes
 
-        out = Path(args.output)
-        if out.suffix.lower() != ".npz":
-            raise AxialDeformError(f"{out}: a scene bakes to one .npz (arrays positions_LAYER, normals_LAYER); "
-                                   f"expected a .npz file name")
-        if wind is not None:  # --wind replaces the scene's [wind]
-            scene.wind = wind
-        baked = {}
-        for layer in scene.layers:
-            with _progress(len(layer.params), f"{layer.name} ({args.engine})") as bar:
-                baked[layer.name] = bake(layer.mesh, layer.params, args.engine, progress=bar,
-                                         wind=scene.wind if layer.wind else None, time=args.time)
-        write_scene_npz(out, baked)
-        print(f"wrote {out}: {', '.join(f'{k} {v[0].shape}' for k, v in baked.items())} float32 ({args.engine})")
-        return
+    wind = _wind(args)
+    scene = scenes.scene_of(args)
+    if scene is not None:
+        return scenes.bake(scene, args, _progress, wind)
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time)
