@@ -199,3 +199,18 @@ def test_speed_sized_run_is_vectorized_and_correct():
     params = ad.scatter(surf, "stone", 5000, min_distance=0.8, anchor="origin", seed=1)
     p = params[:, 10:13].astype(np.float64)
     assert cKDTree(p).query(p, k=2)[0][:, 1].min() >= 0.8 * (1 - 1e-6)
+
+
+def test_density_white_only_where_nothing_faces_up_is_an_error(stone):
+    # two squares side by side: x < 0 faces up, x > 0 faces down
+    v = np.array([[-2, 0, -1], [0, 0, -1], [0, 0, 1], [-2, 0, 1], [2, 0, -1], [2, 0, 1]], dtype=float)
+    f = np.array([[0, 2, 1], [0, 3, 2], [1, 2, 5], [1, 5, 4]])
+    surface = trimesh.Trimesh(v, f, process=False)
+    assert surface.face_normals[0, 1] > 0 and surface.face_normals[2, 1] < 0
+    right = np.zeros((4, 4))
+    right[:, 2:] = 1.0
+    with pytest.raises(ad.ScatterError, match="density: no candidate"):
+        ad.scatter(surface, stone, 10, density=right)
+    left = 1.0 - right
+    params = ad.scatter(surface, stone, 10, density=left, anchor="origin")
+    assert (params[:, 10] <= 0).all()

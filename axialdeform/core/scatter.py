@@ -377,6 +377,10 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
         points = np.concatenate([points, cand])
         faces = np.concatenate([faces, np.asarray(fidx, dtype=np.int64)])
 
+    if n > 0 and len(points) == 0 and grey is not None:
+        raise ScatterError(f"density: no candidate on the upward-facing part of {surf.name} lies under a "
+                           f"non-black pixel; expected white where instances may go (columns along "
+                           f"+{AXIS_NAMES[surf.ground[0]]}, rows along +{AXIS_NAMES[surf.ground[1]]})")
     params = _instances(base, points, np.asarray(tm.face_normals, dtype=np.float64)[faces], surf.up, rng,
                         align_to_normal=align_to_normal, anchor=anchor,
                         scale=None if scale is None else (lo_s, hi_s), bend=bend)
