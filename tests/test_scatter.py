@@ -204,7 +204,7 @@ def test_speed_sized_run_is_vectorized_and_correct():
 def test_density_white_only_where_nothing_faces_up_is_an_error(stone):
     # two squares side by side: x < 0 faces up, x > 0 faces down
     v = np.array([[-2, 0, -1], [0, 0, -1], [0, 0, 1], [-2, 0, 1], [2, 0, -1], [2, 0, 1]], dtype=float)
-    f = np.array([[0, 2, 1], [0, 3, 2], [1, 2, 5], [1, 5, 4]])
+    f = np.array([[0, 2, 1], [0, 3, 2], [1, 5, 2], [1, 4, 5]])
     surface = trimesh.Trimesh(v, f, process=False)
     assert surface.face_normals[0, 1] > 0 and surface.face_normals[2, 1] < 0
     right = np.zeros((4, 4))
