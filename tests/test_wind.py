@@ -136,8 +136,11 @@ def test_wind_parse_and_bad_values():
     np.testing.assert_array_equal(w.unit_direction, [0, 0, 1])
     with pytest.raises(ad.ParamError, match="--wind: gustiness: expected a finite number >= 0"):
         Wind.parse("0.2,-1")
-    with pytest.raises(ad.ParamError, match="wind direction"):
-        Wind(direction=(0, 0, 0))
+    for bad in ((0, 0, 0), (1, 2), "abc", (1, float("nan"), 0)):
+        with pytest.raises(ad.ParamError, match="wind direction"):
+            Wind(direction=bad)
+    with pytest.raises(ad.ParamError, match="wind strength"):
+        Wind(strength=float("inf"))
     with pytest.raises(ad.ParamError, match="time"):
         w.cycles(float("nan"))
 
