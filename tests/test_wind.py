@@ -180,3 +180,9 @@ def test_instance_bounds_hold_the_windy_instances(leaf):
         assert (dist <= radii * (1 + 1e-6)).all()
     still_centers, still_radii = instance_bounds(leaf, p)
     assert (radii > still_radii).all()
+
+
+def test_renderer_refuses_a_wind_that_is_not_a_wind(ctx, leaf):
+    with AxialRenderer(ctx, leaf, blades(leaf, n=3)) as r:
+        with pytest.raises(ad.ParamError, match="wind: expected an axialdeform.Wind"):
+            r.capture(wind=0.3)
