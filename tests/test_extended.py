@@ -265,6 +265,13 @@ def _run(*args, cwd=None):
     (("--taper", "1.5"), r"--taper: expected a number < 1"),
     (("--twist", "nan"), r"--twist: expected a finite number"),
 ])
+def test_cli_time_without_wind_is_an_error(tmp_path):
+    proc = _run("bake", "leaf", "missing.adp", "-o", tmp_path / "x.npz", "--time", "2")
+    assert proc.returncode == 2 and proc.stderr.strip() == (
+        "axialdeform bake: error: --time: only meaningful with --wind (the wind is the only thing that moves with time)")
+    assert not (tmp_path / "x.npz").exists()
+
+
 def test_cli_random_bad_extension_is_one_line_exit_2(tmp_path, args, expected):
     import re
 

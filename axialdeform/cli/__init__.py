@@ -65,7 +65,7 @@ def _add_wind_args(parser) -> None:
         "wind (docs/wind.md): tip displacement as a fraction of L, gustiness, gusts per second, "
         "distance between gust fronts (0: none)"))
     parser.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
-    parser.add_argument("--time", type=float, default=0.0, help="seconds: the moment the wind is taken at (default: 0)")
+    parser.add_argument("--time", type=float, default=None, help="seconds: the moment the wind is taken at (default: 0)")
 
 
 def _wind(args):
@@ -73,7 +73,13 @@ def _wind(args):
     from ..core.wind import Wind
 
     if args.wind is None:
+        if args.time is not None:
+            raise ParamError("--time: only meaningful with --wind (the wind is the only thing that moves with time)")
         return None
+    if args.time is None:
+        args.time = 0.0
+    elif not math.isfinite(args.time):
+        raise ParamError(f"--time: expected a finite number of seconds, found {args.time!r}")
     try:
         direction = tuple(float(x) for x in args.wind_dir.split(","))
     except ValueError:
@@ -227,7 +233,7 @@ def cmd_bake(args) -> None:
     wind = _wind(args)
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time)
+        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time or 0.0)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)
