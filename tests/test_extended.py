@@ -259,12 +259,6 @@ def _run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
 
 
-@pytest.mark.parametrize("args,expected", [
-    (("--scale", "0:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
-    (("--scale", "2:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
-    (("--taper", "1.5"), r"--taper: expected a number < 1"),
-    (("--twist", "nan"), r"--twist: expected a finite number"),
-])
 def test_cli_time_without_wind_is_an_error(tmp_path):
     proc = _run("bake", "leaf", "missing.adp", "-o", tmp_path / "x.npz", "--time", "2")
     assert proc.returncode == 2 and proc.stderr.strip() == (
@@ -272,6 +266,12 @@ def test_cli_time_without_wind_is_an_error(tmp_path):
     assert not (tmp_path / "x.npz").exists()
 
 
+@pytest.mark.parametrize("args,expected", [
+    (("--scale", "0:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
+    (("--scale", "2:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
+    (("--taper", "1.5"), r"--taper: expected a number < 1"),
+    (("--twist", "nan"), r"--twist: expected a finite number"),
+])
 def test_cli_random_bad_extension_is_one_line_exit_2(tmp_path, args, expected):
     import re
 
