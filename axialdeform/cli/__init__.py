@@ -66,7 +66,7 @@ def _add_wind_args(parser) -> None:
         "wind (docs/wind.md): tip displacement as a fraction of L, gustiness, gusts per second, "
         "distance between gust fronts (0: none)"))
     parser.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
-    parser.add_argument("--time", type=float, default=0.0, help="seconds: the moment the wind is taken at (default: 0)")
+    parser.add_argument("--time", type=float, default=None, help="seconds: the moment the wind is taken at (default: 0)")
 
 
 def _wind(args):
@@ -74,7 +74,13 @@ def _wind(args):
     from ..core.wind import Wind
 
     if args.wind is None:
+        if args.time is not None:
+            raise ParamError("--time: only meaningful with --wind (the wind is the only thing that moves with time)")
         return None
+    if args.time is None:
+        args.time = 0.0
+    elif not math.isfinite(args.time):
+        raise ParamError(f"--time: expected a finite number of seconds, found {args.time!r}")
     try:
         direction = tuple(float(x) for x in args.wind_dir.split(","))
     except ValueError:
@@ -125,7 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="extended instances: twist tw drawn in -MAX..MAX radians over the axis")
     r.add_argument("--taper", metavar="MAX", type=float, default=None,
                    help="extended instances: taper tp drawn between 0 and MAX (< 1)")
-    r.add_argument("--quantize", action="store_true", help="write the compact 32-byte form (binary only)")
+    r.add_argument("--quantize", action="store_true", help="write the compact uint16 form: 32 bytes an instance, 38 extended (binary only)")
     r.add_argument("-o", "--output", required=True)
 
     rd = sub.add_parser("render", help="render instances to a PNG", description="Render MESH deformed by PARAMS, framed automatically.")
@@ -158,7 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("src")
     c.add_argument("dst")
     c.add_argument("--mesh", help="record the axis and fingerprint of this base mesh")
-    c.add_argument("--quantize", action="store_true", help="write the compact 32-byte form")
+    c.add_argument("--quantize", action="store_true", help="write the compact uint16 form (32 bytes an instance, 38 extended)")
 
     import importlib
 
@@ -238,7 +244,7 @@ def cmd_bake(args) -> None:
         return scenes.bake(scene, args, _progress, wind)
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time)
+        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time or 0.0)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)
