@@ -198,3 +198,16 @@ def test_view_command_shows_a_scene_headless(small, tmp_path):
     assert "12 instances" in proc.stdout  # the first layer is the viewer's own
     image = np.asarray(Image.open(shot).convert("RGB")).astype(int)
     assert ((image[..., 0] - image[..., 2]) > 60).sum() > 3  # the orange leaves of the second layer are drawn too
+
+
+def test_time_moves_the_scene_wind_and_needs_one(small, tmp_path, capsys):
+    a, b = tmp_path / "a.npz", tmp_path / "b.npz"
+    assert main(["bake", str(small), "-o", str(a)]) == 0
+    assert main(["bake", str(small), "-o", str(b), "--time", "1.3"]) == 0
+    a, b = np.load(a), np.load(b)
+    assert np.array_equal(a["positions_stones"], b["positions_stones"])  # wind = false
+    assert not np.array_equal(a["positions_leaves"], b["positions_leaves"])  # wind = true: moved
+    still = write_scene(small.parent, small.read_text().replace("[wind]\nstrength = 0.2\n", ""), "still.toml")
+    capsys.readouterr()
+    assert main(["render", str(still), "-o", str(tmp_path / "x.png"), "--time", "1.0"]) == 2
+    assert "--time" in capsys.readouterr().err and not (tmp_path / "x.png").exists()

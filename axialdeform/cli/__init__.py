@@ -222,10 +222,10 @@ def cmd_render(args) -> None:
 
     from . import scenes
 
-    wind = _wind(args)
     scene = scenes.scene_of(args)
-    if scene is not None:
-        return scenes.render(scene, args, wind)
+    if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
+        return scenes.render(scene, args, _wind(args) if args.wind is not None else None)
+    wind = _wind(args)
     mesh, params = _load(args)
     image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up,
                          **({"wind": wind, "time": args.time} if wind is not None else {}))
@@ -238,10 +238,10 @@ def cmd_bake(args) -> None:
 
     from . import scenes
 
-    wind = _wind(args)
     scene = scenes.scene_of(args)
-    if scene is not None:
-        return scenes.bake(scene, args, _progress, wind)
+    if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
+        return scenes.bake(scene, args, _progress, _wind(args) if args.wind is not None else None)
+    wind = _wind(args)
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time or 0.0)

@@ -28,6 +28,18 @@ def scene_of(args, *, params_optional: bool = False):
     return load_scene(args.mesh)
 
 
+def _time(scene, args) -> float:
+    """``--time`` for a scene: it moves the scene's wind, so a scene without one refuses it."""
+    t = getattr(args, "time", None)
+    if t is None:
+        return 0.0
+    if scene.wind is None:
+        from ..core.errors import ParamError
+
+        raise ParamError(f"--time: {scene.path} has no [wind] and no --wind is given; expected a wind for the time to move")
+    return float(t)
+
+
 def render(scene, args, wind=None) -> None:
     """``render SCENE -o OUT.png``; ``--wind`` replaces the scene's [wind]."""
     from ..gl.image import parse_size, save_png
@@ -35,7 +47,7 @@ def render(scene, args, wind=None) -> None:
 
     if wind is not None:
         scene.wind = wind
-    image = render_scene(scene, parse_size(args.size), args.mode, time=getattr(args, "time", 0.0))
+    image = render_scene(scene, parse_size(args.size), args.mode, time=_time(scene, args))
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
           f"{image.shape[1]}x{image.shape[0]})")
@@ -51,11 +63,12 @@ def bake(scene, args, progress, wind=None) -> None:
                                f"expected a .npz file name")
     if wind is not None:
         scene.wind = wind
+    t = _time(scene, args)
     baked = {}
     for layer in scene.layers:
         with progress(len(layer.params), f"{layer.name} ({args.engine})") as bar:
             baked[layer.name] = bake_layer(layer.mesh, layer.params, args.engine, progress=bar,
-                                           wind=scene.wind if layer.wind else None, time=getattr(args, "time", 0.0))
+                                           wind=scene.wind if layer.wind else None, time=t)
     write_scene_npz(out, baked)
     print(f"wrote {out}: {', '.join(f'{k} {v[0].shape}' for k, v in baked.items())} float32 ({args.engine})")
 
