@@ -540,11 +540,19 @@ def run(args) -> None:
     from .params import read_params
 
     out = _check_glb_path(args.output)
-    from ..cli import scenes
+    from .scene import is_scene_file, load_scene
 
-    scene = scenes.scene_of(args)
-    if scene is not None:
-        return scenes.export(scene, args)
+    if is_scene_file(args.mesh):  # (this command moves to cli/ with the CLI split; cli/scenes.py has the same)
+        if args.params is not None:
+            raise GltfError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
+        if args.layout != "baked":
+            raise GltfError("--instanced: a scene exports baked (one mesh per layer); expected --baked or no layout flag")
+        scene = load_scene(args.mesh)
+        path = export_scene(out, scene)
+        print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, baked, {path.stat().st_size} bytes)")
+        return
+    if args.params is None:
+        raise GltfError(f"PARAMS: expected a parameter file after MESH {args.mesh} (or a scene file .toml as MESH)")
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     path = export_glb(out, mesh, params, args.layout)
