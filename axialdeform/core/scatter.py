@@ -28,8 +28,10 @@
   are shifted (a shift shared by all five control points) so that the axis
   does not move at the anchor: the bent shape still stands on its point.
 * **Orientation**: a random turn about the up axis, then a tilt of the up
-  axis towards the surface normal by the fraction ``align_to_normal``;
-  stored as angles of ``R = Rz·Ry·Rx`` (``core.fit.angles_from_matrices``).
+  axis towards the surface normal by the fraction ``align_to_normal``
+  (``T · Rot(up, φ)``, which is the tilt followed by a turn about the tilted
+  axis: ``Rot(T up, φ) · T``); stored as angles of ``R = Rz·Ry·Rx``
+  (``core.fit.angles_from_matrices``).
 
 Seeded: one PCG64 stream; the same arguments and seed give the same bytes.
 """
