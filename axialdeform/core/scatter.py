@@ -55,6 +55,8 @@ ANCHORS = ("bottom", "center", "origin")
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm", ".gif", ".webp")
 #: most candidates drawn in one round (bounds memory: about 200 bytes each)
 MAX_CANDIDATES = 4_000_000
+#: most instances one call places (76 bytes each as 19 float32)
+MAX_INSTANCES = 10_000_000
 #: rounds of fresh candidates before giving up on reaching n
 MAX_ROUNDS = 12
 
@@ -314,6 +316,8 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
         raise ScatterError(f"count: expected a whole number >= 0, found {n!r}")
     n = int(n)
+    if n > MAX_INSTANCES:
+        raise ScatterError(f"count: expected at most {MAX_INSTANCES} instances, found {n}")
     if not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ScatterError(f"seed: expected a non-negative integer, found {seed!r}")
     if anchor not in ANCHORS:
@@ -353,11 +357,12 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
             # Greedy thinning of lam candidates per D² keeps about 0.5 (1 - exp(-1.5 lam)) per D²
             # (measured); the first round asks for what should give n with a margin, later rounds
             # (near the packing limit) cover the whole surface again to fill the gaps left.
-            full = math.ceil(3.0 * area / min_distance**2)
+            per_d2 = min(area / min_distance / min_distance, float(MAX_CANDIDATES))  # D² cells in the area
+            full = math.ceil(3.0 * per_d2)
             if round_ == 0:
-                rho = min(0.95, n * min_distance**2 / area / 0.5)
+                rho = min(0.95, n / per_d2 / 0.5)
                 lam = -1.3 * math.log1p(-rho) / 1.5
-                want = min(full, max(want, math.ceil(lam * area / min_distance**2)))
+                want = min(full, max(want, math.ceil(lam * per_d2)))
             else:
                 want = full
         count = int(min(MAX_CANDIDATES, math.ceil(want / mean_density) + 16))
