@@ -211,3 +211,21 @@ def test_time_moves_the_scene_wind_and_needs_one(small, tmp_path, capsys):
     capsys.readouterr()
     assert main(["render", str(still), "-o", str(tmp_path / "x.png"), "--time", "1.0"]) == 2
     assert "--time" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("body, line, key", [
+    ('up = 3', 1, "up"),
+    ('[[layer]]\nmesh = "stone"\ncolor = "red"\nparams = "x"', 3, "color"),
+    ('[terrain]\nheightmap = "hm.png"\n[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = "many"', 6, "count"),
+    ('[terrain]\nheightmap = "hm.png"\n[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = 5\nscale = [0, 1]', 7, "scale"),
+    ('[terrain]\nheightmap = "hm.png"\n[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = 5\nanchor = "top"', 7, "anchor"),
+    ('[terrain]\nheightmap = "hm.png"\nextent = -3', 3, "extent"),
+    ('[camera]\neye = [0, 0, 1]', 2, "eye"),
+    ('[wind]\nstrength = -1', 2, "strength"),
+    ('[terrain]\nheightmap = "hm.png"\n[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = 500\nmin_distance = 3',
+     5, "scatter"),  # too few fit: the recipe's table
+])
+def test_bad_values_name_their_line_and_key(tmp_path, body, line, key):
+    Image.fromarray(np.full((8, 8), 128, dtype=np.uint8)).save(tmp_path / "hm.png")
+    msg = _error(tmp_path, body + "\n")
+    assert msg.startswith(f"{tmp_path / 'scene.toml'}:{line}: key '{key}': "), msg

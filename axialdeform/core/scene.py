@@ -130,7 +130,7 @@ class _Source:
             hits = [i for i, ln in enumerate(self.lines) if head.match(ln)]
             if len(hits) > nth:
                 start = hits[nth]
-        pat = re.compile(r"^\s*(\[\[?\s*)?[\"']?" + re.escape(key.split(".")[-1]) + r"[\"']?\s*(=|\]|\.)")
+        pat = re.compile(r"^\s*(\[\[?\s*([\w-]+\.)*)?[\"']?" + re.escape(key.split(".")[-1]) + r"[\"']?\s*(=|\]|\.)")
         for i in range(start, len(self.lines)):
             if pat.match(self.lines[i]):
                 return i + 1
@@ -367,12 +367,17 @@ def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.n
     if "min_distance" in kwargs and scale_counts < 1:
         kwargs["min_distance"] /= math.sqrt(scale_counts)  # a preview keeps the look: fewer, further apart
     if "scale" in recipe:
-        kwargs["scale"] = tuple(_numbers(src, recipe["scale"], "scale", "layer", nth, (1, 2)) * 2)[:2]
-    for key, kind in (("anchor", str), ("seed", int), ("allow_fewer", bool)):
+        kwargs["scale"] = tuple(_numbers(src, recipe["scale"], "scale", "layer", nth, (1, 2), positive=True) * 2)[:2]
+    for key, kind, what in (("anchor", str, "a string"), ("seed", int, "a whole number"),
+                            ("allow_fewer", bool, "true or false")):
         if key in recipe:
             if not isinstance(recipe[key], kind) or (kind is int and isinstance(recipe[key], bool)):
-                raise src.error(f"expected a {kind.__name__}, found {recipe[key]!r}", key, "layer", nth)
+                raise src.error(f"expected {what}, found {recipe[key]!r}", key, "layer", nth)
             kwargs[key] = recipe[key]
+    from .scatter import ANCHORS
+
+    if kwargs.get("anchor", "bottom") not in ANCHORS:
+        raise src.error(f"expected one of {', '.join(ANCHORS)}, found {kwargs['anchor']!r}", "anchor", "layer", nth)
     if "density" in recipe:
         kwargs["density"] = _existing(src, recipe["density"], "density", "layer", nth)
     where = surface
