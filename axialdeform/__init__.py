@@ -49,6 +49,7 @@ _LAZY = {
     "assemble": "gl.shaders", "assemble_text": "gl.shaders", "build_program": "gl.shaders", "deformation_glsl": "gl.shaders",
     "random_params": "core.variation",
     "scatter": "core.scatter", "load_surface": "core.scatter",
+    "load_scene": "core.scene", "SceneRenderer": "gl.scene", "render_scene": "gl.scene",
     "EXTENDED_FIELDS": "core.params", "extend_params": "core.params", "is_extended": "core.params",
     "Wind": "core.wind", "wind_offsets": "core.wind", "apply_wind": "core.wind",
 }
@@ -86,6 +87,6 @@ __all__ = [
     "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ScatterError", "SceneError", "ShaderError", "TooFewError", "GltfError", "ResidualError", "TopologyError",
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds", "load_mesh", "make_params", "random_params",
-    "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "scatter", "load_surface", "write_params",
+    "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "scatter", "load_surface", "load_scene", "SceneRenderer", "render_scene", "write_params",
     "EXTENDED_FIELDS", "extend_params", "is_extended", "Wind", "wind_offsets", "apply_wind",
 ]
