@@ -170,7 +170,7 @@ def test_viewer_animates_the_wind_and_v_toggles_it(leaf):
 
 
 def test_instance_bounds_hold_the_windy_instances(leaf):
-    from axialdeform.gl.camera import instance_bounds
+    from axialdeform.core.bounds import instance_bounds
 
     p = blades(leaf, n=80)
     centers, radii = instance_bounds(leaf, p, wind=WIND)

@@ -44,27 +44,27 @@ def add_parser(subparsers) -> None:
         "faces that face up, at least --min-distance apart, following a --density image (columns along +x, rows "
         "along +z, top row at the smallest z; black none, white full). Writes a parameter file (16 numbers per "
         "instance, 19 with --scale)."))
-    s.add_argument("surface", metavar="SURFACE")
+    s.add_argument("surface", metavar="SURFACE", help="terrain: a mesh file, or a grey height-map image")
     s.add_argument("mesh", metavar="MESH", help="base mesh file, or 'stone' / 'leaf'")
-    s.add_argument("-n", "--count", type=int, required=True)
-    s.add_argument("-o", "--output", required=True, help="parameter file (.adp binary; .txt/.csv/.dat text)")
-    s.add_argument("--min-distance", type=float, default=None, metavar="D", help="least distance between instances")
-    s.add_argument("--density", default=None, metavar="IMAGE", help="grey density map over the surface's bounding box")
+    s.add_argument("-n", "--count", type=int, required=True, help="how many instances (required)")
+    s.add_argument("-o", "--output", required=True, help="parameter file (.adp binary; .txt/.csv/.dat text; required)")
+    s.add_argument("--min-distance", type=float, default=None, metavar="D", help="least distance between instances (default: none)")
+    s.add_argument("--density", default=None, metavar="IMAGE", help="grey density map over the surface's bounding box (default: uniform)")
     s.add_argument("--align-to-normal", type=float, default=0.0, metavar="F",
                    help="tilt the up axis towards the surface normal by F in [0, 1] (default: 0, upright)")
     s.add_argument("--anchor", choices=ANCHORS, default="bottom",
                    help="point of MESH on the surface (default: %(default)s)")
-    s.add_argument("--scale", type=_scale_range, default=None, metavar="MIN:MAX", help="random uniform scale (19 numbers)")
+    s.add_argument("--scale", type=_scale_range, default=None, metavar="MIN:MAX", help="random uniform scale, 19 numbers an instance (default: none, 16 numbers)")
     s.add_argument("--bend", type=float, default=0.08, metavar="B",
                    help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
     s.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
     s.add_argument("--height-scale", type=float, default=1.0, metavar="H",
                    help="height-map SURFACE: height of a white pixel (default: %(default)s)")
     s.add_argument("--extent", type=_extent, default=None, metavar="W[,D]",
                    help="height-map SURFACE: size along x (and z); default one unit per pixel")
-    s.add_argument("--allow-fewer", action="store_true", help="exit 0 when fewer than N fit")
-    s.add_argument("--quantize", action="store_true", help="write the compact quantized form (binary only)")
+    s.add_argument("--allow-fewer", action="store_true", help="exit 0 when fewer than N fit (default: exit 2)")
+    s.add_argument("--quantize", action="store_true", help="write the compact quantized form, binary only (default: float32)")
     s.set_defaults(handler=run)
 
 

@@ -55,7 +55,8 @@ def render(scene, args, wind=None) -> None:
 
 def bake(scene, args, progress, wind=None) -> None:
     """``bake SCENE -o OUT.npz``: arrays ``positions_LAYER`` and ``normals_LAYER``."""
-    from ..core.bake import bake as bake_layer, write_scene_npz
+    from ..core.bake import write_scene_npz
+    from ..gl.bake import bake as bake_layer
 
     out = Path(args.output)
     if out.suffix.lower() != ".npz":

@@ -31,7 +31,7 @@
   axis towards the surface normal by the fraction ``align_to_normal``
   (``T · Rot(up, φ)``, which is the tilt followed by a turn about the tilted
   axis: ``Rot(T up, φ) · T``); stored as angles of ``R = Rz·Ry·Rx``
-  (``core.fit.angles_from_matrices``).
+  (``core.transforms``).
 
 Seeded: one PCG64 stream; the same arguments and seed give the same bytes.
 """
@@ -281,9 +281,9 @@ def poisson_greedy(points: np.ndarray, radius: float, fixed: np.ndarray | None =
 
 def _rotation_about(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Rodrigues: unit axes (k, 3) and angles (k,) -> (k, 3, 3)."""
-    from .fit import _rodrigues
+    from .transforms import matrices_from_rotation_vectors
 
-    return _rodrigues(axis * angle[:, None])
+    return matrices_from_rotation_vectors(axis * angle[:, None])
 
 
 def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density=None,
@@ -401,7 +401,7 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
 def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, scale, bend) -> np.ndarray:
     """Parameters for instances standing on ``points`` (k, 3) with surface ``normals`` (k, 3)."""
     from .deform import bernstein
-    from .fit import angles_from_matrices
+    from .transforms import angles_from_matrices
 
     k = len(points)
     cols = 16 if scale is None else 19

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .axis import ControlAxis
-from .deform import rotation_matrices
+from .transforms import rotation_matrices
 from .errors import ParamError
 from .params import ANGLES, OFFSETS, POSITION, as_params
 

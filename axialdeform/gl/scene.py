@@ -33,22 +33,30 @@ def scene_camera(scene, aspect: float) -> Camera:
         eye, target = np.asarray(cam["eye"]), np.asarray(cam["target"])
         dist = float(np.linalg.norm(eye - target))
         return Camera(eye, target, up, fov, near=dist * 1e-3, far=dist * 10)
-    from .camera import frame_box, instance_bounds
+    from ..core.bounds import instance_bounds
+    from .camera import frame_points, orbit_axes
 
-    lows, highs = [], []
-    for layer in scene.layers:
+    points, radii = [], []
+    for layer in scene.layers:  # a sphere per instance (it holds the instance at any time of the wind)
         if len(layer.params):
             c, r = instance_bounds(layer.mesh, layer.params, wind=scene.wind if layer.wind else None)
-            r = np.broadcast_to(r, (len(c),))
-            lows.append((c - r[:, None]).min(axis=0))
-            highs.append((c + r[:, None]).max(axis=0))
+            points.append(c)
+            radii.append(np.broadcast_to(r, (len(c),)))
     if scene.terrain is not None:
-        lows.append(scene.terrain.positions.min(axis=0))
-        highs.append(scene.terrain.positions.max(axis=0))
-    if not lows:
-        lows, highs = [np.full(3, -1.0)], [np.full(3, 1.0)]
-    return frame_box(np.min(lows, axis=0), np.max(highs, axis=0), aspect, up=scene.up, fovy=fov,
-                     azimuth=cam.get("azimuth", 35.0), elevation=cam.get("elevation", 35.0))
+        points.append(scene.terrain.positions.astype(np.float64))
+        radii.append(np.zeros(len(scene.terrain.positions)))
+    pts = np.concatenate(points) if points else np.zeros((0, 3))
+    rad = np.concatenate(radii) if radii else np.zeros(0)
+    az, el = cam.get("azimuth", 35.0), cam.get("elevation", 35.0)
+    target, distance = frame_points(pts, rad, scene.up, az, el, aspect, fov)
+    to_eye = orbit_axes(scene.up, az, el)[0]
+    eye = target + to_eye * distance
+    if len(pts):
+        depth = (eye - pts) @ to_eye
+        near, far = float((depth - rad).min()), float((depth + rad).max())
+    else:
+        near, far = distance * 0.5, distance * 2.0
+    return Camera(eye, target, up, fov, near=max(near * 0.95, distance * 1e-3), far=max(far * 1.05, distance * 2e-3))
 
 
 class SceneRenderer:
