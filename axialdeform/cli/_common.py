@@ -110,9 +110,9 @@ def extension_args(args) -> dict:
 def add_wind_args(parser) -> None:
     parser.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None, help=(
         "wind (docs/wind.md): tip displacement as a fraction of L, gustiness, gusts per second, "
-        "distance between gust fronts (0: none); default: no wind"))
+        "distance between gust fronts, 0 for none (default: no wind)"))
     parser.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
-    parser.add_argument("--time", type=float, default=None, help="seconds: the moment the wind is taken at (default: 0)")
+    parser.add_argument("--time", type=float, default=None, help="seconds: the moment the wind is taken at, with --wind (default: 0)")
 
 
 def wind_arg(args):

@@ -25,11 +25,11 @@ def add_parser(sub) -> None:
     r.add_argument("--tilt", type=angle_range, default=(-0.25, 0.25),
                    help="MIN,MAX radians about the other two axes (default: -0.25,0.25)")
     r.add_argument("--scale", metavar="MIN:MAX", default=None,
-                   help="extended instances: uniform scale s drawn in MIN..MAX (0 < MIN <= MAX; default: none, 16 numbers)")
+                   help="extended instances: uniform scale s drawn in MIN..MAX, 0 < MIN <= MAX (default: none, 16 numbers)")
     r.add_argument("--twist", metavar="MAX", type=float, default=None,
                    help="extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)")
     r.add_argument("--taper", metavar="MAX", type=float, default=None,
-                   help="extended instances: taper tp drawn between 0 and MAX (< 1; default: none)")
+                   help="extended instances: taper tp drawn between 0 and MAX < 1 (default: none)")
     r.add_argument("--quantize", action="store_true",
                    help="write the compact uint16 form, binary only: 32 bytes an instance, 38 extended (default: 64/76 bytes, lossless)")
     r.add_argument("-o", "--output", required=True, help="parameter file to write (required, no default)")

@@ -145,11 +145,9 @@ class AxialRenderer:
         if wind is None or wind.strength == 0:
             program["u_wind_strength"].value = 0.0
             return
-        program["u_wind_strength"].value = float(wind.strength)
-        for name, value in (("u_wind_dir", tuple(wind.unit_direction)), ("u_wind_gust", float(wind.gustiness)),
-                            ("u_wind_cycles", tuple(wind.cycles(time))), ("u_wind_wavenumber", wind.wavenumber)):
-            if name in program:
-                program[name].value = value
+        set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),
+                               "u_wind_gust": float(wind.gustiness), "u_wind_cycles": tuple(wind.cycles(time)),
+                               "u_wind_wavenumber": float(wind.wavenumber)})
 
     def _set_quant_uniforms(self, program) -> None:
         """The per-column decode table of a quantized instance buffer (no-op otherwise)."""
