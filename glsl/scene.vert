@@ -20,6 +20,12 @@ in vec4 i_d34;
 in vec2 i_d5;
 in vec3 i_position;
 in vec3 i_angles;
+#ifdef AXIAL_CULLED
+in int i_index;             // the instance's index before culling (the records come from cull.geom)
+#define AXIAL_INSTANCE_ID i_index
+#else
+#define AXIAL_INSTANCE_ID gl_InstanceID
+#endif
 #ifdef AXIAL_TINT
 in vec3 i_tint;             // optional second instanced buffer: the instance's base colour (linear RGB)
 flat out vec3 v_tint;
@@ -43,7 +49,7 @@ void main() {
     AxialInstance inst = AxialInstance(i_d12, i_d34, i_d5, i_position, i_angles);
 #endif
     axial_world(in_position, in_normal, u_axis, u_lo, u_len, inst, v_world, v_normal);
-    v_shade = 0.85 + 0.3 * instance_hash(gl_InstanceID);
+    v_shade = 0.85 + 0.3 * instance_hash(AXIAL_INSTANCE_ID);
 #ifdef AXIAL_TINT
     v_tint = i_tint;
 #endif
