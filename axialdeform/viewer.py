@@ -31,7 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .gl.camera import UP_VECTORS, frame_instances, instance_bounds
+from .core.bounds import scene_box
+from .gl.camera import UP_VECTORS, frame_instances
 from .core.errors import AxialDeformError, ContextError, ParamError
 from .gl.renderer import MODES
 
@@ -115,9 +116,7 @@ class _ViewerMixin:
         self.target = cam.target
         self.distance = float(np.linalg.norm(cam.eye - cam.target))
         self.azimuth, self.elevation = 35.0, 30.0
-        centers, radii = instance_bounds(self.mesh, self.base)
-        lo = (centers - radii[:, None]).min(axis=0) if len(centers) else -np.ones(3)
-        hi = (centers + radii[:, None]).max(axis=0) if len(centers) else np.ones(3)
+        lo, hi = scene_box(self.mesh, self.base)
         self.extent = float(np.linalg.norm(hi - lo)) / 2 + 1e-6
 
     def _aspect(self) -> float:

@@ -40,6 +40,7 @@ import numpy as np
 from .atomic import atomic_write_bytes
 from .errors import GltfError
 from .params import ANGLES, POSITION, as_params
+from .transforms import angles_from_matrices, matrices_from_quaternions, quaternions_from_angles
 
 __all__ = [
     "GltfError",
@@ -77,59 +78,6 @@ _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
 _TRIANGLES = 4
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
-
-
-# ---------------------------------------------------------------- quaternions
-
-
-def quaternions_from_angles(angles: np.ndarray) -> np.ndarray:
-    """Unit quaternions of ``R = Rz(rz)·Ry(ry)·Rx(rx)``.
-
-    Parameters
-    ----------
-    angles : (n, 3) float, radians
-        ``rx ry rz`` per instance.
-
-    Returns
-    -------
-    (n, 4) float64
-        ``x, y, z, w`` (the glTF order), the Hamilton product ``qz ⊗ qy ⊗ qx``
-        (pyrr's ``quaternion.cross``), normalised, sign chosen so ``w >= 0``.
-    """
-    from pyrr import quaternion
-
-    a = np.asarray(angles, dtype=np.float64).reshape(-1, 3)
-    half = 0.5 * a
-    s, c = np.sin(half), np.cos(half)
-    zero = np.zeros(len(a))
-    # pyrr quaternions are (x, y, z, w); quaternion.cross unpacks the first
-    # axis, so (4, n) arrays multiply n quaternions at once
-    qx = np.stack([s[:, 0], zero, zero, c[:, 0]])
-    qy = np.stack([zero, s[:, 1], zero, c[:, 1]])
-    qz = np.stack([zero, zero, s[:, 2], c[:, 2]])
-    q = quaternion.cross(qz, quaternion.cross(qy, qx)).T
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
-    q[q[:, 3] < 0] *= -1.0
-    return q
-
-
-def matrices_from_quaternions(quats: np.ndarray) -> np.ndarray:
-    """Rotation matrices (column-vector convention, ``v -> R @ v``) of unit
-    quaternions ``(n, 4)`` in ``x, y, z, w`` order: ``(n, 3, 3)`` float64."""
-    q = np.asarray(quats, dtype=np.float64).reshape(-1, 4)
-    q = q / np.linalg.norm(q, axis=1, keepdims=True)
-    x, y, z, w = q.T
-    r = np.empty((len(q), 3, 3))
-    r[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    r[:, 0, 1] = 2 * (x * y - z * w)
-    r[:, 0, 2] = 2 * (x * z + y * w)
-    r[:, 1, 0] = 2 * (x * y + z * w)
-    r[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    r[:, 1, 2] = 2 * (y * z - x * w)
-    r[:, 2, 0] = 2 * (x * z - y * w)
-    r[:, 2, 1] = 2 * (y * z + x * w)
-    r[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    return r
 
 
 # --------------------------------------------------------------------- writing
@@ -410,7 +358,6 @@ def read_instanced_glb(path: str | os.PathLike):
             params[:, list(idx)] = cols[name]
     params[:, POSITION] = cols["TRANSLATION"]
     if "_AXIAL_ANGLES" not in cols:
-        from .fit import angles_from_matrices
 
         params[:, ANGLES] = angles_from_matrices(matrices_from_quaternions(cols["ROTATION"]))
 

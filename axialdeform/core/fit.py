@@ -37,9 +37,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .deform import bernstein, deform
+from .deform import bernstein, deform, displace
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .params import ANGLES, OFFSETS, POSITION, as_params
+from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
 __all__ = [
     "TopologyError",
@@ -62,35 +63,6 @@ __all__ = [
 DEFAULT_MAX_RESIDUAL = 1e-3
 #: mesh files a variants folder may hold (others are ignored)
 MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
-
-
-# ------------------------------------------------------------------ rotations
-
-
-def angles_from_matrices(matrices: np.ndarray) -> np.ndarray:
-    """Angles ``rx ry rz`` (radians) with ``R = Rz(rz)·Ry(ry)·Rx(rx)``.
-
-    Parameters
-    ----------
-    matrices : (..., 3, 3) float
-        Rotation matrices (column-vector convention).
-
-    Returns
-    -------
-    (..., 3) float64
-        ``ry = atan2(-R[2,0], hypot(R[0,0], R[1,0]))`` in ``[-pi/2, pi/2]``,
-        ``rx = atan2(R[2,1], R[2,2])``, ``rz = atan2(R[1,0], R[0,0])``.  At
-        gimbal lock (``cos ry`` below 1e-9: rx and rz turn about the same
-        axis) ``rz = 0`` and ``rx`` carries the whole turn.  The matrix is
-        reproduced; the angles need not equal the ones that made it.
-    """
-    r = np.asarray(matrices, dtype=np.float64)
-    cy = np.hypot(r[..., 0, 0], r[..., 1, 0])
-    ry = np.arctan2(-r[..., 2, 0], cy)
-    locked = cy < 1e-9
-    rx = np.where(locked, np.arctan2(-r[..., 1, 2], r[..., 1, 1]), np.arctan2(r[..., 2, 1], r[..., 2, 2]))
-    rz = np.where(locked, 0.0, np.arctan2(r[..., 1, 0], r[..., 0, 0]))
-    return np.stack([rx, ry, rz], axis=-1)
 
 
 def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -119,20 +91,6 @@ def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarr
     flip[..., 2] = np.where(d == 0.0, 1.0, d)
     rot = v @ (flip[..., :, None] * ut)
     return rot, tc[..., 0, :] - (rot @ sc[..., 0, :, None])[..., 0]
-
-
-def _rodrigues(w: np.ndarray) -> np.ndarray:
-    """Rotation matrices (n, 3, 3) of the rotation vectors ``w`` (n, 3) radians."""
-    w = np.asarray(w, dtype=np.float64)
-    theta = np.linalg.norm(w, axis=-1)
-    k = np.zeros(w.shape[:-1] + (3, 3))
-    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -w[..., 2], w[..., 1], -w[..., 0]
-    k[..., 1, 0], k[..., 2, 0], k[..., 2, 1] = w[..., 2], -w[..., 1], w[..., 0]
-    small = theta < 1e-12
-    safe = np.where(small, 1.0, theta)
-    kn = k / safe[..., None, None]
-    rodrigues = np.eye(3) + np.sin(safe)[..., None, None] * kn + (1.0 - np.cos(safe))[..., None, None] * (kn @ kn)
-    return np.where(small[..., None, None], np.eye(3) + k, rodrigues)
 
 
 def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -164,11 +122,7 @@ class _Model:
 
     def bent(self, z: np.ndarray) -> np.ndarray:
         """``V'`` (n, v, 3) for canonical offset coordinates ``z`` (n, 4, 2)."""
-        out = np.repeat(self.base[None], len(z), axis=0)
-        disp = self.basis @ z  # (n, v, 2)
-        out[..., self.i] += disp[..., 0]
-        out[..., self.j] += disp[..., 1]
-        return out
+        return displace(self.axis, self.base, self.basis @ z)  # D(t) = basis @ z: (n, v, 2)
 
     def _offset_columns(self, rot: np.ndarray, a: np.ndarray, first: int) -> None:
         """Fill ``a[..., first:first + 8]`` with d(R·E(basis z))/dz."""
@@ -207,7 +161,7 @@ class _Model:
     @staticmethod
     def apply(step, rot, z, pos):
         dz = np.swapaxes(step[:, 3:11].reshape(-1, 2, 4), 1, 2)
-        return _rodrigues(step[:, :3]) @ rot, z + dz, pos + step[:, 11:]
+        return matrices_from_rotation_vectors(step[:, :3]) @ rot, z + dz, pos + step[:, 11:]
 
     def error(self, rot, z, pos, target) -> np.ndarray:
         """Squared error (n,) of each instance."""

@@ -11,10 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pyrr
 
-from ..core.params import ANGLES, OFFSETS, POSITION, as_params
-from ..core.deform import rotation_matrices
+from ..core.bounds import box_corners, instance_bounds, scene_box
 
-__all__ = ["Camera", "instance_bounds", "frame_instances", "UP_VECTORS"]
+__all__ = ["Camera", "frame_instances", "UP_VECTORS"]
 
 UP_VECTORS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -37,21 +36,6 @@ class Camera:
         return pyrr.matrix44.create_perspective_projection(self.fovy, aspect, self.near, self.far, dtype=np.float32)
 
 
-def instance_bounds(mesh, params) -> tuple[np.ndarray, np.ndarray]:
-    """Bounding spheres of the deformed instances, without deforming them.
-
-    Returns centres (n, 3) and radii (n,) float64 (world units).  The bend
-    moves no vertex further than the largest offset (the weights sum to 1),
-    and a rotation keeps distances, so each sphere holds its whole instance.
-    """
-    params = as_params(params).astype(np.float64)
-    center = np.asarray(mesh.axis.center, dtype=np.float64)
-    radius = float(np.linalg.norm(mesh.positions.astype(np.float64) - center, axis=1).max())
-    bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1)
-    centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) + params[:, POSITION]
-    return centers, radius + bend
-
-
 def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35.0,
                     azimuth: float = 35.0, elevation: float = 35.0, margin: float = 0.03) -> Camera:
     """A camera that sees every instance, looking down at ``elevation`` degrees.
@@ -60,12 +44,7 @@ def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35
     corners of the box around the instances' bounding spheres project inside
     the picture (with ``margin`` as a fraction of the field of view).
     """
-    centers, radii = instance_bounds(mesh, params)
-    if len(centers) == 0:
-        lo, hi = np.full(3, -1.0), np.full(3, 1.0)
-    else:
-        lo = (centers - radii[:, None]).min(axis=0)
-        hi = (centers + radii[:, None]).max(axis=0)
+    lo, hi = scene_box(mesh, params)
     target = (lo + hi) / 2
     up_vec = np.asarray(UP_VECTORS[up])
     side = np.roll(up_vec, 1)
@@ -75,7 +54,7 @@ def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35
     right = np.cross(up_vec, to_eye)
     right /= np.linalg.norm(right)
     cam_up = np.cross(to_eye, right)
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]) - target
+    corners = box_corners(lo, hi) - target
     tan_y = np.tan(np.radians(fovy) / 2) * (1 - margin)
     tan_x = tan_y * aspect
     depth = corners @ to_eye  # towards the eye

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.axis import AXIS_NAMES
+from ..core.bounds import instance_bounds, scene_box
 from ..core.errors import AxialDeformError
 from .shaders import build_program
 
@@ -68,14 +69,11 @@ class GroundPlane:
         typical sphere radius above their lowest point (so instances rest in
         it rather than float over it).  Returns ``self``.
         """
-        from .camera import instance_bounds
-
         centers, radii = instance_bounds(mesh, params)
         if len(centers) == 0:
             return self
         a = AXIS_NAMES.index(self.up)
-        lo = (centers - radii[:, None]).min(axis=0)
-        hi = (centers + radii[:, None]).max(axis=0)
+        lo, hi = scene_box(mesh, params)
         center = (lo + hi) / 2
         others = [i for i in range(3) if i != a]
         self.radius = float(margin * np.linalg.norm((hi - lo)[others]) / 2 + np.median(radii))
