@@ -12,21 +12,33 @@ import numpy as np
 from .transforms import rotation_matrices
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
-__all__ = ["instance_bounds", "scene_box", "box_corners"]
+__all__ = ["instance_bounds", "scene_box", "box_corners", "base_radius", "instance_boxes", "frustum_planes",
+           "spheres_visible", "lod_choice"]
 
 
-def instance_bounds(mesh, params) -> tuple[np.ndarray, np.ndarray]:
+def base_radius(mesh, *extra_positions) -> float:
+    """The largest distance of a vertex from the base mesh's bounding-box
+    centre ``mesh.axis.center`` (model units), over the mesh and any
+    ``extra_positions`` arrays (k, 3) (its LOD levels)."""
+    center = np.asarray(mesh.axis.center, dtype=np.float64)
+    return max(float(np.linalg.norm(np.asarray(p, dtype=np.float64) - center, axis=1).max())
+               for p in (mesh.positions, *extra_positions))
+
+
+def instance_bounds(mesh, params, *, radius: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bounding spheres of the deformed instances, without deforming them.
 
     mesh : BaseMesh; params : (n, 16) float.
     Returns ``centers : (n, 3) float64`` and ``radii : (n,) float64`` (world
     units).  The bend moves no vertex further than the largest offset (the
     Bernstein weights sum to 1), and a rotation keeps distances, so each
-    sphere holds its whole instance.
+    sphere holds its whole instance.  ``radius`` replaces the base mesh's own
+    (:func:`base_radius`; LOD levels may reach further).  The same sphere on
+    the GPU: ``glsl/bounds.glsl`` (``axial_bound_sphere``).
     """
     params = as_params(params).astype(np.float64)
     center = np.asarray(mesh.axis.center, dtype=np.float64)
-    radius = float(np.linalg.norm(mesh.positions.astype(np.float64) - center, axis=1).max())
+    radius = base_radius(mesh) if radius is None else float(radius)
     bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1)
     centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) + params[:, POSITION]
     return centers, radius + bend
@@ -49,3 +61,69 @@ def box_corners(lo, hi) -> np.ndarray:
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     bits = (np.arange(8)[:, None] >> np.arange(3)[::-1]) & 1
     return np.where(bits == 1, hi, lo)
+
+
+def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned world boxes of the deformed instances: ``lo, hi : (n, 3) float64``.
+
+    In model space each offset component of ``D(t)`` is a convex combination
+    of the five control-point offsets, so it lies between their minimum and
+    maximum: the base mesh's box grows by exactly that range across the
+    axis.  The rotated box is then boxed again (half-extents ``|R| h``).
+    """
+    params = as_params(params).astype(np.float64)
+    pos = mesh.positions.astype(np.float64)
+    lo, hi = np.broadcast_to(pos.min(axis=0), (len(params), 3)).copy(), np.broadcast_to(pos.max(axis=0), (len(params), 3)).copy()
+    d = params[:, OFFSETS].reshape(-1, 5, 2)
+    for k, coord in enumerate(mesh.axis.perpendicular):
+        lo[:, coord] += d[:, :, k].min(axis=1)
+        hi[:, coord] += d[:, :, k].max(axis=1)
+    rot = rotation_matrices(params[:, ANGLES])
+    center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) + params[:, POSITION]
+    half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2)
+    return center - half, center + half
+
+
+def frustum_planes(view, projection) -> np.ndarray:
+    """The six planes of the view frustum in world space: ``(6, 4) float64``,
+    rows ``(n, d)`` with unit ``n``; a point ``x`` is inside all of them when
+    ``n . x + d >= 0`` (left, right, bottom, top, near, far).
+
+    view, projection : (4, 4) pyrr-layout matrices (``clip = P V x`` in
+    column-vector terms is ``x @ view @ projection`` on pyrr's rows).
+    """
+    view = np.asarray(view, dtype=np.float64).reshape(4, 4)
+    projection = np.asarray(projection, dtype=np.float64).reshape(4, 4)
+    m = (view @ projection).T  # column-vector clip matrix: rows are clip x, y, z, w
+    planes = np.stack([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] + m[2], m[3] - m[2]])
+    norm = np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+    return planes / np.where(norm > 0, norm, 1.0)
+
+
+def spheres_visible(centers, radii, planes) -> np.ndarray:
+    """``(n,) bool``: False only for a sphere wholly outside one plane (so
+    nothing inside it can be drawn); the same test as ``axial_sphere_visible``
+    in ``glsl/bounds.glsl``."""
+    centers = np.asarray(centers, dtype=np.float64)
+    radii = np.asarray(radii, dtype=np.float64)
+    dist = centers @ planes[:, :3].T + planes[:, 3]
+    return (dist >= -radii[:, None]).all(axis=1)
+
+
+def lod_choice(centers, radii, errors, eye, px_scale: float, lod_error: float, ortho: bool = False) -> np.ndarray:
+    """``(n,) int``: the LOD level of each instance, the coarsest whose
+    ``errors[k]`` (model units, increasing, ``errors[0] = 0``) projects to at
+    most ``lod_error`` pixels at the point of the bounding sphere nearest the
+    eye (``px_scale``: pixels per world unit at distance 1, i.e.
+    ``P[1][1] * height / 2``).  The same rule as ``axial_lod_level`` in
+    ``glsl/cull.vert``."""
+    centers = np.asarray(centers, dtype=np.float64)
+    if ortho:
+        px = np.full(len(centers), float(px_scale))
+    else:
+        near = np.linalg.norm(centers - np.asarray(eye, dtype=np.float64), axis=1) - np.asarray(radii, dtype=np.float64)
+        px = px_scale / np.maximum(near, 1e-6)
+    errors = np.asarray(errors, dtype=np.float64)
+    fits = errors[None, :] * px[:, None] <= lod_error
+    fits[:, 0] = True
+    return (np.cumprod(fits, axis=1).sum(axis=1) - 1).astype(np.int64) if len(errors) else np.zeros(len(centers), np.int64)

@@ -1,0 +1,135 @@
+"""Per-instance frustum culling and LOD choice on the GPU (GL 3.3 core).
+
+One pass per frame (one per LOD level with LOD on) draws every instance
+record as a point through ``glsl/cull.vert`` + ``glsl/cull.geom``: the vertex
+shader computes the instance's bounding sphere (``glsl/bounds.glsl``, the
+same as :func:`axialdeform.core.bounds.instance_bounds`), tests it against
+the six frustum planes and picks its LOD level; the geometry shader emits
+only the kept ones, and transform feedback writes them, in their original
+order, compacted into one buffer: the record byte for byte, then the
+instance's original index (``int``), then its tint (``vec3``) when tinted.
+A ``GL_PRIMITIVES_GENERATED`` query gives the count (the buffer holds every
+instance, so it equals ``TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN``); the CPU
+reads it back before the draw (no indirect drawing yet).  The draw then reads
+the compacted records with divisor 1 and the original index as
+``i_index`` (``AXIAL_CULLED`` in ``glsl/scene.vert``), so per-instance shading
+and tint are those of the unculled draw.
+
+Because a sphere is dropped only when it lies wholly outside one frustum
+plane, every vertex of a dropped instance lies outside that plane too: no
+triangle of it can reach a pixel, and the picture is the one without culling.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.bounds import frustum_planes
+from .buffers import _content, _format_bytes
+from .shaders import build_program
+
+__all__ = ["CullPass", "ALL_VISIBLE_PLANES"]
+
+#: planes no sphere is outside of (LOD without frustum culling)
+ALL_VISIBLE_PLANES = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (6, 1))
+
+
+class CullPass:
+    """The culling program of one instance layout (float or quantized, with or
+    without tint) and the compacted output buffer.
+
+    ctx : moderngl.Context; instances : InstanceBuffer; defines : dict of the
+    renderer's program variant; tint : (buffer, "3f", "i_tint") or None.
+    """
+
+    def __init__(self, ctx, instances, defines: dict, tint=None):
+        self.ctx = ctx
+        self.instances = instances
+        self.tinted = tint is not None
+        self._released = False
+        self._objects = []
+        self.quantized = instances.quantized
+        names = ["o_q0", "o_q1", "o_q2", "o_q3"] if self.quantized else ["o_d12", "o_d34", "o_d5", "o_position", "o_angles"]
+        names.append("o_index")
+        if self.tinted:
+            names.append("o_tint")
+        defs = dict(defines)
+        if self.tinted:
+            defs["AXIAL_TINT"] = 1
+        self.program = build_program(ctx, "cull.vert", geometry="cull.geom", defines=defs, varyings=names)
+        self._objects.append(self.program)
+        fmts, attrs = instances.formats
+        content = [_content(instances.buffer, fmts, attrs, self.program)]
+        if tint is not None:
+            content.append(_content(tint[0], ("3f",), ("i_tint",), self.program))
+        self.vao = ctx.vertex_array(self.program, content)
+        self._objects.append(self.vao)
+        self.query = ctx.query(primitives=True)  # moderngl 5 queries have no release(); the context frees them
+        #: bytes of one compacted record: the instance record, the index, the tint
+        self.out_bytes = instances.record_bytes + 4 + (12 if self.tinted else 0)
+        self.buffer = None
+
+    def ensure_capacity(self, count: int) -> None:
+        """Room for ``count`` compacted records (grows by orphaning; never shrinks)."""
+        need = max(count, 1) * self.out_bytes
+        if self.buffer is None:
+            self.buffer = self.ctx.buffer(reserve=need)
+        elif self.buffer.size < need:
+            self.buffer.orphan(need)
+
+    def set_uniforms(self, uniforms: dict) -> None:
+        for name, value in uniforms.items():
+            if name in self.program:
+                if isinstance(value, np.ndarray):
+                    self.program[name].write(value.astype("f4").tobytes())
+                else:
+                    self.program[name].value = value
+
+    def run(self, count: int, levels: int, view, projection, *, frustum: bool, center, radius: float,
+            lod_errors=(0.0,), eye=(0.0, 0.0, 0.0), px_scale: float = 1.0, ortho: bool = False,
+            lod_px: float = 1.0) -> list[int]:
+        """Cull ``count`` instances; returns the number kept per LOD level
+        (one entry with ``levels == 1``).  Level ``k``'s records start at
+        record ``sum(counts[:k])`` of :attr:`buffer`."""
+        import moderngl
+
+        self.ensure_capacity(count)
+        planes = frustum_planes(view, projection) if frustum else ALL_VISIBLE_PLANES
+        errors = np.zeros(4)
+        errors[: len(lod_errors)] = lod_errors
+        self.set_uniforms({
+            "u_planes": planes, "u_center": tuple(float(c) for c in center), "u_radius": float(radius),
+            "u_levels": int(levels), "u_lod_error": errors, "u_eye": tuple(float(e) for e in eye),
+            "u_px_scale": float(px_scale), "u_ortho": bool(ortho), "u_lod_px": float(lod_px),
+        })
+        counts = []
+        offset = 0
+        for level in (range(levels) if levels > 1 else (-1,)):
+            self.program["u_level"].value = level
+            with self.query:
+                self.vao.transform(self.buffer, mode=moderngl.POINTS, vertices=count, buffer_offset=offset * self.out_bytes)
+            kept = int(self.query.primitives)
+            counts.append(kept)
+            offset += kept
+        return counts
+
+    def bind_records(self, vao, program, first: int) -> None:
+        """Point ``vao``'s instanced attributes at the compacted records from record ``first`` on."""
+        fmts, attrs = self.instances.formats
+        fields = list(zip(fmts, attrs)) + [("1i", "i_index")] + ([("3f", "i_tint")] if self.tinted else [])
+        offset = first * self.out_bytes
+        for fmt, name in fields:
+            if name in program:
+                cls = "i" if ("u" in fmt or fmt.endswith("i")) else "f"
+                vao.bind(program[name].location, cls, self.buffer, fmt, offset=offset, stride=self.out_bytes, divisor=1)
+            offset += _format_bytes(fmt)
+
+    def release(self) -> None:
+        if self._released:
+            return
+        self._released = True
+        for obj in reversed(self._objects):
+            obj.release()
+        self._objects.clear()
+        if self.buffer is not None:
+            self.buffer.release()
