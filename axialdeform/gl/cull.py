@@ -34,6 +34,16 @@ __all__ = ["CullPass", "ALL_VISIBLE_PLANES"]
 ALL_VISIBLE_PLANES = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (6, 1))
 
 
+def _shared_query(ctx):
+    """ONE ``GL_PRIMITIVES_GENERATED`` query per context, kept on it: moderngl 5
+    cannot delete a query, so a query per pass would leak one per renderer."""
+    query = getattr(ctx, "_axialdeform_primitives_query", None)
+    if query is None:
+        query = ctx.query(primitives=True)
+        setattr(ctx, "_axialdeform_primitives_query", query)
+    return query
+
+
 class CullPass:
     """The culling program of one instance layout (float or quantized, with or
     without tint) and the compacted output buffer.
@@ -64,7 +74,7 @@ class CullPass:
             content.append(_content(tint[0], ("3f",), ("i_tint",), self.program))
         self.vao = ctx.vertex_array(self.program, content)
         self._objects.append(self.vao)
-        self.query = ctx.query(primitives=True)  # moderngl 5 queries have no release(); the context frees them
+        self.query = _shared_query(ctx)
         #: bytes of one compacted record: the instance record, the index, the tint
         self.out_bytes = instances.record_bytes + 4 + (12 if self.tinted else 0)
         self.buffer = None
