@@ -9,7 +9,11 @@ Mouse: drag to orbit, scroll to zoom.  Keys::
     S           save a screenshot (axialdeform-view-NNN.png)
     ESC         quit
 
-The window title shows the instance count, the mode, the bend amplitude and
+Instances outside the view are culled on the GPU (``--no-cull`` turns it
+off) and, from 100 000 instances on (or with ``--lod``), far ones are drawn
+with simplified levels of detail (``--no-lod``, ``--lod-error PX``), so
+``axialdeform view stone -n 1000000`` stays interactive when zoomed into
+the field.  The window title shows the instance count (and how many are drawn), the mode, the bend amplitude and
 the frame rate.  ``--headless`` runs the same viewer in moderngl-window's
 headless window (an EGL context, no display) for a number of frames and
 can save the last one (``--screenshot``), which is how the tests drive it.
@@ -47,6 +51,8 @@ KEY_ACTIONS = {
 #: single characters accepted by ``on_key_event`` in place of a window's key code
 _CHAR_KEYS = {"1": "NUMBER_1", "2": "NUMBER_2", "3": "NUMBER_3", "+": "EQUAL", "-": "MINUS"}
 BACKGROUND = (0.80, 0.86, 0.92)
+#: the viewer draws levels of detail by default from this many instances on
+LOD_AUTO_COUNT = 100_000
 
 
 def _window_config_base():
@@ -90,7 +96,8 @@ class _ViewerMixin:
             raise AxialDeformError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
         self.bend_scale = 1.0
         self.show_ground = bool(s.get("ground", True))
-        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base)
+        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, culling=s.get("culling", True),
+                                      lod=s.get("lod", len(self.base) >= LOD_AUTO_COUNT), lod_error=s.get("lod_error", 1.0))
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
@@ -221,7 +228,8 @@ class _ViewerMixin:
 
     def status(self) -> str:
         """What the title bar shows."""
-        return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances - {self.mode} - "
+        shown = self.renderer.stats.get("visible", self.renderer.count)
+        return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances ({shown} drawn) - {self.mode} - "
                 f"bend x{self.bend_scale:.2f} - seed {self.seed} - {self.fps:.0f} fps")
 
     def _update_title(self, force: bool = False) -> None:
@@ -270,14 +278,17 @@ class Viewer:
 
     @staticmethod
     def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int = 0,
-               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4):
+               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
+               culling: bool = True, lod: bool | None = None, lod_error: float = 1.0):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
         ``f(t_seconds) -> (n, 16)`` called every frame; tint : optional (n, 3)
         linear RGB per instance; seed, bend : what ``N`` regenerates offsets
         with (bend as a fraction of L); headless : moderngl-window's headless
-        window on an EGL context (no display needed).
+        window on an EGL context (no display needed); culling, lod, lod_error :
+        :class:`AxialRenderer`'s (``lod=None``: on from
+        :data:`LOD_AUTO_COUNT` instances, so a million can be flown through).
         """
         from .core.params import as_params
 
@@ -286,7 +297,9 @@ class Viewer:
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground)
+                     up=up, ground=ground, culling=culling, lod_error=lod_error)
+        if lod is not None:
+            scene["lod"] = bool(lod)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": samples})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]
@@ -330,6 +343,10 @@ def add_parser(subparsers) -> None:
     v.add_argument("--frames", type=int, default=3, help="frames to draw with --headless (default: %(default)s)")
     v.add_argument("--screenshot", help="PNG of the last frame (with --headless)")
     v.add_argument("--ignore-mesh-mismatch", action="store_true")
+    from .cli import add_cull_arguments
+
+    add_cull_arguments(v)
+    v.add_argument("--no-lod", action="store_true", help=f"no levels of detail (on by default from {LOD_AUTO_COUNT} instances)")
     v.set_defaults(handler=run)
 
 
@@ -340,6 +357,13 @@ def run(args) -> None:
     from .core.params import read_params
     from .core.variation import random_params
 
+    from .cli import cull_options
+
+    options = cull_options(args)
+    if args.no_lod:
+        options["lod"] = False
+    elif not options["lod"]:
+        options["lod"] = None  # automatic
     mesh = load_mesh(args.mesh)
     if args.params:
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
@@ -348,7 +372,7 @@ def run(args) -> None:
     if args.frames < 1:
         raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=args.seed,
-                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground)
+                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground, **options)
     if not args.headless:
         import moderngl_window as mglw
 

@@ -34,6 +34,25 @@ def _angle_range(text: str) -> tuple[float, float]:
     return (parts[0], parts[1])
 
 
+def add_cull_arguments(p) -> None:
+    """``--no-cull``, ``--lod``, ``--lod-error PX`` (render and view)."""
+    p.add_argument("--no-cull", action="store_true", help="draw every instance (no per-instance frustum culling; "
+                   "the picture is the same, only slower)")
+    p.add_argument("--lod", action="store_true", help="levels of detail: far instances use simplified meshes "
+                   "(changes pixels, within --lod-error)")
+    p.add_argument("--lod-error", type=float, default=None, metavar="PX",
+                   help="allowed screen-space error of a level in pixels, > 0 (default 1; implies --lod)")
+
+
+def cull_options(args) -> dict:
+    """AxialRenderer keyword arguments from :func:`add_cull_arguments`'s options."""
+    from ..core.lod import check_lod_error
+
+    lod = bool(args.lod or args.lod_error is not None)
+    return {"culling": not args.no_cull, "lod": lod,
+            "lod_error": check_lod_error(1.0 if args.lod_error is None else args.lod_error)}
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
     from ..core.bake import ENGINES, MESH_FORMATS
@@ -77,6 +96,9 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--size", default="800x600", help="WIDTHxHEIGHT (default: %(default)s)")
     rd.add_argument("--up", choices=("x", "y", "z"), default="y")
     rd.add_argument("--ignore-mesh-mismatch", action="store_true", help="use PARAMS even if made for another mesh")
+    add_cull_arguments(rd)
+    rd.add_argument("--stats", action="store_true", help="print instances submitted / drawn / per LOD level, "
+                    "vertices processed and the frame time")
 
     b = sub.add_parser("bake", help="write every deformed instance out", description=(
         "Deform every instance and write OUT: an .npz with arrays 'positions' and 'normals', each "
@@ -150,12 +172,54 @@ def _load(args):
 
 
 def cmd_render(args) -> None:
+    from ..gl.camera import frame_instances
+    from ..gl.context import create_context
     from ..gl.image import parse_size, render_image, save_png
+    from ..gl.renderer import AxialRenderer
 
+    options = cull_options(args)
     mesh, params = _load(args)
-    image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up)
+    size = parse_size(args.size)
+    ctx = create_context()
+    try:
+        camera = frame_instances(mesh, params, size[0] / size[1], up=args.up)
+        with AxialRenderer(ctx, mesh, params, **options) as r:
+            image = render_image(mesh, params, size, args.mode, ctx=ctx, camera=camera, up=args.up, renderer=r)
+            if args.stats:
+                frame_s = _time_frame(ctx, r, camera, size, args.mode)
+                print(format_stats(r.stats, frame_s))
+    finally:
+        ctx.release()
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(params)} instances, {args.mode}, {image.shape[1]}x{image.shape[0]})")
+
+
+def _time_frame(ctx, renderer, camera, size, mode) -> float:
+    """Seconds for one more frame of ``renderer`` (cull pass + draws, GPU finished), same camera."""
+    import time
+
+    from ..gl.context import Offscreen
+
+    with Offscreen(ctx, size) as target:
+        target.use()
+        ctx.finish()
+        start = time.perf_counter()
+        renderer.render(camera.view(), camera.projection(size[0] / size[1]), mode)
+        ctx.finish()
+        return time.perf_counter() - start
+
+
+def format_stats(stats: dict, frame_s: float | None = None) -> str:
+    """One line of :attr:`AxialRenderer.stats` (and a frame time)."""
+    levels = stats.get("levels", [])
+    text = (f"instances: {stats['submitted']} submitted, {stats['visible']} drawn"
+            f" (culling {'on' if stats.get('culling') else 'off'})")
+    if stats.get("lod"):
+        text += ", LOD levels " + " / ".join(str(k) for k in levels)
+    text += f"; vertices processed: {stats['vertices']}"
+    if frame_s is not None:
+        text += f"; frame {frame_s * 1000:.1f} ms"
+    return text
 
 
 def cmd_bake(args) -> None:
