@@ -4,6 +4,8 @@
 // feedback writes them, compacted and in their original order, into the
 // buffer the draw then reads (docs/culling.md).  The records are passed
 // through bit for bit, with the instance's original index (and tint).
+// With LOD, a second stage (AXIAL_CULL_INDEXED) reads the first pass's
+// output and keeps, once per level, the instances of that level.
 #include "axial.glsl"
 #include "quantized.glsl"
 #include "bounds.glsl"
@@ -40,6 +42,9 @@ flat out uvec2 vs_q3;
 in vec3 i_tint;
 flat out vec3 vs_tint;
 #endif
+#ifdef AXIAL_CULL_INDEXED
+in int i_index;               // second stage (LOD): the records come from the first pass, with their index
+#endif
 flat out int vs_index;
 flat out int vs_keep;
 
@@ -73,7 +78,11 @@ void main() {
 #ifdef AXIAL_TINT
     vs_tint = i_tint;
 #endif
+#ifdef AXIAL_CULL_INDEXED
+    vs_index = i_index;
+#else
     vs_index = gl_VertexID;
+#endif
     vec4 sphere = axial_bound_sphere(inst, u_center, u_radius);
     bool keep = axial_sphere_visible(sphere, u_planes);
     if (keep && u_level >= 0) keep = axial_lod_level(sphere) == u_level;

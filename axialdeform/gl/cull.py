@@ -68,6 +68,8 @@ class CullPass:
             defs["AXIAL_TINT"] = 1
         self.program = build_program(ctx, "cull.vert", geometry="cull.geom", defines=defs, varyings=names)
         self._objects.append(self.program)
+        self._defines, self._varyings = defs, names
+        self._lod_stage = None  # (program, vao, output buffer): the second, per-level stage, built on first use
         fmts, attrs = instances.formats
         content = [_content(instances.buffer, fmts, attrs, self.program)]
         if tint is not None:
@@ -78,6 +80,7 @@ class CullPass:
         #: bytes of one compacted record: the instance record, the index, the tint
         self.out_bytes = instances.record_bytes + 4 + (12 if self.tinted else 0)
         self.buffer = None
+        self.output = None  # the buffer the draw reads: ``buffer``, or the LOD stage's
 
     def ensure_capacity(self, count: int) -> None:
         """Room for ``count`` compacted records (grows by orphaning; never shrinks)."""
@@ -87,40 +90,79 @@ class CullPass:
         elif self.buffer.size < need:
             self.buffer.orphan(need)
 
-    def set_uniforms(self, uniforms: dict) -> None:
+    def _lod(self, count: int):
+        """The second stage: reads :attr:`buffer` (records + index) and writes
+        per-level runs into its own buffer of ``count`` records."""
+        if self._lod_stage is None:
+            prog = build_program(self.ctx, "cull.vert", geometry="cull.geom",
+                                 defines={**self._defines, "AXIAL_CULL_INDEXED": 1}, varyings=self._varyings)
+            self._objects.append(prog)
+            fmts, attrs = self.instances.formats
+            fmts, attrs = fmts + ("1i",) + (("3f",) if self.tinted else ()), attrs + ("i_index",) + (("i_tint",) if self.tinted else ())
+            vao = self.ctx.vertex_array(prog, [_content(self.buffer, fmts, attrs, prog)])
+            self._objects.append(vao)
+            self._lod_stage = [prog, vao, self.ctx.buffer(reserve=max(count, 1) * self.out_bytes)]
+        out = self._lod_stage[2]
+        if out.size < max(count, 1) * self.out_bytes:
+            out.orphan(max(count, 1) * self.out_bytes)
+        return self._lod_stage
+
+    @staticmethod
+    def _set(program, uniforms: dict) -> None:
         for name, value in uniforms.items():
-            if name in self.program:
+            if name in program:
                 if isinstance(value, np.ndarray):
-                    self.program[name].write(value.astype("f4").tobytes())
+                    program[name].write(value.astype("f4").tobytes())
                 else:
-                    self.program[name].value = value
+                    program[name].value = value
+
+    def set_uniforms(self, uniforms: dict) -> None:
+        self._set(self.program, uniforms)
 
     def run(self, count: int, levels: int, view, projection, *, frustum: bool, center, radius: float,
             lod_errors=(0.0,), eye=(0.0, 0.0, 0.0), px_scale: float = 1.0, ortho: bool = False,
             lod_px: float = 1.0) -> list[int]:
         """Cull ``count`` instances; returns the number kept per LOD level
         (one entry with ``levels == 1``).  Level ``k``'s records start at
-        record ``sum(counts[:k])`` of :attr:`buffer`."""
+        record ``sum(counts[:k])`` of :attr:`output`.  With LOD, the first
+        stage keeps the visible instances and a second stage sorts only those
+        into levels (one pass per level)."""
         import moderngl
 
         self.ensure_capacity(count)
         planes = frustum_planes(view, projection) if frustum else ALL_VISIBLE_PLANES
         errors = np.zeros(4)
         errors[: len(lod_errors)] = lod_errors
-        self.set_uniforms({
+        uniforms = {
             "u_planes": planes, "u_center": tuple(float(c) for c in center), "u_radius": float(radius),
             "u_levels": int(levels), "u_lod_error": errors, "u_eye": tuple(float(e) for e in eye),
             "u_px_scale": float(px_scale), "u_ortho": bool(ortho), "u_lod_px": float(lod_px),
-        })
+        }
+        self.set_uniforms(uniforms)
+        self.program["u_level"].value = -1
+        with self.query:
+            self.vao.transform(self.buffer, mode=moderngl.POINTS, vertices=count)
+        visible = int(self.query.primitives)
+        self.output = self.buffer
+        if levels <= 1:
+            return [visible]
+        # second stage: only the visible ones, once per level, into consecutive runs
+        prog, vao, out = self._lod(count)
+        self._set(prog, uniforms)
+        self._set(prog, {"u_planes": ALL_VISIBLE_PLANES})
         counts = []
         offset = 0
-        for level in (range(levels) if levels > 1 else (-1,)):
-            self.program["u_level"].value = level
+        for level in range(levels):
+            if visible == 0:
+                counts.append(0)
+                continue
+            prog["u_level"].value = level
             with self.query:
-                self.vao.transform(self.buffer, mode=moderngl.POINTS, vertices=count, buffer_offset=offset * self.out_bytes)
+                vao.transform(out, mode=moderngl.POINTS, vertices=visible, buffer_offset=offset * self.out_bytes)
             kept = int(self.query.primitives)
             counts.append(kept)
             offset += kept
+        self.output = out
         return counts
 
     def bind_records(self, vao, program, first: int) -> None:
@@ -131,7 +173,7 @@ class CullPass:
         for fmt, name in fields:
             if name in program:
                 cls = "i" if ("u" in fmt or fmt.endswith("i")) else "f"
-                vao.bind(program[name].location, cls, self.buffer, fmt, offset=offset, stride=self.out_bytes, divisor=1)
+                vao.bind(program[name].location, cls, self.output, fmt, offset=offset, stride=self.out_bytes, divisor=1)
             offset += _format_bytes(fmt)
 
     def release(self) -> None:
@@ -143,3 +185,5 @@ class CullPass:
         self._objects.clear()
         if self.buffer is not None:
             self.buffer.release()
+        if self._lod_stage is not None:
+            self._lod_stage[2].release()
