@@ -8,6 +8,10 @@
 // bounding-box centre c and r0 = max |v - c| over its vertices (all LOD
 // levels), every world vertex of the instance lies in the sphere
 //     centre R c + p,   radius r0 + max_i |d_i|.
+// Extended instances: twist keeps a vertex's distance from the axis line,
+// taper scales it by at most max(1, |1 - tp|), s scales everything about the
+// model origin:  centre s R c + p,  radius |s| (r0 max(1, |1 - tp|) + max_i |d_i| + wind).
+// `reach`: how far the wind can move a control point (model units; 0: none).
 
 // Largest control-point offset of an instance: how far its bend can move a vertex.
 float axial_bend_reach(AxialInstance inst) {
@@ -24,9 +28,10 @@ float axial_bend_reach(AxialInstance inst) {
 // The world-space bounding sphere of an instance: centre (xyz) and radius (w).
 // center, radius: the base mesh's bounding-box centre and the largest distance
 // of a vertex from it (model units).
-vec4 axial_bound_sphere(AxialInstance inst, vec3 center, float radius) {
-    vec3 c = axial_rotation(inst.angles) * center + inst.position;
-    return vec4(c, radius + axial_bend_reach(inst));
+vec4 axial_bound_sphere(AxialInstance inst, vec3 center, float radius, float reach) {
+    vec3 c = axial_rotation(inst.angles) * (inst.scale * center) + inst.position;
+    float grow = max(1.0, abs(1.0 - inst.taper));
+    return vec4(c, abs(inst.scale) * (radius * grow + axial_bend_reach(inst) + reach));
 }
 
 // False only when the sphere lies entirely on the outer side of one of the

@@ -15,6 +15,10 @@ flat out vec4 o_d34;
 flat out vec2 o_d5;
 flat out vec3 o_position;
 flat out vec3 o_angles;
+#ifdef AXIAL_EXTENDED
+flat in vec3 vs_extra[];
+flat out vec3 o_extra;
+#endif
 #else
 flat in uvec2 vs_q0[];
 flat in uvec2 vs_q1[];
@@ -24,6 +28,10 @@ flat out uvec2 o_q0;
 flat out uvec2 o_q1;
 flat out uvec2 o_q2;
 flat out uvec2 o_q3;
+#ifdef AXIAL_EXTENDED
+flat in uvec2 vs_q4[];
+flat out uvec2 o_q4;
+#endif
 #endif
 flat in int vs_index[];
 flat out int o_index;
@@ -41,11 +49,17 @@ void main() {
     o_d5 = vs_d5[0];
     o_position = vs_position[0];
     o_angles = vs_angles[0];
+#ifdef AXIAL_EXTENDED
+    o_extra = vs_extra[0];
+#endif
 #else
     o_q0 = vs_q0[0];
     o_q1 = vs_q1[0];
     o_q2 = vs_q2[0];
     o_q3 = vs_q3[0];
+#ifdef AXIAL_EXTENDED
+    o_q4 = vs_q4[0];
+#endif
 #endif
     o_index = vs_index[0];
 #ifdef AXIAL_TINT

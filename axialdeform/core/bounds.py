@@ -12,7 +12,7 @@ import numpy as np
 from .transforms import rotation_matrices
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
-__all__ = ["instance_bounds", "scene_box", "box_corners", "base_radius", "instance_boxes", "frustum_planes",
+__all__ = ["wind_reach", "instance_bounds", "scene_box", "box_corners", "base_radius", "instance_boxes", "frustum_planes",
            "spheres_visible", "lod_choice"]
 
 
@@ -25,23 +25,41 @@ def base_radius(mesh, *extra_positions) -> float:
                for p in (mesh.positions, *extra_positions))
 
 
-def instance_bounds(mesh, params, *, radius: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def wind_reach(mesh, wind) -> float:
+    """How far the wind can move a control point, model units: its offset is
+    ``c_k u`` with ``c_k <= 1`` and ``|u| <= |strength L (1 + gustiness wave)|``,
+    ``|wave| <= 0.6 + 0.4`` (docs/wind.md).  0 without a wind."""
+    if wind is None:
+        return 0.0
+    return abs(float(wind.strength)) * float(mesh.axis.length) * (1.0 + abs(float(wind.gustiness)))
+
+
+def instance_bounds(mesh, params, *, radius: float | None = None, wind=None) -> tuple[np.ndarray, np.ndarray]:
     """Bounding spheres of the deformed instances, without deforming them.
 
-    mesh : BaseMesh; params : (n, 16) float.
+    mesh : BaseMesh; params : (n, 16) or (n, 19) float.
     Returns ``centers : (n, 3) float64`` and ``radii : (n,) float64`` (world
     units).  The bend moves no vertex further than the largest offset (the
     Bernstein weights sum to 1), and a rotation keeps distances, so each
-    sphere holds its whole instance.  ``radius`` replaces the base mesh's own
-    (:func:`base_radius`; LOD levels may reach further).  The same sphere on
-    the GPU: ``glsl/bounds.glsl`` (``axial_bound_sphere``).
+    sphere holds its whole instance.  Extended instances: twist keeps each
+    vertex's distance from the axis line, taper scales it by at most
+    ``max(1, |1 - tp|)``, and ``s`` scales the whole about the model origin
+    (so the centre is ``s R c + p``).  ``wind`` (a :class:`axialdeform.Wind`)
+    adds its largest control-point movement (:func:`wind_reach`).
+    ``radius`` replaces the base mesh's own (:func:`base_radius`; LOD levels
+    may reach further).  The same sphere on the GPU: ``glsl/bounds.glsl``
+    (``axial_bound_sphere``).
     """
     params = as_params(params).astype(np.float64)
     center = np.asarray(mesh.axis.center, dtype=np.float64)
     radius = base_radius(mesh) if radius is None else float(radius)
-    bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1)
-    centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) + params[:, POSITION]
-    return centers, radius + bend
+    bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1) + wind_reach(mesh, wind)
+    scale = np.ones(len(params))
+    grow = np.ones(len(params))
+    if params.shape[1] == 19:
+        scale, grow = params[:, 16], np.maximum(1.0, np.abs(1.0 - params[:, 18]))
+    centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) * scale[:, None] + params[:, POSITION]
+    return centers, (radius * grow + bend) * np.abs(scale)
 
 
 def scene_box(mesh, params) -> tuple[np.ndarray, np.ndarray]:
@@ -79,8 +97,14 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
         lo[:, coord] += d[:, :, k].min(axis=1)
         hi[:, coord] += d[:, :, k].max(axis=1)
     rot = rotation_matrices(params[:, ANGLES])
-    center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) + params[:, POSITION]
-    half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2)
+    scale = params[:, 16] if params.shape[1] == 19 else np.ones(len(params))
+    center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) * scale[:, None] + params[:, POSITION]
+    half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2) * np.abs(scale)[:, None]
+    if params.shape[1] == 19:  # twisted or tapered cross-sections: the box around the sphere
+        turned = (params[:, 17] != 0) | (params[:, 18] != 0)
+        if turned.any():
+            c, r = instance_bounds(mesh, params[turned])
+            center[turned], half[turned] = c, r[:, None]
     return center - half, center + half
 
 

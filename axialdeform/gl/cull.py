@@ -34,6 +34,11 @@ __all__ = ["CullPass", "ALL_VISIBLE_PLANES"]
 ALL_VISIBLE_PLANES = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (6, 1))
 
 
+def _field_bytes(fmt: str) -> int:
+    """Bytes of one attribute format, padding (``"2x"``) included."""
+    return int(fmt[:-1] or 1) if fmt.endswith("x") else _format_bytes(fmt)
+
+
 def _shared_query(ctx):
     """ONE ``GL_PRIMITIVES_GENERATED`` query per context, kept on it: moderngl 5
     cannot delete a query, so a query per pass would leak one per renderer."""
@@ -60,6 +65,8 @@ class CullPass:
         self._objects = []
         self.quantized = instances.quantized
         names = ["o_q0", "o_q1", "o_q2", "o_q3"] if self.quantized else ["o_d12", "o_d34", "o_d5", "o_position", "o_angles"]
+        if getattr(instances, "extended", False):
+            names.append("o_q4" if self.quantized else "o_extra")
         names.append("o_index")
         if self.tinted:
             names.append("o_tint")
@@ -121,7 +128,7 @@ class CullPass:
 
     def run(self, count: int, levels: int, view, projection, *, frustum: bool, center, radius: float,
             lod_errors=(0.0,), eye=(0.0, 0.0, 0.0), px_scale: float = 1.0, ortho: bool = False,
-            lod_px: float = 1.0) -> list[int]:
+            lod_px: float = 1.0, wind_reach: float = 0.0) -> list[int]:
         """Cull ``count`` instances; returns the number kept per LOD level
         (one entry with ``levels == 1``).  Level ``k``'s records start at
         record ``sum(counts[:k])`` of :attr:`output`.  With LOD, the first
@@ -134,7 +141,8 @@ class CullPass:
         errors = np.zeros(4)
         errors[: len(lod_errors)] = lod_errors
         uniforms = {
-            "u_planes": planes, "u_center": tuple(float(c) for c in center), "u_radius": float(radius),
+            "u_planes": planes, "u_bound_center": tuple(float(c) for c in center), "u_radius": float(radius),
+            "u_wind_reach": float(wind_reach),
             "u_levels": int(levels), "u_lod_error": errors, "u_eye": tuple(float(e) for e in eye),
             "u_px_scale": float(px_scale), "u_ortho": bool(ortho), "u_lod_px": float(lod_px),
         }
@@ -171,10 +179,10 @@ class CullPass:
         fields = list(zip(fmts, attrs)) + [("1i", "i_index")] + ([("3f", "i_tint")] if self.tinted else [])
         offset = first * self.out_bytes
         for fmt, name in fields:
-            if name in program:
+            if name is not None and name in program:
                 cls = "i" if ("u" in fmt or fmt.endswith("i")) else "f"
                 vao.bind(program[name].location, cls, self.output, fmt, offset=offset, stride=self.out_bytes, divisor=1)
-            offset += _format_bytes(fmt)
+            offset += _field_bytes(fmt)
 
     def release(self) -> None:
         if self._released:
