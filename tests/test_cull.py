@@ -62,25 +62,32 @@ def test_bounds_hold_every_gpu_vertex_and_are_tight(ctx, tmp_path, stone, leaf):
             assert ((hi - lo) / np.maximum(tight_extent, 1e-3 * L)).mean() <= 2.0, name
 
 
-def test_gpu_culling_agrees_with_the_numpy_spheres(ctx, stone):
+@pytest.mark.parametrize("kind", ["plain", "extended", "extended+wind", "quantized"])
+def test_gpu_culling_agrees_with_the_numpy_spheres(ctx, stone, kind):
     """The GLSL bound (glsl/bounds.glsl) keeps every instance the numpy
-    sphere test keeps, and the few extra ones are within its float margin."""
-    params = field(stone)
+    sphere test keeps, and the few extra ones are within its float margin;
+    the compacted records are the originals byte for byte, in order."""
+    from axialdeform.core.wind import Wind
+
+    params = extended_field(stone, 3000) if kind.startswith("extended") else field(stone)
+    wind = Wind(direction=(1.0, 0.0, 0.2), strength=0.5, gustiness=0.9) if kind.endswith("wind") else None
     view, proj = look((2.0, 1.7, -3.0), (30.0, 0.0, 20.0))
-    with ad.AxialRenderer(ctx, stone, params) as r:
+    with ad.AxialRenderer(ctx, stone, params, wind=wind, quantized=kind == "quantized") as r:
         draw(ctx, r, view, proj)
         cull = r._culled[False][0]
-        kept = r.stats["visible"]
+        kept, rec_bytes = r.stats["visible"], r.instances.record_bytes
         rec = np.frombuffer(cull.buffer.read(size=kept * cull.out_bytes), np.uint8).reshape(kept, cull.out_bytes)
-        index = rec[:, 64:68].copy().view(np.int32).ravel()
-        assert np.array_equal(rec[:, :64].copy().view(np.float32).reshape(kept, 16), params[index])
+        index = rec[:, rec_bytes:rec_bytes + 4].copy().view(np.int32).ravel()
+        originals = np.frombuffer(r.instances.buffer.read(size=r.count * rec_bytes), np.uint8).reshape(r.count, -1)
+        assert np.array_equal(rec[:, :rec_bytes], originals[index])
+        drawn = r.instances.read()
     assert (np.diff(index) > 0).all(), "the compacted records keep their order"
-    centers, radii = instance_bounds(stone, params)
+    centers, radii = instance_bounds(stone, drawn, wind=wind)
     planes = frustum_planes(view, proj)
     visible = spheres_visible(centers, radii, planes)
     assert 0 < visible.sum() < len(params) / 2
     assert set(np.flatnonzero(visible)) <= set(index)
-    assert spheres_visible(centers[index], radii[index] * 1.01, planes).all()
+    assert spheres_visible(centers[index], radii[index] * 1.001, planes).all()
 
 
 def test_frustum_planes_contain_what_the_camera_sees():
@@ -218,3 +225,58 @@ def test_lod_bad_input(ctx, stone):
     with pytest.warns(UserWarning, match="too few to simplify"):
         with ad.AxialRenderer(ctx, tetra, ad.random_params(tetra, 3), lod=True) as r:
             assert len(r.lod_levels) == 1
+
+
+# ------------------------------------------------------------------ extended instances and wind
+def extended_field(mesh, n=2000, seed=6):
+    return ad.random_params(mesh, n, seed=seed, bend=0.2, placement="disc", spacing=1.0 * mesh.axis.length,
+                            scale=(0.5, 1.8), twist=2.5, taper=0.8, tilt=(-3, 3))
+
+
+def test_bounds_cover_scale_twist_taper_and_wind(ctx, tmp_path, stone, leaf):
+    """Extended instances (scale, twist, taper) and a gusty wind at several
+    moments: every GPU-captured vertex lies in its sphere; the spheres stay
+    within 1.5x the tight ones on average without wind."""
+    from axialdeform.core.wind import Wind
+
+    wind = Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.7, frequency=0.8, wavelength=4.0)
+    for name, mesh in meshes_for_all_axes(tmp_path, stone, leaf).items():
+        params = extended_field(mesh, 300, seed=len(name))
+        assert params.shape == (300, 19)
+        L = mesh.axis.length
+        with ad.AxialRenderer(ctx, mesh, params) as r:
+            still, _ = r.capture()
+            centers, radii = instance_bounds(mesh, params)
+            dist = np.linalg.norm(still - centers[:, None, :], axis=2).max(axis=1)
+            assert (dist <= radii + 1e-5 * L).all(), name
+            assert (radii / dist).mean() <= 1.5, (name, (radii / dist).mean())
+            lo, hi = instance_boxes(mesh, params)
+            assert (still >= lo[:, None] - 1e-5 * L).all() and (still <= hi[:, None] + 1e-5 * L).all(), name
+            wc, wr = instance_bounds(mesh, params, wind=wind)
+            assert np.array_equal(wc, centers) and (wr > radii).all()
+            for t in (0.0, 0.37, 1.9, 5.2):
+                moving, _ = r.capture(time=t, wind=wind)
+                assert np.abs(moving - still).max() > 0.05 * L  # the wind really moves them
+                assert (np.linalg.norm(moving - wc[:, None, :], axis=2) <= wr[:, None] + 1e-5 * L).all(), (name, t)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("quantized", [False, True])
+def test_culled_picture_equals_unculled_extended_and_windy(ctx, stone, quantized):
+    from axialdeform.core.wind import Wind
+
+    params = extended_field(stone, 3000)
+    wind = Wind(direction=(0.3, 0.0, 1.0), strength=0.4, gustiness=0.8, frequency=1.0, wavelength=6.0)
+    with ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind) as culled, \
+            ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind, culling=False) as full:
+        assert culled.extended and culled._culled == {}
+        for name in ("inside the field", "at its edge, looking in", "at its edge, looking away"):
+            view, proj = look(*CAMERAS[name])
+            for t in (0.0, 0.8):
+                full.time = culled.time = t
+                a = draw(ctx, full, view, proj)
+                b = draw(ctx, culled, view, proj)
+                assert np.array_equal(a, b), (name, t, int((a != b).any(axis=2).sum()))
+                assert culled.stats["visible"] < len(params)
+        cull = culled._culled[False][0]
+        assert cull.out_bytes == (40 if quantized else 76) + 4
