@@ -280,3 +280,53 @@ def test_culled_picture_equals_unculled_extended_and_windy(ctx, stone, quantized
                 assert culled.stats["visible"] < len(params)
         cull = culled._culled[False][0]
         assert cull.out_bytes == (40 if quantized else 76) + 4
+
+
+# ------------------------------------------------------------------ the command line
+def test_cli_render_stats_no_cull_lod_and_bad_lod_error(tmp_path, capsys):
+    import subprocess
+    import sys
+
+    from PIL import Image
+
+    from axialdeform.cli import main
+
+    params = tmp_path / "p.adp"
+    assert main(["random", "stone", "-n", "400", "--placement", "disc", "-o", str(params)]) == 0
+    capsys.readouterr()
+    pngs = {}
+    for name, extra in {"cull": [], "nocull": ["--no-cull"], "lod": ["--lod-error", "3"]}.items():
+        pngs[name] = tmp_path / f"{name}.png"
+        assert main(["render", "stone", str(params), "-o", str(pngs[name]), "--size", "160x120", "--stats", *extra]) == 0
+        out = capsys.readouterr().out
+        assert "instances: 400 submitted, " in out and " ms" in out and "vertices processed:" in out, out
+        assert ("culling off" in out) == (name == "nocull")
+        assert ("LOD levels" in out) == (name == "lod")
+    images = {k: np.asarray(Image.open(v)) for k, v in pngs.items()}
+    assert np.array_equal(images["cull"], images["nocull"])
+    assert not np.array_equal(images["cull"], images["lod"])  # levels of detail do change pixels
+    for bad in ("0", "-2", "nan"):
+        run = subprocess.run([sys.executable, "-m", "axialdeform", "render", "stone", str(params), "-o",
+                              str(tmp_path / "x.png"), "--lod-error", bad], capture_output=True, text=True)
+        assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
+        assert run.stderr.strip().count("\n") == 0 and "lod_error: expected a number of pixels > 0" in run.stderr
+        assert not (tmp_path / "x.png").exists()
+
+
+def test_viewer_draws_a_field_with_culling_and_lod(ctx):
+    from axialdeform.viewer import LOD_AUTO_COUNT, Viewer
+
+    stone = ad.load_mesh("stone")
+    params = ad.random_params(stone, 2000, seed=2)
+    v = Viewer.create(stone, params, headless=True, size=(160, 120), lod=True, lod_error=2.0)
+    try:
+        assert v.renderer.culling_enabled and v.renderer.lod and len(v.renderer.lod_levels) >= 2
+        v.distance *= 0.05  # zoom into the field: most instances leave the view
+        v.step(2)
+        assert 0 < v.renderer.stats["visible"] < 2000
+        assert f"2000 instances ({v.renderer.stats['visible']} drawn)" in v.status()
+    finally:
+        v.release()
+        v.wnd.destroy()
+    ctx.__enter__()
+    assert LOD_AUTO_COUNT == 100_000
