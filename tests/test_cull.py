@@ -330,3 +330,22 @@ def test_viewer_draws_a_field_with_culling_and_lod(ctx):
         v.wnd.destroy()
     ctx.__enter__()
     assert LOD_AUTO_COUNT == 100_000
+
+
+def test_culling_follows_set_params_and_set_tint(ctx, stone):
+    """Growing the instance buffer and re-tinting after the pass exists: the
+    culled picture still equals the unculled one."""
+    small, big = field(stone, 100, seed=1), field(stone, 1500, seed=2)
+    view, proj = look((1.0, 1.7, 0.5), (25.0, 0.2, 12.0))
+    with ad.AxialRenderer(ctx, stone, small) as culled, ad.AxialRenderer(ctx, stone, small, culling=False) as full:
+        assert np.array_equal(draw(ctx, full, view, proj), draw(ctx, culled, view, proj))
+        for r in (culled, full):
+            r.set_params(big)
+            r.set_tint(np.random.default_rng(3).uniform(0, 1, (1500, 3)))
+        assert np.array_equal(draw(ctx, full, view, proj), draw(ctx, culled, view, proj))
+        assert 0 < culled.stats["visible"] < 1500
+        for r in (culled, full):
+            r.set_tint(None)
+            r.set_params(big[:700])
+        assert np.array_equal(draw(ctx, full, view, proj), draw(ctx, culled, view, proj))
+        assert culled.stats["submitted"] == 700
