@@ -35,6 +35,7 @@ def draw(ctx, renderer, view, proj, mode="solid", size=(160, 120)):
 
 
 # ------------------------------------------------------------------ bounds
+@pytest.mark.slow
 def test_bounds_hold_every_gpu_vertex_and_are_tight(ctx, tmp_path, stone, leaf):
     """Random parameters on meshes whose axis is x, y and z: every vertex the
     GPU computes lies in its instance's sphere and box; on average the sphere
@@ -161,6 +162,7 @@ def test_culling_off_draws_everything_and_stats_count_vertices(ctx, stone):
 
 
 # ------------------------------------------------------------------ LOD
+@pytest.mark.slow
 def test_lod_levels_share_the_base_axis_and_shrink(stone):
     levels = build_lod_levels(stone)
     assert 2 <= len(levels) <= 4
@@ -172,6 +174,7 @@ def test_lod_levels_share_the_base_axis_and_shrink(stone):
     assert base_radius(stone, *[level.positions for level in levels]) >= base_radius(stone)
 
 
+@pytest.mark.slow
 def test_lod_gpu_vertices_use_the_base_axis(ctx, stone):
     """Drawn at the coarsest level, an instance is that level's vertices bent
     with the BASE mesh's axis: the captured picture equals a render of the
@@ -283,6 +286,7 @@ def test_culled_picture_equals_unculled_extended_and_windy(ctx, stone, quantized
 
 
 # ------------------------------------------------------------------ the command line
+@pytest.mark.slow
 def test_cli_render_stats_no_cull_lod_and_bad_lod_error(tmp_path, capsys):
     import subprocess
     import sys
@@ -313,6 +317,7 @@ def test_cli_render_stats_no_cull_lod_and_bad_lod_error(tmp_path, capsys):
         assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.slow
 def test_viewer_draws_a_field_with_culling_and_lod(ctx):
     from axialdeform.viewer import LOD_AUTO_COUNT, Viewer
 
