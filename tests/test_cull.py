@@ -201,22 +201,27 @@ def test_lod_gpu_vertices_use_the_base_axis(ctx, stone):
 
 
 @pytest.mark.slow
-def test_lod_picks_levels_by_screen_error_and_stays_close(ctx, stone):
-    params = field(stone)
+@pytest.mark.parametrize("kind", ["plain", "quantized", "extended", "extended+quantized"])
+def test_lod_picks_levels_by_screen_error_and_stays_close(ctx, stone, kind):
+    params = extended_field(stone, 3000) if kind.startswith("extended") else field(stone)
+    quantized = kind.endswith("quantized")
     view, proj = look((1.0, 1.7, 0.5), (25.0, 0.2, 12.0))
-    with ad.AxialRenderer(ctx, stone, params) as full, ad.AxialRenderer(ctx, stone, params, lod=True) as lod:
+    with ad.AxialRenderer(ctx, stone, params, quantized=quantized) as full, \
+            ad.AxialRenderer(ctx, stone, params, lod=True, quantized=quantized) as lod:
         a = draw(ctx, full, view, proj, size=(320, 240))
         b = draw(ctx, lod, view, proj, size=(320, 240))
         levels = lod.stats["levels"]
         assert len(levels) == len(lod.lod_levels) and sum(levels) == lod.stats["visible"]
         assert levels[0] > 0 and sum(levels[1:]) > 0, levels
         assert lod.stats["vertices"] < full.stats["vertices"]
-        centers, radii = instance_bounds(stone, params, radius=lod.bound_radius)
+        drawn = lod.instances.read()
+        centers, radii = instance_bounds(stone, drawn, radius=lod.bound_radius)
         eye = np.linalg.inv(view.astype(np.float64))[3, :3]
         visible = spheres_visible(centers, radii, frustum_planes(view, proj))
+        scale = drawn[visible, 16] if drawn.shape[1] == 19 else None
         cpu = lod_choice(centers[visible], radii[visible], [lv.error for lv in lod.lod_levels], eye,
-                         proj[1, 1] * 240 / 2, 1.0)
-        assert np.abs(np.bincount(cpu, minlength=len(levels)) - levels).sum() <= 4
+                         proj[1, 1] * 240 / 2, 1.0, scale=scale)
+        assert np.abs(np.bincount(cpu, minlength=len(levels)) - levels).sum() <= 4, (cpu, levels)
     assert np.abs(a.astype(int) - b).mean() / 255 < 0.01
 
 

@@ -134,12 +134,14 @@ def spheres_visible(centers, radii, planes) -> np.ndarray:
     return (dist >= -radii[:, None]).all(axis=1)
 
 
-def lod_choice(centers, radii, errors, eye, px_scale: float, lod_error: float, ortho: bool = False) -> np.ndarray:
+def lod_choice(centers, radii, errors, eye, px_scale: float, lod_error: float, ortho: bool = False,
+               scale=None) -> np.ndarray:
     """``(n,) int``: the LOD level of each instance, the coarsest whose
     ``errors[k]`` (model units, increasing, ``errors[0] = 0``) projects to at
     most ``lod_error`` pixels at the point of the bounding sphere nearest the
     eye (``px_scale``: pixels per world unit at distance 1, i.e.
-    ``P[1][1] * height / 2``).  The same rule as ``axial_lod_level`` in
+    ``P[1][1] * height / 2``); ``scale``: (n,) the instances' ``s`` (errors
+    are model units).  The same rule as ``axial_lod_level`` in
     ``glsl/cull.vert``."""
     centers = np.asarray(centers, dtype=np.float64)
     if ortho:
@@ -147,6 +149,8 @@ def lod_choice(centers, radii, errors, eye, px_scale: float, lod_error: float, o
     else:
         near = np.linalg.norm(centers - np.asarray(eye, dtype=np.float64), axis=1) - np.asarray(radii, dtype=np.float64)
         px = px_scale / np.maximum(near, 1e-6)
+    if scale is not None:
+        px = px * np.abs(np.asarray(scale, dtype=np.float64))
     errors = np.asarray(errors, dtype=np.float64)
     fits = errors[None, :] * px[:, None] <= lod_error
     fits[:, 0] = True

@@ -128,12 +128,13 @@ class CullPass:
 
     def run(self, count: int, levels: int, view, projection, *, frustum: bool, center, radius: float,
             lod_errors=(0.0,), eye=(0.0, 0.0, 0.0), px_scale: float = 1.0, ortho: bool = False,
-            lod_px: float = 1.0, wind_reach: float = 0.0) -> list[int]:
+            lod_px: float = 1.0, wind_reach: float = 0.0, prepare=None) -> list[int]:
         """Cull ``count`` instances; returns the number kept per LOD level
         (one entry with ``levels == 1``).  Level ``k``'s records start at
         record ``sum(counts[:k])`` of :attr:`output`.  With LOD, the first
         stage keeps the visible instances and a second stage sorts only those
-        into levels (one pass per level)."""
+        into levels (one pass per level).  ``prepare(program)`` is called on
+        each program before it runs (the renderer's quantization table)."""
         import moderngl
 
         self.ensure_capacity(count)
@@ -147,6 +148,8 @@ class CullPass:
             "u_px_scale": float(px_scale), "u_ortho": bool(ortho), "u_lod_px": float(lod_px),
         }
         self.set_uniforms(uniforms)
+        if prepare is not None:
+            prepare(self.program)
         self.program["u_level"].value = -1
         with self.query:
             self.vao.transform(self.buffer, mode=moderngl.POINTS, vertices=count)
@@ -156,6 +159,8 @@ class CullPass:
             return [visible]
         # second stage: only the visible ones, once per level, into consecutive runs
         prog, vao, out = self._lod(count)
+        if prepare is not None:
+            prepare(prog)
         self._set(prog, uniforms)
         self._set(prog, {"u_planes": ALL_VISIBLE_PLANES})
         counts = []

@@ -353,7 +353,6 @@ class AxialRenderer:
 
         cull, prog, vaos = state
         if self.quantized:
-            self._set_quant_uniforms(cull.program)
             self._set_quant_uniforms(prog)
         for name in ("u_view", "u_proj", "u_mode", "u_color", "u_line_color", "u_light_dir", "u_up", "u_eye", "u_ambient"):
             if name in prog and name in plain_prog:
@@ -367,7 +366,8 @@ class AxialRenderer:
                           center=self.mesh.axis.center, radius=self.bound_radius,
                           lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye,
                           px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho, lod_px=self.lod_error,
-                          wind_reach=wind_reach(self.mesh, self.wind if self.bend else None))
+                          wind_reach=wind_reach(self.mesh, self.wind if self.bend else None),
+                          prepare=self._set_quant_uniforms)
         self.stats.update(visible=int(sum(counts)), levels=counts, culling=self.culling_enabled, lod=self.lod,
                           vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(counts))))
         first = 0
