@@ -14,7 +14,7 @@ Instances outside the view are culled on the GPU (``--no-cull`` turns it
 off) and, from 100 000 instances on (or with ``--lod``), far ones are drawn
 with simplified levels of detail (``--no-lod``, ``--lod-error PX``), so
 ``axialdeform view stone -n 1000000`` stays interactive when zoomed into
-the field.  The window title shows the instance count (and how many are drawn), the mode, the bend amplitude and
+the field.  The window title shows the instance count, the mode, the bend amplitude, how many instances were drawn and
 the frame rate.  ``--headless`` runs the same viewer in moderngl-window's
 headless window (an EGL context, no display) for a number of frames and
 can save the last one (``--screenshot``), which is how the tests drive it.
@@ -238,9 +238,9 @@ class _ViewerMixin:
         """What the title bar shows."""
         wind = self.renderer.wind
         shown = self.renderer.stats.get("visible", self.renderer.count)
-        return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances ({shown} drawn) - {self.mode} - "
+        return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances - {self.mode} - "
                 f"bend x{self.bend_scale:.2f} - seed {self.seed}"
-                + (f" - wind {wind.strength:g}" if wind is not None else "") + f" - {self.fps:.0f} fps")
+                + (f" - wind {wind.strength:g}" if wind is not None else "") + f" - {shown} drawn - {self.fps:.0f} fps")
 
     def _update_title(self, force: bool = False) -> None:
         now = time.perf_counter()

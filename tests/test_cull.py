@@ -334,7 +334,7 @@ def test_viewer_draws_a_field_with_culling_and_lod(ctx):
         v.distance *= 0.05  # zoom into the field: most instances leave the view
         v.step(2)
         assert 0 < v.renderer.stats["visible"] < 2000
-        assert f"2000 instances ({v.renderer.stats['visible']} drawn)" in v.status()
+        assert "2000 instances - solid" in v.status() and f" - {v.renderer.stats['visible']} drawn - " in v.status()
     finally:
         v.release()
         v.wnd.destroy()
