@@ -4,7 +4,8 @@ framed and zoomed in, with and without LOD (culling on).  Prints one line per ca
     .venv/bin/python tools/view_speed.py
 """
 
-import time, numpy as np
+import time
+
 import axialdeform as ad
 from axialdeform.viewer import Viewer
 stone = ad.load_mesh("stone")
