@@ -5,6 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pyrr
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 import axialdeform as ad
 from axialdeform.core.bounds import (base_radius, frustum_planes, instance_bounds, instance_boxes, lod_choice,
@@ -359,3 +362,27 @@ def test_culling_follows_set_params_and_set_tint(ctx, stone):
             r.set_params(big[:700])
         assert np.array_equal(draw(ctx, full, view, proj), draw(ctx, culled, view, proj))
         assert culled.stats["submitted"] == 700
+
+
+# ------------------------------------------------------------------ property: the numpy bound, many random instances
+_finite = dict(allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=150, deadline=None)
+@given(offsets=arrays(np.float64, (4, 10), elements=st.floats(-3, 3, **_finite)),
+       place=arrays(np.float64, (4, 6), elements=st.floats(-50, 50, **_finite)),
+       extra=st.tuples(st.floats(0.05, 4, **_finite), st.floats(-12, 12, **_finite), st.floats(-3, 0.99, **_finite)),
+       extended=st.booleans())
+def test_bound_holds_the_cpu_reference_for_any_parameters(stone, offsets, place, extra, extended):
+    """Any offsets, positions, angles (and scale, twist, taper): every vertex
+    of the CPU reference deformation lies in the sphere and the box."""
+    params = np.hstack([offsets, place]).astype(np.float32)
+    if extended:
+        params = np.hstack([params, np.tile(np.asarray(extra, np.float32), (4, 1))])
+    world, _ = ad.deform(stone.axis, stone.positions, stone.normals, params)
+    world = world.astype(np.float64)
+    centers, radii = instance_bounds(stone, params)
+    tol = 1e-5 * (1 + np.abs(place).max() + radii.max())
+    assert (np.linalg.norm(world - centers[:, None], axis=2) <= radii[:, None] + tol).all()
+    lo, hi = instance_boxes(stone, params)
+    assert (world >= lo[:, None] - tol).all() and (world <= hi[:, None] + tol).all()
