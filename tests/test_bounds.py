@@ -45,3 +45,20 @@ def test_callers_use_the_one_home():
         src = inspect.getsource(mod)
         assert "radii[:, None]).min(axis=0)" not in src, mod.__name__
     assert ad.instance_bounds is instance_bounds
+
+
+def test_outline_points_by_budget(stone):
+    from axialdeform.core.bounds import outline_points
+
+    params = ad.random_params(stone, 30, seed=8, bend=0.3)
+    world, _ = ad.deform(stone.axis, stone.positions, stone.normals, params)
+    exact, r = outline_points(stone, params)  # 30 x 58 vertices: all of them
+    assert exact.shape == (30 * stone.vertex_count, 3) and not r.any()
+    assert np.abs(exact - world.reshape(-1, 3)).max() < 1e-5 * stone.axis.length
+    some, r = outline_points(stone, params, budget=30 * stone.vertex_count - 1)  # the extreme vertices only
+    assert 0 < len(some) < len(exact) and not r.any()
+    d = np.abs(some[:, None, :] - world.reshape(-1, 3)[None]).max(axis=2).min(axis=1)
+    assert d.max() < 1e-5 * stone.axis.length  # each is a deformed vertex
+    centers, radii = outline_points(stone, params, budget=10)  # the instance spheres
+    c2, r2 = instance_bounds(stone, params)
+    assert np.array_equal(centers, c2) and np.array_equal(radii, r2)

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from .deform import bernstein, displace
 from .transforms import rotation_matrices
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
-__all__ = ["wind_reach", "instance_bounds", "scene_box", "box_corners", "base_radius", "instance_boxes", "frustum_planes",
-           "spheres_visible", "lod_choice"]
+__all__ = ["wind_reach", "instance_bounds", "scene_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
+           "frustum_planes", "spheres_visible", "lod_choice"]
 
 
 def base_radius(mesh, *extra_positions) -> float:
@@ -155,3 +156,53 @@ def lod_choice(centers, radii, errors, eye, px_scale: float, lod_error: float, o
     fits = errors[None, :] * px[:, None] <= lod_error
     fits[:, 0] = True
     return (np.cumprod(fits, axis=1).sum(axis=1) - 1).astype(np.int64) if len(errors) else np.zeros(len(centers), np.int64)
+
+
+def _support_indices(positions: np.ndarray, directions: int = 194) -> np.ndarray:
+    """Indices of the vertices that lie furthest along ``directions`` spread
+    evenly over the sphere (a Fibonacci lattice) and along the six axes:
+    the vertices that make a mesh's outline from any side."""
+    k = np.arange(directions) + 0.5
+    z = 1.0 - 2.0 * k / directions
+    phi = np.pi * (1.0 + 5.0**0.5) * k
+    r = np.sqrt(1.0 - z * z)
+    dirs = np.concatenate([np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1), np.eye(3), -np.eye(3)])
+    p = np.asarray(positions, dtype=np.float64)
+    return np.unique(np.argmax((p - p.mean(axis=0)) @ dirs.T, axis=0))
+
+
+def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
+    """Points (with radii) whose spheres hold the deformed instances, as
+    tightly as ``budget`` allows: what a camera must keep in view.
+
+    mesh : BaseMesh; params : (n, 16) float; budget : the most points made.
+    Returns ``points : (m, 3) float64`` and ``radii : (m,) float64``:
+
+    * every deformed vertex (radius 0) when ``n * vertices <= budget``
+      (exact);
+    * else the deformed vertices that are extreme along 200 directions of
+      the base mesh (radius 0; an approximation: a bent instance may reach
+      a little past them, which the framing's margin covers);
+    * else the instance spheres of :func:`instance_bounds` (always hold).
+    """
+    params = as_params(params)
+    n, v = len(params), mesh.vertex_count
+    if n == 0:
+        return np.zeros((0, 3)), np.zeros(0)
+    if n * v <= budget:
+        idx = np.arange(v)
+    else:
+        idx = _support_indices(mesh.positions)
+        if n * len(idx) > budget:
+            return instance_bounds(mesh, params)
+    if params.shape[1] == 19:  # extended instances: the CPU reference places the chosen vertices
+        from .deform import deform
+
+        world, _ = deform(mesh.axis, mesh.positions[idx], mesh.normals[idx], params)
+        return world.reshape(-1, 3).astype(np.float64), np.zeros(n * len(idx))
+    pts = mesh.positions[idx].astype(np.float64)
+    p64 = params.astype(np.float64)
+    disp = np.einsum("vk,nkc->nvc", bernstein(mesh.axis.parameter(pts), 4), p64[:, OFFSETS].reshape(-1, 5, 2))
+    world = displace(mesh.axis, pts, disp) @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2)
+    world += p64[:, None, POSITION]
+    return world.reshape(-1, 3), np.zeros(n * len(idx))

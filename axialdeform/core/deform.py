@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .arrays import as_array
 from .axis import ControlAxis
 from .params import ANGLES, EXTRA, OFFSETS, POSITION, as_params
 from .transforms import rotation_matrices
@@ -155,6 +156,8 @@ def deform(
     and ``R·n''``), each (n, v, 3) float32.
     """
     params = as_params(params)
+    positions = as_array(positions, (None, 3), "positions")
+    normals = as_array(normals, (len(positions), 3), "normals")
     n, v = len(params), len(positions)
     out_pos = np.empty((n, v, 3), dtype=np.float32)
     out_nrm = np.empty((n, v, 3), dtype=np.float32)
