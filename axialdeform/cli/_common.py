@@ -84,11 +84,11 @@ def progress_bar(total: int, desc: str, unit: str = "inst", small: int = 2000):
 # ---------------------------------------------------------------- extended instances and wind (issue 13)
 def add_extension_args(p) -> None:
     p.add_argument("--scale", metavar="MIN:MAX", default=None,
-                   help="extended instances: uniform scale s drawn in MIN..MAX (0 < MIN <= MAX)")
+                   help="extended instances: uniform scale s drawn in MIN..MAX, 0 < MIN <= MAX (default: none, 16 numbers)")
     p.add_argument("--twist", metavar="MAX", type=float, default=None,
-                   help="extended instances: twist tw drawn in -MAX..MAX radians over the axis")
+                   help="extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)")
     p.add_argument("--taper", metavar="MAX", type=float, default=None,
-                   help="extended instances: taper tp drawn between 0 and MAX (< 1)")
+                   help="extended instances: taper tp drawn between 0 and MAX < 1 (default: none)")
 
 
 def extension_args(args) -> dict:
@@ -120,10 +120,10 @@ def extension_args(args) -> dict:
 def add_wind_args(parser, time: bool = True) -> None:
     parser.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None, help=(
         "wind (docs/wind.md): tip displacement as a fraction of L, gustiness, gusts per second, "
-        "distance between gust fronts (0: none)"))
+        "distance between gust fronts (0: none) (default: no wind)"))
     parser.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
     if time:
-        parser.add_argument("--time", type=float, default=0.0, help="seconds: the moment the wind is taken at (default: 0)")
+        parser.add_argument("--time", type=float, default=0.0, help="seconds: the moment the wind is taken at (default: %(default)s)")
 
 
 def wind_from_args(args):
@@ -149,9 +149,9 @@ def wind_from_args(args):
 def add_cull_arguments(p) -> None:
     """``--no-cull``, ``--lod``, ``--lod-error PX`` (render and view)."""
     p.add_argument("--no-cull", action="store_true", help="draw every instance (no per-instance frustum culling; "
-                   "the picture is the same, only slower)")
+                   "the picture is the same, only slower) (default: culling on)")
     p.add_argument("--lod", action="store_true", help="levels of detail: far instances use simplified meshes "
-                   "(changes pixels, within --lod-error)")
+                   "(changes pixels, within --lod-error) (default: off)")
     p.add_argument("--lod-error", type=float, default=None, metavar="PX",
                    help="allowed screen-space error of a level in pixels, > 0 (default 1; implies --lod)")
 

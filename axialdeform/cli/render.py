@@ -26,7 +26,7 @@ def add_parser(sub) -> None:
     add_mesh_mismatch(rd)
     add_cull_arguments(rd)
     rd.add_argument("--stats", action="store_true", help="print instances submitted / drawn / per LOD level, "
-                    "vertices processed and the frame time")
+                    "vertices processed and the frame time (default: off)")
     add_wind_args(rd)
     rd.set_defaults(handler=run)
 
