@@ -334,7 +334,7 @@ def test_viewer_draws_a_field_with_culling_and_lod(ctx):
     v = Viewer.create(stone, params, headless=True, size=(160, 120), lod=True, lod_error=2.0)
     try:
         assert v.renderer.culling_enabled and v.renderer.lod and len(v.renderer.lod_levels) >= 2
-        v.distance *= 0.05  # zoom into the field: most instances leave the view
+        v.orbit.zoom(0.3)  # zoom into the field: most instances leave the view
         v.step(2)
         assert 0 < v.renderer.stats["visible"] < 2000
         assert "2000 instances - solid" in v.status() and f" - {v.renderer.stats['visible']} drawn - " in v.status()

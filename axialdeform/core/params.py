@@ -5,7 +5,7 @@ One instance is ``d1u d1v d2u d2v d3u d3v d4u d4v d5u d5v px py pz rx ry rz``
 about fixed X, then Y, then Z).  In memory a set of instances is a
 ``(n, 16) float32`` array.  An **extended** instance adds ``s tw tp`` (uniform
 scale > 0, twist in radians over the axis, taper < 1; see the extension
-section of ``docs/axial-deformation.md``): ``(n, 19) float32``.
+section of ``docs/method.md``): ``(n, 19) float32``.
 
 Files
 -----

@@ -28,7 +28,7 @@ from ..core.bounds import base_radius, wind_reach
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.arrays import as_array
 from ..core.wind import Wind
-from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
+from .uniforms import camera_matrices, eye_position, set_camera_uniforms, set_uniforms
 from .shaders import build_program
 
 __all__ = ["AxialRenderer", "BakedMeshes", "MODES", "DEFAULT_COLORS"]
@@ -176,11 +176,9 @@ class AxialRenderer:
             return
         if not isinstance(wind, Wind):
             raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
-        program["u_wind_strength"].value = float(wind.strength)
-        for name, value in (("u_wind_dir", tuple(wind.unit_direction)), ("u_wind_gust", float(wind.gustiness)),
-                            ("u_wind_cycles", tuple(wind.cycles(time))), ("u_wind_wavenumber", wind.wavenumber)):
-            if name in program:
-                program[name].value = value
+        set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),
+                               "u_wind_gust": float(wind.gustiness), "u_wind_cycles": tuple(wind.cycles(time)),
+                               "u_wind_wavenumber": float(wind.wavenumber)})
 
     def _set_quant_uniforms(self, program) -> None:
         """The per-column decode table of a quantized instance buffer (no-op otherwise)."""
@@ -354,7 +352,7 @@ class AxialRenderer:
             if name in prog and name in plain_prog:
                 prog[name].write(plain_prog[name].read())
         self._set_wind_uniforms(prog, self.wind, self.time)
-        eye = np.linalg.inv(view.astype(np.float64))[3, :3]
+        eye = eye_position(view)
         height = float(self.ctx.viewport[3]) if self.ctx.viewport else 1.0
         ortho = abs(float(projection[3, 3]) - 1.0) < 1e-9  # pyrr layout: w = 1 for orthographic
         levels = len(self.lod_levels) if self.lod else 1
