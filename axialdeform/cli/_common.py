@@ -81,16 +81,6 @@ def progress_bar(total: int, desc: str, unit: str = "inst", small: int = 2000):
     return tqdm(total=total, desc=desc, unit=unit, disable=total < small and not sys.stderr.isatty(), file=sys.stderr)
 
 
-# ---------------------------------------------------------------- extended instances and wind (issue 13)
-def add_extension_args(p) -> None:
-    p.add_argument("--scale", metavar="MIN:MAX", default=None,
-                   help="extended instances: uniform scale s drawn in MIN..MAX, 0 < MIN <= MAX (default: none, 16 numbers)")
-    p.add_argument("--twist", metavar="MAX", type=float, default=None,
-                   help="extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)")
-    p.add_argument("--taper", metavar="MAX", type=float, default=None,
-                   help="extended instances: taper tp drawn between 0 and MAX < 1 (default: none)")
-
-
 def extension_args(args) -> dict:
     """``--scale MIN:MAX``, ``--twist MAX``, ``--taper MAX`` as random_params keywords;
     a bad value is a ParamError naming the argument and the expected range."""
@@ -117,22 +107,26 @@ def extension_args(args) -> dict:
     return out
 
 
-def add_wind_args(parser, time: bool = True) -> None:
+def add_wind_args(parser) -> None:
     parser.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None, help=(
         "wind (docs/wind.md): tip displacement as a fraction of L, gustiness, gusts per second, "
-        "distance between gust fronts (0: none) (default: no wind)"))
+        "distance between gust fronts, 0 for none (default: no wind)"))
     parser.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
-    if time:
-        parser.add_argument("--time", type=float, default=0.0, help="seconds: the moment the wind is taken at (default: %(default)s)")
+    parser.add_argument("--time", type=float, default=None, help="seconds: the moment the wind is taken at, with --wind (default: 0)")
 
 
-def wind_from_args(args):
-    """The :class:`axialdeform.Wind` of ``--wind``/``--wind-dir``, or None."""
+def wind_arg(args):
     from ..core.errors import ParamError
     from ..core.wind import Wind
 
     if args.wind is None:
+        if args.time is not None:
+            raise ParamError("--time: only meaningful with --wind (the wind is the only thing that moves with time)")
         return None
+    if args.time is None:
+        args.time = 0.0
+    elif not math.isfinite(args.time):
+        raise ParamError(f"--time: expected a finite number of seconds, found {args.time!r}")
     try:
         direction = tuple(float(x) for x in args.wind_dir.split(","))
     except ValueError:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_mesh_and_params, add_mesh_mismatch, add_wind_args, load, progress_bar, wind_from_args
+from ._common import add_mesh_and_params, add_mesh_mismatch, add_wind_args, load, progress_bar, wind_arg
 
 
 def add_parser(sub) -> None:
@@ -28,10 +28,10 @@ def run(args) -> None:
     from ..core.bake import write_mesh_folder, write_npz
     from ..gl.bake import bake
 
-    wind = wind_from_args(args)
+    wind = wind_arg(args)
     mesh, params = load(args)
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time)
+        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time or 0.0)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)

@@ -24,7 +24,7 @@ def add_parser(sub) -> None:
                    help="write the parameters even if fits exceed --max-residual (they are still reported; default: refuse)")
     f.add_argument("--max-iterations", type=positive_int, default=100, help="alternation rounds per variant (default: %(default)s)")
     f.add_argument("--extended", action="store_true",
-                   help="fit the 19 numbers of extended instances: scale, twist and taper too (default: 16 numbers)")
+                   help="fit the 19 numbers of extended instances: scale, twist and taper too (default: the 16)")
     f.set_defaults(handler=run)
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from ._common import AXES, add_extension_args, angle_range, extension_args
+from ._common import AXES, angle_range, extension_args
 
 
 def add_parser(sub) -> None:
@@ -24,9 +24,14 @@ def add_parser(sub) -> None:
                    help="MIN,MAX radians about the up axis (default: 0,2pi)")
     r.add_argument("--tilt", type=angle_range, default=(-0.25, 0.25),
                    help="MIN,MAX radians about the other two axes (default: -0.25,0.25)")
-    add_extension_args(r)
+    r.add_argument("--scale", metavar="MIN:MAX", default=None,
+                   help="extended instances: uniform scale s drawn in MIN..MAX, 0 < MIN <= MAX (default: none, 16 numbers)")
+    r.add_argument("--twist", metavar="MAX", type=float, default=None,
+                   help="extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)")
+    r.add_argument("--taper", metavar="MAX", type=float, default=None,
+                   help="extended instances: taper tp drawn between 0 and MAX < 1 (default: none)")
     r.add_argument("--quantize", action="store_true",
-                   help="write the compact uint16 form, binary only: 32 bytes an instance, 38 extended (default: lossless)")
+                   help="write the compact uint16 form, binary only: 32 bytes an instance, 38 extended (default: 64/76 bytes, lossless)")
     r.add_argument("-o", "--output", required=True, help="parameter file to write (required, no default)")
     r.set_defaults(handler=run)
 

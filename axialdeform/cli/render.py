@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ._common import (AXES, add_cull_arguments, add_mesh_and_params, add_mesh_mismatch, add_wind_args, cull_options,
-                      format_stats, load, vec3, wind_from_args)
+                      format_stats, load, vec3, wind_arg)
 
 
 def add_parser(sub) -> None:
@@ -24,10 +24,10 @@ def add_parser(sub) -> None:
     rd.add_argument("--fov", type=float, default=None, metavar="DEG",
                     help="vertical field of view in degrees, 0 < DEG < 180 (default: 35)")
     add_mesh_mismatch(rd)
+    add_wind_args(rd)
     add_cull_arguments(rd)
     rd.add_argument("--stats", action="store_true", help="print instances submitted / drawn / per LOD level, "
                     "vertices processed and the frame time (default: off)")
-    add_wind_args(rd)
     rd.set_defaults(handler=run)
 
 
@@ -67,7 +67,7 @@ def run(args) -> None:
     from ..gl.renderer import AxialRenderer
 
     options = cull_options(args)
-    wind = wind_from_args(args)
+    wind = wind_arg(args)
     wind_options = {"wind": wind, "time": args.time} if wind is not None else {}
     mesh, params = load(args)
     size = parse_size(args.size)

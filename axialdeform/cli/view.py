@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import AXES, add_cull_arguments, add_mesh_mismatch, add_wind_args, cull_options, wind_from_args
+from ._common import AXES, add_cull_arguments, add_mesh_mismatch, cull_options, wind_arg
 
 
 def add_parser(sub) -> None:
@@ -26,10 +26,13 @@ def add_parser(sub) -> None:
     v.add_argument("--frames", type=int, default=3, help="frames to draw with --headless (default: %(default)s)")
     v.add_argument("--screenshot", help="PNG of the last frame, with --headless (default: none)")
     add_mesh_mismatch(v)
-    add_wind_args(v, time=False)
+    v.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None,
+                   help="animate a wind on the GPU, docs/wind.md; V toggles it (default: still)")
+    v.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
     add_cull_arguments(v)
     v.add_argument("--no-lod", action="store_true", help="no levels of detail (default: on from 100 000 instances)")
-    v.set_defaults(handler=run)
+    v.set_defaults(handler=run, time=None)
+
 
 
 def run(args) -> None:
@@ -40,7 +43,7 @@ def run(args) -> None:
     from ..gl.image import parse_size
     from ..viewer import Viewer
 
-    wind = wind_from_args(args)
+    wind = wind_arg(args)
     options = cull_options(args)
     if args.no_lod:
         options["lod"] = False

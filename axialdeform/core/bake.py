@@ -21,8 +21,8 @@ MESH_FORMATS = ("obj", "ply", "glb")
 def bake_cpu(mesh, params, *, progress=None, wind=None, time: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
     in the base mesh's vertex order, by the numpy reference (:func:`deform`).
-    ``params``: (n, 16) or (n, 19) (extended instances).
-    ``wind``: an :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
+    ``params``: (n, 16) or (n, 19) (extended instances); ``wind``: an
+    :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
     ``progress``: optional object with ``update(instances_done)``.  The GPU
     engine and the switch between them: :func:`axialdeform.gl.bake.bake`."""
     if wind is not None:

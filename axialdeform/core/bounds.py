@@ -35,7 +35,7 @@ def wind_reach(mesh, wind) -> float:
     return abs(float(wind.strength)) * float(mesh.axis.length) * (1.0 + abs(float(wind.gustiness)))
 
 
-def instance_bounds(mesh, params, *, radius: float | None = None, wind=None) -> tuple[np.ndarray, np.ndarray]:
+def instance_bounds(mesh, params, wind=None, *, radius: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bounding spheres of the deformed instances, without deforming them.
 
     mesh : BaseMesh; params : (n, 16) or (n, 19) float.
@@ -202,6 +202,12 @@ def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, 
         return world.reshape(-1, 3).astype(np.float64), np.zeros(n * len(idx))
     pts = mesh.positions[idx].astype(np.float64)
     p64 = params.astype(np.float64)
+    if p64.shape[1] == 19:  # extended instances: the whole map of the selected vertices
+        from .deform import deform_local_extended
+
+        moved, _ = deform_local_extended(mesh.axis, pts, pts, p64[:, OFFSETS].reshape(-1, 5, 2), p64[:, 16:19])
+        world = moved @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2) + p64[:, None, POSITION]
+        return world.reshape(-1, 3), np.zeros(n * len(idx))
     disp = np.einsum("vk,nkc->nvc", bernstein(mesh.axis.parameter(pts), 4), p64[:, OFFSETS].reshape(-1, 5, 2))
     world = displace(mesh.axis, pts, disp) @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2)
     world += p64[:, None, POSITION]

@@ -90,7 +90,7 @@ def deform_local_extended(
     axis: ControlAxis, positions: np.ndarray, normals: np.ndarray, offsets: np.ndarray, extra: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Bend, twist and taper the base mesh in model space, then scale it
-    (the extension of ``docs/method.md``; no rotation or position).
+    (the extension in ``docs/method.md``; no rotation or position).
 
     positions, normals : (v, 3) — the base mesh.
     offsets : (n, 5, 2) — per-instance control-point offsets.

@@ -238,16 +238,18 @@ def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> 
     """Fit n variants with the 19 numbers of extended instances: ``targets``
     (n, v, 3) -> params (n, 19) float64 and rounds (n,).
 
-    Start: the uniform scale of the best similarity map, then the 16-number
-    fit of the variant divided by it; then Levenberg-Marquardt on all 17
+    Start: the uniform scale of the best similarity map, the Kabsch rotation
+    and the least-squares bend of the variant divided by it; then
+    Levenberg-Marquardt on all 17
     unknowns (rotation vector, canonical offsets, position, log s, tw, tp)
     with a central-difference Jacobian, vectorized over the batch."""
     n = len(targets)
     scale0 = umeyama_scale(m.base, targets)
-    start, rounds = _fit_batch(m, targets / scale0[:, None, None], max_iterations)
-    rot = _rotations(start[:, ANGLES])
-    z = _CANONICAL.T @ start[:, OFFSETS].reshape(n, 5, 2)  # (n, 4, 2): the basis is orthonormal
-    pos = start[:, POSITION] * scale0[:, None]
+    unscaled = targets / scale0[:, None, None]
+    rot, _ = kabsch(m.base, unscaled)
+    z, pos = m.linear_offsets(rot, unscaled)  # the bend for that rotation, then refine everything together
+    pos = pos * scale0[:, None]
+    rounds = np.zeros(n, dtype=np.int64)
     extra = np.stack([scale0, np.zeros(n), np.zeros(n)], axis=1)
     L = m.length
 
@@ -340,7 +342,7 @@ def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> 
 
 
 def _rotations(angles: np.ndarray) -> np.ndarray:
-    from .deform import rotation_matrices
+    from .transforms import rotation_matrices
 
     return rotation_matrices(angles)
 

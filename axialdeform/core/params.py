@@ -179,21 +179,20 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
             if len(shape) == 3 and arr.shape == (5, 2):
                 arr = arr[None]
             parts[name] = arr
-    extra = (scale, twist, taper)
-    sized = {f"{k} {len(a)}": len(a) for k, a in parts.items()}
-    sized.update({f"{k} {np.size(x)}": np.size(x) for k, x in zip(("scale", "twist", "taper"), extra)
-                  if x is not None and np.ndim(x) > 0})
-    lengths = set(sized.values()) | ({int(count)} if count is not None else set())
+    lengths = {len(a) for a in parts.values()} | ({int(count)} if count is not None else set())
     if len(lengths) > 1:
-        found = ", ".join(sized) + (f", count {count}" if count is not None else "")
+        found = ", ".join(f"{k} {len(a)}" for k, a in parts.items()) + (f", count {count}" if count is not None else "")
         raise ParamError(f"make_params: expected the same number of instances in every part, found {found}")
+    extra = (scale, twist, taper)
+    lengths |= {len(np.atleast_1d(x)) for x in extra if x is not None and np.ndim(x) > 0}
+    if len(lengths) > 1:
+        raise ParamError(f"make_params: expected the same number of instances in every part, found {sorted(lengths)}")
     n = lengths.pop() if lengths else 0
     extended = any(x is not None for x in extra)
     out = np.zeros((n, 19 if extended else 16), dtype=np.float32)
     if extended:
         for col, x, default in zip((SCALE, TWIST, TAPER), extra, IDENTITY_EXTRA):
-            out[:, col] = default if x is None else np.broadcast_to(np.asarray(x, dtype=np.float32).ravel()
-                                                                    if np.ndim(x) else np.float32(x), (n,))
+            out[:, col] = default if x is None else np.broadcast_to(np.asarray(x, dtype=np.float32), (n,))
     if "offsets" in parts:
         out[:, OFFSETS] = parts["offsets"].reshape(n, 10)
     if "positions" in parts:
@@ -343,9 +342,9 @@ def quantize_params(values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def quantize_with_table(values, lo, step, *, name: str = "update", setter: str = "set()") -> np.ndarray:
     """Encode ``values`` with an existing table (``lo``, ``step`` from
-    :func:`quantize_params`): ``q`` (n, 16) uint16 (or (n, 19)).
+    :func:`quantize_params`): ``q`` (n, 16) uint16.
 
-    values : (n, 16) or (n, 19) float; lo, step : (16,) or (19,) float32.  A value outside the
+    values : (n, 16) float; lo, step : (16,) float32.  A value outside the
     table's range ``lo .. lo + 65535 * step`` raises :class:`ParamError`
     naming ``name``, the instance and the field (no clipping), and pointing
     to ``setter`` (the call that re-quantizes every instance).

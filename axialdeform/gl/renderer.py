@@ -171,11 +171,11 @@ class AxialRenderer:
         """The wind's uniforms (strength 0: still); no buffer is written."""
         if "u_wind_strength" not in program:  # the linker removed it: no bend (AXIAL_NO_BEND)
             return
+        if wind is not None and not isinstance(wind, Wind):
+            raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
         if wind is None or wind.strength == 0:
             program["u_wind_strength"].value = 0.0
             return
-        if not isinstance(wind, Wind):
-            raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
         set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),
                                "u_wind_gust": float(wind.gustiness), "u_wind_cycles": tuple(wind.cycles(time)),
                                "u_wind_wavenumber": float(wind.wavenumber)})
