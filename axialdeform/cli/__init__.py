@@ -19,7 +19,8 @@ DEMO_COUNT = 2500
 #: modules that add sub-commands: each defines ``add_parser(subparsers)``
 #: (which calls ``subparsers.add_parser(NAME, ...)`` and
 #: ``set_defaults(handler=run)``) and ``run(args) -> None``.
-PLUGINS: tuple[str, ...] = ("axialdeform.core.export", "axialdeform.core.fit", "axialdeform.viewer", "axialdeform.bench")
+PLUGINS: tuple[str, ...] = ("axialdeform.core.export", "axialdeform.core.fit", "axialdeform.viewer", "axialdeform.bench",
+                            "axialdeform.cli.web")
 
 
 def _angle_range(text: str) -> tuple[float, float]:

@@ -318,3 +318,34 @@ def scene_bytes(out: str | os.PathLike) -> dict:
     size = lambda *names: sum((out / n).stat().st_size for n in names)  # noqa: E731
     return {"page": size("index.html", "app.js", "scene.json"), "mesh": size(MESH_FILE), "params": size(PARAMS_FILE),
             "three": size(*("three/" + r for r in VENDOR_FILES.values()))}
+
+
+def make_server(folder: str | os.PathLike, port: int = 8000):
+    """An HTTP server for ``folder`` on 127.0.0.1 (not started).
+
+    Returns ``(server, busy)``: when ``port`` is taken the operating system
+    picks a free one and ``busy`` is True.  Call ``server.serve_forever()``;
+    ``server.server_address[1]`` is the port."""
+    import errno
+    import functools
+    from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise AxialDeformError(f"{folder}: no such folder to serve")
+
+    class Handler(SimpleHTTPRequestHandler):
+        extensions_map = {**SimpleHTTPRequestHandler.extensions_map, ".js": "text/javascript",
+                          ".json": "application/json", ".glb": "model/gltf-binary",
+                          ".adp": "application/octet-stream", ".html": "text/html; charset=utf-8"}
+
+        def log_message(self, format, *args):  # quiet: the CLI prints the URL only
+            pass
+
+    handler = functools.partial(Handler, directory=str(folder))
+    try:
+        return ThreadingHTTPServer(("127.0.0.1", int(port)), handler), False
+    except OSError as exc:
+        if exc.errno not in (errno.EADDRINUSE, errno.EACCES):
+            raise AxialDeformError(f"serve: cannot listen on 127.0.0.1:{port}: {exc.strerror}") from None
+    return ThreadingHTTPServer(("127.0.0.1", 0), handler), True

@@ -340,6 +340,7 @@ export function mount(root, lib, scene) {
         apply(p);
         message.hidden = true;
         renderer.domElement.style.visibility = '';
+        return { instances: p.count };
       } catch (err) {
         showError(err);
         geometry.instanceCount = 0;
