@@ -140,7 +140,7 @@ class Visit:
         self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
         self.page.on("pageerror", lambda e: self.errors.append(str(e)))
         self.page.goto(url)
-        self.page.wait_for_function("window.axialdeform !== undefined", timeout=120_000)
+        self.page.wait_for_function("window.axialdeform && window.axialdeform.ready !== undefined", timeout=120_000)
         self.state = self.page.evaluate("window.axialdeform")
 
     def silhouette(self) -> np.ndarray:
@@ -148,7 +148,8 @@ class Visit:
 
         from PIL import Image
 
-        png = self.page.locator(".axd-stage").screenshot()
+        box = self.page.locator(".axd-stage").bounding_box()
+        png = self.page.screenshot(clip=box)  # no "stable element" wait: the status line keeps changing
         return np.asarray(Image.open(BytesIO(png)).convert("RGB"))
 
     def close(self):
@@ -296,7 +297,8 @@ window.cleanup = await esm.default.render({ model, el: document.getElementById('
         page.goto(harness.as_uri())
         page.wait_for_function("window.widgetStatus !== undefined", timeout=120_000)
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 300}
-        before = page.locator(".axd-stage").screenshot()
+        clip = page.locator(".axd-stage").bounding_box()
+        before = page.screenshot(clip=clip)
         w.set_params(ad.random_params(mesh, 40, seed=9))
         assert w.config["instances"] == 40
         page.evaluate("(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }",
@@ -304,7 +306,7 @@ window.cleanup = await esm.default.render({ model, el: document.getElementById('
         page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
         page.wait_for_timeout(300)
-        assert page.locator(".axd-stage").screenshot() != before
+        assert page.screenshot(clip=clip) != before
         assert "40 instances" in page.locator(".axd-status").inner_text()
         # a bad update: the page says why and draws nothing
         page.evaluate("(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }",

@@ -289,7 +289,7 @@ export function mount(root, lib, scene) {
     let frames = 0, since = performance.now(), fps = 0;
     const fmt = new Intl.NumberFormat('en-US');
     const showStatus = () => {
-      status.textContent = `${fmt.format(state.count)} instances · ${fps ? fps.toFixed(0) : '…'} fps`;
+      status.textContent = `${fmt.format(state.count)} instances · ${fps ? fps.toFixed(fps < 10 ? 1 : 0) : '…'} fps`;
     };
     let first = null, failed = null;
     const drawn = new Promise((resolve, reject) => { first = resolve; failed = reject; });
