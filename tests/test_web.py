@@ -261,18 +261,12 @@ def test_bad_parameter_file_shows_why_and_draws_nothing(browser, served, scene_f
         v.close()
 
 
-@pytest.mark.slow
-def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
+def _widget_page(browser, tmp_path, state: dict, esm: str):
     """The widget's ESM run in Chromium against a minimal anywidget model
-    (get/set/on/off/save_changes over the widget's synced state, bytes as
-    DataView as ipywidgets delivers them); not a Jupyter front end."""
-    from axialdeform.widget import SceneWidget
-
-    mesh = ad.load_mesh("stone")
-    w = SceneWidget(mesh, ad.random_params(mesh, 300, seed=2), size=SIZE)
-    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
-    enc = {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
-    harness = tmp_path / "widget harness.html"
+    (get/set/on/off/save_changes over the synced state; bytes arrive as
+    DataView, as ipywidgets delivers them).  ``state``: name -> value, or
+    {"b64": ...} for bytes.  Returns (page, console errors)."""
+    harness = tmp_path / "widget harness ü.html"
     harness.write_text("""<!doctype html><meta charset="utf-8"><link rel="icon" href="data:,"><body><div id="out"></div>
 <script type="module">
 const state = JSON.parse(document.getElementById('state').textContent);
@@ -287,30 +281,41 @@ window.widgetModel = model; window.toDataView = dv;
 const esm = await import(URL.createObjectURL(new Blob([document.getElementById('esm').textContent], {type: 'text/javascript'})));
 window.cleanup = await esm.default.render({ model, el: document.getElementById('out') });
 </script>
-<script type="application/json" id="state">""" + json.dumps(enc).replace("</", "<\\/") + """</script>
-<script type="text/plain" id="esm">""" + w._esm.replace("</script", "<\\/script") + """</script>""", encoding="utf-8")
+<script type="application/json" id="state">""" + json.dumps(state).replace("</", "<\\/") + """</script>
+<script type="text/plain" id="esm">""" + esm.replace("</script", "<\\/script") + """</script>""", encoding="utf-8")
     page = browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1] + 40})
     errors = []
     page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
     page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(harness.as_uri())
+    page.wait_for_function("window.widgetStatus !== undefined", timeout=120_000)
+    return page, errors
+
+
+@pytest.mark.slow
+def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
+    from axialdeform.widget import SceneWidget
+
+    mesh = ad.load_mesh("stone")
+    w = SceneWidget(mesh, ad.random_params(mesh, 300, seed=2), size=SIZE)
+    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
+    state = {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
+    page, errors = _widget_page(browser, tmp_path, state, w._esm)
     try:
-        page.goto(harness.as_uri())
-        page.wait_for_function("window.widgetStatus !== undefined", timeout=120_000)
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 300}
         clip = page.locator(".axd-stage").bounding_box()
         before = page.screenshot(clip=clip)
         w.set_params(ad.random_params(mesh, 40, seed=9))
         assert w.config["instances"] == 40
-        page.evaluate("(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }",
-                      base64.b64encode(w.params_adp).decode())
+        push = "(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }"
+        page.evaluate(push, base64.b64encode(w.params_adp).decode())
         page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
         page.wait_for_timeout(300)
         assert page.screenshot(clip=clip) != before
         assert "40 instances" in page.locator(".axd-status").inner_text()
         # a bad update: the page says why and draws nothing
-        page.evaluate("(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }",
-                      base64.b64encode(w.params_adp[:-8]).decode())
+        page.evaluate(push, base64.b64encode(w.params_adp[:-8]).decode())
         page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
         st = page.evaluate("window.widgetStatus")
         assert st["ready"] is False and "truncated" in st["error"]
@@ -318,6 +323,40 @@ window.cleanup = await esm.default.render({ model, el: document.getElementById('
         page.evaluate("window.cleanup()")
         assert page.locator("canvas").count() == 0
         assert errors == []
+    finally:
+        page.close()
+
+
+@pytest.mark.slow
+def test_widget_in_an_executed_notebook(browser, tmp_path):
+    """A notebook executed by a real Jupyter kernel (nbclient): the cell shows
+    the widget (widget-view output) and set_params changes its synced state;
+    the widget state the notebook stores (what a front end receives) is then
+    rendered by the widget's ESM in Chromium.  Not tested: a Jupyter or
+    VS Code front end itself."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [
+        nbformat.v4.new_code_cell("import axialdeform as ad\nfrom axialdeform.widget import SceneWidget\n"
+                                  "m = ad.load_mesh('stone')\n"
+                                  f"w = SceneWidget(m, ad.random_params(m, 200, seed=3), size={SIZE!r})\nw"),
+        nbformat.v4.new_code_cell("w.set_params(ad.random_params(m, 50, seed=4)); w.config['instances']"),
+    ]
+    NotebookClient(nb, timeout=180, kernel_name="python3", store_widget_state=True).execute()
+    view = nb.cells[0].outputs[0]["data"]["application/vnd.jupyter.widget-view+json"]
+    assert nb.cells[1].outputs[0]["data"]["text/plain"] == "50"
+    stored = nb.metadata.widgets["application/vnd.jupyter.widget-state+json"]["state"][view["model_id"]]
+    state = dict(stored["state"])
+    for buf in stored.get("buffers", []):
+        assert buf["encoding"] == "base64"
+        state[buf["path"][0]] = {"b64": buf["data"]}
+    assert len(base64.b64decode(state["params_adp"]["b64"])) == 96 + 128 + 32 * 50 + 4
+    page, errors = _widget_page(browser, tmp_path, state, state["_esm"])
+    try:
+        assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 50}
+        assert page.locator("canvas").count() == 1 and errors == []
     finally:
         page.close()
 
