@@ -367,3 +367,31 @@ def test_scene_bytes_counts_what_a_browser_downloads(tmp_path, stone):
     b = scene_bytes(tmp_path / "s")
     assert b["params"] == 96 + 128 + 32 * 100 + 4
     assert b["mesh"] == len(scene.glb) and b["three"] > 600_000
+
+
+@pytest.mark.slow
+def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
+    """The other paths: float32 records, an open (two-sided) mesh, flat shading, z up."""
+    from axialdeform.gl.image import save_png
+
+    mesh = ad.load_mesh("leaf")
+    params = ad.random_params(mesh, 600, seed=5, bend=0.15, up="z", placement="disc")
+    adp = tmp_path / "leaves.adp"
+    ad.write_params(adp, params, mesh)
+    out = tmp_path / "leaves.html"
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "-o", str(out), "--float32",
+                        "--mode", "flat", "--up", "z", "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert base64.b64decode(out.read_text(encoding="utf-8").split('id="axd-params">', 1)[1].split("<", 1)[0])[10] == 0
+    render = ad.render_image(mesh, params, SIZE, "flat", up="z")
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 600, v.state
+        shot = v.silhouette()
+        score = iou(shot, render, BACKGROUND)
+        if score < 0.95:
+            save_png(tmp_path / "page.png", shot)
+        assert score >= 0.95, f"IoU {score:.3f}; see {tmp_path}"
+        assert v.errors == []
+    finally:
+        v.close()

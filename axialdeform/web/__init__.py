@@ -155,6 +155,8 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
         "mode_index": _MODE_INDEX[mode],
         "mesh": {"file": MESH_FILE, "name": str(mesh.name), "axis": int(axis.index), "lo": float(axis.lo),
                  "length": float(axis.length), "fingerprint": mesh.fingerprint.hex(),
+                 # the axis line across the axis (twist and taper turn about it): u_center
+                 "center": [float(c) for k, c in enumerate(axis.center) if k != axis.index],
                  "vertices": int(mesh.vertex_count)},
         "params_file": PARAMS_FILE,
         "cull_back_faces": bool(mesh.is_volume),

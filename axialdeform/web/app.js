@@ -15,7 +15,8 @@ export class SceneError extends Error {}
 
 const MAGIC = [0x89, 0x41, 0x44, 0x50, 0x0d, 0x0a, 0x1a, 0x0a];
 const HEADER = 96;
-const FIELDS = 16;
+// version 1: 16 numbers per instance; version 2: 19 (extended: s tw tp)
+const FIELDS_OF_VERSION = { 1: 16, 2: 19 };
 
 let crcTable = null;
 
@@ -47,14 +48,15 @@ export function parseAdp(buffer, name) {
   if (bytes.length < HEADER + 4) fail(`truncated: ${bytes.length} bytes, shorter than the 96-byte header and the 4-byte checksum`);
   if (MAGIC.some((b, i) => bytes[i] !== b)) fail('not an axialdeform parameter file (magic bytes differ)');
   const version = view.getUint16(8, true);
-  if (version !== 1) fail(`version: expected 1, found ${version}`);
+  const fields = FIELDS_OF_VERSION[version];
+  if (!fields) fail(`version: expected 1 or 2, found ${version} (written by a newer axialdeform?)`);
   const encoding = view.getUint16(10, true);
   if (encoding !== 0 && encoding !== 1) fail(`encoding: expected 0 (float32) or 1 (quantized), found ${encoding}`);
   const headerSize = view.getUint32(12, true);
   if (headerSize !== HEADER) fail(`header size: expected 96, found ${headerSize}`);
   const count64 = view.getBigUint64(16, true);
-  const each = encoding === 1 ? 32 : 64;
-  const table = encoding === 1 ? 128 : 0;
+  const each = encoding === 1 ? 2 * fields : 4 * fields;
+  const table = encoding === 1 ? 8 * fields : 0;
   const expected = BigInt(HEADER + table + 4) + count64 * BigInt(each);
   if (BigInt(bytes.length) !== expected) {
     const why = BigInt(bytes.length) < expected ? 'truncated' : 'too long';
@@ -75,14 +77,14 @@ export function parseAdp(buffer, name) {
   let qtable = null;
   let values;
   if (encoding === 1) {
-    qtable = new Float32Array(buffer.slice(HEADER, HEADER + 128));
-    values = new Uint16Array(buffer.slice(HEADER + 128, HEADER + 128 + count * 32));
+    qtable = new Float32Array(buffer.slice(HEADER, HEADER + table));
+    values = new Uint16Array(buffer.slice(HEADER + table, HEADER + table + count * each));
     if (!qtable.every(Number.isFinite)) fail('quantization table: a number is not finite');
   } else {
-    values = new Float32Array(buffer.slice(HEADER, HEADER + count * 64));
+    values = new Float32Array(buffer.slice(HEADER, HEADER + count * each));
     if (!values.every(Number.isFinite)) fail('values: a number is not finite (NaN or infinity)');
   }
-  return { name, encoding, count, axis, lo, length, fingerprint, qtable, values };
+  return { name, version, fields, encoding, count, axis, lo, length, fingerprint, qtable, values };
 }
 
 async function sha256(bytes) {
@@ -161,26 +163,37 @@ export function mount(root, lib, scene) {
   }
 
   function instanceAttributes(p) {
-    // one interleaved instanced buffer, as the package's InstanceBuffer
+    // the file's records, as they are, in one interleaved instanced buffer
+    const buf = new THREE.InstancedInterleavedBuffer(p.values, p.fields, 1);
+    const f = p.fields;
     if (p.encoding === 1) {
-      const buf = new THREE.InstancedInterleavedBuffer(p.values, FIELDS, 1);
-      for (let k = 0; k < 4; k++) {
-        const a = new THREE.InterleavedBufferAttribute(buf, 4, 4 * k, false);
-        a.gpuType = THREE.IntType; // uvec4 in the shader: vertexAttribIPointer
-        geometry.setAttribute(`i_q${k}`, a);
+      const parts = [['i_q0', 4, 0], ['i_q1', 4, 4], ['i_q2', 4, 8], ['i_q3', 4, 12]];
+      if (f === 19) parts.push(['i_q4', 3, 16]);
+      for (const [n, size, off] of parts) {
+        const a = new THREE.InterleavedBufferAttribute(buf, size, off, false);
+        a.gpuType = THREE.IntType; // uvecN in the shader: vertexAttribIPointer
+        geometry.setAttribute(n, a);
       }
-      material.uniforms.u_qmin.value = p.qtable.subarray(0, 16);
-      material.uniforms.u_qstep.value = p.qtable.subarray(16, 32);
+      const u = material.uniforms;
+      u.u_qmin.value = p.qtable.slice(0, 16);
+      u.u_qstep.value = p.qtable.slice(f, f + 16);
+      if (f === 19) {
+        u.u_qmin_extra.value = new THREE.Vector3().fromArray(p.qtable, 16);
+        u.u_qstep_extra.value = new THREE.Vector3().fromArray(p.qtable, 19 + 16);
+      }
     } else {
-      const buf = new THREE.InstancedInterleavedBuffer(p.values, FIELDS, 1);
-      for (const [n, size, off] of [['i_d12', 4, 0], ['i_d34', 4, 4], ['i_d5', 2, 8], ['i_position', 3, 10], ['i_angles', 3, 13]]) {
-        geometry.setAttribute(n, new THREE.InterleavedBufferAttribute(buf, size, off, false));
-      }
+      const parts = [['i_d12', 4, 0], ['i_d34', 4, 4], ['i_d5', 2, 8], ['i_position', 3, 10], ['i_angles', 3, 13]];
+      if (f === 19) parts.push(['i_extra', 3, 16]);
+      for (const [n, size, off] of parts) geometry.setAttribute(n, new THREE.InterleavedBufferAttribute(buf, size, off, false));
     }
   }
 
-  function makeMaterial(encoding) {
-    const sh = cfg.shaders[encoding === 1 ? 'quantized' : 'float'];
+  function variant(p) {
+    return (p.encoding === 1 ? 'quantized' : 'float') + (p.fields === 19 ? '_extended' : '');
+  }
+
+  function makeMaterial(key) {
+    const sh = cfg.shaders[key];
     const v3 = (a) => new THREE.Vector3().fromArray(a);
     // three.js writes the version line itself (glslVersion), then its own defines
     const body = (src) => src.replace(/^#version 300 es\n/, '');
@@ -192,7 +205,9 @@ export function mount(root, lib, scene) {
       uniforms: {
         u_view: { value: null }, u_proj: { value: null },
         u_axis: { value: cfg.mesh.axis }, u_lo: { value: cfg.mesh.lo }, u_len: { value: cfg.mesh.length },
+        u_center: { value: new THREE.Vector2().fromArray(cfg.mesh.center) },
         u_qmin: { value: new Float32Array(16) }, u_qstep: { value: new Float32Array(16) },
+        u_qmin_extra: { value: new THREE.Vector3() }, u_qstep_extra: { value: new THREE.Vector3() },
         u_mode: { value: cfg.mode_index }, u_color: { value: v3(cfg.color) }, u_line_color: { value: v3(cfg.line_color) },
         u_light_dir: { value: v3(cfg.light_dir) }, u_up: { value: v3(cfg.up) }, u_eye: { value: new THREE.Vector3() },
         u_ambient: { value: cfg.ambient },
@@ -203,19 +218,27 @@ export function mount(root, lib, scene) {
   async function prepare(adp, name) {
     const p = parseAdp(adp, name);
     checkMesh(p, cfg, fingerprint);
+    if (!cfg.shaders[variant(p)]) {
+      throw new SceneError(`${name}: ${p.fields}-number instances, but this page was exported without their shader`);
+    }
     return p;
   }
 
-  let currentEncoding = null;
+  let currentVariant = null;
   let mesh = null;
 
   function apply(p) {
-    if (p.encoding !== currentEncoding) {
+    if (variant(p) !== currentVariant) {
       const old = material;
-      material = makeMaterial(p.encoding);
-      if (old) old.dispose();
+      material = makeMaterial(variant(p));
+      if (old) {
+        for (const k of ['u_view', 'u_proj', 'u_eye']) material.uniforms[k].value = old.uniforms[k].value;
+        old.dispose();
+      }
       if (mesh) mesh.material = material;
-      currentEncoding = p.encoding;
+      currentVariant = variant(p);
+      // attributes of the other layout go
+      for (const n of Object.keys(geometry.attributes)) if (n.startsWith('i_')) geometry.deleteAttribute(n);
     }
     instanceAttributes(p);
     geometry.instanceCount = p.count;
