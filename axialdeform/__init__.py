@@ -45,6 +45,8 @@ _LAZY = {
     "MODES": "gl.renderer", "AxialRenderer": "gl.renderer",
     "assemble": "gl.shaders", "assemble_text": "gl.shaders", "build_program": "gl.shaders", "deformation_glsl": "gl.shaders",
     "random_params": "core.variation",
+    "EXTENDED_FIELDS": "core.params", "extend_params": "core.params", "is_extended": "core.params",
+    "Wind": "core.wind", "wind_offsets": "core.wind", "apply_wind": "core.wind",
 }
 
 
@@ -81,4 +83,5 @@ __all__ = [
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds", "load_mesh", "make_params", "random_params",
     "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "write_params",
+    "EXTENDED_FIELDS", "extend_params", "is_extended", "Wind", "wind_offsets", "apply_wind",
 ]

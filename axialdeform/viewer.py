@@ -6,6 +6,7 @@ Mouse: drag to orbit, scroll to zoom.  Keys::
     N           new seed (new individual shapes, same placement)
     UP / DOWN   bend amplitude x1.25 / x0.8 (also + and -)
     G           ground plane on / off          R   reset the camera
+    V           wind on / off (``--wind``; moves control points on the GPU, no upload)
     S           save a screenshot (axialdeform-view-NNN.png)
     ESC         quit
 
@@ -41,7 +42,7 @@ __all__ = ["Viewer", "add_parser", "run", "KEY_ACTIONS"]
 KEY_ACTIONS = {
     "NUMBER_1": "solid", "NUMBER_2": "flat", "NUMBER_3": "wireframe", "W": "next mode",
     "N": "new seed", "UP": "more bend", "EQUAL": "more bend", "DOWN": "less bend", "MINUS": "less bend",
-    "G": "ground", "R": "reset camera", "S": "screenshot",
+    "G": "ground", "R": "reset camera", "S": "screenshot", "V": "wind",
 }
 #: single characters accepted by ``on_key_event`` in place of a window's key code
 _CHAR_KEYS = {"1": "NUMBER_1", "2": "NUMBER_2", "3": "NUMBER_3", "+": "EQUAL", "-": "MINUS"}
@@ -89,7 +90,8 @@ class _ViewerMixin:
             raise AxialDeformError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
         self.bend_scale = 1.0
         self.show_ground = bool(s.get("ground", True))
-        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base)
+        self.wind = s.get("wind")  # the Wind the V key switches on and off
+        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, wind=self.wind)
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
@@ -171,6 +173,12 @@ class _ViewerMixin:
             self.set_bend_scale(self.bend_scale * 0.8)
         elif what == "ground":
             self.show_ground = not self.show_ground
+        elif what == "wind":
+            if self.wind is None:
+                from .core.wind import Wind
+
+                self.wind = Wind()
+            self.renderer.wind = None if self.renderer.wind is not None else self.wind
         elif what == "reset camera":
             self.reset_camera()
         elif what == "screenshot":
@@ -211,7 +219,7 @@ class _ViewerMixin:
         self.ctx.clear(*BACKGROUND, 1.0, depth=1.0)
         if self.show_ground:
             self.ground.render(view, proj, background=BACKGROUND)
-        self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up])
+        self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up], time=time_s)  # wind: uniforms only
         self.frames += 1
         now = time.perf_counter()  # measured, not the timer's frame_time (headless steps are simulated)
         if self._last_frame is not None and now > self._last_frame:
@@ -222,8 +230,10 @@ class _ViewerMixin:
 
     def status(self) -> str:
         """What the title bar shows."""
+        wind = self.renderer.wind
         return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances - {self.mode} - "
-                f"bend x{self.bend_scale:.2f} - seed {self.seed} - {self.fps:.0f} fps")
+                f"bend x{self.bend_scale:.2f} - seed {self.seed}"
+                + (f" - wind {wind.strength:g}" if wind is not None else "") + f" - {self.fps:.0f} fps")
 
     def _update_title(self, force: bool = False) -> None:
         now = time.perf_counter()
@@ -271,14 +281,17 @@ class Viewer:
 
     @staticmethod
     def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int = 0,
-               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4):
+               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
+               wind=None):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
         ``f(t_seconds) -> (n, 16)`` called every frame; tint : optional (n, 3)
         linear RGB per instance; seed, bend : what ``N`` regenerates offsets
         with (bend as a fraction of L); headless : moderngl-window's headless
-        window on an EGL context (no display needed).
+        window on an EGL context (no display needed); wind : an
+        :class:`axialdeform.Wind` animated on the GPU (``V`` toggles it).
+        params may be (n, 19): extended instances.
         """
         from .core.params import as_params
 
@@ -287,7 +300,7 @@ class Viewer:
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground)
+                     up=up, ground=ground, wind=wind)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": samples})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]
@@ -317,7 +330,7 @@ def add_parser(subparsers) -> None:
     v = subparsers.add_parser("view", help="look at instances in an interactive window", description=(
         "Open MESH (a file, or 'stone' / 'leaf') deformed by PARAMS (or by random parameters) in a window: "
         "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
-        "UP/DOWN bend amplitude, G ground, R reset camera, S screenshot, ESC quit."))
+        "UP/DOWN bend amplitude, G ground, V wind, R reset camera, S screenshot, ESC quit."))
     v.add_argument("mesh")
     v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
     v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
@@ -331,6 +344,9 @@ def add_parser(subparsers) -> None:
     v.add_argument("--frames", type=int, default=3, help="frames to draw with --headless (default: %(default)s)")
     v.add_argument("--screenshot", help="PNG of the last frame (with --headless)")
     v.add_argument("--ignore-mesh-mismatch", action="store_true")
+    v.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None,
+                   help="animate a wind on the GPU (docs/wind.md); V toggles it")
+    v.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
     v.set_defaults(handler=run)
 
 
@@ -341,6 +357,17 @@ def run(args) -> None:
     from .core.params import read_params
     from .core.variation import random_params
 
+    from .core.wind import Wind
+
+    wind = None
+    if args.wind is not None:
+        try:
+            direction = tuple(float(x) for x in args.wind_dir.split(","))
+        except ValueError:
+            direction = ()
+        if len(direction) != 3:
+            raise ParamError(f"--wind-dir: expected X,Y,Z (three numbers), found {args.wind_dir!r}")
+        wind = Wind.parse(args.wind, direction=direction)
     mesh = load_mesh(args.mesh)
     if args.params:
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
@@ -349,7 +376,7 @@ def run(args) -> None:
     if args.frames < 1:
         raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=args.seed,
-                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground)
+                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground, wind=wind)
     if not args.headless:
         import moderngl_window as mglw
 

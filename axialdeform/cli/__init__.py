@@ -35,6 +35,58 @@ def _angle_range(text: str) -> tuple[float, float]:
     return (parts[0], parts[1])
 
 
+def _extension_args(args) -> dict:
+    """``--scale MIN:MAX``, ``--twist MAX``, ``--taper MAX`` as random_params keywords;
+    a bad value is a ParamError naming the argument and the expected range."""
+    from ..core.errors import ParamError
+
+    out = {}
+    if args.scale is not None:
+        parts = args.scale.replace(",", ":").split(":")
+        try:
+            lo, hi = (float(parts[0]), float(parts[-1])) if len(parts) in (1, 2) else (math.nan, math.nan)
+        except ValueError:
+            lo = hi = math.nan
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
+            raise ParamError(f"--scale: expected MIN:MAX with 0 < MIN <= MAX (s must be > 0), found {args.scale!r}")
+        out["scale"] = (lo, hi)
+    if args.twist is not None:
+        if not math.isfinite(args.twist):
+            raise ParamError(f"--twist: expected a finite number of radians, found {args.twist!r}")
+        out["twist"] = args.twist
+    if args.taper is not None:
+        if not (math.isfinite(args.taper) and args.taper < 1):
+            raise ParamError(f"--taper: expected a number < 1 (tp < 1: the tip keeps a size > 0), found {args.taper!r}")
+        out["taper"] = args.taper
+    return out
+
+
+def _add_wind_args(parser) -> None:
+    parser.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None, help=(
+        "wind (docs/wind.md): tip displacement as a fraction of L, gustiness, gusts per second, "
+        "distance between gust fronts (0: none)"))
+    parser.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
+    parser.add_argument("--time", type=float, default=0.0, help="seconds: the moment the wind is taken at (default: 0)")
+
+
+def _wind(args):
+    from ..core.errors import ParamError
+    from ..core.wind import Wind
+
+    if args.wind is None:
+        return None
+    try:
+        direction = tuple(float(x) for x in args.wind_dir.split(","))
+    except ValueError:
+        direction = ()
+    if len(direction) != 3:
+        raise ParamError(f"--wind-dir: expected X,Y,Z (three numbers), found {args.wind_dir!r}")
+    try:
+        return Wind.parse(args.wind, direction=direction)
+    except ParamError as exc:
+        raise ParamError(str(exc).replace("wind direction", "--wind-dir")) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
     from ..core.bake import ENGINES, MESH_FORMATS
@@ -67,6 +119,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
     r.add_argument("--yaw", type=_angle_range, default=(0.0, 2 * math.pi), help="MIN,MAX radians about the up axis")
     r.add_argument("--tilt", type=_angle_range, default=(-0.25, 0.25), help="MIN,MAX radians about the other two axes")
+    r.add_argument("--scale", metavar="MIN:MAX", default=None,
+                   help="extended instances: uniform scale s drawn in MIN..MAX (0 < MIN <= MAX)")
+    r.add_argument("--twist", metavar="MAX", type=float, default=None,
+                   help="extended instances: twist tw drawn in -MAX..MAX radians over the axis")
+    r.add_argument("--taper", metavar="MAX", type=float, default=None,
+                   help="extended instances: taper tp drawn between 0 and MAX (< 1)")
     r.add_argument("--quantize", action="store_true", help="write the compact 32-byte form (binary only)")
     r.add_argument("-o", "--output", required=True)
 
@@ -78,6 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--size", default="800x600", help="WIDTHxHEIGHT (default: %(default)s)")
     rd.add_argument("--up", choices=("x", "y", "z"), default="y")
     rd.add_argument("--ignore-mesh-mismatch", action="store_true", help="use PARAMS even if made for another mesh")
+    _add_wind_args(rd)
 
     b = sub.add_parser("bake", help="write every deformed instance out", description=(
         "Deform every instance and write OUT: an .npz with arrays 'positions' and 'normals', each "
@@ -89,6 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--engine", choices=ENGINES, default="cpu")
     b.add_argument("--format", choices=MESH_FORMATS, default="obj", help="mesh file type when OUT is a folder")
     b.add_argument("--ignore-mesh-mismatch", action="store_true")
+    _add_wind_args(b)
 
     i = sub.add_parser("info", help="describe a parameter file", description="Header, count and checksum verdict of PARAMS.")
     i.add_argument("params")
@@ -134,9 +194,10 @@ def cmd_random(args) -> None:
     from ..core.params import write_params
     from ..core.variation import random_params
 
+    extension = _extension_args(args)  # before any work: a bad range is the first thing said
     mesh = load_mesh(args.mesh)
     params = random_params(mesh, args.count, args.seed, bend=args.bend, placement=args.placement,
-                           spacing=args.spacing, up=args.up, yaw=args.yaw, tilt=args.tilt)
+                           spacing=args.spacing, up=args.up, yaw=args.yaw, tilt=args.tilt, **extension)
     path = write_params(args.output, params, mesh, quantize=args.quantize)
     print(f"wrote {path} ({len(params)} instances, {path.stat().st_size} bytes)")
 
@@ -153,8 +214,10 @@ def _load(args):
 def cmd_render(args) -> None:
     from ..gl.image import parse_size, render_image, save_png
 
+    wind = _wind(args)
     mesh, params = _load(args)
-    image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up)
+    image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up,
+                         **({"wind": wind, "time": args.time} if wind is not None else {}))
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(params)} instances, {args.mode}, {image.shape[1]}x{image.shape[0]})")
 
@@ -162,9 +225,10 @@ def cmd_render(args) -> None:
 def cmd_bake(args) -> None:
     from ..core.bake import bake, write_mesh_folder, write_npz
 
+    wind = _wind(args)
     mesh, params = _load(args)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar)
+        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)
@@ -204,7 +268,7 @@ def cmd_info(args) -> int | None:
         return None
     pf = read_param_file(path)
     print(f"file:      {path} ({pf.size} bytes)")
-    print(f"format:    text, {pf.count} lines of 16 numbers")
+    print(f"format:    text, {pf.count} lines of {pf.values.shape[1]} numbers")
     print(f"instances: {pf.count}" + (f" ({pf.size / pf.count:.1f} bytes each)" if pf.count else ""))
     print("axis:      not recorded (text form)")
     print("mesh:      not recorded (text form)")

@@ -18,12 +18,17 @@
   ``_AXIAL_ANGLES`` VEC3   ``rx ry rz`` (radians), the original angles
   ===============  ======  ===============================================
 
+  Extended instances (19 numbers) add ``SCALE`` (VEC3 float, ``(s, s, s)``:
+  the scale is uniform, applied in model space as glTF's T·R·S does) and
+  ``_AXIAL_TWIST_TAPER`` (VEC2 float, ``tw tp``); 16-number files are written
+  exactly as before.
+
   and the node's ``extras["axialdeform"]`` records the control axis
   (``index``, ``lo``, ``length``) and the SHA-256 fingerprint of the base
   mesh.  A viewer that knows the extension but not the deformation draws the
   undeformed base mesh at each instance's position and orientation; a viewer
   without the extension draws the base mesh once.  :func:`read_instanced_glb`
-  reads the 16 numbers back bit for bit.
+  reads the 16 (or 19) numbers back bit for bit.
 
 Coordinates are written as they are: glTF says +Y is up and units are
 metres, and nothing here re-orients or rescales the model.
@@ -39,7 +44,7 @@ import numpy as np
 
 from .atomic import atomic_write_bytes
 from .errors import GltfError
-from .params import ANGLES, POSITION, as_params
+from .params import ANGLES, EXTENDED_FIELDS, POSITION, SCALE, as_params
 
 __all__ = [
     "GltfError",
@@ -70,6 +75,8 @@ ATTRIBUTES = {
     "_AXIAL_D5": ("VEC2", (8, 9)),
     "_AXIAL_ANGLES": ("VEC3", (13, 14, 15)),
 }
+#: extended instances only: twist and taper (the scale goes to glTF's own SCALE)
+EXTENDED_ATTRIBUTES = {"_AXIAL_TWIST_TAPER": ("VEC2", (17, 18))}
 _FORMAT_VERSION = 1
 
 # glTF enums
@@ -301,13 +308,19 @@ def encode_instanced(mesh, params) -> bytes:
         "TRANSLATION": ("VEC3", params[:, POSITION]),
         "ROTATION": ("VEC4", quaternions_from_angles(params[:, ANGLES]).astype(np.float32)),
     }
-    columns.update({name: (kind, params[:, list(cols)]) for name, (kind, cols) in ATTRIBUTES.items()})
+    extra_attributes = EXTENDED_ATTRIBUTES if params.shape[1] == 19 else {}
+    if extra_attributes:
+        columns["SCALE"] = ("VEC3", np.repeat(params[:, SCALE, None], 3, axis=1))
+    columns.update({name: (kind, params[:, list(cols)])
+                    for name, (kind, cols) in {**ATTRIBUTES, **extra_attributes}.items()})
     attributes = {}
     for name, (kind, data) in columns.items():
         data = np.ascontiguousarray(data, dtype="<f4")
         attributes[name] = b.accessor(b.view(data), _FLOAT, n, kind, name=name)
     extras = _mesh_extras(mesh, n, "instanced")
-    extras["attributes"] = {name: _field_names(cols) for name, (_k, cols) in ATTRIBUTES.items()}
+    extras["attributes"] = {name: _field_names(cols) for name, (_k, cols) in {**ATTRIBUTES, **extra_attributes}.items()}
+    if extra_attributes:
+        extras["attributes"]["SCALE"] = ["s", "s", "s"]
     b.gltf.nodes.append(g.Node(name="axialdeform instances", mesh=0,
                                extensions={INSTANCING: {"attributes": attributes}},
                                extras={EXTRAS_KEY: extras}))
@@ -318,9 +331,7 @@ def encode_instanced(mesh, params) -> bytes:
 
 
 def _field_names(cols) -> list[str]:
-    from .params import FIELDS
-
-    return [FIELDS[c] for c in cols]
+    return [EXTENDED_FIELDS[c] for c in cols]
 
 
 def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
@@ -381,8 +392,8 @@ def read_instanced_glb(path: str | os.PathLike):
     -------
     mesh : BaseMesh
         The base mesh (positions, normals, triangles exactly as written).
-    params : (n, 16) float32
-        The 16 numbers per instance, bit for bit as exported: offsets from
+    params : (n, 16) float32, or (n, 19) for extended instances
+        The numbers per instance, bit for bit as exported: offsets from
         ``_AXIAL_D12/_AXIAL_D34/_AXIAL_D5``, position from ``TRANSLATION``,
         angles from ``_AXIAL_ANGLES`` (or, if a file lacks it, from the
         ``ROTATION`` quaternion: same rotation, angles possibly different).
@@ -423,7 +434,20 @@ def read_instanced_glb(path: str | os.PathLike):
     if len(counts) != 1:
         raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
     n = counts.pop()
-    params = np.zeros((n, 16), dtype=np.float32)
+    extended = "SCALE" in cols or "_AXIAL_TWIST_TAPER" in cols
+    params = np.zeros((n, 19 if extended else 16), dtype=np.float32)
+    if extended:
+        params[:, SCALE] = 1.0
+        for name, (kind, idx) in EXTENDED_ATTRIBUTES.items():
+            if name in cols:
+                if cols[name].shape[1] != _COMPONENTS[kind]:
+                    raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
+                params[:, list(idx)] = cols[name]
+        if "SCALE" in cols:
+            sc = cols["SCALE"]
+            if sc.shape[1] != 3 or not (sc == sc[:, :1]).all():
+                raise GltfError(f"{where}: SCALE: expected a uniform scale (VEC3 with three equal components) per instance")
+            params[:, SCALE] = sc[:, 0]
     for name, (kind, idx) in ATTRIBUTES.items():
         if name in cols:
             if cols[name].shape[1] != _COMPONENTS[kind]:

@@ -43,13 +43,19 @@ def instance_bounds(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     Returns centres (n, 3) and radii (n,) float64 (world units).  The bend
     moves no vertex further than the largest offset (the weights sum to 1),
     and a rotation keeps distances, so each sphere holds its whole instance.
+    Extended instances: twist keeps each vertex's distance from the axis line,
+    taper scales it by at most ``max(1, 1 - tp)``, and ``s`` scales the whole.
     """
     params = as_params(params).astype(np.float64)
     center = np.asarray(mesh.axis.center, dtype=np.float64)
     radius = float(np.linalg.norm(mesh.positions.astype(np.float64) - center, axis=1).max())
     bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1)
-    centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) + params[:, POSITION]
-    return centers, radius + bend
+    scale = np.ones(len(params))
+    grow = np.ones(len(params))
+    if params.shape[1] == 19:
+        scale, grow = params[:, 16], np.maximum(1.0, 1.0 - params[:, 18])
+    centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) * scale[:, None] + params[:, POSITION]
+    return centers, (radius * grow + bend) * scale
 
 
 def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35.0,

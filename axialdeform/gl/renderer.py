@@ -23,6 +23,7 @@ import numpy as np
 from .buffers import InstanceBuffer, MeshBuffers
 from .context import bind_framebuffer, release_framebuffer
 from ..core.errors import AxialDeformError, ParamError
+from ..core.wind import Wind
 from .shaders import build_program
 
 __all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS"]
@@ -32,6 +33,7 @@ _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
 #: default base colours (linear RGB) by bundled mesh name
 DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
 _CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
+_KEEP = object()  # render(wind=...) not given: keep the renderer's wind
 
 
 class AxialRenderer:
@@ -44,7 +46,8 @@ class AxialRenderer:
     mesh : BaseMesh
         The base mesh.
     params : (n, 16) float32, optional
-        The 16 numbers per instance.
+        The 16 numbers per instance, or (n, 19): extended instances (scale,
+        twist, taper after the 16).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
     bend : bool
@@ -64,10 +67,20 @@ class AxialRenderer:
         draws set ``ctx.front_face`` (``"ccw"``; ``"cw"`` for a mirroring
         camera, such as a reflection pass) and ``ctx.cull_face = "back"``,
         and leave ``CULL_FACE`` disabled afterwards.
+    extended : bool or None
+        Store 19 numbers per instance (``AXIAL_EXTENDED``: 76 bytes, 40
+        quantized).  ``None`` (the default): exactly when ``params`` has 19
+        columns.  An extended renderer takes 16-number parameters too (as
+        ``s = 1, tw = 0, tp = 0``); a 16-number one refuses 19.
+    wind : Wind or None
+        The wind drawn (and captured) from now on; see :attr:`wind` and
+        :attr:`time`.  It moves control points in the vertex shader from
+        uniforms alone: animating it writes no buffer.
     """
 
     def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
-                 quantized: bool = False, cull_back_faces: bool | None = None):
+                 quantized: bool = False, cull_back_faces: bool | None = None, extended: bool | None = None,
+                 wind: Wind | None = None):
         self.ctx = ctx
         self.mesh = mesh
         self.bend = bend
@@ -78,12 +91,21 @@ class AxialRenderer:
         defines = {} if bend else {"AXIAL_NO_BEND": 1}
         if self.quantized:
             defines["AXIAL_QUANTIZED"] = 1
+        if extended is None:
+            extended = params is not None and np.shape(params)[-1] == 19
+        self.extended = bool(extended)
+        if self.extended:
+            defines["AXIAL_EXTENDED"] = 1
         self._defines = defines
+        #: the wind (:class:`axialdeform.Wind`) or None (still); set it any time
+        self.wind = wind
+        #: seconds: the time the wind is drawn at (``render(time=...)`` sets it)
+        self.time = 0.0
         try:
             self.program = build_program(ctx, "scene.vert", "scene.frag", defines=defines)
             self._objects.append(self.program)
             self.mesh_buffers = MeshBuffers(ctx, mesh)
-            self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized)
+            self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized, extended=self.extended)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
             self._vao_edges = self._vertex_array(self.program, self.mesh_buffers.edges)
         except BaseException:
@@ -105,16 +127,37 @@ class AxialRenderer:
 
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
-        for name, value in (("u_axis", axis.index), ("u_lo", axis.lo), ("u_len", axis.length)):
+        i, j = axis.perpendicular
+        center = (axis.center[i], axis.center[j])
+        for name, value in (("u_axis", axis.index), ("u_lo", axis.lo), ("u_len", axis.length), ("u_center", center),
+                            ("u_instance_base", 0), ("u_wind_strength", 0.0)):
             if name in program:
                 program[name].value = value
         self._set_quant_uniforms(program)
 
+    def _set_wind_uniforms(self, program, wind, time) -> None:
+        """The wind's uniforms (strength 0: still); no buffer is written."""
+        if "u_wind_strength" not in program:  # the linker removed it: no bend (AXIAL_NO_BEND)
+            return
+        if wind is None or wind.strength == 0:
+            program["u_wind_strength"].value = 0.0
+            return
+        if not isinstance(wind, Wind):
+            raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
+        program["u_wind_strength"].value = float(wind.strength)
+        for name, value in (("u_wind_dir", tuple(wind.unit_direction)), ("u_wind_gust", float(wind.gustiness)),
+                            ("u_wind_cycles", tuple(wind.cycles(time))), ("u_wind_wavenumber", wind.wavenumber)):
+            if name in program:
+                program[name].value = value
+
     def _set_quant_uniforms(self, program) -> None:
         """The per-column decode table of a quantized instance buffer (no-op otherwise)."""
         if "u_qmin" in program:
-            program["u_qmin"].write(self.instances.qmin.astype("f4").tobytes())
-            program["u_qstep"].write(self.instances.qstep.astype("f4").tobytes())
+            program["u_qmin"].write(self.instances.qmin[:16].astype("f4").tobytes())
+            program["u_qstep"].write(self.instances.qstep[:16].astype("f4").tobytes())
+        if "u_qmin_extra" in program:
+            program["u_qmin_extra"].value = tuple(float(x) for x in self.instances.qmin[16:19])
+            program["u_qstep_extra"].value = tuple(float(x) for x in self.instances.qstep[16:19])
 
     def _refresh_quant_uniforms(self) -> None:
         if not self.quantized:
@@ -186,12 +229,16 @@ class AxialRenderer:
 
     # ------------------------------------------------------------ drawing
     def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
-               color=None, line_color=None, ambient: float = 0.35) -> None:
+               color=None, line_color=None, ambient: float = 0.35, time: float | None = None,
+               wind=_KEEP) -> None:
         """Draw every instance into the currently bound framebuffer, in one draw call.
 
         view, projection : (4, 4) pyrr-layout matrices.
         mode : ``"solid"`` (analytic normals), ``"flat"`` (face normals of the
         deformed triangles) or ``"wireframe"`` (the mesh's edges as lines).
+        time : seconds; sets :attr:`time` (the wind's clock).
+        wind : a :class:`axialdeform.Wind` or None; sets :attr:`wind`.
+        Animating the wind sets uniforms only: no buffer is written.
         """
         import moderngl
 
@@ -206,8 +253,13 @@ class AxialRenderer:
                              "call set_tint with one colour per instance (or None)")
         prog = self._tint[0] if tinted else self.program
         vao_edges, vao_triangles = (self._tint[2], self._tint[1]) if tinted else (self._vao_edges, self._vao_triangles)
+        if time is not None:
+            self.time = float(time)
+        if wind is not _KEEP:
+            self.wind = wind
         prog["u_view"].write(view.tobytes())
         prog["u_proj"].write(projection.tobytes())
+        self._set_wind_uniforms(prog, self.wind, self.time)
         uniforms = {
             "u_mode": _MODE_INDEX[mode],
             "u_color": tuple(color or self.color),
@@ -253,13 +305,15 @@ class AxialRenderer:
             self.ctx.disable(moderngl.CULL_FACE)
 
     # ------------------------------------------------------------ capture
-    def capture(self, start: int = 0, count: int | None = None, progress=None) -> tuple[np.ndarray, np.ndarray]:
+    def capture(self, start: int = 0, count: int | None = None, progress=None, *, time: float | None = None,
+                wind=_KEEP) -> tuple[np.ndarray, np.ndarray]:
         """World positions and normals as the GPU computes them, by transform
         feedback of the drawing vertex shader.
 
         Returns two ``(count, vertices, 3) float32`` arrays in the base mesh's
         vertex order, for instances ``start .. start + count - 1``.
         ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
+        ``time``, ``wind``: as :meth:`render` (default: the renderer's own).
         """
         import moderngl
 
@@ -275,7 +329,7 @@ class AxialRenderer:
             prog = build_program(self.ctx, "scene.vert", defines=dict(self._defines),
                                  varyings=("v_world", "v_normal"))
             self._set_axis_uniforms(prog)
-            scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized)
+            scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized, extended=self.extended)
             vao = self.ctx.vertex_array(prog, [self.mesh_buffers.content(prog), scratch.content(prog)])
             output = self.ctx.buffer(reserve=chunk * per_instance)
             # a draw needs a complete framebuffer even with rasterization
@@ -284,6 +338,7 @@ class AxialRenderer:
             fbo = self.ctx.framebuffer(color)
             self._capture = (prog, vao, scratch, output, fbo, color)
         prog, vao, scratch, output, fbo, _ = self._capture
+        self._set_wind_uniforms(prog, self.wind if wind is _KEEP else wind, self.time if time is None else float(time))
         out = np.empty((count, v, 6), dtype=np.float32)
         previous = self.ctx.fbo
         fbo.use()
@@ -293,6 +348,8 @@ class AxialRenderer:
                 rec = self.instances.record_bytes
                 self.ctx.copy_buffer(scratch.buffer, self.instances.buffer, size=k * rec, read_offset=(start + a) * rec)
                 scratch.count = k
+                if "u_instance_base" in prog:  # the wind's per-instance phase follows the instance's index
+                    prog["u_instance_base"].value = start + a
                 vao.transform(output, mode=moderngl.POINTS, vertices=v, instances=k)
                 out[a : a + k] = np.frombuffer(output.read(size=k * per_instance), dtype="f4").reshape(k, v, 6)
                 if progress is not None:
