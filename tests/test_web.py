@@ -42,6 +42,8 @@ def test_page_shaders_hold_the_package_deformation_verbatim():
         assert "axial_world(" in vs.split(axial)[1]  # scene.vert calls it after the include
         assert shaders[variant]["fragment"].startswith("#version 300 es")
         assert "#version 330" not in vs + shaders[variant]["fragment"]
+    for variant in ("float_extended", "quantized_extended"):
+        assert axial in shaders[variant]["vertex"] and "#define AXIAL_EXTENDED 1" in shaders[variant]["vertex"]
     assert "#define AXIAL_QUANTIZED 1" in shaders["quantized"]["vertex"]
     assert "AXIAL_QUANTIZED 1" not in shaders["float"]["vertex"]
 
@@ -392,6 +394,29 @@ def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
         if score < 0.95:
             save_png(tmp_path / "page.png", shot)
         assert score >= 0.95, f"IoU {score:.3f}; see {tmp_path}"
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("quantize", [True, False])
+def test_extended_instances_match_render(browser, tmp_path, quantize):
+    """19-number instances (scale, twist, taper; .adp version 2) in the page."""
+    mesh = ad.load_mesh("stone")
+    params = ad.random_params(mesh, 700, seed=8, bend=0.12, placement="disc", scale=0.5, twist=1.2, taper=0.4)
+    assert params.shape == (700, 19)
+    adp = tmp_path / "ext.adp"
+    ad.write_params(adp, params, mesh)
+    out = tmp_path / "ext.html"
+    write_page(out, build_scene(mesh, ad.read_params(adp, mesh), size=SIZE, quantize=quantize))
+    assert int.from_bytes(base64.b64decode(out.read_text(encoding="utf-8").split('id="axd-params">', 1)[1]
+                                           .split("<", 1)[0])[8:10], "little") == 2
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 700, v.state
+        assert iou(v.silhouette(), render, BACKGROUND) >= 0.95
         assert v.errors == []
     finally:
         v.close()

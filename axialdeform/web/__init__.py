@@ -88,11 +88,14 @@ def to_glsl_es(source: str) -> str:
 def page_shaders() -> dict:
     """The page's shaders, assembled from ``glsl/scene.vert`` / ``scene.frag``
     (which include ``axial.glsl``, ``quantized.glsl`` and ``lighting.glsl``):
-    ``{"float": {"vertex", "fragment"}, "quantized": {...}}``."""
+    ``{"float": {"vertex", "fragment"}, "quantized": ..., "float_extended": ...,
+    "quantized_extended": ...}`` (``_extended``: 19-number instances, ``AXIAL_EXTENDED``)."""
     from ..gl.shaders import assemble
 
     out = {}
-    for variant, defines in (("float", {}), ("quantized", {"AXIAL_QUANTIZED": 1})):
+    variants = (("float", {}), ("quantized", {"AXIAL_QUANTIZED": 1}),
+                ("float_extended", {"AXIAL_EXTENDED": 1}), ("quantized_extended", {"AXIAL_QUANTIZED": 1, "AXIAL_EXTENDED": 1}))
+    for variant, defines in variants:
         out[variant] = {stage: to_glsl_es(assemble(name, defines).source)
                         for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
     return out
