@@ -420,3 +420,14 @@ def test_extended_instances_match_render(browser, tmp_path, quantize):
         assert v.errors == []
     finally:
         v.close()
+
+
+@pytest.mark.slow
+def test_folder_page_from_disk_says_it_needs_a_server(browser, scene_files):
+    v = Visit(browser, (scene_files["base"] / "site ö" / "index.html").as_uri())
+    try:
+        assert v.state["ready"] is False and "file://" in v.state["error"], v.state
+        assert "--serve" in v.page.locator(".axd-message").inner_text()
+        assert v.page.locator("canvas").count() == 0
+    finally:
+        v.close()
