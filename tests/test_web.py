@@ -75,6 +75,13 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
         "https://threejs.org", "")  # nothing fetched from the network
 
 
+def test_build_scene_refuses_bad_options(stone):
+    params = ad.random_params(stone, 3, seed=1)
+    for kwargs, words in (({"size": (0, 10)}, "size"), ({"mode": "wireframe"}, "mode"), ({"up": "w"}, "up")):
+        with pytest.raises(ad.AxialDeformError, match=words):
+            build_scene(stone, params, **kwargs)
+
+
 def test_vendored_three_is_the_pinned_version():
     assert vendor_file("VERSION").decode().strip() == THREE_VERSION
     assert f"REVISION = '{THREE_VERSION.split('.')[1]}'" in vendor_file("three.module.min.js").decode()[:200000] \

@@ -144,6 +144,8 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
     if up not in UP_VECTORS:
         raise AxialDeformError(f"up: expected x, y or z, found {up!r}")
     w, h = (int(x) for x in size)
+    if not (0 < w <= 16384 and 0 < h <= 16384):
+        raise AxialDeformError(f"size: expected 1..16384 pixels each way, found {w}x{h}")
     params = as_params(params)
     cam = frame_instances(mesh, params, w / h, up=up)
     d = _render_defaults()
