@@ -250,7 +250,8 @@ def _corrupt(kind: str, good: bytes) -> bytes:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("kind, words", [("truncated", "truncated"), ("checksum", "checksum: wrong CRC-32"),
-                                         ("other mesh", "made for a different base mesh")])
+                                         ("other mesh", "made for a different base mesh"),
+                                         ("other glb", "not the base mesh this page was exported with")])
 def test_bad_parameter_file_shows_why_and_draws_nothing(browser, served, scene_files, kind, words):
     from urllib.parse import quote
 
@@ -259,12 +260,18 @@ def test_bad_parameter_file_shows_why_and_draws_nothing(browser, served, scene_f
     if bad_dir.exists():
         shutil.rmtree(bad_dir)
     shutil.copytree(site, bad_dir)
-    (bad_dir / PARAMS_FILE).write_bytes(_corrupt(kind, (site / PARAMS_FILE).read_bytes()))
+    if kind == "other glb":  # the mesh file swapped: the browser hashes the GLB (WebCrypto)
+        from axialdeform.core.export import encode_base_mesh
+
+        (bad_dir / "mesh.glb").write_bytes(encode_base_mesh(ad.load_mesh("leaf")))
+    else:
+        (bad_dir / PARAMS_FILE).write_bytes(_corrupt(kind, (site / PARAMS_FILE).read_bytes()))
     v = Visit(browser, served + quote(f"bad {kind}") + "/index.html")
     try:
         assert v.state["ready"] is False and words in v.state["error"], v.state
         message = v.page.locator(".axd-message")
-        assert message.is_visible() and words in message.inner_text() and PARAMS_FILE in message.inner_text()
+        name = "mesh.glb" if kind == "other glb" else PARAMS_FILE
+        assert message.is_visible() and words in message.inner_text() and name in message.inner_text()
         assert v.page.locator("canvas").count() == 0  # nothing drawn, nothing wrong drawn
     finally:
         v.close()
