@@ -326,3 +326,46 @@ def test_fit_extended_recovers_scale_twist_taper(stone, tmp_path):
     proc = _run("fit", "stone", folder, "-o", out, "--extended")
     assert proc.returncode == 0, proc.stderr
     np.testing.assert_allclose(ad.read_params(out, stone)[:, 16:], p[:, 16:], atol=1e-4)
+
+
+# ---------------------------------------------------------------- golden bytes of the 16-number forms
+
+#: sha256 of the three forms of _golden_values(), written by the code BEFORE the extension
+#: (commit 50bd219): 16-number files must stay byte-identical
+GOLDEN_16 = {
+    "float32": (548, "6b9762f3296c124f98818f5b5077a0d0b762cd7c885f71e20df3441ebacc3dab"),
+    "quantized": (452, "8ff252ddb801d9859f65b12408748404f7004415e7157acc47b820695d5974c6"),
+    "text": (1314, "25878adbbf71929152ff897672eafda7d7802aa4253fbcb62064ef83b18faf13"),
+}
+
+
+def _golden_values():
+    v = (np.arange(7 * 16, dtype=np.float64).reshape(7, 16) * 0.37 - 11.0).astype(np.float32)
+    v[:, 13:] = np.sin(v[:, 13:])
+    return v
+
+
+def _forms(values):
+    from axialdeform.core import params as P
+    from axialdeform.core.axis import ControlAxis
+
+    ax, fp = ControlAxis(1, -0.25, 2.5), bytes(range(32))
+    return {"float32": P.encode_binary(values, axis=ax, mesh_fingerprint=fp),
+            "quantized": P.encode_binary(values, axis=ax, mesh_fingerprint=fp, quantize=True),
+            "text": P.format_text(values, "golden").encode()}
+
+
+def test_16_number_files_are_byte_identical_to_before_the_extension():
+    import hashlib
+
+    from axialdeform.core import params as P
+
+    values = _golden_values()
+    for name, data in _forms(values).items():
+        assert (len(data), hashlib.sha256(data).hexdigest()) == GOLDEN_16[name], name
+    back = P.decode_binary(_forms(values)["float32"]).values
+    np.testing.assert_array_equal(back, values)
+    # the same numbers as extended instances are a different (version 2) file that decodes to the same shapes
+    ext = _forms(extend_params(values))
+    assert P.read_binary_header(ext["float32"]).version == 2 and len(ext["float32"]) == 96 + 7 * 76 + 4
+    np.testing.assert_array_equal(P.decode_binary(ext["float32"]).values[:, :16], values)

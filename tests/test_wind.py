@@ -164,3 +164,16 @@ def test_viewer_animates_the_wind_and_v_toggles_it(leaf):
     finally:
         v.release()
         v.wnd.destroy()
+
+
+def test_instance_bounds_hold_the_windy_instances(leaf):
+    from axialdeform.gl.camera import instance_bounds
+
+    p = blades(leaf, n=80)
+    centers, radii = instance_bounds(leaf, p, wind=WIND)
+    for time in (0.0, 0.9, 2.7, 13.1):
+        pos = ad.bake(leaf, p, "cpu", wind=WIND, time=time)[0]
+        dist = np.linalg.norm(pos - centers[:, None], axis=-1).max(axis=1)
+        assert (dist <= radii * (1 + 1e-6)).all()
+    still_centers, still_radii = instance_bounds(leaf, p)
+    assert (radii > still_radii).all()

@@ -221,13 +221,13 @@ def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
         if not stripped or stripped.startswith("#"):
             continue
         tokens = [tok for tok in re.split(r"[,\s]+", stripped) if tok]
+        if len(tokens) not in WIDTHS:
+            raise ParamFileError(f"{name}: line {lineno}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances)")
         if rows and len(tokens) != len(rows[0]):
             raise ParamFileError(
                 f"{name}: line {lineno}: expected {len(rows[0])} numbers like line {linenos[0]}, found {len(tokens)} "
                 "(a file holds 16 numbers on every line, or 19 on every line)"
             )
-        if len(tokens) not in WIDTHS:
-            raise ParamFileError(f"{name}: line {lineno}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances)")
         rows.append(tokens)
         linenos.append(lineno)
     if not rows:

@@ -37,7 +37,7 @@ class Camera:
         return pyrr.matrix44.create_perspective_projection(self.fovy, aspect, self.near, self.far, dtype=np.float32)
 
 
-def instance_bounds(mesh, params) -> tuple[np.ndarray, np.ndarray]:
+def instance_bounds(mesh, params, wind=None) -> tuple[np.ndarray, np.ndarray]:
     """Bounding spheres of the deformed instances, without deforming them.
 
     Returns centres (n, 3) and radii (n,) float64 (world units).  The bend
@@ -45,11 +45,16 @@ def instance_bounds(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     and a rotation keeps distances, so each sphere holds its whole instance.
     Extended instances: twist keeps each vertex's distance from the axis line,
     taper scales it by at most ``max(1, 1 - tp)``, and ``s`` scales the whole.
+    With a ``wind`` (:class:`axialdeform.Wind`) the spheres hold the instances
+    at any time: the wind moves a control point by at most
+    ``strength · L · (1 + gustiness)`` (docs/wind.md).
     """
     params = as_params(params).astype(np.float64)
     center = np.asarray(mesh.axis.center, dtype=np.float64)
     radius = float(np.linalg.norm(mesh.positions.astype(np.float64) - center, axis=1).max())
     bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1)
+    if wind is not None:
+        bend = bend + wind.strength * mesh.axis.length * (1.0 + wind.gustiness)
     scale = np.ones(len(params))
     grow = np.ones(len(params))
     if params.shape[1] == 19:
