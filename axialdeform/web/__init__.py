@@ -34,7 +34,8 @@ from ..core.errors import AxialDeformError
 from ..core.export import encode_base_mesh
 from ..core.params import as_params, encode_binary
 
-__all__ = ["THREE_VERSION", "WebScene", "build_scene", "page_shaders", "to_glsl_es", "write_folder",
+__all__ = ["THREE_VERSION", "WebScene", "build_scene", "page_shaders", "to_glsl_es", "write_folder", "single_file_html",
+           "make_server", "scene_bytes",
            "write_single_file", "write_page", "vendor_file", "page_source"]
 
 #: the files of the vendored three.js, relative to ``web/vendor/``
