@@ -45,7 +45,7 @@ class SceneWidget(anywidget.AnyWidget):
 
         self._mesh = mesh if isinstance(mesh, BaseMesh) else load_mesh(mesh)
         self._quantize = bool(quantize)
-        scene = build_scene(self._mesh, params, size=size, up=up, quantize=quantize)
+        scene = build_scene(self._mesh, params, size=size, up=up, quantize=quantize, all_shaders=True)
         sources = {key: vendor_file(rel).decode("utf-8") for key, rel in VENDOR_FILES.items()}
         sources["app"] = page_source("app.js")
         super().__init__(config=scene.config, mesh_glb=scene.glb, params_adp=scene.adp, _sources=sources,

@@ -53,7 +53,10 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     scene = build_scene(stone, params, size=SIZE)
     index = write_page(tmp_path / "site", scene)
     config = json.loads((tmp_path / "site" / "scene.json").read_text(encoding="utf-8"))
-    assert config["shaders"] == page_shaders()
+    assert config["shaders"] == {"quantized": page_shaders()["quantized"]}  # the build these parameters need
+    assert build_scene(stone, params, quantize=False).config["shaders"] == {"float": page_shaders()["float"]}
+    assert set(build_scene(stone, params, all_shaders=True).config["shaders"]) == {
+        "float", "quantized", "float_extended", "quantized_extended"}
     assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["quantized"]["vertex"]
     adp = (tmp_path / "site" / PARAMS_FILE).read_bytes()
     assert adp == encode_binary(params, axis=stone.axis, mesh_fingerprint=stone.fingerprint, quantize=True)

@@ -129,13 +129,16 @@ class WebScene:
 
 
 def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "solid", quantize: bool = True,
-                title: str | None = None, adp: bytes | None = None) -> WebScene:
+                title: str | None = None, adp: bytes | None = None, all_shaders: bool = False) -> WebScene:
     """The page's data for ``mesh`` and ``params`` ((n, 16) float32).
 
     The camera is :func:`axialdeform.gl.camera.frame_instances` for the canvas
     ``size`` (width, height) -- the camera of ``axialdeform render`` at that
     size.  ``adp`` (bytes of a parameter file) is written as given instead of
-    encoding ``params`` (tests use it to ship a corrupt file).
+    encoding ``params`` (tests use it to ship a corrupt file).  The config
+    carries the shader build for these parameters (16 or 19 numbers, float32
+    or quantized); ``all_shaders`` carries all four (the widget, whose
+    parameters may change).
     """
     from ..gl.camera import UP_VECTORS, frame_instances
     from ..gl.renderer import DEFAULT_COLORS, _MODE_INDEX, _unit
@@ -151,6 +154,10 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
     cam = frame_instances(mesh, params, w / h, up=up)
     d = _render_defaults()
     axis = mesh.axis
+    shaders = page_shaders()
+    if not all_shaders:
+        key = ("quantized" if quantize else "float") + ("_extended" if params.shape[1] == 19 else "")
+        shaders = {key: shaders[key]}
     if adp is None:
         adp = encode_binary(params, axis=axis, mesh_fingerprint=mesh.fingerprint, quantize=quantize)
     config = {
@@ -175,7 +182,7 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
         "color": [float(x) for x in DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))],
         "line_color": [0.12, 0.14, 0.18],
         "three": _three_version(),
-        "shaders": page_shaders(),
+        "shaders": shaders,
     }
     return WebScene(config, encode_base_mesh(mesh), bytes(adp))
 
