@@ -92,6 +92,7 @@ def test_vendored_three_is_the_pinned_version():
     assert f"THREE_VERSION={THREE_VERSION}" in (ROOT / "tools" / "vendor_three.sh").read_text()
 
 
+@pytest.mark.slow
 def test_web_cli_errors_are_one_line(tmp_path):
     cmd = [sys.executable, "-m", "axialdeform", "web"]
     r = subprocess.run(cmd + ["stone", str(tmp_path / "missing.adp"), "-o", str(tmp_path / "x.html")],
