@@ -58,7 +58,7 @@ def run(args) -> None:
     port = server.server_address[1]
     if busy:
         print(f"port {args.port} is busy; using {port}", file=sys.stderr)
-    print(f"serving {page.parent} at http://127.0.0.1:{port}/{quote(page.name)}  (Ctrl-C to stop)", flush=True)
+    print(f"serving {page.parent.resolve()} at http://127.0.0.1:{port}/{quote(page.name)}  (Ctrl-C to stop)", flush=True)
     try:
         server.serve_forever()
     except KeyboardInterrupt:
