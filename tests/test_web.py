@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import base64
 import json
+import re
 import shutil
 import socket
 import subprocess
@@ -120,7 +121,7 @@ def test_serve_on_a_busy_port_picks_another(tmp_path):
         try:
             line = proc.stdout.readline()
             assert line.startswith("serving ") and "http://127.0.0.1:" in line, line + proc.stderr.read()
-            url = line.split(" at ", 1)[1].split()[0]
+            url = re.search(r"http://127\.0\.0\.1:\d+/\S*", line).group(0)
             assert f":{port}/" not in url
             assert urlopen(url, timeout=10).read() == b"<p>hi</p>"
         finally:
