@@ -259,6 +259,13 @@ def _run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
 
 
+def test_cli_time_without_wind_is_an_error(tmp_path):
+    proc = _run("bake", "leaf", "missing.adp", "-o", tmp_path / "x.npz", "--time", "2")
+    assert proc.returncode == 2 and proc.stderr.strip() == (
+        "axialdeform bake: error: --time: only meaningful with --wind (the wind is the only thing that moves with time)")
+    assert not (tmp_path / "x.npz").exists()
+
+
 @pytest.mark.parametrize("args,expected", [
     (("--scale", "0:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),
     (("--scale", "2:1"), r"--scale: expected MIN:MAX with 0 < MIN <= MAX"),

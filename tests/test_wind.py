@@ -136,8 +136,11 @@ def test_wind_parse_and_bad_values():
     np.testing.assert_array_equal(w.unit_direction, [0, 0, 1])
     with pytest.raises(ad.ParamError, match="--wind: gustiness: expected a finite number >= 0"):
         Wind.parse("0.2,-1")
-    with pytest.raises(ad.ParamError, match="wind direction"):
-        Wind(direction=(0, 0, 0))
+    for bad in ((0, 0, 0), (1, 2), "abc", (1, float("nan"), 0)):
+        with pytest.raises(ad.ParamError, match="wind direction"):
+            Wind(direction=bad)
+    with pytest.raises(ad.ParamError, match="wind strength"):
+        Wind(strength=float("inf"))
     with pytest.raises(ad.ParamError, match="time"):
         w.cycles(float("nan"))
 
@@ -167,7 +170,7 @@ def test_viewer_animates_the_wind_and_v_toggles_it(leaf):
 
 
 def test_instance_bounds_hold_the_windy_instances(leaf):
-    from axialdeform.gl.camera import instance_bounds
+    from axialdeform.core.bounds import instance_bounds
 
     p = blades(leaf, n=80)
     centers, radii = instance_bounds(leaf, p, wind=WIND)
@@ -177,3 +180,9 @@ def test_instance_bounds_hold_the_windy_instances(leaf):
         assert (dist <= radii * (1 + 1e-6)).all()
     still_centers, still_radii = instance_bounds(leaf, p)
     assert (radii > still_radii).all()
+
+
+def test_renderer_refuses_a_wind_that_is_not_a_wind(ctx, leaf):
+    with AxialRenderer(ctx, leaf, blades(leaf, n=3)) as r:
+        with pytest.raises(ad.ParamError, match="wind: expected an axialdeform.Wind"):
+            r.capture(wind=0.3)

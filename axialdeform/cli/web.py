@@ -16,15 +16,17 @@ def add_parser(subparsers) -> None:
         "Write MESH bent by PARAMS as a page that draws it in a browser with the package's own shader: "
         "OUT a folder (index.html + files, for a static server) or OUT.html (one self-contained file that "
         "works opened from disk). --serve serves the folder on 127.0.0.1 and prints the URL."))
-    w.add_argument("mesh", nargs="?", help="base mesh file, or 'stone' / 'leaf'")
-    w.add_argument("params", nargs="?", help="parameter file (.adp or text)")
-    w.add_argument("-o", "--output", required=True, help="folder, or a name ending in .html")
+    w.add_argument("mesh", nargs="?", help="base mesh file, or 'stone' / 'leaf' (default: none: serve an exported page)")
+    w.add_argument("params", nargs="?", help="parameter file, .adp or text (default: none: serve an exported page)")
+    w.add_argument("-o", "--output", required=True, help="folder, or a name ending in .html (required)")
     w.add_argument("--size", default="800x600", help="canvas WIDTHxHEIGHT; the camera is render's at this size (default: %(default)s)")
-    w.add_argument("--up", choices=("x", "y", "z"), default="y")
-    w.add_argument("--mode", choices=("solid", "flat"), default="solid")
-    w.add_argument("--float32", action="store_true", help="ship the 64-byte float32 records instead of the quantized 32-byte form")
-    w.add_argument("--ignore-mesh-mismatch", action="store_true", help="use PARAMS even if made for another mesh")
-    w.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C")
+    w.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
+    w.add_argument("--mode", choices=("solid", "flat"), default="solid", help="shading (default: %(default)s)")
+    w.add_argument("--float32", action="store_true",
+                   help="ship the float32 records instead of the quantized form (default: quantized)")
+    w.add_argument("--ignore-mesh-mismatch", action="store_true",
+                   help="use PARAMS even if made for another mesh (default: refuse)")
+    w.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C (default: only write)")
     w.add_argument("--port", type=int, default=8000, help="port for --serve; a busy one is replaced by a free one (default: %(default)s)")
     w.set_defaults(handler=run)
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .axis import ControlAxis
-from .deform import rotation_matrices
+from .transforms import rotation_matrices
 from .errors import ParamError
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
@@ -59,7 +59,10 @@ class Wind:
     _unit: tuple = field(default=(1.0, 0.0, 0.0), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        d = np.asarray(self.direction, dtype=np.float64).reshape(-1)
+        try:
+            d = np.asarray(self.direction, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            d = np.zeros(0)
         norm = float(np.linalg.norm(d)) if d.size == 3 and np.isfinite(d).all() else 0.0
         if not norm > 0:
             raise ParamError(f"wind direction: expected 3 finite numbers, not all zero, found {self.direction!r}")

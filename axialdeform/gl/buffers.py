@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ParamError
-from ..core.params import as_params, dequantize_params, extend_params, quantize_params
+from ..core.params import as_params, dequantize_params, extend_params, quantize_params, quantize_with_table
 
 __all__ = [
     "MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES",
@@ -70,19 +70,25 @@ def _content(buffer, formats, names, program, per_instance=False):
 
 
 class MeshBuffers:
-    """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh."""
+    """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh.
 
-    def __init__(self, ctx, mesh):
+    ``indices`` names the index buffers to build: ``"triangles"`` and/or
+    ``"edges"`` (one left out stays ``None``)."""
+
+    def __init__(self, ctx, mesh, indices=("triangles", "edges")):
         self.ctx = ctx
         self.mesh = mesh
         self.vertex_count = mesh.vertex_count
+        self.triangles = self.edges = None
+        self._released = False
         interleaved = np.hstack([mesh.positions, mesh.normals]).astype("f4")
         self.vbo = ctx.buffer(interleaved.tobytes())
-        self.triangles = ctx.buffer(mesh.faces.astype("u4").tobytes())
-        self.edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
+        if "triangles" in indices:
+            self.triangles = ctx.buffer(mesh.faces.astype("u4").tobytes())
+        if "edges" in indices:
+            self.edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
         self.triangle_indices = int(mesh.faces.size)
         self.edge_indices = int(mesh.edges.size)
-        self._released = False
 
     def content(self, program):
         return _content(self.vbo, ("3f", "3f"), ("in_position", "in_normal"), program)
@@ -92,7 +98,8 @@ class MeshBuffers:
             return
         self._released = True
         for b in (self.vbo, self.triangles, self.edges):
-            b.release()
+            if b is not None:
+                b.release()
 
 
 class InstanceBuffer:
@@ -156,21 +163,11 @@ class InstanceBuffer:
         self.qmin, self.qstep, q = quantize_params(values)
         return self._pack_q(q)
 
-    def _encode_part(self, values: np.ndarray) -> bytes:
+    def _encode_part(self, values: np.ndarray, setter: str = "set()", name: str = "update") -> bytes:
         """Encode with the current table; values outside its range are refused."""
         if not self.quantized:
             return values.tobytes()
-        v = values.astype(np.float64)
-        lo, step = self.qmin.astype(np.float64), self.qstep.astype(np.float64)
-        q = np.rint((v - lo) / np.where(step > 0, step, 1.0))
-        fits = (q >= 0) & (q <= 65535) & ((step > 0) | (v == lo))
-        if not fits.all():
-            row, col = (int(x) for x in np.argwhere(~fits)[0])
-            raise ParamError(
-                f"update: instance {row}, field {col}: {v[row, col]:.9g} is outside the quantized range "
-                f"{lo[col]:.9g}..{lo[col] + 65535 * step[col]:.9g} of the buffer; "
-                "expected values inside it (call set() with every instance to re-quantize)"
-            )
+        q = quantize_with_table(values, self.qmin, self.qstep, name=name, setter=setter)
         return self._pack_q(q)
 
     @property
@@ -198,17 +195,20 @@ class InstanceBuffer:
         if self.count:
             self.buffer.write(self._encode_all(values))
 
-    def update(self, params, start: int = 0) -> None:
-        """Overwrite instances ``start .. start + len(params) - 1`` in place."""
+    def update(self, params, start: int = 0, *, setter: str = "set()", name: str = "update") -> None:
+        """Overwrite instances ``start .. start + len(params) - 1`` in place.
+
+        name, setter : how error messages name this call and the one that
+        replaces every instance (a wrapper such as ``AxialRenderer`` passes its own)."""
         values = self._fit(as_params(params))
         start = int(start)
         if start < 0 or start + len(values) > self.count:
             raise ParamError(
-                f"update: instances {start}..{start + len(values) - 1} do not fit in the {self.count} instances drawn; "
-                "expected 0 <= start and start + len(params) <= count (use set() to change the count)"
+                f"{name}: instances {start}..{start + len(values) - 1} do not fit in the {self.count} instances drawn; "
+                f"expected 0 <= start and start + len(params) <= count (use {setter} to change the count)"
             )
         if len(values):
-            self.buffer.write(self._encode_part(values), offset=start * self.record_bytes)
+            self.buffer.write(self._encode_part(values, setter, name), offset=start * self.record_bytes)
 
     def read(self) -> np.ndarray:
         """The parameters on the GPU, ``(count, 16)`` (extended: ``(count, 19)``)

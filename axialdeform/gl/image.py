@@ -10,7 +10,7 @@ import numpy as np
 from ..core.atomic import atomic_path
 from .camera import UP_VECTORS, Camera, frame_instances
 from .context import Offscreen, create_context
-from ..core.errors import AxialDeformError
+from ..core.errors import ArgumentError
 from .renderer import MODES, AxialRenderer
 
 __all__ = ["render_image", "save_png", "parse_size"]
@@ -21,9 +21,9 @@ def parse_size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(x) for x in str(text).lower().split("x"))
     except ValueError:
-        raise AxialDeformError(f"size: expected WIDTHxHEIGHT such as 800x600, found {text!r}") from None
+        raise ArgumentError(f"size: expected WIDTHxHEIGHT such as 800x600, found {text!r}") from None
     if not (0 < w <= 16384 and 0 < h <= 16384):
-        raise AxialDeformError(f"size: expected 1..16384 pixels each way, found {text!r}")
+        raise ArgumentError(f"size: expected 1..16384 pixels each way, found {text!r}")
     return w, h
 
 
@@ -41,11 +41,11 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
     modes = (modes,) if isinstance(modes, str) else tuple(modes)
     for m in modes:
         if m not in MODES:
-            raise AxialDeformError(f"mode: expected one of {', '.join(MODES)}, found {m!r}")
+            raise ArgumentError(f"mode: expected one of {', '.join(MODES)}, found {m!r}")
     own_ctx = ctx is None
     ctx = create_context() if own_ctx else ctx
     try:
-        w, h = size
+        w, h = parse_size(f"{size[0]}x{size[1]}")
         cam = camera or frame_instances(mesh, params, w / h, up=up)
         view, proj = cam.view(), cam.projection(w / h)
         r = renderer or AxialRenderer(ctx, mesh, params)

@@ -16,17 +16,20 @@ return); the shader computes ``clip = proj * view * world``.
 
 from __future__ import annotations
 
+import contextlib
 from contextlib import contextmanager
 
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers
-from .context import bind_framebuffer, release_framebuffer
-from ..core.errors import AxialDeformError, ParamError
+from .context import bind_framebuffer, release_framebuffer, require_framebuffer
+from ..core.errors import ArgumentError, AxialDeformError, ParamError
+from ..core.arrays import as_array
+from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from ..core.wind import Wind
 from .shaders import build_program
 
-__all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS"]
+__all__ = ["AxialRenderer", "BakedMeshes", "MODES", "DEFAULT_COLORS"]
 
 MODES = ("solid", "flat", "wireframe")
 _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
@@ -128,27 +131,23 @@ class AxialRenderer:
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
         i, j = axis.perpendicular
-        center = (axis.center[i], axis.center[j])
-        for name, value in (("u_axis", axis.index), ("u_lo", axis.lo), ("u_len", axis.length), ("u_center", center),
-                            ("u_instance_base", 0), ("u_wind_strength", 0.0)):
-            if name in program:
-                program[name].value = value
+        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length,
+                               "u_center": (axis.center[i], axis.center[j]), "u_instance_base": 0,
+                               "u_wind_strength": 0.0})
         self._set_quant_uniforms(program)
 
     def _set_wind_uniforms(self, program, wind, time) -> None:
         """The wind's uniforms (strength 0: still); no buffer is written."""
         if "u_wind_strength" not in program:  # the linker removed it: no bend (AXIAL_NO_BEND)
             return
+        if wind is not None and not isinstance(wind, Wind):
+            raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
         if wind is None or wind.strength == 0:
             program["u_wind_strength"].value = 0.0
             return
-        if not isinstance(wind, Wind):
-            raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
-        program["u_wind_strength"].value = float(wind.strength)
-        for name, value in (("u_wind_dir", tuple(wind.unit_direction)), ("u_wind_gust", float(wind.gustiness)),
-                            ("u_wind_cycles", tuple(wind.cycles(time))), ("u_wind_wavenumber", wind.wavenumber)):
-            if name in program:
-                program[name].value = value
+        set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),
+                               "u_wind_gust": float(wind.gustiness), "u_wind_cycles": tuple(wind.cycles(time)),
+                               "u_wind_wavenumber": float(wind.wavenumber)})
 
     def _set_quant_uniforms(self, program) -> None:
         """The per-column decode table of a quantized instance buffer (no-op otherwise)."""
@@ -189,7 +188,7 @@ class AxialRenderer:
     def update_params(self, params, start: int = 0) -> None:
         """Overwrite the instances ``start .. start + len(params) - 1`` in place."""
         self._check()
-        self.instances.update(params, start)
+        self.instances.update(params, start, setter="set_params()", name="update_params")
 
     # ------------------------------------------------------------ optional tint
     def set_tint(self, colors) -> None:
@@ -244,9 +243,9 @@ class AxialRenderer:
 
         self._check()
         if mode not in _MODE_INDEX:
-            raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
-        view = np.asarray(view, dtype=np.float32).reshape(4, 4)
-        projection = np.asarray(projection, dtype=np.float32).reshape(4, 4)
+            raise ArgumentError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
+        view, projection = camera_matrices(view, projection)
+        require_framebuffer(self.ctx, "AxialRenderer.render")
         tinted = self._tint_count is not None
         if tinted and self._tint_count != self.count:
             raise ParamError(f"tint: {self._tint_count} colours for {self.count} instances; "
@@ -257,21 +256,16 @@ class AxialRenderer:
             self.time = float(time)
         if wind is not _KEEP:
             self.wind = wind
-        prog["u_view"].write(view.tobytes())
-        prog["u_proj"].write(projection.tobytes())
+        set_camera_uniforms(prog, view, projection)
         self._set_wind_uniforms(prog, self.wind, self.time)
-        uniforms = {
+        set_uniforms(prog, {
             "u_mode": _MODE_INDEX[mode],
             "u_color": tuple(color or self.color),
             "u_line_color": tuple(line_color or self.line_color),
-            "u_light_dir": tuple(_unit(light_dir)),
-            "u_up": tuple(_unit(up)),
-            "u_eye": tuple(np.linalg.inv(view.astype(np.float64))[3, :3]),
+            "u_light_dir": tuple(_unit(light_dir, "light_dir")),
+            "u_up": tuple(_unit(up, "up")),
             "u_ambient": float(ambient),
-        }
-        for name, value in uniforms.items():
-            if name in prog:
-                prog[name].value = value
+        })
         if self.count == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
@@ -387,6 +381,83 @@ class AxialRenderer:
         self.release()
 
 
+class BakedMeshes:
+    """Meshes that are already deformed (``axialdeform bake`` output, or any
+    mesh files), each with its own vertex and index buffers and vertex
+    array, drawn one draw call each with the shading, uniforms and face
+    culling of an un-bent :class:`AxialRenderer` -- the thesis's "load every
+    one" method, drawn exactly like the instanced methods.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+    like : BaseMesh
+        A mesh whose name picks the colour and whose :attr:`BaseMesh.is_volume`
+        decides back-face culling (the base mesh the files were baked from).
+    mode : str
+        One of :data:`MODES`; only the index buffers this mode draws are made.
+    """
+
+    def __init__(self, ctx, like, mode: str = "solid", *, cull_back_faces: bool | None = None):
+        if mode not in _MODE_INDEX:
+            raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
+        self.ctx = ctx
+        self.mode = mode
+        self._items = []  # (MeshBuffers, vao, index count)
+        self._released = False
+        self.renderer = AxialRenderer(ctx, like, np.zeros((0, 16), np.float32), bend=False,
+                                      cull_back_faces=cull_back_faces)
+        self.cull_back_faces = self.renderer.cull_back_faces
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def add(self, mesh) -> None:
+        """Upload one deformed mesh (world positions and normals as they are)."""
+        if self._released:
+            raise AxialDeformError("these BakedMeshes were released; create new ones")
+        wire = self.mode == "wireframe"
+        buffers = MeshBuffers(self.ctx, mesh, indices=("edges",) if wire else ("triangles",))
+        try:
+            program = self.renderer.program
+            vao = self.ctx.vertex_array(program, [buffers.content(program)],
+                                        index_buffer=buffers.edges if wire else buffers.triangles,
+                                        index_element_size=4)
+        except BaseException:
+            buffers.release()
+            raise
+        self._items.append((buffers, vao, buffers.edge_indices if wire else buffers.triangle_indices))
+
+    def render(self, view, projection, **options) -> None:
+        """Draw every mesh into the bound framebuffer (one draw call each)."""
+        import moderngl
+
+        self.renderer.render(view, projection, self.mode, **options)  # no instances: sets the uniforms only
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        wire = self.mode == "wireframe"
+        primitive = moderngl.LINES if wire else moderngl.TRIANGLES
+        with (contextlib.nullcontext() if wire else self.renderer.culling(view, projection)):
+            for _, vao, n in self._items:
+                vao.render(primitive, vertices=n)
+
+    def release(self) -> None:
+        """Free every GL object; safe to call twice."""
+        if self._released:
+            return
+        self._released = True
+        for buffers, vao, _ in self._items:
+            vao.release()
+            buffers.release()
+        self._items.clear()
+        self.renderer.release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
 def _mirrors(view, projection) -> bool:
     """True when ``projection * view`` flips handedness.  A camera that does
     not (``pyrr`` look-at + perspective or orthographic) has a negative
@@ -397,6 +468,6 @@ def _mirrors(view, projection) -> bool:
     return bool(det > 0.0)
 
 
-def _unit(v) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
+def _unit(v, name: str = "direction") -> np.ndarray:
+    v = as_array(v, (3,), name)
     return v / max(np.linalg.norm(v), 1e-12)

@@ -1,0 +1,139 @@
+"""Helpers shared by the sub-command modules: argument types, loading, progress bars."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+AXES = ("x", "y", "z")
+
+
+def angle_range(text: str) -> tuple[float, float]:
+    """``MIN,MAX`` radians (one number ``A`` means ``-A,A``)."""
+    try:
+        parts = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected MIN,MAX in radians, found {text!r}") from None
+    if len(parts) == 1:
+        return (-abs(parts[0]), abs(parts[0]))
+    if len(parts) != 2 or not all(math.isfinite(x) for x in parts):
+        raise argparse.ArgumentTypeError(f"expected MIN,MAX in radians, found {text!r}")
+    return (parts[0], parts[1])
+
+
+def vec3(text: str) -> tuple[float, float, float]:
+    """``X,Y,Z`` (three finite numbers)."""
+    try:
+        parts = [float(x) for x in text.split(",")]
+    except ValueError:
+        parts = []
+    if len(parts) != 3 or not all(math.isfinite(x) for x in parts):
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z (three numbers), found {text!r}")
+    return (parts[0], parts[1], parts[2])
+
+
+def fraction(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a fraction of L, found {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a finite fraction of L >= 0, found {text!r}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, found {text!r}")
+    return value
+
+
+def add_mesh_and_params(p) -> None:
+    """The MESH and PARAMS positional arguments of the commands that read both."""
+    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
+    p.add_argument("params", help="parameter file (.adp binary, .txt/.csv/.dat text)")
+
+
+def add_mesh_mismatch(p) -> None:
+    p.add_argument("--ignore-mesh-mismatch", action="store_true",
+                   help="use PARAMS even if made for another mesh (default: refuse)")
+
+
+def load(args):
+    """``(mesh, params)`` from ``args.mesh`` and ``args.params``."""
+    from ..core.mesh import load_mesh
+    from ..core.params import read_params
+
+    mesh = load_mesh(args.mesh)
+    params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+    return mesh, params
+
+
+def progress_bar(total: int, desc: str, unit: str = "inst", small: int = 2000):
+    """A tqdm bar on stderr (hidden for small jobs when stderr is not a terminal)."""
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit=unit, disable=total < small and not sys.stderr.isatty(), file=sys.stderr)
+
+
+def extension_args(args) -> dict:
+    """``--scale MIN:MAX``, ``--twist MAX``, ``--taper MAX`` as random_params keywords;
+    a bad value is a ParamError naming the argument and the expected range."""
+    from ..core.errors import ParamError
+
+    out = {}
+    if args.scale is not None:
+        parts = args.scale.replace(",", ":").split(":")
+        try:
+            lo, hi = (float(parts[0]), float(parts[-1])) if len(parts) in (1, 2) else (math.nan, math.nan)
+        except ValueError:
+            lo = hi = math.nan
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
+            raise ParamError(f"--scale: expected MIN:MAX with 0 < MIN <= MAX (s must be > 0), found {args.scale!r}")
+        out["scale"] = (lo, hi)
+    if args.twist is not None:
+        if not math.isfinite(args.twist):
+            raise ParamError(f"--twist: expected a finite number of radians, found {args.twist!r}")
+        out["twist"] = args.twist
+    if args.taper is not None:
+        if not (math.isfinite(args.taper) and args.taper < 1):
+            raise ParamError(f"--taper: expected a number < 1 (tp < 1: the tip keeps a size > 0), found {args.taper!r}")
+        out["taper"] = args.taper
+    return out
+
+
+def add_wind_args(parser) -> None:
+    parser.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None, help=(
+        "wind (docs/wind.md): tip displacement as a fraction of L, gustiness, gusts per second, "
+        "distance between gust fronts, 0 for none (default: no wind)"))
+    parser.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
+    parser.add_argument("--time", type=float, default=None, help="seconds: the moment the wind is taken at, with --wind (default: 0)")
+
+
+def wind_arg(args):
+    from ..core.errors import ParamError
+    from ..core.wind import Wind
+
+    if args.wind is None:
+        if args.time is not None:
+            raise ParamError("--time: only meaningful with --wind (the wind is the only thing that moves with time)")
+        return None
+    if args.time is None:
+        args.time = 0.0
+    elif not math.isfinite(args.time):
+        raise ParamError(f"--time: expected a finite number of seconds, found {args.time!r}")
+    try:
+        direction = tuple(float(x) for x in args.wind_dir.split(","))
+    except ValueError:
+        direction = ()
+    if len(direction) != 3:
+        raise ParamError(f"--wind-dir: expected X,Y,Z (three numbers), found {args.wind_dir!r}")
+    try:
+        return Wind.parse(args.wind, direction=direction)
+    except ParamError as exc:
+        raise ParamError(str(exc).replace("wind direction", "--wind-dir")) from None

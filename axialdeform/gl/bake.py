@@ -1,0 +1,39 @@
+"""Baking by either engine: the numpy reference (:func:`axialdeform.core.bake.bake_cpu`)
+or the GPU (transform feedback of the drawing vertex shader, :meth:`AxialRenderer.capture`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.bake import bake_cpu
+from ..core.errors import ArgumentError
+
+__all__ = ["bake", "ENGINES"]
+
+ENGINES = ("cpu", "gpu")
+
+
+def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, wind=None,
+         time: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
+    in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
+    or ``"gpu"`` (transform feedback of the drawing vertex shader; in ``ctx``,
+    or in a context made and released here).
+    ``params``: (n, 16) or (n, 19) (extended instances).
+    ``wind``: an :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
+    ``progress``: optional object with ``update(instances_done)`` (a tqdm bar)."""
+    if engine == "cpu":
+        return bake_cpu(mesh, params, progress=progress, wind=wind, time=time)
+    if engine != "gpu":
+        raise ArgumentError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
+    from .context import create_context
+    from .renderer import AxialRenderer
+
+    own = ctx is None
+    ctx = create_context() if own else ctx
+    try:
+        with AxialRenderer(ctx, mesh, params, wind=wind) as r:
+            return r.capture(progress=progress, time=time)
+    finally:
+        if own:
+            ctx.release()
