@@ -7,8 +7,8 @@ the reverse; ``tests/test_layers.py`` reads the imports and enforces it):
   deform (the CPU reference), fit, bake, export;
 * ``gl/``   -- moderngl: context, shaders (``glsl/``), buffers, renderer,
   ground, camera, image;
-* the application -- ``cli/`` (the ``axialdeform`` command), ``bench/`` and
-  ``viewer.py``.
+* the application -- ``cli/`` (the ``axialdeform`` command), ``bench/``,
+  ``viewer.py``, ``web/`` (the WebGL page) and ``widget.py`` (the notebook widget).
 """
 
 from .core.errors import (

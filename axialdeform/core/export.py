@@ -57,6 +57,7 @@ __all__ = [
     "export_glb",
     "export_baked",
     "export_instanced",
+    "encode_base_mesh",
     "read_instanced_glb",
     "quaternions_from_angles",
     "matrices_from_quaternions",
@@ -215,6 +216,26 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     path = check_glb_path(path)
     atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals))
     return path
+
+
+def encode_base_mesh(mesh) -> bytes:
+    """The GLB bytes of the base mesh alone (one mesh, one node): POSITION and
+    NORMAL float32 in the file's vertex order and its triangles, so the
+    positions and faces hash to :attr:`BaseMesh.fingerprint` again (what the
+    web page checks a parameter file against)."""
+    b = _Builder()
+    g = b.g
+    pos = b.accessor(b.view(mesh.positions.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
+                     bounds=mesh.positions, name="base_POSITION")
+    nrm = b.accessor(b.view(mesh.normals.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
+                     name="base_NORMAL")
+    idx = b.indices(mesh)
+    b.gltf.meshes.append(g.Mesh(name=str(mesh.name), primitives=[
+        g.Primitive(attributes=g.Attributes(POSITION=pos, NORMAL=nrm), indices=idx, mode=_TRIANGLES)]))
+    b.gltf.nodes.append(g.Node(name=str(mesh.name), mesh=0, extras={EXTRAS_KEY: _mesh_extras(mesh, 0, "base")}))
+    b.gltf.scenes.append(g.Scene(name="axialdeform base mesh", nodes=[0]))
+    b.gltf.scene = 0
+    return b.finish()
 
 
 def encode_instanced(mesh, params) -> bytes:
