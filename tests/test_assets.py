@@ -170,19 +170,38 @@ def test_gpu_capture_equals_cpu_for_every_part(ctx):
         assert np.abs(nrm[:, used] - cpu_nrm[:, used]).max() <= 1e-4, part.name
 
 
-def test_gpu_tangents_bend_by_the_jacobian(ctx):
+@pytest.mark.parametrize("form", ["16", "extended", "extended+wind"])
+def test_gpu_tangents_bend_by_the_jacobian(ctx, form):
     """axial_world_tangent (glsl/axial.glsl) against deform_tangents, and both
-    stay orthogonal to the bent normal (a tangent by J, a normal by cof(J))."""
+    stay orthogonal to the bent normal (a tangent by J, a normal by cof(J)),
+    for 16-number instances and for extended ones (scale, twist, taper), also
+    in the wind (which moves control points: the CPU side takes the moved ones)."""
+    from axialdeform.core.wind import Wind, apply_wind
     from axialdeform.gl.buffers import InstanceBuffer, MeshBuffers
     from axialdeform.gl.material import AppearanceBuffer
     from axialdeform.gl.shaders import build_program
+    from axialdeform.gl.uniforms import set_uniforms
 
     mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
-    params = ad.random_params(mesh, 16, seed=5, bend=0.3)
-    prog = build_program(ctx, "scene.vert", defines={"AXIAL_MATERIAL": 1}, varyings=("v_tangent",))
-    buffers, inst, look = MeshBuffers(ctx, mesh), InstanceBuffer(ctx, params), AppearanceBuffer(ctx, mesh)
-    for name, value in (("u_axis", mesh.axis.index), ("u_lo", mesh.axis.lo), ("u_len", mesh.axis.length)):
-        prog[name].value = value
+    extended = form != "16"
+    extra = dict(scale=(0.7, 1.3), twist=0.8, taper=0.5) if extended else {}
+    params = ad.random_params(mesh, 16, seed=5, bend=0.3, **extra)
+    assert params.shape[1] == (19 if extended else 16)
+    defines = {"AXIAL_MATERIAL": 1, **({"AXIAL_EXTENDED": 1} if extended else {})}
+    prog = build_program(ctx, "scene.vert", defines=defines, varyings=("v_tangent",))
+    buffers, look = MeshBuffers(ctx, mesh), AppearanceBuffer(ctx, mesh)
+    inst = InstanceBuffer(ctx, params, extended=extended)
+    i, j = mesh.axis.perpendicular
+    set_uniforms(prog, {"u_axis": mesh.axis.index, "u_lo": mesh.axis.lo, "u_len": mesh.axis.length,
+                        "u_center": (mesh.axis.center[i], mesh.axis.center[j]), "u_instance_base": 0,
+                        "u_wind_strength": 0.0})
+    wind, time = (Wind(direction=(1.0, 0.0, 0.5), strength=0.3, gustiness=0.5), 1.7) if "wind" in form else (None, 0.0)
+    if wind is not None:  # the uniforms AxialRenderer sets for a wind
+        prog["u_wind_strength"].value = wind.strength
+        prog["u_wind_dir"].value = tuple(wind.unit_direction)
+        prog["u_wind_gust"].value = wind.gustiness
+        prog["u_wind_cycles"].value = tuple(wind.cycles(time))
+        prog["u_wind_wavenumber"].value = wind.wavenumber
     vao = ctx.vertex_array(prog, [buffers.content(prog), inst.content(prog), look.content(prog)])
     out = ctx.buffer(reserve=len(params) * mesh.vertex_count * 16)
     color = ctx.renderbuffer((1, 1))
@@ -201,10 +220,12 @@ def test_gpu_tangents_bend_by_the_jacobian(ctx):
         obj.release()
     for obj in (buffers, inst, look):
         obj.release()
-    cpu = deform_tangents(mesh.axis, mesh.positions, mesh.tangents, params)
+    moved = apply_wind(wind, mesh.axis, params, time)
+    assert (wind is None) == np.array_equal(moved, params)
+    cpu = deform_tangents(mesh.axis, mesh.positions, mesh.tangents, moved)
     assert np.abs(gpu[..., :3] - cpu).max() < 1e-4
     assert np.array_equal(gpu[..., 3], np.broadcast_to(mesh.tangents[:, 3], gpu.shape[:2]))
-    _, normals = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
+    _, normals = ad.deform(mesh.axis, mesh.positions, mesh.normals, moved)
     base_dot = np.einsum("vi,vi->v", mesh.tangents[:, :3], mesh.normals)
     bent_dot = np.einsum("nvi,nvi->nv", cpu, normals)
     assert np.abs(bent_dot - base_dot).max() < 1e-3  # J t . cof(J) n / |..| keeps t.n = 0
@@ -467,3 +488,35 @@ def test_gltf_with_a_missing_or_fifo_image_still_loads(tmp_path):
     out = subprocess.run([sys.executable, "-W", "always", "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0 and out.stdout.strip() == "None", out.stderr
     assert "'pipe.png' (texture or material file) is not a regular file" in out.stderr
+
+
+@pytest.mark.slow
+def test_parts_draw_from_the_culled_instances(ctx):
+    """The cull pass runs once a frame and every part's instanced draw reads its
+    compacted output: with shadows, multisampling and hidden-line wireframe the
+    picture equals the unculled one pixel for pixel, with most instances dropped."""
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    assert len(mesh.parts) > 1
+    n, length = 40, mesh.axis.length
+    params = ad.random_params(mesh, n, seed=2, bend=0.2)
+    params[:, 10:13] = 0.0
+    params[:, 10] = np.arange(n) * 2.0 * length  # a row along x
+    cam = ad.Camera(eye=(2.0 * length, 0.5 * length, 6.0 * length), target=(2.0 * length, 0.5 * length, 0.0),
+                    fovy=35.0, near=0.01 * length, far=100.0 * length)
+    with ad.AxialRenderer(ctx, mesh, params) as culled, \
+            ad.AxialRenderer(ctx, mesh, params, culling=False) as full:
+        for mode in ("solid", "wireframe"):
+            a = ad.render_image(mesh, params, (96, 64), mode, ctx=ctx, camera=cam, renderer=full)
+            b = ad.render_image(mesh, params, (96, 64), mode, ctx=ctx, camera=cam, renderer=culled)
+            assert full.stats["visible"] == n and not full.stats["culling"]
+            assert culled.stats["culling"] and 0 < culled.stats["visible"] < n // 4, culled.stats
+            assert np.array_equal(a, b), (mode, int((a != b).any(axis=2).sum()))
+            assert len(np.unique(a.reshape(-1, 3), axis=0)) > 10  # something is drawn
+    assert ctx.error == "GL_NO_ERROR"
+
+
+def test_lod_of_a_mesh_with_parts_is_refused(ctx):
+    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    with pytest.raises(ad.ParamError, match="lod"):
+        ad.AxialRenderer(ctx, mesh, ad.random_params(mesh, 4, seed=1), lod=True)
+    assert ctx.error == "GL_NO_ERROR"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_mesh_and_params, add_mesh_mismatch, load, progress_bar
+from ._common import add_mesh_and_params, add_mesh_mismatch, add_wind_args, load, progress_bar, wind_arg
 
 
 def add_parser(sub) -> None:
@@ -20,6 +20,7 @@ def add_parser(sub) -> None:
     b.add_argument("--engine", choices=ENGINES, default="cpu", help="who deforms: numpy or the GPU (default: %(default)s)")
     b.add_argument("--format", choices=MESH_FORMATS, default="obj", help="mesh file type when OUT is a folder (default: %(default)s)")
     add_mesh_mismatch(b)
+    add_wind_args(b)
     b.set_defaults(handler=run)
 
 
@@ -27,9 +28,15 @@ def run(args) -> None:
     from ..core.bake import write_mesh_folder, write_npz
     from ..gl.bake import bake
 
+    from . import scenes
+
+    scene = scenes.scene_of(args)
+    if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
+        return scenes.bake(scene, args, progress_bar, wind_arg(args) if args.wind is not None else None)
+    wind = wind_arg(args)
     mesh, params = load(args)
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar)
+        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time or 0.0)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)

@@ -31,7 +31,8 @@ def parse_size(text: str) -> tuple[int, int]:
 
 def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, camera: Camera | None = None,
                  up: str = "y", samples: int = 4, background=(0.93, 0.94, 0.96), renderer=None,
-                 fast: bool = False, ground: bool | None = None, parts=None, hidden_line=None,
+                 fast: bool = False, ground: bool | None = None, shadow: bool | None = None, parts=None,
+                 hidden_line=None,
                  **render_options) -> np.ndarray:
     """Render all instances to an ``(height, width, 3) uint8`` image.
 
@@ -47,7 +48,7 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
     other) and hidden-line wireframes (lines of the front-most surface only).
     ``fast=True`` turns all of them off (no multisampling, no ground, no
     shadow, every edge drawn): what the benchmark times.  ``ground`` overrides
-    the ground alone, ``hidden_line`` the wireframe style (default ``"fill"``:
+    the ground alone, ``shadow`` the shadow map alone, ``hidden_line`` the wireframe style (default ``"fill"``:
     front-most edges over washed-out faces; ``True``: front-most edges only;
     ``False``: every edge; see :meth:`AxialRenderer.render`); ``parts``
     picks the base mesh's parts to draw.
@@ -64,12 +65,17 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
         view, proj = cam.view(), cam.projection(w / h)
         r = renderer or AxialRenderer(ctx, mesh, params, parts=parts)
         ground = (not fast) if ground is None else bool(ground)
+        shadowed = (not fast) if shadow is None else bool(shadow)
         plane = shadow = None
         light = render_options.get("light_dir", (0.35, 0.85, 0.4))
         try:
             if ground:
                 plane = GroundPlane(ctx, up=up).fit(mesh, params)
-            if not fast and r.count:
+            if "time" in render_options:  # the shadows bend in the same wind as the picture
+                r.time = float(render_options["time"])
+            if "wind" in render_options:
+                r.wind = render_options["wind"]
+            if shadowed and r.count:
                 extra = None
                 if plane is not None:  # the ground's centre part receives the shadows
                     extra = [[*plane.center, 0.5 * plane.radius]]

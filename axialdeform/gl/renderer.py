@@ -22,10 +22,13 @@ from contextlib import contextmanager
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers
+from .cull import CullPass
 from .context import bind_framebuffer, release_framebuffer, require_framebuffer
-from ..core.errors import ArgumentError, AxialDeformError, ParamError
+from ..core.bounds import base_radius, wind_reach
+from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.arrays import as_array
-from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
+from ..core.wind import Wind
+from .uniforms import camera_matrices, eye_position, set_camera_uniforms, set_uniforms
 from .material import AppearanceBuffer, GpuMaterials
 from .shaders import build_program
 
@@ -36,6 +39,7 @@ _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
 #: default base colours (linear RGB) by bundled mesh name
 DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
 _CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
+_KEEP = object()  # render(wind=...) not given: keep the renderer's wind
 
 
 class AxialRenderer:
@@ -48,7 +52,8 @@ class AxialRenderer:
     mesh : BaseMesh
         The base mesh.
     params : (n, 16) float32, optional
-        The 16 numbers per instance.
+        The 16 numbers per instance, or (n, 19): extended instances (scale,
+        twist, taper after the 16).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
     bend : bool
@@ -74,15 +79,50 @@ class AxialRenderer:
         :attr:`BaseMesh.parts`.  Every part is one instanced draw call over
         the same instance buffer, and all share the mesh's ONE control axis.
 
+    extended : bool or None
+        Store 19 numbers per instance (``AXIAL_EXTENDED``: 76 bytes, 40
+        quantized).  ``None`` (the default): exactly when ``params`` has 19
+        columns.  An extended renderer takes 16-number parameters too (as
+        ``s = 1, tw = 0, tp = 0``); a 16-number one refuses 19.
+    wind : Wind or None
+        The wind drawn (and captured) from now on; see :attr:`wind` and
+        :attr:`time`.  It moves control points in the vertex shader from
+        uniforms alone: animating it writes no buffer.
+    culling : bool
+        Per-instance frustum culling on the GPU (:mod:`axialdeform.gl.cull`):
+        a transform-feedback pass keeps only the instances whose bounding
+        sphere reaches the view, and the draw reads those.  On by default: it
+        cannot change the picture (an instance is dropped only when every one
+        of its vertices lies outside one frustum plane).
+    lod : bool
+        Draw each instance with one of up to four levels of detail of the
+        base mesh (:func:`axialdeform.core.lod.build_lod_levels`), the
+        coarsest whose geometric error projects to at most ``lod_error``
+        pixels; one draw per level (plain switches, no dithering).  Changes
+        pixels, so off by default.  Levels are of the whole mesh: a mesh
+        with parts or appearance (UVs, colours, materials) refuses ``lod=True``
+        with a :class:`ParamError`.
+    lod_error : float
+        Allowed screen-space error of a level in pixels (> 0; default 1).
+
     A mesh with UVs, vertex colours, several parts or a material
     (:attr:`BaseMesh.has_appearance`) is drawn with ``AXIAL_MATERIAL``:
     textures (sRGB), vertex colours, ``MASK`` cut-outs, ``BLEND`` parts after
     the opaque ones (unsorted, without depth writes), normal maps and
     two-sided lighting where the material is double-sided.
+    :attr:`stats` describes the last :meth:`render`: instances submitted,
+    visible (drawn), per LOD level, and vertices processed.
     """
 
     def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
-                 quantized: bool = False, cull_back_faces: bool | None = None, parts=None):
+                 quantized: bool = False, cull_back_faces: bool | None = None, parts=None,
+                 extended: bool | None = None, wind: Wind | None = None, culling: bool = True, lod: bool = False,
+                 lod_error: float = 1.0):
+        from ..core.lod import LodLevel, build_lod_levels, check_lod_error
+
+        if lod and mesh.has_appearance:
+            raise ParamError(f"{mesh.name}: lod: levels of detail are of the whole mesh and keep no UVs, colours "
+                             "or parts; expected lod=False for a mesh with parts or appearance")
         self.ctx = ctx
         self.mesh = mesh
         self.parts = tuple(mesh.parts) if parts is None else tuple(
@@ -92,6 +132,10 @@ class AxialRenderer:
         # opaque and cut-out parts first, blended ones last (unsorted)
         self._draw_order = sorted(self.parts, key=lambda p: p.material.alpha_mode == "BLEND")
         self.bend = bend
+        self.culling_enabled = bool(culling)
+        self.lod = bool(lod)
+        self.lod_error = check_lod_error(lod_error)
+        self.stats: dict = {}
         self.cull_back_faces = bool(mesh.is_volume) if cull_back_faces is None else bool(cull_back_faces)
         self.quantized = bool(quantized)
         self._released = False
@@ -101,10 +145,19 @@ class AxialRenderer:
             defines["AXIAL_QUANTIZED"] = 1
         if mesh.has_appearance:
             defines["AXIAL_MATERIAL"] = 1
+        if extended is None:
+            extended = params is not None and np.shape(params)[-1] == 19
+        self.extended = bool(extended)
+        if self.extended:
+            defines["AXIAL_EXTENDED"] = 1
         self._defines = defines
         self.appearance = None
         self.materials = None
         self._variants = {}
+        #: the wind (:class:`axialdeform.Wind`) or None (still); set it any time
+        self.wind = wind
+        #: seconds: the time the wind is drawn at (``render(time=...)`` sets it)
+        self.time = 0.0
         try:
             self.program = build_program(ctx, "scene.vert", "scene.frag", defines=defines)
             self._objects.append(self.program)
@@ -118,15 +171,22 @@ class AxialRenderer:
                 e = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0).astype("u4")
                 self._part_edges = (ctx.buffer(e.tobytes()), int(e.size))
                 self._objects.append(self._part_edges[0])
-            self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized)
+            self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized, extended=self.extended)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
             self._vao_edges = self._vertex_array(self.program, self._edge_buffer)
+            #: the levels of detail (level 0 is the base mesh itself)
+            self.lod_levels = build_lod_levels(mesh) if self.lod else [LodLevel(mesh.positions, mesh.normals, mesh.faces, 0.0)]
+            self._level_buffers = [self.mesh_buffers] + [MeshBuffers(ctx, level) for level in self.lod_levels[1:]]
         except BaseException:
             self.release()
             raise
         self._capture = None  # (program, vao, scratch instances, output) built on first capture
         self._tint = None  # (program, triangles vao, edges vao, buffer) built by the first set_tint
         self._tint_count = None  # colours in the tint buffer; None: tint off
+        self._cull_passes = {}  # tinted -> CullPass
+        self._culled = {}  # (tinted, shadowed) -> (CullPass, draw program, [(triangles vao, edges vao) per level])
+        #: bounding-sphere radius about ``mesh.axis.center`` covering every LOD level
+        self.bound_radius = base_radius(mesh, *[level.positions for level in self.lod_levels[1:]])
         self._set_axis_uniforms(self.program)
         self.color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
         self.line_color = (0.12, 0.14, 0.18)
@@ -150,14 +210,33 @@ class AxialRenderer:
 
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
-        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length})
+        i, j = axis.perpendicular
+        center = (axis.center[i], axis.center[j])
+        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length, "u_center": center,
+                               "u_instance_base": 0, "u_wind_strength": 0.0})
         self._set_quant_uniforms(program)
+
+    def _set_wind_uniforms(self, program, wind, time) -> None:
+        """The wind's uniforms (strength 0: still); no buffer is written."""
+        if "u_wind_strength" not in program:  # the linker removed it: no bend (AXIAL_NO_BEND)
+            return
+        if wind is not None and not isinstance(wind, Wind):
+            raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
+        if wind is None or wind.strength == 0:
+            program["u_wind_strength"].value = 0.0
+            return
+        set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),
+                               "u_wind_gust": float(wind.gustiness), "u_wind_cycles": tuple(wind.cycles(time)),
+                               "u_wind_wavenumber": float(wind.wavenumber)})
 
     def _set_quant_uniforms(self, program) -> None:
         """The per-column decode table of a quantized instance buffer (no-op otherwise)."""
         if "u_qmin" in program:
-            program["u_qmin"].write(self.instances.qmin.astype("f4").tobytes())
-            program["u_qstep"].write(self.instances.qstep.astype("f4").tobytes())
+            program["u_qmin"].write(self.instances.qmin[:16].astype("f4").tobytes())
+            program["u_qstep"].write(self.instances.qstep[:16].astype("f4").tobytes())
+        if "u_qmin_extra" in program:
+            program["u_qmin_extra"].value = tuple(float(x) for x in self.instances.qmin[16:19])
+            program["u_qstep_extra"].value = tuple(float(x) for x in self.instances.qstep[16:19])
 
     def _refresh_quant_uniforms(self) -> None:
         if not self.quantized:
@@ -248,10 +327,12 @@ class AxialRenderer:
                                    self._vertex_array(prog, self._edge_buffer, extra=extra))
         return self._variants[key]
 
-    def _draw_parts(self, prog, vao, view, projection, *, depth_only: bool = False) -> None:
-        """One instanced draw per part: opaque and cut-out parts, then blended ones."""
+    def _draw_parts(self, prog, vao, view, projection, *, depth_only: bool = False, instances: int | None = None) -> None:
+        """One instanced draw per part: opaque and cut-out parts, then blended ones.
+        ``instances``: how many to draw (default :attr:`count`; the visible count after culling)."""
         import moderngl
 
+        instances = self.count if instances is None else int(instances)
         fbo = self.ctx.fbo
         for part in self._draw_order:
             if part.count == 0:
@@ -266,16 +347,18 @@ class AxialRenderer:
                 fbo.depth_mask = False
             try:
                 with self.culling(view, projection, enabled=not material.double_sided):
-                    vao.render(moderngl.TRIANGLES, vertices=part.count * 3, first=part.start * 3, instances=self.count)
+                    vao.render(moderngl.TRIANGLES, vertices=part.count * 3, first=part.start * 3, instances=instances)
             finally:
                 if blend:
                     fbo.depth_mask = True
                     self.ctx.disable(moderngl.BLEND)
 
     def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
-               color=None, line_color=None, ambient: float = 0.35, shadow=None, hidden_line=False) -> None:
+               color=None, line_color=None, ambient: float = 0.35, shadow=None, hidden_line=False,
+               time: float | None = None, wind=_KEEP) -> None:
         """Draw every instance into the currently bound framebuffer: one
-        instanced draw call per part (one for a single-part mesh).
+        instanced draw call per part (one for a single-part mesh), after the
+        culling pass (when on) that keeps the visible instances.
 
         view, projection : (4, 4) pyrr-layout matrices.
         mode : ``"solid"`` (analytic normals), ``"flat"`` (face normals of the
@@ -288,6 +371,9 @@ class AxialRenderer:
         show (one more instanced draw per part); ``"fill"`` also paints the
         triangles, lit and washed out towards white, under the lines (dense
         instances then read as shapes, not blobs).
+        time : seconds; sets :attr:`time` (the wind's clock).
+        wind : a :class:`axialdeform.Wind` or None; sets :attr:`wind`.
+        Animating the wind sets uniforms only: no buffer is written.
         """
         import moderngl
 
@@ -300,9 +386,27 @@ class AxialRenderer:
         if tinted and self._tint_count != self.count:
             raise ParamError(f"tint: {self._tint_count} colours for {self.count} instances; "
                              "call set_tint with one colour per instance (or None)")
+        if time is not None:
+            self.time = float(time)
+        if wind is not _KEEP:
+            self.wind = wind
         shadowed = shadow is not None and (mode != "wireframe" or hidden_line == "fill")
-        prog, vao_triangles, vao_edges = self._variant(tinted, shadowed)
+        n = self.count
+        state = None
+        if (self.culling_enabled or self.lod) and n:
+            try:
+                state = self._culled_state(tinted, shadowed)
+            except ShaderError as exc:  # a driver that cannot build the pass: plain drawing, same picture
+                import warnings
+
+                warnings.warn(f"culling/LOD pass unavailable, drawing every instance: {exc}", RuntimeWarning, stacklevel=2)
+                self.culling_enabled = self.lod = False
+        if state is not None:
+            cull, prog, vaos = state
+        else:
+            prog, vao_triangles, vao_edges = self._variant(tinted, shadowed)
         set_camera_uniforms(prog, view, projection)
+        self._set_wind_uniforms(prog, self.wind, self.time)
         set_uniforms(prog, {
             "u_mode": _MODE_INDEX[mode],
             "u_color": tuple(color or self.color),
@@ -313,34 +417,78 @@ class AxialRenderer:
         })
         if shadowed:
             shadow.bind(prog)
-        if self.count == 0:
+        self.stats = {"submitted": n, "visible": n, "levels": [n], "vertices": n * self.mesh.vertex_count,
+                      "culling": False, "lod": False}
+        if n == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
+        keep = self.color
+        if color is not None and self.materials is not None:
+            self.color = tuple(color)
+        try:
+            if state is None:
+                self._draw(prog, vao_triangles, vao_edges, 0, mode, hidden_line, view, projection, n)
+                return
+            if self.quantized:
+                self._set_quant_uniforms(prog)
+            eye = eye_position(view)
+            height = float(self.ctx.viewport[3]) if self.ctx.viewport else 1.0
+            ortho = abs(float(projection[3, 3]) - 1.0) < 1e-9  # pyrr layout: w = 1 for orthographic
+            levels = len(self.lod_levels) if self.lod else 1
+            counts = cull.run(n, levels, view, projection, frustum=self.culling_enabled,
+                              center=self.mesh.axis.center, radius=self.bound_radius,
+                              lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye,
+                              px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho,
+                              lod_px=self.lod_error, wind_reach=wind_reach(self.mesh, self.wind if self.bend else None),
+                              prepare=self._set_quant_uniforms)
+            self.stats.update(visible=int(sum(counts)), levels=counts, culling=self.culling_enabled, lod=self.lod,
+                              vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(counts))))
+            first = 0
+            for level, kept in enumerate(counts):  # the cull pass ran once; every part draws from its output
+                if kept:
+                    vao_t, vao_e = vaos[level]
+                    cull.bind_records(vao_t, prog, first)
+                    cull.bind_records(vao_e, prog, first)
+                    self._draw(prog, vao_t, vao_e, level, mode, hidden_line, view, projection, kept)
+                first += kept
+        finally:
+            self.color = keep
+
+    def _draw(self, prog, vao_triangles, vao_edges, level: int, mode: str, hidden_line, view, projection,
+              instances: int) -> None:
+        """``instances`` instances of one level: the parts' triangles, or the edges in wireframe."""
+        import moderngl
+
         if mode == "wireframe":  # lines are never culled
             if hidden_line:
-                self._depth_prepass(prog, vao_triangles, view, projection, fill=hidden_line == "fill")
+                self._depth_prepass(prog, vao_triangles, level, view, projection, instances,
+                                    fill=hidden_line == "fill")
             fill = hidden_line == "fill"
             set_uniforms(prog, {"u_line_alpha": 0.45 if fill else 1.0})
             if fill:  # the shaded fill shows through the lines
                 self.ctx.enable(moderngl.BLEND)
                 self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
             try:
-                vao_edges.render(moderngl.LINES, vertices=self._edge_count, instances=self.count)
+                edges = self._edge_count if level == 0 else self._level_buffers[level].edge_indices
+                vao_edges.render(moderngl.LINES, vertices=edges, instances=instances)
             finally:
                 self.ctx.depth_func = "<"
                 if fill:
                     self.ctx.disable(moderngl.BLEND)
             return
-        if color is not None and self.materials is not None:
-            keep, self.color = self.color, tuple(color)
-            try:
-                self._draw_parts(prog, vao_triangles, view, projection)
-            finally:
-                self.color = keep
-            return
-        self._draw_parts(prog, vao_triangles, view, projection)
+        self._draw_triangles(prog, vao_triangles, level, view, projection, instances)
 
-    def _depth_prepass(self, prog, vao, view, projection, fill: bool) -> None:
+    def _draw_triangles(self, prog, vao, level: int, view, projection, instances: int, *, depth_only: bool = False):
+        """Level 0: one instanced draw per part; a coarser level (single-part meshes only): one draw."""
+        import moderngl
+
+        if level == 0:
+            self._draw_parts(prog, vao, view, projection, depth_only=depth_only, instances=instances)
+            return
+        with self.culling(view, projection):
+            vao.render(moderngl.TRIANGLES, vertices=self._level_buffers[level].triangle_indices, instances=instances)
+
+    def _depth_prepass(self, prog, vao, level: int, view, projection, instances: int, fill: bool) -> None:
         """The triangles first, pushed back a little so the lines on them pass
         the ``<=`` test: into the depth buffer only (colour kept by a (0, 1)
         blend), or with ``fill`` also drawn washed-out (``u_mode`` 3)."""
@@ -352,7 +500,7 @@ class AxialRenderer:
             self.ctx.blend_func = moderngl.ZERO, moderngl.ONE
         self.ctx.polygon_offset = 1.0, 1.0
         try:
-            self._draw_parts(prog, vao, view, projection, depth_only=True)
+            self._draw_triangles(prog, vao, level, view, projection, instances, depth_only=True)
         finally:
             self.ctx.polygon_offset = 0.0, 0.0
             if not fill:
@@ -363,19 +511,51 @@ class AxialRenderer:
 
     def render_shadow(self, shadow) -> None:
         """Draw every instance into ``shadow`` (a :class:`~axialdeform.gl.shadow.ShadowMap`,
-        fitted with :meth:`ShadowMap.fit`): one instanced depth draw per part;
-        ``MASK`` cut-outs cast cut-out shadows.  Restores the caller's framebuffer."""
+        fitted with :meth:`ShadowMap.fit`): one instanced depth draw per part
+        (every instance: the light's view is not culled); ``MASK`` cut-outs
+        cast cut-out shadows, and the wind of the next :meth:`render` bends
+        the shadows too.  Restores the caller's framebuffer."""
         self._check()
         prog, vao, _ = self._variant(False, False)
         with shadow.target():
             if self.count == 0:
                 return
             set_camera_uniforms(prog, shadow.view, shadow.projection)
+            self._set_wind_uniforms(prog, self.wind, self.time)
             set_uniforms(prog, {"u_mode": 0})
             import moderngl
 
             self.ctx.enable(moderngl.DEPTH_TEST)
             self._draw_parts(prog, vao, None, None, depth_only=True)
+
+    def _culled_state(self, tinted: bool, shadowed: bool = False):
+        """The cull pass (one per tint state) and the draw program/VAOs reading
+        its output (one per tint/shadow variant), built on first use."""
+        state = self._culled.get((tinted, shadowed))
+        if state is None:
+            cull = self._cull_passes.get(tinted)
+            if cull is None:
+                tint = (self._tint[3], "3f", "i_tint") if tinted else None
+                cull = self._cull_passes[tinted] = CullPass(self.ctx, self.instances, self._defines, tint=tint)
+                self._objects.append(cull)
+            defines = {**self._defines, "AXIAL_CULLED": 1, **({"AXIAL_TINT": 1} if tinted else {}),
+                       **({"AXIAL_SHADOW": 1} if shadowed else {})}
+            prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
+            self._objects.append(prog)
+            self._set_axis_uniforms(prog)
+            vaos = []
+            for level, mb in enumerate(self._level_buffers):
+                extra = [self.appearance.content(prog)] if level == 0 and self.appearance is not None else []
+                edges = self._edge_buffer if level == 0 else mb.edges
+                pair = []
+                for index_buffer in (mb.triangles, edges):
+                    vao = self.ctx.vertex_array(prog, [mb.content(prog), *extra], index_buffer=index_buffer,
+                                                index_element_size=4)
+                    self._objects.append(vao)
+                    pair.append(vao)
+                vaos.append(tuple(pair))
+            state = self._culled[(tinted, shadowed)] = (cull, prog, vaos)
+        return state
 
     @contextmanager
     def culling(self, view=None, projection=None, enabled: bool = True):
@@ -401,13 +581,15 @@ class AxialRenderer:
             self.ctx.disable(moderngl.CULL_FACE)
 
     # ------------------------------------------------------------ capture
-    def capture(self, start: int = 0, count: int | None = None, progress=None) -> tuple[np.ndarray, np.ndarray]:
+    def capture(self, start: int = 0, count: int | None = None, progress=None, *, time: float | None = None,
+                wind=_KEEP) -> tuple[np.ndarray, np.ndarray]:
         """World positions and normals as the GPU computes them, by transform
         feedback of the drawing vertex shader.
 
         Returns two ``(count, vertices, 3) float32`` arrays in the base mesh's
         vertex order, for instances ``start .. start + count - 1``.
         ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
+        ``time``, ``wind``: as :meth:`render` (default: the renderer's own).
         """
         import moderngl
 
@@ -423,7 +605,7 @@ class AxialRenderer:
             prog = build_program(self.ctx, "scene.vert", defines=dict(self._defines),
                                  varyings=("v_world", "v_normal"))
             self._set_axis_uniforms(prog)
-            scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized)
+            scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized, extended=self.extended)
             vao = self.ctx.vertex_array(prog, [self.mesh_buffers.content(prog), scratch.content(prog)])
             output = self.ctx.buffer(reserve=chunk * per_instance)
             # a draw needs a complete framebuffer even with rasterization
@@ -432,6 +614,7 @@ class AxialRenderer:
             fbo = self.ctx.framebuffer(color)
             self._capture = (prog, vao, scratch, output, fbo, color)
         prog, vao, scratch, output, fbo, _ = self._capture
+        self._set_wind_uniforms(prog, self.wind if wind is _KEEP else wind, self.time if time is None else float(time))
         out = np.empty((count, v, 6), dtype=np.float32)
         previous = self.ctx.fbo
         fbo.use()
@@ -441,6 +624,8 @@ class AxialRenderer:
                 rec = self.instances.record_bytes
                 self.ctx.copy_buffer(scratch.buffer, self.instances.buffer, size=k * rec, read_offset=(start + a) * rec)
                 scratch.count = k
+                if "u_instance_base" in prog:  # the wind's per-instance phase follows the instance's index
+                    prog["u_instance_base"].value = start + a
                 vao.transform(output, mode=moderngl.POINTS, vertices=v, instances=k)
                 out[a : a + k] = np.frombuffer(output.read(size=k * per_instance), dtype="f4").reshape(k, v, 6)
                 if progress is not None:
@@ -467,6 +652,8 @@ class AxialRenderer:
         for obj in reversed(self._objects):
             obj.release()
         self._objects.clear()
+        for mb in getattr(self, "_level_buffers", [])[1:]:
+            mb.release()
         for holder in ("mesh_buffers", "instances", "appearance", "materials"):
             if getattr(self, holder, None) is not None:
                 getattr(self, holder).release()
