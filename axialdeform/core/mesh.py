@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .axis import ControlAxis
-from .errors import MeshError
+from .errors import AxialDeformError, MeshError
 
 __all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "area_weighted_normals"]
 
@@ -210,16 +210,29 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     else:
         path = Path(source)
     name = str(source)
-    if not path.exists():
+    if not os.path.lexists(path):
         raise MeshError(f"{name}: no such mesh file")
     if path.is_dir():
         raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(_SUPPORTED)})")
     if path.suffix.lower() not in _SUPPORTED:
         raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(_SUPPORTED)}")
+    from .safeio import SafeResolver, memory_available, read_regular
+
+    # a regular file (never a FIFO or a device), read with a bound; every
+    # file it refers to goes through the same check (SafeResolver)
+    data = read_regular(path, max(memory_available() // 2, 1 << 20), f"a mesh file ({', '.join(_SUPPORTED)})", MeshError)
     try:
+        import io
+
         import trimesh
 
-        loaded = trimesh.load(str(path), process=False)
+        resolver = SafeResolver(str(path), referrer=name)
+        loaded = trimesh.load(io.BytesIO(data), file_type=path.suffix.lower().lstrip("."), resolver=resolver, process=False)
+        del data
+        if resolver.refused:
+            raise resolver.refused[0]
+    except AxialDeformError as exc:  # a file the mesh refers to was refused
+        raise MeshError(f"{name}: {exc}") from None
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
     mesh, transform = _single_mesh(loaded, name)

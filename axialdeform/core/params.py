@@ -44,6 +44,7 @@ __all__ = [
     "make_params",
     "ParamFile",
     "read_param_file",
+    "read_param_bytes",
     "read_params",
     "write_params",
     "format_text",
@@ -143,29 +144,75 @@ def format_text(values: np.ndarray, header: str | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: bytes of text parsed at a time: the parser's working memory is a few
+#: times this, whatever the file's size
+_TEXT_CHUNK = 1 << 18
+_LINE_BREAK = re.compile(rb"[\r\n]")
+_SEPARATORS = re.compile(r"[,\s]+")
+
+
 def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
-    """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``."""
+    """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``.
+
+    The text is parsed in pieces of about 256 KiB cut at line breaks, each
+    turned into float32 rows at once, so the memory needed beyond ``data``
+    and the result is bounded (peak under 3x the text's size plus the
+    result, ``tests/test_hostile.py::test_text_parser_memory``)."""
+    view = memoryview(data).cast("B") if not isinstance(data, (bytes, bytearray)) else data
+    n = len(view)
+    start = 3 if bytes(view[:3]) == b"\xef\xbb\xbf" else 0  # a leading byte-order mark is tolerated
+    pieces: list[np.ndarray] = []
+    lineno = 0
+    window = 4 * _MAX_TEXT_LINE + 8  # a line of at most _MAX_TEXT_LINE characters has at most 4x as many bytes
+    while start < n:
+        end = min(n, start + _TEXT_CHUNK)
+        if end < n:
+            m = _LINE_BREAK.search(view, end, min(n, end + window)) if isinstance(view, (bytes, bytearray)) else \
+                _LINE_BREAK.search(bytes(view[end : min(n, end + window)]))
+            if m is None:
+                before = bytes(view[start:end]).count(b"\n")
+                raise ParamFileError(
+                    f"{name}: line {lineno + before + 1} is longer than {window} bytes; expected at most {_MAX_TEXT_LINE} characters a line")
+            cut = m.end() + (0 if isinstance(view, (bytes, bytearray)) else end)
+            if view[cut - 1] == 0x0D and cut < n and view[cut] == 0x0A:
+                cut += 1
+            end = cut
+        chunk = bytes(view[start:end])
+        rows, linenos, lines_in_chunk = _split_lines(chunk, name, lineno, start)
+        if rows:
+            pieces.append(_rows_to_float32(rows, linenos, name))
+        lineno += lines_in_chunk
+        start = end
+    if not pieces:
+        return np.zeros((0, 16), dtype=np.float32)
+    return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
+
+
+def _split_lines(chunk: bytes, name: str, lineno: int, offset: int):
     try:
-        text = bytes(data).decode("utf-8-sig")  # a leading byte-order mark is tolerated
+        text = chunk.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ParamFileError(
-            f"{name}: not a parameter file: byte {exc.start} is not UTF-8 text and the file does not start with the binary magic"
+            f"{name}: not a parameter file: byte {offset + exc.start} is not UTF-8 text and the file does not start with the binary magic"
         ) from None
     rows: list[list[str]] = []
     linenos: list[int] = []
-    for lineno, line in enumerate(text.splitlines(), start=1):
+    lines = text.splitlines()
+    for k, line in enumerate(lines, start=lineno + 1):
         if len(line) > _MAX_TEXT_LINE:
-            raise ParamFileError(f"{name}: line {lineno} is {len(line)} characters long; expected at most {_MAX_TEXT_LINE}")
+            raise ParamFileError(f"{name}: line {k} is {len(line)} characters long; expected at most {_MAX_TEXT_LINE}")
         stripped = line.strip()
         if not stripped or stripped.startswith("#"):
             continue
-        tokens = [tok for tok in re.split(r"[,\s]+", stripped) if tok]
+        tokens = [tok for tok in _SEPARATORS.split(stripped) if tok]
         if len(tokens) != 16:
-            raise ParamFileError(f"{name}: line {lineno}: expected 16 numbers, found {len(tokens)}")
+            raise ParamFileError(f"{name}: line {k}: expected 16 numbers, found {len(tokens)}")
         rows.append(tokens)
-        linenos.append(lineno)
-    if not rows:
-        return np.zeros((0, 16), dtype=np.float32)
+        linenos.append(k)
+    return rows, linenos, len(lines)
+
+
+def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np.ndarray:
     try:
         arr = np.array(rows, dtype=np.float64)
     except ValueError:
@@ -355,20 +402,25 @@ class BinaryHeader:
         return self.size - HEADER_SIZE - table - _TRAILER.size
 
 
-def read_binary_header(data: bytes, name: str = "<binary>") -> BinaryHeader:
+def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None = None) -> BinaryHeader | None:
     """Check the structure of a binary parameter file and read its header.
 
     Every check happens before any allocation that depends on the declared
-    count; the CRC-32 is computed but not judged (see ``checksum_ok``)."""
+    count; the CRC-32 is computed but not judged (see ``checksum_ok``).
+    With ``size`` (the file's size on disk), ``data`` may be the header
+    alone: the structure is checked against ``size`` and None is returned
+    (nothing is checksummed), so a file is read only once its header and its
+    size agree."""
     head = bytes(data[: len(MAGIC)])
     if head != MAGIC[: len(head)]:  # say "not this format" before "too short"
         raise ParamFileError(
             f"{name}: magic: expected {MAGIC!r}, found {head!r}; not a binary parameter file "
             f"(the text form uses {', '.join(TEXT_SUFFIXES)})"
         )
-    if len(data) < HEADER_SIZE + _TRAILER.size:
+    total = len(data) if size is None else int(size)
+    if total < HEADER_SIZE + _TRAILER.size:
         raise ParamFileError(
-            f"{name}: truncated: {len(data)} bytes, expected at least {HEADER_SIZE + _TRAILER.size} (header + checksum)"
+            f"{name}: truncated: {total} bytes, expected at least {HEADER_SIZE + _TRAILER.size} (header + checksum)"
         )
     magic, version, encoding, header_size, count, axis_index, _res, lo, length, fingerprint = _HEADER.unpack_from(data)
     if magic != MAGIC:
@@ -382,11 +434,13 @@ def read_binary_header(data: bytes, name: str = "<binary>") -> BinaryHeader:
     record = _ENCODINGS[encoding][1]
     table = _QUANT.size if encoding == ENCODING_UINT16 else 0
     expected = HEADER_SIZE + table + count * record + _TRAILER.size  # Python int: no overflow
-    if len(data) != expected:
+    if total != expected:
         raise ParamFileError(
-            f"{name}: count: the header declares {count} instances ({expected} bytes), but the file has {len(data)} bytes"
-            + (" (truncated?)" if len(data) < expected else "")
+            f"{name}: count: the header declares {count} instances ({expected} bytes), but the file has {total} bytes"
+            + (" (truncated?)" if total < expected else "")
         )
+    if size is not None:
+        return None
     (stored,) = _TRAILER.unpack_from(data, len(data) - _TRAILER.size)
     computed = zlib.crc32(memoryview(data)[: len(data) - _TRAILER.size])
     return BinaryHeader(version, encoding, count, axis_index, lo, length, fingerprint, stored, computed, len(data))
@@ -433,23 +487,49 @@ def _is_binary_suffix(path: Path) -> bool:
 
 
 def read_param_file(path: str | os.PathLike) -> ParamFile:
-    """Read a parameter file, text or binary (told apart by the magic bytes)."""
-    path = Path(path)
-    try:
-        if path.exists() and not path.is_dir() and not path.is_file():
-            # a FIFO or a device (/dev/zero) might never end: refuse before reading
-            raise ParamFileError(f"{path}: not a regular file; expected a parameter file")
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise ParamFileError(f"{path}: no such parameter file") from None
-    except IsADirectoryError:
-        raise ParamFileError(f"{path}: is a folder; expected a parameter file") from None
-    except OSError as exc:
-        raise ParamFileError(f"{path}: cannot read: {exc.strerror}") from None
-    if data[: len(MAGIC)] == MAGIC or _is_binary_suffix(path):
+    """Read a parameter file, text or binary (told apart by the magic bytes).
+
+    The file must be a regular file (a FIFO, a device or a symlink to one is
+    refused without blocking, :func:`~axialdeform.core.safeio.open_regular`);
+    a binary file is read only if its size is what its header declares, a
+    text file only if it fits in the memory available."""
+    data, binary = read_param_bytes(path)
+    if binary:
         return decode_binary(data, str(path))
     values = parse_text(data, str(path))
     return ParamFile(values=values, format="text", encoding="text", size=len(data))
+
+
+def read_param_bytes(path: str | os.PathLike) -> tuple[bytes, bool]:
+    """The bytes of a parameter file and whether it is binary, read with the
+    checks of :func:`read_param_file` (regular file; a binary file's size
+    must match its header before it is read; a text file must fit in memory)."""
+    from .safeio import memory_available, open_regular
+
+    path = Path(path)
+    with open_regular(path, "a parameter file", ParamFileError) as (fh, size):
+        try:
+            head = fh.read(HEADER_SIZE)
+        except OSError as exc:
+            raise ParamFileError(f"{path}: cannot read: {exc.strerror}") from None
+        binary = head[: len(MAGIC)] == MAGIC or _is_binary_suffix(path)
+        if binary:
+            # the declared count bounds the read: a lying header costs nothing
+            read_binary_header(head, str(path), size=size if len(head) == HEADER_SIZE else len(head))
+            limit = size
+        else:
+            # text: the file, at most a third of the memory available (the parser needs about twice more)
+            limit = max(memory_available() // 3, 1 << 20)
+            if size > limit:
+                raise ParamFileError(f"{path}: is {size} bytes; expected a text parameter file of at most {limit} bytes "
+                                     "(a third of the memory available); use the binary form (.adp)")
+        try:
+            data = head + fh.read(limit + 1 - len(head))
+        except OSError as exc:
+            raise ParamFileError(f"{path}: cannot read: {exc.strerror}") from None
+        if len(data) > limit:
+            raise ParamFileError(f"{path}: grew while being read; expected a file of {limit} bytes")
+    return data, binary
 
 
 def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
