@@ -3,14 +3,17 @@ reference or the GPU capture, to an ``.npz`` or a folder of mesh files."""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
 from pathlib import Path
 
 import numpy as np
 
 from .atomic import atomic_path
 from .deform import deform
-from .errors import AxialDeformError
+from .errors import AxialDeformError, PathError
+from .safeio import check_not_special, require_finite
 
 __all__ = ["bake", "write_npz", "write_mesh_folder", "ENGINES", "MESH_FORMATS"]
 
@@ -22,9 +25,21 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None) -> tuple
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
     in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
     or ``"gpu"`` (transform feedback of the drawing vertex shader).
-    ``progress``: optional object with ``update(instances_done)`` (a tqdm bar)."""
+    ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
+
+    A non-finite result (finite parameters so large that float32 overflows)
+    raises :class:`AxialDeformError` naming the instance, array, vertex and
+    coordinate: nothing non-finite is ever returned to be written."""
+    positions, normals = _bake(mesh, params, engine, ctx=ctx, progress=progress)
+    require_finite(positions, "positions", "xyz")
+    require_finite(normals, "normals", "xyz")
+    return positions, normals
+
+
+def _bake(mesh, params, engine, *, ctx=None, progress=None):
     if engine == "cpu":
-        return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
+        with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused by the caller
+            return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
     if engine != "gpu":
         raise AxialDeformError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
     from ..gl.context import create_context
@@ -47,13 +62,32 @@ def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarra
             np.savez(fh, positions=positions.astype(np.float32), normals=normals.astype(np.float32))
 
 
-def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None) -> list[Path]:
-    """One mesh file per instance (``instance_000000.obj`` …), each written atomically."""
+#: the file names :func:`write_mesh_folder` writes, and recognises as its own
+INSTANCE_FILE = re.compile(r"^instance_(\d{6,})\.(" + "|".join(MESH_FORMATS) + r")$")
+
+
+def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None,
+                      *, overwrite: bool = False) -> list[Path]:
+    """One mesh file per instance (``instance_000000.obj`` …), each written atomically.
+
+    ``folder`` must be new or empty (hidden files aside); a folder that holds
+    anything else is refused, unless ``overwrite``: then every new file is
+    written first (atomically), and only afterwards are the old instance files
+    it recognises (``instance_NNNNNN.obj|ply|glb``) that were not just
+    rewritten removed; other files are left alone.  So an interrupted
+    overwrite leaves every old or new file whole, never a half-written one.
+    """
     if fmt not in MESH_FORMATS:
         raise AxialDeformError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
     folder = Path(folder)
+    check_not_special(folder, "output folder", allow_folder=True)
     if folder.exists() and not folder.is_dir():
-        raise AxialDeformError(f"{folder}: exists and is not a folder")
+        raise PathError(f"{folder}: exists and is not a folder; expected a folder for one mesh file per instance")
+    old = _folder_entries(folder)
+    if old and not overwrite:
+        sample = ", ".join(sorted(old)[:3]) + (", ..." if len(old) > 3 else "")
+        raise PathError(f"{folder}: holds {len(old)} files it did not just write ({sample}); expected a new or empty "
+                        "folder (--overwrite replaces an earlier bake: it removes the old instance_* files)")
     folder.mkdir(parents=True, exist_ok=True)
     digits = max(6, len(str(max(len(positions) - 1, 0))))
     written = []
@@ -65,4 +99,21 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
         written.append(path)
         if progress is not None:
             progress.update(1)
+    if overwrite:
+        keep = {p.name for p in written}
+        for name in old:
+            if name not in keep and INSTANCE_FILE.match(name):
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(folder / name)
     return written
+
+
+def _folder_entries(folder: Path) -> list[str]:
+    """Names in ``folder`` other than hidden ones (atomic writes' ``.part`` files)."""
+    try:
+        with os.scandir(folder) as it:
+            return [e.name for e in it if not e.name.startswith(".")]
+    except FileNotFoundError:
+        return []
+    except OSError as exc:
+        raise PathError(f"{folder}: cannot list: {exc.strerror}") from None

@@ -218,6 +218,11 @@ def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
             f"baked arrays: expected positions and normals of shape ({len(params)}, {mesh.vertex_count}, 3), "
             f"found {positions.shape} and {normals.shape}"
         )
+    from .safeio import require_finite
+
+    # an overflowing deformation (huge but finite parameters) is refused before any JSON is made
+    require_finite(positions, "positions", "xyz", error=GltfError)
+    require_finite(normals, "normals", "xyz", error=GltfError)
     b = _Builder()
     g = b.g
     idx = b.indices(mesh)
@@ -478,8 +483,10 @@ def run(args) -> None:
     """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
     from .mesh import load_mesh
     from .params import read_params
+    from .safeio import check_output_path
 
     out = _check_glb_path(args.output)
+    check_output_path(out, (args.mesh, args.params), "exported .glb")
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     path = export_glb(out, mesh, params, args.layout)

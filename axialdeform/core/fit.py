@@ -513,10 +513,13 @@ def run(args) -> None:
     from .mesh import load_mesh
     from .params import write_params
 
+    from .safeio import check_output_path
+
     out = Path(args.output)
     mesh = load_mesh(args.base)
     is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
     paths = variant_paths(args.variants)
+    check_output_path(out, (args.base, *paths), "parameter file")
     with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:
         result = fit_files(mesh, paths, max_residual=args.max_residual, max_iterations=args.max_iterations,
                            progress=bar)

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_write_bytes
+from .atomic import atomic_path, atomic_write_bytes
 from .axis import AXIS_NAMES, ControlAxis
 from .errors import MeshMismatchError, ParamError, ParamFileError
 
@@ -137,11 +137,21 @@ def format_text(values: np.ndarray, header: str | None = None) -> str:
     exactly.  ``header`` lines are written as ``#`` comments.
     """
     values = as_params(values)
+    return "".join(_text_pieces(values, header))
+
+
+#: rows formatted at a time by the text writer: its memory stays bounded
+_TEXT_ROWS = 16384
+
+
+def _text_pieces(values: np.ndarray, header: str | None):
+    """The text form in pieces of at most ``_TEXT_ROWS`` lines (a generator)."""
     lines = ["# " + line for line in (header or "").splitlines()]
     lines.append("# " + " ".join(FIELDS))
-    body = np.char.mod("%.9g", values.astype(np.float64))
-    lines.extend(" ".join(row) for row in body.tolist())
-    return "\n".join(lines) + "\n"
+    yield "\n".join(lines) + "\n"
+    for s in range(0, len(values), _TEXT_ROWS):
+        body = np.char.mod("%.9g", values[s : s + _TEXT_ROWS].astype(np.float64))
+        yield "\n".join(" ".join(row) for row in body.tolist()) + "\n"
 
 
 #: bytes of text parsed at a time: the parser's working memory is a few
@@ -504,7 +514,7 @@ def read_param_bytes(path: str | os.PathLike) -> tuple[bytes, bool]:
     """The bytes of a parameter file and whether it is binary, read with the
     checks of :func:`read_param_file` (regular file; a binary file's size
     must match its header before it is read; a text file must fit in memory)."""
-    from .safeio import memory_available, open_regular
+    from .safeio import memory_available, open_regular, read_sized
 
     path = Path(path)
     with open_regular(path, "a parameter file", ParamFileError) as (fh, size):
@@ -523,12 +533,7 @@ def read_param_bytes(path: str | os.PathLike) -> tuple[bytes, bool]:
             if size > limit:
                 raise ParamFileError(f"{path}: is {size} bytes; expected a text parameter file of at most {limit} bytes "
                                      "(a third of the memory available); use the binary form (.adp)")
-        try:
-            data = head + fh.read(limit + 1 - len(head))
-        except OSError as exc:
-            raise ParamFileError(f"{path}: cannot read: {exc.strerror}") from None
-        if len(data) > limit:
-            raise ParamFileError(f"{path}: grew while being read; expected a file of {limit} bytes")
+        data = read_sized(fh, size, path, "a parameter file", ParamFileError)
     return data, binary
 
 
@@ -589,7 +594,10 @@ def write_params(
         header = "axialdeform parameters: " + ("unknown axis" if axis is None else axis.describe())
         if mesh is not None:
             header += f"\nbase mesh: {mesh.name} (sha256 {mesh.fingerprint.hex()})"
-        data = format_text(values, header).encode("utf-8")
+        with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+            for piece in _text_pieces(values, header):  # in pieces: memory does not grow with the count
+                fh.write(piece)
+        return path
     else:
         raise ParamFileError(
             f"{path}: unknown parameter file type {path.suffix!r}; expected {', '.join(BINARY_SUFFIXES)} (binary) "

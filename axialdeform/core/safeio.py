@@ -35,7 +35,7 @@ import numpy as np
 from .errors import AxialDeformError, PathError
 
 __all__ = [
-    "open_regular", "read_regular", "SafeResolver", "check_output_path", "check_not_special",
+    "open_regular", "read_regular", "read_sized", "SafeResolver", "check_output_path", "check_not_special",
     "memory_available", "check_count", "require_finite", "quiet_numpy", "MAX_INSTANCES",
     "MAX_REFERENCED_BYTES",
 ]
@@ -76,8 +76,10 @@ def open_regular(path: str | os.PathLike, what: str = "file", error: type = Path
         raise error(f"{name}: cannot open: {exc.strerror}; expected {what}") from None
     try:
         st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise error(f"{name}: is a folder; expected {what}")
         if not stat.S_ISREG(st.st_mode):
-            raise error(f"{name}: is {_kind(st.st_mode)}; expected {what} (a regular file)")
+            raise error(f"{name}: not a regular file ({_kind(st.st_mode)}); expected {what}")
         if hasattr(os, "O_NONBLOCK"):
             os.set_blocking(fd, True)
         fh = os.fdopen(fd, "rb")
@@ -89,7 +91,7 @@ def open_regular(path: str | os.PathLike, what: str = "file", error: type = Path
 
 
 def read_regular(path: str | os.PathLike, max_bytes: int | None = None, what: str = "file",
-                 error: type = PathError) -> bytes:
+                 error: type = PathError) -> bytearray:
     """All bytes of the regular file ``path``, refusing one over ``max_bytes``.
 
     ``max_bytes`` defaults to the memory available.  A file that grows while
@@ -99,13 +101,31 @@ def read_regular(path: str | os.PathLike, max_bytes: int | None = None, what: st
     with open_regular(path, what, error) as (fh, size):
         if size > limit:
             raise error(f"{path}: is {size} bytes; expected {what} of at most {limit} bytes")
-        try:
-            data = fh.read(limit + 1)
-        except OSError as exc:
-            raise error(f"{path}: cannot read: {exc.strerror}") from None
-    if len(data) > limit:
-        raise error(f"{path}: grew past {limit} bytes while being read; expected {what} of at most {limit} bytes")
-    return data
+        return read_sized(fh, size, path, what, error)
+
+
+def read_sized(fh, size: int, path, what: str = "file", error: type = PathError) -> bytearray:
+    """Read the whole of the open file ``fh`` from its start into ONE buffer of
+    ``size`` bytes (what ``fstat`` said; no second copy is made), refusing a
+    file that grew meanwhile."""
+    buf = bytearray(size + 1)
+    view = memoryview(buf)
+    got = 0
+    try:
+        fh.seek(0)
+        while got <= size:
+            k = fh.readinto(view[got:])
+            if not k:
+                break
+            got += k
+    except OSError as exc:
+        raise error(f"{path}: cannot read: {exc.strerror}") from None
+    finally:
+        view.release()
+    if got > size:
+        raise error(f"{path}: grew while being read (fstat said {size} bytes); expected {what} that is not being written")
+    del buf[got:]
+    return buf
 
 
 def _make_resolver():
@@ -175,7 +195,7 @@ def check_not_special(path: str | os.PathLike, what: str = "output", allow_folde
     if stat.S_ISREG(st.st_mode) or (allow_folder and stat.S_ISDIR(st.st_mode)):
         return
     expected = "a regular file" + (" or a folder" if allow_folder else "")
-    raise PathError(f"{p}: is {_kind(st.st_mode)}; expected {expected} (or a new name) for the {what}")
+    raise PathError(f"{p}: not a regular file ({_kind(st.st_mode)}); expected {expected} (or a new name) for the {what}")
 
 
 def check_output_path(path: str | os.PathLike, inputs: Iterable = (), what: str = "output",
