@@ -11,10 +11,16 @@ import sys
 from pathlib import Path
 
 from ..core.errors import AxialDeformError
+from ..core.safeio import check_count, check_output_path, quiet_numpy
 
 __all__ = ["main", "build_parser"]
 
 DEMO_COUNT = 2500
+#: peak bytes per instance of ``random`` (random_params' temporaries, the
+#: result and its encoding; measured with tracemalloc: about 700) and of
+#: ``demo`` (plus the GPU buffer and camera bounds), for the -n check
+_RANDOM_BYTES_EACH = 768
+_DEMO_BYTES_EACH = 1024
 
 #: modules that add sub-commands: each defines ``add_parser(subparsers)``
 #: (which calls ``subparsers.add_parser(NAME, ...)`` and
@@ -88,6 +94,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--engine", choices=ENGINES, default="cpu")
     b.add_argument("--format", choices=MESH_FORMATS, default="obj", help="mesh file type when OUT is a folder")
     b.add_argument("--ignore-mesh-mismatch", action="store_true")
+    b.add_argument("--overwrite", action="store_true", help=(
+        "OUT may be a folder of an earlier bake: new files are written first, then the old instance_* files "
+        "not rewritten are removed (other files are kept); without it a folder holding files is refused"))
 
     i = sub.add_parser("info", help="describe a parameter file", description="Header, count and checksum verdict of PARAMS.")
     i.add_argument("params")
@@ -118,6 +127,8 @@ def cmd_demo(args) -> None:
     from ..core.mesh import load_mesh
     from ..core.variation import random_params
 
+    check_output_path(args.output, (), "PNG")
+    check_count(args.count, _DEMO_BYTES_EACH, "-n/--count")
     mesh = load_mesh("stone")
     params = random_params(mesh, args.count, seed=args.seed, bend=0.14, placement="disc",
                            spacing=0.9 * mesh.axis.length, tilt=(-0.2, 0.2))
@@ -133,6 +144,8 @@ def cmd_random(args) -> None:
     from ..core.params import write_params
     from ..core.variation import random_params
 
+    check_output_path(args.output, (args.mesh,), "parameter file")
+    check_count(args.count, _RANDOM_BYTES_EACH, "-n/--count")
     mesh = load_mesh(args.mesh)
     params = random_params(mesh, args.count, args.seed, bend=args.bend, placement=args.placement,
                            spacing=args.spacing, up=args.up, yaw=args.yaw, tilt=args.tilt)
@@ -140,19 +153,37 @@ def cmd_random(args) -> None:
     print(f"wrote {path} ({len(params)} instances, {path.stat().st_size} bytes)")
 
 
-def _load(args):
+def _load(args, what: str = "output", allow_folder: bool = False):
+    """The mesh and parameters of a command, after checking that its output
+    is neither one of them nor a device, FIFO or socket."""
     from ..core.mesh import load_mesh
     from ..core.params import read_params
 
+    check_output_path(args.output, (args.mesh, args.params), what, allow_folder=allow_folder)
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+    warn_ranges(args, mesh, params)
     return mesh, params
+
+
+def warn(args, message: str) -> None:
+    """One warning line on stderr."""
+    print(f"axialdeform {args.command}: warning: {message}", file=sys.stderr)
+
+
+def warn_ranges(args, mesh, params) -> None:
+    """Warn (once) when a parameter file goes past the float32-safe ranges."""
+    from ..core.params import range_warning
+
+    message = range_warning(mesh, params, args.params)
+    if message:
+        warn(args, message)
 
 
 def cmd_render(args) -> None:
     from ..gl.image import parse_size, render_image, save_png
 
-    mesh, params = _load(args)
+    mesh, params = _load(args, "PNG")
     image = render_image(mesh, params, parse_size(args.size), args.mode, up=args.up)
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(params)} instances, {args.mode}, {image.shape[1]}x{image.shape[0]})")
@@ -161,16 +192,19 @@ def cmd_render(args) -> None:
 def cmd_bake(args) -> None:
     from ..core.bake import bake, write_mesh_folder, write_npz
 
-    mesh, params = _load(args)
+    out = Path(args.output)
+    mesh, params = _load(args, "bake output", allow_folder=out.suffix.lower() != ".npz")
+    if out.suffix.lower() != ".npz":  # refuse a folder of stale files before the work, not after
+        write_mesh_folder(out, mesh, params[:0], params[:0], args.format, overwrite=args.overwrite)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar)
-    out = Path(args.output)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)
         print(f"wrote {out}: positions and normals {positions.shape} float32 ({args.engine})")
     else:
         with _progress(len(positions), "writing meshes") as bar:
-            files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar)
+            files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
+                                      overwrite=args.overwrite)
         print(f"wrote {len(files)} {args.format} files to {out}/ ({args.engine})")
 
 
@@ -216,6 +250,7 @@ def cmd_convert(args) -> None:
     from ..core.mesh import load_mesh
     from ..core.params import check_mesh, read_param_file, write_params
 
+    check_output_path(args.dst, (args.src, args.mesh), "parameter file")
     pf = read_param_file(args.src)
     mesh = load_mesh(args.mesh) if args.mesh else None
     if mesh is not None:
@@ -240,7 +275,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         handler = getattr(args, "handler", None) or COMMANDS[args.command]
-        status = handler(args)
+        with quiet_numpy():  # floating-point trouble is checked and reported, never printed as warnings
+            status = handler(args)
         if status:
             return int(status)
     except AxialDeformError as exc:
@@ -249,6 +285,10 @@ def main(argv=None) -> int:
     except OSError as exc:
         where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
         print(f"axialdeform {args.command}: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(f"axialdeform {args.command}: error: out of memory (the input asks for more than this machine has; "
+              "use fewer instances or a smaller --size)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"axialdeform {args.command}: interrupted", file=sys.stderr)

@@ -59,6 +59,8 @@ __all__ = [
     "MAGIC",
     "BINARY_SUFFIXES",
     "TEXT_SUFFIXES",
+    "range_warning",
+    "SAFE_DISTANCE_L",
 ]
 
 #: names of the 16 columns, in file order
@@ -609,3 +611,35 @@ def write_params(
 
 def axis_letter(index: int) -> str:
     return AXIS_NAMES[index]
+
+
+#: world distances (positions, offsets) up to this many axis lengths L keep
+#: float32 precision of about 1e-5 L; beyond it errors grow in proportion
+#: (measured: ``tools/precision.py``, see docs/reliability.md)
+SAFE_DISTANCE_L = 100.0
+
+
+def range_warning(mesh, values, name: str = "parameters") -> str | None:
+    """A one-line warning if any instance of ``values`` places its mesh, or
+    bends it, further than :data:`SAFE_DISTANCE_L` axis lengths (float32
+    keeps about 7 significant digits, so the deformed mesh loses detail in
+    proportion to the distance); None when every value is in range.
+
+    values : (n, 16) float32.
+    """
+    v = np.asarray(values)
+    if v.size == 0:
+        return None
+    L = float(mesh.axis.length)
+    limit = SAFE_DISTANCE_L * L
+    mag = np.abs(v[:, :13])  # offsets and position, model/world units
+    row_max = mag.max(axis=1)
+    worst = int(np.argmax(row_max))
+    if not row_max[worst] > limit:
+        return None
+    col = int(np.argmax(mag[worst]))
+    count = int((row_max > limit).sum())
+    ulp = float(np.spacing(np.float32(row_max[worst])))
+    return (f"{name}: instance {worst}, field {FIELDS[col]} = {float(v[worst, col]):.6g} is {row_max[worst] / L:.3g} L "
+            f"({count} instance{'s' if count != 1 else ''} beyond the safe {SAFE_DISTANCE_L:g} L); float32 steps there are "
+            f"{ulp / L:.2g} L, so detail finer than that is lost (see docs/reliability.md, safe ranges)")
