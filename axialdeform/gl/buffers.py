@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ParamError
+from .context import check_alive, check_released
 from ..core.params import as_params, dequantize_params, quantize_params
 
 __all__ = [
@@ -32,6 +33,14 @@ RECORD_BYTES = 64
 QUANTIZED_FORMAT = ("4u2", "4u2", "4u2", "4u2")
 QUANTIZED_ATTRIBUTES = ("i_q0", "i_q1", "i_q2", "i_q3")
 QUANTIZED_RECORD_BYTES = 32
+
+
+def as_index(value, name: str) -> int:
+    """``value`` as an int if it is a whole number type (int, numpy integer;
+    not bool, float, str or None), else :class:`ParamError`."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ParamError(f"{name}: expected an integer instance index, found {value!r} ({type(value).__name__})")
+    return int(value)
 
 
 def _format_bytes(fmt: str) -> int:
@@ -59,16 +68,31 @@ class MeshBuffers:
     """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh."""
 
     def __init__(self, ctx, mesh):
+        check_alive(ctx, "new MeshBuffers")
         self.ctx = ctx
         self.mesh = mesh
         self.vertex_count = mesh.vertex_count
         interleaved = np.hstack([mesh.positions, mesh.normals]).astype("f4")
         self.vbo = ctx.buffer(interleaved.tobytes())
         self.triangles = ctx.buffer(mesh.faces.astype("u4").tobytes())
-        self.edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
         self.triangle_indices = int(mesh.faces.size)
-        self.edge_indices = int(mesh.edges.size)
+        self._edges = None  # built by the first wireframe draw: solid drawing never pays for it
         self._released = False
+
+    @property
+    def edges(self):
+        """The edge index buffer (uint32 pairs), built on first use (lazily:
+        finding the unique edges of a 10 M-triangle mesh takes seconds)."""
+        check_released(self._released, "these MeshBuffers")
+        if self._edges is None:
+            check_alive(self.ctx, "these MeshBuffers")
+            self._edges = self.ctx.buffer(self.mesh.edges.astype("u4").tobytes())
+        return self._edges
+
+    @property
+    def edge_indices(self) -> int:
+        """Number of indices in :attr:`edges` (two per edge)."""
+        return int(self.mesh.edges.size)
 
     def content(self, program):
         return _content(self.vbo, ("3f", "3f"), ("in_position", "in_normal"), program)
@@ -77,8 +101,9 @@ class MeshBuffers:
         if self._released:
             return
         self._released = True
-        for b in (self.vbo, self.triangles, self.edges):
-            b.release()
+        for b in (self.vbo, self.triangles, self._edges):
+            if b is not None:
+                b.release()
 
 
 class InstanceBuffer:
@@ -94,6 +119,7 @@ class InstanceBuffer:
     """
 
     def __init__(self, ctx, params=None, capacity: int | None = None, *, quantized: bool = False):
+        check_alive(ctx, "a new InstanceBuffer")
         self.ctx = ctx
         self.quantized = bool(quantized)
         self.record_bytes = QUANTIZED_RECORD_BYTES if self.quantized else RECORD_BYTES
@@ -107,6 +133,10 @@ class InstanceBuffer:
         if self.count:
             self.buffer.write(self._encode_all(values))
         self._released = False
+
+    def _check(self) -> None:
+        check_released(self._released, "this InstanceBuffer")
+        check_alive(self.ctx, "this InstanceBuffer")
 
     def _encode_all(self, values: np.ndarray) -> bytes:
         if not self.quantized:
@@ -143,6 +173,7 @@ class InstanceBuffer:
 
     def set(self, params) -> None:
         """Replace every instance; reallocates only if the count outgrows the capacity."""
+        self._check()
         values = as_params(params)
         if len(values) > self.capacity:
             self.capacity = len(values)
@@ -154,8 +185,9 @@ class InstanceBuffer:
 
     def update(self, params, start: int = 0) -> None:
         """Overwrite instances ``start .. start + len(params) - 1`` in place."""
+        self._check()
         values = as_params(params)
-        start = int(start)
+        start = as_index(start, "update: start")
         if start < 0 or start + len(values) > self.count:
             raise ParamError(
                 f"update: instances {start}..{start + len(values) - 1} do not fit in the {self.count} instances drawn; "
@@ -166,6 +198,9 @@ class InstanceBuffer:
 
     def read(self) -> np.ndarray:
         """The parameters on the GPU, ``(count, 16) float32`` (decoded if quantized)."""
+        self._check()
+        if self.count == 0:  # moderngl cannot map zero bytes
+            return np.zeros((0, 16), dtype=np.float32)
         data = self.buffer.read(size=self.count * self.record_bytes)
         if self.quantized:
             q = np.frombuffer(data, dtype="<u2").reshape(self.count, 16)

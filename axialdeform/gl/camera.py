@@ -14,9 +14,33 @@ import pyrr
 from ..core.params import ANGLES, OFFSETS, POSITION, as_params
 from ..core.deform import rotation_matrices
 
-__all__ = ["Camera", "instance_bounds", "frame_instances", "UP_VECTORS"]
+__all__ = ["Camera", "instance_bounds", "frame_instances", "UP_VECTORS", "as_matrix"]
 
 UP_VECTORS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+
+def as_matrix(m, name: str = "matrix", invertible: bool = False) -> np.ndarray:
+    """``m`` as a ``(4, 4) float32`` matrix of finite numbers, else
+    :class:`~axialdeform.core.errors.ParamError`; with ``invertible`` a
+    singular one (an all-zero view matrix) is refused too."""
+    from ..core.errors import ParamError
+
+    try:
+        a = np.asarray(m, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ParamError(f"{name}: expected a (4, 4) matrix of numbers ({exc})") from None
+    if a.shape not in ((4, 4), (16,)):
+        raise ParamError(f"{name}: expected a (4, 4) matrix, found shape {a.shape}")
+    a = a.reshape(4, 4)
+    if not np.isfinite(a).all():
+        raise ParamError(f"{name}: expected finite numbers, found {a[~np.isfinite(a)][0]}")
+    if invertible:
+        with np.errstate(all="ignore"):
+            cond = np.linalg.cond(a)
+        if not np.isfinite(cond) or cond > 1e12:
+            raise ParamError(f"{name}: expected an invertible matrix (a camera), found a singular one "
+                             f"(condition number {cond:.3g}), e.g. all zeros")
+    return a.astype(np.float32)
 
 
 class Camera:

@@ -7,7 +7,7 @@ import numpy as np
 from ..core.errors import ContextError
 
 __all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "size_limits",
-           "check_image_size"]
+           "check_image_size", "check_alive", "check_released"]
 
 GL_REQUIRE = 330
 
@@ -35,6 +35,22 @@ def create_context(backend: str = "egl"):
         ctx.release()
         raise ContextError(f"the {backend.upper()} context is OpenGL {version}, expected {GL_REQUIRE} or newer; {_HELP}")
     return ctx
+
+
+def check_alive(ctx, what: str = "this object") -> None:
+    """Raise :class:`ContextError` if ``ctx`` was released (every GL wrapper
+    calls this before touching GL, so a call after the context is gone is an
+    error of the library's own family, not an AttributeError from moderngl)."""
+    import moderngl
+
+    if ctx is None or isinstance(getattr(ctx, "mglo", None), moderngl.InvalidObject):
+        raise ContextError(f"the OpenGL context of {what} was released; create a new context (and new objects in it)")
+
+
+def check_released(released: bool, what: str) -> None:
+    """Raise :class:`ContextError` for a call on a released wrapper."""
+    if released:
+        raise ContextError(f"{what} was released; create a new one")
 
 
 def _alive(obj) -> bool:
@@ -79,6 +95,7 @@ def check_image_size(ctx, size, samples: int = 4, panels: int = 1) -> None:
     (colour + depth at ``samples``, the resolved copy and the read-back)."""
     from ..core.safeio import memory_available
 
+    check_alive(ctx, "the image")
     w, h = (int(size[0]), int(size[1]))
     mw, mh, text = size_limits(ctx)
     if not (0 < w <= mw and 0 < h <= mh):
@@ -139,12 +156,18 @@ class Offscreen:
             self._resolved = self.fbo
         self._released = False
 
+    def _check(self) -> None:
+        check_released(self._released, "this Offscreen target")
+        check_alive(self.ctx, "this Offscreen target")
+
     def use(self, background=(0.93, 0.94, 0.96)) -> None:
+        self._check()
         self.fbo.use()
         self.ctx.viewport = (0, 0) + self.size
         self.fbo.clear(*background, 1.0, depth=1.0)
 
     def read(self) -> np.ndarray:
+        self._check()
         if self._resolved is not self.fbo:
             self.ctx.copy_framebuffer(self._resolved, self.fbo)
         data = self._resolved.read(components=3, alignment=1)

@@ -20,8 +20,9 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from .buffers import InstanceBuffer, MeshBuffers
-from .context import bind_framebuffer, release_framebuffer
+from .buffers import as_index, InstanceBuffer, MeshBuffers
+from .camera import as_matrix
+from .context import bind_framebuffer, check_alive, release_framebuffer
 from ..core.errors import AxialDeformError, ParamError
 from .shaders import build_program
 
@@ -68,6 +69,7 @@ class AxialRenderer:
 
     def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
                  quantized: bool = False, cull_back_faces: bool | None = None):
+        check_alive(ctx, "a new AxialRenderer")
         self.ctx = ctx
         self.mesh = mesh
         self.bend = bend
@@ -85,7 +87,7 @@ class AxialRenderer:
             self.mesh_buffers = MeshBuffers(ctx, mesh)
             self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
-            self._vao_edges = self._vertex_array(self.program, self.mesh_buffers.edges)
+            self._vao_edges = None  # built by the first wireframe draw (lazy edges)
         except BaseException:
             self.release()
             raise
@@ -102,6 +104,17 @@ class AxialRenderer:
         vao = self.ctx.vertex_array(program, content, index_buffer=index_buffer, index_element_size=4)
         self._objects.append(vao)
         return vao
+
+    def _edges_vao(self, tinted: bool):
+        """The vertex array of the edges (plain or tinted), built on first use."""
+        if tinted:
+            if self._tint[2] is None:
+                self._tint[2] = self._vertex_array(self._tint[0], self.mesh_buffers.edges,
+                                                   extra=[(self._tint[3], "3f/i", "i_tint")])
+            return self._tint[2]
+        if self._vao_edges is None:
+            self._vao_edges = self._vertex_array(self.program, self.mesh_buffers.edges)
+        return self._vao_edges
 
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
@@ -130,6 +143,7 @@ class AxialRenderer:
     def _check(self) -> None:
         if self._released:
             raise AxialDeformError("this AxialRenderer was released; create a new one")
+        check_alive(self.ctx, "this AxialRenderer")
 
     # ------------------------------------------------------------ parameters
     @property
@@ -144,7 +158,10 @@ class AxialRenderer:
         self._refresh_quant_uniforms()
 
     def update_params(self, params, start: int = 0) -> None:
-        """Overwrite the instances ``start .. start + len(params) - 1`` in place."""
+        """Overwrite the instances ``start .. start + len(params) - 1`` in place.
+
+        ``start`` must be an integer (int or numpy integer): a float, a
+        string, None or NaN raises :class:`ParamError`."""
         self._check()
         self.instances.update(params, start)
 
@@ -175,8 +192,7 @@ class AxialRenderer:
             self._objects.append(buffer)
             tint = (buffer, "3f/i", "i_tint")
             self._set_axis_uniforms(prog)
-            self._tint = (prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=[tint]),
-                          self._vertex_array(prog, self.mesh_buffers.edges, extra=[tint]), buffer)
+            self._tint = [prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=[tint]), None, buffer]
         buffer = self._tint[3]
         if values.nbytes > buffer.size:
             buffer.orphan(values.nbytes)
@@ -198,14 +214,14 @@ class AxialRenderer:
         self._check()
         if mode not in _MODE_INDEX:
             raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
-        view = np.asarray(view, dtype=np.float32).reshape(4, 4)
-        projection = np.asarray(projection, dtype=np.float32).reshape(4, 4)
+        view = as_matrix(view, "view", invertible=True)
+        projection = as_matrix(projection, "projection")
         tinted = self._tint_count is not None
         if tinted and self._tint_count != self.count:
             raise ParamError(f"tint: {self._tint_count} colours for {self.count} instances; "
                              "call set_tint with one colour per instance (or None)")
         prog = self._tint[0] if tinted else self.program
-        vao_edges, vao_triangles = (self._tint[2], self._tint[1]) if tinted else (self._vao_edges, self._vao_triangles)
+        vao_triangles = self._tint[1] if tinted else self._vao_triangles
         prog["u_view"].write(view.tobytes())
         prog["u_proj"].write(projection.tobytes())
         uniforms = {
@@ -224,6 +240,7 @@ class AxialRenderer:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
         if mode == "wireframe":  # lines are never culled
+            vao_edges = self._edges_vao(tinted)
             vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
             return
         with self.culling(view, projection):
@@ -264,7 +281,8 @@ class AxialRenderer:
         import moderngl
 
         self._check()
-        count = self.count - start if count is None else int(count)
+        start = as_index(start, "capture: start")
+        count = self.count - start if count is None else as_index(count, "capture: count")
         if start < 0 or count < 0 or start + count > self.count:
             raise ParamError(f"capture: instances {start}..{start + count - 1} are outside 0..{self.count - 1}")
         v = self.mesh.vertex_count
