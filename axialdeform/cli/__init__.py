@@ -197,7 +197,7 @@ def cmd_bake(args) -> None:
     if out.suffix.lower() != ".npz":  # refuse a folder of stale files before the work, not after
         write_mesh_folder(out, mesh, params[:0], params[:0], args.format, overwrite=args.overwrite)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar)
+        positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)
         print(f"wrote {out}: positions and normals {positions.shape} float32 ({args.engine})")

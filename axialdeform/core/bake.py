@@ -21,7 +21,8 @@ ENGINES = ("cpu", "gpu")
 MESH_FORMATS = ("obj", "ply", "glb")
 
 
-def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None) -> tuple[np.ndarray, np.ndarray]:
+def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None,
+         source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
     in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
     or ``"gpu"`` (transform feedback of the drawing vertex shader).
@@ -29,10 +30,11 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None) -> tuple
 
     A non-finite result (finite parameters so large that float32 overflows)
     raises :class:`AxialDeformError` naming the instance, array, vertex and
-    coordinate: nothing non-finite is ever returned to be written."""
+    coordinate (and ``source``, the parameter file): nothing non-finite is
+    ever returned to be written."""
     positions, normals = _bake(mesh, params, engine, ctx=ctx, progress=progress)
-    require_finite(positions, "positions", "xyz")
-    require_finite(normals, "normals", "xyz")
+    require_finite(positions, "positions", "xyz", source=source)
+    require_finite(normals, "normals", "xyz", source=source)
     return positions, normals
 
 

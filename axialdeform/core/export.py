@@ -201,13 +201,14 @@ def _check_glb_path(path) -> Path:
     return path
 
 
-def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
-    """The GLB bytes of the baked layout (see :func:`export_baked`)."""
+def encode_baked(mesh, params, *, positions=None, normals=None, source: str | None = None) -> bytes:
+    """The GLB bytes of the baked layout (see :func:`export_baked`); ``source``
+    names the parameter file in errors."""
     params = as_params(params)
     if positions is None or normals is None:
         from .bake import bake
 
-        positions, normals = bake(mesh, params, "cpu")
+        positions, normals = bake(mesh, params, "cpu", source=source)
     if len(params) == 0:
         raise GltfError("baked export: expected at least one instance, found 0")
     positions = np.ascontiguousarray(positions, dtype="<f4")
@@ -221,8 +222,8 @@ def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
     from .safeio import require_finite
 
     # an overflowing deformation (huge but finite parameters) is refused before any JSON is made
-    require_finite(positions, "positions", "xyz", error=GltfError)
-    require_finite(normals, "normals", "xyz", error=GltfError)
+    require_finite(positions, "positions", "xyz", error=GltfError, source=source)
+    require_finite(normals, "normals", "xyz", error=GltfError, source=source)
     b = _Builder()
     g = b.g
     idx = b.indices(mesh)
@@ -244,7 +245,8 @@ def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
     return b.finish()
 
 
-def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, normals=None) -> Path:
+def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, normals=None,
+                 source: str | None = None) -> Path:
     """Write one glTF mesh per instance with its deformed world geometry.
 
     Parameters
@@ -261,7 +263,7 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     ``extras["axialdeform"]`` records the axis and the mesh fingerprint.
     """
     path = _check_glb_path(path)
-    atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals))
+    atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals, source=source))
     return path
 
 
@@ -322,10 +324,11 @@ def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
     return path
 
 
-def export_glb(path: str | os.PathLike, mesh, params, layout: str = "baked") -> Path:
-    """Write ``params`` for ``mesh`` as a GLB in ``layout`` ``"baked"`` or ``"instanced"``."""
+def export_glb(path: str | os.PathLike, mesh, params, layout: str = "baked", *, source: str | None = None) -> Path:
+    """Write ``params`` for ``mesh`` as a GLB in ``layout`` ``"baked"`` or ``"instanced"``
+    (``source``: the parameter file, named in errors)."""
     if layout == "baked":
-        return export_baked(path, mesh, params)
+        return export_baked(path, mesh, params, source=source)
     if layout == "instanced":
         return export_instanced(path, mesh, params)
     raise GltfError(f"layout: expected one of {', '.join(LAYOUTS)}, found {layout!r}")
@@ -489,5 +492,5 @@ def run(args) -> None:
     check_output_path(out, (args.mesh, args.params), "exported .glb")
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
-    path = export_glb(out, mesh, params, args.layout)
+    path = export_glb(out, mesh, params, args.layout, source=args.params)
     print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

@@ -143,7 +143,7 @@ def format_text(values: np.ndarray, header: str | None = None) -> str:
 
 
 #: rows formatted at a time by the text writer: its memory stays bounded
-_TEXT_ROWS = 16384
+_TEXT_ROWS = 4096
 
 
 def _text_pieces(values: np.ndarray, header: str | None):
@@ -190,14 +190,56 @@ def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
                 cut += 1
             end = cut
         chunk = bytes(view[start:end])
-        rows, linenos, lines_in_chunk = _split_lines(chunk, name, lineno, start)
-        if rows:
-            pieces.append(_rows_to_float32(rows, linenos, name))
+        fast = _fast_chunk(chunk)
+        if fast is not None:
+            arr, lines_in_chunk = fast
+            if len(arr):
+                pieces.append(arr)
+        else:
+            rows, linenos, lines_in_chunk = _split_lines(chunk, name, lineno, start)
+            if rows:
+                pieces.append(_rows_to_float32(rows, linenos, name))
         lineno += lines_in_chunk
         start = end
     if not pieces:
         return np.zeros((0, 16), dtype=np.float32)
     return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
+
+
+_PLAIN = re.compile(rb"[0-9eE+\-., \t\n]*")
+_COMMENT_LINE = re.compile(rb"^[ \t]*#[\x20-\x7e\t]*$", re.M)
+
+
+def _fast_chunk(chunk: bytes):
+    """``(values (n, 16) float32, lines)`` of a piece made only of numbers,
+    commas, blanks and ``\n`` line breaks, parsed by numpy's C reader; None
+    when the piece holds anything else (comments, ``\r``, other text) or
+    does not parse into 16 columns: the line-by-line parser then finds the
+    exact line and field for its message."""
+    if b"#" in chunk:  # whole-line ASCII comments are dropped (their line breaks kept)
+        chunk = _COMMENT_LINE.sub(b"", chunk)
+    if not _PLAIN.fullmatch(chunk):
+        return None
+    breaks = np.flatnonzero(np.frombuffer(chunk, dtype=np.uint8) == 10)
+    if np.diff(np.concatenate([[-1], breaks, [len(chunk)]])).max() > _MAX_TEXT_LINE + 1:
+        return None  # a line too long: the slow path says which
+    import io
+    import warnings
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # "empty input" of a piece with blank lines only
+            arr = np.loadtxt(io.StringIO(chunk.replace(b",", b" ").decode("ascii")), dtype=np.float64, ndmin=2)
+    except ValueError:
+        return None
+    if arr.size and arr.shape[1] != 16:
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        arr32 = arr.reshape(-1, 16).astype(np.float32)
+    if not np.isfinite(arr32).all():  # beyond float32: the slow path names the line
+        return None
+    lines = chunk.count(b"\n") + (0 if not chunk or chunk.endswith(b"\n") else 1)
+    return np.ascontiguousarray(arr32), lines
 
 
 def _split_lines(chunk: bytes, name: str, lineno: int, offset: int):
