@@ -232,8 +232,12 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
 
         import trimesh
 
+        from .safeio import quiet_numpy
+
         resolver = SafeResolver(str(path), referrer=name)
-        loaded = trimesh.load(io.BytesIO(data), file_type=path.suffix.lower().lstrip("."), resolver=resolver, process=False)
+        with quiet_numpy():  # trimesh's casts of hostile numbers warn; the results are checked below
+            loaded = trimesh.load(io.BytesIO(data), file_type=path.suffix.lower().lstrip("."), resolver=resolver,
+                                  process=False)
         del data
         if resolver.refused:
             raise resolver.refused[0]
