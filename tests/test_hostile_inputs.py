@@ -213,6 +213,18 @@ def test_output_that_is_an_input_is_refused(files, capsys):
         assert p.read_bytes() == data  # before: replaced by a PNG
 
 
+def test_bundled_mesh_is_an_input_too(tmp_path, capsys):
+    """``demo`` and ``render stone`` read the package's stone.obj: never replaced by their output."""
+    stone = ad.bundled_mesh_path("stone")
+    before = stone.read_bytes()
+    params = tmp_path / "p.adp"
+    P.write_params(params, np.zeros((1, 16), np.float32))
+    assert main(["demo", "-o", str(stone), "-n", "2", "--size", "16x16"]) == 2  # before: stone.obj became a PNG
+    assert main(["render", "stone", str(params), "-o", str(stone), "--size", "16x16"]) == 2
+    assert capsys.readouterr().err.count("refusing to overwrite an input") == 2
+    assert stone.read_bytes() == before
+
+
 def test_output_link_to_input_is_refused(files, capsys):
     tmp, mesh, params = files
     (tmp / "link.png").symlink_to(params)
@@ -438,3 +450,33 @@ def test_every_call_after_release_is_an_axialdeform_error(stone):
     for obj in (r, target, buf):  # release stays safe, twice
         obj.release()
         obj.release()
+
+
+# ----------------------------------------------------------- 8. the fuzzer
+
+sys.path.insert(0, str(ROOT / "tools"))
+import fuzz_params  # noqa: E402
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+
+
+@pytest.mark.slow
+@settings(max_examples=80, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@given(case=fuzz_params.strategies()["mesh_file"])
+def test_generated_mesh_files_load_or_name_the_file(tmp_path_factory, case):
+    folder = tmp_path_factory.getbasetemp() / "fuzz-meshes"
+    folder.mkdir(exist_ok=True)
+    fuzz_params.prepare_folder(folder)
+    verdict = fuzz_params.check_mesh_file(folder, *case)
+    assert not verdict.startswith("crash"), (verdict, case)
+
+
+@pytest.mark.slow
+def test_fuzz_every_command_briefly(capsys):
+    assert fuzz_params.fuzz_commands(6.0, seed=2003) == 0, capsys.readouterr()
+    out = capsys.readouterr().out
+    assert "0 crashes, 0 hangs" in out, out
+
+
+def test_fuzz_params_briefly(capsys):
+    assert fuzz_params.fuzz_params(1.0, seed=16) == 0
+    assert "0 crashes" in capsys.readouterr().out

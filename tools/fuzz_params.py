@@ -505,6 +505,14 @@ def run_command(argv: list[str], timeout: float = 30.0) -> tuple[str, float]:
     return f"crash: exit {status} with {len(errors)} error lines: {err.getvalue()[-200:]!r}", seconds
 
 
+def _bundled_digest() -> str:
+    import hashlib
+
+    from axialdeform.core.mesh import BUNDLED_MESHES, bundled_mesh_path
+
+    return hashlib.sha256(b"".join(bundled_mesh_path(n).read_bytes() for n in BUNDLED_MESHES)).hexdigest()
+
+
 def fuzz_commands(seconds: float, seed: int) -> int:
     import os
     import shutil
@@ -518,6 +526,7 @@ def fuzz_commands(seconds: float, seed: int) -> int:
     mesh_texts: list = []
     end = time.monotonic() + seconds
     tried = 0
+    bundled = _bundled_digest()
     with tempfile.TemporaryDirectory(prefix="fuzz-commands-") as tmp:
         prepare_folder(tmp)
         _drive(strategies()["mesh_file"], min(5.0, seconds / 10), seed, mesh_texts.append)
@@ -538,6 +547,8 @@ def fuzz_commands(seconds: float, seed: int) -> int:
                     pass
             verdict, took = run_command(argv)
             tried += 1
+            if _bundled_digest() != bundled:  # an output replaced a file of the package itself
+                verdict = "crash: a bundled mesh file was overwritten"
             per_command[argv[0]] += 1
             for p, mode in kinds.items():  # a FIFO or a symlink stays what it was
                 if not os.path.lexists(p) or stat.S_IFMT(os.lstat(p).st_mode) != stat.S_IFMT(mode):
@@ -547,6 +558,8 @@ def fuzz_commands(seconds: float, seed: int) -> int:
             outcomes[verdict.split(":")[0]] += 1
             if verdict.startswith(("crash", "hang")):
                 failures.append((verdict, argv))
+                if "bundled" in verdict:
+                    break  # the package is damaged: nothing after this is meaningful
     peak = _peak_rss()
     print(f"fuzz commands: {tried} command lines in {seconds:g} s (seed {seed}; "
           + ", ".join(f"{c} {per_command[c]}" for c in COMMANDS) + f"): {outcomes['ok']} succeeded, "

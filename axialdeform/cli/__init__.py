@@ -127,7 +127,9 @@ def cmd_demo(args) -> None:
     from ..core.mesh import load_mesh
     from ..core.variation import random_params
 
-    check_output_path(args.output, (), "PNG")
+    from ..core.mesh import mesh_source_path
+
+    check_output_path(args.output, (mesh_source_path("stone"),), "PNG")  # the bundled mesh is an input too
     check_count(args.count, _DEMO_BYTES_EACH, "-n/--count")
     mesh = load_mesh("stone")
     params = random_params(mesh, args.count, seed=args.seed, bend=0.14, placement="disc",
@@ -144,7 +146,7 @@ def cmd_random(args) -> None:
     from ..core.params import write_params
     from ..core.variation import random_params
 
-    check_output_path(args.output, (args.mesh,), "parameter file")
+    check_output_path(args.output, (_mesh_file(args.mesh),), "parameter file")
     check_count(args.count, _RANDOM_BYTES_EACH, "-n/--count")
     mesh = load_mesh(args.mesh)
     params = random_params(mesh, args.count, args.seed, bend=args.bend, placement=args.placement,
@@ -153,13 +155,20 @@ def cmd_random(args) -> None:
     print(f"wrote {path} ({len(params)} instances, {path.stat().st_size} bytes)")
 
 
+def _mesh_file(source):
+    """The file a mesh argument names (a bundled name: the package's file), or None."""
+    from ..core.mesh import mesh_source_path
+
+    return None if source is None else mesh_source_path(source)
+
+
 def _load(args, what: str = "output", allow_folder: bool = False):
     """The mesh and parameters of a command, after checking that its output
     is neither one of them nor a device, FIFO or socket."""
     from ..core.mesh import load_mesh
     from ..core.params import read_params
 
-    check_output_path(args.output, (args.mesh, args.params), what, allow_folder=allow_folder)
+    check_output_path(args.output, (_mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     warn_ranges(args, mesh, params)
@@ -250,7 +259,7 @@ def cmd_convert(args) -> None:
     from ..core.mesh import load_mesh
     from ..core.params import check_mesh, read_param_file, write_params
 
-    check_output_path(args.dst, (args.src, args.mesh), "parameter file")
+    check_output_path(args.dst, (args.src, _mesh_file(args.mesh)), "parameter file")
     pf = read_param_file(args.src)
     mesh = load_mesh(args.mesh) if args.mesh else None
     if mesh is not None:

@@ -489,7 +489,9 @@ def run(args) -> None:
     from .safeio import check_output_path
 
     out = _check_glb_path(args.output)
-    check_output_path(out, (args.mesh, args.params), "exported .glb")
+    from .mesh import mesh_source_path
+
+    check_output_path(out, (mesh_source_path(args.mesh), args.params), "exported .glb")
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     path = export_glb(out, mesh, params, args.layout, source=args.params)

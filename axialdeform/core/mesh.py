@@ -20,7 +20,7 @@ import numpy as np
 from .axis import ControlAxis
 from .errors import AxialDeformError, MeshError
 
-__all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "area_weighted_normals"]
+__all__ = ["BaseMesh", "load_mesh", "mesh_source_path", "bundled_mesh_path", "BUNDLED_MESHES", "area_weighted_normals"]
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``).
 BUNDLED_MESHES = ("stone", "leaf")
@@ -120,8 +120,8 @@ class BaseMesh:
         Only then can back faces be culled without changing the picture;
         :class:`~axialdeform.gl.renderer.AxialRenderer` does that by default.
         """
-        _, ids = np.unique(self.positions, axis=0, return_inverse=True)
-        f = ids.reshape(-1)[self.faces].astype(np.int64)
+        ids = _position_ids(self.positions)
+        f = ids[self.faces]
         if ((f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 2] == f[:, 0])).any():
             return False
         n = int(f.max()) + 1
@@ -132,9 +132,12 @@ class BaseMesh:
         reverse = np.sort(b * n + a)
         if not np.array_equal(forward, reverse):
             return False
+        # signed volume: sum of det(v0, v1, v2) / 6, by columns (np.cross on (m, 3) is slow)
         p = self.positions.astype(np.float64)
-        v = p[self.faces]
-        volume = np.einsum("ij,ij->", v[:, 0], np.cross(v[:, 1], v[:, 2])) / 6.0
+        x, y, z = p[:, 0], p[:, 1], p[:, 2]
+        i, j, k = self.faces[:, 0], self.faces[:, 1], self.faces[:, 2]
+        volume = float(np.sum(x[i] * (y[j] * z[k] - z[j] * y[k]) + y[i] * (z[j] * x[k] - x[j] * z[k])
+                              + z[i] * (x[j] * y[k] - y[j] * x[k]))) / 6.0
         return bool(volume > 0.0)
 
     def to_trimesh(self, positions: np.ndarray | None = None, normals: np.ndarray | None = None):
@@ -150,6 +153,23 @@ class BaseMesh:
 
 
 _F32_MAX = float(np.finfo(np.float32).max)
+
+
+def _position_ids(positions: np.ndarray) -> np.ndarray:
+    """(n,) int64: one id per distinct position (equal rows share it), the
+    same grouping as ``np.unique(positions, axis=0, return_inverse=True)``
+    but by one lexsort, many times faster on millions of vertices."""
+    p = np.asarray(positions)
+    if len(p) == 0:
+        return np.zeros(0, dtype=np.int64)
+    order = np.lexsort((p[:, 2], p[:, 1], p[:, 0]))
+    q = p[order]
+    new = np.empty(len(p), dtype=bool)
+    new[0] = True
+    new[1:] = (q[1:] != q[:-1]).any(axis=1)
+    ids = np.empty(len(p), dtype=np.int64)
+    ids[order] = np.cumsum(new) - 1
+    return ids
 
 
 def _check_float32_range(positions: np.ndarray, name: str) -> None:
@@ -204,6 +224,14 @@ def bundled_mesh_path(name: str) -> Path:
     return Path(str(resources.files("axialdeform.meshes").joinpath(f"{name}.obj")))
 
 
+def mesh_source_path(source: str | os.PathLike) -> Path:
+    """The file :func:`load_mesh` reads for ``source`` (a bundled mesh's name
+    becomes its file in the package): for comparing outputs with inputs."""
+    if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
+        return bundled_mesh_path(source)
+    return Path(source)
+
+
 def load_mesh(source: str | os.PathLike) -> BaseMesh:
     """Read a base mesh from a file, or a bundled mesh by name (``"stone"``, ``"leaf"``).
 
@@ -235,6 +263,7 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         from .safeio import quiet_numpy
 
         resolver = SafeResolver(str(path), referrer=name)
+        data = bytes(data)  # trimesh decodes text only from bytes (not bytearray)
         with quiet_numpy():  # trimesh's casts of hostile numbers warn; the results are checked below
             loaded = trimesh.load(io.BytesIO(data), file_type=path.suffix.lower().lstrip("."), resolver=resolver,
                                   process=False)
