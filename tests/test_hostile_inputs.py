@@ -25,7 +25,7 @@ import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core import params as P
 from axialdeform.gl.buffers import InstanceBuffer
-from axialdeform.core.errors import AxialDeformError, ContextError, MeshError, ParamError, ParamFileError, PathError
+from axialdeform.core.errors import AxialDeformError, ContextError, ParamError, ParamFileError, PathError
 
 ROOT = Path(__file__).resolve().parent.parent
 ROW = " ".join(["0.01"] * 10 + ["0", "0", "0", "0", "0", "0"]) + "\n"

@@ -359,7 +359,6 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list) -> tuple[list
     import os
     from pathlib import Path
 
-    from axialdeform.core import params as P
     from axialdeform.core.mesh import bundled_mesh_path
 
     tmp = Path(tmp)

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -494,5 +495,10 @@ def run(args) -> None:
     check_output_path(out, (mesh_source_path(args.mesh), args.params), "exported .glb")
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+    from .params import range_warning
+
+    warning = range_warning(mesh, params, args.params)
+    if warning:
+        print(f"axialdeform export: warning: {warning}", file=sys.stderr)
     path = export_glb(out, mesh, params, args.layout, source=args.params)
     print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

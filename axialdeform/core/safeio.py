@@ -27,7 +27,6 @@ import errno
 import os
 import stat
 import warnings
-from pathlib import Path
 from typing import Iterable, Iterator, Sequence
 
 import numpy as np
