@@ -630,6 +630,20 @@ def write_params(
     values = as_params(values)
     if mesh is not None:
         axis, mesh_fingerprint = mesh.axis, mesh.fingerprint
+    if _is_binary_suffix(path) and not quantize:
+        # float32 records are written in pieces, the CRC-32 carried along:
+        # no second copy of a huge payload in memory
+        header = encode_binary(values[:0], axis=axis, mesh_fingerprint=mesh_fingerprint)[:HEADER_SIZE]
+        header = header[:16] + struct.pack("<Q", len(values)) + header[24:]
+        crc = zlib.crc32(header)
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            fh.write(header)
+            for s in range(0, len(values), 1 << 16):
+                piece = values[s : s + (1 << 16)].astype("<f4").tobytes()
+                crc = zlib.crc32(piece, crc)
+                fh.write(piece)
+            fh.write(_TRAILER.pack(crc))
+        return path
     if _is_binary_suffix(path):
         data = encode_binary(values, axis=axis, mesh_fingerprint=mesh_fingerprint, quantize=quantize)
     elif path.suffix.lower() in TEXT_SUFFIXES:
