@@ -199,12 +199,17 @@ def area_weighted_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarra
     scale = float(np.max(np.abs(p - p.mean(axis=0)))) if len(p) else 0.0
     if np.isfinite(scale) and scale > 0:
         p = (p - p.mean(axis=0)) / scale
-    tri = p[f]
+    # by columns: gathers of (m,) arrays and no (m, 3, 3) temporaries, so a
+    # 10 M-triangle mesh needs a few hundred MB and seconds, not gigabytes
+    x, y, z = (np.ascontiguousarray(p[:, c]) for c in range(3))
+    i, j, k = (np.ascontiguousarray(f[:, c]) for c in range(3))
+    ax, ay, az = x[j] - x[i], y[j] - y[i], z[j] - z[i]
+    bx, by, bz = x[k] - x[i], y[k] - y[i], z[k] - z[i]
     # the cross product's length is twice the triangle's area: area weighting
-    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    idx = f.ravel()
-    w = np.repeat(fn, 3, axis=0)
-    vn = np.stack([np.bincount(idx, weights=w[:, k], minlength=len(p)) for k in range(3)], axis=1)
+    fn = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
+    n = len(p)
+    vn = np.stack([np.bincount(i, weights=c, minlength=n) + np.bincount(j, weights=c, minlength=n)
+                   + np.bincount(k, weights=c, minlength=n) for c in fn], axis=1)
     return _unit_or_default(vn)
 
 
