@@ -291,6 +291,15 @@ def test_export_refuses_non_finite_results(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_capture_refuses_non_finite_results(ctx, stone):
+    params = np.zeros((3, 16), np.float32)
+    params[2] = [3.4e38] * 13 + [0.7] * 3
+    with ad.AxialRenderer(ctx, stone, params) as r:
+        r.capture(0, 2)  # finite instances are fine
+        with pytest.raises(AxialDeformError, match=r"instance 2, positions \(vertex \d+, [xyz]\)"):
+            r.capture(1, 2)  # before: inf returned
+
+
 def test_require_finite_names_instance_and_field():
     from axialdeform.core.safeio import require_finite
 

@@ -51,7 +51,7 @@ def _bake(mesh, params, engine, *, ctx=None, progress=None):
     ctx = create_context() if own else ctx
     try:
         with AxialRenderer(ctx, mesh, params) as r:
-            return r.capture(progress=progress)
+            return r.capture(progress=progress, check_finite=False)
     finally:
         if own:
             ctx.release()

@@ -258,7 +258,7 @@ def check_count(count, bytes_each: float, what: str = "count", error: type = Axi
 
 
 def require_finite(array: np.ndarray, what: str, fields: Sequence[str] | None = None, items: str = "instance",
-                   error: type = AxialDeformError, source: str | None = None) -> None:
+                   error: type = AxialDeformError, source: str | None = None, first: int = 0) -> None:
     """Raise ``error`` if ``array`` holds a NaN or infinity, naming the first:
     its ``items`` index (axis 0), then the position in the remaining axes
     (``fields`` names the last axis), e.g. ``p.adp: instance 3, positions
@@ -278,7 +278,7 @@ def require_finite(array: np.ndarray, what: str, fields: Sequence[str] | None = 
             continue
         row, col = (int(x) for x in np.argwhere(~ok)[0])
         row += s
-        where = (f"{source}: " if source else "") + f"{items} {row}, {what}"
+        where = (f"{source}: " if source else "") + f"{items} {row + first}, {what}"
         if a.ndim > 1:
             idx = np.unravel_index(col, a.shape[1:])
             if fields is not None:

@@ -21,6 +21,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from .buffers import as_index, InstanceBuffer, MeshBuffers
+from ..core.safeio import require_finite
 from .camera import as_matrix
 from .context import bind_framebuffer, check_alive, release_framebuffer
 from ..core.errors import AxialDeformError, ParamError
@@ -270,10 +271,13 @@ class AxialRenderer:
             self.ctx.disable(moderngl.CULL_FACE)
 
     # ------------------------------------------------------------ capture
-    def capture(self, start: int = 0, count: int | None = None, progress=None) -> tuple[np.ndarray, np.ndarray]:
+    def capture(self, start: int = 0, count: int | None = None, progress=None, *,
+                check_finite: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """World positions and normals as the GPU computes them, by transform
         feedback of the drawing vertex shader.
 
+        A non-finite result (parameters too large for float32) raises
+        :class:`AxialDeformError` naming the instance and coordinate.
         Returns two ``(count, vertices, 3) float32`` arrays in the base mesh's
         vertex order, for instances ``start .. start + count - 1``.
         ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
@@ -317,7 +321,12 @@ class AxialRenderer:
                     progress.update(k)
         finally:
             bind_framebuffer(self.ctx, previous)  # give the caller back their framebuffer
-        return out[..., :3].copy(), out[..., 3:].copy()
+        positions, normals = out[..., :3].copy(), out[..., 3:].copy()
+        # parameters too large for float32 overflow on the GPU: an error naming the instance
+        if check_finite:  # bake() checks itself, naming the parameter file
+            require_finite(positions, "positions", "xyz", first=start)
+            require_finite(normals, "normals", "xyz", first=start)
+        return positions, normals
 
     def _release_capture(self) -> None:
         if self._capture is not None:
