@@ -70,6 +70,7 @@ def _obj_with_mtllib(folder: Path) -> Path:
     return obj
 
 
+@pytest.mark.slow
 def test_files_a_mesh_refers_to_are_checked(tmp_path):
     obj = _obj_with_mtllib(tmp_path)
     os.mkfifo(tmp_path / "m.mtl")  # before: trimesh's resolver blocked forever opening it
@@ -80,6 +81,7 @@ def test_files_a_mesh_refers_to_are_checked(tmp_path):
     assert str(obj) in proc.stdout and "m.mtl" in proc.stdout and "not a regular file" in proc.stdout
 
 
+@pytest.mark.slow
 def test_gltf_buffer_must_be_a_regular_file_of_bounded_size(tmp_path):
     import json
 
@@ -399,6 +401,7 @@ def test_axis_length_zero_in_a_header_names_the_file(tmp_path, capsys):
     assert len(err) == 1 and str(f) in err[0] and "axis" in err[0]
 
 
+@pytest.mark.slow
 def test_numpy_warnings_never_reach_the_terminal(tmp_path):
     proc = run_cli("bake", "stone", _huge(tmp_path), "-o", tmp_path / "x.npz", "--engine", "cpu")
     assert proc.returncode == 2
