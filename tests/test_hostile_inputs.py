@@ -260,6 +260,9 @@ def test_bake_folder_with_files_needs_overwrite(files, capsys):
     (out / "notes.txt").write_text("mine\n")
     assert main(["bake", str(mesh), str(params), "-o", str(out)]) == 2  # before: wrote 4 beside the stale ones
     assert "--overwrite" in capsys.readouterr().err
+    huge = _huge(tmp)
+    assert main(["bake", str(mesh), str(huge), "-o", str(out), "--overwrite", "--ignore-mesh-mismatch"]) == 2
+    assert len(list(out.iterdir())) == 6  # a failed bake removed nothing
     assert main(["bake", str(mesh), str(params), "-o", str(out), "--overwrite"]) == 0
     names = sorted(p.name for p in out.iterdir())
     assert names == [f"instance_{i:06d}.obj" for i in range(4)] + ["notes.txt"]

@@ -124,10 +124,8 @@ def _progress(total: int, desc: str):
 def cmd_demo(args) -> None:
     from ..gl.camera import frame_instances
     from ..gl.image import parse_size, render_image, save_png
-    from ..core.mesh import load_mesh
+    from ..core.mesh import load_mesh, mesh_source_path
     from ..core.variation import random_params
-
-    from ..core.mesh import mesh_source_path
 
     check_output_path(args.output, (mesh_source_path("stone"),), "PNG")  # the bundled mesh is an input too
     check_count(args.count, _DEMO_BYTES_EACH, "-n/--count")
@@ -199,12 +197,12 @@ def cmd_render(args) -> None:
 
 
 def cmd_bake(args) -> None:
-    from ..core.bake import bake, write_mesh_folder, write_npz
+    from ..core.bake import bake, check_bake_folder, write_mesh_folder, write_npz
 
     out = Path(args.output)
     mesh, params = _load(args, "bake output", allow_folder=out.suffix.lower() != ".npz")
     if out.suffix.lower() != ".npz":  # refuse a folder of stale files before the work, not after
-        write_mesh_folder(out, mesh, params[:0], params[:0], args.format, overwrite=args.overwrite)
+        check_bake_folder(out, args.overwrite)
     with _progress(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params)
     if out.suffix.lower() == ".npz":

@@ -15,7 +15,7 @@ from .deform import deform
 from .errors import AxialDeformError, PathError
 from .safeio import check_not_special, require_finite
 
-__all__ = ["bake", "write_npz", "write_mesh_folder", "ENGINES", "MESH_FORMATS"]
+__all__ = ["bake", "write_npz", "write_mesh_folder", "check_bake_folder", "ENGINES", "MESH_FORMATS"]
 
 ENGINES = ("cpu", "gpu")
 MESH_FORMATS = ("obj", "ply", "glb")
@@ -82,14 +82,7 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
     if fmt not in MESH_FORMATS:
         raise AxialDeformError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
     folder = Path(folder)
-    check_not_special(folder, "output folder", allow_folder=True)
-    if folder.exists() and not folder.is_dir():
-        raise PathError(f"{folder}: exists and is not a folder; expected a folder for one mesh file per instance")
-    old = _folder_entries(folder)
-    if old and not overwrite:
-        sample = ", ".join(sorted(old)[:3]) + (", ..." if len(old) > 3 else "")
-        raise PathError(f"{folder}: holds {len(old)} files it did not just write ({sample}); expected a new or empty "
-                        "folder (--overwrite replaces an earlier bake: it removes the old instance_* files)")
+    old = check_bake_folder(folder, overwrite)
     folder.mkdir(parents=True, exist_ok=True)
     digits = max(6, len(str(max(len(positions) - 1, 0))))
     written = []
@@ -108,6 +101,23 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(folder / name)
     return written
+
+
+def check_bake_folder(folder: str | os.PathLike, overwrite: bool = False) -> list[str]:
+    """Check ``folder`` as the target of :func:`write_mesh_folder` before any
+    work: it must be new, empty (hidden files aside), or — with
+    ``overwrite`` — anything; never a file, a device or a FIFO.  Returns the
+    names it holds now.  Changes nothing."""
+    folder = Path(folder)
+    check_not_special(folder, "output folder", allow_folder=True)
+    if folder.exists() and not folder.is_dir():
+        raise PathError(f"{folder}: exists and is not a folder; expected a folder for one mesh file per instance")
+    old = _folder_entries(folder)
+    if old and not overwrite:
+        sample = ", ".join(sorted(old)[:3]) + (", ..." if len(old) > 3 else "")
+        raise PathError(f"{folder}: holds {len(old)} files it did not just write ({sample}); expected a new or empty "
+                        "folder (--overwrite replaces an earlier bake: it removes the old instance_* files)")
+    return old
 
 
 def _folder_entries(folder: Path) -> list[str]:
