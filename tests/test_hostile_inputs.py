@@ -5,7 +5,9 @@ that name their file, and API misuse inside the error family.
 
 Every test here failed on the code before issue 16 (a hang caught by a
 subprocess timeout, a traceback, a destroyed input, a file written with
-exit 0, or an exception outside ``AxialDeformError``).
+exit 0, an exception outside ``AxialDeformError``, or a missing API),
+except ``test_edges_same_as_unique_rows``, a guard that the faster edge
+code gives exactly the old result.
 """
 
 from __future__ import annotations
@@ -151,6 +153,18 @@ def test_text_parser_memory(tmp_path):
     tracemalloc.stop()
     assert np.array_equal(out, values)
     assert peak < 3 * size + out.nbytes, (peak, size)
+
+
+def test_one_huge_line_is_refused_in_bounded_memory(tmp_path):
+    """A 40 MB line: refused after reading the file once (before: about 4x the file)."""
+    f = tmp_path / "line.txt"
+    f.write_bytes(b"1" * 40_000_000)
+    tracemalloc.start()
+    with pytest.raises(ParamFileError, match="line 1 is longer than"):
+        P.read_param_file(f)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 1.2 * f.stat().st_size, peak
 
 
 @pytest.mark.slow
