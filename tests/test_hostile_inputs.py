@@ -187,6 +187,17 @@ def test_random_count_checked_before_allocating(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_bake_count_checked_before_allocating(tmp_path, monkeypatch, capsys):
+    from axialdeform.core import safeio
+
+    f = tmp_path / "p.adp"
+    P.write_params(f, np.zeros((1000, 16), np.float32))
+    monkeypatch.setattr(safeio, "memory_available", lambda: 1_000_000)  # 1 MB: 1000 x 58 vertices x 24 B does not fit
+    assert main(["bake", "stone", str(f), "-o", str(tmp_path / "b.npz")]) == 2
+    err = capsys.readouterr().err
+    assert "instances to bake" in err and "expected at most" in err and str(f) in err
+
+
 def test_check_count_says_the_maximum():
     from axialdeform.core.safeio import MAX_INSTANCES, check_count
 

@@ -13,7 +13,7 @@ import numpy as np
 from .atomic import atomic_path
 from .deform import deform
 from .errors import AxialDeformError, PathError
-from .safeio import check_not_special, require_finite
+from .safeio import check_count, check_not_special, require_finite
 
 __all__ = ["bake", "write_npz", "write_mesh_folder", "check_bake_folder", "ENGINES", "MESH_FORMATS"]
 
@@ -32,6 +32,10 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None,
     raises :class:`AxialDeformError` naming the instance, array, vertex and
     coordinate (and ``source``, the parameter file): nothing non-finite is
     ever returned to be written."""
+    # the result is two (n, v, 3) float32 arrays (the GPU capture holds a
+    # third copy while it splits them): refused before anything is allocated
+    check_count(len(params), mesh.vertex_count * 12 * (4 if engine == "gpu" else 2.2),
+                f"{source + ': ' if source else ''}instances to bake ({mesh.vertex_count} vertices each)")
     positions, normals = _bake(mesh, params, engine, ctx=ctx, progress=progress)
     require_finite(positions, "positions", "xyz", source=source)
     require_finite(normals, "normals", "xyz", source=source)
