@@ -12,6 +12,7 @@ the reverse; ``tests/test_layers.py`` reads the imports and enforces it):
 """
 
 from .core.errors import (
+    ArgumentError,
     AxialDeformError,
     ContextError,
     GltfError,
@@ -24,19 +25,20 @@ from .core.errors import (
     TopologyError,
 )
 
-# These two share their names with their modules (axialdeform.core.bake,
+# These two share their names with their modules (axialdeform.gl.bake,
 # axialdeform.core.deform), so they are bound now: importing the submodule later
 # must not replace the function.
-from .core.bake import bake
-from .core.deform import deform, rotation_matrices
+from .gl.bake import bake
+from .core.deform import deform
+from .core.transforms import rotation_matrices
 
 # The other public names and the module each lives in.  They are imported on first
 # use (PEP 562), so ``import axialdeform`` -- and every CLI start and every
 # benchmark child -- pays only for what it touches.
 _LAZY = {
     "ControlAxis": "core.axis",
-    "Camera": "gl.camera", "frame_instances": "gl.camera", "instance_bounds": "gl.camera",
-    "Offscreen": "gl.context", "create_context": "gl.context",
+    "Camera": "gl.camera", "OrbitCamera": "gl.camera", "frame_instances": "gl.camera", "instance_bounds": "core.bounds", "scene_box": "core.bounds",
+    "Offscreen": "gl.context", "create_context": "gl.context", "read_pixels": "gl.context",
     "GroundPlane": "gl.ground",
     "render_image": "gl.image", "save_png": "gl.image",
     "BUNDLED_MESHES": "core.mesh", "BaseMesh": "core.mesh", "bundled_mesh_path": "core.mesh", "load_mesh": "core.mesh",
@@ -76,9 +78,10 @@ def __dir__():
 
 
 __all__ = [
-    "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
-    "FIELDS", "GroundPlane", "MODES", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
+    "ArgumentError", "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
+    "FIELDS", "GroundPlane", "MODES", "OrbitCamera", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
-    "deformation_glsl", "frame_instances", "instance_bounds", "load_mesh", "make_params", "random_params",
-    "read_param_file", "read_params", "render_image", "rotation_matrices", "save_png", "write_params",
+    "deformation_glsl", "frame_instances", "instance_bounds",
+    "scene_box", "load_mesh", "make_params", "random_params",
+    "read_param_file", "read_params", "read_pixels", "render_image", "rotation_matrices", "save_png", "write_params",
 ]

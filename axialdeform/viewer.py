@@ -25,17 +25,18 @@ From Python::
 from __future__ import annotations
 
 import logging
-import math
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .gl.camera import UP_VECTORS, frame_instances, instance_bounds
-from .core.errors import AxialDeformError, ContextError, ParamError
+from .gl.camera import UP_VECTORS, OrbitCamera
+from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
 from .gl.renderer import MODES
 
-__all__ = ["Viewer", "add_parser", "run", "KEY_ACTIONS"]
+__all__ = ["Viewer", "KEY_ACTIONS"]
+
+_log = logging.getLogger(__name__)
 
 #: key name -> what it does (names are moderngl-window's key attribute names)
 KEY_ACTIONS = {
@@ -52,7 +53,7 @@ def _window_config_base():
     try:
         import moderngl_window as mglw
     except ImportError as exc:  # pragma: no cover - a dependency
-        raise ContextError(f"moderngl-window is not installed ({exc}); pip install 'moderngl-window>=2.4'") from None
+        raise ContextError(f"moderngl-window is not installed ({exc}); pip install 'moderngl-window>=3.0'") from None
     return mglw
 
 
@@ -81,12 +82,14 @@ class _ViewerMixin:
         self.mesh = s["mesh"]
         self.base = np.array(s["params"], dtype=np.float32)
         self.animate = s.get("animate")
-        self.seed = int(s.get("seed", 0))
+        seed = s.get("seed")
+        self.seed = None if seed is None else int(seed)  # None: the parameters came from elsewhere (a file)
+        self.on_screenshot = s.get("on_screenshot")
         self.bend = float(s.get("bend", 0.08))
         self.up = s.get("up", "y")
         self.mode = s.get("mode", "solid")
         if self.mode not in MODES:
-            raise AxialDeformError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
+            raise ArgumentError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
         self.bend_scale = 1.0
         self.show_ground = bool(s.get("ground", True))
         self.renderer = AxialRenderer(self.ctx, self.mesh, self.base)
@@ -111,14 +114,19 @@ class _ViewerMixin:
     # ------------------------------------------------------------ camera
     def reset_camera(self) -> None:
         """Frame every instance (azimuth 35 deg, elevation 30 deg)."""
-        cam = frame_instances(self.mesh, self.base, self._aspect(), up=self.up, elevation=30.0)
-        self.target = cam.target
-        self.distance = float(np.linalg.norm(cam.eye - cam.target))
-        self.azimuth, self.elevation = 35.0, 30.0
-        centers, radii = instance_bounds(self.mesh, self.base)
-        lo = (centers - radii[:, None]).min(axis=0) if len(centers) else -np.ones(3)
-        hi = (centers + radii[:, None]).max(axis=0) if len(centers) else np.ones(3)
-        self.extent = float(np.linalg.norm(hi - lo)) / 2 + 1e-6
+        self.orbit = OrbitCamera.framing(self.mesh, self.base, self._aspect(), up=self.up, azimuth=35.0, elevation=30.0)
+
+    @property
+    def azimuth(self) -> float:
+        return self.orbit.azimuth
+
+    @property
+    def elevation(self) -> float:
+        return self.orbit.elevation
+
+    @property
+    def distance(self) -> float:
+        return self.orbit.distance
 
     def _aspect(self) -> float:
         w, h = self.wnd.buffer_size
@@ -126,27 +134,15 @@ class _ViewerMixin:
 
     def matrices(self):
         """Current ``(view, projection)``, (4, 4) float32 pyrr layout."""
-        from .gl.camera import Camera
-
-        up = np.asarray(UP_VECTORS[self.up])
-        side = np.roll(up, 1)
-        fwd = np.cross(side, up)
-        az, el = math.radians(self.azimuth), math.radians(self.elevation)
-        to_eye = math.cos(el) * (math.cos(az) * fwd + math.sin(az) * side) + math.sin(el) * up
-        eye = self.target + self.distance * to_eye
-        reach = self.extent * 3.0  # the ground reaches past the instances
-        cam = Camera(eye, self.target, up, fovy=35.0, near=max(self.distance - reach, self.distance * 2e-3),
-                     far=self.distance + reach)
-        return cam.view(), cam.projection(self._aspect())
+        return self.orbit.matrices(self._aspect())
 
     def on_mouse_drag_event(self, x, y, dx, dy):
         """Orbit: 0.3 degrees per pixel."""
-        self.azimuth = (self.azimuth - 0.3 * dx) % 360.0
-        self.elevation = float(np.clip(self.elevation + 0.3 * dy, -5.0, 89.0))
+        self.orbit.orbit(-0.3 * dx, 0.3 * dy)
 
     def on_mouse_scroll_event(self, x_offset, y_offset):
         """Zoom: 10 % per scroll step."""
-        self.distance = float(np.clip(self.distance * 0.9 ** y_offset, 1e-3 * self.extent, 50.0 * self.extent))
+        self.orbit.zoom(0.9 ** y_offset)
 
     # ------------------------------------------------------------ keys
     def on_key_event(self, key, action, modifiers):
@@ -164,7 +160,7 @@ class _ViewerMixin:
         elif what == "next mode":
             self.mode = MODES[(MODES.index(self.mode) + 1) % len(MODES)]
         elif what == "new seed":
-            self.regenerate(self.seed + 1)
+            self.regenerate(0 if self.seed is None else self.seed + 1)
         elif what == "more bend":
             self.set_bend_scale(self.bend_scale * 1.25)
         elif what == "less bend":
@@ -177,7 +173,9 @@ class _ViewerMixin:
             path = Path(f"axialdeform-view-{self.screenshots:03d}.png")
             self.screenshots += 1
             self.save_screenshot(path)
-            print(f"wrote {path.resolve()}")
+            _log.info("wrote %s", path.resolve())
+            if self.on_screenshot is not None:
+                self.on_screenshot(path.resolve())
         self._update_title(force=True)
 
     # ------------------------------------------------------------ parameters
@@ -222,8 +220,9 @@ class _ViewerMixin:
 
     def status(self) -> str:
         """What the title bar shows."""
+        seed = "" if self.seed is None else f" - seed {self.seed}"
         return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances - {self.mode} - "
-                f"bend x{self.bend_scale:.2f} - seed {self.seed} - {self.fps:.0f} fps")
+                f"bend x{self.bend_scale:.2f}{seed} - {self.fps:.0f} fps")
 
     def _update_title(self, force: bool = False) -> None:
         now = time.perf_counter()
@@ -239,17 +238,11 @@ class _ViewerMixin:
 
     def screenshot(self) -> np.ndarray:
         """The last drawn frame, ``(height, width, 3) uint8``, first row at the top."""
-        w, h = self.wnd.buffer_size
-        color = self.ctx.renderbuffer((w, h), 4)
-        fbo = self.ctx.framebuffer(color)
-        try:
-            self.ctx.copy_framebuffer(fbo, self.wnd.fbo)
-            data = fbo.read(components=3, alignment=1)
-        finally:
-            fbo.release()
-            color.release()
+        from .gl.context import read_pixels
+
+        image = read_pixels(self.ctx, self.wnd.fbo, resolve=True)
         self.wnd.use()
-        return np.frombuffer(data, dtype=np.uint8).reshape(h, w, 3)[::-1].copy()
+        return image
 
     def save_screenshot(self, path) -> None:
         """Write the last drawn frame as a PNG, atomically."""
@@ -270,14 +263,18 @@ class Viewer:
     """Builds and runs the viewer window (see the module docstring)."""
 
     @staticmethod
-    def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int = 0,
-               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4):
+    def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int | None = None,
+               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
+               on_screenshot=None):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
         ``f(t_seconds) -> (n, 16)`` called every frame; tint : optional (n, 3)
-        linear RGB per instance; seed, bend : what ``N`` regenerates offsets
-        with (bend as a fraction of L); headless : moderngl-window's headless
+        linear RGB per instance; seed : the seed ``params`` were made with,
+        shown in the title (None: not known, e.g. read from a file; ``N`` then
+        starts at 0); bend : what ``N`` regenerates offsets with (a fraction
+        of L); on_screenshot : optional ``f(path)`` called after the S key
+        wrote a screenshot; headless : moderngl-window's headless
         window on an EGL context (no display needed).
         """
         from .core.params import as_params
@@ -287,7 +284,7 @@ class Viewer:
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground)
+                     up=up, ground=ground, on_screenshot=on_screenshot)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": samples})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]
@@ -310,56 +307,3 @@ class Viewer:
         viewer = cls.create(mesh, params, **kwargs)
         mglw.run_window_config_instance(viewer)
 
-
-# ---------------------------------------------------------------- the command
-def add_parser(subparsers) -> None:
-    """Register ``axialdeform view`` (the cli.PLUGINS hook)."""
-    v = subparsers.add_parser("view", help="look at instances in an interactive window", description=(
-        "Open MESH (a file, or 'stone' / 'leaf') deformed by PARAMS (or by random parameters) in a window: "
-        "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
-        "UP/DOWN bend amplitude, G ground, R reset camera, S screenshot, ESC quit."))
-    v.add_argument("mesh")
-    v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
-    v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
-    v.add_argument("--seed", type=int, default=0)
-    v.add_argument("--bend", type=float, default=0.08, help="offset amplitude for N, fraction of L (default: %(default)s)")
-    v.add_argument("--mode", choices=MODES, default="solid")
-    v.add_argument("--up", choices=("x", "y", "z"), default="y")
-    v.add_argument("--size", default="960x720", help="WIDTHxHEIGHT (default: %(default)s)")
-    v.add_argument("--no-ground", action="store_true", help="start without the ground plane")
-    v.add_argument("--headless", action="store_true", help="no window: draw --frames frames offscreen (EGL)")
-    v.add_argument("--frames", type=int, default=3, help="frames to draw with --headless (default: %(default)s)")
-    v.add_argument("--screenshot", help="PNG of the last frame (with --headless)")
-    v.add_argument("--ignore-mesh-mismatch", action="store_true")
-    v.set_defaults(handler=run)
-
-
-def run(args) -> None:
-    """The ``view`` command."""
-    from .gl.image import parse_size
-    from .core.mesh import load_mesh
-    from .core.params import read_params
-    from .core.variation import random_params
-
-    mesh = load_mesh(args.mesh)
-    if args.params:
-        params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
-    else:
-        params = random_params(mesh, args.count, seed=args.seed, bend=args.bend, up=args.up)
-    if args.frames < 1:
-        raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
-    viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=args.seed,
-                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground)
-    if not args.headless:
-        import moderngl_window as mglw
-
-        mglw.run_window_config_instance(viewer)
-        return
-    try:
-        viewer.step(args.frames)
-        if args.screenshot:
-            viewer.save_screenshot(args.screenshot)
-        print(viewer.status() + (f" - wrote {args.screenshot}" if args.screenshot else ""))
-    finally:
-        viewer.release()
-        viewer.wnd.destroy()

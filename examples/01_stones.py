@@ -71,7 +71,7 @@ def main():
     if args.window:
         from axialdeform.viewer import Viewer
 
-        Viewer.open(mesh, params)
+        Viewer.open(mesh, params, seed=args.seed)
         return
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)

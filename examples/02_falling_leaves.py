@@ -105,7 +105,7 @@ def main():
     if args.window:
         from axialdeform.viewer import Viewer
 
-        Viewer.open(mesh, leaves.at(0.0), animate=leaves.at, tint=leaves.colours(args.seed))
+        Viewer.open(mesh, leaves.at(0.0), animate=leaves.at, tint=leaves.colours(args.seed), seed=args.seed)
         return
 
     out = Path(args.output)

@@ -101,7 +101,7 @@ def main():
     fbo.clear(0.95, 0.95, 0.93, 1.0)
     ctx.enable(moderngl.DEPTH_TEST)
     vao.render(moderngl.TRIANGLES, instances=count)            # ONE instanced draw call
-    image = np.frombuffer(fbo.read(components=3), dtype=np.uint8).reshape(h, w, 3)[::-1]
+    image = ad.read_pixels(ctx, fbo)                           # (h, w, 3) uint8, top row first
     assert ctx.error == "GL_NO_ERROR", ctx.error
 
     out = Path(args.output)

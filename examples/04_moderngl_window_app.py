@@ -86,11 +86,8 @@ def main():
         app.wnd.render(i / 24, 1 / 24)
         app.wnd.swap_buffers()
     assert app.renderer.instances.reallocations == 0
-    # the headless window's framebuffer is multisampled: resolve it, then read
-    w, h = app.wnd.buffer_size
-    resolved = app.ctx.simple_framebuffer((w, h))
-    app.ctx.copy_framebuffer(resolved, app.wnd.fbo)
-    image = np.frombuffer(resolved.read(components=3), dtype=np.uint8).reshape(h, w, 3)[::-1]
+    # the headless window's framebuffer is multisampled: read_pixels resolves it, then reads
+    image = ad.read_pixels(app.ctx, app.wnd.fbo, resolve=True)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     ad.save_png(out / "04_moderngl_window_app.png", image)

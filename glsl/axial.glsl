@@ -2,7 +2,7 @@
 //
 // Pull it in with an include directive of "axial.glsl" (after #version).  It declares no
 // inputs or uniforms: callers pass the base mesh's axis and one instance.
-// Conventions (docs/axial-deformation.md):
+// Conventions (docs/method.md):
 //   axis a in {0,1,2}; t = clamp((v[a] - lo) / len, 0, 1);
 //   offsets d1..d5 are 2-component, in the two other coordinates in
 //   increasing order (x -> (y,z), y -> (x,z), z -> (x,y));

@@ -16,6 +16,7 @@ def run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
 
 
+@pytest.mark.slow
 def test_demo_writes_a_png_and_says_where(tmp_path):
     res = run("demo", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
@@ -61,6 +62,7 @@ def test_bake_to_a_folder_of_meshes(tmp_path, fmt):
     assert back.vertex_count == 58 and np.allclose(back.positions, expected[3], atol=1e-5)
 
 
+@pytest.mark.slow
 def test_off_origin_ply_with_normals_along_each_axis(tmp_path):
     """The 'done when' check: meshes not in the repository, axes x, y, z, off the origin."""
     import trimesh
@@ -93,6 +95,7 @@ def test_off_origin_ply_with_normals_along_each_axis(tmp_path):
     (["bake", "stone", "{tmp}/p.txt", "-o", "{tmp}/p.txt/x.npz"], "Not a directory|not a folder"),
     (["random", "{tmp}/bad.txt", "-n", "3", "-o", "{tmp}/r.adp"], "unsupported mesh file type"),
 ])
+@pytest.mark.slow
 def test_user_errors_exit_2_with_one_line(tmp_path, args, message):
     stone = ad.load_mesh("stone")
     values = ad.random_params(stone, 4, seed=1)
@@ -117,6 +120,7 @@ def test_ignore_mesh_mismatch(tmp_path):
                  "--ignore-mesh-mismatch"]) == 0
 
 
+@pytest.mark.slow
 def test_help_everywhere():
     parser = build_parser()
     commands = parser._subparsers._group_actions[0].choices
@@ -162,3 +166,83 @@ def test_import_is_lazy_and_every_public_name_resolves():
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
+
+
+def _subparsers():
+    import argparse
+
+    parser = build_parser()
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return sub.choices
+
+
+def test_every_command_is_its_own_module():
+    import importlib
+
+    from axialdeform.cli import COMMANDS
+
+    choices = _subparsers()
+    assert set(COMMANDS) == set(choices)
+    for name in COMMANDS:
+        module = importlib.import_module(f"axialdeform.cli.{name}")
+        assert choices[name].get_default("handler") is module.run
+
+
+def test_every_argument_states_its_default():
+    import argparse
+
+    missing = []
+    for name, sub in _subparsers().items():
+        for action in sub._actions:
+            if isinstance(action, argparse._HelpAction):
+                continue
+            text = (action.help or "") % {"default": action.default, "prog": sub.prog, "choices": action.choices}
+            positional = not action.option_strings
+            if positional and action.nargs != "?":
+                ok = bool(text)  # required: it has no default, but it says what it is
+            else:
+                ok = "default" in text or "required" in text
+            if not ok:
+                missing.append(f"{name} {'/'.join(action.option_strings) or action.dest}: {text!r}")
+    assert missing == []
+
+
+def test_render_with_eye_target_fov(tmp_path):
+    params = tmp_path / "p.adp"
+    assert main(["random", "stone", "-n", "50", "--seed", "3", "-o", str(params)]) == 0
+    images = {}
+    for name, extra in (("auto", []), ("near", ["--eye", "0,3,6", "--target", "0,0,0", "--fov", "50"]),
+                        ("far", ["--eye", "0,300,600", "--target", "0,0,0"]), ("narrow", ["--fov", "10"])):
+        out = tmp_path / f"{name}.png"
+        assert main(["render", "stone", str(params), "-o", str(out), "--size", "160x120", *extra]) == 0
+        images[name] = np.asarray(Image.open(out)).astype(int)
+    background = images["far"][0, 0]
+    covered = {k: (np.abs(v - background).max(axis=-1) > 12).mean() for k, v in images.items()}
+    assert covered["far"] < 0.01  # the stones are a speck from 670 units away
+    assert covered["near"] > covered["auto"]  # closer and wider: more of the picture is stone
+    assert not np.array_equal(images["narrow"], images["auto"])
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--eye", "1,2,3", "--target", "1,2,3"], "two different points"),
+    (["--eye", "0,5,0", "--target", "0,0,0"], "parallel to the up axis"),
+    (["--fov", "180"], "--fov"),
+])
+def test_render_camera_errors_are_one_line(tmp_path, capsys, args, message):
+    params = tmp_path / "p.adp"
+    ad.write_params(params, ad.random_params(ad.load_mesh("stone"), 4, seed=1), ad.load_mesh("stone"))
+    assert main(["render", "stone", str(params), "-o", str(tmp_path / "x.png"), *args]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and message in err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_view_of_a_file_shows_no_made_up_seed(tmp_path, capsys):
+    params = tmp_path / "p.adp"
+    assert main(["random", "stone", "-n", "20", "--seed", "5", "-o", str(params)]) == 0
+    capsys.readouterr()
+    assert main(["view", "stone", str(params), "--headless", "--frames", "1", "--size", "64x48"]) == 0
+    title = capsys.readouterr().out
+    assert "20 instances" in title and "seed" not in title
+    assert main(["view", "stone", "-n", "20", "--seed", "7", "--headless", "--frames", "1", "--size", "64x48"]) == 0
+    assert "seed 7" in capsys.readouterr().out

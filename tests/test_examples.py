@@ -66,6 +66,7 @@ def blobs(mask: np.ndarray) -> int:
     return int(ndimage.label(mask)[1])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(EXAMPLES))
 def test_example_runs(run_example, name):
     out, stdout = run_example(name)
@@ -74,6 +75,7 @@ def test_example_runs(run_example, name):
         assert (out / f).stat().st_size > 1000
 
 
+@pytest.mark.slow
 def test_stones_solid_and_wireframe_agree(run_example):
     out, _ = run_example("01_stones.py")
     image = load(out / "01_stones.png")
@@ -91,6 +93,7 @@ def test_stones_solid_and_wireframe_agree(run_example):
     assert (filled & solid).sum() >= 0.9 * solid.sum(), "the filled wireframe misses solid pixels"
 
 
+@pytest.mark.slow
 def test_stones_bank_has_ground_and_tints(run_example):
     out, _ = run_example("01_stones.py")
     image = load(out / "01_stones_bank.png").astype(np.float64)
@@ -101,6 +104,7 @@ def test_stones_bank_has_ground_and_tints(run_example):
     assert 0.002 < warm.mean() < 0.5
 
 
+@pytest.mark.slow
 def test_leaves_gif_animates(run_example):
     out, stdout = run_example("02_falling_leaves.py")
     assert "0 reallocations" in stdout
@@ -117,6 +121,7 @@ def test_leaves_gif_animates(run_example):
     assert blobs(leaves) >= 20, f"only {blobs(leaves)} leaves visible"
 
 
+@pytest.mark.slow
 def test_own_program_picture(run_example):
     out, _ = run_example("03_own_moderngl_program.py")
     image = load(out / "03_own_moderngl_program.png").astype(np.int16)
@@ -127,6 +132,7 @@ def test_own_program_picture(run_example):
     assert blue.sum() > 50 and orange.sum() > 20, "the shader colours by bend: both ends of the ramp appear"
 
 
+@pytest.mark.slow
 def test_moderngl_window_app_picture(run_example):
     out, _ = run_example("04_moderngl_window_app.py")
     image = load(out / "04_moderngl_window_app.png").astype(np.int16)
@@ -191,6 +197,19 @@ def test_viewer_new_seed_and_bend(viewer):
     press(viewer, "G")
 
 
+def test_viewer_title_shows_the_real_seed_or_none(viewer):
+    assert isinstance(viewer.seed, int) and f"seed {viewer.seed}" in viewer.status()  # made with seed 2 (+1 per N)
+    seed = viewer.seed
+    try:
+        viewer.seed = None  # what Viewer.create(..., seed=None) sets: parameters from a file
+        viewer.step()
+        assert "seed" not in viewer.status()
+        press(viewer, "n")  # new offsets: now there is a seed to show
+        assert viewer.seed == 0 and "seed 0" in viewer.wnd.title
+    finally:
+        viewer.regenerate(seed)
+
+
 def test_viewer_mouse_orbits_and_zooms(viewer):
     before = press(viewer, "r")
     az, dist = viewer.azimuth, viewer.distance
@@ -203,6 +222,7 @@ def test_viewer_mouse_orbits_and_zooms(viewer):
     assert viewer.distance == pytest.approx(dist)
 
 
+@pytest.mark.slow
 def test_view_command_headless(tmp_path):
     shot = tmp_path / "view.png"
     proc = subprocess.run([sys.executable, "-m", "axialdeform", "view", "leaf", "-n", "40", "--headless", "--frames",

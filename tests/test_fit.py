@@ -236,6 +236,7 @@ def test_cli_fit_residual_limit(variant_folder, tmp_path, capsys):
     assert main(["fit", "stone", str(good), str(noisy), "-o", str(out), "--max-residual", "0.5"]) == 0
 
 
+@pytest.mark.slow
 def test_cli_fit_wrong_vertex_count_exits_2(variant_folder, tmp_path):
     folder, _, _ = variant_folder
     out = tmp_path / "never.adp"

@@ -93,6 +93,7 @@ def test_any_header_with_valid_checksum(count, version, encoding, header_size, a
         assert isinstance(out, ParamFileError) and "hdr.adp" in str(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("quantize", [False, True])
 def test_every_single_byte_flip_is_caught(quantize):
     """CRC-32 detects every burst of up to 32 bits: each byte, each of its 255
@@ -239,6 +240,7 @@ def test_any_unicode_text_never_crashes(text):
     st.floats(width=32, allow_nan=False, allow_infinity=False),
     st.floats(), st.sampled_from(["nan", "-inf", "1e400", "1_0", "", "#", ",", "\u00a0", "١٢"]),
     st.integers(-2**70, 2**70)), min_size=14, max_size=18), max_size=6))
+@pytest.mark.slow
 def test_near_valid_text_never_crashes(rows):
     text = "\n".join(" ".join(str(x) for x in row) for row in rows)
     out = check_outcome(P.parse_text, text.encode(), "near.txt")
@@ -249,6 +251,7 @@ def test_near_valid_text_never_crashes(rows):
 @FUZZ
 @given(st.lists(st.lists(st.floats(width=32, allow_nan=False, allow_infinity=False), min_size=16, max_size=16),
                 max_size=20), st.booleans())
+@pytest.mark.slow
 def test_valid_values_round_trip_every_form(rows, quantize):
     v = np.array(rows, dtype=np.float32).reshape(-1, 16)
     assert np.array_equal(P.parse_text(P.format_text(v).encode()), v)

@@ -27,7 +27,7 @@ import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core import params as P
 from axialdeform.gl.buffers import InstanceBuffer
-from axialdeform.core.errors import AxialDeformError, ContextError, ParamError, ParamFileError, PathError
+from axialdeform.core.errors import ArgumentError, AxialDeformError, ContextError, ParamFileError, PathError
 
 ROOT = Path(__file__).resolve().parent.parent
 ROW = " ".join(["0.01"] * 10 + ["0", "0", "0", "0", "0", "0"]) + "\n"
@@ -454,7 +454,7 @@ def test_empty_instance_buffer_reads(ctx):
 def test_update_params_start_must_be_an_integer(ctx, stone, start):
     params = ad.random_params(stone, 4, 0)
     with ad.AxialRenderer(ctx, stone, params) as r:
-        with pytest.raises(ParamError, match="start: expected an integer"):
+        with pytest.raises(ArgumentError, match="start: expected an integer"):
             r.update_params(params[:1], start=start)
         r.update_params(params[:1], start=np.int64(2))
         assert np.array_equal(r.instances.read()[2], params[0])
@@ -464,7 +464,7 @@ def test_update_params_start_must_be_an_integer(ctx, stone, start):
 def test_bad_view_matrices(ctx, stone, view):
     with ad.AxialRenderer(ctx, stone, ad.random_params(stone, 2, 0)) as r, ad.Offscreen(ctx, (16, 16)) as t:
         t.use()
-        with pytest.raises(ParamError, match="view: expected"):
+        with pytest.raises(ArgumentError, match="view: expected"):
             r.render(view, np.eye(4))
 
 

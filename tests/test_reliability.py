@@ -91,6 +91,7 @@ while True:
 """
 
 
+@pytest.mark.slow
 def test_killed_writer_leaves_previous_file_intact(tmp_path):
     """SIGKILL a process that rewrites a 6.4 MB parameter file in a loop, at
     random moments, 8 times: the file always reads back as one complete
@@ -144,6 +145,7 @@ def test_failed_write_keeps_old_file(tmp_path):
 # ------------------------------------------------------------------- no leaks
 
 
+@pytest.mark.slow
 def test_1000_renderers_leave_nothing_behind(ctx):
     """Create, draw (8x8 offscreen) and release 1000 renderers: no live GL
     object remains, and the process memory grows by less than 48 MB."""
@@ -231,6 +233,7 @@ class DrawCounter:
         return getattr(self.vao, name)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("quantized", [False, True])
 def test_million_instances_one_draw_call(ctx, quantized):
     n = 1_000_000
@@ -275,5 +278,5 @@ def test_quantized_gpu_capture_matches_cpu_of_dequantized(ctx, stone, leaf):
             assert np.array_equal(r.instances.read(), expected2)
             bad = expected2[3:4].copy()
             bad[0, 10] += 1e6
-            with pytest.raises(ad.ParamError, match=r"outside the quantized range .*call set\(\)"):
+            with pytest.raises(ad.ParamError, match=r"outside the quantized range .*call set_params\(\)"):
                 r.update_params(bad, 3)

@@ -1,6 +1,6 @@
 """One measurement of ``axialdeform bench``, in its own fresh process.
 
-The parent (:mod:`axialdeform.bench`) starts ``python -c`` with a JSON spec;
+The parent (:func:`axialdeform.bench.run_bench`) starts ``python -c`` with a JSON spec;
 this module sets up one method (``same``, ``loaded``, ``axial``,
 ``axial-quantized``), prints ``FIRST`` as soon as its first frame is finished
 (``ctx.finish()``), then draws the warm-up and timed frames and prints one
@@ -10,13 +10,14 @@ harness adds as little as it can to the time of every method alike.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from .plan import obj_name, scene_kwargs
 
 
 def main(spec_text: str) -> None:
@@ -32,7 +33,7 @@ def main(spec_text: str) -> None:
     draw()
     ctx.finish()
     stamps["first_frame"] = time.time()
-    print("FIRST", flush=True)
+    _say("FIRST")
     frames = []
     for k in range(spec["warmup"] + spec["frames"]):
         t = time.perf_counter()
@@ -47,7 +48,7 @@ def main(spec_text: str) -> None:
         save_png(spec["image"], target.read())
     info["trimesh_imported"] = "trimesh" in sys.modules
     info["gl_error"] = ctx.error
-    print("RESULT " + json.dumps({"stamps": stamps, "frames": frames, "info": info}), flush=True)
+    _say("RESULT " + json.dumps({"stamps": stamps, "frames": frames, "info": info}))
 
 
 def interleaved(spec_text: str) -> None:
@@ -70,7 +71,13 @@ def interleaved(spec_text: str) -> None:
             if k >= spec["warmup"]:
                 frames[name].append(time.perf_counter() - t)
     info = {name: i for name, _, i in setups}
-    print("RESULT " + json.dumps({"frames": frames, "info": info, "gl_error": ctx.error}), flush=True)
+    _say("RESULT " + json.dumps({"frames": frames, "info": info, "gl_error": ctx.error}))
+
+
+def _say(line: str) -> None:
+    """One line of the protocol with the parent (stdout, flushed at once)."""
+    sys.stdout.write(line + "\n")
+    sys.stdout.flush()
 
 
 def _open(spec: dict):
@@ -118,48 +125,17 @@ def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
 def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
     """Read every pre-deformed OBJ file with load_mesh, one VBO/IBO/VAO each."""
     from ..core.mesh import load_mesh
-    from ..gl.renderer import AxialRenderer
+    from ..gl.renderer import BakedMeshes
 
     folder = Path(spec["folder"])
-    count = spec["count"]
-    wire = mode == "wireframe"
-    renderer = None
-    vaos = []
-    for i in range(count):  # one file, one upload, one VAO per instance: what this method is
+    meshes = None
+    for i in range(spec["count"]):  # one file, one upload, one VAO per instance: what this method is
         mesh = load_mesh(folder / obj_name(i))
-        if renderer is None:
-            # the drawing program (no bend, identity instance attributes): same shading as the others
-            renderer = AxialRenderer(ctx, mesh, np.zeros((0, 16), np.float32), bend=False)
-            prog = renderer.program
-        vbo = ctx.buffer(np.hstack([mesh.positions, mesh.normals]).astype("f4").tobytes())
-        indices = mesh.edges if wire else mesh.faces
-        ibo = ctx.buffer(np.ascontiguousarray(indices, dtype="u4").tobytes())
-        vao = ctx.vertex_array(prog, [(vbo, "3f 3f", "in_position", "in_normal")], index_buffer=ibo, index_element_size=4)
-        vaos.append((vao, int(indices.size), vbo, ibo))
+        if meshes is None:  # the same shading and culling as the instanced methods
+            meshes = BakedMeshes(ctx, mesh, mode)
+        meshes.add(mesh)
     stamps["read"] = time.time()
-    primitive = moderngl.LINES if wire else moderngl.TRIANGLES
-
-    def draw():
-        renderer.render(view, proj, mode)  # no instances: sets the uniforms only
-        ctx.enable(moderngl.DEPTH_TEST)
-        # the same face culling as the instanced methods (back faces of a closed mesh skipped)
-        with (contextlib.nullcontext() if wire else renderer.culling(view, proj)):
-            for vao, n, _, _ in vaos:
-                vao.render(primitive, vertices=n)
-
-    return draw, {"cull_back_faces": renderer.cull_back_faces}
+    return (lambda: meshes.render(view, proj)), {"cull_back_faces": meshes.cull_back_faces}
 
 
 _SETUPS = {"same": _setup_same, "loaded": _setup_loaded, "axial": _setup_axial, "axial-quantized": _setup_axial}
-
-
-def scene_kwargs(mesh, scene: dict) -> dict:
-    kw = {"bend": scene["bend"], "placement": scene["placement"]}
-    if "spacing_factor" in scene:
-        kw["spacing"] = scene["spacing_factor"] * mesh.axis.length
-    return kw
-
-
-def obj_name(i: int) -> str:
-    return f"instance_{i:06d}.obj"
-

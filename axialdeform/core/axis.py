@@ -1,6 +1,6 @@
 """Step 2 of the data flow: the control axis of a base mesh.
 
-Conventions (``docs/axial-deformation.md`` of the project, thesis §2.2.1):
+Conventions (``docs/method.md``, "The control axis"; thesis §2.2.1):
 
 * the axis ``a`` is the coordinate with the longest bounding-box extent;
   ties go to the first of x, y, z;
@@ -102,6 +102,10 @@ class ControlAxis:
     def parameter(self, positions: np.ndarray) -> np.ndarray:
         """``t = (V[a] - lo) / L`` clamped to [0, 1]; ``positions`` (n, 3) -> (n,) float64."""
         p = np.asarray(positions, dtype=np.float64)
+        if p.ndim == 0 or p.shape[-1] != 3:
+            from .errors import ArgumentError
+
+            raise ArgumentError(f"positions: expected an array of shape (n, 3), found {p.shape}")
         return np.clip((p[..., self.index] - self.lo) / self.length, 0.0, 1.0)
 
     def embed(self, uv: np.ndarray) -> np.ndarray:

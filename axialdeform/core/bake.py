@@ -1,5 +1,6 @@
 """Baking: every instance's deformed world positions and normals, by the CPU
-reference or the GPU capture, to an ``.npz`` or a folder of mesh files."""
+reference (the GPU capture: :mod:`axialdeform.gl.bake`), to an ``.npz`` or a
+folder of mesh files."""
 
 from __future__ import annotations
 
@@ -12,53 +13,53 @@ import numpy as np
 
 from .atomic import atomic_path
 from .deform import deform
-from .errors import AxialDeformError, PathError
+from .errors import ArgumentError, PathError
 from .safeio import check_count, check_not_special, require_finite
 
-__all__ = ["bake", "write_npz", "write_mesh_folder", "check_bake_folder", "ENGINES", "MESH_FORMATS"]
+__all__ = ["bake_cpu", "instance_name", "write_npz", "write_mesh_folder", "check_bake_folder", "check_bake_count",
+           "check_bake_result", "MESH_FORMATS"]
 
-ENGINES = ("cpu", "gpu")
 MESH_FORMATS = ("obj", "ply", "glb")
 
 
-def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None,
-         source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def bake_cpu(mesh, params, *, progress=None, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
-    in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
-    or ``"gpu"`` (transform feedback of the drawing vertex shader).
-    ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
+    in the base mesh's vertex order, by the numpy reference (:func:`deform`).
+    ``progress``: optional object with ``update(instances_done)``.  The GPU
+    engine and the switch between them: :func:`axialdeform.gl.bake.bake`.
 
-    A non-finite result (finite parameters so large that float32 overflows)
-    raises :class:`AxialDeformError` naming the instance, array, vertex and
-    coordinate (and ``source``, the parameter file): nothing non-finite is
-    ever returned to be written."""
-    # the result is two (n, v, 3) float32 arrays (the GPU capture holds a
-    # third copy while it splits them): refused before anything is allocated
-    check_count(len(params), mesh.vertex_count * 12 * (4 if engine == "gpu" else 2.2),
-                f"{source + ': ' if source else ''}instances to bake ({mesh.vertex_count} vertices each)")
-    positions, normals = _bake(mesh, params, engine, ctx=ctx, progress=progress)
-    require_finite(positions, "positions", "xyz", source=source)
-    require_finite(normals, "normals", "xyz", source=source)
+    The count is checked against memory first (:func:`check_bake_count`) and
+    a non-finite result (finite parameters so large that float32 overflows)
+    raises :class:`AxialDeformError` naming ``source`` (the parameter file),
+    the instance, array, vertex and coordinate (:func:`check_bake_result`):
+    nothing non-finite is ever returned to be written."""
+    check_bake_count(mesh, len(params), "cpu", source)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
+        positions, normals = deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
+    check_bake_result(positions, normals, source)
     return positions, normals
 
 
-def _bake(mesh, params, engine, *, ctx=None, progress=None):
-    if engine == "cpu":
-        with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused by the caller
-            return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
-    if engine != "gpu":
-        raise AxialDeformError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
-    from ..gl.context import create_context
-    from ..gl.renderer import AxialRenderer
+def check_bake_count(mesh, count: int, engine: str = "cpu", source: str | None = None) -> None:
+    """Refuse ``count`` instances whose baked result cannot fit in memory: two
+    ``(n, v, 3)`` float32 arrays (the GPU capture holds a third copy while it
+    splits them), checked before anything is allocated."""
+    check_count(count, mesh.vertex_count * 12 * (4 if engine == "gpu" else 2.2),
+                f"{source + ': ' if source else ''}instances to bake ({mesh.vertex_count} vertices each)")
 
-    own = ctx is None
-    ctx = create_context() if own else ctx
-    try:
-        with AxialRenderer(ctx, mesh, params) as r:
-            return r.capture(progress=progress, check_finite=False)
-    finally:
-        if own:
-            ctx.release()
+
+def check_bake_result(positions, normals, source: str | None = None) -> None:
+    """Raise :class:`AxialDeformError` if a baked result holds a NaN or infinity."""
+    require_finite(positions, "positions", "xyz", source=source)
+    require_finite(normals, "normals", "xyz", source=source)
+
+
+def instance_name(i: int, count: int = 0, suffix: str = "") -> str:
+    """The name of instance ``i`` of ``count`` wherever instances are files or
+    glTF nodes: ``instance_000012`` + ``suffix`` (e.g. ``".obj"``), zero-padded
+    to 6 digits or to as many as ``count - 1`` needs, so names sort in order."""
+    digits = max(6, len(str(max(int(count) - 1, 0))))
+    return f"instance_{int(i):0{digits}d}{suffix}"
 
 
 def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarray) -> None:
@@ -84,14 +85,13 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
     overwrite leaves every old or new file whole, never a half-written one.
     """
     if fmt not in MESH_FORMATS:
-        raise AxialDeformError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
+        raise ArgumentError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
     folder = Path(folder)
     old = check_bake_folder(folder, overwrite)
     folder.mkdir(parents=True, exist_ok=True)
-    digits = max(6, len(str(max(len(positions) - 1, 0))))
     written = []
     for i in range(len(positions)):  # one file per instance: file I/O, not maths
-        path = folder / f"instance_{i:0{digits}d}.{fmt}"
+        path = folder / instance_name(i, len(positions), f".{fmt}")
         tm = mesh.to_trimesh(positions[i], normals[i])
         with atomic_path(path) as tmp:
             tm.export(str(tmp), file_type=fmt)

@@ -10,13 +10,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from .arrays import as_array
 from .axis import ControlAxis
 from .params import ANGLES, OFFSETS, POSITION, as_params
+from .transforms import rotation_matrices
 
 __all__ = [
     "bernstein",
     "rotation_matrices",
     "axis_offsets",
+    "displace",
     "deform_local",
     "deform",
 ]
@@ -31,27 +34,6 @@ def bernstein(t: np.ndarray, degree: int = 4) -> np.ndarray:
     return _BINOMIAL[degree] * t**i * (1.0 - t) ** (degree - i)
 
 
-def rotation_matrices(angles: np.ndarray) -> np.ndarray:
-    """``R = Rz(rz) · Ry(ry) · Rx(rx)`` for angles (..., 3) radians -> (..., 3, 3) float64.
-
-    Column-vector convention: a model vector ``v`` goes to ``R @ v``.
-    """
-    a = np.asarray(angles, dtype=np.float64)
-    cx, cy, cz = np.cos(a[..., 0]), np.cos(a[..., 1]), np.cos(a[..., 2])
-    sx, sy, sz = np.sin(a[..., 0]), np.sin(a[..., 1]), np.sin(a[..., 2])
-    r = np.empty(a.shape[:-1] + (3, 3))
-    r[..., 0, 0] = cz * cy
-    r[..., 0, 1] = cz * sy * sx - sz * cx
-    r[..., 0, 2] = cz * sy * cx + sz * sx
-    r[..., 1, 0] = sz * cy
-    r[..., 1, 1] = sz * sy * sx + cz * cx
-    r[..., 1, 2] = sz * sy * cx - cz * sx
-    r[..., 2, 0] = -sy
-    r[..., 2, 1] = cy * sx
-    r[..., 2, 2] = cy * cx
-    return r
-
-
 def axis_offsets(axis: ControlAxis, t: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The axis displacement ``D(t)`` and its derivative ``D'(t)`` (2-component, u/v).
 
@@ -63,6 +45,23 @@ def axis_offsets(axis: ControlAxis, t: np.ndarray, offsets: np.ndarray) -> tuple
     disp = np.einsum("vk,nkc->nvc", bernstein(t, 4), d)
     slope = 4.0 * np.einsum("vk,nkc->nvc", bernstein(t, 3), d[:, 1:] - d[:, :-1])
     return disp, slope
+
+
+def displace(axis: ControlAxis, positions: np.ndarray, disp: np.ndarray) -> np.ndarray:
+    """The bend: ``V' = V + E(D)``, the one place the 2-component axis
+    displacement is put into 3-D (``docs/method.md``).
+
+    positions : (v, 3) float — the base mesh.
+    disp : (n, v, 2) float — ``D(t)`` per instance and vertex (u, v components).
+    Returns ``V'`` : (n, v, 3) float64.
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    disp = np.asarray(disp, dtype=np.float64)
+    i, j = axis.perpendicular
+    moved = np.broadcast_to(p, disp.shape[:-1] + (3,)).copy()
+    moved[..., i] += disp[..., 0]
+    moved[..., j] += disp[..., 1]
+    return moved
 
 
 def deform_local(
@@ -79,9 +78,7 @@ def deform_local(
     nrm = np.asarray(normals, dtype=np.float64)
     disp, slope = axis_offsets(axis, axis.parameter(p), offsets)
     i, j = axis.perpendicular
-    moved = np.broadcast_to(p, disp.shape[:2] + (3,)).copy()
-    moved[..., i] += disp[..., 0]
-    moved[..., j] += disp[..., 1]
+    moved = displace(axis, p, disp)
     bent = np.broadcast_to(nrm, moved.shape).copy()
     bent[..., axis.index] -= (slope[..., 0] * nrm[:, i] + slope[..., 1] * nrm[:, j]) / axis.length
     bent /= np.maximum(np.linalg.norm(bent, axis=-1, keepdims=True), 1e-300)
@@ -106,6 +103,8 @@ def deform(
     Returns ``W = R·V' + p`` and ``R·n'``, each (n, v, 3) float32.
     """
     params = as_params(params)
+    positions = as_array(positions, (None, 3), "positions")
+    normals = as_array(normals, (len(positions), 3), "normals")
     n, v = len(params), len(positions)
     out_pos = np.empty((n, v, 3), dtype=np.float32)
     out_nrm = np.empty((n, v, 3), dtype=np.float32)

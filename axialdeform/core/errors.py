@@ -6,6 +6,7 @@ from __future__ import annotations
 
 __all__ = [
     "AxialDeformError",
+    "ArgumentError",
     "MeshError",
     "ParamError",
     "ParamFileError",
@@ -21,6 +22,12 @@ __all__ = [
 
 class AxialDeformError(Exception):
     """Base class of every error raised by axialdeform."""
+
+
+class ArgumentError(AxialDeformError, ValueError):
+    """A wrong argument value or shape given to a public function or class
+    (an unknown mode, a view matrix that is not 4x4, a negative count); the
+    message names the argument, what was expected and what was found."""
 
 
 class MeshError(AxialDeformError, ValueError):

@@ -33,14 +33,15 @@ from __future__ import annotations
 
 import json
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
 
 from .atomic import atomic_write_bytes
+from .bake import instance_name
 from .errors import GltfError
 from .params import ANGLES, POSITION, as_params
+from .transforms import angles_from_matrices, matrices_from_quaternions, quaternions_from_angles
 
 __all__ = [
     "GltfError",
@@ -54,8 +55,7 @@ __all__ = [
     "read_instanced_glb",
     "quaternions_from_angles",
     "matrices_from_quaternions",
-    "add_parser",
-    "run",
+    "check_glb_path",
 ]
 
 LAYOUTS = ("baked", "instanced")
@@ -78,59 +78,6 @@ _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
 _TRIANGLES = 4
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
-
-
-# ---------------------------------------------------------------- quaternions
-
-
-def quaternions_from_angles(angles: np.ndarray) -> np.ndarray:
-    """Unit quaternions of ``R = Rz(rz)·Ry(ry)·Rx(rx)``.
-
-    Parameters
-    ----------
-    angles : (n, 3) float, radians
-        ``rx ry rz`` per instance.
-
-    Returns
-    -------
-    (n, 4) float64
-        ``x, y, z, w`` (the glTF order), the Hamilton product ``qz ⊗ qy ⊗ qx``
-        (pyrr's ``quaternion.cross``), normalised, sign chosen so ``w >= 0``.
-    """
-    from pyrr import quaternion
-
-    a = np.asarray(angles, dtype=np.float64).reshape(-1, 3)
-    half = 0.5 * a
-    s, c = np.sin(half), np.cos(half)
-    zero = np.zeros(len(a))
-    # pyrr quaternions are (x, y, z, w); quaternion.cross unpacks the first
-    # axis, so (4, n) arrays multiply n quaternions at once
-    qx = np.stack([s[:, 0], zero, zero, c[:, 0]])
-    qy = np.stack([zero, s[:, 1], zero, c[:, 1]])
-    qz = np.stack([zero, zero, s[:, 2], c[:, 2]])
-    q = quaternion.cross(qz, quaternion.cross(qy, qx)).T
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
-    q[q[:, 3] < 0] *= -1.0
-    return q
-
-
-def matrices_from_quaternions(quats: np.ndarray) -> np.ndarray:
-    """Rotation matrices (column-vector convention, ``v -> R @ v``) of unit
-    quaternions ``(n, 4)`` in ``x, y, z, w`` order: ``(n, 3, 3)`` float64."""
-    q = np.asarray(quats, dtype=np.float64).reshape(-1, 4)
-    q = q / np.linalg.norm(q, axis=1, keepdims=True)
-    x, y, z, w = q.T
-    r = np.empty((len(q), 3, 3))
-    r[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    r[:, 0, 1] = 2 * (x * y - z * w)
-    r[:, 0, 2] = 2 * (x * z + y * w)
-    r[:, 1, 0] = 2 * (x * y + z * w)
-    r[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    r[:, 1, 2] = 2 * (y * z - x * w)
-    r[:, 2, 0] = 2 * (x * z - y * w)
-    r[:, 2, 1] = 2 * (y * z + x * w)
-    r[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    return r
 
 
 # --------------------------------------------------------------------- writing
@@ -193,7 +140,8 @@ def _mesh_extras(mesh, count: int, layout: str) -> dict:
     }
 
 
-def _check_glb_path(path) -> Path:
+def check_glb_path(path) -> Path:
+    """``path`` as a Path when it names a .glb file that is not a folder; else :class:`GltfError`."""
     path = Path(path)
     if path.suffix.lower() != ".glb":
         raise GltfError(f"{path}: expected a .glb file name (binary glTF), found {path.suffix or 'no extension'!r}")
@@ -207,9 +155,9 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     names the parameter file in errors."""
     params = as_params(params)
     if positions is None or normals is None:
-        from .bake import bake
+        from .bake import bake_cpu
 
-        positions, normals = bake(mesh, params, "cpu", source=source)
+        positions, normals = bake_cpu(mesh, params, source=source)
     if len(params) == 0:
         raise GltfError("baked export: expected at least one instance, found 0")
     positions = np.ascontiguousarray(positions, dtype="<f4")
@@ -232,9 +180,8 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     pos_view = b.view(positions, target=_ARRAY_BUFFER, stride=12)
     nrm_view = b.view(normals, target=_ARRAY_BUFFER, stride=12)
     lo, hi = positions.min(axis=1), positions.max(axis=1)  # (n, 3): bounds per instance, vectorized
-    digits = max(6, len(str(max(n - 1, 0))))
     for k in range(n):  # glTF objects per instance (JSON), not per vertex
-        name = f"instance_{k:0{digits}d}"
+        name = instance_name(k, n)
         pa = b.accessor(pos_view, _FLOAT, v, "VEC3", offset=k * v * 12, bounds=np.stack([lo[k], hi[k]]), name=name + "_POSITION")
         na = b.accessor(nrm_view, _FLOAT, v, "VEC3", offset=k * v * 12, name=name + "_NORMAL")
         b.gltf.meshes.append(g.Mesh(name=name, primitives=[
@@ -263,7 +210,7 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     NORMAL, world units) and the base mesh's triangles; the scene's
     ``extras["axialdeform"]`` records the axis and the mesh fingerprint.
     """
-    path = _check_glb_path(path)
+    path = check_glb_path(path)
     atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals, source=source))
     return path
 
@@ -320,7 +267,7 @@ def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
     mesh : BaseMesh
     params : (n, 16) float32, n >= 1
     """
-    path = _check_glb_path(path)
+    path = check_glb_path(path)
     atomic_write_bytes(path, encode_instanced(mesh, params))
     return path
 
@@ -419,7 +366,6 @@ def read_instanced_glb(path: str | os.PathLike):
             params[:, list(idx)] = cols[name]
     params[:, POSITION] = cols["TRANSLATION"]
     if "_AXIAL_ANGLES" not in cols:
-        from .fit import angles_from_matrices
 
         params[:, ANGLES] = angles_from_matrices(matrices_from_quaternions(cols["ROTATION"]))
 
@@ -461,44 +407,3 @@ def read_extras(path: str | os.PathLike) -> dict:
 
 
 # ------------------------------------------------------------------------- CLI
-
-
-def add_parser(subparsers) -> None:
-    """Register ``axialdeform export``."""
-    e = subparsers.add_parser("export", help="write instances as a glTF binary (.glb)", description=(
-        "Write MESH deformed by PARAMS to a .glb. --baked (default): one mesh per instance with its deformed "
-        "world positions and normals; opens in any glTF viewer. --instanced: the base mesh once plus "
-        "EXT_mesh_gpu_instancing (TRANSLATION, ROTATION and the offsets as _AXIAL_* attributes); "
-        "see docs/interop.md. Coordinates are written as they are (no re-orientation to glTF's +Y up)."))
-    e.add_argument("mesh")
-    e.add_argument("params")
-    e.add_argument("-o", "--output", required=True, help="the .glb to write")
-    layout = e.add_mutually_exclusive_group()
-    layout.add_argument("--baked", dest="layout", action="store_const", const="baked",
-                        help="one deformed mesh per instance (default)")
-    layout.add_argument("--instanced", dest="layout", action="store_const", const="instanced",
-                        help="base mesh once + EXT_mesh_gpu_instancing")
-    e.set_defaults(layout="baked")
-    e.add_argument("--ignore-mesh-mismatch", action="store_true", help="use PARAMS even if made for another mesh")
-    e.set_defaults(handler=run)
-
-
-def run(args) -> None:
-    """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
-    from .mesh import load_mesh
-    from .params import read_params
-    from .safeio import check_output_path
-
-    out = _check_glb_path(args.output)
-    from .mesh import mesh_source_path
-
-    check_output_path(out, (mesh_source_path(args.mesh), args.params), "exported .glb")
-    mesh = load_mesh(args.mesh)
-    params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
-    from .params import range_warning
-
-    warning = range_warning(mesh, params, args.params)
-    if warning:
-        print(f"axialdeform export: warning: {warning}", file=sys.stderr)
-    path = export_glb(out, mesh, params, args.layout, source=args.params)
-    print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

@@ -3,7 +3,7 @@
 Given a base mesh and variants with its topology (same vertices in the same
 order, each a bent, rotated and moved copy), find for each variant the
 offsets ``d1..d5``, the position ``p`` and the angles ``rx ry rz`` with
-``W ≈ R·(V + E(Σ B_i(t) d_i)) + p`` (``docs/axial-deformation.md``).
+``W ≈ R·(V + E(Σ B_i(t) d_i)) + p`` (``docs/method.md``).
 
 Method (``docs/interop.md``), for every instance, vectorized over the
 vertices and over batches of instances:
@@ -31,15 +31,16 @@ gets an honest residual; fits above ``max_residual`` are flagged.
 from __future__ import annotations
 
 import os
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .deform import bernstein, deform
+from .deform import bernstein, deform, displace
+from .mesh import MESH_SUFFIXES  # mesh files a variants folder may hold (others are ignored)
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .params import ANGLES, OFFSETS, POSITION, as_params
+from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
 __all__ = [
     "TopologyError",
@@ -54,43 +55,10 @@ __all__ = [
     "fit_files",
     "load_variant",
     "variant_paths",
-    "add_parser",
-    "run",
 ]
 
 #: default limit on the worst vertex distance of a fit, as a fraction of L
 DEFAULT_MAX_RESIDUAL = 1e-3
-#: mesh files a variants folder may hold (others are ignored)
-MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
-
-
-# ------------------------------------------------------------------ rotations
-
-
-def angles_from_matrices(matrices: np.ndarray) -> np.ndarray:
-    """Angles ``rx ry rz`` (radians) with ``R = Rz(rz)·Ry(ry)·Rx(rx)``.
-
-    Parameters
-    ----------
-    matrices : (..., 3, 3) float
-        Rotation matrices (column-vector convention).
-
-    Returns
-    -------
-    (..., 3) float64
-        ``ry = atan2(-R[2,0], hypot(R[0,0], R[1,0]))`` in ``[-pi/2, pi/2]``,
-        ``rx = atan2(R[2,1], R[2,2])``, ``rz = atan2(R[1,0], R[0,0])``.  At
-        gimbal lock (``cos ry`` below 1e-9: rx and rz turn about the same
-        axis) ``rz = 0`` and ``rx`` carries the whole turn.  The matrix is
-        reproduced; the angles need not equal the ones that made it.
-    """
-    r = np.asarray(matrices, dtype=np.float64)
-    cy = np.hypot(r[..., 0, 0], r[..., 1, 0])
-    ry = np.arctan2(-r[..., 2, 0], cy)
-    locked = cy < 1e-9
-    rx = np.where(locked, np.arctan2(-r[..., 1, 2], r[..., 1, 1]), np.arctan2(r[..., 2, 1], r[..., 2, 2]))
-    rz = np.where(locked, 0.0, np.arctan2(r[..., 1, 0], r[..., 0, 0]))
-    return np.stack([rx, ry, rz], axis=-1)
 
 
 def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -119,20 +87,6 @@ def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarr
     flip[..., 2] = np.where(d == 0.0, 1.0, d)
     rot = v @ (flip[..., :, None] * ut)
     return rot, tc[..., 0, :] - (rot @ sc[..., 0, :, None])[..., 0]
-
-
-def _rodrigues(w: np.ndarray) -> np.ndarray:
-    """Rotation matrices (n, 3, 3) of the rotation vectors ``w`` (n, 3) radians."""
-    w = np.asarray(w, dtype=np.float64)
-    theta = np.linalg.norm(w, axis=-1)
-    k = np.zeros(w.shape[:-1] + (3, 3))
-    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -w[..., 2], w[..., 1], -w[..., 0]
-    k[..., 1, 0], k[..., 2, 0], k[..., 2, 1] = w[..., 2], -w[..., 1], w[..., 0]
-    small = theta < 1e-12
-    safe = np.where(small, 1.0, theta)
-    kn = k / safe[..., None, None]
-    rodrigues = np.eye(3) + np.sin(safe)[..., None, None] * kn + (1.0 - np.cos(safe))[..., None, None] * (kn @ kn)
-    return np.where(small[..., None, None], np.eye(3) + k, rodrigues)
 
 
 def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -164,11 +118,7 @@ class _Model:
 
     def bent(self, z: np.ndarray) -> np.ndarray:
         """``V'`` (n, v, 3) for canonical offset coordinates ``z`` (n, 4, 2)."""
-        out = np.repeat(self.base[None], len(z), axis=0)
-        disp = self.basis @ z  # (n, v, 2)
-        out[..., self.i] += disp[..., 0]
-        out[..., self.j] += disp[..., 1]
-        return out
+        return displace(self.axis, self.base, self.basis @ z)  # D(t) = basis @ z: (n, v, 2)
 
     def _offset_columns(self, rot: np.ndarray, a: np.ndarray, first: int) -> None:
         """Fill ``a[..., first:first + 8]`` with d(R·E(basis z))/dz."""
@@ -207,7 +157,7 @@ class _Model:
     @staticmethod
     def apply(step, rot, z, pos):
         dz = np.swapaxes(step[:, 3:11].reshape(-1, 2, 4), 1, 2)
-        return _rodrigues(step[:, :3]) @ rot, z + dz, pos + step[:, 11:]
+        return matrices_from_rotation_vectors(step[:, :3]) @ rot, z + dz, pos + step[:, 11:]
 
     def error(self, rot, z, pos, target) -> np.ndarray:
         """Squared error (n,) of each instance."""
@@ -346,13 +296,24 @@ def _residuals(mesh, params32: np.ndarray, targets: np.ndarray) -> tuple[np.ndar
     return np.sqrt(np.mean(dist**2, axis=1)) / mesh.axis.length, dist.max(axis=1) / mesh.axis.length
 
 
+def _in_loaded_order(mesh, pos: np.ndarray) -> np.ndarray:
+    """Positions given in the file's own vertex order (``mesh.source_count``
+    of them) put into the loaded order; loaded-order positions unchanged."""
+    if len(pos) == mesh.vertex_count or len(pos) != mesh.source_count or (mesh.source_index < 0).any():
+        return pos
+    return pos[mesh.source_index]
+
+
 def _check_shape(mesh, positions: np.ndarray, name: str) -> np.ndarray:
     pos = np.asarray(positions, dtype=np.float64)
+    if pos.ndim == 2 and pos.shape[1] == 3:
+        pos = _in_loaded_order(mesh, pos)
     if pos.ndim != 2 or pos.shape[1] != 3 or len(pos) != mesh.vertex_count:
         found = len(pos) if pos.ndim == 2 else pos.shape
+        also = f" or {mesh.source_count} (its file's own order)" if mesh.source_count != mesh.vertex_count else ""
         raise TopologyError(
             f"{name}: has {found} vertices, expected {mesh.vertex_count} (the base mesh {mesh.name}'s count, "
-            "same order)"
+            f"same order){also}"
         )
     if not np.isfinite(pos).all():
         raise MeshError(f"{name}: has non-finite vertex coordinates; expected finite numbers")
@@ -399,7 +360,9 @@ def fit_params(mesh, variants, *, max_residual: float = DEFAULT_MAX_RESIDUAL, ma
     ----------
     mesh : BaseMesh
     variants : (n, v, 3) float, or a sequence of n (v, 3) arrays
-        World positions of each variant in the base mesh's vertex order.
+        World positions of each variant in the base mesh's vertex order
+        (``mesh.vertex_count`` rows), or in its file's own vertex order
+        (``mesh.source_count`` rows; see ``BaseMesh.source_index``).
     max_residual : float
         Limit on the largest vertex distance, fraction of L (flags only;
         call :meth:`FitResult.check` to raise).
@@ -422,6 +385,16 @@ def load_variant(path: str | os.PathLike, mesh) -> np.ndarray:
 
     variant = load_mesh(path)
     name = str(path)
+    if not (variant.vertex_count == mesh.vertex_count and np.array_equal(variant.faces, mesh.faces)):
+        # the same file vertices and triangles, split or ordered differently by the reader
+        # (an OBJ written with other UV seams, or none): compare and map in the file's own order
+        same_file_triangles = (len(variant.faces) == len(mesh.faces) and variant.source_count == mesh.source_count
+                               and not (variant.source_index < 0).any() and not (mesh.source_index < 0).any()
+                               and np.array_equal(variant.source_index[variant.faces], mesh.source_index[mesh.faces]))
+        if same_file_triangles:
+            file_positions = np.zeros((variant.source_count, 3))
+            file_positions[variant.source_index] = variant.positions
+            return file_positions[mesh.source_index]
     if variant.vertex_count != mesh.vertex_count:
         raise TopologyError(f"{name}: has {variant.vertex_count} vertices, expected {mesh.vertex_count} "
                             f"(the base mesh {mesh.name}'s count, same order)")
@@ -461,80 +434,3 @@ def fit_files(mesh, paths, *, max_residual: float = DEFAULT_MAX_RESIDUAL, max_it
     return _fit_all(mesh, items, len(paths), max_residual=max_residual, max_iterations=max_iterations,
                     progress=progress)
 
-
-# ------------------------------------------------------------------------- CLI
-
-
-def _fraction(text: str) -> float:
-    import argparse
-
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a fraction of L, found {text!r}") from None
-    if not (np.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"expected a finite fraction of L >= 0, found {text!r}")
-    return value
-
-
-def _positive_int(text: str) -> int:
-    import argparse
-
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, found {text!r}")
-    return value
-
-
-def add_parser(subparsers) -> None:
-    """Register ``axialdeform fit``."""
-    f = subparsers.add_parser("fit", help="recover parameters from existing variant meshes", description=(
-        "Fit the 16 numbers of each variant of BASE: VARIANTS are mesh files with BASE's vertices in the same "
-        "order, or ONE folder whose mesh files, sorted by name, are instances 0, 1, 2, ... The output is binary "
-        "for .adp, text for .txt/.csv/.dat. Exit 2 if a fit's largest vertex distance exceeds --max-residual."))
-    f.add_argument("base")
-    f.add_argument("variants", nargs="+")
-    f.add_argument("-o", "--output", required=True, help="parameter file to write")
-    f.add_argument("--max-residual", type=_fraction, default=DEFAULT_MAX_RESIDUAL,
-                   help="largest allowed vertex distance, fraction of L (default: %(default)g)")
-    f.add_argument("--allow-residual", action="store_true",
-                   help="write the parameters even if fits exceed --max-residual (they are still reported)")
-    f.add_argument("--max-iterations", type=_positive_int, default=100, help="alternation rounds per variant (default: %(default)s)")
-    f.set_defaults(handler=run)
-
-
-def run(args) -> None:
-    """``axialdeform fit BASE VARIANTS... -o PARAMS``."""
-    from tqdm import tqdm
-
-    from .mesh import load_mesh
-    from .params import write_params
-
-    from .safeio import check_output_path
-
-    out = Path(args.output)
-    mesh = load_mesh(args.base)
-    is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
-    paths = variant_paths(args.variants)
-    from .mesh import mesh_source_path
-
-    check_output_path(out, (mesh_source_path(args.base), *paths), "parameter file")
-    with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:
-        result = fit_files(mesh, paths, max_residual=args.max_residual, max_iterations=args.max_iterations,
-                           progress=bar)
-    if not args.allow_residual:
-        result.check()
-    path = write_params(out, result.params, mesh)
-    k = result.worst
-    print(f"wrote {path} ({len(paths)} instances, {path.stat().st_size} bytes)")
-    print(f"worst residual: max {result.max[k]:.3g} L, rms {result.rms[k]:.3g} L ({result.names[k]})")
-    bad = int(result.exceeds.sum())
-    if bad:
-        print(f"warning: {bad} of {len(paths)} fits exceed the residual limit {result.max_residual:g} L", file=sys.stderr)
-    if is_folder:
-        variant_bytes = sum(p.stat().st_size for p in paths)
-        print(f"size ratio: {variant_bytes} bytes of variants / {path.stat().st_size} bytes of parameters "
-              f"= {variant_bytes / path.stat().st_size:.1f}x")

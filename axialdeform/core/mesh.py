@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import resources
@@ -20,12 +21,14 @@ import numpy as np
 from .axis import ControlAxis
 from .errors import AxialDeformError, MeshError
 
-__all__ = ["BaseMesh", "load_mesh", "mesh_source_path", "bundled_mesh_path", "BUNDLED_MESHES", "area_weighted_normals"]
+__all__ = ["BaseMesh", "load_mesh", "mesh_source_path", "bundled_mesh_path", "BUNDLED_MESHES", "MESH_SUFFIXES",
+           "area_weighted_normals"]
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``).
 BUNDLED_MESHES = ("stone", "leaf")
 
-_SUPPORTED = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
+#: File name suffixes of the mesh files this library reads (base meshes, fit variants).
+MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,6 +48,13 @@ class BaseMesh:
         Where the mesh came from (a file path or a bundled mesh name).
     normals_from_file : bool
         True when ``normals`` were read from the file.
+    source_index : (n,) int64
+        For each vertex, the index of the vertex in the file it came from
+        (``-1`` where none could be matched).  The identity unless the
+        reader split or dropped vertices: trimesh splits an OBJ's ``v``
+        at UV and normal seams and drops the ones no face uses.
+    source_count : int
+        How many vertices the file itself lists (OBJ: its ``v`` lines).
     """
 
     positions: np.ndarray
@@ -52,7 +62,32 @@ class BaseMesh:
     faces: np.ndarray
     name: str = "<mesh>"
     normals_from_file: bool = False
+    source_index: np.ndarray | None = None
+    source_count: int | None = None
     _axis: ControlAxis | None = field(default=None, repr=False)
+
+    @classmethod
+    def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> "BaseMesh":
+        """A mesh from arrays: ``vertices : (n, 3) float``, ``faces : (m, 3) int``
+        and optional unit ``normals : (n, 3) float`` (else area-weighted ones)."""
+        from .arrays import as_array
+
+        vertices = as_array(vertices, (None, 3), f"{name}: vertices", error=MeshError)
+        faces = as_array(faces, (None, 3), f"{name}: faces", np.int64, error=MeshError)
+        if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
+            raise MeshError(f"{name}: faces: expected indices 0..{len(vertices) - 1}, found {int(faces.min())}..{int(faces.max())}")
+        if normals is None:
+            if not np.isfinite(vertices).all():
+                bad = int(np.argwhere(~np.isfinite(vertices).all(axis=1))[0, 0])
+                raise MeshError(f"{name}: vertex {bad} has a non-finite coordinate {vertices[bad].tolist()}; expected finite numbers")
+            normals = area_weighted_normals(vertices, faces)
+        else:
+            normals = as_array(normals, (len(vertices), 3), f"{name}: normals", error=MeshError)
+        return cls(vertices, normals, faces, name=name, normals_from_file=False)
+
+    def __repr__(self) -> str:
+        return (f"BaseMesh({self.name!r}, {self.vertex_count} vertices, {len(self.faces)} triangles, "
+                f"axis {'xyz'[self.axis.index]}, L={self.axis.length:.6g})")
 
     def __post_init__(self) -> None:
         with np.errstate(over="ignore", invalid="ignore"):  # out-of-range coordinates are refused below
@@ -74,6 +109,17 @@ class BaseMesh:
         object.__setattr__(self, "positions", pos)
         object.__setattr__(self, "normals", nrm)
         object.__setattr__(self, "faces", faces)
+        if self.source_index is None:
+            index = np.arange(len(pos), dtype=np.int64)
+        else:
+            index = np.ascontiguousarray(self.source_index, dtype=np.int64)
+            if index.shape != (len(pos),):
+                raise MeshError(f"{self.name}: expected source_index of shape ({len(pos)},), found {index.shape}")
+        object.__setattr__(self, "source_index", index)
+        count = int(index.max()) + 1 if self.source_count is None else int(self.source_count)
+        if count <= index.max():
+            raise MeshError(f"{self.name}: source_index refers to file vertex {int(index.max())}, but source_count is {count}")
+        object.__setattr__(self, "source_count", count)
         # raises MeshError on a zero extent
         object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name))
 
@@ -237,13 +283,25 @@ def mesh_source_path(source: str | os.PathLike) -> Path:
     return Path(source)
 
 
-def load_mesh(source: str | os.PathLike) -> BaseMesh:
-    """Read a base mesh from a file, or a bundled mesh by name (``"stone"``, ``"leaf"``).
+def load_mesh(source) -> BaseMesh:
+    """Read a base mesh from a file, a bundled mesh by name (``"stone"``,
+    ``"leaf"``), or take a ``trimesh.Trimesh`` (or a ``trimesh.Scene`` with one
+    mesh) already in memory.
 
     Raises :class:`MeshError` (naming the file) for a missing or unreadable
     file, a scene with several meshes, no faces, non-finite coordinates or a
-    longest extent of zero.
+    longest extent of zero.  ``source_index`` maps each vertex to the file's
+    own vertex order (``docs/parameter-files.md``, "Vertex order").
     """
+    if isinstance(source, BaseMesh):
+        return source
+    if type(source).__module__.startswith("trimesh"):
+        name = f"<{type(source).__name__}>"
+        mesh, transform = _single_mesh(source, name)
+        return _from_trimesh(mesh, transform, name, None)
+    if not isinstance(source, (str, os.PathLike)):
+        raise MeshError(f"load_mesh: expected a file path, a bundled mesh name ({', '.join(BUNDLED_MESHES)}), "
+                        f"a trimesh.Trimesh or a BaseMesh, found {type(source).__name__}")
     if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
         path = bundled_mesh_path(source)
     else:
@@ -252,14 +310,15 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     if not os.path.lexists(path):
         raise MeshError(f"{name}: no such mesh file")
     if path.is_dir():
-        raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(_SUPPORTED)})")
-    if path.suffix.lower() not in _SUPPORTED:
-        raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(_SUPPORTED)}")
+        raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(MESH_SUFFIXES)}")
     from .safeio import SafeResolver, memory_available, read_regular
 
     # a regular file (never a FIFO or a device), read with a bound; every
     # file it refers to goes through the same check (SafeResolver)
-    data = read_regular(path, max(memory_available() // 2, 1 << 20), f"a mesh file ({', '.join(_SUPPORTED)})", MeshError)
+    data = read_regular(path, max(memory_available() // 2, 1 << 20), f"a mesh file ({', '.join(MESH_SUFFIXES)})",
+                        MeshError)
     try:
         import io
 
@@ -272,7 +331,6 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         with quiet_numpy():  # trimesh's casts of hostile numbers warn; the results are checked below
             loaded = trimesh.load(io.BytesIO(data), file_type=path.suffix.lower().lstrip("."), resolver=resolver,
                                   process=False)
-        del data
         if resolver.refused:
             raise resolver.refused[0]
     except AxialDeformError as exc:  # a file the mesh refers to was refused
@@ -280,6 +338,36 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
     mesh, transform = _single_mesh(loaded, name)
+    file_positions = _obj_positions(data) if path.suffix.lower() == ".obj" else None  # the bytes read above
+    del data
+    return _from_trimesh(mesh, transform, name, file_positions)
+
+
+def _obj_positions(data: bytes) -> np.ndarray | None:
+    """The ``v`` lines of an OBJ file's bytes, ``(k, 3) float64`` in file order (None if unreadable)."""
+    try:
+        rows = re.findall(rb"^[ \t]*v[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)", data, re.M)
+        return np.array(rows, dtype=np.float64).reshape(-1, 3)
+    except (OSError, ValueError):
+        return None
+
+
+def _source_index(positions: np.ndarray, file_positions: np.ndarray | None) -> tuple[np.ndarray | None, int | None]:
+    """For each loaded vertex the first file vertex at exactly its position
+    (-1 if none), and the file's vertex count; (None, None) without a file list."""
+    if file_positions is None or len(file_positions) == 0:
+        return None, None
+    k = len(file_positions)
+    if k == len(positions) and np.array_equal(file_positions, positions):
+        return np.arange(k, dtype=np.int64), k
+    _, ids = np.unique(np.concatenate([file_positions, positions]), axis=0, return_inverse=True)
+    ids = ids.reshape(-1)
+    first = np.full(int(ids.max()) + 1, -1, dtype=np.int64)
+    first[ids[:k][::-1]] = np.arange(k - 1, -1, -1)  # the smallest file index wins
+    return first[ids[k:]], k
+
+
+def _from_trimesh(mesh, transform, name: str, file_positions) -> BaseMesh:
     positions = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     if len(positions) == 0 or len(faces) == 0:
@@ -293,6 +381,7 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
             f"{name}: a face refers to vertex {int(faces.min() if faces.min() < 0 else faces.max())}, "
             f"but the mesh has {len(positions)} vertices; expected indices 0..{len(positions) - 1}"
         )
+    source_index, source_count = _source_index(positions, file_positions)
     file_normals = _file_vertex_normals(mesh, len(positions))
     if transform is not None:
         positions = positions @ transform[:3, :3].T + transform[:3, 3]
@@ -305,7 +394,8 @@ def load_mesh(source: str | os.PathLike) -> BaseMesh:
         normals = np.where(usable[:, None], file_normals / np.where(usable, length, 1.0)[:, None], computed if computed is not None else 0.0)
     else:
         normals = area_weighted_normals(positions, faces)
-    return BaseMesh(positions, normals, faces, name=name, normals_from_file=file_normals is not None)
+    return BaseMesh(positions, normals, faces, name=name, normals_from_file=file_normals is not None,
+                    source_index=source_index, source_count=source_count)
 
 
 def _single_mesh(loaded, name: str):

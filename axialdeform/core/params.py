@@ -56,6 +56,7 @@ __all__ = [
     "quantization_error_bound",
     "quantize_params",
     "dequantize_params",
+    "quantize_with_table",
     "MAGIC",
     "BINARY_SUFFIXES",
     "TEXT_SUFFIXES",
@@ -117,15 +118,28 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
     offsets : (n, 5, 2) model units; positions : (n, 3) world units;
     angles : (n, 3) radians.  Missing parts are zero.
     """
-    parts = [x for x in (offsets, positions, angles) if x is not None]
-    n = count if count is not None else (len(np.asarray(parts[0])) if parts else 0)
+    from .arrays import as_array
+
+    parts = {}
+    for name, value, shape in (("offsets", offsets, (None, 5, 2)), ("positions", positions, (None, 3)),
+                               ("angles", angles, (None, 3))):
+        if value is not None:
+            arr = as_array(value, shape, name, np.float32, error=ParamError)
+            if len(shape) == 3 and arr.shape == (5, 2):
+                arr = arr[None]
+            parts[name] = arr
+    lengths = {len(a) for a in parts.values()} | ({int(count)} if count is not None else set())
+    if len(lengths) > 1:
+        found = ", ".join(f"{k} {len(a)}" for k, a in parts.items()) + (f", count {count}" if count is not None else "")
+        raise ParamError(f"make_params: expected the same number of instances in every part, found {found}")
+    n = lengths.pop() if lengths else 0
     out = np.zeros((n, 16), dtype=np.float32)
-    if offsets is not None:
-        out[:, OFFSETS] = np.asarray(offsets, dtype=np.float32).reshape(n, 10)
-    if positions is not None:
-        out[:, POSITION] = np.asarray(positions, dtype=np.float32).reshape(n, 3)
-    if angles is not None:
-        out[:, ANGLES] = np.asarray(angles, dtype=np.float32).reshape(n, 3)
+    if "offsets" in parts:
+        out[:, OFFSETS] = parts["offsets"].reshape(n, 10)
+    if "positions" in parts:
+        out[:, POSITION] = parts["positions"]
+    if "angles" in parts:
+        out[:, ANGLES] = parts["angles"]
     return as_params(out)
 
 
@@ -358,6 +372,35 @@ def quantize_params(values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.array(raw[:16], dtype=np.float32), np.array(raw[16:], dtype=np.float32), q
 
 
+def quantize_with_table(values, lo, step, *, name: str = "update", setter: str = "set()") -> np.ndarray:
+    """Encode ``values`` with an existing table (``lo``, ``step`` from
+    :func:`quantize_params`): ``q`` (n, 16) uint16.
+
+    values : (n, 16) float; lo, step : (16,) float32.  A value outside the
+    table's range ``lo .. lo + 65535 * step`` raises :class:`ParamError`
+    naming ``name``, the instance and the field (no clipping), and pointing
+    to ``setter`` (the call that re-quantizes every instance).
+    """
+    v = as_params(values).astype(np.float64)
+    lo = np.asarray(lo, dtype=np.float32).reshape(16).astype(np.float64)
+    step = np.asarray(step, dtype=np.float32).reshape(16).astype(np.float64)
+    q = _levels(v, lo, step)
+    fits = (q >= 0) & (q <= 65535) & ((step > 0) | (v == lo))
+    if not fits.all():
+        row, col = (int(x) for x in np.argwhere(~fits)[0])
+        raise ParamError(
+            f"{name}: instance {row}, field {col}: {v[row, col]:.9g} is outside the quantized range "
+            f"{lo[col]:.9g}..{lo[col] + 65535 * step[col]:.9g} of the buffer; "
+            f"expected values inside it (call {setter} with every instance to re-quantize)"
+        )
+    return q.astype(np.uint16)
+
+
+def _levels(v: np.ndarray, lo: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """The quantization levels ``rint((v - lo) / step)`` (float64; a zero step maps to level ``v - lo``)."""
+    return np.rint((v - lo) / np.where(step > 0, step, 1.0))
+
+
 def dequantize_params(lo, step, q) -> np.ndarray:
     """``lo + q * step`` per column, computed in float64 and rounded to float32: (n, 16).
 
@@ -379,9 +422,7 @@ def _quantize(values: np.ndarray) -> tuple[bytes, bytes]:
     # a step that rounds to a value whose 65535 multiple falls short of the range is widened by one ulp
     short = lo32.astype(np.float64) + 65535.0 * step32.astype(np.float64) < hi
     step32[short] = np.nextafter(step32[short], np.float32(np.inf))
-    safe = np.where(step32 > 0, step32.astype(np.float64), 1.0)
-    q = np.rint((v - lo32.astype(np.float64)) / safe)
-    q = np.clip(q, 0, 65535).astype("<u2")
+    q = np.clip(_levels(v, lo32.astype(np.float64), step32.astype(np.float64)), 0, 65535).astype("<u2")
     return _QUANT.pack(*lo32.tolist(), *step32.tolist()), q.tobytes()
 
 

@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ParamError
+from ..core.params import as_params, dequantize_params, quantize_params, quantize_with_table
 from .context import check_alive, check_released
-from ..core.params import as_params, dequantize_params, quantize_params
 
 __all__ = [
     "MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES",
@@ -37,9 +37,11 @@ QUANTIZED_RECORD_BYTES = 32
 
 def as_index(value, name: str) -> int:
     """``value`` as an int if it is a whole number type (int, numpy integer;
-    not bool, float, str or None), else :class:`ParamError`."""
+    not bool, float, str or None), else :class:`ArgumentError`."""
+    from ..core.errors import ArgumentError
+
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise ParamError(f"{name}: expected an integer instance index, found {value!r} ({type(value).__name__})")
+        raise ArgumentError(f"{name}: expected an integer instance index, found {value!r} ({type(value).__name__})")
     return int(value)
 
 
@@ -65,19 +67,27 @@ def _content(buffer, formats, names, program, per_instance=False):
 
 
 class MeshBuffers:
-    """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh."""
+    """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh.
 
-    def __init__(self, ctx, mesh):
+    ``indices`` names the index buffers to build now: ``"triangles"`` and/or
+    ``"edges"``.  Triangles left out stay ``None``; edges left out are built
+    on first use of :attr:`edges` (a wireframe draw), so solid drawing never
+    pays for them."""
+
+    def __init__(self, ctx, mesh, indices=("triangles",)):
         check_alive(ctx, "new MeshBuffers")
         self.ctx = ctx
         self.mesh = mesh
         self.vertex_count = mesh.vertex_count
+        self.triangles = self._edges = None
+        self._released = False
         interleaved = np.hstack([mesh.positions, mesh.normals]).astype("f4")
         self.vbo = ctx.buffer(interleaved.tobytes())
-        self.triangles = ctx.buffer(mesh.faces.astype("u4").tobytes())
+        if "triangles" in indices:
+            self.triangles = ctx.buffer(mesh.faces.astype("u4").tobytes())
+        if "edges" in indices:
+            self._edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
         self.triangle_indices = int(mesh.faces.size)
-        self._edges = None  # built by the first wireframe draw: solid drawing never pays for it
-        self._released = False
 
     @property
     def edges(self):
@@ -144,21 +154,11 @@ class InstanceBuffer:
         self.qmin, self.qstep, q = quantize_params(values)
         return q.astype("<u2").tobytes()
 
-    def _encode_part(self, values: np.ndarray) -> bytes:
+    def _encode_part(self, values: np.ndarray, setter: str = "set()", name: str = "update") -> bytes:
         """Encode with the current table; values outside its range are refused."""
         if not self.quantized:
             return values.tobytes()
-        v = values.astype(np.float64)
-        lo, step = self.qmin.astype(np.float64), self.qstep.astype(np.float64)
-        q = np.rint((v - lo) / np.where(step > 0, step, 1.0))
-        fits = (q >= 0) & (q <= 65535) & ((step > 0) | (v == lo))
-        if not fits.all():
-            row, col = (int(x) for x in np.argwhere(~fits)[0])
-            raise ParamError(
-                f"update: instance {row}, field {col}: {v[row, col]:.9g} is outside the quantized range "
-                f"{lo[col]:.9g}..{lo[col] + 65535 * step[col]:.9g} of the buffer; "
-                "expected values inside it (call set() with every instance to re-quantize)"
-            )
+        q = quantize_with_table(values, self.qmin, self.qstep, name=name, setter=setter)
         return q.astype("<u2").tobytes()
 
     @property
@@ -183,18 +183,22 @@ class InstanceBuffer:
         if self.count:
             self.buffer.write(self._encode_all(values))
 
-    def update(self, params, start: int = 0) -> None:
-        """Overwrite instances ``start .. start + len(params) - 1`` in place."""
+    def update(self, params, start: int = 0, *, setter: str = "set()", name: str = "update") -> None:
+        """Overwrite instances ``start .. start + len(params) - 1`` in place.
+        ``start`` must be an integer (int or numpy integer).
+
+        name, setter : how error messages name this call and the one that
+        replaces every instance (a wrapper such as ``AxialRenderer`` passes its own)."""
         self._check()
         values = as_params(params)
-        start = as_index(start, "update: start")
+        start = as_index(start, f"{name}: start")
         if start < 0 or start + len(values) > self.count:
             raise ParamError(
-                f"update: instances {start}..{start + len(values) - 1} do not fit in the {self.count} instances drawn; "
-                "expected 0 <= start and start + len(params) <= count (use set() to change the count)"
+                f"{name}: instances {start}..{start + len(values) - 1} do not fit in the {self.count} instances drawn; "
+                f"expected 0 <= start and start + len(params) <= count (use {setter} to change the count)"
             )
         if len(values):
-            self.buffer.write(self._encode_part(values), offset=start * self.record_bytes)
+            self.buffer.write(self._encode_part(values, setter, name), offset=start * self.record_bytes)
 
     def read(self) -> np.ndarray:
         """The parameters on the GPU, ``(count, 16) float32`` (decoded if quantized)."""

@@ -11,45 +11,22 @@ from __future__ import annotations
 import numpy as np
 import pyrr
 
-from ..core.params import ANGLES, OFFSETS, POSITION, as_params
-from ..core.deform import rotation_matrices
+from ..core.bounds import outline_points, scene_box
+from ..core.arrays import as_array
+from ..core.errors import ArgumentError
 
-__all__ = ["Camera", "instance_bounds", "frame_instances", "UP_VECTORS", "as_matrix"]
+__all__ = ["Camera", "OrbitCamera", "frame_instances", "frame_points", "orbit_axes", "UP_VECTORS"]
 
 UP_VECTORS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
-
-
-def as_matrix(m, name: str = "matrix", invertible: bool = False) -> np.ndarray:
-    """``m`` as a ``(4, 4) float32`` matrix of finite numbers, else
-    :class:`~axialdeform.core.errors.ParamError`; with ``invertible`` a
-    singular one (an all-zero view matrix) is refused too."""
-    from ..core.errors import ParamError
-
-    try:
-        a = np.asarray(m, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ParamError(f"{name}: expected a (4, 4) matrix of numbers ({exc})") from None
-    if a.shape not in ((4, 4), (16,)):
-        raise ParamError(f"{name}: expected a (4, 4) matrix, found shape {a.shape}")
-    a = a.reshape(4, 4)
-    if not np.isfinite(a).all():
-        raise ParamError(f"{name}: expected finite numbers, found {a[~np.isfinite(a)][0]}")
-    if invertible:
-        with np.errstate(all="ignore"):
-            cond = np.linalg.cond(a)
-        if not np.isfinite(cond) or cond > 1e12:
-            raise ParamError(f"{name}: expected an invertible matrix (a camera), found a singular one "
-                             f"(condition number {cond:.3g}), e.g. all zeros")
-    return a.astype(np.float32)
 
 
 class Camera:
     """A perspective camera: eye, target, up, vertical field of view (degrees)."""
 
     def __init__(self, eye, target, up=(0.0, 1.0, 0.0), fovy: float = 35.0, near: float = 0.01, far: float = 100.0):
-        self.eye = np.asarray(eye, dtype=np.float64)
-        self.target = np.asarray(target, dtype=np.float64)
-        self.up = np.asarray(up, dtype=np.float64)
+        self.eye = as_array(eye, (3,), "eye")
+        self.target = as_array(target, (3,), "target")
+        self.up = as_array(up, (3,), "up")
         self.fovy, self.near, self.far = float(fovy), float(near), float(far)
 
     def view(self) -> np.ndarray:
@@ -61,51 +38,146 @@ class Camera:
         return pyrr.matrix44.create_perspective_projection(self.fovy, aspect, self.near, self.far, dtype=np.float32)
 
 
-def instance_bounds(mesh, params) -> tuple[np.ndarray, np.ndarray]:
-    """Bounding spheres of the deformed instances, without deforming them.
-
-    Returns centres (n, 3) and radii (n,) float64 (world units).  The bend
-    moves no vertex further than the largest offset (the weights sum to 1),
-    and a rotation keeps distances, so each sphere holds its whole instance.
-    """
-    params = as_params(params).astype(np.float64)
-    center = np.asarray(mesh.axis.center, dtype=np.float64)
-    radius = float(np.linalg.norm(mesh.positions.astype(np.float64) - center, axis=1).max())
-    bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1)
-    centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) + params[:, POSITION]
-    return centers, radius + bend
-
-
-def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35.0,
-                    azimuth: float = 35.0, elevation: float = 35.0, margin: float = 0.03) -> Camera:
-    """A camera that sees every instance, looking down at ``elevation`` degrees.
-
-    The eye is placed on the view direction just far enough that all eight
-    corners of the box around the instances' bounding spheres project inside
-    the picture (with ``margin`` as a fraction of the field of view).
-    """
-    centers, radii = instance_bounds(mesh, params)
-    if len(centers) == 0:
-        lo, hi = np.full(3, -1.0), np.full(3, 1.0)
-    else:
-        lo = (centers - radii[:, None]).min(axis=0)
-        hi = (centers + radii[:, None]).max(axis=0)
-    target = (lo + hi) / 2
+def orbit_axes(up: str, azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The camera's unit axes for an orbit around world ``up`` (``"x"``, ``"y"``
+    or ``"z"``) at ``azimuth`` and ``elevation`` degrees: ``to_eye``,
+    ``right`` and ``cam_up``, each ``(3,) float64``."""
+    if up not in UP_VECTORS:
+        raise ArgumentError(f"up: expected one of x, y, z, found {up!r}")
     up_vec = np.asarray(UP_VECTORS[up])
     side = np.roll(up_vec, 1)
     fwd = np.cross(side, up_vec)
     az, el = np.radians(azimuth), np.radians(elevation)
     to_eye = np.cos(el) * (np.cos(az) * fwd + np.sin(az) * side) + np.sin(el) * up_vec
     right = np.cross(up_vec, to_eye)
-    right /= np.linalg.norm(right)
-    cam_up = np.cross(to_eye, right)
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]) - target
-    tan_y = np.tan(np.radians(fovy) / 2) * (1 - margin)
-    tan_x = tan_y * aspect
-    depth = corners @ to_eye  # towards the eye
-    need = np.maximum(np.abs(corners @ right) / tan_x, np.abs(corners @ cam_up) / tan_y) + depth
-    distance = max(float(need.max()), 1e-6)
-    extent = float(np.linalg.norm(hi - lo)) / 2 + 1e-9
+    right /= max(np.linalg.norm(right), 1e-12)
+    return to_eye, right, np.cross(to_eye, right)
+
+
+def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspect: float, fovy: float = 35.0,
+                 margin: float = 0.03) -> tuple[np.ndarray, float]:
+    """Target and distance of an orbit camera that just sees every sphere.
+
+    points : (m, 3) float; radii : (m,) float (0 for points).
+    The eye looks along ``-to_eye`` (:func:`orbit_axes`).  Each side of the
+    picture (less ``margin``, a fraction of the field of view) is a plane
+    through the eye; a sphere is inside when it is on the inner side of all
+    four by its radius (a negative ``margin`` lets the outline run past the
+    edges: a close-up).  That is linear in the eye's position, so the
+    closest eye is solved for directly: in the tighter direction the
+    outline touches both sides, in the other it has equal room on both.
+    Returns ``target : (3,) float64`` (on the view axis, level with the
+    outline's centre) and the eye's distance from it.
+    """
+    pts = as_array(points, (None, 3), "points")
+    r = as_array(radii, (len(pts),), "radii")
+    if not margin < 1.0:
+        raise ArgumentError(f"margin: expected a fraction below 1 (negative: crop past the edges), found {margin!r}")
+    if not aspect > 0 or not 0 < fovy < 180:
+        raise ArgumentError(f"camera: expected aspect > 0 and 0 < fovy < 180, found aspect {aspect!r}, fovy {fovy!r}")
+    if len(pts) == 0:
+        pts, r = np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]), np.zeros(2)
+    to_eye, right, cam_up = orbit_axes(up, azimuth, elevation)
+    half_y = np.arctan(np.tan(np.radians(fovy) / 2) * (1 - margin))
+    half_x = np.arctan(np.tan(half_y) * aspect)
+    cx, sx, cy, sy = np.cos(half_x), np.sin(half_x), np.cos(half_y), np.sin(half_y)
+    # inward normals of the right, left, top and bottom planes
+    normals = np.stack([-cx * right - sx * to_eye, cx * right - sx * to_eye,
+                        -cy * cam_up - sy * to_eye, cy * cam_up - sy * to_eye])
+    # a sphere is inside plane k when (p - eye) . n_k >= r, i.e. eye . n_k <= c_k
+    c = (pts @ normals.T - r[:, None]).min(axis=0)
+    # eye = a right + b cam_up + e to_eye: the smallest e with room for a and b
+    ex, ey = -(c[0] + c[1]) / (2 * sx), -(c[2] + c[3]) / (2 * sy)
+    e = max(ex, ey)
+    a = (c[1] - c[0]) / (2 * cx)
+    b = (c[3] - c[2]) / (2 * cy)
+    eye = a * right + b * cam_up + e * to_eye
+    # the tighter direction touches both sides, so it is centred; the other has
+    # equal room measured across the planes, not in the picture: centre it there
+    slack_axis, half = (cam_up, half_y) if ex >= ey else (right, half_x)
+    for _ in range(3):
+        rel = pts - eye
+        depth = np.maximum(-(rel @ to_eye), 1e-12)
+        across = rel @ slack_axis
+        lo, hi = ((across - r) / depth).min(), ((across + r) / depth).max()
+        shift = (lo + hi) / 2 * float(np.median(depth))
+        moved = eye + shift * slack_axis
+        rel = pts - moved
+        depth = np.maximum(-(rel @ to_eye), 1e-12)
+        if ((np.abs(rel @ slack_axis) + r / np.cos(half)) / depth > np.tan(half) * (1 + 1e-9)).any():
+            break  # would cut something off: keep the last placement
+        eye = moved
+    center = ((pts - r[:, None]).min(axis=0) + (pts + r[:, None]).max(axis=0)) / 2
+    distance = max(float((eye - center) @ to_eye), 1e-9)
+    return eye - distance * to_eye, distance
+
+
+def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35.0,
+                    azimuth: float = 35.0, elevation: float = 35.0, margin: float = 0.03) -> Camera:
+    """A camera that sees every instance and fills the picture, looking down
+    at ``elevation`` degrees.
+
+    The deformed instances' outline (:func:`axialdeform.core.bounds.outline_points`)
+    is centred and the eye placed just far enough that it fits the picture's
+    width or height less ``margin`` (a fraction of the field of view).
+    """
+    points, radii = outline_points(mesh, params)
+    target, distance = frame_points(points, radii, up, azimuth, elevation, aspect, fovy, margin)
+    to_eye = orbit_axes(up, azimuth, elevation)[0]
     eye = target + to_eye * distance
-    return Camera(eye, target, up_vec, fovy, near=max(distance - extent * 1.05, distance * 1e-3),
-                  far=distance + extent * 1.05)
+    if len(points):
+        depth = (eye - points) @ to_eye
+        near, far = float((depth - radii).min()), float((depth + radii).max())
+    else:
+        near, far = distance * 0.5, distance * 2.0
+    return Camera(eye, target, UP_VECTORS[up], fovy, near=max(near * 0.95, distance * 1e-3), far=max(far * 1.05, distance * 1e-3 * 2))
+
+
+class OrbitCamera:
+    """A camera that turns around a target: ``azimuth`` and ``elevation``
+    (degrees) about world ``up``, at ``distance``; the viewer's camera.
+
+    ``extent`` (world units, half the size of the scene) sets how far the
+    near and far planes reach (three times it) and how far it may zoom.
+    """
+
+    def __init__(self, target, distance: float, azimuth: float = 35.0, elevation: float = 35.0, up: str = "y",
+                 fovy: float = 35.0, extent: float = 1.0):
+        if up not in UP_VECTORS:
+            raise ArgumentError(f"up: expected one of x, y, z, found {up!r}")
+        self.target = as_array(target, (3,), "target")
+        self.distance, self.azimuth, self.elevation = float(distance), float(azimuth), float(elevation)
+        self.up, self.fovy, self.extent = up, float(fovy), float(extent)
+
+    @classmethod
+    def framing(cls, mesh, params, aspect: float, *, up: str = "y", fovy: float = 35.0, azimuth: float = 35.0,
+                elevation: float = 35.0, margin: float = 0.03) -> "OrbitCamera":
+        """The orbit that starts where :func:`frame_instances` puts the camera."""
+        cam = frame_instances(mesh, params, aspect, up, fovy, azimuth, elevation, margin)
+        lo, hi = scene_box(mesh, params)
+        return cls(cam.target, float(np.linalg.norm(cam.eye - cam.target)), azimuth, elevation, up, fovy,
+                   float(np.linalg.norm(hi - lo)) / 2 + 1e-6)
+
+    @property
+    def eye(self) -> np.ndarray:
+        """(3,) float64 world position of the eye."""
+        return self.target + self.distance * orbit_axes(self.up, self.azimuth, self.elevation)[0]
+
+    def orbit(self, d_azimuth: float, d_elevation: float) -> None:
+        """Turn by the given degrees; elevation stays within -5..89."""
+        self.azimuth = (self.azimuth + float(d_azimuth)) % 360.0
+        self.elevation = float(np.clip(self.elevation + float(d_elevation), -5.0, 89.0))
+
+    def zoom(self, factor: float) -> None:
+        """Multiply the distance by ``factor`` (within 0.001..50 extents)."""
+        self.distance = float(np.clip(self.distance * float(factor), 1e-3 * self.extent, 50.0 * self.extent))
+
+    def camera(self) -> Camera:
+        reach = self.extent * 3.0  # the ground reaches past the instances
+        return Camera(self.eye, self.target, UP_VECTORS[self.up], self.fovy,
+                      near=max(self.distance - reach, self.distance * 2e-3), far=self.distance + reach)
+
+    def matrices(self, aspect: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(view, projection)``, (4, 4) float32 pyrr layout."""
+        cam = self.camera()
+        return cam.view(), cam.projection(aspect)

@@ -6,8 +6,8 @@ import numpy as np
 
 from ..core.errors import ContextError
 
-__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "size_limits",
-           "check_image_size", "check_alive", "check_released"]
+__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels",
+           "require_framebuffer", "size_limits", "check_image_size", "check_alive", "check_released"]
 
 GL_REQUIRE = 330
 
@@ -69,6 +69,21 @@ def bind_framebuffer(ctx, fbo) -> None:
     (fbo if _alive(fbo) else ctx.detect_framebuffer(0)).use()
 
 
+def require_framebuffer(ctx, what: str = "draw") -> None:
+    """Raise :class:`ContextError` unless a usable framebuffer is bound.
+
+    A surfaceless (EGL, windowless) context has no default framebuffer: a
+    draw there only leaves ``GL_INVALID_FRAMEBUFFER_OPERATION`` behind and
+    draws nothing.  So does a framebuffer that was released while bound.
+    """
+    fbo = ctx.fbo
+    if fbo is None or not _alive(fbo) or 0 in tuple(fbo.size):
+        raise ContextError(
+            f"{what}: no usable framebuffer is bound (a windowless context has none of its own); "
+            "expected one bound first, e.g. Offscreen(ctx, (w, h)).use() or ctx.simple_framebuffer((w, h)).use()"
+        )
+
+
 def release_framebuffer(ctx, fbo) -> None:
     """Release ``fbo``, first un-binding it if it is the bound one."""
     if ctx.fbo is fbo:
@@ -107,6 +122,37 @@ def check_image_size(ctx, size, samples: int = 4, panels: int = 1) -> None:
         side = int((have / per_pixel) ** 0.5)
         raise ContextError(f"size: {w}x{h} pixels need about {need / 1024**3:.3g} GB; expected at most about "
                            f"{side}x{side} (what {have / 1024**3:.3g} GB of available memory holds)")
+
+
+def read_pixels(ctx, fbo, *, resolve: bool | None = None) -> np.ndarray:
+    """The colour of ``fbo`` as ``(height, width, 3) uint8``, first row at the
+    top (OpenGL's first row is the bottom one: this is the one place that
+    flips it).
+
+    resolve : bool or None
+        Copy into a plain single-sample framebuffer first (needed for a
+        multisampled one, e.g. a window's).  ``None``: when ``fbo`` has a
+        multisampled colour attachment or none that moderngl knows of (a
+        window's default framebuffer).  The bound framebuffer is left as it was.
+    """
+    w, h = (int(x) for x in fbo.size)
+    if resolve is None:
+        attachments = fbo.color_attachments
+        resolve = not attachments or any(getattr(a, "samples", 0) for a in attachments)
+    if resolve:
+        previous = ctx.fbo
+        color = ctx.renderbuffer((w, h), 4)
+        plain = ctx.framebuffer(color)
+        try:
+            ctx.copy_framebuffer(plain, fbo)
+            data = plain.read(components=3, alignment=1)
+        finally:
+            release_framebuffer(ctx, plain)
+            color.release()
+            bind_framebuffer(ctx, previous)
+    else:
+        data = fbo.read(components=3, alignment=1)
+    return np.frombuffer(data, dtype=np.uint8).reshape(h, w, 3)[::-1].copy()
 
 
 class Offscreen:
@@ -170,9 +216,7 @@ class Offscreen:
         self._check()
         if self._resolved is not self.fbo:
             self.ctx.copy_framebuffer(self._resolved, self.fbo)
-        data = self._resolved.read(components=3, alignment=1)
-        img = np.frombuffer(data, dtype=np.uint8).reshape(self.size[1], self.size[0], 3)
-        return img[::-1].copy()
+        return read_pixels(self.ctx, self._resolved, resolve=False)
 
     def release(self) -> None:
         if self._released:

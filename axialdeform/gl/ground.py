@@ -15,7 +15,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.axis import AXIS_NAMES
-from ..core.errors import AxialDeformError
+from ..core.bounds import instance_bounds, scene_box
+from ..core.errors import ArgumentError, AxialDeformError
+from .context import require_framebuffer
+from ..core.arrays import as_array
+from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .shaders import build_program
 
 __all__ = ["GroundPlane", "GROUND_COLOR"]
@@ -40,10 +44,10 @@ class GroundPlane:
 
     def __init__(self, ctx, *, up: str = "y", color=GROUND_COLOR, cell: float = 0.0):
         if up not in AXIS_NAMES:
-            raise AxialDeformError(f"ground up axis: expected one of x, y, z, found {up!r}")
+            raise ArgumentError(f"ground up axis: expected one of x, y, z, found {up!r}")
         self.ctx = ctx
         self.up = up
-        self.color = tuple(float(c) for c in color)
+        self.color = tuple(as_array(color, (3,), "ground color").tolist())
         self.cell = float(cell)
         self.center = np.zeros(3)
         self.radius = 10.0
@@ -68,14 +72,11 @@ class GroundPlane:
         typical sphere radius above their lowest point (so instances rest in
         it rather than float over it).  Returns ``self``.
         """
-        from .camera import instance_bounds
-
         centers, radii = instance_bounds(mesh, params)
         if len(centers) == 0:
             return self
         a = AXIS_NAMES.index(self.up)
-        lo = (centers - radii[:, None]).min(axis=0)
-        hi = (centers + radii[:, None]).max(axis=0)
+        lo, hi = scene_box(mesh, params)
         center = (lo + hi) / 2
         others = [i for i in range(3) if i != a]
         self.radius = float(margin * np.linalg.norm((hi - lo)[others]) / 2 + np.median(radii))
@@ -94,23 +95,22 @@ class GroundPlane:
 
         if self._released:
             raise AxialDeformError("this GroundPlane was released; create a new one")
-        view = np.asarray(view, dtype=np.float32).reshape(4, 4)
+        view, projection = camera_matrices(view, projection)
+        require_framebuffer(self.ctx, "GroundPlane.render")
         a = AXIS_NAMES.index(self.up)
         axis_u, axis_v = (np.eye(3)[i] for i in range(3) if i != a)
-        light = np.asarray(light_dir, dtype=np.float64)
+        light = as_array(light_dir, (3,), "light_dir")
+        background = as_array(background, (None,), "background")
+        if len(background) not in (3, 4):
+            raise ArgumentError(f"background: expected 3 or 4 numbers (RGB[A]), found {len(background)}")
         prog = self.program
-        prog["u_view"].write(view.tobytes())
-        prog["u_proj"].write(np.asarray(projection, dtype=np.float32).reshape(4, 4).tobytes())
-        uniforms = {
+        set_camera_uniforms(prog, view, projection)
+        set_uniforms(prog, {
             "u_center": tuple(self.center), "u_axis_u": tuple(axis_u), "u_axis_v": tuple(axis_v),
             "u_radius": self.radius, "u_color": self.color, "u_background": tuple(background[:3]),
             "u_light_dir": tuple(light / max(np.linalg.norm(light), 1e-12)), "u_up": tuple(self.up_vector),
-            "u_eye": tuple(np.linalg.inv(view.astype(np.float64))[3, :3]), "u_ambient": float(ambient),
-            "u_cell": self.cell,
-        }
-        for name, value in uniforms.items():
-            if name in prog:
-                prog[name].value = value
+            "u_ambient": float(ambient), "u_cell": self.cell,
+        })
         self.ctx.enable(moderngl.DEPTH_TEST)
         self.vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
 

@@ -10,7 +10,7 @@ import numpy as np
 from ..core.atomic import atomic_path
 from .camera import UP_VECTORS, Camera, frame_instances
 from .context import Offscreen, check_image_size, create_context
-from ..core.errors import AxialDeformError
+from ..core.errors import ArgumentError
 from .renderer import MODES, AxialRenderer
 
 __all__ = ["render_image", "save_png", "parse_size"]
@@ -24,9 +24,9 @@ def parse_size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(x) for x in str(text).lower().split("x"))
     except ValueError:
-        raise AxialDeformError(f"size: expected WIDTHxHEIGHT such as 800x600, found {text!r}") from None
+        raise ArgumentError(f"size: expected WIDTHxHEIGHT such as 800x600, found {text!r}") from None
     if not (w > 0 and h > 0):
-        raise AxialDeformError(f"size: expected positive WIDTHxHEIGHT, found {text!r}")
+        raise ArgumentError(f"size: expected positive WIDTHxHEIGHT, found {text!r}")
     return w, h
 
 
@@ -44,12 +44,12 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
     modes = (modes,) if isinstance(modes, str) else tuple(modes)
     for m in modes:
         if m not in MODES:
-            raise AxialDeformError(f"mode: expected one of {', '.join(MODES)}, found {m!r}")
+            raise ArgumentError(f"mode: expected one of {', '.join(MODES)}, found {m!r}")
     own_ctx = ctx is None
     ctx = create_context() if own_ctx else ctx
     try:
-        w, h = size
-        check_image_size(ctx, size, samples, panels=len(modes))  # before any work: the error says the limit
+        w, h = parse_size(f"{size[0]}x{size[1]}")
+        check_image_size(ctx, (w, h), samples, panels=len(modes))  # before any work: the error says the limit
         cam = camera or frame_instances(mesh, params, w / h, up=up)
         view, proj = cam.view(), cam.projection(w / h)
         r = renderer or AxialRenderer(ctx, mesh, params)

@@ -16,18 +16,20 @@ return); the shader computes ``clip = proj * view * world``.
 
 from __future__ import annotations
 
+import contextlib
 from contextlib import contextmanager
 
 import numpy as np
 
-from .buffers import as_index, InstanceBuffer, MeshBuffers
+from .buffers import InstanceBuffer, MeshBuffers, as_index
+from .context import bind_framebuffer, check_alive, release_framebuffer, require_framebuffer
+from ..core.errors import ArgumentError, AxialDeformError, ParamError
+from ..core.arrays import as_array
 from ..core.safeio import require_finite
-from .camera import as_matrix
-from .context import bind_framebuffer, check_alive, release_framebuffer
-from ..core.errors import AxialDeformError, ParamError
+from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .shaders import build_program
 
-__all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS"]
+__all__ = ["AxialRenderer", "BakedMeshes", "MODES", "DEFAULT_COLORS"]
 
 MODES = ("solid", "flat", "wireframe")
 _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
@@ -119,9 +121,7 @@ class AxialRenderer:
 
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
-        for name, value in (("u_axis", axis.index), ("u_lo", axis.lo), ("u_len", axis.length)):
-            if name in program:
-                program[name].value = value
+        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length})
         self._set_quant_uniforms(program)
 
     def _set_quant_uniforms(self, program) -> None:
@@ -162,9 +162,9 @@ class AxialRenderer:
         """Overwrite the instances ``start .. start + len(params) - 1`` in place.
 
         ``start`` must be an integer (int or numpy integer): a float, a
-        string, None or NaN raises :class:`ParamError`."""
+        string, None or NaN raises :class:`ArgumentError`."""
         self._check()
-        self.instances.update(params, start)
+        self.instances.update(params, start, setter="set_params()", name="update_params")
 
     # ------------------------------------------------------------ optional tint
     def set_tint(self, colors) -> None:
@@ -214,29 +214,24 @@ class AxialRenderer:
 
         self._check()
         if mode not in _MODE_INDEX:
-            raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
-        view = as_matrix(view, "view", invertible=True)
-        projection = as_matrix(projection, "projection")
+            raise ArgumentError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
+        view, projection = camera_matrices(view, projection)
+        require_framebuffer(self.ctx, "AxialRenderer.render")
         tinted = self._tint_count is not None
         if tinted and self._tint_count != self.count:
             raise ParamError(f"tint: {self._tint_count} colours for {self.count} instances; "
                              "call set_tint with one colour per instance (or None)")
         prog = self._tint[0] if tinted else self.program
         vao_triangles = self._tint[1] if tinted else self._vao_triangles
-        prog["u_view"].write(view.tobytes())
-        prog["u_proj"].write(projection.tobytes())
-        uniforms = {
+        set_camera_uniforms(prog, view, projection)
+        set_uniforms(prog, {
             "u_mode": _MODE_INDEX[mode],
             "u_color": tuple(color or self.color),
             "u_line_color": tuple(line_color or self.line_color),
-            "u_light_dir": tuple(_unit(light_dir)),
-            "u_up": tuple(_unit(up)),
-            "u_eye": tuple(np.linalg.inv(view.astype(np.float64))[3, :3]),
+            "u_light_dir": tuple(_unit(light_dir, "light_dir")),
+            "u_up": tuple(_unit(up, "up")),
             "u_ambient": float(ambient),
-        }
-        for name, value in uniforms.items():
-            if name in prog:
-                prog[name].value = value
+        })
         if self.count == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
@@ -357,6 +352,83 @@ class AxialRenderer:
         self.release()
 
 
+class BakedMeshes:
+    """Meshes that are already deformed (``axialdeform bake`` output, or any
+    mesh files), each with its own vertex and index buffers and vertex
+    array, drawn one draw call each with the shading, uniforms and face
+    culling of an un-bent :class:`AxialRenderer` -- the thesis's "load every
+    one" method, drawn exactly like the instanced methods.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+    like : BaseMesh
+        A mesh whose name picks the colour and whose :attr:`BaseMesh.is_volume`
+        decides back-face culling (the base mesh the files were baked from).
+    mode : str
+        One of :data:`MODES`; only the index buffers this mode draws are made.
+    """
+
+    def __init__(self, ctx, like, mode: str = "solid", *, cull_back_faces: bool | None = None):
+        if mode not in _MODE_INDEX:
+            raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
+        self.ctx = ctx
+        self.mode = mode
+        self._items = []  # (MeshBuffers, vao, index count)
+        self._released = False
+        self.renderer = AxialRenderer(ctx, like, np.zeros((0, 16), np.float32), bend=False,
+                                      cull_back_faces=cull_back_faces)
+        self.cull_back_faces = self.renderer.cull_back_faces
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def add(self, mesh) -> None:
+        """Upload one deformed mesh (world positions and normals as they are)."""
+        if self._released:
+            raise AxialDeformError("these BakedMeshes were released; create new ones")
+        wire = self.mode == "wireframe"
+        buffers = MeshBuffers(self.ctx, mesh, indices=("edges",) if wire else ("triangles",))
+        try:
+            program = self.renderer.program
+            vao = self.ctx.vertex_array(program, [buffers.content(program)],
+                                        index_buffer=buffers.edges if wire else buffers.triangles,
+                                        index_element_size=4)
+        except BaseException:
+            buffers.release()
+            raise
+        self._items.append((buffers, vao, buffers.edge_indices if wire else buffers.triangle_indices))
+
+    def render(self, view, projection, **options) -> None:
+        """Draw every mesh into the bound framebuffer (one draw call each)."""
+        import moderngl
+
+        self.renderer.render(view, projection, self.mode, **options)  # no instances: sets the uniforms only
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        wire = self.mode == "wireframe"
+        primitive = moderngl.LINES if wire else moderngl.TRIANGLES
+        with (contextlib.nullcontext() if wire else self.renderer.culling(view, projection)):
+            for _, vao, n in self._items:
+                vao.render(primitive, vertices=n)
+
+    def release(self) -> None:
+        """Free every GL object; safe to call twice."""
+        if self._released:
+            return
+        self._released = True
+        for buffers, vao, _ in self._items:
+            vao.release()
+            buffers.release()
+        self._items.clear()
+        self.renderer.release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
 def _mirrors(view, projection) -> bool:
     """True when ``projection * view`` flips handedness.  A camera that does
     not (``pyrr`` look-at + perspective or orthographic) has a negative
@@ -367,6 +439,6 @@ def _mirrors(view, projection) -> bool:
     return bool(det > 0.0)
 
 
-def _unit(v) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
+def _unit(v, name: str = "direction") -> np.ndarray:
+    v = as_array(v, (3,), name)
     return v / max(np.linalg.norm(v), 1e-12)

@@ -1,0 +1,46 @@
+"""``axialdeform bake``: every deformed instance written out."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ._common import add_mesh_and_params, add_mesh_mismatch, load, progress_bar
+
+
+def add_parser(sub) -> None:
+    from ..core.bake import MESH_FORMATS
+    from ..gl.bake import ENGINES
+
+    b = sub.add_parser("bake", help="write every deformed instance out", description=(
+        "Deform every instance and write OUT: an .npz with arrays 'positions' and 'normals', each "
+        "(instances, vertices, 3) float32 in world space and the mesh file's vertex order; or a folder "
+        "with one mesh file per instance."))
+    add_mesh_and_params(b)
+    b.add_argument("-o", "--output", required=True, help="an .npz file or a folder (required, no default)")
+    b.add_argument("--engine", choices=ENGINES, default="cpu", help="who deforms: numpy or the GPU (default: %(default)s)")
+    b.add_argument("--format", choices=MESH_FORMATS, default="obj", help="mesh file type when OUT is a folder (default: %(default)s)")
+    add_mesh_mismatch(b)
+    b.add_argument("--overwrite", action="store_true", help=(
+        "OUT may be a folder of an earlier bake: new files are written first, then the old instance_* files "
+        "not rewritten are removed (other files are kept); without it a folder holding files is refused"))
+    b.set_defaults(handler=run)
+
+
+def run(args) -> None:
+    from ..core.bake import check_bake_folder, write_mesh_folder, write_npz
+    from ..gl.bake import bake
+
+    out = Path(args.output)
+    mesh, params = load(args, "bake output", allow_folder=out.suffix.lower() != ".npz")
+    if out.suffix.lower() != ".npz":  # refuse a folder of stale files before the work, not after
+        check_bake_folder(out, args.overwrite)
+    with progress_bar(len(params), f"deforming ({args.engine})") as bar:
+        positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params)
+    if out.suffix.lower() == ".npz":
+        write_npz(out, positions, normals)
+        print(f"wrote {out}: positions and normals {positions.shape} float32 ({args.engine})")
+    else:
+        with progress_bar(len(positions), "writing meshes") as bar:
+            files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
+                                      overwrite=args.overwrite)
+        print(f"wrote {len(files)} {args.format} files to {out}/ ({args.engine})")

@@ -1,0 +1,33 @@
+"""``axialdeform export``: instances as a glTF binary (.glb)."""
+
+from __future__ import annotations
+
+from ._common import add_mesh_and_params, add_mesh_mismatch, load
+
+
+def add_parser(sub) -> None:
+    e = sub.add_parser("export", help="write instances as a glTF binary (.glb)", description=(
+        "Write MESH deformed by PARAMS to a .glb. --baked (default): one mesh per instance with its deformed "
+        "world positions and normals; opens in any glTF viewer. --instanced: the base mesh once plus "
+        "EXT_mesh_gpu_instancing (TRANSLATION, ROTATION and the offsets as _AXIAL_* attributes); "
+        "see docs/interop.md. Coordinates are written as they are (no re-orientation to glTF's +Y up)."))
+    add_mesh_and_params(e)
+    e.add_argument("-o", "--output", required=True, help="the .glb to write (required, no default)")
+    layout = e.add_mutually_exclusive_group()
+    layout.add_argument("--baked", dest="layout", action="store_const", const="baked",
+                        help="one deformed mesh per instance (the default)")
+    layout.add_argument("--instanced", dest="layout", action="store_const", const="instanced",
+                        help="base mesh once + EXT_mesh_gpu_instancing (default: --baked)")
+    e.set_defaults(layout="baked")
+    add_mesh_mismatch(e)
+    e.set_defaults(handler=run)
+
+
+def run(args) -> None:
+    """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
+    from ..core.export import check_glb_path, export_glb
+
+    out = check_glb_path(args.output)  # before the (slow) reading
+    mesh, params = load(args, "exported .glb")
+    path = export_glb(out, mesh, params, args.layout, source=args.params)
+    print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

@@ -1,0 +1,67 @@
+"""``axialdeform render``: instances to a PNG, framed automatically or by ``--eye/--target/--fov``."""
+
+from __future__ import annotations
+
+from ._common import AXES, add_mesh_and_params, add_mesh_mismatch, load, vec3
+
+
+def add_parser(sub) -> None:
+    from ..gl.renderer import MODES
+
+    rd = sub.add_parser("render", help="render instances to a PNG", description=(
+        "Render MESH deformed by PARAMS. Without --eye/--target/--fov the camera frames every instance; "
+        "any of them replaces that part of the automatic camera."))
+    add_mesh_and_params(rd)
+    rd.add_argument("-o", "--output", required=True, help="PNG to write (required, no default)")
+    rd.add_argument("--mode", choices=MODES, default="solid", help="how to draw (default: %(default)s)")
+    rd.add_argument("--size", default="800x600", help="WIDTHxHEIGHT (default: %(default)s)")
+    rd.add_argument("--up", choices=AXES, default="y", help="world up axis (default: %(default)s)")
+    rd.add_argument("--eye", type=vec3, default=None, metavar="X,Y,Z",
+                    help="camera position, world units (default: framed automatically)")
+    rd.add_argument("--target", type=vec3, default=None, metavar="X,Y,Z",
+                    help="point the camera looks at (default: the centre of all instances)")
+    rd.add_argument("--fov", type=float, default=None, metavar="DEG",
+                    help="vertical field of view in degrees, 0 < DEG < 180 (default: 35)")
+    add_mesh_mismatch(rd)
+    rd.set_defaults(handler=run)
+
+
+def camera_from_args(mesh, params, size, args):
+    """The automatic camera, with ``--eye``, ``--target`` and ``--fov`` put in
+    where given (near and far planes then enclose every instance)."""
+    import numpy as np
+
+    from ..core.errors import AxialDeformError
+    from ..core.bounds import instance_bounds
+    from ..gl.camera import Camera, UP_VECTORS, frame_instances
+
+    fov = 35.0 if args.fov is None else float(args.fov)
+    if not 0.0 < fov < 180.0:
+        raise AxialDeformError(f"--fov: expected degrees between 0 and 180, found {args.fov:g}")
+    cam = frame_instances(mesh, params, size[0] / size[1], up=args.up, fovy=fov)
+    if args.eye is None and args.target is None:
+        return cam
+    eye = np.asarray(args.eye if args.eye is not None else cam.eye, dtype=np.float64)
+    target = np.asarray(args.target if args.target is not None else cam.target, dtype=np.float64)
+    forward = target - eye
+    if not np.linalg.norm(forward) > 0:
+        raise AxialDeformError(f"--eye / --target: expected two different points, found both {tuple(eye)}")
+    up = np.asarray(UP_VECTORS[args.up], dtype=np.float64)
+    if np.linalg.norm(np.cross(forward, up)) <= 1e-9 * np.linalg.norm(forward):
+        raise AxialDeformError(f"--eye / --target: the view direction {tuple(forward)} is parallel to the up "
+                               f"axis {args.up}; expected a direction that is not straight up or down (or use --up)")
+    centers, radii = instance_bounds(mesh, params)  # a sphere around each instance
+    reach = np.linalg.norm(centers - eye, axis=1) + radii if len(centers) else np.ones(1)
+    far = float(reach.max()) * 1.05 + 1e-6
+    return Camera(eye, target, up, fov, near=far * 1e-3, far=far)
+
+
+def run(args) -> None:
+    from ..gl.image import parse_size, render_image, save_png
+
+    mesh, params = load(args, "PNG")
+    size = parse_size(args.size)
+    camera = camera_from_args(mesh, params, size, args)
+    image = render_image(mesh, params, size, args.mode, up=args.up, camera=camera)
+    save_png(args.output, image)
+    print(f"wrote {args.output} ({len(params)} instances, {args.mode}, {image.shape[1]}x{image.shape[0]})")

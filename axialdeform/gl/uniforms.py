@@ -1,0 +1,51 @@
+"""Setting uniforms: the camera's (``u_view``, ``u_proj``, ``u_eye``) and any
+others, the one loop every program of the library goes through."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.arrays import as_array
+
+__all__ = ["camera_matrices", "set_uniforms", "set_camera_uniforms"]
+
+
+def camera_matrices(view, projection) -> tuple[np.ndarray, np.ndarray]:
+    """``view`` and ``projection`` checked as ``(4, 4) float32`` (pyrr layout)
+    of finite numbers, ``view`` invertible (a camera; an all-zero matrix is
+    not); anything else raises :class:`~axialdeform.core.errors.ArgumentError`."""
+    from ..core.errors import ArgumentError
+
+    out = []
+    for m, name in ((view, "view"), (projection, "projection")):
+        a = as_array(m, (4, 4), name, np.float64)
+        if not np.isfinite(a).all():
+            raise ArgumentError(f"{name}: expected finite numbers, found {a[~np.isfinite(a)][0]}")
+        out.append(a)
+    with np.errstate(all="ignore"):
+        cond = np.linalg.cond(out[0])
+    if not np.isfinite(cond) or cond > 1e12:
+        raise ArgumentError(f"view: expected an invertible matrix (a camera), found a singular one "
+                            f"(condition number {cond:.3g}), e.g. all zeros")
+    return tuple(np.ascontiguousarray(a, dtype=np.float32) for a in out)
+
+
+def set_uniforms(program, values: dict) -> None:
+    """Set each ``name: value`` that ``program`` uses (the compiler drops
+    unused uniforms); numpy arrays are written as float32 bytes."""
+    for name, value in values.items():
+        if name not in program:
+            continue
+        if isinstance(value, np.ndarray):
+            program[name].write(np.ascontiguousarray(value, dtype=np.float32).tobytes())
+        else:
+            program[name].value = value
+
+
+def set_camera_uniforms(program, view, projection) -> tuple[np.ndarray, np.ndarray]:
+    """``u_view``, ``u_proj`` and ``u_eye`` (the eye's world position, from
+    the inverse view matrix).  Returns the checked ``(view, projection)``."""
+    view, projection = camera_matrices(view, projection)
+    eye = np.linalg.inv(view.astype(np.float64))[3, :3]  # pyrr layout: the translation is the last row
+    set_uniforms(program, {"u_view": view, "u_proj": projection, "u_eye": tuple(eye)})
+    return view, projection

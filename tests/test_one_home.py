@@ -1,0 +1,113 @@
+"""Issue 11, item 2: each piece of shared logic has one home that the others call."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+import axialdeform as ad
+from axialdeform.core import bake as bake_mod
+from axialdeform.core import export, fit, mesh
+
+
+def test_instance_names_come_from_one_function(tmp_path, stone):
+    from axialdeform.bench import child
+
+    assert bake_mod.instance_name(12) == "instance_000012"
+    assert bake_mod.instance_name(3, 2_000_000, ".ply") == "instance_0000003.ply"
+    assert child.obj_name(7) == bake_mod.instance_name(7, 0, ".obj")
+    params = ad.random_params(stone, 3, seed=1)
+    pos, nrm = ad.bake(stone, params)
+    files = bake_mod.write_mesh_folder(tmp_path / "f", stone, pos, nrm, "obj")
+    assert [f.name for f in files] == [bake_mod.instance_name(i, 3, ".obj") for i in range(3)]
+    for mod in (export, child):
+        assert 'f"instance_{' not in inspect.getsource(mod), mod.__name__
+
+
+def test_mesh_suffixes_are_one_constant():
+    assert fit.MESH_SUFFIXES is mesh.MESH_SUFFIXES
+    assert ".obj" in mesh.MESH_SUFFIXES and ".glb" in mesh.MESH_SUFFIXES
+    assert inspect.getsource(fit).count('".ply"') == 0
+
+
+def test_core_bake_needs_no_gl_and_the_gpu_engine_lives_in_gl(stone, ctx):
+    from axialdeform.gl import bake as gl_bake
+
+    src = inspect.getsource(bake_mod)
+    assert "..gl" not in src and "moderngl" not in src and "AxialRenderer" not in src
+    assert ad.bake is gl_bake.bake
+    params = ad.random_params(stone, 4, seed=2, bend=0.2)
+    cpu, _ = bake_mod.bake_cpu(stone, params)
+    gpu, _ = ad.bake(stone, params, "gpu", ctx=ctx)
+    assert np.abs(gpu - cpu).max() < 1e-5 * stone.axis.length
+    assert np.array_equal(ad.bake(stone, params)[0], cpu)
+    with pytest.raises(ValueError, match="engine"):
+        ad.bake(stone, params, "fast")
+
+
+def test_quantized_encoding_lives_in_params(stone):
+    from axialdeform.core import params as params_mod
+    from axialdeform.gl import buffers
+
+    values = ad.random_params(stone, 50, seed=3, bend=0.2)
+    lo, step, q = params_mod.quantize_params(values)
+    assert np.array_equal(params_mod.quantize_with_table(values, lo, step), q)
+    outside = values[:2].copy()
+    outside[1, 10] = values[:, 10].max() + 1.0
+    with pytest.raises(ad.ParamError, match="instance 1, field 10"):
+        params_mod.quantize_with_table(outside, lo, step)
+    src = inspect.getsource(buffers)
+    assert "np.rint" not in src and "65535" not in src
+
+
+def test_conventions_are_cited_from_docs_method():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    method = (root / "docs" / "method.md").read_text(encoding="utf-8")
+    for term in ("Rz(rz) · Ry(ry) · Rx(rx)", "V'   = V + E(D(t))", "n' = normalize", "d1u d1v", "s tw tp",
+                 "(x, z)", "t = (V[a] − lo) / L"):
+        assert term in method, term
+    files = [*root.glob("axialdeform/**/*.py"), *root.glob("glsl/*"), *root.glob("docs/*.md")]
+    cited = [f for f in files if "axial-deformation.md" in f.read_text(encoding="utf-8", errors="replace")]
+    assert not cited, cited
+    assert "docs/method.md" in (root / "glsl" / "axial.glsl").read_text()
+
+
+def test_camera_uniforms_and_read_back_have_one_home():
+    from pathlib import Path
+
+    from axialdeform import viewer
+    from axialdeform.gl import context, ground, renderer
+
+    for mod in (renderer, ground):
+        src = inspect.getsource(mod)
+        assert "set_camera_uniforms(" in src and '["u_view"]' not in src and "np.linalg.inv(view" not in src
+        assert "for name, value in" not in src
+    root = Path(__file__).resolve().parent.parent
+    sources = [inspect.getsource(viewer), inspect.getsource(context.Offscreen)]
+    sources += [p.read_text() for p in sorted((root / "examples").glob("*.py"))]
+    for src in sources:
+        assert "reshape(h, w, 3)[::-1]" not in src and ".read(components=3" not in src
+    assert inspect.getsource(viewer).count("math.cos") == 0  # the orbit is gl.camera.OrbitCamera's
+
+
+def test_read_pixels_puts_the_top_row_first(ctx):
+    from axialdeform.gl.context import release_framebuffer
+
+    fbo = ctx.simple_framebuffer((4, 2))
+    try:
+        fbo.use()
+        ctx.viewport = (0, 0, 4, 2)
+        fbo.clear(0.0, 0.0, 0.0, 1.0)
+        ctx.scissor = (0, 1, 4, 1)  # GL row 1 = the top row of the picture
+        fbo.clear(1.0, 1.0, 1.0, 1.0)
+        ctx.scissor = None
+        image = ad.read_pixels(ctx, fbo)
+        assert image.shape == (2, 4, 3)
+        assert (image[0] == 255).all() and (image[1] == 0).all()
+        assert np.array_equal(ad.read_pixels(ctx, fbo, resolve=True), image)
+    finally:
+        release_framebuffer(ctx, fbo)
