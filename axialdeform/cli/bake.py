@@ -22,7 +22,7 @@ def add_parser(sub) -> None:
     add_mesh_mismatch(b)
     b.add_argument("--overwrite", action="store_true", help=(
         "OUT may be a folder of an earlier bake: new files are written first, then the old instance_* files "
-        "not rewritten are removed (other files are kept); without it a folder holding files is refused"))
+        "not rewritten are removed (other files are kept); default: a folder holding files is refused"))
     b.set_defaults(handler=run)
 
 
