@@ -30,6 +30,12 @@ in vec4 i_d34;
 in vec2 i_d5;
 in vec3 i_position;
 in vec3 i_angles;
+#ifdef AXIAL_CULLED
+in int i_index;             // the instance's index before culling (the records come from cull.geom)
+#define AXIAL_INSTANCE_ID i_index
+#else
+#define AXIAL_INSTANCE_ID gl_InstanceID
+#endif
 #ifdef AXIAL_EXTENDED
 in vec3 i_extra;            // s tw tp: extended instances (19 numbers)
 #endif
@@ -58,11 +64,11 @@ void main() {
     AxialInstance inst = axial_instance(i_d12, i_d34, i_d5, i_position, i_angles);
 #endif
     if (u_wind_strength != 0.0) {
-        inst = axial_wind(inst, uint(gl_InstanceID + u_instance_base), u_axis, u_len, u_wind_dir,
+        inst = axial_wind(inst, uint(AXIAL_INSTANCE_ID + u_instance_base), u_axis, u_len, u_wind_dir,
                           u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
     }
     axial_world(in_position, in_normal, u_axis, u_lo, u_len, u_center, inst, v_world, v_normal);
-    v_shade = 0.85 + 0.3 * instance_hash(gl_InstanceID);
+    v_shade = 0.85 + 0.3 * instance_hash(AXIAL_INSTANCE_ID);
 #ifdef AXIAL_TINT
     v_tint = i_tint;
 #endif

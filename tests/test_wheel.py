@@ -22,7 +22,7 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
     assert build.returncode == 0, build.stderr[-2000:]
     (wheel,) = dist.glob("axialdeform-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
-    shaders = [p.name for p in (ROOT / "glsl").iterdir() if p.suffix in (".glsl", ".vert", ".frag")]
+    shaders = [p.name for p in (ROOT / "glsl").iterdir() if p.is_file() and p.suffix not in (".py", ".pyc")]
     meshes = [p.name for p in (ROOT / "axialdeform" / "meshes").glob("*.obj")]
     assert shaders and meshes
     missing = [f"axialdeform/glsl/{n}" for n in shaders if f"axialdeform/glsl/{n}" not in names]

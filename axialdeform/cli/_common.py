@@ -55,8 +55,8 @@ def positive_int(text: str) -> int:
 
 def add_mesh_and_params(p) -> None:
     """The MESH and PARAMS positional arguments of the commands that read both."""
-    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
-    p.add_argument("params", help="parameter file (.adp binary, .txt/.csv/.dat text)")
+    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf', or a scene file (.toml, then no PARAMS)")
+    p.add_argument("params", nargs="?", help="parameter file (.adp binary, .txt/.csv/.dat text); required unless MESH is a scene file")
 
 
 def add_mesh_mismatch(p) -> None:
@@ -137,3 +137,36 @@ def wind_arg(args):
         return Wind.parse(args.wind, direction=direction)
     except ParamError as exc:
         raise ParamError(str(exc).replace("wind direction", "--wind-dir")) from None
+
+
+# ---------------------------------------------------------------- culling and LOD (issue 14)
+def add_cull_arguments(p) -> None:
+    """``--no-cull``, ``--lod``, ``--lod-error PX`` (render and view)."""
+    p.add_argument("--no-cull", action="store_true", help="draw every instance (no per-instance frustum culling; "
+                   "the picture is the same, only slower) (default: culling on)")
+    p.add_argument("--lod", action="store_true", help="levels of detail: far instances use simplified meshes "
+                   "(changes pixels, within --lod-error) (default: off)")
+    p.add_argument("--lod-error", type=float, default=None, metavar="PX",
+                   help="allowed screen-space error of a level in pixels, > 0 (default 1; implies --lod)")
+
+
+def cull_options(args) -> dict:
+    """AxialRenderer keyword arguments from :func:`add_cull_arguments`'s options."""
+    from ..core.lod import check_lod_error
+
+    lod = bool(args.lod or args.lod_error is not None)
+    return {"culling": not args.no_cull, "lod": lod,
+            "lod_error": check_lod_error(1.0 if args.lod_error is None else args.lod_error)}
+
+
+def format_stats(stats: dict, frame_s: float | None = None) -> str:
+    """One line of :attr:`AxialRenderer.stats` (and a frame time)."""
+    levels = stats.get("levels", [])
+    text = (f"instances: {stats['submitted']} submitted, {stats['visible']} drawn"
+            f" (culling {'on' if stats.get('culling') else 'off'})")
+    if stats.get("lod"):
+        text += ", LOD levels " + " / ".join(str(k) for k in levels)
+    text += f"; vertices processed: {stats['vertices']}"
+    if frame_s is not None:
+        text += f"; frame {frame_s * 1000:.1f} ms"
+    return text

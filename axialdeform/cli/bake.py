@@ -28,6 +28,11 @@ def run(args) -> None:
     from ..core.bake import write_mesh_folder, write_npz
     from ..gl.bake import bake
 
+    from . import scenes
+
+    scene = scenes.scene_of(args)
+    if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
+        return scenes.bake(scene, args, progress_bar, wind_arg(args) if args.wind is not None else None)
     wind = wind_arg(args)
     mesh, params = load(args)
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:

@@ -13,7 +13,7 @@ from .atomic import atomic_path
 from .deform import deform
 from .errors import ArgumentError, AxialDeformError
 
-__all__ = ["bake_cpu", "instance_name", "write_npz", "write_mesh_folder", "MESH_FORMATS"]
+__all__ = ["bake_cpu", "instance_name", "write_npz", "write_scene_npz", "write_mesh_folder", "MESH_FORMATS"]
 
 MESH_FORMATS = ("obj", "ply", "glb")
 
@@ -45,6 +45,18 @@ def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarra
     with atomic_path(path, suffix=".npz") as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, positions=positions.astype(np.float32), normals=normals.astype(np.float32))
+
+
+def write_scene_npz(path: str | os.PathLike, layers: dict) -> None:
+    """Several layers into one ``.npz``, atomically: ``{name: (positions, normals)}``
+    becomes arrays ``positions_NAME`` and ``normals_NAME``, each (instances, vertices, 3) float32."""
+    arrays = {}
+    for name, (positions, normals) in layers.items():
+        arrays[f"positions_{name}"] = np.asarray(positions, dtype=np.float32)
+        arrays[f"normals_{name}"] = np.asarray(normals, dtype=np.float32)
+    with atomic_path(path, suffix=".npz") as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
 
 
 def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None) -> list[Path]:

@@ -16,6 +16,9 @@ __all__ = [
     "TopologyError",
     "ResidualError",
     "GltfError",
+    "ScatterError",
+    "TooFewError",
+    "SceneError",
 ]
 
 
@@ -68,3 +71,22 @@ class ResidualError(AxialDeformError):
 class GltfError(AxialDeformError, ValueError):
     """A glTF file that cannot be written or read back as axialdeform
     instances (wrong extension, missing attribute, unexpected accessor type)."""
+
+
+class ScatterError(AxialDeformError, ValueError):
+    """Scatter input that cannot be used: a surface with no faces or none
+    facing up, an all-black density map, a 1x1 height map, a bad range."""
+
+
+class TooFewError(ScatterError):
+    """Fewer instances fit on the surface than were asked for; ``params``
+    holds the ones that fit."""
+
+    def __init__(self, message: str, params=None) -> None:
+        super().__init__(message)
+        self.params = params
+
+
+class SceneError(AxialDeformError, ValueError):
+    """A scene file that cannot be used; the message names the file, the line
+    and the key."""

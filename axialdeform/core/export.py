@@ -62,6 +62,8 @@ __all__ = [
     "quaternions_from_angles",
     "matrices_from_quaternions",
     "check_glb_path",
+    "encode_scene",
+    "export_scene",
 ]
 
 LAYOUTS = ("baked", "instanced")
@@ -276,6 +278,42 @@ def encode_instanced(mesh, params) -> bytes:
     b.gltf.scene = 0
     b.gltf.extensionsUsed = [INSTANCING]
     return b.finish()
+
+
+def encode_scene(scene) -> bytes:
+    """GLB bytes of a whole scene (:mod:`axialdeform.core.scene`): the terrain and
+    one mesh per layer holding all its instances' deformed world geometry
+    (CPU reference), each with its layer's colour as a PBR material."""
+    import trimesh
+
+    from .deform import deform
+
+    out = trimesh.Scene()
+    parts = [("terrain", scene.terrain, None, scene.terrain_color)] if scene.terrain is not None else []
+    parts += [(layer.name, layer.mesh, layer.params, layer.color) for layer in scene.layers if len(layer.params)]
+    if not parts:
+        raise GltfError(f"{scene.path}: the scene has nothing to export; expected a terrain or a layer with instances")
+    for name, mesh, params, color in parts:
+        if params is None:
+            pos, nrm = mesh.positions[None], mesh.normals[None]
+        else:
+            pos, nrm = deform(mesh.axis, mesh.positions, mesh.normals, params)
+        n, v = pos.shape[:2]
+        faces = (np.asarray(mesh.faces)[None] + (v * np.arange(n))[:, None, None]).reshape(-1, 3)
+        rgb = tuple(color) if color is not None else (0.6, 0.6, 0.6)
+        material = trimesh.visual.material.PBRMaterial(name=name, baseColorFactor=[*rgb, 1.0],
+                                                       metallicFactor=0.0, roughnessFactor=0.9)
+        tm = trimesh.Trimesh(pos.reshape(-1, 3), faces, vertex_normals=nrm.reshape(-1, 3), process=False,
+                             visual=trimesh.visual.TextureVisuals(material=material))
+        out.add_geometry(tm, geom_name=name, node_name=name)
+    return out.export(file_type="glb")
+
+
+def export_scene(path: str | os.PathLike, scene) -> Path:
+    """Write :func:`encode_scene` to ``path`` (a ``.glb``), atomically."""
+    path = check_glb_path(path)
+    atomic_write_bytes(path, encode_scene(scene))
+    return path
 
 
 def _field_names(cols) -> list[str]:

@@ -22,11 +22,13 @@ from contextlib import contextmanager
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers
+from .cull import CullPass
 from .context import bind_framebuffer, release_framebuffer, require_framebuffer
-from ..core.errors import ArgumentError, AxialDeformError, ParamError
+from ..core.bounds import base_radius, wind_reach
+from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.arrays import as_array
-from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from ..core.wind import Wind
+from .uniforms import camera_matrices, eye_position, set_camera_uniforms, set_uniforms
 from .shaders import build_program
 
 __all__ = ["AxialRenderer", "BakedMeshes", "MODES", "DEFAULT_COLORS"]
@@ -79,14 +81,37 @@ class AxialRenderer:
         The wind drawn (and captured) from now on; see :attr:`wind` and
         :attr:`time`.  It moves control points in the vertex shader from
         uniforms alone: animating it writes no buffer.
+    culling : bool
+        Per-instance frustum culling on the GPU (:mod:`axialdeform.gl.cull`):
+        a transform-feedback pass keeps only the instances whose bounding
+        sphere reaches the view, and the draw reads those.  On by default: it
+        cannot change the picture (an instance is dropped only when every one
+        of its vertices lies outside one frustum plane).
+    lod : bool
+        Draw each instance with one of up to four levels of detail of the
+        base mesh (:func:`axialdeform.core.lod.build_lod_levels`), the
+        coarsest whose geometric error projects to at most ``lod_error``
+        pixels; one draw per level (plain switches, no dithering).  Changes
+        pixels, so off by default.
+    lod_error : float
+        Allowed screen-space error of a level in pixels (> 0; default 1).
+
+    :attr:`stats` describes the last :meth:`render`: instances submitted,
+    visible (drawn), per LOD level, and vertices processed.
     """
 
     def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
                  quantized: bool = False, cull_back_faces: bool | None = None, extended: bool | None = None,
-                 wind: Wind | None = None):
+                 wind: Wind | None = None, culling: bool = True, lod: bool = False, lod_error: float = 1.0):
+        from ..core.lod import LodLevel, build_lod_levels, check_lod_error
+
         self.ctx = ctx
         self.mesh = mesh
         self.bend = bend
+        self.culling_enabled = bool(culling)
+        self.lod = bool(lod)
+        self.lod_error = check_lod_error(lod_error)
+        self.stats: dict = {}
         self.cull_back_faces = bool(mesh.is_volume) if cull_back_faces is None else bool(cull_back_faces)
         self.quantized = bool(quantized)
         self._released = False
@@ -111,12 +136,18 @@ class AxialRenderer:
             self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized, extended=self.extended)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
             self._vao_edges = self._vertex_array(self.program, self.mesh_buffers.edges)
+            #: the levels of detail (level 0 is the base mesh itself)
+            self.lod_levels = build_lod_levels(mesh) if self.lod else [LodLevel(mesh.positions, mesh.normals, mesh.faces, 0.0)]
+            self._level_buffers = [self.mesh_buffers] + [MeshBuffers(ctx, level) for level in self.lod_levels[1:]]
         except BaseException:
             self.release()
             raise
         self._capture = None  # (program, vao, scratch instances, output) built on first capture
         self._tint = None  # (program, triangles vao, edges vao, buffer) built by the first set_tint
         self._tint_count = None  # colours in the tint buffer; None: tint off
+        self._culled = {}  # tinted -> (CullPass, draw program, [(triangles vao, edges vao) per level])
+        #: bounding-sphere radius about ``mesh.axis.center`` covering every LOD level
+        self.bound_radius = base_radius(mesh, *[level.positions for level in self.lod_levels[1:]])
         self._set_axis_uniforms(self.program)
         self.color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
         self.line_color = (0.12, 0.14, 0.18)
@@ -131,9 +162,9 @@ class AxialRenderer:
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
         i, j = axis.perpendicular
-        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length,
-                               "u_center": (axis.center[i], axis.center[j]), "u_instance_base": 0,
-                               "u_wind_strength": 0.0})
+        center = (axis.center[i], axis.center[j])
+        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length, "u_center": center,
+                               "u_instance_base": 0, "u_wind_strength": 0.0})
         self._set_quant_uniforms(program)
 
     def _set_wind_uniforms(self, program, wind, time) -> None:
@@ -266,14 +297,86 @@ class AxialRenderer:
             "u_up": tuple(_unit(up, "up")),
             "u_ambient": float(ambient),
         })
-        if self.count == 0:
+        n = self.count
+        self.stats = {"submitted": n, "visible": n, "levels": [n], "vertices": n * self.mesh.vertex_count,
+                      "culling": False, "lod": False}
+        if n == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
+        if self.culling_enabled or self.lod:
+            try:
+                state = self._culled_state(tinted)
+            except ShaderError as exc:  # a driver that cannot build the pass: plain drawing, same picture
+                import warnings
+
+                warnings.warn(f"culling/LOD pass unavailable, drawing every instance: {exc}", RuntimeWarning, stacklevel=2)
+                self.culling_enabled = self.lod = False
+            else:
+                self._render_culled(state, view, projection, mode, prog)
+                return
         if mode == "wireframe":  # lines are never culled
-            vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
+            vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=n)
             return
         with self.culling(view, projection):
-            vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
+            vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=n)
+
+    def _culled_state(self, tinted: bool):
+        """The cull pass and the draw program/VAOs reading its output (built on first use)."""
+        state = self._culled.get(tinted)
+        if state is None:
+            tint = (self._tint[3], "3f", "i_tint") if tinted else None
+            cull = CullPass(self.ctx, self.instances, self._defines, tint=tint)
+            self._objects.append(cull)
+            defines = {**self._defines, "AXIAL_CULLED": 1, **({"AXIAL_TINT": 1} if tinted else {})}
+            prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
+            self._objects.append(prog)
+            self._set_axis_uniforms(prog)
+            vaos = []
+            for mb in self._level_buffers:
+                pair = []
+                for index_buffer in (mb.triangles, mb.edges):
+                    vao = self.ctx.vertex_array(prog, [mb.content(prog)], index_buffer=index_buffer, index_element_size=4)
+                    self._objects.append(vao)
+                    pair.append(vao)
+                vaos.append(tuple(pair))
+            state = self._culled[tinted] = (cull, prog, vaos)
+        return state
+
+    def _render_culled(self, state, view, projection, mode, plain_prog) -> None:
+        import moderngl
+
+        cull, prog, vaos = state
+        if self.quantized:
+            self._set_quant_uniforms(prog)
+        for name in ("u_view", "u_proj", "u_mode", "u_color", "u_line_color", "u_light_dir", "u_up", "u_eye", "u_ambient"):
+            if name in prog and name in plain_prog:
+                prog[name].write(plain_prog[name].read())
+        self._set_wind_uniforms(prog, self.wind, self.time)
+        eye = eye_position(view)
+        height = float(self.ctx.viewport[3]) if self.ctx.viewport else 1.0
+        ortho = abs(float(projection[3, 3]) - 1.0) < 1e-9  # pyrr layout: w = 1 for orthographic
+        levels = len(self.lod_levels) if self.lod else 1
+        counts = cull.run(self.count, levels, view, projection, frustum=self.culling_enabled,
+                          center=self.mesh.axis.center, radius=self.bound_radius,
+                          lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye,
+                          px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho, lod_px=self.lod_error,
+                          wind_reach=wind_reach(self.mesh, self.wind if self.bend else None),
+                          prepare=self._set_quant_uniforms)
+        self.stats.update(visible=int(sum(counts)), levels=counts, culling=self.culling_enabled, lod=self.lod,
+                          vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(counts))))
+        first = 0
+        for level, kept in enumerate(counts):
+            if kept:
+                vao_triangles, vao_edges = vaos[level]
+                mb = self._level_buffers[level]
+                if mode == "wireframe":
+                    cull.bind_records(vao_edges, prog, first)
+                    vao_edges.render(moderngl.LINES, vertices=mb.edge_indices, instances=kept)
+                else:
+                    cull.bind_records(vao_triangles, prog, first)
+                    with self.culling(view, projection):
+                        vao_triangles.render(moderngl.TRIANGLES, vertices=mb.triangle_indices, instances=kept)
+            first += kept
 
     @contextmanager
     def culling(self, view=None, projection=None):
@@ -370,6 +473,8 @@ class AxialRenderer:
         for obj in reversed(self._objects):
             obj.release()
         self._objects.clear()
+        for mb in getattr(self, "_level_buffers", [])[1:]:
+            mb.release()
         for holder in ("mesh_buffers", "instances"):
             if hasattr(self, holder):
                 getattr(self, holder).release()
