@@ -7,8 +7,8 @@ the reverse; ``tests/test_layers.py`` reads the imports and enforces it):
   deform (the CPU reference), fit, bake, export;
 * ``gl/``   -- moderngl: context, shaders (``glsl/``), buffers, renderer,
   ground, camera, image;
-* the application -- ``cli/`` (the ``axialdeform`` command), ``bench/`` and
-  ``viewer.py``.
+* the application -- ``cli/`` (the ``axialdeform`` command), ``bench/``,
+  ``viewer.py``, ``web/`` (the WebGL page) and ``widget.py`` (the notebook widget).
 """
 
 from .core.errors import (
@@ -21,7 +21,10 @@ from .core.errors import (
     ParamError,
     ParamFileError,
     ResidualError,
+    SceneError,
+    ScatterError,
     ShaderError,
+    TooFewError,
     TopologyError,
 )
 
@@ -47,6 +50,10 @@ _LAZY = {
     "MODES": "gl.renderer", "AxialRenderer": "gl.renderer",
     "assemble": "gl.shaders", "assemble_text": "gl.shaders", "build_program": "gl.shaders", "deformation_glsl": "gl.shaders",
     "random_params": "core.variation",
+    "scatter": "core.scatter", "load_surface": "core.scatter",
+    "load_scene": "core.scene", "SceneRenderer": "gl.scene", "render_scene": "gl.scene",
+    "EXTENDED_FIELDS": "core.params", "extend_params": "core.params", "is_extended": "core.params",
+    "Wind": "core.wind", "wind_offsets": "core.wind", "apply_wind": "core.wind",
 }
 
 
@@ -79,9 +86,10 @@ def __dir__():
 
 __all__ = [
     "ArgumentError", "AxialDeformError", "AxialRenderer", "BaseMesh", "BUNDLED_MESHES", "Camera", "ContextError", "ControlAxis",
-    "FIELDS", "GroundPlane", "MODES", "OrbitCamera", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ShaderError", "GltfError", "ResidualError", "TopologyError",
+    "FIELDS", "GroundPlane", "MODES", "OrbitCamera", "MeshError", "MeshMismatchError", "Offscreen", "ParamError", "ParamFileError", "ScatterError", "SceneError", "ShaderError", "TooFewError", "GltfError", "ResidualError", "TopologyError",
     "as_params", "assemble", "assemble_text", "bake", "build_program", "bundled_mesh_path", "create_context", "deform",
     "deformation_glsl", "frame_instances", "instance_bounds",
     "scene_box", "load_mesh", "make_params", "random_params",
-    "read_param_file", "read_params", "read_pixels", "render_image", "rotation_matrices", "save_png", "write_params",
+    "read_param_file", "read_params", "read_pixels", "render_image", "rotation_matrices", "save_png", "scatter", "load_surface", "load_scene", "SceneRenderer", "render_scene", "write_params",
+    "EXTENDED_FIELDS", "extend_params", "is_extended", "Wind", "wind_offsets", "apply_wind",
 ]

@@ -6,10 +6,15 @@ Mouse: drag to orbit, scroll to zoom.  Keys::
     N           new seed (new individual shapes, same placement)
     UP / DOWN   bend amplitude x1.25 / x0.8 (also + and -)
     G           ground plane on / off          R   reset the camera
+    V           wind on / off (``--wind``; moves control points on the GPU, no upload)
     S           save a screenshot (axialdeform-view-NNN.png)
     ESC         quit
 
-The window title shows the instance count, the mode, the bend amplitude and
+Instances outside the view are culled on the GPU (``--no-cull`` turns it
+off) and, from 100 000 instances on (or with ``--lod``), far ones are drawn
+with simplified levels of detail (``--no-lod``, ``--lod-error PX``), so
+``axialdeform view stone -n 1000000`` draws only what is in view, mostly
+with the coarse levels (docs/culling.md has measured frame times).  The window title shows the instance count, the mode, the bend amplitude, how many instances were drawn and
 the frame rate.  ``--headless`` runs the same viewer in moderngl-window's
 headless window (an EGL context, no display) for a number of frames and
 can save the last one (``--screenshot``), which is how the tests drive it.
@@ -42,11 +47,13 @@ _log = logging.getLogger(__name__)
 KEY_ACTIONS = {
     "NUMBER_1": "solid", "NUMBER_2": "flat", "NUMBER_3": "wireframe", "W": "next mode",
     "N": "new seed", "UP": "more bend", "EQUAL": "more bend", "DOWN": "less bend", "MINUS": "less bend",
-    "G": "ground", "R": "reset camera", "S": "screenshot",
+    "G": "ground", "R": "reset camera", "S": "screenshot", "V": "wind",
 }
 #: single characters accepted by ``on_key_event`` in place of a window's key code
 _CHAR_KEYS = {"1": "NUMBER_1", "2": "NUMBER_2", "3": "NUMBER_3", "+": "EQUAL", "-": "MINUS"}
 BACKGROUND = (0.80, 0.86, 0.92)
+#: the viewer draws levels of detail by default from this many instances on
+LOD_AUTO_COUNT = 100_000
 
 
 def _window_config_base():
@@ -92,10 +99,17 @@ class _ViewerMixin:
             raise ArgumentError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
         self.bend_scale = 1.0
         self.show_ground = bool(s.get("ground", True))
-        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base)
+        self.wind = s.get("wind")  # the Wind the V key switches on and off
+        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, wind=self.wind, culling=s.get("culling", True),
+                                      lod=s.get("lod", len(self.base) >= LOD_AUTO_COUNT), lod_error=s.get("lod_error", 1.0))
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
+        self.extra = None  # the other layers and the terrain of a scene file
+        if s.get("extra") is not None:
+            from .gl.scene import SceneRenderer
+
+            self.extra = SceneRenderer(self.ctx, s["extra"])
         self.fps = 0.0
         self.frames = 0
         self.screenshots = 0
@@ -167,6 +181,12 @@ class _ViewerMixin:
             self.set_bend_scale(self.bend_scale * 0.8)
         elif what == "ground":
             self.show_ground = not self.show_ground
+        elif what == "wind":
+            if self.wind is None:
+                from .core.wind import Wind
+
+                self.wind = Wind()
+            self.renderer.wind = None if self.renderer.wind is not None else self.wind
         elif what == "reset camera":
             self.reset_camera()
         elif what == "screenshot":
@@ -209,7 +229,9 @@ class _ViewerMixin:
         self.ctx.clear(*BACKGROUND, 1.0, depth=1.0)
         if self.show_ground:
             self.ground.render(view, proj, background=BACKGROUND)
-        self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up])
+        self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up], time=time_s)  # wind: uniforms only
+        if self.extra is not None:
+            self.extra.render(view, proj, self.mode, time=time_s)
         self.frames += 1
         now = time.perf_counter()  # measured, not the timer's frame_time (headless steps are simulated)
         if self._last_frame is not None and now > self._last_frame:
@@ -220,9 +242,12 @@ class _ViewerMixin:
 
     def status(self) -> str:
         """What the title bar shows."""
+        wind = self.renderer.wind
+        shown = self.renderer.stats.get("visible", self.renderer.count)
         seed = "" if self.seed is None else f" - seed {self.seed}"
         return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances - {self.mode} - "
-                f"bend x{self.bend_scale:.2f}{seed} - {self.fps:.0f} fps")
+                f"bend x{self.bend_scale:.2f}{seed}"
+                + (f" - wind {wind.strength:g}" if wind is not None else "") + f" - {shown} drawn - {self.fps:.0f} fps")
 
     def _update_title(self, force: bool = False) -> None:
         now = time.perf_counter()
@@ -257,6 +282,8 @@ class _ViewerMixin:
         """Free the renderer and the ground plane (the window keeps its context)."""
         self.renderer.release()
         self.ground.release()
+        if self.extra is not None:
+            self.extra.release()
 
 
 class Viewer:
@@ -265,7 +292,8 @@ class Viewer:
     @staticmethod
     def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int | None = None,
                bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
-               on_screenshot=None):
+               on_screenshot=None, wind=None, extra=None, culling: bool = True, lod: bool | None = None,
+               lod_error: float = 1.0):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
@@ -276,6 +304,11 @@ class Viewer:
         of L); on_screenshot : optional ``f(path)`` called after the S key
         wrote a screenshot; headless : moderngl-window's headless
         window on an EGL context (no display needed).
+        wind : an :class:`axialdeform.Wind` animated on the GPU (``V`` toggles
+        it); params may be (n, 19): extended instances.  extra : a loaded scene
+        (:mod:`axialdeform.core.scene`) drawn too, every frame, in the same mode.
+        culling, lod, lod_error : :class:`AxialRenderer`'s (``lod=None``: on from
+        :data:`LOD_AUTO_COUNT` instances, so a million can be flown through).
         """
         from .core.params import as_params
 
@@ -284,7 +317,10 @@ class Viewer:
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground, on_screenshot=on_screenshot)
+                     up=up, ground=ground, on_screenshot=on_screenshot, wind=wind, extra=extra, culling=culling,
+                     lod_error=lod_error)
+        if lod is not None:
+            scene["lod"] = bool(lod)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": samples})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]

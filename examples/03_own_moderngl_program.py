@@ -40,7 +40,7 @@ out vec3 world_normal;
 out float bent;             // how far the bend moved this vertex, fraction of len
 
 void main() {
-    AxialInstance inst = AxialInstance(d12, d34, d5, pos, rot);
+    AxialInstance inst = axial_instance(d12, d34, d5, pos, rot);   // 16 numbers: s = 1, tw = tp = 0
     vec3 v, n;
     axial_bend(position, normal, axis, lo, len, inst, v, n);   // the bend alone
     bent = length(v - position) / len;

@@ -8,17 +8,30 @@
 //   increasing order (x -> (y,z), y -> (x,z), z -> (x,y));
 //   V' = V + E(sum B4_i(t) d_{i+1});  n' = normalize(n - e_a (D'(t).n) / len);
 //   R = Rz(rz) * Ry(ry) * Rx(rx);  W = R V' + p;  world normal = R n'.
+// Extended instances (19 numbers, "s tw tp" after the 16; the extension section of the spec):
+//   the cross-section w (the two other coordinates minus the axis line's centre c) turns by
+//   theta = tw t and shrinks by k = 1 - tp t:  V'' = V + E(k Rot(theta) w - w) + E(D(t));
+//   W = R (s V'') + p;  normal = R normalize(cof(J) n), J = dV''/dV.
+//   s = 1, tw = 0, tp = 0 (what axial_instance(...) sets) gives exactly the 16-number result.
 // Defining AXIAL_NO_BEND before the include keeps only the rigid part
 // (rotation + position): the "all the same" method of the benchmark.
 
-// The 16 numbers of one instance.
+// One instance: the 16 numbers, then the extension's 3 (1, 0, 0 for a 16-number instance).
 struct AxialInstance {
     vec4 d12;      // d1u d1v d2u d2v
     vec4 d34;      // d3u d3v d4u d4v
     vec2 d5;       // d5u d5v
     vec3 position; // px py pz (world units)
     vec3 angles;   // rx ry rz (radians)
+    float scale;   // s  (> 0): uniform scale in model space, after the bend
+    float twist;   // tw (radians over the whole axis): the cross-section at t turns by tw t
+    float taper;   // tp (< 1): the cross-section at t is scaled by 1 - tp t
 };
+
+// A 16-number instance (s = 1, tw = 0, tp = 0).
+AxialInstance axial_instance(vec4 d12, vec4 d34, vec2 d5, vec3 position, vec3 angles) {
+    return AxialInstance(d12, d34, d5, position, angles, 1.0, 0.0, 0.0);
+}
 
 // E: place a 2-component offset into the two coordinates across the axis.
 vec3 axial_embed(vec2 w, int axis) {
@@ -27,9 +40,18 @@ vec3 axial_embed(vec2 w, int axis) {
     return vec3(w.x, w.y, 0.0);
 }
 
+// The two coordinates across the axis (the inverse of axial_embed).
+vec2 axial_across(vec3 v, int axis) {
+    if (axis == 0) return v.yz;
+    if (axis == 1) return v.xz;
+    return v.xy;
+}
+
 // Bend one model-space vertex and its unit normal along the instance's
-// 4th-degree Bezier control axis.
-void axial_bend(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance inst,
+// 4th-degree Bezier control axis, twisting and tapering the cross-section
+// about the axis line through `center` (the bounding-box centre of the base
+// mesh in the two other coordinates, in offset component order).
+void axial_bend(vec3 v, vec3 n, int axis, float lo, float len, vec2 center, AxialInstance inst,
                 out vec3 v_out, out vec3 n_out) {
     float t = clamp((v[axis] - lo) / len, 0.0, 1.0);
     float s = 1.0 - t;
@@ -40,10 +62,27 @@ void axial_bend(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance ins
     // degree-3 Bernstein weights: the slope D'(t)
     vec2 slope = 4.0 * ((s * s * s) * (d2 - d1) + (3.0 * t * s * s) * (d3 - d2)
                       + (3.0 * t * t * s) * (d4 - d3) + (t * t * t) * (d5 - d4));
-    v_out = v + axial_embed(disp, axis);
-    n_out = n;
-    n_out[axis] -= dot(axial_embed(slope, axis), n) / len;
+    // twist and taper of the cross-section: exactly zero shift for tw = tp = 0
+    float k = 1.0 - inst.taper * t;
+    float theta = inst.twist * t;
+    float c = cos(theta), sn = sin(theta);
+    vec2 w = axial_across(v, axis) - center;
+    vec2 rw = vec2(c * w.x - sn * w.y, sn * w.x + c * w.y);
+    v_out = v + axial_embed(k * rw - w, axis) + axial_embed(disp, axis);
+    // cof(J) n / k: across = Rot n_across, along = k n_a - g . (Rot n_across) / len,
+    // g = dV''_across/dt = D'(t) + k tw Rot(w rotated by 90 degrees) - tp Rot w
+    vec2 nw = axial_across(n, axis);
+    vec2 g = slope + ((k * inst.twist) * vec2(-rw.y, rw.x) - inst.taper * rw);
+    n_out = axial_embed(vec2(c * nw.x - sn * nw.y, sn * nw.x + c * nw.y), axis);
+    n_out[axis] = k * n[axis];
+    n_out[axis] -= dot(axial_embed(g, axis), n_out) / len;
     n_out = normalize(n_out);
+}
+
+// The 16-number form (no axis line needed: without twist and taper it does not matter).
+void axial_bend(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance inst,
+                out vec3 v_out, out vec3 n_out) {
+    axial_bend(v, n, axis, lo, len, vec2(0.0), inst, v_out, n_out);
 }
 
 // R = Rz(rz) * Ry(ry) * Rx(rx), column-vector convention.
@@ -57,13 +96,21 @@ mat3 axial_rotation(vec3 r) {
 }
 
 // The whole map: model-space vertex/normal -> world-space vertex/normal.
-void axial_world(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance inst,
+// `center`: the axis line (see axial_bend); W = R (s V'') + p.
+void axial_world(vec3 v, vec3 n, int axis, float lo, float len, vec2 center, AxialInstance inst,
                  out vec3 w_out, out vec3 wn_out) {
     vec3 bent_v = v, bent_n = n;
 #ifndef AXIAL_NO_BEND
-    axial_bend(v, n, axis, lo, len, inst, bent_v, bent_n);
+    axial_bend(v, n, axis, lo, len, center, inst, bent_v, bent_n);
 #endif
     mat3 rot = axial_rotation(inst.angles);
-    w_out = rot * bent_v + inst.position;
+    w_out = rot * (inst.scale * bent_v) + inst.position;
     wn_out = rot * bent_n;
+}
+
+// The 16-number call of earlier versions: right for any instance without twist
+// and taper (the axis line only matters for those).
+void axial_world(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance inst,
+                 out vec3 w_out, out vec3 wn_out) {
+    axial_world(v, n, axis, lo, len, vec2(0.0), inst, w_out, wn_out);
 }

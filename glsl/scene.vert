@@ -2,6 +2,8 @@
 // its own control axis.  Also the capture program (transform feedback of
 // v_world and v_normal): what is drawn is exactly what is captured.
 #include "axial.glsl"
+// the wind: moves control points from uniforms alone (no per-frame upload)
+#include "wind.glsl"
 // AXIAL_QUANTIZED: the 32-byte instance record and its decode
 #include "quantized.glsl"
 
@@ -10,6 +12,14 @@ uniform mat4 u_proj;
 uniform int u_axis;         // control axis of the base mesh: 0 x, 1 y, 2 z
 uniform float u_lo;         // min coordinate along the axis
 uniform float u_len;        // L = max - min along the axis
+uniform vec2 u_center;      // the axis line: bounding-box centre across the axis (twist/taper turn about it)
+// wind (docs/wind.md); u_wind_strength == 0 is the still scene
+uniform float u_wind_strength;   // tip displacement, in units of L
+uniform vec3 u_wind_dir;         // unit direction, world
+uniform float u_wind_gust;       // gustiness
+uniform vec2 u_wind_cycles;      // (fract(f T), fract(2.31 f T)), computed on the CPU
+uniform float u_wind_wavenumber; // 1 / gust wavelength (world units), 0: no travelling fronts
+uniform int u_instance_base;     // index of the first instance drawn (capture works in chunks)
 
 in vec3 in_position;        // base mesh, model units
 in vec3 in_normal;          // unit vertex normal
@@ -20,6 +30,15 @@ in vec4 i_d34;
 in vec2 i_d5;
 in vec3 i_position;
 in vec3 i_angles;
+#ifdef AXIAL_CULLED
+in int i_index;             // the instance's index before culling (the records come from cull.geom)
+#define AXIAL_INSTANCE_ID i_index
+#else
+#define AXIAL_INSTANCE_ID gl_InstanceID
+#endif
+#ifdef AXIAL_EXTENDED
+in vec3 i_extra;            // s tw tp: extended instances (19 numbers)
+#endif
 #ifdef AXIAL_TINT
 in vec3 i_tint;             // optional second instanced buffer: the instance's base colour (linear RGB)
 flat out vec3 v_tint;
@@ -39,11 +58,17 @@ float instance_hash(int i) {
 void main() {
 #ifdef AXIAL_QUANTIZED
     AxialInstance inst = axial_dequantize();
+#elif defined(AXIAL_EXTENDED)
+    AxialInstance inst = AxialInstance(i_d12, i_d34, i_d5, i_position, i_angles, i_extra.x, i_extra.y, i_extra.z);
 #else
-    AxialInstance inst = AxialInstance(i_d12, i_d34, i_d5, i_position, i_angles);
+    AxialInstance inst = axial_instance(i_d12, i_d34, i_d5, i_position, i_angles);
 #endif
-    axial_world(in_position, in_normal, u_axis, u_lo, u_len, inst, v_world, v_normal);
-    v_shade = 0.85 + 0.3 * instance_hash(gl_InstanceID);
+    if (u_wind_strength != 0.0) {
+        inst = axial_wind(inst, uint(AXIAL_INSTANCE_ID + u_instance_base), u_axis, u_len, u_wind_dir,
+                          u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
+    }
+    axial_world(in_position, in_normal, u_axis, u_lo, u_len, u_center, inst, v_world, v_normal);
+    v_shade = 0.85 + 0.3 * instance_hash(AXIAL_INSTANCE_ID);
 #ifdef AXIAL_TINT
     v_tint = i_tint;
 #endif

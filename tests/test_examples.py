@@ -23,6 +23,7 @@ EXAMPLES = {
     "02_falling_leaves.py": ("02_falling_leaves.gif", "02_falling_leaves.png"),
     "03_own_moderngl_program.py": ("03_own_moderngl_program.png",),
     "04_moderngl_window_app.py": ("04_moderngl_window_app.png",),
+    "05_landscape.py": ("05_landscape.png", "05_landscape.gif"),
 }
 BACKGROUND = np.array([0.93, 0.94, 0.96]) * 255  # render_image's default clear colour
 
@@ -138,6 +139,26 @@ def test_moderngl_window_app_picture(run_example):
     image = load(out / "04_moderngl_window_app.png").astype(np.int16)
     green = (image[..., 1] - image[..., 0] > 20) & (image[..., 1] - image[..., 2] > 20)
     assert green.mean() > 0.05, f"blades cover {green.mean():.1%} of the picture"
+
+
+def test_landscape_picture_and_animation(run_example):
+    out, stdout = run_example("05_landscape.py")
+    assert "stones" in stdout and "grass" in stdout and "trunks" in stdout and "leaves" in stdout
+    image = load(out / "05_landscape.png").astype(np.int16)
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    grass = (g - r > 10) & (g - b > 10)
+    leaves = (r - b > 70) & (r - g > 25)  # orange
+    sky = (b - r > 20) & (image.sum(axis=2) > 600)
+    assert grass.mean() > 0.01, f"grass covers {grass.mean():.1%}"
+    assert blobs(leaves) >= 5, f"only {blobs(leaves)} leaves visible"
+    assert 0.2 < sky.mean() < 0.9, "the terrain fills part of the picture, the sky the rest"
+    gif = Image.open(out / "05_landscape.gif")
+    frames = []
+    for i in range(gif.n_frames):
+        gif.seek(i)
+        frames.append(np.asarray(gif.convert("RGB")).astype(np.int16))
+    assert len(frames) >= 5
+    assert np.abs(frames[0] - frames[-1]).mean() > 0.3, "leaves fall and grass sways"
 
 
 # ---------------------------------------------------------------- the viewer

@@ -229,3 +229,31 @@ def test_cli_export_errors(tmp_path, capsys):
         export.export_baked(tmp_path / "none.glb", ad.load_mesh("stone"), np.zeros((0, 16), np.float32))
     with pytest.raises(SystemExit):
         main(["export", "stone", str(params_file), "-o", str(tmp_path / "y.glb"), "--baked", "--instanced"])
+
+
+def test_extended_instances_export_scale_and_twist_taper(tmp_path, validate):
+    from axialdeform.core.params import extend_params
+
+    mesh = ad.load_mesh("leaf")
+    params = extend_params(ad.random_params(mesh, 7, seed=2, bend=0.1))
+    params[:, 16] = np.linspace(0.5, 2.0, 7)
+    params[:, 17] = np.linspace(-1.0, 1.5, 7)
+    params[:, 18] = np.linspace(-0.3, 0.7, 7)
+    inst = export.export_instanced(tmp_path / "ext-instanced.glb", mesh, params)
+    baked = export.export_baked(tmp_path / "ext-baked.glb", mesh, params)
+    r_inst, r_baked = validate(inst, baked)
+    _assert_valid(r_inst, {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"})
+    _assert_valid(r_baked)
+    gltf = pygltflib.GLTF2.load_binary(str(inst))
+    attrs = gltf.nodes[0].extensions[export.INSTANCING]["attributes"]
+    assert {"SCALE", "_AXIAL_TWIST_TAPER"} <= set(attrs)
+    _m, back = export.read_instanced_glb(inst)
+    assert back.shape == (7, 19)
+    assert back.view(np.uint32).tobytes() == params.view(np.uint32).tobytes()  # bit for bit
+    scene = trimesh.load(str(baked), process=False)
+    expected, _n = ad.bake(mesh, params)
+    g = scene.geometry[scene.graph["instance_000003"][1]]
+    assert np.array_equal(np.asarray(g.vertices, dtype=np.float32), expected[3])
+    # 16-number instances keep the old layout: no SCALE
+    plain = export.export_instanced(tmp_path / "plain.glb", mesh, params[:, :16])
+    assert "SCALE" not in pygltflib.GLTF2.load_binary(str(plain)).nodes[0].extensions[export.INSTANCING]["attributes"]

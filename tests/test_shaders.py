@@ -74,7 +74,7 @@ in vec3 p;
 out vec3 w;
 out vec3 n;
 void main() {
-    AxialInstance inst = AxialInstance(vec4(0.0), vec4(0.0), vec2(0.0), vec3(1.0, 2.0, 3.0), vec3(0.0));
+    AxialInstance inst = axial_instance(vec4(0.0), vec4(0.0), vec2(0.0), vec3(1.0, 2.0, 3.0), vec3(0.0));
     axial_world(p, vec3(0.0, 0.0, 1.0), 0, 0.0, 1.0, inst, w, n);
     gl_Position = vec4(w, 1.0);
 }

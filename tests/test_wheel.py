@@ -22,11 +22,15 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
     assert build.returncode == 0, build.stderr[-2000:]
     (wheel,) = dist.glob("axialdeform-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
-    shaders = [p.name for p in (ROOT / "glsl").iterdir() if p.suffix in (".glsl", ".vert", ".frag")]
+    shaders = [p.name for p in (ROOT / "glsl").iterdir() if p.is_file() and p.suffix not in (".py", ".pyc")]
     meshes = [p.name for p in (ROOT / "axialdeform" / "meshes").glob("*.obj")]
     assert shaders and meshes
     missing = [f"axialdeform/glsl/{n}" for n in shaders if f"axialdeform/glsl/{n}" not in names]
     missing += [f"axialdeform/meshes/{n}" for n in meshes if f"axialdeform/meshes/{n}" not in names]
+    web = [p.relative_to(ROOT).as_posix() for p in (ROOT / "axialdeform" / "web").rglob("*")
+           if p.is_file() and p.suffix != ".pyc" and "__pycache__" not in p.parts]
+    assert "axialdeform/web/vendor/three.module.min.js" in web and "axialdeform/web/vendor/LICENSE" in web
+    missing += [n for n in web if n not in names]
     assert not missing, f"the wheel lacks {missing}"
 
     # a fresh venv: only the wheel's axialdeform; the dependencies come from this
@@ -57,3 +61,10 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
     demo = subprocess.run([str(script), "demo", "-n", "60", "--size", "96x64", "-o", "d.png"], capture_output=True, text=True, cwd=work)
     assert demo.returncode == 0, demo.stderr
     assert (work / "d.png").stat().st_size > 1000
+    # the web page from the wheel's own page code and vendored three.js
+    rnd = subprocess.run([str(script), "random", "stone", "-n", "20", "-o", "s.adp"], capture_output=True, text=True, cwd=work)
+    assert rnd.returncode == 0, rnd.stderr
+    page = subprocess.run([str(script), "web", "stone", "s.adp", "-o", "s.html"], capture_output=True, text=True, cwd=work)
+    assert page.returncode == 0, page.stderr
+    html = (work / "s.html").read_text(encoding="utf-8")
+    assert 'id="axd-three"' in html and (work / "s.html").stat().st_size > 800_000

@@ -20,7 +20,8 @@ from ..core.safeio import quiet_numpy
 __all__ = ["main", "build_parser", "COMMANDS", "PLUGINS"]
 
 #: the built-in sub-commands, in the order ``--help`` lists them (module ``axialdeform.cli.<name>``)
-COMMANDS: tuple[str, ...] = ("demo", "random", "render", "bake", "info", "convert", "export", "fit", "view", "bench")
+COMMANDS: tuple[str, ...] = ("demo", "random", "scatter", "render", "bake", "info", "convert", "export", "fit", "view", "bench",
+                             "web")
 
 #: further modules that add sub-commands (the plugin hook): each defines
 #: ``add_parser(subparsers)`` and ``run(args)`` like the built-in ones

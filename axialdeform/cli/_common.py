@@ -55,8 +55,8 @@ def positive_int(text: str) -> int:
 
 def add_mesh_and_params(p) -> None:
     """The MESH and PARAMS positional arguments of the commands that read both."""
-    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
-    p.add_argument("params", help="parameter file (.adp binary, .txt/.csv/.dat text)")
+    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf', or a scene file (.toml, then no PARAMS)")
+    p.add_argument("params", nargs="?", help="parameter file (.adp binary, .txt/.csv/.dat text); required unless MESH is a scene file")
 
 
 def add_mesh_mismatch(p) -> None:
@@ -106,3 +106,94 @@ def progress_bar(total: int, desc: str, unit: str = "inst", small: int = 2000):
     from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, unit=unit, disable=total < small and not sys.stderr.isatty(), file=sys.stderr)
+
+
+def extension_args(args) -> dict:
+    """``--scale MIN:MAX``, ``--twist MAX``, ``--taper MAX`` as random_params keywords;
+    a bad value is a ParamError naming the argument and the expected range."""
+    from ..core.errors import ParamError
+
+    out = {}
+    if args.scale is not None:
+        parts = args.scale.replace(",", ":").split(":")
+        try:
+            lo, hi = (float(parts[0]), float(parts[-1])) if len(parts) in (1, 2) else (math.nan, math.nan)
+        except ValueError:
+            lo = hi = math.nan
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
+            raise ParamError(f"--scale: expected MIN:MAX with 0 < MIN <= MAX (s must be > 0), found {args.scale!r}")
+        out["scale"] = (lo, hi)
+    if args.twist is not None:
+        if not math.isfinite(args.twist):
+            raise ParamError(f"--twist: expected a finite number of radians, found {args.twist!r}")
+        out["twist"] = args.twist
+    if args.taper is not None:
+        if not (math.isfinite(args.taper) and args.taper < 1):
+            raise ParamError(f"--taper: expected a number < 1 (tp < 1: the tip keeps a size > 0), found {args.taper!r}")
+        out["taper"] = args.taper
+    return out
+
+
+def add_wind_args(parser) -> None:
+    parser.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None, help=(
+        "wind (docs/wind.md): tip displacement as a fraction of L, gustiness, gusts per second, "
+        "distance between gust fronts, 0 for none (default: no wind)"))
+    parser.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
+    parser.add_argument("--time", type=float, default=None, help="seconds: the moment the wind is taken at, with --wind (default: 0)")
+
+
+def wind_arg(args):
+    from ..core.errors import ParamError
+    from ..core.wind import Wind
+
+    if args.wind is None:
+        if args.time is not None:
+            raise ParamError("--time: only meaningful with --wind (the wind is the only thing that moves with time)")
+        return None
+    if args.time is None:
+        args.time = 0.0
+    elif not math.isfinite(args.time):
+        raise ParamError(f"--time: expected a finite number of seconds, found {args.time!r}")
+    try:
+        direction = tuple(float(x) for x in args.wind_dir.split(","))
+    except ValueError:
+        direction = ()
+    if len(direction) != 3:
+        raise ParamError(f"--wind-dir: expected X,Y,Z (three numbers), found {args.wind_dir!r}")
+    try:
+        return Wind.parse(args.wind, direction=direction)
+    except ParamError as exc:
+        raise ParamError(str(exc).replace("wind direction", "--wind-dir")) from None
+
+
+# ---------------------------------------------------------------- culling and LOD (issue 14)
+def add_cull_arguments(p) -> None:
+    """``--no-cull``, ``--lod``, ``--lod-error PX`` (render and view)."""
+    p.add_argument("--no-cull", action="store_true", help="draw every instance (no per-instance frustum culling; "
+                   "the picture is the same, only slower) (default: culling on)")
+    p.add_argument("--lod", action="store_true", help="levels of detail: far instances use simplified meshes "
+                   "(changes pixels, within --lod-error) (default: off)")
+    p.add_argument("--lod-error", type=float, default=None, metavar="PX",
+                   help="allowed screen-space error of a level in pixels, > 0 (default 1; implies --lod)")
+
+
+def cull_options(args) -> dict:
+    """AxialRenderer keyword arguments from :func:`add_cull_arguments`'s options."""
+    from ..core.lod import check_lod_error
+
+    lod = bool(args.lod or args.lod_error is not None)
+    return {"culling": not args.no_cull, "lod": lod,
+            "lod_error": check_lod_error(1.0 if args.lod_error is None else args.lod_error)}
+
+
+def format_stats(stats: dict, frame_s: float | None = None) -> str:
+    """One line of :attr:`AxialRenderer.stats` (and a frame time)."""
+    levels = stats.get("levels", [])
+    text = (f"instances: {stats['submitted']} submitted, {stats['visible']} drawn"
+            f" (culling {'on' if stats.get('culling') else 'off'})")
+    if stats.get("lod"):
+        text += ", LOD levels " + " / ".join(str(k) for k in levels)
+    text += f"; vertices processed: {stats['vertices']}"
+    if frame_s is not None:
+        text += f"; frame {frame_s * 1000:.1f} ms"
+    return text

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_mesh_and_params, add_mesh_mismatch, load, progress_bar
+from ._common import add_mesh_and_params, add_mesh_mismatch, add_wind_args, load, progress_bar, wind_arg
 
 
 def add_parser(sub) -> None:
@@ -23,6 +23,7 @@ def add_parser(sub) -> None:
     b.add_argument("--overwrite", action="store_true", help=(
         "OUT may be a folder of an earlier bake: new files are written first, then the old instance_* files "
         "not rewritten are removed (other files are kept); default: a folder holding files is refused"))
+    add_wind_args(b)
     b.set_defaults(handler=run)
 
 
@@ -30,12 +31,19 @@ def run(args) -> None:
     from ..core.bake import check_bake_folder, write_mesh_folder, write_npz
     from ..gl.bake import bake
 
+    from . import scenes
+
+    scene = scenes.scene_of(args)
+    if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
+        return scenes.bake(scene, args, progress_bar, wind_arg(args) if args.wind is not None else None)
+    wind = wind_arg(args)
     out = Path(args.output)
     mesh, params = load(args, "bake output", allow_folder=out.suffix.lower() != ".npz")
     if out.suffix.lower() != ".npz":  # refuse a folder of stale files before the work, not after
         check_bake_folder(out, args.overwrite)
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params)
+        positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params,
+                                  wind=wind, time=args.time or 0.0)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)
         print(f"wrote {out}: positions and normals {positions.shape} float32 ({args.engine})")

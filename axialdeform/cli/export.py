@@ -27,7 +27,12 @@ def run(args) -> None:
     """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
     from ..core.export import check_glb_path, export_glb
 
+    from . import scenes
+
     out = check_glb_path(args.output)  # before the (slow) reading
+    scene = scenes.scene_of(args)
+    if scene is not None:
+        return scenes.export(scene, args)
     mesh, params = load(args, "exported .glb")
     path = export_glb(out, mesh, params, args.layout, source=args.params)
     print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

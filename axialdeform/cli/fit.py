@@ -23,6 +23,8 @@ def add_parser(sub) -> None:
     f.add_argument("--allow-residual", action="store_true",
                    help="write the parameters even if fits exceed --max-residual (they are still reported; default: refuse)")
     f.add_argument("--max-iterations", type=positive_int, default=100, help="alternation rounds per variant (default: %(default)s)")
+    f.add_argument("--extended", action="store_true",
+                   help="fit the 19 numbers of extended instances: scale, twist and taper too (default: the 16)")
     f.set_defaults(handler=run)
 
 
@@ -44,7 +46,7 @@ def run(args) -> None:
     check_output_path(out, (mesh_source_path(args.base), *paths), "parameter file")
     with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:
         result = fit_files(mesh, paths, max_residual=args.max_residual, max_iterations=args.max_iterations,
-                           progress=bar)
+                           progress=bar, extended=args.extended)
     if not args.allow_residual:
         result.check()
     path = write_params(out, result.params, mesh)

@@ -42,7 +42,7 @@ def run(args) -> int | None:
         return None
     pf = ParamFile(values=parse_text(data, str(path)), format="text", encoding="text", size=len(data))
     print(f"file:      {path} ({pf.size} bytes)")
-    print(f"format:    text, {pf.count} lines of 16 numbers")
+    print(f"format:    text, {pf.count} lines of {pf.values.shape[1]} numbers")
     print(f"instances: {pf.count}" + (f" ({pf.size / pf.count:.1f} bytes each)" if pf.count else ""))
     print("axis:      not recorded (text form)")
     print("mesh:      not recorded (text form)")

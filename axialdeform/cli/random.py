@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from ._common import AXES, angle_range
+from ._common import AXES, angle_range, extension_args
 
 
 def add_parser(sub) -> None:
@@ -24,7 +24,14 @@ def add_parser(sub) -> None:
                    help="MIN,MAX radians about the up axis (default: 0,2pi)")
     r.add_argument("--tilt", type=angle_range, default=(-0.25, 0.25),
                    help="MIN,MAX radians about the other two axes (default: -0.25,0.25)")
-    r.add_argument("--quantize", action="store_true", help="write the compact 32-byte form, binary only (default: 64 bytes, lossless)")
+    r.add_argument("--scale", metavar="MIN:MAX", default=None,
+                   help="extended instances: uniform scale s drawn in MIN..MAX, 0 < MIN <= MAX (default: none, 16 numbers)")
+    r.add_argument("--twist", metavar="MAX", type=float, default=None,
+                   help="extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)")
+    r.add_argument("--taper", metavar="MAX", type=float, default=None,
+                   help="extended instances: taper tp drawn between 0 and MAX < 1 (default: none)")
+    r.add_argument("--quantize", action="store_true",
+                   help="write the compact uint16 form, binary only: 32 bytes an instance, 38 extended (default: 64/76 bytes, lossless)")
     r.add_argument("-o", "--output", required=True, help="parameter file to write (required, no default)")
     r.set_defaults(handler=run)
 
@@ -42,10 +49,11 @@ def run(args) -> None:
     from ..core.safeio import check_count, check_output_path
     from ._common import mesh_file
 
+    extension = extension_args(args)  # before any work: a bad range is the first thing said
     check_output_path(args.output, (mesh_file(args.mesh),), "parameter file")
     check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")
     mesh = load_mesh(args.mesh)
     params = random_params(mesh, args.count, args.seed, bend=args.bend, placement=args.placement,
-                           spacing=args.spacing, up=args.up, yaw=args.yaw, tilt=args.tilt)
+                           spacing=args.spacing, up=args.up, yaw=args.yaw, tilt=args.tilt, **extension)
     path = write_params(args.output, params, mesh, quantize=args.quantize)
     print(f"wrote {path} ({len(params)} instances, {path.stat().st_size} bytes)")

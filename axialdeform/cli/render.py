@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from ._common import AXES, add_mesh_and_params, add_mesh_mismatch, load, vec3
+from ._common import (AXES, add_cull_arguments, add_mesh_and_params, add_mesh_mismatch, add_wind_args, cull_options,
+                      format_stats, load, vec3, wind_arg)
 
 
 def add_parser(sub) -> None:
@@ -23,6 +24,10 @@ def add_parser(sub) -> None:
     rd.add_argument("--fov", type=float, default=None, metavar="DEG",
                     help="vertical field of view in degrees, 0 < DEG < 180 (default: 35)")
     add_mesh_mismatch(rd)
+    add_wind_args(rd)
+    add_cull_arguments(rd)
+    rd.add_argument("--stats", action="store_true", help="print instances submitted / drawn / per LOD level, "
+                    "vertices processed and the frame time (default: off)")
     rd.set_defaults(handler=run)
 
 
@@ -57,11 +62,44 @@ def camera_from_args(mesh, params, size, args):
 
 
 def run(args) -> None:
+    from ..gl.context import create_context
     from ..gl.image import parse_size, render_image, save_png
+    from ..gl.renderer import AxialRenderer
 
+    from . import scenes
+
+    scene = scenes.scene_of(args)
+    if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
+        return scenes.render(scene, args, wind_arg(args) if args.wind is not None else None)
+    options = cull_options(args)
+    wind = wind_arg(args)
+    wind_options = {"wind": wind, "time": args.time} if wind is not None else {}
     mesh, params = load(args, "PNG")
     size = parse_size(args.size)
     camera = camera_from_args(mesh, params, size, args)
-    image = render_image(mesh, params, size, args.mode, up=args.up, camera=camera)
+    ctx = create_context()
+    try:
+        with AxialRenderer(ctx, mesh, params, **options) as r:
+            image = render_image(mesh, params, size, args.mode, ctx=ctx, camera=camera, up=args.up, renderer=r,
+                                 **wind_options)
+            if args.stats:
+                print(format_stats(r.stats, _time_frame(ctx, r, camera, size, args.mode)))
+    finally:
+        ctx.release()
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(params)} instances, {args.mode}, {image.shape[1]}x{image.shape[0]})")
+
+
+def _time_frame(ctx, renderer, camera, size, mode) -> float:
+    """Seconds for one more frame of ``renderer`` (cull pass + draws, GPU finished), same camera."""
+    import time
+
+    from ..gl.context import Offscreen
+
+    with Offscreen(ctx, size) as target:
+        target.use()
+        ctx.finish()
+        start = time.perf_counter()
+        renderer.render(camera.view(), camera.projection(size[0] / size[1]), mode)
+        ctx.finish()
+        return time.perf_counter() - start

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import AXES, add_mesh_mismatch
+from ._common import AXES, add_cull_arguments, add_mesh_mismatch, cull_options, wind_arg
 
 
 def add_parser(sub) -> None:
@@ -11,7 +11,7 @@ def add_parser(sub) -> None:
     v = sub.add_parser("view", help="look at instances in an interactive window", description=(
         "Open MESH (a file, or 'stone' / 'leaf') deformed by PARAMS (or by random parameters) in a window: "
         "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
-        "UP/DOWN bend amplitude, G ground, R reset camera, S screenshot, ESC quit."))
+        "UP/DOWN bend amplitude, G ground, V wind, R reset camera, S screenshot, ESC quit."))
     v.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
     v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
     v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
@@ -26,7 +26,13 @@ def add_parser(sub) -> None:
     v.add_argument("--frames", type=int, default=3, help="frames to draw with --headless (default: %(default)s)")
     v.add_argument("--screenshot", help="PNG of the last frame, with --headless (default: none)")
     add_mesh_mismatch(v)
-    v.set_defaults(handler=run)
+    v.add_argument("--wind", metavar="STRENGTH[,GUST[,FREQ[,WAVELENGTH]]]", default=None,
+                   help="animate a wind on the GPU, docs/wind.md; V toggles it (default: still)")
+    v.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
+    add_cull_arguments(v)
+    v.add_argument("--no-lod", action="store_true", help="no levels of detail (default: on from 100 000 instances)")
+    v.set_defaults(handler=run, time=None)
+
 
 
 def run(args) -> None:
@@ -37,18 +43,33 @@ def run(args) -> None:
     from ..gl.image import parse_size
     from ..viewer import Viewer
 
-    mesh = load_mesh(args.mesh)
-    if args.params:
+    from . import scenes
+
+    wind = wind_arg(args)
+    options = cull_options(args)
+    if args.no_lod:
+        options["lod"] = False
+    elif not options["lod"]:
+        options["lod"] = None  # automatic: on from LOD_AUTO_COUNT instances
+    extra = None
+    scene = scenes.scene_of(args, params_optional=True)
+    if scene is not None:
+        mesh, params, wind, extra = scenes.viewer_inputs(scene, wind)
+        seed = args.seed
+        args.up, args.no_ground = scene.up, True
+    elif args.params:
+        mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
         seed = args.seed  # a file records no seed: shown only if the user names one
     else:
+        mesh = load_mesh(args.mesh)
         seed = 0 if args.seed is None else args.seed
         params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)
     if args.frames < 1:
         raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed,
                            bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground,
-                           on_screenshot=lambda path: print(f"wrote {path}"))
+                           on_screenshot=lambda path: print(f"wrote {path}"), wind=wind, extra=extra, **options)
     if not args.headless:
         import moderngl_window as mglw
 

@@ -16,15 +16,18 @@ from .deform import deform
 from .errors import ArgumentError, PathError
 from .safeio import check_count, check_not_special, require_finite
 
-__all__ = ["bake_cpu", "instance_name", "write_npz", "write_mesh_folder", "check_bake_folder", "check_bake_count",
-           "check_bake_result", "MESH_FORMATS"]
+__all__ = ["bake_cpu", "instance_name", "write_npz", "write_scene_npz", "write_mesh_folder", "check_bake_folder",
+           "check_bake_count", "check_bake_result", "MESH_FORMATS"]
 
 MESH_FORMATS = ("obj", "ply", "glb")
 
 
-def bake_cpu(mesh, params, *, progress=None, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def bake_cpu(mesh, params, *, progress=None, wind=None, time: float = 0.0,
+             source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
     in the base mesh's vertex order, by the numpy reference (:func:`deform`).
+    ``params``: (n, 16) or (n, 19) (extended instances); ``wind``: an
+    :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
     ``progress``: optional object with ``update(instances_done)``.  The GPU
     engine and the switch between them: :func:`axialdeform.gl.bake.bake`.
 
@@ -34,6 +37,10 @@ def bake_cpu(mesh, params, *, progress=None, source: str | None = None) -> tuple
     the instance, array, vertex and coordinate (:func:`check_bake_result`):
     nothing non-finite is ever returned to be written."""
     check_bake_count(mesh, len(params), "cpu", source)
+    if wind is not None:
+        from .wind import apply_wind
+
+        params = apply_wind(wind, mesh.axis, params, time)
     with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
         positions, normals = deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
     check_bake_result(positions, normals, source)
@@ -67,6 +74,19 @@ def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarra
     with atomic_path(path, suffix=".npz") as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, positions=positions.astype(np.float32), normals=normals.astype(np.float32))
+
+
+def write_scene_npz(path: str | os.PathLike, layers: dict) -> None:
+    """Several layers into one ``.npz``, atomically: ``{name: (positions, normals)}``
+    becomes arrays ``positions_NAME`` and ``normals_NAME``, each (instances, vertices, 3) float32."""
+    arrays = {}
+    for name, (positions, normals) in layers.items():
+        arrays[f"positions_{name}"] = np.asarray(positions, dtype=np.float32)
+        arrays[f"normals_{name}"] = np.asarray(normals, dtype=np.float32)
+    with atomic_path(path, suffix=".npz") as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
+
 
 
 #: the file names :func:`write_mesh_folder` writes, and recognises as its own

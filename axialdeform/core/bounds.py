@@ -13,24 +13,54 @@ from .deform import bernstein, displace
 from .transforms import rotation_matrices
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
-__all__ = ["instance_bounds", "scene_box", "box_corners", "outline_points"]
+__all__ = ["wind_reach", "instance_bounds", "scene_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
+           "frustum_planes", "spheres_visible", "lod_choice"]
 
 
-def instance_bounds(mesh, params) -> tuple[np.ndarray, np.ndarray]:
+def base_radius(mesh, *extra_positions) -> float:
+    """The largest distance of a vertex from the base mesh's bounding-box
+    centre ``mesh.axis.center`` (model units), over the mesh and any
+    ``extra_positions`` arrays (k, 3) (its LOD levels)."""
+    center = np.asarray(mesh.axis.center, dtype=np.float64)
+    return max(float(np.linalg.norm(np.asarray(p, dtype=np.float64) - center, axis=1).max())
+               for p in (mesh.positions, *extra_positions))
+
+
+def wind_reach(mesh, wind) -> float:
+    """How far the wind can move a control point, model units: its offset is
+    ``c_k u`` with ``c_k <= 1`` and ``|u| <= |strength L (1 + gustiness wave)|``,
+    ``|wave| <= 0.6 + 0.4`` (docs/wind.md).  0 without a wind."""
+    if wind is None:
+        return 0.0
+    return abs(float(wind.strength)) * float(mesh.axis.length) * (1.0 + abs(float(wind.gustiness)))
+
+
+def instance_bounds(mesh, params, wind=None, *, radius: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bounding spheres of the deformed instances, without deforming them.
 
-    mesh : BaseMesh; params : (n, 16) float.
+    mesh : BaseMesh; params : (n, 16) or (n, 19) float.
     Returns ``centers : (n, 3) float64`` and ``radii : (n,) float64`` (world
     units).  The bend moves no vertex further than the largest offset (the
     Bernstein weights sum to 1), and a rotation keeps distances, so each
-    sphere holds its whole instance.
+    sphere holds its whole instance.  Extended instances: twist keeps each
+    vertex's distance from the axis line, taper scales it by at most
+    ``max(1, |1 - tp|)``, and ``s`` scales the whole about the model origin
+    (so the centre is ``s R c + p``).  ``wind`` (a :class:`axialdeform.Wind`)
+    adds its largest control-point movement (:func:`wind_reach`).
+    ``radius`` replaces the base mesh's own (:func:`base_radius`; LOD levels
+    may reach further).  The same sphere on the GPU: ``glsl/bounds.glsl``
+    (``axial_bound_sphere``).
     """
     params = as_params(params).astype(np.float64)
     center = np.asarray(mesh.axis.center, dtype=np.float64)
-    radius = float(np.linalg.norm(mesh.positions.astype(np.float64) - center, axis=1).max())
-    bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1)
-    centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) + params[:, POSITION]
-    return centers, radius + bend
+    radius = base_radius(mesh) if radius is None else float(radius)
+    bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1) + wind_reach(mesh, wind)
+    scale = np.ones(len(params))
+    grow = np.ones(len(params))
+    if params.shape[1] == 19:
+        scale, grow = params[:, 16], np.maximum(1.0, np.abs(1.0 - params[:, 18]))
+    centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) * scale[:, None] + params[:, POSITION]
+    return centers, (radius * grow + bend) * np.abs(scale)
 
 
 def scene_box(mesh, params) -> tuple[np.ndarray, np.ndarray]:
@@ -50,6 +80,82 @@ def box_corners(lo, hi) -> np.ndarray:
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     bits = (np.arange(8)[:, None] >> np.arange(3)[::-1]) & 1
     return np.where(bits == 1, hi, lo)
+
+
+def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned world boxes of the deformed instances: ``lo, hi : (n, 3) float64``.
+
+    In model space each offset component of ``D(t)`` is a convex combination
+    of the five control-point offsets, so it lies between their minimum and
+    maximum: the base mesh's box grows by exactly that range across the
+    axis.  The rotated box is then boxed again (half-extents ``|R| h``).
+    """
+    params = as_params(params).astype(np.float64)
+    pos = mesh.positions.astype(np.float64)
+    lo, hi = np.broadcast_to(pos.min(axis=0), (len(params), 3)).copy(), np.broadcast_to(pos.max(axis=0), (len(params), 3)).copy()
+    d = params[:, OFFSETS].reshape(-1, 5, 2)
+    for k, coord in enumerate(mesh.axis.perpendicular):
+        lo[:, coord] += d[:, :, k].min(axis=1)
+        hi[:, coord] += d[:, :, k].max(axis=1)
+    rot = rotation_matrices(params[:, ANGLES])
+    scale = params[:, 16] if params.shape[1] == 19 else np.ones(len(params))
+    center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) * scale[:, None] + params[:, POSITION]
+    half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2) * np.abs(scale)[:, None]
+    if params.shape[1] == 19:  # twisted or tapered cross-sections: the box around the sphere
+        turned = (params[:, 17] != 0) | (params[:, 18] != 0)
+        if turned.any():
+            c, r = instance_bounds(mesh, params[turned])
+            center[turned], half[turned] = c, r[:, None]
+    return center - half, center + half
+
+
+def frustum_planes(view, projection) -> np.ndarray:
+    """The six planes of the view frustum in world space: ``(6, 4) float64``,
+    rows ``(n, d)`` with unit ``n``; a point ``x`` is inside all of them when
+    ``n . x + d >= 0`` (left, right, bottom, top, near, far).
+
+    view, projection : (4, 4) pyrr-layout matrices (``clip = P V x`` in
+    column-vector terms is ``x @ view @ projection`` on pyrr's rows).
+    """
+    view = np.asarray(view, dtype=np.float64).reshape(4, 4)
+    projection = np.asarray(projection, dtype=np.float64).reshape(4, 4)
+    m = (view @ projection).T  # column-vector clip matrix: rows are clip x, y, z, w
+    planes = np.stack([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] + m[2], m[3] - m[2]])
+    norm = np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+    return planes / np.where(norm > 0, norm, 1.0)
+
+
+def spheres_visible(centers, radii, planes) -> np.ndarray:
+    """``(n,) bool``: False only for a sphere wholly outside one plane (so
+    nothing inside it can be drawn); the same test as ``axial_sphere_visible``
+    in ``glsl/bounds.glsl``."""
+    centers = np.asarray(centers, dtype=np.float64)
+    radii = np.asarray(radii, dtype=np.float64)
+    dist = centers @ planes[:, :3].T + planes[:, 3]
+    return (dist >= -radii[:, None]).all(axis=1)
+
+
+def lod_choice(centers, radii, errors, eye, px_scale: float, lod_error: float, ortho: bool = False,
+               scale=None) -> np.ndarray:
+    """``(n,) int``: the LOD level of each instance, the coarsest whose
+    ``errors[k]`` (model units, increasing, ``errors[0] = 0``) projects to at
+    most ``lod_error`` pixels at the point of the bounding sphere nearest the
+    eye (``px_scale``: pixels per world unit at distance 1, i.e.
+    ``P[1][1] * height / 2``); ``scale``: (n,) the instances' ``s`` (errors
+    are model units).  The same rule as ``axial_lod_level`` in
+    ``glsl/cull.vert``."""
+    centers = np.asarray(centers, dtype=np.float64)
+    if ortho:
+        px = np.full(len(centers), float(px_scale))
+    else:
+        near = np.linalg.norm(centers - np.asarray(eye, dtype=np.float64), axis=1) - np.asarray(radii, dtype=np.float64)
+        px = px_scale / np.maximum(near, 1e-6)
+    if scale is not None:
+        px = px * np.abs(np.asarray(scale, dtype=np.float64))
+    errors = np.asarray(errors, dtype=np.float64)
+    fits = errors[None, :] * px[:, None] <= lod_error
+    fits[:, 0] = True
+    return (np.cumprod(fits, axis=1).sum(axis=1) - 1).astype(np.int64) if len(errors) else np.zeros(len(centers), np.int64)
 
 
 def _support_indices(positions: np.ndarray, directions: int = 194) -> np.ndarray:
@@ -89,8 +195,19 @@ def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, 
         idx = _support_indices(mesh.positions)
         if n * len(idx) > budget:
             return instance_bounds(mesh, params)
+    if params.shape[1] == 19:  # extended instances: the CPU reference places the chosen vertices
+        from .deform import deform
+
+        world, _ = deform(mesh.axis, mesh.positions[idx], mesh.normals[idx], params)
+        return world.reshape(-1, 3).astype(np.float64), np.zeros(n * len(idx))
     pts = mesh.positions[idx].astype(np.float64)
     p64 = params.astype(np.float64)
+    if p64.shape[1] == 19:  # extended instances: the whole map of the selected vertices
+        from .deform import deform_local_extended
+
+        moved, _ = deform_local_extended(mesh.axis, pts, pts, p64[:, OFFSETS].reshape(-1, 5, 2), p64[:, 16:19])
+        world = moved @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2) + p64[:, None, POSITION]
+        return world.reshape(-1, 3), np.zeros(n * len(idx))
     disp = np.einsum("vk,nkc->nvc", bernstein(mesh.axis.parameter(pts), 4), p64[:, OFFSETS].reshape(-1, 5, 2))
     world = displace(mesh.axis, pts, disp) @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2)
     world += p64[:, None, POSITION]

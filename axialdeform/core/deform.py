@@ -12,7 +12,7 @@ import numpy as np
 
 from .arrays import as_array
 from .axis import ControlAxis
-from .params import ANGLES, OFFSETS, POSITION, as_params
+from .params import ANGLES, EXTRA, OFFSETS, POSITION, as_params
 from .transforms import rotation_matrices
 
 __all__ = [
@@ -21,6 +21,7 @@ __all__ = [
     "axis_offsets",
     "displace",
     "deform_local",
+    "deform_local_extended",
     "deform",
 ]
 
@@ -85,6 +86,56 @@ def deform_local(
     return moved, bent
 
 
+def deform_local_extended(
+    axis: ControlAxis, positions: np.ndarray, normals: np.ndarray, offsets: np.ndarray, extra: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bend, twist and taper the base mesh in model space, then scale it
+    (the extension in ``docs/method.md``; no rotation or position).
+
+    positions, normals : (v, 3) — the base mesh.
+    offsets : (n, 5, 2) — per-instance control-point offsets.
+    extra : (n, 3) — per-instance ``s tw tp``.
+    Returns ``s·V''`` (n, v, 3) and the unit normal ``normalize(cof(J)·n)``
+    (n, v, 3), float64, with ``V''`` = the cross-section ``w`` (about the axis
+    line through the bounding-box centre) turned by ``θ = tw·t``, scaled by
+    ``k = 1 − tp·t``, plus ``E(D(t))``.
+
+    ``cof(J)·n`` is evaluated in closed form: with ``M = k·Rot(θ)`` (the 2×2
+    block across the axis) and ``g = ∂V''_across/∂t = D'(t) − tp·Rot·w +
+    k·tw·Rot·(−w_v, w_u)``, ``cof(J)·n / k = (k·n_a − g·(Rot·n_across)/L ;
+    Rot·n_across)``.  With ``s = 1, tw = tp = 0`` every extra term is an exact
+    zero, so the result is bit for bit that of :func:`deform_local`.
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    nrm = np.asarray(normals, dtype=np.float64)
+    ex = np.asarray(extra, dtype=np.float64)
+    scale, twist, taper = ex[:, 0, None], ex[:, 1, None], ex[:, 2, None]  # (n, 1) each
+    t = axis.parameter(p)
+    disp, slope = axis_offsets(axis, t, offsets)
+    i, j = axis.perpendicular
+    center = np.asarray(axis.center, dtype=np.float64)
+    w = np.stack([p[:, i] - center[i], p[:, j] - center[j]], axis=-1)  # (v, 2) across the axis line
+    theta = twist * t  # (n, v)
+    k = 1.0 - taper * t
+    c, s = np.cos(theta), np.sin(theta)
+    rw = np.stack([c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1]], axis=-1)  # Rot(θ) w, (n, v, 2)
+    shift = k[..., None] * rw - w  # exactly 0 when tw = tp = 0
+    moved = np.broadcast_to(p, disp.shape[:2] + (3,)).copy()
+    moved[..., i] += shift[..., 0] + disp[..., 0]
+    moved[..., j] += shift[..., 1] + disp[..., 1]
+    moved *= scale[..., None]
+    # the normal: cof(J) n, divided by k > 0 (it is normalized)
+    rn = np.stack([c * nrm[:, i] - s * nrm[:, j], s * nrm[:, i] + c * nrm[:, j]], axis=-1)  # Rot(θ) n_across
+    turn = np.stack([-rw[..., 1], rw[..., 0]], axis=-1)  # dRot/dθ w
+    g = slope + ((k * twist)[..., None] * turn - taper[..., None] * rw)
+    bent = np.empty_like(moved)
+    bent[..., axis.index] = k * nrm[:, axis.index] - (g[..., 0] * rn[..., 0] + g[..., 1] * rn[..., 1]) / axis.length
+    bent[..., i] = rn[..., 0]
+    bent[..., j] = rn[..., 1]
+    bent /= np.maximum(np.linalg.norm(bent, axis=-1, keepdims=True), 1e-300)
+    return moved, bent
+
+
 def deform(
     axis: ControlAxis,
     positions: np.ndarray,
@@ -98,9 +149,11 @@ def deform(
 
     axis : ControlAxis of the base mesh.
     positions, normals : (v, 3) float — base mesh, file vertex order.
-    params : (n, 16) float — the 16 numbers per instance.
+    params : (n, 16) float — the 16 numbers per instance, or (n, 19):
+        extended instances (scale, twist, taper; :func:`deform_local_extended`).
     progress : optional object with ``update(instances_done)`` (a tqdm bar).
-    Returns ``W = R·V' + p`` and ``R·n'``, each (n, v, 3) float32.
+    Returns ``W = R·V' + p`` and ``R·n'`` (extended: ``W = R·(s·V'') + p``
+    and ``R·n''``), each (n, v, 3) float32.
     """
     params = as_params(params)
     positions = as_array(positions, (None, 3), "positions")
@@ -111,7 +164,11 @@ def deform(
     step = max(1, chunk_vertices // max(v, 1))
     for a in range(0, n, step):  # chunks bound memory; each chunk is fully vectorized
         block = params[a : a + step].astype(np.float64)
-        moved, bent = deform_local(axis, positions, normals, block[:, OFFSETS].reshape(-1, 5, 2))
+        offsets = block[:, OFFSETS].reshape(-1, 5, 2)
+        if block.shape[1] == 19:
+            moved, bent = deform_local_extended(axis, positions, normals, offsets, block[:, EXTRA])
+        else:
+            moved, bent = deform_local(axis, positions, normals, offsets)
         rot = rotation_matrices(block[:, ANGLES])
         out_pos[a : a + step] = np.einsum("nij,nvj->nvi", rot, moved) + block[:, None, POSITION]
         out_nrm[a : a + step] = np.einsum("nij,nvj->nvi", rot, bent)

@@ -17,6 +17,9 @@ __all__ = [
     "ResidualError",
     "GltfError",
     "PathError",
+    "ScatterError",
+    "TooFewError",
+    "SceneError",
 ]
 
 
@@ -75,3 +78,22 @@ class PathError(AxialDeformError, ValueError):
     """A path that cannot be used: an input that is not a regular file (a
     FIFO, a device, a folder, a symlink to one) or too big for what it claims
     to hold; an output that is an input, or exists and is not a regular file."""
+
+
+class ScatterError(AxialDeformError, ValueError):
+    """Scatter input that cannot be used: a surface with no faces or none
+    facing up, an all-black density map, a 1x1 height map, a bad range."""
+
+
+class TooFewError(ScatterError):
+    """Fewer instances fit on the surface than were asked for; ``params``
+    holds the ones that fit."""
+
+    def __init__(self, message: str, params=None) -> None:
+        super().__init__(message)
+        self.params = params
+
+
+class SceneError(AxialDeformError, ValueError):
+    """A scene file that cannot be used; the message names the file, the line
+    and the key."""

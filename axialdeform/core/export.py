@@ -18,12 +18,17 @@
   ``_AXIAL_ANGLES`` VEC3   ``rx ry rz`` (radians), the original angles
   ===============  ======  ===============================================
 
+  Extended instances (19 numbers) add ``SCALE`` (VEC3 float, ``(s, s, s)``:
+  the scale is uniform, applied in model space as glTF's T·R·S does) and
+  ``_AXIAL_TWIST_TAPER`` (VEC2 float, ``tw tp``); 16-number files are written
+  exactly as before.
+
   and the node's ``extras["axialdeform"]`` records the control axis
   (``index``, ``lo``, ``length``) and the SHA-256 fingerprint of the base
   mesh.  A viewer that knows the extension but not the deformation draws the
   undeformed base mesh at each instance's position and orientation; a viewer
   without the extension draws the base mesh once.  :func:`read_instanced_glb`
-  reads the 16 numbers back bit for bit.
+  reads the 16 (or 19) numbers back bit for bit.
 
 Coordinates are written as they are: glTF says +Y is up and units are
 metres, and nothing here re-orients or rescales the model.
@@ -40,7 +45,7 @@ import numpy as np
 from .atomic import atomic_write_bytes
 from .bake import instance_name
 from .errors import GltfError
-from .params import ANGLES, POSITION, as_params
+from .params import ANGLES, EXTENDED_FIELDS, POSITION, SCALE, as_params
 from .transforms import angles_from_matrices, matrices_from_quaternions, quaternions_from_angles
 
 __all__ = [
@@ -52,10 +57,13 @@ __all__ = [
     "export_glb",
     "export_baked",
     "export_instanced",
+    "encode_base_mesh",
     "read_instanced_glb",
     "quaternions_from_angles",
     "matrices_from_quaternions",
     "check_glb_path",
+    "encode_scene",
+    "export_scene",
 ]
 
 LAYOUTS = ("baked", "instanced")
@@ -70,6 +78,8 @@ ATTRIBUTES = {
     "_AXIAL_D5": ("VEC2", (8, 9)),
     "_AXIAL_ANGLES": ("VEC3", (13, 14, 15)),
 }
+#: extended instances only: twist and taper (the scale goes to glTF's own SCALE)
+EXTENDED_ATTRIBUTES = {"_AXIAL_TWIST_TAPER": ("VEC2", (17, 18))}
 _FORMAT_VERSION = 1
 
 # glTF enums
@@ -215,6 +225,26 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     return path
 
 
+def encode_base_mesh(mesh) -> bytes:
+    """The GLB bytes of the base mesh alone (one mesh, one node): POSITION and
+    NORMAL float32 in the file's vertex order and its triangles, so the
+    positions and faces hash to :attr:`BaseMesh.fingerprint` again (what the
+    web page checks a parameter file against)."""
+    b = _Builder()
+    g = b.g
+    pos = b.accessor(b.view(mesh.positions.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
+                     bounds=mesh.positions, name="base_POSITION")
+    nrm = b.accessor(b.view(mesh.normals.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
+                     name="base_NORMAL")
+    idx = b.indices(mesh)
+    b.gltf.meshes.append(g.Mesh(name=str(mesh.name), primitives=[
+        g.Primitive(attributes=g.Attributes(POSITION=pos, NORMAL=nrm), indices=idx, mode=_TRIANGLES)]))
+    b.gltf.nodes.append(g.Node(name=str(mesh.name), mesh=0, extras={EXTRAS_KEY: _mesh_extras(mesh, 0, "base")}))
+    b.gltf.scenes.append(g.Scene(name="axialdeform base mesh", nodes=[0]))
+    b.gltf.scene = 0
+    return b.finish()
+
+
 def encode_instanced(mesh, params) -> bytes:
     """The GLB bytes of the instanced layout (see :func:`export_instanced`)."""
     params = as_params(params)
@@ -235,13 +265,19 @@ def encode_instanced(mesh, params) -> bytes:
         "TRANSLATION": ("VEC3", params[:, POSITION]),
         "ROTATION": ("VEC4", quaternions_from_angles(params[:, ANGLES]).astype(np.float32)),
     }
-    columns.update({name: (kind, params[:, list(cols)]) for name, (kind, cols) in ATTRIBUTES.items()})
+    extra_attributes = EXTENDED_ATTRIBUTES if params.shape[1] == 19 else {}
+    if extra_attributes:
+        columns["SCALE"] = ("VEC3", np.repeat(params[:, SCALE, None], 3, axis=1))
+    columns.update({name: (kind, params[:, list(cols)])
+                    for name, (kind, cols) in {**ATTRIBUTES, **extra_attributes}.items()})
     attributes = {}
     for name, (kind, data) in columns.items():
         data = np.ascontiguousarray(data, dtype="<f4")
         attributes[name] = b.accessor(b.view(data), _FLOAT, n, kind, name=name)
     extras = _mesh_extras(mesh, n, "instanced")
-    extras["attributes"] = {name: _field_names(cols) for name, (_k, cols) in ATTRIBUTES.items()}
+    extras["attributes"] = {name: _field_names(cols) for name, (_k, cols) in {**ATTRIBUTES, **extra_attributes}.items()}
+    if extra_attributes:
+        extras["attributes"]["SCALE"] = ["s", "s", "s"]
     b.gltf.nodes.append(g.Node(name="axialdeform instances", mesh=0,
                                extensions={INSTANCING: {"attributes": attributes}},
                                extras={EXTRAS_KEY: extras}))
@@ -251,10 +287,44 @@ def encode_instanced(mesh, params) -> bytes:
     return b.finish()
 
 
-def _field_names(cols) -> list[str]:
-    from .params import FIELDS
+def encode_scene(scene) -> bytes:
+    """GLB bytes of a whole scene (:mod:`axialdeform.core.scene`): the terrain and
+    one mesh per layer holding all its instances' deformed world geometry
+    (CPU reference), each with its layer's colour as a PBR material."""
+    import trimesh
 
-    return [FIELDS[c] for c in cols]
+    from .deform import deform
+
+    out = trimesh.Scene()
+    parts = [("terrain", scene.terrain, None, scene.terrain_color)] if scene.terrain is not None else []
+    parts += [(layer.name, layer.mesh, layer.params, layer.color) for layer in scene.layers if len(layer.params)]
+    if not parts:
+        raise GltfError(f"{scene.path}: the scene has nothing to export; expected a terrain or a layer with instances")
+    for name, mesh, params, color in parts:
+        if params is None:
+            pos, nrm = mesh.positions[None], mesh.normals[None]
+        else:
+            pos, nrm = deform(mesh.axis, mesh.positions, mesh.normals, params)
+        n, v = pos.shape[:2]
+        faces = (np.asarray(mesh.faces)[None] + (v * np.arange(n))[:, None, None]).reshape(-1, 3)
+        rgb = tuple(color) if color is not None else (0.6, 0.6, 0.6)
+        material = trimesh.visual.material.PBRMaterial(name=name, baseColorFactor=[*rgb, 1.0],
+                                                       metallicFactor=0.0, roughnessFactor=0.9)
+        tm = trimesh.Trimesh(pos.reshape(-1, 3), faces, vertex_normals=nrm.reshape(-1, 3), process=False,
+                             visual=trimesh.visual.TextureVisuals(material=material))
+        out.add_geometry(tm, geom_name=name, node_name=name)
+    return out.export(file_type="glb")
+
+
+def export_scene(path: str | os.PathLike, scene) -> Path:
+    """Write :func:`encode_scene` to ``path`` (a ``.glb``), atomically."""
+    path = check_glb_path(path)
+    atomic_write_bytes(path, encode_scene(scene))
+    return path
+
+
+def _field_names(cols) -> list[str]:
+    return [EXTENDED_FIELDS[c] for c in cols]
 
 
 def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
@@ -316,8 +386,8 @@ def read_instanced_glb(path: str | os.PathLike):
     -------
     mesh : BaseMesh
         The base mesh (positions, normals, triangles exactly as written).
-    params : (n, 16) float32
-        The 16 numbers per instance, bit for bit as exported: offsets from
+    params : (n, 16) float32, or (n, 19) for extended instances
+        The numbers per instance, bit for bit as exported: offsets from
         ``_AXIAL_D12/_AXIAL_D34/_AXIAL_D5``, position from ``TRANSLATION``,
         angles from ``_AXIAL_ANGLES`` (or, if a file lacks it, from the
         ``ROTATION`` quaternion: same rotation, angles possibly different).
@@ -358,7 +428,20 @@ def read_instanced_glb(path: str | os.PathLike):
     if len(counts) != 1:
         raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
     n = counts.pop()
-    params = np.zeros((n, 16), dtype=np.float32)
+    extended = "SCALE" in cols or "_AXIAL_TWIST_TAPER" in cols
+    params = np.zeros((n, 19 if extended else 16), dtype=np.float32)
+    if extended:
+        params[:, SCALE] = 1.0
+        for name, (kind, idx) in EXTENDED_ATTRIBUTES.items():
+            if name in cols:
+                if cols[name].shape[1] != _COMPONENTS[kind]:
+                    raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
+                params[:, list(idx)] = cols[name]
+        if "SCALE" in cols:
+            sc = cols["SCALE"]
+            if sc.shape[1] != 3 or not (sc == sc[:, :1]).all():
+                raise GltfError(f"{where}: SCALE: expected a uniform scale (VEC3 with three equal components) per instance")
+            params[:, SCALE] = sc[:, 0]
     for name, (kind, idx) in ATTRIBUTES.items():
         if name in cols:
             if cols[name].shape[1] != _COMPONENTS[kind]:

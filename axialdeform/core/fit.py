@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .deform import bernstein, deform, displace
+from .deform import bernstein, deform, deform_local_extended, displace
 from .mesh import MESH_SUFFIXES  # mesh files a variants folder may hold (others are ignored)
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .params import ANGLES, OFFSETS, POSITION, as_params
@@ -216,6 +216,137 @@ def _fit_batch(m: _Model, targets: np.ndarray, max_iterations: int) -> tuple[np.
     return out, rounds
 
 
+def umeyama_scale(source: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The uniform scale (n,) of the best similarity map of ``source`` (v, 3)
+    onto each ``target`` (n, v, 3) (Umeyama 1991): the start of an extended fit."""
+    s = np.asarray(source, dtype=np.float64)
+    t = np.asarray(target, dtype=np.float64)
+    sc = s - s.mean(axis=0)
+    tc = t - t.mean(axis=-2, keepdims=True)
+    sv = np.linalg.svd(np.swapaxes(sc, -1, -2)[None] @ tc, compute_uv=False)  # (n, 3)
+    var = float((sc**2).sum())
+    return np.maximum(sv.sum(axis=-1) / max(var, 1e-300), 1e-12)
+
+
+def _extended_shape(m: _Model, rot, z, pos, extra) -> np.ndarray:
+    """``R·(s·V'') + p`` (n, v, 3) of canonical offsets ``z`` (n, 4, 2) and ``extra`` (n, 3) = s tw tp."""
+    moved, _ = deform_local_extended(m.axis, m.base, m.base, _CANONICAL @ z, extra)
+    return moved @ np.swapaxes(rot, -1, -2) + pos[:, None]
+
+
+def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
+    """Fit n variants with the 19 numbers of extended instances: ``targets``
+    (n, v, 3) -> params (n, 19) float64 and rounds (n,).
+
+    Start: the uniform scale of the best similarity map, the Kabsch rotation
+    and the least-squares bend of the variant divided by it; then
+    Levenberg-Marquardt on all 17
+    unknowns (rotation vector, canonical offsets, position, log s, tw, tp)
+    with a central-difference Jacobian, vectorized over the batch."""
+    n = len(targets)
+    scale0 = umeyama_scale(m.base, targets)
+    unscaled = targets / scale0[:, None, None]
+    rot, _ = kabsch(m.base, unscaled)
+    z, pos = m.linear_offsets(rot, unscaled)  # the bend for that rotation, then refine everything together
+    pos = pos * scale0[:, None]
+    rounds = np.zeros(n, dtype=np.int64)
+    extra = np.stack([scale0, np.zeros(n), np.zeros(n)], axis=1)
+    L = m.length
+
+    def shape(rot, z, pos, extra):
+        return _extended_shape(m, rot, z, pos, extra)
+
+    def err_of(shp, w):
+        d = shp - w
+        return np.einsum("nvc,nvc->n", d, d)
+
+    # step sizes of the central differences, per unknown
+    h = np.array([1e-6] * 3 + [1e-6 * L] * 8 + [1e-6 * L] * 3 + [1e-6, 1e-6, 1e-6])
+
+    def perturbed(k, sign, rot, z, pos, extra):
+        rot2, z2, pos2, ex2 = rot, z, pos, extra
+        if k < 3:
+            w = np.zeros((len(rot), 3))
+            w[:, k] = sign * h[k]
+            rot2 = matrices_from_rotation_vectors(w) @ rot
+        elif k < 11:
+            z2 = z.copy()
+            c = k - 3
+            z2[:, c % 4, c // 4] += sign * h[k]
+        elif k < 14:
+            pos2 = pos.copy()
+            pos2[:, k - 11] += sign * h[k]
+        else:
+            ex2 = extra.copy()
+            if k == 14:
+                ex2[:, 0] *= np.exp(sign * h[k])
+            else:
+                ex2[:, k - 14] += sign * h[k]
+        return rot2, z2, pos2, ex2
+
+    def apply(step, rot, z, pos, extra):
+        z2 = z + np.stack([step[:, 3:7], step[:, 7:11]], axis=2)
+        ex2 = extra.copy()
+        ex2[:, 0] *= np.exp(np.clip(step[:, 14], -1.0, 1.0))
+        ex2[:, 1:] += step[:, 15:17]
+        return matrices_from_rotation_vectors(step[:, :3]) @ rot, z2, pos + step[:, 11:14], ex2
+
+    w_all = targets
+    best = err_of(shape(rot, z, pos, extra), w_all)
+    floor = 1e-30 * L**2 * w_all.shape[1]
+    lam = np.full(n, 1e-3)
+    active = np.arange(n)
+    eye = np.eye(17)
+    for r in range(1, max_iterations + 1):
+        if not active.size:
+            break
+        ra, za, pa, ea, wa = rot[active], z[active], pos[active], extra[active], w_all[active]
+        resid = (wa - shape(ra, za, pa, ea)).reshape(len(active), -1)
+        cols = []
+        for k in range(17):  # 17 unknowns: columns of the Jacobian, each vectorized over the batch
+            plus = shape(*perturbed(k, 1.0, ra, za, pa, ea))
+            minus = shape(*perturbed(k, -1.0, ra, za, pa, ea))
+            cols.append(((plus - minus) / (2.0 * h[k])).reshape(len(active), -1))
+        jac = np.stack(cols, axis=-1)  # (n, 3v, 17)
+        jt = np.swapaxes(jac, -1, -2)
+        jtj, jtr = jt @ jac, (jt @ resid[..., None])[..., 0]
+        damp = np.diagonal(jtj, axis1=1, axis2=2)[..., None] * eye + 1e-12 * np.trace(jtj, axis1=1, axis2=2)[:, None, None] * eye
+        err = best[active].copy()
+        la = lam[active]
+        pending = np.arange(len(active))
+        for _ in range(16):
+            if not pending.size:
+                break
+            step = _solve(jtj[pending] + la[pending, None, None] * damp[pending], jtr[pending])
+            trial = apply(step, ra[pending], za[pending], pa[pending], ea[pending])
+            valid = trial[3][:, 2] < 1.0 - 1e-6
+            trial_err = np.where(valid, err_of(shape(*trial), wa[pending]), np.inf)
+            ok = trial_err < err[pending]
+            took = pending[ok]
+            ra[took], za[took], pa[took], ea[took] = trial[0][ok], trial[1][ok], trial[2][ok], trial[3][ok]
+            err[took] = trial_err[ok]
+            la[took] = np.maximum(la[took] / 4.0, 1e-9)
+            la[pending[~ok]] = np.minimum(la[pending[~ok]] * 8.0, 1e9)
+            pending = pending[~ok]
+        rot[active], z[active], pos[active], extra[active], lam[active] = ra, za, pa, ea, la
+        rounds[active] += 1
+        done = (best[active] - err <= 1e-12 * best[active]) | (err <= floor)
+        best[active] = np.minimum(best[active], err)
+        active = active[~done]
+    out = np.empty((n, 19))
+    out[:, OFFSETS] = (_CANONICAL @ z).reshape(n, 10)
+    out[:, POSITION] = pos
+    out[:, ANGLES] = angles_from_matrices(rot)
+    out[:, 16:19] = extra
+    return out, rounds
+
+
+def _rotations(angles: np.ndarray) -> np.ndarray:
+    from .transforms import rotation_matrices
+
+    return rotation_matrices(angles)
+
+
 def fit_instance(mesh, target: np.ndarray, *, max_iterations: int = 100, model: _Model | None = None):
     """Fit the 16 numbers of one variant (:func:`fit_params` fits many at once).
 
@@ -324,17 +455,18 @@ def _check_shape(mesh, positions: np.ndarray, name: str) -> np.ndarray:
 _BATCH_BYTES = 64 << 20
 
 
-def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress):
+def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress, extended=False):
     model = _Model(mesh)
-    params = np.empty((count, 16), dtype=np.float32)
+    params = np.empty((count, 19 if extended else 16), dtype=np.float32)
     rms, mx, its, names = np.empty(count), np.empty(count), np.empty(count, dtype=np.int64), []
-    batch = max(1, _BATCH_BYTES // (mesh.vertex_count * 3 * 14 * 8))
+    batch = max(1, _BATCH_BYTES // (mesh.vertex_count * 3 * (17 if extended else 14) * 8))
+    fit_batch = _fit_batch_extended if extended else _fit_batch
     chunk: list[np.ndarray] = []
 
     def flush(end: int) -> None:  # fit the variants [end - len(chunk), end) together
         start = end - len(chunk)
         targets = np.stack(chunk)
-        values, its[start:end] = _fit_batch(model, targets, max_iterations)
+        values, its[start:end] = fit_batch(model, targets, max_iterations)
         params[start:end] = values.astype(np.float32)
         rms[start:end], mx[start:end] = _residuals(mesh, params[start:end], targets)
         if progress is not None:
@@ -353,7 +485,7 @@ def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress):
 
 
 def fit_params(mesh, variants, *, max_residual: float = DEFAULT_MAX_RESIDUAL, max_iterations: int = 100,
-               progress=None) -> FitResult:
+               progress=None, extended: bool = False) -> FitResult:
     """Fit every variant given as vertex positions.
 
     Parameters
@@ -368,11 +500,14 @@ def fit_params(mesh, variants, *, max_residual: float = DEFAULT_MAX_RESIDUAL, ma
         call :meth:`FitResult.check` to raise).
     progress : tqdm-like, optional
         ``update(k)`` after each batch of k variants.
+    extended : bool
+        Fit the 19 numbers of extended instances (scale, twist, taper too):
+        ``params`` is then (n, 19).
     """
     variants = list(variants) if not isinstance(variants, np.ndarray) else variants
     items = ((f"variant {k}", v) for k, v in enumerate(variants))
     return _fit_all(mesh, items, len(variants), max_residual=max_residual, max_iterations=max_iterations,
-                    progress=progress)
+                    progress=progress, extended=extended)
 
 
 def load_variant(path: str | os.PathLike, mesh) -> np.ndarray:
@@ -427,10 +562,10 @@ def variant_paths(inputs) -> list[Path]:
 
 
 def fit_files(mesh, paths, *, max_residual: float = DEFAULT_MAX_RESIDUAL, max_iterations: int = 100,
-              progress=None) -> FitResult:
+              progress=None, extended: bool = False) -> FitResult:
     """Read variant mesh files one at a time and fit them in batches (see :func:`fit_params`)."""
     paths = [Path(p) for p in paths]
     items = ((str(p), load_variant(p, mesh)) for p in paths)
     return _fit_all(mesh, items, len(paths), max_residual=max_residual, max_iterations=max_iterations,
-                    progress=progress)
+                    progress=progress, extended=extended)
 

@@ -3,18 +3,21 @@
 One instance is ``d1u d1v d2u d2v d3u d3v d4u d4v d5u d5v px py pz rx ry rz``
 (offsets in model units, position in world units, angles in radians applied
 about fixed X, then Y, then Z).  In memory a set of instances is a
-``(n, 16) float32`` array.
+``(n, 16) float32`` array.  An **extended** instance adds ``s tw tp`` (uniform
+scale > 0, twist in radians over the axis, taper < 1; see the extension
+section of ``docs/method.md``): ``(n, 19) float32``.
 
 Files
 -----
 * **text** (``.txt``, ``.csv``, ``.dat``; and anything that does not start
-  with the binary magic): 16 numbers a line, separated by commas or white
-  space; lines starting with ``#`` are comments.
+  with the binary magic): 16 numbers a line (or 19 on EVERY line: extended),
+  separated by commas or white space; lines starting with ``#`` are comments.
 * **binary** (``.adp``): see ``docs/parameter-files.md``.  A fixed header
   (magic, version, encoding, count, the axis and a SHA-256 fingerprint of the
   base mesh it was made for), the payload (float32, 64 bytes per instance, or
   uint16 quantized, 32 bytes per instance) and a CRC-32 trailer over header
-  and payload.
+  and payload.  Version 1 holds 16 numbers per instance, version 2 the 19
+  of extended instances (76 bytes float32, 38 uint16 quantized).
 
 NaN and infinite parameters are refused everywhere (reading, writing,
 uploading) with a :class:`ParamError`: a non-finite number has no shape.
@@ -37,7 +40,14 @@ from .errors import MeshMismatchError, ParamError, ParamFileError
 
 __all__ = [
     "FIELDS",
+    "EXTENDED_FIELDS",
     "OFFSETS",
+    "EXTRA",
+    "SCALE",
+    "TWIST",
+    "TAPER",
+    "is_extended",
+    "extend_params",
     "POSITION",
     "ANGLES",
     "as_params",
@@ -69,15 +79,25 @@ FIELDS = (
     "d1u", "d1v", "d2u", "d2v", "d3u", "d3v", "d4u", "d4v", "d5u", "d5v",
     "px", "py", "pz", "rx", "ry", "rz",
 )
+#: names of the 19 columns of an extended instance
+EXTENDED_FIELDS = FIELDS + ("s", "tw", "tp")
 OFFSETS = slice(0, 10)
 POSITION = slice(10, 13)
 ANGLES = slice(13, 16)
+#: the extension columns ``s tw tp`` of a (n, 19) array
+EXTRA = slice(16, 19)
+SCALE, TWIST, TAPER = 16, 17, 18
+#: the values of ``s tw tp`` that give exactly the 16-number shape
+IDENTITY_EXTRA = (1.0, 0.0, 0.0)
+WIDTHS = (16, 19)
 
 BINARY_SUFFIXES = (".adp",)
 TEXT_SUFFIXES = (".txt", ".csv", ".dat")
 
 MAGIC = b"\x89ADP\r\n\x1a\n"
-VERSION = 1
+VERSION = 1  # 16 numbers per instance
+VERSION_EXTENDED = 2  # 19 numbers per instance (s tw tp after the 16)
+_VERSIONS = {VERSION: 16, VERSION_EXTENDED: 19}
 ENCODING_FLOAT32 = 0
 ENCODING_UINT16 = 1
 _ENCODINGS = {ENCODING_FLOAT32: ("float32", 64), ENCODING_UINT16: ("uint16-quantized", 32)}
@@ -85,38 +105,72 @@ _ENCODINGS = {ENCODING_FLOAT32: ("float32", 64), ENCODING_UINT16: ("uint16-quant
 _HEADER = struct.Struct("<8sHHIQb3xIdd32s16x")
 HEADER_SIZE = _HEADER.size  # 96
 _QUANT = struct.Struct("<16f16f")  # per-column minimum, per-column step
+_QUANT_EXT = struct.Struct("<19f19f")  # the same for 19 columns (version 2)
 _TRAILER = struct.Struct("<I")
 _MAX_TEXT_LINE = 4096
 
 
-def as_params(values, *, name: str = "parameters", error: type = ParamError, rows=None) -> np.ndarray:
-    """Check and convert to a C-contiguous ``(n, 16) float32`` array.
+def as_params(values, *, name: str = "parameters", error: type = ParamError, rows=None, widths=WIDTHS) -> np.ndarray:
+    """Check and convert to a C-contiguous ``(n, 16)`` or ``(n, 19) float32`` array.
 
-    A single record of 16 numbers becomes ``(1, 16)``.  Raises
-    :class:`ParamError` (or ``error``) for a wrong shape or a non-finite
-    number; ``rows`` optionally names each row (e.g. its line in a file).
+    A single record of 16 (or 19) numbers becomes ``(1, 16)`` (``(1, 19)``).
+    Raises :class:`ParamError` (or ``error``) for a wrong shape, a non-finite
+    number, or (19 columns) a scale ``s <= 0`` or a taper ``tp >= 1``;
+    ``rows`` optionally names each row (e.g. its line in a file).  ``widths``
+    lists the accepted numbers per instance (``(16,)`` where only the plain
+    form makes sense).
     """
     try:
         arr = np.asarray(values, dtype=np.float32)
     except (TypeError, ValueError) as exc:
         raise error(f"{name}: expected numbers, found {type(values).__name__} ({exc})") from None
-    if arr.ndim == 1 and arr.shape[0] == 16:
+    if arr.ndim == 1 and arr.shape[0] in widths:
         arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] != 16:
-        raise error(f"{name}: expected an array of shape (n, 16), found {arr.shape}")
+    if arr.ndim != 2 or arr.shape[1] not in widths:
+        expected = " or ".join(f"(n, {w})" for w in widths)
+        raise error(f"{name}: expected an array of shape {expected}, found {arr.shape}")
+    fields = EXTENDED_FIELDS if arr.shape[1] == 19 else FIELDS
     finite = np.isfinite(arr)
     if not finite.all():
         row, col = (int(x) for x in np.argwhere(~finite)[0])
         where = f"instance {row}" if rows is None else rows[row]
-        raise error(f"{name}: {where}, field {FIELDS[col]}: expected a finite number, found {arr[row, col]}")
+        raise error(f"{name}: {where}, field {fields[col]}: expected a finite number, found {arr[row, col]}")
+    if arr.shape[1] == 19:
+        for col, bad, expected in ((SCALE, arr[:, SCALE] <= 0, "a scale s > 0"),
+                                   (TAPER, arr[:, TAPER] >= 1, "a taper tp < 1")):
+            if bad.any():
+                row = int(np.argmax(bad))
+                where = f"instance {row}" if rows is None else rows[row]
+                raise error(f"{name}: {where}, field {fields[col]}: expected {expected}, found {arr[row, col]:.9g}")
     return np.ascontiguousarray(arr)
 
 
-def make_params(offsets=None, positions=None, angles=None, count: int | None = None) -> np.ndarray:
-    """Assemble ``(n, 16)`` parameters from parts.
+def is_extended(values) -> bool:
+    """True for extended instances: an array whose last axis holds 19 numbers."""
+    return np.shape(values)[-1] == 19
+
+
+def extend_params(values) -> np.ndarray:
+    """``(n, 19) float32``: 16-number instances get ``s = 1, tw = 0, tp = 0``
+    (the same shapes); extended ones are returned checked, unchanged."""
+    values = as_params(values)
+    if values.shape[1] == 19:
+        return values
+    out = np.empty((len(values), 19), dtype=np.float32)
+    out[:, :16] = values
+    out[:, EXTRA] = IDENTITY_EXTRA
+    return out
+
+
+def make_params(offsets=None, positions=None, angles=None, count: int | None = None, *,
+                scale=None, twist=None, taper=None) -> np.ndarray:
+    """Assemble ``(n, 16)`` parameters from parts (``(n, 19)`` when any of
+    ``scale``, ``twist``, ``taper`` is given).
 
     offsets : (n, 5, 2) model units; positions : (n, 3) world units;
     angles : (n, 3) radians.  Missing parts are zero.
+    scale : (n,) > 0 (default 1); twist : (n,) radians (default 0);
+    taper : (n,) < 1 (default 0).
     """
     from .arrays import as_array
 
@@ -132,8 +186,16 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
     if len(lengths) > 1:
         found = ", ".join(f"{k} {len(a)}" for k, a in parts.items()) + (f", count {count}" if count is not None else "")
         raise ParamError(f"make_params: expected the same number of instances in every part, found {found}")
+    extra = (scale, twist, taper)
+    lengths |= {len(np.atleast_1d(x)) for x in extra if x is not None and np.ndim(x) > 0}
+    if len(lengths) > 1:
+        raise ParamError(f"make_params: expected the same number of instances in every part, found {sorted(lengths)}")
     n = lengths.pop() if lengths else 0
-    out = np.zeros((n, 16), dtype=np.float32)
+    extended = any(x is not None for x in extra)
+    out = np.zeros((n, 19 if extended else 16), dtype=np.float32)
+    if extended:
+        for col, x, default in zip((SCALE, TWIST, TAPER), extra, IDENTITY_EXTRA):
+            out[:, col] = default if x is None else np.broadcast_to(np.asarray(x, dtype=np.float32), (n,))
     if "offsets" in parts:
         out[:, OFFSETS] = parts["offsets"].reshape(n, 10)
     if "positions" in parts:
@@ -147,7 +209,7 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
 
 
 def format_text(values: np.ndarray, header: str | None = None) -> str:
-    """The text form: one instance a line, 16 numbers separated by spaces.
+    """The text form: one instance a line, 16 (or 19) numbers separated by spaces.
 
     Numbers are written with 9 significant digits, which round-trips float32
     exactly.  ``header`` lines are written as ``#`` comments.
@@ -163,7 +225,7 @@ _TEXT_ROWS = 4096
 def _text_pieces(values: np.ndarray, header: str | None):
     """The text form in pieces of at most ``_TEXT_ROWS`` lines (a generator)."""
     lines = ["# " + line for line in (header or "").splitlines()]
-    lines.append("# " + " ".join(FIELDS))
+    lines.append("# " + " ".join(EXTENDED_FIELDS if values.shape[1] == 19 else FIELDS))
     yield "\n".join(lines) + "\n"
     for s in range(0, len(values), _TEXT_ROWS):
         body = np.char.mod("%.9g", values[s : s + _TEXT_ROWS].astype(np.float64))
@@ -178,7 +240,9 @@ _SEPARATORS = re.compile(r"[,\s]+")
 
 
 def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
-    """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``.
+    """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``, or
+    ``(n, 19)`` when every line holds 19 numbers (a mix is an error naming the
+    line; the first data line fixes the width for the whole file).
 
     The text is parsed in pieces of about 256 KiB cut at line breaks, each
     turned into float32 rows at once, so the memory needed beyond ``data``
@@ -189,6 +253,7 @@ def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
     start = 3 if bytes(view[:3]) == b"\xef\xbb\xbf" else 0  # a leading byte-order mark is tolerated
     pieces: list[np.ndarray] = []
     lineno = 0
+    first = None  # (width, line number) of the first data line: it fixes the width of every other
     window = 4 * _MAX_TEXT_LINE + 8  # a line of at most _MAX_TEXT_LINE characters has at most 4x as many bytes
     while start < n:
         end = min(n, start + _TEXT_CHUNK)
@@ -204,13 +269,15 @@ def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
                 cut += 1
             end = cut
         chunk = bytes(view[start:end])
-        fast = _fast_chunk(chunk)
+        fast = _fast_chunk(chunk, None if first is None else first[0])
         if fast is not None:
             arr, lines_in_chunk = fast
             if len(arr):
+                if first is None:
+                    first = (arr.shape[1], lineno + _first_data_line(chunk))
                 pieces.append(arr)
         else:
-            rows, linenos, lines_in_chunk = _split_lines(chunk, name, lineno, start)
+            rows, linenos, lines_in_chunk, first = _split_lines(chunk, name, lineno, start, first)
             if rows:
                 pieces.append(_rows_to_float32(rows, linenos, name))
         lineno += lines_in_chunk
@@ -224,12 +291,21 @@ _PLAIN = re.compile(rb"[0-9eE+\-., \t\n]*")
 _COMMENT_LINE = re.compile(rb"^[ \t]*#[\x20-\x7e\t]*$", re.M)
 
 
-def _fast_chunk(chunk: bytes):
-    """``(values (n, 16) float32, lines)`` of a piece made only of numbers,
+def _first_data_line(chunk: bytes) -> int:
+    """1-based index in ``chunk`` of its first line that is neither blank nor a comment."""
+    for k, line in enumerate(chunk.split(b"\n"), start=1):
+        stripped = line.strip()
+        if stripped and not stripped.startswith(b"#"):
+            return k
+    return 1
+
+
+def _fast_chunk(chunk: bytes, width: int | None = None):
+    """``(values (n, width) float32, lines)`` of a piece made only of numbers,
     commas, blanks and ``\n`` line breaks, parsed by numpy's C reader; None
     when the piece holds anything else (comments, ``\r``, other text) or
-    does not parse into 16 columns: the line-by-line parser then finds the
-    exact line and field for its message."""
+    does not parse into ``width`` columns (16 or 19 when ``width`` is None):
+    the line-by-line parser then finds the exact line and field for its message."""
     if b"#" in chunk:  # whole-line ASCII comments are dropped (their line breaks kept)
         chunk = _COMMENT_LINE.sub(b"", chunk)
     if not _PLAIN.fullmatch(chunk):
@@ -246,17 +322,24 @@ def _fast_chunk(chunk: bytes):
             arr = np.loadtxt(io.StringIO(chunk.replace(b",", b" ").decode("ascii")), dtype=np.float64, ndmin=2)
     except ValueError:
         return None
-    if arr.size and arr.shape[1] != 16:
-        return None
+    if arr.size:
+        if arr.shape[1] not in WIDTHS or (width is not None and arr.shape[1] != width):
+            return None
+        width = arr.shape[1]
     with np.errstate(over="ignore", invalid="ignore"):
-        arr32 = arr.reshape(-1, 16).astype(np.float32)
+        arr32 = arr.reshape(-1, width or 16).astype(np.float32)
     if not np.isfinite(arr32).all():  # beyond float32: the slow path names the line
         return None
+    if arr32.shape[1] == 19 and len(arr32) and ((arr32[:, SCALE] <= 0).any() or (arr32[:, TAPER] >= 1).any()):
+        return None  # a bad scale or taper: the slow path names the line and field
     lines = chunk.count(b"\n") + (0 if not chunk or chunk.endswith(b"\n") else 1)
     return np.ascontiguousarray(arr32), lines
 
 
-def _split_lines(chunk: bytes, name: str, lineno: int, offset: int):
+def _split_lines(chunk: bytes, name: str, lineno: int, offset: int, first=None):
+    """``(rows, line numbers, lines in chunk, first)`` of one piece, line by
+    line; ``first`` is the ``(width, line number)`` of the file's first data
+    line (None until one is seen): every data line must have its width."""
     try:
         text = chunk.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -273,11 +356,18 @@ def _split_lines(chunk: bytes, name: str, lineno: int, offset: int):
         if not stripped or stripped.startswith("#"):
             continue
         tokens = [tok for tok in _SEPARATORS.split(stripped) if tok]
-        if len(tokens) != 16:
-            raise ParamFileError(f"{name}: line {k}: expected 16 numbers, found {len(tokens)}")
+        if len(tokens) not in WIDTHS:
+            raise ParamFileError(f"{name}: line {k}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances)")
+        if first is None:
+            first = (len(tokens), k)
+        elif len(tokens) != first[0]:
+            raise ParamFileError(
+                f"{name}: line {k}: expected {first[0]} numbers like line {first[1]}, found {len(tokens)} "
+                "(a file holds 16 numbers on every line, or 19 on every line)"
+            )
         rows.append(tokens)
         linenos.append(k)
-    return rows, linenos, len(lines)
+    return rows, linenos, len(lines), first
 
 
 def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np.ndarray:
@@ -293,7 +383,7 @@ def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np
                     float(tok)
                 except ValueError:
                     raise ParamFileError(
-                        f"{name}: line {linenos[k]}, field {FIELDS[c]}: expected a number, found {tok[:40]!r}"
+                        f"{name}: line {linenos[k]}, field {EXTENDED_FIELDS[c]}: expected a number, found {tok[:40]!r}"
                     ) from None
         # numpy refused what Python's float() accepts: parse token by token
         arr = np.array([[float(tok) for tok in row] for row in rows], dtype=np.float64)
@@ -303,7 +393,7 @@ def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np
     if overflow.any():
         k, c = (int(x) for x in np.argwhere(overflow)[0])
         raise ParamFileError(
-            f"{name}: line {linenos[k]}, field {FIELDS[c]}: {arr[k, c]:.9g} does not fit in float32; "
+            f"{name}: line {linenos[k]}, field {EXTENDED_FIELDS[c]}: {arr[k, c]:.9g} does not fit in float32; "
             f"expected a finite number of magnitude at most {float(np.finfo(np.float32).max):.7g}"
         )
     return as_params(arr32, name=name, error=ParamFileError, rows=[f"line {n}" for n in linenos])
@@ -340,7 +430,7 @@ class ParamFile:
 
 
 def quantization_error_bound(values: np.ndarray) -> np.ndarray:
-    """Per-column bound on ``|decoded - original|`` of the quantized form: (16,) float64.
+    """Per-column bound on ``|decoded - original|`` of the quantized form: (16,) (or (19,)) float64.
 
     Each column is stored as ``min + q * step`` with ``q`` a uint16 and
     ``step = (max - min) / 65535``, so the rounding error is at most
@@ -349,7 +439,7 @@ def quantization_error_bound(values: np.ndarray) -> np.ndarray:
     """
     v = as_params(values).astype(np.float64)
     if len(v) == 0:
-        return np.zeros(16)
+        return np.zeros(v.shape[1])
     lo, hi = v.min(axis=0), v.max(axis=0)
     mag = np.maximum(np.abs(lo), np.abs(hi))
     return (hi - lo) / 65535.0 / 2.0 + mag * 2.0**-23
@@ -358,18 +448,19 @@ def quantization_error_bound(values: np.ndarray) -> np.ndarray:
 def quantize_params(values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The uint16 quantization of the binary file form, as arrays.
 
-    values : (n, 16) float — parameters.
-    Returns ``lo`` (16,) float32 (per-column minimum), ``step`` (16,) float32
+    values : (n, 16) or (n, 19) float — parameters (w columns).
+    Returns ``lo`` (w,) float32 (per-column minimum), ``step`` (w,) float32
     (per-column step, ``(max - min) / 65535`` widened by at most one ulp) and
-    ``q`` (n, 16) uint16, so that a value decodes as ``lo + q * step``
+    ``q`` (n, w) uint16, so that a value decodes as ``lo + q * step``
     (:func:`dequantize_params`).  The GPU quantized instance buffer
     (``AxialRenderer(..., quantized=True)``) stores exactly these.
     """
     values = as_params(values)
+    w = values.shape[1]
     table, payload = _quantize(values)
-    raw = _QUANT.unpack(table)
-    q = np.frombuffer(payload, dtype="<u2").reshape(len(values), 16).astype(np.uint16)
-    return np.array(raw[:16], dtype=np.float32), np.array(raw[16:], dtype=np.float32), q
+    raw = _quant_table(w).unpack(table)
+    q = np.frombuffer(payload, dtype="<u2").reshape(len(values), w).astype(np.uint16)
+    return np.array(raw[:w], dtype=np.float32), np.array(raw[w:], dtype=np.float32), q
 
 
 def quantize_with_table(values, lo, step, *, name: str = "update", setter: str = "set()") -> np.ndarray:
@@ -382,8 +473,9 @@ def quantize_with_table(values, lo, step, *, name: str = "update", setter: str =
     to ``setter`` (the call that re-quantizes every instance).
     """
     v = as_params(values).astype(np.float64)
-    lo = np.asarray(lo, dtype=np.float32).reshape(16).astype(np.float64)
-    step = np.asarray(step, dtype=np.float32).reshape(16).astype(np.float64)
+    w = v.shape[1]  # 16, or 19 for extended instances
+    lo = np.asarray(lo, dtype=np.float32).reshape(w).astype(np.float64)
+    step = np.asarray(step, dtype=np.float32).reshape(w).astype(np.float64)
     q = _levels(v, lo, step)
     fits = (q >= 0) & (q <= 65535) & ((step > 0) | (v == lo))
     if not fits.all():
@@ -402,35 +494,43 @@ def _levels(v: np.ndarray, lo: np.ndarray, step: np.ndarray) -> np.ndarray:
 
 
 def dequantize_params(lo, step, q) -> np.ndarray:
-    """``lo + q * step`` per column, computed in float64 and rounded to float32: (n, 16).
+    """``lo + q * step`` per column, computed in float64 and rounded to float32: (n, w).
 
-    lo, step : (16,) float32; q : (n, 16) uint16.  The same decode as a
-    quantized binary file.
+    lo, step : (w,) float32; q : (n, w) uint16, w = 16 or 19.  The same
+    decode as a quantized binary file.
     """
-    lo = np.asarray(lo, dtype=np.float32).reshape(16)
-    step = np.asarray(step, dtype=np.float32).reshape(16)
-    q = np.asarray(q, dtype="<u2").reshape(-1, 16)
-    return _dequantize(_QUANT.pack(*lo.tolist(), *step.tolist()), q.tobytes(), len(q))
+    w = np.size(lo)
+    if w not in WIDTHS:
+        raise ParamError(f"quantization table: expected 16 or 19 columns, found {w}")
+    lo = np.asarray(lo, dtype=np.float32).reshape(w)
+    step = np.asarray(step, dtype=np.float32).reshape(w)
+    q = np.asarray(q, dtype="<u2").reshape(-1, w)
+    return _dequantize(_quant_table(w).pack(*lo.tolist(), *step.tolist()), q.tobytes(), len(q), w)
+
+
+def _quant_table(width: int) -> struct.Struct:
+    return _QUANT_EXT if width == 19 else _QUANT
 
 
 def _quantize(values: np.ndarray) -> tuple[bytes, bytes]:
     v = values.astype(np.float64)
-    lo = v.min(axis=0) if len(v) else np.zeros(16)
-    hi = v.max(axis=0) if len(v) else np.zeros(16)
+    w = v.shape[1]
+    lo = v.min(axis=0) if len(v) else np.zeros(w)
+    hi = v.max(axis=0) if len(v) else np.zeros(w)
     lo32 = lo.astype(np.float32)
     step32 = ((hi - lo.astype(np.float32).astype(np.float64)) / 65535.0).astype(np.float32)
     # a step that rounds to a value whose 65535 multiple falls short of the range is widened by one ulp
     short = lo32.astype(np.float64) + 65535.0 * step32.astype(np.float64) < hi
     step32[short] = np.nextafter(step32[short], np.float32(np.inf))
     q = np.clip(_levels(v, lo32.astype(np.float64), step32.astype(np.float64)), 0, 65535).astype("<u2")
-    return _QUANT.pack(*lo32.tolist(), *step32.tolist()), q.tobytes()
+    return _quant_table(w).pack(*lo32.tolist(), *step32.tolist()), q.tobytes()
 
 
-def _dequantize(table: bytes, payload: bytes, count: int) -> np.ndarray:
-    raw = _QUANT.unpack(table)
-    lo = np.array(raw[:16], dtype=np.float64)
-    step = np.array(raw[16:], dtype=np.float64)
-    q = np.frombuffer(payload, dtype="<u2", count=count * 16).reshape(count, 16).astype(np.float64)
+def _dequantize(table: bytes, payload: bytes, count: int, width: int = 16) -> np.ndarray:
+    raw = _quant_table(width).unpack(table)
+    lo = np.array(raw[:width], dtype=np.float64)
+    step = np.array(raw[width:], dtype=np.float64)
+    q = np.frombuffer(payload, dtype="<u2", count=count * width).reshape(count, width).astype(np.float64)
     with np.errstate(over="ignore", invalid="ignore"):  # a non-finite result is refused by as_params
         return (lo + q * step).astype(np.float32)
 
@@ -442,13 +542,14 @@ def encode_binary(
     mesh_fingerprint: bytes | None = None,
     quantize: bool = False,
 ) -> bytes:
-    """The binary form of ``values`` (see ``docs/parameter-files.md``)."""
+    """The binary form of ``values`` (see ``docs/parameter-files.md``): version 1
+    for 16 numbers per instance (unchanged), version 2 for 19 (extended)."""
     values = as_params(values)
     if mesh_fingerprint is not None and len(mesh_fingerprint) != 32:
         raise ParamError(f"mesh fingerprint: expected 32 bytes, found {len(mesh_fingerprint)}")
     encoding = ENCODING_UINT16 if quantize else ENCODING_FLOAT32
     header = _HEADER.pack(
-        MAGIC, VERSION, encoding, HEADER_SIZE, len(values),
+        MAGIC, VERSION_EXTENDED if values.shape[1] == 19 else VERSION, encoding, HEADER_SIZE, len(values),
         -1 if axis is None else axis.index, 0,
         0.0 if axis is None else axis.lo, 0.0 if axis is None else axis.length,
         mesh_fingerprint or bytes(32),
@@ -457,7 +558,7 @@ def encode_binary(
         table, payload = _quantize(values)
         body = header + table + payload
     else:
-        body = header + values.astype("<f4").tobytes()
+        body = header + values.astype("<f4").tobytes()  # 64 (or 76) bytes per instance
     return body + _TRAILER.pack(zlib.crc32(body))
 
 
@@ -490,10 +591,15 @@ class BinaryHeader:
         return _ENCODINGS[self.encoding][0]
 
     @property
+    def columns(self) -> int:
+        """Numbers per instance: 16 (version 1) or 19 (version 2, extended)."""
+        return _VERSIONS[self.version]
+
+    @property
     def payload_bytes(self) -> int:
         """Bytes of the instance records alone: the file less its header,
         decode table (quantized files) and checksum."""
-        table = _QUANT.size if self.encoding == ENCODING_UINT16 else 0
+        table = _quant_table(self.columns).size if self.encoding == ENCODING_UINT16 else 0
         return self.size - HEADER_SIZE - table - _TRAILER.size
 
 
@@ -520,14 +626,18 @@ def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None 
     magic, version, encoding, header_size, count, axis_index, _res, lo, length, fingerprint = _HEADER.unpack_from(data)
     if magic != MAGIC:
         raise ParamFileError(f"{name}: magic: expected {MAGIC!r}, found {magic!r}")
-    if version != VERSION:
-        raise ParamFileError(f"{name}: version: expected {VERSION}, found {version} (written by a newer axialdeform?)")
+    if version not in _VERSIONS:
+        raise ParamFileError(
+            f"{name}: version: expected {VERSION} (16 numbers) or {VERSION_EXTENDED} (19 numbers), found {version} "
+            "(written by a newer axialdeform?)"
+        )
     if encoding not in _ENCODINGS:
         raise ParamFileError(f"{name}: encoding: expected 0 (float32) or 1 (uint16-quantized), found {encoding}")
     if header_size != HEADER_SIZE:
         raise ParamFileError(f"{name}: header size: expected {HEADER_SIZE}, found {header_size}")
-    record = _ENCODINGS[encoding][1]
-    table = _QUANT.size if encoding == ENCODING_UINT16 else 0
+    width = _VERSIONS[version]
+    record = _ENCODINGS[encoding][1] * width // 16
+    table = _quant_table(width).size if encoding == ENCODING_UINT16 else 0
     expected = HEADER_SIZE + table + count * record + _TRAILER.size  # Python int: no overflow
     if total != expected:
         raise ParamFileError(
@@ -551,7 +661,8 @@ def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
         )
     encoding, count, axis_index, lo, length, fingerprint = h.encoding, h.count, h.axis_index, h.lo, h.length, h.fingerprint
     enc_name = h.encoding_name
-    table = _QUANT.size if encoding == ENCODING_UINT16 else 0
+    width = h.columns
+    table = _quant_table(width).size if encoding == ENCODING_UINT16 else 0
     stored, version = h.stored_crc, h.version
     if axis_index not in (-1, 0, 1, 2):
         raise ParamFileError(f"{name}: axis: expected -1 (not recorded), 0, 1 or 2, found {axis_index}")
@@ -563,9 +674,9 @@ def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
             raise ParamFileError(f"{name}: axis: {exc}") from None
     payload = memoryview(data)[HEADER_SIZE + table : len(data) - _TRAILER.size]
     if encoding == ENCODING_UINT16:
-        values = _dequantize(bytes(data[HEADER_SIZE : HEADER_SIZE + table]), payload, count)
+        values = _dequantize(bytes(data[HEADER_SIZE : HEADER_SIZE + table]), payload, count, width)
     else:
-        values = np.frombuffer(payload, dtype="<f4", count=count * 16).reshape(count, 16).astype(np.float32)
+        values = np.frombuffer(payload, dtype="<f4", count=count * width).reshape(count, width).astype(np.float32)
     values = as_params(values, name=name, error=ParamFileError)
     return ParamFile(
         values=values, format="binary", encoding=enc_name, axis=axis,
@@ -640,7 +751,7 @@ def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
 
 
 def read_params(path: str | os.PathLike, mesh=None, *, allow_mesh_mismatch: bool = False) -> np.ndarray:
-    """Read a parameter file (text or binary) into ``(n, 16) float32``.
+    """Read a parameter file (text or binary) into ``(n, 16) float32`` (``(n, 19)``: extended).
 
     If ``mesh`` is given and the file records the base mesh it was made for,
     a different mesh raises :class:`MeshMismatchError` unless

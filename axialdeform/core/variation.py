@@ -51,8 +51,12 @@ def random_params(
     yaw=(0.0, 2 * math.pi),
     tilt=(-0.25, 0.25),
     height=(0.0, 0.0),
+    scale=None,
+    twist=None,
+    taper=None,
 ) -> np.ndarray:
-    """Random parameters: ``(count, 16) float32``.
+    """Random parameters: ``(count, 16) float32``, or ``(count, 19)`` (extended
+    instances) when any of ``scale``, ``twist``, ``taper`` is given.
 
     mesh : BaseMesh (its axis length ``L`` scales the bend).
     bend : offsets are drawn uniformly in ``±bend·L`` per component, then
@@ -67,6 +71,12 @@ def random_params(
     yaw : range of the angle about the up axis (radians).
     tilt : range of the two other angles (radians).
     height : range of the position along the up axis (grid and disc).
+    scale : ``(min, max)`` with ``0 < min <= max``: uniform scale ``s``, drawn
+        uniformly (a single number: every instance that size).
+    twist : ``max`` radians: ``tw`` uniform in ``[-|max|, |max|]``.
+    taper : ``max`` (< 1): ``tp`` uniform between 0 and ``max``.
+    The first 16 numbers of an instance are the same as without these (the
+    extra numbers come from the same random stream, after the others).
     """
     if not isinstance(count, (int, np.integer)) or count < 0:
         raise ParamError(f"count: expected a non-negative integer, found {count!r}")
@@ -81,6 +91,16 @@ def random_params(
     if not (math.isfinite(spacing) and spacing > 0):
         raise ParamError(f"spacing: expected a finite distance > 0, found {spacing!r}")
     yaw, tilt, height = _range(yaw, "yaw"), _range(tilt, "tilt"), _range(height, "height")
+    extended = any(x is not None for x in (scale, twist, taper))
+    s_lo, s_hi = _range(1.0 if scale is None else scale, "scale")
+    if not s_lo > 0:
+        raise ParamError(f"scale: expected MIN,MAX with 0 < MIN <= MAX, found {scale!r}")
+    tw = 0.0 if twist is None else float(twist)
+    tp = 0.0 if taper is None else float(taper)
+    if not math.isfinite(tw):
+        raise ParamError(f"twist: expected a finite number of radians, found {twist!r}")
+    if not (math.isfinite(tp) and tp < 1):
+        raise ParamError(f"taper: expected a number < 1, found {taper!r}")
     n = int(count)
     u = uniforms(seed, n * 16).reshape(n, 16)  # one row of uniforms per instance
     out = np.zeros((n, 16), dtype=np.float64)
@@ -115,4 +135,12 @@ def random_params(
     angles = tilt[0] + (tilt[1] - tilt[0]) * u[:, ANGLES]
     angles[:, up_i] = yaw[0] + (yaw[1] - yaw[0]) * u[:, 13 + up_i]
     out[:, ANGLES] = angles
-    return as_params(out)
+    if not extended:
+        return as_params(out)
+    extra = uniforms(seed, n * 19)[n * 16 :].reshape(n, 3)  # the same stream, after the 16 numbers a row
+    ext = np.empty((n, 19))
+    ext[:, :16] = out
+    ext[:, 16] = s_lo + (s_hi - s_lo) * extra[:, 0]
+    ext[:, 17] = abs(tw) * (2.0 * extra[:, 1] - 1.0)
+    ext[:, 18] = tp * extra[:, 2]
+    return as_params(ext)

@@ -7,6 +7,8 @@
   uint16 per number plus a per-column ``min``/``step`` table passed as
   uniforms and decoded in the vertex shader, ``AXIAL_QUANTIZED``); replacing
   all of it or a slice writes in place while the count is unchanged.
+  Extended instances (19 numbers: ``s tw tp`` too, ``AXIAL_EXTENDED``) take
+  76 bytes (float32) or 40 (19 uint16 and 2 bytes of padding).
 
 Both hold their ``ctx``; ``release()`` is safe to call twice and nothing is
 released from ``__del__``.
@@ -17,12 +19,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ParamError
-from ..core.params import as_params, dequantize_params, quantize_params, quantize_with_table
+from ..core.params import as_params, dequantize_params, extend_params, quantize_params, quantize_with_table
 from .context import check_alive, check_released
 
 __all__ = [
     "MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES",
     "QUANTIZED_FORMAT", "QUANTIZED_ATTRIBUTES", "QUANTIZED_RECORD_BYTES",
+    "EXTENDED_FORMAT", "EXTENDED_ATTRIBUTES", "EXTENDED_RECORD_BYTES",
+    "QUANTIZED_EXTENDED_FORMAT", "QUANTIZED_EXTENDED_ATTRIBUTES", "QUANTIZED_EXTENDED_RECORD_BYTES",
 ]
 
 #: layout of one instance record in the instanced attribute buffer
@@ -33,6 +37,14 @@ RECORD_BYTES = 64
 QUANTIZED_FORMAT = ("4u2", "4u2", "4u2", "4u2")
 QUANTIZED_ATTRIBUTES = ("i_q0", "i_q1", "i_q2", "i_q3")
 QUANTIZED_RECORD_BYTES = 32
+#: extended instances (19 numbers): ``s tw tp`` follow as one more attribute
+EXTENDED_FORMAT = INSTANCE_FORMAT + ("3f",)
+EXTENDED_ATTRIBUTES = INSTANCE_ATTRIBUTES + ("i_extra",)
+EXTENDED_RECORD_BYTES = 76
+#: 19 uint16 and 2 bytes of padding (attributes stay 4-byte aligned)
+QUANTIZED_EXTENDED_FORMAT = QUANTIZED_FORMAT + ("3u2", "2x")
+QUANTIZED_EXTENDED_ATTRIBUTES = QUANTIZED_ATTRIBUTES + ("i_q4", None)
+QUANTIZED_EXTENDED_RECORD_BYTES = 40
 
 
 def as_index(value, name: str) -> int:
@@ -58,7 +70,9 @@ def _content(buffer, formats, names, program, per_instance=False):
     fmt = []
     used = []
     for f, name in zip(formats, names):
-        if name in program:
+        if name is None:  # padding of the layout itself
+            fmt.append(f)
+        elif name in program:
             fmt.append(f)
             used.append(name)
         else:
@@ -126,16 +140,28 @@ class InstanceBuffer:
     quantization of :func:`axialdeform.core.params.quantize_params`; ``qmin`` and
     ``qstep`` ((16,) float32) are the per-column table the vertex shader
     needs (uniforms ``u_qmin``/``u_qstep``, four ``vec4`` each).
+
+    ``extended`` (default: whether ``params`` has 19 columns) stores the 19
+    numbers of extended instances (76 bytes, or 40 quantized: the extra
+    ``(3,)`` of the table go to ``u_qmin_extra``/``u_qstep_extra``); 16-number
+    parameters written to it get ``s = 1, tw = 0, tp = 0``.
     """
 
-    def __init__(self, ctx, params=None, capacity: int | None = None, *, quantized: bool = False):
+    def __init__(self, ctx, params=None, capacity: int | None = None, *, quantized: bool = False,
+                 extended: bool | None = None):
         check_alive(ctx, "a new InstanceBuffer")
         self.ctx = ctx
         self.quantized = bool(quantized)
-        self.record_bytes = QUANTIZED_RECORD_BYTES if self.quantized else RECORD_BYTES
-        self.qmin = np.zeros(16, dtype=np.float32)
-        self.qstep = np.zeros(16, dtype=np.float32)
         values = as_params(np.zeros((0, 16)) if params is None else params)
+        self.extended = values.shape[1] == 19 if extended is None else bool(extended)
+        self.columns = 19 if self.extended else 16
+        if self.extended:
+            self.record_bytes = QUANTIZED_EXTENDED_RECORD_BYTES if self.quantized else EXTENDED_RECORD_BYTES
+        else:
+            self.record_bytes = QUANTIZED_RECORD_BYTES if self.quantized else RECORD_BYTES
+        self.qmin = np.zeros(self.columns, dtype=np.float32)
+        self.qstep = np.zeros(self.columns, dtype=np.float32)
+        values = self._fit(values)
         self.count = len(values)
         self.capacity = max(int(capacity or 0), self.count, 1)
         self.buffer = ctx.buffer(reserve=self.capacity * self.record_bytes)
@@ -148,24 +174,44 @@ class InstanceBuffer:
         check_released(self._released, "this InstanceBuffer")
         check_alive(self.ctx, "this InstanceBuffer")
 
+    def _fit(self, values: np.ndarray) -> np.ndarray:
+        """``values`` in this buffer's width (16-number ones extended with 1, 0, 0)."""
+        if self.extended:
+            return extend_params(values)
+        if values.shape[1] != 16:
+            raise ParamError(
+                f"parameters: {values.shape[1]} numbers per instance for a buffer of 16; expected (n, 16), "
+                "or a renderer made for extended instances (extended=True)"
+            )
+        return values
+
+    def _pack_q(self, q: np.ndarray) -> bytes:
+        if self.extended:  # two bytes of padding after the 19 uint16
+            q = np.concatenate([q, np.zeros((len(q), 1), dtype=q.dtype)], axis=1)
+        return q.astype("<u2").tobytes()
+
     def _encode_all(self, values: np.ndarray) -> bytes:
         if not self.quantized:
             return values.tobytes()
         self.qmin, self.qstep, q = quantize_params(values)
-        return q.astype("<u2").tobytes()
+        return self._pack_q(q)
 
     def _encode_part(self, values: np.ndarray, setter: str = "set()", name: str = "update") -> bytes:
         """Encode with the current table; values outside its range are refused."""
         if not self.quantized:
             return values.tobytes()
         q = quantize_with_table(values, self.qmin, self.qstep, name=name, setter=setter)
-        return q.astype("<u2").tobytes()
+        return self._pack_q(q)
 
     @property
     def formats(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
         """The attribute formats and names of this buffer's layout."""
         if self.quantized:
+            if self.extended:
+                return QUANTIZED_EXTENDED_FORMAT, QUANTIZED_EXTENDED_ATTRIBUTES
             return QUANTIZED_FORMAT, QUANTIZED_ATTRIBUTES
+        if self.extended:
+            return EXTENDED_FORMAT, EXTENDED_ATTRIBUTES
         return INSTANCE_FORMAT, INSTANCE_ATTRIBUTES
 
     def content(self, program):
@@ -174,7 +220,7 @@ class InstanceBuffer:
     def set(self, params) -> None:
         """Replace every instance; reallocates only if the count outgrows the capacity."""
         self._check()
-        values = as_params(params)
+        values = self._fit(as_params(params))
         if len(values) > self.capacity:
             self.capacity = len(values)
             self.buffer.orphan(self.capacity * self.record_bytes)
@@ -190,7 +236,7 @@ class InstanceBuffer:
         name, setter : how error messages name this call and the one that
         replaces every instance (a wrapper such as ``AxialRenderer`` passes its own)."""
         self._check()
-        values = as_params(params)
+        values = self._fit(as_params(params))
         start = as_index(start, f"{name}: start")
         if start < 0 or start + len(values) > self.count:
             raise ParamError(
@@ -201,15 +247,17 @@ class InstanceBuffer:
             self.buffer.write(self._encode_part(values, setter, name), offset=start * self.record_bytes)
 
     def read(self) -> np.ndarray:
-        """The parameters on the GPU, ``(count, 16) float32`` (decoded if quantized)."""
+        """The parameters on the GPU, ``(count, 16)`` (extended: ``(count, 19)``)
+        float32, decoded if quantized."""
         self._check()
         if self.count == 0:  # moderngl cannot map zero bytes
-            return np.zeros((0, 16), dtype=np.float32)
+            return np.zeros((0, self.columns), dtype=np.float32)
         data = self.buffer.read(size=self.count * self.record_bytes)
+        w = self.columns
         if self.quantized:
-            q = np.frombuffer(data, dtype="<u2").reshape(self.count, 16)
+            q = np.frombuffer(data, dtype="<u2").reshape(self.count, self.record_bytes // 2)[:, :w]
             return dequantize_params(self.qmin, self.qstep, q)
-        return np.frombuffer(data, dtype="f4").reshape(self.count, 16).copy()
+        return np.frombuffer(data, dtype="f4").reshape(self.count, w).copy()
 
     def release(self) -> None:
         if self._released:

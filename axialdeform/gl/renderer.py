@@ -22,11 +22,14 @@ from contextlib import contextmanager
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers, as_index
+from .cull import CullPass
 from .context import bind_framebuffer, check_alive, release_framebuffer, require_framebuffer
-from ..core.errors import ArgumentError, AxialDeformError, ParamError
+from ..core.bounds import base_radius, wind_reach
+from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.arrays import as_array
 from ..core.safeio import require_finite
-from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
+from ..core.wind import Wind
+from .uniforms import camera_matrices, eye_position, set_camera_uniforms, set_uniforms
 from .shaders import build_program
 
 __all__ = ["AxialRenderer", "BakedMeshes", "MODES", "DEFAULT_COLORS"]
@@ -36,6 +39,7 @@ _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
 #: default base colours (linear RGB) by bundled mesh name
 DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
 _CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
+_KEEP = object()  # render(wind=...) not given: keep the renderer's wind
 
 
 class AxialRenderer:
@@ -48,7 +52,8 @@ class AxialRenderer:
     mesh : BaseMesh
         The base mesh.
     params : (n, 16) float32, optional
-        The 16 numbers per instance.
+        The 16 numbers per instance, or (n, 19): extended instances (scale,
+        twist, taper after the 16).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
     bend : bool
@@ -68,14 +73,47 @@ class AxialRenderer:
         draws set ``ctx.front_face`` (``"ccw"``; ``"cw"`` for a mirroring
         camera, such as a reflection pass) and ``ctx.cull_face = "back"``,
         and leave ``CULL_FACE`` disabled afterwards.
+    extended : bool or None
+        Store 19 numbers per instance (``AXIAL_EXTENDED``: 76 bytes, 40
+        quantized).  ``None`` (the default): exactly when ``params`` has 19
+        columns.  An extended renderer takes 16-number parameters too (as
+        ``s = 1, tw = 0, tp = 0``); a 16-number one refuses 19.
+    wind : Wind or None
+        The wind drawn (and captured) from now on; see :attr:`wind` and
+        :attr:`time`.  It moves control points in the vertex shader from
+        uniforms alone: animating it writes no buffer.
+    culling : bool
+        Per-instance frustum culling on the GPU (:mod:`axialdeform.gl.cull`):
+        a transform-feedback pass keeps only the instances whose bounding
+        sphere reaches the view, and the draw reads those.  On by default: it
+        cannot change the picture (an instance is dropped only when every one
+        of its vertices lies outside one frustum plane).
+    lod : bool
+        Draw each instance with one of up to four levels of detail of the
+        base mesh (:func:`axialdeform.core.lod.build_lod_levels`), the
+        coarsest whose geometric error projects to at most ``lod_error``
+        pixels; one draw per level (plain switches, no dithering).  Changes
+        pixels, so off by default.
+    lod_error : float
+        Allowed screen-space error of a level in pixels (> 0; default 1).
+
+    :attr:`stats` describes the last :meth:`render`: instances submitted,
+    visible (drawn), per LOD level, and vertices processed.
     """
 
     def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
-                 quantized: bool = False, cull_back_faces: bool | None = None):
+                 quantized: bool = False, cull_back_faces: bool | None = None, extended: bool | None = None,
+                 wind: Wind | None = None, culling: bool = True, lod: bool = False, lod_error: float = 1.0):
         check_alive(ctx, "a new AxialRenderer")
+        from ..core.lod import LodLevel, build_lod_levels, check_lod_error
+
         self.ctx = ctx
         self.mesh = mesh
         self.bend = bend
+        self.culling_enabled = bool(culling)
+        self.lod = bool(lod)
+        self.lod_error = check_lod_error(lod_error)
+        self.stats: dict = {}
         self.cull_back_faces = bool(mesh.is_volume) if cull_back_faces is None else bool(cull_back_faces)
         self.quantized = bool(quantized)
         self._released = False
@@ -83,20 +121,35 @@ class AxialRenderer:
         defines = {} if bend else {"AXIAL_NO_BEND": 1}
         if self.quantized:
             defines["AXIAL_QUANTIZED"] = 1
+        if extended is None:
+            extended = params is not None and np.shape(params)[-1] == 19
+        self.extended = bool(extended)
+        if self.extended:
+            defines["AXIAL_EXTENDED"] = 1
         self._defines = defines
+        #: the wind (:class:`axialdeform.Wind`) or None (still); set it any time
+        self.wind = wind
+        #: seconds: the time the wind is drawn at (``render(time=...)`` sets it)
+        self.time = 0.0
         try:
             self.program = build_program(ctx, "scene.vert", "scene.frag", defines=defines)
             self._objects.append(self.program)
             self.mesh_buffers = MeshBuffers(ctx, mesh)
-            self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized)
+            self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized, extended=self.extended)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
             self._vao_edges = None  # built by the first wireframe draw (lazy edges)
+            #: the levels of detail (level 0 is the base mesh itself)
+            self.lod_levels = build_lod_levels(mesh) if self.lod else [LodLevel(mesh.positions, mesh.normals, mesh.faces, 0.0)]
+            self._level_buffers = [self.mesh_buffers] + [MeshBuffers(ctx, level) for level in self.lod_levels[1:]]
         except BaseException:
             self.release()
             raise
         self._capture = None  # (program, vao, scratch instances, output) built on first capture
         self._tint = None  # (program, triangles vao, edges vao, buffer) built by the first set_tint
         self._tint_count = None  # colours in the tint buffer; None: tint off
+        self._culled = {}  # tinted -> (CullPass, draw program, [(triangles vao, edges vao) per level])
+        #: bounding-sphere radius about ``mesh.axis.center`` covering every LOD level
+        self.bound_radius = base_radius(mesh, *[level.positions for level in self.lod_levels[1:]])
         self._set_axis_uniforms(self.program)
         self.color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
         self.line_color = (0.12, 0.14, 0.18)
@@ -121,14 +174,33 @@ class AxialRenderer:
 
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
-        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length})
+        i, j = axis.perpendicular
+        center = (axis.center[i], axis.center[j])
+        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length, "u_center": center,
+                               "u_instance_base": 0, "u_wind_strength": 0.0})
         self._set_quant_uniforms(program)
+
+    def _set_wind_uniforms(self, program, wind, time) -> None:
+        """The wind's uniforms (strength 0: still); no buffer is written."""
+        if "u_wind_strength" not in program:  # the linker removed it: no bend (AXIAL_NO_BEND)
+            return
+        if wind is not None and not isinstance(wind, Wind):
+            raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
+        if wind is None or wind.strength == 0:
+            program["u_wind_strength"].value = 0.0
+            return
+        set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),
+                               "u_wind_gust": float(wind.gustiness), "u_wind_cycles": tuple(wind.cycles(time)),
+                               "u_wind_wavenumber": float(wind.wavenumber)})
 
     def _set_quant_uniforms(self, program) -> None:
         """The per-column decode table of a quantized instance buffer (no-op otherwise)."""
         if "u_qmin" in program:
-            program["u_qmin"].write(self.instances.qmin.astype("f4").tobytes())
-            program["u_qstep"].write(self.instances.qstep.astype("f4").tobytes())
+            program["u_qmin"].write(self.instances.qmin[:16].astype("f4").tobytes())
+            program["u_qstep"].write(self.instances.qstep[:16].astype("f4").tobytes())
+        if "u_qmin_extra" in program:
+            program["u_qmin_extra"].value = tuple(float(x) for x in self.instances.qmin[16:19])
+            program["u_qstep_extra"].value = tuple(float(x) for x in self.instances.qstep[16:19])
 
     def _refresh_quant_uniforms(self) -> None:
         if not self.quantized:
@@ -203,12 +275,16 @@ class AxialRenderer:
 
     # ------------------------------------------------------------ drawing
     def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
-               color=None, line_color=None, ambient: float = 0.35) -> None:
+               color=None, line_color=None, ambient: float = 0.35, time: float | None = None,
+               wind=_KEEP) -> None:
         """Draw every instance into the currently bound framebuffer, in one draw call.
 
         view, projection : (4, 4) pyrr-layout matrices.
         mode : ``"solid"`` (analytic normals), ``"flat"`` (face normals of the
         deformed triangles) or ``"wireframe"`` (the mesh's edges as lines).
+        time : seconds; sets :attr:`time` (the wind's clock).
+        wind : a :class:`axialdeform.Wind` or None; sets :attr:`wind`.
+        Animating the wind sets uniforms only: no buffer is written.
         """
         import moderngl
 
@@ -223,7 +299,12 @@ class AxialRenderer:
                              "call set_tint with one colour per instance (or None)")
         prog = self._tint[0] if tinted else self.program
         vao_triangles = self._tint[1] if tinted else self._vao_triangles
+        if time is not None:
+            self.time = float(time)
+        if wind is not _KEEP:
+            self.wind = wind
         set_camera_uniforms(prog, view, projection)
+        self._set_wind_uniforms(prog, self.wind, self.time)
         set_uniforms(prog, {
             "u_mode": _MODE_INDEX[mode],
             "u_color": tuple(color or self.color),
@@ -232,15 +313,88 @@ class AxialRenderer:
             "u_up": tuple(_unit(up, "up")),
             "u_ambient": float(ambient),
         })
-        if self.count == 0:
+        n = self.count
+        self.stats = {"submitted": n, "visible": n, "levels": [n], "vertices": n * self.mesh.vertex_count,
+                      "culling": False, "lod": False}
+        if n == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
+        if self.culling_enabled or self.lod:
+            try:
+                state = self._culled_state(tinted)
+            except ShaderError as exc:  # a driver that cannot build the pass: plain drawing, same picture
+                import warnings
+
+                warnings.warn(f"culling/LOD pass unavailable, drawing every instance: {exc}", RuntimeWarning, stacklevel=2)
+                self.culling_enabled = self.lod = False
+            else:
+                self._render_culled(state, view, projection, mode, prog)
+                return
         if mode == "wireframe":  # lines are never culled
             vao_edges = self._edges_vao(tinted)
-            vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=self.count)
+            vao_edges.render(moderngl.LINES, vertices=self.mesh_buffers.edge_indices, instances=n)
             return
         with self.culling(view, projection):
-            vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=self.count)
+            vao_triangles.render(moderngl.TRIANGLES, vertices=self.mesh_buffers.triangle_indices, instances=n)
+
+    def _culled_state(self, tinted: bool):
+        """The cull pass and the draw program/VAOs reading its output (built on first use)."""
+        state = self._culled.get(tinted)
+        if state is None:
+            tint = (self._tint[3], "3f", "i_tint") if tinted else None
+            cull = CullPass(self.ctx, self.instances, self._defines, tint=tint)
+            self._objects.append(cull)
+            defines = {**self._defines, "AXIAL_CULLED": 1, **({"AXIAL_TINT": 1} if tinted else {})}
+            prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
+            self._objects.append(prog)
+            self._set_axis_uniforms(prog)
+            vaos = []
+            for mb in self._level_buffers:  # edges VAOs: built by the first wireframe draw (lazy edges)
+                vao = self.ctx.vertex_array(prog, [mb.content(prog)], index_buffer=mb.triangles, index_element_size=4)
+                self._objects.append(vao)
+                vaos.append([vao, None])
+            state = self._culled[tinted] = (cull, prog, vaos)
+        return state
+
+    def _render_culled(self, state, view, projection, mode, plain_prog) -> None:
+        import moderngl
+
+        cull, prog, vaos = state
+        if self.quantized:
+            self._set_quant_uniforms(prog)
+        for name in ("u_view", "u_proj", "u_mode", "u_color", "u_line_color", "u_light_dir", "u_up", "u_eye", "u_ambient"):
+            if name in prog and name in plain_prog:
+                prog[name].write(plain_prog[name].read())
+        self._set_wind_uniforms(prog, self.wind, self.time)
+        eye = eye_position(view)
+        height = float(self.ctx.viewport[3]) if self.ctx.viewport else 1.0
+        ortho = abs(float(projection[3, 3]) - 1.0) < 1e-9  # pyrr layout: w = 1 for orthographic
+        levels = len(self.lod_levels) if self.lod else 1
+        counts = cull.run(self.count, levels, view, projection, frustum=self.culling_enabled,
+                          center=self.mesh.axis.center, radius=self.bound_radius,
+                          lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye,
+                          px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho, lod_px=self.lod_error,
+                          wind_reach=wind_reach(self.mesh, self.wind if self.bend else None),
+                          prepare=self._set_quant_uniforms)
+        self.stats.update(visible=int(sum(counts)), levels=counts, culling=self.culling_enabled, lod=self.lod,
+                          vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(counts))))
+        first = 0
+        for level, kept in enumerate(counts):
+            if kept:
+                vao_triangles, vao_edges = vaos[level]
+                mb = self._level_buffers[level]
+                if mode == "wireframe":
+                    if vao_edges is None:
+                        vao_edges = vaos[level][1] = self.ctx.vertex_array(
+                            prog, [mb.content(prog)], index_buffer=mb.edges, index_element_size=4)
+                        self._objects.append(vao_edges)
+                    cull.bind_records(vao_edges, prog, first)
+                    vao_edges.render(moderngl.LINES, vertices=mb.edge_indices, instances=kept)
+                else:
+                    cull.bind_records(vao_triangles, prog, first)
+                    with self.culling(view, projection):
+                        vao_triangles.render(moderngl.TRIANGLES, vertices=mb.triangle_indices, instances=kept)
+            first += kept
 
     @contextmanager
     def culling(self, view=None, projection=None):
@@ -266,8 +420,8 @@ class AxialRenderer:
             self.ctx.disable(moderngl.CULL_FACE)
 
     # ------------------------------------------------------------ capture
-    def capture(self, start: int = 0, count: int | None = None, progress=None, *,
-                check_finite: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    def capture(self, start: int = 0, count: int | None = None, progress=None, *, time: float | None = None,
+                wind=_KEEP, check_finite: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """World positions and normals as the GPU computes them, by transform
         feedback of the drawing vertex shader.
 
@@ -276,6 +430,7 @@ class AxialRenderer:
         Returns two ``(count, vertices, 3) float32`` arrays in the base mesh's
         vertex order, for instances ``start .. start + count - 1``.
         ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
+        ``time``, ``wind``: as :meth:`render` (default: the renderer's own).
         """
         import moderngl
 
@@ -292,7 +447,7 @@ class AxialRenderer:
             prog = build_program(self.ctx, "scene.vert", defines=dict(self._defines),
                                  varyings=("v_world", "v_normal"))
             self._set_axis_uniforms(prog)
-            scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized)
+            scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized, extended=self.extended)
             vao = self.ctx.vertex_array(prog, [self.mesh_buffers.content(prog), scratch.content(prog)])
             output = self.ctx.buffer(reserve=chunk * per_instance)
             # a draw needs a complete framebuffer even with rasterization
@@ -301,6 +456,7 @@ class AxialRenderer:
             fbo = self.ctx.framebuffer(color)
             self._capture = (prog, vao, scratch, output, fbo, color)
         prog, vao, scratch, output, fbo, _ = self._capture
+        self._set_wind_uniforms(prog, self.wind if wind is _KEEP else wind, self.time if time is None else float(time))
         out = np.empty((count, v, 6), dtype=np.float32)
         previous = self.ctx.fbo
         fbo.use()
@@ -310,6 +466,8 @@ class AxialRenderer:
                 rec = self.instances.record_bytes
                 self.ctx.copy_buffer(scratch.buffer, self.instances.buffer, size=k * rec, read_offset=(start + a) * rec)
                 scratch.count = k
+                if "u_instance_base" in prog:  # the wind's per-instance phase follows the instance's index
+                    prog["u_instance_base"].value = start + a
                 vao.transform(output, mode=moderngl.POINTS, vertices=v, instances=k)
                 out[a : a + k] = np.frombuffer(output.read(size=k * per_instance), dtype="f4").reshape(k, v, 6)
                 if progress is not None:
@@ -341,6 +499,8 @@ class AxialRenderer:
         for obj in reversed(self._objects):
             obj.release()
         self._objects.clear()
+        for mb in getattr(self, "_level_buffers", [])[1:]:
+            mb.release()
         for holder in ("mesh_buffers", "instances"):
             if hasattr(self, holder):
                 getattr(self, holder).release()

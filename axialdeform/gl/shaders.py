@@ -139,11 +139,11 @@ def _translate_log(log: str, stages: dict[str, Assembled]) -> str:
 
 
 def build_program(ctx, vertex: str, fragment: str | None = None, *, defines: dict | None = None, varyings=(),
-                  loader=None):
+                  loader=None, geometry: str | None = None):
     """Compile and link a program from files of ``glsl/``.
 
     ``loader(name) -> str`` replaces :func:`shader_source` (your own files,
-    tests).  Raises :class:`ShaderError` whose message names the file, the
+    tests).  ``geometry`` names an optional geometry shader file.  Raises :class:`ShaderError` whose message names the file, the
     stage and the line of each compiler error.
     """
     import moderngl
@@ -152,7 +152,9 @@ def build_program(ctx, vertex: str, fragment: str | None = None, *, defines: dic
     stages = {"vertex_shader": assemble(vertex, defines, loader=loader)}
     if fragment is not None:
         stages["fragment_shader"] = assemble(fragment, defines, loader=loader)
+    if geometry is not None:
+        stages["geometry_shader"] = assemble(geometry, defines, loader=loader)
     try:
         return ctx.program(**{k: v.source for k, v in stages.items()}, varyings=list(varyings))
     except moderngl.Error as exc:
-        raise ShaderError(f"GLSL {vertex}{' + ' + fragment if fragment else ''} failed: {_translate_log(str(exc), stages)}") from None
+        raise ShaderError(f"GLSL {' + '.join(x for x in (vertex, geometry, fragment) if x)} failed: {_translate_log(str(exc), stages)}") from None

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..core.arrays import as_array
 
-__all__ = ["camera_matrices", "set_uniforms", "set_camera_uniforms"]
+__all__ = ["camera_matrices", "eye_position", "set_uniforms", "set_camera_uniforms"]
 
 
 def camera_matrices(view, projection) -> tuple[np.ndarray, np.ndarray]:
@@ -42,10 +42,15 @@ def set_uniforms(program, values: dict) -> None:
             program[name].value = value
 
 
+def eye_position(view) -> np.ndarray:
+    """The camera's world position ``(3,) float64`` from a pyrr-layout view matrix."""
+    return np.linalg.inv(np.asarray(view, dtype=np.float64).reshape(4, 4))[3, :3]  # pyrr layout: translation is the last row
+
+
 def set_camera_uniforms(program, view, projection) -> tuple[np.ndarray, np.ndarray]:
     """``u_view``, ``u_proj`` and ``u_eye`` (the eye's world position, from
     the inverse view matrix).  Returns the checked ``(view, projection)``."""
     view, projection = camera_matrices(view, projection)
-    eye = np.linalg.inv(view.astype(np.float64))[3, :3]  # pyrr layout: the translation is the last row
+    eye = eye_position(view)
     set_uniforms(program, {"u_view": view, "u_proj": projection, "u_eye": tuple(eye)})
     return view, projection

@@ -1,0 +1,93 @@
+"""``axialdeform scatter SURFACE MESH -n N -o OUT``: instances on a terrain.
+
+SURFACE is a mesh file or a grey height-map image; see
+:mod:`axialdeform.core.scatter` for the method.  When fewer than N fit, the
+ones that fit are written, the count is said on stderr and the status is 2
+(0 with ``--allow-fewer``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["add_parser", "run"]
+
+
+def _scale_range(text: str) -> tuple[float, float]:
+    try:
+        parts = [float(x) for x in text.split(":")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected MIN:MAX (0 < MIN <= MAX), found {text!r}") from None
+    if len(parts) == 1:
+        parts = parts * 2
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"expected MIN:MAX (0 < MIN <= MAX), found {text!r}")
+    return parts[0], parts[1]
+
+
+def _extent(text: str) -> tuple[float, ...]:
+    try:
+        parts = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected W or W,D (world units > 0), found {text!r}") from None
+    if len(parts) not in (1, 2):
+        raise argparse.ArgumentTypeError(f"expected W or W,D (world units > 0), found {text!r}")
+    return parts
+
+
+def add_parser(subparsers) -> None:
+    from ..core.scatter import ANCHORS
+
+    s = subparsers.add_parser("scatter", help="place instances on a terrain (mesh or height map)", description=(
+        "Place N instances of MESH on SURFACE (a mesh file, or a grey height-map image): area-uniform on the "
+        "faces that face up, at least --min-distance apart, following a --density image (columns along +x, rows "
+        "along +z, top row at the smallest z; black none, white full). Writes a parameter file (16 numbers per "
+        "instance, 19 with --scale)."))
+    s.add_argument("surface", metavar="SURFACE", help="terrain: a mesh file, or a grey height-map image")
+    s.add_argument("mesh", metavar="MESH", help="base mesh file, or 'stone' / 'leaf'")
+    s.add_argument("-n", "--count", type=int, required=True, help="how many instances (required)")
+    s.add_argument("-o", "--output", required=True, help="parameter file (.adp binary; .txt/.csv/.dat text; required)")
+    s.add_argument("--min-distance", type=float, default=None, metavar="D", help="least distance between instances (default: none)")
+    s.add_argument("--density", default=None, metavar="IMAGE", help="grey density map over the surface's bounding box (default: uniform)")
+    s.add_argument("--align-to-normal", type=float, default=0.0, metavar="F",
+                   help="tilt the up axis towards the surface normal by F in [0, 1] (default: 0, upright)")
+    s.add_argument("--anchor", choices=ANCHORS, default="bottom",
+                   help="point of MESH on the surface (default: %(default)s)")
+    s.add_argument("--scale", type=_scale_range, default=None, metavar="MIN:MAX", help="random uniform scale, 19 numbers an instance (default: none, 16 numbers)")
+    s.add_argument("--bend", type=float, default=0.08, metavar="B",
+                   help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
+    s.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
+    s.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
+    s.add_argument("--height-scale", type=float, default=1.0, metavar="H",
+                   help="height-map SURFACE: height of a white pixel (default: %(default)s)")
+    s.add_argument("--extent", type=_extent, default=None, metavar="W[,D]",
+                   help="height-map SURFACE: size along x (and z); default one unit per pixel")
+    s.add_argument("--allow-fewer", action="store_true", help="exit 0 when fewer than N fit (default: exit 2)")
+    s.add_argument("--quantize", action="store_true", help="write the compact quantized form, binary only (default: float32)")
+    s.set_defaults(handler=run)
+
+
+def run(args) -> int | None:
+    from ..core.errors import TooFewError
+    from ..core.mesh import load_mesh
+    from ..core.params import write_params
+    from ..core.scatter import scatter
+
+    mesh = load_mesh(args.mesh)
+    try:
+        params = scatter(args.surface, mesh, args.count, min_distance=args.min_distance, density=args.density,
+                         align_to_normal=args.align_to_normal, anchor=args.anchor, scale=args.scale,
+                         bend=args.bend, seed=args.seed, up=args.up, height_scale=args.height_scale,
+                         extent=args.extent, allow_fewer=args.allow_fewer)
+        short = None
+    except TooFewError as exc:
+        params, short = exc.params, exc
+    path = write_params(args.output, params, mesh, quantize=args.quantize)
+    print(f"wrote {path} ({len(params)} instances, {params.shape[1]} numbers each, {path.stat().st_size} bytes)")
+    if short is not None:
+        print(f"axialdeform scatter: error: {short}", file=sys.stderr)
+        return 2
+    if len(params) < args.count:
+        print(f"axialdeform scatter: only {len(params)} of {args.count} instances fit (--allow-fewer)", file=sys.stderr)
+    return None

@@ -1,0 +1,103 @@
+"""Scene files on the command line: ``render``, ``bake``, ``export`` and
+``view`` take ``SCENE.toml`` where they take ``MESH PARAMS``.  Each command
+calls :func:`scene_of` first and hands a scene to the matching function here."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..core.errors import AxialDeformError
+
+__all__ = ["scene_of", "render", "bake", "export", "viewer_inputs"]
+
+
+def scene_of(args, *, params_optional: bool = False):
+    """The loaded scene when ``args.mesh`` is a scene file (and PARAMS is left out), else None.
+
+    A MESH without PARAMS is an error unless ``params_optional`` (``view``: random parameters).
+    """
+    from ..core.scene import is_scene_file, load_scene
+
+    if not is_scene_file(args.mesh):
+        if args.params is None and not params_optional:
+            raise AxialDeformError(f"PARAMS: expected a parameter file after MESH {args.mesh} (or a scene file .toml as MESH)")
+        return None
+    if args.params is not None:
+        raise AxialDeformError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
+    return load_scene(args.mesh)
+
+
+def _time(scene, args) -> float:
+    """``--time`` for a scene: it moves the scene's wind, so a scene without one refuses it."""
+    t = getattr(args, "time", None)
+    if t is None:
+        return 0.0
+    if scene.wind is None:
+        from ..core.errors import ParamError
+
+        raise ParamError(f"--time: {scene.path} has no [wind] and no --wind is given; expected a wind for the time to move")
+    return float(t)
+
+
+def render(scene, args, wind=None) -> None:
+    """``render SCENE -o OUT.png``; ``--wind`` replaces the scene's [wind]."""
+    from ..gl.image import parse_size, save_png
+    from ..gl.scene import render_scene
+
+    if wind is not None:
+        scene.wind = wind
+    image = render_scene(scene, parse_size(args.size), args.mode, time=_time(scene, args))
+    save_png(args.output, image)
+    print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
+          f"{image.shape[1]}x{image.shape[0]})")
+
+
+def bake(scene, args, progress, wind=None) -> None:
+    """``bake SCENE -o OUT.npz``: arrays ``positions_LAYER`` and ``normals_LAYER``."""
+    from ..core.bake import write_scene_npz
+    from ..gl.bake import bake as bake_layer
+
+    out = Path(args.output)
+    if out.suffix.lower() != ".npz":
+        raise AxialDeformError(f"{out}: a scene bakes to one .npz (arrays positions_LAYER, normals_LAYER); "
+                               f"expected a .npz file name")
+    if wind is not None:
+        scene.wind = wind
+    t = _time(scene, args)
+    baked = {}
+    for layer in scene.layers:
+        with progress(len(layer.params), f"{layer.name} ({args.engine})") as bar:
+            baked[layer.name] = bake_layer(layer.mesh, layer.params, args.engine, progress=bar,
+                                           wind=scene.wind if layer.wind else None, time=t)
+    write_scene_npz(out, baked)
+    print(f"wrote {out}: {', '.join(f'{k} {v[0].shape}' for k, v in baked.items())} float32 ({args.engine})")
+
+
+def export(scene, args) -> None:
+    """``export SCENE -o OUT.glb``: one mesh per layer (baked) and the terrain."""
+    from ..core.errors import GltfError
+    from ..core.export import export_scene
+
+    if args.layout != "baked":
+        raise GltfError("--instanced: a scene exports baked (one mesh per layer); expected --baked or no layout flag")
+    path = export_scene(args.output, scene)
+    print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, baked, {path.stat().st_size} bytes)")
+
+
+def viewer_inputs(scene, wind=None):
+    """``(mesh, params, wind, extra)`` for the viewer: the first layer is the
+    viewer's own (N and UP/DOWN act on it); the other layers and the terrain
+    are drawn with it."""
+    from dataclasses import replace
+
+    if not scene.layers:
+        raise AxialDeformError(f"{scene.path}: the scene has no layer; expected at least one [[layer]]")
+    first = scene.layers[0]
+    if wind is not None:
+        scene.wind = wind
+    return first.mesh, first.params, (scene.wind if first.wind else None), replace(scene, layers=scene.layers[1:])
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit("use: axialdeform render|bake|export|view SCENE.toml")

@@ -1,0 +1,69 @@
+"""``axialdeform web``: the scene as a WebGL 2 page (three.js), and ``--serve``."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from urllib.parse import quote
+
+from ..core.errors import AxialDeformError
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(subparsers) -> None:
+    w = subparsers.add_parser("web", help="write the scene as a web page (WebGL 2, three.js)", description=(
+        "Write MESH bent by PARAMS as a page that draws it in a browser with the package's own shader: "
+        "OUT a folder (index.html + files, for a static server) or OUT.html (one self-contained file that "
+        "works opened from disk). --serve serves the folder on 127.0.0.1 and prints the URL."))
+    w.add_argument("mesh", nargs="?", help="base mesh file, or 'stone' / 'leaf' (default: none: serve an exported page)")
+    w.add_argument("params", nargs="?", help="parameter file, .adp or text (default: none: serve an exported page)")
+    w.add_argument("-o", "--output", required=True, help="folder, or a name ending in .html (required)")
+    w.add_argument("--size", default="800x600", help="canvas WIDTHxHEIGHT; the camera is render's at this size (default: %(default)s)")
+    w.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
+    w.add_argument("--mode", choices=("solid", "flat"), default="solid", help="shading (default: %(default)s)")
+    w.add_argument("--float32", action="store_true",
+                   help="ship the float32 records instead of the quantized form (default: quantized)")
+    w.add_argument("--ignore-mesh-mismatch", action="store_true",
+                   help="use PARAMS even if made for another mesh (default: refuse)")
+    w.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C (default: only write)")
+    w.add_argument("--port", type=int, default=8000, help="port for --serve; a busy one is replaced by a free one (default: %(default)s)")
+    w.set_defaults(handler=run)
+
+
+def run(args) -> None:
+    from ..gl.image import parse_size
+    from ..web import build_scene, make_server, write_page
+
+    out = Path(args.output)
+    if (args.mesh is None) != (args.params is None):
+        raise AxialDeformError("web: expected both MESH and PARAMS (or neither, with --serve)")
+    if args.mesh is not None:
+        from ..core.mesh import load_mesh
+        from ..core.params import read_params
+
+        mesh = load_mesh(args.mesh)
+        params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+        scene = build_scene(mesh, params, size=parse_size(args.size), up=args.up, mode=args.mode,
+                            quantize=not args.float32)
+        page = write_page(out, scene)
+        print(f"wrote {page} ({len(params)} instances, {'float32' if args.float32 else 'quantized'} parameters)")
+    elif not args.serve:
+        raise AxialDeformError("web: expected MESH and PARAMS (or --serve to serve an exported page)")
+    else:
+        page = out / "index.html" if out.is_dir() or out.suffix.lower() not in (".html", ".htm") else out
+        if not page.is_file():
+            raise AxialDeformError(f"{page}: no exported page to serve; give MESH and PARAMS to write one")
+    if not args.serve:
+        return
+    server, busy = make_server(page.parent, args.port)
+    port = server.server_address[1]
+    if busy:
+        print(f"port {args.port} is busy; using {port}", file=sys.stderr)
+    print(f"serving {page.parent.resolve()} at http://127.0.0.1:{port}/{quote(page.name)}  (Ctrl-C to stop)", flush=True)
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.server_close()

@@ -1,0 +1,445 @@
+"""Scatter instances ON a surface: area-uniform, with a minimum spacing and a density map.
+
+``scatter(surface, mesh, n, ...)`` returns ``(n, 16) float32`` parameters (or
+``(n, 19)`` with a per-instance scale, the extended layout ``... s tw tp``).
+
+* **Surface**: a mesh file (a terrain), a grey height-map image (Pillow), a
+  ``trimesh.Trimesh``, or a 2-D array of heights in [0, 1].  Only its faces
+  that face up (normal · up > 0) receive instances.
+* **Area-uniform**: candidates are drawn with ``trimesh.sample.sample_surface``
+  weighted by face area.
+* **Minimum spacing D** (Poisson disk): the candidates, in their random order,
+  are kept greedily -- a candidate is kept when no earlier kept one lies within
+  D (3-D distance) -- which is dart throwing.  It is computed without a Python
+  loop per candidate: the conflicting pairs come from a KD-tree
+  (``scipy.spatial.cKDTree.query_pairs``) and the greedy result is found
+  in a few vectorized rounds (a candidate is decided *in* once every earlier
+  neighbour is decided *out*; this gives exactly the sequential result).
+  Rounds of fresh candidates fill the gaps until ``n`` are kept or the
+  surface is full.
+* **Density map**: a grey image over the surface's bounding box: columns along
+  the first ground axis (+x for ``up="y"``), rows along the second (+z), the
+  top row at the smallest coordinate; a candidate survives with probability
+  equal to its pixel's grey level (black = none, white = all).
+* **Anchor**: which point of the base mesh sits on the surface point:
+  ``bottom`` (centre of the bounding-box face at the lowest ``up``
+  coordinate), ``center`` (bounding-box centre) or ``origin`` (the model's
+  origin: ``p`` is exactly the surface point).  The offsets of every instance
+  are shifted (a shift shared by all five control points) so that the axis
+  does not move at the anchor: the bent shape still stands on its point.
+* **Orientation**: a random turn about the up axis, then a tilt of the up
+  axis towards the surface normal by the fraction ``align_to_normal``
+  (``T · Rot(up, φ)``, which is the tilt followed by a turn about the tilted
+  axis: ``Rot(T up, φ) · T``); stored as angles of ``R = Rz·Ry·Rx``
+  (``core.transforms``).
+
+Seeded: one PCG64 stream; the same arguments and seed give the same bytes.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .axis import AXIS_NAMES, PERPENDICULAR
+from .errors import ScatterError, TooFewError
+
+__all__ = ["scatter", "Surface", "load_surface", "load_density", "surface_from_heights", "ANCHORS", "IMAGE_SUFFIXES",
+           "poisson_greedy"]
+
+ANCHORS = ("bottom", "center", "origin")
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm", ".gif", ".webp")
+#: most candidates drawn in one round (bounds memory: about 200 bytes each)
+MAX_CANDIDATES = 4_000_000
+#: most instances one call places (76 bytes each as 19 float32)
+MAX_INSTANCES = 10_000_000
+#: rounds of fresh candidates before giving up on reaching n
+MAX_ROUNDS = 12
+
+
+@dataclass
+class Surface:
+    """A surface to scatter on.
+
+    mesh : trimesh.Trimesh -- every face (world units).
+    up : int -- 0, 1, 2 for x, y, z.
+    name : str -- for messages.
+    upward : (f,) bool -- faces whose normal has a positive ``up`` component.
+    """
+
+    mesh: object
+    up: int
+    name: str
+    upward: np.ndarray
+
+    @property
+    def ground(self) -> tuple[int, int]:
+        """The two other axes in increasing order: density columns, density rows."""
+        return PERPENDICULAR[self.up]
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """(2, 3) float64: the surface's bounding box."""
+        return np.asarray(self.mesh.bounds, dtype=np.float64)
+
+    @property
+    def size(self) -> float:
+        """Largest extent of the bounding box of the upward-facing faces."""
+        tri = self.mesh.triangles[self.upward].reshape(-1, 3)
+        return float((tri.max(axis=0) - tri.min(axis=0)).max())
+
+
+def _up_index(up) -> int:
+    if up not in AXIS_NAMES:
+        raise ScatterError(f"up: expected one of x, y, z, found {up!r}")
+    return AXIS_NAMES.index(up)
+
+
+def _read_grey(path: Path, what: str) -> np.ndarray:
+    """A grey image as float64 in [0, 1], shape (rows, cols)."""
+    from PIL import Image, UnidentifiedImageError
+
+    if not path.exists():
+        raise ScatterError(f"{what} {path}: no such file")
+    try:
+        with Image.open(path) as img:
+            img.load()
+            if img.mode in ("I;16", "I;16B", "I;16L", "I"):
+                grey = np.asarray(img, dtype=np.float64) / 65535.0
+            elif img.mode == "F":
+                grey = np.asarray(img, dtype=np.float64)
+            else:
+                grey = np.asarray(img.convert("L"), dtype=np.float64) / 255.0
+    except (UnidentifiedImageError, OSError, ValueError) as exc:
+        raise ScatterError(f"{what} {path}: could not read the image ({type(exc).__name__}: {exc})") from None
+    return grey
+
+
+def _grid(heights, what: str) -> np.ndarray:
+    h = np.asarray(heights, dtype=np.float64)
+    if h.ndim != 2:
+        raise ScatterError(f"{what}: expected a 2-D grey image, found an array of shape {h.shape}")
+    if not np.isfinite(h).all():
+        raise ScatterError(f"{what}: expected finite grey levels, found a non-finite value")
+    return h
+
+
+def surface_from_heights(heights, *, up: str = "y", height_scale: float = 1.0, extent=None,
+                         name: str = "<height map>") -> "Surface":
+    """A terrain mesh from a height map.
+
+    heights : (rows, cols) float in [0, 1] -- pixel (row, col) is the vertex at
+        ``col`` along the first ground axis (+x for ``up="y"``) and ``row``
+        along the second (+z), the top row at the smallest coordinate; its
+        height along ``up`` is ``value * height_scale``.
+    extent : None, W or (W, D) -- the grid's size along the two ground axes
+        (default: one unit per pixel; with W alone, D keeps the pixels square).
+        The grid is centred on the origin across ``up``.
+    """
+    import trimesh
+
+    h = _grid(heights, name)
+    rows, cols = h.shape
+    if rows < 2 or cols < 2:
+        raise ScatterError(f"{name}: a height map of {cols}x{rows} pixels; expected at least 2x2")
+    if not (math.isfinite(height_scale) and height_scale >= 0):
+        raise ScatterError(f"height-scale: expected a finite number >= 0, found {height_scale!r}")
+    if extent is None:
+        width, depth = float(cols - 1), float(rows - 1)
+    else:
+        ext = [float(extent)] if np.isscalar(extent) else [float(x) for x in extent]
+        if len(ext) not in (1, 2) or not all(math.isfinite(x) and x > 0 for x in ext):
+            raise ScatterError(f"extent: expected W or W,D with finite sizes > 0, found {extent!r}")
+        width = ext[0]
+        depth = ext[1] if len(ext) == 2 else width * (rows - 1) / (cols - 1)
+    u = _up_index(up)
+    g0, g1 = PERPENDICULAR[u]
+    jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
+    verts = np.zeros((rows * cols, 3))
+    verts[:, g0] = (jj.ravel() / (cols - 1) - 0.5) * width
+    verts[:, g1] = (ii.ravel() / (rows - 1) - 0.5) * depth
+    verts[:, u] = h.ravel() * height_scale
+    k = (ii[:-1, :-1] * cols + jj[:-1, :-1]).ravel()
+    faces = np.concatenate([np.stack([k, k + cols, k + 1], axis=1), np.stack([k + 1, k + cols, k + cols + 1], axis=1)])
+    mesh = trimesh.Trimesh(verts, faces, process=False)
+    if mesh.face_normals[:, u].sum() < 0:  # wind the grid so that it faces up
+        mesh = trimesh.Trimesh(verts, faces[:, ::-1], process=False)
+    return _make_surface(mesh, u, name)
+
+
+def _make_surface(mesh, u: int, name: str) -> "Surface":
+    faces = np.asarray(mesh.faces)
+    if len(faces) == 0:
+        raise ScatterError(f"{name}: the surface has no faces; expected a triangle mesh")
+    if not np.isfinite(np.asarray(mesh.vertices)).all():
+        raise ScatterError(f"{name}: the surface has a non-finite vertex; expected finite coordinates")
+    area = np.asarray(mesh.area_faces)
+    upward = (np.asarray(mesh.face_normals)[:, u] > 1e-9) & (area > 0)
+    if not upward.any():
+        raise ScatterError(f"{name}: no face of the surface faces up (+{AXIS_NAMES[u]}); "
+                           f"expected a surface facing up somewhere (or choose --up)")
+    return Surface(mesh=mesh, up=u, name=name, upward=upward)
+
+
+def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=None) -> Surface:
+    """A :class:`Surface` from a mesh file, a height-map image, a ``trimesh.Trimesh``,
+    a :class:`~axialdeform.core.mesh.BaseMesh` or a 2-D height array."""
+    import trimesh
+
+    u = _up_index(up)
+    if isinstance(source, Surface):
+        return source
+    if isinstance(source, trimesh.Trimesh):
+        return _make_surface(source, u, "<surface>")
+    if hasattr(source, "positions") and hasattr(source, "faces"):  # a BaseMesh
+        return _make_surface(trimesh.Trimesh(source.positions, source.faces, process=False), u, source.name)
+    if isinstance(source, (str, os.PathLike)):
+        path = Path(source)
+        if path.suffix.lower() in IMAGE_SUFFIXES:
+            return surface_from_heights(_read_grey(path, "SURFACE"), up=up, height_scale=height_scale,
+                                        extent=extent, name=f"SURFACE {path}")
+        from .errors import MeshError
+        from .mesh import load_mesh
+
+        try:
+            base = load_mesh(path)
+        except MeshError as exc:
+            raise ScatterError(f"SURFACE {exc}") from None
+        return _make_surface(trimesh.Trimesh(base.positions, base.faces, process=False), u, str(path))
+    return surface_from_heights(source, up=up, height_scale=height_scale, extent=extent)
+
+
+def load_density(source, name: str = "<array>") -> np.ndarray:
+    """A density map: (rows, cols) float64 in [0, 1] from an image path or an array."""
+    if isinstance(source, (str, os.PathLike)):
+        name = str(source)
+        grey = _read_grey(Path(source), "density")
+    else:
+        grey = _grid(source, name)
+    if grey.size == 0:
+        raise ScatterError(f"density {name}: the image has no pixels; expected a grey image")
+    if grey.min() < 0 or grey.max() > 1:
+        raise ScatterError(f"density {name}: grey levels must lie in [0, 1], found {grey.min():g}..{grey.max():g}")
+    if not (grey > 0).any():
+        raise ScatterError(f"density {name}: every pixel is black; expected some non-black pixel (black = none, white = full)")
+    return grey
+
+
+def _density_at(grey: np.ndarray, points: np.ndarray, surface: Surface) -> np.ndarray:
+    """Nearest-pixel grey level under each point: (k, 3) -> (k,)."""
+    rows, cols = grey.shape
+    lo, hi = surface.bounds
+    g0, g1 = surface.ground
+    span = np.where(hi - lo > 0, hi - lo, 1.0)
+    c = np.clip(np.floor((points[:, g0] - lo[g0]) / span[g0] * cols), 0, cols - 1).astype(np.int64)
+    r = np.clip(np.floor((points[:, g1] - lo[g1]) / span[g1] * rows), 0, rows - 1).astype(np.int64)
+    return grey[r, c]
+
+
+def poisson_greedy(points: np.ndarray, radius: float, fixed: np.ndarray | None = None) -> np.ndarray:
+    """Greedy dart throwing, vectorized: which of ``points`` to keep.
+
+    points : (k, 3) float64 -- candidates in priority order.
+    fixed : (m, 3) float64 or None -- points already kept (they win over every candidate).
+    Returns (k,) bool: candidate ``i`` is kept iff no point of ``fixed`` and no
+    kept candidate ``j < i`` lies closer than ``radius``.  Same result as the
+    sequential loop; found in rounds over the conflict pairs of a KD-tree.
+    """
+    from scipy.spatial import cKDTree
+
+    k = len(points)
+    alive = np.ones(k, dtype=bool)
+    if k == 0:
+        return alive
+    if fixed is not None and len(fixed):
+        dist, _ = cKDTree(fixed, balanced_tree=False, compact_nodes=False).query(points, k=1, distance_upper_bound=radius)
+        alive = ~(dist < radius)
+    state = np.where(alive, 0, -1).astype(np.int8)  # 0 undecided, 1 kept, -1 dropped
+    idx = np.flatnonzero(alive)
+    pairs = cKDTree(points[idx], balanced_tree=False, compact_nodes=False).query_pairs(radius * (1 - 1e-12), output_type="ndarray")
+    a, b = idx[pairs[:, 0]], idx[pairs[:, 1]]
+    swap = a > b
+    a, b = np.where(swap, b, a), np.where(swap, a, b)  # a < b: a has priority
+    while True:
+        undecided = state == 0
+        if not undecided.any():
+            break
+        live = undecided[a] & undecided[b]
+        a, b = a[live], b[live]
+        blocked = np.zeros(k, dtype=bool)
+        blocked[b] = True
+        new = undecided & ~blocked
+        state[new] = 1
+        state[b[new[a]]] = -1
+        state[a[new[b]]] = -1
+    return state == 1
+
+
+def _rotation_about(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rodrigues: unit axes (k, 3) and angles (k,) -> (k, 3, 3)."""
+    from .transforms import matrices_from_rotation_vectors
+
+    return matrices_from_rotation_vectors(axis * angle[:, None])
+
+
+def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density=None,
+            align_to_normal: float = 0.0, anchor: str = "bottom", scale=None, bend: float = 0.08,
+            seed: int = 0, up: str = "y", height_scale: float = 1.0, extent=None,
+            allow_fewer: bool = False) -> np.ndarray:
+    """Place ``n`` instances of ``mesh`` on ``surface``.
+
+    surface : mesh path, height-map image path, ``trimesh.Trimesh``, BaseMesh or (rows, cols) heights.
+    mesh : BaseMesh, a mesh path or a bundled name (``"stone"``, ``"leaf"``).
+    n : int -- how many instances.
+    min_distance : float or None -- least distance between two instances' surface points.
+    density : image path or (rows, cols) float in [0, 1] over the surface's bounding box, or None.
+    align_to_normal : float in [0, 1] -- 0 upright, 1 along the surface normal.
+    anchor : ``"bottom"``, ``"center"`` or ``"origin"``.
+    scale : None, S or (MIN, MAX) with 0 < MIN <= MAX -- a uniform random scale per
+        instance; given, the result has 19 columns (``s tw tp``, ``tw = tp = 0``).
+    bend : float >= 0 -- control-offset amplitude as a fraction of the axis length L.
+    seed : int >= 0.  up : ``"x"``, ``"y"`` or ``"z"``.
+    height_scale, extent : for a height-map surface (see :func:`surface_from_heights`).
+    allow_fewer : when fewer than ``n`` fit, return them instead of raising.
+
+    Returns (n, 16) or (n, 19) float32.  Raises :class:`TooFewError` (with
+    ``.params``, what fits) when fewer than ``n`` fit and not ``allow_fewer``.
+    """
+    import trimesh
+
+    from .mesh import BaseMesh, load_mesh
+
+    if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
+        raise ScatterError(f"count: expected a whole number >= 0, found {n!r}")
+    n = int(n)
+    if n > MAX_INSTANCES:
+        raise ScatterError(f"count: expected at most {MAX_INSTANCES} instances, found {n}")
+    if not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ScatterError(f"seed: expected a non-negative integer, found {seed!r}")
+    if anchor not in ANCHORS:
+        raise ScatterError(f"anchor: expected one of {', '.join(ANCHORS)}, found {anchor!r}")
+    if not (math.isfinite(align_to_normal) and 0.0 <= align_to_normal <= 1.0):
+        raise ScatterError(f"align-to-normal: expected a fraction in [0, 1], found {align_to_normal!r}")
+    if not (math.isfinite(bend) and bend >= 0):
+        raise ScatterError(f"bend: expected a finite fraction of L >= 0, found {bend!r}")
+    if scale is not None:
+        lo_s, hi_s = (float(scale), float(scale)) if np.isscalar(scale) else (float(scale[0]), float(scale[1]))
+        if not (math.isfinite(lo_s) and math.isfinite(hi_s) and 0 < lo_s <= hi_s):
+            raise ScatterError(f"scale: expected MIN:MAX with 0 < MIN <= MAX, found {lo_s:g}:{hi_s:g}")
+    base = mesh if isinstance(mesh, BaseMesh) else load_mesh(mesh)
+    surf = load_surface(surface, up=up, height_scale=height_scale, extent=extent)
+    grey = None if density is None else load_density(density)
+    if min_distance is not None:
+        size = surf.size
+        if not (math.isfinite(min_distance) and 0 < min_distance <= size):
+            raise ScatterError(f"min-distance: expected a distance > 0 and at most the surface's size "
+                               f"({size:.6g}), found {min_distance!r}")
+
+    rng = np.random.Generator(np.random.PCG64(int(seed)))
+    tm = surf.mesh
+    weights = np.where(surf.upward, np.asarray(tm.area_faces, dtype=np.float64), 0.0)
+    area = float(weights.sum())
+    mean_density = 1.0 if grey is None else max(float(grey.mean()), 1e-3)
+
+    points = np.zeros((0, 3))
+    faces = np.zeros(0, dtype=np.int64)
+    stalled = 0
+    for round_ in range(MAX_ROUNDS):
+        need = n - len(points)
+        if need <= 0:
+            break
+        want = 2 * need
+        if min_distance is not None:
+            # Greedy thinning of lam candidates per D² keeps about 0.5 (1 - exp(-1.5 lam)) per D²
+            # (measured); the first round asks for what should give n with a margin, later rounds
+            # (near the packing limit) cover the whole surface again to fill the gaps left.
+            per_d2 = min(area / min_distance / min_distance, float(MAX_CANDIDATES))  # D² cells in the area
+            full = math.ceil(3.0 * per_d2)
+            if round_ == 0:
+                rho = min(0.95, n / per_d2 / 0.5)
+                lam = -1.3 * math.log1p(-rho) / 1.5
+                want = min(full, max(want, math.ceil(lam * per_d2)))
+            else:
+                want = full
+        count = int(min(MAX_CANDIDATES, math.ceil(want / mean_density) + 16))
+        cand, fidx = trimesh.sample.sample_surface(tm, count, face_weight=weights, seed=rng)
+        cand = np.asarray(cand, dtype=np.float64)
+        if grey is not None:
+            keep = rng.random(count) < _density_at(grey, cand, surf)
+            cand, fidx = cand[keep], fidx[keep]
+        if min_distance is not None:
+            keep = poisson_greedy(cand, float(min_distance), points)
+            cand, fidx = cand[keep], fidx[keep]
+        cand, fidx = cand[:need], fidx[:need]
+        if len(cand) == 0:
+            stalled += 1
+            if stalled >= 2:
+                break
+        else:
+            stalled = 0
+        points = np.concatenate([points, cand])
+        faces = np.concatenate([faces, np.asarray(fidx, dtype=np.int64)])
+
+    if n > 0 and len(points) == 0 and grey is not None:
+        raise ScatterError(f"density: no candidate on the upward-facing part of {surf.name} lies under a "
+                           f"non-black pixel; expected white where instances may go (columns along "
+                           f"+{AXIS_NAMES[surf.ground[0]]}, rows along +{AXIS_NAMES[surf.ground[1]]})")
+    params = _instances(base, points, np.asarray(tm.face_normals, dtype=np.float64)[faces], surf.up, rng,
+                        align_to_normal=align_to_normal, anchor=anchor,
+                        scale=None if scale is None else (lo_s, hi_s), bend=bend)
+    if len(params) < n and not allow_fewer:
+        why = f" at spacing {min_distance:g}" if min_distance is not None else ""
+        raise TooFewError(f"count: only {len(params)} of {n} instances fit on {surf.name}{why}; "
+                          f"expected room for {n} (lower -n or --min-distance, or pass --allow-fewer)", params)
+    return params
+
+
+def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, scale, bend) -> np.ndarray:
+    """Parameters for instances standing on ``points`` (k, 3) with surface ``normals`` (k, 3)."""
+    from .deform import bernstein
+    from .transforms import angles_from_matrices
+
+    k = len(points)
+    cols = 16 if scale is None else 19
+    rolls = rng.random((k, 12))
+    axis = base.axis
+    length = axis.length
+    offsets = ((2.0 * rolls[:, :10] - 1.0) * bend * length).reshape(k, 5, 2)
+
+    lo, hi = base.positions.min(axis=0), base.positions.max(axis=0)
+    if anchor == "origin":
+        a = np.zeros(3)
+    else:
+        a = (lo + hi) / 2
+        if anchor == "bottom":
+            a[u] = lo[u]
+    # pin the axis at the anchor: subtract D(t_anchor) from all five offsets
+    t_a = float(axis.parameter(a[None, :])[0])
+    offsets -= np.einsum("i,kic->kc", bernstein(np.array(t_a), 4), offsets)[:, None, :]
+
+    e_up = np.zeros(3)
+    e_up[u] = 1.0
+    yaw = 2 * math.pi * rolls[:, 10]
+    turn = _rotation_about(np.broadcast_to(e_up, (k, 3)), yaw)
+    nrm = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    cross = np.cross(np.broadcast_to(e_up, (k, 3)), nrm)
+    sin = np.linalg.norm(cross, axis=1)
+    angle = np.arctan2(sin, nrm[:, u]) * align_to_normal
+    tilt_axis = np.where(sin[:, None] > 1e-12, cross / np.where(sin > 1e-12, sin, 1.0)[:, None], 0.0)
+    rot = _rotation_about(tilt_axis, angle) @ turn
+
+    s = np.ones(k) if scale is None else scale[0] + (scale[1] - scale[0]) * rolls[:, 11]
+    out = np.zeros((k, cols), dtype=np.float64)
+    out[:, 0:10] = offsets.reshape(k, 10)
+    out[:, 10:13] = points - s[:, None] * (rot @ a)
+    out[:, 13:16] = angles_from_matrices(rot)
+    if cols == 19:
+        out[:, 16] = s
+    out = np.ascontiguousarray(out, dtype=np.float32)
+    if not np.isfinite(out).all():
+        raise ScatterError("scatter: a parameter came out non-finite; expected finite surface and mesh coordinates")
+    return out

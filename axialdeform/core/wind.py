@@ -1,0 +1,152 @@
+"""Wind: the CPU reference of ``glsl/wind.glsl`` (see ``docs/wind.md``).
+
+The wind moves each instance's control points, never its vertices directly,
+so the exact normals of the deformation still hold.  It is a function of the
+instance (its index, position and angles), the base mesh's axis and a few
+numbers that are uniforms on the GPU: direction, strength, gustiness,
+frequency, gust wavelength and the time.  Nothing per instance is uploaded
+per frame.
+
+For instance ``i`` at time ``T``::
+
+    h    = (pcg(i) >> 8) / 2**24                    # per-instance phase, bit-exact on CPU and GPU
+    ph   = h - dot(p, dir) / wavelength             # gust fronts travel along dir (no term if wavelength = 0)
+    wave = 0.6 sin(2π (c1 + ph)) + 0.4 sin(2π (c2 + 1.7 ph)),  c1 = frac(f T), c2 = frac(2.31 f T)
+    amp  = strength · L · (1 + gustiness · wave)    # tip displacement, model units
+    u    = amp · (Rᵀ dir) across the axis           # the wind in the instance's own frame
+    d_k += c_k · u,  c = (0, 0, 1/6, 1/2, 1)        # the control polygon of D(t) = t²
+
+``P1`` and ``P2`` do not move, so the base point and the base tangent stay;
+the tip moves by ``u``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .axis import ControlAxis
+from .transforms import rotation_matrices
+from .errors import ParamError
+from .params import ANGLES, OFFSETS, POSITION, as_params
+
+__all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "wind_offsets", "apply_wind"]
+
+#: how much of the tip displacement each control point P1..P5 gets (D(t) = t²)
+WIND_WEIGHTS = np.array([0.0, 0.0, 1.0 / 6.0, 0.5, 1.0])
+#: frequency ratio of the second sine of the gust wave
+SECOND_HARMONIC = 2.31
+
+
+@dataclass(frozen=True)
+class Wind:
+    """A wind, the same on CPU and GPU.
+
+    direction : (3,) world direction (normalized on creation).
+    strength : tip displacement as a fraction of the axis length ``L`` (>= 0).
+    gustiness : how much the displacement swings around its mean (>= 0; 0 = a steady lean).
+    frequency : gust cycles per second (>= 0).
+    wavelength : distance between gust fronts in world units (> 0), or 0 for none.
+    """
+
+    direction: tuple = (1.0, 0.0, 0.0)
+    strength: float = 0.15
+    gustiness: float = 0.6
+    frequency: float = 0.5
+    wavelength: float = 0.0
+    _unit: tuple = field(default=(1.0, 0.0, 0.0), init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        try:
+            d = np.asarray(self.direction, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            d = np.zeros(0)
+        norm = float(np.linalg.norm(d)) if d.size == 3 and np.isfinite(d).all() else 0.0
+        if not norm > 0:
+            raise ParamError(f"wind direction: expected 3 finite numbers, not all zero, found {self.direction!r}")
+        for name in ("strength", "gustiness", "frequency", "wavelength"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float, np.floating, np.integer)) and math.isfinite(value) and value >= 0):
+                raise ParamError(f"wind {name}: expected a finite number >= 0, found {value!r}")
+        object.__setattr__(self, "direction", tuple(float(x) for x in d))
+        object.__setattr__(self, "_unit", tuple(float(x) for x in d / norm))
+
+    @property
+    def unit_direction(self) -> np.ndarray:
+        """(3,) float64: the direction, normalized."""
+        return np.array(self._unit)
+
+    @property
+    def wavenumber(self) -> float:
+        """``1 / wavelength`` (0 when there are no travelling fronts)."""
+        return 1.0 / self.wavelength if self.wavelength > 0 else 0.0
+
+    def cycles(self, time: float) -> np.ndarray:
+        """(2,) float64: ``(frac(f T), frac(2.31 f T))``, the time as the shader gets it."""
+        time = float(time)
+        if not math.isfinite(time):
+            raise ParamError(f"time: expected a finite number of seconds, found {time!r}")
+        return np.array([(self.frequency * time) % 1.0, (SECOND_HARMONIC * self.frequency * time) % 1.0])
+
+    @classmethod
+    def parse(cls, text: str, direction=(1.0, 0.0, 0.0), name: str = "--wind") -> "Wind":
+        """``STRENGTH[,GUSTINESS[,FREQUENCY[,WAVELENGTH]]]`` (the CLI's ``--wind``)."""
+        parts = [p for p in str(text).split(",")]
+        keys = ("strength", "gustiness", "frequency", "wavelength")
+        if not 1 <= len(parts) <= 4:
+            raise ParamError(f"{name}: expected STRENGTH[,GUSTINESS[,FREQUENCY[,WAVELENGTH]]], found {text!r}")
+        values = {}
+        for key, part in zip(keys, parts):
+            try:
+                values[key] = float(part)
+            except ValueError:
+                raise ParamError(f"{name}: {key}: expected a number >= 0, found {part!r}") from None
+            if not (math.isfinite(values[key]) and values[key] >= 0):
+                raise ParamError(f"{name}: {key}: expected a finite number >= 0, found {part!r}")
+        return cls(direction=tuple(direction), **values)
+
+
+def wind_hash(ids) -> np.ndarray:
+    """The PCG hash of ``glsl/wind.glsl``: (n,) integer instance indices -> (n,) uint32."""
+    i = np.asarray(ids).astype(np.uint32)
+    with np.errstate(over="ignore"):
+        h = i * np.uint32(747796405) + np.uint32(2891336453)
+        h = ((h >> ((h >> np.uint32(28)) + np.uint32(4))) ^ h) * np.uint32(277803737)
+        return (h >> np.uint32(22)) ^ h
+
+
+def wind_phase(ids) -> np.ndarray:
+    """(n,) float32 in [0, 1): 24 bits of the hash, exactly as the shader computes it."""
+    return (wind_hash(ids) >> np.uint32(8)).astype(np.float32) * np.float32(1.0 / 16777216.0)
+
+
+def wind_offsets(wind: Wind, axis: ControlAxis, params, time: float, *, start: int = 0) -> np.ndarray:
+    """What the wind adds to every instance's control-point offsets at ``time``.
+
+    params : (n, 16) or (n, 19) — the instances (their index is ``start + row``).
+    Returns (n, 5, 2) float64 (model units; the first two rows are 0).
+    """
+    params = as_params(params).astype(np.float64)
+    n = len(params)
+    d = wind.unit_direction
+    c1, c2 = wind.cycles(time)
+    ph = wind_phase(np.arange(start, start + n)).astype(np.float64) - params[:, POSITION] @ d * wind.wavenumber
+    wave = 0.6 * np.sin(2.0 * np.pi * (c1 + ph)) + 0.4 * np.sin(2.0 * np.pi * (c2 + 1.7 * ph))
+    amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
+    local = np.einsum("nji,j->ni", rotation_matrices(params[:, ANGLES]), d)  # Rᵀ dir
+    i, j = axis.perpendicular
+    u = amp[:, None] * local[:, [i, j]]  # (n, 2)
+    return WIND_WEIGHTS[None, :, None] * u[:, None, :]
+
+
+def apply_wind(wind: Wind | None, axis: ControlAxis, params, time: float, *, start: int = 0) -> np.ndarray:
+    """``params`` with the wind's offsets added (same shape, float32); ``None`` returns them unchanged."""
+    params = as_params(params)
+    if wind is None or wind.strength == 0:
+        return params
+    out = params.copy()
+    moved = params[:, OFFSETS].astype(np.float64) + wind_offsets(wind, axis, params, time, start=start).reshape(-1, 10)
+    out[:, OFFSETS] = moved.astype(np.float32)
+    return as_params(out)

@@ -1,0 +1,366 @@
+"""The same scene in a browser: a WebGL 2 page (three.js) that bends every
+instance in its vertex shader from the package's own GLSL.
+
+``build_scene`` gathers what a page needs: the base mesh as GLB, the
+parameters in the binary ``.adp`` form (quantized by default), and a config
+with the camera, background and light of ``axialdeform render`` for the same
+canvas size and the shaders, assembled at export time from ``glsl/`` by
+:func:`axialdeform.gl.shaders.assemble` and moved to GLSL ES 3.00 (version
+line and precision only: :func:`to_glsl_es`).  ``write_folder`` writes
+``index.html`` + files for a static server; ``write_single_file`` ONE ``.html``
+with everything inlined (base64), which works opened from disk.
+
+The page's JavaScript (``app.js``) verifies the file's CRC-32 and compares
+the base mesh's fingerprint: the SHA-256 of the GLB's positions and triangles,
+computed in the browser with WebCrypto (available on ``file://``,
+``http://127.0.0.1`` and ``https://``), else the fingerprint taken at export.
+
+This is an application layer: ``core/`` and ``gl/`` never import it.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import inspect
+import json
+import os
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+from ..core.atomic import atomic_write_bytes
+from ..core.errors import AxialDeformError
+from ..core.export import encode_base_mesh
+from ..core.params import as_params, encode_binary
+
+__all__ = ["THREE_VERSION", "WebScene", "build_scene", "page_shaders", "to_glsl_es", "write_folder", "single_file_html",
+           "make_server", "scene_bytes",
+           "write_single_file", "write_page", "vendor_file", "page_source"]
+
+#: the files of the vendored three.js, relative to ``web/vendor/``
+VENDOR_FILES = {
+    "three": "three.module.min.js",
+    "orbit": "addons/controls/OrbitControls.js",
+    "gltf": "addons/loaders/GLTFLoader.js",
+    "bgu": "addons/utils/BufferGeometryUtils.js",
+}
+GLSL_ES_HEADER = "#version 300 es\nprecision highp float;\nprecision highp int;"
+MESH_FILE = "mesh.glb"
+PARAMS_FILE = "params.adp"
+
+
+def _here():
+    return resources.files("axialdeform.web")
+
+
+def page_source(name: str) -> str:
+    """The text of one file of the page code (``app.js``, ``loader.js``, ``page.html``)."""
+    return _here().joinpath(name).read_text(encoding="utf-8")
+
+
+def vendor_file(relative: str) -> bytes:
+    """The bytes of one vendored three.js file (``web/vendor/<relative>``)."""
+    res = _here().joinpath("vendor", *relative.split("/"))
+    if not res.is_file():
+        raise AxialDeformError(f"axialdeform/web/vendor/{relative}: missing; run tools/vendor_three.sh")
+    return res.read_bytes()
+
+
+def _three_version() -> str:
+    return vendor_file("VERSION").decode().strip()
+
+
+THREE_VERSION = "0.160.1"  # tools/vendor_three.sh pins it; tests compare with vendor/VERSION
+
+
+def to_glsl_es(source: str) -> str:
+    """An assembled GLSL 3.30 core stage as GLSL ES 3.00 (WebGL 2): only the
+    version line changes, and default precisions follow it; every other
+    line, every ``#line``, stays as assembled."""
+    from ..gl.shaders import GLSL_VERSION
+
+    first, _, rest = source.partition("\n")
+    if first.strip() != GLSL_VERSION:
+        raise AxialDeformError(f"shader: expected an assembled source starting with {GLSL_VERSION!r}, found {first!r}")
+    return GLSL_ES_HEADER + "\n" + rest
+
+
+def page_shaders() -> dict:
+    """The page's shaders, assembled from ``glsl/scene.vert`` / ``scene.frag``
+    (which include ``axial.glsl``, ``quantized.glsl`` and ``lighting.glsl``):
+    ``{"float": {"vertex", "fragment"}, "quantized": ..., "float_extended": ...,
+    "quantized_extended": ...}`` (``_extended``: 19-number instances, ``AXIAL_EXTENDED``)."""
+    from ..gl.shaders import assemble
+
+    out = {}
+    variants = (("float", {}), ("quantized", {"AXIAL_QUANTIZED": 1}),
+                ("float_extended", {"AXIAL_EXTENDED": 1}), ("quantized_extended", {"AXIAL_QUANTIZED": 1, "AXIAL_EXTENDED": 1}))
+    for variant, defines in variants:
+        out[variant] = {stage: to_glsl_es(assemble(name, defines).source)
+                        for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
+    return out
+
+
+def _render_defaults() -> dict:
+    """Background, light and colours exactly as ``axialdeform render`` uses them
+    (read from the signatures of render_image and AxialRenderer.render)."""
+    from ..gl.image import render_image
+    from ..gl.renderer import AxialRenderer
+
+    img = inspect.signature(render_image).parameters
+    ren = inspect.signature(AxialRenderer.render).parameters
+    return {"background": [float(x) for x in img["background"].default],
+            "light_dir": [float(x) for x in ren["light_dir"].default],
+            "ambient": float(ren["ambient"].default)}
+
+
+@dataclass
+class WebScene:
+    """What a page shows: ``config`` (JSON-able dict), ``glb`` and ``adp`` bytes."""
+
+    config: dict
+    glb: bytes
+    adp: bytes
+
+    @property
+    def count(self) -> int:
+        return int(self.config["instances"])
+
+
+def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "solid", quantize: bool = True,
+                title: str | None = None, adp: bytes | None = None, all_shaders: bool = False) -> WebScene:
+    """The page's data for ``mesh`` and ``params`` ((n, 16) float32).
+
+    The camera is :func:`axialdeform.gl.camera.frame_instances` for the canvas
+    ``size`` (width, height) -- the camera of ``axialdeform render`` at that
+    size.  ``adp`` (bytes of a parameter file) is written as given instead of
+    encoding ``params`` (tests use it to ship a corrupt file).  The config
+    carries the shader build for these parameters (16 or 19 numbers, float32
+    or quantized); ``all_shaders`` carries all four (the widget, whose
+    parameters may change).
+    """
+    from ..gl.camera import UP_VECTORS, frame_instances
+    from ..gl.renderer import DEFAULT_COLORS, _MODE_INDEX, _unit
+
+    if mode not in ("solid", "flat"):
+        raise AxialDeformError(f"mode: the page draws 'solid' or 'flat', found {mode!r}")
+    if up not in UP_VECTORS:
+        raise AxialDeformError(f"up: expected x, y or z, found {up!r}")
+    w, h = (int(x) for x in size)
+    if not (0 < w <= 16384 and 0 < h <= 16384):
+        raise AxialDeformError(f"size: expected 1..16384 pixels each way, found {w}x{h}")
+    params = as_params(params)
+    cam = frame_instances(mesh, params, w / h, up=up)
+    d = _render_defaults()
+    axis = mesh.axis
+    shaders = page_shaders()
+    if not all_shaders:
+        key = ("quantized" if quantize else "float") + ("_extended" if params.shape[1] == 19 else "")
+        shaders = {key: shaders[key]}
+    if adp is None:
+        adp = encode_binary(params, axis=axis, mesh_fingerprint=mesh.fingerprint, quantize=quantize)
+    config = {
+        "generator": "axialdeform",
+        "title": title or f"{len(params)} × {mesh.name}",
+        "instances": int(len(params)),
+        "size": [w, h],
+        "mode_index": _MODE_INDEX[mode],
+        "mesh": {"file": MESH_FILE, "name": str(mesh.name), "axis": int(axis.index), "lo": float(axis.lo),
+                 "length": float(axis.length), "fingerprint": mesh.fingerprint.hex(),
+                 # the axis line across the axis (twist and taper turn about it): u_center
+                 "center": [float(c) for k, c in enumerate(axis.center) if k != axis.index],
+                 "vertices": int(mesh.vertex_count)},
+        "params_file": PARAMS_FILE,
+        "cull_back_faces": bool(mesh.is_volume),
+        "camera": {"eye": cam.eye.tolist(), "target": cam.target.tolist(), "up": cam.up.tolist(),
+                   "fovy": cam.fovy, "near": cam.near, "far": cam.far},
+        "background": d["background"],
+        "light_dir": [float(x) for x in _unit(d["light_dir"])],
+        "up": [float(x) for x in _unit(UP_VECTORS[up])],
+        "ambient": d["ambient"],
+        "color": [float(x) for x in DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))],
+        "line_color": [0.12, 0.14, 0.18],
+        "three": _three_version(),
+        "shaders": shaders,
+    }
+    return WebScene(config, encode_base_mesh(mesh), bytes(adp))
+
+
+def _json_in_html(obj) -> str:
+    # inside <script>: no "</" can close the element
+    return json.dumps(obj, ensure_ascii=False, separators=(",", ":")).replace("</", "<\\/")
+
+
+def _page(config: dict, head: str, body_data: str, entry: str) -> str:
+    template = page_source("page.html")
+    return (template.replace("{{TITLE}}", html.escape(f"axialdeform: {config['title']}"))
+            .replace("{{HEAD}}", head).replace("{{DATA}}", body_data).replace("{{ENTRY}}", entry))
+
+
+_FOLDER_ENTRY = """
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import * as app from './app.js';
+
+async function fetchBytes(name) {
+  const r = await fetch(name);
+  if (!r.ok) throw new app.SceneError(`${name}: ${r.status} ${r.statusText}`);
+  return r.arrayBuffer();
+}
+async function load() {
+  try {
+    const config = await (await fetch('scene.json')).json();
+    return { config, glb: await fetchBytes(config.mesh.file), adp: await fetchBytes(config.params_file) };
+  } catch (err) {
+    if (err instanceof app.SceneError) throw err;
+    throw new app.SceneError(location.protocol === 'file:'
+      ? 'this folder page needs a web server (axialdeform web --serve), or export one .html file'
+      : `could not load the scene: ${err.message}`);
+  }
+}
+start(() => load(), { THREE, OrbitControls, GLTFLoader }, app);
+"""
+
+_SINGLE_ENTRY = """
+import { loadModules } from '{{LOADER}}';
+const text = (id) => document.getElementById(id).textContent;
+const b64text = (id) => new TextDecoder().decode(Uint8Array.from(atob(text(id).trim()), (c) => c.charCodeAt(0)));
+const { lib, app } = await loadModules({ three: b64text('axd-three'), orbit: b64text('axd-orbit'),
+  gltf: b64text('axd-gltf'), bgu: b64text('axd-bgu'), app: b64text('axd-app') });
+start(async () => ({ config: JSON.parse(text('axd-config')), glb: app.fromBase64(text('axd-mesh')),
+  adp: app.fromBase64(text('axd-params')) }), lib, app);
+"""
+
+# shared by both entries: mount, then tell tools the first frame is drawn
+_START = """
+function start(load, lib, app) {
+  const root = document.getElementById('axd-page');
+  load().then((scene) => {
+    document.title = `axialdeform: ${scene.config.title}`;
+    const view = app.mount(root, lib, scene);
+    window.axialdeformView = view;
+    return view.ready;
+  }).then((r) => {
+    // firstFrameMs: from the start of the navigation (performance.timeOrigin) to the first frame drawn
+    window.axialdeform = { ready: true, instances: r.instances, firstFrameMs: performance.now() };
+  }).catch((err) => {
+    const msg = err && err.message ? err.message : String(err);
+    if (!root.querySelector('.axd-message')) {
+      const m = document.createElement('div');
+      m.className = 'axd-message';
+      m.setAttribute('role', 'alert');
+      m.textContent = msg;
+      root.appendChild(m);
+    }
+    window.axialdeform = { ready: false, error: msg };
+  });
+}
+"""
+
+
+def _import_map(imports: dict) -> str:
+    return f'<script type="importmap">{_json_in_html({"imports": imports})}</script>'
+
+
+def write_folder(out: str | os.PathLike, scene: WebScene) -> Path:
+    """Write ``OUT/index.html`` + ``app.js``, ``scene.json``, ``mesh.glb``,
+    ``params.adp`` and ``three/`` (the vendored three.js and its licence)
+    for a static web server.  Every file is written atomically."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise AxialDeformError(f"{out}: exists and is not a folder; give a folder, or a name ending in .html")
+    out.mkdir(parents=True, exist_ok=True)
+    head = _import_map({"three": "./three/three.module.min.js", "three/addons/": "./three/addons/"})
+    page = _page(scene.config, head, "", _START + _FOLDER_ENTRY)
+    files = {
+        "index.html": page.encode("utf-8"),
+        "app.js": page_source("app.js").encode("utf-8"),
+        "scene.json": json.dumps(scene.config, ensure_ascii=False, indent=1).encode("utf-8"),
+        MESH_FILE: scene.glb,
+        PARAMS_FILE: scene.adp,
+    }
+    for rel in list(VENDOR_FILES.values()) + ["LICENSE", "VERSION"]:
+        files["three/" + rel] = vendor_file(rel)
+    for rel, data in files.items():
+        path = out / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(path, data)
+    return out / "index.html"
+
+
+def _data_script(element_id: str, data: bytes, kind: str = "application/octet-stream;base64") -> str:
+    return f'<script type="{kind}" id="{element_id}">{base64.b64encode(data).decode("ascii")}</script>\n'
+
+
+def single_file_html(scene: WebScene) -> str:
+    """ONE self-contained page (works from ``file://``): three.js, the page
+    code, the GLB and the ``.adp`` inlined as base64; three.js's licence in a comment."""
+    loader = "data:text/javascript;base64," + base64.b64encode(page_source("loader.js").encode()).decode()
+    licence = vendor_file("LICENSE").decode("utf-8").replace("--", "- -")
+    head = f"<!-- three.js {_three_version()} (inlined below), its licence:\n{licence}-->"
+    data = f'<script type="application/json" id="axd-config">{_json_in_html(scene.config)}</script>\n'
+    data += _data_script("axd-mesh", scene.glb) + _data_script("axd-params", scene.adp)
+    for key, rel in VENDOR_FILES.items():
+        data += _data_script(f"axd-{key}", vendor_file(rel), "text/javascript;base64")
+    data += _data_script("axd-app", page_source("app.js").encode("utf-8"), "text/javascript;base64")
+    return _page(scene.config, head, data, _START + _SINGLE_ENTRY.replace("{{LOADER}}", loader))
+
+
+def write_single_file(out: str | os.PathLike, scene: WebScene) -> Path:
+    out = Path(out)
+    if out.is_dir():
+        raise AxialDeformError(f"{out}: is a folder; a single page needs a name ending in .html")
+    atomic_write_bytes(out, single_file_html(scene).encode("utf-8"))
+    return out
+
+
+def write_page(out: str | os.PathLike, scene: WebScene) -> Path:
+    """``OUT.html`` (or ``.htm``): one self-contained file; anything else: a folder.
+    Returns the page's path (the file, or the folder's ``index.html``)."""
+    out = Path(out)
+    if out.suffix.lower() in (".html", ".htm"):
+        return write_single_file(out, scene)
+    return write_folder(out, scene)
+
+
+def scene_bytes(out: str | os.PathLike) -> dict:
+    """Bytes a browser downloads for an exported folder: ``page`` (index.html,
+    app.js, scene.json), ``mesh``, ``params`` and ``three`` (the vendored
+    three.js files the page imports)."""
+    out = Path(out)
+    size = lambda *names: sum((out / n).stat().st_size for n in names)  # noqa: E731
+    return {"page": size("index.html", "app.js", "scene.json"), "mesh": size(MESH_FILE), "params": size(PARAMS_FILE),
+            "three": size(*("three/" + r for r in VENDOR_FILES.values()))}
+
+
+def make_server(folder: str | os.PathLike, port: int = 8000):
+    """An HTTP server for ``folder`` on 127.0.0.1 (not started).
+
+    Returns ``(server, busy)``: when ``port`` is taken the operating system
+    picks a free one and ``busy`` is True.  Call ``server.serve_forever()``;
+    ``server.server_address[1]`` is the port."""
+    import errno
+    import functools
+    from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise AxialDeformError(f"{folder}: no such folder to serve")
+
+    class Handler(SimpleHTTPRequestHandler):
+        extensions_map = {**SimpleHTTPRequestHandler.extensions_map, ".js": "text/javascript",
+                          ".json": "application/json", ".glb": "model/gltf-binary",
+                          ".adp": "application/octet-stream", ".html": "text/html; charset=utf-8"}
+
+        def log_message(self, format, *args):  # quiet: the CLI prints the URL only
+            pass
+
+    handler = functools.partial(Handler, directory=str(folder))
+    try:
+        return ThreadingHTTPServer(("127.0.0.1", int(port)), handler), False
+    except OSError as exc:
+        if exc.errno not in (errno.EADDRINUSE, errno.EACCES):
+            raise AxialDeformError(f"serve: cannot listen on 127.0.0.1:{port}: {exc.strerror}") from None
+    return ThreadingHTTPServer(("127.0.0.1", 0), handler), True

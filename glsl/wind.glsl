@@ -1,0 +1,42 @@
+// wind.glsl -- wind on the GPU (docs/wind.md): it moves an instance's CONTROL POINTS,
+// so the exact normals of axial.glsl still hold, and it needs no per-frame upload.
+//
+// Include after "axial.glsl".  Declares no inputs or uniforms: callers pass them.
+// Model (the CPU reference is axialdeform.core.wind, the same function of time):
+//   h     = (pcg(id) >> 8) / 2^24                      per-instance phase in [0, 1), exact on CPU
+//   ph    = h - dot(p, dir) * wavenumber                gust fronts travel along dir
+//   wave  = 0.6 sin(2 pi (cycles.x + ph)) + 0.4 sin(2 pi (cycles.y + 1.7 ph))
+//   amp   = strength * L * (1 + gustiness * wave)       tip displacement, model units
+//   u     = amp * (R^T dir) across the axis             the wind in the instance's own frame
+//   d_k  += c_k u,  c = (0, 0, 1/6, 1/2, 1)             control polygon of D(t) = t^2:
+//                                                       P1 and the base tangent stay, the tip moves most
+// cycles = (fract(f T), fract(2.31 f T)) are computed on the CPU in double precision,
+// so a long-running clock loses no accuracy in float32.
+
+// PCG hash of an instance index (integer maths: bit-exact on every GPU and in numpy).
+uint axial_wind_hash(uint i) {
+    uint h = i * 747796405u + 2891336453u;
+    h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
+    return (h >> 22u) ^ h;
+}
+
+// The instance's phase in [0, 1): 24 bits of the hash, exact in float32.
+float axial_wind_phase(uint id) {
+    return float(axial_wind_hash(id) >> 8u) * (1.0 / 16777216.0);
+}
+
+// The instance `inst` (index `id`) as the wind at this moment bends it.
+// dir: unit wind direction (world); strength: tip displacement in units of L;
+// gust: gustiness (0 = steady lean); cycles: see above; wavenumber: 1 / gust wavelength (world units).
+AxialInstance axial_wind(AxialInstance inst, uint id, int axis, float len, vec3 dir, float strength,
+                         float gust, vec2 cycles, float wavenumber) {
+    float ph = axial_wind_phase(id) - dot(inst.position, dir) * wavenumber;
+    float wave = 0.6 * sin(6.283185307179586 * (cycles.x + ph))
+               + 0.4 * sin(6.283185307179586 * (cycles.y + 1.7 * ph));
+    float amp = strength * len * (1.0 + gust * wave);
+    vec3 local = transpose(axial_rotation(inst.angles)) * dir;  // world -> the instance's model frame
+    vec2 u = amp * axial_across(local, axis);
+    inst.d34 += vec4(u * (1.0 / 6.0), u * 0.5);
+    inst.d5 += u;
+    return inst;
+}

@@ -1,0 +1,388 @@
+"""Issue 14: bend-aware bounds, GPU per-instance culling, LOD, stats."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyrr
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+import axialdeform as ad
+from axialdeform.core.bounds import (base_radius, frustum_planes, instance_bounds, instance_boxes, lod_choice,
+                                     spheres_visible)
+from axialdeform.core.lod import build_lod_levels
+from axialdeform.gl.context import Offscreen
+from conftest import make_mesh
+from test_render import meshes_for_all_axes
+
+BACKGROUND = (0.93, 0.94, 0.96)
+
+
+def field(mesh, n=3000, seed=4):
+    """Stones scattered on a disc (y up), radius about 30 L."""
+    return ad.random_params(mesh, n, seed=seed, bend=0.15, placement="disc", spacing=1.0 * mesh.axis.length)
+
+
+def look(eye, target, fovy=60.0, aspect=4 / 3, near=0.05, far=400.0):
+    view = pyrr.matrix44.create_look_at(np.asarray(eye, float), np.asarray(target, float), (0, 1, 0), dtype=np.float32)
+    return view, pyrr.matrix44.create_perspective_projection(fovy, aspect, near, far, dtype=np.float32)
+
+
+def draw(ctx, renderer, view, proj, mode="solid", size=(160, 120)):
+    with Offscreen(ctx, size, samples=4) as target:
+        target.use(BACKGROUND)
+        renderer.render(view, proj, mode)
+        return target.read()
+
+
+# ------------------------------------------------------------------ bounds
+@pytest.mark.slow
+def test_bounds_hold_every_gpu_vertex_and_are_tight(ctx, tmp_path, stone, leaf):
+    """Random parameters on meshes whose axis is x, y and z: every vertex the
+    GPU computes lies in its instance's sphere and box; on average the sphere
+    is at most 1.5x the tight one (the smallest sphere about the same centre
+    holding the captured vertices).  The world box (a box around the rotated
+    bent model box) may be up to sqrt(3) wider than the vertices' own box
+    per axis; on average it is less than 2x."""
+    rng = np.random.default_rng(14)
+    for name, mesh in meshes_for_all_axes(tmp_path, stone, leaf).items():
+        for trial in range(3):
+            params = ad.random_params(mesh, 400, seed=int(rng.integers(1 << 30)), bend=float(rng.uniform(0.02, 0.4)),
+                                      placement="disc", tilt=(-3, 3))
+            with ad.AxialRenderer(ctx, mesh, params) as r:
+                world, _ = r.capture()
+            centers, radii = instance_bounds(mesh, params)
+            dist = np.linalg.norm(world.astype(np.float64) - centers[:, None, :], axis=2)
+            tight = dist.max(axis=1)
+            L = mesh.axis.length
+            assert (tight <= radii * (1 + 1e-6) + 1e-6 * L).all(), name
+            assert (radii / tight).mean() <= 1.5, (name, (radii / tight).mean())
+            lo, hi = instance_boxes(mesh, params)
+            eps = 1e-5 * (L + np.abs(params[:, 10:13]).max())
+            assert (world >= lo[:, None, :] - eps).all() and (world <= hi[:, None, :] + eps).all(), name
+            tight_extent = world.max(axis=1) - world.min(axis=1)
+            assert ((hi - lo) / np.maximum(tight_extent, 1e-3 * L)).mean() <= 2.0, name
+
+
+@pytest.mark.parametrize("kind", ["plain", "extended", "extended+wind", "quantized"])
+def test_gpu_culling_agrees_with_the_numpy_spheres(ctx, stone, kind):
+    """The GLSL bound (glsl/bounds.glsl) keeps every instance the numpy
+    sphere test keeps, and the few extra ones are within its float margin;
+    the compacted records are the originals byte for byte, in order."""
+    from axialdeform.core.wind import Wind
+
+    params = extended_field(stone, 3000) if kind.startswith("extended") else field(stone)
+    wind = Wind(direction=(1.0, 0.0, 0.2), strength=0.5, gustiness=0.9) if kind.endswith("wind") else None
+    view, proj = look((2.0, 1.7, -3.0), (30.0, 0.0, 20.0))
+    with ad.AxialRenderer(ctx, stone, params, wind=wind, quantized=kind == "quantized") as r:
+        draw(ctx, r, view, proj)
+        cull = r._culled[False][0]
+        kept, rec_bytes = r.stats["visible"], r.instances.record_bytes
+        rec = np.frombuffer(cull.buffer.read(size=kept * cull.out_bytes), np.uint8).reshape(kept, cull.out_bytes)
+        index = rec[:, rec_bytes:rec_bytes + 4].copy().view(np.int32).ravel()
+        originals = np.frombuffer(r.instances.buffer.read(size=r.count * rec_bytes), np.uint8).reshape(r.count, -1)
+        assert np.array_equal(rec[:, :rec_bytes], originals[index])
+        drawn = r.instances.read()
+    assert (np.diff(index) > 0).all(), "the compacted records keep their order"
+    centers, radii = instance_bounds(stone, drawn, wind=wind)
+    planes = frustum_planes(view, proj)
+    visible = spheres_visible(centers, radii, planes)
+    assert 0 < visible.sum() < len(params) / 2
+    assert set(np.flatnonzero(visible)) <= set(index)
+    assert spheres_visible(centers[index], radii[index] * 1.001, planes).all()
+
+
+def test_frustum_planes_contain_what_the_camera_sees():
+    view, proj = look((0, 1, 0), (0, 1, -10), fovy=90, aspect=1, near=0.5, far=50)
+    planes = frustum_planes(view, proj)
+    inside = np.array([[0, 1, -5], [4.9, 1, -5], [0, 1, -49]])
+    outside = np.array([[0, 1, 5], [5.2, 1, -5], [0, 1, -51], [0, 1, -0.4]])
+    assert spheres_visible(inside, np.zeros(3), planes).all()
+    assert not spheres_visible(outside, np.zeros(4), planes).any()
+    assert spheres_visible(outside[:1], [5.6], planes).all()  # 5.5 behind the near plane
+    assert not spheres_visible(outside[:1], [5.4], planes).any()
+
+
+# ------------------------------------------------------------------ culling keeps the picture
+EDGE = 2.03 * np.sqrt(3000 / np.pi) + 1.5  # the disc of field(stone): spacing * sqrt(n / pi), plus a stone
+CAMERAS = {
+    "inside the field": ((1.0, 1.7, 0.5), (25.0, 0.2, 12.0)),
+    "at its edge, looking in": ((0.0, 2.0, EDGE), (0.0, 0.0, 0.0)),
+    "at its edge, looking away": ((0.0, 1.7, EDGE), (0.0, 1.7, EDGE + 50)),
+    "above, everything in view": ((0.0, 2.6 * EDGE, 1.7 * EDGE), (0.0, 0.0, 0.0)),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", ["plain", "quantized", "tinted"])
+def test_culled_picture_equals_unculled_pixel_for_pixel(ctx, stone, variant):
+    params = field(stone)
+    quantized = variant == "quantized"
+    with ad.AxialRenderer(ctx, stone, params, quantized=quantized) as culled, \
+            ad.AxialRenderer(ctx, stone, params, quantized=quantized, culling=False) as full:
+        if variant == "tinted":
+            tint = np.random.default_rng(1).uniform(0, 1, (len(params), 3))
+            culled.set_tint(tint)
+            full.set_tint(tint)
+        for name, (eye, target) in CAMERAS.items():
+            view, proj = look(eye, target)
+            for mode in ("solid", "wireframe") if variant == "plain" else ("solid",):
+                a = draw(ctx, full, view, proj, mode)
+                b = draw(ctx, culled, view, proj, mode)
+                assert full.stats["visible"] == len(params) and not full.stats["culling"]
+                assert np.array_equal(a, b), (name, mode, int((a != b).any(axis=2).sum()))
+                seen = culled.stats["visible"]
+                if name == "at its edge, looking away":
+                    assert seen == 0 and (a == np.round(np.array(BACKGROUND) * 255)).all()
+                elif name == "above, everything in view":
+                    assert seen == len(params)
+                else:
+                    assert 0 < seen < len(params) * (0.9 if "edge" in name else 0.5), (name, seen)
+                    assert (a != np.round(np.array(BACKGROUND) * 255)).any()
+
+
+def test_capture_is_of_every_instance_with_culling_on(ctx, stone):
+    params = field(stone, 50)
+    view, proj = look((0.0, 1.7, EDGE), (0.0, 1.7, EDGE + 50))
+    with ad.AxialRenderer(ctx, stone, params) as r:
+        draw(ctx, r, view, proj)
+        assert r.stats["visible"] == 0
+        pos, _ = r.capture()
+    cpu, _ = ad.deform(stone.axis, stone.positions, stone.normals, params)
+    assert pos.shape == cpu.shape and np.abs(pos - cpu).max() <= 1e-5 * stone.axis.length
+
+
+def test_culling_off_draws_everything_and_stats_count_vertices(ctx, stone):
+    params = field(stone, 200)
+    view, proj = look((0.0, 1.7, 34.0), (0.0, 1.7, 80.0))
+    with ad.AxialRenderer(ctx, stone, params, culling=False) as r:
+        draw(ctx, r, view, proj)
+        assert r.stats == {"submitted": 200, "visible": 200, "levels": [200], "vertices": 200 * stone.vertex_count,
+                           "culling": False, "lod": False}
+        assert r._culled == {}, "culling=False builds no culling pass"
+
+
+# ------------------------------------------------------------------ LOD
+@pytest.mark.slow
+def test_lod_levels_share_the_base_axis_and_shrink(stone):
+    levels = build_lod_levels(stone)
+    assert 2 <= len(levels) <= 4
+    assert levels[0].positions is stone.positions and levels[0].error == 0
+    faces = [len(level.faces) for level in levels]
+    assert faces == sorted(faces, reverse=True) and faces[-1] < faces[0] / 2
+    errors = [level.error for level in levels]
+    assert errors == sorted(errors) and errors[1] > 0
+    assert base_radius(stone, *[level.positions for level in levels]) >= base_radius(stone)
+
+
+@pytest.mark.slow
+def test_lod_gpu_vertices_use_the_base_axis(ctx, stone):
+    """Drawn at the coarsest level, an instance is that level's vertices bent
+    with the BASE mesh's axis: the captured picture equals a render of the
+    CPU-deformed level (compared through the renderer's own capture program
+    would not show it, so compare silhouettes)."""
+    levels = build_lod_levels(stone)
+    coarse = levels[-1]
+    params = ad.random_params(stone, 1, seed=3, bend=0.3)
+    params[0, 10:13] = (0.0, 0.0, -6.0)
+    view, proj = look((0.0, 0.0, 0.0), (0.0, 0.0, -6.0), fovy=30, aspect=1)
+    with ad.AxialRenderer(ctx, stone, params, lod=True, lod_error=1e6) as r:
+        img = draw(ctx, r, view, proj, size=(96, 96))
+        assert r.stats["levels"][-1] == 1 and r.stats["vertices"] == coarse.vertex_count
+    world, _ = ad.deform(stone.axis, coarse.positions, coarse.normals, params)
+    ref_mesh = make_mesh(world[0] - params[0, 10:13], coarse.faces, "coarse")
+    rigid = params.copy()
+    rigid[:, :10] = 0
+    rigid[:, 13:16] = 0
+    with ad.AxialRenderer(ctx, ref_mesh, rigid, cull_back_faces=stone.is_volume) as ref:
+        expected = draw(ctx, ref, view, proj, size=(96, 96))
+    bg = np.round(np.array(BACKGROUND) * 255)
+    mask_a, mask_b = (img != bg).any(axis=2), (expected != bg).any(axis=2)
+    assert mask_a.sum() > 200 and (mask_a != mask_b).sum() <= 0.03 * mask_a.sum()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["plain", "quantized", "extended", "extended+quantized"])
+def test_lod_picks_levels_by_screen_error_and_stays_close(ctx, stone, kind):
+    params = extended_field(stone, 3000) if kind.startswith("extended") else field(stone)
+    quantized = kind.endswith("quantized")
+    view, proj = look((1.0, 1.7, 0.5), (25.0, 0.2, 12.0))
+    with ad.AxialRenderer(ctx, stone, params, quantized=quantized) as full, \
+            ad.AxialRenderer(ctx, stone, params, lod=True, quantized=quantized) as lod:
+        a = draw(ctx, full, view, proj, size=(320, 240))
+        b = draw(ctx, lod, view, proj, size=(320, 240))
+        levels = lod.stats["levels"]
+        assert len(levels) == len(lod.lod_levels) and sum(levels) == lod.stats["visible"]
+        assert levels[0] > 0 and sum(levels[1:]) > 0, levels
+        assert lod.stats["vertices"] < full.stats["vertices"]
+        drawn = lod.instances.read()
+        centers, radii = instance_bounds(stone, drawn, radius=lod.bound_radius)
+        eye = np.linalg.inv(view.astype(np.float64))[3, :3]
+        visible = spheres_visible(centers, radii, frustum_planes(view, proj))
+        scale = drawn[visible, 16] if drawn.shape[1] == 19 else None
+        cpu = lod_choice(centers[visible], radii[visible], [lv.error for lv in lod.lod_levels], eye,
+                         proj[1, 1] * 240 / 2, 1.0, scale=scale)
+        assert np.abs(np.bincount(cpu, minlength=len(levels)) - levels).sum() <= 4, (cpu, levels)
+    assert np.abs(a.astype(int) - b).mean() / 255 < 0.01
+
+
+def test_lod_bad_input(ctx, stone):
+    for bad in (0, -1, float("nan"), "x"):
+        with pytest.raises(ad.ParamError, match="lod_error: expected a number of pixels > 0"):
+            ad.AxialRenderer(ctx, stone, field(stone, 3), lod=True, lod_error=bad)
+    tetra = make_mesh([(0, 0, 0), (2, 0, 0), (0.6, 0.8, 0), (0.6, 0.3, 0.7)], [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)])
+    with pytest.warns(UserWarning, match="too few to simplify"):
+        with ad.AxialRenderer(ctx, tetra, ad.random_params(tetra, 3), lod=True) as r:
+            assert len(r.lod_levels) == 1
+
+
+# ------------------------------------------------------------------ extended instances and wind
+def extended_field(mesh, n=2000, seed=6):
+    return ad.random_params(mesh, n, seed=seed, bend=0.2, placement="disc", spacing=1.0 * mesh.axis.length,
+                            scale=(0.5, 1.8), twist=2.5, taper=0.8, tilt=(-3, 3))
+
+
+def test_bounds_cover_scale_twist_taper_and_wind(ctx, tmp_path, stone, leaf):
+    """Extended instances (scale, twist, taper) and a gusty wind at several
+    moments: every GPU-captured vertex lies in its sphere; the spheres stay
+    within 1.5x the tight ones on average without wind."""
+    from axialdeform.core.wind import Wind
+
+    wind = Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.7, frequency=0.8, wavelength=4.0)
+    for name, mesh in meshes_for_all_axes(tmp_path, stone, leaf).items():
+        params = extended_field(mesh, 300, seed=len(name))
+        assert params.shape == (300, 19)
+        L = mesh.axis.length
+        with ad.AxialRenderer(ctx, mesh, params) as r:
+            still, _ = r.capture()
+            centers, radii = instance_bounds(mesh, params)
+            dist = np.linalg.norm(still - centers[:, None, :], axis=2).max(axis=1)
+            assert (dist <= radii + 1e-5 * L).all(), name
+            assert (radii / dist).mean() <= 1.5, (name, (radii / dist).mean())
+            lo, hi = instance_boxes(mesh, params)
+            assert (still >= lo[:, None] - 1e-5 * L).all() and (still <= hi[:, None] + 1e-5 * L).all(), name
+            wc, wr = instance_bounds(mesh, params, wind=wind)
+            assert np.array_equal(wc, centers) and (wr > radii).all()
+            for t in (0.0, 0.37, 1.9, 5.2):
+                moving, _ = r.capture(time=t, wind=wind)
+                assert np.abs(moving - still).max() > 0.05 * L  # the wind really moves them
+                assert (np.linalg.norm(moving - wc[:, None, :], axis=2) <= wr[:, None] + 1e-5 * L).all(), (name, t)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("quantized", [False, True])
+def test_culled_picture_equals_unculled_extended_and_windy(ctx, stone, quantized):
+    from axialdeform.core.wind import Wind
+
+    params = extended_field(stone, 3000)
+    wind = Wind(direction=(0.3, 0.0, 1.0), strength=0.4, gustiness=0.8, frequency=1.0, wavelength=6.0)
+    with ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind) as culled, \
+            ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind, culling=False) as full:
+        assert culled.extended and culled._culled == {}
+        for name in ("inside the field", "at its edge, looking in", "at its edge, looking away"):
+            view, proj = look(*CAMERAS[name])
+            for t in (0.0, 0.8):
+                full.time = culled.time = t
+                a = draw(ctx, full, view, proj)
+                b = draw(ctx, culled, view, proj)
+                assert np.array_equal(a, b), (name, t, int((a != b).any(axis=2).sum()))
+                assert culled.stats["visible"] < len(params)
+        cull = culled._culled[False][0]
+        assert cull.out_bytes == (40 if quantized else 76) + 4
+
+
+# ------------------------------------------------------------------ the command line
+@pytest.mark.slow
+def test_cli_render_stats_no_cull_lod_and_bad_lod_error(tmp_path, capsys):
+    import subprocess
+    import sys
+
+    from PIL import Image
+
+    from axialdeform.cli import main
+
+    params = tmp_path / "p.adp"
+    assert main(["random", "stone", "-n", "400", "--placement", "disc", "-o", str(params)]) == 0
+    capsys.readouterr()
+    pngs = {}
+    for name, extra in {"cull": [], "nocull": ["--no-cull"], "lod": ["--lod-error", "3"]}.items():
+        pngs[name] = tmp_path / f"{name}.png"
+        assert main(["render", "stone", str(params), "-o", str(pngs[name]), "--size", "160x120", "--stats", *extra]) == 0
+        out = capsys.readouterr().out
+        assert "instances: 400 submitted, " in out and " ms" in out and "vertices processed:" in out, out
+        assert ("culling off" in out) == (name == "nocull")
+        assert ("LOD levels" in out) == (name == "lod")
+    images = {k: np.asarray(Image.open(v)) for k, v in pngs.items()}
+    assert np.array_equal(images["cull"], images["nocull"])
+    assert not np.array_equal(images["cull"], images["lod"])  # levels of detail do change pixels
+    for bad in ("0", "-2", "nan"):
+        run = subprocess.run([sys.executable, "-m", "axialdeform", "render", "stone", str(params), "-o",
+                              str(tmp_path / "x.png"), "--lod-error", bad], capture_output=True, text=True)
+        assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
+        assert run.stderr.strip().count("\n") == 0 and "lod_error: expected a number of pixels > 0" in run.stderr
+        assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.slow
+def test_viewer_draws_a_field_with_culling_and_lod(ctx):
+    from axialdeform.viewer import LOD_AUTO_COUNT, Viewer
+
+    stone = ad.load_mesh("stone")
+    params = ad.random_params(stone, 2000, seed=2)
+    v = Viewer.create(stone, params, headless=True, size=(160, 120), lod=True, lod_error=2.0)
+    try:
+        assert v.renderer.culling_enabled and v.renderer.lod and len(v.renderer.lod_levels) >= 2
+        v.orbit.zoom(0.3)  # zoom into the field: most instances leave the view
+        v.step(2)
+        assert 0 < v.renderer.stats["visible"] < 2000
+        assert "2000 instances - solid" in v.status() and f" - {v.renderer.stats['visible']} drawn - " in v.status()
+    finally:
+        v.release()
+        v.wnd.destroy()
+    ctx.__enter__()
+    assert LOD_AUTO_COUNT == 100_000
+
+
+def test_culling_follows_set_params_and_set_tint(ctx, stone):
+    """Growing the instance buffer and re-tinting after the pass exists: the
+    culled picture still equals the unculled one."""
+    small, big = field(stone, 100, seed=1), field(stone, 1500, seed=2)
+    view, proj = look((1.0, 1.7, 0.5), (25.0, 0.2, 12.0))
+    with ad.AxialRenderer(ctx, stone, small) as culled, ad.AxialRenderer(ctx, stone, small, culling=False) as full:
+        assert np.array_equal(draw(ctx, full, view, proj), draw(ctx, culled, view, proj))
+        for r in (culled, full):
+            r.set_params(big)
+            r.set_tint(np.random.default_rng(3).uniform(0, 1, (1500, 3)))
+        assert np.array_equal(draw(ctx, full, view, proj), draw(ctx, culled, view, proj))
+        assert 0 < culled.stats["visible"] < 1500
+        for r in (culled, full):
+            r.set_tint(None)
+            r.set_params(big[:700])
+        assert np.array_equal(draw(ctx, full, view, proj), draw(ctx, culled, view, proj))
+        assert culled.stats["submitted"] == 700
+
+
+# ------------------------------------------------------------------ property: the numpy bound, many random instances
+_finite = dict(allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=150, deadline=None)
+@given(offsets=arrays(np.float64, (4, 10), elements=st.floats(-3, 3, **_finite)),
+       place=arrays(np.float64, (4, 6), elements=st.floats(-50, 50, **_finite)),
+       extra=st.tuples(st.floats(0.05, 4, **_finite), st.floats(-12, 12, **_finite), st.floats(-3, 0.99, **_finite)),
+       extended=st.booleans())
+def test_bound_holds_the_cpu_reference_for_any_parameters(stone, offsets, place, extra, extended):
+    """Any offsets, positions, angles (and scale, twist, taper): every vertex
+    of the CPU reference deformation lies in the sphere and the box."""
+    params = np.hstack([offsets, place]).astype(np.float32)
+    if extended:
+        params = np.hstack([params, np.tile(np.asarray(extra, np.float32), (4, 1))])
+    world, _ = ad.deform(stone.axis, stone.positions, stone.normals, params)
+    world = world.astype(np.float64)
+    centers, radii = instance_bounds(stone, params)
+    tol = 1e-5 * (1 + np.abs(place).max() + radii.max())
+    assert (np.linalg.norm(world - centers[:, None], axis=2) <= radii[:, None] + tol).all()
+    lo, hi = instance_boxes(stone, params)
+    assert (world >= lo[:, None] - tol).all() and (world <= hi[:, None] + tol).all()

@@ -1,0 +1,216 @@
+"""Scatter on surfaces (issue 13 item 2).
+
+The terrain is a mesh we did not make: ``base/rock_caustics.obj`` from the
+shared data (the rock of three.js's caustics example, BSD-3-Clause), a flat
+rock about 19 x 14 x 7 units lying with +z up; its upper faces are the
+"terrain".  There is no terrain mesh in the shared data; this is the most
+terrain-like real surface there (a broad, gently curved top).
+"""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import trimesh
+from PIL import Image
+from scipy.spatial import cKDTree
+
+import axialdeform as ad
+from axialdeform.cli import main
+from axialdeform.core.scatter import load_surface, poisson_greedy, surface_from_heights
+from conftest import shared_mesh
+
+ROCK = "base/rock_caustics.obj"
+
+
+@pytest.fixture(scope="module")
+def terrain():
+    path = shared_mesh(ROCK)
+    tm = trimesh.load(path, force="mesh", process=False)
+    return path, tm, float(np.linalg.norm(tm.extents))
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+def test_origin_anchor_puts_every_instance_on_the_terrain_and_keeps_the_spacing(terrain, stone):
+    path, tm, size = terrain
+    d = 0.6
+    params = ad.scatter(path, stone, 300, min_distance=d, anchor="origin", up="z", seed=3, bend=0.2)
+    assert params.shape == (300, 16) and params.dtype == np.float32
+    p = params[:, 10:13].astype(np.float64)
+    _, dist, face = trimesh.proximity.closest_point(tm, p)
+    assert dist.max() <= 1e-4 * size
+    assert (tm.face_normals[face, 2] > 0).all()  # on the faces that face up (+z)
+    assert cKDTree(p).query(p, k=2)[0][:, 1].min() >= d * (1 - 1e-6)
+
+
+def test_spacing_is_a_real_poisson_disk_and_matches_the_sequential_loop():
+    rng = np.random.default_rng(5)
+    pts = rng.random((600, 3)) * [10, 0, 10]
+    fixed = rng.random((20, 3)) * [10, 0, 10]
+    keep = poisson_greedy(pts, 0.7, fixed)
+    kept = []  # the sequential definition, written out (600 points: a test, not a hot path)
+    for i, q in enumerate(pts):
+        if np.linalg.norm(fixed - q, axis=1).min() >= 0.7 and all(np.linalg.norm(pts[j] - q) >= 0.7 for j in kept):
+            kept.append(i)
+    assert np.flatnonzero(keep).tolist() == kept
+    assert len(kept) > 50
+
+
+def test_half_black_density_map_is_honoured(terrain, stone, tmp_path):
+    path, tm, _ = terrain
+    img = np.full((16, 32), 255, dtype=np.uint8)
+    img[:, :16] = 0  # left half (smaller x) black
+    Image.fromarray(img).save(tmp_path / "half.png")
+    params = ad.scatter(path, stone, 400, min_distance=0.3, density=tmp_path / "half.png", anchor="origin", up="z", seed=1)
+    x = params[:, 10].astype(np.float64)
+    mid = (tm.bounds[0, 0] + tm.bounds[1, 0]) / 2
+    assert len(params) == 400
+    assert x.min() >= mid - 1e-5  # none in the black half
+    # and the white half is covered to its far edge (not just a sliver)
+    assert x.max() > tm.bounds[1, 0] - 0.2 * tm.extents[0]
+
+
+def test_density_rows_run_along_z_top_row_at_smallest_z(stone):
+    heights = np.zeros((20, 30))
+    dens = np.ones((10, 10))
+    dens[:5] = 0  # top half of the image black: the smaller z
+    params = ad.scatter(heights, stone, 200, density=dens, anchor="origin", extent=(30.0, 20.0), seed=2)
+    z = params[:, 12]
+    assert z.min() >= 0.0 - 1e-6 and z.max() > 5.0
+    assert np.abs(params[:, 11]).max() == 0.0  # flat map at height 0
+
+
+@pytest.mark.slow
+def test_same_seed_same_bytes_other_seed_other_bytes(terrain, tmp_path):
+    path, _, _ = terrain
+    args = ["scatter", path, "stone", "-n", "150", "--min-distance", "0.5", "--up", "z", "--align-to-normal", "0.7",
+            "--scale", "0.5:1.5"]
+    for name, seed in (("a.adp", 7), ("b.adp", 7), ("c.adp", 8)):
+        res = run(*args, "--seed", seed, "-o", tmp_path / name)
+        assert res.returncode == 0, res.stderr
+    a, b, c = ((tmp_path / n).read_bytes() for n in ("a.adp", "b.adp", "c.adp"))
+    assert a == b and a != c
+    values = ad.read_params(tmp_path / "a.adp")
+    assert values.shape == (150, 19)
+    assert (values[:, 16] >= 0.5).all() and (values[:, 16] <= 1.5).all() and values[:, 16].std() > 0.1
+    assert (values[:, 17:19] == 0).all()
+
+
+def test_align_to_normal_turns_the_up_axis_onto_the_normal(terrain, stone):
+    path, tm, _ = terrain
+    for f in (0.0, 0.5, 1.0):
+        params = ad.scatter(path, stone, 100, anchor="origin", up="z", align_to_normal=f, seed=4)
+        up = ad.rotation_matrices(params[:, 13:16])[:, :, 2]  # R · e_z
+        _, _, face = trimesh.proximity.closest_point(tm, params[:, 10:13].astype(np.float64))
+        normal = tm.face_normals[face]
+        full = np.arccos(np.clip(normal[:, 2], -1, 1))
+        got = np.arccos(np.clip(np.einsum("ij,ij->i", up, normal), -1, 1))
+        assert np.allclose(got, (1 - f) * full, atol=2e-3)
+        # tilted within the plane of e_z and the normal
+        plane = np.cross(np.array([0, 0, 1.0]), normal)
+        assert np.abs(np.einsum("ij,ij->i", up, plane)).max() < 2e-3
+    yaw = ad.rotation_matrices(params[:, 13:16])[:, :, 0]
+    assert np.ptp(np.arctan2(yaw[:, 1], yaw[:, 0])) > 5.0  # random turns about the up axis
+
+
+@pytest.mark.parametrize("anchor", ["bottom", "center"])
+def test_the_bent_scaled_instance_stands_on_its_anchor(terrain, leaf, anchor):
+    path, tm, size = terrain
+    params = ad.scatter(path, leaf, 50, anchor=anchor, up="z", bend=0.3, scale=(0.5, 2.0), align_to_normal=0.6, seed=9)
+    lo, hi = leaf.positions.min(axis=0), leaf.positions.max(axis=0)
+    a = (lo + hi) / 2
+    if anchor == "bottom":
+        a[2] = lo[2]
+    world, _ = ad.deform(leaf.axis, a[None, :], np.array([[0.0, 0.0, 1.0]]), params)
+    _, dist, _ = trimesh.proximity.closest_point(tm, world[:, 0].astype(np.float64))
+    assert dist.max() <= 1e-4 * size
+    assert not np.allclose(params[:, 10:13], world[:, 0])  # p itself is not the surface point
+
+
+def test_height_map_image_surface(tmp_path, stone):
+    x = np.linspace(0, 1, 40)
+    X, Z = np.meshgrid(x, x[:30])
+    grey = (255 * (0.5 + 0.4 * np.sin(4 * X) * np.cos(3 * Z))).astype(np.uint8)
+    Image.fromarray(grey).save(tmp_path / "hm.png")
+    surf = load_surface(tmp_path / "hm.png", height_scale=5.0, extent=(40.0,))
+    assert np.allclose(surf.mesh.extents[[0, 2]], [40.0, 40.0 * 29 / 39])
+    params = ad.scatter(tmp_path / "hm.png", stone, 200, height_scale=5.0, extent=40.0, anchor="origin", min_distance=1.0)
+    _, dist, _ = trimesh.proximity.closest_point(surf.mesh, params[:, 10:13].astype(np.float64))
+    assert dist.max() <= 1e-4 * 40
+    # a bright pixel is high: the vertex under pixel (row 0, col 39) is at the +x, -z corner
+    v = np.asarray(surf.mesh.vertices)
+    corner = v[np.argmin(np.linalg.norm(v[:, [0, 2]] - [20.0, -20.0 * 29 / 39], axis=1))]
+    assert np.isclose(corner[1], grey[0, 39] / 255 * 5.0)
+
+
+@pytest.mark.slow
+def test_too_few_writes_what_fits_and_exits_2_unless_allowed(terrain, tmp_path):
+    path, _, _ = terrain
+    res = run("scatter", path, "stone", "-n", "100000", "--min-distance", "1.0", "--up", "z", "-o", tmp_path / "f.adp")
+    assert res.returncode == 2
+    line = res.stderr.strip()
+    assert "\n" not in line and "Traceback" not in line and "of 100000" in line
+    got = ad.read_params(tmp_path / "f.adp")
+    assert 50 < len(got) < 100000 and f"only {len(got)} of 100000" in line
+    res = run("scatter", path, "stone", "-n", "100000", "--min-distance", "1.0", "--up", "z", "-o", tmp_path / "g.adp",
+              "--allow-fewer")
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / "g.adp").read_bytes() == (tmp_path / "f.adp").read_bytes()
+    with pytest.raises(ad.TooFewError) as info:
+        ad.scatter(path, "stone", 100000, min_distance=1.0, up="z")
+    assert len(info.value.params) == len(got)
+
+
+@pytest.mark.slow
+def test_bad_input_one_line_exit_2(terrain, tmp_path, capsys):
+    path, _, _ = terrain
+    Image.new("L", (1, 1), 128).save(tmp_path / "one.png")
+    Image.new("L", (8, 8), 0).save(tmp_path / "black.png")
+    cases = [
+        ([shared_mesh("edge_cases/empty.obj"), "stone"], "empty.obj"),
+        ([shared_mesh("edge_cases/plane.ply"), "stone"], "faces up"),  # the plane faces +z only
+        ([tmp_path / "one.png", "stone"], "1x1"),
+        ([path, "stone", "--up", "z", "--density", tmp_path / "black.png"], "black"),
+        ([path, "stone", "--up", "z", "--scale", "0:1"], "0 < MIN <= MAX"),
+        ([path, "stone", "--up", "z", "--min-distance", "100"], "min-distance"),
+        ([path, "stone", "--up", "z", "--align-to-normal", "1.5"], "align-to-normal"),
+    ]
+    out = tmp_path / "x.adp"
+    for args, expect in cases:  # in-process (fast); one subprocess below checks the real exit
+        assert main(["scatter", *map(str, args), "-n", "10", "-o", str(out)]) == 2, args
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and err.startswith("axialdeform scatter: error: ") and expect in err, (args, err)
+        assert not out.exists()
+    res = run("scatter", path, "stone", "--up", "z", "--scale", "0:1", "-n", "10", "-o", out)
+    assert res.returncode == 2 and "Traceback" not in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_speed_sized_run_is_vectorized_and_correct():
+    """A 20 000-triangle terrain and 5 000 instances (the speed goal itself is in tools/scatter_speed.py)."""
+    x = np.linspace(0, 1, 101)
+    X, Z = np.meshgrid(x, x)
+    surf = surface_from_heights(0.5 + 0.3 * np.sin(5 * X) * np.cos(4 * Z), height_scale=10, extent=100.0)
+    assert len(surf.mesh.faces) == 20000
+    params = ad.scatter(surf, "stone", 5000, min_distance=0.8, anchor="origin", seed=1)
+    p = params[:, 10:13].astype(np.float64)
+    assert cKDTree(p).query(p, k=2)[0][:, 1].min() >= 0.8 * (1 - 1e-6)
+
+
+def test_density_white_only_where_nothing_faces_up_is_an_error(stone):
+    # two squares side by side: x < 0 faces up, x > 0 faces down
+    v = np.array([[-2, 0, -1], [0, 0, -1], [0, 0, 1], [-2, 0, 1], [2, 0, -1], [2, 0, 1]], dtype=float)
+    f = np.array([[0, 2, 1], [0, 3, 2], [1, 5, 2], [1, 4, 5]])
+    surface = trimesh.Trimesh(v, f, process=False)
+    assert surface.face_normals[0, 1] > 0 and surface.face_normals[2, 1] < 0
+    right = np.zeros((4, 4))
+    right[:, 2:] = 1.0
+    with pytest.raises(ad.ScatterError, match="density: no candidate"):
+        ad.scatter(surface, stone, 10, density=right)
+    left = 1.0 - right
+    params = ad.scatter(surface, stone, 10, density=left, anchor="origin")
+    assert (params[:, 10] <= 0).all()

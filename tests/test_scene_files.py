@@ -1,0 +1,231 @@
+"""Scene files (issue 13 item 4): TOML layers, terrain, camera, light, wind;
+render / bake / export accept them; errors name the file, the line and the key."""
+
+from __future__ import annotations
+
+import textwrap
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import axialdeform as ad
+from axialdeform.cli import main
+from axialdeform.core.scene import load_scene
+from test_export import _assert_valid, validate  # noqa: F401  (the validator fixture)
+
+LANDSCAPE = __import__("pathlib").Path(__file__).resolve().parent.parent / "examples" / "landscape" / "landscape.toml"
+
+
+def write_scene(folder, body: str, name: str = "scene.toml"):
+    path = folder / name
+    path.write_text(textwrap.dedent(body).lstrip("\n"))
+    return path
+
+
+@pytest.fixture
+def small(tmp_path):
+    """A scene in its own folder: a height-map terrain, a parameter-file layer and a scatter layer."""
+    folder = tmp_path / "s"
+    folder.mkdir()
+    x = np.linspace(0, 1, 24)
+    hm = (255 * (0.3 + 0.3 * np.outer(np.sin(3 * x[:18]), np.cos(2 * x)))).astype(np.uint8)
+    Image.fromarray(hm).save(folder / "hm.png")
+    stone = ad.load_mesh("stone")
+    ad.write_params(folder / "stones.adp", ad.random_params(stone, 12, seed=1, spacing=3.0), stone)
+    path = write_scene(folder, """
+        up = "y"
+        [terrain]
+        heightmap = "hm.png"
+        height_scale = 3.0
+        extent = 20.0
+        [camera]
+        elevation = 40.0
+        [wind]
+        strength = 0.2
+        [[layer]]
+        name = "stones"
+        mesh = "stone"
+        params = "stones.adp"
+        [[layer]]
+        name = "leaves"
+        mesh = "leaf"
+        color = [0.8, 0.4, 0.1]
+        wind = true
+        [layer.scatter]
+        count = 40
+        min_distance = 0.8
+        anchor = "origin"
+        scale = [0.5, 1.0]
+        seed = 5
+        """)
+    return path
+
+
+def test_a_scene_loads_with_paths_relative_to_its_file(small, monkeypatch, tmp_path):
+    monkeypatch.chdir(tmp_path)  # not the scene's folder
+    scene = load_scene(small)
+    assert [layer.name for layer in scene.layers] == ["stones", "leaves"]
+    assert scene.layers[0].params.shape == (12, 16)
+    assert scene.layers[1].params.shape == (40, 19) and scene.layers[1].wind and scene.layers[1].color == (0.8, 0.4, 0.1)
+    assert isinstance(scene.wind, ad.core.wind.Wind) and scene.wind.strength == 0.2
+    assert scene.camera == {"elevation": 40.0}
+    # the scatter layer is exactly axialdeform.scatter on the terrain
+    expected = ad.scatter(small.parent / "hm.png", "leaf", 40, min_distance=0.8, anchor="origin", scale=(0.5, 1.0),
+                          seed=5, height_scale=3.0, extent=[20.0])
+    assert np.array_equal(scene.layers[1].params, expected)
+    assert np.array_equal(scene.layers[0].params, ad.read_params(small.parent / "stones.adp"))
+
+
+def _error(tmp_path, body, name="scene.toml"):
+    path = write_scene(tmp_path, body, name)
+    with pytest.raises(ad.SceneError) as info:
+        load_scene(path)
+    return str(info.value)
+
+
+def test_unknown_key_names_file_line_and_key(tmp_path):
+    msg = _error(tmp_path, """
+        [[layer]]
+        mesh = "stone"
+        params = "x.adp"
+
+        [[layer]]
+        mesh = "leaf"
+        colour = [1, 0, 0]
+        """)
+    assert msg.startswith(f"{tmp_path / 'scene.toml'}:7: key 'colour'") and "unknown key" in msg
+    msg = _error(tmp_path, """
+        up = "y"
+        [camera]
+        elevation = 30
+        zoom = 2
+        """)
+    assert ":4: key 'zoom'" in msg and "elevation" in msg  # says what is allowed
+
+
+def test_missing_layer_file_names_file_line_and_key(tmp_path):
+    msg = _error(tmp_path, """
+        [[layer]]
+        name = "a"
+        mesh = "stone"
+
+        params = "nowhere.adp"
+        """)
+    assert f"scene.toml:5: key 'params'" in msg and "nowhere.adp" in msg and "no such file" in msg
+
+
+def test_include_cycle_names_file_line_and_key(tmp_path):
+    write_scene(tmp_path, 'include = ["a.toml"]\n', "b.toml")
+    write_scene(tmp_path, '# a comment\n\ninclude = ["b.toml"]\n', "a.toml")
+    msg = _error(tmp_path, 'up = "y"\ninclude = ["a.toml"]\n')
+    assert "b.toml:1: key 'include'" in msg and "cycle" in msg and "a.toml" in msg
+
+
+def test_include_adds_layers_and_bad_values_are_caught(tmp_path):
+    stone = ad.load_mesh("stone")
+    ad.write_params(tmp_path / "p.txt", ad.random_params(stone, 3, seed=2), stone)
+    write_scene(tmp_path, '[[layer]]\nname = "inc"\nmesh = "stone"\nparams = "p.txt"\n', "inc.toml")
+    path = write_scene(tmp_path, 'include = ["inc.toml"]\n[[layer]]\nname = "own"\nmesh = "stone"\nparams = "p.txt"\n')
+    assert [layer.name for layer in load_scene(path).layers] == ["inc", "own"]
+    msg = _error(tmp_path, 'include = ["inc.toml"]\n[[layer]]\nname = "inc"\nmesh = "stone"\nparams = "p.txt"\n', "dup.toml")
+    assert "dup.toml:3: key 'name'" in msg
+    msg = _error(tmp_path, '[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = 5\nmin_distance = 1\n', "noterrain.toml")
+    assert "terrain" in msg
+    msg = _error(tmp_path, '[terrain]\nheightmap = "missing.png"\n', "t.toml")
+    assert "t.toml:2: key 'heightmap'" in msg
+    msg = _error(tmp_path, 'up = "y"\n[[layer]\n', "broken.toml")
+    assert "broken.toml" in msg and "TOML" in msg
+
+
+@pytest.mark.slow
+def test_cli_render_bake_export_accept_a_scene(small, tmp_path, capsys, validate):  # noqa: F811
+    png = tmp_path / "scene.png"
+    assert main(["render", str(small), "-o", str(png), "--size", "160x120"]) == 0
+    image = np.asarray(Image.open(png).convert("RGB")).astype(int)
+    assert image.shape == (120, 160, 3)
+    leafy = (image[..., 0] - image[..., 2]) > 60  # the orange leaves layer is drawn in its colour
+    assert leafy.sum() > 5 and image.std() > 10
+    npz = tmp_path / "scene.npz"
+    assert main(["bake", str(small), "-o", str(npz)]) == 0
+    baked = np.load(npz)
+    scene = load_scene(small)
+    for layer in scene.layers:
+        still, _ = ad.deform(layer.mesh.axis, layer.mesh.positions, layer.mesh.normals, layer.params)
+        expected, _ = ad.bake(layer.mesh, layer.params, "cpu", wind=scene.wind if layer.wind else None, time=0.0)
+        assert np.array_equal(baked[f"positions_{layer.name}"], expected)
+        # the [wind] reaches the layers with wind = true only
+        assert np.array_equal(expected, still) == (not layer.wind)
+    glb = tmp_path / "scene.glb"
+    assert main(["export", str(small), "-o", str(glb)]) == 0
+    (report,) = validate(glb)
+    _assert_valid(report, allowed_infos=("BUFFER_VIEW_TARGET_MISSING",))
+    import trimesh
+
+    loaded = trimesh.load(glb)
+    assert set(loaded.geometry) == {"terrain", "stones", "leaves"}
+    assert len(loaded.geometry["leaves"].faces) == 40 * len(ad.load_mesh("leaf").faces)
+    capsys.readouterr()
+    # a scene with PARAMS, or a mesh without: one line, status 2
+    assert main(["render", str(small), str(tmp_path / "x.adp"), "-o", str(png)]) == 2
+    assert main(["render", "stone", "-o", str(png)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all(line.startswith("axialdeform render: error: PARAMS") for line in err)
+
+
+def test_scene_error_from_the_cli_is_one_line(tmp_path, capsys):
+    path = write_scene(tmp_path, '[[layer]]\nmesh = "stone"\nparams = "gone.adp"\n')
+    assert main(["render", str(path), "-o", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"axialdeform render: error: {path}:3: key 'params': no such file {tmp_path / 'gone.adp'}"
+
+
+def test_the_landscape_scene_loads():
+    scene = load_scene(LANDSCAPE, scale_counts=0.1)
+    assert [layer.name for layer in scene.layers] == ["stones", "grass", "trunks", "leaves"]
+    assert scene.terrain is not None and all(len(layer.params) > 0 for layer in scene.layers)
+
+
+@pytest.mark.slow
+def test_view_command_shows_a_scene_headless(small, tmp_path):
+    import subprocess
+    import sys
+
+    shot = tmp_path / "view.png"
+    proc = subprocess.run([sys.executable, "-m", "axialdeform", "view", str(small), "--headless", "--frames", "2",
+                           "--size", "160x120", "--screenshot", str(shot)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "12 instances" in proc.stdout  # the first layer is the viewer's own
+    image = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    assert ((image[..., 0] - image[..., 2]) > 60).sum() > 3  # the orange leaves of the second layer are drawn too
+
+
+def test_time_moves_the_scene_wind_and_needs_one(small, tmp_path, capsys):
+    a, b = tmp_path / "a.npz", tmp_path / "b.npz"
+    assert main(["bake", str(small), "-o", str(a)]) == 0
+    assert main(["bake", str(small), "-o", str(b), "--time", "1.3"]) == 0
+    a, b = np.load(a), np.load(b)
+    assert np.array_equal(a["positions_stones"], b["positions_stones"])  # wind = false
+    assert not np.array_equal(a["positions_leaves"], b["positions_leaves"])  # wind = true: moved
+    still = write_scene(small.parent, small.read_text().replace("[wind]\nstrength = 0.2\n", ""), "still.toml")
+    capsys.readouterr()
+    assert main(["render", str(still), "-o", str(tmp_path / "x.png"), "--time", "1.0"]) == 2
+    assert "--time" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("body, line, key", [
+    ('up = 3', 1, "up"),
+    ('[[layer]]\nmesh = "stone"\ncolor = "red"\nparams = "x"', 3, "color"),
+    ('[terrain]\nheightmap = "hm.png"\n[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = "many"', 6, "count"),
+    ('[terrain]\nheightmap = "hm.png"\n[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = 5\nscale = [0, 1]', 7, "scale"),
+    ('[terrain]\nheightmap = "hm.png"\n[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = 5\nanchor = "top"', 7, "anchor"),
+    ('[terrain]\nheightmap = "hm.png"\nextent = -3', 3, "extent"),
+    ('[camera]\neye = [0, 0, 1]', 2, "eye"),
+    ('[wind]\nstrength = -1', 2, "strength"),
+    ('[terrain]\nheightmap = "hm.png"\n[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = 500\nmin_distance = 3',
+     5, "scatter"),  # too few fit: the recipe's table
+])
+def test_bad_values_name_their_line_and_key(tmp_path, body, line, key):
+    Image.fromarray(np.full((8, 8), 128, dtype=np.uint8)).save(tmp_path / "hm.png")
+    msg = _error(tmp_path, body + "\n")
+    assert msg.startswith(f"{tmp_path / 'scene.toml'}:{line}: key '{key}': "), msg

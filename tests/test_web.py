@@ -1,0 +1,452 @@
+"""The web page (axialdeform web) and the notebook widget, in a REAL browser:
+Debian's chromium driven by Playwright, WebGL 2 on SwiftShader.  No test
+here skips: without chromium or playwright they fail (the README's test
+command installs both)."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import axialdeform as ad
+from axialdeform.core.params import encode_binary
+from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_scene, make_server, page_shaders,
+                             scene_bytes, single_file_html, vendor_file, write_page)
+
+ROOT = Path(__file__).resolve().parent.parent
+SIZE = (400, 300)
+CHROMIUM_ARGS = ["--use-angle=swiftshade", "--enable-unsafe-swiftshader", "--no-sandbox"]
+
+
+# ------------------------------------------------------------------ no browser
+def test_page_shaders_hold_the_package_deformation_verbatim():
+    axial = ad.deformation_glsl().rstrip("\n")
+    quant = ad.assemble("quantized.glsl").source  # noqa: F841 - assembles: the file exists and parses
+    quantized_text = (ROOT / "glsl" / "quantized.glsl").read_text().rstrip("\n")
+    shaders = page_shaders()
+    for variant in ("float", "quantized"):
+        vs = shaders[variant]["vertex"]
+        assert vs.startswith("#version 300 es\nprecision highp float;\n")
+        assert axial in vs, "the page's vertex shader must contain glsl/axial.glsl verbatim"
+        assert quantized_text in vs
+        assert "axial_world(" in vs.split(axial)[1]  # scene.vert calls it after the include
+        assert shaders[variant]["fragment"].startswith("#version 300 es")
+        assert "#version 330" not in vs + shaders[variant]["fragment"]
+    for variant in ("float_extended", "quantized_extended"):
+        assert axial in shaders[variant]["vertex"] and "#define AXIAL_EXTENDED 1" in shaders[variant]["vertex"]
+    assert "#define AXIAL_QUANTIZED 1" in shaders["quantized"]["vertex"]
+    assert "AXIAL_QUANTIZED 1" not in shaders["float"]["vertex"]
+
+
+def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
+    params = ad.random_params(stone, 50, seed=4)
+    scene = build_scene(stone, params, size=SIZE)
+    index = write_page(tmp_path / "site", scene)
+    config = json.loads((tmp_path / "site" / "scene.json").read_text(encoding="utf-8"))
+    assert config["shaders"] == {"quantized": page_shaders()["quantized"]}  # the build these parameters need
+    assert build_scene(stone, params, quantize=False).config["shaders"] == {"float": page_shaders()["float"]}
+    assert set(build_scene(stone, params, all_shaders=True).config["shaders"]) == {
+        "float", "quantized", "float_extended", "quantized_extended"}
+    assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["quantized"]["vertex"]
+    adp = (tmp_path / "site" / PARAMS_FILE).read_bytes()
+    assert adp == encode_binary(params, axis=stone.axis, mesh_fingerprint=stone.fingerprint, quantize=True)
+    cam = ad.frame_instances(stone, params, SIZE[0] / SIZE[1])
+    assert np.allclose(config["camera"]["eye"], cam.eye) and np.allclose(config["camera"]["target"], cam.target)
+    assert config["camera"]["near"] == cam.near and config["camera"]["far"] == cam.far
+    assert config["mesh"]["fingerprint"] == stone.fingerprint.hex()
+    assert "<script type=\"importmap\">" in index.read_text(encoding="utf-8")
+    for rel in VENDOR_FILES.values():
+        assert (tmp_path / "site" / "three" / rel).read_bytes() == vendor_file(rel)
+    assert "MIT License" in (tmp_path / "site" / "three" / "LICENSE").read_text()
+    # the single file holds the same config, mesh and params, base64
+    one = single_file_html(scene)
+    cfg = one.split('id="axd-config">', 1)[1].split("</script>", 1)[0]
+    assert json.loads(cfg.replace("<\\/", "</")) == config
+    b64 = one.split('id="axd-params">', 1)[1].split("</script>", 1)[0]
+    assert base64.b64decode(b64) == adp
+    assert "http://" not in one.split("<body>", 1)[1] and "https://" not in one.split("<body>", 1)[1].replace(
+        "https://threejs.org", "")  # nothing fetched from the network
+
+
+def test_build_scene_refuses_bad_options(stone):
+    params = ad.random_params(stone, 3, seed=1)
+    for kwargs, words in (({"size": (0, 10)}, "size"), ({"mode": "wireframe"}, "mode"), ({"up": "w"}, "up")):
+        with pytest.raises(ad.AxialDeformError, match=words):
+            build_scene(stone, params, **kwargs)
+
+
+def test_vendored_three_is_the_pinned_version():
+    assert vendor_file("VERSION").decode().strip() == THREE_VERSION
+    assert f"REVISION = '{THREE_VERSION.split('.')[1]}'" in vendor_file("three.module.min.js").decode()[:200000] \
+        or f'"{THREE_VERSION.split(".")[1]}"' in vendor_file("three.module.min.js").decode()[:2000]
+    assert f"THREE_VERSION={THREE_VERSION}" in (ROOT / "tools" / "vendor_three.sh").read_text()
+
+
+@pytest.mark.slow
+def test_web_cli_errors_are_one_line(tmp_path):
+    cmd = [sys.executable, "-m", "axialdeform", "web"]
+    r = subprocess.run(cmd + ["stone", str(tmp_path / "missing.adp"), "-o", str(tmp_path / "x.html")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    adp = tmp_path / "s.adp"
+    ad.write_params(adp, ad.random_params(ad.load_mesh("stone"), 5, seed=1), ad.load_mesh("stone"))
+    r = subprocess.run(cmd + ["leaf", str(adp), "-o", str(tmp_path / "x.html")], capture_output=True, text=True)
+    assert r.returncode == 2 and "different base mesh" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    r = subprocess.run(cmd + ["-o", str(tmp_path / "nothing"), "--serve"], capture_output=True, text=True)
+    assert r.returncode == 2 and "no exported page" in r.stderr
+
+
+def test_serve_on_a_busy_port_picks_another(tmp_path):
+    from urllib.request import urlopen
+
+    (tmp_path / "index.html").write_text("<p>hi</p>")
+    busy = socket.socket()
+    busy.bind(("127.0.0.1", 0))
+    busy.listen(1)
+    port = busy.getsockname()[1]
+    try:
+        proc = subprocess.Popen([sys.executable, "-m", "axialdeform", "web", "-o", str(tmp_path), "--serve",
+                                 "--port", str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            line = proc.stdout.readline()
+            assert line.startswith("serving ") and "http://127.0.0.1:" in line, line + proc.stderr.read()
+            url = re.search(r"http://127\.0\.0\.1:\d+/\S*", line).group(0)
+            assert f":{port}/" not in url
+            assert urlopen(url, timeout=10).read() == b"<p>hi</p>"
+        finally:
+            proc.terminate()
+            proc.wait(timeout=10)
+        assert f"port {port} is busy" in proc.stderr.read()
+    finally:
+        busy.close()
+
+
+# ------------------------------------------------------------------ browser
+@pytest.fixture(scope="module")
+def browser():
+    chromium = shutil.which("chromium")
+    assert chromium, "Debian's chromium is required (apt-get install chromium); browser tests do not skip"
+    from playwright.sync_api import sync_playwright  # a missing package is a failure
+
+    with sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+class Visit:
+    """One page in the browser with its console errors collected."""
+
+    def __init__(self, browser, url, size=SIZE):
+        self.page = browser.new_page(viewport={"width": size[0], "height": size[1] + 40})
+        self.errors = []
+        self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
+        self.page.on("pageerror", lambda e: self.errors.append(str(e)))
+        self.page.goto(url)
+        self.page.wait_for_function("window.axialdeform && window.axialdeform.ready !== undefined", timeout=120_000)
+        self.state = self.page.evaluate("window.axialdeform")
+
+    def silhouette(self) -> np.ndarray:
+        from io import BytesIO
+
+        from PIL import Image
+
+        box = self.page.locator(".axd-stage").bounding_box()
+        png = self.page.screenshot(clip=box)  # no "stable element" wait: the status line keeps changing
+        return np.asarray(Image.open(BytesIO(png)).convert("RGB"))
+
+    def close(self):
+        self.page.close()
+
+
+def _mask(image: np.ndarray, background) -> np.ndarray:
+    bg = np.asarray(background) * 255.0
+    return np.abs(image.astype(np.float64) - bg).max(axis=2) > 12
+
+
+def iou(a: np.ndarray, b: np.ndarray, background) -> float:
+    ma, mb = _mask(a, background), _mask(b, background)
+    return float((ma & mb).sum() / max((ma | mb).sum(), 1))
+
+
+@pytest.fixture(scope="module")
+def scene_files(tmp_path_factory):
+    """A parameter file and both exports, in a folder whose name has spaces and non-ASCII."""
+    base = tmp_path_factory.mktemp("web") / "my scènes ü"
+    base.mkdir()
+    mesh = ad.load_mesh("stone")
+    params = ad.random_params(mesh, 1500, seed=7, bend=0.12, placement="disc")
+    adp = base / "stones ä.adp"
+    ad.write_params(adp, params, mesh)
+    for out in ("site ö", "scène.html"):
+        r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "stone", str(adp), "-o", str(base / out),
+                            "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE)
+    return {"base": base, "params": params, "mesh": mesh, "render": render}
+
+
+@pytest.fixture(scope="module")
+def served(scene_files):
+    server, _ = make_server(scene_files["base"], 0)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    yield f"http://127.0.0.1:{server.server_address[1]}/"
+    server.shutdown()
+    server.server_close()
+
+
+BACKGROUND = (0.93, 0.94, 0.96)
+
+
+@pytest.mark.slow
+def test_folder_page_shows_what_render_shows(browser, served, scene_files):
+    from urllib.parse import quote
+
+    v = Visit(browser, served + quote("site ö") + "/index.html")
+    try:
+        assert v.state == {"ready": True, "instances": 1500, "firstFrameMs": v.state["firstFrameMs"]}, v.state
+        shot = v.silhouette()
+        assert shot.shape == (SIZE[1], SIZE[0], 3)
+        assert iou(shot, scene_files["render"], BACKGROUND) >= 0.95
+        assert np.allclose(shot[0, 0], np.asarray(BACKGROUND) * 255, atol=1.5)  # render's background
+        assert "1,500 instances" in v.page.locator(".axd-status").inner_text()
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_single_file_works_from_disk(browser, scene_files):
+    page = scene_files["base"] / "scène.html"
+    v = Visit(browser, page.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 1500, v.state
+        assert iou(v.silhouette(), scene_files["render"], BACKGROUND) >= 0.95
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+def _corrupt(kind: str, good: bytes) -> bytes:
+    if kind == "truncated":
+        return good[:-100]
+    if kind == "checksum":
+        bad = bytearray(good)
+        bad[200] ^= 0x40
+        return bytes(bad)
+    leaf = ad.load_mesh("leaf")
+    other = encode_binary(ad.random_params(leaf, 1500, seed=1), axis=leaf.axis, mesh_fingerprint=leaf.fingerprint,
+                          quantize=True)
+    assert zlib.crc32(other[:-4]) == int.from_bytes(other[-4:], "little")
+    return other
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind, words", [("truncated", "truncated"), ("checksum", "checksum: wrong CRC-32"),
+                                         ("other mesh", "made for a different base mesh"),
+                                         ("other glb", "not the base mesh this page was exported with")])
+def test_bad_parameter_file_shows_why_and_draws_nothing(browser, served, scene_files, kind, words):
+    from urllib.parse import quote
+
+    site = scene_files["base"] / "site ö"
+    bad_dir = scene_files["base"] / f"bad {kind}"
+    if bad_dir.exists():
+        shutil.rmtree(bad_dir)
+    shutil.copytree(site, bad_dir)
+    if kind == "other glb":  # the mesh file swapped: the browser hashes the GLB (WebCrypto)
+        from axialdeform.core.export import encode_base_mesh
+
+        (bad_dir / "mesh.glb").write_bytes(encode_base_mesh(ad.load_mesh("leaf")))
+    else:
+        (bad_dir / PARAMS_FILE).write_bytes(_corrupt(kind, (site / PARAMS_FILE).read_bytes()))
+    v = Visit(browser, served + quote(f"bad {kind}") + "/index.html")
+    try:
+        assert v.state["ready"] is False and words in v.state["error"], v.state
+        message = v.page.locator(".axd-message")
+        name = "mesh.glb" if kind == "other glb" else PARAMS_FILE
+        assert message.is_visible() and words in message.inner_text() and name in message.inner_text()
+        assert v.page.locator("canvas").count() == 0  # nothing drawn, nothing wrong drawn
+    finally:
+        v.close()
+
+
+def _widget_page(browser, tmp_path, state: dict, esm: str):
+    """The widget's ESM run in Chromium against a minimal anywidget model
+    (get/set/on/off/save_changes over the synced state; bytes arrive as
+    DataView, as ipywidgets delivers them).  ``state``: name -> value, or
+    {"b64": ...} for bytes.  Returns (page, console errors)."""
+    harness = tmp_path / "widget harness ü.html"
+    harness.write_text("""<!doctype html><meta charset="utf-8"><link rel="icon" href="data:,"><body><div id="out"></div>
+<script type="module">
+const state = JSON.parse(document.getElementById('state').textContent);
+const dv = (b64) => { const s = atob(b64); const a = new Uint8Array(s.length);
+  for (let i = 0; i < s.length; i++) a[i] = s.charCodeAt(i); return new DataView(a.buffer); };
+const data = {}; for (const [k, v] of Object.entries(state)) data[k] = v && v.b64 !== undefined ? dv(v.b64) : v;
+const listeners = {};
+const model = { get: (k) => data[k], set: (k, v) => { data[k] = v; (listeners['change:' + k] || []).forEach((f) => f()); },
+  on: (e, f) => { (listeners[e] = listeners[e] || []).push(f); }, off: (e, f) => { listeners[e] = (listeners[e] || []).filter((g) => g !== f); },
+  save_changes: () => { window.widgetStatus = data.status; } };
+window.widgetModel = model; window.toDataView = dv;
+const esm = await import(URL.createObjectURL(new Blob([document.getElementById('esm').textContent], {type: 'text/javascript'})));
+window.cleanup = await esm.default.render({ model, el: document.getElementById('out') });
+</script>
+<script type="application/json" id="state">""" + json.dumps(state).replace("</", "<\\/") + """</script>
+<script type="text/plain" id="esm">""" + esm.replace("</script", "<\\/script") + """</script>""", encoding="utf-8")
+    page = browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1] + 40})
+    errors = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(harness.as_uri())
+    page.wait_for_function("window.widgetStatus !== undefined", timeout=120_000)
+    return page, errors
+
+
+@pytest.mark.slow
+def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
+    from axialdeform.widget import SceneWidget
+
+    mesh = ad.load_mesh("stone")
+    w = SceneWidget(mesh, ad.random_params(mesh, 300, seed=2), size=SIZE)
+    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
+    state = {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
+    page, errors = _widget_page(browser, tmp_path, state, w._esm)
+    try:
+        assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 300}
+        clip = page.locator(".axd-stage").bounding_box()
+        before = page.screenshot(clip=clip)
+        w.set_params(ad.random_params(mesh, 40, seed=9))
+        assert w.config["instances"] == 40
+        push = "(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }"
+        page.evaluate(push, base64.b64encode(w.params_adp).decode())
+        page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
+        assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
+        page.wait_for_timeout(300)
+        assert page.screenshot(clip=clip) != before
+        assert "40 instances" in page.locator(".axd-status").inner_text()
+        # a bad update: the page says why and draws nothing
+        page.evaluate(push, base64.b64encode(w.params_adp[:-8]).decode())
+        page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
+        st = page.evaluate("window.widgetStatus")
+        assert st["ready"] is False and "truncated" in st["error"]
+        assert page.locator(".axd-message").is_visible()
+        page.evaluate("window.cleanup()")
+        assert page.locator("canvas").count() == 0
+        assert errors == []
+    finally:
+        page.close()
+
+
+@pytest.mark.slow
+def test_widget_in_an_executed_notebook(browser, tmp_path):
+    """A notebook executed by a real Jupyter kernel (nbclient): the cell shows
+    the widget (widget-view output) and set_params changes its synced state;
+    the widget state the notebook stores (what a front end receives) is then
+    rendered by the widget's ESM in Chromium.  Not tested: a Jupyter or
+    VS Code front end itself."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [
+        nbformat.v4.new_code_cell("import axialdeform as ad\nfrom axialdeform.widget import SceneWidget\n"
+                                  "m = ad.load_mesh('stone')\n"
+                                  f"w = SceneWidget(m, ad.random_params(m, 200, seed=3), size={SIZE!r})\nw"),
+        nbformat.v4.new_code_cell("w.set_params(ad.random_params(m, 50, seed=4)); w.config['instances']"),
+    ]
+    NotebookClient(nb, timeout=180, kernel_name="python3", store_widget_state=True).execute()
+    view = nb.cells[0].outputs[0]["data"]["application/vnd.jupyter.widget-view+json"]
+    assert nb.cells[1].outputs[0]["data"]["text/plain"] == "50"
+    stored = nb.metadata.widgets["application/vnd.jupyter.widget-state+json"]["state"][view["model_id"]]
+    state = dict(stored["state"])
+    for buf in stored.get("buffers", []):
+        assert buf["encoding"] == "base64"
+        state[buf["path"][0]] = {"b64": buf["data"]}
+    assert len(base64.b64decode(state["params_adp"]["b64"])) == 96 + 128 + 32 * 50 + 4
+    page, errors = _widget_page(browser, tmp_path, state, state["_esm"])
+    try:
+        assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 50}
+        assert page.locator("canvas").count() == 1 and errors == []
+    finally:
+        page.close()
+
+
+def test_scene_bytes_counts_what_a_browser_downloads(tmp_path, stone):
+    scene = build_scene(stone, ad.random_params(stone, 100, seed=1), size=SIZE)
+    write_page(tmp_path / "s", scene)
+    b = scene_bytes(tmp_path / "s")
+    assert b["params"] == 96 + 128 + 32 * 100 + 4
+    assert b["mesh"] == len(scene.glb) and b["three"] > 600_000
+
+
+@pytest.mark.slow
+def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
+    """The other paths: float32 records, an open (two-sided) mesh, flat shading, z up."""
+    from axialdeform.gl.image import save_png
+
+    mesh = ad.load_mesh("leaf")
+    params = ad.random_params(mesh, 600, seed=5, bend=0.15, up="z", placement="disc")
+    adp = tmp_path / "leaves.adp"
+    ad.write_params(adp, params, mesh)
+    out = tmp_path / "leaves.html"
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "-o", str(out), "--float32",
+                        "--mode", "flat", "--up", "z", "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert base64.b64decode(out.read_text(encoding="utf-8").split('id="axd-params">', 1)[1].split("<", 1)[0])[10] == 0
+    render = ad.render_image(mesh, params, SIZE, "flat", up="z")
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 600, v.state
+        shot = v.silhouette()
+        score = iou(shot, render, BACKGROUND)
+        if score < 0.95:
+            save_png(tmp_path / "page.png", shot)
+        assert score >= 0.95, f"IoU {score:.3f}; see {tmp_path}"
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("quantize", [True, False])
+def test_extended_instances_match_render(browser, tmp_path, quantize):
+    """19-number instances (scale, twist, taper; .adp version 2) in the page."""
+    mesh = ad.load_mesh("stone")
+    params = ad.random_params(mesh, 700, seed=8, bend=0.12, placement="disc", scale=0.5, twist=1.2, taper=0.4)
+    assert params.shape == (700, 19)
+    adp = tmp_path / "ext.adp"
+    ad.write_params(adp, params, mesh)
+    out = tmp_path / "ext.html"
+    write_page(out, build_scene(mesh, ad.read_params(adp, mesh), size=SIZE, quantize=quantize))
+    assert int.from_bytes(base64.b64decode(out.read_text(encoding="utf-8").split('id="axd-params">', 1)[1]
+                                           .split("<", 1)[0])[8:10], "little") == 2
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 700, v.state
+        assert iou(v.silhouette(), render, BACKGROUND) >= 0.95
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_folder_page_from_disk_says_it_needs_a_server(browser, scene_files):
+    v = Visit(browser, (scene_files["base"] / "site ö" / "index.html").as_uri())
+    try:
+        assert v.state["ready"] is False and "file://" in v.state["error"], v.state
+        assert "--serve" in v.page.locator(".axd-message").inner_text()
+        assert v.page.locator("canvas").count() == 0
+    finally:
+        v.close()
