@@ -240,6 +240,21 @@ def test_output_that_is_an_input_is_refused(files, capsys):
         assert p.read_bytes() == data  # before: replaced by a PNG
 
 
+def test_scene_file_output_that_is_the_scene_is_refused(tmp_path, capsys):
+    """``render``/``export`` of a scene file never write over the scene file itself."""
+    stone = ad.load_mesh("stone")
+    ad.write_params(tmp_path / "p.adp", ad.random_params(stone, 3, seed=1), stone)
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[[layer]]\nname = "stones"\nmesh = "stone"\nparams = "p.adp"\n')
+    before = scene.read_bytes()
+    (tmp_path / "link.glb").symlink_to(scene)
+    for argv in (["render", scene, "-o", scene, "--size", "16x16"], ["export", scene, "-o", tmp_path / "link.glb"]):
+        assert main([str(a) for a in argv]) == 2, argv
+        assert "refusing to overwrite an input" in capsys.readouterr().err, argv
+    assert scene.read_bytes() == before
+    assert main(["render", str(scene), "-o", str(tmp_path / "ok.png"), "--size", "16x16"]) == 0  # a sane one
+
+
 def test_bundled_mesh_is_an_input_too(tmp_path, capsys):
     """``demo`` and ``render stone`` read the package's stone.obj: never replaced by their output."""
     stone = ad.bundled_mesh_path("stone")
