@@ -15,6 +15,7 @@ import importlib
 import sys
 
 from ..core.errors import AxialDeformError
+from ..core.safeio import quiet_numpy
 
 __all__ = ["main", "build_parser", "COMMANDS", "PLUGINS"]
 
@@ -58,7 +59,8 @@ def main(argv=None) -> int:
 
     previous, warnings.showwarning = warnings.showwarning, show
     try:
-        status = args.handler(args)
+        with quiet_numpy():  # floating-point trouble is checked and reported, never printed as warnings
+            status = args.handler(args)
         if status:
             return int(status)
     except AxialDeformError as exc:
@@ -67,6 +69,10 @@ def main(argv=None) -> int:
     except OSError as exc:
         where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
         print(f"axialdeform {args.command}: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(f"axialdeform {args.command}: error: out of memory (the input asks for more than this machine has; "
+              "use fewer instances or a smaller --size)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"axialdeform {args.command}: interrupted", file=sys.stderr)

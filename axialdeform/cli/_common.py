@@ -64,14 +64,41 @@ def add_mesh_mismatch(p) -> None:
                    help="use PARAMS even if made for another mesh (default: refuse)")
 
 
-def load(args):
-    """``(mesh, params)`` from ``args.mesh`` and ``args.params``."""
+def mesh_file(source):
+    """The file a mesh argument names (a bundled name: the package's file), or None."""
+    from ..core.mesh import mesh_source_path
+
+    return None if source is None else mesh_source_path(source)
+
+
+def load(args, what: str = "output", allow_folder: bool = False):
+    """``(mesh, params)`` from ``args.mesh`` and ``args.params``, after checking
+    that ``args.output`` is neither one of them nor a device, FIFO or socket
+    (:func:`~axialdeform.core.safeio.check_output_path`); warns once when the
+    parameters go past the float32-safe ranges."""
     from ..core.mesh import load_mesh
     from ..core.params import read_params
+    from ..core.safeio import check_output_path
 
+    check_output_path(args.output, (mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+    warn_ranges(args, mesh, params)
     return mesh, params
+
+
+def warn(args, message: str) -> None:
+    """One warning line on stderr."""
+    print(f"axialdeform {args.command}: warning: {message}", file=sys.stderr)
+
+
+def warn_ranges(args, mesh, params) -> None:
+    """Warn (once) when a parameter file goes past the float32-safe ranges."""
+    from ..core.params import range_warning
+
+    message = range_warning(mesh, params, args.params)
+    if message:
+        warn(args, message)
 
 
 def progress_bar(total: int, desc: str, unit: str = "inst", small: int = 2000):

@@ -20,12 +20,15 @@ def add_parser(sub) -> None:
     b.add_argument("--engine", choices=ENGINES, default="cpu", help="who deforms: numpy or the GPU (default: %(default)s)")
     b.add_argument("--format", choices=MESH_FORMATS, default="obj", help="mesh file type when OUT is a folder (default: %(default)s)")
     add_mesh_mismatch(b)
+    b.add_argument("--overwrite", action="store_true", help=(
+        "OUT may be a folder of an earlier bake: new files are written first, then the old instance_* files "
+        "not rewritten are removed (other files are kept); default: a folder holding files is refused"))
     add_wind_args(b)
     b.set_defaults(handler=run)
 
 
 def run(args) -> None:
-    from ..core.bake import write_mesh_folder, write_npz
+    from ..core.bake import check_bake_folder, write_mesh_folder, write_npz
     from ..gl.bake import bake
 
     from . import scenes
@@ -34,16 +37,20 @@ def run(args) -> None:
     if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
         return scenes.bake(scene, args, progress_bar, wind_arg(args) if args.wind is not None else None)
     wind = wind_arg(args)
-    mesh, params = load(args)
-    with progress_bar(len(params), f"deforming ({args.engine})") as bar:
-        positions, normals = bake(mesh, params, args.engine, progress=bar, wind=wind, time=args.time or 0.0)
     out = Path(args.output)
+    mesh, params = load(args, "bake output", allow_folder=out.suffix.lower() != ".npz")
+    if out.suffix.lower() != ".npz":  # refuse a folder of stale files before the work, not after
+        check_bake_folder(out, args.overwrite)
+    with progress_bar(len(params), f"deforming ({args.engine})") as bar:
+        positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params,
+                                  wind=wind, time=args.time or 0.0)
     if out.suffix.lower() == ".npz":
         write_npz(out, positions, normals)
         print(f"wrote {out}: positions and normals {positions.shape} float32 ({args.engine})")
     else:
         with progress_bar(len(positions), "writing meshes") as bar:
-            files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar)
+            files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
+                                      overwrite=args.overwrite)
         meshes = [f for f in files if f.suffix == "." + args.format]
         beside = f" + {len(files) - len(meshes)} material/texture files" if len(files) > len(meshes) else ""
         print(f"wrote {len(meshes)} {args.format} files{beside} to {out}/ ({args.engine})")

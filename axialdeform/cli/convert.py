@@ -17,6 +17,10 @@ def run(args) -> None:
     from ..core.mesh import load_mesh
     from ..core.params import check_mesh, read_param_file, write_params
 
+    from ..core.safeio import check_output_path
+    from ._common import mesh_file
+
+    check_output_path(args.dst, (args.src, mesh_file(args.mesh)), "parameter file")
     pf = read_param_file(args.src)
     mesh = load_mesh(args.mesh) if args.mesh else None
     if mesh is not None:

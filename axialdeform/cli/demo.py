@@ -19,12 +19,22 @@ def add_parser(sub) -> None:
     d.set_defaults(handler=run)
 
 
+#: peak bytes per instance of ``demo`` (random_params' temporaries, the
+#: result, the GPU buffer and camera bounds), for the -n check
+DEMO_BYTES_EACH = 1024
+
+
 def run(args) -> None:
     from ..core.mesh import load_mesh
     from ..core.variation import random_params
     from ..gl.camera import frame_instances
     from ..gl.image import parse_size, render_image, save_png
 
+    from ..core.mesh import mesh_source_path
+    from ..core.safeio import check_count, check_output_path
+
+    check_output_path(args.output, (mesh_source_path("stone"),), "PNG")  # the bundled mesh is an input too
+    check_count(args.count, DEMO_BYTES_EACH, "-n/--count")
     mesh = load_mesh("stone")
     params = random_params(mesh, args.count, seed=args.seed, bend=0.14, placement="disc",
                            spacing=0.9 * mesh.axis.length, tilt=(-0.2, 0.2))

@@ -33,6 +33,6 @@ def run(args) -> None:
     scene = scenes.scene_of(args)
     if scene is not None:
         return scenes.export(scene, args)
-    mesh, params = load(args)
-    path = export_glb(out, mesh, params, args.layout)
+    mesh, params = load(args, "exported .glb")
+    path = export_glb(out, mesh, params, args.layout, source=args.params)
     print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

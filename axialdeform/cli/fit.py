@@ -40,6 +40,10 @@ def run(args) -> None:
     mesh = load_mesh(args.base)
     is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
     paths = variant_paths(args.variants)
+    from ..core.mesh import mesh_source_path
+    from ..core.safeio import check_output_path
+
+    check_output_path(out, (mesh_source_path(args.base), *paths), "parameter file")
     with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:
         result = fit_files(mesh, paths, max_residual=args.max_residual, max_iterations=args.max_iterations,
                            progress=bar, extended=args.extended)

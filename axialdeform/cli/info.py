@@ -16,16 +16,17 @@ def run(args) -> int | None:
     """Header, count and checksum verdict; a corrupt binary file still shows
     its header, then the verdict fails with status 2."""
     from ..core.axis import ControlAxis
-    from ..core.params import BINARY_SUFFIXES, MAGIC, read_binary_header, read_param_file
+    from ..core.errors import AxialDeformError, ParamFileError
+    from ..core.params import ParamFile, decode_binary, parse_text, read_binary_header, read_param_bytes
 
     path = Path(args.params)
-    try:
-        data = path.read_bytes()
-    except OSError:
-        data = b""
-    if path.is_file() and (data[: len(MAGIC)] == MAGIC or path.suffix.lower() in BINARY_SUFFIXES):
+    data, binary = read_param_bytes(path)  # a regular file, read with a bound
+    if binary:
         h = read_binary_header(data, str(path))  # structural errors: one line, exit 2
-        axis = ControlAxis(h.axis_index, h.lo, h.length).describe() if h.axis_index >= 0 else "not recorded"
+        try:
+            axis = ControlAxis(h.axis_index, h.lo, h.length).describe() if h.axis_index >= 0 else "not recorded"
+        except AxialDeformError as exc:
+            raise ParamFileError(f"{path}: axis: {exc}") from None
         rows = [("file", f"{path} ({h.size} bytes)"), ("format", f"binary v{h.version}, {h.encoding_name}"),
                 ("instances", f"{h.count}" + (f" ({h.size / h.count:.1f} bytes each)" if h.count else "")),
                 ("axis", axis),
@@ -37,9 +38,9 @@ def run(args) -> int | None:
         if not h.checksum_ok:
             print(f"axialdeform info: error: {path}: checksum: the file is corrupt", file=sys.stderr)
             return 2
-        read_param_file(path)  # the values too: finite numbers, valid axis
+        decode_binary(data, str(path))  # the values too: finite numbers, valid axis
         return None
-    pf = read_param_file(path)
+    pf = ParamFile(values=parse_text(data, str(path)), format="text", encoding="text", size=len(data))
     print(f"file:      {path} ({pf.size} bytes)")
     print(f"format:    text, {pf.count} lines of {pf.values.shape[1]} numbers")
     print(f"instances: {pf.count}" + (f" ({pf.size / pf.count:.1f} bytes each)" if pf.count else ""))

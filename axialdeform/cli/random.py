@@ -36,12 +36,22 @@ def add_parser(sub) -> None:
     r.set_defaults(handler=run)
 
 
+#: peak bytes per instance of ``random`` (random_params' temporaries, the
+#: result and its encoding; measured with tracemalloc: about 700), for the -n check
+RANDOM_BYTES_EACH = 768
+
+
 def run(args) -> None:
     from ..core.mesh import load_mesh
     from ..core.params import write_params
     from ..core.variation import random_params
 
+    from ..core.safeio import check_count, check_output_path
+    from ._common import mesh_file
+
     extension = extension_args(args)  # before any work: a bad range is the first thing said
+    check_output_path(args.output, (mesh_file(args.mesh),), "parameter file")
+    check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")
     mesh = load_mesh(args.mesh)
     params = random_params(mesh, args.count, args.seed, bend=args.bend, placement=args.placement,
                            spacing=args.spacing, up=args.up, yaw=args.yaw, tilt=args.tilt, **extension)

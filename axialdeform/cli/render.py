@@ -78,7 +78,7 @@ def run(args) -> None:
     options = cull_options(args)
     wind = wind_arg(args)
     wind_options = {"wind": wind, "time": args.time} if wind is not None else {}
-    mesh, params = load(args)
+    mesh, params = load(args, "PNG")
     size = parse_size(args.size)
     camera = camera_from_args(mesh, params, size, args)
     ctx = create_context()

@@ -28,6 +28,13 @@ def scene_of(args, *, params_optional: bool = False):
     return load_scene(args.mesh)
 
 
+def _check_output(args, what: str) -> None:
+    """Refuse an output that is the scene file itself, a device, FIFO or socket."""
+    from ..core.safeio import check_output_path
+
+    check_output_path(args.output, (args.mesh,), what)
+
+
 def _time(scene, args) -> float:
     """``--time`` for a scene: it moves the scene's wind, so a scene without one refuses it."""
     t = getattr(args, "time", None)
@@ -45,6 +52,7 @@ def render(scene, args, wind=None) -> None:
     from ..gl.image import parse_size, save_png
     from ..gl.scene import render_scene
 
+    _check_output(args, "PNG")
     if wind is not None:
         scene.wind = wind
     image = render_scene(scene, parse_size(args.size), args.mode, time=_time(scene, args))
@@ -62,6 +70,7 @@ def bake(scene, args, progress, wind=None) -> None:
     if out.suffix.lower() != ".npz":
         raise AxialDeformError(f"{out}: a scene bakes to one .npz (arrays positions_LAYER, normals_LAYER); "
                                f"expected a .npz file name")
+    _check_output(args, "bake output")
     if wind is not None:
         scene.wind = wind
     t = _time(scene, args)
@@ -81,6 +90,7 @@ def export(scene, args) -> None:
 
     if args.layout != "baked":
         raise GltfError("--instanced: a scene exports baked (one mesh per layer); expected --baked or no layout flag")
+    _check_output(args, "exported .glb")
     path = export_scene(args.output, scene)
     print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, baked, {path.stat().st_size} bytes)")
 

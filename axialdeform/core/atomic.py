@@ -72,7 +72,11 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     a format from the name still see the right extension.  If the block
     raises, the temporary file is removed and ``path`` is left as it was.
     """
+    from .safeio import check_not_special
+
     path = Path(path)
+    # a device, a FIFO or a symlink to one is never replaced by a regular file
+    check_not_special(path, "output")
     folder = path.parent if str(path.parent) else Path(".")
     key = os.path.abspath(folder)
     if key not in _swept:  # once per folder and process: cheap even for folders of many files
@@ -93,6 +97,12 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         # (the replaced file's, else 0666 less the umask)
         os.chmod(tmp, stat.S_IMODE(path.stat().st_mode) if path.exists() else _default_mode())
         os.replace(tmp, path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        if exc.filename is None:  # disk full, quota: say which file could not be written
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
+        raise
     except BaseException:
         with contextlib.suppress(OSError):
             tmp.unlink()

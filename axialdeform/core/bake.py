@@ -4,7 +4,9 @@ folder of mesh files."""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -12,25 +14,52 @@ import numpy as np
 from .atomic import atomic_path, atomic_write_bytes
 from .material import to_trimesh_with_appearance
 from .deform import deform
-from .errors import ArgumentError, AxialDeformError
+from .errors import ArgumentError, PathError
+from .safeio import check_count, check_not_special, require_finite
 
-__all__ = ["bake_cpu", "instance_name", "write_npz", "write_scene_npz", "write_mesh_folder", "MESH_FORMATS"]
+__all__ = ["bake_cpu", "instance_name", "write_npz", "write_scene_npz", "write_mesh_folder", "check_bake_folder",
+           "check_bake_count", "check_bake_result", "MESH_FORMATS"]
 
 MESH_FORMATS = ("obj", "ply", "glb")
 
 
-def bake_cpu(mesh, params, *, progress=None, wind=None, time: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def bake_cpu(mesh, params, *, progress=None, wind=None, time: float = 0.0,
+             source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
     in the base mesh's vertex order, by the numpy reference (:func:`deform`).
     ``params``: (n, 16) or (n, 19) (extended instances); ``wind``: an
     :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
     ``progress``: optional object with ``update(instances_done)``.  The GPU
-    engine and the switch between them: :func:`axialdeform.gl.bake.bake`."""
+    engine and the switch between them: :func:`axialdeform.gl.bake.bake`.
+
+    The count is checked against memory first (:func:`check_bake_count`) and
+    a non-finite result (finite parameters so large that float32 overflows)
+    raises :class:`AxialDeformError` naming ``source`` (the parameter file),
+    the instance, array, vertex and coordinate (:func:`check_bake_result`):
+    nothing non-finite is ever returned to be written."""
+    check_bake_count(mesh, len(params), "cpu", source)
     if wind is not None:
         from .wind import apply_wind
 
         params = apply_wind(wind, mesh.axis, params, time)
-    return deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
+        positions, normals = deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
+    check_bake_result(positions, normals, source)
+    return positions, normals
+
+
+def check_bake_count(mesh, count: int, engine: str = "cpu", source: str | None = None) -> None:
+    """Refuse ``count`` instances whose baked result cannot fit in memory: two
+    ``(n, v, 3)`` float32 arrays (the GPU capture holds a third copy while it
+    splits them), checked before anything is allocated."""
+    check_count(count, mesh.vertex_count * 12 * (4 if engine == "gpu" else 2.2),
+                f"{source + ': ' if source else ''}instances to bake ({mesh.vertex_count} vertices each)")
+
+
+def check_bake_result(positions, normals, source: str | None = None) -> None:
+    """Raise :class:`AxialDeformError` if a baked result holds a NaN or infinity."""
+    require_finite(positions, "positions", "xyz", source=source)
+    require_finite(normals, "normals", "xyz", source=source)
 
 
 def instance_name(i: int, count: int = 0, suffix: str = "") -> str:
@@ -60,13 +89,26 @@ def write_scene_npz(path: str | os.PathLike, layers: dict) -> None:
             np.savez(fh, **arrays)
 
 
-def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None) -> list[Path]:
-    """One mesh file per instance (``instance_000000.obj`` …), each written atomically."""
+
+#: the file names :func:`write_mesh_folder` writes, and recognises as its own
+INSTANCE_FILE = re.compile(r"^instance_(\d{6,})\.(" + "|".join(MESH_FORMATS) + r")$")
+
+
+def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None,
+                      *, overwrite: bool = False) -> list[Path]:
+    """One mesh file per instance (``instance_000000.obj`` …), each written atomically.
+
+    ``folder`` must be new or empty (hidden files aside); a folder that holds
+    anything else is refused, unless ``overwrite``: then every new file is
+    written first (atomically), and only afterwards are the old instance files
+    it recognises (``instance_NNNNNN.obj|ply|glb``) that were not just
+    rewritten removed; other files are left alone.  So an interrupted
+    overwrite leaves every old or new file whole, never a half-written one.
+    """
     if fmt not in MESH_FORMATS:
         raise ArgumentError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
     folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise AxialDeformError(f"{folder}: exists and is not a folder")
+    old = check_bake_folder(folder, overwrite)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     plain = not mesh.has_appearance
@@ -97,4 +139,38 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
         written.append(path)
         if progress is not None:
             progress.update(1)
+    if overwrite:
+        keep = {p.name for p in written}
+        for name in old:
+            if name not in keep and INSTANCE_FILE.match(name):
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(folder / name)
     return written
+
+
+def check_bake_folder(folder: str | os.PathLike, overwrite: bool = False) -> list[str]:
+    """Check ``folder`` as the target of :func:`write_mesh_folder` before any
+    work: it must be new, empty (hidden files aside), or — with
+    ``overwrite`` — anything; never a file, a device or a FIFO.  Returns the
+    names it holds now.  Changes nothing."""
+    folder = Path(folder)
+    check_not_special(folder, "output folder", allow_folder=True)
+    if folder.exists() and not folder.is_dir():
+        raise PathError(f"{folder}: exists and is not a folder; expected a folder for one mesh file per instance")
+    old = _folder_entries(folder)
+    if old and not overwrite:
+        sample = ", ".join(sorted(old)[:3]) + (", ..." if len(old) > 3 else "")
+        raise PathError(f"{folder}: holds {len(old)} files it did not just write ({sample}); expected a new or empty "
+                        "folder (--overwrite replaces an earlier bake: it removes the old instance_* files)")
+    return old
+
+
+def _folder_entries(folder: Path) -> list[str]:
+    """Names in ``folder`` other than hidden ones (atomic writes' ``.part`` files)."""
+    try:
+        with os.scandir(folder) as it:
+            return [e.name for e in it if not e.name.startswith(".")]
+    except FileNotFoundError:
+        return []
+    except OSError as exc:
+        raise PathError(f"{folder}: cannot list: {exc.strerror}") from None

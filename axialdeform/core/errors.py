@@ -16,6 +16,7 @@ __all__ = [
     "TopologyError",
     "ResidualError",
     "GltfError",
+    "PathError",
     "ScatterError",
     "TooFewError",
     "SceneError",
@@ -71,6 +72,12 @@ class ResidualError(AxialDeformError):
 class GltfError(AxialDeformError, ValueError):
     """A glTF file that cannot be written or read back as axialdeform
     instances (wrong extension, missing attribute, unexpected accessor type)."""
+
+
+class PathError(AxialDeformError, ValueError):
+    """A path that cannot be used: an input that is not a regular file (a
+    FIFO, a device, a folder, a symlink to one) or too big for what it claims
+    to hold; an output that is an input, or exists and is not a regular file."""
 
 
 class ScatterError(AxialDeformError, ValueError):

@@ -242,13 +242,14 @@ def check_glb_path(path) -> Path:
     return path
 
 
-def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
-    """The GLB bytes of the baked layout (see :func:`export_baked`)."""
+def encode_baked(mesh, params, *, positions=None, normals=None, source: str | None = None) -> bytes:
+    """The GLB bytes of the baked layout (see :func:`export_baked`); ``source``
+    names the parameter file in errors."""
     params = as_params(params)
     if positions is None or normals is None:
         from .bake import bake_cpu
 
-        positions, normals = bake_cpu(mesh, params)
+        positions, normals = bake_cpu(mesh, params, source=source)
     if len(params) == 0:
         raise GltfError("baked export: expected at least one instance, found 0")
     positions = np.ascontiguousarray(positions, dtype="<f4")
@@ -259,6 +260,11 @@ def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
             f"baked arrays: expected positions and normals of shape ({len(params)}, {mesh.vertex_count}, 3), "
             f"found {positions.shape} and {normals.shape}"
         )
+    from .safeio import require_finite
+
+    # an overflowing deformation (huge but finite parameters) is refused before any JSON is made
+    require_finite(positions, "positions", "xyz", error=GltfError, source=source)
+    require_finite(normals, "normals", "xyz", error=GltfError, source=source)
     b = _Builder()
     g = b.g
     look = b.appearance(mesh)
@@ -288,7 +294,8 @@ def encode_baked(mesh, params, *, positions=None, normals=None) -> bytes:
     return b.finish()
 
 
-def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, normals=None) -> Path:
+def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, normals=None,
+                 source: str | None = None) -> Path:
     """Write one glTF mesh per instance with its deformed world geometry.
 
     Parameters
@@ -305,7 +312,7 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     ``extras["axialdeform"]`` records the axis and the mesh fingerprint.
     """
     path = check_glb_path(path)
-    atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals))
+    atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals, source=source))
     return path
 
 
@@ -429,10 +436,11 @@ def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
     return path
 
 
-def export_glb(path: str | os.PathLike, mesh, params, layout: str = "baked") -> Path:
-    """Write ``params`` for ``mesh`` as a GLB in ``layout`` ``"baked"`` or ``"instanced"``."""
+def export_glb(path: str | os.PathLike, mesh, params, layout: str = "baked", *, source: str | None = None) -> Path:
+    """Write ``params`` for ``mesh`` as a GLB in ``layout`` ``"baked"`` or ``"instanced"``
+    (``source``: the parameter file, named in errors)."""
     if layout == "baked":
-        return export_baked(path, mesh, params)
+        return export_baked(path, mesh, params, source=source)
     if layout == "instanced":
         return export_instanced(path, mesh, params)
     raise GltfError(f"layout: expected one of {', '.join(LAYOUTS)}, found {layout!r}")

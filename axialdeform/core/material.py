@@ -135,18 +135,29 @@ class Part:
 class SafeResolver:
     """A trimesh resolver for the files a mesh refers to (``.mtl``, textures,
     glTF buffers): only regular files in the mesh's folder tree are read, so a
-    FIFO or a device never blocks; every refusal or failure is recorded in
-    ``failed`` as ``(name, reason)`` for the loader's warning."""
+    FIFO or a device never blocks, each at most ``max_bytes``
+    (:data:`axialdeform.core.safeio.MAX_REFERENCED_BYTES`); every refusal or
+    failure is recorded in ``failed`` as ``(name, reason)`` for the loader's
+    warning, and the refusals (not a regular file, too large) also in
+    ``refused`` as ``(name, message)``: the loader refuses the mesh for those
+    that are not textures."""
 
-    def __init__(self, folder: str | os.PathLike):
+    def __init__(self, folder: str | os.PathLike, max_bytes: int | None = None):
+        from .safeio import MAX_REFERENCED_BYTES
+
         self.parent = os.path.abspath(os.fspath(folder))
+        self.max_bytes = MAX_REFERENCED_BYTES if max_bytes is None else int(max_bytes)
         self.failed: list[tuple[str, str]] = []
+        self.refused: list[tuple[str, str]] = []
 
     def _path(self, name: str) -> str:
         name = str(name).replace("\\", "/")
         return name if os.path.isabs(name) else os.path.join(self.parent, name)
 
     def get(self, name: str) -> bytes:
+        from .errors import PathError
+        from .safeio import read_regular
+
         path = self._path(name)
         try:
             st = os.stat(path)
@@ -155,11 +166,14 @@ class SafeResolver:
             raise
         if not stat.S_ISREG(st.st_mode):
             self.failed.append((str(name), "is not a regular file"))
+            self.refused.append((str(name), f"{name}: not a regular file"))
             raise OSError(f"{name}: not a regular file")
         try:
-            fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-            with os.fdopen(fd, "rb") as fh:
-                return fh.read()
+            return bytes(read_regular(path, self.max_bytes, "a file referred to by the mesh"))
+        except PathError as exc:
+            self.failed.append((str(name), str(exc)))
+            self.refused.append((str(name), str(exc)))
+            raise OSError(str(exc)) from None
         except OSError as exc:
             self.failed.append((str(name), exc.strerror or "cannot be read"))
             raise
@@ -170,7 +184,9 @@ class SafeResolver:
         return self.parent
 
     def namespaced(self, namespace):
-        return SafeResolver(os.path.join(self.parent, namespace))
+        child = SafeResolver(os.path.join(self.parent, namespace), self.max_bytes)
+        child.failed, child.refused = self.failed, self.refused  # one record for the whole load
+        return child
 
     def keys(self):
         return iter(())

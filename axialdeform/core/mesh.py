@@ -20,9 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from .axis import ControlAxis
-from .errors import MeshError
+from .errors import AxialDeformError, MeshError
 
-__all__ = ["BaseMesh", "load_mesh", "bundled_mesh_path", "BUNDLED_MESHES", "MESH_SUFFIXES", "area_weighted_normals"]
+__all__ = ["BaseMesh", "load_mesh", "mesh_source_path", "bundled_mesh_path", "BUNDLED_MESHES", "MESH_SUFFIXES",
+           "area_weighted_normals"]
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``,
 #: or ``NAME.glb`` for the textured leaf card of ``tools/make_leaf_card.py``).
@@ -179,9 +180,15 @@ class BaseMesh:
     @cached_property
     def edges(self) -> np.ndarray:
         """(k, 2) uint32 unique undirected edges of the triangles (for wireframe)."""
-        e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-        e = np.sort(e, axis=1)
-        return np.unique(e, axis=0).astype(np.uint32)
+        f = self.faces.astype(np.int64)
+        a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
+        b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        # one int64 key per edge: a 1-D unique is many times faster than
+        # unique(axis=0) and sorts the same way (by lo, then hi)
+        key = np.unique(lo * np.int64(len(self.positions)) + hi)
+        n = np.int64(len(self.positions))
+        return np.stack([key // n, key % n], axis=1).astype(np.uint32)
 
     @cached_property
     def is_volume(self) -> bool:
@@ -194,8 +201,8 @@ class BaseMesh:
         Only then can back faces be culled without changing the picture;
         :class:`~axialdeform.gl.renderer.AxialRenderer` does that by default.
         """
-        _, ids = np.unique(self.positions, axis=0, return_inverse=True)
-        f = ids.reshape(-1)[self.faces].astype(np.int64)
+        ids = _position_ids(self.positions)
+        f = ids[self.faces]
         if ((f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 2] == f[:, 0])).any():
             return False
         n = int(f.max()) + 1
@@ -206,9 +213,12 @@ class BaseMesh:
         reverse = np.sort(b * n + a)
         if not np.array_equal(forward, reverse):
             return False
+        # signed volume: sum of det(v0, v1, v2) / 6, by columns (np.cross on (m, 3) is slow)
         p = self.positions.astype(np.float64)
-        v = p[self.faces]
-        volume = np.einsum("ij,ij->", v[:, 0], np.cross(v[:, 1], v[:, 2])) / 6.0
+        x, y, z = p[:, 0], p[:, 1], p[:, 2]
+        i, j, k = self.faces[:, 0], self.faces[:, 1], self.faces[:, 2]
+        volume = float(np.sum(x[i] * (y[j] * z[k] - z[j] * y[k]) + y[i] * (z[j] * x[k] - x[j] * z[k])
+                              + z[i] * (x[j] * y[k] - y[j] * x[k]))) / 6.0
         return bool(volume > 0.0)
 
     def to_trimesh(self, positions: np.ndarray | None = None, normals: np.ndarray | None = None):
@@ -224,6 +234,23 @@ class BaseMesh:
 
 
 _F32_MAX = float(np.finfo(np.float32).max)
+
+
+def _position_ids(positions: np.ndarray) -> np.ndarray:
+    """(n,) int64: one id per distinct position (equal rows share it), the
+    same grouping as ``np.unique(positions, axis=0, return_inverse=True)``
+    but by one lexsort, many times faster on millions of vertices."""
+    p = np.asarray(positions)
+    if len(p) == 0:
+        return np.zeros(0, dtype=np.int64)
+    order = np.lexsort((p[:, 2], p[:, 1], p[:, 0]))
+    q = p[order]
+    new = np.empty(len(p), dtype=bool)
+    new[0] = True
+    new[1:] = (q[1:] != q[:-1]).any(axis=1)
+    ids = np.empty(len(p), dtype=np.int64)
+    ids[order] = np.cumsum(new) - 1
+    return ids
 
 
 def _check_float32_range(positions: np.ndarray, name: str) -> None:
@@ -253,12 +280,17 @@ def area_weighted_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarra
     scale = float(np.max(np.abs(p - p.mean(axis=0)))) if len(p) else 0.0
     if np.isfinite(scale) and scale > 0:
         p = (p - p.mean(axis=0)) / scale
-    tri = p[f]
+    # by columns: gathers of (m,) arrays and no (m, 3, 3) temporaries, so a
+    # 10 M-triangle mesh needs a few hundred MB and seconds, not gigabytes
+    x, y, z = (np.ascontiguousarray(p[:, c]) for c in range(3))
+    i, j, k = (np.ascontiguousarray(f[:, c]) for c in range(3))
+    ax, ay, az = x[j] - x[i], y[j] - y[i], z[j] - z[i]
+    bx, by, bz = x[k] - x[i], y[k] - y[i], z[k] - z[i]
     # the cross product's length is twice the triangle's area: area weighting
-    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    idx = f.ravel()
-    w = np.repeat(fn, 3, axis=0)
-    vn = np.stack([np.bincount(idx, weights=w[:, k], minlength=len(p)) for k in range(3)], axis=1)
+    fn = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
+    n = len(p)
+    vn = np.stack([np.bincount(i, weights=c, minlength=n) + np.bincount(j, weights=c, minlength=n)
+                   + np.bincount(k, weights=c, minlength=n) for c in fn], axis=1)
     return _unit_or_default(vn)
 
 
@@ -277,6 +309,14 @@ def bundled_mesh_path(name: str) -> Path:
         raise MeshError(f"unknown bundled mesh {name!r}; expected one of {', '.join(BUNDLED_MESHES)}")
     suffix = ".glb" if name == "leafcard" else ".obj"
     return Path(str(resources.files("axialdeform.meshes").joinpath(f"{name}{suffix}")))
+
+
+def mesh_source_path(source: str | os.PathLike) -> Path:
+    """The file :func:`load_mesh` reads for ``source`` (a bundled mesh's name
+    becomes its file in the package): for comparing outputs with inputs."""
+    if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
+        return bundled_mesh_path(source)
+    return Path(source)
 
 
 def load_mesh(source) -> BaseMesh:
@@ -310,28 +350,52 @@ def load_mesh(source) -> BaseMesh:
     else:
         path = Path(source)
     name = str(source)
-    if not path.exists():
+    if not os.path.lexists(path):
         raise MeshError(f"{name}: no such mesh file")
     if path.is_dir():
         raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
     if path.suffix.lower() not in MESH_SUFFIXES:
         raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(MESH_SUFFIXES)}")
-    if not path.is_file():
-        raise MeshError(f"{name}: is not a regular file; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
     from .material import SafeResolver
+    from .safeio import memory_available, read_regular
 
+    # a regular file (never a FIFO or a device), read with a bound; every
+    # file it refers to goes through the same check (SafeResolver)
+    data = read_regular(path, max(memory_available() // 2, 1 << 20), f"a mesh file ({', '.join(MESH_SUFFIXES)})",
+                        MeshError)
     resolver = SafeResolver(path.parent)
     try:
+        import io
+
         import trimesh
 
-        loaded = trimesh.load(str(path), process=False, resolver=resolver)
-        if path.suffix.lower() == ".obj" and isinstance(loaded, trimesh.Trimesh) and _obj_object_count(path) > 1:
-            loaded = _obj_objects(loaded, trimesh.load(str(path), process=False, resolver=SafeResolver(path.parent),
-                                                       split_objects=True))
+        from .safeio import quiet_numpy
+
+        data = bytes(data)  # trimesh decodes text only from bytes (not bytearray)
+        kind = path.suffix.lower().lstrip(".")
+        with quiet_numpy():  # trimesh's casts of hostile numbers warn; the results are checked below
+            loaded = trimesh.load(io.BytesIO(data), file_type=kind, resolver=resolver, process=False)
+            if kind == "obj" and isinstance(loaded, trimesh.Trimesh) and _obj_object_count(data) > 1:
+                loaded = _obj_objects(loaded, trimesh.load(io.BytesIO(data), file_type=kind, process=False,
+                                                           resolver=SafeResolver(path.parent), split_objects=True))
+        # a material library or buffer that is a FIFO, a device or too large
+        # refuses the mesh; such a texture only loses its picture (AssetWarning)
+        refused = [msg for ref, msg in resolver.refused if not _is_image_name(ref)]
+        if refused:
+            raise MeshError(f"{name}: {refused[0]}")
+    except MeshError:
+        raise
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
-    file_positions = _obj_positions(path) if path.suffix.lower() == ".obj" else None
+    file_positions = _obj_positions(data) if path.suffix.lower() == ".obj" else None  # the bytes read above
+    del data
     return _from_loaded(loaded, name, file_positions, resolver.failed)
+
+
+def _is_image_name(name: str) -> bool:
+    """True for a referenced file that is a picture (a texture), by its suffix."""
+    return os.path.splitext(str(name))[1].lower() in (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".gif", ".webp",
+                                                       ".tif", ".tiff", ".ktx", ".ktx2", ".dds")
 
 
 def _from_loaded(loaded, name: str, file_positions=None, failed=()) -> BaseMesh:
@@ -389,10 +453,9 @@ def _from_loaded(loaded, name: str, file_positions=None, failed=()) -> BaseMesh:
                     source_index=source_index, source_count=source_count)
 
 
-def _obj_positions(path: Path) -> np.ndarray | None:
-    """The ``v`` lines of an OBJ file, ``(k, 3) float64`` in file order (None if unreadable)."""
+def _obj_positions(data: bytes) -> np.ndarray | None:
+    """The ``v`` lines of an OBJ file's bytes, ``(k, 3) float64`` in file order (None if unreadable)."""
     try:
-        data = path.read_bytes()
         rows = re.findall(rb"^[ \t]*v[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)", data, re.M)
         return np.array(rows, dtype=np.float64).reshape(-1, 3)
     except (OSError, ValueError):
@@ -414,13 +477,12 @@ def _source_index(positions: np.ndarray, file_positions: np.ndarray | None) -> t
     return first[ids[k:]], k
 
 
-def _obj_object_count(path: Path) -> int:
-    """How many ``o NAME`` lines an OBJ file has (a byte scan, so only files
-    with several objects pay for the second, splitting load)."""
+def _obj_object_count(data: bytes) -> int:
+    """How many ``o NAME`` lines an OBJ file's bytes have (a byte scan, so only
+    files with several objects pay for the second, splitting load)."""
     import re
 
-    with open(path, "rb") as fh:
-        return len(re.findall(rb"(?m)^[ \t]*o[ \t]", fh.read()))
+    return len(re.findall(rb"(?m)^[ \t]*o[ \t]", data))
 
 
 def _obj_objects(merged, split):

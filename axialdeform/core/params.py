@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_write_bytes
+from .atomic import atomic_path, atomic_write_bytes
 from .axis import AXIS_NAMES, ControlAxis
 from .errors import MeshMismatchError, ParamError, ParamFileError
 
@@ -54,6 +54,7 @@ __all__ = [
     "make_params",
     "ParamFile",
     "read_param_file",
+    "read_param_bytes",
     "read_params",
     "write_params",
     "format_text",
@@ -69,6 +70,8 @@ __all__ = [
     "MAGIC",
     "BINARY_SUFFIXES",
     "TEXT_SUFFIXES",
+    "range_warning",
+    "SAFE_DISTANCE_L",
 ]
 
 #: names of the 16 columns, in file order
@@ -212,42 +215,162 @@ def format_text(values: np.ndarray, header: str | None = None) -> str:
     exactly.  ``header`` lines are written as ``#`` comments.
     """
     values = as_params(values)
+    return "".join(_text_pieces(values, header))
+
+
+#: rows formatted at a time by the text writer: its memory stays bounded
+_TEXT_ROWS = 4096
+
+
+def _text_pieces(values: np.ndarray, header: str | None):
+    """The text form in pieces of at most ``_TEXT_ROWS`` lines (a generator)."""
     lines = ["# " + line for line in (header or "").splitlines()]
     lines.append("# " + " ".join(EXTENDED_FIELDS if values.shape[1] == 19 else FIELDS))
-    body = np.char.mod("%.9g", values.astype(np.float64))
-    lines.extend(" ".join(row) for row in body.tolist())
-    return "\n".join(lines) + "\n"
+    yield "\n".join(lines) + "\n"
+    for s in range(0, len(values), _TEXT_ROWS):
+        body = np.char.mod("%.9g", values[s : s + _TEXT_ROWS].astype(np.float64))
+        yield "\n".join(" ".join(row) for row in body.tolist()) + "\n"
+
+
+#: bytes of text parsed at a time: the parser's working memory is a few
+#: times this, whatever the file's size
+_TEXT_CHUNK = 1 << 18
+_LINE_BREAK = re.compile(rb"[\r\n]")
+_SEPARATORS = re.compile(r"[,\s]+")
 
 
 def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
     """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``, or
-    ``(n, 19)`` when every line holds 19 numbers (a mix is an error naming the line)."""
+    ``(n, 19)`` when every line holds 19 numbers (a mix is an error naming the
+    line; the first data line fixes the width for the whole file).
+
+    The text is parsed in pieces of about 256 KiB cut at line breaks, each
+    turned into float32 rows at once, so the memory needed beyond ``data``
+    and the result is bounded (peak under 3x the text's size plus the
+    result, ``tests/test_hostile.py::test_text_parser_memory``)."""
+    view = memoryview(data).cast("B") if not isinstance(data, (bytes, bytearray)) else data
+    n = len(view)
+    start = 3 if bytes(view[:3]) == b"\xef\xbb\xbf" else 0  # a leading byte-order mark is tolerated
+    pieces: list[np.ndarray] = []
+    lineno = 0
+    first = None  # (width, line number) of the first data line: it fixes the width of every other
+    window = 4 * _MAX_TEXT_LINE + 8  # a line of at most _MAX_TEXT_LINE characters has at most 4x as many bytes
+    while start < n:
+        end = min(n, start + _TEXT_CHUNK)
+        if end < n:
+            m = _LINE_BREAK.search(view, end, min(n, end + window)) if isinstance(view, (bytes, bytearray)) else \
+                _LINE_BREAK.search(bytes(view[end : min(n, end + window)]))
+            if m is None:
+                before = bytes(view[start:end]).count(b"\n")
+                raise ParamFileError(
+                    f"{name}: line {lineno + before + 1} is longer than {window} bytes; expected at most {_MAX_TEXT_LINE} characters a line")
+            cut = m.end() + (0 if isinstance(view, (bytes, bytearray)) else end)
+            if view[cut - 1] == 0x0D and cut < n and view[cut] == 0x0A:
+                cut += 1
+            end = cut
+        chunk = bytes(view[start:end])
+        fast = _fast_chunk(chunk, None if first is None else first[0])
+        if fast is not None:
+            arr, lines_in_chunk = fast
+            if len(arr):
+                if first is None:
+                    first = (arr.shape[1], lineno + _first_data_line(chunk))
+                pieces.append(arr)
+        else:
+            rows, linenos, lines_in_chunk, first = _split_lines(chunk, name, lineno, start, first)
+            if rows:
+                pieces.append(_rows_to_float32(rows, linenos, name))
+        lineno += lines_in_chunk
+        start = end
+    if not pieces:
+        return np.zeros((0, 16), dtype=np.float32)
+    return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
+
+
+_PLAIN = re.compile(rb"[0-9eE+\-., \t\n]*")
+_COMMENT_LINE = re.compile(rb"^[ \t]*#[\x20-\x7e\t]*$", re.M)
+
+
+def _first_data_line(chunk: bytes) -> int:
+    """1-based index in ``chunk`` of its first line that is neither blank nor a comment."""
+    for k, line in enumerate(chunk.split(b"\n"), start=1):
+        stripped = line.strip()
+        if stripped and not stripped.startswith(b"#"):
+            return k
+    return 1
+
+
+def _fast_chunk(chunk: bytes, width: int | None = None):
+    """``(values (n, width) float32, lines)`` of a piece made only of numbers,
+    commas, blanks and ``\n`` line breaks, parsed by numpy's C reader; None
+    when the piece holds anything else (comments, ``\r``, other text) or
+    does not parse into ``width`` columns (16 or 19 when ``width`` is None):
+    the line-by-line parser then finds the exact line and field for its message."""
+    if b"#" in chunk:  # whole-line ASCII comments are dropped (their line breaks kept)
+        chunk = _COMMENT_LINE.sub(b"", chunk)
+    if not _PLAIN.fullmatch(chunk):
+        return None
+    breaks = np.flatnonzero(np.frombuffer(chunk, dtype=np.uint8) == 10)
+    if np.diff(np.concatenate([[-1], breaks, [len(chunk)]])).max() > _MAX_TEXT_LINE + 1:
+        return None  # a line too long: the slow path says which
+    import io
+    import warnings
+
     try:
-        text = bytes(data).decode("utf-8-sig")  # a leading byte-order mark is tolerated
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # "empty input" of a piece with blank lines only
+            arr = np.loadtxt(io.StringIO(chunk.replace(b",", b" ").decode("ascii")), dtype=np.float64, ndmin=2)
+    except ValueError:
+        return None
+    if arr.size:
+        if arr.shape[1] not in WIDTHS or (width is not None and arr.shape[1] != width):
+            return None
+        width = arr.shape[1]
+    with np.errstate(over="ignore", invalid="ignore"):
+        arr32 = arr.reshape(-1, width or 16).astype(np.float32)
+    if not np.isfinite(arr32).all():  # beyond float32: the slow path names the line
+        return None
+    if arr32.shape[1] == 19 and len(arr32) and ((arr32[:, SCALE] <= 0).any() or (arr32[:, TAPER] >= 1).any()):
+        return None  # a bad scale or taper: the slow path names the line and field
+    lines = chunk.count(b"\n") + (0 if not chunk or chunk.endswith(b"\n") else 1)
+    return np.ascontiguousarray(arr32), lines
+
+
+def _split_lines(chunk: bytes, name: str, lineno: int, offset: int, first=None):
+    """``(rows, line numbers, lines in chunk, first)`` of one piece, line by
+    line; ``first`` is the ``(width, line number)`` of the file's first data
+    line (None until one is seen): every data line must have its width."""
+    try:
+        text = chunk.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ParamFileError(
-            f"{name}: not a parameter file: byte {exc.start} is not UTF-8 text and the file does not start with the binary magic"
+            f"{name}: not a parameter file: byte {offset + exc.start} is not UTF-8 text and the file does not start with the binary magic"
         ) from None
     rows: list[list[str]] = []
     linenos: list[int] = []
-    for lineno, line in enumerate(text.splitlines(), start=1):
+    lines = text.splitlines()
+    for k, line in enumerate(lines, start=lineno + 1):
         if len(line) > _MAX_TEXT_LINE:
-            raise ParamFileError(f"{name}: line {lineno} is {len(line)} characters long; expected at most {_MAX_TEXT_LINE}")
+            raise ParamFileError(f"{name}: line {k} is {len(line)} characters long; expected at most {_MAX_TEXT_LINE}")
         stripped = line.strip()
         if not stripped or stripped.startswith("#"):
             continue
-        tokens = [tok for tok in re.split(r"[,\s]+", stripped) if tok]
+        tokens = [tok for tok in _SEPARATORS.split(stripped) if tok]
         if len(tokens) not in WIDTHS:
-            raise ParamFileError(f"{name}: line {lineno}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances)")
-        if rows and len(tokens) != len(rows[0]):
+            raise ParamFileError(f"{name}: line {k}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances)")
+        if first is None:
+            first = (len(tokens), k)
+        elif len(tokens) != first[0]:
             raise ParamFileError(
-                f"{name}: line {lineno}: expected {len(rows[0])} numbers like line {linenos[0]}, found {len(tokens)} "
+                f"{name}: line {k}: expected {first[0]} numbers like line {first[1]}, found {len(tokens)} "
                 "(a file holds 16 numbers on every line, or 19 on every line)"
             )
         rows.append(tokens)
-        linenos.append(lineno)
-    if not rows:
-        return np.zeros((0, 16), dtype=np.float32)
+        linenos.append(k)
+    return rows, linenos, len(lines), first
+
+
+def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np.ndarray:
     try:
         arr = np.array(rows, dtype=np.float64)
     except ValueError:
@@ -480,20 +603,25 @@ class BinaryHeader:
         return self.size - HEADER_SIZE - table - _TRAILER.size
 
 
-def read_binary_header(data: bytes, name: str = "<binary>") -> BinaryHeader:
+def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None = None) -> BinaryHeader | None:
     """Check the structure of a binary parameter file and read its header.
 
     Every check happens before any allocation that depends on the declared
-    count; the CRC-32 is computed but not judged (see ``checksum_ok``)."""
+    count; the CRC-32 is computed but not judged (see ``checksum_ok``).
+    With ``size`` (the file's size on disk), ``data`` may be the header
+    alone: the structure is checked against ``size`` and None is returned
+    (nothing is checksummed), so a file is read only once its header and its
+    size agree."""
     head = bytes(data[: len(MAGIC)])
     if head != MAGIC[: len(head)]:  # say "not this format" before "too short"
         raise ParamFileError(
             f"{name}: magic: expected {MAGIC!r}, found {head!r}; not a binary parameter file "
             f"(the text form uses {', '.join(TEXT_SUFFIXES)})"
         )
-    if len(data) < HEADER_SIZE + _TRAILER.size:
+    total = len(data) if size is None else int(size)
+    if total < HEADER_SIZE + _TRAILER.size:
         raise ParamFileError(
-            f"{name}: truncated: {len(data)} bytes, expected at least {HEADER_SIZE + _TRAILER.size} (header + checksum)"
+            f"{name}: truncated: {total} bytes, expected at least {HEADER_SIZE + _TRAILER.size} (header + checksum)"
         )
     magic, version, encoding, header_size, count, axis_index, _res, lo, length, fingerprint = _HEADER.unpack_from(data)
     if magic != MAGIC:
@@ -511,11 +639,13 @@ def read_binary_header(data: bytes, name: str = "<binary>") -> BinaryHeader:
     record = _ENCODINGS[encoding][1] * width // 16
     table = _quant_table(width).size if encoding == ENCODING_UINT16 else 0
     expected = HEADER_SIZE + table + count * record + _TRAILER.size  # Python int: no overflow
-    if len(data) != expected:
+    if total != expected:
         raise ParamFileError(
-            f"{name}: count: the header declares {count} instances ({expected} bytes), but the file has {len(data)} bytes"
-            + (" (truncated?)" if len(data) < expected else "")
+            f"{name}: count: the header declares {count} instances ({expected} bytes), but the file has {total} bytes"
+            + (" (truncated?)" if total < expected else "")
         )
+    if size is not None:
+        return None
     (stored,) = _TRAILER.unpack_from(data, len(data) - _TRAILER.size)
     computed = zlib.crc32(memoryview(data)[: len(data) - _TRAILER.size])
     return BinaryHeader(version, encoding, count, axis_index, lo, length, fingerprint, stored, computed, len(data))
@@ -563,23 +693,44 @@ def _is_binary_suffix(path: Path) -> bool:
 
 
 def read_param_file(path: str | os.PathLike) -> ParamFile:
-    """Read a parameter file, text or binary (told apart by the magic bytes)."""
-    path = Path(path)
-    try:
-        if path.exists() and not path.is_dir() and not path.is_file():
-            # a FIFO or a device (/dev/zero) might never end: refuse before reading
-            raise ParamFileError(f"{path}: not a regular file; expected a parameter file")
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise ParamFileError(f"{path}: no such parameter file") from None
-    except IsADirectoryError:
-        raise ParamFileError(f"{path}: is a folder; expected a parameter file") from None
-    except OSError as exc:
-        raise ParamFileError(f"{path}: cannot read: {exc.strerror}") from None
-    if data[: len(MAGIC)] == MAGIC or _is_binary_suffix(path):
+    """Read a parameter file, text or binary (told apart by the magic bytes).
+
+    The file must be a regular file (a FIFO, a device or a symlink to one is
+    refused without blocking, :func:`~axialdeform.core.safeio.open_regular`);
+    a binary file is read only if its size is what its header declares, a
+    text file only if it fits in the memory available."""
+    data, binary = read_param_bytes(path)
+    if binary:
         return decode_binary(data, str(path))
     values = parse_text(data, str(path))
     return ParamFile(values=values, format="text", encoding="text", size=len(data))
+
+
+def read_param_bytes(path: str | os.PathLike) -> tuple[bytes, bool]:
+    """The bytes of a parameter file and whether it is binary, read with the
+    checks of :func:`read_param_file` (regular file; a binary file's size
+    must match its header before it is read; a text file must fit in memory)."""
+    from .safeio import memory_available, open_regular, read_sized
+
+    path = Path(path)
+    with open_regular(path, "a parameter file", ParamFileError) as (fh, size):
+        try:
+            head = fh.read(HEADER_SIZE)
+        except OSError as exc:
+            raise ParamFileError(f"{path}: cannot read: {exc.strerror}") from None
+        binary = head[: len(MAGIC)] == MAGIC or _is_binary_suffix(path)
+        if binary:
+            # the declared count bounds the read: a lying header costs nothing
+            read_binary_header(head, str(path), size=size if len(head) == HEADER_SIZE else len(head))
+            limit = size
+        else:
+            # text: the file, at most a third of the memory available (the parser needs about twice more)
+            limit = max(memory_available() // 3, 1 << 20)
+            if size > limit:
+                raise ParamFileError(f"{path}: is {size} bytes; expected a text parameter file of at most {limit} bytes "
+                                     "(a third of the memory available); use the binary form (.adp)")
+        data = read_sized(fh, size, path, "a parameter file", ParamFileError)
+    return data, binary
 
 
 def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
@@ -631,6 +782,20 @@ def write_params(
     values = as_params(values)
     if mesh is not None:
         axis, mesh_fingerprint = mesh.axis, mesh.fingerprint
+    if _is_binary_suffix(path) and not quantize:
+        # float32 records are written in pieces, the CRC-32 carried along:
+        # no second copy of a huge payload in memory
+        header = encode_binary(values[:0], axis=axis, mesh_fingerprint=mesh_fingerprint)[:HEADER_SIZE]
+        header = header[:16] + struct.pack("<Q", len(values)) + header[24:]
+        crc = zlib.crc32(header)
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            fh.write(header)
+            for s in range(0, len(values), 1 << 16):
+                piece = values[s : s + (1 << 16)].astype("<f4").tobytes()
+                crc = zlib.crc32(piece, crc)
+                fh.write(piece)
+            fh.write(_TRAILER.pack(crc))
+        return path
     if _is_binary_suffix(path):
         data = encode_binary(values, axis=axis, mesh_fingerprint=mesh_fingerprint, quantize=quantize)
     elif path.suffix.lower() in TEXT_SUFFIXES:
@@ -639,7 +804,10 @@ def write_params(
         header = "axialdeform parameters: " + ("unknown axis" if axis is None else axis.describe())
         if mesh is not None:
             header += f"\nbase mesh: {mesh.name} (sha256 {mesh.fingerprint.hex()})"
-        data = format_text(values, header).encode("utf-8")
+        with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+            for piece in _text_pieces(values, header):  # in pieces: memory does not grow with the count
+                fh.write(piece)
+        return path
     else:
         raise ParamFileError(
             f"{path}: unknown parameter file type {path.suffix!r}; expected {', '.join(BINARY_SUFFIXES)} (binary) "
@@ -651,3 +819,35 @@ def write_params(
 
 def axis_letter(index: int) -> str:
     return AXIS_NAMES[index]
+
+
+#: world distances (positions, offsets) up to this many axis lengths L keep
+#: float32 precision of about 1e-5 L; beyond it errors grow in proportion
+#: (measured: ``tools/precision.py``, see docs/reliability.md)
+SAFE_DISTANCE_L = 100.0
+
+
+def range_warning(mesh, values, name: str = "parameters") -> str | None:
+    """A one-line warning if any instance of ``values`` places its mesh, or
+    bends it, further than :data:`SAFE_DISTANCE_L` axis lengths (float32
+    keeps about 7 significant digits, so the deformed mesh loses detail in
+    proportion to the distance); None when every value is in range.
+
+    values : (n, 16) float32.
+    """
+    v = np.asarray(values)
+    if v.size == 0:
+        return None
+    L = float(mesh.axis.length)
+    limit = SAFE_DISTANCE_L * L
+    mag = np.abs(v[:, :13])  # offsets and position, model/world units
+    row_max = mag.max(axis=1)
+    worst = int(np.argmax(row_max))
+    if not row_max[worst] > limit:
+        return None
+    col = int(np.argmax(mag[worst]))
+    count = int((row_max > limit).sum())
+    ulp = float(np.spacing(np.float32(row_max[worst])))
+    return (f"{name}: instance {worst}, field {FIELDS[col]} = {float(v[worst, col]):.6g} is {row_max[worst] / L:.3g} L "
+            f"({count} instance{'s' if count != 1 else ''} beyond the safe {SAFE_DISTANCE_L:g} L); float32 steps there are "
+            f"{ulp / L:.2g} L, so detail finer than that is lost (see docs/reliability.md, safe ranges)")

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core.errors import ParamError
 from ..core.params import as_params, dequantize_params, extend_params, quantize_params, quantize_with_table
+from .context import check_alive, check_released
 
 __all__ = [
     "MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES",
@@ -44,6 +45,16 @@ EXTENDED_RECORD_BYTES = 76
 QUANTIZED_EXTENDED_FORMAT = QUANTIZED_FORMAT + ("3u2", "2x")
 QUANTIZED_EXTENDED_ATTRIBUTES = QUANTIZED_ATTRIBUTES + ("i_q4", None)
 QUANTIZED_EXTENDED_RECORD_BYTES = 40
+
+
+def as_index(value, name: str) -> int:
+    """``value`` as an int if it is a whole number type (int, numpy integer;
+    not bool, float, str or None), else :class:`ArgumentError`."""
+    from ..core.errors import ArgumentError
+
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ArgumentError(f"{name}: expected an integer instance index, found {value!r} ({type(value).__name__})")
+    return int(value)
 
 
 def _format_bytes(fmt: str) -> int:
@@ -72,23 +83,40 @@ def _content(buffer, formats, names, program, per_instance=False):
 class MeshBuffers:
     """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh.
 
-    ``indices`` names the index buffers to build: ``"triangles"`` and/or
-    ``"edges"`` (one left out stays ``None``)."""
+    ``indices`` names the index buffers to build now: ``"triangles"`` and/or
+    ``"edges"``.  Triangles left out stay ``None``; edges left out are built
+    on first use of :attr:`edges` (a wireframe draw), so solid drawing never
+    pays for them."""
 
-    def __init__(self, ctx, mesh, indices=("triangles", "edges")):
+    def __init__(self, ctx, mesh, indices=("triangles",)):
+        check_alive(ctx, "new MeshBuffers")
         self.ctx = ctx
         self.mesh = mesh
         self.vertex_count = mesh.vertex_count
-        self.triangles = self.edges = None
+        self.triangles = self._edges = None
         self._released = False
         interleaved = np.hstack([mesh.positions, mesh.normals]).astype("f4")
         self.vbo = ctx.buffer(interleaved.tobytes())
         if "triangles" in indices:
             self.triangles = ctx.buffer(mesh.faces.astype("u4").tobytes())
         if "edges" in indices:
-            self.edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
+            self._edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
         self.triangle_indices = int(mesh.faces.size)
-        self.edge_indices = int(mesh.edges.size)
+
+    @property
+    def edges(self):
+        """The edge index buffer (uint32 pairs), built on first use (lazily:
+        finding the unique edges of a 10 M-triangle mesh takes seconds)."""
+        check_released(self._released, "these MeshBuffers")
+        if self._edges is None:
+            check_alive(self.ctx, "these MeshBuffers")
+            self._edges = self.ctx.buffer(self.mesh.edges.astype("u4").tobytes())
+        return self._edges
+
+    @property
+    def edge_indices(self) -> int:
+        """Number of indices in :attr:`edges` (two per edge)."""
+        return int(self.mesh.edges.size)
 
     def content(self, program):
         return _content(self.vbo, ("3f", "3f"), ("in_position", "in_normal"), program)
@@ -97,7 +125,7 @@ class MeshBuffers:
         if self._released:
             return
         self._released = True
-        for b in (self.vbo, self.triangles, self.edges):
+        for b in (self.vbo, self.triangles, self._edges):
             if b is not None:
                 b.release()
 
@@ -121,6 +149,7 @@ class InstanceBuffer:
 
     def __init__(self, ctx, params=None, capacity: int | None = None, *, quantized: bool = False,
                  extended: bool | None = None):
+        check_alive(ctx, "a new InstanceBuffer")
         self.ctx = ctx
         self.quantized = bool(quantized)
         values = as_params(np.zeros((0, 16)) if params is None else params)
@@ -140,6 +169,10 @@ class InstanceBuffer:
         if self.count:
             self.buffer.write(self._encode_all(values))
         self._released = False
+
+    def _check(self) -> None:
+        check_released(self._released, "this InstanceBuffer")
+        check_alive(self.ctx, "this InstanceBuffer")
 
     def _fit(self, values: np.ndarray) -> np.ndarray:
         """``values`` in this buffer's width (16-number ones extended with 1, 0, 0)."""
@@ -186,6 +219,7 @@ class InstanceBuffer:
 
     def set(self, params) -> None:
         """Replace every instance; reallocates only if the count outgrows the capacity."""
+        self._check()
         values = self._fit(as_params(params))
         if len(values) > self.capacity:
             self.capacity = len(values)
@@ -197,11 +231,13 @@ class InstanceBuffer:
 
     def update(self, params, start: int = 0, *, setter: str = "set()", name: str = "update") -> None:
         """Overwrite instances ``start .. start + len(params) - 1`` in place.
+        ``start`` must be an integer (int or numpy integer).
 
         name, setter : how error messages name this call and the one that
         replaces every instance (a wrapper such as ``AxialRenderer`` passes its own)."""
+        self._check()
         values = self._fit(as_params(params))
-        start = int(start)
+        start = as_index(start, f"{name}: start")
         if start < 0 or start + len(values) > self.count:
             raise ParamError(
                 f"{name}: instances {start}..{start + len(values) - 1} do not fit in the {self.count} instances drawn; "
@@ -213,6 +249,9 @@ class InstanceBuffer:
     def read(self) -> np.ndarray:
         """The parameters on the GPU, ``(count, 16)`` (extended: ``(count, 19)``)
         float32, decoded if quantized."""
+        self._check()
+        if self.count == 0:  # moderngl cannot map zero bytes
+            return np.zeros((0, self.columns), dtype=np.float32)
         data = self.buffer.read(size=self.count * self.record_bytes)
         w = self.columns
         if self.quantized:

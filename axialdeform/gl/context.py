@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.errors import ArgumentError, ContextError
+from ..core.errors import ContextError
 
-__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels", "require_framebuffer"]
+__all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels",
+           "require_framebuffer", "size_limits", "check_image_size", "check_alive", "check_released"]
 
 GL_REQUIRE = 330
 
@@ -34,6 +35,22 @@ def create_context(backend: str = "egl"):
         ctx.release()
         raise ContextError(f"the {backend.upper()} context is OpenGL {version}, expected {GL_REQUIRE} or newer; {_HELP}")
     return ctx
+
+
+def check_alive(ctx, what: str = "this object") -> None:
+    """Raise :class:`ContextError` if ``ctx`` was released (every GL wrapper
+    calls this before touching GL, so a call after the context is gone is an
+    error of the library's own family, not an AttributeError from moderngl)."""
+    import moderngl
+
+    if ctx is None or isinstance(getattr(ctx, "mglo", None), moderngl.InvalidObject):
+        raise ContextError(f"the OpenGL context of {what} was released; create a new context (and new objects in it)")
+
+
+def check_released(released: bool, what: str) -> None:
+    """Raise :class:`ContextError` for a call on a released wrapper."""
+    if released:
+        raise ContextError(f"{what} was released; create a new one")
 
 
 def _alive(obj) -> bool:
@@ -72,6 +89,39 @@ def release_framebuffer(ctx, fbo) -> None:
     if ctx.fbo is fbo:
         ctx.detect_framebuffer(0).use()
     fbo.release()
+
+
+def size_limits(ctx) -> tuple[int, int, str]:
+    """The largest ``(width, height)`` a render target of ``ctx`` may have, and
+    where that comes from: the smallest of ``GL_MAX_RENDERBUFFER_SIZE``,
+    ``GL_MAX_TEXTURE_SIZE`` and ``GL_MAX_VIEWPORT_DIMS``."""
+    info = ctx.info
+    rb = int(info.get("GL_MAX_RENDERBUFFER_SIZE", 16384))
+    tex = int(info.get("GL_MAX_TEXTURE_SIZE", 16384))
+    vw, vh = (int(x) for x in info.get("GL_MAX_VIEWPORT_DIMS", (16384, 16384)))
+    text = f"GL_MAX_RENDERBUFFER_SIZE {rb}, GL_MAX_TEXTURE_SIZE {tex}, GL_MAX_VIEWPORT_DIMS {vw}x{vh}"
+    return min(rb, tex, vw), min(rb, tex, vh), text
+
+
+def check_image_size(ctx, size, samples: int = 4, panels: int = 1) -> None:
+    """Raise :class:`ContextError` if an image of ``size = (width, height)``
+    (``panels`` of them side by side) cannot be made by ``ctx``: a side past
+    the GL limits (:func:`size_limits`) or more memory than is available
+    (colour + depth at ``samples``, the resolved copy and the read-back)."""
+    from ..core.safeio import memory_available
+
+    check_alive(ctx, "the image")
+    w, h = (int(size[0]), int(size[1]))
+    mw, mh, text = size_limits(ctx)
+    if not (0 < w <= mw and 0 < h <= mh):
+        raise ContextError(f"size: {w}x{h} pixels; expected 1..{mw} x 1..{mh}, the most this OpenGL context can render "
+                           f"({text})")
+    per_pixel = 8 * max(samples, 1) + 4 + 3 * (panels + 1)
+    need, have = w * h * per_pixel, int(0.8 * memory_available())
+    if need > have:
+        side = int((have / per_pixel) ** 0.5)
+        raise ContextError(f"size: {w}x{h} pixels need about {need / 1024**3:.3g} GB; expected at most about "
+                           f"{side}x{side} (what {have / 1024**3:.3g} GB of available memory holds)")
 
 
 def read_pixels(ctx, fbo, *, resolve: bool | None = None) -> np.ndarray:
@@ -114,15 +164,36 @@ class Offscreen:
     """
 
     def __init__(self, ctx, size: tuple[int, int], samples: int = 4):
+        import moderngl
+
         width, height = (int(size[0]), int(size[1]))
-        if width <= 0 or height <= 0 or width > 16384 or height > 16384:
-            raise ArgumentError(f"image size: expected 1..16384 pixels each way, found {width}x{height}")
+        check_image_size(ctx, (width, height), samples)
         self.ctx = ctx
         self.size = (width, height)
         samples = min(samples, ctx.max_samples) if samples > 1 else 0
-        self._color = ctx.renderbuffer(self.size, 4, samples=samples)
-        self._depth = ctx.depth_renderbuffer(self.size, samples=samples)
-        self.fbo = ctx.framebuffer(self._color, self._depth)
+        self._released = True  # until everything exists: release() does nothing
+        while True:
+            # a driver may refuse a multisampled target that it can make with
+            # fewer samples (llvmpipe: one resource of at most 2 GiB): fall back
+            color = depth = None
+            try:
+                color = ctx.renderbuffer(self.size, 4, samples=samples)
+                depth = ctx.depth_renderbuffer(self.size, samples=samples)
+                fbo = ctx.framebuffer(color, depth)
+                break
+            except moderngl.Error as exc:
+                for obj in (depth, color):
+                    if obj is not None:
+                        obj.release()
+                bind_framebuffer(ctx, None)
+                if samples == 0:
+                    _w, _h, text = size_limits(ctx)
+                    raise ContextError(f"size: this OpenGL context cannot make a {width}x{height} render target ({exc}); "
+                                       f"expected a smaller size (its limits: {text})") from None
+                samples //= 2
+                samples = 0 if samples < 2 else samples
+        self.samples = samples
+        self._color, self._depth, self.fbo = color, depth, fbo
         if samples:
             self._resolved_color = ctx.renderbuffer(self.size, 4)
             self._resolved = ctx.framebuffer(self._resolved_color)
@@ -131,12 +202,18 @@ class Offscreen:
             self._resolved = self.fbo
         self._released = False
 
+    def _check(self) -> None:
+        check_released(self._released, "this Offscreen target")
+        check_alive(self.ctx, "this Offscreen target")
+
     def use(self, background=(0.93, 0.94, 0.96)) -> None:
+        self._check()
         self.fbo.use()
         self.ctx.viewport = (0, 0) + self.size
         self.fbo.clear(*background, 1.0, depth=1.0)
 
     def read(self) -> np.ndarray:
+        self._check()
         if self._resolved is not self.fbo:
             self.ctx.copy_framebuffer(self._resolved, self.fbo)
         return read_pixels(self.ctx, self._resolved, resolve=False)

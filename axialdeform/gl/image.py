@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core.atomic import atomic_path
 from .camera import UP_VECTORS, Camera, frame_instances
-from .context import Offscreen, create_context
+from .context import Offscreen, check_image_size, create_context
 from ..core.errors import ArgumentError
 from .ground import GroundPlane
 from .renderer import MODES, AxialRenderer
@@ -19,13 +19,16 @@ __all__ = ["render_image", "save_png", "parse_size"]
 
 
 def parse_size(text: str) -> tuple[int, int]:
-    """``"800x600"`` -> ``(800, 600)``."""
+    """``"800x600"`` -> ``(800, 600)``.  Only the form is checked here; what
+    the OpenGL context can make is checked where the image is made
+    (:func:`~axialdeform.gl.context.check_image_size`), and the error says
+    the context's limit."""
     try:
         w, h = (int(x) for x in str(text).lower().split("x"))
     except ValueError:
         raise ArgumentError(f"size: expected WIDTHxHEIGHT such as 800x600, found {text!r}") from None
-    if not (0 < w <= 16384 and 0 < h <= 16384):
-        raise ArgumentError(f"size: expected 1..16384 pixels each way, found {text!r}")
+    if not (w > 0 and h > 0):
+        raise ArgumentError(f"size: expected positive WIDTHxHEIGHT, found {text!r}")
     return w, h
 
 
@@ -61,6 +64,7 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
     ctx = create_context() if own_ctx else ctx
     try:
         w, h = parse_size(f"{size[0]}x{size[1]}")
+        check_image_size(ctx, (w, h), samples, panels=len(modes))  # before any work: the error says the limit
         cam = camera or frame_instances(mesh, params, w / h, up=up)
         view, proj = cam.view(), cam.projection(w / h)
         r = renderer or AxialRenderer(ctx, mesh, params, parts=parts)

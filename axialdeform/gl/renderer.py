@@ -21,12 +21,13 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from .buffers import InstanceBuffer, MeshBuffers
+from .buffers import InstanceBuffer, MeshBuffers, as_index
 from .cull import CullPass
-from .context import bind_framebuffer, release_framebuffer, require_framebuffer
+from .context import bind_framebuffer, check_alive, release_framebuffer, require_framebuffer
 from ..core.bounds import base_radius, wind_reach
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.arrays import as_array
+from ..core.safeio import require_finite
 from ..core.wind import Wind
 from .uniforms import camera_matrices, eye_position, set_camera_uniforms, set_uniforms
 from .material import AppearanceBuffer, GpuMaterials
@@ -118,6 +119,7 @@ class AxialRenderer:
                  quantized: bool = False, cull_back_faces: bool | None = None, parts=None,
                  extended: bool | None = None, wind: Wind | None = None, culling: bool = True, lod: bool = False,
                  lod_error: float = 1.0):
+        check_alive(ctx, "a new AxialRenderer")
         from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 
         if lod and mesh.has_appearance:
@@ -173,7 +175,7 @@ class AxialRenderer:
                 self._objects.append(self._part_edges[0])
             self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized, extended=self.extended)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
-            self._vao_edges = self._vertex_array(self.program, self._edge_buffer)
+            self._vao_edges = None  # built by the first wireframe draw (lazy edges)
             #: the levels of detail (level 0 is the base mesh itself)
             self.lod_levels = build_lod_levels(mesh) if self.lod else [LodLevel(mesh.positions, mesh.normals, mesh.faces, 0.0)]
             self._level_buffers = [self.mesh_buffers] + [MeshBuffers(ctx, level) for level in self.lod_levels[1:]]
@@ -207,6 +209,22 @@ class AxialRenderer:
         vao = self.ctx.vertex_array(program, content, index_buffer=index_buffer, index_element_size=4)
         self._objects.append(vao)
         return vao
+
+    def _edges_vao(self, tinted: bool, shadowed: bool = False):
+        """The vertex array of the edges (plain, tinted and/or shadow-receiving), built on first use."""
+        if shadowed:
+            entry = self._variants[(tinted, True)]
+            if entry[2] is None:
+                entry[2] = self._vertex_array(entry[0], self._edge_buffer, extra=entry[3])
+            return entry[2]
+        if tinted:
+            if self._tint[2] is None:
+                self._tint[2] = self._vertex_array(self._tint[0], self._edge_buffer,
+                                                   extra=[(self._tint[3], "3f/i", "i_tint")])
+            return self._tint[2]
+        if self._vao_edges is None:
+            self._vao_edges = self._vertex_array(self.program, self._edge_buffer)
+        return self._vao_edges
 
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
@@ -252,6 +270,7 @@ class AxialRenderer:
     def _check(self) -> None:
         if self._released:
             raise AxialDeformError("this AxialRenderer was released; create a new one")
+        check_alive(self.ctx, "this AxialRenderer")
 
     # ------------------------------------------------------------ parameters
     @property
@@ -266,7 +285,10 @@ class AxialRenderer:
         self._refresh_quant_uniforms()
 
     def update_params(self, params, start: int = 0) -> None:
-        """Overwrite the instances ``start .. start + len(params) - 1`` in place."""
+        """Overwrite the instances ``start .. start + len(params) - 1`` in place.
+
+        ``start`` must be an integer (int or numpy integer): a float, a
+        string, None or NaN raises :class:`ArgumentError`."""
         self._check()
         self.instances.update(params, start, setter="set_params()", name="update_params")
 
@@ -297,8 +319,7 @@ class AxialRenderer:
             self._objects.append(buffer)
             tint = (buffer, "3f/i", "i_tint")
             self._set_axis_uniforms(prog)
-            self._tint = (prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=[tint]),
-                          self._vertex_array(prog, self._edge_buffer, extra=[tint]), buffer)
+            self._tint = [prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=[tint]), None, buffer]
         buffer = self._tint[3]
         if values.nbytes > buffer.size:
             buffer.orphan(values.nbytes)
@@ -308,11 +329,15 @@ class AxialRenderer:
 
     # ------------------------------------------------------------ drawing
     def _variant(self, tinted: bool, shadowed: bool):
-        """(program, triangles vao, edges vao) of the plain, tinted and/or shadow-receiving program."""
+        """(program, triangles vao, a function that returns the edges vao) of the
+        plain, tinted and/or shadow-receiving program (edges: built on first use)."""
+        def edges():
+            return self._edges_vao(tinted, shadowed)
+
         if not shadowed:
             if tinted:
-                return self._tint[0], self._tint[1], self._tint[2]
-            return self.program, self._vao_triangles, self._vao_edges
+                return self._tint[0], self._tint[1], edges
+            return self.program, self._vao_triangles, edges
         key = (tinted, shadowed)
         if key not in self._variants:
             defines = {**self._defines, "AXIAL_SHADOW": 1}
@@ -323,9 +348,9 @@ class AxialRenderer:
             prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
             self._objects.append(prog)
             self._set_axis_uniforms(prog)
-            self._variants[key] = (prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=extra),
-                                   self._vertex_array(prog, self._edge_buffer, extra=extra))
-        return self._variants[key]
+            self._variants[key] = [prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=extra), None, extra]
+        entry = self._variants[key]
+        return entry[0], entry[1], edges
 
     def _draw_parts(self, prog, vao, view, projection, *, depth_only: bool = False, instances: int | None = None) -> None:
         """One instanced draw per part: opaque and cut-out parts, then blended ones.
@@ -404,7 +429,7 @@ class AxialRenderer:
         if state is not None:
             cull, prog, vaos = state
         else:
-            prog, vao_triangles, vao_edges = self._variant(tinted, shadowed)
+            prog, vao_triangles, edges = self._variant(tinted, shadowed)
         set_camera_uniforms(prog, view, projection)
         self._set_wind_uniforms(prog, self.wind, self.time)
         set_uniforms(prog, {
@@ -427,7 +452,7 @@ class AxialRenderer:
             self.color = tuple(color)
         try:
             if state is None:
-                self._draw(prog, vao_triangles, vao_edges, 0, mode, hidden_line, view, projection, n)
+                self._draw(prog, vao_triangles, edges, 0, mode, hidden_line, view, projection, n)
                 return
             if self.quantized:
                 self._set_quant_uniforms(prog)
@@ -446,17 +471,23 @@ class AxialRenderer:
             first = 0
             for level, kept in enumerate(counts):  # the cull pass ran once; every part draws from its output
                 if kept:
-                    vao_t, vao_e = vaos[level]
+                    vao_t = vaos[level][0]
                     cull.bind_records(vao_t, prog, first)
-                    cull.bind_records(vao_e, prog, first)
-                    self._draw(prog, vao_t, vao_e, level, mode, hidden_line, view, projection, kept)
+
+                    def culled_edges(level=level, first=first):
+                        vao_e = self._culled_edges(vaos, prog, level)
+                        cull.bind_records(vao_e, prog, first)
+                        return vao_e
+
+                    self._draw(prog, vao_t, culled_edges, level, mode, hidden_line, view, projection, kept)
                 first += kept
         finally:
             self.color = keep
 
-    def _draw(self, prog, vao_triangles, vao_edges, level: int, mode: str, hidden_line, view, projection,
+    def _draw(self, prog, vao_triangles, edges, level: int, mode: str, hidden_line, view, projection,
               instances: int) -> None:
-        """``instances`` instances of one level: the parts' triangles, or the edges in wireframe."""
+        """``instances`` instances of one level: the parts' triangles, or the
+        edges in wireframe (``edges()`` returns their vao: built on first use)."""
         import moderngl
 
         if mode == "wireframe":  # lines are never culled
@@ -469,8 +500,8 @@ class AxialRenderer:
                 self.ctx.enable(moderngl.BLEND)
                 self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
             try:
-                edges = self._edge_count if level == 0 else self._level_buffers[level].edge_indices
-                vao_edges.render(moderngl.LINES, vertices=edges, instances=instances)
+                count = self._edge_count if level == 0 else self._level_buffers[level].edge_indices
+                edges().render(moderngl.LINES, vertices=count, instances=instances)
             finally:
                 self.ctx.depth_func = "<"
                 if fill:
@@ -544,18 +575,24 @@ class AxialRenderer:
             self._objects.append(prog)
             self._set_axis_uniforms(prog)
             vaos = []
-            for level, mb in enumerate(self._level_buffers):
-                extra = [self.appearance.content(prog)] if level == 0 and self.appearance is not None else []
-                edges = self._edge_buffer if level == 0 else mb.edges
-                pair = []
-                for index_buffer in (mb.triangles, edges):
-                    vao = self.ctx.vertex_array(prog, [mb.content(prog), *extra], index_buffer=index_buffer,
-                                                index_element_size=4)
-                    self._objects.append(vao)
-                    pair.append(vao)
-                vaos.append(tuple(pair))
+            for level in range(len(self._level_buffers)):  # edges: built by the first wireframe draw (lazy edges)
+                vaos.append([self._culled_vao(prog, level, self._level_buffers[level].triangles), None])
             state = self._culled[(tinted, shadowed)] = (cull, prog, vaos)
         return state
+
+    def _culled_vao(self, prog, level: int, index_buffer):
+        """A vertex array of one LOD level for the culled program (instances: bound by the cull pass)."""
+        mb = self._level_buffers[level]
+        extra = [self.appearance.content(prog)] if level == 0 and self.appearance is not None else []
+        vao = self.ctx.vertex_array(prog, [mb.content(prog), *extra], index_buffer=index_buffer, index_element_size=4)
+        self._objects.append(vao)
+        return vao
+
+    def _culled_edges(self, vaos, prog, level: int):
+        if vaos[level][1] is None:
+            edges = self._edge_buffer if level == 0 else self._level_buffers[level].edges
+            vaos[level][1] = self._culled_vao(prog, level, edges)
+        return vaos[level][1]
 
     @contextmanager
     def culling(self, view=None, projection=None, enabled: bool = True):
@@ -582,10 +619,12 @@ class AxialRenderer:
 
     # ------------------------------------------------------------ capture
     def capture(self, start: int = 0, count: int | None = None, progress=None, *, time: float | None = None,
-                wind=_KEEP) -> tuple[np.ndarray, np.ndarray]:
+                wind=_KEEP, check_finite: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """World positions and normals as the GPU computes them, by transform
         feedback of the drawing vertex shader.
 
+        A non-finite result (parameters too large for float32) raises
+        :class:`AxialDeformError` naming the instance and coordinate.
         Returns two ``(count, vertices, 3) float32`` arrays in the base mesh's
         vertex order, for instances ``start .. start + count - 1``.
         ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
@@ -594,7 +633,8 @@ class AxialRenderer:
         import moderngl
 
         self._check()
-        count = self.count - start if count is None else int(count)
+        start = as_index(start, "capture: start")
+        count = self.count - start if count is None else as_index(count, "capture: count")
         if start < 0 or count < 0 or start + count > self.count:
             raise ParamError(f"capture: instances {start}..{start + count - 1} are outside 0..{self.count - 1}")
         v = self.mesh.vertex_count
@@ -632,7 +672,12 @@ class AxialRenderer:
                     progress.update(k)
         finally:
             bind_framebuffer(self.ctx, previous)  # give the caller back their framebuffer
-        return out[..., :3].copy(), out[..., 3:].copy()
+        positions, normals = out[..., :3].copy(), out[..., 3:].copy()
+        # parameters too large for float32 overflow on the GPU: an error naming the instance
+        if check_finite:  # bake() checks itself, naming the parameter file
+            require_finite(positions, "positions", "xyz", first=start)
+            require_finite(normals, "normals", "xyz", first=start)
+        return positions, normals
 
     def _release_capture(self) -> None:
         if self._capture is not None:

@@ -11,10 +11,23 @@ __all__ = ["camera_matrices", "eye_position", "set_uniforms", "set_camera_unifor
 
 
 def camera_matrices(view, projection) -> tuple[np.ndarray, np.ndarray]:
-    """``view`` and ``projection`` checked as ``(4, 4) float32`` (pyrr layout);
-    any other shape raises :class:`~axialdeform.core.errors.ArgumentError`."""
-    return (np.ascontiguousarray(as_array(view, (4, 4), "view", np.float32)),
-            np.ascontiguousarray(as_array(projection, (4, 4), "projection", np.float32)))
+    """``view`` and ``projection`` checked as ``(4, 4) float32`` (pyrr layout)
+    of finite numbers, ``view`` invertible (a camera; an all-zero matrix is
+    not); anything else raises :class:`~axialdeform.core.errors.ArgumentError`."""
+    from ..core.errors import ArgumentError
+
+    out = []
+    for m, name in ((view, "view"), (projection, "projection")):
+        a = as_array(m, (4, 4), name, np.float64)
+        if not np.isfinite(a).all():
+            raise ArgumentError(f"{name}: expected finite numbers, found {a[~np.isfinite(a)][0]}")
+        out.append(a)
+    with np.errstate(all="ignore"):
+        cond = np.linalg.cond(out[0])
+    if not np.isfinite(cond) or cond > 1e12:
+        raise ArgumentError(f"view: expected an invertible matrix (a camera), found a singular one "
+                            f"(condition number {cond:.3g}), e.g. all zeros")
+    return tuple(np.ascontiguousarray(a, dtype=np.float32) for a in out)
 
 
 def set_uniforms(program, values: dict) -> None:
