@@ -332,9 +332,15 @@ def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
         page.evaluate(push, base64.b64encode(w.params_adp).decode())
         page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
-        page.wait_for_timeout(300)
-        assert page.screenshot(clip=clip) != before
+        # the status line and the picture follow within the next frames: wait for them, not a fixed time
+        page.wait_for_function("document.querySelector('.axd-status').innerText.includes('40 instances')",
+                               timeout=60_000)
         assert "40 instances" in page.locator(".axd-status").inner_text()
+        for _ in range(100):
+            if page.screenshot(clip=clip) != before:
+                break
+            page.wait_for_timeout(200)
+        assert page.screenshot(clip=clip) != before
         # a bad update: the page says why and draws nothing
         page.evaluate(push, base64.b64encode(w.params_adp[:-8]).decode())
         page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
