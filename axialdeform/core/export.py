@@ -316,6 +316,15 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     return path
 
 
+def _base_attributes(b: "_Builder", mesh) -> tuple[int, int]:
+    """Accessors of the base mesh's POSITION and NORMAL (float32, file order)."""
+    pos = b.accessor(b.view(mesh.positions.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
+                     bounds=mesh.positions, name="base_POSITION")
+    nrm = b.accessor(b.view(mesh.normals.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
+                     name="base_NORMAL")
+    return pos, nrm
+
+
 def encode_base_mesh(mesh) -> bytes:
     """The GLB bytes of the base mesh alone (one mesh, one node): POSITION and
     NORMAL float32 in the file's vertex order and its triangles, so the
@@ -323,10 +332,7 @@ def encode_base_mesh(mesh) -> bytes:
     web page checks a parameter file against)."""
     b = _Builder()
     g = b.g
-    pos = b.accessor(b.view(mesh.positions.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
-                     bounds=mesh.positions, name="base_POSITION")
-    nrm = b.accessor(b.view(mesh.normals.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
-                     name="base_NORMAL")
+    pos, nrm = _base_attributes(b, mesh)
     idx = b.indices(mesh)
     b.gltf.meshes.append(g.Mesh(name=str(mesh.name), primitives=[
         g.Primitive(attributes=g.Attributes(POSITION=pos, NORMAL=nrm), indices=idx, mode=_TRIANGLES)]))
@@ -344,10 +350,7 @@ def encode_instanced(mesh, params) -> bytes:
         raise GltfError("instanced export: expected at least one instance (EXT_mesh_gpu_instancing needs count >= 1)")
     b = _Builder()
     g = b.g
-    pos = b.accessor(b.view(mesh.positions.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
-                     bounds=mesh.positions, name="base_POSITION")
-    nrm = b.accessor(b.view(mesh.normals.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
-                     name="base_NORMAL")
+    pos, nrm = _base_attributes(b, mesh)
     look = b.appearance(mesh)
     attributes = {"POSITION": pos, "NORMAL": nrm}
     if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:

@@ -15,7 +15,7 @@ from ..core.bounds import outline_points, scene_box
 from ..core.arrays import as_array
 from ..core.errors import ArgumentError
 
-__all__ = ["Camera", "OrbitCamera", "frame_instances", "frame_points", "orbit_axes", "UP_VECTORS"]
+__all__ = ["Camera", "camera_for_points", "OrbitCamera", "frame_instances", "frame_points", "orbit_axes", "UP_VECTORS"]
 
 UP_VECTORS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -122,6 +122,15 @@ def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35
     width or height less ``margin`` (a fraction of the field of view).
     """
     points, radii = outline_points(mesh, params)
+    return camera_for_points(points, radii, aspect, up, fovy, azimuth, elevation, margin)
+
+
+def camera_for_points(points, radii, aspect: float, up: str = "y", fovy: float = 35.0,
+                      azimuth: float = 35.0, elevation: float = 35.0, margin: float = 0.03) -> Camera:
+    """The orbit camera that frames ``points`` (m, 3) with spheres of ``radii`` (m,)
+    (:func:`frame_points`), its near and far planes enclosing every sphere."""
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    radii = np.asarray(radii, dtype=np.float64).reshape(-1)
     target, distance = frame_points(points, radii, up, azimuth, elevation, aspect, fovy, margin)
     to_eye = orbit_axes(up, azimuth, elevation)[0]
     eye = target + to_eye * distance
@@ -130,7 +139,7 @@ def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35
         near, far = float((depth - radii).min()), float((depth + radii).max())
     else:
         near, far = distance * 0.5, distance * 2.0
-    return Camera(eye, target, UP_VECTORS[up], fovy, near=max(near * 0.95, distance * 1e-3), far=max(far * 1.05, distance * 1e-3 * 2))
+    return Camera(eye, target, UP_VECTORS[up], fovy, near=max(near * 0.95, distance * 1e-3), far=max(far * 1.05, distance * 2e-3))
 
 
 class OrbitCamera:

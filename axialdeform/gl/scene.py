@@ -34,7 +34,7 @@ def scene_camera(scene, aspect: float) -> Camera:
         dist = float(np.linalg.norm(eye - target))
         return Camera(eye, target, up, fov, near=dist * 1e-3, far=dist * 10)
     from ..core.bounds import instance_bounds
-    from .camera import frame_points, orbit_axes
+    from .camera import camera_for_points
 
     points, radii = [], []
     for layer in scene.layers:  # a sphere per instance (it holds the instance at any time of the wind)
@@ -47,16 +47,7 @@ def scene_camera(scene, aspect: float) -> Camera:
         radii.append(np.zeros(len(scene.terrain.positions)))
     pts = np.concatenate(points) if points else np.zeros((0, 3))
     rad = np.concatenate(radii) if radii else np.zeros(0)
-    az, el = cam.get("azimuth", 35.0), cam.get("elevation", 35.0)
-    target, distance = frame_points(pts, rad, scene.up, az, el, aspect, fov)
-    to_eye = orbit_axes(scene.up, az, el)[0]
-    eye = target + to_eye * distance
-    if len(pts):
-        depth = (eye - pts) @ to_eye
-        near, far = float((depth - rad).min()), float((depth + rad).max())
-    else:
-        near, far = distance * 0.5, distance * 2.0
-    return Camera(eye, target, up, fov, near=max(near * 0.95, distance * 1e-3), far=max(far * 1.05, distance * 2e-3))
+    return camera_for_points(pts, rad, aspect, scene.up, fov, cam.get("azimuth", 35.0), cam.get("elevation", 35.0))
 
 
 class SceneRenderer:
