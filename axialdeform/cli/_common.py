@@ -108,6 +108,21 @@ def progress_bar(total: int, desc: str, unit: str = "inst", small: int = 2000):
     return tqdm(total=total, desc=desc, unit=unit, disable=total < small and not sys.stderr.isatty(), file=sys.stderr)
 
 
+def scale_range(text: str) -> tuple[float, float]:
+    """``--scale MIN:MAX`` (or one number S for S:S) as ``(lo, hi)``; anything but
+    finite 0 < MIN <= MAX is a ParamError naming the argument and the range."""
+    from ..core.errors import ParamError
+
+    parts = text.replace(",", ":").split(":")
+    try:
+        lo, hi = (float(parts[0]), float(parts[-1])) if len(parts) in (1, 2) else (math.nan, math.nan)
+    except ValueError:
+        lo = hi = math.nan
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
+        raise ParamError(f"--scale: expected MIN:MAX with 0 < MIN <= MAX (s must be > 0), found {text!r}")
+    return lo, hi
+
+
 def extension_args(args) -> dict:
     """``--scale MIN:MAX``, ``--twist MAX``, ``--taper MAX`` as random_params keywords;
     a bad value is a ParamError naming the argument and the expected range."""
@@ -115,14 +130,7 @@ def extension_args(args) -> dict:
 
     out = {}
     if args.scale is not None:
-        parts = args.scale.replace(",", ":").split(":")
-        try:
-            lo, hi = (float(parts[0]), float(parts[-1])) if len(parts) in (1, 2) else (math.nan, math.nan)
-        except ValueError:
-            lo = hi = math.nan
-        if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
-            raise ParamError(f"--scale: expected MIN:MAX with 0 < MIN <= MAX (s must be > 0), found {args.scale!r}")
-        out["scale"] = (lo, hi)
+        out["scale"] = scale_range(args.scale)
     if args.twist is not None:
         if not math.isfinite(args.twist):
             raise ParamError(f"--twist: expected a finite number of radians, found {args.twist!r}")

@@ -14,18 +14,6 @@ import sys
 __all__ = ["add_parser", "run"]
 
 
-def _scale_range(text: str) -> tuple[float, float]:
-    try:
-        parts = [float(x) for x in text.split(":")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected MIN:MAX (0 < MIN <= MAX), found {text!r}") from None
-    if len(parts) == 1:
-        parts = parts * 2
-    if len(parts) != 2:
-        raise argparse.ArgumentTypeError(f"expected MIN:MAX (0 < MIN <= MAX), found {text!r}")
-    return parts[0], parts[1]
-
-
 def _extent(text: str) -> tuple[float, ...]:
     try:
         parts = tuple(float(x) for x in text.split(","))
@@ -54,7 +42,7 @@ def add_parser(subparsers) -> None:
                    help="tilt the up axis towards the surface normal by F in [0, 1] (default: 0, upright)")
     s.add_argument("--anchor", choices=ANCHORS, default="bottom",
                    help="point of MESH on the surface (default: %(default)s)")
-    s.add_argument("--scale", type=_scale_range, default=None, metavar="MIN:MAX", help="random uniform scale, 19 numbers an instance (default: none, 16 numbers)")
+    s.add_argument("--scale", default=None, metavar="MIN:MAX", help="random uniform scale, 19 numbers an instance (default: none, 16 numbers)")
     s.add_argument("--bend", type=float, default=0.08, metavar="B",
                    help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
     s.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
@@ -73,11 +61,14 @@ def run(args) -> int | None:
     from ..core.mesh import load_mesh
     from ..core.params import write_params
     from ..core.scatter import scatter
+    from ._common import scale_range
 
+    scale = None if args.scale is None else scale_range(args.scale)  # checked before any file is read
     mesh = load_mesh(args.mesh)
     try:
         params = scatter(args.surface, mesh, args.count, min_distance=args.min_distance, density=args.density,
-                         align_to_normal=args.align_to_normal, anchor=args.anchor, scale=args.scale,
+                         align_to_normal=args.align_to_normal, anchor=args.anchor,
+                         scale=scale,
                          bend=args.bend, seed=args.seed, up=args.up, height_scale=args.height_scale,
                          extent=args.extent, allow_fewer=args.allow_fewer)
         short = None
