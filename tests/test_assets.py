@@ -520,3 +520,141 @@ def test_lod_of_a_mesh_with_parts_is_refused(ctx):
     with pytest.raises(ad.ParamError, match="lod"):
         ad.AxialRenderer(ctx, mesh, ad.random_params(mesh, 4, seed=1), lod=True)
     assert ctx.error == "GL_NO_ERROR"
+
+
+# ------------------------------------------------------------------ the file's own tangents, PLY parts
+
+
+def _gltf_tangents(path):
+    """Every primitive's TANGENT of a GLB, read with pygltflib (independent of the loader)."""
+    import pygltflib
+
+    from axialdeform.core.export import read_accessor
+
+    g = pygltflib.GLTF2.load(str(path))
+    blob = g.binary_blob()
+    return [read_accessor(g, blob, p.attributes.TANGENT, "TANGENT", str(path))
+            for m in g.meshes for p in m.primitives if p.attributes.TANGENT is not None]
+
+
+def _with_tangents(src, dst, change):
+    """A copy of the GLB ``src`` whose (tightly packed) TANGENT data is ``change(tangents, normals)``."""
+    import pygltflib
+
+    from axialdeform.core.export import read_accessor
+
+    g = pygltflib.GLTF2.load(str(src))
+    blob = bytearray(g.binary_blob())
+    a = g.meshes[0].primitives[0].attributes
+    acc = g.accessors[a.TANGENT]
+    view = g.bufferViews[acc.bufferView]
+    assert view.byteStride in (None, 16)
+    new = change(read_accessor(g, bytes(blob), a.TANGENT, "T", ""), read_accessor(g, bytes(blob), a.NORMAL, "N", ""))
+    start = (view.byteOffset or 0) + (acc.byteOffset or 0)
+    blob[start:start + new.nbytes] = np.ascontiguousarray(new, "<f4").tobytes()
+    g.set_binary_blob(bytes(blob))
+    g.save_binary(str(dst))
+    return dst
+
+
+def test_tangents_stored_in_the_file_are_used_and_written_back(tmp_path):
+    """cubevc.glb (trimesh's test model) carries TANGENT; trimesh drops it, the loader
+    reads it in the file's vertex order, and export writes it back unchanged."""
+    from axialdeform.core.export import export_baked, export_instanced
+
+    src = shared_mesh("gltf/cubevc.glb")
+    mesh = ad.load_mesh(src)
+    assert mesh.uvs is not None  # TEXCOORD_0 of a primitive without a material, also dropped by trimesh
+    computed = compute_tangents(mesh.positions, mesh.normals, mesh.uvs, mesh.faces)
+    assert np.array_equal(mesh.tangents, _gltf_tangents(src)[0])
+    # cubevc's own tangents happen to equal the computed ones: turn them 90 degrees
+    # about the normal and flip the handedness, so only the file can be their source
+    path = _with_tangents(src, tmp_path / "turned.glb", lambda t, n: np.column_stack([np.cross(n, t[:, :3]), -t[:, 3]]))
+    (file_tangents,) = _gltf_tangents(path)
+    assert np.abs(np.einsum("ij,ij->i", file_tangents[:, :3], computed[:, :3])).max() < 1e-6
+    mesh = ad.load_mesh(path)
+    assert mesh.tangents is not None and np.array_equal(mesh.tangents, file_tangents)
+    identity = np.zeros((2, 16), np.float32)
+    baked = export_baked(tmp_path / "b.glb", mesh, identity)
+    inst = export_instanced(tmp_path / "i.glb", mesh, identity)
+    for report in _validate(baked, inst):
+        assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
+    out = _gltf_tangents(baked)
+    assert len(out) == 2
+    for t in out:  # identity instances: the bend's Jacobian is I
+        assert np.allclose(t[:, :3], file_tangents[:, :3], atol=1e-6) and np.array_equal(t[:, 3], file_tangents[:, 3])
+    assert np.array_equal(_gltf_tangents(inst)[0], file_tangents)  # the base mesh: bit for bit
+
+
+def test_bake_glb_writes_the_bent_tangents(tmp_path):
+    from axialdeform.cli import main
+
+    mesh_path = str(shared_mesh("gltf/cubevc.glb"))
+    assert main(["random", mesh_path, "-n", "2", "-o", str(tmp_path / "p.adp")]) == 0
+    out = tmp_path / "glb"
+    assert main(["bake", mesh_path, str(tmp_path / "p.adp"), "-o", str(out), "--format", "glb"]) == 0
+    mesh = ad.load_mesh(mesh_path)
+    params = ad.read_params(tmp_path / "p.adp", mesh)
+    expected = deform_tangents(mesh.axis, mesh.positions, mesh.tangents, params)
+    for i in range(2):
+        path = out / f"instance_00000{i}.glb"
+        assert _validate(path)[0]["issues"]["numErrors"] == 0
+        (t,) = _gltf_tangents(path)
+        assert np.allclose(t[:, :3], expected[i], atol=1e-6) and np.array_equal(t[:, 3], mesh.tangents[:, 3])
+        g = next(iter(trimesh.load(path).geometry.values()))
+        assert g.visual.kind == "vertex"  # the colours came along
+
+
+def test_gltf_tangents_under_a_mirroring_node(tmp_path):
+    """A node transform turns the file's tangents by its linear part; a mirror flips w."""
+    import pygltflib
+
+    src = shared_mesh("gltf/cubevc.glb")
+    g = pygltflib.GLTF2.load(str(src))
+    (file_tangents,) = _gltf_tangents(src)
+    g.nodes[g.scenes[g.scene or 0].nodes[0]].matrix = [-2, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]
+    path = tmp_path / "mirrored.glb"
+    g.save_binary(str(path))
+    mesh = ad.load_mesh(path)
+    want = file_tangents.copy()
+    want[:, 0] *= -1  # x scaled by -2, then normalised
+    want[:, :3] /= np.linalg.norm(want[:, :3], axis=1, keepdims=True)
+    want[:, 3] *= -1
+    assert np.allclose(mesh.tangents, want, atol=1e-6)
+
+
+def test_ply_bake_of_a_multi_part_mesh_writes_one_file_per_part(tmp_path):
+    from axialdeform.cli import main
+
+    mesh_path = str(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(mesh_path)
+    assert main(["random", mesh_path, "-n", "2", "-o", str(tmp_path / "p.adp")]) == 0
+    out = tmp_path / "ply"
+    assert main(["bake", mesh_path, str(tmp_path / "p.adp"), "-o", str(out), "--format", "ply"]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    from axialdeform.core.bake import INSTANCE_FILE, instance_name, part_file_names
+
+    want = sorted(instance_name(i, 2, ".ply", part=n) for i in range(2) for n in part_file_names(mesh.parts))
+    assert names == want and len(names) == 2 * len(mesh.parts)
+    positions, _ = ad.bake(mesh, ad.read_params(tmp_path / "p.adp", mesh))
+    for part, file_part in zip(mesh.parts, part_file_names(mesh.parts)):
+        g = trimesh.load(out / instance_name(1, 2, ".ply", part=file_part), process=False)
+        used = np.unique(mesh.faces[part.start:part.start + part.count])
+        assert np.allclose(g.vertices, positions[1][used], atol=1e-6)  # this part's vertices only, bent
+        assert np.allclose(g.visual.uv, mesh.uvs[used], atol=1e-6)  # UVs kept
+        assert len(g.faces) == part.count
+    assert all(INSTANCE_FILE.match(n) for n in names)
+    # --overwrite with fewer instances removes the stale part files, keeps foreign ones
+    (out / "notes.txt").write_text("mine")
+    assert main(["random", mesh_path, "-n", "1", "-o", str(tmp_path / "q.adp")]) == 0
+    assert main(["bake", mesh_path, str(tmp_path / "q.adp"), "-o", str(out), "--format", "ply", "--overwrite"]) == 0
+    left = sorted(p.name for p in out.iterdir())
+    assert left == sorted(["notes.txt"] + [instance_name(0, 1, ".ply", part=n) for n in part_file_names(mesh.parts)])
+
+
+def test_part_file_names_are_safe_and_unique():
+    from axialdeform.core.bake import part_file_names
+    from axialdeform.core.material import Part
+
+    parts = [Part("a b", 0, 1), Part("a/b", 1, 1), Part("ok-1_x", 2, 1), Part("", 3, 1)]
+    assert part_file_names(parts) == ["a_b", "a_b-1", "ok-1_x", "part"]

@@ -49,8 +49,13 @@ def run(args) -> None:
         print(f"wrote {out}: positions and normals {positions.shape} float32 ({args.engine})")
     else:
         with progress_bar(len(positions), "writing meshes") as bar:
+            bent = params
+            if wind is not None:  # the tangents of a glb bend with the same wind-moved control points
+                from ..core.wind import apply_wind
+
+                bent = apply_wind(wind, mesh.axis, params, args.time or 0.0)
             files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
-                                      overwrite=args.overwrite)
+                                      overwrite=args.overwrite, params=bent)
         meshes = [f for f in files if f.suffix == "." + args.format]
         beside = f" + {len(files) - len(meshes)} material/texture files" if len(files) > len(meshes) else ""
         print(f"wrote {len(meshes)} {args.format} files{beside} to {out}/ ({args.engine})")

@@ -17,7 +17,7 @@ from .deform import deform
 from .errors import ArgumentError, PathError
 from .safeio import check_count, check_not_special, require_finite
 
-__all__ = ["bake_cpu", "instance_name", "write_npz", "write_scene_npz", "write_mesh_folder", "check_bake_folder",
+__all__ = ["bake_cpu", "instance_name", "part_file_names", "write_npz", "write_scene_npz", "write_mesh_folder", "check_bake_folder",
            "check_bake_count", "check_bake_result", "MESH_FORMATS"]
 
 MESH_FORMATS = ("obj", "ply", "glb")
@@ -62,12 +62,31 @@ def check_bake_result(positions, normals, source: str | None = None) -> None:
     require_finite(normals, "normals", "xyz", source=source)
 
 
-def instance_name(i: int, count: int = 0, suffix: str = "") -> str:
+def instance_name(i: int, count: int = 0, suffix: str = "", part: str | None = None) -> str:
     """The name of instance ``i`` of ``count`` wherever instances are files or
     glTF nodes: ``instance_000012`` + ``suffix`` (e.g. ``".obj"``), zero-padded
-    to 6 digits or to as many as ``count - 1`` needs, so names sort in order."""
+    to 6 digits or to as many as ``count - 1`` needs, so names sort in order.
+    ``part``: one part of a multi-part mesh in its own file,
+    ``instance_000012_PART.ply`` (:func:`part_file_names` makes ``PART``
+    safe for a file name)."""
     digits = max(6, len(str(max(int(count) - 1, 0))))
-    return f"instance_{int(i):0{digits}d}{suffix}"
+    middle = "" if part is None else f"_{part}"
+    return f"instance_{int(i):0{digits}d}{middle}{suffix}"
+
+
+def part_file_names(parts) -> list[str]:
+    """For each :class:`~axialdeform.core.material.Part`, its name as it goes
+    into a file name: letters, digits, ``-`` and ``_`` kept, anything else
+    ``_``; names that then repeat get ``-1``, ``-2`` … so each is unique."""
+    out: list[str] = []
+    for p in parts:
+        base = re.sub(r"[^A-Za-z0-9_-]", "_", str(p.name)) or "part"
+        name, k = base, 0
+        while name in out:
+            k += 1
+            name = f"{base}-{k}"
+        out.append(name)
+    return out
 
 
 def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarray) -> None:
@@ -91,12 +110,23 @@ def write_scene_npz(path: str | os.PathLike, layers: dict) -> None:
 
 
 #: the file names :func:`write_mesh_folder` writes, and recognises as its own
-INSTANCE_FILE = re.compile(r"^instance_(\d{6,})\.(" + "|".join(MESH_FORMATS) + r")$")
+#: (``instance_NNNNNN.EXT``, or ``instance_NNNNNN_PART.ply`` for one part)
+INSTANCE_FILE = re.compile(r"^instance_(\d{6,})(_[A-Za-z0-9_-]+)?\.(" + "|".join(MESH_FORMATS) + r")$")
 
 
 def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None,
-                      *, overwrite: bool = False) -> list[Path]:
+                      *, overwrite: bool = False, params=None) -> list[Path]:
     """One mesh file per instance (``instance_000000.obj`` …), each written atomically.
+
+    A mesh with appearance keeps it: ``obj`` writes ``vt``, one shared
+    ``material.mtl`` and its textures beside the files; ``glb`` writes each
+    instance as :func:`axialdeform.core.export.encode_baked` does (UVs,
+    colours, the material with its texture embedded, and -- given ``params``
+    (n, 16|19), the instances the arrays were baked from -- tangents bent by
+    the Jacobian); ``ply`` of a mesh with several parts writes one file per
+    part and instance, ``instance_000000_PART.ply`` (PLY has no parts or
+    materials: a part per file is what Blender and trimesh open as separate
+    objects), each with its own vertices, UVs or colours.
 
     ``folder`` must be new or empty (hidden files aside); a folder that holds
     anything else is refused, unless ``overwrite``: then every new file is
@@ -113,8 +143,24 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
     written = []
     plain = not mesh.has_appearance
     shared_written = False
+    per_part = fmt == "ply" and len(mesh.parts) > 1
+    part_names = part_file_names(mesh.parts) if per_part else []
+    if params is not None and len(params) != len(positions):
+        raise ArgumentError(f"params: {len(params)} instances for {len(positions)} baked ones; expected one per instance")
     for i in range(len(positions)):  # one file per instance: file I/O, not maths
         path = folder / instance_name(i, len(positions), f".{fmt}")
+        if per_part:
+            scene = to_trimesh_with_appearance(mesh, positions[i], normals[i])
+            for part, file_part in zip(mesh.parts, part_names):
+                if part.name not in scene.geometry:
+                    continue  # a part without triangles
+                path = folder / instance_name(i, len(positions), ".ply", part=file_part)
+                with atomic_path(path) as tmp:
+                    scene.geometry[part.name].export(str(tmp), file_type="ply")
+                written.append(path)
+            if progress is not None:
+                progress.update(1)
+            continue
         if plain:
             tm = mesh.to_trimesh(positions[i], normals[i])
             with atomic_path(path) as tmp:
@@ -132,6 +178,13 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
                     written.append(folder / name)
                 shared_written = True
             atomic_write_bytes(path, text.encode("utf-8"))
+        elif fmt == "glb":
+            from .export import encode_baked
+
+            one = slice(i, i + 1)
+            atomic_write_bytes(path, encode_baked(mesh, _identity_params(1) if params is None else params[one],
+                                                  positions=positions[one], normals=normals[one],
+                                                  tangents=params is not None))
         else:
             tm = to_trimesh_with_appearance(mesh, positions[i], normals[i])
             with atomic_path(path) as tmp:
@@ -146,6 +199,11 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(folder / name)
     return written
+
+
+def _identity_params(n: int) -> np.ndarray:
+    """``n`` instances that change nothing (zero offsets, at the origin, unrotated)."""
+    return np.zeros((n, 16), dtype=np.float32)
 
 
 def check_bake_folder(folder: str | os.PathLike, overwrite: bool = False) -> list[str]:

@@ -242,9 +242,11 @@ def check_glb_path(path) -> Path:
     return path
 
 
-def encode_baked(mesh, params, *, positions=None, normals=None, source: str | None = None) -> bytes:
+def encode_baked(mesh, params, *, positions=None, normals=None, source: str | None = None,
+                 tangents: bool = True) -> bytes:
     """The GLB bytes of the baked layout (see :func:`export_baked`); ``source``
-    names the parameter file in errors."""
+    names the parameter file in errors; ``tangents=False`` leaves ``TANGENT``
+    out (when ``params`` are not the ones ``positions`` were baked from)."""
     params = as_params(params)
     if positions is None or normals is None:
         from .bake import bake_cpu
@@ -272,7 +274,7 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     pos_view = b.view(positions, target=_ARRAY_BUFFER, stride=12)
     nrm_view = b.view(normals, target=_ARRAY_BUFFER, stride=12)
     tan_view = None
-    if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
+    if tangents and "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
         from .deform import deform_tangents
 
         tangents = np.concatenate([deform_tangents(mesh.axis, mesh.positions, mesh.tangents, params),
@@ -452,7 +454,10 @@ def export_glb(path: str | os.PathLike, mesh, params, layout: str = "baked", *, 
 # --------------------------------------------------------------------- reading
 
 
-def _read_accessor(gltf, blob: bytes, index, name: str, where: str) -> np.ndarray:
+def read_accessor(gltf, blob: bytes, index, name: str, where: str) -> np.ndarray:
+    """One accessor of a loaded pygltflib ``GLTF2`` over ``blob`` (buffer 0) as
+    a ``(count, components)`` array (normalized integers as floats);
+    :class:`GltfError` naming ``where`` and ``name`` if it cannot be read."""
     if not isinstance(index, int) or not 0 <= index < len(gltf.accessors):
         raise GltfError(f"{where}: {name}: expected an accessor index, found {index!r}")
     acc = gltf.accessors[index]
@@ -520,7 +525,7 @@ def read_instanced_glb(path: str | os.PathLike):
     if missing or ("_AXIAL_ANGLES" not in attrs and "ROTATION" not in attrs):
         raise GltfError(f"{where}: {INSTANCING} attributes: expected TRANSLATION, ROTATION and "
                         f"{', '.join(ATTRIBUTES)}; missing {', '.join(missing) or 'ROTATION'}")
-    cols = {name: _read_accessor(gltf, blob, attrs[name], name, where) for name in attrs}
+    cols = {name: read_accessor(gltf, blob, attrs[name], name, where) for name in attrs}
     counts = {len(v) for v in cols.values()}
     if len(counts) != 1:
         raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
@@ -558,11 +563,11 @@ def read_instanced_glb(path: str | os.PathLike):
             raise GltfError(f"{where}: mesh {node.mesh}: expected indexed triangles (mode 4)")
         if other.attributes.POSITION != prim.attributes.POSITION:
             raise GltfError(f"{where}: mesh {node.mesh}: expected every primitive to share one POSITION accessor")
-    positions = _read_accessor(gltf, blob, prim.attributes.POSITION, "POSITION", where)
-    faces = np.concatenate([_read_accessor(gltf, blob, q.indices, "indices", where).reshape(-1, 3)
+    positions = read_accessor(gltf, blob, prim.attributes.POSITION, "POSITION", where)
+    faces = np.concatenate([read_accessor(gltf, blob, q.indices, "indices", where).reshape(-1, 3)
                             for q in mesh_def.primitives])
     if prim.attributes.NORMAL is not None:
-        normals = _read_accessor(gltf, blob, prim.attributes.NORMAL, "NORMAL", where)
+        normals = read_accessor(gltf, blob, prim.attributes.NORMAL, "NORMAL", where)
         from_file = True
     else:
         from .mesh import area_weighted_normals

@@ -300,7 +300,8 @@ def gather_parts(loaded, file_name: str, failed=()) -> dict:
     """Every triangle mesh of what ``trimesh.load`` returned, as one mesh.
 
     Returns a dict with ``geometries`` (list of ``(trimesh.Trimesh, transform
-    (4, 4) or None)`` in scene order), ``uvs`` ((n, 2) float64 or None),
+    (4, 4) or None)`` in scene order), ``uvs`` ((n, 2) float64 or None;
+    ``uv_list``: the same per geometry, None where it has none),
     ``colors`` ((n, 4) float64 linear or None) and ``parts`` (list of
     :class:`Part` whose ``start``/``count`` index the concatenated faces).
     A part without UVs in a multi-part mesh with UVs gets UV (0, 0); one
@@ -358,7 +359,7 @@ def gather_parts(loaded, file_name: str, failed=()) -> dict:
         warnings.warn(AssetWarning(
             f"{file_name}: {texture!r} (texture or material file) {reason}; material {', '.join(repr(m) for m in untextured) or '?'} "
             "drawn with its base colour"), stacklevel=3)
-    return {"geometries": geometries, "uvs": uv_all, "colors": col_all, "parts": parts}
+    return {"geometries": geometries, "uvs": uv_all, "colors": col_all, "parts": parts, "uv_list": uvs}
 
 
 # --------------------------------------------------------------------- tangents

@@ -23,7 +23,7 @@ from .axis import ControlAxis
 from .errors import AxialDeformError, MeshError
 
 __all__ = ["BaseMesh", "load_mesh", "mesh_source_path", "bundled_mesh_path", "BUNDLED_MESHES", "MESH_SUFFIXES",
-           "area_weighted_normals"]
+           "area_weighted_normals", "gltf_attributes"]
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``,
 #: or ``NAME.glb`` for the textured leaf card of ``tools/make_leaf_card.py``).
@@ -55,8 +55,10 @@ class BaseMesh:
     colors : (n, 4) float32 or None
         Linear RGBA vertex colours.
     tangents : (n, 4) float32 or None
-        Unit tangent (xyz) and handedness (w = ±1), present where a part has
-        a normal map (computed by :func:`~axialdeform.core.material.compute_tangents`).
+        Unit tangent (xyz) and handedness (w = ±1): a glTF file's own
+        ``TANGENT`` where it has one (:func:`gltf_attributes`), else computed
+        (:func:`~axialdeform.core.material.compute_tangents`) where a part
+        has a normal map; None otherwise.
     parts : tuple of Part
         Ranges of ``faces`` each drawn with its own material (one part
         covering every face by default).  All parts share ONE control axis.
@@ -388,8 +390,9 @@ def load_mesh(source) -> BaseMesh:
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
     file_positions = _obj_positions(data) if path.suffix.lower() == ".obj" else None  # the bytes read above
+    dropped = gltf_attributes(data, kind, SafeResolver(path.parent)) if kind in ("glb", "gltf") else []
     del data
-    return _from_loaded(loaded, name, file_positions, resolver.failed)
+    return _from_loaded(loaded, name, file_positions, resolver.failed, dropped)
 
 
 def _is_image_name(name: str) -> bool:
@@ -398,15 +401,105 @@ def _is_image_name(name: str) -> bool:
                                                        ".tif", ".tiff", ".ktx", ".ktx2", ".dds")
 
 
-def _from_loaded(loaded, name: str, file_positions=None, failed=()) -> BaseMesh:
+def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:
+    """What trimesh drops of a glTF file's triangle primitives: ``TANGENT``
+    always, ``TEXCOORD_0`` of a primitive without a material.  A list of
+    ``(positions (k, 3) float32, {"TANGENT": (k, 4) float32, "TEXCOORD_0":
+    (k, 2) float32})`` (the keys the primitive has), one per primitive with
+    either, in the file's vertex order, read by pygltflib and
+    :func:`axialdeform.core.export.read_accessor`.  ``kind``: ``"glb"`` or
+    ``"gltf"``; ``resolver``: reads a ``.gltf``'s external buffer (a
+    :class:`~axialdeform.core.material.SafeResolver`).  Only buffer 0 is read
+    (the GLB chunk, a data URI or one ``.bin``); what cannot be read is left
+    out (tangents are then computed where a normal map needs them)."""
+    import json
+
+    import pygltflib
+
+    from .errors import GltfError
+    from .export import read_accessor
+
+    try:
+        if kind == "glb":
+            gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
+            blob = gltf.binary_blob() or b""
+        else:
+            gltf = pygltflib.GLTF2.from_json(json.loads(bytes(data).decode("utf-8")))
+            uri = gltf.buffers[0].uri if gltf.buffers else None
+            if not uri:
+                return []
+            if uri.startswith("data:"):
+                blob = gltf.decode_data_uri(uri)
+            elif resolver is not None:
+                blob = resolver.get(uri)
+            else:
+                return []
+    except Exception:  # trimesh has read (or refused) the file already: nothing more, not a second error
+        return []
+    out = []
+    for m in gltf.meshes or []:
+        for prim in m.primitives or []:
+            a = prim.attributes
+            wanted = {"TANGENT": a.TANGENT}
+            if prim.material is None:
+                wanted["TEXCOORD_0"] = a.TEXCOORD_0
+            wanted = {k: v for k, v in wanted.items() if v is not None}
+            if not wanted or a.POSITION is None or prim.mode not in (None, 4):
+                continue
+            try:
+                views = [gltf.bufferViews[gltf.accessors[i].bufferView] for i in (a.POSITION, *wanted.values())]
+                if any(v.buffer != 0 for v in views):
+                    continue
+                pos = read_accessor(gltf, blob, a.POSITION, "POSITION", "")
+                found = {k: read_accessor(gltf, blob, i, k, "").astype(np.float32) for k, i in wanted.items()}
+            except (GltfError, IndexError, TypeError, ValueError):
+                continue
+            widths = {"TANGENT": 4, "TEXCOORD_0": 2}
+            found = {k: v for k, v in found.items() if v.shape == (len(pos), widths[k])}
+            if pos.ndim == 2 and pos.shape[1] == 3 and found:
+                out.append((pos.astype(np.float32), found))
+    return out
+
+
+def _file_attributes_of(mesh, entries: list, used: set) -> dict:
+    """The file's dropped attributes (:func:`gltf_attributes`) of one loaded
+    geometry: those of the first unused primitive whose positions equal its
+    vertices exactly ({} if none)."""
+    v = np.asarray(mesh.vertices)
+    for k, (pos, found) in enumerate(entries):
+        if k not in used and pos.shape == v.shape and np.array_equal(pos.astype(np.float64), v):
+            used.add(k)
+            return found
+    return {}
+
+
+def _transform_tangents(tangents: np.ndarray, transform: np.ndarray) -> np.ndarray:
+    """File tangents (k, 4) under a node transform: xyz by its linear part
+    (a tangent is a difference of positions), renormalised; w flips where the
+    transform mirrors the frame (bitangent = w · n × t, with n by the inverse
+    transpose)."""
+    m = transform[:3, :3]
+    t = tangents[:, :3] @ m.T
+    out = tangents.copy()
+    out[:, :3] = t / np.maximum(np.linalg.norm(t, axis=1), 1e-30)[:, None]
+    if np.linalg.det(m) < 0:
+        out[:, 3] = -out[:, 3]
+    return out
+
+
+def _from_loaded(loaded, name: str, file_positions=None, failed=(), dropped=()) -> BaseMesh:
     """One BaseMesh from what trimesh loaded (a Trimesh, or a Scene whose
-    meshes become parts, node transforms applied)."""
+    meshes become parts, node transforms applied); ``dropped``: what
+    :func:`gltf_attributes` read from the file (tangents, UVs), used where
+    its positions match a geometry's."""
     from .material import compute_tangents, gather_parts
 
     gathered = gather_parts(loaded, name, failed=failed)
     all_positions, all_faces, all_normals, raw_positions = [], [], [], []
+    all_tangents, used = [], set()
+    uv_list = list(gathered["uv_list"])
     offset = 0
-    for mesh, transform in gathered["geometries"]:
+    for g, (mesh, transform) in enumerate(gathered["geometries"]):
         positions = np.asarray(mesh.vertices, dtype=np.float64)
         faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
         if not np.isfinite(positions).all():
@@ -420,10 +513,17 @@ def _from_loaded(loaded, name: str, file_positions=None, failed=()) -> BaseMesh:
             )
         raw_positions.append(positions)
         file_normals = _file_vertex_normals(mesh, len(positions))
+        found = _file_attributes_of(mesh, dropped, used) if dropped else {}
+        tangents = found["TANGENT"].astype(np.float64) if "TANGENT" in found else None
+        if uv_list[g] is None and "TEXCOORD_0" in found:  # glTF's v points down the image: ours up
+            uv_list[g] = np.column_stack([found["TEXCOORD_0"][:, 0], 1.0 - found["TEXCOORD_0"][:, 1]])
         if transform is not None:
             positions = positions @ transform[:3, :3].T + transform[:3, 3]
             if file_normals is not None:
                 file_normals = file_normals @ np.linalg.inv(transform[:3, :3])  # inverse transpose
+            if tangents is not None:
+                tangents = _transform_tangents(tangents, transform)
+        all_tangents.append(tangents if tangents is not None else np.full((len(positions), 4), np.nan))
         all_positions.append(positions)
         all_faces.append(faces + offset)
         all_normals.append(file_normals if file_normals is not None else np.full((len(positions), 3), np.nan))
@@ -445,9 +545,25 @@ def _from_loaded(loaded, name: str, file_positions=None, failed=()) -> BaseMesh:
     else:
         normals = area_weighted_normals(positions, faces)
     uvs, colors, parts = gathered["uvs"], gathered["colors"], gathered["parts"]
-    tangents = None
-    if uvs is not None and any(p.material.normal_texture is not None for p in parts):
+    if any(u is not None and g is None for u, g in zip(uv_list, gathered["uv_list"])):
+        uvs = np.concatenate([u if u is not None else np.zeros((len(m.vertices), 2))
+                              for u, (m, _) in zip(uv_list, gathered["geometries"])])
+        if not np.isfinite(uvs).all():
+            raise MeshError(f"{name}: a texture coordinate is not a finite number")
+    # the file's own tangents where it has them (unit xyz, w = ±1); computed
+    # for the other vertices, or for all where a normal map asks and the file has none
+    tangents = np.concatenate(all_tangents)
+    usable = (np.isfinite(tangents).all(axis=1) & (np.abs(np.linalg.norm(tangents[:, :3], axis=1) - 1.0) < 1e-3)
+              & (np.abs(np.abs(tangents[:, 3]) - 1.0) < 1e-6))
+    if usable.any():
+        if not usable.all():
+            computed = (compute_tangents(positions, normals, uvs, faces) if uvs is not None
+                        else compute_tangents(positions, normals, np.zeros((len(positions), 2)), faces))
+            tangents = np.where(usable[:, None], tangents, computed)
+    elif uvs is not None and any(p.material.normal_texture is not None for p in parts):
         tangents = compute_tangents(positions, normals, uvs, faces)
+    else:
+        tangents = None
     return BaseMesh(positions, normals, faces, name=name, normals_from_file=has_file_normals,
                     uvs=uvs, colors=colors, tangents=tangents, parts=tuple(parts),
                     source_index=source_index, source_count=source_count)
