@@ -229,3 +229,40 @@ def test_bad_values_name_their_line_and_key(tmp_path, body, line, key):
     Image.fromarray(np.full((8, 8), 128, dtype=np.uint8)).save(tmp_path / "hm.png")
     msg = _error(tmp_path, body + "\n")
     assert msg.startswith(f"{tmp_path / 'scene.toml'}:{line}: key '{key}': "), msg
+
+
+@pytest.mark.slow
+def test_export_a_scene_instanced(small, tmp_path, capsys, validate):  # noqa: F811
+    """``export SCENE --instanced``: per layer its base mesh once on a node with
+    EXT_mesh_gpu_instancing, the terrain once; each layer reads back bit for bit."""
+    from axialdeform.core.export import INSTANCING, read_instanced_glb
+
+    glb = tmp_path / "inst.glb"
+    assert main(["export", str(small), "-o", str(glb), "--instanced"]) == 0
+    assert "instanced" in capsys.readouterr().out
+    (report,) = validate(glb)
+    assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
+    assert report["issues"]["numWarnings"] == 0, report["issues"]["messages"][:5]
+    scene = load_scene(small)
+    import pygltflib
+
+    g = pygltflib.GLTF2.load(str(glb))
+    inst = {n.name: n for n in g.nodes if (n.extensions or {}).get(INSTANCING)}
+    assert set(inst) == {"stones", "leaves"} and g.extensionsUsed == [INSTANCING]
+    assert [n.name for n in g.nodes if n.mesh is not None and n.name not in inst] == ["terrain"]
+    for layer in scene.layers:
+        mesh, params = read_instanced_glb(glb, node=layer.name)
+        assert mesh.fingerprint == layer.mesh.fingerprint and np.array_equal(params, layer.params)
+        extras = inst[layer.name].extras["axialdeform"]
+        assert extras["layer"] == layer.name and extras["count"] == len(layer.params)
+    leaves = g.meshes[inst["leaves"].mesh].primitives[0]
+    color = g.materials[leaves.material].pbrMetallicRoughness.baseColorFactor
+    assert np.allclose(color[:3], (0.8, 0.4, 0.1))  # the layer's colour
+    import trimesh
+
+    loaded = trimesh.load(glb)  # trimesh ignores the extension: each base mesh once
+    assert {"terrain", "stones", "leaves"} <= {n for n in loaded.graph.nodes_geometry}
+    assert sum(len(geom.faces) for geom in loaded.geometry.values()) == (
+        len(scene.terrain.faces) + len(ad.load_mesh("stone").faces) + len(ad.load_mesh("leaf").faces))
+    with pytest.raises(ad.AxialDeformError, match="name one with node="):
+        read_instanced_glb(glb)

@@ -84,15 +84,15 @@ def bake(scene, args, progress, wind=None) -> None:
 
 
 def export(scene, args) -> None:
-    """``export SCENE -o OUT.glb``: one mesh per layer (baked) and the terrain."""
-    from ..core.errors import GltfError
+    """``export SCENE -o OUT.glb [--instanced]``: the terrain and one mesh per
+    layer (baked), or per layer its base mesh once on a node with
+    EXT_mesh_gpu_instancing (instanced)."""
     from ..core.export import export_scene
 
-    if args.layout != "baked":
-        raise GltfError("--instanced: a scene exports baked (one mesh per layer); expected --baked or no layout flag")
     _check_output(args, "exported .glb")
-    path = export_scene(args.output, scene)
-    print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, baked, {path.stat().st_size} bytes)")
+    path = export_scene(args.output, scene, args.layout)
+    print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, {args.layout}, "
+          f"{path.stat().st_size} bytes)")
 
 
 def viewer_inputs(scene, wind=None):

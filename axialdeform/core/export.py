@@ -131,9 +131,10 @@ class _Builder:
         view = self.view(data, target=_ELEMENT_ARRAY_BUFFER)
         return self.accessor(view, _UINT16 if small else _UINT32, data.size, "SCALAR", name=name)
 
-    def appearance(self, mesh) -> "_Appearance":
-        """The mesh's parts (indices + material each) and its UV/colour accessors, written once."""
-        return _Appearance(self, mesh)
+    def appearance(self, mesh, default_color=None) -> "_Appearance":
+        """The mesh's parts (indices + material each) and its UV/colour accessors,
+        written once; ``default_color`` (linear RGB) replaces a default material."""
+        return _Appearance(self, mesh, default_color)
 
     def finish(self) -> bytes:
         blob = b"".join(self.chunks)
@@ -158,7 +159,7 @@ class _Appearance:
     cutoff, double-sidedness, normal map), shared TEXCOORD_0 (glTF's ``v``
     points down the image: ``1 - v``) and COLOR_0 (linear RGBA float)."""
 
-    def __init__(self, b: _Builder, mesh) -> None:
+    def __init__(self, b: _Builder, mesh, default_color=None) -> None:
         g = b.g
         self.mesh = mesh
         self.attributes: dict[str, int] = {}
@@ -177,11 +178,19 @@ class _Appearance:
             if part.count == 0:
                 continue
             m = part.material
-            if id(m) not in materials and not (single and m.is_default):
-                materials[id(m)] = self._material(b, m)
+            if default_color is not None and m.is_default:  # a scene layer's colour
+                from .material import Material
+
+                m = Material(name=part.name if not single else str(getattr(mesh, "name", "mesh")),
+                             base_color=[*default_color[:3], 1.0])
+                part_key = ("color", part.name)
+            else:
+                part_key = id(m)
+            if part_key not in materials and not (single and m.is_default):
+                materials[part_key] = self._material(b, m)
             faces = mesh.faces[part.start:part.start + part.count]
             idx = b.indices(mesh, faces, name="indices" if single else f"{part.name}_indices")
-            self.parts.append((part.name, idx, materials.get(id(m))))
+            self.parts.append((part.name, idx, materials.get(part_key)))
         if b.gltf.textures:
             b.gltf.samplers = [g.Sampler(magFilter=9729, minFilter=9987, wrapS=10497, wrapT=10497)]
 
@@ -346,19 +355,32 @@ def encode_base_mesh(mesh) -> bytes:
 
 def encode_instanced(mesh, params) -> bytes:
     """The GLB bytes of the instanced layout (see :func:`export_instanced`)."""
+    b = _Builder()
+    _add_instanced(b, mesh, params, "axialdeform instances")
+    b.gltf.scenes.append(b.g.Scene(name="axialdeform instanced", nodes=[0]))
+    b.gltf.scene = 0
+    b.gltf.extensionsUsed = [INSTANCING]
+    return b.finish()
+
+
+def _add_instanced(b: _Builder, mesh, params, node_name: str, *, color=None, extras=None) -> int:
+    """Add ``mesh`` once (POSITION, NORMAL, appearance, TANGENT) and one node
+    drawing it ``len(params)`` times with ``EXT_mesh_gpu_instancing`` (the
+    instanced layout of the module docs); returns the node's index.
+    ``color``: linear RGB for a mesh with the default material (a scene layer's)."""
     params = as_params(params)
     n = len(params)
     if n == 0:
         raise GltfError("instanced export: expected at least one instance (EXT_mesh_gpu_instancing needs count >= 1)")
-    b = _Builder()
     g = b.g
     pos, nrm = _base_attributes(b, mesh)
-    look = b.appearance(mesh)
+    look = b.appearance(mesh, color)
     attributes = {"POSITION": pos, "NORMAL": nrm}
     if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
         attributes["TANGENT"] = b.accessor(b.view(mesh.tangents.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT,
                                            mesh.vertex_count, "VEC4", name="base_TANGENT")
-    b.gltf.meshes.append(g.Mesh(name="base", primitives=look.primitives(attributes)))
+    b.gltf.meshes.append(g.Mesh(name=node_name if color is not None else "base",
+                                primitives=look.primitives(attributes)))
     # per-instance data: no bufferView target (they are not vertex attributes)
     columns = {
         "TRANSLATION": ("VEC3", params[:, POSITION]),
@@ -373,32 +395,43 @@ def encode_instanced(mesh, params) -> bytes:
     for name, (kind, data) in columns.items():
         data = np.ascontiguousarray(data, dtype="<f4")
         attributes[name] = b.accessor(b.view(data), _FLOAT, n, kind, name=name)
-    extras = _mesh_extras(mesh, n, "instanced")
-    extras["attributes"] = {name: _field_names(cols) for name, (_k, cols) in {**ATTRIBUTES, **extra_attributes}.items()}
+    node_extras = _mesh_extras(mesh, n, "instanced")
+    node_extras["attributes"] = {name: _field_names(cols) for name, (_k, cols) in {**ATTRIBUTES, **extra_attributes}.items()}
     if extra_attributes:
-        extras["attributes"]["SCALE"] = ["s", "s", "s"]
-    b.gltf.nodes.append(g.Node(name="axialdeform instances", mesh=0,
+        node_extras["attributes"]["SCALE"] = ["s", "s", "s"]
+    node_extras.update(extras or {})
+    b.gltf.nodes.append(g.Node(name=node_name, mesh=len(b.gltf.meshes) - 1,
                                extensions={INSTANCING: {"attributes": attributes}},
-                               extras={EXTRAS_KEY: extras}))
-    b.gltf.scenes.append(g.Scene(name="axialdeform instanced", nodes=[0]))
-    b.gltf.scene = 0
-    b.gltf.extensionsUsed = [INSTANCING]
-    return b.finish()
+                               extras={EXTRAS_KEY: node_extras}))
+    return len(b.gltf.nodes) - 1
 
 
-def encode_scene(scene) -> bytes:
-    """GLB bytes of a whole scene (:mod:`axialdeform.core.scene`): the terrain and
-    one mesh per layer holding all its instances' deformed world geometry
-    (CPU reference), each with its layer's colour as a PBR material."""
+def encode_scene(scene, layout: str = "baked") -> bytes:
+    """GLB bytes of a whole scene (:mod:`axialdeform.core.scene`).
+
+    ``layout="baked"``: the terrain and one mesh per layer holding all its
+    instances' deformed world geometry (CPU reference), each with its layer's
+    colour as a PBR material.  ``layout="instanced"``: the terrain once, and
+    per layer its base mesh once (with its own appearance, or the layer's
+    colour) drawn by one node named after the layer with
+    ``EXT_mesh_gpu_instancing`` and the ``_AXIAL_*`` attributes, exactly as
+    :func:`export_instanced` writes one mesh (:func:`read_instanced_glb` with
+    ``node=LAYER`` reads a layer back).  Neither layout holds the scene's wind.
+    """
+    if layout not in LAYOUTS:
+        raise GltfError(f"layout: expected one of {', '.join(LAYOUTS)}, found {layout!r}")
+    layers = [layer for layer in scene.layers if len(layer.params)]
+    if scene.terrain is None and not layers:
+        raise GltfError(f"{scene.path}: the scene has nothing to export; expected a terrain or a layer with instances")
+    if layout == "instanced":
+        return _encode_scene_instanced(scene, layers)
     import trimesh
 
     from .deform import deform
 
     out = trimesh.Scene()
     parts = [("terrain", scene.terrain, None, scene.terrain_color)] if scene.terrain is not None else []
-    parts += [(layer.name, layer.mesh, layer.params, layer.color) for layer in scene.layers if len(layer.params)]
-    if not parts:
-        raise GltfError(f"{scene.path}: the scene has nothing to export; expected a terrain or a layer with instances")
+    parts += [(layer.name, layer.mesh, layer.params, layer.color) for layer in layers]
     for name, mesh, params, color in parts:
         if params is None:
             pos, nrm = mesh.positions[None], mesh.normals[None]
@@ -415,10 +448,35 @@ def encode_scene(scene) -> bytes:
     return out.export(file_type="glb")
 
 
-def export_scene(path: str | os.PathLike, scene) -> Path:
-    """Write :func:`encode_scene` to ``path`` (a ``.glb``), atomically."""
+def _encode_scene_instanced(scene, layers) -> bytes:
+    """The instanced layout of :func:`encode_scene`."""
+    b = _Builder()
+    g = b.g
+    nodes = []
+    if scene.terrain is not None:
+        terrain = scene.terrain
+        pos, nrm = _base_attributes(b, terrain)
+        look = b.appearance(terrain, scene.terrain_color)
+        b.gltf.meshes.append(g.Mesh(name="terrain", primitives=look.primitives({"POSITION": pos, "NORMAL": nrm})))
+        b.gltf.nodes.append(g.Node(name="terrain", mesh=len(b.gltf.meshes) - 1))
+        nodes.append(len(b.gltf.nodes) - 1)
+    for layer in layers:
+        nodes.append(_add_instanced(b, layer.mesh, layer.params, layer.name,
+                                    color=layer.color if layer.color is not None else (0.6, 0.6, 0.6),
+                                    extras={"layer": layer.name}))
+    b.gltf.scenes.append(g.Scene(name="axialdeform scene, instanced", nodes=nodes, extras={EXTRAS_KEY: {
+        "version": _FORMAT_VERSION, "layout": "instanced", "layers": [layer.name for layer in layers],
+        "up": scene.up}}))
+    b.gltf.scene = 0
+    if layers:
+        b.gltf.extensionsUsed = [INSTANCING]
+    return b.finish()
+
+
+def export_scene(path: str | os.PathLike, scene, layout: str = "baked") -> Path:
+    """Write :func:`encode_scene` (``layout`` ``"baked"`` or ``"instanced"``) to ``path`` (a ``.glb``), atomically."""
     path = check_glb_path(path)
-    atomic_write_bytes(path, encode_scene(scene))
+    atomic_write_bytes(path, encode_scene(scene, layout))
     return path
 
 
@@ -481,8 +539,10 @@ def read_accessor(gltf, blob: bytes, index, name: str, where: str) -> np.ndarray
     return out
 
 
-def read_instanced_glb(path: str | os.PathLike):
-    """Read a GLB written by :func:`export_instanced` back.
+def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
+    """Read a GLB written by :func:`export_instanced` back (or, with ``node``,
+    the instanced node of that name: a layer of :func:`export_scene`'s
+    instanced layout).
 
     Returns
     -------
@@ -516,9 +576,16 @@ def read_instanced_glb(path: str | os.PathLike):
     except Exception as exc:  # pygltflib raises IOError, struct.error, JSON errors
         raise GltfError(f"{where}: not a binary glTF file ({type(exc).__name__}: {exc})") from None
     blob = gltf.binary_blob() or b""
-    nodes = [node for node in gltf.nodes if (node.extensions or {}).get(INSTANCING) and node.mesh is not None]
+    nodes = [nd for nd in gltf.nodes if (nd.extensions or {}).get(INSTANCING) and nd.mesh is not None]
+    if node is not None:
+        named = [nd for nd in nodes if nd.name == node]
+        if len(named) != 1:
+            raise GltfError(f"{where}: expected one node {node!r} with {INSTANCING}, found {len(named)}; "
+                            f"the instanced nodes are {', '.join(repr(nd.name) for nd in nodes) or 'none'}")
+        nodes = named
     if len(nodes) != 1:
-        raise GltfError(f"{where}: expected exactly one node with {INSTANCING}, found {len(nodes)}")
+        raise GltfError(f"{where}: expected exactly one node with {INSTANCING}, found {len(nodes)}"
+                        + (f" ({', '.join(repr(nd.name) for nd in nodes)}: name one with node=)" if nodes else ""))
     node = nodes[0]
     attrs = node.extensions[INSTANCING].get("attributes", {})
     missing = [k for k in ("TRANSLATION", "_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5") if k not in attrs]
