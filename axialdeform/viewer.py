@@ -5,6 +5,7 @@ Mouse: drag to orbit, scroll to zoom.  Keys::
     1 / 2 / 3   solid / flat / wireframe        W   next mode
     N           new seed (new individual shapes, same placement)
     UP / DOWN   bend amplitude x1.25 / x0.8 (also + and -)
+                (a scene file: N, UP/DOWN and V act on every layer)
     G           ground plane on / off          R   reset the camera
     V           wind on / off (``--wind``; moves control points on the GPU, no upload)
     S           save a screenshot (axialdeform-view-NNN.png)
@@ -114,10 +115,22 @@ class _ViewerMixin:
 
             self.shadow = ShadowMap(self.ctx, 2048)
         self.extra = None  # the other layers and the terrain of a scene file
+        #: the other layers of a scene: [(layer, renderer, loaded params (n, 16|19) float32)];
+        #: N, UP/DOWN and V act on them as on the viewer's own instances
+        self.layers = []
         if s.get("extra") is not None:
             from .gl.scene import SceneRenderer
 
             self.extra = SceneRenderer(self.ctx, s["extra"])
+            self.layers = [(layer, r, np.array(layer.params, dtype=np.float32)) for layer, r in self.extra.layers()]
+            scene = s["extra"]
+            #: a scene's wind, on or off for every layer at once (V)
+            self.scene_wind_on = self.renderer.wind is not None or (
+                scene.wind is not None and any(layer.wind for layer in scene.layers))
+        if self.samples and self.samples > 1 and not getattr(self.wnd.fbo, "color_attachments", None):
+            # a window's own multisampled framebuffer has no attachments to ask: BLEND parts by coverage
+            for r in [self.renderer, *(r for _, r, _ in self.layers)]:
+                r.alpha_to_coverage = True
         self.fps = 0.0
         self.frames = 0
         self.screenshots = 0
@@ -190,11 +203,16 @@ class _ViewerMixin:
         elif what == "ground":
             self.show_ground = not self.show_ground
         elif what == "wind":
-            if self.wind is None:
-                from .core.wind import Wind
+            if self.extra is not None:  # a scene: every layer with wind = true sways or stills together
+                self.scene_wind_on = not self.scene_wind_on
+                self.extra.wind_enabled = self.scene_wind_on
+                self.renderer.wind = self.wind if self.scene_wind_on else None
+            else:
+                if self.wind is None:
+                    from .core.wind import Wind
 
-                self.wind = Wind()
-            self.renderer.wind = None if self.renderer.wind is not None else self.wind
+                    self.wind = Wind()
+                self.renderer.wind = None if self.renderer.wind is not None else self.wind
         elif what == "reset camera":
             self.reset_camera()
         elif what == "screenshot":
@@ -215,6 +233,9 @@ class _ViewerMixin:
         self.seed = int(seed)
         fresh = random_params(self.mesh, len(self.base), seed=self.seed, bend=self.bend)
         self.base[:, :10] = fresh[:, :10]
+        for k, (layer, _, base) in enumerate(self.layers):  # each other layer: its own seed, derived from the seed
+            if len(base):
+                base[:, :10] = random_params(layer.mesh, len(base), seed=self.seed + 7919 * (k + 1), bend=self.bend)[:, :10]
         self._upload(self.base)
 
     def set_bend_scale(self, scale: float) -> None:
@@ -227,6 +248,11 @@ class _ViewerMixin:
         shown[:, :10] *= self.bend_scale
         self.renderer.update_params(shown)
         self._shown = shown
+        for _, renderer, base in self.layers:
+            if len(base):
+                other = base.copy()
+                other[:, :10] *= self.bend_scale
+                renderer.update_params(other)
 
     # ------------------------------------------------------------ drawing
     def on_render(self, time_s: float, frame_time: float):
@@ -264,7 +290,9 @@ class _ViewerMixin:
         wind = self.renderer.wind
         shown = self.renderer.stats.get("visible", self.renderer.count)
         seed = "" if self.seed is None else f" - seed {self.seed}"
-        return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances - {self.mode} - "
+        others = (f" + {sum(len(b) for _, _, b in self.layers)} in {len(self.layers)} more "
+                  f"layer{'s' if len(self.layers) != 1 else ''}") if self.layers else ""
+        return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances{others} - {self.mode} - "
                 f"bend x{self.bend_scale:.2f}{seed}"
                 + (f" - wind {wind.strength:g}" if wind is not None else "") + f" - {shown} drawn - {self.fps:.0f} fps")
 

@@ -658,3 +658,72 @@ def test_part_file_names_are_safe_and_unique():
 
     parts = [Part("a b", 0, 1), Part("a/b", 1, 1), Part("ok-1_x", 2, 1), Part("", 3, 1)]
     assert part_file_names(parts) == ["a_b", "a_b-1", "ok-1_x", "part"]
+
+
+# ------------------------------------------------------------------ BLEND: alpha-to-coverage, shadows
+
+
+def _glass_card(alpha: float):
+    """A 1 x 1 double-sided card in z = 0 with one BLEND material of the given alpha."""
+    from axialdeform.core.material import Material, Part
+
+    pos = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
+    faces = np.array([[0, 1, 2], [0, 2, 3]], np.uint32)
+    glass = Material(name="glass", base_color=(1, 1, 1, alpha), alpha_mode="BLEND", double_sided=True)
+    return ad.BaseMesh(pos, np.tile(np.float32([0, 0, 1]), (4, 1)), faces, name="glass",
+                       parts=(Part("glass", 0, 2, glass),))
+
+
+def _two_panes(ctx, mesh, order, coverage, samples=4):
+    """A red pane in front of a blue one (overlapping), each its own renderer
+    (one instance), drawn in ``order``; the picture."""
+    from axialdeform.gl.context import Offscreen
+    from axialdeform.gl.renderer import AxialRenderer
+
+    params = np.zeros((2, 1, 16), np.float32)
+    params[0, 0, 10:13] = (0.3, 0.2, 0.5)  # red, nearer the camera (+z)
+    tint = np.float32([[[1, 0, 0]], [[0, 0, 1]]])
+    cam = _front_camera(mesh, params.reshape(2, 16))
+    with AxialRenderer(ctx, mesh, params[0]) as red, AxialRenderer(ctx, mesh, params[1]) as blue, \
+            Offscreen(ctx, (48, 48), samples=samples) as target:
+        panes = [red, blue]
+        target.use((1.0, 1.0, 1.0))
+        for k in order:
+            panes[k].set_tint(tint[k])
+            panes[k].alpha_to_coverage = coverage
+            panes[k].render(cam.view(), cam.projection(1.0), "solid", ambient=1.0)
+        return target.read().astype(int)
+
+
+def test_blend_parts_use_alpha_to_coverage_when_multisampled(ctx):
+    mesh = _glass_card(0.5)
+    a2c = [_two_panes(ctx, mesh, order, True) for order in ([0, 1], [1, 0])]
+    assert np.array_equal(a2c[0], a2c[1])  # order-independent: the nearer pane wins by depth
+    # where both panes overlap, the red one hides the blue one behind it
+    red_only = _two_panes(ctx, mesh, [0], True)
+    blue_only = _two_panes(ctx, mesh, [1], True)
+    overlap = (red_only.sum(axis=2) < 700) & (blue_only.sum(axis=2) < 700)
+    assert overlap.sum() > 50 and np.array_equal(a2c[0][overlap], red_only[overlap])
+    auto = _two_panes(ctx, mesh, [1, 0], None)  # None: a multisampled target picks alpha-to-coverage
+    assert np.array_equal(auto, a2c[0])
+    # plain blending (no depth writes, unsorted) depends on the order: the test can tell
+    plain = [_two_panes(ctx, mesh, order, False) for order in ([0, 1], [1, 0])]
+    assert not np.array_equal(plain[0], plain[1])
+    # a single-sampled target cannot: None then blends
+    single = _two_panes(ctx, mesh, [1, 0], None, samples=0)
+    assert np.array_equal(single, _two_panes(ctx, mesh, [1, 0], False, samples=0))
+
+
+@pytest.mark.parametrize("alpha, casts", [(0.3, False), (0.8, True)])
+def test_blend_parts_cast_shadows_where_mostly_opaque(ctx, alpha, casts):
+    from axialdeform.gl.renderer import BLEND_DEPTH_CUTOFF, AxialRenderer
+    from axialdeform.gl.shadow import ShadowMap
+
+    assert BLEND_DEPTH_CUTOFF == 0.5
+    mesh = _glass_card(alpha)
+    params = np.zeros((1, 16), np.float32)
+    with AxialRenderer(ctx, mesh, params) as r, ShadowMap(ctx, 64) as shadow:
+        shadow.fit(mesh, params, (0.0, 0.0, 1.0))
+        r.render_shadow(shadow)
+        depth = np.frombuffer(shadow.texture.read(), dtype=np.float32)
+    assert (depth < 1.0).any() == casts

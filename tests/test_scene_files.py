@@ -266,3 +266,39 @@ def test_export_a_scene_instanced(small, tmp_path, capsys, validate):  # noqa: F
         len(scene.terrain.faces) + len(ad.load_mesh("stone").faces) + len(ad.load_mesh("leaf").faces))
     with pytest.raises(ad.AxialDeformError, match="name one with node="):
         read_instanced_glb(glb)
+
+
+@pytest.mark.slow
+def test_viewer_keys_act_on_every_layer_of_a_scene(small):
+    """N (new shapes), UP/DOWN (bend) and V (wind) reach every layer, not only the first."""
+    from axialdeform.cli.scenes import viewer_inputs
+    from axialdeform.viewer import Viewer
+
+    scene = load_scene(small)
+    mesh, params, wind, extra = viewer_inputs(scene)
+    v = Viewer.create(mesh, params, headless=True, size=(96, 72), wind=wind, extra=extra, seed=4, fast=True)  # N: seed 5 (the file: 1)
+    try:
+        (leaves, renderer, base), = v.layers
+        assert leaves.name == "leaves" and "12 instances + 40 in 1 more layer" in v.status()
+        v.step()
+        assert renderer.wind is scene.wind  # the leaves sway (wind = true), the stones do not
+        own0, other0 = v.renderer.instances.read().copy(), renderer.instances.read().copy()
+        v.on_key_event("N", v.wnd.keys.ACTION_PRESS, None)
+        v.step()
+        own1, other1 = v.renderer.instances.read(), renderer.instances.read()
+        for before, after in ((own0, own1), (other0, other1)):
+            assert not np.allclose(before[:, :10], after[:, :10])  # new shapes ...
+            assert np.array_equal(before[:, 10:], after[:, 10:])  # ... in the same places
+        v.on_key_event("UP", v.wnd.keys.ACTION_PRESS, None)
+        v.step()
+        np.testing.assert_allclose(renderer.instances.read()[:, :10], base[:, :10] * 1.25, rtol=1e-6, atol=1e-7)
+        np.testing.assert_allclose(v.renderer.instances.read()[:, :10], v.base[:, :10] * 1.25, rtol=1e-6, atol=1e-7)
+        v.on_key_event("V", v.wnd.keys.ACTION_PRESS, None)  # wind off: every layer
+        v.step()
+        assert renderer.wind is None and v.renderer.wind is None and not v.scene_wind_on
+        v.on_key_event("V", v.wnd.keys.ACTION_PRESS, None)
+        v.step()
+        assert renderer.wind is scene.wind and v.renderer.wind is None  # the stones' layer has no wind
+    finally:
+        v.release()
+        v.wnd.destroy()

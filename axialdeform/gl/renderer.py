@@ -33,7 +33,7 @@ from .uniforms import camera_matrices, eye_position, set_camera_uniforms, set_un
 from .material import AppearanceBuffer, GpuMaterials
 from .shaders import build_program
 
-__all__ = ["AxialRenderer", "BakedMeshes", "MODES", "DEFAULT_COLORS"]
+__all__ = ["AxialRenderer", "BakedMeshes", "MODES", "DEFAULT_COLORS", "BLEND_DEPTH_CUTOFF"]
 
 MODES = ("solid", "flat", "wireframe")
 _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
@@ -41,6 +41,9 @@ _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
 DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
 _CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
 _KEEP = object()  # render(wind=...) not given: keep the renderer's wind
+#: alpha below which a ``BLEND`` part leaves no depth in depth-only passes (shadows)
+BLEND_DEPTH_CUTOFF = 0.5
+_GL_SAMPLE_ALPHA_TO_COVERAGE = 0x809E
 
 
 class AxialRenderer:
@@ -109,8 +112,12 @@ class AxialRenderer:
     A mesh with UVs, vertex colours, several parts or a material
     (:attr:`BaseMesh.has_appearance`) is drawn with ``AXIAL_MATERIAL``:
     textures (sRGB), vertex colours, ``MASK`` cut-outs, ``BLEND`` parts after
-    the opaque ones (unsorted, without depth writes), normal maps and
-    two-sided lighting where the material is double-sided.
+    the opaque ones -- with alpha-to-coverage into a multisampled target
+    (order-independent, with depth writes; :attr:`alpha_to_coverage`), else
+    blended unsorted without depth writes -- normal maps and two-sided
+    lighting where the material is double-sided.  In depth-only passes
+    (shadows, hidden-line depth) a ``BLEND`` part is a cut-out at alpha
+    :data:`BLEND_DEPTH_CUTOFF`: it casts shadows where it is mostly opaque.
     :attr:`stats` describes the last :meth:`render`: instances submitted,
     visible (drawn), per LOD level, and vertices processed.
     """
@@ -156,6 +163,11 @@ class AxialRenderer:
         self.appearance = None
         self.materials = None
         self._variants = {}
+        #: ``BLEND`` parts: True draws them with alpha-to-coverage (order-independent,
+        #: depth-tested against each other; needs a multisampled target), False
+        #: blends them unsorted without depth writes, None (default) picks
+        #: alpha-to-coverage when the bound framebuffer is multisampled
+        self.alpha_to_coverage = None
         #: the wind (:class:`axialdeform.Wind`) or None (still); set it any time
         self.wind = wind
         #: seconds: the time the wind is drawn at (``render(time=...)`` sets it)
@@ -359,14 +371,22 @@ class AxialRenderer:
 
         instances = self.count if instances is None else int(instances)
         fbo = self.ctx.fbo
+        coverage = None  # whether BLEND parts draw with alpha-to-coverage: asked once per draw
         for part in self._draw_order:
             if part.count == 0:
                 continue
             material = part.material
             if self.materials is not None:
                 self.materials.bind(prog, material, self.color)
-            blend = material.alpha_mode == "BLEND" and not depth_only
-            if blend:
+            is_blend = material.alpha_mode == "BLEND"
+            if is_blend and depth_only:  # shadows and hidden-line depth: a cut-out at alpha 0.5
+                set_uniforms(prog, {"u_alpha_mode": 1, "u_alpha_cutoff": BLEND_DEPTH_CUTOFF})
+            blend = is_blend and not depth_only
+            if blend and coverage is None:
+                coverage = self._alpha_to_coverage(fbo)
+            if blend and coverage:  # order-independent: depth writes on, alpha -> sample mask
+                self.ctx.enable_direct(_GL_SAMPLE_ALPHA_TO_COVERAGE)
+            elif blend:
                 self.ctx.enable(moderngl.BLEND)
                 self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
                 fbo.depth_mask = False
@@ -374,9 +394,20 @@ class AxialRenderer:
                 with self.culling(view, projection, enabled=not material.double_sided):
                     vao.render(moderngl.TRIANGLES, vertices=part.count * 3, first=part.start * 3, instances=instances)
             finally:
-                if blend:
+                if blend and coverage:
+                    self.ctx.disable_direct(_GL_SAMPLE_ALPHA_TO_COVERAGE)
+                elif blend:
                     fbo.depth_mask = True
                     self.ctx.disable(moderngl.BLEND)
+
+    def _alpha_to_coverage(self, fbo) -> bool:
+        """:attr:`alpha_to_coverage`, or (None) whether ``fbo`` is multisampled:
+        its first colour attachment has 2 or more samples (a window's default
+        framebuffer has none to ask: the viewer sets the attribute)."""
+        if self.alpha_to_coverage is not None:
+            return bool(self.alpha_to_coverage)
+        attachments = getattr(fbo, "color_attachments", None) or ()
+        return bool(attachments) and int(getattr(attachments[0], "samples", 0) or 0) > 1
 
     def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
                color=None, line_color=None, ambient: float = 0.35, shadow=None, hidden_line=False,

@@ -61,6 +61,8 @@ class SceneRenderer:
         self.scene = scene
         self.renderers = []
         self._released = False
+        #: False stills every layer's wind (the viewer's V key); True: the scene's
+        self.wind_enabled = True
         try:
             if scene.terrain is not None:
                 self.renderers.append((AxialRenderer(ctx, scene.terrain, TERRAIN_INSTANCE), scene.terrain_color, False))
@@ -80,12 +82,18 @@ class SceneRenderer:
 
         raise SceneError(f"layer: expected one of {', '.join(x.name for x in self.scene.layers)}, found {name!r}")
 
+    def layers(self) -> list:
+        """``[(layer, renderer), ...]`` of every layer, in the scene's order."""
+        start = 1 if self.scene.terrain is not None else 0
+        return [(layer, renderer) for layer, (renderer, _, _) in zip(self.scene.layers, self.renderers[start:])]
+
     def render(self, view, projection, mode: str = "solid", *, time: float = 0.0) -> None:
-        """Draw everything into the bound framebuffer; ``time`` drives the wind of layers with ``wind = true``."""
+        """Draw everything into the bound framebuffer; ``time`` drives the wind of layers
+        with ``wind = true`` (while :attr:`wind_enabled`)."""
         up = UP_VECTORS[self.scene.up]
         for renderer, color, sways in self.renderers:
             renderer.render(view, projection, mode, up=up, color=color, time=time,
-                            wind=self.scene.wind if sways else None, **self.scene.light)
+                            wind=self.scene.wind if sways and self.wind_enabled else None, **self.scene.light)
 
     def release(self) -> None:
         """Free every renderer; safe to call twice."""
