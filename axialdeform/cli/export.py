@@ -10,7 +10,8 @@ def add_parser(sub) -> None:
         "Write MESH deformed by PARAMS to a .glb. --baked (default): one mesh per instance with its deformed "
         "world positions and normals; opens in any glTF viewer. --instanced: the base mesh once plus "
         "EXT_mesh_gpu_instancing (TRANSLATION, ROTATION and the offsets as _AXIAL_* attributes); "
-        "see docs/interop.md. Coordinates are written as they are (no re-orientation to glTF's +Y up)."))
+        "a scene file (SCENE.toml, no PARAMS): one node per layer. "
+        "See docs/interop.md. Coordinates are written as they are (no re-orientation to glTF's +Y up)."))
     add_mesh_and_params(e)
     e.add_argument("-o", "--output", required=True, help="the .glb to write (required, no default)")
     layout = e.add_mutually_exclusive_group()

@@ -97,8 +97,8 @@ def export(scene, args) -> None:
 
 def viewer_inputs(scene, wind=None):
     """``(mesh, params, wind, extra)`` for the viewer: the first layer is the
-    viewer's own (N and UP/DOWN act on it); the other layers and the terrain
-    are drawn with it."""
+    viewer's own; the other layers and the terrain are drawn with it (N,
+    UP/DOWN and V act on every layer: the viewer's ``layers``)."""
     from dataclasses import replace
 
     if not scene.layers:
