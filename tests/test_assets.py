@@ -727,3 +727,22 @@ def test_blend_parts_cast_shadows_where_mostly_opaque(ctx, alpha, casts):
         r.render_shadow(shadow)
         depth = np.frombuffer(shadow.texture.read(), dtype=np.float32)
     assert (depth < 1.0).any() == casts
+
+
+def test_gltf_text_files_give_their_tangents_too(tmp_path):
+    """A .gltf with its buffer as a data URI, or as an external .bin: the same tangents as the GLB."""
+    import pygltflib
+    from pygltflib import BufferFormat
+
+    src = shared_mesh("gltf/cubevc.glb")
+    (want,) = _gltf_tangents(src)
+    g = pygltflib.GLTF2.load(str(src))
+    g.convert_buffers(BufferFormat.DATAURI)
+    g.save_json(str(tmp_path / "uri.gltf"))
+    g = pygltflib.GLTF2.load(str(src))
+    (tmp_path / "cube.bin").write_bytes(g.binary_blob())
+    g.buffers[0].uri = "cube.bin"
+    g.save_json(str(tmp_path / "ext.gltf"))
+    for name in ("uri.gltf", "ext.gltf"):
+        mesh = ad.load_mesh(tmp_path / name)
+        assert mesh.tangents is not None and np.array_equal(mesh.tangents, want), name

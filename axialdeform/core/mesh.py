@@ -412,8 +412,6 @@ def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:
     :class:`~axialdeform.core.material.SafeResolver`).  Only buffer 0 is read
     (the GLB chunk, a data URI or one ``.bin``); what cannot be read is left
     out (tangents are then computed where a normal map needs them)."""
-    import json
-
     import pygltflib
 
     from .errors import GltfError
@@ -424,7 +422,7 @@ def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:
             gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
             blob = gltf.binary_blob() or b""
         else:
-            gltf = pygltflib.GLTF2.from_json(json.loads(bytes(data).decode("utf-8")))
+            gltf = pygltflib.GLTF2.from_json(bytes(data).decode("utf-8"))
             uri = gltf.buffers[0].uri if gltf.buffers else None
             if not uri:
                 return []
