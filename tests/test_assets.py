@@ -746,3 +746,22 @@ def test_gltf_text_files_give_their_tangents_too(tmp_path):
     for name in ("uri.gltf", "ext.gltf"):
         mesh = ad.load_mesh(tmp_path / name)
         assert mesh.tangents is not None and np.array_equal(mesh.tangents, want), name
+
+
+def test_ply_part_files_keep_vertex_colours(tmp_path):
+    from axialdeform.core.bake import write_mesh_folder
+    from axialdeform.core.material import Part, linear_to_srgb
+
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0], [3, 0, 0], [2, 1, 0]], np.float32)
+    faces = np.array([[0, 1, 2], [3, 4, 5]], np.uint32)
+    colors = np.array([[1, 0, 0, 1]] * 3 + [[0, 0.2, 1, 1]] * 3, np.float32)
+    mesh = ad.BaseMesh(pos, np.tile(np.float32([0, 0, 1]), (6, 1)), faces, name="two",
+                       colors=colors, parts=(Part("red", 0, 1), Part("blue", 1, 1)))
+    params = np.zeros((1, 16), np.float32)
+    positions, normals = ad.bake(mesh, params)
+    files = write_mesh_folder(tmp_path / "out", mesh, positions, normals, "ply")
+    assert [f.name for f in files] == ["instance_000000_red.ply", "instance_000000_blue.ply"]
+    for f, want in zip(files, (colors[0], colors[3])):
+        g = trimesh.load(f, process=False)
+        srgb = np.round(255 * np.append(linear_to_srgb(want[:3]), want[3])).astype(int)
+        assert len(g.vertices) == 3 and (np.abs(g.visual.vertex_colors.astype(int) - srgb) <= 1).all()
