@@ -5,32 +5,35 @@
 // the kept records byte for byte, in their original order, each followed by
 // its original index (int) and tint (3 floats), level after level.
 //
-// Three dispatches of this file (AXIAL_CULL_STAGE 1, 2, 3), an order-keeping
-// compaction (a prefix sum, no atomics):
-//   1. classify: one invocation per instance (blocks of 128): its level, or
-//      -1 when culled; a block-wide scan of one byte per level gives each
-//      instance its rank among the block's instances of its level.
-//   2. offsets: ONE work group scans the blocks' counts: where each block's
+// Four dispatches of this file (AXIAL_CULL_STAGE 1 to 4), an order-keeping
+// compaction (a prefix sum; no atomics, no work-group barriers on the
+// per-instance stages):
+//   1. classify: one invocation per instance: its level, or culled.
+//   2. rank: one invocation per block of 256 instances walks them in order:
+//      each kept one's rank among the block's instances of its level, and
+//      the block's count per level.
+//   3. offsets: ONE work group scans the blocks' counts: where each block's
 //      run of each level starts, the total per level, and the indirect
 //      draw commands (instanceCount and baseInstance of each slot's level).
-//   3. scatter: every kept instance copies its record to its place.
+//   4. scatter: one invocation per instance copies a kept record to its place.
 #include "axial.glsl"
 #include "quantized.glsl"
 #include "bounds.glsl"
 #include "cull.glsl"
 
-#define AXIAL_BLOCK 128u     // instances per block: one byte per level holds a block's count
+#define AXIAL_BLOCK 256u     // instances per block of the rank stage
 #define AXIAL_SCAN 256u      // invocations of the offsets stage
+#define AXIAL_LOCAL 64       // invocations per work group of the other stages
 #define AXIAL_CULLED_OUT 0xFFFFFFFFu
 
 uniform uint u_count;         // instances
-uniform uint u_blocks;        // blocks: ceil(u_count / 128)
+uniform uint u_blocks;        // blocks: ceil(u_count / AXIAL_BLOCK)
 uniform uint u_slots;         // indirect draw commands to fill
 
 layout(std430, binding = 0) readonly buffer Records { uint rec_in[]; };      // AXIAL_REC_WORDS words an instance
-layout(std430, binding = 1) readonly buffer Tints { uint tint_in[]; };       // 3 floats an instance (AXIAL_TINT)
-layout(std430, binding = 2) buffer Info { uint info[]; };                    // level << 8 | rank, or AXIAL_CULLED_OUT
-layout(std430, binding = 3) buffer BlockSums { uint block_sum[]; };          // per block: one byte per level
+layout(std430, binding = 1) readonly buffer Tints { uint tint_in[]; };       // 3 floats an instance (AXIAL_TINT_WORDS 3)
+layout(std430, binding = 2) buffer Info { uint info[]; };                    // level, then level << 16 | rank; or AXIAL_CULLED_OUT
+layout(std430, binding = 3) buffer BlockCounts { uvec4 block_count[]; };     // per block: kept instances per level
 layout(std430, binding = 4) buffer BlockOffsets { uvec4 block_off[]; };      // per block: first output record per level
 layout(std430, binding = 5) writeonly buffer Out { uint rec_out[]; };        // the compacted records
 layout(std430, binding = 6) buffer Counts { uvec4 level_count; uvec4 level_first; };
@@ -39,17 +42,14 @@ layout(std430, binding = 8) readonly buffer SlotLevels { uint slot_level[]; };
 
 #define AXIAL_OUT_WORDS (AXIAL_REC_WORDS + 1 + AXIAL_TINT_WORDS)
 
-uint axial_block() {
-    return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-}
-
-uvec4 axial_unpack_bytes(uint p) {
-    return uvec4(p & 0xFFu, (p >> 8u) & 0xFFu, (p >> 16u) & 0xFFu, p >> 24u);
+// This invocation's index along a 1D or 2D grid of work groups (more than
+// 65 535 groups along x go on y; the extra ones of the last row do nothing).
+uint axial_invocation() {
+    return (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * uint(AXIAL_LOCAL) + gl_LocalInvocationID.x;
 }
 
 #if AXIAL_CULL_STAGE == 1
-layout(local_size_x = 128) in;
-shared uint s_scan[AXIAL_BLOCK];
+layout(local_size_x = AXIAL_LOCAL) in;
 
 float axial_word(uint base, uint k) {
     return uintBitsToFloat(rec_in[base + k]);
@@ -83,30 +83,32 @@ AxialInstance axial_record(uint i) {
 }
 
 void main() {
-    uint block = axial_block();  // past u_blocks: the rest of a 2D grid's last row (writes nothing)
-    uint lid = gl_LocalInvocationID.x;
-    uint i = block * AXIAL_BLOCK + lid;
-    bool live = block < u_blocks && i < u_count;
-    int level = live ? axial_cull_level(axial_record(i)) : -1;
-    uint flag = level >= 0 ? (1u << (8u * uint(level))) : 0u;
-    s_scan[lid] = flag;
-    barrier();
-    for (uint step = 1u; step < AXIAL_BLOCK; step <<= 1u) {  // inclusive scan, one byte per level
-        uint add = lid >= step ? s_scan[lid - step] : 0u;
-        barrier();
-        s_scan[lid] += add;
-        barrier();
-    }
-    uint inclusive = s_scan[lid];
-    if (live) {
-        uint rank = ((inclusive - flag) >> (8u * uint(max(level, 0)))) & 0xFFu;
-        info[i] = level < 0 ? AXIAL_CULLED_OUT : (uint(level) << 8u) | rank;
-    }
-    if (lid == AXIAL_BLOCK - 1u && block < u_blocks) block_sum[block] = inclusive;
+    uint i = axial_invocation();
+    if (i >= u_count) return;
+    int level = axial_cull_level(axial_record(i));
+    info[i] = level < 0 ? AXIAL_CULLED_OUT : uint(level);
 }
 #endif
 
 #if AXIAL_CULL_STAGE == 2
+layout(local_size_x = AXIAL_LOCAL) in;
+
+void main() {
+    uint block = axial_invocation();
+    if (block >= u_blocks) return;
+    uvec4 count = uvec4(0u);
+    uint end = min((block + 1u) * AXIAL_BLOCK, u_count);
+    for (uint i = block * AXIAL_BLOCK; i < end; ++i) {
+        uint level = info[i];
+        if (level == AXIAL_CULLED_OUT) continue;
+        info[i] = (level << 16u) | count[level];
+        count[level] += 1u;
+    }
+    block_count[block] = count;
+}
+#endif
+
+#if AXIAL_CULL_STAGE == 3
 layout(local_size_x = 256) in;
 shared uvec4 s_sum[AXIAL_SCAN];
 
@@ -116,10 +118,10 @@ void main() {
     uint b0 = min(lid * per, u_blocks);
     uint b1 = min(b0 + per, u_blocks);
     uvec4 mine = uvec4(0u);
-    for (uint b = b0; b < b1; ++b) mine += axial_unpack_bytes(block_sum[b]);
+    for (uint b = b0; b < b1; ++b) mine += block_count[b];
     s_sum[lid] = mine;
     barrier();
-    for (uint step = 1u; step < AXIAL_SCAN; step <<= 1u) {
+    for (uint step = 1u; step < AXIAL_SCAN; step <<= 1u) {  // inclusive scan of the invocations' sums
         uvec4 add = lid >= step ? s_sum[lid - step] : uvec4(0u);
         barrier();
         s_sum[lid] += add;
@@ -130,7 +132,7 @@ void main() {
     uvec4 running = first + s_sum[lid] - mine;
     for (uint b = b0; b < b1; ++b) {
         block_off[b] = running;
-        running += axial_unpack_bytes(block_sum[b]);
+        running += block_count[b];
     }
     if (lid == 0u) {
         level_count = total;
@@ -144,16 +146,15 @@ void main() {
 }
 #endif
 
-#if AXIAL_CULL_STAGE == 3
-layout(local_size_x = 128) in;
+#if AXIAL_CULL_STAGE == 4
+layout(local_size_x = AXIAL_LOCAL) in;
 
 void main() {
-    uint block = axial_block();
-    uint i = block * AXIAL_BLOCK + gl_LocalInvocationID.x;
-    if (block >= u_blocks || i >= u_count) return;
+    uint i = axial_invocation();
+    if (i >= u_count) return;
     uint code = info[i];
     if (code == AXIAL_CULLED_OUT) return;
-    uint dst = (block_off[block][code >> 8u] + (code & 0xFFu)) * uint(AXIAL_OUT_WORDS);
+    uint dst = (block_off[i / AXIAL_BLOCK][code >> 16u] + (code & 0xFFFFu)) * uint(AXIAL_OUT_WORDS);
     uint src = i * uint(AXIAL_REC_WORDS);
     for (uint k = 0u; k < uint(AXIAL_REC_WORDS); ++k) rec_out[dst + k] = rec_in[src + k];
     rec_out[dst + uint(AXIAL_REC_WORDS)] = i;  // the original index (an int: i < 2^31)

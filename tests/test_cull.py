@@ -164,7 +164,7 @@ def test_culling_off_draws_everything_and_stats_count_vertices(ctx, stone):
     with ad.AxialRenderer(ctx, stone, params, culling=False) as r:
         draw(ctx, r, view, proj)
         assert r.stats == {"submitted": 200, "visible": 200, "levels": [200], "vertices": 200 * stone.vertex_count,
-                           "culling": False, "lod": False}
+                           "culling": False, "lod": False, "indirect": False}
         assert r._culled == {}, "culling=False builds no culling pass"
 
 

@@ -10,8 +10,8 @@ with divisor 1 and the original index as ``i_index`` (``AXIAL_CULLED`` in
 unculled draw.
 
 * **GL >= 4.3: compute + indirect draws** (``glsl/cull.comp``).  Three
-  dispatches (classify, offsets, scatter: an order-keeping prefix sum, no
-  atomics) compact the records and write the indirect draw commands
+  dispatches (classify, rank, offsets, scatter: an order-keeping prefix
+  sum, no atomics) compact the records and write the indirect draw commands
   themselves (instance count and base instance of every draw slot); the
   draws are ``glMultiDrawElementsIndirect`` (``vao.render_indirect``), so the
   CPU never waits for a count.  :meth:`CullPass.run` returns an
@@ -50,7 +50,8 @@ __all__ = ["CullPass", "IndirectDraws", "ALL_VISIBLE_PLANES", "indirect_supporte
 ALL_VISIBLE_PLANES = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (6, 1))
 #: environment variable: ``0`` forces the GL 3.3 (transform feedback + query) path
 INDIRECT_ENV = "AXIALDEFORM_INDIRECT"
-_BLOCK = 128  # instances per block of glsl/cull.comp (AXIAL_BLOCK)
+_BLOCK = 256  # instances per block of glsl/cull.comp's rank stage (AXIAL_BLOCK)
+_LOCAL = 64  # invocations per work group of its stages 1, 2 and 4
 _MAX_GROUPS = 65535  # work groups along x (GL's guaranteed minimum); more go on y
 
 
@@ -182,7 +183,7 @@ class CullPass:
     def _build_compute(self, defs: dict, draws) -> None:
         words = {"AXIAL_REC_WORDS": self.instances.record_bytes // 4, "AXIAL_TINT_WORDS": 3 if self.tinted else 0}
         self.stages = []
-        for stage in (1, 2, 3):
+        for stage in (1, 2, 3, 4):
             cs = build_compute(self.ctx, "cull.comp", defines={**defs, **words, "AXIAL_CULL_STAGE": stage})
             self._objects.append(cs)
             self.stages.append(cs)
@@ -281,31 +282,38 @@ class CullPass:
             return self._run_compute(count, levels, uniforms, prepare)
         return self._run_feedback(count, levels, uniforms, prepare)
 
+    @staticmethod
+    def _grid(invocations: int) -> tuple[int, int, int]:
+        """Work groups of :data:`_LOCAL` for ``invocations``: along x, and on
+        y too past :data:`_MAX_GROUPS` (the shader skips the extra ones)."""
+        groups = max((invocations + _LOCAL - 1) // _LOCAL, 1)
+        gx = min(groups, _MAX_GROUPS)
+        return gx, (groups + gx - 1) // gx, 1
+
     def _run_compute(self, count: int, levels: int, uniforms: dict, prepare) -> IndirectDraws:
         ctx = self.ctx
         blocks = (count + _BLOCK - 1) // _BLOCK
-        gx = min(blocks, _MAX_GROUPS)
-        gy = (blocks + gx - 1) // gx
         rec = self.instances.record_bytes
         uniforms = {**uniforms, "u_count": count, "u_blocks": blocks, "u_slots": self._slot_count}
         info = self._scratch_buffer("info", 4 * count)
-        sums = self._scratch_buffer("sums", 4 * blocks)
+        block_counts = self._scratch_buffer("counts", 16 * blocks)
         offsets = self._scratch_buffer("offsets", 16 * blocks)
         self.instances.buffer.bind_to_storage_buffer(0, size=rec * count)
         if self.tint is not None:
             self.tint[0].bind_to_storage_buffer(1, size=12 * count)
         info.bind_to_storage_buffer(2, size=4 * count)
-        sums.bind_to_storage_buffer(3, size=4 * blocks)
+        block_counts.bind_to_storage_buffer(3, size=16 * blocks)
         offsets.bind_to_storage_buffer(4, size=16 * blocks)
         self.buffer.bind_to_storage_buffer(5, size=self.out_bytes * count)
         self.counts_buffer.bind_to_storage_buffer(6)
         self.commands.bind_to_storage_buffer(7)
         self._slot_levels.bind_to_storage_buffer(8)
-        for k, cs in enumerate(self.stages):
+        grids = (self._grid(count), self._grid(blocks), (1, 1, 1), self._grid(count))
+        for cs, grid in zip(self.stages, grids):
             self._set(cs, uniforms)
             if prepare is not None:
                 prepare(cs)
-            cs.run(1, 1, 1) if k == 1 else cs.run(gx, gy, 1)
+            cs.run(*grid)
             ctx.memory_barrier()  # storage writes -> the next stage, the draws' attributes and commands
         self.output = self.buffer
         return IndirectDraws(self, levels)
