@@ -534,3 +534,28 @@ def test_shadow_pass_culls_casters_to_the_light_volume(ctx, stone, indirect):
             maps.append(kept[0])
         assert len(corner) <= maps[0] < len(params) / 3 and maps[1] == len(params), (len(corner), maps)
         assert full.shadow_result is None  # culling off: every caster, no pass
+
+
+@pytest.mark.slow
+def test_field_bench_reports_both_paths(ctx):
+    """The field bench on a small field: every culled picture is the unculled
+    one, both paths (indirect draws, query wait) draw the same instances,
+    and the report names both with their pass share."""
+    from axialdeform.bench.field import format_field, run_field
+
+    res = run_field(3000, (96, 72), frames=1, ctx=ctx, all_visible_frames=1)
+    for view in ("across", "out"):
+        d = res["views"][view]["draws"]
+        assert d["cull"]["identical"] and d["cull (query)"]["identical"]
+        assert d["cull"]["stats"]["indirect"] == (ctx.version_code >= 430)
+        assert not d["cull (query)"]["stats"]["indirect"]
+        for lod in ("cull+lod", "cull+lod (query)"):
+            assert d[lod]["stats"]["lod"] and d[lod]["mean_pixel_error"] < 0.05
+        assert d["cull"]["stats"]["levels"] == d["cull (query)"]["stats"]["levels"]
+        assert d["cull+lod"]["stats"]["levels"] == d["cull+lod (query)"]["stats"]["levels"]
+        assert 0 < d["cull"]["stats"]["visible"] < 3000
+    av = res["all_visible"]
+    assert av["visible"] == 3000 and av["indirect"] == (ctx.version_code >= 430) and not av["query_indirect"]
+    text = format_field(res)
+    assert "cull (indirect draws): culled frame" in text and "cull (query wait): culled frame" in text
+    assert "% of the instances in view: culling alone removes at most" in text
