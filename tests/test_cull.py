@@ -508,6 +508,10 @@ def test_indirect_pass_on_a_two_dimensional_grid_of_work_groups(ctx, stone, monk
         picture = draw(ctx, r, view, proj)
         assert r.stats["levels"] == counts and 0 < counts[0] < len(params)
         assert _compacted(r._cull_passes[False], counts) == records
+        assert np.array_equal(picture, expected)
+        r._cull_passes[False].storage_limit = 1000  # buffers over the storage-block limit: the GL 3.3 path
+        picture = draw(ctx, r, view, proj)
+        assert r.stats["levels"] == counts and r.stats["indirect"] is False
     assert np.array_equal(picture, expected)
 
 
@@ -559,3 +563,25 @@ def test_field_bench_reports_both_paths(ctx):
     text = format_field(res)
     assert "cull (indirect draws): culled frame" in text and "cull (query wait): culled frame" in text
     assert "% of the instances in view: culling alone removes at most" in text
+
+
+def test_a_compute_pass_that_does_not_build_falls_back_to_the_query_path(ctx, stone, monkeypatch):
+    import axialdeform.gl.cull as cull_module
+
+    params = field(stone, 300)
+    view, proj = look(*CAMERAS["inside the field"])
+    with ad.AxialRenderer(ctx, stone, params, culling=False) as full:
+        expected = draw(ctx, full, view, proj)
+
+    def broken(*args, **kwargs):
+        raise ad.ShaderError("glsl/cull.comp, line 1 (compute shader): error: no compute here")
+
+    monkeypatch.setattr(cull_module, "build_compute", broken)
+    if not cull_module.indirect_supported(ctx):
+        monkeypatch.setattr(cull_module, "indirect_supported", lambda ctx: True)
+    with ad.AxialRenderer(ctx, stone, params) as r:
+        with pytest.warns(RuntimeWarning, match="indirect culling unavailable, using transform feedback: .*cull.comp"):
+            picture = draw(ctx, r, view, proj)
+        assert r.stats["culling"] and not r.stats["indirect"] and 0 < r.stats["visible"] < 300
+        assert not r._cull_passes[False].indirect
+    assert np.array_equal(picture, expected)

@@ -161,10 +161,14 @@ class CullPass:
         self.slots = {}
         self.commands = self.counts_buffer = None
         self._scratch = {}  # name -> buffer of the compute path (info, block sums, block offsets)
-        if self.indirect:
-            self._build_compute(defs, draws)
-        else:
-            self._build_feedback()
+        try:
+            if self.indirect:
+                self._build_compute(defs, draws)
+            else:
+                self._build_feedback()
+        except BaseException:  # a shader the driver cannot build: free what was made
+            self.release()
+            raise
 
     # ------------------------------------------------------------ building
     def _build_feedback(self) -> None:
