@@ -585,3 +585,44 @@ def test_a_compute_pass_that_does_not_build_falls_back_to_the_query_path(ctx, st
         assert r.stats["culling"] and not r.stats["indirect"] and 0 < r.stats["visible"] < 300
         assert not r._cull_passes[False].indirect
     assert np.array_equal(picture, expected)
+
+
+@pytest.mark.slow
+def test_a_gl_3_3_context_takes_the_query_path(tmp_path):
+    """Mesa told to report GL 3.3 (``MESA_GL_VERSION_OVERRIDE``): the
+    renderer picks transform feedback + query by itself, draws the unculled
+    picture, and ``indirect=True`` is refused with a ContextError."""
+    import os
+    import subprocess
+    import sys
+
+    script = tmp_path / "gl33.py"
+    script.write_text(
+        "import warnings, numpy as np, pyrr, axialdeform as ad\n"
+        "warnings.simplefilter('error', RuntimeWarning)  # chosen by version, not a fallback after a failed build\n"
+        "ctx = ad.create_context()\n"
+        "assert ctx.version_code == 330, ctx.version_code\n"
+        "stone = ad.load_mesh('stone')\n"
+        "params = ad.random_params(stone, 500, seed=4, bend=0.15, placement='disc', spacing=stone.axis.length)\n"
+        "view = pyrr.matrix44.create_look_at((1.0, 1.7, 0.5), (25.0, 0.2, 12.0), (0, 1, 0), dtype=np.float32)\n"
+        "proj = pyrr.matrix44.create_perspective_projection(60.0, 4 / 3, 0.05, 400.0, dtype=np.float32)\n"
+        "pictures = []\n"
+        "for culling in (True, False):\n"
+        "    with ad.AxialRenderer(ctx, stone, params, culling=culling) as r, ad.Offscreen(ctx, (96, 72)) as t:\n"
+        "        t.use((1, 1, 1)); r.render(view, proj); pictures.append(t.read())\n"
+        "        if culling:\n"
+        "            assert r.stats['culling'] and not r.stats['indirect'] and 0 < r.stats['visible'] < 500, r.stats\n"
+        "            assert not r._cull_passes[False].indirect\n"
+        "assert np.array_equal(*pictures)\n"
+        "try:\n"
+        "    ad.AxialRenderer(ctx, stone, params, indirect=True)\n"
+        "except ad.ContextError as exc:\n"
+        "    assert 'needs OpenGL >= 4.3' in str(exc) and '330' in str(exc), exc\n"
+        "else:\n"
+        "    raise AssertionError('indirect=True on GL 3.3 was accepted')\n"
+        "assert ctx.error == 'GL_NO_ERROR'\n"
+        "print('ok')\n")
+    env = {**os.environ, "MESA_GL_VERSION_OVERRIDE": "3.3"}
+    env.pop("AXIALDEFORM_INDIRECT", None)
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=300)
+    assert run.returncode == 0 and run.stdout.strip().endswith("ok"), run.stdout + run.stderr
