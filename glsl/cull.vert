@@ -9,18 +9,9 @@
 #include "axial.glsl"
 #include "quantized.glsl"
 #include "bounds.glsl"
+#include "cull.glsl"
 
-uniform vec4 u_planes[6];     // world-space frustum planes, unit normals, inside: dot(n, x) + d >= 0
-uniform vec3 u_bound_center;  // base mesh bounding-box centre (model units)
-uniform float u_radius;       // largest distance of a vertex (of any LOD level) from u_center
 uniform int u_level;          // -1: keep every visible instance; k: only the visible ones whose LOD level is k
-uniform int u_levels;         // LOD levels (1..4)
-uniform float u_lod_error[4]; // geometric error of each level, model units (level 0: 0)
-uniform vec3 u_eye;           // camera position (world)
-uniform float u_px_scale;     // pixels per world unit at distance 1 (perspective) or everywhere (orthographic)
-uniform bool u_ortho;
-uniform float u_lod_px;       // allowed screen-space error, pixels
-uniform float u_wind_reach;   // how far the wind can move a control point (model units), 0: still
 
 #ifndef AXIAL_QUANTIZED
 in vec4 i_d12;
@@ -56,18 +47,6 @@ in int i_index;               // second stage (LOD): the records come from the f
 flat out int vs_index;
 flat out int vs_keep;
 
-// The LOD level of an instance whose bounding sphere is `sphere`: the
-// coarsest level whose error, projected at the sphere's nearest point to
-// the eye, is at most u_lod_px pixels (errors are model units: times |s|).
-int axial_lod_level(vec4 sphere, float scale) {
-    float px = abs(scale) * (u_ortho ? u_px_scale : u_px_scale / max(length(sphere.xyz - u_eye) - sphere.w, 1e-6));
-    int level = 0;
-    for (int k = 1; k < 4; ++k) {
-        if (k < u_levels && u_lod_error[k] * px <= u_lod_px) level = k;
-    }
-    return level;
-}
-
 void main() {
 #ifdef AXIAL_QUANTIZED
     AxialInstance inst = axial_dequantize();
@@ -102,9 +81,7 @@ void main() {
 #else
     vs_index = gl_VertexID;
 #endif
-    vec4 sphere = axial_bound_sphere(inst, u_bound_center, u_radius, u_wind_reach);
-    bool keep = axial_sphere_visible(sphere, u_planes);
-    if (keep && u_level >= 0) keep = axial_lod_level(sphere, inst.scale) == u_level;
-    vs_keep = keep ? 1 : 0;
+    int level = axial_cull_level(inst);
+    vs_keep = (level >= 0 && (u_level < 0 || level == u_level)) ? 1 : 0;
     gl_Position = vec4(0.0, 0.0, 0.0, 1.0);
 }

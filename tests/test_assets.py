@@ -297,7 +297,15 @@ def test_one_instanced_draw_per_part_and_part_choice(ctx, monkeypatch):
         calls.append((kwargs.get("instances"), kwargs.get("vertices")))
         return original(self, *args, **kwargs)
 
+    original_indirect = moderngl.VertexArray.render_indirect
+
+    def spy_indirect(self, buffer, mode=None, count=-1, first=0):  # the culled draw on GL >= 4.3: the GPU's command
+        command = np.frombuffer(buffer.read(size=20, offset=20 * first), "<u4")
+        calls.append((int(command[1]), int(command[0])))
+        return original_indirect(self, buffer, mode, count, first)
+
     monkeypatch.setattr(moderngl.VertexArray, "render", spy)
+    monkeypatch.setattr(moderngl.VertexArray, "render_indirect", spy_indirect)
     full = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, fast=True)
     assert sorted(v for _, v in calls) == sorted(p.count * 3 for p in mesh.parts)
     assert all(n == 30 for n, _ in calls)
@@ -491,10 +499,12 @@ def test_gltf_with_a_missing_or_fifo_image_still_loads(tmp_path):
 
 
 @pytest.mark.slow
-def test_parts_draw_from_the_culled_instances(ctx):
+@pytest.mark.parametrize("indirect", [True, False], ids=["indirect", "query"])
+def test_parts_draw_from_the_culled_instances(ctx, indirect):
     """The cull pass runs once a frame and every part's instanced draw reads its
     compacted output: with shadows, multisampling and hidden-line wireframe the
-    picture equals the unculled one pixel for pixel, with most instances dropped."""
+    picture equals the unculled one pixel for pixel, with most instances dropped
+    (indirect: one draw command per part, filled in by the compute pass)."""
     mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
     assert len(mesh.parts) > 1
     n, length = 40, mesh.axis.length
@@ -503,13 +513,14 @@ def test_parts_draw_from_the_culled_instances(ctx):
     params[:, 10] = np.arange(n) * 2.0 * length  # a row along x
     cam = ad.Camera(eye=(2.0 * length, 0.5 * length, 6.0 * length), target=(2.0 * length, 0.5 * length, 0.0),
                     fovy=35.0, near=0.01 * length, far=100.0 * length)
-    with ad.AxialRenderer(ctx, mesh, params) as culled, \
+    with ad.AxialRenderer(ctx, mesh, params, indirect=indirect) as culled, \
             ad.AxialRenderer(ctx, mesh, params, culling=False) as full:
         for mode in ("solid", "wireframe"):
             a = ad.render_image(mesh, params, (96, 64), mode, ctx=ctx, camera=cam, renderer=full)
             b = ad.render_image(mesh, params, (96, 64), mode, ctx=ctx, camera=cam, renderer=culled)
             assert full.stats["visible"] == n and not full.stats["culling"]
             assert culled.stats["culling"] and 0 < culled.stats["visible"] < n // 4, culled.stats
+            assert culled.stats["indirect"] == indirect
             assert np.array_equal(a, b), (mode, int((a != b).any(axis=2).sum()))
             assert len(np.unique(a.reshape(-1, 3), axis=0)) > 10  # something is drawn
     assert ctx.error == "GL_NO_ERROR"

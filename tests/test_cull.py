@@ -66,19 +66,22 @@ def test_bounds_hold_every_gpu_vertex_and_are_tight(ctx, tmp_path, stone, leaf):
             assert ((hi - lo) / np.maximum(tight_extent, 1e-3 * L)).mean() <= 2.0, name
 
 
+@pytest.mark.parametrize("indirect", [True, False], ids=["indirect", "query"])
 @pytest.mark.parametrize("kind", ["plain", "extended", "extended+wind", "quantized"])
-def test_gpu_culling_agrees_with_the_numpy_spheres(ctx, stone, kind):
+def test_gpu_culling_agrees_with_the_numpy_spheres(ctx, stone, kind, indirect):
     """The GLSL bound (glsl/bounds.glsl) keeps every instance the numpy
     sphere test keeps, and the few extra ones are within its float margin;
-    the compacted records are the originals byte for byte, in order."""
+    the compacted records are the originals byte for byte, in order (both
+    paths: compute + indirect draws, transform feedback + query)."""
     from axialdeform.core.wind import Wind
 
     params = extended_field(stone, 3000) if kind.startswith("extended") else field(stone)
     wind = Wind(direction=(1.0, 0.0, 0.2), strength=0.5, gustiness=0.9) if kind.endswith("wind") else None
     view, proj = look((2.0, 1.7, -3.0), (30.0, 0.0, 20.0))
-    with ad.AxialRenderer(ctx, stone, params, wind=wind, quantized=kind == "quantized") as r:
+    with ad.AxialRenderer(ctx, stone, params, wind=wind, quantized=kind == "quantized", indirect=indirect) as r:
         draw(ctx, r, view, proj)
         cull = r._culled[(False, False)][0]
+        assert cull.indirect == indirect and r.stats["indirect"] == indirect
         kept, rec_bytes = r.stats["visible"], r.instances.record_bytes
         rec = np.frombuffer(cull.buffer.read(size=kept * cull.out_bytes), np.uint8).reshape(kept, cull.out_bytes)
         index = rec[:, rec_bytes:rec_bytes + 4].copy().view(np.int32).ravel()
@@ -116,11 +119,12 @@ CAMERAS = {
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("indirect", [True, False], ids=["indirect", "query"])
 @pytest.mark.parametrize("variant", ["plain", "quantized", "tinted"])
-def test_culled_picture_equals_unculled_pixel_for_pixel(ctx, stone, variant):
+def test_culled_picture_equals_unculled_pixel_for_pixel(ctx, stone, variant, indirect):
     params = field(stone)
     quantized = variant == "quantized"
-    with ad.AxialRenderer(ctx, stone, params, quantized=quantized) as culled, \
+    with ad.AxialRenderer(ctx, stone, params, quantized=quantized, indirect=indirect) as culled, \
             ad.AxialRenderer(ctx, stone, params, quantized=quantized, culling=False) as full:
         if variant == "tinted":
             tint = np.random.default_rng(1).uniform(0, 1, (len(params), 3))
@@ -160,7 +164,7 @@ def test_culling_off_draws_everything_and_stats_count_vertices(ctx, stone):
     with ad.AxialRenderer(ctx, stone, params, culling=False) as r:
         draw(ctx, r, view, proj)
         assert r.stats == {"submitted": 200, "visible": 200, "levels": [200], "vertices": 200 * stone.vertex_count,
-                           "culling": False, "lod": False}
+                           "culling": False, "lod": False, "indirect": False}
         assert r._culled == {}, "culling=False builds no culling pass"
 
 
@@ -272,13 +276,13 @@ def test_bounds_cover_scale_twist_taper_and_wind(ctx, tmp_path, stone, leaf):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("quantized", [False, True])
-def test_culled_picture_equals_unculled_extended_and_windy(ctx, stone, quantized):
+@pytest.mark.parametrize("quantized, indirect", [(False, True), (True, True), (True, False)])
+def test_culled_picture_equals_unculled_extended_and_windy(ctx, stone, quantized, indirect):
     from axialdeform.core.wind import Wind
 
     params = extended_field(stone, 3000)
     wind = Wind(direction=(0.3, 0.0, 1.0), strength=0.4, gustiness=0.8, frequency=1.0, wavelength=6.0)
-    with ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind) as culled, \
+    with ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind, indirect=indirect) as culled, \
             ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind, culling=False) as full:
         assert culled.extended and culled._culled == {}
         for name in ("inside the field", "at its edge, looking in", "at its edge, looking away"):
@@ -386,3 +390,239 @@ def test_bound_holds_the_cpu_reference_for_any_parameters(stone, offsets, place,
     assert (np.linalg.norm(world - centers[:, None], axis=2) <= radii[:, None] + tol).all()
     lo, hi = instance_boxes(stone, params)
     assert (world >= lo[:, None] - tol).all() and (world <= hi[:, None] + tol).all()
+
+
+# ------------------------------------------------------------------ the two paths: indirect (GL >= 4.3) and query (GL 3.3)
+def _compacted(cull, counts):
+    """The compacted records of every level, as bytes (levels one after another)."""
+    return cull.output.read(size=max(sum(counts), 1) * cull.out_bytes)[: sum(counts) * cull.out_bytes]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", ["plain", "quantized+tinted", "extended"])
+def test_indirect_and_query_paths_agree_with_lod(ctx, stone, variant):
+    """With LOD on, the indirect path (compute + indirect draws) and the GL 3.3
+    path (transform feedback + query) keep the same instances at the same
+    levels, write the same compacted records, and draw the same picture, which
+    is also the picture of LOD without culling; on every test camera."""
+    params = extended_field(stone, 3000) if variant == "extended" else field(stone)
+    quantized = "quantized" in variant
+    kw = dict(quantized=quantized, lod=True, lod_error=2.0)
+    with ad.AxialRenderer(ctx, stone, params, indirect=True, **kw) as ind, \
+            ad.AxialRenderer(ctx, stone, params, indirect=False, **kw) as query, \
+            ad.AxialRenderer(ctx, stone, params, culling=False, **kw) as uncull:
+        if "tinted" in variant:
+            tint = np.random.default_rng(5).uniform(0, 1, (len(params), 3))
+            for r in (ind, query, uncull):
+                r.set_tint(tint)
+        tinted = "tinted" in variant
+        used_levels = set()
+        for name, (eye, target) in CAMERAS.items():
+            view, proj = look(eye, target)
+            a, b, c = (draw(ctx, r, view, proj) for r in (ind, query, uncull))
+            assert ind.stats["indirect"] and not query.stats["indirect"]
+            assert ind.stats == {**query.stats, "indirect": True}, name
+            assert np.array_equal(a, b), (name, int((a != b).any(axis=2).sum()))
+            assert np.array_equal(a, c), (name, int((a != c).any(axis=2).sum()))
+            assert uncull.stats["visible"] == len(params) and uncull.stats["lod"]
+            counts = ind.stats["levels"]
+            used_levels |= {k for k, n in enumerate(counts) if n}
+            ca, cb = ind._cull_passes[tinted], query._cull_passes[tinted]
+            assert ca.indirect and not cb.indirect
+            assert _compacted(ca, counts) == _compacted(cb, counts), name
+        assert len(used_levels) >= 2, used_levels  # the cameras exercise several levels
+
+
+def test_an_indirect_frame_never_waits_for_the_count(ctx, stone, monkeypatch):
+    """On the indirect path render() reads nothing back from the GPU (no
+    query, no buffer read); the counts are read once, when stats is asked,
+    and describe that render even after a shadow pass ran the cull again."""
+    import moderngl
+
+    import axialdeform.gl.renderer as renderer_module
+
+    params = field(stone, 800)
+    view, proj = look(*CAMERAS["inside the field"])
+    reads = []
+    original_read = moderngl.Buffer.read
+
+    def counting_read(self, *args, **kwargs):
+        reads.append(self)
+        return original_read(self, *args, **kwargs)
+
+    with ad.AxialRenderer(ctx, stone, params, indirect=True) as r, \
+            ad.AxialRenderer(ctx, stone, params, indirect=False) as ref, ad.ShadowMap(ctx, 256) as shadow:
+        expected = draw(ctx, ref, view, proj)
+        with Offscreen(ctx, (160, 120), samples=4) as target:
+            monkeypatch.setattr(moderngl.Buffer, "read", counting_read)
+            target.use(BACKGROUND)
+            r.render(view, proj)
+            assert reads == [], "render() read a buffer back"
+            monkeypatch.setattr(moderngl.Buffer, "read", original_read)
+            picture = target.read()
+        assert np.array_equal(picture, expected)
+        shadow.fit(stone, params[:50])
+        r.render_shadow(shadow)  # runs the cull again, for the light: the stats stay those of render()
+        monkeypatch.setattr(renderer_module, "read_counts", lambda *a: reads.append("counts") or [7])
+        assert r.stats["visible"] == 7 and r.stats["levels"] == [7] and reads == ["counts"]
+        assert r.stats["visible"] == 7 and reads == ["counts"], "read once"
+        monkeypatch.undo()
+        draw(ctx, r, view, proj)
+        assert r.stats["visible"] == ref.stats["visible"] and 0 < ref.stats["visible"] < 800
+
+
+def test_the_path_is_chosen_by_version_and_can_be_forced(ctx, stone, monkeypatch):
+    from axialdeform.gl.cull import INDIRECT_ENV, _choose_indirect, indirect_supported
+
+    class GL33:
+        version_code = 330
+
+    assert not indirect_supported(GL33()) and not _choose_indirect(GL33(), None)
+    with pytest.raises(ad.ContextError, match="indirect: the indirect culling path needs OpenGL >= 4.3"):
+        _choose_indirect(GL33(), True)
+    assert indirect_supported(ctx) == (ctx.version_code >= 430)
+    params = field(stone, 100)
+    view, proj = look(*CAMERAS["inside the field"])
+    monkeypatch.setenv(INDIRECT_ENV, "0")
+    with ad.AxialRenderer(ctx, stone, params) as r:
+        draw(ctx, r, view, proj)
+        assert not r._cull_passes[False].indirect and r.stats["indirect"] is False
+    monkeypatch.delenv(INDIRECT_ENV)
+    with ad.AxialRenderer(ctx, stone, params) as r:
+        draw(ctx, r, view, proj)
+        assert r._cull_passes[False].indirect == indirect_supported(ctx) and r.stats["indirect"] == indirect_supported(ctx)
+
+
+def test_indirect_pass_on_a_two_dimensional_grid_of_work_groups(ctx, stone, monkeypatch):
+    """More blocks than work groups along x (65 535 in GL; 5 here) go on a
+    second grid dimension; the extra groups of the last row write nothing."""
+    import axialdeform.gl.cull as cull_module
+
+    params = field(stone)  # 3000 instances: 24 blocks of 128 -> a 5 x 5 grid
+    view, proj = look(*CAMERAS["at its edge, looking in"])
+    with ad.AxialRenderer(ctx, stone, params, indirect=True) as r:
+        expected = draw(ctx, r, view, proj)
+        counts = r.stats["levels"]
+        records = _compacted(r._cull_passes[False], counts)
+        monkeypatch.setattr(cull_module, "_MAX_GROUPS", 5)
+        picture = draw(ctx, r, view, proj)
+        assert r.stats["levels"] == counts and 0 < counts[0] < len(params)
+        assert _compacted(r._cull_passes[False], counts) == records
+        assert np.array_equal(picture, expected)
+        r._cull_passes[False].storage_limit = 1000  # buffers over the storage-block limit: the GL 3.3 path
+        picture = draw(ctx, r, view, proj)
+        assert r.stats["levels"] == counts and r.stats["indirect"] is False
+    assert np.array_equal(picture, expected)
+
+
+@pytest.mark.parametrize("indirect", [True, False], ids=["indirect", "query"])
+def test_shadow_pass_culls_casters_to_the_light_volume(ctx, stone, indirect):
+    """A shadow map fitted to part of the field: the culled shadow pass keeps
+    only the casters that reach the light's view volume and writes the same
+    depth map as drawing every instance."""
+    params = field(stone)
+    with ad.AxialRenderer(ctx, stone, params, indirect=indirect) as culled, \
+            ad.AxialRenderer(ctx, stone, params, culling=False) as full, \
+            ad.ShadowMap(ctx, 512) as shadow:
+        maps = []
+        corner = params[(params[:, 10] > 0.5 * EDGE) & (params[:, 12] > 0.3 * EDGE)]
+        for part in (corner, params):  # a corner of the field, then all of it
+            shadow.fit(stone, part)
+            full.render_shadow(shadow)
+            plain = np.frombuffer(shadow.texture.read(), "f4")
+            culled.render_shadow(shadow)
+            result = culled.shadow_result
+            kept = result.counts() if indirect else result
+            assert np.array_equal(np.frombuffer(shadow.texture.read(), "f4"), plain)
+            assert (plain < 1.0).mean() > 0.05  # the map holds shadows
+            maps.append(kept[0])
+        assert len(corner) <= maps[0] < len(params) / 3 and maps[1] == len(params), (len(corner), maps)
+        assert full.shadow_result is None  # culling off: every caster, no pass
+
+
+@pytest.mark.slow
+def test_field_bench_reports_both_paths(ctx):
+    """The field bench on a small field: every culled picture is the unculled
+    one, both paths (indirect draws, query wait) draw the same instances,
+    and the report names both with their pass share."""
+    from axialdeform.bench.field import format_field, run_field
+
+    res = run_field(3000, (96, 72), frames=1, ctx=ctx, all_visible_frames=1)
+    for view in ("across", "out"):
+        d = res["views"][view]["draws"]
+        assert d["cull"]["identical"] and d["cull (query)"]["identical"]
+        assert d["cull"]["stats"]["indirect"] == (ctx.version_code >= 430)
+        assert not d["cull (query)"]["stats"]["indirect"]
+        for lod in ("cull+lod", "cull+lod (query)"):
+            assert d[lod]["stats"]["lod"] and d[lod]["mean_pixel_error"] < 0.05
+        assert d["cull"]["stats"]["levels"] == d["cull (query)"]["stats"]["levels"]
+        assert d["cull+lod"]["stats"]["levels"] == d["cull+lod (query)"]["stats"]["levels"]
+        assert 0 < d["cull"]["stats"]["visible"] < 3000
+    av = res["all_visible"]
+    assert av["visible"] == 3000 and av["indirect"] == (ctx.version_code >= 430) and not av["query_indirect"]
+    text = format_field(res)
+    assert "cull (indirect draws): culled frame" in text and "cull (query wait): culled frame" in text
+    assert "% of the instances in view: culling alone removes at most" in text
+
+
+def test_a_compute_pass_that_does_not_build_falls_back_to_the_query_path(ctx, stone, monkeypatch):
+    import axialdeform.gl.cull as cull_module
+
+    params = field(stone, 300)
+    view, proj = look(*CAMERAS["inside the field"])
+    with ad.AxialRenderer(ctx, stone, params, culling=False) as full:
+        expected = draw(ctx, full, view, proj)
+
+    def broken(*args, **kwargs):
+        raise ad.ShaderError("glsl/cull.comp, line 1 (compute shader): error: no compute here")
+
+    monkeypatch.setattr(cull_module, "build_compute", broken)
+    if not cull_module.indirect_supported(ctx):
+        monkeypatch.setattr(cull_module, "indirect_supported", lambda ctx: True)
+    with ad.AxialRenderer(ctx, stone, params) as r:
+        with pytest.warns(RuntimeWarning, match="indirect culling unavailable, using transform feedback: .*cull.comp"):
+            picture = draw(ctx, r, view, proj)
+        assert r.stats["culling"] and not r.stats["indirect"] and 0 < r.stats["visible"] < 300
+        assert not r._cull_passes[False].indirect
+    assert np.array_equal(picture, expected)
+
+
+@pytest.mark.slow
+def test_a_gl_3_3_context_takes_the_query_path(tmp_path):
+    """Mesa told to report GL 3.3 (``MESA_GL_VERSION_OVERRIDE``): the
+    renderer picks transform feedback + query by itself, draws the unculled
+    picture, and ``indirect=True`` is refused with a ContextError."""
+    import os
+    import subprocess
+    import sys
+
+    script = tmp_path / "gl33.py"
+    script.write_text(
+        "import warnings, numpy as np, pyrr, axialdeform as ad\n"
+        "warnings.simplefilter('error', RuntimeWarning)  # chosen by version, not a fallback after a failed build\n"
+        "ctx = ad.create_context()\n"
+        "assert ctx.version_code == 330, ctx.version_code\n"
+        "stone = ad.load_mesh('stone')\n"
+        "params = ad.random_params(stone, 500, seed=4, bend=0.15, placement='disc', spacing=stone.axis.length)\n"
+        "view = pyrr.matrix44.create_look_at((1.0, 1.7, 0.5), (25.0, 0.2, 12.0), (0, 1, 0), dtype=np.float32)\n"
+        "proj = pyrr.matrix44.create_perspective_projection(60.0, 4 / 3, 0.05, 400.0, dtype=np.float32)\n"
+        "pictures = []\n"
+        "for culling in (True, False):\n"
+        "    with ad.AxialRenderer(ctx, stone, params, culling=culling) as r, ad.Offscreen(ctx, (96, 72)) as t:\n"
+        "        t.use((1, 1, 1)); r.render(view, proj); pictures.append(t.read())\n"
+        "        if culling:\n"
+        "            assert r.stats['culling'] and not r.stats['indirect'] and 0 < r.stats['visible'] < 500, r.stats\n"
+        "            assert not r._cull_passes[False].indirect\n"
+        "assert np.array_equal(*pictures)\n"
+        "try:\n"
+        "    ad.AxialRenderer(ctx, stone, params, indirect=True)\n"
+        "except ad.ContextError as exc:\n"
+        "    assert 'needs OpenGL >= 4.3' in str(exc) and '330' in str(exc), exc\n"
+        "else:\n"
+        "    raise AssertionError('indirect=True on GL 3.3 was accepted')\n"
+        "assert ctx.error == 'GL_NO_ERROR'\n"
+        "print('ok')\n")
+    env = {**os.environ, "MESA_GL_VERSION_OVERRIDE": "3.3"}
+    env.pop("AXIALDEFORM_INDIRECT", None)
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=300)
+    assert run.returncode == 0 and run.stdout.strip().endswith("ok"), run.stdout + run.stderr

@@ -72,7 +72,14 @@ def test_one_draw_call_draws_every_instance(ctx, stone, monkeypatch):
         calls.append(kwargs.get("instances"))
         return original(self, *args, **kwargs)
 
+    original_indirect = moderngl.VertexArray.render_indirect
+
+    def spy_indirect(self, buffer, mode=None, count=-1, first=0):  # the culled draw on GL >= 4.3
+        calls.append(int(np.frombuffer(buffer.read(size=20, offset=20 * first), "<u4")[1]))  # its instanceCount
+        return original_indirect(self, buffer, mode, count, first)
+
     monkeypatch.setattr(moderngl.VertexArray, "render", spy)
+    monkeypatch.setattr(moderngl.VertexArray, "render_indirect", spy_indirect)
     params = ad.random_params(stone, 3000, seed=1)
     for mode in ad.MODES:
         calls.clear()

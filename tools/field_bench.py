@@ -31,10 +31,13 @@ def main(argv=None) -> int:
     p.add_argument("--mesh", default="stone")
     p.add_argument("--views", default="across,out", help="walker views, comma-separated (default: %(default)s)")
     p.add_argument("--no-all-visible", action="store_true", help="skip the all-in-view scene (the slowest part)")
+    p.add_argument("--all-visible-frames", type=int, default=None, metavar="N",
+                   help="timed frames of the all-in-view scene (default: --frames)")
     p.add_argument("--json", default=None, help="write the figures here as JSON")
     args = p.parse_args(argv)
     res = run_field(args.count, parse_size(args.size), args.frames, lod_error=args.lod_error, samples=args.samples,
-                    mesh=args.mesh, views=tuple(args.views.split(",")), all_visible=not args.no_all_visible, progress=lambda text: print(f"  {text}", file=sys.stderr, flush=True))
+                    mesh=args.mesh, views=tuple(args.views.split(",")), all_visible=not args.no_all_visible,
+                    all_visible_frames=args.all_visible_frames, progress=lambda text: print(f"  {text}", file=sys.stderr, flush=True))
     print(format_field(res))
     if args.json:
         from axialdeform.core.atomic import atomic_path

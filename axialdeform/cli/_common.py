@@ -198,7 +198,7 @@ def format_stats(stats: dict, frame_s: float | None = None) -> str:
     """One line of :attr:`AxialRenderer.stats` (and a frame time)."""
     levels = stats.get("levels", [])
     text = (f"instances: {stats['submitted']} submitted, {stats['visible']} drawn"
-            f" (culling {'on' if stats.get('culling') else 'off'})")
+            f" (culling {'on' if stats.get('culling') else 'off'}{', indirect draws' if stats.get('indirect') else ''})")
     if stats.get("lod"):
         text += ", LOD levels " + " / ".join(str(k) for k in levels)
     text += f"; vertices processed: {stats['vertices']}"

@@ -22,7 +22,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers, as_index
-from .cull import CullPass
+from .cull import CullPass, IndirectDraws, read_counts
 from .context import bind_framebuffer, check_alive, release_framebuffer, require_framebuffer
 from ..core.bounds import base_radius, wind_reach
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
@@ -108,6 +108,14 @@ class AxialRenderer:
         with a :class:`ParamError`.
     lod_error : float
         Allowed screen-space error of a level in pixels (> 0; default 1).
+    indirect : bool or None
+        How the culling pass reaches the draw (:mod:`axialdeform.gl.cull`):
+        ``None`` (the default) picks compute shaders + indirect draws on
+        GL >= 4.3 (the CPU never waits for the visible count) and transform
+        feedback + a query on GL 3.3 (or when the environment variable
+        ``AXIALDEFORM_INDIRECT=0``); ``True`` demands the indirect path
+        (:class:`ContextError` below GL 4.3); ``False`` forces the GL 3.3 one.
+        Both draw the same picture.
 
     A mesh with UVs, vertex colours, several parts or a material
     (:attr:`BaseMesh.has_appearance`) is drawn with ``AXIAL_MATERIAL``:
@@ -125,7 +133,7 @@ class AxialRenderer:
     def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
                  quantized: bool = False, cull_back_faces: bool | None = None, parts=None,
                  extended: bool | None = None, wind: Wind | None = None, culling: bool = True, lod: bool = False,
-                 lod_error: float = 1.0):
+                 lod_error: float = 1.0, indirect: bool | None = None):
         check_alive(ctx, "a new AxialRenderer")
         from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 
@@ -144,7 +152,15 @@ class AxialRenderer:
         self.culling_enabled = bool(culling)
         self.lod = bool(lod)
         self.lod_error = check_lod_error(lod_error)
-        self.stats: dict = {}
+        self._stats: dict = {}
+        self._stats_gpu = None  # (buffer, levels): counts of the last indirect frame, read when stats is asked
+        self._stats_buffer = None
+        self._indirect = indirect
+        self.shadow_result = None
+        if indirect:
+            from .cull import _choose_indirect
+
+            _choose_indirect(ctx, True)  # a context below GL 4.3: the error now, not at the first draw
         self.cull_back_faces = bool(mesh.is_volume) if cull_back_faces is None else bool(cull_back_faces)
         self.quantized = bool(quantized)
         self._released = False
@@ -290,6 +306,21 @@ class AxialRenderer:
         """Number of instances drawn."""
         return self.instances.count
 
+    @property
+    def stats(self) -> dict:
+        """What the last :meth:`render` drew: ``submitted``, ``visible``,
+        ``levels`` (visible per LOD level), ``vertices`` (processed by the
+        vertex shader), ``culling``, ``lod``, ``indirect``.  On the indirect
+        path the counts stay on the GPU until this is read: reading it waits
+        for that frame's culling pass, a frame that never asks never waits."""
+        if self._stats_gpu is not None:
+            buffer, levels = self._stats_gpu
+            self._stats_gpu = None
+            counts = read_counts(buffer, levels)
+            self._stats.update(visible=int(sum(counts)), levels=counts,
+                               vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(counts))))
+        return self._stats
+
     def set_params(self, params) -> None:
         """Replace all parameters; the buffer is reallocated only if the count grows past its capacity."""
         self._check()
@@ -369,7 +400,7 @@ class AxialRenderer:
         ``instances``: how many to draw (default :attr:`count`; the visible count after culling)."""
         import moderngl
 
-        instances = self.count if instances is None else int(instances)
+        instances = self.count if instances is None else instances
         fbo = self.ctx.fbo
         coverage = None  # whether BLEND parts draw with alpha-to-coverage: asked once per draw
         for part in self._draw_order:
@@ -392,7 +423,8 @@ class AxialRenderer:
                 fbo.depth_mask = False
             try:
                 with self.culling(view, projection, enabled=not material.double_sided):
-                    vao.render(moderngl.TRIANGLES, vertices=part.count * 3, first=part.start * 3, instances=instances)
+                    self._instanced(vao, moderngl.TRIANGLES, part.count * 3, part.start * 3, instances,
+                                    ("t", 0, part.start * 3))
             finally:
                 if blend and coverage:
                     self.ctx.disable_direct(_GL_SAMPLE_ALPHA_TO_COVERAGE)
@@ -473,8 +505,9 @@ class AxialRenderer:
         })
         if shadowed:
             shadow.bind(prog)
-        self.stats = {"submitted": n, "visible": n, "levels": [n], "vertices": n * self.mesh.vertex_count,
-                      "culling": False, "lod": False}
+        self._stats_gpu = None
+        self._stats = {"submitted": n, "visible": n, "levels": [n], "vertices": n * self.mesh.vertex_count,
+                       "culling": False, "lod": False, "indirect": False}
         if n == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
@@ -487,36 +520,62 @@ class AxialRenderer:
                 return
             if self.quantized:
                 self._set_quant_uniforms(prog)
-            eye = eye_position(view)
-            height = float(self.ctx.viewport[3]) if self.ctx.viewport else 1.0
-            ortho = abs(float(projection[3, 3]) - 1.0) < 1e-9  # pyrr layout: w = 1 for orthographic
             levels = len(self.lod_levels) if self.lod else 1
-            counts = cull.run(n, levels, view, projection, frustum=self.culling_enabled,
-                              center=self.mesh.axis.center, radius=self.bound_radius,
-                              lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye,
-                              px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho,
-                              lod_px=self.lod_error, wind_reach=wind_reach(self.mesh, self.wind if self.bend else None),
-                              prepare=self._set_quant_uniforms)
-            self.stats.update(visible=int(sum(counts)), levels=counts, culling=self.culling_enabled, lod=self.lod,
-                              vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(counts))))
-            first = 0
-            for level, kept in enumerate(counts):  # the cull pass ran once; every part draws from its output
-                if kept:
-                    vao_t = vaos[level][0]
-                    cull.bind_records(vao_t, prog, first)
+            result = self._run_cull(cull, view, projection, levels, frustum=self.culling_enabled)
+            self._stats.update(culling=self.culling_enabled, lod=self.lod)
+            if isinstance(result, IndirectDraws):  # the counts stay on the GPU: copied, read when stats is asked
+                if self._stats_buffer is None:
+                    self._stats_buffer = self.ctx.buffer(reserve=16)
+                    self._objects.append(self._stats_buffer)
+                result.copy_counts(self._stats_buffer)
+                self._stats_gpu = (self._stats_buffer, levels)
+                self._stats.update(indirect=True)
+            else:
+                self._stats.update(visible=int(sum(result)), levels=result,
+                                   vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(result))))
 
-                    def culled_edges(level=level, first=first):
-                        vao_e = self._culled_edges(vaos, prog, level)
-                        cull.bind_records(vao_e, prog, first)
-                        return vao_e
+            def draw_level(level, vao_t, edges, instances):
+                self._draw(prog, vao_t, edges, level, mode, hidden_line, view, projection, instances)
 
-                    self._draw(prog, vao_t, culled_edges, level, mode, hidden_line, view, projection, kept)
-                first += kept
+            self._draw_culled(cull, prog, vaos, result, draw_level)
         finally:
             self.color = keep
 
+    def _run_cull(self, cull, view, projection, levels: int, *, frustum: bool):
+        """Run ``cull`` for the camera ``view``, ``projection``: the counts per
+        level (GL 3.3 path) or an :class:`IndirectDraws` (indirect path)."""
+        height = float(self.ctx.viewport[3]) if self.ctx.viewport else 1.0
+        ortho = abs(float(projection[3, 3]) - 1.0) < 1e-9  # pyrr layout: w = 1 for orthographic
+        return cull.run(self.count, levels, view, projection, frustum=frustum,
+                        center=self.mesh.axis.center, radius=self.bound_radius,
+                        lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye_position(view),
+                        px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho,
+                        lod_px=self.lod_error, wind_reach=wind_reach(self.mesh, self.wind if self.bend else None),
+                        prepare=self._set_quant_uniforms)
+
+    def _draw_culled(self, cull, prog, vaos, result, draw_level) -> None:
+        """Every level's draws from the cull pass's output: ``draw_level(level,
+        triangles vao, edges(), instances)``; ``instances`` is the level's
+        count (GL 3.3 path: empty levels are skipped) or the
+        :class:`IndirectDraws` (every level is drawn, its count on the GPU)."""
+        indirect = isinstance(result, IndirectDraws)
+        first = 0
+        for level, kept in enumerate([result] * result.levels if indirect else result):
+            if indirect or kept:
+                vao_t = vaos[level][0]
+                cull.bind_records(vao_t, prog, first)
+
+                def culled_edges(level=level, first=first):
+                    vao_e = self._culled_edges(vaos, prog, level)
+                    cull.bind_records(vao_e, prog, first)
+                    return vao_e
+
+                draw_level(level, vao_t, culled_edges, kept)
+            if not indirect:
+                first += kept
+
     def _draw(self, prog, vao_triangles, edges, level: int, mode: str, hidden_line, view, projection,
-              instances: int) -> None:
+              instances) -> None:
         """``instances`` instances of one level: the parts' triangles, or the
         edges in wireframe (``edges()`` returns their vao: built on first use)."""
         import moderngl
@@ -532,7 +591,7 @@ class AxialRenderer:
                 self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
             try:
                 count = self._edge_count if level == 0 else self._level_buffers[level].edge_indices
-                edges().render(moderngl.LINES, vertices=count, instances=instances)
+                self._instanced(edges(), moderngl.LINES, count, 0, instances, ("e", level, 0))
             finally:
                 self.ctx.depth_func = "<"
                 if fill:
@@ -548,7 +607,8 @@ class AxialRenderer:
             self._draw_parts(prog, vao, view, projection, depth_only=depth_only, instances=instances)
             return
         with self.culling(view, projection):
-            vao.render(moderngl.TRIANGLES, vertices=self._level_buffers[level].triangle_indices, instances=instances)
+            self._instanced(vao, moderngl.TRIANGLES, self._level_buffers[level].triangle_indices, 0, instances,
+                            ("t", level, 0))
 
     def _depth_prepass(self, prog, vao, level: int, view, projection, instances: int, fill: bool) -> None:
         """The triangles first, pushed back a little so the lines on them pass
@@ -572,13 +632,24 @@ class AxialRenderer:
         self.ctx.depth_func = "<="
 
     def render_shadow(self, shadow) -> None:
-        """Draw every instance into ``shadow`` (a :class:`~axialdeform.gl.shadow.ShadowMap`,
-        fitted with :meth:`ShadowMap.fit`): one instanced depth draw per part
-        (every instance: the light's view is not culled); ``MASK`` cut-outs
-        cast cut-out shadows, and the wind of the next :meth:`render` bends
-        the shadows too.  Restores the caller's framebuffer."""
+        """Draw the instances into ``shadow`` (a :class:`~axialdeform.gl.shadow.ShadowMap`,
+        fitted with :meth:`ShadowMap.fit`): one instanced depth draw per part;
+        ``MASK`` cut-outs cast cut-out shadows, and the wind of the next
+        :meth:`render` bends the shadows too.  With culling on, the culling
+        pass first keeps the casters whose bound reaches the light's view
+        volume (every level of detail is the full mesh here): the same shadow
+        map, fewer vertices.  Restores the caller's framebuffer."""
         self._check()
-        prog, vao, _ = self._variant(False, False)
+        state = None
+        if self.culling_enabled and self.count:
+            try:
+                state = self._culled_state(False, False)
+            except ShaderError as exc:
+                import warnings
+
+                warnings.warn(f"culling pass unavailable, drawing every caster: {exc}", RuntimeWarning, stacklevel=2)
+                self.culling_enabled = False
+        prog, vao, _ = self._variant(False, False) if state is None else (state[1], None, None)
         with shadow.target():
             if self.count == 0:
                 return
@@ -588,7 +659,20 @@ class AxialRenderer:
             import moderngl
 
             self.ctx.enable(moderngl.DEPTH_TEST)
-            self._draw_parts(prog, vao, None, None, depth_only=True)
+            if state is None:
+                self._draw_parts(prog, vao, None, None, depth_only=True)
+                return
+            cull, _, vaos = state
+            if self.quantized:
+                self._set_quant_uniforms(prog)
+            result = self._run_cull(cull, shadow.view, shadow.projection, 1, frustum=True)
+            #: casters the last :meth:`render_shadow` kept (a list, or :class:`IndirectDraws` on the GPU)
+            self.shadow_result = result
+
+            def draw_level(level, vao_t, edges, instances):
+                self._draw_parts(prog, vao_t, None, None, depth_only=True, instances=instances)
+
+            self._draw_culled(cull, prog, vaos[:1], result, draw_level)
 
     def _culled_state(self, tinted: bool, shadowed: bool = False):
         """The cull pass (one per tint state) and the draw program/VAOs reading
@@ -598,7 +682,19 @@ class AxialRenderer:
             cull = self._cull_passes.get(tinted)
             if cull is None:
                 tint = (self._tint[3], "3f", "i_tint") if tinted else None
-                cull = self._cull_passes[tinted] = CullPass(self.ctx, self.instances, self._defines, tint=tint)
+                try:
+                    cull = CullPass(self.ctx, self.instances, self._defines, tint=tint, indirect=self._indirect,
+                                    draws=self._draw_slots())
+                except ShaderError as exc:
+                    if self._indirect is not None:
+                        raise
+                    import warnings  # a driver that cannot build the compute pass: the GL 3.3 one, same picture
+
+                    warnings.warn(f"indirect culling unavailable, using transform feedback: {exc}", RuntimeWarning,
+                                  stacklevel=3)
+                    self._indirect = False
+                    cull = CullPass(self.ctx, self.instances, self._defines, tint=tint, indirect=False)
+                self._cull_passes[tinted] = cull
                 self._objects.append(cull)
             defines = {**self._defines, "AXIAL_CULLED": 1, **({"AXIAL_TINT": 1} if tinted else {}),
                        **({"AXIAL_SHADOW": 1} if shadowed else {})}
@@ -610,6 +706,21 @@ class AxialRenderer:
                 vaos.append([self._culled_vao(prog, level, self._level_buffers[level].triangles), None])
             state = self._culled[(tinted, shadowed)] = (cull, prog, vaos)
         return state
+
+    def _draw_slots(self) -> list:
+        """The indirect draw commands: ``(key, level)`` of every draw a culled
+        frame can make: the triangles of each part (level 0) or of a level,
+        the edges of each level."""
+        slots = [(("t", 0, part.start * 3), 0) for part in self.parts]
+        slots += [(("t", level, 0), level) for level in range(1, len(self._level_buffers))]
+        return slots + [(("e", level, 0), level) for level in range(len(self._level_buffers))]
+
+    def _instanced(self, vao, mode, vertices: int, first: int, instances, key) -> None:
+        """One instanced draw: ``instances`` a count, or the GPU's (:class:`IndirectDraws`, slot ``key``)."""
+        if isinstance(instances, IndirectDraws):
+            instances.render(vao, mode, key, vertices, first)
+        else:
+            vao.render(mode, vertices=vertices, first=first, instances=instances)
 
     def _culled_vao(self, prog, level: int, index_buffer):
         """A vertex array of one LOD level for the culled program (instances: bound by the cull pass)."""

@@ -14,7 +14,8 @@ from importlib import resources
 
 from ..core.errors import ShaderError
 
-__all__ = ["GLSL_VERSION", "shader_source", "assemble", "assemble_text", "deformation_glsl", "build_program", "Assembled"]
+__all__ = ["GLSL_VERSION", "COMPUTE_VERSION", "shader_source", "assemble", "assemble_text", "deformation_glsl", "build_program",
+           "build_compute", "Assembled"]
 
 GLSL_VERSION = "#version 330 core"
 _INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"\s*(?://.*)?$')
@@ -158,3 +159,23 @@ def build_program(ctx, vertex: str, fragment: str | None = None, *, defines: dic
         return ctx.program(**{k: v.source for k, v in stages.items()}, varyings=list(varyings))
     except moderngl.Error as exc:
         raise ShaderError(f"GLSL {' + '.join(x for x in (vertex, geometry, fragment) if x)} failed: {_translate_log(str(exc), stages)}") from None
+
+
+#: the version compute shaders are written for (``glsl/*.comp``; GL >= 4.3 only)
+COMPUTE_VERSION = "#version 430 core"
+
+
+def build_compute(ctx, name: str, *, defines: dict | None = None, loader=None):
+    """Compile a compute shader from a file of ``glsl/`` (GL >= 4.3; the
+    caller checks ``ctx.version_code``).  ``AXIAL_COMPUTE`` is defined, so
+    shared files leave out their vertex attributes.  Raises
+    :class:`ShaderError` naming the file and line of each compiler error."""
+    import moderngl
+
+    loader = shader_source if loader is None else loader
+    stage = assemble(name, {"AXIAL_COMPUTE": 1, **(defines or {})}, loader=loader)
+    stage.source = COMPUTE_VERSION + stage.source[len(GLSL_VERSION):]
+    try:
+        return ctx.compute_shader(stage.source)
+    except moderngl.Error as exc:
+        raise ShaderError(f"GLSL {name} failed: {_translate_log(str(exc), {'compute_shader': stage})}") from None
