@@ -527,9 +527,30 @@ def test_generated_mesh_files_load_or_name_the_file(tmp_path_factory, case):
 
 @pytest.mark.slow
 def test_fuzz_every_command_briefly(capsys):
-    assert fuzz_params.fuzz_commands(6.0, seed=2003) == 0, capsys.readouterr()
+    # every command in turn, twice (view headless, bench tiny, scatter, web with --serve,
+    # scene files), each in a forked child with its peak RSS checked; big inputs of 1 MB
+    status = fuzz_params.fuzz_commands(150.0, seed=2003, big_mb=1.0, cases=2 * len(fuzz_params.COMMANDS), cycle=True)
     out = capsys.readouterr().out
-    assert "0 crashes, 0 hangs" in out, out
+    assert status == 0, out
+    assert f"fuzz commands: {2 * len(fuzz_params.COMMANDS)} command lines" in out, out
+    assert "0 crashes, 0 hangs" in out and "0 over the memory bound" in out, out
+    for command in ("view", "bench", "scatter", "web", "scene-"):
+        assert f"| {command}" in out, out
+
+
+def test_fuzz_runner_sees_what_in_process_capture_missed(tmp_path):
+    # the forked runner judges exactly what a user sees: exit status, lines on stderr, a hang
+    ok = fuzz_params.run_isolated(["random", "stone", "-n", "3", "-o", str(tmp_path / "p.adp")])
+    assert ok["verdict"] == "ok" and ok["peak_rss"] > 10 * 2**20 and "wrote" in ok["stdout"], ok
+    bad = fuzz_params.run_isolated(["random", "stone", "-n", "-3", "-o", str(tmp_path / "q.adp")])
+    assert bad["verdict"] == "error", bad
+    os.mkfifo(tmp_path / "fifo.adp")
+    hang = fuzz_params.run_isolated(["info", str(tmp_path / "fifo.adp")], timeout=2.0)
+    assert hang["verdict"] == "error", hang  # refused, not read: a blocked read would be a hang
+    assert fuzz_params._verdict(["info"], 0, {"code": 0, "how": "returned"}, "x.py:3: UserWarning: w\n").startswith(
+        "crash: stray stderr")
+    assert fuzz_params._verdict(["info"], 0, {"code": 70, "how": "exception"}, "Traceback\nKeyError: 1\n") == \
+        "crash: KeyError: 1"
 
 
 def test_fuzz_params_briefly(capsys):
@@ -657,3 +678,11 @@ def test_framing_a_big_mesh_in_bounded_memory():
     dirs = np.concatenate([np.stack([np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z], 1),
                            np.eye(3), -np.eye(3)])
     assert np.array_equal(idx, np.unique(np.argmax((p - p.mean(axis=0)) @ dirs.T, axis=0)))
+
+
+def test_view_count_checked_before_allocating(capsys):
+    # before: random_params allocated, and the MemoryError became "out of memory" without the limit
+    assert main(["view", "stone", "-n", str(10**12), "--headless", "--frames", "1", "--size", "32x24"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("axialdeform view: error: -n/--count: 1000000000000 instances need about")
+    assert "expected at most" in err[0]
