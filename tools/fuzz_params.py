@@ -19,12 +19,27 @@ NaN, out-of-range indices, missing/hostile referenced files) fed to
 ``load_mesh``: a ``BaseMesh`` with finite positions or a ``MeshError``.
 
 ``commands``: every command of the CLI (``info convert random render bake
-export fit demo``) run in-process with fuzzed inputs (mutated parameter
-files, generated meshes, outputs that are inputs, FIFOs, symlinks to
-``/dev/null``, folders of stale files, absurd ``-n`` and ``--size``): exit 0,
-or exit 2 with ONE error line on stderr (plus ``warning:`` lines); any
-exception escaping ``main``, any other output on stderr, a FIFO or device
-replaced, or a case running over 30 s (a hang) is a failure.
+export fit demo view bench scatter web`` and scene files given to
+``render``/``bake``/``export``/``view``), each command line run in a FORKED
+child (``run_isolated``: stdout/stderr captured at the descriptor level, its
+own peak RSS from ``wait4`` after resetting the high-water mark through
+``/proc/self/clear_refs``), with fuzzed inputs: mutated parameter files,
+generated meshes, hypothesis-generated TOML scene files with hostile fields,
+height and density maps (a decompression bomb among them), outputs that are
+inputs, FIFOs, symlinks to ``/dev/null``, folders of stale files, absurd
+``-n``, ``--size`` and ``--port``, ``view --headless``, a tiny ``bench``,
+``web --serve`` (the page is fetched, then the server gets Ctrl-C; sometimes
+on a busy port), and in one case in ten BIG inputs (``--big-mb``, default
+20 MB: text and binary parameter files, a binary-PLY torus from
+tools/big_mesh.py, a scene file, a 1 500 x 1 500 height map).  A case must
+exit 0, or exit 2 with ONE error line on stderr (plus ``warning:`` lines).
+A *crash* is an exception escaping ``main``, any other stderr line, another
+exit status, a FIFO or device replaced or a bundled mesh overwritten; a
+*hang* is over 30 s of CPU, blocked (no CPU for 10 s) past 30 s, or running
+120 s; *over the memory bound* is a peak RSS above 3x the largest input or
+output (an image counts as 8 bytes a pixel) plus 500 MB.
+
+    python3 tools/fuzz_params.py --target commands --seconds 600 --seed 16 [--commands view,web] [--log cases.txt]
 
 Prints one summary line per target (cases, crashes, hangs, peak RSS and the
 largest input) and a few examples of any failure; exit status 1 if anything
