@@ -685,3 +685,10 @@ def test_view_count_checked_before_allocating(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("axialdeform view: error: -n/--count: 1000000000000 instances need about")
     assert "expected at most" in err[0]
+
+
+def test_headless_view_size_limit_comes_from_the_context(capsys):
+    # before: "could not open the viewer window (Error: the framebuffer is not complete (INCOMPLETE_ATTACHMENT))"
+    assert main(["view", "stone", "-n", "3", "--headless", "--frames", "1", "--size", "100000x16"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "100000x16 pixels; expected 1.." in err[0] and "GL_MAX_RENDERBUFFER_SIZE" in err[0], err
