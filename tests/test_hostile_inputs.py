@@ -692,3 +692,20 @@ def test_headless_view_size_limit_comes_from_the_context(capsys):
     assert main(["view", "stone", "-n", "3", "--headless", "--frames", "1", "--size", "100000x16"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "100000x16 pixels; expected 1.." in err[0] and "GL_MAX_RENDERBUFFER_SIZE" in err[0], err
+
+
+def test_bench_report_from_must_be_a_regular_file(tmp_path, capsys):
+    fifo = tmp_path / "details.json"
+    os.mkfifo(fifo)
+    proc = run_cli("bench", "--report-from", fifo, timeout=30)  # before: blocked forever in read_text
+    one_error_line(proc, str(fifo), "not a regular file (a FIFO)")
+    link = tmp_path / "zero.json"
+    link.symlink_to("/dev/null")  # /dev/zero is the attack (before: 8 GB and counting); /dev/null shows the check
+    assert main(["bench", "--report-from", str(link)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(link) in err[0] and "character device" in err[0], err
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000)
+    assert main(["bench", "--report-from", str(deep)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "invalid JSON" in err[0], err
