@@ -300,10 +300,6 @@ class _TimeUp(Exception):
     pass
 
 
-class _Hang(BaseException):
-    pass
-
-
 def _drive(strategy, seconds: float, seed: int, body) -> int:
     """Call ``body(example)`` for examples of ``strategy`` until ``seconds`` pass."""
     from hypothesis import HealthCheck, Phase, Verbosity, given, seed as hseed, settings

@@ -116,7 +116,7 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
     with the limit, never decoded."""
     import warnings
 
-    from PIL import Image, UnidentifiedImageError
+    from PIL import Image
 
     from .safeio import _gb, memory_available, open_regular
 
@@ -143,9 +143,9 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
                         grey = np.asarray(img.convert("L"), dtype=np.float64) / 255.0
         except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
             raise ScatterError(f"{what} {path}: refused as a decompression bomb ({exc})") from None
-        except ScatterError:
+        except (ScatterError, MemoryError):
             raise
-        except (UnidentifiedImageError, Exception) as exc:  # noqa: BLE001 - any decoder failure on a hostile file
+        except Exception as exc:  # noqa: BLE001 - UnidentifiedImageError or any decoder failure on a hostile file
             raise ScatterError(f"{what} {path}: could not read the image ({type(exc).__name__}: {exc})") from None
     return grey
 
