@@ -378,6 +378,14 @@ class Viewer:
         argv = ["--size", f"{w}x{h}"]
         if headless:
             argv += ["--window", "headless", "--backend", "egl"]
+            # the headless window is a framebuffer: the error says the context's limit (as render's does)
+            from .gl.context import check_image_size, create_context
+
+            probe = create_context()
+            try:
+                check_image_size(probe, (w, h), samples=0)
+            finally:
+                probe.release()
         logging.getLogger("moderngl_window").setLevel(logging.WARNING)
         try:
             return mglw.create_window_config_instance(app, args=argv)

@@ -527,11 +527,185 @@ def test_generated_mesh_files_load_or_name_the_file(tmp_path_factory, case):
 
 @pytest.mark.slow
 def test_fuzz_every_command_briefly(capsys):
-    assert fuzz_params.fuzz_commands(6.0, seed=2003) == 0, capsys.readouterr()
+    # every command in turn, twice (view headless, bench tiny, scatter, web with --serve,
+    # scene files), each in a forked child with its peak RSS checked; big inputs of 1 MB
+    status = fuzz_params.fuzz_commands(150.0, seed=2003, big_mb=1.0, cases=2 * len(fuzz_params.COMMANDS), cycle=True)
     out = capsys.readouterr().out
-    assert "0 crashes, 0 hangs" in out, out
+    assert status == 0, out
+    assert f"fuzz commands: {2 * len(fuzz_params.COMMANDS)} command lines" in out, out
+    assert "0 crashes, 0 hangs" in out and "0 over the memory bound" in out, out
+    for command in ("view", "bench", "scatter", "web", "scene-"):
+        assert f"| {command}" in out, out
+
+
+def test_fuzz_runner_sees_what_in_process_capture_missed(tmp_path):
+    # the forked runner judges exactly what a user sees: exit status, lines on stderr, a hang
+    ok = fuzz_params.run_isolated(["random", "stone", "-n", "3", "-o", str(tmp_path / "p.adp")])
+    assert ok["verdict"] == "ok" and ok["peak_rss"] > 10 * 2**20 and "wrote" in ok["stdout"], ok
+    bad = fuzz_params.run_isolated(["random", "stone", "-n", "-3", "-o", str(tmp_path / "q.adp")])
+    assert bad["verdict"] == "error", bad
+    os.mkfifo(tmp_path / "fifo.adp")
+    hang = fuzz_params.run_isolated(["info", str(tmp_path / "fifo.adp")], timeout=2.0)
+    assert hang["verdict"] == "error", hang  # refused, not read: a blocked read would be a hang
+    assert fuzz_params._verdict(["info"], 0, {"code": 0, "how": "returned"}, "x.py:3: UserWarning: w\n").startswith(
+        "crash: stray stderr")
+    assert fuzz_params._verdict(["info"], 0, {"code": 70, "how": "exception"}, "Traceback\nKeyError: 1\n") == \
+        "crash: KeyError: 1"
 
 
 def test_fuzz_params_briefly(capsys):
     assert fuzz_params.fuzz_params(1.0, seed=16) == 0
     assert "0 crashes" in capsys.readouterr().out
+
+
+# ------------------------------------- found by fuzzing every command (s16fuzz)
+# Each failed before its fix: a hang (the subprocess timeout), a traceback, or
+# a second stderr line.
+
+
+def _png(path, array):
+    from PIL import Image
+
+    Image.fromarray(array).save(path)
+    return path
+
+
+def test_scatter_refuses_a_fifo_height_map_without_blocking(tmp_path):
+    fifo = tmp_path / "hm.png"
+    os.mkfifo(fifo)
+    proc = run_cli("scatter", fifo, "stone", "-n", "5", "-o", tmp_path / "o.adp", timeout=30)  # before: blocked forever
+    one_error_line(proc, str(fifo), "not a regular file")
+    assert not (tmp_path / "o.adp").exists()
+
+
+def test_density_map_must_be_a_regular_file(tmp_path, capsys):
+    hm = _png(tmp_path / "hm.png", np.full((8, 8), 128, np.uint8))
+    link = tmp_path / "d.png"
+    link.symlink_to("/dev/null")
+    assert main(["scatter", str(hm), "stone", "-n", "3", "-o", str(tmp_path / "o.adp"), "--density", str(link)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(link) in err[0] and "character device" in err[0], err
+
+
+@pytest.mark.slow
+def test_scatter_refuses_a_decompression_bomb_in_one_line(tmp_path):
+    bomb = _png(tmp_path / "bomb.png", np.zeros((12000, 16000), np.uint8))  # 192 M pixels in ~190 kB
+    assert bomb.stat().st_size < 1_000_000
+    proc = run_cli("scatter", bomb, "stone", "-n", "5", "-o", tmp_path / "o.adp", timeout=60)  # before: a traceback
+    one_error_line(proc, str(bomb), "decompression bomb")
+
+
+def test_height_map_pixels_checked_against_memory_before_decoding(tmp_path, monkeypatch, capsys):
+    from axialdeform.core import safeio, scatter
+
+    hm = _png(tmp_path / "hm.png", np.full((200, 300), 128, np.uint8))
+    budget = 200 * 300 * scatter.SURFACE_BYTES_PER_PIXEL  # 0.8 of this is less than the map needs
+    monkeypatch.setattr(safeio, "memory_available", lambda: budget)
+    decoded = []
+    monkeypatch.setattr(np, "asarray", lambda *a, **k: decoded.append(1) or np.array(*a, **k))
+    with pytest.raises(ad.ScatterError, match=r"300x200 pixels needs about .*expected at most 48000 pixels") as info:
+        scatter.load_surface(hm)
+    assert str(hm) in str(info.value) and not decoded
+    monkeypatch.undo()
+    assert len(scatter.load_surface(hm).mesh.faces) == 2 * 199 * 299  # within memory: read as before
+
+
+def test_scene_file_must_be_a_regular_file(tmp_path):
+    fifo = tmp_path / "scene.toml"
+    os.mkfifo(fifo)
+    proc = run_cli("render", fifo, "-o", tmp_path / "o.png", timeout=30)  # before: blocked forever in read_text
+    one_error_line(proc, str(fifo), "not a regular file (a FIFO)")
+
+
+def test_scene_file_symlink_to_a_device_is_refused(tmp_path, capsys):
+    link = tmp_path / "scene.toml"
+    link.symlink_to("/dev/null")  # /dev/zero is the attack (before: read until memory ran out); /dev/null shows the check
+    assert main(["bake", str(link), "-o", str(tmp_path / "o.npz")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(link) in err[0] and "character device" in err[0], err
+
+
+def test_scene_include_of_a_fifo_is_refused(tmp_path):
+    os.mkfifo(tmp_path / "inc.toml")
+    scene = tmp_path / "scene.toml"
+    scene.write_text('include = ["inc.toml"]\n')
+    proc = run_cli("export", scene, "-o", tmp_path / "o.glb", timeout=30)  # before: blocked forever
+    one_error_line(proc, "inc.toml", "FIFO")
+
+
+@pytest.mark.parametrize("port", ["70000", "-1"])
+def test_web_serve_port_out_of_range_is_one_line(tmp_path, capsys, port):
+    params = tmp_path / "p.adp"
+    assert main(["random", "stone", "-n", "3", "-o", str(params)]) == 0
+    capsys.readouterr()
+    # before: OverflowError traceback from socket.bind after the page was written
+    assert main(["web", "stone", str(params), "-o", str(tmp_path / "w"), "--serve", "--port", port]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"axialdeform web: error: --port: expected a TCP port 0..65535 (0: any free one), found {port}"]
+    from axialdeform.web import make_server
+
+    (tmp_path / "w2").mkdir()
+    with pytest.raises(AxialDeformError, match="expected a TCP port"):
+        make_server(tmp_path / "w2", int(port))
+
+
+def test_library_warnings_are_one_line_on_the_cli(tmp_path, capsys):
+    tet = tmp_path / "tet.obj"
+    tet.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n")
+    # before: "…/renderer.py:180: UserWarning: …" and the source line: two stray lines
+    assert main(["view", str(tet), "-n", "5", "--headless", "--frames", "1", "--size", "32x24", "--lod"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"axialdeform view: warning: {tet}: 4 triangles are too few to simplify (LOD needs at least 48); "
+                   "drawing one level"], err
+
+
+def test_framing_a_big_mesh_in_bounded_memory():
+    from axialdeform.core.bounds import _support_indices
+
+    rng = np.random.default_rng(4)
+    positions = rng.normal(size=(300_000, 3)).astype(np.float32)
+    tracemalloc.start()
+    try:
+        idx = _support_indices(positions)  # before: a (300 000, 200) float64 product, 460 MB, and a copy
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 80 * 2**20, peak / 2**20
+    p = positions.astype(np.float64)  # the same vertices as one product over all of them
+    k = np.arange(194) + 0.5
+    z, phi = 1.0 - 2.0 * k / 194, np.pi * (1.0 + 5.0**0.5) * k
+    dirs = np.concatenate([np.stack([np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z], 1),
+                           np.eye(3), -np.eye(3)])
+    assert np.array_equal(idx, np.unique(np.argmax((p - p.mean(axis=0)) @ dirs.T, axis=0)))
+
+
+def test_view_count_checked_before_allocating(capsys):
+    # before: random_params allocated, and the MemoryError became "out of memory" without the limit
+    assert main(["view", "stone", "-n", str(10**12), "--headless", "--frames", "1", "--size", "32x24"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("axialdeform view: error: -n/--count: 1000000000000 instances need about")
+    assert "expected at most" in err[0]
+
+
+def test_headless_view_size_limit_comes_from_the_context(capsys):
+    # before: "could not open the viewer window (Error: the framebuffer is not complete (INCOMPLETE_ATTACHMENT))"
+    assert main(["view", "stone", "-n", "3", "--headless", "--frames", "1", "--size", "100000x16"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "100000x16 pixels; expected 1.." in err[0] and "GL_MAX_RENDERBUFFER_SIZE" in err[0], err
+
+
+def test_bench_report_from_must_be_a_regular_file(tmp_path, capsys):
+    fifo = tmp_path / "details.json"
+    os.mkfifo(fifo)
+    proc = run_cli("bench", "--report-from", fifo, timeout=30)  # before: blocked forever in read_text
+    one_error_line(proc, str(fifo), "not a regular file (a FIFO)")
+    link = tmp_path / "zero.json"
+    link.symlink_to("/dev/null")  # /dev/zero is the attack (before: 8 GB and counting); /dev/null shows the check
+    assert main(["bench", "--report-from", str(link)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(link) in err[0] and "character device" in err[0], err
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000)
+    assert main(["bench", "--report-from", str(deep)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "invalid JSON" in err[0], err

@@ -23,12 +23,18 @@ _REQUIRED = ("command", "machine", "settings", "stats", "wall_s")
 
 def load_details(path) -> dict:
     """The measurements of a run, read from its ``bench-details.json``."""
+    from ..core.safeio import memory_available, read_regular
+
     path = Path(path)
+    if not path.exists() and not path.is_symlink():
+        raise AxialDeformError(f"{path}: cannot read the bench measurements (No such file or directory)")
+    # a regular file only (a FIFO or /dev/zero is refused without blocking), of a size whose parse
+    # fits in memory (json's objects take up to ~10x the text; a real bench-details.json is < 1 MB)
+    data = read_regular(path, max(memory_available() // 12, 1 << 20), "the JSON written by axialdeform bench "
+                                                                       "(bench-details.json)")
     try:
-        details = json.loads(path.read_text())
-    except OSError as exc:
-        raise AxialDeformError(f"{path}: cannot read the bench measurements ({exc.strerror or exc})") from None
-    except (ValueError, UnicodeDecodeError) as exc:
+        details = json.loads(bytes(data).decode("utf-8"))
+    except (ValueError, UnicodeDecodeError, RecursionError) as exc:
         raise AxialDeformError(f"{path}: expected the JSON written by axialdeform bench (bench-details.json), "
                                f"found invalid JSON ({exc})") from None
     if not isinstance(details, dict):

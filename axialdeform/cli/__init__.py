@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 from ..core.errors import AxialDeformError
@@ -51,8 +52,12 @@ def main(argv=None) -> int:
 
     from ..core.material import AssetWarning
 
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
     def show(message, category, filename, lineno, file=None, line=None):
-        if issubclass(category, AssetWarning):  # one line, no source context
+        # the library's own warnings (an asset, a mesh too small for LOD, a pass
+        # that fell back): one line, no source context
+        if issubclass(category, AssetWarning) or os.path.abspath(str(filename)).startswith(package + os.sep):
             print(f"axialdeform {args.command}: warning: {message}", file=sys.stderr)
         else:
             previous(message, category, filename, lineno, file, line)

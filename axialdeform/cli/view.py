@@ -66,6 +66,10 @@ def run(args) -> None:
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
         seed = args.seed  # a file records no seed: shown only if the user names one
     else:
+        from ..core.safeio import check_count
+        from .random import RANDOM_BYTES_EACH
+
+        check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")  # before anything is read or allocated
         mesh = load_mesh(args.mesh)
         seed = 0 if args.seed is None else args.seed
         params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)

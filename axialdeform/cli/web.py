@@ -36,6 +36,8 @@ def run(args) -> None:
     from ..web import build_scene, make_server, write_page
 
     out = Path(args.output)
+    if args.serve and not 0 <= args.port <= 65535:
+        raise AxialDeformError(f"--port: expected a TCP port 0..65535 (0: any free one), found {args.port}")
     if (args.mesh is None) != (args.params is None):
         raise AxialDeformError("web: expected both MESH and PARAMS (or neither, with --serve)")
     if args.mesh is not None:
@@ -59,7 +61,7 @@ def run(args) -> None:
     server, busy = make_server(page.parent, args.port)
     port = server.server_address[1]
     if busy:
-        print(f"port {args.port} is busy; using {port}", file=sys.stderr)
+        print(f"axialdeform web: port {args.port} is busy; using {port}", file=sys.stderr)
     print(f"serving {page.parent.resolve()} at http://127.0.0.1:{port}/{quote(page.name)}  (Ctrl-C to stop)", flush=True)
     try:
         server.serve_forever()

@@ -145,12 +145,18 @@ def _load_toml(path: Path):
         import tomllib
     else:  # pragma: no cover - Python 3.10
         import tomli as tomllib
+    from .safeio import memory_available, read_regular
+
+    if not os.path.lexists(path):
+        raise SceneError(f"{path}: no such scene file")
+    # a regular file only (a FIFO or /dev/zero is refused without blocking), of a size
+    # whose parse fits in memory (tomllib's objects take up to ~10x the text)
+    data = read_regular(path, max(memory_available() // 12, 1 << 20), "a scene file (.toml)", SceneError)
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such scene file") from None
-    except (OSError, UnicodeDecodeError) as exc:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
         raise SceneError(f"{path}: could not read the scene file ({exc})") from None
+    del data
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

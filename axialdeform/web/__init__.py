@@ -358,6 +358,15 @@ def make_server(folder: str | os.PathLike, port: int = 8000):
             pass
 
     handler = functools.partial(Handler, directory=str(folder))
+    import operator
+
+    try:
+        number = operator.index(port)
+    except TypeError:
+        number = -1
+    if not 0 <= number <= 65535:
+        raise AxialDeformError(f"serve: expected a TCP port 0..65535 (0: any free one), found {port!r}")
+    port = number
     try:
         return ThreadingHTTPServer(("127.0.0.1", int(port)), handler), False
     except OSError as exc:
