@@ -55,6 +55,7 @@ class SceneWidget(anywidget.AnyWidget):
         """Draw ``params`` ((m, 16) float32, any count) instead; the camera stays."""
         params = as_params(params)
         axis = self._mesh.axis
-        self.params_adp = encode_binary(params, axis=axis, mesh_fingerprint=self._mesh.fingerprint,
-                                        quantize=self._quantize)
-        self.config = {**self.config, "instances": int(len(params))}
+        adp = encode_binary(params, axis=axis, mesh_fingerprint=self._mesh.fingerprint, quantize=self._quantize)
+        with self.hold_sync():  # one update message to the front end, not two
+            self.params_adp = adp
+            self.config = {**self.config, "instances": int(len(params))}

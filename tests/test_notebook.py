@@ -143,8 +143,10 @@ def test_widget_in_jupyterlab(tmp_path):
     """JupyterLab runs the cells: ``SceneWidget(...)`` draws in the output
     area, the silhouettes equal ``axialdeform render``'s (its function,
     without ground and shadow) of the same file at the same size, ``set_params`` changes the count shown and the
-    picture, the status comes back to Python, the browser reports no
-    console error and asks nothing of the network."""
+    picture, the status comes back to Python; a second view shares the
+    one copy of three.js and re-running its cell releases the old view's
+    WebGL context; the browser reports no console error and asks nothing
+    of the network."""
     chromium = shutil.which("chromium")
     assert chromium, "Debian's chromium is required (apt-get install chromium); this test does not skip"
     from playwright.sync_api import sync_playwright  # a missing package is a failure
@@ -163,6 +165,7 @@ def test_widget_in_jupyterlab(tmp_path):
         f"m = ad.load_mesh('stone')\nw = SceneWidget(m, ad.read_params({adp.name!r}, m), size={SIZE!r})\nw",
         "w.set_params(ad.random_params(m, 150, seed=8, bend=0.12, placement='disc'))\nw.config['instances']",
         "w.status",
+        "w",  # a second view of the same widget
     ])
     t0 = time.monotonic()
     lab = Lab(root)
@@ -172,8 +175,9 @@ def test_widget_in_jupyterlab(tmp_path):
             browser = pw.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
             try:
                 page = browser.new_page(viewport={"width": 1280, "height": 1000})
-                errors, outside = [], []
-                page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+                errors, warnings, outside = [], [], []
+                page.on("console", lambda m: errors.append(m.text) if m.type == "error" else
+                        warnings.append(m.text) if m.type == "warning" else None)
                 page.on("pageerror", lambda e: errors.append(str(e)))
 
                 def only_local(route):  # the notebook must work with no network: record and refuse the rest
@@ -228,6 +232,21 @@ def test_widget_in_jupyterlab(tmp_path):
                 out = _cell(page, 2).locator(".jp-OutputArea-output")
                 out.wait_for(timeout=60_000)
                 assert out.inner_text().strip() == "{'ready': True, 'instances': 150}"
+
+                _run_cell(page, 3)  # a second view: both draw the 150, from ONE copy of three.js
+                second = _cell(page, 3).locator(".jp-OutputArea-output .axd-status")
+                second.wait_for(timeout=120_000)
+                page.wait_for_function("""() => [...document.querySelectorAll('.jp-OutputArea-output .axd-status')]
+                    .map((s) => s.innerText).filter((t) => /^150 instances/.test(t)).length === 2""", timeout=120_000)
+                # re-running the cell disposes the old view: its WebGL context is released at once
+                page.evaluate("window.__oldCanvas = document.querySelectorAll('.jp-OutputArea-output canvas')[1]")
+                assert page.evaluate("window.__oldCanvas.getContext('webgl2').isContextLost()") is False
+                _run_cell(page, 3)
+                page.wait_for_function("""() => window.__oldCanvas.getContext('webgl2').isContextLost()
+                    && !document.body.contains(window.__oldCanvas)""", timeout=60_000)
+                page.wait_for_function("""() => [...document.querySelectorAll('.jp-OutputArea-output .axd-status')]
+                    .map((s) => s.innerText).filter((t) => /^150 instances/.test(t)).length === 2""", timeout=120_000)
+                assert not [w for w in warnings if "Multiple instances of Three.js" in w or "WebGL" in w], warnings
                 assert errors == [], errors
                 assert outside == [], f"requests beyond the local server: {outside}"
             finally:

@@ -4,9 +4,28 @@
 const bytesOf = (v) => (v instanceof DataView ? v.buffer.slice(v.byteOffset, v.byteOffset + v.byteLength)
   : v instanceof ArrayBuffer ? v : new Uint8Array(v).buffer);
 
+// three.js and app.js are imported ONCE per browser page, shared by every view of every
+// SceneWidget (a notebook shows a widget again, re-runs its cell, shows several): one copy
+// of three.js, not one per view.  Keyed by the sources' text, so two axialdeform versions
+// on one page each get their own.
+const LOADED = (globalThis.__axialdeformModules ??= new Map());
+
+function modules(sources) {
+  const key = ['three', 'orbit', 'gltf', 'bgu', 'app'].map((k) => sources[k]).join('\u0000');
+  if (!LOADED.has(key)) {
+    const loading = loadModules(sources).then(({ lib, app, urls }) => {
+      urls.forEach((u) => URL.revokeObjectURL(u)); // imported: the module map keeps them
+      return { lib, app };
+    });
+    loading.catch(() => LOADED.delete(key)); // a failed load is tried again by the next view
+    LOADED.set(key, loading);
+  }
+  return LOADED.get(key);
+}
+
 export default {
   async render({ model, el }) {
-    const { lib, app, urls } = await loadModules(model.get('_sources'));
+    const { lib, app } = await modules(model.get('_sources'));
     const report = (status) => { model.set('status', status); model.save_changes(); };
     const view = app.mount(el, lib, { config: model.get('config'), glb: bytesOf(model.get('mesh_glb')),
       adp: bytesOf(model.get('params_adp')) });
@@ -18,7 +37,6 @@ export default {
     return () => {
       model.off('change:params_adp', onParams);
       view.dispose();
-      urls.forEach((u) => URL.revokeObjectURL(u));
     };
   },
 };
