@@ -373,9 +373,7 @@ export function mount(root, lib, scene) {
     },
     dispose() {
       disposed = true;
-      // forceContextLoss: the browser's WebGL context goes now, not at garbage collection (a notebook
-      // re-running a cell would otherwise reach Chromium's 16 live contexts and lose the oldest)
-      if (renderer) { renderer.setAnimationLoop(null); renderer.dispose(); renderer.forceContextLoss(); }
+      if (renderer) { renderer.setAnimationLoop(null); renderer.dispose(); }
       if (controls) controls.dispose();
       if (material) material.dispose();
       if (geometry) geometry.dispose();

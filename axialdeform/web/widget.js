@@ -36,7 +36,13 @@ export default {
     model.on('change:params_adp', onParams);
     return () => {
       model.off('change:params_adp', onParams);
+      const canvas = el.querySelector('canvas');
       view.dispose();
+      // a view that goes gives its WebGL context back now, not at garbage collection: a notebook
+      // re-running a cell would otherwise reach Chromium's 16 live contexts and lose the oldest
+      const gl = canvas && (canvas.getContext('webgl2') || canvas.getContext('webgl'));
+      const lose = gl && gl.getExtension('WEBGL_lose_context');
+      if (lose) lose.loseContext();
     };
   },
 };
