@@ -26,6 +26,9 @@ function modules(sources) {
 export default {
   async render({ model, el }) {
     const { lib, app } = await modules(model.get('_sources'));
+    // keys pressed while the picture has focus are the picture's: JupyterLab (lumino) runs
+    // none of its shortcuts for them (without this, 'd d' on a focused picture deleted the cell)
+    el.setAttribute('data-lm-suppress-shortcuts', 'true');
     const report = (status) => { model.set('status', status); model.save_changes(); };
     const view = app.mount(el, lib, { config: model.get('config'), glb: bytesOf(model.get('mesh_glb')),
       adp: bytesOf(model.get('params_adp')) });
