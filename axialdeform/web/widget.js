@@ -26,9 +26,11 @@ function modules(sources) {
 export default {
   async render({ model, el }) {
     const { lib, app } = await modules(model.get('_sources'));
-    // keys pressed while the picture has focus are the picture's: JupyterLab (lumino) runs
-    // none of its shortcuts for them (without this, 'd d' on a focused picture deleted the cell)
-    el.setAttribute('data-lm-suppress-shortcuts', 'true');
+    // keys pressed while the picture has focus are the picture's: JupyterLab (lumino) runs no
+    // shortcut for a key whose target carries this attribute (without it, 'd d' on a focused
+    // picture deleted the cell); lumino looks at the target first, so it goes on what takes focus
+    const ownKeys = (e) => e.target.setAttribute('data-lm-suppress-shortcuts', 'true');
+    el.addEventListener('focusin', ownKeys);
     const report = (status) => { model.set('status', status); model.save_changes(); };
     const view = app.mount(el, lib, { config: model.get('config'), glb: bytesOf(model.get('mesh_glb')),
       adp: bytesOf(model.get('params_adp')) });
@@ -39,6 +41,7 @@ export default {
     model.on('change:params_adp', onParams);
     return () => {
       model.off('change:params_adp', onParams);
+      el.removeEventListener('focusin', ownKeys);
       const canvas = el.querySelector('canvas');
       view.dispose();
       // a view that goes gives its WebGL context back now, not at garbage collection: a notebook
