@@ -23,7 +23,7 @@ from io import BytesIO
 from pathlib import Path
 from urllib.error import URLError
 from urllib.parse import quote
-from urllib.request import urlopen
+from urllib.request import ProxyHandler, build_opener
 
 import numpy as np
 import pytest
@@ -71,26 +71,34 @@ class Lab:
         self.log = open(root.parent / "jupyterlab.log", "w+")
         self.proc = subprocess.Popen(cmd, stdout=self.log, stderr=subprocess.STDOUT, env=env, cwd=root)
         self.url = f"http://127.0.0.1:{self.port}"
+        try:
+            self.startup_s = self._wait()
+        except BaseException:
+            self.close()
+            raise
+
+    def _wait(self) -> float:
+        direct = build_opener(ProxyHandler({}))  # 127.0.0.1 never through an http_proxy
         t0 = time.monotonic()
         while True:
             if self.proc.poll() is not None:
                 raise AssertionError(f"jupyterlab exited with {self.proc.returncode}:\n{self.text_log()}")
             try:
-                with urlopen(f"{self.url}/api/status?token={self.token}", timeout=5) as r:
+                with direct.open(f"{self.url}/api/status?token={self.token}", timeout=5) as r:
                     if r.status == 200:
-                        break
+                        return time.monotonic() - t0
             except (URLError, OSError):
                 pass
             assert time.monotonic() - t0 < STARTUP_S, f"jupyterlab did not answer in {STARTUP_S} s:\n{self.text_log()}"
             time.sleep(0.25)
-        self.startup_s = time.monotonic() - t0
 
     def text_log(self) -> str:
         self.log.flush()
         return Path(self.log.name).read_text(errors="replace")
 
     def close(self):
-        self.proc.terminate()
+        if self.proc.poll() is None:
+            self.proc.terminate()
         try:
             self.proc.wait(timeout=30)
         except subprocess.TimeoutExpired:
