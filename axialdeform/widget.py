@@ -1,5 +1,7 @@
-"""``SceneWidget``: the web page's scene inline in Jupyter / VS Code notebooks
-(an anywidget running the same page code, ``axialdeform/web/app.js``).
+"""``SceneWidget``: the web page's scene inline in a notebook (an anywidget
+running the same page code, ``axialdeform/web/app.js``).  Tested in a real
+JupyterLab (tests/test_notebook.py); Jupyter Notebook 7 and VS Code load
+anywidgets the same way but are not tested here.
 
     from axialdeform.widget import SceneWidget
     w = SceneWidget("stone", params)      # a mesh (or its name / file) and (n, 16) float32
@@ -55,6 +57,7 @@ class SceneWidget(anywidget.AnyWidget):
         """Draw ``params`` ((m, 16) float32, any count) instead; the camera stays."""
         params = as_params(params)
         axis = self._mesh.axis
-        self.params_adp = encode_binary(params, axis=axis, mesh_fingerprint=self._mesh.fingerprint,
-                                        quantize=self._quantize)
-        self.config = {**self.config, "instances": int(len(params))}
+        adp = encode_binary(params, axis=axis, mesh_fingerprint=self._mesh.fingerprint, quantize=self._quantize)
+        with self.hold_sync():  # one update message to the front end, not two
+            self.params_adp = adp
+            self.config = {**self.config, "instances": int(len(params))}

@@ -1,6 +1,7 @@
 """A built wheel, installed into a fresh virtual environment, still finds
 its shaders and meshes (the package data list is checked against the tree)."""
 
+import json
 import os
 import subprocess
 import sys
@@ -69,3 +70,16 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
     assert page.returncode == 0, page.stderr
     html = (work / "s.html").read_text(encoding="utf-8")
     assert 'id="axd-three"' in html and (work / "s.html").stat().st_size > 800_000
+    # the notebook widget from the wheel: its model carries the page code and the whole
+    # vendored three.js (a notebook front end fetches nothing), read from the wheel's files
+    wid = subprocess.run([str(py), "-c", (
+        "import sys, json; from axialdeform.widget import SceneWidget; import axialdeform as ad; "
+        "m = ad.load_mesh('stone'); w = SceneWidget(m, ad.random_params(m, 5, seed=1)); "
+        "import axialdeform.widget as aw; assert aw.__file__.startswith(sys.prefix), aw.__file__; "
+        "print(json.dumps({k: len(v) for k, v in w._sources.items()})); "
+        "assert 'export default' in w._esm and 'loadModules' in w._esm; "
+        "assert all(s not in w._esm for s in ('http://', 'https://'))"
+    )], capture_output=True, text=True, cwd=work)
+    assert wid.returncode == 0, wid.stderr
+    sizes = json.loads(wid.stdout.strip().splitlines()[-1])
+    assert set(sizes) == {"three", "orbit", "gltf", "bgu", "app"} and sizes["three"] > 600_000, sizes

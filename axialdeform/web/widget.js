@@ -4,9 +4,33 @@
 const bytesOf = (v) => (v instanceof DataView ? v.buffer.slice(v.byteOffset, v.byteOffset + v.byteLength)
   : v instanceof ArrayBuffer ? v : new Uint8Array(v).buffer);
 
+// three.js and app.js are imported ONCE per browser page, shared by every view of every
+// SceneWidget (a notebook shows a widget again, re-runs its cell, shows several): one copy
+// of three.js, not one per view.  Keyed by the sources' text, so two axialdeform versions
+// on one page each get their own.
+const LOADED = (globalThis.__axialdeformModules ??= new Map());
+
+function modules(sources) {
+  const key = ['three', 'orbit', 'gltf', 'bgu', 'app'].map((k) => sources[k]).join('\u0000');
+  if (!LOADED.has(key)) {
+    const loading = loadModules(sources).then(({ lib, app, urls }) => {
+      urls.forEach((u) => URL.revokeObjectURL(u)); // imported: the module map keeps them
+      return { lib, app };
+    });
+    loading.catch(() => LOADED.delete(key)); // a failed load is tried again by the next view
+    LOADED.set(key, loading);
+  }
+  return LOADED.get(key);
+}
+
 export default {
   async render({ model, el }) {
-    const { lib, app, urls } = await loadModules(model.get('_sources'));
+    const { lib, app } = await modules(model.get('_sources'));
+    // keys pressed while the picture has focus are the picture's: JupyterLab (lumino) runs no
+    // shortcut for a key whose target carries this attribute (without it, 'd d' on a focused
+    // picture deleted the cell); lumino looks at the target first, so it goes on what takes focus
+    const ownKeys = (e) => e.target.setAttribute('data-lm-suppress-shortcuts', 'true');
+    el.addEventListener('focusin', ownKeys);
     const report = (status) => { model.set('status', status); model.save_changes(); };
     const view = app.mount(el, lib, { config: model.get('config'), glb: bytesOf(model.get('mesh_glb')),
       adp: bytesOf(model.get('params_adp')) });
@@ -17,8 +41,14 @@ export default {
     model.on('change:params_adp', onParams);
     return () => {
       model.off('change:params_adp', onParams);
+      el.removeEventListener('focusin', ownKeys);
+      const canvas = el.querySelector('canvas');
       view.dispose();
-      urls.forEach((u) => URL.revokeObjectURL(u));
+      // a view that goes gives its WebGL context back now, not at garbage collection: a notebook
+      // re-running a cell would otherwise reach Chromium's 16 live contexts and lose the oldest
+      const gl = canvas && (canvas.getContext('webgl2') || canvas.getContext('webgl'));
+      const lose = gl && gl.getExtension('WEBGL_lose_context');
+      if (lose) lose.loseContext();
     };
   },
 };
