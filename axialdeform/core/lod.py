@@ -55,6 +55,7 @@ LOD_REDUCTIONS = (0.5, 0.8, 0.93)
 #: has that many keeps one level, with a warning)
 MIN_LOD_TRIANGLES = 48
 _SAMPLE = 2048
+_PAIRS = 1 << 18  # (vertex, triangle) candidate pairs per closest-point chunk
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,6 +141,18 @@ def _one_sided(points: np.ndarray, targets: np.ndarray) -> float:
     return worst
 
 
+def _unique_ints(values: np.ndarray) -> np.ndarray:
+    """Sorted unique values of an int64 array (a sort: many times faster here
+    than ``np.unique``'s hashing for millions of keys)."""
+    values = np.sort(values)
+    return values[np.r_[True, values[1:] != values[:-1]]] if len(values) else values
+
+
+def _used_vertices(faces: np.ndarray, n: int) -> np.ndarray:
+    """(k,) int64 sorted indices below ``n`` that ``faces`` uses."""
+    return np.flatnonzero(np.bincount(faces.ravel(), minlength=n)).astype(np.int64)
+
+
 def _attributes(mesh):
     """The per-vertex attributes carried to a level: name -> (n, k) float64 (normals first)."""
     out = {"normals": mesh.normals.astype(np.float64)}
@@ -166,11 +179,13 @@ def _transfer(positions, faces, attrs, new_positions, mapping):
     target = mapping[faces.ravel()]
     face = np.repeat(np.arange(m, dtype=np.int64), 3)
     ok = target >= 0
-    key = np.unique(target[ok] * m + face[ok])  # unique (simplified vertex, original triangle) pairs
+    key = _unique_ints(target[ok] * m + face[ok])  # unique (simplified vertex, original triangle) pairs
     j, f = key // m, key % m
     tri = positions[faces[f]]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        close = trimesh.triangles.closest_point(tri, new_positions[j])
+    close = np.empty((len(j), 3))
+    for a in range(0, len(j), _PAIRS):  # chunks bound closest_point's temporaries (a few per pair)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            close[a:a + _PAIRS] = trimesh.triangles.closest_point(tri[a:a + _PAIRS], new_positions[j[a:a + _PAIRS]])
     dist = np.linalg.norm(close - new_positions[j], axis=1)
     dist[~np.isfinite(dist)] = np.inf
     order = np.lexsort((dist, j))  # by vertex, nearest first
@@ -223,7 +238,7 @@ def _part_piece(mesh, part, reduction):
     import fast_simplification
 
     faces = mesh.faces[part.start:part.start + part.count].astype(np.int64)
-    used = np.unique(faces)
+    used = _used_vertices(faces, mesh.vertex_count)
     local = np.searchsorted(used, faces)
     positions = mesh.positions[used].astype(np.float64)
     attrs = {name: value[used] for name, value in _attributes(mesh).items()}
@@ -241,7 +256,7 @@ def _part_piece(mesh, part, reduction):
     if not np.array_equal(replayed, new_faces):  # never seen; carry attributes by the mapping anyway
         warnings.warn(f"{mesh.name}: part {part.name!r}: the replayed simplification differs from the "
                       "simplification; attributes follow the replay's vertex mapping", RuntimeWarning, stacklevel=3)
-    keep = np.unique(new_faces)  # drop vertices no triangle uses
+    keep = _used_vertices(new_faces, len(points))  # drop vertices no triangle uses
     remap = np.full(len(points), -1, dtype=np.int64)
     remap[keep] = np.arange(len(keep))
     mapping = np.asarray(mapping, dtype=np.int64)
