@@ -255,3 +255,27 @@ def test_cli_render_lod_of_a_multi_part_file(tmp_path, capsys):
     assert not np.array_equal(images["full"], images["lod"])
     assert np.abs(images["full"] - images["lod"]).mean() / 255 < 0.01
     assert not np.array_equal(images["lod"], images["part"])  # one part only
+
+
+@pytest.mark.slow
+def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch):
+    import moderngl
+
+    mesh = two_part_mesh()
+    params = meadow(mesh)
+    calls = []
+    original = moderngl.VertexArray.render
+
+    def spy(self, *args, **kwargs):
+        calls.append((kwargs.get("instances"), kwargs.get("vertices"), kwargs.get("first", 0)))
+        return original(self, *args, **kwargs)
+
+    with ad.AxialRenderer(ctx, mesh, params, lod=True) as r:
+        monkeypatch.setattr(moderngl.VertexArray, "render", spy)
+        draw(ctx, r, *MEADOW_VIEW, size=(160, 120))
+        monkeypatch.undo()
+        expected = [(kept, part.count * 3, part.start * 3)
+                    for kept, level in zip(r.stats["levels"], r.lod_levels) if kept for part in level.parts]
+        assert len([k for k in r.stats["levels"] if k]) >= 2
+    assert sorted(calls) == sorted(expected)
+    assert ctx.error == "GL_NO_ERROR"
