@@ -22,8 +22,9 @@ its vertices split at a seam (one copy per side), so the simplifier sees a
 seam as an open border of the part; a collapse never joins the two sides
 (they share no edge), so each simplified vertex takes its UV from one side
 only -- no UV is ever averaged across a seam.  Both sides are simplified
-independently, so the seam may open by up to the level's geometric error
-(measured below; the screen-space rule keeps it under ``lod_error`` pixels).
+independently, so the seam may open by up to twice the level's geometric
+error (measured below; the screen-space rule keeps it under 2 x ``lod_error``
+pixels); docs/culling.md says why the seams are not welded.
 
 All levels are deformed with the BASE mesh's control axis (``mesh.axis``:
 axis, ``lo``, ``L`` computed from the full mesh), so an instance bends the
