@@ -279,3 +279,49 @@ def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch):
         assert len([k for k in r.stats["levels"] if k]) >= 2
     assert sorted(calls) == sorted(expected)
     assert ctx.error == "GL_NO_ERROR"
+
+
+FACES = [((1, 0, 0), (0, 1, 0), (0, 0, 1)), ((-1, 0, 0), (0, 0, 1), (0, 1, 0)), ((0, 1, 0), (0, 0, 1), (1, 0, 0)),
+         ((0, -1, 0), (1, 0, 0), (0, 0, 1)), ((0, 0, 1), (1, 0, 0), (0, 1, 0)), ((0, 0, -1), (0, 1, 0), (1, 0, 0))]
+
+
+def seamed_box(n: int = 7):
+    """A unit cube, each side an n x n grid with its OWN vertices and UV chart
+    (side k maps to u in [k/6 + 0.01, (k+1)/6 - 0.01]): every cube edge is a UV seam."""
+    s, t = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1), indexing="ij")
+    s, t = s.ravel(), t.ravel()
+    q = np.arange(n * (n + 1)).reshape(n, n + 1)[:, :n].ravel()  # lower-left corner of each quad
+    quad = np.stack([q, q + n + 1, q + n + 2, q + 1], axis=1)
+    positions, uvs, faces = [], [], []
+    for k, (normal, a, b) in enumerate(FACES):
+        normal, a, b = map(np.asarray, (normal, a, b))
+        p = 0.5 * normal + (s[:, None] - 0.5) * a + (t[:, None] - 0.5) * b
+        tri = np.vstack([quad[:, [0, 1, 2]], quad[:, [0, 2, 3]]])
+        if np.dot(np.cross(a, b), normal) < 0:  # outward winding
+            tri = tri[:, ::-1]
+        faces.append(tri + len(positions) * (n + 1) ** 2)
+        positions.append(p)
+        uvs.append(np.stack([k / 6 + 0.01 + s * (1 / 6 - 0.02), t], axis=1))
+    positions, faces = np.vstack(positions), np.vstack(faces)
+    return ad.BaseMesh(positions, area_weighted_normals(positions, faces), faces, name="seamed-box", uvs=np.vstack(uvs))
+
+
+def test_no_uv_is_mixed_across_a_seam():
+    """Each simplified vertex takes its UV from one side of a seam: it lies on
+    one side's chart (u in that side's band) and equals that side's map at the
+    vertex's position (projected onto that side), never a blend of two charts."""
+    mesh = seamed_box()
+    levels = build_lod_levels(mesh)
+    assert len(levels) >= 3
+    for k, level in enumerate(levels):
+        side = np.floor(level.uvs[:, 0] * 6).astype(int)
+        assert ((side >= 0) & (side < 6)).all()
+        lo = side / 6 + 0.01 - 1e-4
+        assert ((level.uvs[:, 0] >= lo) & (level.uvs[:, 0] <= lo + 1 / 6 - 0.02 + 2e-4)).all(), k
+        a = np.array([f[1] for f in FACES], float)[side]
+        b = np.array([f[2] for f in FACES], float)[side]
+        p = level.positions.astype(np.float64)
+        expected_u = side / 6 + 0.01 + np.clip(np.einsum("ij,ij->i", p, a) + 0.5, 0, 1) * (1 / 6 - 0.02)
+        expected_v = np.clip(np.einsum("ij,ij->i", p, b) + 0.5, 0, 1)
+        tol = 1e-5 + level.error
+        assert np.abs(level.uvs[:, 0] - expected_u).max() <= tol / 6 and np.abs(level.uvs[:, 1] - expected_v).max() <= tol, k
