@@ -233,16 +233,17 @@ def _finish(attrs, positions, faces):
     return out
 
 
-def _part_piece(mesh, part, reduction):
+def _part_piece(mesh, attributes, part, reduction):
     """One part at one reduction: (positions (v, 3) float64, faces (m, 3) int64,
-    attributes name -> (v, k)); ``reduction`` None: the part as it is."""
+    attributes name -> (v, k)); ``attributes``: :func:`_attributes` of the mesh;
+    ``reduction`` None: the part as it is."""
     import fast_simplification
 
     faces = mesh.faces[part.start:part.start + part.count].astype(np.int64)
     used = _used_vertices(faces, mesh.vertex_count)
     local = np.searchsorted(used, faces)
     positions = mesh.positions[used].astype(np.float64)
-    attrs = {name: value[used] for name, value in _attributes(mesh).items()}
+    attrs = {name: value[used] for name, value in attributes.items()}
     if reduction is None or part.count < MIN_LOD_TRIANGLES:
         return positions, local, attrs
     points, new_faces, collapses = fast_simplification.simplify(positions, local, target_reduction=float(reduction),
@@ -289,9 +290,10 @@ def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
 
     full = trimesh.Trimesh(mesh.positions.astype(np.float64), mesh.faces.astype(np.int64), process=False)
     full_cloud = _surface_points(full, _SAMPLE, 1)
+    attributes = _attributes(mesh)
     levels = [base]
     for reduction in reductions:
-        pieces = [_part_piece(mesh, part, reduction) for part in mesh.parts]
+        pieces = [_part_piece(mesh, attributes, part, reduction) for part in mesh.parts]
         total = sum(len(f) for _, f, _ in pieces)
         if total < 4 or total > 0.8 * len(levels[-1].faces):
             continue
