@@ -101,8 +101,8 @@ class _ViewerMixin:
         self.bend_scale = 1.0
         self.show_ground = bool(s.get("ground", True))
         self.wind = s.get("wind")  # the Wind the V key switches on and off
-        # levels of detail are of the whole mesh: never for a mesh with parts or appearance
-        lod = s.get("lod", len(self.base) >= LOD_AUTO_COUNT and not self.mesh.has_appearance)
+        # levels of detail part by part, carrying UVs, colours and tangents (core/lod.py)
+        lod = s.get("lod", len(self.base) >= LOD_AUTO_COUNT)
         self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, parts=s.get("parts"), wind=self.wind,
                                       culling=s.get("culling", True), lod=lod, lod_error=s.get("lod_error", 1.0))
         if s.get("tint") is not None:

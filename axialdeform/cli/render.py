@@ -73,9 +73,9 @@ def run(args) -> None:
     from . import scenes
 
     scene = scenes.scene_of(args)
-    if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
-        return scenes.render(scene, args, wind_arg(args) if args.wind is not None else None)
     options = cull_options(args)
+    if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
+        return scenes.render(scene, args, wind_arg(args) if args.wind is not None else None, options)
     wind = wind_arg(args)
     wind_options = {"wind": wind, "time": args.time} if wind is not None else {}
     mesh, params = load(args, "PNG")

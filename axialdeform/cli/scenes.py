@@ -47,15 +47,16 @@ def _time(scene, args) -> float:
     return float(t)
 
 
-def render(scene, args, wind=None) -> None:
-    """``render SCENE -o OUT.png``; ``--wind`` replaces the scene's [wind]."""
+def render(scene, args, wind=None, options=None) -> None:
+    """``render SCENE -o OUT.png``; ``--wind`` replaces the scene's [wind];
+    ``options``: ``--no-cull``, ``--lod``, ``--lod-error`` (:func:`._common.cull_options`)."""
     from ..gl.image import parse_size, save_png
     from ..gl.scene import render_scene
 
     _check_output(args, "PNG")
     if wind is not None:
         scene.wind = wind
-    image = render_scene(scene, parse_size(args.size), args.mode, time=_time(scene, args))
+    image = render_scene(scene, parse_size(args.size), args.mode, time=_time(scene, args), **(options or {}))
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
           f"{image.shape[1]}x{image.shape[0]})")

@@ -1,17 +1,40 @@
 """Levels of detail of a base mesh (pure numpy + fast-simplification + trimesh).
 
 Every level is a quadric simplification (``fast_simplification``, the
-maintained binding of Fast-Quadric-Mesh-Simplification) of the base mesh's
-triangles.  All levels are deformed with the BASE mesh's control axis
-(``mesh.axis``: axis, ``lo``, ``L`` computed from the full mesh), so an
-instance bends the same way at every level.  Each level carries its
-geometric error in model units: the symmetric Hausdorff distance between it
-and the full mesh, measured from the vertices of each to the surface of the
-other, both sampled densely (vertices plus 2048 surface points each; the
-nearest sampled point stands in for the nearest surface point, which can only
-over-estimate the error by the sampling spacing).
-The renderer picks a level per instance from that error projected to pixels
-(docs/culling.md).
+maintained binding of Fast-Quadric-Mesh-Simplification) of the base mesh,
+PART BY PART: each part (:attr:`BaseMesh.parts`) is simplified on its own and
+keeps its material, so a level has the same parts, in the same order, as the
+base mesh.  A part with fewer than :data:`MIN_LOD_TRIANGLES` triangles is not
+simplified: every level carries it at full resolution.
+
+The per-vertex attributes (normals, UVs, vertex colours, tangents) are
+carried to the simplified vertices with the collapse history
+(``simplify(..., return_collapses=True)`` replayed by
+``replay_simplification``, whose ``indice_mapping`` says which simplified
+vertex every original vertex was collapsed into): a simplified vertex is
+projected to the closest point of the original triangles around the vertices
+collapsed into it, and takes the barycentric interpolation of their
+attributes there (normals renormalised; tangents made orthogonal to the
+normal, unit, with the handedness of the interpolated ``w``).  So a flat
+card with an affine texture map keeps exactly that map at every level, and
+a colour is never averaged across the surface.  UV seams: the base mesh has
+its vertices split at a seam (one copy per side), so the simplifier sees a
+seam as an open border of the part; a collapse never joins the two sides
+(they share no edge), so each simplified vertex takes its UV from one side
+only -- no UV is ever averaged across a seam.  Both sides are simplified
+independently, so the seam may open by up to twice the level's geometric
+error (measured below; the screen-space rule keeps it under 2 x ``lod_error``
+pixels); docs/culling.md says why the seams are not welded.
+
+All levels are deformed with the BASE mesh's control axis (``mesh.axis``:
+axis, ``lo``, ``L`` computed from the full mesh), so an instance bends the
+same way at every level.  Each level carries its geometric error in model
+units: the symmetric Hausdorff distance between it and the full mesh,
+measured from the vertices of each to the surface of the other, both sampled
+densely (vertices plus 2048 surface points each; the nearest sampled point
+stands in for the nearest surface point, which can only over-estimate the
+error by the sampling spacing).  The renderer picks a level per instance
+from that error projected to pixels (docs/culling.md).
 """
 
 from __future__ import annotations
@@ -29,21 +52,41 @@ __all__ = ["LodLevel", "build_lod_levels", "LOD_REDUCTIONS", "MIN_LOD_TRIANGLES"
 
 #: fraction of the triangles removed for levels 1, 2, 3 (level 0 is the full mesh)
 LOD_REDUCTIONS = (0.5, 0.8, 0.93)
-#: a mesh with fewer triangles is not simplified (it keeps one level, with a warning)
+#: a part with fewer triangles is not simplified (a mesh none of whose parts
+#: has that many keeps one level, with a warning)
 MIN_LOD_TRIANGLES = 48
 _SAMPLE = 2048
+_PAIRS = 1 << 18  # (vertex, triangle) candidate pairs per closest-point chunk
 
 
 @dataclass(frozen=True, eq=False)
 class LodLevel:
-    """One level of detail: positions (n, 3) float32, normals (n, 3) float32
-    (unit, area-weighted), faces (m, 3) uint32, and ``error`` (model units,
-    0 for the full mesh)."""
+    """One level of detail, drawn like a base mesh (same attribute names).
+
+    positions : (n, 3) float32
+    normals : (n, 3) float32 (unit)
+    faces : (m, 3) uint32
+    error : float -- geometric error in model units (0 for the full mesh)
+    uvs : (n, 2) float32 or None; colors : (n, 4) float32 or None;
+    tangents : (n, 4) float32 or None -- where the base mesh has them
+    parts : tuple of Part -- the base mesh's parts, in its order, with the
+        same materials, as ranges of this level's ``faces``
+    """
 
     positions: np.ndarray
     normals: np.ndarray
     faces: np.ndarray
     error: float
+    uvs: np.ndarray | None = None
+    colors: np.ndarray | None = None
+    tangents: np.ndarray | None = None
+    parts: tuple = ()
+
+    @classmethod
+    def of(cls, mesh) -> "LodLevel":
+        """Level 0: the base mesh itself (its arrays, not copies)."""
+        return cls(mesh.positions, mesh.normals, mesh.faces, 0.0, mesh.uvs, mesh.colors, mesh.tangents,
+                   tuple(mesh.parts))
 
     @property
     def vertex_count(self) -> int:
@@ -52,8 +95,18 @@ class LodLevel:
     @cached_property
     def edges(self) -> np.ndarray:
         """(k, 2) uint32 unique undirected edges (for wireframe)."""
-        e = np.sort(self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-        return np.unique(e, axis=0).astype(np.uint32)
+        return faces_edges(self.faces)
+
+    def part_edges(self, indices) -> np.ndarray:
+        """(k, 2) uint32 unique edges of the parts ``indices`` (positions in :attr:`parts`)."""
+        return faces_edges(np.concatenate([self.faces[p.start:p.start + p.count]
+                                           for p in (self.parts[i] for i in indices)]))
+
+
+def faces_edges(faces: np.ndarray) -> np.ndarray:
+    """(k, 2) uint32 unique undirected edges of ``faces : (m, 3) int``."""
+    e = np.sort(np.asarray(faces, dtype=np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    return np.unique(e, axis=0).astype(np.uint32)
 
 
 def check_lod_error(pixels) -> float:
@@ -89,40 +142,175 @@ def _one_sided(points: np.ndarray, targets: np.ndarray) -> float:
     return worst
 
 
+def _unique_ints(values: np.ndarray) -> np.ndarray:
+    """Sorted unique values of an int64 array (a sort: many times faster here
+    than ``np.unique``'s hashing for millions of keys)."""
+    values = np.sort(values)
+    return values[np.r_[True, values[1:] != values[:-1]]] if len(values) else values
+
+
+def _used_vertices(faces: np.ndarray, n: int) -> np.ndarray:
+    """(k,) int64 sorted indices below ``n`` that ``faces`` uses."""
+    return np.flatnonzero(np.bincount(faces.ravel(), minlength=n)).astype(np.int64)
+
+
+def _attributes(mesh):
+    """The per-vertex attributes carried to a level: name -> (n, k) float64 (normals first)."""
+    out = {"normals": mesh.normals.astype(np.float64)}
+    for key in ("uvs", "colors", "tangents"):
+        value = getattr(mesh, key)
+        if value is not None:
+            out[key] = value.astype(np.float64)
+    return out
+
+
+def _transfer(positions, faces, attrs, new_positions, mapping):
+    """Attributes of the simplified vertices, by closest-point barycentric interpolation.
+
+    positions : (v, 3) float64 and faces : (m, 3) int64 of the original part;
+    attrs : name -> (v, k) float64; new_positions : (w, 3) float64;
+    mapping : (v,) int64, the simplified vertex each original vertex went into
+    (-1: none).  Each simplified vertex is projected onto the original
+    triangles that touch a vertex collapsed into it (candidates: one pair per
+    triangle corner, all pairs at once) and the nearest projection wins.
+    """
+    import trimesh
+
+    m = len(faces)
+    target = mapping[faces.ravel()]
+    face = np.repeat(np.arange(m, dtype=np.int64), 3)
+    ok = target >= 0
+    key = _unique_ints(target[ok] * m + face[ok])  # unique (simplified vertex, original triangle) pairs
+    j, f = key // m, key % m
+    tri = positions[faces[f]]
+    close = np.empty((len(j), 3))
+    for a in range(0, len(j), _PAIRS):  # chunks bound closest_point's temporaries (a few per pair)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            close[a:a + _PAIRS] = trimesh.triangles.closest_point(tri[a:a + _PAIRS], new_positions[j[a:a + _PAIRS]])
+    dist = np.linalg.norm(close - new_positions[j], axis=1)
+    dist[~np.isfinite(dist)] = np.inf
+    order = np.lexsort((dist, j))  # by vertex, nearest first
+    js = j[order]
+    first = order[np.r_[True, js[1:] != js[:-1]]]
+    best_j, best_f = j[first], f[first]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        bary = trimesh.triangles.points_to_barycentric(tri[first], close[first])
+    bary = np.clip(np.nan_to_num(bary, nan=-1.0), 0.0, None)
+    total = bary.sum(axis=1)
+    bad = ~(total > 1e-12)  # a degenerate triangle: take its first corner
+    bary[bad] = (1.0, 0.0, 0.0)
+    bary /= bary.sum(axis=1, keepdims=True)
+    corners = faces[best_f]
+    out = {}
+    for name, values in attrs.items():
+        full = np.zeros((len(new_positions), values.shape[1]))
+        full[best_j] = np.einsum("ic,ick->ik", bary, values[corners])
+        out[name] = full
+    return out
+
+
+def _finish(attrs, positions, faces):
+    """Renormalise interpolated normals/tangents: (n, 3)/(n, 4) float32, colours clipped."""
+    normals = attrs["normals"]
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    fallback = area_weighted_normals(positions, faces).astype(np.float64)
+    normals = np.where(length > 1e-8, normals / np.maximum(length, 1e-30), fallback)
+    out = {"normals": normals.astype(np.float32)}
+    if "uvs" in attrs:
+        out["uvs"] = attrs["uvs"].astype(np.float32)
+    if "colors" in attrs:
+        out["colors"] = np.clip(attrs["colors"], 0.0, 1.0).astype(np.float32)
+    if "tangents" in attrs:
+        t = attrs["tangents"]
+        xyz = t[:, :3] - np.einsum("ij,ij->i", t[:, :3], normals)[:, None] * normals
+        size = np.linalg.norm(xyz, axis=1, keepdims=True)
+        # a tangent parallel to the normal: any unit vector orthogonal to it
+        other = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+        alt = np.cross(normals, other)
+        xyz = np.where(size > 1e-8, xyz / np.maximum(size, 1e-30), alt / np.linalg.norm(alt, axis=1, keepdims=True))
+        w = np.where(t[:, 3:] < 0.0, -1.0, 1.0)
+        out["tangents"] = np.hstack([xyz, w]).astype(np.float32)
+    return out
+
+
+def _part_piece(mesh, attributes, part, reduction):
+    """One part at one reduction: (positions (v, 3) float64, faces (m, 3) int64,
+    attributes name -> (v, k)); ``attributes``: :func:`_attributes` of the mesh;
+    ``reduction`` None: the part as it is."""
+    import fast_simplification
+
+    faces = mesh.faces[part.start:part.start + part.count].astype(np.int64)
+    used = _used_vertices(faces, mesh.vertex_count)
+    local = np.searchsorted(used, faces)
+    positions = mesh.positions[used].astype(np.float64)
+    attrs = {name: value[used] for name, value in attributes.items()}
+    if reduction is None or part.count < MIN_LOD_TRIANGLES:
+        return positions, local, attrs
+    points, new_faces, collapses = fast_simplification.simplify(positions, local, target_reduction=float(reduction),
+                                                                return_collapses=True)
+    new_faces = np.asarray(new_faces, dtype=np.int64).reshape(-1, 3)
+    if len(new_faces) == 0:  # simplified away entirely: keep the part as it is
+        return positions, local, attrs
+    # which simplified vertex each original vertex was collapsed into
+    _, replayed, mapping = fast_simplification.replay_simplification(positions.astype(np.float32),
+                                                                     local.astype(np.int32), collapses)
+    replayed = np.asarray(replayed, dtype=np.int64).reshape(-1, 3)
+    if not np.array_equal(replayed, new_faces):  # never seen; carry attributes by the mapping anyway
+        warnings.warn(f"{mesh.name}: part {part.name!r}: the replayed simplification differs from the "
+                      "simplification; attributes follow the replay's vertex mapping", RuntimeWarning, stacklevel=3)
+    keep = _used_vertices(new_faces, len(points))  # drop vertices no triangle uses
+    remap = np.full(len(points), -1, dtype=np.int64)
+    remap[keep] = np.arange(len(keep))
+    mapping = np.asarray(mapping, dtype=np.int64)
+    mapping = np.where((mapping >= 0) & (mapping < len(points)), remap[np.clip(mapping, 0, len(points) - 1)], -1)
+    points = np.asarray(points, dtype=np.float64)[keep]
+    new_faces = remap[new_faces]
+    return points, new_faces, _transfer(positions, local, attrs, points, mapping)
+
+
 def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
     """Level 0 (the base mesh itself) and up to ``len(reductions)`` simplified levels.
 
-    A mesh with fewer than :data:`MIN_LOD_TRIANGLES` triangles keeps one level
-    and says so (a ``UserWarning``); a level that removes less than a fifth of
-    the previous level's triangles, or keeps fewer than 4, is dropped.
+    Each part with at least :data:`MIN_LOD_TRIANGLES` triangles is simplified
+    on its own (``reduction`` of its triangles removed), smaller parts are
+    carried unchanged.  A mesh without such a part keeps one level and says
+    so (a ``UserWarning``); a level that removes less than a fifth of the
+    previous level's triangles, or keeps fewer than 4, is dropped.
     """
-    import fast_simplification
     import trimesh
 
-    base = LodLevel(mesh.positions, mesh.normals, mesh.faces, 0.0)
-    if len(mesh.faces) < MIN_LOD_TRIANGLES:
-        warnings.warn(f"{mesh.name}: {len(mesh.faces)} triangles are too few to simplify "
-                      f"(LOD needs at least {MIN_LOD_TRIANGLES}); drawing one level", UserWarning, stacklevel=2)
+    base = LodLevel.of(mesh)
+    if not any(p.count >= MIN_LOD_TRIANGLES for p in mesh.parts):
+        largest = max(p.count for p in mesh.parts)
+        warnings.warn(f"{mesh.name}: {len(mesh.faces)} triangles are too few to simplify (LOD needs a part of at "
+                      f"least {MIN_LOD_TRIANGLES}; the largest has {largest}); drawing one level",
+                      UserWarning, stacklevel=2)
         return [base]
+    from .material import Part
+
     full = trimesh.Trimesh(mesh.positions.astype(np.float64), mesh.faces.astype(np.int64), process=False)
     full_cloud = _surface_points(full, _SAMPLE, 1)
+    attributes = _attributes(mesh)
     levels = [base]
     for reduction in reductions:
-        points, faces = fast_simplification.simplify(mesh.positions.astype(np.float32), mesh.faces.astype(np.int64),
-                                                     target_reduction=float(reduction))
-        faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-        if len(faces) < 4 or len(faces) > 0.8 * len(levels[-1].faces):
+        pieces = [_part_piece(mesh, attributes, part, reduction) for part in mesh.parts]
+        total = sum(len(f) for _, f, _ in pieces)
+        if total < 4 or total > 0.8 * len(levels[-1].faces):
             continue
-        used = np.unique(faces)  # drop vertices no triangle uses
-        remap = np.full(len(points), -1, dtype=np.int64)
-        remap[used] = np.arange(len(used))
-        points = np.asarray(points, dtype=np.float64)[used]
-        faces = remap[faces]
+        offsets = np.cumsum([0] + [len(p) for p, _, _ in pieces])
+        starts = np.cumsum([0] + [len(f) for _, f, _ in pieces])
+        points = np.concatenate([p for p, _, _ in pieces])
+        faces = np.concatenate([f + o for (_, f, _), o in zip(pieces, offsets)])
+        attrs = {name: np.concatenate([a[name] for _, _, a in pieces]) for name in pieces[0][2]}
+        attrs = _finish(attrs, points, faces)
+        parts = tuple(Part(p.name, int(s), len(f), p.material)
+                      for p, s, (_, f, _) in zip(mesh.parts, starts, pieces))
         simple = trimesh.Trimesh(points, faces, process=False)
         simple_cloud = _surface_points(simple, _SAMPLE, 2)
         error = max(_one_sided(full_cloud, simple_cloud), _one_sided(simple_cloud, full_cloud))
-        levels.append(LodLevel(points.astype(np.float32), area_weighted_normals(points, faces),
-                               faces.astype(np.uint32), max(error, levels[-1].error)))
+        levels.append(LodLevel(points.astype(np.float32), attrs["normals"], faces.astype(np.uint32),
+                               max(error, levels[-1].error), attrs.get("uvs"), attrs.get("colors"),
+                               attrs.get("tangents"), parts))
     if len(levels) == 1:
         warnings.warn(f"{mesh.name}: simplification removed too few triangles; drawing one level",
                       UserWarning, stacklevel=2)

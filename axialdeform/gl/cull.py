@@ -345,7 +345,7 @@ class CullPass:
         counts = []
         offset = 0
         for level in range(levels):
-            if visible == 0:
+            if offset >= visible:  # every visible instance has its level (and a run past the end is GL_INVALID_VALUE)
                 counts.append(0)
                 continue
             prog["u_level"].value = level

@@ -102,10 +102,10 @@ class AxialRenderer:
         Draw each instance with one of up to four levels of detail of the
         base mesh (:func:`axialdeform.core.lod.build_lod_levels`), the
         coarsest whose geometric error projects to at most ``lod_error``
-        pixels; one draw per level (plain switches, no dithering).  Changes
-        pixels, so off by default.  Levels are of the whole mesh: a mesh
-        with parts or appearance (UVs, colours, materials) refuses ``lod=True``
-        with a :class:`ParamError`.
+        pixels; one instanced draw per level and part (plain switches, no
+        dithering).  Changes pixels, so off by default.  Every part is
+        simplified on its own and keeps its material; UVs, vertex colours,
+        normals and tangents are carried to the simplified vertices.
     lod_error : float
         Allowed screen-space error of a level in pixels (> 0; default 1).
     indirect : bool or None
@@ -137,9 +137,6 @@ class AxialRenderer:
         check_alive(ctx, "a new AxialRenderer")
         from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 
-        if lod and mesh.has_appearance:
-            raise ParamError(f"{mesh.name}: lod: levels of detail are of the whole mesh and keep no UVs, colours "
-                             "or parts; expected lod=False for a mesh with parts or appearance")
         self.ctx = ctx
         self.mesh = mesh
         self.parts = tuple(mesh.parts) if parts is None else tuple(
@@ -148,6 +145,8 @@ class AxialRenderer:
             raise AxialDeformError(f"{mesh.name}: parts: expected at least one part name, found none")
         # opaque and cut-out parts first, blended ones last (unsorted)
         self._draw_order = sorted(self.parts, key=lambda p: p.material.alpha_mode == "BLEND")
+        # where each drawn part sits in mesh.parts (and so in every LOD level's parts)
+        self._draw_index = [next(i for i, q in enumerate(mesh.parts) if q is p) for p in self._draw_order]
         self.bend = bend
         self.culling_enabled = bool(culling)
         self.lod = bool(lod)
@@ -205,8 +204,14 @@ class AxialRenderer:
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
             self._vao_edges = None  # built by the first wireframe draw (lazy edges)
             #: the levels of detail (level 0 is the base mesh itself)
-            self.lod_levels = build_lod_levels(mesh) if self.lod else [LodLevel(mesh.positions, mesh.normals, mesh.faces, 0.0)]
-            self._level_buffers = [self.mesh_buffers] + [MeshBuffers(ctx, level) for level in self.lod_levels[1:]]
+            self.lod_levels = build_lod_levels(mesh) if self.lod else [LodLevel.of(mesh)]
+            self._level_buffers = [self.mesh_buffers]
+            self._level_appearance = [self.appearance]
+            self._level_edges = {}  # level -> (edge buffer, indices) of the chosen parts (levels > 0)
+            for level in self.lod_levels[1:]:
+                self._level_buffers.append(MeshBuffers(ctx, level))
+                if self.appearance is not None:
+                    self._level_appearance.append(AppearanceBuffer(ctx, level))
         except BaseException:
             self.release()
             raise
@@ -395,15 +400,17 @@ class AxialRenderer:
         entry = self._variants[key]
         return entry[0], entry[1], edges
 
-    def _draw_parts(self, prog, vao, view, projection, *, depth_only: bool = False, instances: int | None = None) -> None:
+    def _draw_parts(self, prog, vao, view, projection, *, depth_only: bool = False, instances: int | None = None,
+                    level: int = 0) -> None:
         """One instanced draw per part: opaque and cut-out parts, then blended ones.
-        ``instances``: how many to draw (default :attr:`count`; the visible count after culling)."""
+        ``instances``: how many to draw (default :attr:`count`; the visible count after culling);
+        ``level``: the LOD level whose parts ``vao`` draws (its parts have the base mesh's materials)."""
         import moderngl
 
         instances = self.count if instances is None else instances
         fbo = self.ctx.fbo
         coverage = None  # whether BLEND parts draw with alpha-to-coverage: asked once per draw
-        for part in self._draw_order:
+        for part in self._level_parts(level):
             if part.count == 0:
                 continue
             material = part.material
@@ -424,7 +431,7 @@ class AxialRenderer:
             try:
                 with self.culling(view, projection, enabled=not material.double_sided):
                     self._instanced(vao, moderngl.TRIANGLES, part.count * 3, part.start * 3, instances,
-                                    ("t", 0, part.start * 3))
+                                    ("t", level, part.start * 3))
             finally:
                 if blend and coverage:
                     self.ctx.disable_direct(_GL_SAMPLE_ALPHA_TO_COVERAGE)
@@ -590,7 +597,7 @@ class AxialRenderer:
                 self.ctx.enable(moderngl.BLEND)
                 self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
             try:
-                count = self._edge_count if level == 0 else self._level_buffers[level].edge_indices
+                count = self._edge_count if level == 0 else self._level_edge_data(level)[1]
                 self._instanced(edges(), moderngl.LINES, count, 0, instances, ("e", level, 0))
             finally:
                 self.ctx.depth_func = "<"
@@ -600,15 +607,8 @@ class AxialRenderer:
         self._draw_triangles(prog, vao_triangles, level, view, projection, instances)
 
     def _draw_triangles(self, prog, vao, level: int, view, projection, instances: int, *, depth_only: bool = False):
-        """Level 0: one instanced draw per part; a coarser level (single-part meshes only): one draw."""
-        import moderngl
-
-        if level == 0:
-            self._draw_parts(prog, vao, view, projection, depth_only=depth_only, instances=instances)
-            return
-        with self.culling(view, projection):
-            self._instanced(vao, moderngl.TRIANGLES, self._level_buffers[level].triangle_indices, 0, instances,
-                            ("t", level, 0))
+        """One instanced draw per part of LOD level ``level`` (0: the base mesh)."""
+        self._draw_parts(prog, vao, view, projection, depth_only=depth_only, instances=instances, level=level)
 
     def _depth_prepass(self, prog, vao, level: int, view, projection, instances: int, fill: bool) -> None:
         """The triangles first, pushed back a little so the lines on them pass
@@ -711,9 +711,16 @@ class AxialRenderer:
         """The indirect draw commands: ``(key, level)`` of every draw a culled
         frame can make: the triangles of each part (level 0) or of a level,
         the edges of each level."""
-        slots = [(("t", 0, part.start * 3), 0) for part in self.parts]
-        slots += [(("t", level, 0), level) for level in range(1, len(self._level_buffers))]
-        return slots + [(("e", level, 0), level) for level in range(len(self._level_buffers))]
+        levels = range(len(self._level_buffers))
+        slots = [(("t", level, part.start * 3), level) for level in levels for part in self._level_parts(level)]
+        return slots + [(("e", level, 0), level) for level in levels]
+
+    def _level_parts(self, level: int) -> list:
+        """The parts drawn at LOD level ``level``, in draw order (opaque and cut-out, then blended):
+        the chosen parts of the base mesh (level 0) or their simplified counterparts."""
+        if level == 0:
+            return self._draw_order
+        return [self.lod_levels[level].parts[i] for i in self._draw_index]
 
     def _instanced(self, vao, mode, vertices: int, first: int, instances, key) -> None:
         """One instanced draw: ``instances`` a count, or the GPU's (:class:`IndirectDraws`, slot ``key``)."""
@@ -725,16 +732,28 @@ class AxialRenderer:
     def _culled_vao(self, prog, level: int, index_buffer):
         """A vertex array of one LOD level for the culled program (instances: bound by the cull pass)."""
         mb = self._level_buffers[level]
-        extra = [self.appearance.content(prog)] if level == 0 and self.appearance is not None else []
+        extra = [self._level_appearance[level].content(prog)] if self.appearance is not None else []
         vao = self.ctx.vertex_array(prog, [mb.content(prog), *extra], index_buffer=index_buffer, index_element_size=4)
         self._objects.append(vao)
         return vao
 
     def _culled_edges(self, vaos, prog, level: int):
         if vaos[level][1] is None:
-            edges = self._edge_buffer if level == 0 else self._level_buffers[level].edges
+            edges = self._edge_buffer if level == 0 else self._level_edge_data(level)[0]
             vaos[level][1] = self._culled_vao(prog, level, edges)
         return vaos[level][1]
+
+    def _level_edge_data(self, level: int):
+        """(edge index buffer, index count) of LOD level ``level`` > 0: all its
+        edges, or those of the chosen parts only (built on first use)."""
+        if self._part_edges is None:
+            return self._level_buffers[level].edges, self._level_buffers[level].edge_indices
+        if level not in self._level_edges:
+            e = self.lod_levels[level].part_edges(self._draw_index)
+            buffer = self.ctx.buffer(e.astype("u4").tobytes())
+            self._objects.append(buffer)
+            self._level_edges[level] = (buffer, int(e.size))
+        return self._level_edges[level]
 
     @contextmanager
     def culling(self, view=None, projection=None, enabled: bool = True):
@@ -761,7 +780,7 @@ class AxialRenderer:
 
     # ------------------------------------------------------------ capture
     def capture(self, start: int = 0, count: int | None = None, progress=None, *, time: float | None = None,
-                wind=_KEEP, check_finite: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                wind=_KEEP, check_finite: bool = True, level: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """World positions and normals as the GPU computes them, by transform
         feedback of the drawing vertex shader.
 
@@ -771,16 +790,22 @@ class AxialRenderer:
         vertex order, for instances ``start .. start + count - 1``.
         ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
         ``time``, ``wind``: as :meth:`render` (default: the renderer's own).
+        ``level``: the LOD level whose vertices are captured (0: the base
+        mesh; ``len(lod_levels) - 1`` at most), in that level's vertex order,
+        bent with the base mesh's axis like every level.
         """
         import moderngl
 
         self._check()
         start = as_index(start, "capture: start")
+        level = as_index(level, "capture: level")
+        if not 0 <= level < len(self.lod_levels):
+            raise ParamError(f"capture: level: expected 0..{len(self.lod_levels) - 1}, found {level}")
         count = self.count - start if count is None else as_index(count, "capture: count")
         if start < 0 or count < 0 or start + count > self.count:
             raise ParamError(f"capture: instances {start}..{start + count - 1} are outside 0..{self.count - 1}")
-        v = self.mesh.vertex_count
-        per_instance = v * 24
+        v = self.lod_levels[level].vertex_count
+        per_instance = max(lv.vertex_count for lv in self.lod_levels) * 24  # room for any level
         chunk = max(1, min(count, _CAPTURE_BYTES // per_instance))
         if self._capture is None or self._capture[2].capacity < chunk:
             self._release_capture()
@@ -795,7 +820,12 @@ class AxialRenderer:
             color = self.ctx.renderbuffer((1, 1))
             fbo = self.ctx.framebuffer(color)
             self._capture = (prog, vao, scratch, output, fbo, color)
-        prog, vao, scratch, output, fbo, _ = self._capture
+            self._capture_levels = {0: vao}
+        prog, _, scratch, output, fbo, _ = self._capture
+        if level not in self._capture_levels:  # a coarser level's vertices, same program and instances
+            self._capture_levels[level] = self.ctx.vertex_array(
+                prog, [self._level_buffers[level].content(prog), scratch.content(prog)])
+        vao = self._capture_levels[level]
         self._set_wind_uniforms(prog, self.wind if wind is _KEEP else wind, self.time if time is None else float(time))
         out = np.empty((count, v, 6), dtype=np.float32)
         previous = self.ctx.fbo
@@ -809,7 +839,7 @@ class AxialRenderer:
                 if "u_instance_base" in prog:  # the wind's per-instance phase follows the instance's index
                     prog["u_instance_base"].value = start + a
                 vao.transform(output, mode=moderngl.POINTS, vertices=v, instances=k)
-                out[a : a + k] = np.frombuffer(output.read(size=k * per_instance), dtype="f4").reshape(k, v, 6)
+                out[a : a + k] = np.frombuffer(output.read(size=k * v * 24), dtype="f4").reshape(k, v, 6)
                 if progress is not None:
                     progress.update(k)
         finally:
@@ -825,7 +855,7 @@ class AxialRenderer:
         if self._capture is not None:
             prog, vao, scratch, output, fbo, color = self._capture
             release_framebuffer(self.ctx, fbo)
-            for obj in (vao, prog, scratch, output, color):
+            for obj in (*[a for lv, a in self._capture_levels.items() if lv], vao, prog, scratch, output, color):
                 obj.release()
             self._capture = None
 
@@ -841,6 +871,8 @@ class AxialRenderer:
         self._objects.clear()
         for mb in getattr(self, "_level_buffers", [])[1:]:
             mb.release()
+        for ab in getattr(self, "_level_appearance", [])[1:]:
+            ab.release()
         for holder in ("mesh_buffers", "instances", "appearance", "materials"):
             if getattr(self, holder, None) is not None:
                 getattr(self, holder).release()

@@ -54,9 +54,13 @@ class SceneRenderer:
     """Draws every layer of a scene (and its terrain) with one renderer each.
 
     ctx : moderngl.Context.  scene : a loaded :class:`~axialdeform.core.scene.Scene`.
+    culling, lod, lod_error : each layer's :class:`AxialRenderer` options
+    (per-instance culling, levels of detail -- textured and multi-part layer
+    meshes too, one draw per level and part); the terrain, ONE instance, is
+    always drawn whole.
     """
 
-    def __init__(self, ctx, scene):
+    def __init__(self, ctx, scene, *, culling: bool = True, lod: bool = False, lod_error: float = 1.0):
         self.ctx = ctx
         self.scene = scene
         self.renderers = []
@@ -67,7 +71,8 @@ class SceneRenderer:
             if scene.terrain is not None:
                 self.renderers.append((AxialRenderer(ctx, scene.terrain, TERRAIN_INSTANCE), scene.terrain_color, False))
             for layer in scene.layers:
-                self.renderers.append((AxialRenderer(ctx, layer.mesh, layer.params), layer.color, layer.wind))
+                self.renderers.append((AxialRenderer(ctx, layer.mesh, layer.params, culling=culling, lod=lod,
+                                                     lod_error=lod_error), layer.color, layer.wind))
         except BaseException:
             self.release()
             raise
@@ -110,14 +115,16 @@ class SceneRenderer:
 
 
 def render_scene(scene, size=(800, 600), mode: str = "solid", *, ctx=None, time: float = 0.0, samples: int = 4,
-                 camera: Camera | None = None) -> np.ndarray:
-    """Render a scene to an ``(height, width, 3) uint8`` image (an EGL context is made if ``ctx`` is None)."""
+                 camera: Camera | None = None, culling: bool = True, lod: bool = False,
+                 lod_error: float = 1.0) -> np.ndarray:
+    """Render a scene to an ``(height, width, 3) uint8`` image (an EGL context is made if ``ctx`` is None);
+    ``culling``, ``lod``, ``lod_error``: as :class:`SceneRenderer`."""
     own = ctx is None
     ctx = create_context() if own else ctx
     try:
         w, h = size
         cam = camera or scene_camera(scene, w / h)
-        with SceneRenderer(ctx, scene) as sr, Offscreen(ctx, (w, h), samples=samples) as target:
+        with SceneRenderer(ctx, scene, culling=culling, lod=lod, lod_error=lod_error) as sr, Offscreen(ctx, (w, h), samples=samples) as target:
             target.use(scene.background)
             sr.render(cam.view(), cam.projection(w / h), mode, time=time)
             return target.read()
