@@ -14,6 +14,8 @@ of the library (and of its CLI) goes through.
   allowed): a device, a FIFO, a socket, a symlink to one.
 * :func:`check_count` — a count checked against memory before anything is
   allocated; the message says the maximum.
+* :func:`check_disk_space` — an output's size checked against the free
+  space of its file system before anything is written; the message says both.
 * :func:`require_finite` — a computed result with a non-finite number is an
   error naming the instance and the field.
 * :func:`quiet_numpy` — numpy floating-point warnings silenced (results are
@@ -35,7 +37,7 @@ from .errors import AxialDeformError, PathError
 
 __all__ = [
     "open_regular", "read_regular", "read_sized", "SafeResolver", "check_output_path", "check_not_special",
-    "memory_available", "check_count", "require_finite", "quiet_numpy", "MAX_INSTANCES",
+    "memory_available", "check_count", "disk_free", "check_disk_space", "require_finite", "quiet_numpy", "MAX_INSTANCES",
     "MAX_REFERENCED_BYTES",
 ]
 
@@ -255,6 +257,33 @@ def check_count(count, bytes_each: float, what: str = "count", error: type = Axi
         raise error(f"{what}: {n} instances need about {_gb(need)}; expected at most {most} "
                     f"(what {_gb(budget)} of available memory holds; never more than {MAX_INSTANCES})")
     return n
+
+
+def disk_free(path: str | os.PathLike) -> int:
+    """Bytes free for this user on the file system that ``path`` (a file to
+    be written: its folder is asked) is on."""
+    import shutil
+
+    folder = os.path.dirname(os.path.abspath(os.fspath(path))) or "."
+    return shutil.disk_usage(folder).free
+
+
+def check_disk_space(path: str | os.PathLike, needed: int, what: str = "output", error: type = AxialDeformError,
+                     free: int | None = None, expected=None) -> None:
+    """Raise ``error`` before anything is written if the file system of
+    ``path`` has fewer than ``needed`` bytes free (an atomic write needs the
+    whole new file beside the old one); the message names the path, the
+    bytes needed and the bytes free.  ``free`` defaults to :func:`disk_free`;
+    ``expected(free)`` optionally says what fits instead (the message's end)."""
+    try:
+        free = disk_free(path) if free is None else int(free)
+    except OSError as exc:  # the folder is missing or unreadable: the writer says so itself
+        del exc
+        return
+    if needed > free:
+        fits = expected(free) if expected is not None else f"at most {free} bytes"
+        raise error(f"{os.fspath(path)}: the {what} needs {int(needed)} bytes ({_gb(needed)}), but its file system has "
+                    f"{free} bytes free ({_gb(free)}); expected {fits}")
 
 
 def require_finite(array: np.ndarray, what: str, fields: Sequence[str] | None = None, items: str = "instance",
