@@ -104,8 +104,9 @@ def test_gltf_buffer_must_be_a_regular_file_of_bounded_size(tmp_path):
     assert ad.load_mesh(gltf).vertex_count == 3
     from axialdeform.core.safeio import SafeResolver
 
-    with pytest.raises(PathError, match="at most 10 bytes"):
-        SafeResolver(str(gltf), max_bytes=10).get("data.bin")
+    (tmp_path / "other.mtl").write_bytes(b"x" * 11)
+    with pytest.raises(OSError, match="at most 10 bytes"):
+        SafeResolver(tmp_path, max_bytes=10).get("other.mtl")
 
 
 def test_read_regular_refuses_files_over_the_bound(tmp_path):
