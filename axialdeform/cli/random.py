@@ -17,7 +17,7 @@ def add_parser(sub) -> None:
     r.add_argument("-n", "--count", type=int, required=True, help=(
         "number of instances (required, no default); at most 2147483647 and what the output's disk holds: "
         "64 bytes an instance in .adp, 32 quantized, up to 256 in text (19 numbers: 76, 38, 304); "
-        "they are made and written 131072 at a time, so memory stays about 100 MB whatever the count"))
+        "they are made and written 131072 at a time, so memory stays under 200 MB whatever the count"))
     r.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
     r.add_argument("--bend", type=float, default=0.08, help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
     r.add_argument("--placement", choices=PLACEMENTS, default="grid", help="how instances are laid out (default: %(default)s)")
@@ -39,13 +39,15 @@ def add_parser(sub) -> None:
     r.set_defaults(handler=run)
 
 
-#: peak bytes per instance of ``random`` while it makes one piece (random_params'
-#: temporaries, the float32 result and its encoding), for the memory check of
-#: a piece; measured for 19 numbers an instance (the larger form) with
-#: ``python tools/random_memory.py`` (tracemalloc; see docs/reliability.md)
-RANDOM_BYTES_EACH = 768
+#: peak bytes per instance of ``random`` while it makes and writes one piece
+#: (the generator's temporaries, the float32 piece and its encoding), for the
+#: memory check of a piece: measured 533 for 19 numbers quantized (the
+#: largest form; 16 numbers text 416) with ``python tools/random_memory.py``
+#: (tracemalloc, pieces of 131072; docs/reliability.md), plus 20 %
+RANDOM_BYTES_EACH = 640
 #: instances made and written at a time: memory stays about
-#: ``RANDOM_CHUNK * RANDOM_BYTES_EACH`` (100 MB) whatever ``-n`` is
+#: ``RANDOM_CHUNK * RANDOM_BYTES_EACH`` (80 MB) beyond the interpreter's
+#: whatever ``-n`` is (measured peak: 189 MB resident at -n 300000 to 4800000)
 RANDOM_CHUNK = 1 << 17
 
 
