@@ -261,3 +261,56 @@ def test_gltf_image_over_the_cap_is_not_read(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="tex: is 101 bytes; expected a picture referred to by t.gltf"):
         resolver.get("tex")
     assert ad.load_mesh(gltf).vertex_count == 3  # refused picture: not a refused mesh
+
+
+# -------------------------------------------------------------------- bake
+
+
+def test_bake_cpu_pieces_are_the_whole_bake(tmp_path):
+    from axialdeform.core.bake import bake_cpu, bake_cpu_pieces, write_npz_pieces
+
+    stone = ad.load_mesh("stone")
+    params = ad.random_params(stone, 503, 3, bend=0.2)
+    wind = ad.Wind(strength=0.2)  # its phase follows the instance index: the pieces must know where they start
+    positions, normals = bake_cpu(stone, params, wind=wind, time=0.7)
+    pieces = bake_cpu_pieces(stone, params, wind=wind, time=0.7, piece_bytes=50_000)  # 35 instances a piece
+    write_npz_pieces(tmp_path / "b.npz", pieces, 503, stone.vertex_count)
+    with np.load(tmp_path / "b.npz") as z:
+        assert z["positions"].tobytes() == positions.tobytes() and z["normals"].tobytes() == normals.tobytes()
+    with pytest.raises(ad.AxialDeformError, match="expected 504"):
+        write_npz_pieces(tmp_path / "c.npz", bake_cpu_pieces(stone, params), 504, stone.vertex_count)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.npz"]  # no archive, no spool left
+
+
+def test_bake_npz_refuses_a_disk_too_small_and_names_a_bad_instance(tmp_path, monkeypatch, capsys):
+    from axialdeform.core import safeio
+
+    f = tmp_path / "p.adp"
+    values = ad.random_params(ad.load_mesh("stone"), 1000, 1)
+    P.write_params(f, values)
+    out = tmp_path / "b.npz"
+    monkeypatch.setattr(safeio, "disk_free", lambda path: 1_000_000)  # 1000 x 58 x 36 B = 2.1 MB needed
+    assert main(["bake", "stone", str(f), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(out) in err[0] and "needs 2153536 bytes" in err[0] and "1000000 bytes free" in err[0]
+    monkeypatch.undo()
+    values[700, 0:10], values[700, 13:16] = 3.4e38, 0.7  # finite, but turned 40 degrees they overflow float32
+    P.write_params(f, values)
+    assert main(["bake", "stone", str(f), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{f}: instance 700, positions" in err and not out.exists()
+
+
+@pytest.mark.slow
+def test_bake_npz_memory_does_not_grow_with_the_count(tmp_path):
+    """A CPU bake to .npz is made and written in pieces: 40 000 instances
+    (111 MB of output) peak where 10 000 do (before: the whole result, and
+    a copy of it while writing)."""
+    peaks = []
+    for n in (10_000, 40_000):
+        params = tmp_path / f"p{n}.adp"
+        P.write_params(params, ad.random_params(ad.load_mesh("stone"), n, 2))
+        peaks.append(_peak_rss_mb(["bake", "stone", params, "-o", tmp_path / f"b{n}.npz"]))
+        with np.load(tmp_path / f"b{n}.npz") as z:
+            assert z["normals"].shape == (n, 58, 3)
+    assert peaks[1] - peaks[0] < 30, peaks
