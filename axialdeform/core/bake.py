@@ -82,7 +82,7 @@ def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarra
 
 
 #: bytes of baked output (positions and normals) made at a time by :func:`bake_cpu_pieces`
-BAKE_PIECE_BYTES = 1 << 28
+BAKE_PIECE_BYTES = 1 << 23
 
 
 def bake_cpu_pieces(mesh, params, *, progress=None, wind=None, time: float = 0.0, source: str | None = None,
@@ -142,6 +142,7 @@ def write_npz_pieces(path: str | os.PathLike, pieces, count: int, vertices: int)
                     break
                 entry.write(np.ascontiguousarray(positions, dtype="<f4").data)
                 spool.write(np.ascontiguousarray(normals, dtype="<f4").data)
+                del positions, normals  # one piece alive while the next is made
         if done != count:
             raise ArgumentError(f"{path}: the pieces hold {'at least ' if done > count else ''}{done} instances; "
                                 f"expected {count}")
