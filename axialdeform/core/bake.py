@@ -17,7 +17,7 @@ from .deform import deform
 from .errors import ArgumentError, PathError
 from .safeio import check_count, check_not_special, require_finite
 
-__all__ = ["bake_cpu", "bake_cpu_pieces", "instance_name", "write_npz", "write_npz_pieces", "write_scene_npz", "write_mesh_folder", "check_bake_folder",
+__all__ = ["bake_cpu", "bake_cpu_pieces", "instance_name", "write_npz", "write_npz_pieces", "write_npz_layers", "write_scene_npz", "write_mesh_folder", "check_bake_folder",
            "check_bake_count", "check_bake_result", "MESH_FORMATS"]
 
 MESH_FORMATS = ("obj", "ply", "glb")
@@ -115,41 +115,51 @@ def write_npz_pieces(path: str | os.PathLike, pieces, count: int, vertices: int)
     """Arrays ``positions`` and ``normals``, each ``(count, vertices, 3)
     float32``, into one ``.npz`` (what :func:`write_npz` writes, as
     ``np.load`` reads it) from ``pieces`` of ``(positions, normals)``,
-    atomically, memory bounded by one piece: positions go straight into
-    the archive, normals to an unnamed temporary file beside ``path`` (gone
-    with the process, whatever happens) that is copied in after.  Pieces
-    that do not add up to ``count`` raise :class:`ArgumentError`; nothing
-    is written then."""
+    atomically, memory bounded by one piece (:func:`write_npz_layers`)."""
+    return write_npz_layers(path, [("", pieces, count, vertices)])
+
+
+def write_npz_layers(path: str | os.PathLike, layers) -> Path:
+    """Several baked layers into one ``.npz``, atomically, memory bounded by
+    one piece: ``layers`` is a list of ``(suffix, pieces, count, vertices)``
+    and each becomes arrays ``positions{suffix}`` and ``normals{suffix}``,
+    ``(count, vertices, 3) float32``, from its ``pieces`` of ``(positions,
+    normals)``.  Positions go straight into the archive, normals to an
+    unnamed temporary file beside ``path`` (gone with the process, whatever
+    happens) that is copied in after them.  Pieces that do not add up to
+    ``count`` raise :class:`ArgumentError`, as does a non-finite piece its
+    producer refuses; nothing is written then."""
     import shutil
     import tempfile
     import zipfile
 
     path = Path(path)
-    shape = (int(count), int(vertices), 3)
-    header = {"descr": "<f4", "fortran_order": False, "shape": shape}
     with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh, \
-            tempfile.TemporaryFile(dir=path.parent if str(path.parent) else ".") as spool, \
             zipfile.ZipFile(fh, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
-        done = 0
-        with zf.open("positions.npy", "w", force_zip64=True) as entry:
-            np.lib.format.write_array_header_2_0(entry, header)
-            for positions, normals in pieces:
-                if positions.shape[1:] != shape[1:] or normals.shape != positions.shape:
-                    raise ArgumentError(f"{path}: a piece of shape {positions.shape} / {normals.shape}; "
-                                        f"expected (m, {vertices}, 3) both")
-                done += len(positions)
-                if done > count:
-                    break
-                entry.write(np.ascontiguousarray(positions, dtype="<f4").data)
-                spool.write(np.ascontiguousarray(normals, dtype="<f4").data)
-                del positions, normals  # one piece alive while the next is made
-        if done != count:
-            raise ArgumentError(f"{path}: the pieces hold {'at least ' if done > count else ''}{done} instances; "
-                                f"expected {count}")
-        spool.seek(0)
-        with zf.open("normals.npy", "w", force_zip64=True) as entry:
-            np.lib.format.write_array_header_2_0(entry, header)
-            shutil.copyfileobj(spool, entry, 1 << 24)
+        for suffix, pieces, count, vertices in layers:
+            shape = (int(count), int(vertices), 3)
+            header = {"descr": "<f4", "fortran_order": False, "shape": shape}
+            with tempfile.TemporaryFile(dir=path.parent if str(path.parent) else ".") as spool:
+                done = 0
+                with zf.open(f"positions{suffix}.npy", "w", force_zip64=True) as entry:
+                    np.lib.format.write_array_header_2_0(entry, header)
+                    for positions, normals in pieces:
+                        if positions.shape[1:] != shape[1:] or normals.shape != positions.shape:
+                            raise ArgumentError(f"{path}: a piece of shape {positions.shape} / {normals.shape}; "
+                                                f"expected (m, {vertices}, 3) both")
+                        done += len(positions)
+                        if done > count:
+                            break
+                        entry.write(np.ascontiguousarray(positions, dtype="<f4").data)
+                        spool.write(np.ascontiguousarray(normals, dtype="<f4").data)
+                        del positions, normals  # one piece alive while the next is made
+                if done != count:
+                    raise ArgumentError(f"{path}: the pieces{' of ' + suffix.lstrip('_') if suffix else ''} hold "
+                                        f"{'at least ' if done > count else ''}{done} instances; expected {count}")
+                spool.seek(0)
+                with zf.open(f"normals{suffix}.npy", "w", force_zip64=True) as entry:
+                    np.lib.format.write_array_header_2_0(entry, header)
+                    shutil.copyfileobj(spool, entry, 1 << 24)
     return path
 
 
