@@ -104,6 +104,9 @@ def test_random_checks_free_disk_space_first(tmp_path, monkeypatch, capsys):
     # text: an upper bound (every number at its longest)
     assert main(["random", "stone", "-n", "400", "-o", str(tmp_path / "p.txt")]) == 2
     assert "-n/--count at most 358" in capsys.readouterr().err  # (100000 - 8192) // 256
+    # a wrong file type is said first, whatever the disk
+    assert main(["random", "stone", "-n", "400", "-o", str(tmp_path / "p.png")]) == 2
+    assert "unknown parameter file type '.png'" in capsys.readouterr().err
 
 
 def test_random_count_maximum_is_gl_not_memory(tmp_path, capsys):

@@ -884,14 +884,7 @@ def write_param_chunks(
         if done != count:
             raise ParamError(f"{name}: the pieces hold {'at least ' if done > count else ''}{done} instances; expected {count}")
 
-    binary = _is_binary_suffix(path)
-    if not binary and path.suffix.lower() not in TEXT_SUFFIXES:
-        raise ParamFileError(
-            f"{path}: unknown parameter file type {path.suffix!r}; expected {', '.join(BINARY_SUFFIXES)} (binary) "
-            f"or {', '.join(TEXT_SUFFIXES)} (text)"
-        )
-    if quantize and not binary:
-        raise ParamFileError(f"{path}: the quantized form is binary only; expected a {'/'.join(BINARY_SUFFIXES)} file name")
+    binary = _output_kind(path, quantize)
     if binary:
         header = _binary_header(width, quantize, count, axis, mesh_fingerprint)
         table = b""
@@ -918,12 +911,27 @@ def write_param_chunks(
     return path
 
 
+def _output_kind(path: Path, quantize: bool) -> bool:
+    """True if ``path`` names a binary parameter file, False for text; a
+    :class:`ParamFileError` for another suffix, or text with ``quantize``."""
+    binary = _is_binary_suffix(path)
+    if not binary and path.suffix.lower() not in TEXT_SUFFIXES:
+        raise ParamFileError(
+            f"{path}: unknown parameter file type {path.suffix!r}; expected {', '.join(BINARY_SUFFIXES)} (binary) "
+            f"or {', '.join(TEXT_SUFFIXES)} (text)"
+        )
+    if quantize and not binary:
+        raise ParamFileError(f"{path}: the quantized form is binary only; expected a {'/'.join(BINARY_SUFFIXES)} file name")
+    return binary
+
+
 def param_file_bytes(path: str | os.PathLike, count: int, width: int = 16, *, quantize: bool = False) -> int:
     """Bytes a parameter file of ``count`` instances takes on disk: exact for
     the binary form; for text an upper bound (every number at its longest,
-    ``%.9g`` of a float32: 15 characters and a separator, plus the header)."""
+    ``%.9g`` of a float32: 15 characters and a separator, plus the header).
+    The path's suffix picks the form (an unknown one is a :class:`ParamFileError`)."""
     count = int(count)
-    if _is_binary_suffix(Path(path)):
+    if _output_kind(Path(path), quantize):
         record = _ENCODINGS[ENCODING_UINT16 if quantize else ENCODING_FLOAT32][1] * width // 16
         table = _quant_table(width).size if quantize else 0
         return HEADER_SIZE + table + count * record + _TRAILER.size
