@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-    from ..core.bake import check_bake_folder, write_mesh_folder, write_npz
+    from ..core.bake import check_bake_folder, write_mesh_folder
     from ..gl.bake import bake
 
     from . import scenes
@@ -39,23 +39,43 @@ def run(args) -> None:
     wind = wind_arg(args)
     out = Path(args.output)
     mesh, params = load(args, "bake output", allow_folder=out.suffix.lower() != ".npz")
-    if out.suffix.lower() != ".npz":  # refuse a folder of stale files before the work, not after
-        check_bake_folder(out, args.overwrite)
+    if out.suffix.lower() == ".npz":  # made and written in pieces: bounded by the disk, not memory
+        return _bake_npz_in_pieces(args, out, mesh, params, wind)
+    check_bake_folder(out, args.overwrite)  # refuse a folder of stale files before the work, not after
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params,
                                   wind=wind, time=args.time or 0.0)
-    if out.suffix.lower() == ".npz":
-        write_npz(out, positions, normals)
-        print(f"wrote {out}: positions and normals {positions.shape} float32 ({args.engine})")
-    else:
-        with progress_bar(len(positions), "writing meshes") as bar:
-            bent = params
-            if wind is not None:  # the tangents of a glb bend with the same wind-moved control points
-                from ..core.wind import apply_wind
+    with progress_bar(len(positions), "writing meshes") as bar:
+        bent = params
+        if wind is not None:  # the tangents of a glb bend with the same wind-moved control points
+            from ..core.wind import apply_wind
 
-                bent = apply_wind(wind, mesh.axis, params, args.time or 0.0)
-            files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
-                                      overwrite=args.overwrite, params=bent)
-        meshes = [f for f in files if f.suffix == "." + args.format]
-        beside = f" + {len(files) - len(meshes)} material/texture files" if len(files) > len(meshes) else ""
-        print(f"wrote {len(meshes)} {args.format} files{beside} to {out}/ ({args.engine})")
+            bent = apply_wind(wind, mesh.axis, params, args.time or 0.0)
+        files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
+                                  overwrite=args.overwrite, params=bent)
+    meshes = [f for f in files if f.suffix == "." + args.format]
+    beside = f" + {len(files) - len(meshes)} material/texture files" if len(files) > len(meshes) else ""
+    print(f"wrote {len(meshes)} {args.format} files{beside} to {out}/ ({args.engine})")
+
+
+def _bake_npz_in_pieces(args, out: Path, mesh, params, wind) -> None:
+    """``bake -o OUT.npz``: :func:`~axialdeform.gl.bake.bake_pieces` (either
+    engine) into :func:`~axialdeform.core.bake.write_npz_pieces`; the disk
+    must hold the archive and, meanwhile, a spooled copy of the normals."""
+    from ..core.bake import write_npz_pieces
+    from ..gl.bake import bake_pieces
+    from ..core.errors import ArgumentError
+    from ..core.safeio import check_disk_space
+
+    n, v = len(params), mesh.vertex_count
+    array = n * v * 12
+    check_disk_space(out, 3 * array + (1 << 16), f"bake of {n} instances x {v} vertices (the .npz and, while "
+                     "it is written, a spooled copy of the normals)", ArgumentError)
+    with progress_bar(n, f"deforming ({args.engine})") as bar:
+        pieces = bake_pieces(mesh, params, args.engine, progress=bar, wind=wind, time=args.time or 0.0,
+                             source=args.params)
+        try:
+            write_npz_pieces(out, pieces, n, v)
+        finally:
+            pieces.close()  # the GPU engine's context is released even when a piece is refused
+    print(f"wrote {out}: positions and normals {(n, v, 3)} float32 ({args.engine})")

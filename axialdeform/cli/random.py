@@ -14,7 +14,10 @@ def add_parser(sub) -> None:
         "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf'); "
         "the output is binary for .adp, text for .txt/.csv/.dat."))
     r.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
-    r.add_argument("-n", "--count", type=int, required=True, help="number of instances (required, no default)")
+    r.add_argument("-n", "--count", type=int, required=True, help=(
+        "number of instances (required, no default); at most 2147483647 and what the output's disk holds: "
+        "64 bytes an instance in .adp, 32 quantized, up to 256 in text (19 numbers: 76, 38, 304); "
+        "they are made and written 131072 at a time, so memory stays under 200 MB whatever the count"))
     r.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
     r.add_argument("--bend", type=float, default=0.08, help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
     r.add_argument("--placement", choices=PLACEMENTS, default="grid", help="how instances are laid out (default: %(default)s)")
@@ -36,24 +39,53 @@ def add_parser(sub) -> None:
     r.set_defaults(handler=run)
 
 
-#: peak bytes per instance of ``random`` (random_params' temporaries, the
-#: result and its encoding; measured with tracemalloc: about 700), for the -n check
-RANDOM_BYTES_EACH = 768
+#: peak bytes per instance of ``random`` while it makes and writes one piece
+#: (the generator's temporaries, the float32 piece and its encoding), for the
+#: memory check of a piece: measured 533 for 19 numbers quantized (the
+#: largest form; 16 numbers text 416) with ``python tools/random_memory.py``
+#: (tracemalloc, pieces of 131072; docs/reliability.md), plus 20 %
+RANDOM_BYTES_EACH = 640
+#: instances made and written at a time: memory stays about
+#: ``RANDOM_CHUNK * RANDOM_BYTES_EACH`` (80 MB) beyond the interpreter's
+#: whatever ``-n`` is (measured peak: 189 MB resident at -n 300000 to 4800000)
+RANDOM_CHUNK = 1 << 17
 
 
 def run(args) -> None:
+    from ..core.errors import ArgumentError
     from ..core.mesh import load_mesh
-    from ..core.params import write_params
-    from ..core.variation import random_params
+    from ..core.params import param_file_bytes, write_param_chunks
+    from ..core.variation import iter_random_params
 
-    from ..core.safeio import check_count, check_output_path
+    from ..core.safeio import MAX_INSTANCES, check_count, check_disk_space, check_output_path
     from ._common import mesh_file
 
     extension = extension_args(args)  # before any work: a bad range is the first thing said
     check_output_path(args.output, (mesh_file(args.mesh),), "parameter file")
-    check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")
+    count = int(args.count)
+    if count < 0:
+        raise ArgumentError(f"-n/--count: expected 0 or more instances, found {count}")
+    if count > MAX_INSTANCES:
+        raise ArgumentError(f"-n/--count: expected at most {MAX_INSTANCES} instances (a GL draw takes a signed "
+                            f"32-bit count), found {count}")
+    # memory holds one piece whatever the count; the file must fit on its disk
+    check_count(min(count, RANDOM_CHUNK), RANDOM_BYTES_EACH, f"-n/--count (made {RANDOM_CHUNK} at a time)")
+    width = 19 if extension else 16
+    fixed = param_file_bytes(args.output, 0, width, quantize=args.quantize)
+    each = param_file_bytes(args.output, 1, width, quantize=args.quantize) - fixed
+
+    def fits(free: int) -> str:
+        return f"-n/--count at most {max(0, (free - fixed) // each)} there ({each} bytes an instance)"
+
+    check_disk_space(args.output, fixed + count * each, f"parameter file ({count} instances of {width} numbers)",
+                     ArgumentError, expected=fits)
     mesh = load_mesh(args.mesh)
-    params = random_params(mesh, args.count, args.seed, bend=args.bend, placement=args.placement,
-                           spacing=args.spacing, up=args.up, yaw=args.yaw, tilt=args.tilt, **extension)
-    path = write_params(args.output, params, mesh, quantize=args.quantize)
-    print(f"wrote {path} ({len(params)} instances, {path.stat().st_size} bytes)")
+    options = dict(bend=args.bend, placement=args.placement, spacing=args.spacing, up=args.up, yaw=args.yaw,
+                   tilt=args.tilt, **extension)
+    iter_random_params(mesh, count, args.seed, **options)  # bad options are refused before the file is opened
+
+    def pieces():  # called twice for the quantized form: a first pass finds the decode table
+        return iter_random_params(mesh, count, args.seed, chunk=RANDOM_CHUNK, **options)
+
+    path = write_param_chunks(args.output, pieces, count, width, mesh, quantize=args.quantize)
+    print(f"wrote {path} ({count} instances, {path.stat().st_size} bytes)")

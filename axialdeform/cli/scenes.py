@@ -64,8 +64,10 @@ def render(scene, args, wind=None, options=None) -> None:
 
 def bake(scene, args, progress, wind=None) -> None:
     """``bake SCENE -o OUT.npz``: arrays ``positions_LAYER`` and ``normals_LAYER``."""
-    from ..core.bake import write_scene_npz
-    from ..gl.bake import bake as bake_layer
+    from ..core.bake import write_npz_layers
+    from ..core.errors import ArgumentError
+    from ..core.safeio import check_disk_space
+    from ..gl.bake import bake_pieces
 
     out = Path(args.output)
     if out.suffix.lower() != ".npz":
@@ -75,13 +77,22 @@ def bake(scene, args, progress, wind=None) -> None:
     if wind is not None:
         scene.wind = wind
     t = _time(scene, args)
-    baked = {}
-    for layer in scene.layers:
-        with progress(len(layer.params), f"{layer.name} ({args.engine})") as bar:
-            baked[layer.name] = bake_layer(layer.mesh, layer.params, args.engine, progress=bar,
-                                           wind=scene.wind if layer.wind else None, time=t)
-    write_scene_npz(out, baked)
-    print(f"wrote {out}: {', '.join(f'{k} {v[0].shape}' for k, v in baked.items())} float32 ({args.engine})")
+    # made and written in pieces, layer after layer: bounded by the disk, not memory
+    shapes = {layer.name: (len(layer.params), layer.mesh.vertex_count, 3) for layer in scene.layers}
+    needed = sum(36 * n * v for n, v, _ in shapes.values()) + (1 << 16)
+    check_disk_space(out, needed, f"bake of {scene.count} instances (the .npz and, while it is written, a spooled "
+                     "copy of a layer's normals)", ArgumentError)
+    with progress(scene.count, f"{len(scene.layers)} layers ({args.engine})") as bar:
+        pieces = [bake_pieces(layer.mesh, layer.params, args.engine, progress=bar,
+                              wind=scene.wind if layer.wind else None, time=t, source=f"{scene.path}: {layer.name}")
+                  for layer in scene.layers]
+        try:
+            write_npz_layers(out, [(f"_{layer.name}", p, len(layer.params), layer.mesh.vertex_count)
+                                   for layer, p in zip(scene.layers, pieces)])
+        finally:
+            for p in pieces:
+                p.close()
+    print(f"wrote {out}: {', '.join(f'{k} {v}' for k, v in shapes.items())} float32 ({args.engine})")
 
 
 def export(scene, args) -> None:

@@ -17,7 +17,8 @@ from .deform import deform
 from .errors import ArgumentError, PathError
 from .safeio import check_count, check_not_special, require_finite
 
-__all__ = ["bake_cpu", "instance_name", "part_file_names", "write_npz", "write_scene_npz", "write_mesh_folder", "check_bake_folder",
+__all__ = ["bake_cpu", "bake_cpu_pieces", "instance_name", "part_file_names", "write_npz", "write_npz_pieces", "write_npz_layers",
+           "write_scene_npz", "write_mesh_folder", "check_bake_folder",
            "check_bake_count", "check_bake_result", "MESH_FORMATS"]
 
 MESH_FORMATS = ("obj", "ply", "glb")
@@ -90,10 +91,96 @@ def part_file_names(parts) -> list[str]:
 
 
 def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarray) -> None:
-    """``positions`` and ``normals`` arrays into one ``.npz``, atomically."""
+    """``positions`` and ``normals`` arrays into one ``.npz``, atomically.
+
+    positions, normals : (instances, vertices, 3) float32.  No copy is made
+    of float32 arrays (numpy writes each in 16 MB pieces)."""
     with atomic_path(path, suffix=".npz") as tmp:
         with open(tmp, "wb") as fh:
-            np.savez(fh, positions=positions.astype(np.float32), normals=normals.astype(np.float32))
+            np.savez(fh, positions=np.asarray(positions, dtype=np.float32),
+                     normals=np.asarray(normals, dtype=np.float32))
+
+
+#: bytes of baked output (positions and normals) made at a time by :func:`bake_cpu_pieces`
+BAKE_PIECE_BYTES = 1 << 23
+
+
+def bake_cpu_pieces(mesh, params, *, progress=None, wind=None, time: float = 0.0, source: str | None = None,
+                    piece_bytes: int = BAKE_PIECE_BYTES):
+    """The result of :func:`bake_cpu` in pieces of consecutive instances, a
+    generator of ``(positions, normals)``, each ``(m, vertices, 3) float32``
+    with ``m * vertices * 24 <= piece_bytes`` (at least one instance):
+    concatenated they are exactly ``bake_cpu``'s arrays, but memory holds one
+    piece.  Each piece is checked for non-finite numbers as it is made (the
+    message numbers the instance in the whole file)."""
+    from .params import as_params
+
+    params = as_params(params)
+    v = max(mesh.vertex_count, 1)
+    step = max(1, int(piece_bytes) // (v * 24))
+    for a in range(0, len(params), step):
+        block = params[a : a + step]
+        if wind is not None:
+            from .wind import apply_wind
+
+            block = apply_wind(wind, mesh.axis, block, time, start=a)  # the wind's phase follows the instance index
+        with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
+            positions, normals = deform(mesh.axis, mesh.positions, mesh.normals, block, progress=progress)
+        require_finite(positions, "positions", "xyz", source=source, first=a)
+        require_finite(normals, "normals", "xyz", source=source, first=a)
+        yield positions, normals
+
+
+def write_npz_pieces(path: str | os.PathLike, pieces, count: int, vertices: int) -> Path:
+    """Arrays ``positions`` and ``normals``, each ``(count, vertices, 3)
+    float32``, into one ``.npz`` (what :func:`write_npz` writes, as
+    ``np.load`` reads it) from ``pieces`` of ``(positions, normals)``,
+    atomically, memory bounded by one piece (:func:`write_npz_layers`)."""
+    return write_npz_layers(path, [("", pieces, count, vertices)])
+
+
+def write_npz_layers(path: str | os.PathLike, layers) -> Path:
+    """Several baked layers into one ``.npz``, atomically, memory bounded by
+    one piece: ``layers`` is a list of ``(suffix, pieces, count, vertices)``
+    and each becomes arrays ``positions{suffix}`` and ``normals{suffix}``,
+    ``(count, vertices, 3) float32``, from its ``pieces`` of ``(positions,
+    normals)``.  Positions go straight into the archive, normals to an
+    unnamed temporary file beside ``path`` (gone with the process, whatever
+    happens) that is copied in after them.  Pieces that do not add up to
+    ``count`` raise :class:`ArgumentError`, as does a non-finite piece its
+    producer refuses; nothing is written then."""
+    import shutil
+    import tempfile
+    import zipfile
+
+    path = Path(path)
+    with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh, \
+            zipfile.ZipFile(fh, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
+        for suffix, pieces, count, vertices in layers:
+            shape = (int(count), int(vertices), 3)
+            header = {"descr": "<f4", "fortran_order": False, "shape": shape}
+            with tempfile.TemporaryFile(dir=path.parent if str(path.parent) else ".") as spool:
+                done = 0
+                with zf.open(f"positions{suffix}.npy", "w", force_zip64=True) as entry:
+                    np.lib.format.write_array_header_2_0(entry, header)
+                    for positions, normals in pieces:
+                        if positions.shape[1:] != shape[1:] or normals.shape != positions.shape:
+                            raise ArgumentError(f"{path}: a piece of shape {positions.shape} / {normals.shape}; "
+                                                f"expected (m, {vertices}, 3) both")
+                        done += len(positions)
+                        if done > count:
+                            break
+                        entry.write(np.ascontiguousarray(positions, dtype="<f4").data)
+                        spool.write(np.ascontiguousarray(normals, dtype="<f4").data)
+                        del positions, normals  # one piece alive while the next is made
+                if done != count:
+                    raise ArgumentError(f"{path}: the pieces{' of ' + suffix.lstrip('_') if suffix else ''} hold "
+                                        f"{'at least ' if done > count else ''}{done} instances; expected {count}")
+                spool.seek(0)
+                with zf.open(f"normals{suffix}.npy", "w", force_zip64=True) as entry:
+                    np.lib.format.write_array_header_2_0(entry, header)
+                    shutil.copyfileobj(spool, entry, 1 << 24)
+    return path
 
 
 def write_scene_npz(path: str | os.PathLike, layers: dict) -> None:

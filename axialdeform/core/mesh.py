@@ -358,14 +358,17 @@ def load_mesh(source) -> BaseMesh:
         raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
     if path.suffix.lower() not in MESH_SUFFIXES:
         raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(MESH_SUFFIXES)}")
-    from .material import SafeResolver
+    from .material import SafeResolver, gltf_references
     from .safeio import memory_available, read_regular
 
     # a regular file (never a FIFO or a device), read with a bound; every
     # file it refers to goes through the same check (SafeResolver)
     data = read_regular(path, max(memory_available() // 2, 1 << 20), f"a mesh file ({', '.join(MESH_SUFFIXES)})",
                         MeshError)
-    resolver = SafeResolver(path.parent)
+    kind = path.suffix.lower().lstrip(".")
+    # each file a glTF refers to is read with the bound it declares (a buffer's byteLength)
+    declared = gltf_references(data, kind, name) if kind in ("gltf", "glb") else {}
+    resolver = SafeResolver(path.parent, declared=declared, referrer=path.name)
     try:
         import io
 
@@ -374,20 +377,20 @@ def load_mesh(source) -> BaseMesh:
         from .safeio import quiet_numpy
 
         data = bytes(data)  # trimesh decodes text only from bytes (not bytearray)
-        kind = path.suffix.lower().lstrip(".")
         with quiet_numpy():  # trimesh's casts of hostile numbers warn; the results are checked below
             loaded = trimesh.load(io.BytesIO(data), file_type=kind, resolver=resolver, process=False)
             if kind == "obj" and isinstance(loaded, trimesh.Trimesh) and _obj_object_count(data) > 1:
                 loaded = _obj_objects(loaded, trimesh.load(io.BytesIO(data), file_type=kind, process=False,
-                                                           resolver=SafeResolver(path.parent), split_objects=True))
-        # a material library or buffer that is a FIFO, a device or too large
-        # refuses the mesh; such a texture only loses its picture (AssetWarning)
-        refused = [msg for ref, msg in resolver.refused if not _is_image_name(ref)]
-        if refused:
-            raise MeshError(f"{name}: {refused[0]}")
+                                                           resolver=SafeResolver(path.parent, referrer=path.name),
+                                                           split_objects=True))
+        # a material library or buffer that is a FIFO, a device, too large or
+        # not its declared size refuses the mesh; such a texture only loses
+        # its picture (AssetWarning)
+        _refuse(name, resolver, declared)
     except MeshError:
         raise
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
+        _refuse(name, resolver, declared)  # a refused buffer is the reason: say it plainly
         raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
     file_positions = _obj_positions(data) if path.suffix.lower() == ".obj" else None  # the bytes read above
     dropped = gltf_attributes(data, kind, SafeResolver(path.parent)) if kind in ("glb", "gltf") else []
@@ -395,10 +398,19 @@ def load_mesh(source) -> BaseMesh:
     return _from_loaded(loaded, name, file_positions, resolver.failed, dropped)
 
 
+def _refuse(name: str, resolver, declared: dict) -> None:
+    """Raise :class:`MeshError` for the first file the resolver refused that is not a picture."""
+    refused = [msg for ref, msg in resolver.refused
+               if not (_is_image_name(ref) or declared.get(ref, ("", 0))[1] is None)]
+    if refused:
+        raise MeshError(f"{name}: {refused[0]}")
+
+
 def _is_image_name(name: str) -> bool:
     """True for a referenced file that is a picture (a texture), by its suffix."""
-    return os.path.splitext(str(name))[1].lower() in (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".gif", ".webp",
-                                                       ".tif", ".tiff", ".ktx", ".ktx2", ".dds")
+    from .material import is_image_name
+
+    return is_image_name(name)
 
 
 def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:

@@ -57,6 +57,8 @@ __all__ = [
     "read_param_bytes",
     "read_params",
     "write_params",
+    "write_param_chunks",
+    "param_file_bytes",
     "format_text",
     "parse_text",
     "encode_binary",
@@ -224,9 +226,19 @@ _TEXT_ROWS = 4096
 
 def _text_pieces(values: np.ndarray, header: str | None):
     """The text form in pieces of at most ``_TEXT_ROWS`` lines (a generator)."""
+    yield _text_header(values.shape[1], header)
+    yield from _text_body(values)
+
+
+def _text_header(width: int, header: str | None) -> str:
+    """The comment lines that start a text file: ``header``, then the field names."""
     lines = ["# " + line for line in (header or "").splitlines()]
-    lines.append("# " + " ".join(EXTENDED_FIELDS if values.shape[1] == 19 else FIELDS))
-    yield "\n".join(lines) + "\n"
+    lines.append("# " + " ".join(EXTENDED_FIELDS if width == 19 else FIELDS))
+    return "\n".join(lines) + "\n"
+
+
+def _text_body(values: np.ndarray):
+    """The lines of ``values``, at most ``_TEXT_ROWS`` a piece (a generator)."""
     for s in range(0, len(values), _TEXT_ROWS):
         body = np.char.mod("%.9g", values[s : s + _TEXT_ROWS].astype(np.float64))
         yield "\n".join(" ".join(row) for row in body.tolist()) + "\n"
@@ -513,17 +525,39 @@ def _quant_table(width: int) -> struct.Struct:
 
 
 def _quantize(values: np.ndarray) -> tuple[bytes, bytes]:
-    v = values.astype(np.float64)
-    w = v.shape[1]
-    lo = v.min(axis=0) if len(v) else np.zeros(w)
-    hi = v.max(axis=0) if len(v) else np.zeros(w)
+    lo32, step32 = _quant_steps(*_quant_range([values], values.shape[1]))
+    return _quant_table(values.shape[1]).pack(*lo32.tolist(), *step32.tolist()), _quant_levels(values, lo32, step32).tobytes()
+
+
+def _quant_range(pieces, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per-column minimum and maximum (float64, exact) over ``pieces`` of
+    ``(m, width)`` float32 values, zeros when there are none: the same
+    whether the values come whole or in pieces."""
+    lo = hi = None
+    for piece in pieces:
+        if len(piece):
+            p_lo, p_hi = piece.min(axis=0).astype(np.float64), piece.max(axis=0).astype(np.float64)
+            lo = p_lo if lo is None else np.minimum(lo, p_lo)
+            hi = p_hi if hi is None else np.maximum(hi, p_hi)
+    if lo is None:
+        return np.zeros(width), np.zeros(width)
+    return lo, hi
+
+
+def _quant_steps(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The decode table of a column range: ``lo`` (w,) float32 and ``step`` (w,) float32."""
     lo32 = lo.astype(np.float32)
-    step32 = ((hi - lo.astype(np.float32).astype(np.float64)) / 65535.0).astype(np.float32)
+    step32 = ((hi - lo32.astype(np.float64)) / 65535.0).astype(np.float32)
     # a step that rounds to a value whose 65535 multiple falls short of the range is widened by one ulp
     short = lo32.astype(np.float64) + 65535.0 * step32.astype(np.float64) < hi
     step32[short] = np.nextafter(step32[short], np.float32(np.inf))
-    q = np.clip(_levels(v, lo32.astype(np.float64), step32.astype(np.float64)), 0, 65535).astype("<u2")
-    return _quant_table(w).pack(*lo32.tolist(), *step32.tolist()), q.tobytes()
+    return lo32, step32
+
+
+def _quant_levels(values: np.ndarray, lo32: np.ndarray, step32: np.ndarray) -> np.ndarray:
+    """``values`` (m, w) as uint16 levels (little-endian) of the table ``lo32``, ``step32``."""
+    v = values.astype(np.float64)
+    return np.clip(_levels(v, lo32.astype(np.float64), step32.astype(np.float64)), 0, 65535).astype("<u2")
 
 
 def _dequantize(table: bytes, payload: bytes, count: int, width: int = 16) -> np.ndarray:
@@ -545,21 +579,26 @@ def encode_binary(
     """The binary form of ``values`` (see ``docs/parameter-files.md``): version 1
     for 16 numbers per instance (unchanged), version 2 for 19 (extended)."""
     values = as_params(values)
-    if mesh_fingerprint is not None and len(mesh_fingerprint) != 32:
-        raise ParamError(f"mesh fingerprint: expected 32 bytes, found {len(mesh_fingerprint)}")
-    encoding = ENCODING_UINT16 if quantize else ENCODING_FLOAT32
-    header = _HEADER.pack(
-        MAGIC, VERSION_EXTENDED if values.shape[1] == 19 else VERSION, encoding, HEADER_SIZE, len(values),
-        -1 if axis is None else axis.index, 0,
-        0.0 if axis is None else axis.lo, 0.0 if axis is None else axis.length,
-        mesh_fingerprint or bytes(32),
-    )
+    header = _binary_header(values.shape[1], quantize, len(values), axis, mesh_fingerprint)
     if quantize:
         table, payload = _quantize(values)
         body = header + table + payload
     else:
         body = header + values.astype("<f4").tobytes()  # 64 (or 76) bytes per instance
     return body + _TRAILER.pack(zlib.crc32(body))
+
+
+def _binary_header(width: int, quantize: bool, count: int, axis: ControlAxis | None,
+                   mesh_fingerprint: bytes | None) -> bytes:
+    """The fixed header of a binary file (:data:`HEADER_SIZE` bytes)."""
+    if mesh_fingerprint is not None and len(mesh_fingerprint) != 32:
+        raise ParamError(f"mesh fingerprint: expected 32 bytes, found {len(mesh_fingerprint)}")
+    return _HEADER.pack(
+        MAGIC, VERSION_EXTENDED if width == 19 else VERSION, ENCODING_UINT16 if quantize else ENCODING_FLOAT32,
+        HEADER_SIZE, count, -1 if axis is None else axis.index, 0,
+        0.0 if axis is None else axis.lo, 0.0 if axis is None else axis.length,
+        mesh_fingerprint or bytes(32),
+    )
 
 
 @dataclass(frozen=True)
@@ -776,45 +815,131 @@ def write_params(
 
     ``.adp`` is binary (float32, or uint16 with ``quantize=True``); ``.txt``,
     ``.csv`` and ``.dat`` are text.  ``mesh`` (a :class:`BaseMesh`) records
-    the axis and fingerprint of the base mesh in a binary file.
+    the axis and fingerprint of the base mesh in a binary file.  Written in
+    pieces (:func:`write_param_chunks`): memory beyond ``values`` stays
+    bounded whatever the count.
+    """
+    values = as_params(values)
+
+    def pieces():
+        return (values[s : s + _WRITE_ROWS] for s in range(0, len(values), _WRITE_ROWS))
+
+    return write_param_chunks(path, pieces, len(values), values.shape[1], mesh, quantize=quantize, axis=axis,
+                              mesh_fingerprint=mesh_fingerprint)
+
+
+class _Rows:
+    """``rows`` for :func:`as_params` of a piece that starts at instance ``first``."""
+
+    def __init__(self, first: int):
+        self.first = first
+
+    def __getitem__(self, row: int) -> str:
+        return f"instance {self.first + row}"
+
+
+#: instances encoded at a time by the writers (a few MB of temporaries)
+_WRITE_ROWS = 1 << 16
+
+
+def write_param_chunks(
+    path: str | os.PathLike,
+    pieces,
+    count: int,
+    width: int = 16,
+    mesh=None,
+    *,
+    quantize: bool = False,
+    axis: ControlAxis | None = None,
+    mesh_fingerprint: bytes | None = None,
+) -> Path:
+    """Write ``count`` instances that come in pieces, atomically, with memory
+    bounded by one piece: the file is byte for byte what :func:`write_params`
+    writes for the pieces concatenated.
+
+    pieces : a callable returning a fresh iterable of ``(m, width)`` arrays
+        (float32; ``width`` 16 or 19) whose lengths add up to ``count``.  It
+        is called once, or twice for the quantized form (a first pass finds
+        each column's range for the decode table, the second encodes).
+    Other arguments as :func:`write_params`.  Pieces that do not add up to
+    ``count``, or of another width, raise :class:`ParamError` and leave no
+    file (nor harm an existing one).
     """
     path = Path(path)
-    values = as_params(values)
+    count, width = int(count), int(width)
+    if width not in WIDTHS:
+        raise ParamError(f"width: expected 16 or 19 numbers per instance, found {width}")
     if mesh is not None:
         axis, mesh_fingerprint = mesh.axis, mesh.fingerprint
-    if _is_binary_suffix(path) and not quantize:
-        # float32 records are written in pieces, the CRC-32 carried along:
-        # no second copy of a huge payload in memory
-        header = encode_binary(values[:0], axis=axis, mesh_fingerprint=mesh_fingerprint)[:HEADER_SIZE]
-        header = header[:16] + struct.pack("<Q", len(values)) + header[24:]
-        crc = zlib.crc32(header)
+    name = str(path)
+
+    def checked():
+        done = 0
+        for piece in pieces():
+            piece = as_params(piece, name=name, widths=(width,), rows=_Rows(done))
+            done += len(piece)
+            if done > count:
+                break
+            yield piece
+        if done != count:
+            raise ParamError(f"{name}: the pieces hold {'at least ' if done > count else ''}{done} instances; expected {count}")
+
+    binary = _output_kind(path, quantize)
+    if binary:
+        header = _binary_header(width, quantize, count, axis, mesh_fingerprint)
+        table = b""
+        if quantize:  # first pass: the decode table needs every column's range
+            lo32, step32 = _quant_steps(*_quant_range(checked(), width))
+            table = _quant_table(width).pack(*lo32.tolist(), *step32.tolist())
         with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-            fh.write(header)
-            for s in range(0, len(values), 1 << 16):
-                piece = values[s : s + (1 << 16)].astype("<f4").tobytes()
-                crc = zlib.crc32(piece, crc)
-                fh.write(piece)
+            crc = zlib.crc32(header + table)
+            fh.write(header + table)
+            for piece in checked():  # the CRC-32 carried along: no copy of the whole payload
+                data = (_quant_levels(piece, lo32, step32) if quantize else piece.astype("<f4")).tobytes()
+                crc = zlib.crc32(data, crc)
+                fh.write(data)
             fh.write(_TRAILER.pack(crc))
         return path
-    if _is_binary_suffix(path):
-        data = encode_binary(values, axis=axis, mesh_fingerprint=mesh_fingerprint, quantize=quantize)
-    elif path.suffix.lower() in TEXT_SUFFIXES:
-        if quantize:
-            raise ParamFileError(f"{path}: the quantized form is binary only; expected a {'/'.join(BINARY_SUFFIXES)} file name")
-        header = "axialdeform parameters: " + ("unknown axis" if axis is None else axis.describe())
-        if mesh is not None:
-            header += f"\nbase mesh: {mesh.name} (sha256 {mesh.fingerprint.hex()})"
-        with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-            for piece in _text_pieces(values, header):  # in pieces: memory does not grow with the count
-                fh.write(piece)
-        return path
-    else:
+    text = "axialdeform parameters: " + ("unknown axis" if axis is None else axis.describe())
+    if mesh is not None:
+        text += f"\nbase mesh: {mesh.name} (sha256 {mesh.fingerprint.hex()})"
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(_text_header(width, text))
+        for piece in checked():
+            for lines in _text_body(piece):
+                fh.write(lines)
+    return path
+
+
+def _output_kind(path: Path, quantize: bool) -> bool:
+    """True if ``path`` names a binary parameter file, False for text; a
+    :class:`ParamFileError` for another suffix, or text with ``quantize``."""
+    binary = _is_binary_suffix(path)
+    if not binary and path.suffix.lower() not in TEXT_SUFFIXES:
         raise ParamFileError(
             f"{path}: unknown parameter file type {path.suffix!r}; expected {', '.join(BINARY_SUFFIXES)} (binary) "
             f"or {', '.join(TEXT_SUFFIXES)} (text)"
         )
-    atomic_write_bytes(path, data)
-    return path
+    if quantize and not binary:
+        raise ParamFileError(f"{path}: the quantized form is binary only; expected a {'/'.join(BINARY_SUFFIXES)} file name")
+    return binary
+
+
+def param_file_bytes(path: str | os.PathLike, count: int, width: int = 16, *, quantize: bool = False) -> int:
+    """Bytes a parameter file of ``count`` instances takes on disk: exact for
+    the binary form; for text an upper bound (every number at its longest,
+    ``%.9g`` of a float32: 15 characters and a separator, plus the header).
+    The path's suffix picks the form (an unknown one is a :class:`ParamFileError`)."""
+    count = int(count)
+    if _output_kind(Path(path), quantize):
+        record = _ENCODINGS[ENCODING_UINT16 if quantize else ENCODING_FLOAT32][1] * width // 16
+        table = _quant_table(width).size if quantize else 0
+        return HEADER_SIZE + table + count * record + _TRAILER.size
+    return _TEXT_HEADER_MAX + count * 16 * width
+
+
+#: the text header's bound in :func:`param_file_bytes` (field names, axis, mesh name, fingerprint)
+_TEXT_HEADER_MAX = 8192
 
 
 def axis_letter(index: int) -> str:

@@ -6,14 +6,18 @@ of the library (and of its CLI) goes through.
   open), check it with ``fstat`` on the open descriptor (no race between the
   check and the read: a symlink to ``/dev/zero`` is refused, a folder too),
   and read at most ``max_bytes``.
-* :class:`SafeResolver` — a ``trimesh.resolvers.FilePathResolver`` whose
-  every read (glTF buffers and images, OBJ ``mtllib``, textures) goes through
-  :func:`read_regular`.
+* ``SafeResolver`` (:class:`axialdeform.core.material.SafeResolver`) — the
+  trimesh resolver whose every read (glTF buffers and images, OBJ
+  ``mtllib``, textures) goes through :func:`open_regular`, bounded by what
+  the mesh declares (a buffer's ``byteLength``; :data:`MAX_IMAGE_BYTES` for
+  a picture).
 * :func:`check_output_path` — refuse an output that is the same file as an
   input, or that exists and is not a regular file (or folder, where one is
   allowed): a device, a FIFO, a socket, a symlink to one.
 * :func:`check_count` — a count checked against memory before anything is
   allocated; the message says the maximum.
+* :func:`check_disk_space` — an output's size checked against the free
+  space of its file system before anything is written; the message says both.
 * :func:`require_finite` — a computed result with a non-finite number is an
   error naming the instance and the field.
 * :func:`quiet_numpy` — numpy floating-point warnings silenced (results are
@@ -35,15 +39,22 @@ from .errors import AxialDeformError, PathError
 
 __all__ = [
     "open_regular", "read_regular", "read_sized", "SafeResolver", "check_output_path", "check_not_special",
-    "memory_available", "check_count", "require_finite", "quiet_numpy", "MAX_INSTANCES",
-    "MAX_REFERENCED_BYTES",
+    "memory_available", "check_count", "disk_free", "check_disk_space", "require_finite", "quiet_numpy", "MAX_INSTANCES",
+    "MAX_REFERENCED_BYTES", "MAX_IMAGE_BYTES",
 ]
 
 #: The largest instance count any command accepts (GL draws take a signed
 #: 32-bit instance count); memory usually limits it earlier, see :func:`check_count`.
 MAX_INSTANCES = 2**31 - 1
-#: Bound on one file a mesh refers to (glTF buffer, image, material library).
+#: Bound on one file a mesh refers to that declares no size of its own (an
+#: OBJ material library); a glTF buffer is bound by its ``byteLength``, a
+#: picture by :data:`MAX_IMAGE_BYTES` (``core.material.SafeResolver``).
 MAX_REFERENCED_BYTES = 2 * 1024**3
+#: Bound on one picture a mesh refers to (a glTF image, an OBJ texture): a
+#: 16384 x 16384 RGBA texture, the largest most GL drivers take, is 1 GiB
+#: decoded; its compressed file is far smaller.  A larger file is not read
+#: (the part is drawn with its base colour, ``AssetWarning``).
+MAX_IMAGE_BYTES = 256 * 1024**2
 
 
 def _kind(mode: int) -> str:
@@ -127,50 +138,11 @@ def read_sized(fh, size: int, path, what: str = "file", error: type = PathError)
     return buf
 
 
-def _make_resolver():
-    import trimesh.resolvers
-
-    class SafeResolver(trimesh.resolvers.FilePathResolver):
-        """A trimesh file resolver that reads only regular files, each at most
-        ``max_bytes`` (glTF buffers and images, OBJ ``mtllib`` and textures)."""
-
-        def __init__(self, source, max_bytes: int = MAX_REFERENCED_BYTES, referrer: str | None = None):
-            super().__init__(source)
-            self.max_bytes = int(max_bytes)
-            self.referrer = referrer
-            #: the PathErrors raised by get(): trimesh swallows some (a
-            #: material library it cannot read), the caller can still refuse
-            self.refused: list[PathError] = []
-
-        def get(self, name):
-            # trimesh's own candidates and root restriction; only the read differs
-            what = f"a file referred to by {self.referrer}" if self.referrer else "a file referred to by the mesh"
-            name = str(name)
-            for candidate in (name.strip(), name.strip().lstrip("/"), os.path.split(name)[-1]):
-                try:
-                    path = self.absolute(candidate)
-                except ValueError:
-                    continue
-                if os.path.lexists(path):
-                    try:
-                        return read_regular(path, self.max_bytes, what)
-                    except PathError as exc:
-                        self.refused.append(exc)
-                        raise
-            self.absolute(name)  # a name outside the root: trimesh's own error
-            raise FileNotFoundError(errno.ENOENT, "no such file", name)
-
-        def write(self, name, data):  # a reader never writes beside its input
-            raise PathError(f"{name}: refusing to write while reading a mesh")
-
-    return SafeResolver
-
-
-def __getattr__(name):  # the resolver class needs trimesh: built on first use
+def __getattr__(name):  # the one resolver lives beside the appearance code that uses it (needs trimesh)
     if name == "SafeResolver":
-        cls = _make_resolver()
-        globals()["SafeResolver"] = cls
-        return cls
+        from .material import SafeResolver
+
+        return SafeResolver
     raise AttributeError(name)
 
 
@@ -255,6 +227,33 @@ def check_count(count, bytes_each: float, what: str = "count", error: type = Axi
         raise error(f"{what}: {n} instances need about {_gb(need)}; expected at most {most} "
                     f"(what {_gb(budget)} of available memory holds; never more than {MAX_INSTANCES})")
     return n
+
+
+def disk_free(path: str | os.PathLike) -> int:
+    """Bytes free for this user on the file system that ``path`` (a file to
+    be written: its folder is asked) is on."""
+    import shutil
+
+    folder = os.path.dirname(os.path.abspath(os.fspath(path))) or "."
+    return shutil.disk_usage(folder).free
+
+
+def check_disk_space(path: str | os.PathLike, needed: int, what: str = "output", error: type = AxialDeformError,
+                     free: int | None = None, expected=None) -> None:
+    """Raise ``error`` before anything is written if the file system of
+    ``path`` has fewer than ``needed`` bytes free (an atomic write needs the
+    whole new file beside the old one); the message names the path, the
+    bytes needed and the bytes free.  ``free`` defaults to :func:`disk_free`;
+    ``expected(free)`` optionally says what fits instead (the message's end)."""
+    try:
+        free = disk_free(path) if free is None else int(free)
+    except OSError as exc:  # the folder is missing or unreadable: the writer says so itself
+        del exc
+        return
+    if needed > free:
+        fits = expected(free) if expected is not None else f"at most {free} bytes"
+        raise error(f"{os.fspath(path)}: the {what} needs {int(needed)} bytes ({_gb(needed)}), but its file system has "
+                    f"{free} bytes free ({_gb(free)}); expected {fits}")
 
 
 def require_finite(array: np.ndarray, what: str, fields: Sequence[str] | None = None, items: str = "instance",

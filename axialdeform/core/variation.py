@@ -12,6 +12,7 @@ shared by all five is the same as a translation, see docs/parameter-files.md).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,17 +20,15 @@ from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import ANGLES, OFFSETS, POSITION, as_params
 
-__all__ = ["random_params", "PLACEMENTS", "uniforms"]
+__all__ = ["random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
 
 PLACEMENTS = ("grid", "box", "disc")
 
 
 def uniforms(seed: int, n: int) -> np.ndarray:
     """``n`` uniform doubles in [0, 1) from PCG64(seed), platform-independent."""
-    if not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ParamError(f"seed: expected a non-negative integer, found {seed!r}")
-    raw = np.random.PCG64(int(seed)).random_raw(int(n))
-    return (np.asarray(raw, dtype=np.uint64) >> np.uint64(11)).astype(np.float64) * 2.0**-53
+    _check_seed(seed)
+    return _stream(seed, 0, n)
 
 
 def _range(value, name: str) -> tuple[float, float]:
@@ -37,6 +36,71 @@ def _range(value, name: str) -> tuple[float, float]:
     if not (math.isfinite(lo) and math.isfinite(hi)) or hi < lo:
         raise ParamError(f"{name}: expected a finite range (min, max) with min <= max, found {value!r}")
     return lo, hi
+
+
+@dataclass(frozen=True)
+class _Spec:
+    """Checked options of :func:`random_params`."""
+
+    count: int
+    seed: int
+    bend: float
+    length: float
+    placement: str
+    spacing: float
+    up: int
+    yaw: tuple
+    tilt: tuple
+    height: tuple
+    extended: bool
+    scale: tuple
+    twist: float
+    taper: float
+
+
+def _spec(
+    mesh,
+    count: int,
+    seed: int = 0,
+    *,
+    bend: float = 0.08,
+    placement: str = "grid",
+    spacing: float | None = None,
+    up: str = "y",
+    yaw=(0.0, 2 * math.pi),
+    tilt=(-0.25, 0.25),
+    height=(0.0, 0.0),
+    scale=None,
+    twist=None,
+    taper=None,
+) -> "_Spec":
+    """The checked options of :func:`random_params`."""
+    if not isinstance(count, (int, np.integer)) or count < 0:
+        raise ParamError(f"count: expected a non-negative integer, found {count!r}")
+    if placement not in PLACEMENTS:
+        raise ParamError(f"placement: expected one of {', '.join(PLACEMENTS)}, found {placement!r}")
+    if up not in AXIS_NAMES:
+        raise ParamError(f"up: expected one of x, y, z, found {up!r}")
+    if not (math.isfinite(bend) and bend >= 0):
+        raise ParamError(f"bend: expected a finite fraction of L >= 0, found {bend!r}")
+    length = mesh.axis.length
+    spacing = 1.1 * length if spacing is None else float(spacing)
+    if not (math.isfinite(spacing) and spacing > 0):
+        raise ParamError(f"spacing: expected a finite distance > 0, found {spacing!r}")
+    yaw, tilt, height = _range(yaw, "yaw"), _range(tilt, "tilt"), _range(height, "height")
+    extended = any(x is not None for x in (scale, twist, taper))
+    s_lo, s_hi = _range(1.0 if scale is None else scale, "scale")
+    if not s_lo > 0:
+        raise ParamError(f"scale: expected MIN,MAX with 0 < MIN <= MAX, found {scale!r}")
+    tw = 0.0 if twist is None else float(twist)
+    tp = 0.0 if taper is None else float(taper)
+    if not math.isfinite(tw):
+        raise ParamError(f"twist: expected a finite number of radians, found {twist!r}")
+    if not (math.isfinite(tp) and tp < 1):
+        raise ParamError(f"taper: expected a number < 1, found {taper!r}")
+    _check_seed(seed)
+    return _Spec(int(count), int(seed), bend, length, placement, spacing, AXIS_NAMES.index(up), yaw, tilt,
+                 height, extended, (s_lo, s_hi), tw, tp)
 
 
 def random_params(
@@ -77,45 +141,58 @@ def random_params(
     taper : ``max`` (< 1): ``tp`` uniform between 0 and ``max``.
     The first 16 numbers of an instance are the same as without these (the
     extra numbers come from the same random stream, after the others).
+    Instance ``i`` depends only on the seed, the options, ``count`` and ``i``:
+    :func:`iter_random_params` yields the same rows in pieces.
     """
-    if not isinstance(count, (int, np.integer)) or count < 0:
-        raise ParamError(f"count: expected a non-negative integer, found {count!r}")
-    if placement not in PLACEMENTS:
-        raise ParamError(f"placement: expected one of {', '.join(PLACEMENTS)}, found {placement!r}")
-    if up not in AXIS_NAMES:
-        raise ParamError(f"up: expected one of x, y, z, found {up!r}")
-    if not (math.isfinite(bend) and bend >= 0):
-        raise ParamError(f"bend: expected a finite fraction of L >= 0, found {bend!r}")
-    length = mesh.axis.length
-    spacing = 1.1 * length if spacing is None else float(spacing)
-    if not (math.isfinite(spacing) and spacing > 0):
-        raise ParamError(f"spacing: expected a finite distance > 0, found {spacing!r}")
-    yaw, tilt, height = _range(yaw, "yaw"), _range(tilt, "tilt"), _range(height, "height")
-    extended = any(x is not None for x in (scale, twist, taper))
-    s_lo, s_hi = _range(1.0 if scale is None else scale, "scale")
-    if not s_lo > 0:
-        raise ParamError(f"scale: expected MIN,MAX with 0 < MIN <= MAX, found {scale!r}")
-    tw = 0.0 if twist is None else float(twist)
-    tp = 0.0 if taper is None else float(taper)
-    if not math.isfinite(tw):
-        raise ParamError(f"twist: expected a finite number of radians, found {twist!r}")
-    if not (math.isfinite(tp) and tp < 1):
-        raise ParamError(f"taper: expected a number < 1, found {taper!r}")
-    n = int(count)
-    u = uniforms(seed, n * 16).reshape(n, 16)  # one row of uniforms per instance
-    out = np.zeros((n, 16), dtype=np.float64)
+    spec = _spec(mesh, count, seed, bend=bend, placement=placement, spacing=spacing, up=up, yaw=yaw, tilt=tilt,
+                 height=height, scale=scale, twist=twist, taper=taper)
+    return _rows(spec, 0, spec.count)
 
-    offsets = (2.0 * u[:, OFFSETS] - 1.0) * bend * length
-    offsets = offsets.reshape(n, 5, 2)
+
+def iter_random_params(mesh, count: int, seed: int = 0, *, chunk: int = 1 << 18, **options):
+    """The rows of :func:`random_params` (same arguments) in pieces of at most
+    ``chunk`` instances, an iterator of ``(m, 16)`` (or ``(m, 19)``) float32
+    arrays: concatenated they are exactly ``random_params(mesh, count, seed,
+    ...)``, bit for bit, but memory holds one piece at a time (each piece
+    starts the random stream where it is, PCG64's ``advance``)."""
+    spec = _spec(mesh, count, seed, **options)  # bad options are said here, before the first piece
+    if not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise ParamError(f"chunk: expected a number of instances >= 1, found {chunk!r}")
+    chunk = int(chunk)
+    return (_rows(spec, start, min(spec.count, start + chunk)) for start in range(0, spec.count, chunk))
+
+
+def _check_seed(seed) -> None:
+    if not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ParamError(f"seed: expected a non-negative integer, found {seed!r}")
+
+
+def _stream(seed: int, skip: int, n: int) -> np.ndarray:
+    """Uniform doubles ``skip .. skip + n - 1`` of PCG64(seed)'s stream (see :func:`uniforms`)."""
+    bits = np.random.PCG64(int(seed))
+    if skip:
+        bits.advance(int(skip))
+    raw = bits.random_raw(int(n))
+    return (np.asarray(raw, dtype=np.uint64) >> np.uint64(11)).astype(np.float64) * 2.0**-53
+
+
+def _rows(spec: "_Spec", start: int, stop: int) -> np.ndarray:
+    """Instances ``start .. stop - 1`` of the ``spec.count`` a spec describes: (m, 16|19) float32."""
+    n, m = spec.count, stop - start
+    spacing, up_i, placement = spec.spacing, spec.up, spec.placement
+    u = _stream(spec.seed, 16 * start, 16 * m).reshape(m, 16)  # one row of uniforms per instance
+    out = np.zeros((m, 19 if spec.extended else 16), dtype=np.float64)
+
+    offsets = (2.0 * u[:, OFFSETS] - 1.0) * spec.bend * spec.length
+    offsets = offsets.reshape(m, 5, 2)
     offsets -= offsets.mean(axis=1, keepdims=True)
-    out[:, OFFSETS] = offsets.reshape(n, 10)
+    out[:, OFFSETS] = offsets.reshape(m, 10)
 
-    up_i = AXIS_NAMES.index(up)
     ground = [i for i in range(3) if i != up_i]
-    pos = np.zeros((n, 3))
+    pos = np.zeros((m, 3))
     if placement == "grid":
         cols = max(1, math.ceil(math.sqrt(n)))
-        k = np.arange(n)
+        k = np.arange(start, stop)
         jitter = (u[:, POSITION][:, :2] - 0.5) * 0.2 * spacing
         pos[:, ground[0]] = (k % cols - (cols - 1) / 2) * spacing + jitter[:, 0]
         pos[:, ground[1]] = (k // cols - (math.ceil(n / cols) - 1) / 2) * spacing + jitter[:, 1]
@@ -129,18 +206,20 @@ def random_params(
         side = spacing * max(n, 1) ** (1 / 3)
         pos = (u[:, POSITION] - 0.5) * side
     if placement != "box":
+        height = spec.height
         pos[:, up_i] = height[0] + (height[1] - height[0]) * u[:, 12]
     out[:, POSITION] = pos
 
+    yaw, tilt = spec.yaw, spec.tilt
     angles = tilt[0] + (tilt[1] - tilt[0]) * u[:, ANGLES]
     angles[:, up_i] = yaw[0] + (yaw[1] - yaw[0]) * u[:, 13 + up_i]
     out[:, ANGLES] = angles
-    if not extended:
-        return as_params(out)
-    extra = uniforms(seed, n * 19)[n * 16 :].reshape(n, 3)  # the same stream, after the 16 numbers a row
-    ext = np.empty((n, 19))
-    ext[:, :16] = out
-    ext[:, 16] = s_lo + (s_hi - s_lo) * extra[:, 0]
-    ext[:, 17] = abs(tw) * (2.0 * extra[:, 1] - 1.0)
-    ext[:, 18] = tp * extra[:, 2]
-    return as_params(ext)
+    del u, offsets, pos, angles
+    if spec.extended:
+        # the same stream, after the 16 numbers of every instance: 3 a row
+        extra = _stream(spec.seed, 16 * n + 3 * start, 3 * m).reshape(m, 3)
+        (s_lo, s_hi), tw, tp = spec.scale, spec.twist, spec.taper
+        out[:, 16] = s_lo + (s_hi - s_lo) * extra[:, 0]
+        out[:, 17] = abs(tw) * (2.0 * extra[:, 1] - 1.0)
+        out[:, 18] = tp * extra[:, 2]
+    return as_params(out)

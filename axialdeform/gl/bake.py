@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.bake import bake_cpu, check_bake_count, check_bake_result
+from ..core.bake import BAKE_PIECE_BYTES, bake_cpu, bake_cpu_pieces, check_bake_count, check_bake_result
 from ..core.errors import ArgumentError
+from ..core.safeio import require_finite
 
-__all__ = ["bake", "ENGINES"]
+__all__ = ["bake", "bake_pieces", "ENGINES"]
 
 ENGINES = ("cpu", "gpu")
 
@@ -42,3 +43,39 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, wind=Non
             ctx.release()
     check_bake_result(positions, normals, source)  # named after the file, not just the instance
     return positions, normals
+
+
+def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, wind=None, time: float = 0.0,
+                source: str | None = None, piece_bytes: int = BAKE_PIECE_BYTES):
+    """The result of :func:`bake` in pieces of consecutive instances, a
+    generator of ``(positions, normals)``, each ``(m, vertices, 3) float32``
+    of at most ``piece_bytes`` together (at least one instance):
+    concatenated they are :func:`bake`'s arrays, but memory holds one piece
+    (the GPU holds the parameters; each piece is one :meth:`capture` of
+    ``start, count``, so the wind's phase follows the instance index).
+    Non-finite results are refused as they come, naming ``source`` and the
+    instance in the whole file."""
+    if engine == "cpu":
+        yield from bake_cpu_pieces(mesh, params, progress=progress, wind=wind, time=time, source=source,
+                                   piece_bytes=piece_bytes)
+        return
+    if engine != "gpu":
+        raise ArgumentError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
+    from .context import create_context
+    from .renderer import AxialRenderer
+
+    step = max(1, int(piece_bytes) // (max(mesh.vertex_count, 1) * 24))
+    own = ctx is None
+    ctx = create_context() if own else ctx
+    try:
+        with AxialRenderer(ctx, mesh, params, wind=wind) as r:
+            for a in range(0, r.count, step):
+                m = min(step, r.count - a)
+                positions, normals = r.capture(a, m, progress=progress, time=time, check_finite=False)
+                require_finite(positions, "positions", "xyz", source=source, first=a)
+                require_finite(normals, "normals", "xyz", source=source, first=a)
+                yield positions, normals
+                del positions, normals
+    finally:
+        if own:
+            ctx.release()
