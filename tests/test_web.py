@@ -21,8 +21,8 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core.params import encode_binary
-from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_scene, make_server, page_shaders,
-                             scene_bytes, single_file_html, vendor_file, write_page)
+from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_scene, embedded_file, make_server,
+                             page_shaders, scene_bytes, single_file_html, vendor_file, write_page)
 
 ROOT = Path(__file__).resolve().parent.parent
 SIZE = (400, 300)
@@ -58,13 +58,16 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     assert build_scene(stone, params, quantize=False).config["shaders"] == {"float": page_shaders()["float"]}
     assert set(build_scene(stone, params, all_shaders=True).config["shaders"]) == {
         "float", "quantized", "float_extended", "quantized_extended"}
+    assert set(build_scene(ad.load_mesh("leafcard"), params, all_shaders=True).config["shaders"]) == {
+        "float_material", "quantized_material", "float_extended_material", "quantized_extended_material"}
     assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["quantized"]["vertex"]
     adp = (tmp_path / "site" / PARAMS_FILE).read_bytes()
     assert adp == encode_binary(params, axis=stone.axis, mesh_fingerprint=stone.fingerprint, quantize=True)
     cam = ad.frame_instances(stone, params, SIZE[0] / SIZE[1])
     assert np.allclose(config["camera"]["eye"], cam.eye) and np.allclose(config["camera"]["target"], cam.target)
     assert config["camera"]["near"] == cam.near and config["camera"]["far"] == cam.far
-    assert config["mesh"]["fingerprint"] == stone.fingerprint.hex()
+    assert config["layers"][0]["mesh"]["fingerprint"] == stone.fingerprint.hex()
+    assert config["fixed_size"] is True and config["wind"] is None
     assert "<script type=\"importmap\">" in index.read_text(encoding="utf-8")
     for rel in VENDOR_FILES.values():
         assert (tmp_path / "site" / "three" / rel).read_bytes() == vendor_file(rel)
@@ -73,15 +76,14 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     one = single_file_html(scene)
     cfg = one.split('id="axd-config">', 1)[1].split("</script>", 1)[0]
     assert json.loads(cfg.replace("<\\/", "</")) == config
-    b64 = one.split('id="axd-params">', 1)[1].split("</script>", 1)[0]
-    assert base64.b64decode(b64) == adp
+    assert embedded_file(one, PARAMS_FILE) == adp
     assert "http://" not in one.split("<body>", 1)[1] and "https://" not in one.split("<body>", 1)[1].replace(
         "https://threejs.org", "")  # nothing fetched from the network
 
 
 def test_build_scene_refuses_bad_options(stone):
     params = ad.random_params(stone, 3, seed=1)
-    for kwargs, words in (({"size": (0, 10)}, "size"), ({"mode": "wireframe"}, "mode"), ({"up": "w"}, "up")):
+    for kwargs, words in (({"size": (0, 10)}, "size"), ({"mode": "hidden"}, "mode"), ({"up": "w"}, "up")):
         with pytest.raises(ad.AxialDeformError, match=words):
             build_scene(stone, params, **kwargs)
 
@@ -409,7 +411,7 @@ def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
     r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "-o", str(out), "--float32",
                         "--mode", "flat", "--up", "z", "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    assert base64.b64decode(out.read_text(encoding="utf-8").split('id="axd-params">', 1)[1].split("<", 1)[0])[10] == 0
+    assert embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[10] == 0
     render = ad.render_image(mesh, params, SIZE, "flat", up="z", ground=False, shadow=False)
     v = Visit(browser, out.as_uri())
     try:
@@ -435,8 +437,7 @@ def test_extended_instances_match_render(browser, tmp_path, quantize):
     ad.write_params(adp, params, mesh)
     out = tmp_path / "ext.html"
     write_page(out, build_scene(mesh, ad.read_params(adp, mesh), size=SIZE, quantize=quantize))
-    assert int.from_bytes(base64.b64decode(out.read_text(encoding="utf-8").split('id="axd-params">', 1)[1]
-                                           .split("<", 1)[0])[8:10], "little") == 2
+    assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == 2
     render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, ground=False, shadow=False)
     v = Visit(browser, out.as_uri())
     try:
