@@ -52,7 +52,9 @@ def run(args) -> None:
         web = build_scene_file(scene, size=size, mode=args.mode, quantize=not args.float32,
                                fixed_size=args.size is not None)
         page = write_page(out, web)
-        print(f"wrote {page} ({len(web.config['layers'])} layers, {web.count} instances, "
+        layers = [layer for layer in web.config["layers"] if not layer["terrain"]]
+        print(f"wrote {page} ({len(layers)} layers{', a terrain' if len(layers) < len(web.config['layers']) else ''}, "
+              f"{web.count} instances, "
               f"{'float32' if args.float32 else 'quantized'} parameters)")
     elif (args.mesh is None) != (args.params is None):
         raise AxialDeformError("web: expected both MESH and PARAMS, a scene file .toml, or neither (with --serve)")

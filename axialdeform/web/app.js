@@ -188,7 +188,7 @@ export function mount(root, lib, scene, options = {}) {
   toggle.textContent = 'wireframe (W)';
   toggle.setAttribute('aria-pressed', 'false');
 
-  let renderer = null, controls = null;
+  let renderer = null, controls = null, camera = null;
   let disposed = false;
   const layers = []; // {cfg, geometry, materials, mesh, fingerprint, variant, uniforms, count}
   const state = { count: 0, wireframe: cfg.mode === 'wireframe' };
@@ -394,7 +394,7 @@ export function mount(root, lib, scene, options = {}) {
     stage.insertBefore(renderer.domElement, message);
 
     const c = cfg.camera;
-    const camera = new THREE.PerspectiveCamera(c.fovy, w / h, c.near, c.far);
+    camera = new THREE.PerspectiveCamera(c.fovy, w / h, c.near, c.far);
     camera.up.fromArray(c.up);
     camera.position.fromArray(c.eye);
     camera.lookAt(new THREE.Vector3().fromArray(c.target));
@@ -485,6 +485,12 @@ export function mount(root, lib, scene, options = {}) {
   return {
     ready,
     get wireframe() { return state.wireframe; },
+    /** What is on screen: canvas size in CSS pixels, the camera's aspect, wireframe or not. */
+    info() {
+      const size = renderer ? renderer.getSize(new THREE.Vector2()) : { x: 0, y: 0 };
+      return { width: size.x, height: size.y, aspect: camera ? camera.aspect : null, wireframe: state.wireframe,
+        fixed, time: options.time === undefined ? null : options.time };
+    },
     setWireframe,
     /** Replace the first layer's parameters by another .adp (ArrayBuffer); a
      * bad file keeps nothing wrong on screen: the message says why and nothing is drawn. */
