@@ -809,3 +809,29 @@ def test_canvas_fills_the_window_and_follows_resizes(browser, scene_files, tmp_p
         assert v.page.locator(".axd-message").is_visible()
     finally:
         v.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("rel", ["assets/AlphaBlendModeTest.glb", "assets/cubevc.glb"])
+def test_parts_alpha_modes_and_vertex_colours_match_render(browser, tmp_path, rel):
+    """Nine parts (OPAQUE, MASK at three cutoffs, BLEND, textured, double-sided)
+    and a mesh with vertex colours: one draw per part, the same picture as render."""
+    from conftest import shared_mesh
+
+    mesh = ad.load_mesh(shared_mesh(rel))
+    assert mesh.has_appearance
+    params = ad.random_params(mesh, 30, seed=1, bend=0.1, placement="disc")
+    out = tmp_path / "parts.html"
+    scene = build_scene(mesh, params, size=SIZE)
+    assert len(scene.config["layers"][0]["parts"]) == len([p for p in mesh.parts if p.count])
+    write_page(out, scene)
+    render = ad.render_image(mesh, params, SIZE, ground=False, shadow=False)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 30, v.state
+        shot = v.silhouette()
+        assert iou(shot, render, BACKGROUND) >= 0.95
+        assert np.abs(shot.astype(np.float64) - render).mean() < 2.0  # colours too, pixel by pixel
+        assert v.errors == []
+    finally:
+        v.close()

@@ -130,7 +130,7 @@ function el(tag, cls, parent) {
  * a fixed size, or the whole window). */
 export function pageOptions(search) {
   const q = new URLSearchParams(search || '');
-  const out = {};
+  const out = { windowKeys: true }; // a page of its own: W anywhere toggles wireframe
   if (q.has('t')) {
     const t = Number(q.get('t'));
     if (q.get('t').trim() === '' || !Number.isFinite(t)) throw new SceneError(`?t=${q.get('t')}: expected a time in seconds`);
@@ -154,7 +154,8 @@ function windCycles(w, t) {
  * Draw the scene into `root`.
  * scene = {config, files: {name: ArrayBuffer}} (every layer's GLB and .adp),
  * or {config, glb, adp} for a one-layer scene (the widget).
- * options = {time, size} (pageOptions).
+ * options = {time, size, windowKeys} (pageOptions); without windowKeys (the
+ * widget, inside a notebook) only a focused picture takes the W key.
  * Returns {ready: Promise<{instances}> (first frame drawn; rejects with the
  * message shown), setParams(ArrayBuffer, name) (the first layer's),
  * setWireframe(on), dispose()}.
@@ -367,6 +368,8 @@ export function mount(root, lib, scene, options = {}) {
     if (e.key === 'w' || e.key === 'W') setWireframe(!state.wireframe);
   };
   toggle.addEventListener('click', () => setWireframe(!state.wireframe));
+  const keyTarget = options.windowKeys ? window : stage;
+  if (!options.windowKeys) stage.tabIndex = 0; // click the picture, then W
 
   const ready = (async () => {
     const loaded = await Promise.all(cfg.layers.map((lc) => loadLayer(lc)));
@@ -423,7 +426,7 @@ export function mount(root, lib, scene, options = {}) {
       });
       resizer.observe(stage);
     }
-    window.addEventListener('keydown', onKey);
+    keyTarget.addEventListener('keydown', onKey);
 
     shared.u_view.value = camera.matrixWorldInverse;
     shared.u_proj.value = camera.projectionMatrix;
@@ -513,7 +516,7 @@ export function mount(root, lib, scene, options = {}) {
     },
     dispose() {
       disposed = true;
-      window.removeEventListener('keydown', onKey);
+      keyTarget.removeEventListener('keydown', onKey);
       if (layers.resizer) layers.resizer.disconnect();
       if (renderer) { renderer.setAnimationLoop(null); renderer.dispose(); }
       if (controls) controls.dispose();
