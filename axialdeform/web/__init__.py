@@ -1,9 +1,11 @@
 """The same scene in a browser: a WebGL 2 page (three.js) that bends every
 instance in its vertex shader from the package's own GLSL.
 
-``build_scene`` gathers what a page needs: the base mesh as GLB, the
-parameters in the binary ``.adp`` form (quantized by default), and a config
-with the camera, background and light of ``axialdeform render`` for the same
+``build_scene`` (one mesh and its parameters) and ``build_scene_file`` (a
+scene file: every layer and the terrain) gather what a page needs: per layer
+the base mesh as GLB (with its parts and materials) and the parameters in the
+binary ``.adp`` form (quantized by default), and a config with the layers,
+the camera, background, light and wind of ``axialdeform render`` for the same
 canvas size and the shaders, assembled at export time from ``glsl/`` by
 :func:`axialdeform.gl.shaders.assemble` and moved to GLSL ES 3.00 (version
 line and precision only: :func:`to_glsl_es`).  ``write_folder`` writes
