@@ -835,3 +835,22 @@ def test_parts_alpha_modes_and_vertex_colours_match_render(browser, tmp_path, re
         assert v.errors == []
     finally:
         v.close()
+
+
+@pytest.mark.slow
+def test_scene_page_with_a_bad_layer_file_says_which(browser, scene_pages):
+    from urllib.parse import quote
+
+    site = scene_pages["base"] / "windy site"
+    bad = scene_pages["base"] / "windy bad"
+    if bad.exists():
+        shutil.rmtree(bad)
+    shutil.copytree(site, bad)
+    (bad / "layer-leaves.adp").write_bytes(_corrupt("checksum", (site / "layer-leaves.adp").read_bytes()))
+    v = Visit(browser, scene_pages["url"] + quote("windy bad") + "/index.html")
+    try:
+        assert v.state["ready"] is False, v.state
+        assert "layer-leaves.adp" in v.state["error"] and "checksum: wrong CRC-32" in v.state["error"]
+        assert v.page.locator(".axd-message").is_visible() and v.page.locator("canvas").count() == 0
+    finally:
+        v.close()
