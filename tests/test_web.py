@@ -791,6 +791,15 @@ def test_canvas_fills_the_window_and_follows_resizes(browser, scene_files, tmp_p
         info = v.page.evaluate("window.axialdeformView.info()")
         assert (info["width"], info["height"]) == (700, 300) and abs(info["aspect"] - 700 / 300) < 1e-9
         assert _mask(v.silhouette(), BACKGROUND).sum() > 1000  # still drawn after the resize
+        fovy = json.loads(out.read_text(encoding="utf-8").split('id="axd-config">', 1)[1].split("</script>", 1)[0]
+                          .replace("<\\/", "</"))["camera"]["fovy"]
+        assert info["fov"] == fovy  # wider than the export (4:3): the exported camera as it is
+        v.page.set_viewport_size({"width": 300, "height": 500})  # narrower: the same width stays in view
+        v.page.wait_for_function("window.axialdeformView.info().width === 300")
+        v.page.wait_for_timeout(300)
+        assert v.page.evaluate("window.axialdeformView.info().fov") > fovy
+        covered = _mask(v.silhouette(), BACKGROUND)[:-80]  # the status line floats over the bottom rows
+        assert covered.sum() > 1000 and not covered[:, 0].any() and not covered[:, -1].any()  # nothing cut off
         assert v.errors == []
     finally:
         v.close()

@@ -397,7 +397,12 @@ export function mount(root, lib, scene, options = {}) {
     stage.insertBefore(renderer.domElement, message);
 
     const c = cfg.camera;
-    camera = new THREE.PerspectiveCamera(c.fovy, w / h, c.near, c.far);
+    // the exported camera frames the scene for the export's aspect; a narrower
+    // canvas widens the vertical field of view so the same width stays in view
+    const aspect0 = cfg.size[0] / cfg.size[1];
+    const fovFor = (aspect) => (aspect >= aspect0 ? c.fovy
+      : (2 * Math.atan(Math.tan((c.fovy * Math.PI) / 360) * (aspect0 / aspect)) * 180) / Math.PI);
+    camera = new THREE.PerspectiveCamera(fovFor(w / h), w / h, c.near, c.far);
     camera.up.fromArray(c.up);
     camera.position.fromArray(c.eye);
     camera.lookAt(new THREE.Vector3().fromArray(c.target));
@@ -422,6 +427,7 @@ export function mount(root, lib, scene, options = {}) {
         [w, h] = sizeNow();
         renderer.setSize(w, h);
         camera.aspect = w / h;
+        camera.fov = fovFor(camera.aspect);
         camera.updateProjectionMatrix();
       });
       resizer.observe(stage);
@@ -491,7 +497,8 @@ export function mount(root, lib, scene, options = {}) {
     /** What is on screen: canvas size in CSS pixels, the camera's aspect, wireframe or not. */
     info() {
       const size = renderer ? renderer.getSize(new THREE.Vector2()) : { x: 0, y: 0 };
-      return { width: size.x, height: size.y, aspect: camera ? camera.aspect : null, wireframe: state.wireframe,
+      return { width: size.x, height: size.y, aspect: camera ? camera.aspect : null, fov: camera ? camera.fov : null,
+        wireframe: state.wireframe,
         fixed, time: options.time === undefined ? null : options.time };
     },
     setWireframe,
