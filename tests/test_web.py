@@ -863,3 +863,32 @@ def test_scene_page_with_a_bad_layer_file_says_which(browser, scene_pages):
         assert v.page.locator(".axd-message").is_visible() and v.page.locator("canvas").count() == 0
     finally:
         v.close()
+
+
+@pytest.mark.slow
+def test_mesh_page_with_wind_and_a_frozen_time_matches_render(browser, tmp_path):
+    """``web MESH PARAMS --wind ... --time T``: the page's clock stays at T (no
+    query needed), the picture is render's with the same wind at T."""
+    mesh = ad.load_mesh("leaf")
+    params = ad.random_params(mesh, 400, seed=6, bend=0.1, placement="disc")
+    adp = tmp_path / "leaves.adp"
+    ad.write_params(adp, params, mesh)
+    cmd = [sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "--size", f"{SIZE[0]}x{SIZE[1]}"]
+    r = subprocess.run(cmd + ["-o", str(tmp_path / "x.html"), "--time", "2"], capture_output=True, text=True)
+    assert r.returncode == 2 and "--time" in r.stderr and "Traceback" not in r.stderr  # no wind to move
+    out = tmp_path / "windy leaves.html"
+    r = subprocess.run(cmd + ["-o", str(out), "--wind", "0.8,0.8,0.4", "--wind-dir", "1,0,0.3", "--time", "2"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    wind = ad.Wind(direction=(1, 0, 0.3), strength=0.8, gustiness=0.8, frequency=0.4)
+    at = ad.render_image(mesh, params, SIZE, ground=False, shadow=False, wind=wind, time=2.0)
+    still = ad.render_image(mesh, params, SIZE, ground=False, shadow=False)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.page.evaluate("window.axialdeformView.info().time") == 2
+        shot = v.silhouette()
+        assert iou(shot, at, BACKGROUND) >= 0.95
+        assert iou(shot, at, BACKGROUND) > iou(shot, still, BACKGROUND) + 0.05, (iou(shot, at, BACKGROUND), iou(shot, still, BACKGROUND))
+        assert v.errors == []
+    finally:
+        v.close()

@@ -7,6 +7,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 from ..core.errors import AxialDeformError
+from ._common import add_wind_args, wind_arg
 
 __all__ = ["add_parser", "run"]
 
@@ -31,6 +32,11 @@ def add_parser(subparsers) -> None:
                    help="ship the float32 records instead of the quantized form (default: quantized)")
     w.add_argument("--ignore-mesh-mismatch", action="store_true",
                    help="use PARAMS even if made for another mesh (default: refuse)")
+    add_wind_args(w)
+    for action in w._actions:  # the page's clock: frozen at --time, else it runs
+        if action.dest == "time":
+            action.help = ("seconds: freeze the wind's clock there (a scene's [wind] or --wind; ?t= on the page "
+                           "overrides) (default: the clock runs)")
     w.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C (default: only write)")
     w.add_argument("--port", type=int, default=8000, help="port for --serve; a busy one is replaced by a free one (default: %(default)s)")
     w.set_defaults(handler=run)
@@ -43,14 +49,19 @@ def run(args) -> None:
 
     out = Path(args.output)
     size = parse_size(args.size) if args.size is not None else (800, 600)
+    time = args.time  # the page's frozen time (None: the wind's clock runs)
     if args.mesh is not None and is_scene_file(args.mesh):
-        from .scenes import scene_of
+        from .scenes import _time, scene_of
 
         scene = scene_of(args)
+        if args.wind is not None:  # replaces the scene's [wind]
+            scene.wind = wind_arg(args)
+        if time is not None:
+            _time(scene, args)  # refuses a time without a wind
         if args.up != "y":
             raise AxialDeformError(f"--up: a scene file ({args.mesh}) names its own up axis; expected no --up")
         web = build_scene_file(scene, size=size, mode=args.mode, quantize=not args.float32,
-                               fixed_size=args.size is not None)
+                               fixed_size=args.size is not None, time=time)
         page = write_page(out, web)
         layers = [layer for layer in web.config["layers"] if not layer["terrain"]]
         print(f"wrote {page} ({len(layers)} layers{', a terrain' if len(layers) < len(web.config['layers']) else ''}, "
@@ -64,8 +75,8 @@ def run(args) -> None:
 
         mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
-        scene = build_scene(mesh, params, size=size, up=args.up, mode=args.mode,
-                            quantize=not args.float32, fixed_size=args.size is not None)
+        scene = build_scene(mesh, params, size=size, up=args.up, mode=args.mode, quantize=not args.float32,
+                            fixed_size=args.size is not None, wind=wind_arg(args), time=time)
         page = write_page(out, scene)
         print(f"wrote {page} ({len(params)} instances, {'float32' if args.float32 else 'quantized'} parameters)")
     elif not args.serve:

@@ -221,7 +221,8 @@ def _check_view(size, up: str, mode: str) -> tuple:
     return w, h
 
 
-def _config(*, title, layers, size, fixed_size, mode, cam, background, light_dir, up, ambient, wind, shaders) -> dict:
+def _config(*, title, layers, size, fixed_size, mode, cam, background, light_dir, up, ambient, wind, shaders,
+            time=None) -> dict:
     from ..gl.camera import UP_VECTORS
     from ..gl.renderer import _MODE_INDEX, _unit
 
@@ -242,6 +243,7 @@ def _config(*, title, layers, size, fixed_size, mode, cam, background, light_dir
         "ambient": float(ambient),
         "line_color": [0.12, 0.14, 0.18],
         "wind": _wind_config(wind),
+        "time": None if time is None else float(time),  # seconds: the wind's clock frozen there (None: it runs)
         "three": _three_version(),
         "shaders": shaders,
     }
@@ -259,6 +261,18 @@ def _wind_config(wind) -> dict | None:
             "harmonic": float(SECOND_HARMONIC), "wavenumber": float(wind.wavenumber)}
 
 
+def _time(wind, time):
+    if time is None:
+        return None
+    import math
+
+    if wind is None:
+        raise AxialDeformError("time: only meaningful with a wind (the wind is the only thing that moves with time)")
+    if not math.isfinite(float(time)):
+        raise AxialDeformError(f"time: expected a finite number of seconds, found {time!r}")
+    return float(time)
+
+
 def _shaders(layers, all_shaders: bool) -> dict:
     shaders = page_shaders()
     if all_shaders:  # the widget, whose parameters may change: every build of its mesh's kind
@@ -269,7 +283,7 @@ def _shaders(layers, all_shaders: bool) -> dict:
 
 def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "solid", quantize: bool = True,
                 title: str | None = None, adp: bytes | None = None, all_shaders: bool = False,
-                fixed_size: bool = True) -> WebScene:
+                fixed_size: bool = True, wind=None, time: float | None = None) -> WebScene:
     """The page's data for ``mesh`` and ``params`` ((n, 16) float32).
 
     The camera is :func:`axialdeform.gl.camera.frame_instances` for the canvas
@@ -279,7 +293,9 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
     encoding ``params`` (tests use it to ship a corrupt file).  The config
     carries the shader build for these parameters (16 or 19 numbers, float32
     or quantized, with or without material); ``all_shaders`` carries the four
-    of the mesh's kind (the widget, whose parameters may change).
+    of the mesh's kind (the widget, whose parameters may change).  ``wind``
+    (:class:`axialdeform.Wind`) sways the instances; ``time`` freezes its
+    clock at that many seconds (else it runs; ``?t=`` on the page overrides).
     """
     from ..gl.camera import frame_instances
 
@@ -287,23 +303,23 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
     params = as_params(params)
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
-                   quantize=quantize, adp=adp)
+                   quantize=quantize, adp=adp, wind=wind is not None)
     d = _render_defaults()
     config = _config(title=title or f"{len(params)} × {mesh.name}", layers=[layer], size=(w, h),
                      fixed_size=fixed_size, mode=mode, cam=frame_instances(mesh, params, w / h, up=up),
-                     background=d["background"], light_dir=d["light_dir"], up=up, ambient=d["ambient"], wind=None,
-                     shaders=_shaders([layer], all_shaders))
+                     background=d["background"], light_dir=d["light_dir"], up=up, ambient=d["ambient"], wind=wind,
+                     shaders=_shaders([layer], all_shaders), time=_time(wind, time))
     return WebScene(config, files)
 
 
 def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: bool = True,
-                     fixed_size: bool = True, wind=None) -> WebScene:
+                     fixed_size: bool = True, wind=None, time: float | None = None) -> WebScene:
     """The page's data for a loaded scene file (:func:`axialdeform.core.scene.load_scene`):
     every layer (its base mesh and parameters: one instanced draw per part),
     the terrain (one undeformed instance of itself, float32), the scene's
     camera (:func:`axialdeform.gl.scene.scene_camera` at this ``size``),
-    background, light and wind (``wind`` replaces the scene's), as
-    ``axialdeform render SCENE`` draws them."""
+    background, light and wind (``wind`` replaces the scene's; ``time``
+    freezes its clock), as ``axialdeform render SCENE [--time T]`` draws them."""
     from ..gl.scene import TERRAIN_INSTANCE, scene_camera
 
     w, h = _check_view(size, scene.up, mode)
@@ -328,7 +344,7 @@ def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: b
     config = _config(title=Path(scene.path).stem, layers=layers, size=(w, h), fixed_size=fixed_size, mode=mode,
                      cam=cam, background=scene.background, light_dir=scene.light.get("light_dir", d["light_dir"]),
                      up=scene.up, ambient=scene.light.get("ambient", d["ambient"]), wind=wind,
-                     shaders=_shaders(layers, False))
+                     shaders=_shaders(layers, False), time=_time(wind, time))
     return WebScene(config, files)
 
 

@@ -196,6 +196,8 @@ export function mount(root, lib, scene, options = {}) {
   const baseMode = cfg.mode === 'wireframe' ? 0 : cfg.mode_index;
   const v3 = (a) => new THREE.Vector3().fromArray(a);
   const wind = cfg.wind;
+  // the wind's clock: ?t= on the page, else the export's --time, else it runs
+  const frozen = options.time !== undefined ? options.time : (cfg.time === null || cfg.time === undefined ? undefined : cfg.time);
   // uniforms every layer shares (the same objects: set once a frame)
   const shared = {
     u_view: { value: null }, u_proj: { value: null }, u_eye: { value: new THREE.Vector3() },
@@ -450,7 +452,7 @@ export function mount(root, lib, scene, options = {}) {
     const fmt = new Intl.NumberFormat('en-US');
     const showStatus = () => {
       statusText.textContent = `${fmt.format(state.count)} instances · ${fps ? fps.toFixed(fps < 10 ? 1 : 0) : '…'} fps` +
-        (options.time !== undefined && wind ? ` · t = ${options.time} s` : '');
+        (frozen !== undefined && wind ? ` · t = ${frozen} s` : '');
     };
     let first = null, failed = null;
     const drawn = new Promise((resolve, reject) => { first = resolve; failed = reject; });
@@ -458,7 +460,7 @@ export function mount(root, lib, scene, options = {}) {
       if (disposed) return;
       controls.update();
       if (wind) {
-        const t = options.time !== undefined ? options.time : (performance.now() - t0) / 1000;
+        const t = frozen !== undefined ? frozen : (performance.now() - t0) / 1000;
         shared.u_wind_cycles.value.fromArray(windCycles(wind, t));
       }
       renderer.render(world, camera);
@@ -499,7 +501,7 @@ export function mount(root, lib, scene, options = {}) {
       const size = renderer ? renderer.getSize(new THREE.Vector2()) : { x: 0, y: 0 };
       return { width: size.x, height: size.y, aspect: camera ? camera.aspect : null, fov: camera ? camera.fov : null,
         wireframe: state.wireframe,
-        fixed, time: options.time === undefined ? null : options.time };
+        fixed, time: frozen === undefined ? null : frozen };
     },
     setWireframe,
     /** Replace the first layer's parameters by another .adp (ArrayBuffer); a
