@@ -644,6 +644,17 @@ def test_base_mesh_glb_carries_the_material(tmp_path):
     assert "TEXCOORD_0" in g.meshes[0].primitives[0].attributes.__dict__ or g.meshes[0].primitives[0].attributes.TEXCOORD_0
     stone = pygltflib.GLTF2().load_from_bytes(encode_base_mesh(ad.load_mesh("stone")))
     assert stone.materials == [] and stone.meshes[0].primitives[0].material is None  # plain: no material
+    from conftest import shared_mesh
+    from test_assets import ALPHA_TEST, _validate
+
+    parts = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    (tmp_path / "parts.glb").write_bytes(encode_base_mesh(parts))
+    for report in _validate(path, tmp_path / "parts.glb"):
+        assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
+    g = pygltflib.GLTF2().load(str(tmp_path / "parts.glb"))  # one primitive per part, in order, with its alpha mode
+    modes = [g.materials[prim.material].alphaMode for prim in g.meshes[0].primitives]
+    assert modes == [p.material.alpha_mode for p in parts.parts if p.count]
+    assert [g.accessors[prim.indices].count for prim in g.meshes[0].primitives] == [3 * p.count for p in parts.parts if p.count]
 
 
 @pytest.mark.slow
