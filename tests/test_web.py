@@ -21,8 +21,8 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core.params import encode_binary
-from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_scene, make_server, page_shaders,
-                             scene_bytes, single_file_html, vendor_file, write_page)
+from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_scene, embedded_file, make_server,
+                             page_shaders, scene_bytes, single_file_html, vendor_file, write_page)
 
 ROOT = Path(__file__).resolve().parent.parent
 SIZE = (400, 300)
@@ -58,13 +58,16 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     assert build_scene(stone, params, quantize=False).config["shaders"] == {"float": page_shaders()["float"]}
     assert set(build_scene(stone, params, all_shaders=True).config["shaders"]) == {
         "float", "quantized", "float_extended", "quantized_extended"}
+    assert set(build_scene(ad.load_mesh("leafcard"), params, all_shaders=True).config["shaders"]) == {
+        "float_material", "quantized_material", "float_extended_material", "quantized_extended_material"}
     assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["quantized"]["vertex"]
     adp = (tmp_path / "site" / PARAMS_FILE).read_bytes()
     assert adp == encode_binary(params, axis=stone.axis, mesh_fingerprint=stone.fingerprint, quantize=True)
     cam = ad.frame_instances(stone, params, SIZE[0] / SIZE[1])
     assert np.allclose(config["camera"]["eye"], cam.eye) and np.allclose(config["camera"]["target"], cam.target)
     assert config["camera"]["near"] == cam.near and config["camera"]["far"] == cam.far
-    assert config["mesh"]["fingerprint"] == stone.fingerprint.hex()
+    assert config["layers"][0]["mesh"]["fingerprint"] == stone.fingerprint.hex()
+    assert config["fixed_size"] is True and config["wind"] is None
     assert "<script type=\"importmap\">" in index.read_text(encoding="utf-8")
     for rel in VENDOR_FILES.values():
         assert (tmp_path / "site" / "three" / rel).read_bytes() == vendor_file(rel)
@@ -73,15 +76,14 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     one = single_file_html(scene)
     cfg = one.split('id="axd-config">', 1)[1].split("</script>", 1)[0]
     assert json.loads(cfg.replace("<\\/", "</")) == config
-    b64 = one.split('id="axd-params">', 1)[1].split("</script>", 1)[0]
-    assert base64.b64decode(b64) == adp
+    assert embedded_file(one, PARAMS_FILE) == adp
     assert "http://" not in one.split("<body>", 1)[1] and "https://" not in one.split("<body>", 1)[1].replace(
         "https://threejs.org", "")  # nothing fetched from the network
 
 
 def test_build_scene_refuses_bad_options(stone):
     params = ad.random_params(stone, 3, seed=1)
-    for kwargs, words in (({"size": (0, 10)}, "size"), ({"mode": "wireframe"}, "mode"), ({"up": "w"}, "up")):
+    for kwargs, words in (({"size": (0, 10)}, "size"), ({"mode": "hidden"}, "mode"), ({"up": "w"}, "up")):
         with pytest.raises(ad.AxialDeformError, match=words):
             build_scene(stone, params, **kwargs)
 
@@ -409,7 +411,7 @@ def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
     r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "-o", str(out), "--float32",
                         "--mode", "flat", "--up", "z", "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    assert base64.b64decode(out.read_text(encoding="utf-8").split('id="axd-params">', 1)[1].split("<", 1)[0])[10] == 0
+    assert embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[10] == 0
     render = ad.render_image(mesh, params, SIZE, "flat", up="z", ground=False, shadow=False)
     v = Visit(browser, out.as_uri())
     try:
@@ -435,8 +437,7 @@ def test_extended_instances_match_render(browser, tmp_path, quantize):
     ad.write_params(adp, params, mesh)
     out = tmp_path / "ext.html"
     write_page(out, build_scene(mesh, ad.read_params(adp, mesh), size=SIZE, quantize=quantize))
-    assert int.from_bytes(base64.b64decode(out.read_text(encoding="utf-8").split('id="axd-params">', 1)[1]
-                                           .split("<", 1)[0])[8:10], "little") == 2
+    assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == 2
     render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, ground=False, shadow=False)
     v = Visit(browser, out.as_uri())
     try:
@@ -454,5 +455,451 @@ def test_folder_page_from_disk_says_it_needs_a_server(browser, scene_files):
         assert v.state["ready"] is False and "file://" in v.state["error"], v.state
         assert "--serve" in v.page.locator(".axd-message").inner_text()
         assert v.page.locator("canvas").count() == 0
+    finally:
+        v.close()
+
+
+# ------------------------------------------------------------------ scene files, materials, wind, wireframe, window
+LANDSCAPE = ROOT / "examples" / "landscape"
+SKY = (0.80, 0.87, 0.95)
+
+
+def _shot_of(browser, url, size=SIZE, viewport=None):
+    v = Visit(browser, url, size=viewport or size)
+    return v
+
+
+def _mean_covered(image: np.ndarray, background) -> np.ndarray:
+    return image[_mask(image, background)].astype(np.float64).mean(axis=0)
+
+
+def test_page_shader_includes_wind_glsl_verbatim():
+    wind = (ROOT / "glsl" / "wind.glsl").read_text().rstrip("\n")
+    for variant, stages in page_shaders().items():
+        assert wind in stages["vertex"], variant
+        assert "axial_wind(inst" in stages["vertex"].split(wind)[1]  # scene.vert calls it after the include
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text.lstrip("\n"), encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def scene_pages(tmp_path_factory):
+    """Two scene files (a windy one without terrain; a landscape with terrain,
+    textured leaf cards and stones), each exported as a folder and one file,
+    and render's pictures of them."""
+    from PIL import Image
+
+    base = tmp_path_factory.mktemp("scenes") / "scène files"
+    base.mkdir()
+    stone, leaf = ad.load_mesh("stone"), ad.load_mesh("leaf")
+    ad.write_params(base / "stones.adp", ad.random_params(stone, 300, seed=3, bend=0.1, placement="disc"), stone)
+    ad.write_params(base / "leaves.adp", ad.random_params(leaf, 400, seed=4, bend=0.1, placement="disc"), leaf)
+    _write(base / "windy.toml", """
+background = [0.80, 0.87, 0.95]
+[light]
+direction = [0.4, 0.9, 0.3]
+ambient = 0.4
+[wind]
+direction = [1.0, 0.0, 0.3]
+strength = 0.8
+gustiness = 0.8
+frequency = 0.4
+[[layer]]
+name = "stones"
+mesh = "stone"
+params = "stones.adp"
+color = [0.5, 0.48, 0.45]
+[[layer]]
+name = "leaves"
+mesh = "leaf"
+params = "leaves.adp"
+wind = true
+""")
+    _write(base / "land.toml", f"""
+background = [0.80, 0.87, 0.95]
+[terrain]
+heightmap = {json.dumps(str(LANDSCAPE / "terrain.png"))}
+height_scale = 6.0
+extent = [40.0, 30.0]
+color = [0.42, 0.40, 0.30]
+[camera]
+elevation = 24.0
+azimuth = 25.0
+fov = 30.0
+[light]
+direction = [0.3, 0.9, 0.5]
+ambient = 0.3
+[[layer]]
+name = "cards"
+mesh = "leafcard"
+[layer.scatter]
+count = 400
+min_distance = 0.5
+scale = [1.5, 2.5]
+seed = 2
+[[layer]]
+name = "stones"
+mesh = "stone"
+color = [0.6, 0.58, 0.55]
+[layer.scatter]
+count = 150
+min_distance = 0.8
+scale = [0.5, 0.9]
+anchor = "center"
+seed = 5
+""")
+    cmd = [sys.executable, "-m", "axialdeform"]
+    size = f"{SIZE[0]}x{SIZE[1]}"
+    for name in ("windy", "land"):
+        for out in (f"{name} site", f"{name}.html"):
+            r = subprocess.run(cmd + ["web", str(base / f"{name}.toml"), "-o", str(base / out), "--size", size],
+                               capture_output=True, text=True)
+            assert r.returncode == 0 and "2 layers" in r.stdout, r.stderr
+    renders = {}
+    for key, args in (("windy 1.5", ["windy", "--time", "1.5"]), ("windy 0", ["windy", "--time", "0"]),
+                      ("land", ["land"])):
+        png = base / f"{key}.png"
+        r = subprocess.run(cmd + ["render", str(base / f"{args[0]}.toml"), "-o", str(png), "--size", size, *args[1:]],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        renders[key] = np.asarray(Image.open(png).convert("RGB"))
+    server, _ = make_server(base, 0)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    yield {"base": base, "render": renders, "url": f"http://127.0.0.1:{server.server_address[1]}/"}
+    server.shutdown()
+    server.server_close()
+
+
+def test_scene_page_config_has_every_layer_terrain_light_and_wind(tmp_path):
+    from axialdeform.core.scene import load_scene
+    from axialdeform.gl.scene import scene_camera
+    from axialdeform.web import build_scene_file
+
+    mesh = ad.load_mesh("stone")
+    ad.write_params(tmp_path / "s.adp", ad.random_params(mesh, 20, seed=1), mesh)
+    path = _write(tmp_path / "s.toml", f"""
+background = [0.1, 0.2, 0.3]
+[terrain]
+heightmap = {json.dumps(str(LANDSCAPE / "terrain.png"))}
+extent = 10.0
+[light]
+direction = [0.0, 1.0, 0.0]
+ambient = 0.5
+[wind]
+strength = 0.3
+frequency = 2.0
+wavelength = 4.0
+[[layer]]
+name = "a"
+mesh = "stone"
+params = "s.adp"
+wind = true
+[[layer]]
+name = "b"
+mesh = "leafcard"
+params = "s.adp"
+""")
+    with pytest.raises(ad.AxialDeformError, match="different base mesh"):  # s.adp is the stone's
+        load_scene(path)
+    path.write_text(path.read_text().replace('mesh = "leafcard"\nparams = "s.adp"', 'mesh = "stone"\nparams = "s.adp"'))
+    scene = load_scene(path)
+    web = build_scene_file(scene, size=SIZE)
+    cfg = web.config
+    assert [layer["name"] for layer in cfg["layers"]] == ["terrain", "a", "b"]
+    assert [layer["terrain"] for layer in cfg["layers"]] == [True, False, False]
+    assert cfg["instances"] == 40 and cfg["background"] == [0.1, 0.2, 0.3] and cfg["ambient"] == 0.5
+    assert cfg["light_dir"] == [0.0, 1.0, 0.0]
+    assert [layer["wind"] for layer in cfg["layers"]] == [False, True, False]
+    assert cfg["wind"]["wavenumber"] == 0.25 and cfg["wind"]["frequency"] == 2.0 and cfg["wind"]["harmonic"] == 2.31
+    cam = scene_camera(scene, SIZE[0] / SIZE[1])
+    assert np.allclose(cfg["camera"]["eye"], cam.eye) and cfg["camera"]["far"] == cam.far
+    assert set(web.files) == {"terrain.glb", "terrain.adp", "layer-a.glb", "layer-a.adp", "layer-b.glb", "layer-b.adp"}
+    assert web.files["layer-a.adp"] == web.files["layer-b.adp"]
+    assert web.files["terrain.glb"] != web.files["layer-a.glb"]
+    # the CLI: a scene names its own parameters and up axis
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", str(path), "extra.adp", "-o", str(tmp_path / "x")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "names its own parameters" in r.stderr and "Traceback" not in r.stderr
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", str(path), "--up", "z", "-o", str(tmp_path / "x")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "--up" in r.stderr
+
+
+def test_base_mesh_glb_carries_the_material(tmp_path):
+    import pygltflib
+
+    from axialdeform.core.export import encode_base_mesh
+
+    card = ad.load_mesh("leafcard")
+    path = tmp_path / "card.glb"
+    path.write_bytes(encode_base_mesh(card))
+    g = pygltflib.GLTF2().load(str(path))
+    (mat,) = g.materials
+    assert mat.alphaMode == "MASK" and mat.alphaCutoff == card.parts[0].material.alpha_cutoff and mat.doubleSided
+    assert mat.pbrMetallicRoughness.baseColorTexture is not None and len(g.images) == 1
+    assert "TEXCOORD_0" in g.meshes[0].primitives[0].attributes.__dict__ or g.meshes[0].primitives[0].attributes.TEXCOORD_0
+    stone = pygltflib.GLTF2().load_from_bytes(encode_base_mesh(ad.load_mesh("stone")))
+    assert stone.materials == [] and stone.meshes[0].primitives[0].material is None  # plain: no material
+    from conftest import shared_mesh
+    from test_assets import ALPHA_TEST, _validate
+
+    parts = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    (tmp_path / "parts.glb").write_bytes(encode_base_mesh(parts))
+    for report in _validate(path, tmp_path / "parts.glb"):
+        assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
+    g = pygltflib.GLTF2().load(str(tmp_path / "parts.glb"))  # one primitive per part, in order, with its alpha mode
+    modes = [g.materials[prim.material].alphaMode for prim in g.meshes[0].primitives]
+    assert modes == [p.material.alpha_mode for p in parts.parts if p.count]
+    assert [g.accessors[prim.indices].count for prim in g.meshes[0].primitives] == [3 * p.count for p in parts.parts if p.count]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["folder", "single file"])
+def test_scene_page_shows_what_render_shows(browser, scene_pages, kind):
+    from urllib.parse import quote
+
+    url = (scene_pages["url"] + quote("land site") + "/index.html" if kind == "folder"
+           else (scene_pages["base"] / "land.html").as_uri())
+    v = Visit(browser, url)
+    try:
+        assert v.state["ready"] is True and v.state["instances"] > 400, v.state
+        shot = v.silhouette()
+        render = scene_pages["render"]["land"]
+        assert iou(shot, render, SKY) >= 0.95
+        assert np.abs(shot.astype(np.float64) - render).mean() < 3.0  # the same colours, pixel by pixel
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_textured_cutout_page_draws_the_texture(browser, tmp_path):
+    """The bundled leafcard (a textured quad, MASK cut-out, double-sided):
+    same silhouette as render and the texture's colours, not the plain grey."""
+    mesh = ad.load_mesh("leafcard")
+    params = ad.random_params(mesh, 200, seed=5, bend=0.15, placement="disc")
+    adp = tmp_path / "cards.adp"
+    ad.write_params(adp, params, mesh)
+    out = tmp_path / "cards.html"
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "leafcard", str(adp), "-o", str(out),
+                        "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, ground=False, shadow=False)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 200, v.state
+        shot = v.silhouette()
+        assert iou(shot, render, BACKGROUND) >= 0.95
+        page_mean, render_mean = _mean_covered(shot, BACKGROUND), _mean_covered(render, BACKGROUND)
+        assert np.abs(page_mean - render_mean).max() < 6.0, (page_mean, render_mean)
+        r_, g_, b_ = page_mean
+        assert g_ > r_ + 15 and g_ > b_ + 30, page_mean  # the leaf texture's green, not a grey card
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["folder", "single file"])
+def test_wind_at_a_fixed_time_matches_render_time(browser, scene_pages, kind):
+    from urllib.parse import quote
+
+    url = (scene_pages["url"] + quote("windy site") + "/index.html" if kind == "folder"
+           else (scene_pages["base"] / "windy.html").as_uri()) + "?t=1.5"
+    v = Visit(browser, url)
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 700, v.state
+        assert v.page.evaluate("window.axialdeformView.info().time") == 1.5
+        shot = v.silhouette()
+        at, still = scene_pages["render"]["windy 1.5"], scene_pages["render"]["windy 0"]
+        assert iou(shot, at, SKY) >= 0.95
+        near, far = (np.abs(shot.astype(np.float64) - ref).mean() for ref in (at, still))
+        assert near < far / 3, (near, far)  # the page's wind is render's at t = 1.5, not at t = 0
+        v.page.wait_for_timeout(700)
+        assert np.array_equal(v.silhouette(), shot)  # frozen time: the picture stays
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_wind_moves_without_a_fixed_time(browser, scene_pages):
+    v = Visit(browser, (scene_pages["base"] / "windy.html").as_uri())
+    try:
+        assert v.state["ready"] is True, v.state
+        first = v.silhouette()
+        changed = False
+        for _ in range(20):
+            v.page.wait_for_timeout(250)
+            if not np.array_equal(v.silhouette(), first):
+                changed = True
+                break
+        assert changed, "the wind did not move the leaves"
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+def line_share(image: np.ndarray) -> float:
+    """The share of the covered pixels that are (near) the wireframe's line colour."""
+    covered = _mask(image, BACKGROUND)
+    line = np.asarray([0.12, 0.14, 0.18]) * 255
+    near = np.abs(image.astype(np.float64) - line).max(axis=2) < 60
+    return float((near & covered).sum() / max(covered.sum(), 1))
+
+
+@pytest.mark.slow
+def test_wireframe_key_and_mode(browser, scene_files, tmp_path):
+    v = Visit(browser, (scene_files["base"] / "scène.html").as_uri())
+    try:
+        solid = v.silhouette()
+        assert v.page.evaluate("window.axialdeformView.wireframe") is False
+        v.page.keyboard.press("w")
+        v.page.wait_for_function("window.axialdeformView.wireframe === true")
+        assert v.page.locator(".axd-toggle").get_attribute("aria-pressed") == "true"
+        v.page.wait_for_timeout(300)
+        wire = v.silhouette()
+        assert line_share(wire) > 0.3 and line_share(solid) < 0.02, (line_share(wire), line_share(solid))
+        assert iou(wire, solid, BACKGROUND) > 0.5  # ... of the same instances
+        v.page.locator(".axd-toggle").click()  # the button toggles back
+        v.page.wait_for_function("window.axialdeformView.wireframe === false")
+        v.page.wait_for_timeout(300)
+        assert iou(v.silhouette(), solid, BACKGROUND) >= 0.99
+        assert v.errors == []
+    finally:
+        v.close()
+    mesh = scene_files["mesh"]
+    out = tmp_path / "wire.html"
+    write_page(out, build_scene(mesh, scene_files["params"], size=SIZE, mode="wireframe"))
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.page.evaluate("window.axialdeformView.wireframe") is True
+        assert line_share(v.silhouette()) > 0.3
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_canvas_fills_the_window_and_follows_resizes(browser, scene_files, tmp_path):
+    out = tmp_path / "full.html"
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "stone",
+                        str(scene_files["base"] / "stones ä.adp"), "-o", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(out.read_text(encoding="utf-8").split('id="axd-config">', 1)[1].split("</script>", 1)[0]
+                      .replace("<\\/", "</"))["fixed_size"] is False
+    v = Visit(browser, out.as_uri(), size=(520, 360))
+    try:
+        info = v.page.evaluate("window.axialdeformView.info()")
+        assert (info["width"], info["height"], info["fixed"]) == (520, 400, False), info  # the whole viewport
+        assert abs(info["aspect"] - 520 / 400) < 1e-9
+        v.page.set_viewport_size({"width": 700, "height": 300})
+        v.page.wait_for_function("window.axialdeformView.info().width === 700")
+        info = v.page.evaluate("window.axialdeformView.info()")
+        assert (info["width"], info["height"]) == (700, 300) and abs(info["aspect"] - 700 / 300) < 1e-9
+        assert _mask(v.silhouette(), BACKGROUND).sum() > 1000  # still drawn after the resize
+        fovy = json.loads(out.read_text(encoding="utf-8").split('id="axd-config">', 1)[1].split("</script>", 1)[0]
+                          .replace("<\\/", "</"))["camera"]["fovy"]
+        assert info["fov"] == fovy  # wider than the export (4:3): the exported camera as it is
+        v.page.set_viewport_size({"width": 300, "height": 500})  # narrower: the same width stays in view
+        v.page.wait_for_function("window.axialdeformView.info().width === 300")
+        v.page.wait_for_timeout(300)
+        assert v.page.evaluate("window.axialdeformView.info().fov") > fovy
+        covered = _mask(v.silhouette(), BACKGROUND)[:-80]  # the status line floats over the bottom rows
+        assert covered.sum() > 1000 and not covered[:, 0].any() and not covered[:, -1].any()  # nothing cut off
+        assert v.errors == []
+    finally:
+        v.close()
+    v = Visit(browser, out.as_uri() + "?size=320x240", size=(520, 360))  # asked for a fixed size
+    try:
+        info = v.page.evaluate("window.axialdeformView.info()")
+        assert (info["width"], info["height"], info["fixed"]) == (320, 240, True), info
+        v.page.set_viewport_size({"width": 700, "height": 500})
+        v.page.wait_for_timeout(300)
+        assert v.page.evaluate("window.axialdeformView.info().width") == 320
+    finally:
+        v.close()
+    v = Visit(browser, out.as_uri() + "?t=soon")
+    try:
+        assert v.state["ready"] is False and "?t=soon" in v.state["error"], v.state
+        assert v.page.locator(".axd-message").is_visible()
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("rel", ["assets/AlphaBlendModeTest.glb", "assets/cubevc.glb"])
+def test_parts_alpha_modes_and_vertex_colours_match_render(browser, tmp_path, rel):
+    """Nine parts (OPAQUE, MASK at three cutoffs, BLEND, textured, double-sided)
+    and a mesh with vertex colours: one draw per part, the same picture as render."""
+    from conftest import shared_mesh
+
+    mesh = ad.load_mesh(shared_mesh(rel))
+    assert mesh.has_appearance
+    params = ad.random_params(mesh, 30, seed=1, bend=0.1, placement="disc")
+    out = tmp_path / "parts.html"
+    scene = build_scene(mesh, params, size=SIZE)
+    assert len(scene.config["layers"][0]["parts"]) == len([p for p in mesh.parts if p.count])
+    write_page(out, scene)
+    render = ad.render_image(mesh, params, SIZE, ground=False, shadow=False)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 30, v.state
+        shot = v.silhouette()
+        assert iou(shot, render, BACKGROUND) >= 0.95
+        assert np.abs(shot.astype(np.float64) - render).mean() < 2.0  # colours too, pixel by pixel
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_scene_page_with_a_bad_layer_file_says_which(browser, scene_pages):
+    from urllib.parse import quote
+
+    site = scene_pages["base"] / "windy site"
+    bad = scene_pages["base"] / "windy bad"
+    if bad.exists():
+        shutil.rmtree(bad)
+    shutil.copytree(site, bad)
+    (bad / "layer-leaves.adp").write_bytes(_corrupt("checksum", (site / "layer-leaves.adp").read_bytes()))
+    v = Visit(browser, scene_pages["url"] + quote("windy bad") + "/index.html")
+    try:
+        assert v.state["ready"] is False, v.state
+        assert "layer-leaves.adp" in v.state["error"] and "checksum: wrong CRC-32" in v.state["error"]
+        assert v.page.locator(".axd-message").is_visible() and v.page.locator("canvas").count() == 0
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_mesh_page_with_wind_and_a_frozen_time_matches_render(browser, tmp_path):
+    """``web MESH PARAMS --wind ... --time T``: the page's clock stays at T (no
+    query needed), the picture is render's with the same wind at T."""
+    mesh = ad.load_mesh("leaf")
+    params = ad.random_params(mesh, 400, seed=6, bend=0.1, placement="disc")
+    adp = tmp_path / "leaves.adp"
+    ad.write_params(adp, params, mesh)
+    cmd = [sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "--size", f"{SIZE[0]}x{SIZE[1]}"]
+    r = subprocess.run(cmd + ["-o", str(tmp_path / "x.html"), "--time", "2"], capture_output=True, text=True)
+    assert r.returncode == 2 and "--time" in r.stderr and "Traceback" not in r.stderr  # no wind to move
+    out = tmp_path / "windy leaves.html"
+    r = subprocess.run(cmd + ["-o", str(out), "--wind", "0.8,0.8,0.4", "--wind-dir", "1,0,0.3", "--time", "2"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    wind = ad.Wind(direction=(1, 0, 0.3), strength=0.8, gustiness=0.8, frequency=0.4)
+    at = ad.render_image(mesh, params, SIZE, ground=False, shadow=False, wind=wind, time=2.0)
+    still = ad.render_image(mesh, params, SIZE, ground=False, shadow=False)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.page.evaluate("window.axialdeformView.info().time") == 2
+        shot = v.silhouette()
+        assert iou(shot, at, BACKGROUND) >= 0.95
+        assert iou(shot, at, BACKGROUND) > iou(shot, still, BACKGROUND) + 0.05, (iou(shot, at, BACKGROUND), iou(shot, still, BACKGROUND))
+        assert v.errors == []
     finally:
         v.close()

@@ -7,25 +7,36 @@ from pathlib import Path
 from urllib.parse import quote
 
 from ..core.errors import AxialDeformError
+from ._common import add_wind_args, wind_arg
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(subparsers) -> None:
     w = subparsers.add_parser("web", help="write the scene as a web page (WebGL 2, three.js)", description=(
-        "Write MESH bent by PARAMS as a page that draws it in a browser with the package's own shader: "
+        "Write MESH bent by PARAMS (or a scene file SCENE.toml: its layers, terrain, camera, light and wind) "
+        "as a page that draws it in a browser with the package's own shader: "
         "OUT a folder (index.html + files, for a static server) or OUT.html (one self-contained file that "
-        "works opened from disk). --serve serves the folder on 127.0.0.1 and prints the URL."))
-    w.add_argument("mesh", nargs="?", help="base mesh file, or 'stone' / 'leaf' (default: none: serve an exported page)")
+        "works opened from disk). --serve serves the folder on 127.0.0.1 and prints the URL. "
+        "The page: drag to orbit, W toggles wireframe; ?t=SECONDS freezes the wind's clock, ?size=WxH fixes the canvas."))
+    w.add_argument("mesh", nargs="?", help="base mesh file, 'stone' / 'leaf' / 'leafcard', or a scene file .toml "
+                   "(default: none: serve an exported page)")
     w.add_argument("params", nargs="?", help="parameter file, .adp or text (default: none: serve an exported page)")
     w.add_argument("-o", "--output", required=True, help="folder, or a name ending in .html (required)")
-    w.add_argument("--size", default="800x600", help="canvas WIDTHxHEIGHT; the camera is render's at this size (default: %(default)s)")
+    w.add_argument("--size", default=None, help="canvas WIDTHxHEIGHT, fixed; the camera is render's at this size "
+                   "(default: the canvas fills the window, the camera framed for 800x600)")
     w.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
-    w.add_argument("--mode", choices=("solid", "flat"), default="solid", help="shading (default: %(default)s)")
+    w.add_argument("--mode", choices=("solid", "flat", "wireframe"), default="solid",
+                   help="how to draw at first; W on the page toggles wireframe (default: %(default)s)")
     w.add_argument("--float32", action="store_true",
                    help="ship the float32 records instead of the quantized form (default: quantized)")
     w.add_argument("--ignore-mesh-mismatch", action="store_true",
                    help="use PARAMS even if made for another mesh (default: refuse)")
+    add_wind_args(w)
+    for action in w._actions:  # the page's clock: frozen at --time, else it runs
+        if action.dest == "time":
+            action.help = ("seconds: freeze the wind's clock there (a scene's [wind] or --wind; ?t= on the page "
+                           "overrides) (default: the clock runs)")
     w.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C (default: only write)")
     w.add_argument("--port", type=int, default=8000, help="port for --serve; a busy one is replaced by a free one (default: %(default)s)")
     w.set_defaults(handler=run)
@@ -33,21 +44,41 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> None:
     from ..gl.image import parse_size
-    from ..web import build_scene, make_server, write_page
+    from ..core.scene import is_scene_file
+    from ..web import build_scene, build_scene_file, make_server, write_page
 
     out = Path(args.output)
     if args.serve and not 0 <= args.port <= 65535:
         raise AxialDeformError(f"--port: expected a TCP port 0..65535 (0: any free one), found {args.port}")
-    if (args.mesh is None) != (args.params is None):
-        raise AxialDeformError("web: expected both MESH and PARAMS (or neither, with --serve)")
-    if args.mesh is not None:
+    size = parse_size(args.size) if args.size is not None else (800, 600)
+    time = args.time  # the page's frozen time (None: the wind's clock runs)
+    if args.mesh is not None and is_scene_file(args.mesh):
+        from .scenes import _time, scene_of
+
+        scene = scene_of(args)
+        if args.wind is not None:  # replaces the scene's [wind]
+            scene.wind = wind_arg(args)
+        if time is not None:
+            _time(scene, args)  # refuses a time without a wind
+        if args.up != "y":
+            raise AxialDeformError(f"--up: a scene file ({args.mesh}) names its own up axis; expected no --up")
+        web = build_scene_file(scene, size=size, mode=args.mode, quantize=not args.float32,
+                               fixed_size=args.size is not None, time=time)
+        page = write_page(out, web)
+        layers = [layer for layer in web.config["layers"] if not layer["terrain"]]
+        print(f"wrote {page} ({len(layers)} layers{', a terrain' if len(layers) < len(web.config['layers']) else ''}, "
+              f"{web.count} instances, "
+              f"{'float32' if args.float32 else 'quantized'} parameters)")
+    elif (args.mesh is None) != (args.params is None):
+        raise AxialDeformError("web: expected both MESH and PARAMS, a scene file .toml, or neither (with --serve)")
+    elif args.mesh is not None:
         from ..core.mesh import load_mesh
         from ..core.params import read_params
 
         mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
-        scene = build_scene(mesh, params, size=parse_size(args.size), up=args.up, mode=args.mode,
-                            quantize=not args.float32)
+        scene = build_scene(mesh, params, size=size, up=args.up, mode=args.mode, quantize=not args.float32,
+                            fixed_size=args.size is not None, wind=wind_arg(args), time=time)
         page = write_page(out, scene)
         print(f"wrote {page} ({len(params)} instances, {'float32' if args.float32 else 'quantized'} parameters)")
     elif not args.serve:

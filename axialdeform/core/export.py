@@ -340,13 +340,20 @@ def encode_base_mesh(mesh) -> bytes:
     """The GLB bytes of the base mesh alone (one mesh, one node): POSITION and
     NORMAL float32 in the file's vertex order and its triangles, so the
     positions and faces hash to :attr:`BaseMesh.fingerprint` again (what the
-    web page checks a parameter file against)."""
+    web page checks a parameter file against).  A mesh with appearance keeps
+    it: one primitive per part (its triangles in order, so the parts' indices
+    concatenated are the mesh's triangles) with its material (base colour
+    factor and texture, alpha mode and cutoff, double-sidedness, normal map),
+    TEXCOORD_0, COLOR_0 and TANGENT."""
     b = _Builder()
     g = b.g
     pos, nrm = _base_attributes(b, mesh)
-    idx = b.indices(mesh)
-    b.gltf.meshes.append(g.Mesh(name=str(mesh.name), primitives=[
-        g.Primitive(attributes=g.Attributes(POSITION=pos, NORMAL=nrm), indices=idx, mode=_TRIANGLES)]))
+    look = b.appearance(mesh)
+    attributes = {"POSITION": pos, "NORMAL": nrm}
+    if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
+        attributes["TANGENT"] = b.accessor(b.view(mesh.tangents.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT,
+                                           mesh.vertex_count, "VEC4", name="base_TANGENT")
+    b.gltf.meshes.append(g.Mesh(name=str(mesh.name), primitives=look.primitives(attributes)))
     b.gltf.nodes.append(g.Node(name=str(mesh.name), mesh=0, extras={EXTRAS_KEY: _mesh_extras(mesh, 0, "base")}))
     b.gltf.scenes.append(g.Scene(name="axialdeform base mesh", nodes=[0]))
     b.gltf.scene = 0

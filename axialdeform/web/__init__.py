@@ -1,9 +1,11 @@
 """The same scene in a browser: a WebGL 2 page (three.js) that bends every
 instance in its vertex shader from the package's own GLSL.
 
-``build_scene`` gathers what a page needs: the base mesh as GLB, the
-parameters in the binary ``.adp`` form (quantized by default), and a config
-with the camera, background and light of ``axialdeform render`` for the same
+``build_scene`` (one mesh and its parameters) and ``build_scene_file`` (a
+scene file: every layer and the terrain) gather what a page needs: per layer
+the base mesh as GLB (with its parts and materials) and the parameters in the
+binary ``.adp`` form (quantized by default), and a config with the layers,
+the camera, background, light and wind of ``axialdeform render`` for the same
 canvas size and the shaders, assembled at export time from ``glsl/`` by
 :func:`axialdeform.gl.shaders.assemble` and moved to GLSL ES 3.00 (version
 line and precision only: :func:`to_glsl_es`).  ``write_folder`` writes
@@ -34,8 +36,8 @@ from ..core.errors import AxialDeformError
 from ..core.export import encode_base_mesh
 from ..core.params import as_params, encode_binary
 
-__all__ = ["THREE_VERSION", "WebScene", "build_scene", "page_shaders", "to_glsl_es", "write_folder", "single_file_html",
-           "make_server", "scene_bytes",
+__all__ = ["THREE_VERSION", "WebScene", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es", "write_folder", "single_file_html",
+           "make_server", "scene_bytes", "embedded_file",
            "write_single_file", "write_page", "vendor_file", "page_source"]
 
 #: the files of the vendored three.js, relative to ``web/vendor/``
@@ -86,20 +88,32 @@ def to_glsl_es(source: str) -> str:
     return GLSL_ES_HEADER + "\n" + rest
 
 
+#: the page's shader builds: key -> defines (``_extended``: 19-number
+#: instances; ``_material``: a mesh with UVs, colours, parts or materials)
+SHADER_VARIANTS = {
+    "float": {}, "quantized": {"AXIAL_QUANTIZED": 1},
+    "float_extended": {"AXIAL_EXTENDED": 1}, "quantized_extended": {"AXIAL_QUANTIZED": 1, "AXIAL_EXTENDED": 1},
+}
+SHADER_VARIANTS.update({f"{k}_material": {**v, "AXIAL_MATERIAL": 1} for k, v in list(SHADER_VARIANTS.items())})
+
+
 def page_shaders() -> dict:
     """The page's shaders, assembled from ``glsl/scene.vert`` / ``scene.frag``
-    (which include ``axial.glsl``, ``quantized.glsl`` and ``lighting.glsl``):
-    ``{"float": {"vertex", "fragment"}, "quantized": ..., "float_extended": ...,
-    "quantized_extended": ...}`` (``_extended``: 19-number instances, ``AXIAL_EXTENDED``)."""
+    (which include ``axial.glsl``, ``wind.glsl``, ``quantized.glsl`` and
+    ``lighting.glsl``): ``{"float": {"vertex", "fragment"}, "quantized": ...,
+    "float_extended": ..., "quantized_extended": ...}`` and the same four with
+    ``_material`` (``AXIAL_MATERIAL``: textures, vertex colours, alpha modes)."""
     from ..gl.shaders import assemble
 
-    out = {}
-    variants = (("float", {}), ("quantized", {"AXIAL_QUANTIZED": 1}),
-                ("float_extended", {"AXIAL_EXTENDED": 1}), ("quantized_extended", {"AXIAL_QUANTIZED": 1, "AXIAL_EXTENDED": 1}))
-    for variant, defines in variants:
-        out[variant] = {stage: to_glsl_es(assemble(name, defines).source)
-                        for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
-    return out
+    return {variant: {stage: to_glsl_es(assemble(name, defines).source)
+                      for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
+            for variant, defines in SHADER_VARIANTS.items()}
+
+
+def shader_key(quantize: bool, fields: int, material: bool) -> str:
+    """The :data:`SHADER_VARIANTS` key of a layer."""
+    return ("quantized" if quantize else "float") + ("_extended" if fields == 19 else "") + (
+        "_material" if material else "")
 
 
 def _render_defaults() -> dict:
@@ -117,74 +131,221 @@ def _render_defaults() -> dict:
 
 @dataclass
 class WebScene:
-    """What a page shows: ``config`` (JSON-able dict), ``glb`` and ``adp`` bytes."""
+    """What a page shows: ``config`` (JSON-able dict) and ``files``
+    (file name -> bytes: a GLB and an ``.adp`` per layer)."""
 
     config: dict
-    glb: bytes
-    adp: bytes
+    files: dict
 
     @property
     def count(self) -> int:
         return int(self.config["instances"])
 
+    @property
+    def glb(self) -> bytes:
+        """The first layer's base mesh (GLB bytes)."""
+        return self.files[self.config["layers"][0]["mesh"]["file"]]
 
-def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "solid", quantize: bool = True,
-                title: str | None = None, adp: bytes | None = None, all_shaders: bool = False) -> WebScene:
-    """The page's data for ``mesh`` and ``params`` ((n, 16) float32).
+    @property
+    def adp(self) -> bytes:
+        """The first layer's parameter file (``.adp`` bytes)."""
+        return self.files[self.config["layers"][0]["params_file"]]
 
-    The camera is :func:`axialdeform.gl.camera.frame_instances` for the canvas
-    ``size`` (width, height) -- the camera of ``axialdeform render`` at that
-    size.  ``adp`` (bytes of a parameter file) is written as given instead of
-    encoding ``params`` (tests use it to ship a corrupt file).  The config
-    carries the shader build for these parameters (16 or 19 numbers, float32
-    or quantized); ``all_shaders`` carries all four (the widget, whose
-    parameters may change).
-    """
-    from ..gl.camera import UP_VECTORS, frame_instances
-    from ..gl.renderer import DEFAULT_COLORS, _MODE_INDEX, _unit
 
-    if mode not in ("solid", "flat"):
-        raise AxialDeformError(f"mode: the page draws 'solid' or 'flat', found {mode!r}")
+def _parts(mesh, color) -> list:
+    """The parts as the page draws them (the GLB's primitives, in order):
+    triangle range and material, as :class:`axialdeform.gl.material.GpuMaterials`
+    binds them (a default material takes the layer's colour and is lit on both sides)."""
+    from ..gl.material import ALPHA_MODE_INDEX
+
+    out = []
+    for part in mesh.parts:
+        if part.count == 0:  # no primitive in the GLB either
+            continue
+        m = part.material
+        base = [float(c) for c in m.base_color]
+        if m.is_default:
+            base[:3] = [float(c) for c in color]
+        out.append({"name": str(part.name), "start": int(part.start), "count": int(part.count),
+                    "alpha_mode": ALPHA_MODE_INDEX[m.alpha_mode], "alpha_cutoff": float(m.alpha_cutoff),
+                    "double_sided": bool(m.double_sided), "lit_two_sided": bool(m.double_sided or m.is_default),
+                    "base_color": base, "texture": m.texture is not None and mesh.uvs is not None,
+                    "normal_map": (m.normal_texture is not None and mesh.uvs is not None
+                                   and mesh.tangents is not None)})
+    return out
+
+
+def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: str, quantize: bool,
+           color=None, wind: bool = False, adp: bytes | None = None, terrain: bool = False) -> dict:
+    """One layer's config entry; its GLB and ``.adp`` go into ``files``."""
+    from ..gl.renderer import DEFAULT_COLORS
+
+    axis = mesh.axis
+    if color is None:
+        color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
+    material = bool(mesh.has_appearance)
+    if adp is None:
+        adp = encode_binary(params, axis=axis, mesh_fingerprint=mesh.fingerprint, quantize=quantize)
+    files[glb_file] = encode_base_mesh(mesh)
+    files[params_file] = bytes(adp)
+    return {
+        "name": name,
+        "terrain": bool(terrain),  # drawn, not counted among the instances
+        "instances": int(len(params)),
+        "mesh": {"file": glb_file, "name": Path(str(mesh.name)).name, "axis": int(axis.index), "lo": float(axis.lo),
+                 "length": float(axis.length), "fingerprint": mesh.fingerprint.hex(),
+                 # the axis line across the axis (twist and taper turn about it): u_center
+                 "center": [float(c) for k, c in enumerate(axis.center) if k != axis.index],
+                 "vertices": int(mesh.vertex_count)},
+        "params_file": params_file,
+        "shader": shader_key(quantize, params.shape[1], material),
+        "material": material,
+        "color": [float(x) for x in color],
+        "wind": bool(wind),
+        "cull_back_faces": bool(mesh.is_volume),
+        "parts": _parts(mesh, color),
+    }
+
+
+def _check_view(size, up: str, mode: str) -> tuple:
+    from ..gl.camera import UP_VECTORS
+    from ..gl.renderer import MODES
+
+    if mode not in MODES:
+        raise AxialDeformError(f"mode: the page draws {', '.join(MODES)}, found {mode!r}")
     if up not in UP_VECTORS:
         raise AxialDeformError(f"up: expected x, y or z, found {up!r}")
     w, h = (int(x) for x in size)
     if not (0 < w <= 16384 and 0 < h <= 16384):
         raise AxialDeformError(f"size: expected 1..16384 pixels each way, found {w}x{h}")
-    params = as_params(params)
-    cam = frame_instances(mesh, params, w / h, up=up)
-    d = _render_defaults()
-    axis = mesh.axis
-    shaders = page_shaders()
-    if not all_shaders:
-        key = ("quantized" if quantize else "float") + ("_extended" if params.shape[1] == 19 else "")
-        shaders = {key: shaders[key]}
-    if adp is None:
-        adp = encode_binary(params, axis=axis, mesh_fingerprint=mesh.fingerprint, quantize=quantize)
-    config = {
+    return w, h
+
+
+def _config(*, title, layers, size, fixed_size, mode, cam, background, light_dir, up, ambient, wind, shaders,
+            time=None) -> dict:
+    from ..gl.camera import UP_VECTORS
+    from ..gl.renderer import _MODE_INDEX, _unit
+
+    return {
         "generator": "axialdeform",
-        "title": title or f"{len(params)} × {mesh.name}",
-        "instances": int(len(params)),
-        "size": [w, h],
+        "title": title,
+        "instances": int(sum(layer["instances"] for layer in layers if not layer["terrain"])),
+        "size": [int(size[0]), int(size[1])],
+        "fixed_size": bool(fixed_size),
+        "mode": mode,
         "mode_index": _MODE_INDEX[mode],
-        "mesh": {"file": MESH_FILE, "name": str(mesh.name), "axis": int(axis.index), "lo": float(axis.lo),
-                 "length": float(axis.length), "fingerprint": mesh.fingerprint.hex(),
-                 # the axis line across the axis (twist and taper turn about it): u_center
-                 "center": [float(c) for k, c in enumerate(axis.center) if k != axis.index],
-                 "vertices": int(mesh.vertex_count)},
-        "params_file": PARAMS_FILE,
-        "cull_back_faces": bool(mesh.is_volume),
+        "layers": layers,
         "camera": {"eye": cam.eye.tolist(), "target": cam.target.tolist(), "up": cam.up.tolist(),
                    "fovy": cam.fovy, "near": cam.near, "far": cam.far},
-        "background": d["background"],
-        "light_dir": [float(x) for x in _unit(d["light_dir"])],
+        "background": [float(x) for x in background],
+        "light_dir": [float(x) for x in _unit(light_dir)],
         "up": [float(x) for x in _unit(UP_VECTORS[up])],
-        "ambient": d["ambient"],
-        "color": [float(x) for x in DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))],
+        "ambient": float(ambient),
         "line_color": [0.12, 0.14, 0.18],
+        "wind": _wind_config(wind),
+        "time": None if time is None else float(time),  # seconds: the wind's clock frozen there (None: it runs)
         "three": _three_version(),
         "shaders": shaders,
     }
-    return WebScene(config, encode_base_mesh(mesh), bytes(adp))
+
+
+def _wind_config(wind) -> dict | None:
+    """The wind's uniforms but the time (the page computes the two cycles,
+    ``frac(f T)`` and ``frac(harmonic f T)``, as :meth:`Wind.cycles` does)."""
+    if wind is None or wind.strength == 0:
+        return None
+    from ..core.wind import SECOND_HARMONIC
+
+    return {"strength": float(wind.strength), "direction": [float(x) for x in wind.unit_direction],
+            "gustiness": float(wind.gustiness), "frequency": float(wind.frequency),
+            "harmonic": float(SECOND_HARMONIC), "wavenumber": float(wind.wavenumber)}
+
+
+def _time(wind, time):
+    if time is None:
+        return None
+    import math
+
+    if wind is None:
+        raise AxialDeformError("time: only meaningful with a wind (the wind is the only thing that moves with time)")
+    if not math.isfinite(float(time)):
+        raise AxialDeformError(f"time: expected a finite number of seconds, found {time!r}")
+    return float(time)
+
+
+def _shaders(layers, all_shaders: bool) -> dict:
+    shaders = page_shaders()
+    if all_shaders:  # the widget, whose parameters may change: every build of its mesh's kind
+        material = layers[0]["material"]
+        return {k: v for k, v in shaders.items() if k.endswith("_material") == material}
+    return {layer["shader"]: shaders[layer["shader"]] for layer in layers}
+
+
+def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "solid", quantize: bool = True,
+                title: str | None = None, adp: bytes | None = None, all_shaders: bool = False,
+                fixed_size: bool = True, wind=None, time: float | None = None) -> WebScene:
+    """The page's data for ``mesh`` and ``params`` ((n, 16) float32).
+
+    The camera is :func:`axialdeform.gl.camera.frame_instances` for the canvas
+    ``size`` (width, height) -- the camera of ``axialdeform render`` at that
+    size.  ``fixed_size`` keeps the canvas at ``size``; else it fills the
+    window.  ``adp`` (bytes of a parameter file) is written as given instead of
+    encoding ``params`` (tests use it to ship a corrupt file).  The config
+    carries the shader build for these parameters (16 or 19 numbers, float32
+    or quantized, with or without material); ``all_shaders`` carries the four
+    of the mesh's kind (the widget, whose parameters may change).  ``wind``
+    (:class:`axialdeform.Wind`) sways the instances; ``time`` freezes its
+    clock at that many seconds (else it runs; ``?t=`` on the page overrides).
+    """
+    from ..gl.camera import frame_instances
+
+    w, h = _check_view(size, up, mode)
+    params = as_params(params)
+    files: dict = {}
+    layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
+                   quantize=quantize, adp=adp, wind=wind is not None)
+    d = _render_defaults()
+    config = _config(title=title or f"{len(params)} × {mesh.name}", layers=[layer], size=(w, h),
+                     fixed_size=fixed_size, mode=mode, cam=frame_instances(mesh, params, w / h, up=up),
+                     background=d["background"], light_dir=d["light_dir"], up=up, ambient=d["ambient"], wind=wind,
+                     shaders=_shaders([layer], all_shaders), time=_time(wind, time))
+    return WebScene(config, files)
+
+
+def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: bool = True,
+                     fixed_size: bool = True, wind=None, time: float | None = None) -> WebScene:
+    """The page's data for a loaded scene file (:func:`axialdeform.core.scene.load_scene`):
+    every layer (its base mesh and parameters: one instanced draw per part),
+    the terrain (one undeformed instance of itself, float32), the scene's
+    camera (:func:`axialdeform.gl.scene.scene_camera` at this ``size``),
+    background, light and wind (``wind`` replaces the scene's; ``time``
+    freezes its clock), as ``axialdeform render SCENE [--time T]`` draws them."""
+    from ..gl.scene import TERRAIN_INSTANCE, scene_camera
+
+    w, h = _check_view(size, scene.up, mode)
+    wind = scene.wind if wind is None else wind
+    files: dict = {}
+    layers = []
+    if scene.terrain is not None:
+        layers.append(_layer("terrain", scene.terrain, TERRAIN_INSTANCE, files=files, glb_file="terrain.glb",
+                             params_file="terrain.adp", quantize=False, color=scene.terrain_color, terrain=True))
+    for item in scene.layers:
+        if len(item.params) == 0:
+            continue
+        layers.append(_layer(item.name, item.mesh, as_params(item.params), files=files,
+                             glb_file=f"layer-{item.name}.glb", params_file=f"layer-{item.name}.adp",
+                             quantize=quantize, color=item.color, wind=item.wind and wind is not None))
+    if not layers:
+        raise AxialDeformError(f"{scene.path}: the scene has nothing to draw; expected a terrain or a layer with instances")
+    d = _render_defaults()
+    from dataclasses import replace
+
+    cam = scene_camera(replace(scene, wind=wind), w / h)
+    config = _config(title=Path(scene.path).stem, layers=layers, size=(w, h), fixed_size=fixed_size, mode=mode,
+                     cam=cam, background=scene.background, light_dir=scene.light.get("light_dir", d["light_dir"]),
+                     up=scene.up, ambient=scene.light.get("ambient", d["ambient"]), wind=wind,
+                     shaders=_shaders(layers, False), time=_time(wind, time))
+    return WebScene(config, files)
 
 
 def _json_in_html(obj) -> str:
@@ -205,14 +366,17 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import * as app from './app.js';
 
 async function fetchBytes(name) {
-  const r = await fetch(name);
+  const r = await fetch(encodeURIComponent(name));
   if (!r.ok) throw new app.SceneError(`${name}: ${r.status} ${r.statusText}`);
   return r.arrayBuffer();
 }
 async function load() {
   try {
     const config = await (await fetch('scene.json')).json();
-    return { config, glb: await fetchBytes(config.mesh.file), adp: await fetchBytes(config.params_file) };
+    const names = config.layers.flatMap((l) => [l.mesh.file, l.params_file]);
+    const files = {};
+    await Promise.all(names.map(async (n) => { files[n] = await fetchBytes(n); }));
+    return { config, files };
   } catch (err) {
     if (err instanceof app.SceneError) throw err;
     throw new app.SceneError(location.protocol === 'file:'
@@ -229,8 +393,9 @@ const text = (id) => document.getElementById(id).textContent;
 const b64text = (id) => new TextDecoder().decode(Uint8Array.from(atob(text(id).trim()), (c) => c.charCodeAt(0)));
 const { lib, app } = await loadModules({ three: b64text('axd-three'), orbit: b64text('axd-orbit'),
   gltf: b64text('axd-gltf'), bgu: b64text('axd-bgu'), app: b64text('axd-app') });
-start(async () => ({ config: JSON.parse(text('axd-config')), glb: app.fromBase64(text('axd-mesh')),
-  adp: app.fromBase64(text('axd-params')) }), lib, app);
+const files = {};
+for (const e of document.querySelectorAll('script[data-file]')) files[e.dataset.file] = app.fromBase64(e.textContent);
+start(async () => ({ config: JSON.parse(text('axd-config')), files }), lib, app);
 """
 
 # shared by both entries: mount, then tell tools the first frame is drawn
@@ -239,7 +404,7 @@ function start(load, lib, app) {
   const root = document.getElementById('axd-page');
   load().then((scene) => {
     document.title = `axialdeform: ${scene.config.title}`;
-    const view = app.mount(root, lib, scene);
+    const view = app.mount(root, lib, scene, app.pageOptions(location.search));
     window.axialdeformView = view;
     return view.ready;
   }).then((r) => {
@@ -278,8 +443,7 @@ def write_folder(out: str | os.PathLike, scene: WebScene) -> Path:
         "index.html": page.encode("utf-8"),
         "app.js": page_source("app.js").encode("utf-8"),
         "scene.json": json.dumps(scene.config, ensure_ascii=False, indent=1).encode("utf-8"),
-        MESH_FILE: scene.glb,
-        PARAMS_FILE: scene.adp,
+        **scene.files,
     }
     for rel in list(VENDOR_FILES.values()) + ["LICENSE", "VERSION"]:
         files["three/" + rel] = vendor_file(rel)
@@ -294,6 +458,20 @@ def _data_script(element_id: str, data: bytes, kind: str = "application/octet-st
     return f'<script type="{kind}" id="{element_id}">{base64.b64encode(data).decode("ascii")}</script>\n'
 
 
+def _file_script(name: str, data: bytes) -> str:
+    """One of the scene's files inlined: ``<script data-file="NAME">`` (base64)."""
+    return (f'<script type="application/octet-stream;base64" data-file="{html.escape(name)}">'
+            f'{base64.b64encode(data).decode("ascii")}</script>\n')
+
+
+def embedded_file(page: str, name: str) -> bytes:
+    """The bytes of the file ``name`` inlined in a single-file page (for tools and tests)."""
+    marker = f'data-file="{html.escape(name)}">'
+    if marker not in page:
+        raise AxialDeformError(f"page: no inlined file {name!r}")
+    return base64.b64decode(page.split(marker, 1)[1].split("<", 1)[0])
+
+
 def single_file_html(scene: WebScene) -> str:
     """ONE self-contained page (works from ``file://``): three.js, the page
     code, the GLB and the ``.adp`` inlined as base64; three.js's licence in a comment."""
@@ -301,7 +479,7 @@ def single_file_html(scene: WebScene) -> str:
     licence = vendor_file("LICENSE").decode("utf-8").replace("--", "- -")
     head = f"<!-- three.js {_three_version()} (inlined below), its licence:\n{licence}-->"
     data = f'<script type="application/json" id="axd-config">{_json_in_html(scene.config)}</script>\n'
-    data += _data_script("axd-mesh", scene.glb) + _data_script("axd-params", scene.adp)
+    data += "".join(_file_script(name, blob) for name, blob in scene.files.items())
     for key, rel in VENDOR_FILES.items():
         data += _data_script(f"axd-{key}", vendor_file(rel), "text/javascript;base64")
     data += _data_script("axd-app", page_source("app.js").encode("utf-8"), "text/javascript;base64")
@@ -327,11 +505,14 @@ def write_page(out: str | os.PathLike, scene: WebScene) -> Path:
 
 def scene_bytes(out: str | os.PathLike) -> dict:
     """Bytes a browser downloads for an exported folder: ``page`` (index.html,
-    app.js, scene.json), ``mesh``, ``params`` and ``three`` (the vendored
-    three.js files the page imports)."""
+    app.js, scene.json), ``mesh`` (every layer's GLB), ``params`` (every
+    ``.adp``) and ``three`` (the vendored three.js files the page imports)."""
     out = Path(out)
     size = lambda *names: sum((out / n).stat().st_size for n in names)  # noqa: E731
-    return {"page": size("index.html", "app.js", "scene.json"), "mesh": size(MESH_FILE), "params": size(PARAMS_FILE),
+    config = json.loads((out / "scene.json").read_text(encoding="utf-8"))
+    return {"page": size("index.html", "app.js", "scene.json"),
+            "mesh": size(*(layer["mesh"]["file"] for layer in config["layers"])),
+            "params": size(*(layer["params_file"] for layer in config["layers"])),
             "three": size(*("three/" + r for r in VENDOR_FILES.values()))}
 
 

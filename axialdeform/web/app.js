@@ -95,28 +95,26 @@ async function sha256(bytes) {
 /** SHA-256 of the mesh's positions (float32 LE) and triangles (uint32 LE),
  * as BaseMesh.fingerprint; null where WebCrypto is unavailable (a page served
  * to another machine over plain http is not a secure context). */
-export async function meshFingerprint(geometry) {
-  const pos = geometry.getAttribute('position').array;
-  const index = Uint32Array.from(geometry.index.array);
-  const all = new Uint8Array(pos.byteLength + index.byteLength);
-  all.set(new Uint8Array(pos.buffer, pos.byteOffset, pos.byteLength), 0);
-  all.set(new Uint8Array(index.buffer), pos.byteLength);
+export async function meshFingerprint(positions, index) {
+  const all = new Uint8Array(positions.byteLength + index.byteLength);
+  all.set(new Uint8Array(positions.buffer, positions.byteOffset, positions.byteLength), 0);
+  all.set(new Uint8Array(index.buffer, index.byteOffset, index.byteLength), positions.byteLength);
   return sha256(all);
 }
 
 /** The mesh check of axialdeform.core.params.check_mesh. */
-function checkMesh(p, cfg, actual) {
+function checkMesh(p, mesh, actual) {
   const axisNames = ['x', 'y', 'z'];
   if (p.fingerprint.some((b) => b !== 0)) {
-    const want = actual ? hex(actual) : cfg.mesh.fingerprint;
+    const want = actual ? hex(actual) : mesh.fingerprint;
     if (hex(p.fingerprint) !== want) {
       throw new SceneError(`${p.name}: made for a different base mesh (fingerprint ${hex(p.fingerprint).slice(0, 16)}, ` +
-        `expected ${want.slice(0, 16)} of ${cfg.mesh.name}); export it with the mesh it was made for`);
+        `expected ${want.slice(0, 16)} of ${mesh.name}); export it with the mesh it was made for`);
     }
   }
-  if (p.axis >= 0 && p.axis !== cfg.mesh.axis) {
+  if (p.axis >= 0 && p.axis !== mesh.axis) {
     throw new SceneError(`${p.name}: made for a mesh whose control axis is ${axisNames[p.axis]}, ` +
-      `but ${cfg.mesh.name}'s is ${axisNames[cfg.mesh.axis]}`);
+      `but ${mesh.name}'s is ${axisNames[mesh.axis]}`);
   }
 }
 
@@ -127,43 +125,101 @@ function el(tag, cls, parent) {
   return e;
 }
 
+/** The page's query options: ?t=SECONDS freezes the wind's clock at that
+ * time; ?size=WxH keeps the canvas at that size (else the export decides:
+ * a fixed size, or the whole window). */
+export function pageOptions(search) {
+  const q = new URLSearchParams(search || '');
+  const out = { windowKeys: true }; // a page of its own: W anywhere toggles wireframe
+  if (q.has('t')) {
+    const t = Number(q.get('t'));
+    if (q.get('t').trim() === '' || !Number.isFinite(t)) throw new SceneError(`?t=${q.get('t')}: expected a time in seconds`);
+    out.time = t;
+  }
+  if (q.has('size')) {
+    const m = /^(\d{1,5})x(\d{1,5})$/.exec(q.get('size'));
+    if (!m || +m[1] < 1 || +m[2] < 1) throw new SceneError(`?size=${q.get('size')}: expected WIDTHxHEIGHT in pixels`);
+    out.size = [+m[1], +m[2]];
+  }
+  return out;
+}
+
+/** The wind's two cycles at time t, as axialdeform.core.wind.Wind.cycles. */
+function windCycles(w, t) {
+  const frac = (x) => ((x % 1) + 1) % 1;
+  return [frac(w.frequency * t), frac(w.harmonic * w.frequency * t)];
+}
+
 /**
  * Draw the scene into `root`.
- * scene = {config, glb: ArrayBuffer, adp: ArrayBuffer}
+ * scene = {config, files: {name: ArrayBuffer}} (every layer's GLB and .adp),
+ * or {config, glb, adp} for a one-layer scene (the widget).
+ * options = {time, size, windowKeys} (pageOptions); without windowKeys (the
+ * widget, inside a notebook) only a focused picture takes the W key.
  * Returns {ready: Promise<{instances}> (first frame drawn; rejects with the
- * message shown), setParams(ArrayBuffer, name), dispose()}.
+ * message shown), setParams(ArrayBuffer, name) (the first layer's),
+ * setWireframe(on), dispose()}.
  */
-export function mount(root, lib, scene) {
+export function mount(root, lib, scene, options = {}) {
   const { THREE, OrbitControls, GLTFLoader } = lib;
   const cfg = scene.config;
-  const [W, H] = cfg.size;
+  const files = scene.files || { [cfg.layers[0].mesh.file]: scene.glb, [cfg.layers[0].params_file]: scene.adp };
+  const fixed = Boolean(options.size) || cfg.fixed_size !== false;
+  const [W, H] = options.size || cfg.size;
   root.classList.add('axd-root');
   const stage = el('div', 'axd-stage', root);
-  stage.style.width = `${W}px`;
-  stage.style.height = `${H}px`;
-  stage.style.position = 'relative';
+  if (fixed) {
+    stage.style.width = `${W}px`;
+    stage.style.height = `${H}px`;
+    stage.style.position = 'relative';
+  } else {
+    root.classList.add('axd-fill');
+    stage.style.position = 'fixed';
+    stage.style.inset = '0';
+  }
   stage.style.background = `rgb(${cfg.background.map((c) => Math.round(c * 255)).join(',')})`;
   const message = el('div', 'axd-message', stage);
   message.setAttribute('role', 'alert');
   message.hidden = true;
   const status = el('div', 'axd-status', root);
-  status.textContent = 'loading…';
+  const statusText = el('span', 'axd-status-text', status);
+  statusText.textContent = 'loading…';
+  const toggle = el('button', 'axd-toggle', status);
+  toggle.type = 'button';
+  toggle.textContent = 'wireframe (W)';
+  toggle.setAttribute('aria-pressed', 'false');
 
-  let renderer = null, controls = null, material = null, geometry = null, fingerprint = null;
+  let renderer = null, controls = null, camera = null;
   let disposed = false;
-  const state = { count: 0 };
+  const layers = []; // {cfg, geometry, materials, mesh, fingerprint, variant, uniforms, count}
+  const state = { count: 0, wireframe: cfg.mode === 'wireframe' };
+  const baseMode = cfg.mode === 'wireframe' ? 0 : cfg.mode_index;
+  const v3 = (a) => new THREE.Vector3().fromArray(a);
+  const wind = cfg.wind;
+  // the wind's clock: ?t= on the page, else the export's --time, else it runs
+  const frozen = options.time !== undefined ? options.time : (cfg.time === null || cfg.time === undefined ? undefined : cfg.time);
+  // uniforms every layer shares (the same objects: set once a frame)
+  const shared = {
+    u_view: { value: null }, u_proj: { value: null }, u_eye: { value: new THREE.Vector3() },
+    u_mode: { value: state.wireframe ? 2 : baseMode }, u_line_color: { value: v3(cfg.line_color) },
+    u_line_alpha: { value: 1.0 }, u_light_dir: { value: v3(cfg.light_dir) }, u_up: { value: v3(cfg.up) },
+    u_ambient: { value: cfg.ambient }, u_instance_base: { value: 0 },
+    u_wind_dir: { value: v3(wind ? wind.direction : [1, 0, 0]) }, u_wind_gust: { value: wind ? wind.gustiness : 0 },
+    u_wind_cycles: { value: new THREE.Vector2() }, u_wind_wavenumber: { value: wind ? wind.wavenumber : 0 },
+  };
 
   function showError(err) {
     const text = err instanceof SceneError ? err.message : `error: ${err && err.message ? err.message : err}`;
     message.textContent = text;
     message.hidden = false;
-    status.textContent = 'nothing drawn';
+    statusText.textContent = 'nothing drawn';
     if (renderer) renderer.domElement.style.visibility = 'hidden';
     return text;
   }
 
-  function instanceAttributes(p) {
+  function instanceAttributes(layer, p) {
     // the file's records, as they are, in one interleaved instanced buffer
+    const geometry = layer.geometry;
     const buf = new THREE.InstancedInterleavedBuffer(p.values, p.fields, 1);
     const f = p.fields;
     if (p.encoding === 1) {
@@ -174,7 +230,7 @@ export function mount(root, lib, scene) {
         a.gpuType = THREE.IntType; // uvecN in the shader: vertexAttribIPointer
         geometry.setAttribute(n, a);
       }
-      const u = material.uniforms;
+      const u = layer.uniforms;
       u.u_qmin.value = p.qtable.slice(0, 16);
       u.u_qstep.value = p.qtable.slice(f, f + 16);
       if (f === 19) {
@@ -188,88 +244,150 @@ export function mount(root, lib, scene) {
     }
   }
 
-  function variant(p) {
-    return (p.encoding === 1 ? 'quantized' : 'float') + (p.fields === 19 ? '_extended' : '');
+  function variant(layer, p) {
+    return (p.encoding === 1 ? 'quantized' : 'float') + (p.fields === 19 ? '_extended' : '') +
+      (layer.cfg.material ? '_material' : '');
   }
 
-  function makeMaterial(key) {
+  function makeMaterials(layer, key) {
     const sh = cfg.shaders[key];
-    const v3 = (a) => new THREE.Vector3().fromArray(a);
     // three.js writes the version line itself (glslVersion), then its own defines
     const body = (src) => src.replace(/^#version 300 es\n/, '');
-    return new THREE.RawShaderMaterial({
-      glslVersion: THREE.GLSL3,
-      vertexShader: body(sh.vertex),
-      fragmentShader: body(sh.fragment),
-      side: cfg.cull_back_faces ? THREE.FrontSide : THREE.DoubleSide,
-      uniforms: {
-        u_view: { value: null }, u_proj: { value: null },
-        u_axis: { value: cfg.mesh.axis }, u_lo: { value: cfg.mesh.lo }, u_len: { value: cfg.mesh.length },
-        u_center: { value: new THREE.Vector2().fromArray(cfg.mesh.center) },
-        u_qmin: { value: new Float32Array(16) }, u_qstep: { value: new Float32Array(16) },
-        u_qmin_extra: { value: new THREE.Vector3() }, u_qstep_extra: { value: new THREE.Vector3() },
-        u_mode: { value: cfg.mode_index }, u_color: { value: v3(cfg.color) }, u_line_color: { value: v3(cfg.line_color) },
-        u_light_dir: { value: v3(cfg.light_dir) }, u_up: { value: v3(cfg.up) }, u_eye: { value: new THREE.Vector3() },
-        u_ambient: { value: cfg.ambient },
-      },
+    const lc = layer.cfg;
+    return lc.parts.map((part, i) => {
+      const tex = layer.textures[i] || {};
+      const blend = part.alpha_mode === 2;
+      const m = new THREE.RawShaderMaterial({
+        glslVersion: THREE.GLSL3,
+        vertexShader: body(sh.vertex),
+        fragmentShader: body(sh.fragment),
+        side: lc.cull_back_faces && !part.double_sided ? THREE.FrontSide : THREE.DoubleSide,
+        transparent: blend,
+        depthWrite: !blend,
+        wireframe: state.wireframe,
+        uniforms: {
+          ...shared, ...layer.uniforms,
+          // the part's material, as axialdeform.gl.material.GpuMaterials.bind sets it
+          u_base_color: { value: new THREE.Vector4().fromArray(part.base_color) },
+          u_has_texture: { value: Boolean(part.texture && tex.map) }, u_texture: { value: tex.map || null },
+          u_alpha_mode: { value: part.alpha_mode }, u_alpha_cutoff: { value: part.alpha_cutoff },
+          u_double_sided: { value: part.lit_two_sided },
+          u_has_normal_map: { value: Boolean(part.normal_map && tex.normalMap) },
+          u_normal_map: { value: tex.normalMap || null },
+        },
+      });
+      return m;
     });
   }
 
-  async function prepare(adp, name) {
+  async function prepare(layer, adp, name) {
     const p = parseAdp(adp, name);
-    checkMesh(p, cfg, fingerprint);
-    if (!cfg.shaders[variant(p)]) {
+    checkMesh(p, layer.cfg.mesh, layer.fingerprint);
+    if (!cfg.shaders[variant(layer, p)]) {
       throw new SceneError(`${name}: ${p.fields}-number instances, but this page was exported without their shader`);
     }
     return p;
   }
 
-  let currentVariant = null;
-  let mesh = null;
-
-  function apply(p) {
-    if (variant(p) !== currentVariant) {
-      const old = material;
-      material = makeMaterial(variant(p));
-      if (old) {
-        for (const k of ['u_view', 'u_proj', 'u_eye']) material.uniforms[k].value = old.uniforms[k].value;
-        old.dispose();
-      }
-      if (mesh) mesh.material = material;
-      currentVariant = variant(p);
+  function apply(layer, p) {
+    if (variant(layer, p) !== layer.variant) {
+      const old = layer.materials;
+      layer.materials = makeMaterials(layer, variant(layer, p));
+      if (old) old.forEach((m) => m.dispose());
+      if (layer.mesh) layer.mesh.material = layer.materials;
+      layer.variant = variant(layer, p);
       // attributes of the other layout go
-      for (const n of Object.keys(geometry.attributes)) if (n.startsWith('i_')) geometry.deleteAttribute(n);
+      for (const n of Object.keys(layer.geometry.attributes)) if (n.startsWith('i_')) layer.geometry.deleteAttribute(n);
     }
-    instanceAttributes(p);
-    geometry.instanceCount = p.count;
-    state.count = p.count;
+    instanceAttributes(layer, p);
+    layer.geometry.instanceCount = p.count;
+    layer.count = p.count;
+    state.count = layers.reduce((a, l) => a + (l.cfg.terrain ? 0 : l.count), 0);
   }
 
-  const ready = (async () => {
-    const gltf = await new Promise((resolve, reject) => new GLTFLoader().parse(scene.glb, '', resolve, (e) =>
-      reject(new SceneError(`${cfg.mesh.file}: not a readable glTF binary (${e && e.message ? e.message : e})`))));
-    let base = null;
-    gltf.scene.traverse((o) => { if (!base && o.isMesh) base = o.geometry; });
-    if (!base || !base.index) throw new SceneError(`${cfg.mesh.file}: holds no indexed triangle mesh`);
-    fingerprint = await meshFingerprint(base);
-    if (fingerprint && hex(fingerprint) !== cfg.mesh.fingerprint) {
-      throw new SceneError(`${cfg.mesh.file}: not the base mesh this page was exported with (fingerprint ` +
-        `${hex(fingerprint).slice(0, 16)}, expected ${cfg.mesh.fingerprint.slice(0, 16)})`);
+  async function loadLayer(lc) {
+    const glb = files[lc.mesh.file];
+    if (!glb) throw new SceneError(`${lc.mesh.file}: missing from the page`);
+    const gltf = await new Promise((resolve, reject) => new GLTFLoader().parse(glb, '', resolve, (e) =>
+      reject(new SceneError(`${lc.mesh.file}: not a readable glTF binary (${e && e.message ? e.message : e})`))));
+    const prims = [];
+    gltf.scene.traverse((o) => { if (o.isMesh) prims.push(o); });
+    if (!prims.length || prims.some((o) => !o.geometry.index)) {
+      throw new SceneError(`${lc.mesh.file}: holds no indexed triangle mesh`);
     }
-    const p = await prepare(scene.adp, cfg.params_file);
-
-    geometry = new THREE.InstancedBufferGeometry();
-    geometry.setIndex(base.index);
-    geometry.setAttribute('in_position', base.getAttribute('position'));
+    if (prims.length !== lc.parts.length) {
+      throw new SceneError(`${lc.mesh.file}: ${prims.length} primitives, but ${lc.mesh.name} has ${lc.parts.length} parts`);
+    }
+    // the parts' triangles, in order, are the mesh's triangles
+    const total = prims.reduce((a, o) => a + o.geometry.index.count, 0);
+    const index = new Uint32Array(total);
+    let at = 0;
+    for (const o of prims) { index.set(o.geometry.index.array, at); at += o.geometry.index.count; }
+    const base = prims[0].geometry;
+    const layer = { cfg: lc, geometry: null, materials: null, mesh: null, variant: null, count: 0,
+      textures: prims.map((o) => ({ map: o.material.map || null, normalMap: o.material.normalMap || null })) };
+    const position = base.getAttribute('position');
+    layer.fingerprint = await meshFingerprint(position.array, index);
+    if (layer.fingerprint && hex(layer.fingerprint) !== lc.mesh.fingerprint) {
+      throw new SceneError(`${lc.mesh.file}: not the base mesh this page was exported with (fingerprint ` +
+        `${hex(layer.fingerprint).slice(0, 16)}, expected ${lc.mesh.fingerprint.slice(0, 16)})`);
+    }
+    const adp = files[lc.params_file];
+    if (!adp) throw new SceneError(`${lc.params_file}: missing from the page`);
+    const p = await prepare(layer, adp, lc.params_file);
+    const n = position.count;
+    const geometry = new THREE.InstancedBufferGeometry();
+    geometry.setIndex(new THREE.BufferAttribute(index, 1));
+    geometry.setAttribute('in_position', position);
     geometry.setAttribute('in_normal', base.getAttribute('normal'));
-    apply(p);
+    if (lc.material) { // defaults where the mesh has none, as axialdeform.gl.material.AppearanceBuffer
+      const fill = (size, v) => { const a = new Float32Array(n * size); for (let i = 0; i < a.length; i++) a[i] = v[i % size]; return a; };
+      geometry.setAttribute('in_uv', base.getAttribute('uv') || new THREE.BufferAttribute(fill(2, [0, 0]), 2));
+      const color = base.getAttribute('color');
+      geometry.setAttribute('in_color', color && color.itemSize === 4 ? color : new THREE.BufferAttribute(fill(4, [1, 1, 1, 1]), 4));
+      geometry.setAttribute('in_tangent', base.getAttribute('tangent') || new THREE.BufferAttribute(fill(4, [1, 0, 0, 1]), 4));
+    }
+    lc.parts.forEach((part, i) => geometry.addGroup(part.start * 3, part.count * 3, i));
+    layer.geometry = geometry;
+    layer.uniforms = {
+      u_axis: { value: lc.mesh.axis }, u_lo: { value: lc.mesh.lo }, u_len: { value: lc.mesh.length },
+      u_center: { value: new THREE.Vector2().fromArray(lc.mesh.center) },
+      u_qmin: { value: new Float32Array(16) }, u_qstep: { value: new Float32Array(16) },
+      u_qmin_extra: { value: new THREE.Vector3() }, u_qstep_extra: { value: new THREE.Vector3() },
+      u_color: { value: v3(lc.color) }, u_wind_strength: { value: wind && lc.wind ? wind.strength : 0.0 },
+    };
+    return { layer, p };
+  }
+
+  function setWireframe(on) {
+    state.wireframe = Boolean(on);
+    shared.u_mode.value = state.wireframe ? 2 : baseMode;
+    for (const l of layers) for (const m of l.materials || []) { m.wireframe = state.wireframe; m.needsUpdate = true; }
+    toggle.setAttribute('aria-pressed', String(state.wireframe));
+  }
+  const onKey = (e) => {
+    if (e.repeat || e.ctrlKey || e.metaKey || e.altKey) return;
+    if (e.key === 'w' || e.key === 'W') setWireframe(!state.wireframe);
+  };
+  toggle.addEventListener('click', () => setWireframe(!state.wireframe));
+  const keyTarget = options.windowKeys ? window : stage;
+  if (!options.windowKeys) stage.tabIndex = 0; // click the picture, then W
+
+  const ready = (async () => {
+    const loaded = await Promise.all(cfg.layers.map((lc) => loadLayer(lc)));
+    for (const { layer, p } of loaded) {
+      layers.push(layer);
+      apply(layer, p);
+    }
 
     THREE.ColorManagement.enabled = false; // colours are written as render's, unconverted
     renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
     if (!renderer.capabilities.isWebGL2) throw new SceneError('this browser has no WebGL 2');
     renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
     renderer.setPixelRatio(window.devicePixelRatio || 1);
-    renderer.setSize(W, H);
+    const sizeNow = () => (fixed ? [W, H] : [Math.max(1, stage.clientWidth), Math.max(1, stage.clientHeight)]);
+    let [w, h] = sizeNow();
+    renderer.setSize(w, h);
     renderer.setClearColor(new THREE.Color(...cfg.background), 1);
     let shaderError = null;
     renderer.debug.onShaderError = (gl, program, vs, fs) => {
@@ -281,7 +399,12 @@ export function mount(root, lib, scene) {
     stage.insertBefore(renderer.domElement, message);
 
     const c = cfg.camera;
-    const camera = new THREE.PerspectiveCamera(c.fovy, W / H, c.near, c.far);
+    // the exported camera frames the scene for the export's aspect; a narrower
+    // canvas widens the vertical field of view so the same width stays in view
+    const aspect0 = cfg.size[0] / cfg.size[1];
+    const fovFor = (aspect) => (aspect >= aspect0 ? c.fovy
+      : (2 * Math.atan(Math.tan((c.fovy * Math.PI) / 360) * (aspect0 / aspect)) * 180) / Math.PI);
+    camera = new THREE.PerspectiveCamera(fovFor(w / h), w / h, c.near, c.far);
     camera.up.fromArray(c.up);
     camera.position.fromArray(c.eye);
     camera.lookAt(new THREE.Vector3().fromArray(c.target));
@@ -300,28 +423,46 @@ export function mount(root, lib, scene) {
     });
     controls.update();
     camera.near = c.near; camera.far = c.far; camera.updateProjectionMatrix();
+    let resizer = null;
+    if (!fixed) { // the canvas follows the window; the camera's aspect with it
+      resizer = new ResizeObserver(() => {
+        [w, h] = sizeNow();
+        renderer.setSize(w, h);
+        camera.aspect = w / h;
+        camera.fov = fovFor(camera.aspect);
+        camera.updateProjectionMatrix();
+      });
+      resizer.observe(stage);
+    }
+    keyTarget.addEventListener('keydown', onKey);
 
-    material.uniforms.u_view.value = camera.matrixWorldInverse;
-    material.uniforms.u_proj.value = camera.projectionMatrix;
-    material.uniforms.u_eye.value = camera.position;
-    mesh = new THREE.Mesh(geometry, material);
-    mesh.frustumCulled = false; // the bounds of the base mesh are not those of the bent instances
+    shared.u_view.value = camera.matrixWorldInverse;
+    shared.u_proj.value = camera.projectionMatrix;
+    shared.u_eye.value = camera.position;
     const world = new THREE.Scene();
-    world.add(mesh);
+    layers.forEach((layer, i) => {
+      layer.mesh = new THREE.Mesh(layer.geometry, layer.materials);
+      layer.mesh.frustumCulled = false; // the bounds of the base mesh are not those of the bent instances
+      layer.mesh.renderOrder = i;
+      world.add(layer.mesh);
+    });
 
     let frames = 0, since = performance.now(), fps = 0;
+    const t0 = performance.now();
     const fmt = new Intl.NumberFormat('en-US');
     const showStatus = () => {
-      status.textContent = `${fmt.format(state.count)} instances · ${fps ? fps.toFixed(fps < 10 ? 1 : 0) : '…'} fps`;
+      statusText.textContent = `${fmt.format(state.count)} instances · ${fps ? fps.toFixed(fps < 10 ? 1 : 0) : '…'} fps` +
+        (frozen !== undefined && wind ? ` · t = ${frozen} s` : '');
     };
     let first = null, failed = null;
     const drawn = new Promise((resolve, reject) => { first = resolve; failed = reject; });
     renderer.setAnimationLoop(() => {
       if (disposed) return;
       controls.update();
-      material.uniforms.u_view.value = camera.matrixWorldInverse;
-      material.uniforms.u_proj.value = camera.projectionMatrix;
-      material.uniforms.u_eye.value = camera.position;
+      if (wind) {
+        const t = frozen !== undefined ? frozen : (performance.now() - t0) / 1000;
+        shared.u_wind_cycles.value.fromArray(windCycles(wind, t));
+      }
       renderer.render(world, camera);
       frames += 1;
       const now = performance.now();
@@ -345,6 +486,7 @@ export function mount(root, lib, scene) {
         first = failed = null;
       }
     });
+    layers.resizer = resizer;
     return drawn;
   })().catch((err) => {
     const text = showError(err);
@@ -353,30 +495,45 @@ export function mount(root, lib, scene) {
 
   return {
     ready,
-    /** Replace the parameters by another .adp (ArrayBuffer); a bad file keeps
-     * nothing wrong on screen: the message says why and nothing is drawn. */
+    get wireframe() { return state.wireframe; },
+    /** What is on screen: canvas size in CSS pixels, the camera's aspect, wireframe or not. */
+    info() {
+      const size = renderer ? renderer.getSize(new THREE.Vector2()) : { x: 0, y: 0 };
+      return { width: size.x, height: size.y, aspect: camera ? camera.aspect : null, fov: camera ? camera.fov : null,
+        wireframe: state.wireframe,
+        fixed, time: frozen === undefined ? null : frozen };
+    },
+    setWireframe,
+    /** Replace the first layer's parameters by another .adp (ArrayBuffer); a
+     * bad file keeps nothing wrong on screen: the message says why and nothing is drawn. */
     async setParams(adp, name = 'parameters') {
       await ready.catch(() => null);
-      if (!geometry) return;
+      const layer = layers[0];
+      if (!layer) return;
       try {
-        const p = await prepare(adp, name);
-        apply(p);
+        const p = await prepare(layer, adp, name);
+        apply(layer, p);
         message.hidden = true;
         renderer.domElement.style.visibility = '';
         return { instances: p.count };
       } catch (err) {
         showError(err);
-        geometry.instanceCount = 0;
+        for (const l of layers) { l.geometry.instanceCount = 0; l.count = 0; }
         state.count = 0;
         throw err;
       }
     },
     dispose() {
       disposed = true;
+      keyTarget.removeEventListener('keydown', onKey);
+      if (layers.resizer) layers.resizer.disconnect();
       if (renderer) { renderer.setAnimationLoop(null); renderer.dispose(); }
       if (controls) controls.dispose();
-      if (material) material.dispose();
-      if (geometry) geometry.dispose();
+      for (const l of layers) {
+        (l.materials || []).forEach((m) => m.dispose());
+        if (l.geometry) l.geometry.dispose();
+        l.textures.forEach((t) => { if (t.map) t.map.dispose(); if (t.normalMap) t.normalMap.dispose(); });
+      }
       root.replaceChildren();
     },
   };
