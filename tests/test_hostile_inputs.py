@@ -657,7 +657,7 @@ def test_library_warnings_are_one_line_on_the_cli(tmp_path, capsys):
     # before: "…/renderer.py:180: UserWarning: …" and the source line: two stray lines
     assert main(["view", str(tet), "-n", "5", "--headless", "--frames", "1", "--size", "32x24", "--lod"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"axialdeform view: warning: {tet}: 4 triangles are too few to simplify (LOD needs at least 48); "
+    assert err == [f"axialdeform view: warning: {tet}: 4 triangles are too few to simplify (LOD needs a part of at least 48; the largest has 4); "
                    "drawing one level"], err
 
 
