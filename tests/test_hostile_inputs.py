@@ -713,3 +713,30 @@ def test_bench_report_from_must_be_a_regular_file(tmp_path, capsys):
     assert main(["bench", "--report-from", str(deep)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "invalid JSON" in err[0], err
+
+
+def test_scatter_checks_its_output_before_the_work(tmp_path, capsys, monkeypatch):
+    from axialdeform.core import scatter
+
+    hm = _png(tmp_path / "hm.png", np.full((8, 8), 128, np.uint8))
+    density = tmp_path / "d.adp"  # an image under another name
+    from PIL import Image
+
+    Image.fromarray(np.full((4, 4), 200, np.uint8)).save(density, format="PNG")
+    before = density.read_bytes()
+    monkeypatch.setattr(scatter, "scatter", lambda *a, **k: pytest.fail("scattered before checking the output"))
+    # before: the terrain was scattered first, then write_params refused the name (or replaced the input)
+    assert main(["scatter", str(hm), "stone", "-n", "3", "-o", str(tmp_path / "o.txt"), "--quantize"]) == 2
+    assert "the quantized form is binary only" in capsys.readouterr().err
+    assert main(["scatter", str(hm), "stone", "-n", "3", "-o", str(density), "--density", str(density)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is the input file" in err[0], err
+    assert density.read_bytes() == before
+
+
+def test_unreadable_image_message_names_the_file_not_a_descriptor(tmp_path, capsys):
+    junk = tmp_path / "junk.png"
+    junk.write_bytes(b"not a png at all")
+    assert main(["scatter", str(junk), "stone", "-n", "3", "-o", str(tmp_path / "o.adp")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"axialdeform scatter: error: SURFACE {junk}: could not read the image (not an image format Pillow recognises)"
