@@ -528,13 +528,17 @@ def test_generated_mesh_files_load_or_name_the_file(tmp_path_factory, case):
 
 
 @pytest.mark.slow
-def test_fuzz_every_command_briefly(capsys):
+def test_fuzz_every_command_briefly():
     # every command in turn, twice (view headless, bench tiny, scatter, web with --serve,
     # scene files), each in a forked child with its peak RSS checked; big inputs of 1 MB
-    status = fuzz_params.fuzz_commands(150.0, seed=2003, big_mb=1.0, cases=2 * len(fuzz_params.COMMANDS), cycle=True)
-    out = capsys.readouterr().out
-    assert status == 0, out
-    assert f"fuzz commands: {2 * len(fuzz_params.COMMANDS)} command lines" in out, out
+    # in a fresh process: this one holds GL contexts, whose llvmpipe threads a fork does not copy
+    n = 2 * len(fuzz_params.COMMANDS)
+    proc = subprocess.run([sys.executable, str(ROOT / "tools" / "fuzz_params.py"), "--target", "commands", "--seconds",
+                           "150", "--seed", "2003", "--big-mb", "1", "--cases", str(n), "--cycle"],
+                          capture_output=True, text=True, timeout=600, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out
+    assert f"fuzz commands: {n} command lines" in out, out
     assert "0 crashes, 0 hangs" in out and "0 over the memory bound" in out, out
     for command in ("view", "bench", "scatter", "web", "scene-"):
         assert f"| {command}" in out, out
@@ -711,3 +715,30 @@ def test_bench_report_from_must_be_a_regular_file(tmp_path, capsys):
     assert main(["bench", "--report-from", str(deep)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "invalid JSON" in err[0], err
+
+
+def test_scatter_checks_its_output_before_the_work(tmp_path, capsys, monkeypatch):
+    from axialdeform.core import scatter
+
+    hm = _png(tmp_path / "hm.png", np.full((8, 8), 128, np.uint8))
+    density = tmp_path / "d.adp"  # an image under another name
+    from PIL import Image
+
+    Image.fromarray(np.full((4, 4), 200, np.uint8)).save(density, format="PNG")
+    before = density.read_bytes()
+    monkeypatch.setattr(scatter, "scatter", lambda *a, **k: pytest.fail("scattered before checking the output"))
+    # before: the terrain was scattered first, then write_params refused the name (or replaced the input)
+    assert main(["scatter", str(hm), "stone", "-n", "3", "-o", str(tmp_path / "o.txt"), "--quantize"]) == 2
+    assert "the quantized form is binary only" in capsys.readouterr().err
+    assert main(["scatter", str(hm), "stone", "-n", "3", "-o", str(density), "--density", str(density)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is the input file" in err[0], err
+    assert density.read_bytes() == before
+
+
+def test_unreadable_image_message_names_the_file_not_a_descriptor(tmp_path, capsys):
+    junk = tmp_path / "junk.png"
+    junk.write_bytes(b"not a png at all")
+    assert main(["scatter", str(junk), "stone", "-n", "3", "-o", str(tmp_path / "o.adp")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"axialdeform scatter: error: SURFACE {junk}: could not read the image (not an image format Pillow recognises)"

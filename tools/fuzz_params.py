@@ -952,7 +952,10 @@ def run_isolated(argv: list[str], timeout: float = HANG_S, serve: str | None = N
     ONE error line on stderr, or an argparse usage error), 'hang: ...'
     (killed after ``timeout`` s) or 'crash: ...' (an exception out of
     ``main``, a stray stderr line, any other exit, a kill by a signal, RSS
-    over ``rss_cap``).  A hang: over ``timeout`` s of CPU, blocked (no CPU
+    over ``rss_cap``).  Call it from a process that holds no GL context
+    (llvmpipe's threads do not survive ``fork``: a child that makes its own
+    context can block forever) -- the fuzzer's own process never makes one;
+    tests run the fuzzer in a fresh process.  A hang: over ``timeout`` s of CPU, blocked (no CPU
     for :data:`BLOCKED_S`) after ``timeout`` s, or running ``wall_limit`` s.  With ``serve`` ('probe' or 'busy'), the page is
     fetched once the URL is printed, then the server is stopped with SIGINT
     (Ctrl-C), which must end it with exit 0."""
@@ -1193,6 +1196,8 @@ def main(argv=None) -> int:
                                                    + ", ".join(COMMANDS) + " (default: all)")
     ap.add_argument("--big-mb", type=float, default=20.0, help="size of the big inputs, MB (default: %(default)s)")
     ap.add_argument("--log", default=None, help="write every command case with its verdict here (default: none)")
+    ap.add_argument("--cases", type=int, default=None, help="stop after this many command lines (default: --seconds only)")
+    ap.add_argument("--cycle", action="store_true", help="the commands in turn (default: drawn at random)")
     args = ap.parse_args(argv)
     targets = ("params", "meshes", "commands") if args.target == "all" else (args.target,)
     only = tuple(c for c in args.commands.split(",") if c)
@@ -1204,7 +1209,7 @@ def main(argv=None) -> int:
     try:
         for t in targets:
             if t == "commands":
-                status |= fuzz_commands(args.seconds, args.seed, only, args.big_mb, log)
+                status |= fuzz_commands(args.seconds, args.seed, only, args.big_mb, log, args.cases, args.cycle)
             else:
                 status |= {"params": fuzz_params, "meshes": fuzz_meshes}[t](args.seconds, args.seed)
     finally:

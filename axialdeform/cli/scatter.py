@@ -64,6 +64,17 @@ def run(args) -> int | None:
     from ._common import scale_range
 
     scale = None if args.scale is None else scale_range(args.scale)  # checked before any file is read
+    from pathlib import Path
+
+    from ..core.errors import ParamFileError
+    from ..core.mesh import mesh_source_path
+    from ..core.params import BINARY_SUFFIXES
+    from ..core.safeio import check_output_path
+
+    if args.quantize and Path(args.output).suffix.lower() not in BINARY_SUFFIXES:  # before the work, not after
+        raise ParamFileError(f"{args.output}: the quantized form is binary only; expected a "
+                             f"{'/'.join(BINARY_SUFFIXES)} file name")
+    check_output_path(args.output, (args.surface, mesh_source_path(args.mesh), args.density), "parameter file")
     mesh = load_mesh(args.mesh)
     try:
         params = scatter(args.surface, mesh, args.count, min_distance=args.min_distance, density=args.density,

@@ -146,7 +146,11 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
         except (ScatterError, MemoryError):
             raise
         except Exception as exc:  # noqa: BLE001 - UnidentifiedImageError or any decoder failure on a hostile file
-            raise ScatterError(f"{what} {path}: could not read the image ({type(exc).__name__}: {exc})") from None
+            from PIL import UnidentifiedImageError
+
+            why = ("not an image format Pillow recognises" if isinstance(exc, UnidentifiedImageError)
+                   else f"{type(exc).__name__}: {exc}")
+            raise ScatterError(f"{what} {path}: could not read the image ({why})") from None
     return grey
 
 
