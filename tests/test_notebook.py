@@ -151,7 +151,8 @@ def test_widget_in_jupyterlab(tmp_path):
     """JupyterLab runs the cells: ``SceneWidget(...)`` draws in the output
     area, the silhouettes equal ``axialdeform render``'s (its function,
     without ground and shadow) of the same file at the same size, ``set_params`` changes the count shown and the
-    picture, the status comes back to Python; a second view shares the
+    picture, the status comes back to Python; keys on the focused picture
+    are its own, not JupyterLab's shortcuts; a second view shares the
     one copy of three.js and re-running its cell releases the old view's
     WebGL context; the browser reports no console error and asks nothing
     of the network."""
@@ -258,6 +259,17 @@ def test_widget_in_jupyterlab(tmp_path):
                     && !document.body.contains(window.__oldCanvas)""", timeout=60_000)
                 page.wait_for_function("""() => [...document.querySelectorAll('.jp-OutputArea-output .axd-status')]
                     .map((s) => s.innerText).filter((t) => /^150 instances/.test(t)).length === 2""", timeout=120_000)
+                # keys on a focused picture are the picture's (W: wireframe), not JupyterLab's shortcuts
+                cells = page.locator(".jp-Notebook .jp-Cell").count()
+                toggle = _cell(page, 0).locator(".axd-toggle").element_handle()
+                _cell(page, 0).locator(".axd-stage").click()
+                assert page.evaluate("!!document.activeElement.closest('.axd-stage')")
+                for keys in (("a", "b"), ("d", "d")):  # command mode: insert above and below; delete
+                    for key in keys:
+                        page.keyboard.press(key)
+                    assert page.locator(".jp-Notebook .jp-Cell").count() == cells, f"JupyterLab took {keys}"
+                page.keyboard.press("w")
+                page.wait_for_function("(t) => t.getAttribute('aria-pressed') === 'true'", arg=toggle, timeout=30_000)
                 assert not [w for w in warnings if "Multiple instances of Three.js" in w
                             or "Too many active WebGL contexts" in w], warnings
                 assert errors == [], errors
