@@ -258,26 +258,41 @@ def test_cli_render_lod_of_a_multi_part_file(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch):
+@pytest.mark.parametrize("indirect", [False, None])
+def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch, indirect):
+    """GL 3.3 path (``indirect=False``): one ``render`` per part of every level
+    that has instances, with that level's count; the default path (indirect
+    draws where the context has GL >= 4.3): one ``render_indirect`` per part
+    of every level (the counts stay on the GPU)."""
     import moderngl
 
     mesh = two_part_mesh()
     params = meadow(mesh)
-    calls = []
-    original = moderngl.VertexArray.render
+    calls, indirect_calls = [], []
+    original, original_indirect = moderngl.VertexArray.render, moderngl.VertexArray.render_indirect
 
     def spy(self, *args, **kwargs):
         calls.append((kwargs.get("instances"), kwargs.get("vertices"), kwargs.get("first", 0)))
         return original(self, *args, **kwargs)
 
-    with ad.AxialRenderer(ctx, mesh, params, lod=True) as r:
+    def spy_indirect(self, *args, **kwargs):
+        indirect_calls.append(args)
+        return original_indirect(self, *args, **kwargs)
+
+    with ad.AxialRenderer(ctx, mesh, params, lod=True, indirect=indirect) as r:
         monkeypatch.setattr(moderngl.VertexArray, "render", spy)
+        monkeypatch.setattr(moderngl.VertexArray, "render_indirect", spy_indirect)
         draw(ctx, r, *MEADOW_VIEW, size=(160, 120))
         monkeypatch.undo()
-        expected = [(kept, part.count * 3, part.start * 3)
-                    for kept, level in zip(r.stats["levels"], r.lod_levels) if kept for part in level.parts]
-        assert len([k for k in r.stats["levels"] if k]) >= 2
-    assert sorted(calls) == sorted(expected)
+        stats = r.stats
+        assert len([k for k in stats["levels"] if k]) >= 2
+        if stats.get("indirect"):
+            assert calls == [] and len(indirect_calls) == len(r.lod_levels) * len(mesh.parts)
+        else:
+            assert indirect is None or indirect_calls == []
+            expected = [(kept, part.count * 3, part.start * 3)
+                        for kept, level in zip(stats["levels"], r.lod_levels) if kept for part in level.parts]
+            assert sorted(calls) == sorted(expected)
     assert ctx.error == "GL_NO_ERROR"
 
 
