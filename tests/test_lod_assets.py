@@ -258,39 +258,46 @@ def test_cli_render_lod_of_a_multi_part_file(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch):
+@pytest.mark.parametrize("indirect", [False, None])
+def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch, indirect):
+    """GL 3.3 path (``indirect=False``): one ``render`` per part of every level
+    that has instances, with that level's count; the default path (indirect
+    draws where the context has GL >= 4.3): one ``render_indirect`` per part
+    of every level (the counts stay on the GPU: a level that kept none is
+    still issued), whose commands hold the kept count, the part's index
+    count and its first index."""
     import moderngl
 
     mesh = two_part_mesh()
     params = meadow(mesh)
-    calls = []
-    original = moderngl.VertexArray.render
+    calls, indirect_calls = [], []
+    original, original_indirect = moderngl.VertexArray.render, moderngl.VertexArray.render_indirect
 
     def spy(self, *args, **kwargs):
         calls.append((kwargs.get("instances"), kwargs.get("vertices"), kwargs.get("first", 0)))
         return original(self, *args, **kwargs)
 
-    original_indirect = moderngl.VertexArray.render_indirect
-
-    def spy_indirect(self, buffer, mode=None, count=-1, first=0):  # the culled draw on GL >= 4.3
+    def spy_indirect(self, buffer, mode=None, count=-1, first=0):
         result = original_indirect(self, buffer, mode, count, first)
         command = np.frombuffer(buffer.read(size=20, offset=20 * first), "<u4")  # count, instances, first index, ...
-        calls.append((int(command[1]), int(command[0]), int(command[2])))
+        indirect_calls.append((int(command[1]), int(command[0]), int(command[2])))
         return result
 
-    with ad.AxialRenderer(ctx, mesh, params, lod=True) as r:
+    with ad.AxialRenderer(ctx, mesh, params, lod=True, indirect=indirect) as r:
         monkeypatch.setattr(moderngl.VertexArray, "render", spy)
         monkeypatch.setattr(moderngl.VertexArray, "render_indirect", spy_indirect)
         draw(ctx, r, *MEADOW_VIEW, size=(160, 120))
         monkeypatch.undo()
+        stats = r.stats
+        assert len([k for k in stats["levels"] if k]) >= 2
         expected = [(kept, part.count * 3, part.start * 3)
-                    for kept, level in zip(r.stats["levels"], r.lod_levels) if kept for part in level.parts]
-        assert len([k for k in r.stats["levels"] if k]) >= 2
-        slots = sum(len(level.parts) for level in r.lod_levels)
-    # the indirect path (GL >= 4.3) also issues the draws of levels that kept no instance: the CPU never
-    # learns the counts; either way at most one draw per level and part, and every kept one is drawn once
-    assert sorted(c for c in calls if c[0]) == sorted(expected)
-    assert len(calls) <= slots
+                    for kept, level in zip(stats["levels"], r.lod_levels) if kept for part in level.parts]
+        if stats.get("indirect"):
+            assert calls == [] and len(indirect_calls) == len(r.lod_levels) * len(mesh.parts)
+            assert sorted(c for c in indirect_calls if c[0]) == sorted(expected)
+        else:
+            assert indirect is None or indirect_calls == []
+            assert sorted(calls) == sorted(expected)
     assert ctx.error == "GL_NO_ERROR"
 
 
