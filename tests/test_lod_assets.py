@@ -270,7 +270,8 @@ def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch):
         calls.append((kwargs.get("instances"), kwargs.get("vertices"), kwargs.get("first", 0)))
         return original(self, *args, **kwargs)
 
-    with ad.AxialRenderer(ctx, mesh, params, lod=True) as r:
+    # the plain path: the indirect path (the default where compute shaders exist) draws by render_indirect
+    with ad.AxialRenderer(ctx, mesh, params, lod=True, indirect=False) as r:
         monkeypatch.setattr(moderngl.VertexArray, "render", spy)
         draw(ctx, r, *MEADOW_VIEW, size=(160, 120))
         monkeypatch.undo()
