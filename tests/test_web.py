@@ -361,8 +361,8 @@ def test_widget_in_an_executed_notebook(browser, tmp_path):
     """A notebook executed by a real Jupyter kernel (nbclient): the cell shows
     the widget (widget-view output) and set_params changes its synced state;
     the widget state the notebook stores (what a front end receives) is then
-    rendered by the widget's ESM in Chromium.  Not tested: a Jupyter or
-    VS Code front end itself."""
+    rendered by the widget's ESM in Chromium.  A real JupyterLab front end
+    is tested in tests/test_notebook.py; VS Code is not tested."""
     import nbformat
     from nbclient import NotebookClient
 
