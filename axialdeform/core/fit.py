@@ -95,6 +95,41 @@ def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return (np.linalg.pinv(a) @ b[..., None])[..., 0]
 
 
+#: float64 bytes of one block of a tall system (n, 3·vb, k) built at a time: the fit's
+#: work memory no longer grows with the vertex count (docs/reliability.md)
+_BLOCK_BYTES = 8 << 20
+
+
+def _block_rows(n: int, k: int) -> int:
+    """Vertices per block so that a (n, 3·vb, k) float64 block stays under ``_BLOCK_BYTES``."""
+    return max(1, _BLOCK_BYTES // (n * 3 * k * 8))
+
+
+class _TallLeastSquares:
+    """Stacked least-squares problems ``a x = b`` whose rows come in blocks.
+
+    Keeps only the triangular factor ``R`` (n, k+1, k+1) of the QR
+    decomposition of ``[a | b]`` (a tall-skinny QR, updated per block); its
+    top-left (k, k) part has the singular values of ``a`` and its last column
+    is ``Qᵀb``, so :meth:`solve` gives what ``pinv(a) @ b`` gives on the full
+    system (the same minimum-norm solution) without ever holding ``a``.
+    """
+
+    def __init__(self, n: int, k: int) -> None:
+        self.k = k
+        self.r = np.zeros((n, 0, k + 1))
+
+    def add(self, a: np.ndarray, b: np.ndarray) -> None:
+        """Rows ``a`` (n, m, k) and right-hand sides ``b`` (n, m)."""
+        block = np.concatenate([a, b[..., None]], axis=-1)
+        self.r = np.linalg.qr(np.concatenate([self.r, block], axis=1), mode="r")
+
+    def solve(self) -> np.ndarray:
+        """``x`` (n, k)."""
+        k = self.k
+        return _solve(self.r[:, :k, :k], self.r[:, :k, k])
+
+
 # ---------------------------------------------------------------------- fitting
 
 
@@ -120,39 +155,51 @@ class _Model:
         """``V'`` (n, v, 3) for canonical offset coordinates ``z`` (n, 4, 2)."""
         return displace(self.axis, self.base, self.basis @ z)  # D(t) = basis @ z: (n, v, 2)
 
-    def _offset_columns(self, rot: np.ndarray, a: np.ndarray, first: int) -> None:
-        """Fill ``a[..., first:first + 8]`` with d(R·E(basis z))/dz."""
-        a[..., first:first + 4] = rot[:, None, :, self.i, None] * self.basis[None, :, None, :]
-        a[..., first + 4:first + 8] = rot[:, None, :, self.j, None] * self.basis[None, :, None, :]
+    def _offset_columns(self, rot: np.ndarray, a: np.ndarray, first: int, rows: slice = slice(None)) -> None:
+        """Fill ``a[..., first:first + 8]`` with d(R·E(basis z))/dz for the vertices ``rows``."""
+        basis = self.basis[rows]
+        a[..., first:first + 4] = rot[:, None, :, self.i, None] * basis[None, :, None, :]
+        a[..., first + 4:first + 8] = rot[:, None, :, self.j, None] * basis[None, :, None, :]
 
     def linear_offsets(self, rot: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Offsets ``z`` (n, 4, 2) and positions ``p`` (n, 3) minimising the error for fixed ``R``.
 
         ``W - R·V = R·E(basis z) + p`` is linear in ``(z, p)``: n systems of (3v, 11)."""
         n, v = len(rot), len(self.base)
-        rhs = (target - self.base @ np.swapaxes(rot, -1, -2)).reshape(n, -1)
-        a = np.empty((n, v, 3, 11))
-        self._offset_columns(rot, a, 0)
-        a[..., 8:] = np.eye(3)
-        sol = _solve(a.reshape(n, 3 * v, 11), rhs)
+        lsq = _TallLeastSquares(n, 11)
+        step = _block_rows(n, 11)
+        for s in range(0, v, step):  # blocks of vertices: the (3v, 11) system is never held whole
+            e = min(v, s + step)
+            rhs = (target[:, s:e] - self.base[s:e] @ np.swapaxes(rot, -1, -2)).reshape(n, -1)
+            a = np.empty((n, e - s, 3, 11))
+            self._offset_columns(rot, a, 0, slice(s, e))
+            a[..., 8:] = np.eye(3)
+            lsq.add(a.reshape(n, 3 * (e - s), 11), rhs)
+        sol = lsq.solve()
         return np.swapaxes(sol[:, :8].reshape(n, 2, 4), 1, 2), sol[:, 8:]
 
     def normal_equations(self, rot, z, pos, target):
         """``JᵀJ`` (n, 14, 14) and ``Jᵀr`` (n, 14) of the joint problem in (rotation
         vector, canonical offsets, position), linearised at the current state."""
         n, v = len(rot), len(self.base)
-        q = self.bent(z) @ np.swapaxes(rot, -1, -2)  # R·V', (n, v, 3)
-        resid = (target - q - pos[:, None]).reshape(n, -1)
-        a = np.empty((n, v, 3, 14))
-        # d(ω × q)/dω = -[q]×
-        a[..., 0, 0], a[..., 0, 1], a[..., 0, 2] = 0.0, q[..., 2], -q[..., 1]
-        a[..., 1, 0], a[..., 1, 1], a[..., 1, 2] = -q[..., 2], 0.0, q[..., 0]
-        a[..., 2, 0], a[..., 2, 1], a[..., 2, 2] = q[..., 1], -q[..., 0], 0.0
-        self._offset_columns(rot, a, 3)
-        a[..., 11:] = np.eye(3)
-        a = a.reshape(n, 3 * v, 14)
-        at = np.swapaxes(a, -1, -2)
-        return at @ a, (at @ resid[..., None])[..., 0]
+        jtj, jtr = np.zeros((n, 14, 14)), np.zeros((n, 14))
+        step = _block_rows(n, 14)
+        for s in range(0, v, step):  # blocks of vertices: the (3v, 14) Jacobian is never held whole
+            e = min(v, s + step)
+            q = displace(self.axis, self.base[s:e], self.basis[s:e] @ z) @ np.swapaxes(rot, -1, -2)  # R·V'
+            resid = (target[:, s:e] - q - pos[:, None]).reshape(n, -1)
+            a = np.empty((n, e - s, 3, 14))
+            # d(ω × q)/dω = -[q]×
+            a[..., 0, 0], a[..., 0, 1], a[..., 0, 2] = 0.0, q[..., 2], -q[..., 1]
+            a[..., 1, 0], a[..., 1, 1], a[..., 1, 2] = -q[..., 2], 0.0, q[..., 0]
+            a[..., 2, 0], a[..., 2, 1], a[..., 2, 2] = q[..., 1], -q[..., 0], 0.0
+            self._offset_columns(rot, a, 3, slice(s, e))
+            a[..., 11:] = np.eye(3)
+            a = a.reshape(n, 3 * (e - s), 14)
+            at = np.swapaxes(a, -1, -2)
+            jtj += at @ a
+            jtr += (at @ resid[..., None])[..., 0]
+        return jtj, jtr
 
     @staticmethod
     def apply(step, rot, z, pos):
