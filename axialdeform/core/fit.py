@@ -275,9 +275,11 @@ def umeyama_scale(source: np.ndarray, target: np.ndarray) -> np.ndarray:
     return np.maximum(sv.sum(axis=-1) / max(var, 1e-300), 1e-12)
 
 
-def _extended_shape(m: _Model, rot, z, pos, extra) -> np.ndarray:
-    """``R·(s·V'') + p`` (n, v, 3) of canonical offsets ``z`` (n, 4, 2) and ``extra`` (n, 3) = s tw tp."""
-    moved, _ = deform_local_extended(m.axis, m.base, m.base, _CANONICAL @ z, extra)
+def _extended_shape(m: _Model, rot, z, pos, extra, rows: slice = slice(None)) -> np.ndarray:
+    """``R·(s·V'') + p`` (n, v, 3) of canonical offsets ``z`` (n, 4, 2) and ``extra`` (n, 3) = s tw tp,
+    for the base mesh's vertices ``rows`` (all of them by default)."""
+    base = m.base[rows]
+    moved, _ = deform_local_extended(m.axis, base, base, _CANONICAL @ z, extra)
     return moved @ np.swapaxes(rot, -1, -2) + pos[:, None]
 
 
@@ -300,8 +302,8 @@ def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> 
     extra = np.stack([scale0, np.zeros(n), np.zeros(n)], axis=1)
     L = m.length
 
-    def shape(rot, z, pos, extra):
-        return _extended_shape(m, rot, z, pos, extra)
+    def shape(rot, z, pos, extra, rows=slice(None)):
+        return _extended_shape(m, rot, z, pos, extra, rows)
 
     def err_of(shp, w):
         d = shp - w
@@ -348,15 +350,19 @@ def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> 
         if not active.size:
             break
         ra, za, pa, ea, wa = rot[active], z[active], pos[active], extra[active], w_all[active]
-        resid = (wa - shape(ra, za, pa, ea)).reshape(len(active), -1)
-        cols = []
-        for k in range(17):  # 17 unknowns: columns of the Jacobian, each vectorized over the batch
-            plus = shape(*perturbed(k, 1.0, ra, za, pa, ea))
-            minus = shape(*perturbed(k, -1.0, ra, za, pa, ea))
-            cols.append(((plus - minus) / (2.0 * h[k])).reshape(len(active), -1))
-        jac = np.stack(cols, axis=-1)  # (n, 3v, 17)
-        jt = np.swapaxes(jac, -1, -2)
-        jtj, jtr = jt @ jac, (jt @ resid[..., None])[..., 0]
+        na, v = len(active), w_all.shape[1]
+        states = [(perturbed(k, 1.0, ra, za, pa, ea), perturbed(k, -1.0, ra, za, pa, ea)) for k in range(17)]
+        jtj, jtr = np.zeros((na, 17, 17)), np.zeros((na, 17))
+        step_rows = _block_rows(na, 17)
+        for s in range(0, v, step_rows):  # blocks of vertices: the (3v, 17) Jacobian is never held whole
+            rows = slice(s, min(v, s + step_rows))
+            resid = (wa[:, rows] - shape(ra, za, pa, ea, rows)).reshape(na, -1)
+            jac = np.empty((na, resid.shape[1], 17))
+            for k, (plus, minus) in enumerate(states):  # 17 unknowns: central differences, vectorized over the batch
+                jac[..., k] = ((shape(*plus, rows) - shape(*minus, rows)) / (2.0 * h[k])).reshape(na, -1)
+            jt = np.swapaxes(jac, -1, -2)
+            jtj += jt @ jac
+            jtr += (jt @ resid[..., None])[..., 0]
         damp = np.diagonal(jtj, axis1=1, axis2=2)[..., None] * eye + 1e-12 * np.trace(jtj, axis1=1, axis2=2)[:, None, None] * eye
         err = best[active].copy()
         la = lam[active]
