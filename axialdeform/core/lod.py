@@ -47,7 +47,7 @@ from functools import cached_property
 import numpy as np
 
 from .errors import ParamError
-from .mesh import area_weighted_normals
+from .mesh import area_weighted_normals, unique_edges
 
 __all__ = ["LodLevel", "build_lod_levels", "collapse_mapping", "spatial_chunks", "LOD_CHUNK_TRIANGLES", "LOD_REDUCTIONS", "MIN_LOD_TRIANGLES", "check_lod_error"]
 
@@ -109,9 +109,10 @@ class LodLevel:
 
 
 def faces_edges(faces: np.ndarray) -> np.ndarray:
-    """(k, 2) uint32 unique undirected edges of ``faces : (m, 3) int``."""
-    e = np.sort(np.asarray(faces, dtype=np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return np.unique(e, axis=0).astype(np.uint32)
+    """(k, 2) uint32 unique undirected edges of ``faces : (m, 3) int``
+    (:func:`axialdeform.core.mesh.unique_edges`)."""
+    faces = np.asarray(faces)
+    return unique_edges(faces, int(faces.max()) + 1 if faces.size else 0)
 
 
 def check_lod_error(pixels) -> float:

@@ -182,15 +182,7 @@ class BaseMesh:
     @cached_property
     def edges(self) -> np.ndarray:
         """(k, 2) uint32 unique undirected edges of the triangles (for wireframe)."""
-        f = self.faces.astype(np.int64)
-        a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
-        b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
-        lo, hi = np.minimum(a, b), np.maximum(a, b)
-        # one int64 key per edge: a 1-D unique is many times faster than
-        # unique(axis=0) and sorts the same way (by lo, then hi)
-        key = np.unique(lo * np.int64(len(self.positions)) + hi)
-        n = np.int64(len(self.positions))
-        return np.stack([key // n, key % n], axis=1).astype(np.uint32)
+        return unique_edges(self.faces, len(self.positions))
 
     @cached_property
     def is_volume(self) -> bool:
@@ -236,6 +228,30 @@ class BaseMesh:
 
 
 _F32_MAX = float(np.finfo(np.float32).max)
+
+
+def unique_edges(faces: np.ndarray, vertex_count: int) -> np.ndarray:
+    """(k, 2) uint32 unique undirected edges of ``faces`` (m, 3) int, sorted by
+    their lower vertex, then the higher (what ``np.unique(np.sort(pairs, axis=1),
+    axis=0)`` gives).  One int64 key per edge, made column by column into one
+    array and sorted in place: ~40 bytes a triangle at once (a 1 M-triangle
+    mesh: 171 MB before, with a (3 m, 2) int64 copy and its temporaries)."""
+    f = np.asarray(faces)
+    m, n = len(f), np.int64(vertex_count)
+    key = np.empty(3 * m, dtype=np.int64)
+    for c, (i, j) in enumerate(((0, 1), (1, 2), (2, 0))):
+        a, b = f[:, i].astype(np.int64), f[:, j].astype(np.int64)
+        np.minimum(a, b, out=key[c * m:(c + 1) * m])
+        key[c * m:(c + 1) * m] *= n
+        key[c * m:(c + 1) * m] += np.maximum(a, b, out=a)
+        del a, b
+    key.sort()
+    if len(key):
+        key = key[np.r_[True, key[1:] != key[:-1]]]
+    out = np.empty((len(key), 2), dtype=np.uint32)
+    out[:, 0] = key // n
+    out[:, 1] = key % n
+    return out
 
 
 def _position_ids(positions: np.ndarray) -> np.ndarray:
