@@ -295,8 +295,8 @@ def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
 def test_multisampled_frame_memory_does_not_grow_with_triangles(tmp_path):
     """llvmpipe kept ~48 bytes a triangle of a multisampled frame until it was
     finished: 50 instances of a 200 000-triangle mesh (10 M triangles) into a
-    64x64 4-sample target grew the process by ~480 MB.  Sliced, the growth is
-    bounded by one slice.  Measured in child processes, with the slicing off
+    64x64 4-sample target grew the process by 150 to 480 MB.  Sliced, the growth
+    is bounded by one slice.  Measured in child processes, with the slicing off
     (``AXIALDEFORM_FLUSH_PRIMITIVES=0``: the measurement sees the growth) and on."""
     import os
     import subprocess
@@ -331,11 +331,13 @@ def test_multisampled_frame_memory_does_not_grow_with_triangles(tmp_path):
         "print((after - before) / 1024)\n")
     root = Path(__file__).resolve().parent.parent
     growth = {}
-    for flush in ("0", "1000000"):
+    for flush in ("0", "default"):
         env = {**os.environ, "AXIALDEFORM_FLUSH_PRIMITIVES": flush, "AXIALDEFORM_INDIRECT": "0"}
+        if flush == "default":
+            env.pop("AXIALDEFORM_FLUSH_PRIMITIVES")
         done = subprocess.run([sys.executable, "-c", script], cwd=root, env=env, capture_output=True, text=True,
                               timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
         growth[flush] = float(done.stdout.split()[-1])
-    assert growth["0"] > 250, growth  # unsliced: the driver's memory grows (the measurement can see it)
-    assert growth["1000000"] < 120, growth  # sliced: bounded by one slice
+    assert growth["0"] > 150, growth  # unsliced: the driver's memory grows (the measurement can see it)
+    assert growth["default"] < 80 and growth["0"] > 3 * growth["default"], growth  # sliced: one slice at a time
