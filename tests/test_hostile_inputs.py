@@ -769,6 +769,8 @@ def test_render_refuses_a_frame_over_the_triangle_budget(files, capsys, monkeypa
     assert "x 2.5 for wireframe" in capsys.readouterr().err
     assert main(argv + ["--max-triangles", "671", "--fast"]) == 2
     assert "x 1.5 for wireframe" in capsys.readouterr().err
+    assert main(argv + ["--max-triangles", "2239", "--stats"]) == 2  # --stats times one more frame
+    assert "x 2 frames = 2240" in capsys.readouterr().err
     monkeypatch.setattr(context, "create_context", real)
     # at the limit it draws: the limit is raised by --max-triangles
     assert main(["render", str(mesh), str(params), "-o", str(out), "--size", "32x24", "--max-triangles", "448"]) == 0
@@ -816,6 +818,11 @@ def test_view_with_a_parameter_file_checks_the_budget(files, capsys):
     assert main(argv + ["--max-triangles", "447", "--lod"]) == 2  # LOD: every instance may be near (level 0)
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{mesh} x {params}: 4 instances x 112 triangles" in err[0] and not shot.exists(), err
+    # --headless draws every one of --frames: a job of 2 frames counts both
+    argv2 = [a if a != "1" else "2" for a in argv]
+    assert main(argv2 + ["--max-triangles", "895"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "448 triangles a frame (solid), x 2 frames = 896" in err[0] and not shot.exists(), err
     assert main(argv + ["--max-triangles", "448"]) == 0 and shot.exists()
 
 

@@ -249,14 +249,16 @@ def drawn_triangles(mesh, parts=None) -> int:
     return int(sum(mesh.part(name).count for name in dict.fromkeys(parts)))
 
 
-def check_triangles(items, modes, limit: int, fast: bool = False) -> int:
+def check_triangles(items, modes, limit: int, fast: bool = False, frames: int = 1) -> int:
     """Refuse a frame over the CLI's triangle budget, before anything is drawn.
 
     ``items`` : iterable of ``(label, instances, triangles)`` (one a layer;
     a terrain is 1 instance), ``modes`` : a mode or the modes drawn side by
-    side (``demo``), ``limit`` : ``--max-triangles``.  Returns the weighted
-    primitives a frame draws; over ``limit`` an :class:`ArgumentError`
-    names the file(s), the counts, the product, the limit and how to raise it.
+    side (``demo``), ``limit`` : ``--max-triangles``; ``frames`` : frames a
+    job draws with no window to close (``view --headless --frames N``,
+    ``render --stats``: 2), each counted.  Returns the weighted primitives
+    drawn; over ``limit`` an :class:`ArgumentError` names the file(s), the
+    counts, the product, the limit and how to raise it.
     """
     from ..core.errors import ArgumentError
 
@@ -264,7 +266,8 @@ def check_triangles(items, modes, limit: int, fast: bool = False) -> int:
     weight = sum(mode_weight(m, fast) for m in modes)
     items = [(label, int(n), int(t)) for label, n, t in items]
     triangles = sum(n * t for _, n, t in items)
-    work = int(math.ceil(triangles * weight))
+    frames = max(int(frames), 1)
+    work = int(math.ceil(triangles * weight)) * frames
     if work <= limit:
         return work
     parts = "; ".join(f"{label}: {n} instances x {t} triangles" for label, n, t in items if n * t)
@@ -272,9 +275,13 @@ def check_triangles(items, modes, limit: int, fast: bool = False) -> int:
         total = f"{triangles} triangles a frame ({modes[0]})"
     else:
         what = f"{WIRE_EDGES_PER_TRIANGLE:g} edges a triangle" + ("" if fast else " + the hidden-line pass")
-        total = f"{triangles} triangles a frame, x {weight:g} for {' + '.join(modes)} (wireframe: {what}) = {work}"
+        total = f"{triangles} triangles a frame, x {weight:g} for {' + '.join(modes)} (wireframe: {what})"
+    if frames > 1:
+        total += f", x {frames} frames"
+    if weight != 1 or frames > 1:
+        total += f" = {work}"
     fits = [t for _, n, t in items if n * t]
-    most = (f"at most {int(limit // (fits[0] * weight))} instances of this mesh"
+    most = (f"at most {int(limit // (fits[0] * weight * frames))} instances of this mesh"
             if len(fits) == 1 else "fewer instances or smaller meshes")
     raise ArgumentError(
         f"{parts} = {total}, over the limit of {limit}; expected {most}, "

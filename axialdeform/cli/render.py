@@ -82,7 +82,7 @@ def run(args) -> None:
     wind_options = {"wind": wind, "time": args.time} if wind is not None else {}
     mesh, params = load(args, "PNG")
     check_triangles([(f"{args.mesh} x {args.params}", len(params), drawn_triangles(mesh, args.part))],
-                    args.mode, args.max_triangles, args.fast)  # before the camera, the context, any drawing
+                    args.mode, args.max_triangles, args.fast, 2 if args.stats else 1)  # before the camera, context
     size = parse_size(args.size)
     camera = camera_from_args(mesh, params, size, args)
     ctx = create_context()

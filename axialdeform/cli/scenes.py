@@ -35,7 +35,7 @@ def _check_output(args, what: str) -> None:
     check_output_path(args.output, (args.mesh,), what)
 
 
-def check_triangles(scene, args, mode: str, fast: bool = False) -> None:
+def check_triangles(scene, args, mode: str, fast: bool = False, frames: int = 1) -> None:
     """The CLI's per-frame triangle budget (:func:`._common.check_triangles`)
     over every layer and the terrain, before anything is drawn."""
     from ._common import check_triangles as check
@@ -43,7 +43,7 @@ def check_triangles(scene, args, mode: str, fast: bool = False) -> None:
     items = [(f"{scene.path}: layer {layer.name}", len(layer.params), len(layer.mesh.faces)) for layer in scene.layers]
     if scene.terrain is not None:
         items.append((f"{scene.path}: terrain", 1, len(scene.terrain.faces)))
-    check(items, mode, args.max_triangles, fast)
+    check(items, mode, args.max_triangles, fast, frames)
 
 
 def _time(scene, args) -> float:

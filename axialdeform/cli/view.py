@@ -58,9 +58,12 @@ def run(args) -> None:
     elif not options["lod"]:
         options["lod"] = None  # automatic: on from LOD_AUTO_COUNT instances
     extra = None
+    if args.frames < 1:
+        raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
+    frames = args.frames if args.headless else 1  # a window is the user's to close; --headless draws them all
     scene = scenes.scene_of(args, params_optional=True)
     if scene is not None:
-        scenes.check_triangles(scene, args, args.mode, args.fast)  # the mode it starts in; LOD: level 0
+        scenes.check_triangles(scene, args, args.mode, args.fast, frames)  # the mode it starts in; LOD: level 0
         mesh, params, wind, extra = scenes.viewer_inputs(scene, wind)
         seed = args.seed
         args.up, args.no_ground = scene.up, True
@@ -68,7 +71,7 @@ def run(args) -> None:
         mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
         check_triangles([(f"{args.mesh} x {args.params}", len(params), drawn_triangles(mesh, args.part))],
-                        args.mode, args.max_triangles, args.fast)  # before the levels of detail, any drawing
+                        args.mode, args.max_triangles, args.fast, frames)  # before the levels of detail, any drawing
         seed = args.seed  # a file records no seed: shown only if the user names one
     else:
         from ..core.safeio import check_count
@@ -77,11 +80,9 @@ def run(args) -> None:
         check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")  # before anything is read or allocated
         mesh = load_mesh(args.mesh)
         check_triangles([(f"{args.mesh} x -n {args.count}", args.count, drawn_triangles(mesh, args.part))],
-                        args.mode, args.max_triangles, args.fast)  # before the parameters are made
+                        args.mode, args.max_triangles, args.fast, frames)  # before the parameters are made
         seed = 0 if args.seed is None else args.seed
         params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)
-    if args.frames < 1:
-        raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed,
                            bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground,
                            on_screenshot=lambda path: print(f"wrote {path}"), wind=wind, extra=extra,
