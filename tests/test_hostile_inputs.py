@@ -867,3 +867,28 @@ def test_bake_folder_refuses_more_files_than_the_limit(tmp_path, capsys, monkeyp
     assert sorted(p.name for p in out.iterdir()) == [f"instance_{i:06d}.obj" for i in range(3)]
     # an .npz has no file limit
     assert main(["bake", "stone", str(few), "-o", str(tmp_path / "b.npz"), "--max-files", "1"]) == 0
+
+
+def test_export_baked_refuses_more_meshes_than_the_limit(tmp_path, capsys, monkeypatch):
+    from axialdeform.cli._common import MAX_EXPORT_MESHES
+    from axialdeform.core import export
+
+    assert MAX_EXPORT_MESHES == 10_000  # the documented default
+    many = tmp_path / "many.adp"
+    P.write_params(many, np.zeros((MAX_EXPORT_MESHES + 1, 16), np.float32))
+    out = tmp_path / "e.glb"
+    real = export.export_baked
+    monkeypatch.setattr(export, "export_baked", lambda *a, **k: pytest.fail("baked before the check"))
+    assert main(["export", "stone", str(many), "-o", str(out)]) == 2  # before: 10 001 glTF meshes and nodes
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and not out.exists(), err
+    for needle in (str(out), str(many), "10001 instances", "over the limit of 10000", "--max-meshes N", "--instanced"):
+        assert needle in err[0], err[0]
+    assert main(["export", "stone", str(many), "-o", str(out), "--instanced"]) == 0  # one mesh: no limit
+    out.unlink()
+    few = tmp_path / "few.adp"
+    P.write_params(few, np.zeros((3, 16), np.float32))
+    assert main(["export", "stone", str(few), "-o", str(out), "--max-meshes", "2"]) == 2
+    assert "over the limit of 2" in capsys.readouterr().err and not out.exists()
+    monkeypatch.setattr(export, "export_baked", real)
+    assert main(["export", "stone", str(few), "-o", str(out), "--max-meshes", "3"]) == 0 and out.exists()

@@ -224,6 +224,11 @@ WIRE_EDGES_PER_TRIANGLE = 1.5
 #: ``bake -o OUT.npz`` has no such limit (it is written in pieces).
 MAX_BAKE_FILES = 10_000
 
+#: The CLI's maximum of instances ``export --baked`` writes, one glTF mesh and
+#: node each (``--max-meshes``); ``--instanced`` (one mesh) and scene files
+#: (one mesh a layer) have no such limit.
+MAX_EXPORT_MESHES = 10_000
+
 
 def add_max_triangles(p) -> None:
     """``--max-triangles N`` (every command that rasterises)."""
