@@ -235,7 +235,7 @@ def add_max_triangles(p) -> None:
     p.add_argument("--max-triangles", type=positive_int, default=MAX_TRIANGLES, metavar="N", help=(
         "refuse a frame of more than N triangles: instances x triangles of the drawn parts, summed over "
         "layers; wireframe counts 1.5 edges a triangle, plus the triangles of the hidden-line pass unless "
-        "--fast (default: %(default)s: about 11 s of CPU a frame on llvmpipe)"))
+        "--fast (default: %(default)s: about 12 s of CPU a frame on llvmpipe)"))
 
 
 def mode_weight(mode: str, fast: bool = False) -> float:
