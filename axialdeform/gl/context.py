@@ -7,7 +7,8 @@ import numpy as np
 from ..core.errors import ContextError
 
 __all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels",
-           "require_framebuffer", "size_limits", "check_image_size", "check_alive", "check_released"]
+           "require_framebuffer", "size_limits", "check_image_size", "check_alive", "check_released",
+           "flush_interval", "draw_in_batches", "SOFTWARE_FLUSH_PRIMITIVES"]
 
 GL_REQUIRE = 330
 
@@ -35,6 +36,57 @@ def create_context(backend: str = "egl"):
         ctx.release()
         raise ContextError(f"the {backend.upper()} context is OpenGL {version}, expected {GL_REQUIRE} or newer; {_HELP}")
     return ctx
+
+
+#: most primitives (instances x triangles, or x lines) a software rasteriser is
+#: given before the draws are finished.  Mesa's llvmpipe keeps every primitive
+#: drawn into a multisampled target until the frame is finished -- about 48
+#: bytes a triangle: one draw of 100 instances of a 0.5 M-triangle mesh into a
+#: 64x64 4-sample target peaked at 2.4 GB, 213 MB when finished after each
+#: 0.5 M triangles (tools/msaa_memory.py) -- so big draws are split there.
+SOFTWARE_FLUSH_PRIMITIVES = 1_000_000
+_SOFTWARE = ("llvmpipe", "softpipe", "swrast", "swiftshader", "lavapipe")
+
+
+def flush_interval(ctx) -> int | None:
+    """Primitives to draw between finishes on ``ctx``: :data:`SOFTWARE_FLUSH_PRIMITIVES`
+    on a software rasteriser (``GL_RENDERER`` names llvmpipe, softpipe, ...), None on
+    a GPU (whose memory does not grow with what one frame draws).  The environment
+    variable ``AXIALDEFORM_FLUSH_PRIMITIVES`` overrides it (0: never split)."""
+    import os
+
+    cached = getattr(ctx, "_axialdeform_flush", False)
+    if cached is not False:
+        return cached
+    env = os.environ.get("AXIALDEFORM_FLUSH_PRIMITIVES")
+    if env is not None and env.strip().isdigit():
+        value = int(env) or None
+    else:
+        renderer = str(ctx.info.get("GL_RENDERER", "")).lower()
+        value = SOFTWARE_FLUSH_PRIMITIVES if any(name in renderer for name in _SOFTWARE) else None
+    try:
+        setattr(ctx, "_axialdeform_flush", value)
+    except AttributeError:  # pragma: no cover - a context that takes no attributes: ask every time
+        pass
+    return value
+
+
+def draw_in_batches(ctx, draw, vertices: int, first: int, per_primitive: int, instances: int) -> None:
+    """Call ``draw(vertices, first)`` once, or -- on a software rasteriser, when
+    ``instances`` x ``vertices / per_primitive`` exceeds :func:`flush_interval` --
+    once per slice of the index range (whole primitives, every instance each time),
+    finishing the GL queue after each slice, so that the driver's memory for one
+    frame stays bounded.  The picture is the same for depth-tested opaque drawing
+    (the slices reorder primitives only; a blended draw must not be split)."""
+    budget = flush_interval(ctx)
+    primitives = vertices // per_primitive
+    if budget is None or primitives * max(int(instances), 1) <= budget or primitives <= 1:
+        draw(vertices, first)
+        return
+    step = max(1, budget // max(int(instances), 1)) * per_primitive
+    for start in range(0, vertices, step):
+        draw(min(step, vertices - start), first + start)
+        ctx.finish()
 
 
 def check_alive(ctx, what: str = "this object") -> None:

@@ -23,7 +23,7 @@ import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers, as_index
 from .cull import CullPass, IndirectDraws, read_counts
-from .context import bind_framebuffer, check_alive, release_framebuffer, require_framebuffer
+from .context import bind_framebuffer, check_alive, draw_in_batches, release_framebuffer, require_framebuffer
 from ..core.bounds import base_radius, wind_reach
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.arrays import as_array
@@ -431,7 +431,7 @@ class AxialRenderer:
             try:
                 with self.culling(view, projection, enabled=not material.double_sided):
                     self._instanced(vao, moderngl.TRIANGLES, part.count * 3, part.start * 3, instances,
-                                    ("t", level, part.start * 3))
+                                    ("t", level, part.start * 3), split=not (blend and not coverage))
             finally:
                 if blend and coverage:
                     self.ctx.disable_direct(_GL_SAMPLE_ALPHA_TO_COVERAGE)
@@ -722,12 +722,25 @@ class AxialRenderer:
             return self._draw_order
         return [self.lod_levels[level].parts[i] for i in self._draw_index]
 
-    def _instanced(self, vao, mode, vertices: int, first: int, instances, key) -> None:
-        """One instanced draw: ``instances`` a count, or the GPU's (:class:`IndirectDraws`, slot ``key``)."""
+    def _instanced(self, vao, mode, vertices: int, first: int, instances, key, *, split: bool = True) -> None:
+        """One instanced draw: ``instances`` a count, or the GPU's (:class:`IndirectDraws`, slot ``key``).
+        On a software rasteriser a big draw is made in slices of its index range
+        (:func:`~axialdeform.gl.context.draw_in_batches`; not when ``split`` is False:
+        blended parts, whose order matters)."""
+        import moderngl
+
         if isinstance(instances, IndirectDraws):
-            instances.render(vao, mode, key, vertices, first)
+            def draw(n, start):
+                instances.render(vao, mode, key, n, start)
+            most = self.count  # the GPU's count is at most every instance
         else:
-            vao.render(mode, vertices=vertices, first=first, instances=instances)
+            def draw(n, start):
+                vao.render(mode, vertices=n, first=start, instances=instances)
+            most = instances
+        if not split:
+            draw(vertices, first)
+            return
+        draw_in_batches(self.ctx, draw, vertices, first, 2 if mode == moderngl.LINES else 3, most)
 
     def _culled_vao(self, prog, level: int, index_buffer):
         """A vertex array of one LOD level for the culled program (instances: bound by the cull pass)."""
@@ -941,7 +954,8 @@ class BakedMeshes:
         primitive = moderngl.LINES if wire else moderngl.TRIANGLES
         with (contextlib.nullcontext() if wire else self.renderer.culling(view, projection)):
             for _, vao, n in self._items:
-                vao.render(primitive, vertices=n)
+                draw_in_batches(self.ctx, lambda count, first, vao=vao: vao.render(primitive, vertices=count, first=first),
+                                n, 0, 2 if wire else 3, 1)
 
     def release(self) -> None:
         """Free every GL object; safe to call twice."""
