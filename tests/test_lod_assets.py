@@ -284,6 +284,8 @@ def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch, indirect):
         return result
 
     with ad.AxialRenderer(ctx, mesh, params, lod=True, indirect=indirect) as r:
+        # whole draws (a multisampled frame on llvmpipe is otherwise drawn in slices: tests/test_render.py)
+        monkeypatch.setattr(ctx, "_axialdeform_flush", None, raising=False)
         monkeypatch.setattr(moderngl.VertexArray, "render", spy)
         monkeypatch.setattr(moderngl.VertexArray, "render_indirect", spy_indirect)
         draw(ctx, r, *MEADOW_VIEW, size=(160, 120))
@@ -345,3 +347,117 @@ def test_no_uv_is_mixed_across_a_seam():
         expected_v = np.clip(np.einsum("ij,ij->i", p, b) + 0.5, 0, 1)
         tol = 1e-5 + level.error
         assert np.abs(level.uvs[:, 0] - expected_u).max() <= tol / 6 and np.abs(level.uvs[:, 1] - expected_v).max() <= tol, k
+
+
+# ---------------------------------------------------------------- big meshes (issue 16)
+
+def _torus(faces):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
+    from big_mesh import torus
+
+    return torus(faces)
+
+
+@pytest.mark.parametrize("name", ["torus", "base/rock_trimesh.obj", "base/grass_blade_flora.obj",
+                                  "base/rock_caustics.obj"])
+def test_collapse_mapping_is_the_replays_mapping(name):
+    """``collapse_mapping`` reads from the collapse history what
+    ``replay_simplification`` computes by simplifying a second time: the same
+    simplified vertex for every original vertex the replay maps into a
+    triangle; where a whole piece vanished (rock_caustics has some) the replay
+    gives an index that is not meaningful and ours gives -1."""
+    import fast_simplification
+
+    from axialdeform.core.lod import collapse_mapping
+
+    if name == "torus":
+        p, f = _torus(20_000)
+        p, f = p.astype(np.float64), f.astype(np.int64)
+    else:
+        tm = trimesh.load(shared_mesh(name), process=False, force="mesh")
+        p, f = np.asarray(tm.vertices, np.float64), np.asarray(tm.faces, np.int64)
+    for reduction in (0.5, 0.8, 0.93):
+        _, new_faces, collapses = fast_simplification.simplify(p, f, target_reduction=reduction,
+                                                               return_collapses=True)
+        new_faces = np.asarray(new_faces, np.int64).reshape(-1, 3)
+        _, _, replay = fast_simplification.replay_simplification(p.astype(np.float32), f.astype(np.int32), collapses)
+        ours = collapse_mapping(len(p), f, collapses, new_faces)
+        assert ours is not None and ours.shape == (len(p),)
+        referenced = np.zeros(len(p), bool)
+        referenced[new_faces.ravel()] = True
+        in_triangles = ours >= 0
+        assert np.array_equal(ours[in_triangles], replay[in_triangles]), (name, reduction)
+        if name != "base/rock_caustics.obj":
+            assert in_triangles[np.unique(f)].all()
+        assert np.array_equal(np.unique(ours[in_triangles]), np.arange(new_faces.max() + 1))
+        # a history that does not give these triangles is refused (the caller then replays)
+        assert collapse_mapping(len(p), f, collapses, new_faces[::-1]) is None
+
+
+def test_spatial_chunks_partition_into_neighbourhoods():
+    from axialdeform.core.lod import spatial_chunks
+
+    rng = np.random.default_rng(4)
+    pts = rng.random((10_000, 3)) * [10.0, 1.0, 3.0]
+    chunks = spatial_chunks(pts, 1000)
+    every = np.concatenate(chunks)
+    assert len(every) == len(pts) and np.array_equal(np.sort(every), np.arange(len(pts)))
+    assert all(500 <= len(c) <= 1000 for c in chunks) and len(chunks) == 16
+    # neighbourhoods: the chunks' boxes add up to about the whole box (no chunk spans the field)
+    volume = sum(np.prod(pts[c].max(axis=0) - pts[c].min(axis=0)) for c in chunks)
+    assert volume < 1.2 * np.prod(pts.max(axis=0) - pts.min(axis=0))
+
+
+def test_a_big_part_is_simplified_in_chunks_like_parts(monkeypatch):
+    """A part over LOD_CHUNK_TRIANGLES is simplified chunk by chunk: the same
+    reduction, attributes carried, and a geometric error like the unchunked one
+    (chunk borders behave like the borders between parts: they may open by
+    about the level's error)."""
+    import axialdeform.core.lod as lod
+
+    p, f = _torus(20_000)
+    mesh = ad.load_mesh(trimesh.Trimesh(p, f, process=False))
+    whole = build_lod_levels(mesh)
+    monkeypatch.setattr(lod, "LOD_CHUNK_TRIANGLES", 3000)
+    calls = []
+    original = lod._simplified
+    monkeypatch.setattr(lod, "_simplified", lambda *a: (calls.append(len(a[2])), original(*a))[1])
+    chunked = build_lod_levels(mesh)
+    assert len(calls) == 3 * 8 and max(calls) <= 3000  # 19 968 triangles: 8 chunks a level
+    assert len(chunked) == len(whole)
+    for a, b in zip(whole[1:], chunked[1:]):
+        assert abs(len(b.faces) - len(a.faces)) <= 0.02 * len(a.faces)
+        assert b.error <= 2.0 * a.error + 1e-6
+        assert np.isfinite(b.normals).all() and np.allclose(np.linalg.norm(b.normals, axis=1), 1.0, atol=1e-5)
+
+
+@pytest.mark.slow
+def test_lod_of_a_big_mesh_has_bounded_memory(tmp_path):
+    """fast-simplification keeps the working arrays of its largest input for the
+    life of the process (~290 bytes a triangle; a replay as much again): LOD of
+    a 0.5 M-triangle torus grew the process by ~560 MB before chunking and the
+    history-read mapping, ~150 MB after.  Measured in a child process."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    script = ("import resource, sys, trimesh\n"
+              "sys.path.insert(0, 'tools')\n"
+              "from big_mesh import torus\n"
+              "import axialdeform as ad\n"
+              "from axialdeform.core.lod import build_lod_levels\n"
+              "p, f = torus(500_000)\n"
+              "mesh = ad.load_mesh(trimesh.Trimesh(p, f, process=False))\n"
+              "del p, f\n"
+              "before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
+              "levels = build_lod_levels(mesh)\n"
+              "after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
+              "assert len(levels) == 4, len(levels)\n"
+              "print((after - before) / 1024)\n")
+    done = subprocess.run([sys.executable, "-c", script], cwd=root, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert float(done.stdout.split()[-1]) < 300

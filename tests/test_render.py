@@ -255,7 +255,7 @@ def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
     translucent fill up to the order of overlapping translucent lines."""
     import moderngl
 
-    from axialdeform.gl.context import flush_interval
+    from axialdeform.gl.context import _multisampled, flush_interval
 
     params = ad.random_params(stone, 400, seed=6, bend=0.2)
     modes = ("solid", "flat", "wireframe")
@@ -266,12 +266,13 @@ def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
     original, original_finish = moderngl.VertexArray.render, moderngl.Context.finish
 
     def spy(self, mode=None, vertices=-1, first=0, instances=-1):
-        calls.append((mode, vertices, first, instances))
+        if _multisampled(ctx):  # the shadow map's depth target is single-sampled: never sliced
+            calls.append((mode, vertices, first, instances))
         return original(self, mode, vertices=vertices, first=first, instances=instances)
 
     monkeypatch.setattr(moderngl.VertexArray, "render", spy)
     monkeypatch.setattr(moderngl.Context, "finish", lambda self: (finishes.append(1), original_finish(self))[1])
-    monkeypatch.setattr(ctx, "_axialdeform_flush", 7000)  # 17 stone triangles x 400 instances a slice
+    monkeypatch.setattr(ctx, "_axialdeform_flush", 7000)  # 17 stone triangles (5 lines) x 400 instances a slice
     monkeypatch.setenv("AXIALDEFORM_INDIRECT", "0")
     sliced = ad.render_image(stone, params, (200, 150), modes, ctx=ctx)
     w = 200
@@ -280,7 +281,8 @@ def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
     assert (diff > 40).mean() < 0.002 and diff.mean() < 0.5
     tri = [c for c in calls if c[0] == moderngl.TRIANGLES and c[3] == 400]
     lines = [c for c in calls if c[0] == moderngl.LINES and c[3] == 400]
-    assert all(v <= 17 * 3 for _, v, _, _ in tri) and all(v <= 17 * 2 for _, v, _, _ in lines)  # slices ...
+    assert all(v <= 17 * 3 for _, v, _, _ in tri), tri
+    assert all(v <= 5 * 2 for _, v, _, _ in lines), lines  # slices ...
     slices = -(-len(stone.faces) // 17)
     assert len(tri) >= 3 * slices and len(lines) >= slices  # solid, flat, the wireframe's depth pass; its lines
     firsts = sorted(first // 3 for _, _, first, _ in tri[:slices])

@@ -214,3 +214,106 @@ def test_density_white_only_where_nothing_faces_up_is_an_error(stone):
     left = 1.0 - right
     params = ad.scatter(surface, stone, 10, density=left, anchor="origin")
     assert (params[:, 10] <= 0).all()
+
+
+# ------------------------------------------- height maps within the memory bound (issue 16)
+
+
+def _trimesh_weights(tm, u):
+    """What scatter weighted faces by before: trimesh's own areas and normals of every face."""
+    area = np.asarray(tm.area_faces)
+    return np.where((np.asarray(tm.face_normals)[:, u] > 1e-9) & (area > 0), area, 0.0)
+
+
+def _surfaces(terrain):
+    rng = np.random.default_rng(5)
+    yield surface_from_heights(rng.random((23, 31)), height_scale=4.0, extent=(10.0, 7.0))
+    yield surface_from_heights(rng.random((17, 12)), up="z", height_scale=2.0)
+    yield surface_from_heights(rng.random((9, 14)), up="x")
+    yield load_surface(terrain[0], up="z")  # a real mesh: faces up and down, uint32 faces
+
+
+def test_sample_is_trimesh_sample_surface(terrain, monkeypatch):
+    """Surface.sample gathers only the picked faces, yet draws what
+    trimesh.sample.sample_surface draws -- the same points and faces bit for
+    bit, and the generator left in the same state -- for every kind of surface."""
+    from axialdeform.core import scatter as S
+
+    monkeypatch.setattr(S, "FACE_BLOCK", 97)  # many blocks: the blocked areas must equal trimesh's whole ones
+    for surf in _surfaces(terrain):
+        tm = surf.mesh
+        assert np.array_equal(surf.weights, _trimesh_weights(tm, surf.up))
+        assert np.array_equal(surf.bounds, tm.bounds)
+        tri = tm.triangles[surf.upward].reshape(-1, 3)
+        assert surf.size == float((tri.max(axis=0) - tri.min(axis=0)).max())
+        for seed, count in ((0, 1), (3, 257), (11, 5000)):
+            mine, theirs = np.random.default_rng(seed), np.random.default_rng(seed)
+            p, f = surf.sample(count, mine)
+            q, g = trimesh.sample.sample_surface(tm, count, face_weight=surf.weights, seed=theirs)
+            assert p.dtype == q.dtype and np.array_equal(p, q) and np.array_equal(f, g), surf.name
+            assert mine.random() == theirs.random()
+            assert np.array_equal(surf.face_normals(f), np.asarray(tm.face_normals)[f])
+
+
+def test_height_map_grid_is_the_one_trimesh_built_before():
+    """The grid written in place (uint32 faces, wound to face up) is the old
+    meshgrid one: the same vertices, and the same faces up to the winding flip."""
+    h = np.random.default_rng(2).random((6, 9))
+    for up in "xyz":
+        surf = surface_from_heights(h, up=up, height_scale=3.0, extent=(8.0,))
+        rows, cols = h.shape
+        u = "xyz".index(up)
+        g0, g1 = ad.core.axis.PERPENDICULAR[u]
+        jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
+        verts = np.zeros((rows * cols, 3))
+        verts[:, g0] = (jj.ravel() / (cols - 1) - 0.5) * 8.0
+        verts[:, g1] = (ii.ravel() / (rows - 1) - 0.5) * 8.0 * (rows - 1) / (cols - 1)
+        verts[:, u] = h.ravel() * 3.0
+        k = (ii[:-1, :-1] * cols + jj[:-1, :-1]).ravel()
+        faces = np.concatenate([np.stack([k, k + cols, k + 1], 1), np.stack([k + 1, k + cols, k + cols + 1], 1)])
+        if trimesh.Trimesh(verts, faces, process=False).face_normals[:, u].sum() < 0:
+            faces = faces[:, ::-1]
+        assert np.array_equal(surf.vertices, verts) and surf.faces.dtype == np.uint32
+        assert np.array_equal(surf.faces, faces) and surf.upward.all()
+
+
+def _traced_peak_bytes(fn) -> int:
+    import gc
+    import tracemalloc
+
+    gc.collect()
+    tracemalloc.start()
+    try:
+        fn()
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+#: what the library may allocate (numpy arrays and Python objects, tracemalloc's
+#: peak) per pixel of a 600 x 600 height map while scattering on it, or loading a
+#: scene with it as a terrain (the surface, its drawing copy and normals, a scatter
+#: layer); before: 600 and 682 bytes a pixel; after: ~95 and ~218
+HEIGHT_MAP_TRACED_BYTES_PER_PIXEL = {"scatter": 150, "scene": 260}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("what", ["scatter", "scene"])
+def test_height_map_memory_is_bounded_per_pixel(tmp_path, stone, what):
+    """A 600 x 600 height map: building the surface, its area weights, the
+    scatter (and for a scene the terrain's drawing copy with its normals)
+    peaks under HEIGHT_MAP_TRACED_BYTES_PER_PIXEL a pixel.  Before: trimesh's
+    caches of every face and sample_surface's (f, 2, 3) edge vectors."""
+    from axialdeform.core.scene import load_scene
+
+    rng = np.random.default_rng(7)
+    Image.fromarray((rng.random((600, 600)) * 255).astype(np.uint8)).save(tmp_path / "hm.png")
+    if what == "scatter":
+        run_it = lambda: ad.scatter(tmp_path / "hm.png", stone, 200, seed=1)  # noqa: E731
+    else:
+        (tmp_path / "s.toml").write_text('[terrain]\nheightmap = "hm.png"\nheight_scale = 20.0\n'
+                                         '[[layer]]\nmesh = "stone"\n[layer.scatter]\ncount = 200\nseed = 3\n')
+        run_it = lambda: load_scene(tmp_path / "s.toml")  # noqa: E731
+    run_it()  # imports and first-use caches are not the map's
+    peak = _traced_peak_bytes(run_it)
+    assert peak < HEIGHT_MAP_TRACED_BYTES_PER_PIXEL[what] * 600 * 600, f"{peak / 2**20:.0f} MB: {peak / 600**2:.0f} B a pixel"

@@ -3,6 +3,7 @@ first solid frame (renderer + one draw into 64x64), with wireframe edges
 never built for solid drawing.
 
     python3 tools/big_mesh.py [--faces 10000000] [--format ply]
+    python3 tools/big_mesh.py --faces 1000000 --lod    # LOD instead: its time and peak RSS
 
 Generates a closed torus of about ``--faces`` triangles (binary PLY, or OBJ
 text) in a temporary folder, then times each step once and prints a JSON
@@ -41,6 +42,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--faces", type=int, default=10_000_000)
     ap.add_argument("--format", choices=("ply", "obj"), default="ply")
+    ap.add_argument("--lod", action="store_true", help="instead: time build_lod_levels after load_mesh and print "
+                    "the peak RSS after each (run it in a fresh process: the peak is the process's)")
     args = ap.parse_args(argv)
     import trimesh
 
@@ -58,6 +61,20 @@ def main(argv=None) -> int:
         t = time.perf_counter()
         mesh = ad.load_mesh(path)
         out["load_mesh_s"] = round(time.perf_counter() - t, 2)
+        if args.lod:
+            import resource
+
+            from axialdeform.core.lod import build_lod_levels
+
+            del pos, faces
+            out["peak_rss_after_load_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+            t = time.perf_counter()
+            levels = build_lod_levels(mesh)
+            out["build_lod_levels_s"] = round(time.perf_counter() - t, 2)
+            out["peak_rss_after_lod_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+            out["level_triangles"] = [len(level.faces) for level in levels]
+            print(json.dumps(out))
+            return 0
     params = ad.random_params(mesh, 1, 0)
     ctx = ad.create_context()
     t = time.perf_counter()

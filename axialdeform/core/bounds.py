@@ -22,8 +22,13 @@ def base_radius(mesh, *extra_positions) -> float:
     centre ``mesh.axis.center`` (model units), over the mesh and any
     ``extra_positions`` arrays (k, 3) (its LOD levels)."""
     center = np.asarray(mesh.axis.center, dtype=np.float64)
-    return max(float(np.linalg.norm(np.asarray(p, dtype=np.float64) - center, axis=1).max())
-               for p in (mesh.positions, *extra_positions))
+    # over blocks of vertices: no (n, 3) float64 copies of a big mesh (the same maximum)
+    return max(float(np.linalg.norm(np.asarray(p[s:s + _RADIUS_BLOCK], dtype=np.float64) - center, axis=1).max())
+               for p in (mesh.positions, *extra_positions) for s in range(0, len(p), _RADIUS_BLOCK))
+
+
+#: vertices handled at once by :func:`base_radius`
+_RADIUS_BLOCK = 1 << 16
 
 
 def wind_reach(mesh, wind) -> float:

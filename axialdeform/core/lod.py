@@ -9,9 +9,10 @@ simplified: every level carries it at full resolution.
 
 The per-vertex attributes (normals, UVs, vertex colours, tangents) are
 carried to the simplified vertices with the collapse history
-(``simplify(..., return_collapses=True)`` replayed by
-``replay_simplification``, whose ``indice_mapping`` says which simplified
-vertex every original vertex was collapsed into): a simplified vertex is
+(``simplify(..., return_collapses=True)``; :func:`collapse_mapping` reads
+from it which simplified vertex every original vertex was collapsed into --
+``replay_simplification``'s ``indice_mapping``, without the replay, whose
+working arrays fast-simplification keeps for the life of the process): a simplified vertex is
 projected to the closest point of the original triangles around the vertices
 collapsed into it, and takes the barycentric interpolation of their
 attributes there (normals renormalised; tangents made orthogonal to the
@@ -46,15 +47,19 @@ from functools import cached_property
 import numpy as np
 
 from .errors import ParamError
-from .mesh import area_weighted_normals
+from .mesh import area_weighted_normals, unique_edges
 
-__all__ = ["LodLevel", "build_lod_levels", "LOD_REDUCTIONS", "MIN_LOD_TRIANGLES", "check_lod_error"]
+__all__ = ["LodLevel", "build_lod_levels", "collapse_mapping", "spatial_chunks", "LOD_CHUNK_TRIANGLES", "LOD_REDUCTIONS", "MIN_LOD_TRIANGLES", "check_lod_error"]
 
 #: fraction of the triangles removed for levels 1, 2, 3 (level 0 is the full mesh)
 LOD_REDUCTIONS = (0.5, 0.8, 0.93)
 #: a part with fewer triangles is not simplified (a mesh none of whose parts
 #: has that many keeps one level, with a warning)
 MIN_LOD_TRIANGLES = 48
+#: a part of more triangles is simplified in spatial chunks of at most this many,
+#: each on its own (fast-simplification keeps ~290 bytes a triangle of its largest
+#: input for the life of the process: a 1 M-triangle part cost 290 MB at once)
+LOD_CHUNK_TRIANGLES = 1 << 17
 _SAMPLE = 2048
 _PAIRS = 1 << 18  # (vertex, triangle) candidate pairs per closest-point chunk
 
@@ -104,9 +109,10 @@ class LodLevel:
 
 
 def faces_edges(faces: np.ndarray) -> np.ndarray:
-    """(k, 2) uint32 unique undirected edges of ``faces : (m, 3) int``."""
-    e = np.sort(np.asarray(faces, dtype=np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return np.unique(e, axis=0).astype(np.uint32)
+    """(k, 2) uint32 unique undirected edges of ``faces : (m, 3) int``
+    (:func:`axialdeform.core.mesh.unique_edges`)."""
+    faces = np.asarray(faces)
+    return unique_edges(faces, int(faces.max()) + 1 if faces.size else 0)
 
 
 def check_lod_error(pixels) -> float:
@@ -181,20 +187,31 @@ def _transfer(positions, faces, attrs, new_positions, mapping):
     face = np.repeat(np.arange(m, dtype=np.int64), 3)
     ok = target >= 0
     key = _unique_ints(target[ok] * m + face[ok])  # unique (simplified vertex, original triangle) pairs
+    del target, face, ok
     j, f = key // m, key % m
-    tri = positions[faces[f]]
-    close = np.empty((len(j), 3))
-    for a in range(0, len(j), _PAIRS):  # chunks bound closest_point's temporaries (a few per pair)
+    del key
+    # the distance of every pair, in chunks: the (pairs, 3, 3) triangles and their
+    # closest points exist one chunk at a time (about 200 bytes a pair at once before)
+    dist = np.empty(len(j))
+    for a in range(0, len(j), _PAIRS):
         with np.errstate(invalid="ignore", divide="ignore"):
-            close[a:a + _PAIRS] = trimesh.triangles.closest_point(tri[a:a + _PAIRS], new_positions[j[a:a + _PAIRS]])
-    dist = np.linalg.norm(close - new_positions[j], axis=1)
+            near = trimesh.triangles.closest_point(positions[faces[f[a:a + _PAIRS]]], new_positions[j[a:a + _PAIRS]])
+        dist[a:a + _PAIRS] = np.linalg.norm(near - new_positions[j[a:a + _PAIRS]], axis=1)
     dist[~np.isfinite(dist)] = np.inf
     order = np.lexsort((dist, j))  # by vertex, nearest first
+    del dist
     js = j[order]
     first = order[np.r_[True, js[1:] != js[:-1]]]
+    del order, js
     best_j, best_f = j[first], f[first]
+    del j, f
+    tri = positions[faces[best_f]]
+    close = np.empty((len(best_j), 3))
+    for a in range(0, len(best_j), _PAIRS):  # the nearest pairs' closest points again (the same numbers)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            close[a:a + _PAIRS] = trimesh.triangles.closest_point(tri[a:a + _PAIRS], new_positions[best_j[a:a + _PAIRS]])
     with np.errstate(invalid="ignore", divide="ignore"):
-        bary = trimesh.triangles.points_to_barycentric(tri[first], close[first])
+        bary = trimesh.triangles.points_to_barycentric(tri, close)
     bary = np.clip(np.nan_to_num(bary, nan=-1.0), 0.0, None)
     total = bary.sum(axis=1)
     bad = ~(total > 1e-12)  # a degenerate triangle: take its first corner
@@ -233,31 +250,130 @@ def _finish(attrs, positions, faces):
     return out
 
 
+def collapse_mapping(n: int, faces: np.ndarray, collapses: np.ndarray, new_faces: np.ndarray):
+    """The simplified vertex each of ``n`` original vertices went into, from the
+    collapse history -- what ``fast_simplification.replay_simplification`` returns
+    as ``indice_mapping``, without replaying the simplification.
+
+    faces : (m, 3) int64, the original triangles; collapses : (k, 2) int, row
+    ``(i0, i1)``: vertex ``i1`` was collapsed into ``i0``, in order;
+    new_faces : (m', 3) int64, the simplified triangles.  Returns (n,) int64
+    (-1: a vertex of no simplified triangle: unreferenced, or of a piece that
+    vanished), or None when the history does not reproduce ``new_faces``
+    (the caller then asks the library's replay).
+
+    A vertex ends in the root of its collapse chain; a triangle survives when
+    its corners' roots are three different vertices; the simplified vertices
+    are the roots of surviving triangles in increasing order (the simplifier's
+    final compaction), and the surviving triangles, in order, must be exactly
+    ``new_faces``.  A root left without a triangle follows the edges of the
+    collapsed triangles to a root with one (as the replay does)."""
+    root = np.arange(n, dtype=np.int64)
+    c = np.asarray(collapses, dtype=np.int64).reshape(-1, 2)
+    if len(c) and (c.min() < 0 or c.max() >= n):
+        return None
+    root[c[:, 1]] = c[:, 0]  # last wins, as in the replay
+    for _ in range(64):  # pointer jumping: depth halves each round
+        nxt = root[root]
+        if np.array_equal(nxt, root):
+            break
+        root = nxt
+    else:
+        return None  # a cycle: not a history
+    rf = root[faces]
+    d01, d12, d02 = rf[:, 0] != rf[:, 1], rf[:, 1] != rf[:, 2], rf[:, 0] != rf[:, 2]
+    alive = d01 & d12 & d02
+    kept = np.zeros(n, dtype=bool)
+    kept[rf[alive].ravel()] = True
+    rank = np.cumsum(kept) - 1
+    if not np.array_equal(rank[rf[alive]], np.asarray(new_faces).reshape(-1, 3)):
+        return None
+    collapsed = rf[~alive & (d01 | d12 | d02)]  # triangles reduced to an edge
+    edges = np.concatenate([collapsed[:, [0, 1]], collapsed[:, [1, 2]], collapsed[:, [0, 2]]])
+    edges = edges[edges[:, 0] != edges[:, 1]]
+    target = np.where(kept, np.arange(n), -1)
+    a, b = edges[:, 0], edges[:, 1]
+    for _ in range(n):  # rounds: one step along the edges each (bounded by the longest chain)
+        fill_a = (target[a] < 0) & (target[b] >= 0)
+        fill_b = (target[b] < 0) & (target[a] >= 0)
+        if not (fill_a.any() or fill_b.any()):
+            break
+        new = target.copy()
+        new[a[fill_a]] = target[b[fill_a]]
+        new[b[fill_b]] = target[a[fill_b]]
+        target = new
+    t = target[root]
+    return np.where(t >= 0, rank[np.maximum(t, 0)], -1)
+
+
 def _part_piece(mesh, attributes, part, reduction):
     """One part at one reduction: (positions (v, 3) float64, faces (m, 3) int64,
     attributes name -> (v, k)); ``attributes``: :func:`_attributes` of the mesh;
-    ``reduction`` None: the part as it is."""
+    ``reduction`` None: the part as it is.  A part of more than
+    :data:`LOD_CHUNK_TRIANGLES` triangles is simplified in spatial chunks
+    (:func:`spatial_chunks`), each on its own like a part."""
+    faces = mesh.faces[part.start:part.start + part.count].astype(np.int64)
+    if reduction is None or part.count < MIN_LOD_TRIANGLES or part.count <= LOD_CHUNK_TRIANGLES:
+        return _simplified(mesh, attributes, faces, reduction, part.name)
+    centroids = (mesh.positions[faces[:, 0]] + mesh.positions[faces[:, 1]] + mesh.positions[faces[:, 2]]) / 3
+    pieces = []
+    for chunk in spatial_chunks(centroids, LOD_CHUNK_TRIANGLES):
+        pieces.append(_simplified(mesh, attributes, faces[chunk], reduction, part.name))
+    offsets = np.cumsum([0] + [len(p) for p, _, _ in pieces])
+    return (np.concatenate([p for p, _, _ in pieces]),
+            np.concatenate([f + o for (_, f, _), o in zip(pieces, offsets)]),
+            {name: np.concatenate([a[name] for _, _, a in pieces]) for name in pieces[0][2]})
+
+
+def spatial_chunks(points: np.ndarray, most: int) -> list:
+    """Split ``points`` (m, 3) into groups of at most ``most`` by halving at
+    the median along the longest side of each group's box, until every group
+    fits: a list of (k,) int64 index arrays, neighbours in space together.
+    One Python step per group (about 2 m / ``most`` of them), none per point."""
+    points = np.asarray(points, dtype=np.float64)
+    done, todo = [], [np.arange(len(points), dtype=np.int64)]
+    while todo:
+        index = todo.pop()
+        if len(index) <= most:
+            done.append(np.sort(index))
+            continue
+        p = points[index]
+        side = int(np.argmax(p.max(axis=0) - p.min(axis=0)))
+        half = len(index) // 2
+        split = np.argpartition(p[:, side], half)
+        todo += [index[split[:half]], index[split[half:]]]
+    return done
+
+
+def _simplified(mesh, attributes, faces, reduction, name):
+    """The triangles ``faces`` (m, 3) int64 of ``mesh`` at one reduction (None: as
+    they are): (positions (v, 3) float64, faces (m', 3) int64 local to them,
+    attributes name -> (v, k))."""
     import fast_simplification
 
-    faces = mesh.faces[part.start:part.start + part.count].astype(np.int64)
     used = _used_vertices(faces, mesh.vertex_count)
     local = np.searchsorted(used, faces)
     positions = mesh.positions[used].astype(np.float64)
-    attrs = {name: value[used] for name, value in attributes.items()}
-    if reduction is None or part.count < MIN_LOD_TRIANGLES:
+    attrs = {key: value[used] for key, value in attributes.items()}
+    if reduction is None or len(faces) < MIN_LOD_TRIANGLES:
         return positions, local, attrs
     points, new_faces, collapses = fast_simplification.simplify(positions, local, target_reduction=float(reduction),
                                                                 return_collapses=True)
     new_faces = np.asarray(new_faces, dtype=np.int64).reshape(-1, 3)
-    if len(new_faces) == 0:  # simplified away entirely: keep the part as it is
+    if len(new_faces) == 0:  # simplified away entirely: keep the triangles as they are
         return positions, local, attrs
-    # which simplified vertex each original vertex was collapsed into
-    _, replayed, mapping = fast_simplification.replay_simplification(positions.astype(np.float32),
-                                                                     local.astype(np.int32), collapses)
-    replayed = np.asarray(replayed, dtype=np.int64).reshape(-1, 3)
-    if not np.array_equal(replayed, new_faces):  # never seen; carry attributes by the mapping anyway
-        warnings.warn(f"{mesh.name}: part {part.name!r}: the replayed simplification differs from the "
-                      "simplification; attributes follow the replay's vertex mapping", RuntimeWarning, stacklevel=3)
+    # which simplified vertex each original vertex was collapsed into: from the
+    # collapse history (no replay: fast-simplification keeps its working arrays,
+    # ~320 bytes a triangle, for the life of the process after a replay)
+    mapping = collapse_mapping(len(positions), local, collapses, new_faces)
+    if mapping is None:  # the history does not explain the result: ask the library's replay
+        _, replayed, mapping = fast_simplification.replay_simplification(positions.astype(np.float32),
+                                                                         local.astype(np.int32), collapses)
+        replayed = np.asarray(replayed, dtype=np.int64).reshape(-1, 3)
+        if not np.array_equal(replayed, new_faces):  # never seen; carry attributes by the mapping anyway
+            warnings.warn(f"{mesh.name}: part {name!r}: the replayed simplification differs from the "
+                          "simplification; attributes follow the replay's vertex mapping", RuntimeWarning,
+                          stacklevel=4)
     keep = _used_vertices(new_faces, len(points))  # drop vertices no triangle uses
     remap = np.full(len(points), -1, dtype=np.int64)
     remap[keep] = np.arange(len(keep))
@@ -290,6 +406,7 @@ def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
 
     full = trimesh.Trimesh(mesh.positions.astype(np.float64), mesh.faces.astype(np.int64), process=False)
     full_cloud = _surface_points(full, _SAMPLE, 1)
+    del full  # and its cached triangles, areas, normals (~140 bytes a triangle)
     attributes = _attributes(mesh)
     levels = [base]
     for reduction in reductions:
@@ -305,8 +422,7 @@ def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
         attrs = _finish(attrs, points, faces)
         parts = tuple(Part(p.name, int(s), len(f), p.material)
                       for p, s, (_, f, _) in zip(mesh.parts, starts, pieces))
-        simple = trimesh.Trimesh(points, faces, process=False)
-        simple_cloud = _surface_points(simple, _SAMPLE, 2)
+        simple_cloud = _surface_points(trimesh.Trimesh(points, faces, process=False), _SAMPLE, 2)
         error = max(_one_sided(full_cloud, simple_cloud), _one_sided(simple_cloud, full_cloud))
         levels.append(LodLevel(points.astype(np.float32), attrs["normals"], faces.astype(np.uint32),
                                max(error, levels[-1].error), attrs.get("uvs"), attrs.get("colors"),

@@ -182,15 +182,7 @@ class BaseMesh:
     @cached_property
     def edges(self) -> np.ndarray:
         """(k, 2) uint32 unique undirected edges of the triangles (for wireframe)."""
-        f = self.faces.astype(np.int64)
-        a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
-        b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
-        lo, hi = np.minimum(a, b), np.maximum(a, b)
-        # one int64 key per edge: a 1-D unique is many times faster than
-        # unique(axis=0) and sorts the same way (by lo, then hi)
-        key = np.unique(lo * np.int64(len(self.positions)) + hi)
-        n = np.int64(len(self.positions))
-        return np.stack([key // n, key % n], axis=1).astype(np.uint32)
+        return unique_edges(self.faces, len(self.positions))
 
     @cached_property
     def is_volume(self) -> bool:
@@ -238,6 +230,30 @@ class BaseMesh:
 _F32_MAX = float(np.finfo(np.float32).max)
 
 
+def unique_edges(faces: np.ndarray, vertex_count: int) -> np.ndarray:
+    """(k, 2) uint32 unique undirected edges of ``faces`` (m, 3) int, sorted by
+    their lower vertex, then the higher (what ``np.unique(np.sort(pairs, axis=1),
+    axis=0)`` gives).  One int64 key per edge, made column by column into one
+    array and sorted in place: ~40 bytes a triangle at once (a 1 M-triangle
+    mesh: 171 MB before, with a (3 m, 2) int64 copy and its temporaries)."""
+    f = np.asarray(faces)
+    m, n = len(f), np.int64(vertex_count)
+    key = np.empty(3 * m, dtype=np.int64)
+    for c, (i, j) in enumerate(((0, 1), (1, 2), (2, 0))):
+        a, b = f[:, i].astype(np.int64), f[:, j].astype(np.int64)
+        np.minimum(a, b, out=key[c * m:(c + 1) * m])
+        key[c * m:(c + 1) * m] *= n
+        key[c * m:(c + 1) * m] += np.maximum(a, b, out=a)
+        del a, b
+    key.sort()
+    if len(key):
+        key = key[np.r_[True, key[1:] != key[:-1]]]
+    out = np.empty((len(key), 2), dtype=np.uint32)
+    out[:, 0] = key // n
+    out[:, 1] = key % n
+    return out
+
+
 def _position_ids(positions: np.ndarray) -> np.ndarray:
     """(n,) int64: one id per distinct position (equal rows share it), the
     same grouping as ``np.unique(positions, axis=0, return_inverse=True)``
@@ -269,6 +285,11 @@ def _check_float32_range(positions: np.ndarray, name: str) -> None:
         )
 
 
+#: faces per block of :func:`area_weighted_normals` (bounds its temporaries; rows per
+#: block of its unit step)
+_NORMAL_BLOCK = 1 << 17
+
+
 def area_weighted_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Unit vertex normals, each the area-weighted mean of its faces' normals.
 
@@ -276,33 +297,56 @@ def area_weighted_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarra
     A vertex with no face area around it gets ``(0, 0, 1)``.
     """
     p = np.asarray(positions, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
+    f = np.asarray(faces)
     # scale to unit size first: the result does not depend on the scale, and
     # neither 1e-30 (cross products underflow the cut-off) nor 1e30 meshes lose normals
-    scale = float(np.max(np.abs(p - p.mean(axis=0)))) if len(p) else 0.0
-    if np.isfinite(scale) and scale > 0:
-        p = (p - p.mean(axis=0)) / scale
-    # by columns: gathers of (m,) arrays and no (m, 3, 3) temporaries, so a
-    # 10 M-triangle mesh needs a few hundred MB and seconds, not gigabytes
-    x, y, z = (np.ascontiguousarray(p[:, c]) for c in range(3))
-    i, j, k = (np.ascontiguousarray(f[:, c]) for c in range(3))
-    ax, ay, az = x[j] - x[i], y[j] - y[i], z[j] - z[i]
-    bx, by, bz = x[k] - x[i], y[k] - y[i], z[k] - z[i]
-    # the cross product's length is twice the triangle's area: area weighting
-    fn = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
+    center = p.mean(axis=0) if len(p) else np.zeros(3)
+    scale = float(np.max([np.max(np.abs(p[:, c] - center[c])) for c in range(3)])) if len(p) else 0.0
+    # by columns and by blocks of faces: gathers of (block,) arrays, no (m, 3, 3)
+    # temporaries nor a scaled copy of the positions, so the temporaries stay ~16 MB
+    # whatever the mesh (a 1 M-triangle mesh: 168 MB at once before); one block gives
+    # the same bits as one sum over all faces, several the same float32 normals
+    # (checked on random meshes of up to 900 000 faces), up to rounding order
+    unit = np.isfinite(scale) and scale > 0
+
+    def coord(c, index):  # column c of the scaled positions at ``index``, gathered (elementwise as a scaled copy)
+        return (p[index, c] - center[c]) / scale if unit else p[index, c]
+
     n = len(p)
-    vn = np.stack([np.bincount(i, weights=c, minlength=n) + np.bincount(j, weights=c, minlength=n)
-                   + np.bincount(k, weights=c, minlength=n) for c in fn], axis=1)
+    vn = np.zeros((n, 3))
+    for start in range(0, len(f), _NORMAL_BLOCK):
+        i, j, k = (f[start:start + _NORMAL_BLOCK, c].astype(np.int64) for c in range(3))
+        (xi, yi, zi), (xj, yj, zj), (xk, yk, zk) = ((coord(0, v), coord(1, v), coord(2, v)) for v in (i, j, k))
+        ax, ay, az = xj - xi, yj - yi, zj - zi
+        bx, by, bz = xk - xi, yk - yi, zk - zi
+        del xi, yi, zi, xj, yj, zj, xk, yk, zk
+        # the cross product's length is twice the triangle's area: area weighting
+        fn = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
+        del ax, ay, az, bx, by, bz
+        for c in range(3):
+            part = np.bincount(i, weights=fn[c], minlength=n)
+            part += np.bincount(j, weights=fn[c], minlength=n)
+            part += np.bincount(k, weights=fn[c], minlength=n)
+            if start:
+                vn[:, c] += part
+            else:  # assigned, not added to 0: the same bits (-0.0 too) as one bincount sum
+                vn[:, c] = part
     return _unit_or_default(vn)
 
 
 def _unit_or_default(v: np.ndarray) -> np.ndarray:
-    length = np.linalg.norm(v, axis=1)
-    ok = length > 1e-30
-    out = np.zeros_like(v, dtype=np.float64)
-    out[ok] = v[ok] / length[ok, None]
-    out[~ok] = (0.0, 0.0, 1.0)
-    return out.astype(np.float32)
+    """(n, 3) float -> (n, 3) float32 unit rows ((0, 0, 1) where a row is ~0), over
+    blocks of rows: no (n, 3) float64 temporaries besides ``v`` itself."""
+    out = np.empty((len(v), 3), dtype=np.float32)
+    for start in range(0, len(v), _NORMAL_BLOCK):
+        b = v[start:start + _NORMAL_BLOCK]
+        length = np.linalg.norm(b, axis=1)
+        ok = length > 1e-30
+        unit = np.zeros_like(b, dtype=np.float64)
+        unit[ok] = b[ok] / length[ok, None]
+        unit[~ok] = (0.0, 0.0, 1.0)
+        out[start:start + _NORMAL_BLOCK] = unit
+    return out
 
 
 def bundled_mesh_path(name: str) -> Path:

@@ -6,8 +6,10 @@
 * **Surface**: a mesh file (a terrain), a grey height-map image (Pillow), a
   ``trimesh.Trimesh``, or a 2-D array of heights in [0, 1].  Only its faces
   that face up (normal · up > 0) receive instances.
-* **Area-uniform**: candidates are drawn with ``trimesh.sample.sample_surface``
-  weighted by face area.
+* **Area-uniform**: candidates are drawn as ``trimesh.sample.sample_surface``
+  draws them weighted by face area -- the same points for the same seed --
+  but gathering only the picked faces (:meth:`Surface.sample`: a height map
+  of 1 500 x 1 500 pixels stays within a few hundred MB).
 * **Minimum spacing D** (Poisson disk): the candidates, in their random order,
   are kept greedily -- a candidate is kept when no earlier kept one lies within
   D (3-D distance) -- which is dart throwing.  It is computed without a Python
@@ -61,20 +63,43 @@ MAX_INSTANCES = 10_000_000
 MAX_ROUNDS = 12
 
 
-@dataclass
-class Surface:
-    """A surface to scatter on.
+#: faces handled at once when a surface's face areas, normals and bounds are
+#: computed (bounds the temporaries: about 250 bytes a face, ~16 MB a block)
+FACE_BLOCK = 1 << 16
 
-    mesh : trimesh.Trimesh -- every face (world units).
+
+@dataclass(eq=False)
+class Surface:
+    """A surface to scatter on, kept as plain arrays (no ``trimesh.Trimesh``
+    and its caches: a 1 500 x 1 500 height map is 4.5 M faces).
+
+    vertices : (n, 3) float64 -- world units.
+    faces : (f, 3) uint32 (int64 where given so) -- every face.
     up : int -- 0, 1, 2 for x, y, z.
     name : str -- for messages.
-    upward : (f,) bool -- faces whose normal has a positive ``up`` component.
+    weights : (f,) float64 -- each face's area where it faces up (its normal has
+        a ``up`` component > 1e-9, trimesh's face normal and area), else 0:
+        what sampling is weighted by.
     """
 
-    mesh: object
+    vertices: np.ndarray
+    faces: np.ndarray
     up: int
     name: str
-    upward: np.ndarray
+    weights: np.ndarray
+
+    @property
+    def upward(self) -> np.ndarray:
+        """(f,) bool: the faces that face up (and have an area)."""
+        return self.weights > 0
+
+    @property
+    def mesh(self):
+        """A ``trimesh.Trimesh`` of every face, built on each call (costly on
+        a big surface: the library itself never asks for it)."""
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
 
     @property
     def ground(self) -> tuple[int, int]:
@@ -83,14 +108,80 @@ class Surface:
 
     @property
     def bounds(self) -> np.ndarray:
-        """(2, 3) float64: the surface's bounding box."""
-        return np.asarray(self.mesh.bounds, dtype=np.float64)
+        """(2, 3) float64: the bounding box of the vertices the faces use (as trimesh's ``bounds``)."""
+        if "_bounds" not in self.__dict__:
+            self.__dict__["_bounds"] = _used_bounds(self.vertices, self.faces)
+        return self.__dict__["_bounds"]
 
     @property
     def size(self) -> float:
         """Largest extent of the bounding box of the upward-facing faces."""
-        tri = self.mesh.triangles[self.upward].reshape(-1, 3)
-        return float((tri.max(axis=0) - tri.min(axis=0)).max())
+        lo, hi = _used_bounds(self.vertices, self.faces, self.weights > 0)
+        return float((hi - lo).max())
+
+    def face_normals(self, index: np.ndarray) -> np.ndarray:
+        """(k, 3) float64 unit normals of the faces ``index`` (k,) -- trimesh's
+        ``face_normals`` of those faces (zero where a face has no area)."""
+        return _trimesh_normals(self.vertices[self.faces[index]])
+
+    def sample(self, count: int, rng: np.random.Generator, weight_cum: np.ndarray | None = None):
+        """``count`` points, area-uniform over the upward faces: ``(points (count, 3)
+        float64, face_index (count,) int64)``.
+
+        The same draws from ``rng``, in the same order, and the same arithmetic
+        as ``trimesh.sample.sample_surface(mesh, count, face_weight=weights,
+        seed=rng)`` -- the same points and faces, bit for bit (pinned by
+        ``tests/test_scatter.py::test_sample_is_trimesh_sample_surface``) --
+        but trimesh builds an origin and two edge vectors for EVERY face
+        ((f, 3, 3) float64: 324 MB on a 1 500 x 1 500 height map) before
+        picking; this gathers only the picked faces' vertices.
+        ``weight_cum`` : ``np.cumsum(self.weights)`` if already at hand."""
+        if weight_cum is None:
+            weight_cum = np.cumsum(self.weights)
+        random = rng.random
+        face_pick = random(count) * weight_cum[-1]
+        face_index = np.searchsorted(weight_cum, face_pick)
+        f = self.faces[face_index]
+        tri_origins = self.vertices[f[:, 0]]
+        tri_vectors = self.vertices[f[:, 1:]]
+        tri_vectors -= np.tile(tri_origins, (1, 2)).reshape((-1, 2, 3))
+        random_lengths = random((len(tri_vectors), 2, 1))
+        random_test = random_lengths.sum(axis=1).reshape(-1) > 1.0
+        random_lengths[random_test] -= 1.0
+        random_lengths = np.abs(random_lengths)
+        sample_vector = (tri_vectors * random_lengths).sum(axis=1)
+        return sample_vector + tri_origins, face_index
+
+
+def _blocks(count: int):
+    for start in range(0, count, FACE_BLOCK):
+        yield slice(start, min(start + FACE_BLOCK, count))
+
+
+def _used_bounds(vertices: np.ndarray, faces: np.ndarray, which: np.ndarray | None = None) -> np.ndarray:
+    """(2, 3) float64 min and max of the vertices used by ``faces`` (those with ``which`` (f,) bool)."""
+    used = np.zeros(len(vertices), dtype=bool)
+    for b in _blocks(len(faces)):
+        used[(faces[b] if which is None else faces[b][which[b]]).ravel()] = True
+    return np.array([[vertices[used, c].min() for c in range(3)], [vertices[used, c].max() for c in range(3)]])
+
+
+def _upward_areas(vertices: np.ndarray, faces: np.ndarray, u: int) -> np.ndarray:
+    """(f,) float64: each face's area (trimesh's ``area_faces``) where its unit normal
+    (trimesh's ``face_normals``) has a ``u`` component > 1e-9, else 0 -- computed
+    with trimesh's own functions over blocks of faces, so that no (f, 3, 3) or
+    (f, 3) array of every face is ever held."""
+    import trimesh
+
+    weights = np.empty(len(faces))
+    for b in _blocks(len(faces)):
+        crosses = trimesh.triangles.cross(vertices[faces[b]])
+        area = trimesh.triangles.area(crosses=crosses)
+        unit, valid = trimesh.util.unitize(crosses, check_valid=True)
+        nu = np.zeros(len(area))
+        nu[valid] = unit[:, u]
+        weights[b] = np.where((nu > 1e-9) & (area > 0), area, 0.0)
+    return weights
 
 
 def _up_index(up) -> int:
@@ -99,9 +190,14 @@ def _up_index(up) -> int:
     return AXIS_NAMES.index(up)
 
 
-#: peak bytes a height-map SURFACE costs per pixel (grid, faces, trimesh's normals
-#: and areas, sampling; measured ~480 on a 1 500 x 1 500 map) -- the pixel bound
-SURFACE_BYTES_PER_PIXEL = 500
+#: peak bytes a height-map SURFACE costs per pixel (float64 grid 24, uint32 faces 24,
+#: area weights 16 and their running sum 16, blocks of temporaries; as a scene's terrain
+#: also its float32 drawing copy and normals): measured on a 1 500 x 1 500 map, peak RSS
+#: less a tiny map's, ~96 for `axialdeform scatter big.png stone -n 200 -o p.adp` and
+#: ~150 for a scene with it as [terrain] up to its first draw (tracemalloc on 600 x 600:
+#: up to 218; tests/test_scatter.py::test_height_map_memory_is_bounded_per_pixel) --
+#: with a margin, the pixel bound checked before decoding (was 500)
+SURFACE_BYTES_PER_PIXEL = 260
 #: bytes a density map costs per pixel (the float64 grey levels and one copy)
 DENSITY_BYTES_PER_PIXEL = 32
 
@@ -175,8 +271,6 @@ def surface_from_heights(heights, *, up: str = "y", height_scale: float = 1.0, e
         (default: one unit per pixel; with W alone, D keeps the pixels square).
         The grid is centred on the origin across ``up``.
     """
-    import trimesh
-
     h = _grid(heights, name)
     rows, cols = h.shape
     if rows < 2 or cols < 2:
@@ -193,31 +287,50 @@ def surface_from_heights(heights, *, up: str = "y", height_scale: float = 1.0, e
         depth = ext[1] if len(ext) == 2 else width * (rows - 1) / (cols - 1)
     u = _up_index(up)
     g0, g1 = PERPENDICULAR[u]
-    jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
-    verts = np.zeros((rows * cols, 3))
-    verts[:, g0] = (jj.ravel() / (cols - 1) - 0.5) * width
-    verts[:, g1] = (ii.ravel() / (rows - 1) - 0.5) * depth
+    # float64 vertices (24 bytes a pixel) and uint32 faces (24 bytes a pixel), written in place
+    verts = np.empty((rows * cols, 3))
+    verts[:, g0] = np.tile((np.arange(cols) / (cols - 1) - 0.5) * width, rows)
+    verts[:, g1] = np.repeat((np.arange(rows) / (rows - 1) - 0.5) * depth, cols)
     verts[:, u] = h.ravel() * height_scale
-    k = (ii[:-1, :-1] * cols + jj[:-1, :-1]).ravel()
-    faces = np.concatenate([np.stack([k, k + cols, k + 1], axis=1), np.stack([k + 1, k + cols, k + cols + 1], axis=1)])
-    mesh = trimesh.Trimesh(verts, faces, process=False)
-    if mesh.face_normals[:, u].sum() < 0:  # wind the grid so that it faces up
-        mesh = trimesh.Trimesh(verts, faces[:, ::-1], process=False)
-    return _make_surface(mesh, u, name)
+    dtype = np.uint32 if rows * cols < 2**32 else np.int64
+    k = (np.arange(rows - 1, dtype=dtype)[:, None] * dtype(cols) + np.arange(cols - 1, dtype=dtype)).ravel()
+    half = len(k)
+    corners = ((k, k + cols, k + 1), (k + 1, k + cols, k + cols + 1))
+    # every face's projection on the ground has the same turn, so the first face says
+    # whether the grid faces up; else wind it the other way (as trimesh.Trimesh(verts, faces[:, ::-1]))
+    first = np.array([[c[0] for c in corners[0]]])
+    flip = _trimesh_normals(verts[first])[0, u] < 0
+    faces = np.empty((2 * half, 3), dtype=dtype)
+    for t, tri in enumerate(corners):
+        for c, col in enumerate(tri[::-1] if flip else tri):
+            faces[t * half:(t + 1) * half, c] = col
+    del k, corners
+    return _make_surface(verts, faces, u, name)
 
 
-def _make_surface(mesh, u: int, name: str) -> "Surface":
-    faces = np.asarray(mesh.faces)
+def _trimesh_normals(triangles: np.ndarray) -> np.ndarray:
+    """(k, 3) float64 unit normals of ``triangles`` (k, 3, 3) as trimesh's ``face_normals`` (zero where degenerate)."""
+    import trimesh
+
+    unit, valid = trimesh.triangles.normals(triangles=triangles)
+    out = np.zeros((len(triangles), 3))
+    out[valid] = unit
+    return out
+
+
+def _make_surface(vertices, faces, u: int, name: str) -> "Surface":
+    """A Surface of (n, 3) vertices and (f, 3) faces (not copied when already float64 / an integer type)."""
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces)
     if len(faces) == 0:
         raise ScatterError(f"{name}: the surface has no faces; expected a triangle mesh")
-    if not np.isfinite(np.asarray(mesh.vertices)).all():
+    if not all(np.isfinite(vertices[:, c]).all() for c in range(3)):
         raise ScatterError(f"{name}: the surface has a non-finite vertex; expected finite coordinates")
-    area = np.asarray(mesh.area_faces)
-    upward = (np.asarray(mesh.face_normals)[:, u] > 1e-9) & (area > 0)
-    if not upward.any():
+    weights = _upward_areas(vertices, faces, u)
+    if not (weights > 0).any():
         raise ScatterError(f"{name}: no face of the surface faces up (+{AXIS_NAMES[u]}); "
                            f"expected a surface facing up somewhere (or choose --up)")
-    return Surface(mesh=mesh, up=u, name=name, upward=upward)
+    return Surface(vertices=vertices, faces=faces, up=u, name=name, weights=weights)
 
 
 def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=None) -> Surface:
@@ -229,9 +342,9 @@ def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=Non
     if isinstance(source, Surface):
         return source
     if isinstance(source, trimesh.Trimesh):
-        return _make_surface(source, u, "<surface>")
+        return _make_surface(source.vertices.view(np.ndarray), source.faces.view(np.ndarray), u, "<surface>")
     if hasattr(source, "positions") and hasattr(source, "faces"):  # a BaseMesh
-        return _make_surface(trimesh.Trimesh(source.positions, source.faces, process=False), u, source.name)
+        return _make_surface(source.positions, source.faces, u, source.name)
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)
         if path.suffix.lower() in IMAGE_SUFFIXES:
@@ -250,7 +363,7 @@ def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=Non
                 base = load_mesh(path)
         except MeshError as exc:
             raise ScatterError(f"SURFACE {exc}") from None
-        return _make_surface(trimesh.Trimesh(base.positions, base.faces, process=False), u, str(path))
+        return _make_surface(base.positions, base.faces, u, str(path))
     return surface_from_heights(source, up=up, height_scale=height_scale, extent=extent)
 
 
@@ -350,8 +463,6 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
     Returns (n, 16) or (n, 19) float32.  Raises :class:`TooFewError` (with
     ``.params``, what fits) when fewer than ``n`` fit and not ``allow_fewer``.
     """
-    import trimesh
-
     from .mesh import BaseMesh, load_mesh
 
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
@@ -381,9 +492,8 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
                                f"({size:.6g}), found {min_distance!r}")
 
     rng = np.random.Generator(np.random.PCG64(int(seed)))
-    tm = surf.mesh
-    weights = np.where(surf.upward, np.asarray(tm.area_faces, dtype=np.float64), 0.0)
-    area = float(weights.sum())
+    weight_cum = np.cumsum(surf.weights)  # as trimesh's sample_surface makes it
+    area = float(surf.weights.sum())
     mean_density = 1.0 if grey is None else max(float(grey.mean()), 1e-3)
 
     points = np.zeros((0, 3))
@@ -407,8 +517,7 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
             else:
                 want = full
         count = int(min(MAX_CANDIDATES, math.ceil(want / mean_density) + 16))
-        cand, fidx = trimesh.sample.sample_surface(tm, count, face_weight=weights, seed=rng)
-        cand = np.asarray(cand, dtype=np.float64)
+        cand, fidx = surf.sample(count, rng, weight_cum)
         if grey is not None:
             keep = rng.random(count) < _density_at(grey, cand, surf)
             cand, fidx = cand[keep], fidx[keep]
@@ -429,7 +538,7 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
         raise ScatterError(f"density: no candidate on the upward-facing part of {surf.name} lies under a "
                            f"non-black pixel; expected white where instances may go (columns along "
                            f"+{AXIS_NAMES[surf.ground[0]]}, rows along +{AXIS_NAMES[surf.ground[1]]})")
-    params = _instances(base, points, np.asarray(tm.face_normals, dtype=np.float64)[faces], surf.up, rng,
+    params = _instances(base, points, surf.face_normals(faces), surf.up, rng,
                         align_to_normal=align_to_normal, anchor=anchor,
                         scale=None if scale is None else (lo_s, hi_s), bend=bend)
     if len(params) < n and not allow_fewer:

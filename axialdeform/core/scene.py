@@ -283,8 +283,8 @@ def _read_terrain(src, terrain, scene):
         scene.terrain_color = tuple(_numbers(src, terrain["color"], "color", "terrain", 0, (3,)))
     with _wrap(src, key, "terrain", 0):
         surface = load_surface(file, up=scene.up, height_scale=hs, extent=extent)
-    v = np.asarray(surface.mesh.vertices, dtype=np.float64)
-    f = np.asarray(surface.mesh.faces, dtype=np.int64)
+    # the drawing copy: float32 positions and normals; the uint32 faces are the surface's own (shared)
+    v, f = surface.vertices, surface.faces
     scene.terrain = BaseMesh(v, area_weighted_normals(v, f), f, name=str(file))
     return surface
 

@@ -54,6 +54,10 @@ def orbit_axes(up: str, azimuth: float, elevation: float) -> tuple[np.ndarray, n
     return to_eye, right, np.cross(to_eye, right)
 
 
+#: points handled at once by :func:`frame_points` and :func:`camera_for_points`
+_FRAME_BLOCK = 1 << 16
+
+
 def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspect: float, fovy: float = 35.0,
                  margin: float = 0.03) -> tuple[np.ndarray, float]:
     """Target and distance of an orbit camera that just sees every sphere.
@@ -85,7 +89,10 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     normals = np.stack([-cx * right - sx * to_eye, cx * right - sx * to_eye,
                         -cy * cam_up - sy * to_eye, cy * cam_up - sy * to_eye])
     # a sphere is inside plane k when (p - eye) . n_k >= r, i.e. eye . n_k <= c_k
-    c = (pts @ normals.T - r[:, None]).min(axis=0)
+    # (over blocks of points here and below: the same numbers without (m, 3) or
+    # (m, 4) float64 temporaries -- a 1 500 x 1 500 terrain is 2.25 M points)
+    blocks = [slice(s, s + _FRAME_BLOCK) for s in range(0, len(pts), _FRAME_BLOCK)]
+    c = np.min([(pts[b] @ normals.T - r[b, None]).min(axis=0) for b in blocks], axis=0)
     # eye = a right + b cam_up + e to_eye: the smallest e with room for a and b
     ex, ey = -(c[0] + c[1]) / (2 * sx), -(c[2] + c[3]) / (2 * sy)
     e = max(ex, ey)
@@ -95,19 +102,25 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     # the tighter direction touches both sides, so it is centred; the other has
     # equal room measured across the planes, not in the picture: centre it there
     slack_axis, half = (cam_up, half_y) if ex >= ey else (right, half_x)
+    def depth_across(at):
+        depth, across = np.empty(len(pts)), np.empty(len(pts))
+        for b in blocks:
+            rel = pts[b] - at
+            depth[b] = np.maximum(-(rel @ to_eye), 1e-12)
+            across[b] = rel @ slack_axis
+        return depth, across
+
     for _ in range(3):
-        rel = pts - eye
-        depth = np.maximum(-(rel @ to_eye), 1e-12)
-        across = rel @ slack_axis
+        depth, across = depth_across(eye)
         lo, hi = ((across - r) / depth).min(), ((across + r) / depth).max()
         shift = (lo + hi) / 2 * float(np.median(depth))
         moved = eye + shift * slack_axis
-        rel = pts - moved
-        depth = np.maximum(-(rel @ to_eye), 1e-12)
-        if ((np.abs(rel @ slack_axis) + r / np.cos(half)) / depth > np.tan(half) * (1 + 1e-9)).any():
+        depth, across = depth_across(moved)
+        if ((np.abs(across) + r / np.cos(half)) / depth > np.tan(half) * (1 + 1e-9)).any():
             break  # would cut something off: keep the last placement
         eye = moved
-    center = ((pts - r[:, None]).min(axis=0) + (pts + r[:, None]).max(axis=0)) / 2
+    center = (np.min([(pts[b] - r[b, None]).min(axis=0) for b in blocks], axis=0)
+              + np.max([(pts[b] + r[b, None]).max(axis=0) for b in blocks], axis=0)) / 2
     distance = max(float((eye - center) @ to_eye), 1e-9)
     return eye - distance * to_eye, distance
 
@@ -135,8 +148,11 @@ def camera_for_points(points, radii, aspect: float, up: str = "y", fovy: float =
     to_eye = orbit_axes(up, azimuth, elevation)[0]
     eye = target + to_eye * distance
     if len(points):
-        depth = (eye - points) @ to_eye
-        near, far = float((depth - radii).min()), float((depth + radii).max())
+        near, far = np.inf, -np.inf
+        for s in range(0, len(points), _FRAME_BLOCK):
+            depth = (eye - points[s:s + _FRAME_BLOCK]) @ to_eye
+            near = min(near, float((depth - radii[s:s + _FRAME_BLOCK]).min()))
+            far = max(far, float((depth + radii[s:s + _FRAME_BLOCK]).max()))
     else:
         near, far = distance * 0.5, distance * 2.0
     return Camera(eye, target, UP_VECTORS[up], fovy, near=max(near * 0.95, distance * 1e-3), far=max(far * 1.05, distance * 2e-3))

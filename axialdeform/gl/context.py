@@ -40,11 +40,13 @@ def create_context(backend: str = "egl"):
 
 #: most primitives (instances x triangles, or x lines) a software rasteriser is
 #: given before the draws are finished.  Mesa's llvmpipe keeps every primitive
-#: drawn into a multisampled target until the frame is finished -- about 48
+#: drawn into a multisampled target until the frame is finished -- 30 to 130
 #: bytes a triangle: one draw of 100 instances of a 0.5 M-triangle mesh into a
 #: 64x64 4-sample target peaked at 2.4 GB, 213 MB when finished after each
-#: 0.5 M triangles (tools/msaa_memory.py) -- so big draws are split there.
-SOFTWARE_FLUSH_PRIMITIVES = 1_000_000
+#: 0.5 M triangles -- so big draws are split there (lines: a third as many;
+#: the cost, a finish a slice, was +9 to +30 % of a frame of many small meshes;
+#: ``tests/test_render.py::test_multisampled_frame_memory_does_not_grow_with_triangles``).
+SOFTWARE_FLUSH_PRIMITIVES = 250_000
 _SOFTWARE = ("llvmpipe", "softpipe", "swrast", "swiftshader", "lavapipe")
 
 
@@ -71,14 +73,32 @@ def flush_interval(ctx) -> int | None:
     return value
 
 
+def _multisampled(ctx) -> bool:
+    """Whether the bound framebuffer is multisampled (a window's default
+    framebuffer, whose attachments moderngl cannot see, counts as one)."""
+    fbo = ctx.fbo
+    attachments = list(getattr(fbo, "color_attachments", ()) or ())
+    depth = getattr(fbo, "depth_attachment", None)
+    if depth is not None:
+        attachments.append(depth)
+    if not attachments:
+        return True
+    return any(getattr(a, "samples", 0) > 1 for a in attachments)
+
+
 def draw_in_batches(ctx, draw, vertices: int, first: int, per_primitive: int, instances: int) -> None:
-    """Call ``draw(vertices, first)`` once, or -- on a software rasteriser, when
-    ``instances`` x ``vertices / per_primitive`` exceeds :func:`flush_interval` --
+    """Call ``draw(vertices, first)`` once, or -- on a software rasteriser drawing
+    into a multisampled target, when ``instances`` x ``vertices / per_primitive``
+    exceeds :func:`flush_interval` (lines: a third of it) --
     once per slice of the index range (whole primitives, every instance each time),
     finishing the GL queue after each slice, so that the driver's memory for one
     frame stays bounded.  The picture is the same for depth-tested opaque drawing
     (the slices reorder primitives only; a blended draw must not be split)."""
     budget = flush_interval(ctx)
+    if budget is not None and not _multisampled(ctx):
+        budget = None  # single-sampled: llvmpipe bins a bounded scene and flushes it by itself
+    if budget is not None and per_primitive == 2:
+        budget = max(1, budget // 3)  # a line costs llvmpipe ~140 bytes, a triangle ~48
     primitives = vertices // per_primitive
     if budget is None or primitives * max(int(instances), 1) <= budget or primitives <= 1:
         draw(vertices, first)

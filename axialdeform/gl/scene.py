@@ -43,7 +43,7 @@ def scene_camera(scene, aspect: float) -> Camera:
             points.append(c)
             radii.append(np.broadcast_to(r, (len(c),)))
     if scene.terrain is not None:
-        points.append(scene.terrain.positions.astype(np.float64))
+        points.append(scene.terrain.positions)  # float32: concatenated (or read) as float64 once, below
         radii.append(np.zeros(len(scene.terrain.positions)))
     pts = np.concatenate(points) if points else np.zeros((0, 3))
     rad = np.concatenate(radii) if radii else np.zeros(0)
@@ -69,7 +69,10 @@ class SceneRenderer:
         self.wind_enabled = True
         try:
             if scene.terrain is not None:
-                self.renderers.append((AxialRenderer(ctx, scene.terrain, TERRAIN_INSTANCE), scene.terrain_color, False))
+                # no back-face culling: a height map is never a closed volume, and finding out
+                # (BaseMesh.is_volume sorts every directed edge) costs ~100 bytes a face
+                self.renderers.append((AxialRenderer(ctx, scene.terrain, TERRAIN_INSTANCE, cull_back_faces=False),
+                                       scene.terrain_color, False))
             for layer in scene.layers:
                 self.renderers.append((AxialRenderer(ctx, layer.mesh, layer.params, culling=culling, lod=lod,
                                                      lod_error=lod_error), layer.color, layer.wind))
