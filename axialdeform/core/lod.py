@@ -126,12 +126,16 @@ def check_lod_error(pixels) -> float:
     return value
 
 
-def _surface_points(tmesh, count: int, seed: int) -> np.ndarray:
-    """The vertices of a trimesh plus points sampled on its surface: (k, 3) float64."""
-    import trimesh
+def _surface_points(positions: np.ndarray, faces: np.ndarray, count: int, seed: int) -> np.ndarray:
+    """The vertices (n, 3) plus ``count`` points sampled on the triangles (area-
+    uniform: :func:`~axialdeform.core.scatter.sample_faces`, trimesh's
+    ``sample_surface`` without its per-face arrays): (k, 3) float64."""
+    from .scatter import face_areas, sample_faces
 
-    points, _ = trimesh.sample.sample_surface(tmesh, count, seed=seed)
-    cloud = np.vstack([tmesh.vertices, points])
+    positions = np.asarray(positions, dtype=np.float64)
+    points, _ = sample_faces(positions, faces, np.cumsum(face_areas(positions, faces)), count,
+                             np.random.default_rng(seed))
+    cloud = np.vstack([positions, points])
     if len(cloud) > 2 * count:
         cloud = cloud[np.random.default_rng(seed).choice(len(cloud), 2 * count, replace=False)]
     return cloud
@@ -393,8 +397,6 @@ def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
     so (a ``UserWarning``); a level that removes less than a fifth of the
     previous level's triangles, or keeps fewer than 4, is dropped.
     """
-    import trimesh
-
     base = LodLevel.of(mesh)
     if not any(p.count >= MIN_LOD_TRIANGLES for p in mesh.parts):
         largest = max(p.count for p in mesh.parts)
@@ -404,9 +406,7 @@ def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
         return [base]
     from .material import Part
 
-    full = trimesh.Trimesh(mesh.positions.astype(np.float64), mesh.faces.astype(np.int64), process=False)
-    full_cloud = _surface_points(full, _SAMPLE, 1)
-    del full  # and its cached triangles, areas, normals (~140 bytes a triangle)
+    full_cloud = _surface_points(mesh.positions, mesh.faces, _SAMPLE, 1)
     attributes = _attributes(mesh)
     levels = [base]
     for reduction in reductions:
@@ -422,7 +422,7 @@ def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
         attrs = _finish(attrs, points, faces)
         parts = tuple(Part(p.name, int(s), len(f), p.material)
                       for p, s, (_, f, _) in zip(mesh.parts, starts, pieces))
-        simple_cloud = _surface_points(trimesh.Trimesh(points, faces, process=False), _SAMPLE, 2)
+        simple_cloud = _surface_points(points, faces, _SAMPLE, 2)
         error = max(_one_sided(full_cloud, simple_cloud), _one_sided(simple_cloud, full_cloud))
         levels.append(LodLevel(points.astype(np.float32), attrs["normals"], faces.astype(np.uint32),
                                max(error, levels[-1].error), attrs.get("uvs"), attrs.get("colors"),
