@@ -742,3 +742,153 @@ def test_unreadable_image_message_names_the_file_not_a_descriptor(tmp_path, caps
     assert main(["scatter", str(junk), "stone", "-n", "3", "-o", str(tmp_path / "o.adp")]) == 2
     err = capsys.readouterr().err.strip()
     assert err == f"axialdeform scatter: error: SURFACE {junk}: could not read the image (not an image format Pillow recognises)"
+
+
+# ------------------------------------ bounded time for huge jobs (s16caps)
+# Found by fuzzing every command: a 0.5 M-face mesh x 61 700 instances (view),
+# 82 000 OBJ files (bake -o FOLDER) ran past 30 s of CPU with no warning.
+# Each refusal below is exit 2, one line, nothing written, before the work.
+
+
+def test_render_refuses_a_frame_over_the_triangle_budget(files, capsys, monkeypatch):
+    from axialdeform.gl import context
+
+    tmp, mesh, params = files  # 4 stones x 112 triangles = 448 a frame
+    out = tmp / "r.png"
+    real = context.create_context
+    monkeypatch.setattr(context, "create_context", lambda *a, **k: pytest.fail("a context before the check"))
+    assert main(["render", str(mesh), str(params), "-o", str(out), "--size", "32x24", "--max-triangles", "447"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and not out.exists(), err
+    for needle in (f"{mesh} x {params}", "4 instances x 112 triangles = 448 triangles a frame (solid)",
+                   "over the limit of 447", "expected at most 3 instances", "--max-triangles N"):
+        assert needle in err[0], err[0]
+    # wireframe: 1.5 edges a triangle, plus the hidden-line pass unless --fast
+    argv = ["render", str(mesh), str(params), "-o", str(out), "--size", "32x24", "--mode", "wireframe"]
+    assert main(argv + ["--max-triangles", "1119"]) == 2
+    assert "x 2.5 for wireframe" in capsys.readouterr().err
+    assert main(argv + ["--max-triangles", "671", "--fast"]) == 2
+    assert "x 1.5 for wireframe" in capsys.readouterr().err
+    assert main(argv + ["--max-triangles", "2239", "--stats"]) == 2  # --stats times one more frame
+    assert "x 2 frames = 2240" in capsys.readouterr().err
+    monkeypatch.setattr(context, "create_context", real)
+    # at the limit it draws: the limit is raised by --max-triangles
+    assert main(["render", str(mesh), str(params), "-o", str(out), "--size", "32x24", "--max-triangles", "448"]) == 0
+    assert out.exists()
+
+
+def test_drawn_triangles_count_only_the_parts_drawn():
+    from dataclasses import replace
+
+    from axialdeform.cli._common import drawn_triangles
+    from axialdeform.core.material import Part
+
+    stone = ad.load_mesh("stone")
+    two = replace(stone, parts=(Part("a", 0, 100), Part("b", 100, 12)))
+    assert drawn_triangles(two) == 112 and drawn_triangles(two, ["b"]) == 12
+    assert drawn_triangles(two, ["a", "b", "a"]) == 112
+    with pytest.raises(AxialDeformError, match="no part 'c'"):
+        drawn_triangles(two, ["c"])
+
+
+def test_default_triangle_budget_refuses_huge_jobs_before_the_work(tmp_path, capsys, monkeypatch):
+    from axialdeform.cli._common import MAX_TRIANGLES
+    from axialdeform.core import variation
+
+    assert MAX_TRIANGLES == 50_000_000  # the documented default (README, docs/reliability.md)
+    shot = tmp_path / "v.png"
+    monkeypatch.setattr(variation, "random_params", lambda *a, **k: pytest.fail("parameters made before the check"))
+    # 450 000 stones x 112 = 50.4 M triangles: before, the viewer drew them
+    assert main(["view", "stone", "--headless", "--frames", "1", "-n", "450000", "--size", "32x24",
+                 "--screenshot", str(shot)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "stone x -n 450000: 450000 instances x 112 triangles" in err[0], err
+    assert "over the limit of 50000000" in err[0] and not shot.exists()
+    out = tmp_path / "d.png"
+    # demo draws solid and wireframe side by side: 150 000 x 112 x 3.5 = 58.8 M
+    assert main(["demo", "-n", "150000", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "x 3.5 for solid + wireframe" in err[0] and not out.exists(), err
+
+
+def test_view_with_a_parameter_file_checks_the_budget(files, capsys):
+    tmp, mesh, params = files
+    shot = tmp / "v.png"
+    argv = ["view", str(mesh), str(params), "--headless", "--frames", "1", "--size", "32x24", "--screenshot", str(shot)]
+    assert main(argv + ["--max-triangles", "447", "--lod"]) == 2  # LOD: every instance may be near (level 0)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{mesh} x {params}: 4 instances x 112 triangles" in err[0] and not shot.exists(), err
+    # --headless draws every one of --frames: a job of 2 frames counts both
+    argv2 = [a if a != "1" else "2" for a in argv]
+    assert main(argv2 + ["--max-triangles", "895"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "448 triangles a frame (solid), x 2 frames = 896" in err[0] and not shot.exists(), err
+    assert main(argv + ["--max-triangles", "448"]) == 0 and shot.exists()
+
+
+def test_scene_render_and_view_check_every_layer(files, capsys):
+    tmp, mesh, params = files
+    scene = tmp / "s.toml"
+    scene.write_text(f'[[layer]]\nname = "a"\nmesh = "stone"\nparams = "{params.name}"\n'
+                     f'[[layer]]\nname = "b"\nmesh = "{mesh.name}"\nparams = "{params.name}"\n')
+    out = tmp / "s.png"
+    assert main(["render", str(scene), "-o", str(out), "--size", "32x24", "--max-triangles", "895"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and not out.exists(), err
+    assert f"{scene}: layer a: 4 instances x 112 triangles; {scene}: layer b: 4 instances x 112 triangles" in err[0]
+    assert "= 896 triangles a frame" in err[0] and "fewer instances or smaller meshes" in err[0]
+    assert main(["view", str(scene), "--headless", "--frames", "1", "--size", "32x24", "--max-triangles", "895"]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert main(["render", str(scene), "-o", str(out), "--size", "32x24", "--max-triangles", "896"]) == 0
+    assert out.exists()
+
+
+def test_bake_folder_refuses_more_files_than_the_limit(tmp_path, capsys, monkeypatch):
+    from axialdeform.cli._common import MAX_BAKE_FILES
+    from axialdeform.gl import bake as gl_bake
+
+    assert MAX_BAKE_FILES == 10_000  # the documented default
+    many = tmp_path / "many.adp"
+    P.write_params(many, np.zeros((MAX_BAKE_FILES + 1, 16), np.float32))
+    out = tmp_path / "baked"
+    real = gl_bake.bake
+    monkeypatch.setattr(gl_bake, "bake", lambda *a, **k: pytest.fail("deformed before the check"))
+    assert main(["bake", "stone", str(many), "-o", str(out)]) == 2  # before: 10 001 OBJ files
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and not out.exists(), err
+    for needle in (str(out), str(many), "10001 instances", "over the limit of 10000", "--max-files N", "-o OUT.npz"):
+        assert needle in err[0], err[0]
+    few = tmp_path / "few.adp"
+    P.write_params(few, np.zeros((3, 16), np.float32))
+    assert main(["bake", "stone", str(few), "-o", str(out), "--max-files", "2"]) == 2
+    assert "3 files, over the limit of 2" in capsys.readouterr().err and not out.exists()
+    monkeypatch.setattr(gl_bake, "bake", real)
+    assert main(["bake", "stone", str(few), "-o", str(out), "--max-files", "3"]) == 0  # at the limit: written
+    assert sorted(p.name for p in out.iterdir()) == [f"instance_{i:06d}.obj" for i in range(3)]
+    # an .npz has no file limit
+    assert main(["bake", "stone", str(few), "-o", str(tmp_path / "b.npz"), "--max-files", "1"]) == 0
+
+
+def test_export_baked_refuses_more_meshes_than_the_limit(tmp_path, capsys, monkeypatch):
+    from axialdeform.cli._common import MAX_EXPORT_MESHES
+    from axialdeform.core import export
+
+    assert MAX_EXPORT_MESHES == 10_000  # the documented default
+    many = tmp_path / "many.adp"
+    P.write_params(many, np.zeros((MAX_EXPORT_MESHES + 1, 16), np.float32))
+    out = tmp_path / "e.glb"
+    real = export.export_baked
+    monkeypatch.setattr(export, "export_baked", lambda *a, **k: pytest.fail("baked before the check"))
+    assert main(["export", "stone", str(many), "-o", str(out)]) == 2  # before: 10 001 glTF meshes and nodes
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and not out.exists(), err
+    for needle in (str(out), str(many), "10001 instances", "over the limit of 10000", "--max-meshes N", "--instanced"):
+        assert needle in err[0], err[0]
+    assert main(["export", "stone", str(many), "-o", str(out), "--instanced"]) == 0  # one mesh: no limit
+    out.unlink()
+    few = tmp_path / "few.adp"
+    P.write_params(few, np.zeros((3, 16), np.float32))
+    assert main(["export", "stone", str(few), "-o", str(out), "--max-meshes", "2"]) == 2
+    assert "over the limit of 2" in capsys.readouterr().err and not out.exists()
+    monkeypatch.setattr(export, "export_baked", real)
+    assert main(["export", "stone", str(few), "-o", str(out), "--max-meshes", "3"]) == 0 and out.exists()

@@ -205,3 +205,89 @@ def format_stats(stats: dict, frame_s: float | None = None) -> str:
     if frame_s is not None:
         text += f"; frame {frame_s * 1000:.1f} ms"
     return text
+
+
+# ---------------------------------------------------------------- bounded time for huge jobs (issue 16)
+#: The CLI's per-frame budget of drawn primitives (``--max-triangles``):
+#: instances x triangles of the drawn parts, summed over layers and panels,
+#: wireframe weighted by :func:`mode_weight`.  A frame of 10**8 triangles of
+#: a 1 M-face mesh costs about 25 s of CPU on llvmpipe (2 cores); 5 * 10**7
+#: keeps a default ``render`` near 17 s of CPU (docs/reliability.md,
+#: "Bounded time for huge jobs").  A policy of the command line only: the
+#: Python API (``AxialRenderer`` and the rest) draws whatever it is given.
+MAX_TRIANGLES = 50_000_000
+
+#: edges a wireframe draws per triangle (a closed mesh has exactly 1.5)
+WIRE_EDGES_PER_TRIANGLE = 1.5
+
+#: The CLI's maximum of mesh files ``bake -o FOLDER`` writes (``--max-files``);
+#: ``bake -o OUT.npz`` has no such limit (it is written in pieces).
+MAX_BAKE_FILES = 10_000
+
+#: The CLI's maximum of instances ``export --baked`` writes, one glTF mesh and
+#: node each (``--max-meshes``); ``--instanced`` (one mesh) and scene files
+#: (one mesh a layer) have no such limit.
+MAX_EXPORT_MESHES = 10_000
+
+
+def add_max_triangles(p) -> None:
+    """``--max-triangles N`` (every command that rasterises)."""
+    p.add_argument("--max-triangles", type=positive_int, default=MAX_TRIANGLES, metavar="N", help=(
+        "refuse a frame of more than N triangles: instances x triangles of the drawn parts, summed over "
+        "layers; wireframe counts 1.5 edges a triangle, plus the triangles of the hidden-line pass unless "
+        "--fast (default: %(default)s: about 12 s of CPU a frame on llvmpipe)"))
+
+
+def mode_weight(mode: str, fast: bool = False) -> float:
+    """Primitives drawn per triangle of the mesh in ``mode``: 1 (solid, flat);
+    wireframe: 1.5 edges, plus 1 for the hidden-line depth pass unless ``fast``.
+    Level of detail is not counted: any instance may be near (level 0)."""
+    if mode == "wireframe":
+        return WIRE_EDGES_PER_TRIANGLE + (0.0 if fast else 1.0)
+    return 1.0
+
+
+def drawn_triangles(mesh, parts=None) -> int:
+    """Triangles of ``mesh`` drawn with ``--part`` names ``parts`` (None: all)."""
+    if not parts:
+        return int(len(mesh.faces))
+    return int(sum(mesh.part(name).count for name in dict.fromkeys(parts)))
+
+
+def check_triangles(items, modes, limit: int, fast: bool = False, frames: int = 1) -> int:
+    """Refuse a frame over the CLI's triangle budget, before anything is drawn.
+
+    ``items`` : iterable of ``(label, instances, triangles)`` (one a layer;
+    a terrain is 1 instance), ``modes`` : a mode or the modes drawn side by
+    side (``demo``), ``limit`` : ``--max-triangles``; ``frames`` : frames a
+    job draws with no window to close (``view --headless --frames N``,
+    ``render --stats``: 2), each counted.  Returns the weighted primitives
+    drawn; over ``limit`` an :class:`ArgumentError` names the file(s), the
+    counts, the product, the limit and how to raise it.
+    """
+    from ..core.errors import ArgumentError
+
+    modes = (modes,) if isinstance(modes, str) else tuple(modes)
+    weight = sum(mode_weight(m, fast) for m in modes)
+    items = [(label, int(n), int(t)) for label, n, t in items]
+    triangles = sum(n * t for _, n, t in items)
+    frames = max(int(frames), 1)
+    work = int(math.ceil(triangles * weight)) * frames
+    if work <= limit:
+        return work
+    parts = "; ".join(f"{label}: {n} instances x {t} triangles" for label, n, t in items if n * t)
+    if weight == 1:
+        total = f"{triangles} triangles a frame ({modes[0]})"
+    else:
+        what = f"{WIRE_EDGES_PER_TRIANGLE:g} edges a triangle" + ("" if fast else " + the hidden-line pass")
+        total = f"{triangles} triangles a frame, x {weight:g} for {' + '.join(modes)} (wireframe: {what})"
+    if frames > 1:
+        total += f", x {frames} frames"
+    if weight != 1 or frames > 1:
+        total += f" = {work}"
+    fits = [t for _, n, t in items if n * t]
+    most = (f"at most {int(limit // (fits[0] * weight * frames))} instances of this mesh"
+            if len(fits) == 1 else "fewer instances or smaller meshes")
+    raise ArgumentError(
+        f"{parts} = {total}, over the limit of {limit}; expected {most}, "
+        f"or raise the limit with --max-triangles N (about 25 s of CPU per 10^8 triangles on llvmpipe)")

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_mesh_and_params, add_mesh_mismatch, add_wind_args, load, progress_bar, wind_arg
+from ._common import (MAX_BAKE_FILES, add_mesh_and_params, add_mesh_mismatch, add_wind_args, load, positive_int,
+                      progress_bar, wind_arg)
 
 
 def add_parser(sub) -> None:
@@ -23,6 +24,9 @@ def add_parser(sub) -> None:
     b.add_argument("--overwrite", action="store_true", help=(
         "OUT may be a folder of an earlier bake: new files are written first, then the old instance_* files "
         "not rewritten are removed (other files are kept); default: a folder holding files is refused"))
+    b.add_argument("--max-files", type=positive_int, default=MAX_BAKE_FILES, metavar="N", help=(
+        "refuse to write more than N mesh files into a folder (one an instance; -o OUT.npz has no such limit) "
+        "(default: %(default)s)"))
     add_wind_args(b)
     b.set_defaults(handler=run)
 
@@ -41,6 +45,7 @@ def run(args) -> None:
     mesh, params = load(args, "bake output", allow_folder=out.suffix.lower() != ".npz")
     if out.suffix.lower() == ".npz":  # made and written in pieces: bounded by the disk, not memory
         return _bake_npz_in_pieces(args, out, mesh, params, wind)
+    check_file_count(args, out, len(params))  # before anything is deformed or written
     check_bake_folder(out, args.overwrite)  # refuse a folder of stale files before the work, not after
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params,
@@ -56,6 +61,17 @@ def run(args) -> None:
     meshes = [f for f in files if f.suffix == "." + args.format]
     beside = f" + {len(files) - len(meshes)} material/texture files" if len(files) > len(meshes) else ""
     print(f"wrote {len(meshes)} {args.format} files{beside} to {out}/ ({args.engine})")
+
+
+def check_file_count(args, out: Path, count: int) -> None:
+    """Refuse a bake into a folder of more than ``--max-files`` mesh files."""
+    from ..core.errors import ArgumentError
+
+    if count > args.max_files:
+        raise ArgumentError(
+            f"{out}: {args.params} holds {count} instances, one {args.format} file each: {count} files, over the "
+            f"limit of {args.max_files} files a folder; expected at most {args.max_files} instances, or raise the "
+            f"limit with --max-files N, or bake to -o OUT.npz (one archive, no such limit)")
 
 
 def _bake_npz_in_pieces(args, out: Path, mesh, params, wind) -> None:

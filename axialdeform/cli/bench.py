@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ..core.errors import AxialDeformError
+from ._common import add_max_triangles, check_triangles, drawn_triangles
 
 
 def add_parser(sub) -> None:
@@ -37,6 +38,7 @@ def add_parser(sub) -> None:
     b.add_argument("--no-leaf", action="store_true", help="leave out the 1 000-leaf scene (default: include it)")
     b.add_argument("--no-throughput", action="store_true", help="leave out the deformation throughput (default: include it)")
     b.add_argument("--no-progress", action="store_true", help="no progress bar (default: a bar on stderr)")
+    add_max_triangles(b)
     b.add_argument("--report-from", metavar="DETAILS_JSON", default=None,
                    help="measure nothing: render bench.md and the plots again from a saved bench-details.json, "
                         "into --out if given, else beside the JSON (default: measure)")
@@ -59,6 +61,20 @@ def _report_from(args) -> None:
     print(f"wrote {path} (from the measurements in {args.report_from})")
 
 
+def _check_triangles(args, counts) -> None:
+    """The largest count of the bench's mesh in each mode within ``--max-triangles``, before anything runs."""
+    from ..bench import COUNTS, QUICK_COUNTS
+    from ..core.mesh import load_mesh
+
+    if args.quick and tuple(counts) == COUNTS:
+        counts = QUICK_COUNTS
+    if not counts:
+        return
+    triangles = drawn_triangles(load_mesh(args.mesh))
+    for mode in _csv(args.modes, "--modes"):
+        check_triangles([(f"{args.mesh} x --counts {max(counts)}", max(counts), triangles)], mode, args.max_triangles)
+
+
 def run(args) -> None:
     """Handler of ``axialdeform bench``."""
     from ..bench import COUNTS, DEFAULT_OUT, run_bench
@@ -72,6 +88,7 @@ def run(args) -> None:
             counts = tuple(int(x) for x in _csv(args.counts, "--counts"))
         except ValueError:
             raise AxialDeformError(f"--counts: expected comma-separated integers, found {args.counts!r}") from None
+    _check_triangles(args, counts)
     command = shlex.join(["axialdeform", *sys.argv[1:]]) if sys.argv and "bench" in sys.argv[1:] else None
     out = Path(DEFAULT_OUT if args.out is None else args.out)
     how_long = "under a minute" if args.quick else "about 16 minutes on a 2-core machine; --quick for under a minute"

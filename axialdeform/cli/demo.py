@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ._common import add_max_triangles, check_triangles
+
 DEMO_COUNT = 2500
 
 
@@ -16,6 +18,7 @@ def add_parser(sub) -> None:
     d.add_argument("--seed", type=int, default=2003, help="random seed (default: %(default)s)")
     d.add_argument("--fast", action="store_true",
                    help="no multisampling, ground, shadows or hidden lines (default: all of them)")
+    add_max_triangles(d)
     d.set_defaults(handler=run)
 
 
@@ -36,6 +39,8 @@ def run(args) -> None:
     check_output_path(args.output, (mesh_source_path("stone"),), "PNG")  # the bundled mesh is an input too
     check_count(args.count, DEMO_BYTES_EACH, "-n/--count")
     mesh = load_mesh("stone")
+    check_triangles([(f"stone x -n {args.count}", args.count, len(mesh.faces))], ("solid", "wireframe"),
+                    args.max_triangles, args.fast)  # both panels, before the parameters are made
     params = random_params(mesh, args.count, seed=args.seed, bend=0.14, placement="disc",
                            spacing=0.9 * mesh.axis.length, tilt=(-0.2, 0.2))
     size = parse_size(args.size)

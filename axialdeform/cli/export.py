@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import add_mesh_and_params, add_mesh_mismatch, load
+from ._common import MAX_EXPORT_MESHES, add_mesh_and_params, add_mesh_mismatch, load, positive_int
 
 
 def add_parser(sub) -> None:
@@ -21,6 +21,9 @@ def add_parser(sub) -> None:
                         help="base mesh once + EXT_mesh_gpu_instancing (default: --baked)")
     e.set_defaults(layout="baked")
     add_mesh_mismatch(e)
+    e.add_argument("--max-meshes", type=positive_int, default=MAX_EXPORT_MESHES, metavar="N", help=(
+        "with --baked: refuse more than N instances (one glTF mesh and node each; --instanced and scene files "
+        "have no such limit) (default: %(default)s)"))
     e.set_defaults(handler=run)
 
 
@@ -35,5 +38,12 @@ def run(args) -> None:
     if scene is not None:
         return scenes.export(scene, args)
     mesh, params = load(args, "exported .glb")
+    if args.layout == "baked" and len(params) > args.max_meshes:  # before anything is deformed
+        from ..core.errors import ArgumentError
+
+        raise ArgumentError(
+            f"{out}: {args.params} holds {len(params)} instances; --baked writes one glTF mesh and node each, "
+            f"over the limit of {args.max_meshes}; expected at most {args.max_meshes} instances, or raise the "
+            f"limit with --max-meshes N, or use --instanced (the base mesh once, no such limit)")
     path = export_glb(out, mesh, params, args.layout, source=args.params)
     print(f"wrote {path} ({len(params)} instances, {args.layout}, {path.stat().st_size} bytes)")

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from ._common import (AXES, add_cull_arguments, add_mesh_and_params, add_mesh_mismatch, add_wind_args, cull_options,
-                      format_stats, load, vec3, wind_arg)
+from ._common import (AXES, add_cull_arguments, add_max_triangles, add_mesh_and_params, add_mesh_mismatch,
+                      add_wind_args, check_triangles, cull_options, drawn_triangles, format_stats, load, vec3,
+                      wind_arg)
 
 
 def add_parser(sub) -> None:
@@ -32,6 +33,7 @@ def add_parser(sub) -> None:
     add_cull_arguments(rd)
     rd.add_argument("--stats", action="store_true", help="print instances submitted / drawn / per LOD level, "
                     "vertices processed and the frame time (default: off)")
+    add_max_triangles(rd)
     rd.set_defaults(handler=run)
 
 
@@ -79,6 +81,8 @@ def run(args) -> None:
     wind = wind_arg(args)
     wind_options = {"wind": wind, "time": args.time} if wind is not None else {}
     mesh, params = load(args, "PNG")
+    check_triangles([(f"{args.mesh} x {args.params}", len(params), drawn_triangles(mesh, args.part))],
+                    args.mode, args.max_triangles, args.fast, 2 if args.stats else 1)  # before the camera, context
     size = parse_size(args.size)
     camera = camera_from_args(mesh, params, size, args)
     ctx = create_context()

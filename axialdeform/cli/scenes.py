@@ -35,6 +35,17 @@ def _check_output(args, what: str) -> None:
     check_output_path(args.output, (args.mesh,), what)
 
 
+def check_triangles(scene, args, mode: str, fast: bool = False, frames: int = 1) -> None:
+    """The CLI's per-frame triangle budget (:func:`._common.check_triangles`)
+    over every layer and the terrain, before anything is drawn."""
+    from ._common import check_triangles as check
+
+    items = [(f"{scene.path}: layer {layer.name}", len(layer.params), len(layer.mesh.faces)) for layer in scene.layers]
+    if scene.terrain is not None:
+        items.append((f"{scene.path}: terrain", 1, len(scene.terrain.faces)))
+    check(items, mode, args.max_triangles, fast, frames)
+
+
 def _time(scene, args) -> float:
     """``--time`` for a scene: it moves the scene's wind, so a scene without one refuses it."""
     t = getattr(args, "time", None)
@@ -54,6 +65,7 @@ def render(scene, args, wind=None, options=None) -> None:
     from ..gl.scene import render_scene
 
     _check_output(args, "PNG")
+    check_triangles(scene, args, args.mode)
     if wind is not None:
         scene.wind = wind
     image = render_scene(scene, parse_size(args.size), args.mode, time=_time(scene, args), **(options or {}))

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from ._common import AXES, add_cull_arguments, add_mesh_mismatch, cull_options, wind_arg
+from ._common import (AXES, add_cull_arguments, add_max_triangles, add_mesh_mismatch, check_triangles, cull_options,
+                      drawn_triangles, wind_arg)
 
 
 def add_parser(sub) -> None:
@@ -35,6 +36,7 @@ def add_parser(sub) -> None:
     v.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
     add_cull_arguments(v)
     v.add_argument("--no-lod", action="store_true", help="no levels of detail (default: on from 100 000 instances)")
+    add_max_triangles(v)
     v.set_defaults(handler=run, time=None)
 
 
@@ -56,14 +58,20 @@ def run(args) -> None:
     elif not options["lod"]:
         options["lod"] = None  # automatic: on from LOD_AUTO_COUNT instances
     extra = None
+    if args.frames < 1:
+        raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
+    frames = args.frames if args.headless else 1  # a window is the user's to close; --headless draws them all
     scene = scenes.scene_of(args, params_optional=True)
     if scene is not None:
+        scenes.check_triangles(scene, args, args.mode, args.fast, frames)  # the mode it starts in; LOD: level 0
         mesh, params, wind, extra = scenes.viewer_inputs(scene, wind)
         seed = args.seed
         args.up, args.no_ground = scene.up, True
     elif args.params:
         mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+        check_triangles([(f"{args.mesh} x {args.params}", len(params), drawn_triangles(mesh, args.part))],
+                        args.mode, args.max_triangles, args.fast, frames)  # before the levels of detail, any drawing
         seed = args.seed  # a file records no seed: shown only if the user names one
     else:
         from ..core.safeio import check_count
@@ -71,10 +79,10 @@ def run(args) -> None:
 
         check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")  # before anything is read or allocated
         mesh = load_mesh(args.mesh)
+        check_triangles([(f"{args.mesh} x -n {args.count}", args.count, drawn_triangles(mesh, args.part))],
+                        args.mode, args.max_triangles, args.fast, frames)  # before the parameters are made
         seed = 0 if args.seed is None else args.seed
         params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)
-    if args.frames < 1:
-        raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed,
                            bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground,
                            on_screenshot=lambda path: print(f"wrote {path}"), wind=wind, extra=extra,
