@@ -811,6 +811,31 @@ def test_default_triangle_budget_refuses_huge_jobs_before_the_work(tmp_path, cap
     assert len(err) == 1 and "x 3.5 for solid + wireframe" in err[0] and not out.exists(), err
 
 
+def test_the_interactive_viewer_is_not_capped(monkeypatch, capsys):
+    """A window is watched and closed by its user (a million stones at full
+    detail is its point): only ``--headless`` frames are counted."""
+    import axialdeform.viewer as viewer_module
+    from axialdeform.cli._common import check_triangles
+
+    assert check_triangles([("a", 10**9, 10**6)], "wireframe", 1, frames=0) == 0
+    with pytest.raises(AxialDeformError, match="over the limit of 1"):
+        check_triangles([("a", 10**9, 10**6)], "wireframe", 1, frames=1)
+    reached = []
+
+    class Stop(AxialDeformError):
+        pass
+
+    def create(mesh, params, **kwargs):
+        reached.append((len(params), kwargs["headless"]))
+        raise Stop("stopped before opening a window")
+
+    monkeypatch.setattr(viewer_module.Viewer, "create", staticmethod(create))
+    assert main(["view", "stone", "-n", "450000"]) == 2  # 50.4 M triangles: over the default, not refused
+    assert reached == [(450000, False)] and "stopped before opening a window" in capsys.readouterr().err
+    assert main(["view", "stone", "-n", "450000", "--headless"]) == 2
+    assert reached == [(450000, False)] and "over the limit of 50000000" in capsys.readouterr().err
+
+
 def test_view_with_a_parameter_file_checks_the_budget(files, capsys):
     tmp, mesh, params = files
     shot = tmp / "v.png"

@@ -261,12 +261,15 @@ def check_triangles(items, modes, limit: int, fast: bool = False, frames: int = 
     a terrain is 1 instance), ``modes`` : a mode or the modes drawn side by
     side (``demo``), ``limit`` : ``--max-triangles``; ``frames`` : frames a
     job draws with no window to close (``view --headless --frames N``,
-    ``render --stats``: 2), each counted.  Returns the weighted primitives
+    ``render --stats``: 2), each counted; 0: an interactive window its user
+    watches and closes, not capped.  Returns the weighted primitives
     drawn; over ``limit`` an :class:`ArgumentError` names the file(s), the
     counts, the product, the limit and how to raise it.
     """
     from ..core.errors import ArgumentError
 
+    if int(frames) == 0:
+        return 0
     modes = (modes,) if isinstance(modes, str) else tuple(modes)
     weight = sum(mode_weight(m, fast) for m in modes)
     items = [(label, int(n), int(t)) for label, n, t in items]

@@ -60,7 +60,9 @@ def run(args) -> None:
     extra = None
     if args.frames < 1:
         raise AxialDeformError(f"--frames: expected 1 or more, found {args.frames}")
-    frames = args.frames if args.headless else 1  # a window is the user's to close; --headless draws them all
+    # --headless draws them all unattended: every frame counts; a window is the user's to watch
+    # and close (a million stones at full detail is its point): not capped
+    frames = args.frames if args.headless else 0
     scene = scenes.scene_of(args, params_optional=True)
     if scene is not None:
         scenes.check_triangles(scene, args, args.mode, args.fast, frames)  # the mode it starts in; LOD: level 0
