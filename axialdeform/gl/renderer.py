@@ -732,15 +732,15 @@ class AxialRenderer:
         if isinstance(instances, IndirectDraws):
             def draw(n, start):
                 instances.render(vao, mode, key, n, start)
-            most = self.count  # the GPU's count is at most every instance
         else:
             def draw(n, start):
                 vao.render(mode, vertices=n, first=start, instances=instances)
-            most = instances
         if not split:
             draw(vertices, first)
             return
-        draw_in_batches(self.ctx, draw, vertices, first, 2 if mode == moderngl.LINES else 3, most)
+        # slices sized for EVERY instance, whatever this draw's count (culled, a level's):
+        # the same slices with and without culling, so the same order and the same picture
+        draw_in_batches(self.ctx, draw, vertices, first, 2 if mode == moderngl.LINES else 3, max(self.count, 1))
 
     def _culled_vao(self, prog, level: int, index_buffer):
         """A vertex array of one LOD level for the culled program (instances: bound by the cull pass)."""
