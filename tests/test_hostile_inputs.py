@@ -868,23 +868,32 @@ def test_scene_render_and_view_check_every_layer(files, capsys):
     assert out.exists()
 
 
+def _refused_over_the_limit(tmp_path, capsys, command, out, limit, needles):
+    """``command stone many.adp -o out`` with one instance over ``limit`` is one
+    error line naming the files, the count, the limit and ``needles``, nothing
+    written; returns a parameter file of 3 instances for the limits around it."""
+    many = tmp_path / "many.adp"
+    P.write_params(many, np.zeros((limit + 1, 16), np.float32))
+    assert main([command, "stone", str(many), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and not out.exists(), err
+    for needle in (str(out), str(many), f"{limit + 1} instances", f"over the limit of {limit}", *needles):
+        assert needle in err[0], err[0]
+    few = tmp_path / "few.adp"
+    P.write_params(few, np.zeros((3, 16), np.float32))
+    return few
+
+
 def test_bake_folder_refuses_more_files_than_the_limit(tmp_path, capsys, monkeypatch):
     from axialdeform.cli._common import MAX_BAKE_FILES
     from axialdeform.gl import bake as gl_bake
 
     assert MAX_BAKE_FILES == 10_000  # the documented default
-    many = tmp_path / "many.adp"
-    P.write_params(many, np.zeros((MAX_BAKE_FILES + 1, 16), np.float32))
     out = tmp_path / "baked"
     real = gl_bake.bake
     monkeypatch.setattr(gl_bake, "bake", lambda *a, **k: pytest.fail("deformed before the check"))
-    assert main(["bake", "stone", str(many), "-o", str(out)]) == 2  # before: 10 001 OBJ files
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and not out.exists(), err
-    for needle in (str(out), str(many), "10001 instances", "over the limit of 10000", "--max-files N", "-o OUT.npz"):
-        assert needle in err[0], err[0]
-    few = tmp_path / "few.adp"
-    P.write_params(few, np.zeros((3, 16), np.float32))
+    # before: 10 001 OBJ files
+    few = _refused_over_the_limit(tmp_path, capsys, "bake", out, MAX_BAKE_FILES, ("--max-files N", "-o OUT.npz"))
     assert main(["bake", "stone", str(few), "-o", str(out), "--max-files", "2"]) == 2
     assert "3 files, over the limit of 2" in capsys.readouterr().err and not out.exists()
     monkeypatch.setattr(gl_bake, "bake", real)
@@ -899,20 +908,13 @@ def test_export_baked_refuses_more_meshes_than_the_limit(tmp_path, capsys, monke
     from axialdeform.core import export
 
     assert MAX_EXPORT_MESHES == 10_000  # the documented default
-    many = tmp_path / "many.adp"
-    P.write_params(many, np.zeros((MAX_EXPORT_MESHES + 1, 16), np.float32))
     out = tmp_path / "e.glb"
     real = export.export_baked
     monkeypatch.setattr(export, "export_baked", lambda *a, **k: pytest.fail("baked before the check"))
-    assert main(["export", "stone", str(many), "-o", str(out)]) == 2  # before: 10 001 glTF meshes and nodes
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and not out.exists(), err
-    for needle in (str(out), str(many), "10001 instances", "over the limit of 10000", "--max-meshes N", "--instanced"):
-        assert needle in err[0], err[0]
-    assert main(["export", "stone", str(many), "-o", str(out), "--instanced"]) == 0  # one mesh: no limit
+    # before: 10 001 glTF meshes and nodes
+    few = _refused_over_the_limit(tmp_path, capsys, "export", out, MAX_EXPORT_MESHES, ("--max-meshes N", "--instanced"))
+    assert main(["export", "stone", str(tmp_path / "many.adp"), "-o", str(out), "--instanced"]) == 0  # no limit
     out.unlink()
-    few = tmp_path / "few.adp"
-    P.write_params(few, np.zeros((3, 16), np.float32))
     assert main(["export", "stone", str(few), "-o", str(out), "--max-meshes", "2"]) == 2
     assert "over the limit of 2" in capsys.readouterr().err and not out.exists()
     monkeypatch.setattr(export, "export_baked", real)
