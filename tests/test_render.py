@@ -250,47 +250,72 @@ def test_back_faces_are_culled_only_where_nothing_changes(ctx, stone, leaf):
 
 
 def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
-    """On a software rasteriser a draw of more than ``flush_interval`` primitives
-    (instances x triangles) is made in slices of the index range, each slice
-    every instance, the queue finished in between (llvmpipe's memory for a
-    multisampled frame grows with what it was given until then).  The slices
-    give the same picture: solid and flat exactly; wireframe over its
-    translucent fill up to the order of overlapping translucent lines."""
+    """On a software rasteriser a multisampled draw of more than ``flush_interval``
+    primitives (instances x triangles) is made in slices, the queue finished in
+    between (llvmpipe's memory for a multisampled frame grows with what it was
+    given until then).  A small mesh: slices of whole instances, in order
+    (indirect commands with a base instance): the very same picture, every mode.
+    A big mesh: slices of its triangles, every instance in each: the same
+    picture solid and flat; wireframe over its translucent fill up to the order
+    of overlapping translucent lines."""
     import moderngl
+    import trimesh as tm
 
     from axialdeform.gl.context import _multisampled, flush_interval
 
-    params = ad.random_params(stone, 400, seed=6, bend=0.2)
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
+    from big_mesh import torus
+
     modes = ("solid", "flat", "wireframe")
-    monkeypatch.setattr(ctx, "_axialdeform_flush", None, raising=False)
-    assert flush_interval(ctx) is None
-    whole = ad.render_image(stone, params, (200, 150), modes, ctx=ctx)
-    calls, finishes = [], []
-    original, original_finish = moderngl.VertexArray.render, moderngl.Context.finish
+    calls, indirect, finishes = [], [], []
+    original, original_indirect = moderngl.VertexArray.render, moderngl.VertexArray.render_indirect
+    original_finish = moderngl.Context.finish
 
     def spy(self, mode=None, vertices=-1, first=0, instances=-1):
         if _multisampled(ctx):  # the shadow map's depth target is single-sampled: never sliced
             calls.append((mode, vertices, first, instances))
         return original(self, mode, vertices=vertices, first=first, instances=instances)
 
-    monkeypatch.setattr(moderngl.VertexArray, "render", spy)
-    monkeypatch.setattr(moderngl.Context, "finish", lambda self: (finishes.append(1), original_finish(self))[1])
-    monkeypatch.setattr(ctx, "_axialdeform_flush", 7000)  # 17 stone triangles (5 lines) x 400 instances a slice
-    monkeypatch.setenv("AXIALDEFORM_INDIRECT", "0")
-    sliced = ad.render_image(stone, params, (200, 150), modes, ctx=ctx)
-    w = 200
-    assert np.array_equal(sliced[:, :2 * w], whole[:, :2 * w])
-    diff = np.abs(sliced[:, 2 * w:].astype(int) - whole[:, 2 * w:].astype(int))
-    assert (diff > 40).mean() < 0.002 and diff.mean() < 0.5
-    tri = [c for c in calls if c[0] == moderngl.TRIANGLES and c[3] == 400]
-    lines = [c for c in calls if c[0] == moderngl.LINES and c[3] == 400]
-    assert all(v <= 17 * 3 for _, v, _, _ in tri), tri
-    assert all(v <= 5 * 2 for _, v, _, _ in lines), lines  # slices ...
-    slices = -(-len(stone.faces) // 17)
-    assert len(tri) >= 3 * slices and len(lines) >= slices  # solid, flat, the wireframe's depth pass; its lines
-    firsts = sorted(first // 3 for _, _, first, _ in tri[:slices])
-    assert firsts == list(range(0, len(stone.faces), 17))  # one pass's slices cover every triangle once
-    assert len(finishes) >= len(tri) + len(lines)
+    def spy_indirect(self, buffer, mode=None, count=-1, first=0):
+        if _multisampled(ctx):
+            indirect.append((mode, *np.frombuffer(buffer.read(size=20, offset=20 * first), "<u4").tolist()))
+        return original_indirect(self, buffer, mode, count, first)
+
+    pos, faces = torus(2000)
+    ring = ad.load_mesh(tm.Trimesh(pos, faces, process=False))
+    for mesh, n, size in ((stone, 400, (200, 150)), (ring, 6, (120, 90))):
+        params = ad.random_params(mesh, n, seed=6, bend=0.2)
+        monkeypatch.setattr(ctx, "_axialdeform_flush", None, raising=False)
+        assert flush_interval(ctx) is None
+        whole = ad.render_image(mesh, params, size, modes, ctx=ctx)
+        calls.clear(), indirect.clear(), finishes.clear()
+        monkeypatch.setattr(moderngl.VertexArray, "render", spy)
+        monkeypatch.setattr(moderngl.VertexArray, "render_indirect", spy_indirect)
+        monkeypatch.setattr(moderngl.Context, "finish", lambda self: (finishes.append(1), original_finish(self))[1])
+        monkeypatch.setattr(ctx, "_axialdeform_flush", 7000)
+        sliced = ad.render_image(mesh, params, size, modes, ctx=ctx)
+        monkeypatch.undo()
+        w = size[0]
+        if mesh is stone:  # 112 triangles: slices of 7000 // 112 = 62 instances, lines 7000 // 3 // 168 = 13
+            assert np.array_equal(sliced, whole)
+            tri = [c for c in indirect if c[0] == moderngl.TRIANGLES]
+            assert tri and all(c[2] <= 62 for c in tri) and all(c[2] <= 13 for c in indirect if c[0] == moderngl.LINES)
+            assert sorted(c[5] for c in tri[:7]) == list(range(0, 400, 62))  # one pass: every instance once
+            assert not [c for c in calls if c[3] == 400]  # no whole draw of every instance
+        else:  # 1 996 triangles x 6: slices of 7000 // 6 = 1 166 triangles, lines a third
+            assert np.array_equal(sliced[:, :2 * w], whole[:, :2 * w])
+            diff = np.abs(sliced[:, 2 * w:].astype(int) - whole[:, 2 * w:].astype(int))
+            assert (diff > 40).mean() < 0.002 and diff.mean() < 0.5
+            # (the culled frame's draws are indirect: their commands hold index count and first index)
+            tri = [(c[1], c[3]) for c in indirect if c[0] == moderngl.TRIANGLES]
+            tri += [(v, f) for m, v, f, k in calls if m == moderngl.TRIANGLES and k == n]
+            lines = [c[1] for c in indirect if c[0] == moderngl.LINES] + [v for m, v, _, k in calls
+                                                                          if m == moderngl.LINES and k == n]
+            assert all(v <= 1166 * 3 for v, _ in tri) and all(v <= 388 * 2 for v in lines)
+            assert sorted(f // 3 for _, f in tri[:2]) == [0, 1166] and len(lines) >= 2
+        assert len(finishes) >= 3
     assert ctx.error == "GL_NO_ERROR"
 
 

@@ -8,7 +8,7 @@ from ..core.errors import ContextError
 
 __all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels",
            "require_framebuffer", "size_limits", "check_image_size", "check_alive", "check_released",
-           "flush_interval", "draw_in_batches", "SOFTWARE_FLUSH_PRIMITIVES"]
+           "flush_interval", "flush_budget", "draw_in_batches", "SOFTWARE_FLUSH_PRIMITIVES"]
 
 GL_REQUIRE = 330
 
@@ -86,6 +86,15 @@ def _multisampled(ctx) -> bool:
     return any(getattr(a, "samples", 0) > 1 for a in attachments)
 
 
+def flush_budget(ctx, per_primitive: int = 3) -> int | None:
+    """Primitives to give ``ctx`` between finishes now: None (never slice) on a GPU
+    or into a single-sampled target; else :func:`flush_interval` (lines: a third)."""
+    budget = flush_interval(ctx)
+    if budget is None or not _multisampled(ctx):
+        return None  # single-sampled: llvmpipe bins a bounded scene and flushes it by itself
+    return max(1, budget // 3) if per_primitive == 2 else budget  # a line costs ~140 bytes, a triangle ~48
+
+
 def draw_in_batches(ctx, draw, vertices: int, first: int, per_primitive: int, instances: int) -> None:
     """Call ``draw(vertices, first)`` once, or -- on a software rasteriser drawing
     into a multisampled target, when ``instances`` x ``vertices / per_primitive``
@@ -94,11 +103,7 @@ def draw_in_batches(ctx, draw, vertices: int, first: int, per_primitive: int, in
     finishing the GL queue after each slice, so that the driver's memory for one
     frame stays bounded.  The picture is the same for depth-tested opaque drawing
     (the slices reorder primitives only; a blended draw must not be split)."""
-    budget = flush_interval(ctx)
-    if budget is not None and not _multisampled(ctx):
-        budget = None  # single-sampled: llvmpipe bins a bounded scene and flushes it by itself
-    if budget is not None and per_primitive == 2:
-        budget = max(1, budget // 3)  # a line costs llvmpipe ~140 bytes, a triangle ~48
+    budget = flush_budget(ctx, per_primitive)
     primitives = vertices // per_primitive
     if budget is None or primitives * max(int(instances), 1) <= budget or primitives <= 1:
         draw(vertices, first)

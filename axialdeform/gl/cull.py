@@ -103,6 +103,14 @@ class IndirectDraws:
     def render(self, vao, mode, key, vertices: int, first: int = 0) -> None:
         vao.render_indirect(self.cull.commands, mode, count=1, first=self.cull.command(key, vertices, first))
 
+    def slot_instances(self, key, vertices: int, first: int = 0) -> tuple[int, int]:
+        """``(instance count, base instance)`` of slot ``key`` as the pass wrote them
+        (read back: waits for the pass; for drawing it in slices on a software
+        rasteriser, where waiting costs nothing)."""
+        slot = self.cull.command(key, vertices, first)
+        command = np.frombuffer(self.cull.commands.read(size=20, offset=20 * slot), "<u4")
+        return int(command[1]), int(command[4])
+
     def copy_counts(self, buffer) -> None:
         """Copy the counts (4 uint32) into ``buffer`` on the GPU, no wait
         (the next pass may overwrite the pass's own)."""

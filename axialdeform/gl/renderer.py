@@ -23,7 +23,8 @@ import numpy as np
 
 from .buffers import InstanceBuffer, MeshBuffers, as_index
 from .cull import CullPass, IndirectDraws, read_counts
-from .context import bind_framebuffer, check_alive, draw_in_batches, release_framebuffer, require_framebuffer
+from .context import (bind_framebuffer, check_alive, draw_in_batches, flush_budget, release_framebuffer,
+                      require_framebuffer)
 from ..core.bounds import base_radius, wind_reach
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.arrays import as_array
@@ -164,6 +165,7 @@ class AxialRenderer:
         self.quantized = bool(quantized)
         self._released = False
         self._objects = []
+        self._slice_commands = None  # the one indirect command of instance slices (software rasterisers)
         defines = {} if bend else {"AXIAL_NO_BEND": 1}
         if self.quantized:
             defines["AXIAL_QUANTIZED"] = 1
@@ -735,12 +737,40 @@ class AxialRenderer:
         else:
             def draw(n, start):
                 vao.render(mode, vertices=n, first=start, instances=instances)
+        per = 2 if mode == moderngl.LINES else 3
+        budget = flush_budget(self.ctx, per)
+        primitives = vertices // per
+        if budget is None or primitives * max(self.count, 1) <= budget:
+            draw(vertices, first)
+            return
+        if 4 * primitives <= budget and self.ctx.version_code >= 420:
+            # a small mesh, many instances: slices of whole instances, in order (indirect
+            # commands with a base instance, GL 4.2), so the very same picture, blended or not
+            if isinstance(instances, IndirectDraws):
+                count, base = instances.slot_instances(key, vertices, first)  # waits for the culling pass
+            else:
+                count, base = int(instances), 0
+            self._draw_instance_slices(vao, mode, vertices, first, count, base, max(1, budget // primitives))
+            return
         if not split:
             draw(vertices, first)
             return
-        # slices sized for EVERY instance, whatever this draw's count (culled, a level's):
-        # the same slices with and without culling, so the same order and the same picture
-        draw_in_batches(self.ctx, draw, vertices, first, 2 if mode == moderngl.LINES else 3, max(self.count, 1))
+        # a big mesh (or GL 3.3): slices of its triangles, every instance in each, sized for
+        # EVERY instance whatever this draw's count (culled, a level's): the same slices
+        # with and without culling, so the same order and the same picture
+        draw_in_batches(self.ctx, draw, vertices, first, per, max(self.count, 1))
+
+    def _draw_instance_slices(self, vao, mode, vertices: int, first: int, count: int, base: int, step: int) -> None:
+        """Draw instances ``base .. base + count`` in slices of ``step``, the GL queue
+        finished after each (one indirect command a slice, base instance set)."""
+        if self._slice_commands is None:
+            self._slice_commands = self.ctx.buffer(reserve=20)
+            self._objects.append(self._slice_commands)
+        for start in range(0, count, step):
+            n = min(step, count - start)
+            self._slice_commands.write(np.array([vertices, n, first, 0, base + start], "<u4").tobytes())
+            vao.render_indirect(self._slice_commands, mode, count=1, first=0)
+            self.ctx.finish()
 
     def _culled_vao(self, prog, level: int, index_buffer):
         """A vertex array of one LOD level for the culled program (instances: bound by the cull pass)."""
