@@ -34,7 +34,8 @@ in vec3 i_angles;
 in int i_index;             // the instance's index before culling (the records come from cull.geom)
 #define AXIAL_INSTANCE_ID i_index
 #else
-#define AXIAL_INSTANCE_ID gl_InstanceID
+uniform int u_slice_base;   // the first instance of this draw (a slice of the instances, gl/renderer.py); 0 else
+#define AXIAL_INSTANCE_ID (gl_InstanceID + u_slice_base)
 #endif
 #ifdef AXIAL_EXTENDED
 in vec3 i_extra;            // s tw tp: extended instances (19 numbers)

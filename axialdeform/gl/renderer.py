@@ -766,11 +766,20 @@ class AxialRenderer:
         if self._slice_commands is None:
             self._slice_commands = self.ctx.buffer(reserve=20)
             self._objects.append(self._slice_commands)
-        for start in range(0, count, step):
-            n = min(step, count - start)
-            self._slice_commands.write(np.array([vertices, n, first, 0, base + start], "<u4").tobytes())
-            vao.render_indirect(self._slice_commands, mode, count=1, first=0)
-            self.ctx.finish()
+        # gl_InstanceID restarts at 0 in every draw (GLSL 3.30 has no gl_BaseInstance): the
+        # unculled program adds u_slice_base (the culled one reads each record's own index)
+        slice_base = vao.program.get("u_slice_base", None)
+        try:
+            for start in range(0, count, step):
+                n = min(step, count - start)
+                self._slice_commands.write(np.array([vertices, n, first, 0, base + start], "<u4").tobytes())
+                if slice_base is not None:
+                    slice_base.value = base + start
+                vao.render_indirect(self._slice_commands, mode, count=1, first=0)
+                self.ctx.finish()
+        finally:
+            if slice_base is not None:
+                slice_base.value = 0
 
     def _culled_vao(self, prog, level: int, index_buffer):
         """A vertex array of one LOD level for the culled program (instances: bound by the cull pass)."""
