@@ -726,9 +726,11 @@ class AxialRenderer:
 
     def _instanced(self, vao, mode, vertices: int, first: int, instances, key, *, split: bool = True) -> None:
         """One instanced draw: ``instances`` a count, or the GPU's (:class:`IndirectDraws`, slot ``key``).
-        On a software rasteriser a big draw is made in slices of its index range
-        (:func:`~axialdeform.gl.context.draw_in_batches`; not when ``split`` is False:
-        blended parts, whose order matters)."""
+        On a software rasteriser a big multisampled draw is made in slices
+        (:func:`~axialdeform.gl.context.flush_budget`): of whole instances, in order,
+        for a small mesh (GL 4.2); else of its index range
+        (:func:`~axialdeform.gl.context.draw_in_batches`), but not when ``split`` is
+        False (blended parts, whose order matters)."""
         import moderngl
 
         if isinstance(instances, IndirectDraws):
