@@ -122,7 +122,8 @@ def mutate(data: bytes, other: bytes, rng: np.random.Generator) -> tuple[str, by
 
 
 def check(fn, data: bytes, name: str):
-    """'ok' (finite (n, 16) float32), 'error' (AxialDeformError) or 'crash: ...'."""
+    """'ok' (finite (n, 16) or (n, 19) float32: plain or extended), 'error'
+    (AxialDeformError) or 'crash: ...'."""
     try:
         out = fn(data, name)
     except AxialDeformError as exc:
@@ -131,7 +132,7 @@ def check(fn, data: bytes, name: str):
         return f"crash: {type(exc).__name__}: {exc}"[:200], None
     values = out.values if isinstance(out, P.ParamFile) else out
     if not (isinstance(values, np.ndarray) and values.dtype == np.float32 and values.ndim == 2
-            and values.shape[1] == 16 and np.isfinite(values).all()):
+            and values.shape[1] in (16, 19) and np.isfinite(values).all()):
         return "crash: silent garbage", None
     return "ok", values
 
