@@ -11,7 +11,8 @@ import numpy as np
 
 from .deform import bernstein, displace
 from .transforms import rotation_matrices
-from .params import ANGLES, OFFSETS, POSITION, as_params
+from .params import as_params
+from .record import ANGLES, OFFSETS, POSITION
 
 __all__ = ["wind_reach", "instance_bounds", "scene_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
            "frustum_planes", "spheres_visible", "lod_choice"]

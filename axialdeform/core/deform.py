@@ -12,7 +12,8 @@ import numpy as np
 
 from .arrays import as_array
 from .axis import ControlAxis
-from .params import ANGLES, EXTRA, OFFSETS, POSITION, as_params
+from .params import as_params
+from .record import ANGLES, EXTRA, OFFSETS, POSITION
 from .transforms import rotation_matrices
 
 __all__ = [

@@ -45,7 +45,8 @@ import numpy as np
 from .atomic import atomic_write_bytes
 from .bake import instance_name
 from .errors import GltfError
-from .params import ANGLES, EXTENDED_FIELDS, POSITION, SCALE, as_params
+from .params import as_params
+from .record import ANGLES, EXTENDED_FIELDS, GLTF_ATTRIBUTES, GLTF_EXTENDED_ATTRIBUTES, POSITION, SCALE
 from .transforms import angles_from_matrices, matrices_from_quaternions, quaternions_from_angles
 
 __all__ = [
@@ -71,15 +72,9 @@ LAYOUTS = ("baked", "instanced")
 INSTANCING = "EXT_mesh_gpu_instancing"
 #: key of the dictionary this library writes into ``extras``
 EXTRAS_KEY = "axialdeform"
-#: the application-specific per-instance attributes: name -> (type, columns of the 16 numbers)
-ATTRIBUTES = {
-    "_AXIAL_D12": ("VEC4", (0, 1, 2, 3)),
-    "_AXIAL_D34": ("VEC4", (4, 5, 6, 7)),
-    "_AXIAL_D5": ("VEC2", (8, 9)),
-    "_AXIAL_ANGLES": ("VEC3", (13, 14, 15)),
-}
-#: extended instances only: twist and taper (the scale goes to glTF's own SCALE)
-EXTENDED_ATTRIBUTES = {"_AXIAL_TWIST_TAPER": ("VEC2", (17, 18))}
+#: the application-specific per-instance attributes (from the record table)
+ATTRIBUTES = GLTF_ATTRIBUTES
+EXTENDED_ATTRIBUTES = GLTF_EXTENDED_ATTRIBUTES
 _FORMAT_VERSION = 1
 
 # glTF enums

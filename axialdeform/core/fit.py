@@ -39,7 +39,8 @@ import numpy as np
 from .deform import bernstein, deform, deform_local_extended, displace
 from .mesh import MESH_SUFFIXES  # mesh files a variants folder may hold (others are ignored)
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
-from .params import ANGLES, OFFSETS, POSITION, as_params
+from .params import as_params
+from .record import ANGLES, OFFSETS, POSITION
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
 __all__ = [

@@ -37,6 +37,9 @@ import numpy as np
 from .atomic import atomic_path, atomic_write_bytes
 from .axis import AXIS_NAMES, ControlAxis
 from .errors import MeshMismatchError, ParamError, ParamFileError
+from .record import (  # the record's columns and slices: one home
+    ANGLES, EXTENDED_FIELDS, EXTRA, FIELDS, as_instances, IDENTITY_EXTRA, OFFSETS, POSITION, SCALE, TAPER, TWIST, WIDTHS,
+)
 
 __all__ = [
     "FIELDS",
@@ -75,23 +78,6 @@ __all__ = [
     "range_warning",
     "SAFE_DISTANCE_L",
 ]
-
-#: names of the 16 columns, in file order
-FIELDS = (
-    "d1u", "d1v", "d2u", "d2v", "d3u", "d3v", "d4u", "d4v", "d5u", "d5v",
-    "px", "py", "pz", "rx", "ry", "rz",
-)
-#: names of the 19 columns of an extended instance
-EXTENDED_FIELDS = FIELDS + ("s", "tw", "tp")
-OFFSETS = slice(0, 10)
-POSITION = slice(10, 13)
-ANGLES = slice(13, 16)
-#: the extension columns ``s tw tp`` of a (n, 19) array
-EXTRA = slice(16, 19)
-SCALE, TWIST, TAPER = 16, 17, 18
-#: the values of ``s tw tp`` that give exactly the 16-number shape
-IDENTITY_EXTRA = (1.0, 0.0, 0.0)
-WIDTHS = (16, 19)
 
 BINARY_SUFFIXES = (".adp",)
 TEXT_SUFFIXES = (".txt", ".csv", ".dat")
@@ -204,7 +190,7 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
         out[:, POSITION] = parts["positions"]
     if "angles" in parts:
         out[:, ANGLES] = parts["angles"]
-    return as_params(out)
+    return as_instances(as_params(out))
 
 
 # --------------------------------------------------------------------- text
@@ -799,7 +785,7 @@ def read_params(path: str | os.PathLike, mesh=None, *, allow_mesh_mismatch: bool
     pf = read_param_file(path)
     if mesh is not None and not allow_mesh_mismatch:
         check_mesh(pf, mesh, str(path))
-    return pf.values
+    return as_instances(pf.values)
 
 
 def write_params(

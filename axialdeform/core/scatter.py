@@ -49,6 +49,7 @@ import numpy as np
 
 from .axis import AXIS_NAMES, PERPENDICULAR
 from .errors import ScatterError, TooFewError
+from .record import as_instances
 
 __all__ = ["scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights", "ANCHORS", "IMAGE_SUFFIXES",
            "poisson_greedy"]
@@ -572,7 +573,7 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
         why = f" at spacing {min_distance:g}" if min_distance is not None else ""
         raise TooFewError(f"count: only {len(params)} of {n} instances fit on {surf.name}{why}; "
                           f"expected room for {n} (lower -n or --min-distance, or pass --allow-fewer)", params)
-    return params
+    return as_instances(params)
 
 
 def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, scale, bend) -> np.ndarray:

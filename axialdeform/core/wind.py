@@ -30,7 +30,8 @@ import numpy as np
 from .axis import ControlAxis
 from .transforms import rotation_matrices
 from .errors import ParamError
-from .params import ANGLES, OFFSETS, POSITION, as_params
+from .params import as_params
+from .record import ANGLES, OFFSETS, POSITION
 
 __all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "wind_offsets", "apply_wind"]
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core.errors import ParamError
 from ..core.params import as_params, dequantize_params, extend_params, quantize_params, quantize_with_table
+from ..core.record import gl_layout
 from .context import check_alive, check_released
 
 __all__ = [
@@ -29,22 +30,14 @@ __all__ = [
     "QUANTIZED_EXTENDED_FORMAT", "QUANTIZED_EXTENDED_ATTRIBUTES", "QUANTIZED_EXTENDED_RECORD_BYTES",
 ]
 
-#: layout of one instance record in the instanced attribute buffer
-INSTANCE_FORMAT = ("4f", "4f", "2f", "3f", "3f")
-INSTANCE_ATTRIBUTES = ("i_d12", "i_d34", "i_d5", "i_position", "i_angles")
-RECORD_BYTES = 64
-#: the quantized layout: 16 uint16 read as four integer ``uvec4`` attributes
-QUANTIZED_FORMAT = ("4u2", "4u2", "4u2", "4u2")
-QUANTIZED_ATTRIBUTES = ("i_q0", "i_q1", "i_q2", "i_q3")
-QUANTIZED_RECORD_BYTES = 32
-#: extended instances (19 numbers): ``s tw tp`` follow as one more attribute
-EXTENDED_FORMAT = INSTANCE_FORMAT + ("3f",)
-EXTENDED_ATTRIBUTES = INSTANCE_ATTRIBUTES + ("i_extra",)
-EXTENDED_RECORD_BYTES = 76
-#: 19 uint16 and 2 bytes of padding (attributes stay 4-byte aligned)
-QUANTIZED_EXTENDED_FORMAT = QUANTIZED_FORMAT + ("3u2", "2x")
-QUANTIZED_EXTENDED_ATTRIBUTES = QUANTIZED_ATTRIBUTES + ("i_q4", None)
-QUANTIZED_EXTENDED_RECORD_BYTES = 40
+# the layouts of the instanced attribute buffer, generated from the record
+# table (core/record.py): float 64 bytes (76 extended); quantized 16 uint16
+# read as four integer uvec4 attributes (19 + 2 bytes of padding extended)
+INSTANCE_FORMAT, INSTANCE_ATTRIBUTES, RECORD_BYTES = gl_layout(extended=False, quantized=False)
+QUANTIZED_FORMAT, QUANTIZED_ATTRIBUTES, QUANTIZED_RECORD_BYTES = gl_layout(extended=False, quantized=True)
+EXTENDED_FORMAT, EXTENDED_ATTRIBUTES, EXTENDED_RECORD_BYTES = gl_layout(extended=True, quantized=False)
+(QUANTIZED_EXTENDED_FORMAT, QUANTIZED_EXTENDED_ATTRIBUTES,
+ QUANTIZED_EXTENDED_RECORD_BYTES) = gl_layout(extended=True, quantized=True)
 
 
 def as_index(value, name: str) -> int:

@@ -223,6 +223,7 @@ def _check_view(size, up: str, mode: str) -> tuple:
 
 def _config(*, title, layers, size, fixed_size, mode, cam, background, light_dir, up, ambient, wind, shaders,
             time=None) -> dict:
+    from ..core.record import page_record
     from ..gl.camera import UP_VECTORS
     from ..gl.renderer import _MODE_INDEX, _unit
 
@@ -246,6 +247,7 @@ def _config(*, title, layers, size, fixed_size, mode, cam, background, light_dir
         "time": None if time is None else float(time),  # seconds: the wind's clock frozen there (None: it runs)
         "three": _three_version(),
         "shaders": shaders,
+        "record": page_record(),  # the instanced attributes, from the record table (core/record.py)
     }
 
 

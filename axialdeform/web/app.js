@@ -222,10 +222,10 @@ export function mount(root, lib, scene, options = {}) {
     const geometry = layer.geometry;
     const buf = new THREE.InstancedInterleavedBuffer(p.values, p.fields, 1);
     const f = p.fields;
+    // [name, size, first column] of each attribute: the record table's (core/record.py)
+    const layout = cfg.record[String(f)];
     if (p.encoding === 1) {
-      const parts = [['i_q0', 4, 0], ['i_q1', 4, 4], ['i_q2', 4, 8], ['i_q3', 4, 12]];
-      if (f === 19) parts.push(['i_q4', 3, 16]);
-      for (const [n, size, off] of parts) {
+      for (const [n, size, off] of layout.quantized) {
         const a = new THREE.InterleavedBufferAttribute(buf, size, off, false);
         a.gpuType = THREE.IntType; // uvecN in the shader: vertexAttribIPointer
         geometry.setAttribute(n, a);
@@ -238,9 +238,7 @@ export function mount(root, lib, scene, options = {}) {
         u.u_qstep_extra.value = new THREE.Vector3().fromArray(p.qtable, 19 + 16);
       }
     } else {
-      const parts = [['i_d12', 4, 0], ['i_d34', 4, 4], ['i_d5', 2, 8], ['i_position', 3, 10], ['i_angles', 3, 13]];
-      if (f === 19) parts.push(['i_extra', 3, 16]);
-      for (const [n, size, off] of parts) geometry.setAttribute(n, new THREE.InterleavedBufferAttribute(buf, size, off, false));
+      for (const [n, size, off] of layout.float) geometry.setAttribute(n, new THREE.InterleavedBufferAttribute(buf, size, off, false));
     }
   }
 
