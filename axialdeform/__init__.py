@@ -39,7 +39,7 @@ from .core.transforms import rotation_matrices
 # use (PEP 562), so ``import axialdeform`` -- and every CLI start and every
 # benchmark child -- pays only for what it touches.
 _LAZY = {
-    "ControlAxis": "core.axis",
+    "ControlAxis": "core.axis", "Look": "core.look", "Instances": "core.record",
     "Camera": "gl.camera", "OrbitCamera": "gl.camera", "frame_instances": "gl.camera", "instance_bounds": "core.bounds", "scene_box": "core.bounds",
     "Offscreen": "gl.context", "create_context": "gl.context", "read_pixels": "gl.context",
     "GroundPlane": "gl.ground", "ShadowMap": "gl.shadow",

@@ -38,6 +38,7 @@ import numpy as np
 
 from .gl.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
+from .core.look import DEFAULT_LOOK
 from .gl.renderer import MODES
 
 __all__ = ["Viewer", "KEY_ACTIONS"]
@@ -52,7 +53,6 @@ KEY_ACTIONS = {
 }
 #: single characters accepted by ``on_key_event`` in place of a window's key code
 _CHAR_KEYS = {"1": "NUMBER_1", "2": "NUMBER_2", "3": "NUMBER_3", "+": "EQUAL", "-": "MINUS"}
-BACKGROUND = (0.80, 0.86, 0.92)
 #: the viewer draws levels of detail by default from this many instances on
 LOD_AUTO_COUNT = 100_000
 
@@ -99,7 +99,9 @@ class _ViewerMixin:
         if self.mode not in MODES:
             raise ArgumentError(f"mode: expected one of {', '.join(MODES)}, found {self.mode!r}")
         self.bend_scale = 1.0
-        self.show_ground = bool(s.get("ground", True))
+        #: how the frames look (axialdeform.Look); G toggles its ground
+        self.look = s.get("look") or DEFAULT_LOOK
+        self.show_ground = self.look.draws_ground
         self.wind = s.get("wind")  # the Wind the V key switches on and off
         # levels of detail part by part, carrying UVs, colours and tangents (core/lod.py)
         lod = s.get("lod", len(self.base) >= LOD_AUTO_COUNT)
@@ -108,9 +110,9 @@ class _ViewerMixin:
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
-        self.fast = bool(s.get("fast", False))
+        self.fast = self.look.fast
         self.shadow = None
-        if not self.fast:  # shadows from the key light, redrawn each frame (one instanced draw per part)
+        if self.look.draws_shadow:  # shadows from the key light, redrawn each frame (one instanced draw per part)
             from .gl.shadow import ShadowMap
 
             self.shadow = ShadowMap(self.ctx, 2048)
@@ -260,7 +262,8 @@ class _ViewerMixin:
         if self.animate is not None:
             self._upload(self.animate(time_s))
         view, proj = self.matrices()
-        light = (0.35, 0.85, 0.4)
+        look = self.look
+        light = look.light_dir
         shadow = self.shadow
         if shadow is not None:
             g = self.ground
@@ -270,11 +273,11 @@ class _ViewerMixin:
             self.renderer.time = time_s  # the shadows bend in this frame's wind
             self.renderer.render_shadow(shadow)
         self.wnd.use()
-        self.ctx.clear(*BACKGROUND, 1.0, depth=1.0)
+        self.ctx.clear(*look.background, 1.0, depth=1.0)
         if self.show_ground:
-            self.ground.render(view, proj, background=BACKGROUND, light_dir=light, shadow=shadow)
-        self.renderer.render(view, proj, self.mode, up=UP_VECTORS[self.up], light_dir=light, shadow=shadow,
-                             hidden_line=False if self.fast else "fill", time=time_s)  # wind: uniforms only
+            self.ground.render(view, proj, look=look, shadow=shadow)
+        self.renderer.up = UP_VECTORS[self.up]
+        self.renderer.render(view, proj, self.mode, look=look, shadow=shadow, time=time_s)  # wind: uniforms only
         if self.extra is not None:
             self.extra.render(view, proj, self.mode, time=time_s)
         self.frames += 1
@@ -340,9 +343,9 @@ class Viewer:
 
     @staticmethod
     def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int | None = None,
-               bend: float = 0.08, mode: str = "solid", up: str = "y", ground: bool = True, samples: int = 4,
-               on_screenshot=None, fast: bool = False, parts=None, wind=None, extra=None, culling: bool = True,
-               lod: bool | None = None, lod_error: float = 1.0):
+               bend: float = 0.08, mode: str = "solid", up: str = "y", look=None,
+               on_screenshot=None, parts=None, wind=None, extra=None, culling: bool = True,
+               lod: bool | None = None, lod_error: float = 1.0, **old_keywords):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         mesh : BaseMesh; params : (n, 16) the instances; animate : optional
@@ -352,8 +355,11 @@ class Viewer:
         starts at 0); bend : what ``N`` regenerates offsets with (a fraction
         of L); on_screenshot : optional ``f(path)`` called after the S key
         wrote a screenshot; headless : moderngl-window's headless
-        window on an EGL context (no display needed); fast : no shadows,
-        hidden lines or multisampling (``samples`` is then 0); parts : names
+        window on an EGL context (no display needed); look : how the frames
+        look (:class:`axialdeform.Look`: ground, shadow, samples, light,
+        background; ``Look(fast=True)``: no shadows, hidden lines or
+        multisampling; the old ``ground``, ``samples`` and ``fast`` keywords
+        still work, with a DeprecationWarning); parts : names
         of the mesh's parts to draw (all by default).
         wind : an :class:`axialdeform.Wind` animated on the GPU (``V`` toggles
         it); params may be (n, 19): extended instances.  extra : a loaded scene
@@ -363,17 +369,20 @@ class Viewer:
         unless the mesh has parts or appearance).
         """
         from .core.params import as_params
+        from .gl.image import look_from_keywords
+
+        look = look_from_keywords(look, old_keywords, "Viewer.create")
 
         mglw = _window_config_base()
         params = as_params(params)
         if animate is not None and as_params(animate(0.0)).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
-                     up=up, ground=ground, on_screenshot=on_screenshot, fast=fast, parts=parts, wind=wind, extra=extra,
+                     up=up, look=look, on_screenshot=on_screenshot, parts=parts, wind=wind, extra=extra,
                      culling=culling, lod_error=lod_error)
         if lod is not None:
             scene["lod"] = bool(lod)
-        app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": 0 if fast else samples})
+        app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": look.msaa})
         w, h = (int(size[0]), int(size[1]))
         argv = ["--size", f"{w}x{h}"]
         if headless:

@@ -80,23 +80,22 @@ def main():
 
     # 1. solid | wireframe, the same parameters and camera
     # (shadows, multisampling and hidden-line wireframe are on by default; no ground here)
-    image = ad.render_image(mesh, params, size, ("solid", "wireframe"), camera=cam, ground=False)
+    image = ad.render_image(mesh, params, size, ("solid", "wireframe"), camera=cam, look=ad.Look(ground=False))
     ad.save_png(out / "01_stones.png", image)
 
     # 2. the bank: ground plane + one colour per stone, in your own offscreen target
     ctx = ad.create_context()
-    background = (0.80, 0.86, 0.92)
-    light = (0.35, 0.85, 0.4)
+    look = ad.Look(background=(0.80, 0.86, 0.92))   # light, ambient, background: one value object
     with ad.AxialRenderer(ctx, mesh, params) as stones, ad.GroundPlane(ctx, color=(0.42, 0.37, 0.30)) as ground, \
             ad.Offscreen(ctx, size) as target, ad.ShadowMap(ctx) as shadow:
         stones.set_tint(stone_colours(count, args.seed))
         ground.fit(mesh, params, margin=3.0)
-        shadow.fit(mesh, params, light)          # the key light's shadow map around the stones
+        shadow.fit(mesh, params, look.light_dir)          # the key light's shadow map around the stones
         stones.render_shadow(shadow)             # one more instanced draw
         view, proj = cam.view(), cam.projection(size[0] / size[1])
-        target.use(background)
-        ground.render(view, proj, background=background, light_dir=light, shadow=shadow)
-        stones.render(view, proj, "solid", light_dir=light, shadow=shadow)
+        target.use(look.background)
+        ground.render(view, proj, look=look, shadow=shadow)
+        stones.render(view, proj, "solid", look=look, shadow=shadow)
         ad.save_png(out / "01_stones_bank.png", target.read())
     ctx.release()
     print(f"wrote {out / '01_stones.png'} and {out / '01_stones_bank.png'} ({count} stones)")

@@ -115,10 +115,9 @@ def main():
     cam = ad.Camera(eye=(1.25 * side, 0.95 * side, 1.25 * side), target=(0.0, 0.38 * side, 0.0), fovy=40.0,
                     near=0.1 * side, far=5.0 * side)
     view, proj = cam.view(), cam.projection(size[0] / size[1])
-    background = (0.82, 0.87, 0.93)
+    look = ad.Look(background=(0.82, 0.87, 0.93))
     ctx = ad.create_context()
     images = []
-    light = (0.35, 0.85, 0.4)
     with ad.AxialRenderer(ctx, mesh, leaves.at(0.0)) as r, ad.GroundPlane(ctx, color=(0.30, 0.27, 0.20)) as ground, \
             ad.Offscreen(ctx, size) as target, ad.ShadowMap(ctx, 1024) as shadow:
         # the tint multiplies the leaf texture: autumn colours over its veins
@@ -127,11 +126,11 @@ def main():
         for i in range(frames):
             params = leaves.at(i / args.fps)
             r.update_params(params)   # same count: written in place
-            shadow.fit(mesh, params, light, extra=[[*ground.center, ground.radius]])
+            shadow.fit(mesh, params, look.light_dir, extra=[[*ground.center, ground.radius]])
             r.render_shadow(shadow)   # the leaves' shadows: one more instanced draw
-            target.use(background)
-            ground.render(view, proj, background=background, light_dir=light, shadow=shadow)
-            r.render(view, proj, "solid", light_dir=light, shadow=shadow)
+            target.use(look.background)
+            ground.render(view, proj, look=look, shadow=shadow)
+            r.render(view, proj, "solid", look=look, shadow=shadow)
             images.append(target.read())
         assert r.instances.reallocations == 0, "the instance buffer was reallocated"
     ctx.release()

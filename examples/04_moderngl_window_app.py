@@ -23,6 +23,9 @@ import axialdeform as ad
 WIND = ad.Wind(direction=(1.0, 0.0, 0.3), strength=0.22, gustiness=0.7, frequency=0.35, wavelength=6.0)
 
 
+#: how the frames look: a sky-blue background, the default light
+LOOK = ad.Look(background=(0.78, 0.86, 0.95))
+
 class Meadow(mglw.WindowConfig):
     gl_version = (3, 3)
     title = "axialdeform meadow"
@@ -50,15 +53,14 @@ class Meadow(mglw.WindowConfig):
                                 fovy=40.0, near=0.05 * radius, far=8.0 * radius)
 
     def on_render(self, time, frame_time):
-        background = (0.78, 0.86, 0.95)
-        light = (0.35, 0.85, 0.4)
-        self.shadow.fit(self.mesh, self.params, light, extra=[[*self.ground.center, 0.6 * self.ground.radius]])
+        look = LOOK
+        self.shadow.fit(self.mesh, self.params, look.light_dir, extra=[[*self.ground.center, 0.6 * self.ground.radius]])
         self.renderer.time = time                             # the shadows bend in this frame's wind
         self.renderer.render_shadow(self.shadow)              # blades shadow the ground and each other
-        self.ctx.clear(*background, 1.0, depth=1.0)
+        self.ctx.clear(*look.background, 1.0, depth=1.0)
         view, proj = self.camera.view(), self.camera.projection(self.wnd.aspect_ratio)
-        self.ground.render(view, proj, background=background, light_dir=light, shadow=self.shadow)
-        self.renderer.render(view, proj, "solid", light_dir=light, shadow=self.shadow,
+        self.ground.render(view, proj, look=look, shadow=self.shadow)
+        self.renderer.render(view, proj, "solid", look=look, shadow=self.shadow,
                              time=time)  # the wind: uniforms only, no upload
 
 

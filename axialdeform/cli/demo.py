@@ -31,6 +31,7 @@ def run(args) -> None:
     from ..core.mesh import load_mesh
     from ..core.variation import random_params
     from ..gl.camera import frame_instances
+    from ..core.look import Look
     from ..gl.image import parse_size, render_image, save_png
 
     from ..core.mesh import mesh_source_path
@@ -45,6 +46,6 @@ def run(args) -> None:
                            spacing=0.9 * mesh.axis.length, tilt=(-0.2, 0.2))
     size = parse_size(args.size)
     camera = frame_instances(mesh, params, size[0] / size[1], elevation=30.0, azimuth=20.0)
-    image = render_image(mesh, params, size, ("solid", "wireframe"), camera=camera, fast=args.fast)
+    image = render_image(mesh, params, size, ("solid", "wireframe"), camera=camera, look=Look(fast=args.fast))
     save_png(args.output, image)
     print(f"wrote {Path(args.output).resolve()} ({args.count} stones, solid | wireframe, {image.shape[1]}x{image.shape[0]})")

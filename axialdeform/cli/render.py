@@ -69,6 +69,7 @@ def camera_from_args(mesh, params, size, args):
 
 def run(args) -> None:
     from ..gl.context import create_context
+    from ..core.look import Look
     from ..gl.image import parse_size, render_image, save_png
     from ..gl.renderer import AxialRenderer
 
@@ -89,7 +90,7 @@ def run(args) -> None:
     try:
         with AxialRenderer(ctx, mesh, params, parts=args.part, **options) as r:
             image = render_image(mesh, params, size, args.mode, ctx=ctx, camera=camera, up=args.up, renderer=r,
-                                 fast=args.fast, parts=args.part, **wind_options)
+                                 look=Look(fast=args.fast), parts=args.part, **wind_options)
             if args.stats:
                 print(format_stats(r.stats, _time_frame(ctx, r, camera, size, args.mode)))
     finally:

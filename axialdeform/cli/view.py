@@ -43,6 +43,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> None:
     from ..core.errors import AxialDeformError
+    from ..core.look import Look
     from ..core.mesh import load_mesh
     from ..core.params import read_params
     from ..core.variation import random_params
@@ -86,9 +87,9 @@ def run(args) -> None:
         seed = 0 if args.seed is None else args.seed
         params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed,
-                           bend=args.bend, mode=args.mode, up=args.up, ground=not args.no_ground,
+                           bend=args.bend, mode=args.mode, up=args.up, look=Look(ground=not args.no_ground, fast=args.fast),
                            on_screenshot=lambda path: print(f"wrote {path}"), wind=wind, extra=extra,
-                           fast=args.fast, parts=args.part, **options)
+                           parts=args.part, **options)
     if not args.headless:
         import moderngl_window as mglw
 

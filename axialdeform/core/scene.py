@@ -66,6 +66,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import AxialDeformError, SceneError
+from .look import BACKGROUND, Look
 
 __all__ = ["Scene", "Layer", "load_scene", "is_scene_file", "SCENE_SUFFIXES"]
 
@@ -109,11 +110,16 @@ class Scene:
     camera: dict = field(default_factory=dict)
     light: dict = field(default_factory=dict)
     wind: object = None
-    background: tuple = (0.93, 0.94, 0.96)
+    background: tuple = BACKGROUND
 
     @property
     def count(self) -> int:
         return sum(len(layer.params) for layer in self.layers)
+
+    @property
+    def look(self) -> Look:
+        """The file's ``[light]`` and ``background`` as a :class:`Look`."""
+        return Look(background=self.background, **self.light)
 
 
 class _Source:

@@ -37,6 +37,50 @@ class Camera:
         """(4, 4) float32 projection matrix (pyrr layout)."""
         return pyrr.matrix44.create_perspective_projection(self.fovy, aspect, self.near, self.far, dtype=np.float32)
 
+    def enclosing_square(self, center, normal, half_side: float, aspect: float) -> "Camera":
+        """This camera with its near and far planes widened (never narrowed)
+        so that the part of a square it sees lies between them.
+
+        Parameters
+        ----------
+        center, normal : (3,) float
+            The square's centre and its plane's normal.
+        half_side : float
+            Half the square's side; its sides run along the plane's axes
+            (a square across a world axis, as :class:`GroundPlane` draws).
+        aspect : float
+            Width over height of the picture.
+
+        The far plane reaches the square's farthest corner; the near plane
+        the nearest point where the view frustum's edges meet the plane
+        (depth is linear over the plane, so the seen part's nearest point is
+        one of those: a lower bound, never a cut).
+        """
+        center = as_array(center, (3,), "center")
+        normal = as_array(normal, (3,), "normal")
+        fwd = self.target - self.eye
+        fwd /= max(np.linalg.norm(fwd), 1e-300)
+        right = np.cross(fwd, self.up)
+        right /= max(np.linalg.norm(right), 1e-300)
+        cam_up = np.cross(right, fwd)
+        ty = np.tan(np.radians(self.fovy) / 2)
+        tx = ty * aspect
+        # the four corner rays, scaled to unit depth along fwd
+        rays = np.array([fwd + sx * tx * right + sy * ty * cam_up for sx in (-1, 1) for sy in (-1, 1)])
+        dn = rays @ normal
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = ((center - self.eye) @ normal) / dn
+        hits = t[(np.abs(dn) > 1e-12) & (t > 0)]
+        if not len(hits):
+            return self  # the plane is not in view
+        a = np.argsort(np.abs(normal))[:2]  # the square's two in-plane world axes
+        corners = np.array([center + half_side * (su * np.eye(3)[a[0]] + sv * np.eye(3)[a[1]])
+                            for su in (-1, 1) for sv in (-1, 1)])
+        far = float(((corners - self.eye) @ fwd).max())
+        near = float(hits.min())
+        return Camera(self.eye, self.target, self.up, self.fovy, near=min(self.near, 0.95 * near),
+                      far=max(self.far, 1.05 * far))
+
 
 def orbit_axes(up: str, azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The camera's unit axes for an orbit around world ``up`` (``"x"``, ``"y"``

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ContextError
+from ..core.look import BACKGROUND
 
 __all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels",
            "require_framebuffer", "size_limits", "check_image_size", "check_alive", "check_released",
@@ -283,7 +284,7 @@ class Offscreen:
         check_released(self._released, "this Offscreen target")
         check_alive(self.ctx, "this Offscreen target")
 
-    def use(self, background=(0.93, 0.94, 0.96)) -> None:
+    def use(self, background=BACKGROUND) -> None:
         self._check()
         self.fbo.use()
         self.ctx.viewport = (0, 0) + self.size

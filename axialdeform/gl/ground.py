@@ -6,7 +6,7 @@ part of the instanced draw.  It shares the instances' light model
     ground = ad.GroundPlane(ctx)
     ground.fit(mesh, params)                  # centre, size and height from the instances
     target.use(background)
-    ground.render(view, proj, background=background)
+    ground.render(view, proj, look=look)
     renderer.render(view, proj, "solid")
 """
 
@@ -17,6 +17,7 @@ import numpy as np
 from ..core.axis import AXIS_NAMES
 from ..core.bounds import instance_bounds, scene_box
 from ..core.errors import ArgumentError, AxialDeformError
+from ..core.look import DEFAULT_LOOK, Look
 from .context import require_framebuffer
 from ..core.arrays import as_array
 from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
@@ -85,15 +86,22 @@ class GroundPlane:
         self.center = center
         return self
 
-    def render(self, view, projection, *, background=(0.93, 0.94, 0.96), light_dir=(0.35, 0.85, 0.4),
-               ambient: float = 0.35, shadow=None) -> None:
+    def render(self, view, projection, *, look: Look | None = None, shadow=None) -> None:
         """Draw the plane into the bound framebuffer (depth test on).
 
-        view, projection : (4, 4) pyrr-layout matrices; background : the
-        framebuffer's clear colour (sRGB) that the plane fades into;
-        shadow : a drawn :class:`~axialdeform.gl.shadow.ShadowMap` (the
-        instances' shadows on the ground), or None.
+        Parameters
+        ----------
+        view, projection : (4, 4) float32
+            pyrr-layout matrices.
+        look : Look, optional
+            Its light, ambient and background (the clear colour, sRGB, that
+            the plane fades into); default :data:`~axialdeform.core.look.DEFAULT_LOOK`.
+        shadow : ShadowMap, optional
+            A drawn :class:`~axialdeform.gl.shadow.ShadowMap` (the instances'
+            shadows on the ground).
         """
+        look = DEFAULT_LOOK if look is None else look
+        background, light_dir, ambient = look.background, look.light_dir, look.ambient
         import moderngl
 
         if self._released:

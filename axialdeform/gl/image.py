@@ -11,6 +11,7 @@ from ..core.atomic import atomic_path
 from .camera import UP_VECTORS, Camera, frame_instances
 from .context import Offscreen, check_image_size, create_context
 from ..core.errors import ArgumentError
+from ..core.look import DEFAULT_LOOK, Look
 from .ground import GroundPlane
 from .renderer import MODES, AxialRenderer
 from .shadow import ShadowMap
@@ -32,30 +33,72 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, camera: Camera | None = None,
-                 up: str = "y", samples: int = 4, background=(0.93, 0.94, 0.96), renderer=None,
-                 fast: bool = False, ground: bool | None = None, shadow: bool | None = None, parts=None,
-                 hidden_line=None,
-                 **render_options) -> np.ndarray:
+#: render_image's keywords of the old signature, now fields of :class:`Look`
+_LOOK_KEYWORDS = ("fast", "ground", "shadow", "samples", "background", "hidden_line", "light_dir", "ambient")
+
+
+def look_from_keywords(look: Look | None, keywords: dict, where: str = "render_image") -> Look:
+    """``look`` (default :data:`DEFAULT_LOOK`) with the old keywords folded in
+    (``fast=True``, ``ground=False``, ...), each with a DeprecationWarning
+    naming the field of :class:`Look` that replaces it."""
+    look = DEFAULT_LOOK if look is None else look
+    if not isinstance(look, Look):
+        raise ArgumentError(f"{where}: look: expected an axialdeform.Look, found {type(look).__name__}")
+    unknown = sorted(set(keywords) - set(_LOOK_KEYWORDS))
+    if unknown:
+        raise TypeError(f"{where}() got an unexpected keyword argument {unknown[0]!r}")
+    changes = {k: v for k, v in keywords.items() if v is not None}
+    if changes:
+        import warnings
+
+        warnings.warn(f"{where}({', '.join(f'{k}=' for k in changes)}): pass look=axialdeform.Look"
+                      f"({', '.join(f'{k}=...' for k in changes)}) instead", DeprecationWarning, stacklevel=3)
+        look = look.replace(**changes)
+    return look
+
+
+def render_image(mesh, params, size=(800, 600), modes="solid", *, look: Look | None = None,
+                 camera: Camera | None = None, up: str = "y", ctx=None, renderer=None, parts=None,
+                 time: float | None = None, wind=None, **old_keywords) -> np.ndarray:
     """Render all instances to an ``(height, width, 3) uint8`` image.
 
-    ``modes`` is one mode or a sequence of modes drawn side by side with the
-    same parameters and camera (e.g. ``("solid", "wireframe")``).
-    A context is created (EGL) if ``ctx`` is None and released afterwards.
-    ``render_options`` go to :meth:`AxialRenderer.render` (``color``,
-    ``line_color``, ``light_dir``, ``ambient``).
+    Parameters
+    ----------
+    mesh : BaseMesh
+    params : (n, 16) or (n, 19) float32
+    size : (int, int)
+        Width and height of one panel.
+    modes : str or sequence of str
+        One mode or several drawn side by side with the same parameters and
+        camera (e.g. ``("solid", "wireframe")``).
+    look : Look, optional
+        How the picture looks (:class:`axialdeform.Look`): by default the
+        extras -- multisampling (where ``ctx.max_samples`` allows), a ground
+        plane, a shadow map from the key light, hidden-line wireframes;
+        ``Look(fast=True)`` turns them all off (what the benchmark times).
+    camera : Camera, optional
+        Default: :func:`~axialdeform.gl.camera.frame_instances` for ``size``.
+    up : {"x", "y", "z"}
+        World up.
+    ctx : moderngl.Context, optional
+        Created (EGL) and released afterwards if None.
+    renderer : AxialRenderer, optional
+        Draw with this renderer (its parameters) instead of a new one.
+    parts : sequence of str, optional
+        The base mesh's parts to draw.
+    time, wind : optional
+        The wind's clock (seconds) and a :class:`axialdeform.Wind`.
 
-    By default the picture has the extras: ``samples``-fold multisampling
-    (where ``ctx.max_samples`` allows), a ground plane under the instances, a
-    shadow map from the key light (instances shadow the ground and each
-    other) and hidden-line wireframes (lines of the front-most surface only).
-    ``fast=True`` turns all of them off (no multisampling, no ground, no
-    shadow, every edge drawn): what the benchmark times.  ``ground`` overrides
-    the ground alone, ``shadow`` the shadow map alone, ``hidden_line`` the wireframe style (default ``"fill"``:
-    front-most edges over washed-out faces; ``True``: front-most edges only;
-    ``False``: every edge; see :meth:`AxialRenderer.render`); ``parts``
-    picks the base mesh's parts to draw.
+    Returns
+    -------
+    image : (h, w * len(modes), 3) uint8
+        First row at the top.
+
+    The old keywords ``fast``, ``ground``, ``shadow``, ``samples``,
+    ``background``, ``hidden_line``, ``light_dir`` and ``ambient`` still work
+    for one release, with a DeprecationWarning: they are fields of ``look``.
     """
+    look = look_from_keywords(look, old_keywords)
     modes = (modes,) if isinstance(modes, str) else tuple(modes)
     for m in modes:
         if m not in MODES:
@@ -64,37 +107,34 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, ctx=None, came
     ctx = create_context() if own_ctx else ctx
     try:
         w, h = parse_size(f"{size[0]}x{size[1]}")
-        check_image_size(ctx, (w, h), samples, panels=len(modes))  # before any work: the error says the limit
-        cam = camera or frame_instances(mesh, params, w / h, up=up)
-        view, proj = cam.view(), cam.projection(w / h)
+        check_image_size(ctx, (w, h), look.samples, panels=len(modes))  # before any work: the error says the limit
         r = renderer or AxialRenderer(ctx, mesh, params, parts=parts)
-        ground = (not fast) if ground is None else bool(ground)
-        shadowed = (not fast) if shadow is None else bool(shadow)
         plane = shadow = None
-        light = render_options.get("light_dir", (0.35, 0.85, 0.4))
         try:
-            if ground:
+            if look.draws_ground:
                 plane = GroundPlane(ctx, up=up).fit(mesh, params)
-            if "time" in render_options:  # the shadows bend in the same wind as the picture
-                r.time = float(render_options["time"])
-            if "wind" in render_options:
-                r.wind = render_options["wind"]
-            if shadowed and r.count:
+            cam = camera or frame_instances(mesh, params, w / h, up=up)
+            if plane is not None:  # near and far enclose everything drawn: the ground reaches the edges
+                cam = cam.enclosing_square(plane.center, UP_VECTORS[up], plane.radius, w / h)
+            view, proj = cam.view(), cam.projection(w / h)
+            if time is not None:  # the shadows bend in the same wind as the picture
+                r.time = float(time)
+            if wind is not None:
+                r.wind = wind
+            r.up = UP_VECTORS[up]
+            if look.draws_shadow and r.count:
                 extra = None
                 if plane is not None:  # the ground's centre part receives the shadows
                     extra = [[*plane.center, 0.5 * plane.radius]]
-                shadow = ShadowMap(ctx).fit(mesh, params, light, extra=extra)
+                shadow = ShadowMap(ctx).fit(mesh, params, look.light_dir, extra=extra)
                 r.render_shadow(shadow)
-            with Offscreen(ctx, (w, h), samples=0 if fast else samples) as target:
+            with Offscreen(ctx, (w, h), samples=look.msaa) as target:
                 panels = []
                 for m in modes:
-                    target.use(background)
+                    target.use(look.background)
                     if plane is not None:
-                        plane.render(view, proj, background=background, light_dir=light,
-                                     ambient=render_options.get("ambient", 0.35), shadow=shadow)
-                    r.render(view, proj, m, up=UP_VECTORS[up], shadow=shadow,
-                             hidden_line=("fill" if not fast else False) if hidden_line is None else hidden_line,
-                             **render_options)
+                        plane.render(view, proj, look=look, shadow=shadow)
+                    r.render(view, proj, m, look=look, shadow=shadow)
                     panels.append(target.read())
         finally:
             for obj in (plane, shadow):

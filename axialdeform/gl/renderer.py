@@ -27,6 +27,7 @@ from .context import (bind_framebuffer, check_alive, draw_in_batches, flush_budg
                       require_framebuffer)
 from ..core.bounds import base_radius, wind_reach
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
+from ..core.look import DEFAULT_LOOK, Look
 from ..core.arrays import as_array
 from ..core.safeio import require_finite
 from ..core.wind import Wind
@@ -41,7 +42,9 @@ _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
 #: default base colours (linear RGB) by bundled mesh name
 DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
 _CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
-_KEEP = object()  # render(wind=...) not given: keep the renderer's wind
+_KEEP = object()  # capture(wind=...) not given: keep the renderer's wind
+#: render(look=None): the default light and lines, every edge drawn (no depth pre-pass)
+_PLAIN_LOOK = DEFAULT_LOOK.replace(hidden_line=False)
 #: alpha below which a ``BLEND`` part leaves no depth in depth-only passes (shadows)
 BLEND_DEPTH_CUTOFF = 0.5
 _GL_SAMPLE_ALPHA_TO_COVERAGE = 0x809E
@@ -226,7 +229,8 @@ class AxialRenderer:
         self.bound_radius = base_radius(mesh, *[level.positions for level in self.lod_levels[1:]])
         self._set_axis_uniforms(self.program)
         self.color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
-        self.line_color = (0.12, 0.14, 0.18)
+        #: world up (unit vector), for the sky/ground hemisphere ambient
+        self.up = (0.0, 1.0, 0.0)
 
     # ------------------------------------------------------------ plumbing
     @property
@@ -450,28 +454,40 @@ class AxialRenderer:
         attachments = getattr(fbo, "color_attachments", None) or ()
         return bool(attachments) and int(getattr(attachments[0], "samples", 0) or 0) > 1
 
-    def render(self, view, projection, mode: str = "solid", *, light_dir=(0.35, 0.85, 0.4), up=(0.0, 1.0, 0.0),
-               color=None, line_color=None, ambient: float = 0.35, shadow=None, hidden_line=False,
-               time: float | None = None, wind=_KEEP) -> None:
+    def render(self, view, projection, mode: str = "solid", *, look: Look | None = None, shadow=None,
+               time: float | None = None) -> None:
         """Draw every instance into the currently bound framebuffer: one
         instanced draw call per part (one for a single-part mesh), after the
         culling pass (when on) that keeps the visible instances.
 
-        view, projection : (4, 4) pyrr-layout matrices.
-        mode : ``"solid"`` (analytic normals), ``"flat"`` (face normals of the
-        deformed triangles) or ``"wireframe"`` (the mesh's edges as lines).
-        shadow : a :class:`~axialdeform.gl.shadow.ShadowMap` already drawn
-        (:meth:`render_shadow`) from the same ``light_dir``: the sun is
-        shadowed by the instances (the ambient is not).
-        hidden_line : in wireframe mode, first fill the depth buffer with the
-        triangles (no colour), so only the lines of the front-most surface
-        show (one more instanced draw per part); ``"fill"`` also paints the
-        triangles, lit and washed out towards white, under the lines (dense
-        instances then read as shapes, not blobs).
-        time : seconds; sets :attr:`time` (the wind's clock).
-        wind : a :class:`axialdeform.Wind` or None; sets :attr:`wind`.
-        Animating the wind sets uniforms only: no buffer is written.
+        Parameters
+        ----------
+        view, projection : (4, 4) float32
+            pyrr-layout matrices (``clip = projection * view * world``).
+        mode : {"solid", "flat", "wireframe"}
+            Analytic normals, face normals of the deformed triangles, or the
+            mesh's edges as lines.
+        look : Look, optional
+            Light, ambient, line colour and wireframe style
+            (:class:`axialdeform.Look`); None: the default look with every
+            edge drawn.  With ``look.hidden_line`` a wireframe first fills
+            the depth buffer with the triangles, so only the lines of the
+            front-most surface show; ``"fill"`` also paints the triangles,
+            washed out towards white, under the lines.
+        shadow : ShadowMap, optional
+            Already drawn (:meth:`render_shadow`) from the same light: the
+            sun is shadowed by the instances (the ambient is not).
+        time : float, optional
+            Seconds; sets :attr:`time`, the clock of :attr:`wind`.
+
+        The base colour is :attr:`color`, world up (for the hemisphere
+        ambient) :attr:`up` and the wind :attr:`wind`: set them on the
+        renderer.  Animating the wind sets uniforms only: no buffer is written.
         """
+        look = _PLAIN_LOOK if look is None else look
+        if not isinstance(look, Look):
+            raise ArgumentError(f"look: expected an axialdeform.Look, found {type(look).__name__}")
+        light_dir, ambient, hidden_line = look.light_dir, look.ambient, look.wire_style
         import moderngl
 
         self._check()
@@ -485,8 +501,6 @@ class AxialRenderer:
                              "call set_tint with one colour per instance (or None)")
         if time is not None:
             self.time = float(time)
-        if wind is not _KEEP:
-            self.wind = wind
         shadowed = shadow is not None and (mode != "wireframe" or hidden_line == "fill")
         n = self.count
         state = None
@@ -506,10 +520,10 @@ class AxialRenderer:
         self._set_wind_uniforms(prog, self.wind, self.time)
         set_uniforms(prog, {
             "u_mode": _MODE_INDEX[mode],
-            "u_color": tuple(color or self.color),
-            "u_line_color": tuple(line_color or self.line_color),
+            "u_color": tuple(self.color),
+            "u_line_color": tuple(look.line_color),
             "u_light_dir": tuple(_unit(light_dir, "light_dir")),
-            "u_up": tuple(_unit(up, "up")),
+            "u_up": tuple(_unit(self.up, "up")),
             "u_ambient": float(ambient),
         })
         if shadowed:
@@ -520,35 +534,29 @@ class AxialRenderer:
         if n == 0:
             return
         self.ctx.enable(moderngl.DEPTH_TEST)
-        keep = self.color
-        if color is not None and self.materials is not None:
-            self.color = tuple(color)
-        try:
-            if state is None:
-                self._draw(prog, vao_triangles, edges, 0, mode, hidden_line, view, projection, n)
-                return
-            if self.quantized:
-                self._set_quant_uniforms(prog)
-            levels = len(self.lod_levels) if self.lod else 1
-            result = self._run_cull(cull, view, projection, levels, frustum=self.culling_enabled)
-            self._stats.update(culling=self.culling_enabled, lod=self.lod)
-            if isinstance(result, IndirectDraws):  # the counts stay on the GPU: copied, read when stats is asked
-                if self._stats_buffer is None:
-                    self._stats_buffer = self.ctx.buffer(reserve=16)
-                    self._objects.append(self._stats_buffer)
-                result.copy_counts(self._stats_buffer)
-                self._stats_gpu = (self._stats_buffer, levels)
-                self._stats.update(indirect=True)
-            else:
-                self._stats.update(visible=int(sum(result)), levels=result,
-                                   vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(result))))
+        if state is None:
+            self._draw(prog, vao_triangles, edges, 0, mode, hidden_line, view, projection, n)
+            return
+        if self.quantized:
+            self._set_quant_uniforms(prog)
+        levels = len(self.lod_levels) if self.lod else 1
+        result = self._run_cull(cull, view, projection, levels, frustum=self.culling_enabled)
+        self._stats.update(culling=self.culling_enabled, lod=self.lod)
+        if isinstance(result, IndirectDraws):  # the counts stay on the GPU: copied, read when stats is asked
+            if self._stats_buffer is None:
+                self._stats_buffer = self.ctx.buffer(reserve=16)
+                self._objects.append(self._stats_buffer)
+            result.copy_counts(self._stats_buffer)
+            self._stats_gpu = (self._stats_buffer, levels)
+            self._stats.update(indirect=True)
+        else:
+            self._stats.update(visible=int(sum(result)), levels=result,
+                               vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(result))))
 
-            def draw_level(level, vao_t, edges, instances):
-                self._draw(prog, vao_t, edges, level, mode, hidden_line, view, projection, instances)
+        def draw_level(level, vao_t, edges, instances):
+            self._draw(prog, vao_t, edges, level, mode, hidden_line, view, projection, instances)
 
-            self._draw_culled(cull, prog, vaos, result, draw_level)
-        finally:
-            self.color = keep
+        self._draw_culled(cull, prog, vaos, result, draw_level)
 
     def _run_cull(self, cull, view, projection, levels: int, *, frustum: bool):
         """Run ``cull`` for the camera ``view``, ``projection``: the counts per

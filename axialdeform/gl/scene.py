@@ -95,13 +95,18 @@ class SceneRenderer:
         start = 1 if self.scene.terrain is not None else 0
         return [(layer, renderer) for layer, (renderer, _, _) in zip(self.scene.layers, self.renderers[start:])]
 
-    def render(self, view, projection, mode: str = "solid", *, time: float = 0.0) -> None:
+    def render(self, view, projection, mode: str = "solid", *, time: float = 0.0, look=None) -> None:
         """Draw everything into the bound framebuffer; ``time`` drives the wind of layers
-        with ``wind = true`` (while :attr:`wind_enabled`)."""
+        with ``wind = true`` (while :attr:`wind_enabled`); ``look`` (default: the
+        scene file's, :attr:`Scene.look`) gives the light."""
         up = UP_VECTORS[self.scene.up]
+        look = self.scene.look.replace(hidden_line=False) if look is None else look
         for renderer, color, sways in self.renderers:
-            renderer.render(view, projection, mode, up=up, color=color, time=time,
-                            wind=self.scene.wind if sways and self.wind_enabled else None, **self.scene.light)
+            renderer.up = up
+            if color is not None:
+                renderer.color = tuple(color)
+            renderer.wind = self.scene.wind if sways and self.wind_enabled else None
+            renderer.render(view, projection, mode, look=look, time=time)
 
     def release(self) -> None:
         """Free every renderer; safe to call twice."""

@@ -21,6 +21,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from ..core.errors import AxialDeformError
+from ..core.look import LIGHT_DIR
 from .context import bind_framebuffer, release_framebuffer
 from .uniforms import set_uniforms
 
@@ -57,7 +58,7 @@ class ShadowMap:
             self.texture.release()
             raise
 
-    def fit(self, mesh, params, light_dir=(0.35, 0.85, 0.4), *, extra=None) -> "ShadowMap":
+    def fit(self, mesh, params, light_dir=LIGHT_DIR, *, extra=None) -> "ShadowMap":
         """Aim the light camera at every instance (their bounding spheres);
         ``extra``: (k, 4) more spheres ``x, y, z, r`` to keep inside (a ground).  Returns self."""
         import pyrr

@@ -32,6 +32,7 @@ from importlib import resources
 from pathlib import Path
 
 from ..core.atomic import atomic_write_bytes
+from ..core.look import DEFAULT_LOOK
 from ..core.errors import AxialDeformError
 from ..core.export import encode_base_mesh
 from ..core.params import as_params, encode_binary
@@ -114,19 +115,6 @@ def shader_key(quantize: bool, fields: int, material: bool) -> str:
     """The :data:`SHADER_VARIANTS` key of a layer."""
     return ("quantized" if quantize else "float") + ("_extended" if fields == 19 else "") + (
         "_material" if material else "")
-
-
-def _render_defaults() -> dict:
-    """Background, light and colours exactly as ``axialdeform render`` uses them
-    (read from the signatures of render_image and AxialRenderer.render)."""
-    from ..gl.image import render_image
-    from ..gl.renderer import AxialRenderer
-
-    img = inspect.signature(render_image).parameters
-    ren = inspect.signature(AxialRenderer.render).parameters
-    return {"background": [float(x) for x in img["background"].default],
-            "light_dir": [float(x) for x in ren["light_dir"].default],
-            "ambient": float(ren["ambient"].default)}
 
 
 @dataclass
@@ -221,7 +209,7 @@ def _check_view(size, up: str, mode: str) -> tuple:
     return w, h
 
 
-def _config(*, title, layers, size, fixed_size, mode, cam, background, light_dir, up, ambient, wind, shaders,
+def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shaders,
             time=None) -> dict:
     from ..core.record import page_record
     from ..gl.camera import UP_VECTORS
@@ -238,11 +226,9 @@ def _config(*, title, layers, size, fixed_size, mode, cam, background, light_dir
         "layers": layers,
         "camera": {"eye": cam.eye.tolist(), "target": cam.target.tolist(), "up": cam.up.tolist(),
                    "fovy": cam.fovy, "near": cam.near, "far": cam.far},
-        "background": [float(x) for x in background],
-        "light_dir": [float(x) for x in _unit(light_dir)],
+        # how it looks: axialdeform.Look, the one home of the defaults (light normalised here)
+        "look": {**look.to_json(), "light_dir": [float(x) for x in _unit(look.light_dir)]},
         "up": [float(x) for x in _unit(UP_VECTORS[up])],
-        "ambient": float(ambient),
-        "line_color": [0.12, 0.14, 0.18],
         "wind": _wind_config(wind),
         "time": None if time is None else float(time),  # seconds: the wind's clock frozen there (None: it runs)
         "three": _three_version(),
@@ -306,10 +292,9 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
                    quantize=quantize, adp=adp, wind=wind is not None)
-    d = _render_defaults()
     config = _config(title=title or f"{len(params)} × {mesh.name}", layers=[layer], size=(w, h),
                      fixed_size=fixed_size, mode=mode, cam=frame_instances(mesh, params, w / h, up=up),
-                     background=d["background"], light_dir=d["light_dir"], up=up, ambient=d["ambient"], wind=wind,
+                     look=DEFAULT_LOOK, up=up, wind=wind,
                      shaders=_shaders([layer], all_shaders), time=_time(wind, time))
     return WebScene(config, files)
 
@@ -339,13 +324,11 @@ def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: b
                              quantize=quantize, color=item.color, wind=item.wind and wind is not None))
     if not layers:
         raise AxialDeformError(f"{scene.path}: the scene has nothing to draw; expected a terrain or a layer with instances")
-    d = _render_defaults()
     from dataclasses import replace
 
     cam = scene_camera(replace(scene, wind=wind), w / h)
     config = _config(title=Path(scene.path).stem, layers=layers, size=(w, h), fixed_size=fixed_size, mode=mode,
-                     cam=cam, background=scene.background, light_dir=scene.light.get("light_dir", d["light_dir"]),
-                     up=scene.up, ambient=scene.light.get("ambient", d["ambient"]), wind=wind,
+                     cam=cam, look=scene.look, up=scene.up, wind=wind,
                      shaders=_shaders(layers, False), time=_time(wind, time))
     return WebScene(config, files)
 

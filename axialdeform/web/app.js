@@ -177,7 +177,7 @@ export function mount(root, lib, scene, options = {}) {
     stage.style.position = 'fixed';
     stage.style.inset = '0';
   }
-  stage.style.background = `rgb(${cfg.background.map((c) => Math.round(c * 255)).join(',')})`;
+  stage.style.background = `rgb(${cfg.look.background.map((c) => Math.round(c * 255)).join(',')})`;
   const message = el('div', 'axd-message', stage);
   message.setAttribute('role', 'alert');
   message.hidden = true;
@@ -201,9 +201,9 @@ export function mount(root, lib, scene, options = {}) {
   // uniforms every layer shares (the same objects: set once a frame)
   const shared = {
     u_view: { value: null }, u_proj: { value: null }, u_eye: { value: new THREE.Vector3() },
-    u_mode: { value: state.wireframe ? 2 : baseMode }, u_line_color: { value: v3(cfg.line_color) },
-    u_line_alpha: { value: 1.0 }, u_light_dir: { value: v3(cfg.light_dir) }, u_up: { value: v3(cfg.up) },
-    u_ambient: { value: cfg.ambient }, u_instance_base: { value: 0 },
+    u_mode: { value: state.wireframe ? 2 : baseMode }, u_line_color: { value: v3(cfg.look.line_color) },
+    u_line_alpha: { value: 1.0 }, u_light_dir: { value: v3(cfg.look.light_dir) }, u_up: { value: v3(cfg.up) },
+    u_ambient: { value: cfg.look.ambient }, u_instance_base: { value: 0 },
     u_wind_dir: { value: v3(wind ? wind.direction : [1, 0, 0]) }, u_wind_gust: { value: wind ? wind.gustiness : 0 },
     u_wind_cycles: { value: new THREE.Vector2() }, u_wind_wavenumber: { value: wind ? wind.wavenumber : 0 },
   };
@@ -386,7 +386,7 @@ export function mount(root, lib, scene, options = {}) {
     const sizeNow = () => (fixed ? [W, H] : [Math.max(1, stage.clientWidth), Math.max(1, stage.clientHeight)]);
     let [w, h] = sizeNow();
     renderer.setSize(w, h);
-    renderer.setClearColor(new THREE.Color(...cfg.background), 1);
+    renderer.setClearColor(new THREE.Color(...cfg.look.background), 1);
     let shaderError = null;
     renderer.debug.onShaderError = (gl, program, vs, fs) => {
       const log = [gl.getShaderInfoLog(vs), gl.getShaderInfoLog(fs), gl.getProgramInfoLog(program)]
