@@ -239,8 +239,7 @@ def test_texture_and_cutout_drawn(ctx, tmp_path):
     mesh = ad.load_mesh(_textured_card(tmp_path))
     params = np.zeros((1, 16), np.float32)
     bg = (0.0, 0.0, 0.0)
-    img = ad.render_image(mesh, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(mesh, params),
-                          background=bg, fast=True, ambient=1.0).astype(int)
+    img = ad.render_image(mesh, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(mesh, params), look=ad.Look(background=bg, fast=True, ambient=1.0)).astype(int)
     # the card's red half (u < 0.5) is cut out: only the blue half is drawn
     def columns(image):
         return int((image.sum(axis=2) > 30).any(axis=0).sum())
@@ -254,8 +253,7 @@ def test_texture_and_cutout_drawn(ctx, tmp_path):
     assert red(img) == 0 and blue(img) > 100
     # without the cut (an opaque texture) the red half shows too, and the card is twice as wide
     opaque = ad.load_mesh(_textured_card(tmp_path, cut=False))
-    img2 = ad.render_image(opaque, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(opaque, params),
-                           background=bg, fast=True, ambient=1.0).astype(int)
+    img2 = ad.render_image(opaque, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(opaque, params), look=ad.Look(background=bg, fast=True, ambient=1.0)).astype(int)
     assert red(img2) > 100 and blue(img2) > 100
     assert 1.6 < columns(img2) / columns(img) < 2.4
 
@@ -265,8 +263,7 @@ def test_missing_texture_part_drawn_with_base_colour(ctx, tmp_path):
         warnings.simplefilter("ignore", AssetWarning)
         mesh = ad.load_mesh(_textured_card(tmp_path, texture="gone.png"))
     params = np.zeros((1, 16), np.float32)
-    img = ad.render_image(mesh, params, (48, 48), "solid", ctx=ctx, camera=_front_camera(mesh, params),
-                          background=(0, 0, 0), fast=True)
+    img = ad.render_image(mesh, params, (48, 48), "solid", ctx=ctx, camera=_front_camera(mesh, params), look=ad.Look(background=(0, 0, 0), fast=True))
     drawn = img[img.sum(axis=2) > 0]
     assert len(drawn) > 200  # the whole card, in its (white) base colour
     assert (np.abs(drawn[:, 0].astype(int) - drawn[:, 2]) < 40).all()
@@ -306,11 +303,11 @@ def test_one_instanced_draw_per_part_and_part_choice(ctx, monkeypatch):
 
     monkeypatch.setattr(moderngl.VertexArray, "render", spy)
     monkeypatch.setattr(moderngl.VertexArray, "render_indirect", spy_indirect)
-    full = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, fast=True)
+    full = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, look=ad.Look(fast=True))
     assert sorted(v for _, v in calls) == sorted(p.count * 3 for p in mesh.parts)
     assert all(n == 30 for n, _ in calls)
     calls.clear()
-    bed = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, fast=True, parts=["Bed"])
+    bed = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, parts=["Bed"], look=ad.Look(fast=True))
     assert calls == [(30, mesh.part("Bed").count * 3)]
     assert not np.array_equal(full, bed)
     with pytest.raises(MeshError, match="no part 'Nope'"):
@@ -319,21 +316,20 @@ def test_one_instanced_draw_per_part_and_part_choice(ctx, monkeypatch):
 
 def test_shadows_darken_the_ground_and_hidden_lines_hide(ctx, stone):
     params = ad.random_params(stone, 60, seed=4, bend=0.1, spacing=2.0 * stone.axis.length)
-    with_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, samples=0)
-    no_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, samples=0, fast=True, ground=True)
+    with_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, look=ad.Look(samples=0))
+    no_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, look=ad.Look(samples=0, shadow=False))  # the ground without shadows
     darker = (with_shadow.astype(int).sum(axis=2) < no_shadow.astype(int).sum(axis=2) - 30).mean()
     assert darker > 0.01, f"{darker:.1%} of the pixels darker with shadows"
-    lines = dict(background=(0, 0, 0), line_color=(1, 1, 1), samples=0, ground=False)
+    lines = ad.Look(background=(0, 0, 0), line_color=(1, 1, 1), samples=0, ground=False, shadow=False)
     few = params[:4]  # big on the screen: the back edges are apart from the front ones
-    hidden = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, hidden_line=True, **lines)
-    every = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, fast=True, **lines)
+    hidden = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, look=lines.replace(hidden_line=True))
+    every = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, look=lines.replace(fast=True))
     on_hidden, on_every = (hidden.sum(axis=2) > 100).sum(), (every.sum(axis=2) > 100).sum()
     assert 0 < on_hidden < 0.8 * on_every, (on_hidden, on_every)  # back lines removed
     assert ((hidden.sum(axis=2) > 100) & ~(every.sum(axis=2) > 100)).sum() <= 0.02 * on_hidden
     # the default fills the faces (washed out) under the front lines, with the dark line colour
-    filled = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, samples=0, ground=False,
-                             background=(0, 0, 0), line_color=(0, 0, 0))
-    solid = ad.render_image(stone, few, (320, 240), "solid", ctx=ctx, fast=True, background=(0, 0, 0))
+    filled = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, look=ad.Look(samples=0, ground=False, background=(0, 0, 0), line_color=(0, 0, 0)))
+    solid = ad.render_image(stone, few, (320, 240), "solid", ctx=ctx, look=ad.Look(fast=True, background=(0, 0, 0)))
     covered, silhouette = (filled.astype(int).sum(axis=2) > 30), (solid.astype(int).sum(axis=2) > 30)
     assert (covered & silhouette).sum() >= 0.95 * silhouette.sum()  # the faces, not just lines
     assert ((hidden.astype(int).sum(axis=2) > 30) & silhouette).sum() < 0.9 * silhouette.sum()
@@ -415,8 +411,7 @@ def test_bundled_leaf_card():
 def test_flat_and_wireframe_work_for_textured_parts(ctx):
     mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
     params = ad.random_params(mesh, 6, seed=4, bend=0.1)
-    img = ad.render_image(mesh, params, (128, 96), ("solid", "flat", "wireframe"), ctx=ctx, ground=False,
-                          background=(0, 0, 0))
+    img = ad.render_image(mesh, params, (128, 96), ("solid", "flat", "wireframe"), ctx=ctx, look=ad.Look(ground=False, background=(0, 0, 0)))
     panels = [img[:, i * 128:(i + 1) * 128].astype(int).sum(axis=2) > 30 for i in range(3)]
     assert all(p.mean() > 0.02 for p in panels)
     assert not np.array_equal(img[:, :128], img[:, 128:256])  # flat shading differs from smooth
@@ -705,7 +700,7 @@ def _two_panes(ctx, mesh, order, coverage, samples=4):
         for k in order:
             panes[k].set_tint(tint[k])
             panes[k].alpha_to_coverage = coverage
-            panes[k].render(cam.view(), cam.projection(1.0), "solid", ambient=1.0)
+            panes[k].render(cam.view(), cam.projection(1.0), "solid", look=ad.Look(ambient=1.0))
         return target.read().astype(int)
 
 

@@ -24,7 +24,7 @@ def _extent(image):
 def test_automatic_framing_fills_80_percent_and_cuts_nothing(ctx, name, count, size):
     mesh = ad.load_mesh(name)
     params = ad.random_params(mesh, count, seed=4, bend=0.15)
-    image = ad.render_image(mesh, params, size, ctx=ctx, ground=False)  # what differs from the background: instances
+    image = ad.render_image(mesh, params, size, ctx=ctx, look=ad.Look(ground=False))  # what differs from the background: instances
     width, height, touches = _extent(image)
     assert max(width, height) >= 0.8, (width, height)
     assert not touches  # nothing cut off at the border

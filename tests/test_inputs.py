@@ -56,7 +56,7 @@ def test_a_3x3_view_matrix_is_refused_by_renderer_and_ground(ctx, stone):
         with pytest.raises(ad.ArgumentError, match="projection"):
             ground.render(np.eye(4), np.eye(4)[:3])
         with pytest.raises(ad.ArgumentError, match="light_dir"):
-            r.render(np.eye(4), np.eye(4), light_dir=(1, 2))
+            r.render(np.eye(4), np.eye(4), look=ad.Look(light_dir=(1, 2)))
         with pytest.raises(ad.ArgumentError, match="ground color"):
             ad.GroundPlane(ctx, color=(1, 2))
 

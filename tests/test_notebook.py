@@ -168,7 +168,7 @@ def test_widget_in_jupyterlab(tmp_path):
     # axialdeform render's picture of the same file at the same size: its function, with antialiasing
     # like the widget's canvas but without render's ground and shadow (the widget draws neither);
     # `render --fast` also drops the antialiasing, which thins these 8-pixel stones (IoU about 0.84)
-    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, ground=False, shadow=False)
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))
     _notebook(root / "scène.ipynb", [
         "import axialdeform as ad\nfrom axialdeform.widget import SceneWidget\n"
         f"m = ad.load_mesh('stone')\nw = SceneWidget(m, ad.read_params({adp.name!r}, m), size={SIZE!r})\nw",

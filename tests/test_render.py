@@ -88,7 +88,7 @@ def test_one_draw_call_draws_every_instance(ctx, stone, monkeypatch):
     params = ad.random_params(stone, 3000, seed=1)
     for mode in ad.MODES:
         calls.clear()
-        img = ad.render_image(stone, params, (160, 120), mode, ctx=ctx, fast=True)
+        img = ad.render_image(stone, params, (160, 120), mode, ctx=ctx, look=ad.Look(fast=True))
         assert calls == [3000], mode
         assert (img != img[0, 0]).any()
         # with the extras: a shadow pass, and for wireframe a depth pre-pass, each
@@ -115,8 +115,7 @@ def _mask(img, background):
 def test_solid_and_wireframe_cover_the_same_silhouette(ctx, stone):
     params = ad.random_params(stone, 60, seed=8, bend=0.25, spacing=2.5 * stone.axis.length)
     # a black background: every lit stone pixel and every line differs from it
-    img = ad.render_image(stone, params, (480, 360), ("solid", "wireframe"), ctx=ctx, samples=0,
-                          background=(0, 0, 0), line_color=(1, 1, 1), fast=True)
+    img = ad.render_image(stone, params, (480, 360), ("solid", "wireframe"), ctx=ctx, look=ad.Look(samples=0, background=(0, 0, 0), line_color=(1, 1, 1), fast=True))
     bg = img[0, 0].astype(int)
     solid, wire = _mask(img[:, :480], bg), _mask(img[:, 480:], bg)
     assert solid.mean() > 0.02
@@ -134,7 +133,7 @@ def test_solid_and_wireframe_cover_the_same_silhouette(ctx, stone):
 
 def test_flat_and_solid_differ_only_in_shading(ctx, stone):
     params = ad.random_params(stone, 40, seed=8, bend=0.25, spacing=2.5 * stone.axis.length)
-    img = ad.render_image(stone, params, (320, 240), ("solid", "flat"), ctx=ctx, samples=0, fast=True)
+    img = ad.render_image(stone, params, (320, 240), ("solid", "flat"), ctx=ctx, look=ad.Look(samples=0, fast=True))
     bg = img[0, 0].astype(int)
     solid, flat = _mask(img[:, :320], bg), _mask(img[:, 320:], bg)
     assert (solid ^ flat).sum() <= 0.01 * solid.sum()

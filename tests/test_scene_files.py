@@ -276,7 +276,7 @@ def test_viewer_keys_act_on_every_layer_of_a_scene(small):
 
     scene = load_scene(small)
     mesh, params, wind, extra = viewer_inputs(scene)
-    v = Viewer.create(mesh, params, headless=True, size=(96, 72), wind=wind, extra=extra, seed=4, fast=True)  # N: seed 5 (the file: 1)
+    v = Viewer.create(mesh, params, headless=True, size=(96, 72), wind=wind, extra=extra, seed=4, look=ad.Look(fast=True))  # N: seed 5 (the file: 1)
     try:
         (leaves, renderer, base), = v.layers
         assert leaves.name == "leaves" and "12 instances + 40 in 1 more layer" in v.status()

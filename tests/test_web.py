@@ -195,7 +195,7 @@ def scene_files(tmp_path_factory):
         r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "stone", str(adp), "-o", str(base / out),
                             "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
-    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, ground=False, shadow=False)  # the page: no ground, no shadow
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))  # the page: no ground, no shadow
     return {"base": base, "params": params, "mesh": mesh, "render": render}
 
 
@@ -412,7 +412,7 @@ def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
                         "--mode", "flat", "--up", "z", "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[10] == 0
-    render = ad.render_image(mesh, params, SIZE, "flat", up="z", ground=False, shadow=False)
+    render = ad.render_image(mesh, params, SIZE, "flat", up="z", look=ad.Look(ground=False, shadow=False))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.state["instances"] == 600, v.state
@@ -438,7 +438,7 @@ def test_extended_instances_match_render(browser, tmp_path, quantize):
     out = tmp_path / "ext.html"
     write_page(out, build_scene(mesh, ad.read_params(adp, mesh), size=SIZE, quantize=quantize))
     assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == 2
-    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, ground=False, shadow=False)
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.state["instances"] == 700, v.state
@@ -611,8 +611,9 @@ params = "s.adp"
     cfg = web.config
     assert [layer["name"] for layer in cfg["layers"]] == ["terrain", "a", "b"]
     assert [layer["terrain"] for layer in cfg["layers"]] == [True, False, False]
-    assert cfg["instances"] == 40 and cfg["background"] == [0.1, 0.2, 0.3] and cfg["ambient"] == 0.5
-    assert cfg["light_dir"] == [0.0, 1.0, 0.0]
+    assert cfg["instances"] == 40 and cfg["look"]["background"] == [0.1, 0.2, 0.3] and cfg["look"]["ambient"] == 0.5
+    assert cfg["look"]["light_dir"] == [0.0, 1.0, 0.0]
+    assert cfg["look"] == {**scene.look.to_json(), "light_dir": [0.0, 1.0, 0.0]}  # the Look, as JSON
     assert [layer["wind"] for layer in cfg["layers"]] == [False, True, False]
     assert cfg["wind"]["wavenumber"] == 0.25 and cfg["wind"]["frequency"] == 2.0 and cfg["wind"]["harmonic"] == 2.31
     cam = scene_camera(scene, SIZE[0] / SIZE[1])
@@ -688,7 +689,7 @@ def test_textured_cutout_page_draws_the_texture(browser, tmp_path):
     r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "leafcard", str(adp), "-o", str(out),
                         "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, ground=False, shadow=False)
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.state["instances"] == 200, v.state
@@ -845,7 +846,7 @@ def test_parts_alpha_modes_and_vertex_colours_match_render(browser, tmp_path, re
     scene = build_scene(mesh, params, size=SIZE)
     assert len(scene.config["layers"][0]["parts"]) == len([p for p in mesh.parts if p.count])
     write_page(out, scene)
-    render = ad.render_image(mesh, params, SIZE, ground=False, shadow=False)
+    render = ad.render_image(mesh, params, SIZE, look=ad.Look(ground=False, shadow=False))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.state["instances"] == 30, v.state
@@ -892,8 +893,8 @@ def test_mesh_page_with_wind_and_a_frozen_time_matches_render(browser, tmp_path)
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     wind = ad.Wind(direction=(1, 0, 0.3), strength=0.8, gustiness=0.8, frequency=0.4)
-    at = ad.render_image(mesh, params, SIZE, ground=False, shadow=False, wind=wind, time=2.0)
-    still = ad.render_image(mesh, params, SIZE, ground=False, shadow=False)
+    at = ad.render_image(mesh, params, SIZE, wind=wind, time=2.0, look=ad.Look(ground=False, shadow=False))
+    still = ad.render_image(mesh, params, SIZE, look=ad.Look(ground=False, shadow=False))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.page.evaluate("window.axialdeformView.info().time") == 2

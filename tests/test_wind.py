@@ -117,7 +117,8 @@ def test_animating_the_wind_writes_no_buffer(ctx, leaf, monkeypatch):
     proj = pyrr.matrix44.create_perspective_projection(40.0, 1.0, 0.1, 100.0, dtype=np.float32)
     with ad.Offscreen(ctx, (64, 64), samples=0) as target, AxialRenderer(ctx, leaf, p) as r:
         target.use()
-        r.render(view, proj, time=0.0, wind=WIND)  # first frame: whatever setup it needs
+        r.wind = WIND
+        r.render(view, proj, time=0.0)  # first frame: whatever setup it needs
         first = target.read().copy()
         monkeypatch.setattr(moderngl.Buffer, "write", counting)
         frames = []

@@ -34,7 +34,8 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 #: render_image's keywords of the old signature, now fields of :class:`Look`
-_LOOK_KEYWORDS = ("fast", "ground", "shadow", "samples", "background", "hidden_line", "light_dir", "ambient")
+_LOOK_KEYWORDS = ("fast", "ground", "shadow", "samples", "background", "hidden_line", "light_dir", "ambient",
+                  "line_color")
 
 
 def look_from_keywords(look: Look | None, keywords: dict, where: str = "render_image") -> Look:
