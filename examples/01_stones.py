@@ -86,8 +86,8 @@ def main():
     # 2. the bank: ground plane + one colour per stone, in your own offscreen target
     ctx = ad.create_context()
     look = ad.Look(background=(0.80, 0.86, 0.92))   # light, ambient, background: one value object
-    with ad.AxialRenderer(ctx, mesh, params) as stones, ad.GroundPlane(ctx, color=(0.42, 0.37, 0.30)) as ground, \
-            ad.Offscreen(ctx, size) as target, ad.ShadowMap(ctx) as shadow:
+    with ad.AxialRenderer(ctx, mesh, params) as stones, ad.gl.GroundPlane(ctx, color=(0.42, 0.37, 0.30)) as ground, \
+            ad.Offscreen(ctx, size) as target, ad.gl.ShadowMap(ctx) as shadow:
         stones.set_tint(stone_colours(count, args.seed))
         ground.fit(mesh, params, margin=3.0)
         shadow.fit(mesh, params, look.light_dir)          # the key light's shadow map around the stones

@@ -118,8 +118,8 @@ def main():
     look = ad.Look(background=(0.82, 0.87, 0.93))
     ctx = ad.create_context()
     images = []
-    with ad.AxialRenderer(ctx, mesh, leaves.at(0.0)) as r, ad.GroundPlane(ctx, color=(0.30, 0.27, 0.20)) as ground, \
-            ad.Offscreen(ctx, size) as target, ad.ShadowMap(ctx, 1024) as shadow:
+    with ad.AxialRenderer(ctx, mesh, leaves.at(0.0)) as r, ad.gl.GroundPlane(ctx, color=(0.30, 0.27, 0.20)) as ground, \
+            ad.Offscreen(ctx, size) as target, ad.gl.ShadowMap(ctx, 1024) as shadow:
         # the tint multiplies the leaf texture: autumn colours over its veins
         r.set_tint(leaves.colours(args.seed) / np.array([0.30, 0.50, 0.10]).mean() * 0.6)
         ground.center, ground.radius = np.zeros(3), 1.2 * side

@@ -11,7 +11,7 @@ it (blue: barely bent, orange: strongly bent).  Writes
 Two ways to bring the deformation into a shader:
 * moderngl's include table (used below):
   ``ctx.includes["axial.glsl"] = ad.deformation_glsl()``;
-* ``ad.assemble_text(my_source).source``: expands the include yourself and
+* ``ad.gl.assemble_text(my_source).source``: expands the include yourself and
   keeps ``#line`` numbers, so compiler errors point at your own lines.
 """
 
@@ -102,7 +102,7 @@ def main():
     fbo.clear(0.95, 0.95, 0.93, 1.0)
     ctx.enable(moderngl.DEPTH_TEST)
     vao.render(moderngl.TRIANGLES, instances=count)            # ONE instanced draw call
-    image = ad.read_pixels(ctx, fbo)                           # (h, w, 3) uint8, top row first
+    image = ad.gl.read_pixels(ctx, fbo)                           # (h, w, 3) uint8, top row first
     assert ctx.error == "GL_NO_ERROR", ctx.error
 
     out = Path(args.output)

@@ -45,8 +45,8 @@ class Meadow(mglw.WindowConfig):
                                        tilt=(-0.15, 0.15), scale=(0.7, 1.3), twist=0.6, taper=0.5)
         self.xz = self.params[:, [10, 12]].astype(np.float64)
         self.renderer = ad.AxialRenderer(self.ctx, self.mesh, self.params, wind=WIND)
-        self.shadow = ad.ShadowMap(self.ctx, 2048)
-        self.ground = ad.GroundPlane(self.ctx, color=(0.30, 0.26, 0.16)).fit(self.mesh, self.params, sink=0.0)
+        self.shadow = ad.gl.ShadowMap(self.ctx, 2048)
+        self.ground = ad.gl.GroundPlane(self.ctx, color=(0.30, 0.26, 0.16)).fit(self.mesh, self.params, sink=0.0)
         self.ground.center[1] = 0.0
         radius = float(np.abs(self.xz).max())
         self.camera = ad.Camera(eye=(1.3 * radius, 0.9 * radius, 1.6 * radius), target=(0.0, 0.0, 0.0),
@@ -86,7 +86,7 @@ def main():
         app.wnd.swap_buffers()
     assert app.renderer.instances.reallocations == 0
     # the headless window's framebuffer is multisampled: read_pixels resolves it, then reads
-    image = ad.read_pixels(app.ctx, app.wnd.fbo, resolve=True)
+    image = ad.gl.read_pixels(app.ctx, app.wnd.fbo, resolve=True)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     ad.save_png(out / "04_moderngl_window_app.png", image)

@@ -22,7 +22,7 @@ def box(extent, offset=(0, 0, 0)):
 @pytest.mark.parametrize("extent,axis", [((3, 1, 2), 0), ((1, 3, 2), 1), ((1, 2, 3), 2)])
 def test_axis_is_longest_extent_off_origin(extent, axis):
     offset = (10.5, -7.25, 100.0)
-    a = ad.ControlAxis.from_positions(box(extent, offset))
+    a = ad.core.ControlAxis.from_positions(box(extent, offset))
     assert a.index == axis
     assert a.lo == pytest.approx(offset[axis])
     assert a.length == pytest.approx(extent[axis])
@@ -33,12 +33,12 @@ def test_axis_is_longest_extent_off_origin(extent, axis):
 
 @pytest.mark.parametrize("extent,axis", [((2, 2, 2), 0), ((1, 2, 2), 1), ((2, 1, 2), 0), ((1, 1, 1), 0)])
 def test_axis_ties_go_to_first_of_xyz(extent, axis):
-    assert ad.ControlAxis.from_positions(box(extent)).index == axis
+    assert ad.core.ControlAxis.from_positions(box(extent)).index == axis
 
 
 def test_zero_extent_is_an_error():
-    with pytest.raises(ad.MeshError, match="longest extent"):
-        ad.ControlAxis.from_positions(np.ones((4, 3)))
+    with pytest.raises(ad.core.MeshError, match="longest extent"):
+        ad.core.ControlAxis.from_positions(np.ones((4, 3)))
 
 
 def test_bernstein_partition_of_unity():
@@ -60,7 +60,7 @@ def _mesh_along(axis_index, offset=(3.0, -2.0, 5.0)):
 def test_equal_offsets_are_a_pure_shift(axis_index):
     mesh = _mesh_along(axis_index)
     uv = np.array([0.3, -0.7])
-    params = ad.make_params(offsets=np.tile(uv, (1, 5, 1)))
+    params = ad.core.make_params(offsets=np.tile(uv, (1, 5, 1)))
     pos, nrm = deform(mesh.axis, mesh.positions, mesh.normals, params)
     shift = mesh.axis.embed(uv)
     assert np.allclose(pos[0] - mesh.positions, shift, atol=1e-6)
@@ -72,7 +72,7 @@ def test_end_vertices_move_by_d1_and_d5(axis_index):
     mesh = _mesh_along(axis_index)
     rng = np.random.default_rng(1)
     d = rng.normal(size=(1, 5, 2))
-    pos, _ = deform(mesh.axis, mesh.positions, mesh.normals, ad.make_params(offsets=d))
+    pos, _ = deform(mesh.axis, mesh.positions, mesh.normals, ad.core.make_params(offsets=d))
     t = mesh.axis.parameter(mesh.positions)
     moved = pos[0] - mesh.positions
     assert np.allclose(moved[t == 0], mesh.axis.embed(d[0, 0].astype(np.float32)), atol=1e-6)
@@ -85,7 +85,7 @@ def test_middle_offset_gives_symmetric_bow():
     # a thin rod along y sampled at many t; only d3 set
     t = np.linspace(0, 1, 41)
     positions = np.stack([np.zeros_like(t), 2 + 5 * t, np.zeros_like(t)], axis=1)
-    axis = ad.ControlAxis.from_positions(positions)
+    axis = ad.core.ControlAxis.from_positions(positions)
     d = np.zeros((1, 5, 2))
     d[0, 2] = (1.0, 0.0)  # d3u -> x for a y axis
     moved, _ = deform_local(axis, positions, np.tile([1.0, 0, 0], (41, 1)), d)
@@ -137,7 +137,7 @@ def test_rotation_order_matches_pyrr_rz_ry_rx():
 
 def test_world_transform_and_normals():
     mesh = _mesh_along(1)
-    params = ad.make_params(positions=[[1.0, 2.0, 3.0]], angles=[[0.1, 0.2, 0.3]], offsets=np.full((1, 5, 2), 0.0))
+    params = ad.core.make_params(positions=[[1.0, 2.0, 3.0]], angles=[[0.1, 0.2, 0.3]], offsets=np.full((1, 5, 2), 0.0))
     pos, nrm = deform(mesh.axis, mesh.positions, mesh.normals, params)
     r = rotation_matrices(np.array([0.1, 0.2, 0.3], dtype=np.float32).astype(np.float64))
     assert np.allclose(pos[0], mesh.positions @ r.T + [1, 2, 3], atol=1e-5)
@@ -180,9 +180,9 @@ def test_random_params_placement(stone, placement, up):
 
 
 def test_random_params_rejects_bad_arguments(stone):
-    with pytest.raises(ad.ParamError, match="placement"):
+    with pytest.raises(ad.core.ParamError, match="placement"):
         ad.random_params(stone, 3, placement="spiral")
-    with pytest.raises(ad.ParamError, match="count"):
+    with pytest.raises(ad.core.ParamError, match="count"):
         ad.random_params(stone, -1)
-    with pytest.raises(ad.ParamError, match="bend"):
+    with pytest.raises(ad.core.ParamError, match="bend"):
         ad.random_params(stone, 3, bend=float("nan"))

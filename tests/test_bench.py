@@ -56,7 +56,7 @@ def test_file_bytes_relationships(quick):
     out, _, _ = quick
     records = json.loads((out / "bench.json").read_text())
     by = {(r["method"], r["count"], r["mode"]): r["file_bytes"] for r in records}
-    mesh_bytes = ad.bundled_mesh_path("stone").stat().st_size
+    mesh_bytes = ad.core.bundled_mesh_path("stone").stat().st_size
     header, trailer, table = 96, 4, 128  # binary .adp: header, CRC-32, quantization table
     for mode in bench.BENCH_MODES:
         # the same files are read in both modes
@@ -72,7 +72,7 @@ def test_file_bytes_relationships(quick):
 def test_axial_bytes_are_mesh_plus_param_file(quick):
     _, cache, _ = quick
     records = json.loads((quick[0] / "bench.json").read_text())
-    mesh_bytes = ad.bundled_mesh_path("stone").stat().st_size
+    mesh_bytes = ad.core.bundled_mesh_path("stone").stat().st_size
     for n in bench.QUICK_COUNTS:
         (folder,) = [p for p in cache.iterdir() if p.name.startswith(f"stone-{n}-")]
         adp, adpq = folder / "params.adp", folder / "params-quantized.adp"

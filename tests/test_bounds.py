@@ -44,7 +44,7 @@ def test_callers_use_the_one_home():
     for mod in (camera, ground, viewer):
         src = inspect.getsource(mod)
         assert "radii[:, None]).min(axis=0)" not in src, mod.__name__
-    assert ad.instance_bounds is instance_bounds
+    assert ad.core.instance_bounds is instance_bounds
 
 
 def test_outline_points_by_budget(stone):

@@ -160,7 +160,7 @@ def test_import_is_lazy_and_every_public_name_resolves():
         "missing = [n for n in ad.__all__ if not hasattr(ad, n)]\n"
         "assert not missing, missing\n"
         "assert set(ad.__all__) <= set(dir(ad))\n"
-        "assert ad.core.params.FIELDS == ad.FIELDS and ad.__version__\n"
+        "assert ad.core.params.FIELDS == ad.core.FIELDS and ad.__version__\n"
         "try:\n    ad.no_such_name\nexcept AttributeError as e:\n    assert 'no_such_name' in str(e)\n"
         "else:\n    raise SystemExit('no AttributeError')\n"
     )

@@ -234,7 +234,7 @@ def test_lod_picks_levels_by_screen_error_and_stays_close(ctx, stone, kind):
 
 def test_lod_bad_input(ctx, stone):
     for bad in (0, -1, float("nan"), "x"):
-        with pytest.raises(ad.ParamError, match="lod_error: expected a number of pixels > 0"):
+        with pytest.raises(ad.core.ParamError, match="lod_error: expected a number of pixels > 0"):
             ad.AxialRenderer(ctx, stone, field(stone, 3), lod=True, lod_error=bad)
     tetra = make_mesh([(0, 0, 0), (2, 0, 0), (0.6, 0.8, 0), (0.6, 0.3, 0.7)], [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)])
     with pytest.warns(UserWarning, match="too few to simplify"):
@@ -451,7 +451,7 @@ def test_an_indirect_frame_never_waits_for_the_count(ctx, stone, monkeypatch):
         return original_read(self, *args, **kwargs)
 
     with ad.AxialRenderer(ctx, stone, params, indirect=True) as r, \
-            ad.AxialRenderer(ctx, stone, params, indirect=False) as ref, ad.ShadowMap(ctx, 256) as shadow:
+            ad.AxialRenderer(ctx, stone, params, indirect=False) as ref, ad.gl.ShadowMap(ctx, 256) as shadow:
         expected = draw(ctx, ref, view, proj)
         with Offscreen(ctx, (160, 120), samples=4) as target:
             monkeypatch.setattr(moderngl.Buffer, "read", counting_read)
@@ -478,7 +478,7 @@ def test_the_path_is_chosen_by_version_and_can_be_forced(ctx, stone, monkeypatch
         version_code = 330
 
     assert not indirect_supported(GL33()) and not _choose_indirect(GL33(), None)
-    with pytest.raises(ad.ContextError, match="indirect: the indirect culling path needs OpenGL >= 4.3"):
+    with pytest.raises(ad.core.ContextError, match="indirect: the indirect culling path needs OpenGL >= 4.3"):
         _choose_indirect(GL33(), True)
     assert indirect_supported(ctx) == (ctx.version_code >= 430)
     params = field(stone, 100)
@@ -523,7 +523,7 @@ def test_shadow_pass_culls_casters_to_the_light_volume(ctx, stone, indirect):
     params = field(stone)
     with ad.AxialRenderer(ctx, stone, params, indirect=indirect) as culled, \
             ad.AxialRenderer(ctx, stone, params, culling=False) as full, \
-            ad.ShadowMap(ctx, 512) as shadow:
+            ad.gl.ShadowMap(ctx, 512) as shadow:
         maps = []
         corner = params[(params[:, 10] > 0.5 * EDGE) & (params[:, 12] > 0.3 * EDGE)]
         for part in (corner, params):  # a corner of the field, then all of it
@@ -574,7 +574,7 @@ def test_a_compute_pass_that_does_not_build_falls_back_to_the_query_path(ctx, st
         expected = draw(ctx, full, view, proj)
 
     def broken(*args, **kwargs):
-        raise ad.ShaderError("glsl/cull.comp, line 1 (compute shader): error: no compute here")
+        raise ad.core.ShaderError("glsl/cull.comp, line 1 (compute shader): error: no compute here")
 
     monkeypatch.setattr(cull_module, "build_compute", broken)
     if not cull_module.indirect_supported(ctx):
@@ -616,7 +616,7 @@ def test_a_gl_3_3_context_takes_the_query_path(tmp_path):
         "assert np.array_equal(*pictures)\n"
         "try:\n"
         "    ad.AxialRenderer(ctx, stone, params, indirect=True)\n"
-        "except ad.ContextError as exc:\n"
+        "except ad.core.ContextError as exc:\n"
         "    assert 'needs OpenGL >= 4.3' in str(exc) and '330' in str(exc), exc\n"
         "else:\n"
         "    raise AssertionError('indirect=True on GL 3.3 was accepted')\n"

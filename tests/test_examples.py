@@ -278,7 +278,7 @@ def test_viewer_animates_the_leaves_in_place():
         v.step(3)
         assert np.abs(a.astype(int) - v.screenshot()).mean() > 0.1
         assert v.renderer.instances.reallocations == 0
-        with pytest.raises(ad.ParamError):
+        with pytest.raises(ad.core.ParamError):
             Viewer.create(ad.load_mesh("leaf"), leaves.at(0.0)[:5], animate=leaves.at, headless=True)
     finally:
         v.release()

@@ -147,7 +147,7 @@ def test_instanced_layout_follows_the_extension(scenes):
     quats = np.frombuffer(blob, "<f4", acc.count * 4, (view.byteOffset or 0) + (acc.byteOffset or 0)).reshape(-1, 4)
     assert np.abs(np.linalg.norm(quats.astype(np.float64), axis=1) - 1).max() < 1e-6
     rot = export.matrices_from_quaternions(quats)
-    assert np.abs(rot - ad.rotation_matrices(params[:, ANGLES])).max() < 1e-6
+    assert np.abs(rot - ad.core.rotation_matrices(params[:, ANGLES])).max() < 1e-6
     extras = node.extras[export.EXTRAS_KEY]
     assert extras["axis"] == {"index": 1, "name": "y", "lo": mesh.axis.lo, "length": mesh.axis.length}
     assert extras["mesh_fingerprint"] == mesh.fingerprint.hex()
@@ -161,7 +161,7 @@ def test_quaternions_match_rotation_matrices():
     q = export.quaternions_from_angles(angles)
     assert q.shape == (300, 4) and np.allclose(np.linalg.norm(q, axis=1), 1.0)
     assert (q[:, 3] >= 0).all()
-    assert np.abs(export.matrices_from_quaternions(q) - ad.rotation_matrices(angles)).max() < 1e-12
+    assert np.abs(export.matrices_from_quaternions(q) - ad.core.rotation_matrices(angles)).max() < 1e-12
     assert np.allclose(q[0], [0, 0, 0, 1])
 
 
@@ -175,7 +175,7 @@ def test_reader_falls_back_to_the_quaternion(scenes, tmp_path):
     path.write_bytes(b"".join(gltf.save_to_bytes()))
     _m, back = export.read_instanced_glb(path)
     assert np.array_equal(back[:, :13], params[:, :13])
-    assert np.abs(ad.rotation_matrices(back[:, ANGLES]) - ad.rotation_matrices(params[:, ANGLES])).max() < 1e-6
+    assert np.abs(ad.core.rotation_matrices(back[:, ANGLES]) - ad.core.rotation_matrices(params[:, ANGLES])).max() < 1e-6
 
 
 def test_reader_refuses_other_files(scenes, tmp_path):

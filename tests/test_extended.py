@@ -183,7 +183,7 @@ def test_renderer_widths(ctx, stone):
         assert got.shape == (3, 19)
         np.testing.assert_array_equal(got[:, 16:], [[1, 0, 0]] * 3)
     with AxialRenderer(ctx, stone, p) as r:
-        with pytest.raises(ad.ParamError, match="extended=True"):
+        with pytest.raises(ad.core.ParamError, match="extended=True"):
             r.set_params(extend_params(p))
 
 
@@ -204,7 +204,7 @@ def test_text_file_mixed_widths_name_the_line(tmp_path):
     row19 = " ".join(["0"] * 16 + ["1", "0", "0"])
     path = tmp_path / "mixed.txt"
     path.write_text(f"# comment\n{row19}\n{row19}\n{row16}\n")
-    with pytest.raises(ad.ParamFileError, match=r"mixed.txt: line 4: expected 19 numbers like line 2, found 16"):
+    with pytest.raises(ad.core.ParamFileError, match=r"mixed.txt: line 4: expected 19 numbers like line 2, found 16"):
         ad.read_params(path)
 
 
@@ -215,7 +215,7 @@ def test_bad_extension_values_are_refused_naming_line_and_field(tmp_path, field,
     extra[0 if field == "s" else 2] = value
     path = tmp_path / "bad.txt"
     path.write_text(" ".join(["0"] * 16 + ["1", "0", "0"]) + "\n" + " ".join(["0"] * 16 + extra) + "\n")
-    with pytest.raises(ad.ParamFileError, match=rf"line 2, field {field}: expected a (scale|taper) {expected}"):
+    with pytest.raises(ad.core.ParamFileError, match=rf"line 2, field {field}: expected a (scale|taper) {expected}"):
         ad.read_params(path)
 
 
@@ -245,7 +245,7 @@ def test_extend_and_make_params():
     assert p.shape == (2, 19)
     np.testing.assert_array_equal(p[:, 16:], [[2, 0, 0.25], [3, 0, 0.25]])
     assert make_params(count=2).shape == (2, 16)
-    with pytest.raises(ad.ParamError, match="field s: expected a scale s > 0"):
+    with pytest.raises(ad.core.ParamError, match="field s: expected a scale s > 0"):
         make_params(count=1, scale=0.0)
 
 

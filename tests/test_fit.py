@@ -67,8 +67,8 @@ def test_fit_reproduces_every_variant(case):
     assert (result.max < TOL).all() and (result.rms <= result.max).all()
     assert not result.exceeds.any()
     result.check()  # does not raise
-    rot_true = ad.rotation_matrices(params[:, ANGLES])
-    rot_fit = ad.rotation_matrices(result.params[:, ANGLES])
+    rot_true = ad.core.rotation_matrices(params[:, ANGLES])
+    rot_fit = ad.core.rotation_matrices(result.params[:, ANGLES])
     assert np.abs(rot_true - rot_fit).max() < TOL
     # random_params is canonical, so the offsets and positions come back too
     length = mesh.axis.length
@@ -84,8 +84,8 @@ def test_fit_large_rotations_and_gimbal_lock(stone):
     positions, _ = ad.bake(stone, params)
     result = fit.fit_params(stone, positions)
     _assert_reproduces(stone, result.params, positions)
-    rot_true = ad.rotation_matrices(params[:, ANGLES])
-    assert np.abs(rot_true - ad.rotation_matrices(result.params[:, ANGLES])).max() < TOL
+    rot_true = ad.core.rotation_matrices(params[:, ANGLES])
+    assert np.abs(rot_true - ad.core.rotation_matrices(result.params[:, ANGLES])).max() < TOL
 
 
 def test_fit_returns_canonical_offsets(leaf):
@@ -107,9 +107,9 @@ def test_angles_from_matrices_round_trip():
     angles = rng.uniform(-np.pi, np.pi, size=(500, 3))
     angles[:50, 1] = np.pi / 2
     angles[50:100, 1] = -np.pi / 2
-    rot = ad.rotation_matrices(angles)
+    rot = ad.core.rotation_matrices(angles)
     back = fit.angles_from_matrices(rot)
-    assert np.abs(ad.rotation_matrices(back) - rot).max() < 1e-12
+    assert np.abs(ad.core.rotation_matrices(back) - rot).max() < 1e-12
     assert np.all(np.abs(back[:, 1]) <= np.pi / 2 + 1e-12)
     # away from the lock the angles are the originals (up to 2π) where ry is in [-π/2, π/2]
     plain = (np.abs(angles[:, 1]) < np.pi / 2 - 1e-3)
@@ -120,7 +120,7 @@ def test_angles_from_matrices_round_trip():
 def test_kabsch_is_a_proper_rotation():
     rng = np.random.default_rng(1)
     src = rng.normal(size=(40, 3))
-    rot = ad.rotation_matrices(np.array([0.4, -1.1, 2.5]))
+    rot = ad.core.rotation_matrices(np.array([0.4, -1.1, 2.5]))
     dst = src @ rot.T + [1.0, 2.0, 3.0]
     r, p = fit.kabsch(src, dst)
     assert np.allclose(r, rot, atol=1e-12) and np.allclose(p, [1, 2, 3], atol=1e-12)
@@ -180,7 +180,7 @@ def test_fit_gpu_captured_variants(ctx, leaf):
     positions, _ = ad.bake(leaf, params, "gpu", ctx=ctx)
     result = fit.fit_params(leaf, positions)
     _assert_reproduces(leaf, result.params, positions)
-    assert np.abs(ad.rotation_matrices(params[:, ANGLES]) - ad.rotation_matrices(result.params[:, ANGLES])).max() < TOL
+    assert np.abs(ad.core.rotation_matrices(params[:, ANGLES]) - ad.core.rotation_matrices(result.params[:, ANGLES])).max() < TOL
 
 
 # ------------------------------------------------------------------------- CLI

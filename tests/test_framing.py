@@ -55,5 +55,5 @@ def test_orbit_camera_turns_and_zooms(stone):
     assert np.linalg.norm(orbit.eye - orbit.target) == pytest.approx(d / 2)
     to_eye, right, up = orbit_axes("z", 0.0, 90.0)
     assert np.allclose(to_eye, [0, 0, 1]) and abs(right @ up) < 1e-12
-    with pytest.raises(ad.ArgumentError):
+    with pytest.raises(ad.core.ArgumentError):
         OrbitCamera([0, 0, 0], 1.0, up="w")

@@ -437,7 +437,7 @@ def test_no_gl_context_says_what_to_install(monkeypatch):
         raise moderngl.Error("eglInitialize failed (0x3001)")
 
     monkeypatch.setattr(moderngl, "create_standalone_context", fail)
-    with pytest.raises(ad.ContextError, match="libegl1 libgl1-mesa-dri") as exc:
+    with pytest.raises(ad.core.ContextError, match="libegl1 libgl1-mesa-dri") as exc:
         ad.create_context()
     assert "eglInitialize failed" in str(exc.value)
 
@@ -475,7 +475,7 @@ def test_include_cycle_and_missing_include():
 
 def test_wrong_mesh_for_parameter_file(tmp_path, stone, leaf):
     path = ad.write_params(tmp_path / "stones.adp", ad.random_params(stone, 3, seed=1), stone)
-    with pytest.raises(ad.MeshMismatchError, match=r"stones.adp: made for .*use the mesh it was made for"):
+    with pytest.raises(ad.core.MeshMismatchError, match=r"stones.adp: made for .*use the mesh it was made for"):
         ad.read_params(path, leaf)
     assert ad.read_params(path, leaf, allow_mesh_mismatch=True).shape == (3, 16)
 

@@ -76,7 +76,7 @@ def _obj_with_mtllib(folder: Path) -> Path:
 def test_files_a_mesh_refers_to_are_checked(tmp_path):
     obj = _obj_with_mtllib(tmp_path)
     os.mkfifo(tmp_path / "m.mtl")  # before: trimesh's resolver blocked forever opening it
-    code = f"import axialdeform as ad\ntry:\n    ad.load_mesh({str(obj)!r})\nexcept ad.MeshError as e:\n    print('ERR', e)\n"
+    code = f"import axialdeform as ad\ntry:\n    ad.load_mesh({str(obj)!r})\nexcept ad.core.MeshError as e:\n    print('ERR', e)\n"
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30,
                           env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert proc.stdout.startswith("ERR "), proc.stdout + proc.stderr
@@ -95,7 +95,7 @@ def test_gltf_buffer_must_be_a_regular_file_of_bounded_size(tmp_path):
                        "min": [0, 0, 0], "max": [1, 1, 0]}],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}], "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}]}))
     os.mkfifo(tmp_path / "data.bin")  # before: blocked forever opening it
-    code = f"import axialdeform as ad\ntry:\n    ad.load_mesh({str(gltf)!r})\nexcept ad.MeshError as e:\n    print('ERR', e)\n"
+    code = f"import axialdeform as ad\ntry:\n    ad.load_mesh({str(gltf)!r})\nexcept ad.core.MeshError as e:\n    print('ERR', e)\n"
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30,
                           env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert proc.stdout.startswith("ERR ") and "data.bin: not a regular file" in proc.stdout, proc.stdout + proc.stderr
@@ -219,7 +219,7 @@ def files(tmp_path):
     params = tmp_path / "p.adp"
     P.write_params(params, ad.random_params(ad.load_mesh("stone"), 4, 1), ad.load_mesh("stone"))
     mesh = tmp_path / "m.obj"
-    mesh.write_bytes(ad.bundled_mesh_path("stone").read_bytes())
+    mesh.write_bytes(ad.core.bundled_mesh_path("stone").read_bytes())
     return tmp_path, mesh, params
 
 
@@ -259,7 +259,7 @@ def test_scene_file_output_that_is_the_scene_is_refused(tmp_path, capsys):
 
 def test_bundled_mesh_is_an_input_too(tmp_path, capsys):
     """``demo`` and ``render stone`` read the package's stone.obj: never replaced by their output."""
-    stone = ad.bundled_mesh_path("stone")
+    stone = ad.core.bundled_mesh_path("stone")
     before = stone.read_bytes()
     params = tmp_path / "p.adp"
     P.write_params(params, np.zeros((1, 16), np.float32))
@@ -401,7 +401,7 @@ def test_size_limited_by_memory(ctx, monkeypatch):
 
 
 def test_solid_drawing_never_builds_edges(ctx):
-    mesh = ad.load_mesh(ad.bundled_mesh_path("stone"))  # a fresh mesh: nothing cached
+    mesh = ad.load_mesh(ad.core.bundled_mesh_path("stone"))  # a fresh mesh: nothing cached
     params = ad.random_params(mesh, 3, 0)
     with ad.AxialRenderer(ctx, mesh, params) as r, ad.Offscreen(ctx, (32, 32)) as target:
         target.use()
@@ -609,7 +609,7 @@ def test_height_map_pixels_checked_against_memory_before_decoding(tmp_path, monk
     monkeypatch.setattr(safeio, "memory_available", lambda: budget)
     decoded = []
     monkeypatch.setattr(np, "asarray", lambda *a, **k: decoded.append(1) or np.array(*a, **k))
-    with pytest.raises(ad.ScatterError, match=r"300x200 pixels needs about .*expected at most 48000 pixels") as info:
+    with pytest.raises(ad.core.ScatterError, match=r"300x200 pixels needs about .*expected at most 48000 pixels") as info:
         scatter.load_surface(hm)
     assert str(hm) in str(info.value) and not decoded
     monkeypatch.undo()

@@ -19,15 +19,15 @@ def _is_ours(exc):
 
 
 def test_argument_error_is_both():
-    assert issubclass(ad.ArgumentError, ad.AxialDeformError) and issubclass(ad.ArgumentError, ValueError)
+    assert issubclass(ad.core.ArgumentError, ad.AxialDeformError) and issubclass(ad.core.ArgumentError, ValueError)
 
 
 @pytest.mark.parametrize("call", [
-    lambda m: ad.as_params(np.zeros((3, 15))),
+    lambda m: ad.core.as_params(np.zeros((3, 15))),
     lambda m: ad.deform(m.axis, m.positions[:, :2], m.normals, np.zeros((3, 16))),
     lambda m: ad.deform(m.axis, m.positions, m.normals[:5], np.zeros((3, 16))),
-    lambda m: ad.make_params(offsets=np.zeros((3, 4, 2))),
-    lambda m: ad.make_params(offsets=np.zeros((3, 5, 2)), positions=np.zeros((2, 3))),
+    lambda m: ad.core.make_params(offsets=np.zeros((3, 4, 2))),
+    lambda m: ad.core.make_params(offsets=np.zeros((3, 5, 2)), positions=np.zeros((2, 3))),
     lambda m: Camera([0, 0], [0, 0, 0]),
     lambda m: ad.frame_instances(m, np.zeros((2, 16)), -1.0),
     lambda m: ad.bake(m, np.zeros((1, 16)), "fast"),
@@ -49,25 +49,25 @@ def test_wrong_values_and_shapes_get_our_value_error(stone, call):
 def test_a_3x3_view_matrix_is_refused_by_renderer_and_ground(ctx, stone):
     params = ad.random_params(stone, 3, seed=1)
     with ad.Offscreen(ctx, (32, 32)) as target, ad.AxialRenderer(ctx, stone, params) as r, \
-            ad.GroundPlane(ctx) as ground:
+            ad.gl.GroundPlane(ctx) as ground:
         target.use()
-        with pytest.raises(ad.ArgumentError, match=r"view: expected an array of shape \(4, 4\), found \(3, 3\)"):
+        with pytest.raises(ad.core.ArgumentError, match=r"view: expected an array of shape \(4, 4\), found \(3, 3\)"):
             r.render(np.eye(3), np.eye(4))
-        with pytest.raises(ad.ArgumentError, match="projection"):
+        with pytest.raises(ad.core.ArgumentError, match="projection"):
             ground.render(np.eye(4), np.eye(4)[:3])
-        with pytest.raises(ad.ArgumentError, match="light_dir"):
+        with pytest.raises(ad.core.ArgumentError, match="light_dir"):
             r.render(np.eye(4), np.eye(4), look=ad.Look(light_dir=(1, 2)))
-        with pytest.raises(ad.ArgumentError, match="ground color"):
-            ad.GroundPlane(ctx, color=(1, 2))
+        with pytest.raises(ad.core.ArgumentError, match="ground color"):
+            ad.gl.GroundPlane(ctx, color=(1, 2))
 
 
 def test_drawing_without_a_framebuffer_raises(ctx, stone):
     params = ad.random_params(stone, 3, seed=1)
-    with ad.AxialRenderer(ctx, stone, params) as r, ad.GroundPlane(ctx) as ground:
+    with ad.AxialRenderer(ctx, stone, params) as r, ad.gl.GroundPlane(ctx) as ground:
         ctx.detect_framebuffer(0).use()  # a windowless context: no default framebuffer
-        with pytest.raises(ad.ContextError, match="no usable framebuffer"):
+        with pytest.raises(ad.core.ContextError, match="no usable framebuffer"):
             r.render(np.eye(4), np.eye(4))
-        with pytest.raises(ad.ContextError, match="no usable framebuffer"):
+        with pytest.raises(ad.core.ContextError, match="no usable framebuffer"):
             ground.render(np.eye(4), np.eye(4))
     assert ctx.error == "GL_NO_ERROR"
 
@@ -103,10 +103,10 @@ def test_moderngl_window_version_message_agrees_with_pyproject():
 def test_update_params_error_names_set_params(ctx, stone):
     params = ad.random_params(stone, 4, seed=1)
     with ad.AxialRenderer(ctx, stone, params) as r:
-        with pytest.raises(ad.ParamError, match=r"^update_params: .*set_params\(\)"):
+        with pytest.raises(ad.core.ParamError, match=r"^update_params: .*set_params\(\)"):
             r.update_params(params, start=2)
     with ad.AxialRenderer(ctx, stone, params, quantized=True) as r:
         big = params[:1].copy()
         big[0, 10] += 1000.0
-        with pytest.raises(ad.ParamError, match=r"set_params\(\)"):
+        with pytest.raises(ad.core.ParamError, match=r"set_params\(\)"):
             r.update_params(big)

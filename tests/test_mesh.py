@@ -61,22 +61,22 @@ def test_area_weighted_normals():
 ])
 def test_bad_meshes_are_refused_with_the_file_named(rel, message):
     path = shared_mesh(rel)
-    with pytest.raises(ad.MeshError, match=message) as err:
+    with pytest.raises(ad.core.MeshError, match=message) as err:
         ad.load_mesh(path)
     assert str(path) in str(err.value)
 
 
 def test_nan_and_zero_extent_and_missing(tmp_path):
     (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n")
-    with pytest.raises(ad.MeshError, match="vertex 1 has a non-finite coordinate"):
+    with pytest.raises(ad.core.MeshError, match="vertex 1 has a non-finite coordinate"):
         ad.load_mesh(tmp_path / "nan.obj")
     (tmp_path / "point.obj").write_text("v 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\n")
-    with pytest.raises(ad.MeshError, match="longest extent is 0"):
+    with pytest.raises(ad.core.MeshError, match="longest extent is 0"):
         ad.load_mesh(tmp_path / "point.obj")
-    with pytest.raises(ad.MeshError, match="no such mesh file"):
+    with pytest.raises(ad.core.MeshError, match="no such mesh file"):
         ad.load_mesh(tmp_path / "missing.obj")
     (tmp_path / "x.abc").write_text("hello")
-    with pytest.raises(ad.MeshError, match="unsupported mesh file type"):
+    with pytest.raises(ad.core.MeshError, match="unsupported mesh file type"):
         ad.load_mesh(tmp_path / "x.abc")
 
 

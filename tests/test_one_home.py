@@ -56,7 +56,7 @@ def test_quantized_encoding_lives_in_params(stone):
     assert np.array_equal(params_mod.quantize_with_table(values, lo, step), q)
     outside = values[:2].copy()
     outside[1, 10] = values[:, 10].max() + 1.0
-    with pytest.raises(ad.ParamError, match="instance 1, field 10"):
+    with pytest.raises(ad.core.ParamError, match="instance 1, field 10"):
         params_mod.quantize_with_table(outside, lo, step)
     src = inspect.getsource(buffers)
     assert "np.rint" not in src and "65535" not in src
@@ -105,9 +105,9 @@ def test_read_pixels_puts_the_top_row_first(ctx):
         ctx.scissor = (0, 1, 4, 1)  # GL row 1 = the top row of the picture
         fbo.clear(1.0, 1.0, 1.0, 1.0)
         ctx.scissor = None
-        image = ad.read_pixels(ctx, fbo)
+        image = ad.gl.read_pixels(ctx, fbo)
         assert image.shape == (2, 4, 3)
         assert (image[0] == 255).all() and (image[1] == 0).all()
-        assert np.array_equal(ad.read_pixels(ctx, fbo, resolve=True), image)
+        assert np.array_equal(ad.gl.read_pixels(ctx, fbo, resolve=True), image)
     finally:
         release_framebuffer(ctx, fbo)

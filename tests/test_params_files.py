@@ -42,7 +42,7 @@ def test_text_accepts_commas_spaces_and_comments(tmp_path):
 def test_text_errors_name_file_line_and_field(tmp_path, line, message):
     path = tmp_path / "bad.txt"
     path.write_text("# header\n" + line + "\n")
-    with pytest.raises(ad.ParamFileError) as err:
+    with pytest.raises(ad.core.ParamFileError) as err:
         ad.read_params(path)
     import re
 
@@ -52,14 +52,14 @@ def test_text_errors_name_file_line_and_field(tmp_path, line, message):
 def test_non_utf8_text_is_refused(tmp_path):
     path = tmp_path / "bad.txt"
     path.write_bytes(b"1 2 3 \xff\xfe\n")
-    with pytest.raises(ad.ParamFileError, match="not UTF-8"):
+    with pytest.raises(ad.core.ParamFileError, match="not UTF-8"):
         ad.read_params(path)
 
 
 def test_binary_round_trip_is_bit_exact(tmp_path, values, stone):
     path = ad.write_params(tmp_path / "p.adp", values, stone)
     assert path.stat().st_size == P.HEADER_SIZE + 64 * len(values) + 4
-    pf = ad.read_param_file(path)
+    pf = ad.core.read_param_file(path)
     assert pf.values.tobytes() == values.tobytes()
     assert pf.encoding == "float32" and pf.mesh_fingerprint == stone.fingerprint
     assert pf.axis.index == stone.axis.index and pf.axis.lo == stone.axis.lo and pf.axis.length == stone.axis.length
@@ -96,7 +96,7 @@ def test_text_binary_text_conversion_changes_nothing(tmp_path, values, stone):
 
 def test_wrong_mesh_is_an_error_unless_overridden(tmp_path, values, stone, leaf):
     path = ad.write_params(tmp_path / "p.adp", values, stone)
-    with pytest.raises(ad.MeshMismatchError, match="different base mesh"):
+    with pytest.raises(ad.core.MeshMismatchError, match="different base mesh"):
         ad.read_params(path, leaf)
     assert np.array_equal(ad.read_params(path, leaf, allow_mesh_mismatch=True), values)
     assert np.array_equal(ad.read_params(path, stone), values)
@@ -108,7 +108,7 @@ def test_every_flipped_byte_is_detected(tmp_path, stone):
     for i in range(len(data)):
         bad = bytearray(data)
         bad[i] ^= 0x40
-        with pytest.raises(ad.ParamFileError):
+        with pytest.raises(ad.core.ParamFileError):
             P.decode_binary(bytes(bad), "x.adp")
 
 
@@ -116,11 +116,11 @@ def test_corrupt_checksum_and_truncation(tmp_path, values, stone):
     path = ad.write_params(tmp_path / "p.adp", values, stone)
     data = path.read_bytes()
     (tmp_path / "flip.adp").write_bytes(data[:200] + bytes([data[200] ^ 1]) + data[201:])
-    with pytest.raises(ad.ParamFileError, match="checksum"):
+    with pytest.raises(ad.core.ParamFileError, match="checksum"):
         ad.read_params(tmp_path / "flip.adp")
     for cut in (0, 10, P.HEADER_SIZE, len(data) - 1):
         (tmp_path / "cut.adp").write_bytes(data[:cut])
-        with pytest.raises(ad.ParamFileError, match="truncated|count") as err:
+        with pytest.raises(ad.core.ParamFileError, match="truncated|count") as err:
             ad.read_params(tmp_path / "cut.adp")
         assert "cut.adp" in str(err.value)
 
@@ -128,36 +128,36 @@ def test_corrupt_checksum_and_truncation(tmp_path, values, stone):
 def test_huge_declared_count_allocates_nothing(tmp_path):
     data = bytearray(P.encode_binary(np.zeros((1, 16), np.float32)))
     struct.pack_into("<Q", data, 16, 2**60)
-    with pytest.raises(ad.ParamFileError, match="declares 1152921504606846976 instances"):
+    with pytest.raises(ad.core.ParamFileError, match="declares 1152921504606846976 instances"):
         P.decode_binary(bytes(data), "huge.adp")
 
 
 def test_wrong_magic_and_version(values):
     data = bytearray(P.encode_binary(values))
     data[1] = ord("X")
-    with pytest.raises(ad.ParamFileError, match="magic"):
+    with pytest.raises(ad.core.ParamFileError, match="magic"):
         P.decode_binary(bytes(data))
     data = bytearray(P.encode_binary(values))
     struct.pack_into("<H", data, 8, 99)
-    with pytest.raises(ad.ParamFileError, match=r"version: expected 1 \(16 numbers\) or 2 \(19 numbers\), found 99"):
+    with pytest.raises(ad.core.ParamFileError, match=r"version: expected 1 \(16 numbers\) or 2 \(19 numbers\), found 99"):
         P.decode_binary(bytes(data))
 
 
 def test_unknown_extension_and_missing_file(tmp_path, values):
-    with pytest.raises(ad.ParamFileError, match="unknown parameter file type"):
+    with pytest.raises(ad.core.ParamFileError, match="unknown parameter file type"):
         ad.write_params(tmp_path / "p.xyz", values)
-    with pytest.raises(ad.ParamFileError, match="no such parameter file"):
+    with pytest.raises(ad.core.ParamFileError, match="no such parameter file"):
         ad.read_params(tmp_path / "missing.adp")
 
 
 def test_as_params_validates_shape_and_finiteness():
-    with pytest.raises(ad.ParamError, match=r"shape \(n, 16\) or \(n, 19\), found \(3, 15\)"):
-        ad.as_params(np.zeros((3, 15)))
+    with pytest.raises(ad.core.ParamError, match=r"shape \(n, 16\) or \(n, 19\), found \(3, 15\)"):
+        ad.core.as_params(np.zeros((3, 15)))
     bad = np.zeros((2, 16))
     bad[1, 14] = np.inf
-    with pytest.raises(ad.ParamError, match="instance 1, field ry"):
-        ad.as_params(bad)
-    assert ad.as_params(np.arange(16)).shape == (1, 16)
+    with pytest.raises(ad.core.ParamError, match="instance 1, field ry"):
+        ad.core.as_params(bad)
+    assert ad.core.as_params(np.arange(16)).shape == (1, 16)
 
 
 def test_write_is_atomic_and_keeps_the_old_file_on_error(tmp_path, values):
@@ -165,7 +165,7 @@ def test_write_is_atomic_and_keeps_the_old_file_on_error(tmp_path, values):
     before = path.read_bytes()
     bad = values.copy()
     bad[0, 0] = np.nan
-    with pytest.raises(ad.ParamError):
+    with pytest.raises(ad.core.ParamError):
         ad.write_params(path, bad)
     assert path.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["p.adp"]  # no temporary files left

@@ -285,5 +285,5 @@ def test_quantized_gpu_capture_matches_cpu_of_dequantized(ctx, stone, leaf):
             assert np.array_equal(r.instances.read(), expected2)
             bad = expected2[3:4].copy()
             bad[0, 10] += 1e6
-            with pytest.raises(ad.ParamError, match=r"outside the quantized range .*call set_params\(\)"):
+            with pytest.raises(ad.core.ParamError, match=r"outside the quantized range .*call set_params\(\)"):
                 r.update_params(bad, 3)

@@ -86,7 +86,7 @@ def test_one_draw_call_draws_every_instance(ctx, stone, monkeypatch):
     # slices, every instance in each (test_big_draws_are_sliced_with_the_same_picture)
     monkeypatch.setattr(ctx, "_axialdeform_flush", None, raising=False)
     params = ad.random_params(stone, 3000, seed=1)
-    for mode in ad.MODES:
+    for mode in ad.gl.MODES:
         calls.clear()
         img = ad.render_image(stone, params, (160, 120), mode, ctx=ctx, look=ad.Look(fast=True))
         assert calls == [3000], mode
@@ -157,7 +157,7 @@ def test_parameter_updates_write_in_place(ctx, stone):
         assert r.count == 10 and r.instances.reallocations == 0
         r.set_params(ad.random_params(stone, 900, seed=3))  # more than the capacity: grows once
         assert r.count == 900 and r.instances.reallocations == 1
-        with pytest.raises(ad.ParamError, match="do not fit"):
+        with pytest.raises(ad.core.ParamError, match="do not fit"):
             r.update_params(params[:5], start=898)
 
 
@@ -174,7 +174,7 @@ def test_render_with_callers_pyrr_matrices(ctx, stone):
     """The documented matrix convention: pyrr matrices as they come, clip = proj * view * world."""
     import pyrr
 
-    params = ad.make_params(positions=[[0.0, 0.0, 0.0]])
+    params = ad.core.make_params(positions=[[0.0, 0.0, 0.0]])
     view = pyrr.matrix44.create_look_at([0.0, 0.0, 5.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0])
     proj = pyrr.matrix44.create_perspective_projection(40.0, 1.0, 0.1, 100.0)
     with ad.AxialRenderer(ctx, stone, params) as r, Offscreen(ctx, (64, 64), samples=0) as target:
@@ -187,7 +187,7 @@ def test_render_with_callers_pyrr_matrices(ctx, stone):
         assert abs(xs.mean() - 31.5) < 2 and abs(ys.mean() - 31.5) < 2
         assert np.ptp(xs) > 1.5 * np.ptp(ys)
         # moved right in world x -> right in the picture
-        r.set_params(ad.make_params(positions=[[1.0, 0.0, 0.0]]))
+        r.set_params(ad.core.make_params(positions=[[1.0, 0.0, 0.0]]))
         target.use()
         r.render(view, proj)
         assert np.nonzero(_mask(target.read(), img[0, 0].astype(int)))[1].mean() > xs.mean() + 5

@@ -104,7 +104,7 @@ def test_align_to_normal_turns_the_up_axis_onto_the_normal(terrain, stone):
     path, tm, _ = terrain
     for f in (0.0, 0.5, 1.0):
         params = ad.scatter(path, stone, 100, anchor="origin", up="z", align_to_normal=f, seed=4)
-        up = ad.rotation_matrices(params[:, 13:16])[:, :, 2]  # R · e_z
+        up = ad.core.rotation_matrices(params[:, 13:16])[:, :, 2]  # R · e_z
         _, _, face = trimesh.proximity.closest_point(tm, params[:, 10:13].astype(np.float64))
         normal = tm.face_normals[face]
         full = np.arccos(np.clip(normal[:, 2], -1, 1))
@@ -113,7 +113,7 @@ def test_align_to_normal_turns_the_up_axis_onto_the_normal(terrain, stone):
         # tilted within the plane of e_z and the normal
         plane = np.cross(np.array([0, 0, 1.0]), normal)
         assert np.abs(np.einsum("ij,ij->i", up, plane)).max() < 2e-3
-    yaw = ad.rotation_matrices(params[:, 13:16])[:, :, 0]
+    yaw = ad.core.rotation_matrices(params[:, 13:16])[:, :, 0]
     assert np.ptp(np.arctan2(yaw[:, 1], yaw[:, 0])) > 5.0  # random turns about the up axis
 
 
@@ -160,7 +160,7 @@ def test_too_few_writes_what_fits_and_exits_2_unless_allowed(terrain, tmp_path):
               "--allow-fewer")
     assert res.returncode == 0, res.stderr
     assert (tmp_path / "g.adp").read_bytes() == (tmp_path / "f.adp").read_bytes()
-    with pytest.raises(ad.TooFewError) as info:
+    with pytest.raises(ad.core.TooFewError) as info:
         ad.scatter(path, "stone", 100000, min_distance=1.0, up="z")
     assert len(info.value.params) == len(got)
 
@@ -209,7 +209,7 @@ def test_density_white_only_where_nothing_faces_up_is_an_error(stone):
     assert surface.face_normals[0, 1] > 0 and surface.face_normals[2, 1] < 0
     right = np.zeros((4, 4))
     right[:, 2:] = 1.0
-    with pytest.raises(ad.ScatterError, match="density: no candidate"):
+    with pytest.raises(ad.core.ScatterError, match="density: no candidate"):
         ad.scatter(surface, stone, 10, density=right)
     left = 1.0 - right
     params = ad.scatter(surface, stone, 10, density=left, anchor="origin")

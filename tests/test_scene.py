@@ -31,9 +31,9 @@ def test_tint_colours_each_instance_in_one_draw(ctx, stone):
         r.set_tint(None)
         assert np.array_equal(_draw(ctx, r, stone, params), plain)
         r.set_tint(np.ones((15, 3)))
-        with pytest.raises(ad.ParamError, match="15 colours for 16 instances"):
+        with pytest.raises(ad.core.ParamError, match="15 colours for 16 instances"):
             _draw(ctx, r, stone, params)
-        with pytest.raises(ad.ParamError):
+        with pytest.raises(ad.core.ParamError):
             r.set_tint(np.ones((16, 4)))
 
 
@@ -48,7 +48,7 @@ def test_tint_keeps_the_capture_path(ctx, stone):
 
 def test_ground_plane_draws_under_instances(ctx, stone):
     params = ad.random_params(stone, 9, seed=1)
-    with ad.AxialRenderer(ctx, stone, params) as r, ad.GroundPlane(ctx, cell=1.0) as g:
+    with ad.AxialRenderer(ctx, stone, params) as r, ad.gl.GroundPlane(ctx, cell=1.0) as g:
         g.fit(stone, params)
         assert g.radius > 0 and g.center[1] < 0.2
         plain = _draw(ctx, r, stone, params)
@@ -56,16 +56,16 @@ def test_ground_plane_draws_under_instances(ctx, stone):
     bg = np.array([0.93, 0.94, 0.96]) * 255
     assert (np.abs(grounded - bg).max(axis=2) > 14).mean() > (np.abs(plain - bg).max(axis=2) > 14).mean() + 0.1
     with pytest.raises(ad.AxialDeformError):
-        ad.GroundPlane(ctx, up="w")
+        ad.gl.GroundPlane(ctx, up="w")
 
 
 def test_assemble_text_expands_include_and_keeps_lines(ctx):
     src = '#version 330 core\n#include "axial.glsl"\nin vec3 p;\nvoid main() { gl_Position = vec4(axial_rotation(p) * p, 1.0); }\n'
-    out = ad.assemble_text(src, "mine.vert")
+    out = ad.gl.assemble_text(src, "mine.vert")
     assert out.source.startswith("#version 330 core\n")
     assert "axial_world" in out.source and out.files == ["mine.vert", "axial.glsl"]
     ctx.program(vertex_shader=out.source).release()
     bad = '#include "axial.glsl"\nvoid main() { nope(); }\n'
     with pytest.raises(Exception) as info:
-        ctx.program(vertex_shader=ad.assemble_text(bad, "mine.vert").source)
+        ctx.program(vertex_shader=ad.gl.assemble_text(bad, "mine.vert").source)
     assert "0:2" in str(info.value) or "0(2)" in str(info.value)

@@ -79,7 +79,7 @@ def test_a_scene_loads_with_paths_relative_to_its_file(small, monkeypatch, tmp_p
 
 def _error(tmp_path, body, name="scene.toml"):
     path = write_scene(tmp_path, body, name)
-    with pytest.raises(ad.SceneError) as info:
+    with pytest.raises(ad.core.SceneError) as info:
         load_scene(path)
     return str(info.value)
 

@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parent.parent
 def loader_from(files):
     def load(name):
         if name not in files:
-            raise ad.ShaderError(f"glsl/{name}: no such shader file")
+            raise ad.core.ShaderError(f"glsl/{name}: no such shader file")
         return files[name]
 
     return load
@@ -32,12 +32,12 @@ def test_include_keeps_line_numbers():
 
 def test_include_cycle_is_refused():
     files = {"a.glsl": '#include "b.glsl"\n', "b.glsl": '#include "a.glsl"\n'}
-    with pytest.raises(ad.ShaderError, match=r"cycle: a.glsl -> b.glsl -> a.glsl"):
+    with pytest.raises(ad.core.ShaderError, match=r"cycle: a.glsl -> b.glsl -> a.glsl"):
         assemble("a.glsl", loader=loader_from(files))
 
 
 def test_version_in_an_included_file_is_refused():
-    with pytest.raises(ad.ShaderError, match="lib.glsl, line 1: remove #version"):
+    with pytest.raises(ad.core.ShaderError, match="lib.glsl, line 1: remove #version"):
         assemble("m.vert", loader=loader_from({"m.vert": '#include "lib.glsl"\n', "lib.glsl": "#version 330\n"}))
 
 
@@ -51,7 +51,7 @@ def test_compile_error_names_file_stage_and_line(ctx, monkeypatch):
     }
     monkeypatch.setattr(S, "shader_source", loader_from(files))
     monkeypatch.setattr(S.assemble, "__defaults__", (None, loader_from(files)))
-    with pytest.raises(ad.ShaderError) as err:
+    with pytest.raises(ad.core.ShaderError) as err:
         build_program(ctx, "bad.vert", "ok.frag")
     msg = str(err.value)
     assert "glsl/lib.glsl, line 4" in msg and "vertex shader" in msg and "undefined_thing" in msg

@@ -80,7 +80,7 @@ def test_fit_takes_variants_in_file_order_and_loaded_order(tmp_path):
     b = fit_params(mesh, file_order)
     assert a.rms.max() < 1e-5 and b.rms.max() < 1e-5
     assert np.allclose(a.params, b.params, atol=1e-5)
-    with pytest.raises(ad.TopologyError, match=f"or {mesh.source_count}"):
+    with pytest.raises(ad.core.TopologyError, match=f"or {mesh.source_count}"):
         fit_params(mesh, file_order[:, :-1])
 
 
@@ -100,4 +100,4 @@ def test_fit_files_written_by_a_tool_without_the_seams(tmp_path):
         paths[-1].write_text(text)
     result = fit_files(mesh, paths)
     assert result.max.max() < 1e-4
-    assert np.allclose(ad.rotation_matrices(result.params[:, 13:16]), ad.rotation_matrices(params[:, 13:16]), atol=1e-4)
+    assert np.allclose(ad.core.rotation_matrices(result.params[:, 13:16]), ad.core.rotation_matrices(params[:, 13:16]), atol=1e-4)

@@ -32,7 +32,7 @@ CHROMIUM_ARGS = ["--use-angle=swiftshade", "--enable-unsafe-swiftshader", "--no-
 # ------------------------------------------------------------------ no browser
 def test_page_shaders_hold_the_package_deformation_verbatim():
     axial = ad.deformation_glsl().rstrip("\n")
-    quant = ad.assemble("quantized.glsl").source  # noqa: F841 - assembles: the file exists and parses
+    quant = ad.gl.assemble("quantized.glsl").source  # noqa: F841 - assembles: the file exists and parses
     quantized_text = (ROOT / "glsl" / "quantized.glsl").read_text().rstrip("\n")
     shaders = page_shaders()
     for variant in ("float", "quantized"):

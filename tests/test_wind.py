@@ -135,14 +135,14 @@ def test_wind_parse_and_bad_values():
     w = Wind.parse("0.2,0.5,1.5,8", direction=(0, 0, 1))
     assert (w.strength, w.gustiness, w.frequency, w.wavelength) == (0.2, 0.5, 1.5, 8.0)
     np.testing.assert_array_equal(w.unit_direction, [0, 0, 1])
-    with pytest.raises(ad.ParamError, match="--wind: gustiness: expected a finite number >= 0"):
+    with pytest.raises(ad.core.ParamError, match="--wind: gustiness: expected a finite number >= 0"):
         Wind.parse("0.2,-1")
     for bad in ((0, 0, 0), (1, 2), "abc", (1, float("nan"), 0)):
-        with pytest.raises(ad.ParamError, match="wind direction"):
+        with pytest.raises(ad.core.ParamError, match="wind direction"):
             Wind(direction=bad)
-    with pytest.raises(ad.ParamError, match="wind strength"):
+    with pytest.raises(ad.core.ParamError, match="wind strength"):
         Wind(strength=float("inf"))
-    with pytest.raises(ad.ParamError, match="time"):
+    with pytest.raises(ad.core.ParamError, match="time"):
         w.cycles(float("nan"))
 
 
@@ -185,5 +185,5 @@ def test_instance_bounds_hold_the_windy_instances(leaf):
 
 def test_renderer_refuses_a_wind_that_is_not_a_wind(ctx, leaf):
     with AxialRenderer(ctx, leaf, blades(leaf, n=3)) as r:
-        with pytest.raises(ad.ParamError, match="wind: expected an axialdeform.Wind"):
+        with pytest.raises(ad.core.ParamError, match="wind: expected an axialdeform.Wind"):
             r.capture(wind=0.3)

@@ -1,0 +1,37 @@
+"""The core layer: pure numpy, no GL.  The public names below have their home
+here; each lives in the module named beside it (imported on first use).
+
+Modules, in the order of the data flow: ``mesh`` (load, parts, materials),
+``axis`` (the control axis), ``record`` (THE instance record), ``params``
+(parameter arrays and files), ``variation``, ``scatter`` and ``wind`` (making
+instances), ``deform`` and ``transforms`` (the CPU reference), ``bounds``,
+``lod``, ``look``, ``scene``, ``bake``, ``export``, ``fit``; plumbing:
+``errors``, ``arrays``, ``atomic``, ``safeio``, ``lazy``.
+"""
+
+from .lazy import attach
+
+_NAMES = {
+    # errors: one family
+    **{n: "errors" for n in ("AxialDeformError", "ArgumentError", "ContextError", "GltfError", "MeshError",
+                             "MeshMismatchError", "ParamError", "ParamFileError", "ResidualError", "SceneError",
+                             "ScatterError", "ShaderError", "TooFewError", "TopologyError")},
+    # mesh, axis, appearance
+    "BaseMesh": "mesh", "load_mesh": "mesh", "BUNDLED_MESHES": "mesh", "bundled_mesh_path": "mesh",
+    "ControlAxis": "axis", "Material": "material", "Part": "material", "AssetWarning": "material",
+    # the record and parameters
+    "RECORD": "record", "Field": "record", "Instances": "record", "as_instances": "record",
+    "FIELDS": "record", "EXTENDED_FIELDS": "record",
+    "as_params": "params", "make_params": "params", "extend_params": "params", "is_extended": "params",
+    "read_params": "params", "read_param_file": "params", "write_params": "params", "ParamFile": "params",
+    "random_params": "variation", "load_surface": "scatter",
+    "Wind": "wind", "wind_offsets": "wind", "apply_wind": "wind",
+    # the CPU reference, bounds
+    "rotation_matrices": "transforms", "instance_bounds": "bounds", "scene_box": "bounds",
+    # scene and look
+    "Scene": "scene", "Layer": "scene", "load_scene": "scene", "Look": "look", "DEFAULT_LOOK": "look",
+    # out again
+    "export_glb": "export", "export_instanced": "export", "export_baked": "export", "fit_params": "fit",
+}
+
+__getattr__, __dir__, __all__ = attach(__name__, _NAMES)

@@ -3,7 +3,7 @@
 part of the instanced draw.  It shares the instances' light model
 (``glsl/lighting.glsl``), so both read as one scene::
 
-    ground = ad.GroundPlane(ctx)
+    ground = ad.gl.GroundPlane(ctx)
     ground.fit(mesh, params)                  # centre, size and height from the instances
     target.use(background)
     ground.render(view, proj, look=look)

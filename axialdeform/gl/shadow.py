@@ -2,7 +2,7 @@
 
 ::
 
-    shadow = ad.ShadowMap(ctx).fit(mesh, params, light_dir)
+    shadow = ad.gl.ShadowMap(ctx).fit(mesh, params, light_dir)
     renderer.render_shadow(shadow)               # instances -> depth map, one draw per part
     target.use(background)
     ground.render(view, proj, shadow=shadow)     # instances shadow the ground ...
