@@ -61,14 +61,15 @@ def _time(scene, args) -> float:
 def render(scene, args, wind=None, options=None) -> None:
     """``render SCENE -o OUT.png``; ``--wind`` replaces the scene's [wind];
     ``options``: ``--no-cull``, ``--lod``, ``--lod-error`` (:func:`._common.cull_options`)."""
-    from ..gl.image import parse_size, save_png
-    from ..gl.scene import render_scene
+    from ..gl.image import parse_size, render_image, save_png
 
     _check_output(args, "PNG")
-    check_triangles(scene, args, args.mode)
+    fast = bool(getattr(args, "fast", False))
+    check_triangles(scene, args, args.mode, fast)
     if wind is not None:
         scene.wind = wind
-    image = render_scene(scene, parse_size(args.size), args.mode, time=_time(scene, args), **(options or {}))
+    image = render_image(scene, size=parse_size(args.size), modes=args.mode, look=scene.look.replace(fast=fast),
+                         time=_time(scene, args), options=options)
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
           f"{image.shape[1]}x{image.shape[0]})")

@@ -14,7 +14,7 @@ from .transforms import rotation_matrices
 from .params import as_params
 from .record import ANGLES, OFFSETS, POSITION
 
-__all__ = ["wind_reach", "instance_bounds", "scene_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
+__all__ = ["wind_reach", "instance_bounds", "scene_box", "sphere_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
            "frustum_planes", "spheres_visible", "lod_choice"]
 
 
@@ -75,7 +75,14 @@ def scene_box(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     Returns ``lo : (3,) float64`` and ``hi : (3,) float64``; with no
     instances, the box from -1 to 1.
     """
-    centers, radii = instance_bounds(mesh, params)
+    return sphere_box(*instance_bounds(mesh, params))
+
+
+def sphere_box(centers, radii) -> tuple[np.ndarray, np.ndarray]:
+    """The axis-aligned box around spheres: ``centers : (n, 3)``, ``radii :
+    (n,)``.  Returns ``lo, hi : (3,) float64``; the box from -1 to 1 when n = 0."""
+    centers = np.asarray(centers, dtype=np.float64).reshape(-1, 3)
+    radii = np.broadcast_to(np.asarray(radii, dtype=np.float64), (len(centers),))
     if len(centers) == 0:
         return np.full(3, -1.0), np.full(3, 1.0)
     return (centers - radii[:, None]).min(axis=0), (centers + radii[:, None]).max(axis=0)

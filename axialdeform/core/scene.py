@@ -96,13 +96,38 @@ class Layer:
     color: tuple | None = None
     wind: bool = False
     lift: np.ndarray | None = None  # (n,) float32: height a scatter recipe's ``lift`` added along up
+    parts: tuple | None = None  # names of the mesh's parts to draw (None: all)
 
 
 @dataclass
 class Scene:
-    """A loaded scene: layers, the terrain (a BaseMesh or None) and the view settings."""
+    """What is drawn: layers of instances, a terrain, and the scene's camera,
+    light and wind -- the one front end of every picture
+    (:func:`axialdeform.render_image`, the viewer, ``axialdeform web``, the
+    notebook widget and the command line all take a scene).
 
-    path: Path
+    Make one with :meth:`single` (one mesh and its instances) or
+    :meth:`load` (a scene file, several layers).
+
+    Attributes
+    ----------
+    path : Path or None
+        The scene file (None for :meth:`single`).
+    up : {"x", "y", "z"}
+    layers : list of Layer
+        ``Layer(name, mesh, params, color, wind, lift, parts)``.
+    terrain : BaseMesh or None
+        Drawn as one undeformed instance of itself.
+    camera : dict
+        ``elevation``, ``azimuth``, ``fov`` or ``eye`` + ``target`` (scene files).
+    light : dict
+        ``light_dir``, ``ambient`` (scene files' ``[light]``).
+    wind : Wind or None
+        What layers with ``wind = True`` sway in.
+    background : (3,) float
+    """
+
+    path: Path | None
     up: str = "y"
     layers: list = field(default_factory=list)
     terrain: object = None
@@ -120,6 +145,41 @@ class Scene:
     def look(self) -> Look:
         """The file's ``[light]`` and ``background`` as a :class:`Look`."""
         return Look(background=self.background, **self.light)
+
+    @classmethod
+    def single(cls, mesh, params, *, up: str = "y", wind=None, color=None, parts=None,
+               name: str | None = None) -> "Scene":
+        """A scene of one layer: ``params`` ((n, 16|19) float32) instances of ``mesh``.
+
+        Parameters
+        ----------
+        mesh : BaseMesh
+        params : (n, 16) or (n, 19) float32
+        up : {"x", "y", "z"}
+            World up.
+        wind : Wind, optional
+            The layer sways in it.
+        color : (3,) float, optional
+            Base colour (linear RGB); default: the mesh's.
+        parts : sequence of str, optional
+            The mesh's parts to draw.
+        name : str, optional
+            The layer's name (default: the mesh's).
+        """
+        from .params import as_params
+
+        if up not in ("x", "y", "z"):
+            raise SceneError(f"up: expected one of x, y, z, found {up!r}")
+        parts = None if parts is None else tuple([parts] if isinstance(parts, str) else parts)
+        layer = Layer(str(name or getattr(mesh, "name", "mesh")), mesh, as_params(params),
+                      color=None if color is None else tuple(color), wind=wind is not None, parts=parts)
+        return cls(path=None, up=up, layers=[layer], wind=wind)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "Scene":
+        """A scene file (TOML, see :mod:`axialdeform.core.scene`); errors are
+        :class:`SceneError` naming the file, the line and the key."""
+        return load_scene(path)
 
 
 class _Source:

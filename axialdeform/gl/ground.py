@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.axis import AXIS_NAMES
-from ..core.bounds import instance_bounds, scene_box
+from ..core.bounds import instance_bounds, sphere_box
 from ..core.errors import ArgumentError, AxialDeformError
 from ..core.look import DEFAULT_LOOK, Look
 from .context import require_framebuffer
@@ -74,11 +74,18 @@ class GroundPlane:
         typical sphere radius above their lowest point (so instances rest in
         it rather than float over it).  Returns ``self``.
         """
-        centers, radii = instance_bounds(mesh, params)
-        if len(centers) == 0:
+        return self.fit_layers([(mesh, params)], margin=margin, sink=sink)
+
+    def fit_layers(self, layers, *, margin: float = 1.6, sink: float = 0.35) -> "GroundPlane":
+        """:meth:`fit` under several ``[(mesh, params), ...]`` (a scene's layers)."""
+        bounds = [instance_bounds(mesh, params) for mesh, params in layers]
+        bounds = [(c, np.broadcast_to(r, (len(c),))) for c, r in bounds if len(c)]
+        if not bounds:
             return self
+        centers = np.concatenate([c for c, _ in bounds])
+        radii = np.concatenate([r for _, r in bounds])
         a = AXIS_NAMES.index(self.up)
-        lo, hi = scene_box(mesh, params)
+        lo, hi = sphere_box(centers, radii)  # the scene's box
         center = (lo + hi) / 2
         others = [i for i in range(3) if i != a]
         self.radius = float(margin * np.linalg.norm((hi - lo)[others]) / 2 + np.median(radii))

@@ -8,15 +8,15 @@ import os
 import numpy as np
 
 from ..core.atomic import atomic_path
-from .camera import UP_VECTORS, Camera, frame_instances
+from .camera import UP_VECTORS, Camera
 from .context import Offscreen, check_image_size, create_context
 from ..core.errors import ArgumentError
 from ..core.look import DEFAULT_LOOK, Look
 from .ground import GroundPlane
-from .renderer import MODES, AxialRenderer
+from .renderer import MODES
 from .shadow import ShadowMap
 
-__all__ = ["render_image", "save_png", "parse_size"]
+__all__ = ["render_image", "save_png", "parse_size", "as_scene", "look_from_keywords"]
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -58,37 +58,62 @@ def look_from_keywords(look: Look | None, keywords: dict, where: str = "render_i
     return look
 
 
-def render_image(mesh, params, size=(800, 600), modes="solid", *, look: Look | None = None,
+def as_scene(scene, params=None, *, up: str = "y", wind=None, parts=None):
+    """``scene`` if it is a :class:`~axialdeform.core.scene.Scene`, else
+    :meth:`Scene.single` of the mesh ``scene`` and ``params``."""
+    from ..core.scene import Scene
+
+    if isinstance(scene, Scene):
+        if params is not None:
+            raise ArgumentError("params: a Scene carries its own instances; expected no params beside it")
+        return scene
+    if params is None:
+        raise ArgumentError("params: expected the instances ((n, 16) float32) beside a mesh, or a Scene")
+    return Scene.single(scene, params, up=up, wind=wind, parts=parts)
+
+
+def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Look | None = None,
                  camera: Camera | None = None, up: str = "y", ctx=None, renderer=None, parts=None,
-                 time: float | None = None, wind=None, **old_keywords) -> np.ndarray:
-    """Render all instances to an ``(height, width, 3) uint8`` image.
+                 time: float | None = None, wind=None, options: dict | None = None, **old_keywords) -> np.ndarray:
+    """Render a scene to an ``(height, width, 3) uint8`` image.
 
     Parameters
     ----------
-    mesh : BaseMesh
-    params : (n, 16) or (n, 19) float32
+    scene : Scene or BaseMesh
+        What to draw: a :class:`axialdeform.Scene` (layers, terrain, the
+        file's camera and wind), or a mesh with its ``params``
+        (:meth:`Scene.single`).
+    params : (n, 16) or (n, 19) float32, optional
+        The instances, when ``scene`` is a mesh.
     size : (int, int)
         Width and height of one panel.
     modes : str or sequence of str
-        One mode or several drawn side by side with the same parameters and
+        One mode or several drawn side by side with the same instances and
         camera (e.g. ``("solid", "wireframe")``).
     look : Look, optional
-        How the picture looks (:class:`axialdeform.Look`): by default the
-        extras -- multisampling (where ``ctx.max_samples`` allows), a ground
-        plane, a shadow map from the key light, hidden-line wireframes;
-        ``Look(fast=True)`` turns them all off (what the benchmark times).
+        How the picture looks (:class:`axialdeform.Look`; default: the
+        scene file's light and background with every extra -- multisampling
+        where ``ctx.max_samples`` allows, a ground plane (none under a
+        terrain), a shadow map from the key light, hidden-line wireframes;
+        ``Look(fast=True)`` turns them all off: what the benchmark times).
     camera : Camera, optional
-        Default: :func:`~axialdeform.gl.camera.frame_instances` for ``size``.
+        Default: :func:`~axialdeform.gl.scene.scene_camera`, the one framing
+        rule (tight, bend-aware) at this aspect; near and far enclose the
+        ground too.
     up : {"x", "y", "z"}
-        World up.
+        World up of a mesh (a Scene has its own).
     ctx : moderngl.Context, optional
         Created (EGL) and released afterwards if None.
     renderer : AxialRenderer, optional
-        Draw with this renderer (its parameters) instead of a new one.
+        Draw a one-layer scene with this renderer (its instances).
     parts : sequence of str, optional
-        The base mesh's parts to draw.
+        The mesh's parts to draw.
     time, wind : optional
-        The wind's clock (seconds) and a :class:`axialdeform.Wind`.
+        The wind's clock (seconds) and a :class:`axialdeform.Wind` that
+        replaces the scene's.
+    options : dict, optional
+        :class:`AxialRenderer` options of every layer (``culling``, ``lod``,
+        ``lod_error``).
 
     Returns
     -------
@@ -96,10 +121,16 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, look: Look | N
         First row at the top.
 
     The old keywords ``fast``, ``ground``, ``shadow``, ``samples``,
-    ``background``, ``hidden_line``, ``light_dir`` and ``ambient`` still work
-    for one release, with a DeprecationWarning: they are fields of ``look``.
+    ``background``, ``hidden_line``, ``light_dir``, ``ambient`` and
+    ``line_color`` still work for one release, with a DeprecationWarning:
+    they are fields of ``look``.
     """
-    look = look_from_keywords(look, old_keywords)
+    from .scene import SceneRenderer, scene_camera
+
+    scene = as_scene(scene, params, up=up, wind=wind, parts=parts)
+    if wind is not None:
+        scene.wind = wind
+    look = look_from_keywords(scene.look if look is None else look, old_keywords)
     modes = (modes,) if isinstance(modes, str) else tuple(modes)
     for m in modes:
         if m not in MODES:
@@ -109,40 +140,39 @@ def render_image(mesh, params, size=(800, 600), modes="solid", *, look: Look | N
     try:
         w, h = parse_size(f"{size[0]}x{size[1]}")
         check_image_size(ctx, (w, h), look.samples, panels=len(modes))  # before any work: the error says the limit
-        r = renderer or AxialRenderer(ctx, mesh, params, parts=parts)
-        plane = shadow = None
-        try:
-            if look.draws_ground:
-                plane = GroundPlane(ctx, up=up).fit(mesh, params)
-            cam = camera or frame_instances(mesh, params, w / h, up=up)
-            if plane is not None:  # near and far enclose everything drawn: the ground reaches the edges
-                cam = cam.enclosing_square(plane.center, UP_VECTORS[up], plane.radius, w / h)
-            view, proj = cam.view(), cam.projection(w / h)
-            if time is not None:  # the shadows bend in the same wind as the picture
-                r.time = float(time)
-            if wind is not None:
-                r.wind = wind
-            r.up = UP_VECTORS[up]
-            if look.draws_shadow and r.count:
-                extra = None
-                if plane is not None:  # the ground's centre part receives the shadows
-                    extra = [[*plane.center, 0.5 * plane.radius]]
-                shadow = ShadowMap(ctx).fit(mesh, params, look.light_dir, extra=extra)
-                r.render_shadow(shadow)
-            with Offscreen(ctx, (w, h), samples=look.msaa) as target:
-                panels = []
-                for m in modes:
-                    target.use(look.background)
-                    if plane is not None:
-                        plane.render(view, proj, look=look, shadow=shadow)
-                    r.render(view, proj, m, look=look, shadow=shadow)
-                    panels.append(target.read())
-        finally:
-            for obj in (plane, shadow):
-                if obj is not None:
-                    obj.release()
-            if renderer is None:
-                r.release()
+        layers = [(layer.mesh, layer.params) for layer in scene.layers]
+        with SceneRenderer(ctx, scene, renderer=renderer, **(options or {})) as drawn:
+            plane = shadow = None
+            try:
+                if look.draws_ground and scene.terrain is None:
+                    plane = GroundPlane(ctx, up=scene.up).fit_layers(layers)
+                cam = camera or scene_camera(scene, w / h)
+                if plane is not None:  # near and far enclose everything drawn: the ground reaches the edges
+                    cam = cam.enclosing_square(plane.center, UP_VECTORS[scene.up], plane.radius, w / h)
+                view, proj = cam.view(), cam.projection(w / h)
+                drawn.prepare(time)  # the shadows bend in the same wind as the picture
+                if look.draws_shadow and scene.count:
+                    extra = None
+                    if plane is not None:  # the ground's centre part receives the shadows
+                        extra = [[*plane.center, 0.5 * plane.radius]]
+                    elif scene.terrain is not None:  # the terrain receives them
+                        from .scene import TERRAIN_INSTANCE
+
+                        layers.append((scene.terrain, TERRAIN_INSTANCE))
+                    shadow = ShadowMap(ctx).fit_layers(layers, look.light_dir, extra=extra)
+                    drawn.render_shadow(shadow)
+                with Offscreen(ctx, (w, h), samples=look.msaa) as target:
+                    panels = []
+                    for m in modes:
+                        target.use(look.background)
+                        if plane is not None:
+                            plane.render(view, proj, look=look, shadow=shadow)
+                        drawn.render(view, proj, m, look=look, shadow=shadow, time=None)
+                        panels.append(target.read())
+            finally:
+                for obj in (plane, shadow):
+                    if obj is not None:
+                        obj.release()
         return np.concatenate(panels, axis=1)
     finally:
         if own_ctx:

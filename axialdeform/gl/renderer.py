@@ -641,14 +641,15 @@ class AxialRenderer:
             set_uniforms(prog, {"u_mode": 2})
         self.ctx.depth_func = "<="
 
-    def render_shadow(self, shadow) -> None:
+    def render_shadow(self, shadow, *, clear: bool = True) -> None:
         """Draw the instances into ``shadow`` (a :class:`~axialdeform.gl.shadow.ShadowMap`,
         fitted with :meth:`ShadowMap.fit`): one instanced depth draw per part;
         ``MASK`` cut-outs cast cut-out shadows, and the wind of the next
         :meth:`render` bends the shadows too.  With culling on, the culling
         pass first keeps the casters whose bound reaches the light's view
         volume (every level of detail is the full mesh here): the same shadow
-        map, fewer vertices.  Restores the caller's framebuffer."""
+        map, fewer vertices.  Restores the caller's framebuffer.  ``clear=False``
+        adds these casters to a map other renderers drew (a scene's layers)."""
         self._check()
         state = None
         if self.culling_enabled and self.count:
@@ -660,7 +661,7 @@ class AxialRenderer:
                 warnings.warn(f"culling pass unavailable, drawing every caster: {exc}", RuntimeWarning, stacklevel=2)
                 self.culling_enabled = False
         prog, vao, _ = self._variant(False, False) if state is None else (state[1], None, None)
-        with shadow.target():
+        with shadow.target(clear):
             if self.count == 0:
                 return
             set_camera_uniforms(prog, shadow.view, shadow.projection)

@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from .camera import UP_VECTORS, Camera
-from .context import Offscreen, create_context
 from .renderer import AxialRenderer
 
 __all__ = ["SceneRenderer", "scene_camera", "render_scene"]
@@ -15,17 +14,15 @@ __all__ = ["SceneRenderer", "scene_camera", "render_scene"]
 TERRAIN_INSTANCE = np.zeros((1, 16), dtype=np.float32)
 
 
-def _all_instances(scene):
-    """Every layer's instances as spheres' worth of (mesh, params) pairs for framing."""
-    pairs = [(layer.mesh, layer.params) for layer in scene.layers if len(layer.params)]
-    if scene.terrain is not None:
-        pairs.append((scene.terrain, TERRAIN_INSTANCE))
-    return pairs
-
-
-def scene_camera(scene, aspect: float) -> Camera:
-    """The scene's camera: ``eye``/``target`` when given, else one that frames
-    every layer and the terrain at the scene's elevation and azimuth."""
+def scene_camera(scene, aspect: float, *, margin: float = 0.03) -> Camera:
+    """THE framing rule of every picture: the scene's ``eye``/``target`` when
+    its file gives them, else the orbit camera (the scene's elevation,
+    azimuth and fov; 35 degrees each by default) that just sees every layer's
+    bent instances -- tight outline points
+    (:func:`axialdeform.core.bounds.outline_points`), or the bounding spheres
+    of the wind's reach for a layer that sways -- and the terrain.  Its near
+    and far planes enclose them; :meth:`Camera.enclosing_square` widens them
+    for a ground plane."""
     cam = scene.camera
     fov = cam.get("fov", 35.0)
     up = UP_VECTORS[scene.up]
@@ -33,21 +30,26 @@ def scene_camera(scene, aspect: float) -> Camera:
         eye, target = np.asarray(cam["eye"]), np.asarray(cam["target"])
         dist = float(np.linalg.norm(eye - target))
         return Camera(eye, target, up, fov, near=dist * 1e-3, far=dist * 10)
-    from ..core.bounds import instance_bounds
+    from ..core.bounds import instance_bounds, outline_points
     from .camera import camera_for_points
 
     points, radii = [], []
-    for layer in scene.layers:  # a sphere per instance (it holds the instance at any time of the wind)
-        if len(layer.params):
-            c, r = instance_bounds(layer.mesh, layer.params, wind=scene.wind if layer.wind else None)
-            points.append(c)
-            radii.append(np.broadcast_to(r, (len(c),)))
+    for layer in scene.layers:
+        if not len(layer.params):
+            continue
+        if layer.wind and scene.wind is not None:  # a sphere per instance: it holds the instance at any time
+            c, r = instance_bounds(layer.mesh, layer.params, wind=scene.wind)
+        else:
+            c, r = outline_points(layer.mesh, layer.params)
+        points.append(c)
+        radii.append(np.broadcast_to(r, (len(c),)))
     if scene.terrain is not None:
         points.append(scene.terrain.positions)  # float32: concatenated (or read) as float64 once, below
         radii.append(np.zeros(len(scene.terrain.positions)))
     pts = np.concatenate(points) if points else np.zeros((0, 3))
     rad = np.concatenate(radii) if radii else np.zeros(0)
-    return camera_for_points(pts, rad, aspect, scene.up, fov, cam.get("azimuth", 35.0), cam.get("elevation", 35.0))
+    return camera_for_points(pts, rad, aspect, scene.up, fov, cam.get("azimuth", 35.0), cam.get("elevation", 35.0),
+                             margin)
 
 
 class SceneRenderer:
@@ -60,11 +62,14 @@ class SceneRenderer:
     always drawn whole.
     """
 
-    def __init__(self, ctx, scene, *, culling: bool = True, lod: bool = False, lod_error: float = 1.0):
+    def __init__(self, ctx, scene, *, culling: bool = True, lod: bool = False, lod_error: float = 1.0,
+                 renderer: AxialRenderer | None = None):
         self.ctx = ctx
         self.scene = scene
         self.renderers = []
         self._released = False
+        #: a renderer the caller made for the one layer (render_image(renderer=...)): used, never released
+        self._borrowed = renderer
         #: False stills every layer's wind (the viewer's V key); True: the scene's
         self.wind_enabled = True
         try:
@@ -74,8 +79,9 @@ class SceneRenderer:
                 self.renderers.append((AxialRenderer(ctx, scene.terrain, TERRAIN_INSTANCE, cull_back_faces=False),
                                        scene.terrain_color, False))
             for layer in scene.layers:
-                self.renderers.append((AxialRenderer(ctx, layer.mesh, layer.params, culling=culling, lod=lod,
-                                                     lod_error=lod_error), layer.color, layer.wind))
+                r = renderer if renderer is not None and len(scene.layers) == 1 else AxialRenderer(
+                    ctx, layer.mesh, layer.params, culling=culling, lod=lod, lod_error=lod_error, parts=layer.parts)
+                self.renderers.append((r, layer.color, layer.wind))
         except BaseException:
             self.release()
             raise
@@ -95,23 +101,40 @@ class SceneRenderer:
         start = 1 if self.scene.terrain is not None else 0
         return [(layer, renderer) for layer, (renderer, _, _) in zip(self.scene.layers, self.renderers[start:])]
 
-    def render(self, view, projection, mode: str = "solid", *, time: float = 0.0, look=None) -> None:
-        """Draw everything into the bound framebuffer; ``time`` drives the wind of layers
-        with ``wind = true`` (while :attr:`wind_enabled`); ``look`` (default: the
-        scene file's, :attr:`Scene.look`) gives the light."""
+    def prepare(self, time: float | None = None) -> None:
+        """Set every renderer's up, colour, wind and (unless None) clock from
+        the scene: before :meth:`render_shadow` and :meth:`render`."""
         up = UP_VECTORS[self.scene.up]
-        look = self.scene.look.replace(hidden_line=False) if look is None else look
         for renderer, color, sways in self.renderers:
             renderer.up = up
             if color is not None:
                 renderer.color = tuple(color)
-            renderer.wind = self.scene.wind if sways and self.wind_enabled else None
-            renderer.render(view, projection, mode, look=look, time=time)
+            if renderer is not self._borrowed or sways:
+                renderer.wind = self.scene.wind if sways and self.wind_enabled else None
+            if time is not None:
+                renderer.time = float(time)
+
+    def render_shadow(self, shadow) -> None:
+        """Every layer and the terrain into ``shadow`` (one map, cleared once)."""
+        for k, (renderer, _, _) in enumerate(self.renderers):
+            renderer.render_shadow(shadow, clear=k == 0)
+
+    def render(self, view, projection, mode: str = "solid", *, time: float | None = 0.0, look=None,
+               shadow=None) -> None:
+        """Draw everything into the bound framebuffer; ``time`` drives the wind of layers
+        with ``wind = true`` (while :attr:`wind_enabled`; None: keep each renderer's
+        clock); ``look`` (default: the scene file's, :attr:`Scene.look`) gives
+        the light; ``shadow`` a drawn :class:`ShadowMap` (:meth:`render_shadow`)."""
+        look = self.scene.look.replace(hidden_line=False) if look is None else look
+        self.prepare(time)
+        for renderer, _, _ in self.renderers:
+            renderer.render(view, projection, mode, look=look, shadow=shadow)
 
     def release(self) -> None:
         """Free every renderer; safe to call twice."""
         for renderer, _, _ in self.renderers:
-            renderer.release()
+            if renderer is not self._borrowed:
+                renderer.release()
         self.renderers = []
         self._released = True
 
@@ -125,17 +148,14 @@ class SceneRenderer:
 def render_scene(scene, size=(800, 600), mode: str = "solid", *, ctx=None, time: float = 0.0, samples: int = 4,
                  camera: Camera | None = None, culling: bool = True, lod: bool = False,
                  lod_error: float = 1.0) -> np.ndarray:
-    """Render a scene to an ``(height, width, 3) uint8`` image (an EGL context is made if ``ctx`` is None);
-    ``culling``, ``lod``, ``lod_error``: as :class:`SceneRenderer`."""
-    own = ctx is None
-    ctx = create_context() if own else ctx
-    try:
-        w, h = size
-        cam = camera or scene_camera(scene, w / h)
-        with SceneRenderer(ctx, scene, culling=culling, lod=lod, lod_error=lod_error) as sr, Offscreen(ctx, (w, h), samples=samples) as target:
-            target.use(scene.background)
-            sr.render(cam.view(), cam.projection(w / h), mode, time=time)
-            return target.read()
-    finally:
-        if own:
-            ctx.release()
+    """Deprecated: :func:`axialdeform.render_image` takes a scene
+    (``render_image(scene, size=..., modes=mode, look=scene.look.replace(samples=...))``)."""
+    import warnings
+
+    from .image import render_image
+
+    warnings.warn("render_scene is deprecated: use axialdeform.render_image(scene, ...)", DeprecationWarning,
+                  stacklevel=2)
+    return render_image(scene, size=size, modes=mode, ctx=ctx, time=time, camera=camera,
+                        look=scene.look.replace(samples=samples),
+                        options={"culling": culling, "lod": lod, "lod_error": lod_error})

@@ -61,12 +61,20 @@ class ShadowMap:
     def fit(self, mesh, params, light_dir=LIGHT_DIR, *, extra=None) -> "ShadowMap":
         """Aim the light camera at every instance (their bounding spheres);
         ``extra``: (k, 4) more spheres ``x, y, z, r`` to keep inside (a ground).  Returns self."""
+        return self.fit_layers([(mesh, params)], light_dir, extra=extra)
+
+    def fit_layers(self, layers, light_dir=LIGHT_DIR, *, extra=None) -> "ShadowMap":
+        """:meth:`fit` over several ``[(mesh, params), ...]`` (a scene's layers)."""
         import pyrr
 
         from ..core.bounds import instance_bounds
 
-        centers, radii = instance_bounds(mesh, params)
-        spheres = np.hstack([centers, radii[:, None]]) if len(centers) else np.zeros((0, 4))
+        spheres = [np.zeros((0, 4))]
+        for mesh, params in layers:
+            centers, radii = instance_bounds(mesh, params)
+            if len(centers):
+                spheres.append(np.hstack([centers, radii[:, None]]))
+        spheres = np.vstack(spheres)
         if extra is not None:
             spheres = np.vstack([spheres, np.asarray(extra, dtype=np.float64).reshape(-1, 4)])
         if len(spheres) == 0:
@@ -92,15 +100,17 @@ class ShadowMap:
         return (np.asarray(self.view, np.float64) @ np.asarray(self.projection, np.float64)).astype(np.float32)
 
     @contextmanager
-    def target(self):
-        """Bind the depth framebuffer (cleared) for the depth pass; the caller's
+    def target(self, clear: bool = True):
+        """Bind the depth framebuffer (cleared unless ``clear`` is False: a
+        further caster of the same map) for the depth pass; the caller's
         framebuffer and viewport come back afterwards."""
         if self._released:
             raise AxialDeformError("this ShadowMap was released; create a new one")
         previous, viewport = self.ctx.fbo, self.ctx.viewport
         self.fbo.use()
         self.ctx.viewport = (0, 0, self.size, self.size)
-        self.fbo.clear(depth=1.0)
+        if clear:
+            self.fbo.clear(depth=1.0)
         try:
             yield
         finally:
