@@ -44,7 +44,7 @@ def test_gpu_capture_equals_cpu_reference(ctx, tmp_path, stone, leaf):
 
 
 def test_capture_in_chunks_and_slices(ctx, stone, monkeypatch):
-    import axialdeform.gl.renderer as R
+    import axialdeform.gl.capture as R
 
     params = ad.random_params(stone, 100, seed=2, bend=0.3)
     monkeypatch.setattr(R, "_CAPTURE_BYTES", 58 * 24 * 7)  # 7 instances per pass

@@ -11,7 +11,7 @@ import axialdeform as ad
 from axialdeform.core.deform import deform
 from axialdeform.core.params import extend_params
 from axialdeform.core.wind import Wind, apply_wind, wind_hash, wind_offsets, wind_phase
-from axialdeform.gl import renderer as renderer_module
+from axialdeform.gl import capture as capture_module
 from axialdeform.gl.renderer import AxialRenderer
 
 WIND = Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.7, frequency=0.8, wavelength=4.0)
@@ -87,7 +87,7 @@ def test_wind_follows_direction_in_each_instance_frame(leaf):
 def test_gpu_wind_equals_cpu(ctx, leaf, monkeypatch, quantized):
     p = blades(leaf, n=200)
     # small capture chunks: the per-instance phase must follow the instance's index across chunks
-    monkeypatch.setattr(renderer_module, "_CAPTURE_BYTES", leaf.vertex_count * 24 * 37)
+    monkeypatch.setattr(capture_module, "_CAPTURE_BYTES", leaf.vertex_count * 24 * 37)
     with AxialRenderer(ctx, leaf, p, quantized=quantized, wind=WIND) as r:
         gpu = r.capture(time=7.25)
         still = r.capture(wind=None)

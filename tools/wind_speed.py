@@ -79,12 +79,15 @@ def main() -> None:
                     t = time.perf_counter()
                     target.use()
                     if kind == "still":
-                        r.render(view, proj, "solid", wind=None)
+                        r.wind = None
+                        r.render(view, proj, "solid")
                     elif kind == "wind":
-                        r.render(view, proj, "solid", wind=wind, time=now)
+                        r.wind = wind
+                        r.render(view, proj, "solid", time=now)
                     else:  # the CPU path: the same wind computed in numpy, uploaded every frame
                         r.update_params(apply_wind(wind, mesh.axis, params, now))
-                        r.render(view, proj, "solid", wind=None)
+                        r.wind = None
+                        r.render(view, proj, "solid")
                     ctx.finish()
                     dt = time.perf_counter() - t
                 if k >= 2:

@@ -125,7 +125,7 @@ def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
 def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
     """Read every pre-deformed OBJ file with load_mesh, one VBO/IBO/VAO each."""
     from ..core.mesh import load_mesh
-    from ..gl.renderer import BakedMeshes
+    from .baked import BakedMeshes
 
     folder = Path(spec["folder"])
     meshes = None

@@ -16,41 +16,36 @@ return); the shader computes ``clip = proj * view * world``.
 
 from __future__ import annotations
 
-import contextlib
 from contextlib import contextmanager
 
 import numpy as np
 
-from .buffers import InstanceBuffer, MeshBuffers, as_index
-from .cull import CullPass, IndirectDraws, read_counts
-from .context import (bind_framebuffer, check_alive, draw_in_batches, flush_budget, release_framebuffer,
-                      require_framebuffer)
-from ..core.bounds import base_radius, wind_reach
+from .buffers import InstanceBuffer, MeshBuffers
+from .cull import IndirectDraws, read_counts
+from .context import check_alive, require_framebuffer
+from ..core.bounds import base_radius
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.look import DEFAULT_LOOK, Look
 from ..core.arrays import as_array
-from ..core.safeio import require_finite
 from ..core.wind import Wind
-from .uniforms import camera_matrices, eye_position, set_camera_uniforms, set_uniforms
+from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .material import AppearanceBuffer, GpuMaterials
 from .shaders import build_program
+from .variants import ShaderVariants
+from .draw import BLEND_DEPTH_CUTOFF, Drawing
+from .capture import Capture
 
-__all__ = ["AxialRenderer", "BakedMeshes", "MODES", "DEFAULT_COLORS", "BLEND_DEPTH_CUTOFF"]
+__all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS", "BLEND_DEPTH_CUTOFF"]
 
 MODES = ("solid", "flat", "wireframe")
 _MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
 #: default base colours (linear RGB) by bundled mesh name
 DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
-_CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
-_KEEP = object()  # capture(wind=...) not given: keep the renderer's wind
 #: render(look=None): the default light and lines, every edge drawn (no depth pre-pass)
 _PLAIN_LOOK = DEFAULT_LOOK.replace(hidden_line=False)
-#: alpha below which a ``BLEND`` part leaves no depth in depth-only passes (shadows)
-BLEND_DEPTH_CUTOFF = 0.5
-_GL_SAMPLE_ALPHA_TO_COVERAGE = 0x809E
 
 
-class AxialRenderer:
+class AxialRenderer(ShaderVariants, Drawing, Capture):
     """Draws ``count`` deformed instances of one base mesh.
 
     Parameters
@@ -232,79 +227,6 @@ class AxialRenderer:
         #: world up (unit vector), for the sky/ground hemisphere ambient
         self.up = (0.0, 1.0, 0.0)
 
-    # ------------------------------------------------------------ plumbing
-    @property
-    def _edge_buffer(self):
-        return self.mesh_buffers.edges if self._part_edges is None else self._part_edges[0]
-
-    @property
-    def _edge_count(self) -> int:
-        return self.mesh_buffers.edge_indices if self._part_edges is None else self._part_edges[1]
-
-    def _vertex_array(self, program, index_buffer, instance_buffer=None, extra=()):
-        content = [self.mesh_buffers.content(program), (instance_buffer or self.instances).content(program), *extra]
-        if self.appearance is not None:
-            content.append(self.appearance.content(program))
-        vao = self.ctx.vertex_array(program, content, index_buffer=index_buffer, index_element_size=4)
-        self._objects.append(vao)
-        return vao
-
-    def _edges_vao(self, tinted: bool, shadowed: bool = False):
-        """The vertex array of the edges (plain, tinted and/or shadow-receiving), built on first use."""
-        if shadowed:
-            entry = self._variants[(tinted, True)]
-            if entry[2] is None:
-                entry[2] = self._vertex_array(entry[0], self._edge_buffer, extra=entry[3])
-            return entry[2]
-        if tinted:
-            if self._tint[2] is None:
-                self._tint[2] = self._vertex_array(self._tint[0], self._edge_buffer,
-                                                   extra=[(self._tint[3], "3f/i", "i_tint")])
-            return self._tint[2]
-        if self._vao_edges is None:
-            self._vao_edges = self._vertex_array(self.program, self._edge_buffer)
-        return self._vao_edges
-
-    def _set_axis_uniforms(self, program) -> None:
-        axis = self.mesh.axis
-        i, j = axis.perpendicular
-        center = (axis.center[i], axis.center[j])
-        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length, "u_center": center,
-                               "u_instance_base": 0, "u_wind_strength": 0.0})
-        self._set_quant_uniforms(program)
-
-    def _set_wind_uniforms(self, program, wind, time) -> None:
-        """The wind's uniforms (strength 0: still); no buffer is written."""
-        if "u_wind_strength" not in program:  # the linker removed it: no bend (AXIAL_NO_BEND)
-            return
-        if wind is not None and not isinstance(wind, Wind):
-            raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
-        if wind is None or wind.strength == 0:
-            program["u_wind_strength"].value = 0.0
-            return
-        set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),
-                               "u_wind_gust": float(wind.gustiness), "u_wind_cycles": tuple(wind.cycles(time)),
-                               "u_wind_wavenumber": float(wind.wavenumber)})
-
-    def _set_quant_uniforms(self, program) -> None:
-        """The per-column decode table of a quantized instance buffer (no-op otherwise)."""
-        if "u_qmin" in program:
-            program["u_qmin"].write(self.instances.qmin[:16].astype("f4").tobytes())
-            program["u_qstep"].write(self.instances.qstep[:16].astype("f4").tobytes())
-        if "u_qmin_extra" in program:
-            program["u_qmin_extra"].value = tuple(float(x) for x in self.instances.qmin[16:19])
-            program["u_qstep_extra"].value = tuple(float(x) for x in self.instances.qstep[16:19])
-
-    def _refresh_quant_uniforms(self) -> None:
-        if not self.quantized:
-            return
-        import moderngl
-
-        programs = [o for o in self._objects if isinstance(o, moderngl.Program)]
-        if self._capture is not None:
-            programs.append(self._capture[0])
-        for prog in programs:
-            self._set_quant_uniforms(prog)
 
     def _check(self) -> None:
         if self._released:
@@ -381,78 +303,6 @@ class AxialRenderer:
             buffer.write(values.tobytes())
         self._tint_count = len(values)
 
-    # ------------------------------------------------------------ drawing
-    def _variant(self, tinted: bool, shadowed: bool):
-        """(program, triangles vao, a function that returns the edges vao) of the
-        plain, tinted and/or shadow-receiving program (edges: built on first use)."""
-        def edges():
-            return self._edges_vao(tinted, shadowed)
-
-        if not shadowed:
-            if tinted:
-                return self._tint[0], self._tint[1], edges
-            return self.program, self._vao_triangles, edges
-        key = (tinted, shadowed)
-        if key not in self._variants:
-            defines = {**self._defines, "AXIAL_SHADOW": 1}
-            extra = []
-            if tinted:
-                defines["AXIAL_TINT"] = 1
-                extra = [(self._tint[3], "3f/i", "i_tint")]
-            prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
-            self._objects.append(prog)
-            self._set_axis_uniforms(prog)
-            self._variants[key] = [prog, self._vertex_array(prog, self.mesh_buffers.triangles, extra=extra), None, extra]
-        entry = self._variants[key]
-        return entry[0], entry[1], edges
-
-    def _draw_parts(self, prog, vao, view, projection, *, depth_only: bool = False, instances: int | None = None,
-                    level: int = 0) -> None:
-        """One instanced draw per part: opaque and cut-out parts, then blended ones.
-        ``instances``: how many to draw (default :attr:`count`; the visible count after culling);
-        ``level``: the LOD level whose parts ``vao`` draws (its parts have the base mesh's materials)."""
-        import moderngl
-
-        instances = self.count if instances is None else instances
-        fbo = self.ctx.fbo
-        coverage = None  # whether BLEND parts draw with alpha-to-coverage: asked once per draw
-        for part in self._level_parts(level):
-            if part.count == 0:
-                continue
-            material = part.material
-            if self.materials is not None:
-                self.materials.bind(prog, material, self.color)
-            is_blend = material.alpha_mode == "BLEND"
-            if is_blend and depth_only:  # shadows and hidden-line depth: a cut-out at alpha 0.5
-                set_uniforms(prog, {"u_alpha_mode": 1, "u_alpha_cutoff": BLEND_DEPTH_CUTOFF})
-            blend = is_blend and not depth_only
-            if blend and coverage is None:
-                coverage = self._alpha_to_coverage(fbo)
-            if blend and coverage:  # order-independent: depth writes on, alpha -> sample mask
-                self.ctx.enable_direct(_GL_SAMPLE_ALPHA_TO_COVERAGE)
-            elif blend:
-                self.ctx.enable(moderngl.BLEND)
-                self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-                fbo.depth_mask = False
-            try:
-                with self.culling(view, projection, enabled=not material.double_sided):
-                    self._instanced(vao, moderngl.TRIANGLES, part.count * 3, part.start * 3, instances,
-                                    ("t", level, part.start * 3), split=not (blend and not coverage))
-            finally:
-                if blend and coverage:
-                    self.ctx.disable_direct(_GL_SAMPLE_ALPHA_TO_COVERAGE)
-                elif blend:
-                    fbo.depth_mask = True
-                    self.ctx.disable(moderngl.BLEND)
-
-    def _alpha_to_coverage(self, fbo) -> bool:
-        """:attr:`alpha_to_coverage`, or (None) whether ``fbo`` is multisampled:
-        its first colour attachment has 2 or more samples (a window's default
-        framebuffer has none to ask: the viewer sets the attribute)."""
-        if self.alpha_to_coverage is not None:
-            return bool(self.alpha_to_coverage)
-        attachments = getattr(fbo, "color_attachments", None) or ()
-        return bool(attachments) and int(getattr(attachments[0], "samples", 0) or 0) > 1
 
     def render(self, view, projection, mode: str = "solid", *, look: Look | None = None, shadow=None,
                time: float | None = None) -> None:
@@ -558,88 +408,6 @@ class AxialRenderer:
 
         self._draw_culled(cull, prog, vaos, result, draw_level)
 
-    def _run_cull(self, cull, view, projection, levels: int, *, frustum: bool):
-        """Run ``cull`` for the camera ``view``, ``projection``: the counts per
-        level (GL 3.3 path) or an :class:`IndirectDraws` (indirect path)."""
-        height = float(self.ctx.viewport[3]) if self.ctx.viewport else 1.0
-        ortho = abs(float(projection[3, 3]) - 1.0) < 1e-9  # pyrr layout: w = 1 for orthographic
-        return cull.run(self.count, levels, view, projection, frustum=frustum,
-                        center=self.mesh.axis.center, radius=self.bound_radius,
-                        lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye_position(view),
-                        px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho,
-                        lod_px=self.lod_error, wind_reach=wind_reach(self.mesh, self.wind if self.bend else None),
-                        prepare=self._set_quant_uniforms)
-
-    def _draw_culled(self, cull, prog, vaos, result, draw_level) -> None:
-        """Every level's draws from the cull pass's output: ``draw_level(level,
-        triangles vao, edges(), instances)``; ``instances`` is the level's
-        count (GL 3.3 path: empty levels are skipped) or the
-        :class:`IndirectDraws` (every level is drawn, its count on the GPU)."""
-        indirect = isinstance(result, IndirectDraws)
-        first = 0
-        for level, kept in enumerate([result] * result.levels if indirect else result):
-            if indirect or kept:
-                vao_t = vaos[level][0]
-                cull.bind_records(vao_t, prog, first)
-
-                def culled_edges(level=level, first=first):
-                    vao_e = self._culled_edges(vaos, prog, level)
-                    cull.bind_records(vao_e, prog, first)
-                    return vao_e
-
-                draw_level(level, vao_t, culled_edges, kept)
-            if not indirect:
-                first += kept
-
-    def _draw(self, prog, vao_triangles, edges, level: int, mode: str, hidden_line, view, projection,
-              instances) -> None:
-        """``instances`` instances of one level: the parts' triangles, or the
-        edges in wireframe (``edges()`` returns their vao: built on first use)."""
-        import moderngl
-
-        if mode == "wireframe":  # lines are never culled
-            if hidden_line:
-                self._depth_prepass(prog, vao_triangles, level, view, projection, instances,
-                                    fill=hidden_line == "fill")
-            fill = hidden_line == "fill"
-            set_uniforms(prog, {"u_line_alpha": 0.45 if fill else 1.0})
-            if fill:  # the shaded fill shows through the lines
-                self.ctx.enable(moderngl.BLEND)
-                self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-            try:
-                count = self._edge_count if level == 0 else self._level_edge_data(level)[1]
-                self._instanced(edges(), moderngl.LINES, count, 0, instances, ("e", level, 0))
-            finally:
-                self.ctx.depth_func = "<"
-                if fill:
-                    self.ctx.disable(moderngl.BLEND)
-            return
-        self._draw_triangles(prog, vao_triangles, level, view, projection, instances)
-
-    def _draw_triangles(self, prog, vao, level: int, view, projection, instances: int, *, depth_only: bool = False):
-        """One instanced draw per part of LOD level ``level`` (0: the base mesh)."""
-        self._draw_parts(prog, vao, view, projection, depth_only=depth_only, instances=instances, level=level)
-
-    def _depth_prepass(self, prog, vao, level: int, view, projection, instances: int, fill: bool) -> None:
-        """The triangles first, pushed back a little so the lines on them pass
-        the ``<=`` test: into the depth buffer only (colour kept by a (0, 1)
-        blend), or with ``fill`` also drawn washed-out (``u_mode`` 3)."""
-        import moderngl
-
-        set_uniforms(prog, {"u_mode": 3 if fill else 0})
-        if not fill:
-            self.ctx.enable(moderngl.BLEND)
-            self.ctx.blend_func = moderngl.ZERO, moderngl.ONE
-        self.ctx.polygon_offset = 1.0, 1.0
-        try:
-            self._draw_triangles(prog, vao, level, view, projection, instances, depth_only=True)
-        finally:
-            self.ctx.polygon_offset = 0.0, 0.0
-            if not fill:
-                self.ctx.disable(moderngl.BLEND)
-                self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-            set_uniforms(prog, {"u_mode": 2})
-        self.ctx.depth_func = "<="
 
     def render_shadow(self, shadow, *, clear: bool = True) -> None:
         """Draw the instances into ``shadow`` (a :class:`~axialdeform.gl.shadow.ShadowMap`,
@@ -685,138 +453,6 @@ class AxialRenderer:
 
             self._draw_culled(cull, prog, vaos[:1], result, draw_level)
 
-    def _culled_state(self, tinted: bool, shadowed: bool = False):
-        """The cull pass (one per tint state) and the draw program/VAOs reading
-        its output (one per tint/shadow variant), built on first use."""
-        state = self._culled.get((tinted, shadowed))
-        if state is None:
-            cull = self._cull_passes.get(tinted)
-            if cull is None:
-                tint = (self._tint[3], "3f", "i_tint") if tinted else None
-                try:
-                    cull = CullPass(self.ctx, self.instances, self._defines, tint=tint, indirect=self._indirect,
-                                    draws=self._draw_slots())
-                except ShaderError as exc:
-                    if self._indirect is not None:
-                        raise
-                    import warnings  # a driver that cannot build the compute pass: the GL 3.3 one, same picture
-
-                    warnings.warn(f"indirect culling unavailable, using transform feedback: {exc}", RuntimeWarning,
-                                  stacklevel=3)
-                    self._indirect = False
-                    cull = CullPass(self.ctx, self.instances, self._defines, tint=tint, indirect=False)
-                self._cull_passes[tinted] = cull
-                self._objects.append(cull)
-            defines = {**self._defines, "AXIAL_CULLED": 1, **({"AXIAL_TINT": 1} if tinted else {}),
-                       **({"AXIAL_SHADOW": 1} if shadowed else {})}
-            prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
-            self._objects.append(prog)
-            self._set_axis_uniforms(prog)
-            vaos = []
-            for level in range(len(self._level_buffers)):  # edges: built by the first wireframe draw (lazy edges)
-                vaos.append([self._culled_vao(prog, level, self._level_buffers[level].triangles), None])
-            state = self._culled[(tinted, shadowed)] = (cull, prog, vaos)
-        return state
-
-    def _draw_slots(self) -> list:
-        """The indirect draw commands: ``(key, level)`` of every draw a culled
-        frame can make: the triangles of each part (level 0) or of a level,
-        the edges of each level."""
-        levels = range(len(self._level_buffers))
-        slots = [(("t", level, part.start * 3), level) for level in levels for part in self._level_parts(level)]
-        return slots + [(("e", level, 0), level) for level in levels]
-
-    def _level_parts(self, level: int) -> list:
-        """The parts drawn at LOD level ``level``, in draw order (opaque and cut-out, then blended):
-        the chosen parts of the base mesh (level 0) or their simplified counterparts."""
-        if level == 0:
-            return self._draw_order
-        return [self.lod_levels[level].parts[i] for i in self._draw_index]
-
-    def _instanced(self, vao, mode, vertices: int, first: int, instances, key, *, split: bool = True) -> None:
-        """One instanced draw: ``instances`` a count, or the GPU's (:class:`IndirectDraws`, slot ``key``).
-        On a software rasteriser a big multisampled draw is made in slices
-        (:func:`~axialdeform.gl.context.flush_budget`): of whole instances, in order,
-        for a small mesh (GL 4.2); else of its index range
-        (:func:`~axialdeform.gl.context.draw_in_batches`), but not when ``split`` is
-        False (blended parts, whose order matters)."""
-        import moderngl
-
-        if isinstance(instances, IndirectDraws):
-            def draw(n, start):
-                instances.render(vao, mode, key, n, start)
-        else:
-            def draw(n, start):
-                vao.render(mode, vertices=n, first=start, instances=instances)
-        per = 2 if mode == moderngl.LINES else 3
-        budget = flush_budget(self.ctx, per)
-        primitives = vertices // per
-        if budget is None or primitives * max(self.count, 1) <= budget:
-            draw(vertices, first)
-            return
-        if 4 * primitives <= budget and self.ctx.version_code >= 420:
-            # a small mesh, many instances: slices of whole instances, in order (indirect
-            # commands with a base instance, GL 4.2), so the very same picture, blended or not
-            if isinstance(instances, IndirectDraws):
-                count, base = instances.slot_instances(key, vertices, first)  # waits for the culling pass
-            else:
-                count, base = int(instances), 0
-            self._draw_instance_slices(vao, mode, vertices, first, count, base, max(1, budget // primitives))
-            return
-        if not split:
-            draw(vertices, first)
-            return
-        # a big mesh (or GL 3.3): slices of its triangles, every instance in each, sized for
-        # EVERY instance whatever this draw's count (culled, a level's): the same slices
-        # with and without culling, so the same order and the same picture
-        draw_in_batches(self.ctx, draw, vertices, first, per, max(self.count, 1))
-
-    def _draw_instance_slices(self, vao, mode, vertices: int, first: int, count: int, base: int, step: int) -> None:
-        """Draw instances ``base .. base + count`` in slices of ``step``, the GL queue
-        finished after each (one indirect command a slice, base instance set)."""
-        if self._slice_commands is None:
-            self._slice_commands = self.ctx.buffer(reserve=20)
-            self._objects.append(self._slice_commands)
-        # gl_InstanceID restarts at 0 in every draw (GLSL 3.30 has no gl_BaseInstance): the
-        # unculled program adds u_slice_base (the culled one reads each record's own index)
-        slice_base = vao.program.get("u_slice_base", None)
-        try:
-            for start in range(0, count, step):
-                n = min(step, count - start)
-                self._slice_commands.write(np.array([vertices, n, first, 0, base + start], "<u4").tobytes())
-                if slice_base is not None:
-                    slice_base.value = base + start
-                vao.render_indirect(self._slice_commands, mode, count=1, first=0)
-                self.ctx.finish()
-        finally:
-            if slice_base is not None:
-                slice_base.value = 0
-
-    def _culled_vao(self, prog, level: int, index_buffer):
-        """A vertex array of one LOD level for the culled program (instances: bound by the cull pass)."""
-        mb = self._level_buffers[level]
-        extra = [self._level_appearance[level].content(prog)] if self.appearance is not None else []
-        vao = self.ctx.vertex_array(prog, [mb.content(prog), *extra], index_buffer=index_buffer, index_element_size=4)
-        self._objects.append(vao)
-        return vao
-
-    def _culled_edges(self, vaos, prog, level: int):
-        if vaos[level][1] is None:
-            edges = self._edge_buffer if level == 0 else self._level_edge_data(level)[0]
-            vaos[level][1] = self._culled_vao(prog, level, edges)
-        return vaos[level][1]
-
-    def _level_edge_data(self, level: int):
-        """(edge index buffer, index count) of LOD level ``level`` > 0: all its
-        edges, or those of the chosen parts only (built on first use)."""
-        if self._part_edges is None:
-            return self._level_buffers[level].edges, self._level_buffers[level].edge_indices
-        if level not in self._level_edges:
-            e = self.lod_levels[level].part_edges(self._draw_index)
-            buffer = self.ctx.buffer(e.astype("u4").tobytes())
-            self._objects.append(buffer)
-            self._level_edges[level] = (buffer, int(e.size))
-        return self._level_edges[level]
 
     @contextmanager
     def culling(self, view=None, projection=None, enabled: bool = True):
@@ -841,86 +477,6 @@ class AxialRenderer:
         finally:
             self.ctx.disable(moderngl.CULL_FACE)
 
-    # ------------------------------------------------------------ capture
-    def capture(self, start: int = 0, count: int | None = None, progress=None, *, time: float | None = None,
-                wind=_KEEP, check_finite: bool = True, level: int = 0) -> tuple[np.ndarray, np.ndarray]:
-        """World positions and normals as the GPU computes them, by transform
-        feedback of the drawing vertex shader.
-
-        A non-finite result (parameters too large for float32) raises
-        :class:`AxialDeformError` naming the instance and coordinate.
-        Returns two ``(count, vertices, 3) float32`` arrays in the base mesh's
-        vertex order, for instances ``start .. start + count - 1``.
-        ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
-        ``time``, ``wind``: as :meth:`render` (default: the renderer's own).
-        ``level``: the LOD level whose vertices are captured (0: the base
-        mesh; ``len(lod_levels) - 1`` at most), in that level's vertex order,
-        bent with the base mesh's axis like every level.
-        """
-        import moderngl
-
-        self._check()
-        start = as_index(start, "capture: start")
-        level = as_index(level, "capture: level")
-        if not 0 <= level < len(self.lod_levels):
-            raise ParamError(f"capture: level: expected 0..{len(self.lod_levels) - 1}, found {level}")
-        count = self.count - start if count is None else as_index(count, "capture: count")
-        if start < 0 or count < 0 or start + count > self.count:
-            raise ParamError(f"capture: instances {start}..{start + count - 1} are outside 0..{self.count - 1}")
-        v = self.lod_levels[level].vertex_count
-        per_instance = max(lv.vertex_count for lv in self.lod_levels) * 24  # room for any level
-        chunk = max(1, min(count, _CAPTURE_BYTES // per_instance))
-        if self._capture is None or self._capture[2].capacity < chunk:
-            self._release_capture()
-            prog = build_program(self.ctx, "scene.vert", defines=dict(self._defines),
-                                 varyings=("v_world", "v_normal"))
-            self._set_axis_uniforms(prog)
-            scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized, extended=self.extended)
-            vao = self.ctx.vertex_array(prog, [self.mesh_buffers.content(prog), scratch.content(prog)])
-            output = self.ctx.buffer(reserve=chunk * per_instance)
-            # a draw needs a complete framebuffer even with rasterization
-            # discarded; a surfaceless EGL context has none of its own
-            color = self.ctx.renderbuffer((1, 1))
-            fbo = self.ctx.framebuffer(color)
-            self._capture = (prog, vao, scratch, output, fbo, color)
-            self._capture_levels = {0: vao}
-        prog, _, scratch, output, fbo, _ = self._capture
-        if level not in self._capture_levels:  # a coarser level's vertices, same program and instances
-            self._capture_levels[level] = self.ctx.vertex_array(
-                prog, [self._level_buffers[level].content(prog), scratch.content(prog)])
-        vao = self._capture_levels[level]
-        self._set_wind_uniforms(prog, self.wind if wind is _KEEP else wind, self.time if time is None else float(time))
-        out = np.empty((count, v, 6), dtype=np.float32)
-        previous = self.ctx.fbo
-        fbo.use()
-        try:
-            for a in range(0, count, chunk):  # chunks bound GPU memory; each is one transform-feedback draw
-                k = min(chunk, count - a)
-                rec = self.instances.record_bytes
-                self.ctx.copy_buffer(scratch.buffer, self.instances.buffer, size=k * rec, read_offset=(start + a) * rec)
-                scratch.count = k
-                if "u_instance_base" in prog:  # the wind's per-instance phase follows the instance's index
-                    prog["u_instance_base"].value = start + a
-                vao.transform(output, mode=moderngl.POINTS, vertices=v, instances=k)
-                out[a : a + k] = np.frombuffer(output.read(size=k * v * 24), dtype="f4").reshape(k, v, 6)
-                if progress is not None:
-                    progress.update(k)
-        finally:
-            bind_framebuffer(self.ctx, previous)  # give the caller back their framebuffer
-        positions, normals = out[..., :3].copy(), out[..., 3:].copy()
-        # parameters too large for float32 overflow on the GPU: an error naming the instance
-        if check_finite:  # bake() checks itself, naming the parameter file
-            require_finite(positions, "positions", "xyz", first=start)
-            require_finite(normals, "normals", "xyz", first=start)
-        return positions, normals
-
-    def _release_capture(self) -> None:
-        if self._capture is not None:
-            prog, vao, scratch, output, fbo, color = self._capture
-            release_framebuffer(self.ctx, fbo)
-            for obj in (*[a for lv, a in self._capture_levels.items() if lv], vao, prog, scratch, output, color):
-                obj.release()
-            self._capture = None
 
     # ------------------------------------------------------------ lifetime
     def release(self) -> None:
@@ -939,84 +495,6 @@ class AxialRenderer:
         for holder in ("mesh_buffers", "instances", "appearance", "materials"):
             if getattr(self, holder, None) is not None:
                 getattr(self, holder).release()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.release()
-
-
-class BakedMeshes:
-    """Meshes that are already deformed (``axialdeform bake`` output, or any
-    mesh files), each with its own vertex and index buffers and vertex
-    array, drawn one draw call each with the shading, uniforms and face
-    culling of an un-bent :class:`AxialRenderer` -- the thesis's "load every
-    one" method, drawn exactly like the instanced methods.
-
-    Parameters
-    ----------
-    ctx : moderngl.Context
-    like : BaseMesh
-        A mesh whose name picks the colour and whose :attr:`BaseMesh.is_volume`
-        decides back-face culling (the base mesh the files were baked from).
-    mode : str
-        One of :data:`MODES`; only the index buffers this mode draws are made.
-    """
-
-    def __init__(self, ctx, like, mode: str = "solid", *, cull_back_faces: bool | None = None):
-        if mode not in _MODE_INDEX:
-            raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
-        self.ctx = ctx
-        self.mode = mode
-        self._items = []  # (MeshBuffers, vao, index count)
-        self._released = False
-        self.renderer = AxialRenderer(ctx, like, np.zeros((0, 16), np.float32), bend=False,
-                                      cull_back_faces=cull_back_faces)
-        self.cull_back_faces = self.renderer.cull_back_faces
-
-    def __len__(self) -> int:
-        return len(self._items)
-
-    def add(self, mesh) -> None:
-        """Upload one deformed mesh (world positions and normals as they are)."""
-        if self._released:
-            raise AxialDeformError("these BakedMeshes were released; create new ones")
-        wire = self.mode == "wireframe"
-        buffers = MeshBuffers(self.ctx, mesh, indices=("edges",) if wire else ("triangles",))
-        try:
-            program = self.renderer.program
-            vao = self.ctx.vertex_array(program, [buffers.content(program)],
-                                        index_buffer=buffers.edges if wire else buffers.triangles,
-                                        index_element_size=4)
-        except BaseException:
-            buffers.release()
-            raise
-        self._items.append((buffers, vao, buffers.edge_indices if wire else buffers.triangle_indices))
-
-    def render(self, view, projection, **options) -> None:
-        """Draw every mesh into the bound framebuffer (one draw call each)."""
-        import moderngl
-
-        self.renderer.render(view, projection, self.mode, **options)  # no instances: sets the uniforms only
-        self.ctx.enable(moderngl.DEPTH_TEST)
-        wire = self.mode == "wireframe"
-        primitive = moderngl.LINES if wire else moderngl.TRIANGLES
-        with (contextlib.nullcontext() if wire else self.renderer.culling(view, projection)):
-            for _, vao, n in self._items:
-                draw_in_batches(self.ctx, lambda count, first, vao=vao: vao.render(primitive, vertices=count, first=first),
-                                n, 0, 2 if wire else 3, 1)
-
-    def release(self) -> None:
-        """Free every GL object; safe to call twice."""
-        if self._released:
-            return
-        self._released = True
-        for buffers, vao, _ in self._items:
-            vao.release()
-            buffers.release()
-        self._items.clear()
-        self.renderer.release()
 
     def __enter__(self):
         return self
