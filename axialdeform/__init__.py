@@ -29,19 +29,19 @@ from .core.scatter import scatter
 
 _NAMES = {
     # mesh -> axis
-    "load_mesh": "core.mesh", "BaseMesh": "core.mesh",
+    "load_mesh": "core.io.mesh", "BaseMesh": "core.mesh",
     # the record and its variation
     "Instances": "core.record", "random_params": "core.variation",
     # files
-    "read_params": "core.params", "write_params": "core.params",
+    "read_params": "core.io.params", "write_params": "core.io.params",
     # scene, look, camera, wind
     "Scene": "core.scene", "Look": "core.look", "Wind": "core.wind",
     "Camera": "gl.camera", "frame_instances": "gl.camera",
     # drawing
     "create_context": "gl.context", "Offscreen": "gl.context", "AxialRenderer": "gl.renderer",
-    "render_image": "gl.image", "save_png": "gl.image", "deformation_glsl": "gl.shaders",
+    "render_image": "gl.image", "save_png": "core.io.image", "deformation_glsl": "gl.shaders",
     # out again
-    "export_glb": "core.export", "fit_params": "core.fit",
+    "export_glb": "core.io.gltf", "fit_params": "core.fit",
 }
 
 #: the old top-level names and their homes now

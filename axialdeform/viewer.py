@@ -321,7 +321,7 @@ class _ViewerMixin:
 
     def save_screenshot(self, path) -> None:
         """Write the last drawn frame as a PNG, atomically."""
-        from .gl.image import save_png
+        from .core.io.image import save_png
 
         save_png(path, self.screenshot())
 

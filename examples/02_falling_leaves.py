@@ -17,6 +17,7 @@ import numpy as np
 from PIL import Image
 
 import axialdeform as ad
+from axialdeform.core.io.atomic import atomic_path
 from axialdeform.gl.image import parse_size
 
 # where each control point sits along the leaf (t of P1..P5) and a zero-mean
@@ -83,7 +84,7 @@ def save_gif(path, frames, fps):
     """Frames ``(h, w, 3) uint8`` -> an endless animated GIF, written atomically."""
     images = [Image.fromarray(f).quantize(colors=64, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
               for f in frames]
-    with ad.core.atomic.atomic_path(path, suffix=".gif") as tmp:
+    with atomic_path(path, suffix=".gif") as tmp:
         images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
                        duration=int(1000 / fps), loop=0, optimize=True)
 

@@ -36,7 +36,7 @@ def test_each_layer_lists_its_names_and_each_has_one_home(layer):
         home = pkg._NAMES[name]
         module = importlib.import_module(f"axialdeform.{layer}.{home}")
         assert name in module.__all__, f"{name} is not in axialdeform.{layer}.{home}.__all__"
-        tree = ast.parse((PACKAGE / layer / f"{home}.py").read_text(encoding="utf-8"))
+        tree = ast.parse((PACKAGE / layer / (home.replace(".", "/") + ".py")).read_text(encoding="utf-8"))
         defined = {n.name for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
         defined |= {t.id for n in tree.body if isinstance(n, (ast.Assign, ast.AnnAssign))
                     for t in (n.targets if isinstance(n, ast.Assign) else [n.target]) if isinstance(t, ast.Name)}

@@ -341,7 +341,7 @@ def test_shadows_darken_the_ground_and_hidden_lines_hide(ctx, stone):
 def test_exported_glbs_keep_the_material_and_pass_the_validator(tmp_path):
     mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
     params = ad.random_params(mesh, 3, seed=1)
-    from axialdeform.core.export import export_baked, export_instanced, read_instanced_glb
+    from axialdeform.core.io.gltf import export_baked, export_instanced, read_instanced_glb
 
     baked, inst = export_baked(tmp_path / "b.glb", mesh, params), export_instanced(tmp_path / "i.glb", mesh, params)
     for report in _validate(baked, inst):
@@ -357,7 +357,7 @@ def test_exported_glbs_keep_the_material_and_pass_the_validator(tmp_path):
 
 
 def test_vertex_colour_glb_passes_the_validator(tmp_path):
-    from axialdeform.core.export import export_baked
+    from axialdeform.core.io.gltf import export_baked
 
     mesh = ad.load_mesh(shared_mesh("gltf/cubevc.glb"))
     path = export_baked(tmp_path / "vc.glb", mesh, ad.random_params(mesh, 2, seed=1))
@@ -538,7 +538,7 @@ def _gltf_tangents(path):
     """Every primitive's TANGENT of a GLB, read with pygltflib (independent of the loader)."""
     import pygltflib
 
-    from axialdeform.core.export import read_accessor
+    from axialdeform.core.io.gltf import read_accessor
 
     g = pygltflib.GLTF2.load(str(path))
     blob = g.binary_blob()
@@ -550,7 +550,7 @@ def _with_tangents(src, dst, change):
     """A copy of the GLB ``src`` whose (tightly packed) TANGENT data is ``change(tangents, normals)``."""
     import pygltflib
 
-    from axialdeform.core.export import read_accessor
+    from axialdeform.core.io.gltf import read_accessor
 
     g = pygltflib.GLTF2.load(str(src))
     blob = bytearray(g.binary_blob())
@@ -569,7 +569,7 @@ def _with_tangents(src, dst, change):
 def test_tangents_stored_in_the_file_are_used_and_written_back(tmp_path):
     """cubevc.glb (trimesh's test model) carries TANGENT; trimesh drops it, the loader
     reads it in the file's vertex order, and export writes it back unchanged."""
-    from axialdeform.core.export import export_baked, export_instanced
+    from axialdeform.core.io.gltf import export_baked, export_instanced
 
     src = shared_mesh("gltf/cubevc.glb")
     mesh = ad.load_mesh(src)
@@ -641,7 +641,8 @@ def test_ply_bake_of_a_multi_part_mesh_writes_one_file_per_part(tmp_path):
     out = tmp_path / "ply"
     assert main(["bake", mesh_path, str(tmp_path / "p.adp"), "-o", str(out), "--format", "ply"]) == 0
     names = sorted(p.name for p in out.iterdir())
-    from axialdeform.core.bake import INSTANCE_FILE, instance_name, part_file_names
+    from axialdeform.core.io.bake import INSTANCE_FILE
+    from axialdeform.core.bake import instance_name, part_file_names
 
     want = sorted(instance_name(i, 2, ".ply", part=n) for i in range(2) for n in part_file_names(mesh.parts))
     assert names == want and len(names) == 2 * len(mesh.parts)
@@ -758,7 +759,7 @@ def test_gltf_text_files_give_their_tangents_too(tmp_path):
 
 
 def test_ply_part_files_keep_vertex_colours(tmp_path):
-    from axialdeform.core.bake import write_mesh_folder
+    from axialdeform.core.io.bake import write_mesh_folder
     from axialdeform.core.material import Part, linear_to_srgb
 
     pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0], [3, 0, 0], [2, 1, 0]], np.float32)

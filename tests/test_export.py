@@ -19,7 +19,7 @@ import pytest
 import trimesh
 
 import axialdeform as ad
-from axialdeform.core import export
+from axialdeform.core.io import gltf as export
 from axialdeform.cli import main
 from axialdeform.core.params import ANGLES
 

@@ -220,7 +220,7 @@ def test_bad_extension_values_are_refused_naming_line_and_field(tmp_path, field,
 
 
 def test_binary_version_2_lossless_and_quantized(tmp_path, stone):
-    from axialdeform.core import params as P
+    from axialdeform.core.io import params as P
 
     e = extended(stone, n=50)
     path = ad.write_params(tmp_path / "e.adp", e, stone)
@@ -326,7 +326,7 @@ def test_fit_extended_recovers_scale_twist_taper(stone, tmp_path):
     assert fit_params(stone, shapes).max.max() > 1e-3
     # and from the command line
     folder = tmp_path / "variants"
-    from axialdeform.core.bake import write_mesh_folder
+    from axialdeform.core.io.bake import write_mesh_folder
 
     write_mesh_folder(folder, stone, shapes, ad.bake(stone, p)[1], "obj")
     out = tmp_path / "fit.adp"
@@ -353,7 +353,7 @@ def _golden_values():
 
 
 def _forms(values):
-    from axialdeform.core import params as P
+    from axialdeform.core.io import params as P
     from axialdeform.core.axis import ControlAxis
 
     ax, fp = ControlAxis(1, -0.25, 2.5), bytes(range(32))
@@ -365,7 +365,7 @@ def _forms(values):
 def test_16_number_files_are_byte_identical_to_before_the_extension():
     import hashlib
 
-    from axialdeform.core import params as P
+    from axialdeform.core.io import params as P
 
     values = _golden_values()
     for name, data in _forms(values).items():

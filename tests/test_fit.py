@@ -11,7 +11,7 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core import fit
-from axialdeform.core.bake import write_mesh_folder
+from axialdeform.core.io.bake import write_mesh_folder
 from axialdeform.cli import main
 from axialdeform.core.params import ANGLES, OFFSETS, POSITION
 

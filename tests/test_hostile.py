@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import axialdeform as ad
-from axialdeform.core import params as P
+from axialdeform.core.io import params as P
 from axialdeform.core.deform import deform
 from axialdeform.core.errors import AxialDeformError, MeshError, ParamError, ParamFileError, ShaderError
 

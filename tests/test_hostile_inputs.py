@@ -25,7 +25,7 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.cli import main
-from axialdeform.core import params as P
+from axialdeform.core.io import params as P
 from axialdeform.gl.buffers import InstanceBuffer
 from axialdeform.core.errors import ArgumentError, AxialDeformError, ContextError, ParamFileError, PathError
 
@@ -102,7 +102,7 @@ def test_gltf_buffer_must_be_a_regular_file_of_bounded_size(tmp_path):
     (tmp_path / "data.bin").unlink()
     (tmp_path / "data.bin").write_bytes(np.array([0, 0, 0, 1, 0, 0, 0, 1, 0], "<f4").tobytes())
     assert ad.load_mesh(gltf).vertex_count == 3
-    from axialdeform.core.safeio import SafeResolver
+    from axialdeform.core.io.resolver import SafeResolver
 
     (tmp_path / "other.mtl").write_bytes(b"x" * 11)
     with pytest.raises(OSError, match="at most 10 bytes"):
@@ -110,7 +110,7 @@ def test_gltf_buffer_must_be_a_regular_file_of_bounded_size(tmp_path):
 
 
 def test_read_regular_refuses_files_over_the_bound(tmp_path):
-    from axialdeform.core.safeio import read_regular
+    from axialdeform.core.io.safeio import read_regular
 
     f = tmp_path / "a.bin"
     f.write_bytes(b"x" * 100)
@@ -189,7 +189,7 @@ def test_random_count_checked_before_allocating(tmp_path, capsys):
 
 
 def test_bake_count_checked_before_allocating(tmp_path, monkeypatch, capsys):
-    from axialdeform.core import safeio
+    from axialdeform.core.io import safeio
 
     f = tmp_path / "p.adp"
     P.write_params(f, np.zeros((1000, 16), np.float32))
@@ -201,7 +201,7 @@ def test_bake_count_checked_before_allocating(tmp_path, monkeypatch, capsys):
 
 
 def test_check_count_says_the_maximum():
-    from axialdeform.core.safeio import MAX_INSTANCES, check_count
+    from axialdeform.core.io.safeio import MAX_INSTANCES, check_count
 
     assert check_count(10, 100, budget=1000) == 10
     with pytest.raises(AxialDeformError, match=r"expected at most 10 .*never more than " + str(MAX_INSTANCES)):
@@ -287,7 +287,7 @@ def test_non_regular_outputs_are_refused(files, capsys):
         assert "not a regular file" in err, err
     assert fifo.is_fifo()  # before: replaced by a regular file
     assert os.readlink(tmp / "null.png") == "/dev/null"
-    from axialdeform.core.atomic import atomic_write_bytes
+    from axialdeform.core.io.atomic import atomic_write_bytes
 
     with pytest.raises(PathError, match="FIFO"):
         atomic_write_bytes(fifo, b"x")
@@ -348,7 +348,7 @@ def test_capture_refuses_non_finite_results(ctx, stone):
 
 
 def test_require_finite_names_instance_and_field():
-    from axialdeform.core.safeio import require_finite
+    from axialdeform.core.io.safeio import require_finite
 
     a = np.zeros((3, 5, 3), np.float32)
     a[2, 4, 1] = np.nan
@@ -389,7 +389,7 @@ def test_size_limit_comes_from_the_context(tmp_path, capsys):
 
 
 def test_size_limited_by_memory(ctx, monkeypatch):
-    from axialdeform.core import safeio
+    from axialdeform.core.io import safeio
     from axialdeform.gl.context import Offscreen
 
     monkeypatch.setattr(safeio, "memory_available", lambda: 10_000_000)
@@ -602,7 +602,8 @@ def test_scatter_refuses_a_decompression_bomb_in_one_line(tmp_path):
 
 
 def test_height_map_pixels_checked_against_memory_before_decoding(tmp_path, monkeypatch, capsys):
-    from axialdeform.core import safeio, scatter
+    from axialdeform.core import scatter
+    from axialdeform.core.io import safeio
 
     hm = _png(tmp_path / "hm.png", np.full((200, 300), 128, np.uint8))
     budget = 200 * 300 * scatter.SURFACE_BYTES_PER_PIXEL  # 0.8 of this is less than the map needs
@@ -905,7 +906,7 @@ def test_bake_folder_refuses_more_files_than_the_limit(tmp_path, capsys, monkeyp
 
 def test_export_baked_refuses_more_meshes_than_the_limit(tmp_path, capsys, monkeypatch):
     from axialdeform.cli._common import MAX_EXPORT_MESHES
-    from axialdeform.core import export
+    from axialdeform.core.io import gltf as export
 
     assert MAX_EXPORT_MESHES == 10_000  # the documented default
     out = tmp_path / "e.glb"

@@ -222,7 +222,7 @@ def test_widget_in_jupyterlab(tmp_path):
                 score = iou(shot, render)
                 timings["IoU with render"] = score
                 if score < 0.95:
-                    from axialdeform.gl.image import save_png
+                    from axialdeform.core.io.image import save_png
 
                     save_png(tmp_path / "widget.png", shot)
                     save_png(tmp_path / "render.png", render)

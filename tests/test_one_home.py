@@ -9,7 +9,10 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core import bake as bake_mod
-from axialdeform.core import export, fit, mesh
+from axialdeform.core import fit, mesh
+from axialdeform.core.io import bake as bake_io
+from axialdeform.core.io import gltf as export
+from axialdeform.core.io import mesh as mesh_io
 
 
 def test_instance_names_come_from_one_function(tmp_path, stone):
@@ -20,15 +23,15 @@ def test_instance_names_come_from_one_function(tmp_path, stone):
     assert child.obj_name(7) == bake_mod.instance_name(7, 0, ".obj")
     params = ad.random_params(stone, 3, seed=1)
     pos, nrm = ad.bake(stone, params)
-    files = bake_mod.write_mesh_folder(tmp_path / "f", stone, pos, nrm, "obj")
+    files = bake_io.write_mesh_folder(tmp_path / "f", stone, pos, nrm, "obj")
     assert [f.name for f in files] == [bake_mod.instance_name(i, 3, ".obj") for i in range(3)]
     for mod in (export, child):
         assert 'f"instance_{' not in inspect.getsource(mod), mod.__name__
 
 
 def test_mesh_suffixes_are_one_constant():
-    assert fit.MESH_SUFFIXES is mesh.MESH_SUFFIXES
-    assert ".obj" in mesh.MESH_SUFFIXES and ".glb" in mesh.MESH_SUFFIXES
+    assert fit.MESH_SUFFIXES is mesh_io.MESH_SUFFIXES
+    assert ".obj" in mesh_io.MESH_SUFFIXES and ".glb" in mesh_io.MESH_SUFFIXES
     assert inspect.getsource(fit).count('".ply"') == 0
 
 
@@ -48,7 +51,7 @@ def test_core_bake_needs_no_gl_and_the_gpu_engine_lives_in_gl(stone, ctx):
 
 
 def test_quantized_encoding_lives_in_params(stone):
-    from axialdeform.core import params as params_mod
+    from axialdeform.core.io import params as params_mod
     from axialdeform.gl import buffers
 
     values = ad.random_params(stone, 50, seed=3, bend=0.2)

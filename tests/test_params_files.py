@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
-from axialdeform.core import params as P
+from axialdeform.core.io import params as P
 
 
 @pytest.fixture
@@ -185,7 +185,7 @@ def test_atomic_writes_get_ordinary_permissions(tmp_path, values):
 
 @pytest.mark.parametrize("quantize, record", [(False, 64), (True, 32)])
 def test_header_says_the_record_bytes(tmp_path, stone, quantize, record):
-    from axialdeform.core.params import read_binary_header
+    from axialdeform.core.io.params import read_binary_header
 
     for n in (0, 1, 777):
         path = ad.write_params(tmp_path / f"p{n}.adp", ad.random_params(stone, n, seed=1), stone, quantize=quantize)

@@ -84,7 +84,7 @@ def test_the_vertex_shader_declares_what_the_table_generates(ctx, extended, quan
 
 
 def test_the_page_and_gltf_receive_the_table(stone):
-    from axialdeform.core import export
+    from axialdeform.core.io import gltf as export
     from axialdeform.web import build_scene
 
     assert export.ATTRIBUTES is R.GLTF_ATTRIBUTES

@@ -27,9 +27,9 @@ import pyrr
 import pytest
 
 import axialdeform as ad
-from axialdeform.core.atomic import sweep_stale_parts
+from axialdeform.core.io.atomic import sweep_stale_parts
 from axialdeform.core.deform import deform
-from axialdeform.core.params import dequantize_params, quantize_params
+from axialdeform.core.io.params import dequantize_params, quantize_params
 
 from conftest import make_mesh
 
@@ -131,7 +131,7 @@ def test_killed_writer_leaves_previous_file_intact(tmp_path):
 
 
 def test_failed_write_keeps_old_file(tmp_path):
-    from axialdeform.core.atomic import atomic_path
+    from axialdeform.core.io.atomic import atomic_path
 
     path = ad.write_params(tmp_path / "p.txt", np.ones((2, 16)))
     with pytest.raises(RuntimeError):

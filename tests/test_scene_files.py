@@ -235,7 +235,7 @@ def test_bad_values_name_their_line_and_key(tmp_path, body, line, key):
 def test_export_a_scene_instanced(small, tmp_path, capsys, validate):  # noqa: F811
     """``export SCENE --instanced``: per layer its base mesh once on a node with
     EXT_mesh_gpu_instancing, the terrain once; each layer reads back bit for bit."""
-    from axialdeform.core.export import INSTANCING, read_instanced_glb
+    from axialdeform.core.io.gltf import INSTANCING, read_instanced_glb
 
     glb = tmp_path / "inst.glb"
     assert main(["export", str(small), "-o", str(glb), "--instanced"]) == 0

@@ -25,7 +25,7 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.cli import main
-from axialdeform.core import params as P
+from axialdeform.core.io import params as P
 from axialdeform.core.errors import MeshError, ParamError
 from axialdeform.core.variation import iter_random_params
 
@@ -89,7 +89,7 @@ def test_random_in_pieces_writes_the_same_file_as_before(tmp_path, monkeypatch, 
 
 
 def test_random_checks_free_disk_space_first(tmp_path, monkeypatch, capsys):
-    from axialdeform.core import safeio
+    from axialdeform.core.io import safeio
 
     out = tmp_path / "p.adp"
     monkeypatch.setattr(safeio, "disk_free", lambda path: 100_000)
@@ -190,7 +190,7 @@ def test_quantized_writer_memory_is_bounded(tmp_path):
 
 @pytest.mark.slow
 def test_bake_npz_writer_makes_no_copy(tmp_path):
-    from axialdeform.core.bake import write_npz
+    from axialdeform.core.io.bake import write_npz
 
     positions = np.zeros((400, 20_000, 3), np.float32)  # 96 MB each
     normals = np.ones((400, 20_000, 3), np.float32)
@@ -241,7 +241,7 @@ def test_gltf_buffer_of_declared_size_loads_padding_allowed(tmp_path):
 
 def test_gltf_buffer_read_is_bounded_by_the_declaration(tmp_path, monkeypatch):
     """A huge buffer file is refused from its size alone: never read."""
-    from axialdeform.core import safeio
+    from axialdeform.core.io import safeio
 
     gltf = _gltf(tmp_path, 36, b"")
     with open(tmp_path / "data.bin", "wb") as fh:  # sparse: 8 GB that take no disk
@@ -264,12 +264,12 @@ def test_gltf_buffer_byte_length_must_be_a_whole_number(tmp_path, value):
 def test_gltf_image_over_the_cap_is_not_read(tmp_path, monkeypatch):
     """A picture is bounded by MAX_IMAGE_BYTES: over it, the mesh still
     loads without that texture (the loader's warning names the file)."""
-    from axialdeform.core import safeio
+    from axialdeform.core.io import safeio
 
     monkeypatch.setattr(safeio, "MAX_IMAGE_BYTES", 100)
     (tmp_path / "tex").write_bytes(bytes(101))  # no suffix: known as a picture from images[0].uri alone
     gltf = _gltf(tmp_path, 36, TRIANGLE, images=["tex"])
-    from axialdeform.core.material import SafeResolver, gltf_references
+    from axialdeform.core.io.resolver import SafeResolver, gltf_references
 
     declared = gltf_references(gltf.read_bytes(), "gltf")
     assert declared == {"data.bin": ("buffers[0].byteLength", 36), "tex": ("images[0].uri", None)}
@@ -286,7 +286,8 @@ def test_gltf_image_over_the_cap_is_not_read(tmp_path, monkeypatch):
 
 
 def test_bake_cpu_pieces_are_the_whole_bake(tmp_path):
-    from axialdeform.core.bake import bake_cpu, bake_cpu_pieces, write_npz_pieces
+    from axialdeform.core.bake import bake_cpu, bake_cpu_pieces
+    from axialdeform.core.io.bake import write_npz_pieces
 
     stone = ad.load_mesh("stone")
     params = ad.random_params(stone, 503, 3, bend=0.2)
@@ -302,7 +303,7 @@ def test_bake_cpu_pieces_are_the_whole_bake(tmp_path):
 
 
 def test_bake_npz_refuses_a_disk_too_small_and_names_a_bad_instance(tmp_path, monkeypatch, capsys):
-    from axialdeform.core import safeio
+    from axialdeform.core.io import safeio
 
     f = tmp_path / "p.adp"
     values = ad.random_params(ad.load_mesh("stone"), 1000, 1)
@@ -336,7 +337,7 @@ def test_bake_npz_memory_does_not_grow_with_the_count(tmp_path):
 
 
 def test_gpu_bake_pieces_are_the_whole_capture(gl, tmp_path):
-    from axialdeform.core.bake import write_npz_pieces
+    from axialdeform.core.io.bake import write_npz_pieces
     from axialdeform.gl.bake import bake, bake_pieces
 
     stone = ad.load_mesh("stone")

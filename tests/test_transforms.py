@@ -6,7 +6,8 @@ import inspect
 
 import numpy as np
 
-from axialdeform.core import deform, export, fit, transforms
+from axialdeform.core import deform, fit, transforms
+from axialdeform.core.io import gltf as export
 
 
 def test_conversions_agree():

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
-from axialdeform.core.params import encode_binary
+from axialdeform.core.io.params import encode_binary
 from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_scene, embedded_file, make_server,
                              page_shaders, scene_bytes, single_file_html, vendor_file, write_page)
 
@@ -268,7 +268,7 @@ def test_bad_parameter_file_shows_why_and_draws_nothing(browser, served, scene_f
         shutil.rmtree(bad_dir)
     shutil.copytree(site, bad_dir)
     if kind == "other glb":  # the mesh file swapped: the browser hashes the GLB (WebCrypto)
-        from axialdeform.core.export import encode_base_mesh
+        from axialdeform.core.io.gltf import encode_base_mesh
 
         (bad_dir / "mesh.glb").write_bytes(encode_base_mesh(ad.load_mesh("leaf")))
     else:
@@ -401,7 +401,7 @@ def test_scene_bytes_counts_what_a_browser_downloads(tmp_path, stone):
 @pytest.mark.slow
 def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
     """The other paths: float32 records, an open (two-sided) mesh, flat shading, z up."""
-    from axialdeform.gl.image import save_png
+    from axialdeform.core.io.image import save_png
 
     mesh = ad.load_mesh("leaf")
     params = ad.random_params(mesh, 600, seed=5, bend=0.15, up="z", placement="disc")
@@ -633,7 +633,7 @@ params = "s.adp"
 def test_base_mesh_glb_carries_the_material(tmp_path):
     import pygltflib
 
-    from axialdeform.core.export import encode_base_mesh
+    from axialdeform.core.io.gltf import encode_base_mesh
 
     card = ad.load_mesh("leafcard")
     path = tmp_path / "card.glb"

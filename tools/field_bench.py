@@ -40,7 +40,7 @@ def main(argv=None) -> int:
                     all_visible_frames=args.all_visible_frames, progress=lambda text: print(f"  {text}", file=sys.stderr, flush=True))
     print(format_field(res))
     if args.json:
-        from axialdeform.core.atomic import atomic_path
+        from axialdeform.core.io.atomic import atomic_path
 
         with atomic_path(args.json, suffix=".json") as tmp:
             Path(tmp).write_text(json.dumps(res, indent=1))

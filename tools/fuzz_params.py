@@ -57,7 +57,7 @@ from collections import Counter
 
 import numpy as np
 
-from axialdeform.core import params as P
+from axialdeform.core.io import params as P
 from axialdeform.core.errors import AxialDeformError
 
 
@@ -282,7 +282,7 @@ def check_mesh_file(folder, suffix: str, text: str, k: int = 0) -> str:
     """Write one generated mesh file and load it: 'ok', 'error' or 'crash: ...'."""
     from pathlib import Path
 
-    from axialdeform.core.mesh import load_mesh
+    from axialdeform.core.io.mesh import load_mesh
 
     path = Path(folder) / f"case{k % 50}{suffix}"
     path.write_text(text, encoding="utf-8", errors="surrogateescape")
@@ -527,8 +527,8 @@ def make_big_inputs(folder, mb: float = 20.0) -> dict:
 
     import trimesh
 
-    from axialdeform.core.mesh import load_mesh
-    from axialdeform.core.params import write_params
+    from axialdeform.core.io.mesh import load_mesh
+    from axialdeform.core.io.params import write_params
     from axialdeform.core.variation import random_params
 
     folder = Path(folder)
@@ -567,8 +567,8 @@ def case_files(folder, big: dict) -> None:
     import os
     from pathlib import Path
 
-    from axialdeform.core.mesh import bundled_mesh_path, load_mesh
-    from axialdeform.core.params import write_params
+    from axialdeform.core.io.mesh import bundled_mesh_path, load_mesh
+    from axialdeform.core.io.params import write_params
     from axialdeform.core.variation import random_params
 
     folder = Path(folder)
@@ -607,7 +607,7 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
     import os
     from pathlib import Path
 
-    from axialdeform.core.mesh import bundled_mesh_path
+    from axialdeform.core.io.mesh import bundled_mesh_path
 
     tmp = Path(tmp)
     k = int(rng.integers(1 << 30))
@@ -1092,7 +1092,7 @@ def run_command(argv: list[str], timeout: float = HANG_S) -> tuple[str, float]:
 def _bundled_digest() -> str:
     import hashlib
 
-    from axialdeform.core.mesh import BUNDLED_MESHES, bundled_mesh_path
+    from axialdeform.core.io.mesh import BUNDLED_MESHES, bundled_mesh_path
 
     return hashlib.sha256(b"".join(bundled_mesh_path(n).read_bytes() for n in BUNDLED_MESHES)).hexdigest()
 

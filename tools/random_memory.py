@@ -30,7 +30,7 @@ from pathlib import Path
 
 def piece_bytes(piece: int, width: int, suffix: str, quantize: bool, folder: Path) -> float:
     import axialdeform as ad
-    from axialdeform.core.params import write_param_chunks
+    from axialdeform.core.io.params import write_param_chunks
     from axialdeform.core.variation import iter_random_params
 
     mesh = ad.load_mesh("stone")

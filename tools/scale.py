@@ -24,7 +24,7 @@ import numpy as np
 import pyrr
 
 import axialdeform as ad
-from axialdeform.core.atomic import atomic_write_text
+from axialdeform.core.io.atomic import atomic_write_text
 from axialdeform.gl.image import parse_size
 from axialdeform.core.mesh import area_weighted_normals
 

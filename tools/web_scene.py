@@ -36,7 +36,7 @@ def main() -> None:
 
     from axialdeform.core.scene import load_scene
     from axialdeform.gl.image import parse_size
-    from axialdeform.gl.scene import render_scene
+    from axialdeform.gl.image import render_image
     from axialdeform.web import build_scene_file, write_page
 
     w, h = parse_size(args.size)
@@ -45,7 +45,7 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="axd-web-scene-"))
     try:
         page_path = write_page(work / "scene.html", web)
-        render = render_scene(scene, (w, h), time=args.time if scene.wind is not None else 0.0)
+        render = render_image(scene, size=(w, h), time=args.time if scene.wind is not None else 0.0)
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=shutil.which("chromium"),
                                          args=["--use-angle=swiftshade", "--enable-unsafe-swiftshader", "--no-sandbox"])

@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 import axialdeform as ad
-from axialdeform.core.export import encode_baked
+from axialdeform.core.io.gltf import encode_baked
 from axialdeform.gl.image import parse_size
 from axialdeform.web import build_scene, make_server, scene_bytes, single_file_html, write_page
 

@@ -318,8 +318,8 @@ def run_bench(
     stopped early, ``bench-details.json`` with ``"interrupted": true``), then
     the ``KeyboardInterrupt`` is raised again.
     """
-    from ..core.atomic import atomic_write_text
-    from ..core.mesh import load_mesh
+    from ..core.io.atomic import atomic_write_text
+    from ..core.io.mesh import load_mesh
 
     if progress is None or progress is False:
         progress = _no_progress

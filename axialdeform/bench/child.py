@@ -43,7 +43,7 @@ def main(spec_text: str) -> None:
         if k >= spec["warmup"]:
             frames.append(time.perf_counter() - t)
     if spec.get("image"):
-        from ..gl.image import save_png
+        from ..core.io.image import save_png
 
         save_png(spec["image"], target.read())
     info["trimesh_imported"] = "trimesh" in sys.modules
@@ -97,7 +97,7 @@ def _setup(ctx, spec: dict, view, proj, mode: str, stamps: dict):
 
 
 def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
-    from ..core.mesh import load_mesh
+    from ..core.io.mesh import load_mesh
     from ..gl.renderer import AxialRenderer
     from ..core.variation import random_params
 
@@ -110,8 +110,8 @@ def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
 
 
 def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
-    from ..core.mesh import load_mesh
-    from ..core.params import read_params
+    from ..core.io.mesh import load_mesh
+    from ..core.io.params import read_params
     from ..gl.renderer import AxialRenderer
 
     mesh = load_mesh(spec["mesh"])
@@ -124,7 +124,7 @@ def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
 
 def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
     """Read every pre-deformed OBJ file with load_mesh, one VBO/IBO/VAO each."""
-    from ..core.mesh import load_mesh
+    from ..core.io.mesh import load_mesh
     from .baked import BakedMeshes
 
     folder = Path(spec["folder"])

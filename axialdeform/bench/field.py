@@ -89,7 +89,7 @@ def run_field(count: int = 1_000_000, size=(800, 600), frames: int = 3, seed: in
     ``all_visible_frames``: frames of the all-in-view scene (default ``frames``;
     its unculled frame is the slowest of all).
     """
-    from ..core.mesh import load_mesh
+    from ..core.io.mesh import load_mesh
     from ..gl.camera import frame_instances
     from ..gl.context import Offscreen, create_context
     from ..gl.renderer import AxialRenderer

@@ -72,7 +72,7 @@ def cache_root(cache) -> Path:
 
 def mesh_file(source) -> Path:
     """The file of a mesh argument (a path, or a bundled mesh's name)."""
-    from ..core.mesh import BUNDLED_MESHES, bundled_mesh_path
+    from ..core.io.mesh import BUNDLED_MESHES, bundled_mesh_path
 
     if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
         return bundled_mesh_path(source)
@@ -92,7 +92,7 @@ class Scene:
     the folder of pre-deformed OBJ files (cached by mesh + parameters)."""
 
     def __init__(self, mesh, mesh_path: Path, count: int, seed: int, scene: dict, cache: Path):
-        from ..core.params import write_params
+        from ..core.io.params import write_params
         from ..core.variation import random_params
 
         self.mesh, self.mesh_path, self.count, self.seed, self.scene = mesh, mesh_path, count, seed, scene
@@ -124,7 +124,8 @@ class Scene:
                 f"bench cache {self.dir}: about {need >> 20} MiB needed for {self.count} OBJ files, "
                 f"{free >> 20} MiB free; use --cache DIR on a larger disk or leave out this count"
             )
-        from ..core.bake import bake_cpu, write_mesh_folder
+        from ..core.bake import bake_cpu
+        from ..core.io.bake import write_mesh_folder
 
         tmp = self.dir / f"objs.tmp-{os.getpid()}"
         shutil.rmtree(tmp, ignore_errors=True)

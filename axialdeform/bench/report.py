@@ -23,7 +23,7 @@ _REQUIRED = ("command", "machine", "settings", "stats", "wall_s")
 
 def load_details(path) -> dict:
     """The measurements of a run, read from its ``bench-details.json``."""
-    from ..core.safeio import memory_available, read_regular
+    from ..core.io.safeio import memory_available, read_regular
 
     path = Path(path)
     if not path.exists() and not path.is_symlink():
@@ -56,7 +56,7 @@ def with_goals(details: dict) -> dict:
 
 def write_report(details: dict, out, plt=None) -> Path:
     """Write ``bench.md`` and the two plots into the folder ``out``; returns the report's path."""
-    from ..core.atomic import atomic_write_text
+    from ..core.io.atomic import atomic_write_text
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -80,7 +80,7 @@ def import_pyplot():
 
 
 def plot_files(plt, stats, out: Path) -> dict:
-    from ..core.atomic import atomic_path
+    from ..core.io.atomic import atomic_path
 
     files = {}
     for key, field, title, lo_key, hi_key, bars in (

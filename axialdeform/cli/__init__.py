@@ -16,7 +16,7 @@ import os
 import sys
 
 from ..core.errors import AxialDeformError
-from ..core.safeio import quiet_numpy
+from ..core.io.safeio import quiet_numpy
 
 __all__ = ["main", "build_parser", "COMMANDS", "PLUGINS"]
 

@@ -66,7 +66,7 @@ def add_mesh_mismatch(p) -> None:
 
 def mesh_file(source):
     """The file a mesh argument names (a bundled name: the package's file), or None."""
-    from ..core.mesh import mesh_source_path
+    from ..core.io.mesh import mesh_source_path
 
     return None if source is None else mesh_source_path(source)
 
@@ -76,9 +76,9 @@ def load(args, what: str = "output", allow_folder: bool = False):
     that ``args.output`` is neither one of them nor a device, FIFO or socket
     (:func:`~axialdeform.core.safeio.check_output_path`); warns once when the
     parameters go past the float32-safe ranges."""
-    from ..core.mesh import load_mesh
-    from ..core.params import read_params
-    from ..core.safeio import check_output_path
+    from ..core.io.mesh import load_mesh
+    from ..core.io.params import read_params
+    from ..core.io.safeio import check_output_path
 
     check_output_path(args.output, (mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)
     mesh = load_mesh(args.mesh)

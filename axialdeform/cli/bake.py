@@ -32,7 +32,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-    from ..core.bake import check_bake_folder, write_mesh_folder
+    from ..core.io.bake import check_bake_folder, write_mesh_folder
     from ..gl.bake import bake
 
     from . import scenes
@@ -78,10 +78,10 @@ def _bake_npz_in_pieces(args, out: Path, mesh, params, wind) -> None:
     """``bake -o OUT.npz``: :func:`~axialdeform.gl.bake.bake_pieces` (either
     engine) into :func:`~axialdeform.core.bake.write_npz_pieces`; the disk
     must hold the archive and, meanwhile, a spooled copy of the normals."""
-    from ..core.bake import write_npz_pieces
+    from ..core.io.bake import write_npz_pieces
     from ..gl.bake import bake_pieces
     from ..core.errors import ArgumentError
-    from ..core.safeio import check_disk_space
+    from ..core.io.safeio import check_disk_space
 
     n, v = len(params), mesh.vertex_count
     array = n * v * 12

@@ -64,7 +64,7 @@ def _report_from(args) -> None:
 def _check_triangles(args, counts) -> None:
     """The largest count of the bench's mesh in each mode within ``--max-triangles``, before anything runs."""
     from ..bench import COUNTS, QUICK_COUNTS
-    from ..core.mesh import load_mesh
+    from ..core.io.mesh import load_mesh
 
     if args.quick and tuple(counts) == COUNTS:
         counts = QUICK_COUNTS

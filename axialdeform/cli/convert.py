@@ -14,10 +14,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-    from ..core.mesh import load_mesh
-    from ..core.params import check_mesh, read_param_file, write_params
+    from ..core.io.mesh import load_mesh
+    from ..core.io.params import check_mesh, read_param_file, write_params
 
-    from ..core.safeio import check_output_path
+    from ..core.io.safeio import check_output_path
     from ._common import mesh_file
 
     check_output_path(args.dst, (args.src, mesh_file(args.mesh)), "parameter file")

@@ -29,7 +29,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> None:
     """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
-    from ..core.export import check_glb_path, export_glb
+    from ..core.io.gltf import check_glb_path, export_glb
 
     from . import scenes
 

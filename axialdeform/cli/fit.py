@@ -33,15 +33,15 @@ def run(args) -> None:
     from tqdm import tqdm
 
     from ..core.fit import fit_files, variant_paths
-    from ..core.mesh import load_mesh
-    from ..core.params import write_params
+    from ..core.io.mesh import load_mesh
+    from ..core.io.params import write_params
 
     out = Path(args.output)
     mesh = load_mesh(args.base)
     is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
     paths = variant_paths(args.variants)
-    from ..core.mesh import mesh_source_path
-    from ..core.safeio import check_output_path
+    from ..core.io.mesh import mesh_source_path
+    from ..core.io.safeio import check_output_path
 
     check_output_path(out, (mesh_source_path(args.base), *paths), "parameter file")
     with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:

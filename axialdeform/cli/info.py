@@ -17,7 +17,7 @@ def run(args) -> int | None:
     its header, then the verdict fails with status 2."""
     from ..core.axis import ControlAxis
     from ..core.errors import AxialDeformError, ParamFileError
-    from ..core.params import ParamFile, decode_binary, parse_text, read_binary_header, read_param_bytes
+    from ..core.io.params import ParamFile, decode_binary, parse_text, read_binary_header, read_param_bytes
 
     path = Path(args.params)
     data, binary = read_param_bytes(path)  # a regular file, read with a bound

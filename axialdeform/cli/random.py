@@ -53,11 +53,11 @@ RANDOM_CHUNK = 1 << 17
 
 def run(args) -> None:
     from ..core.errors import ArgumentError
-    from ..core.mesh import load_mesh
-    from ..core.params import param_file_bytes, write_param_chunks
+    from ..core.io.mesh import load_mesh
+    from ..core.io.params import param_file_bytes, write_param_chunks
     from ..core.variation import iter_random_params
 
-    from ..core.safeio import MAX_INSTANCES, check_count, check_disk_space, check_output_path
+    from ..core.io.safeio import MAX_INSTANCES, check_count, check_disk_space, check_output_path
     from ._common import mesh_file
 
     extension = extension_args(args)  # before any work: a bad range is the first thing said

@@ -70,7 +70,8 @@ def camera_from_args(mesh, params, size, args):
 def run(args) -> None:
     from ..gl.context import create_context
     from ..core.look import Look
-    from ..gl.image import parse_size, render_image, save_png
+    from ..gl.image import parse_size, render_image
+    from ..core.io.image import save_png
     from ..gl.renderer import AxialRenderer
 
     from . import scenes

@@ -58,8 +58,8 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int | None:
     from ..core.errors import TooFewError
-    from ..core.mesh import load_mesh
-    from ..core.params import write_params
+    from ..core.io.mesh import load_mesh
+    from ..core.io.params import write_params
     from ..core.scatter import scatter
     from ._common import scale_range
 
@@ -67,9 +67,9 @@ def run(args) -> int | None:
     from pathlib import Path
 
     from ..core.errors import ParamFileError
-    from ..core.mesh import mesh_source_path
-    from ..core.params import BINARY_SUFFIXES
-    from ..core.safeio import check_output_path
+    from ..core.io.mesh import mesh_source_path
+    from ..core.io.params import BINARY_SUFFIXES
+    from ..core.io.safeio import check_output_path
 
     if args.quantize and Path(args.output).suffix.lower() not in BINARY_SUFFIXES:  # before the work, not after
         raise ParamFileError(f"{args.output}: the quantized form is binary only; expected a "

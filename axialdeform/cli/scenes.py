@@ -30,7 +30,7 @@ def scene_of(args, *, params_optional: bool = False):
 
 def _check_output(args, what: str) -> None:
     """Refuse an output that is the scene file itself, a device, FIFO or socket."""
-    from ..core.safeio import check_output_path
+    from ..core.io.safeio import check_output_path
 
     check_output_path(args.output, (args.mesh,), what)
 
@@ -61,7 +61,8 @@ def _time(scene, args) -> float:
 def render(scene, args, wind=None, options=None) -> None:
     """``render SCENE -o OUT.png``; ``--wind`` replaces the scene's [wind];
     ``options``: ``--no-cull``, ``--lod``, ``--lod-error`` (:func:`._common.cull_options`)."""
-    from ..gl.image import parse_size, render_image, save_png
+    from ..gl.image import parse_size, render_image
+    from ..core.io.image import save_png
 
     _check_output(args, "PNG")
     fast = bool(getattr(args, "fast", False))
@@ -77,9 +78,9 @@ def render(scene, args, wind=None, options=None) -> None:
 
 def bake(scene, args, progress, wind=None) -> None:
     """``bake SCENE -o OUT.npz``: arrays ``positions_LAYER`` and ``normals_LAYER``."""
-    from ..core.bake import write_npz_layers
+    from ..core.io.bake import write_npz_layers
     from ..core.errors import ArgumentError
-    from ..core.safeio import check_disk_space
+    from ..core.io.safeio import check_disk_space
     from ..gl.bake import bake_pieces
 
     out = Path(args.output)
@@ -112,7 +113,7 @@ def export(scene, args) -> None:
     """``export SCENE -o OUT.glb [--instanced]``: the terrain and one mesh per
     layer (baked), or per layer its base mesh once on a node with
     EXT_mesh_gpu_instancing (instanced)."""
-    from ..core.export import export_scene
+    from ..core.io.gltf import export_scene
 
     _check_output(args, "exported .glb")
     path = export_scene(args.output, scene, args.layout)

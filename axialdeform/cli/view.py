@@ -44,8 +44,8 @@ def add_parser(sub) -> None:
 def run(args) -> None:
     from ..core.errors import AxialDeformError
     from ..core.look import Look
-    from ..core.mesh import load_mesh
-    from ..core.params import read_params
+    from ..core.io.mesh import load_mesh
+    from ..core.io.params import read_params
     from ..core.variation import random_params
     from ..gl.image import parse_size
     from ..viewer import Viewer
@@ -77,7 +77,7 @@ def run(args) -> None:
                         args.mode, args.max_triangles, args.fast, frames)  # before the levels of detail, any drawing
         seed = args.seed  # a file records no seed: shown only if the user names one
     else:
-        from ..core.safeio import check_count
+        from ..core.io.safeio import check_count
         from .random import RANDOM_BYTES_EACH
 
         check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")  # before anything is read or allocated

@@ -72,8 +72,8 @@ def run(args) -> None:
     elif (args.mesh is None) != (args.params is None):
         raise AxialDeformError("web: expected both MESH and PARAMS, a scene file .toml, or neither (with --serve)")
     elif args.mesh is not None:
-        from ..core.mesh import load_mesh
-        from ..core.params import read_params
+        from ..core.io.mesh import load_mesh
+        from ..core.io.params import read_params
 
         mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)

@@ -5,8 +5,8 @@ Modules, in the order of the data flow: ``mesh`` (load, parts, materials),
 ``axis`` (the control axis), ``record`` (THE instance record), ``params``
 (parameter arrays and files), ``variation``, ``scatter`` and ``wind`` (making
 instances), ``deform`` and ``transforms`` (the CPU reference), ``bounds``,
-``lod``, ``look``, ``scene``, ``bake``, ``export``, ``fit``; plumbing:
-``errors``, ``arrays``, ``atomic``, ``safeio``, ``lazy``.
+``lod``, ``look``, ``scene``, ``bake``, ``fit``; plumbing: ``errors``,
+``arrays``, ``lazy``.  Every file read and written: the :mod:`.io` package.
 """
 
 from .lazy import attach
@@ -17,13 +17,13 @@ _NAMES = {
                              "MeshMismatchError", "ParamError", "ParamFileError", "ResidualError", "SceneError",
                              "ScatterError", "ShaderError", "TooFewError", "TopologyError")},
     # mesh, axis, appearance
-    "BaseMesh": "mesh", "load_mesh": "mesh", "BUNDLED_MESHES": "mesh", "bundled_mesh_path": "mesh",
+    "BaseMesh": "mesh", "load_mesh": "io.mesh", "BUNDLED_MESHES": "io.mesh", "bundled_mesh_path": "io.mesh",
     "ControlAxis": "axis", "Material": "material", "Part": "material", "AssetWarning": "material",
     # the record and parameters
     "RECORD": "record", "Field": "record", "Instances": "record", "as_instances": "record",
     "FIELDS": "record", "EXTENDED_FIELDS": "record",
     "as_params": "params", "make_params": "params", "extend_params": "params", "is_extended": "params",
-    "read_params": "params", "read_param_file": "params", "write_params": "params", "ParamFile": "params",
+    "read_params": "io.params", "read_param_file": "io.params", "write_params": "io.params", "ParamFile": "io.params",
     "random_params": "variation", "load_surface": "scatter",
     "Wind": "wind", "wind_offsets": "wind", "apply_wind": "wind",
     # the CPU reference, bounds
@@ -31,7 +31,8 @@ _NAMES = {
     # scene and look
     "Scene": "scene", "Layer": "scene", "load_scene": "scene", "Look": "look", "DEFAULT_LOOK": "look",
     # out again
-    "export_glb": "export", "export_instanced": "export", "export_baked": "export", "fit_params": "fit",
+    "export_glb": "io.gltf", "export_instanced": "io.gltf", "export_baked": "io.gltf", "fit_params": "fit",
+    "save_png": "io.image",
 }
 
 __getattr__, __dir__, __all__ = attach(__name__, _NAMES)

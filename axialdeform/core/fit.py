@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .deform import bernstein, deform, deform_local_extended, displace
-from .mesh import MESH_SUFFIXES  # mesh files a variants folder may hold (others are ignored)
+from .io.mesh import MESH_SUFFIXES
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .params import as_params
 from .record import ANGLES, OFFSETS, POSITION
@@ -570,7 +570,7 @@ def load_variant(path: str | os.PathLike, mesh) -> np.ndarray:
     Raises :class:`TopologyError` naming the file if its vertex count, triangle
     count or triangles differ from the base mesh's.
     """
-    from .mesh import load_mesh
+    from .io.mesh import load_mesh
 
     variant = load_mesh(path)
     name = str(path)

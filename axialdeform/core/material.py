@@ -22,8 +22,6 @@ drawn with its base colour.
 
 from __future__ import annotations
 
-import os
-import stat
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,11 +30,7 @@ import numpy as np
 
 from .errors import MeshError
 
-__all__ = [
-    "Material", "Part", "AssetWarning", "ALPHA_MODES", "DEFAULT_MATERIAL",
-    "gather_parts", "compute_tangents", "SafeResolver", "srgb_to_linear", "linear_to_srgb",
-    "gltf_references", "is_image_name", "IMAGE_SUFFIXES", "BUFFER_SLACK",
-]
+__all__ = ['Material', 'Part', 'AssetWarning', 'ALPHA_MODES', 'DEFAULT_MATERIAL', 'gather_parts', 'compute_tangents', 'srgb_to_linear', 'linear_to_srgb']
 
 ALPHA_MODES = ("OPAQUE", "MASK", "BLEND")
 
@@ -131,162 +125,6 @@ class Part:
 
 
 # --------------------------------------------------------------------- files
-
-
-#: suffixes of the files a mesh refers to that are pictures (textures)
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".gif", ".webp", ".tif", ".tiff", ".ktx", ".ktx2", ".dds")
-
-
-def is_image_name(name: str) -> bool:
-    """True for a referenced file that is a picture (a texture), by its suffix."""
-    return os.path.splitext(str(name))[1].lower() in IMAGE_SUFFIXES
-
-
-def gltf_references(data: bytes, kind: str, name: str = "<gltf>") -> dict[str, tuple[str, int | None]]:
-    """What a glTF (``kind`` ``"gltf"``: JSON; ``"glb"``: its JSON chunk)
-    declares about the files it refers to: ``{uri: (field, byte length)}``,
-    the length a buffer's ``byteLength`` (``field`` e.g.
-    ``"buffers[0].byteLength"``), None for an image (``"images[2].uri"``:
-    bounded by :data:`axialdeform.core.safeio.MAX_IMAGE_BYTES`).  ``data:``
-    URIs are inside the file and not listed.  A file whose JSON cannot be
-    read gives ``{}`` (the mesh loader's own error says why); a buffer
-    ``byteLength`` that is not a whole number >= 1 raises :class:`MeshError`
-    naming ``name`` and the field."""
-    import json
-    import struct
-
-    try:
-        if kind == "glb":
-            magic, _version, _length, chunk, ctype = struct.unpack_from("<4sIIII", data)
-            if magic != b"glTF" or ctype != 0x4E4F534A:
-                return {}
-            data = bytes(data[20 : 20 + chunk])
-        tree = json.loads(bytes(data).decode("utf-8"))
-    except (ValueError, struct.error, UnicodeDecodeError):
-        return {}
-    out: dict[str, tuple[str, int | None]] = {}
-    if not isinstance(tree, dict):
-        return out
-    for group in ("buffers", "images"):
-        items = tree.get(group)
-        for i, item in enumerate(items if isinstance(items, list) else []):
-            uri = item.get("uri") if isinstance(item, dict) else None
-            if not isinstance(uri, str) or "base64," in uri or uri in out:
-                continue
-            if group == "images":
-                out[uri] = (f"images[{i}].uri", None)
-                continue
-            size = item.get("byteLength")
-            if isinstance(size, bool) or not isinstance(size, int) or size < 1:
-                raise MeshError(f"{name}: buffers[{i}].byteLength: expected a whole number of bytes >= 1 "
-                                f"(the size of {uri}), found {size!r}")
-            out[uri] = (f"buffers[{i}].byteLength", size)
-    return out
-
-
-#: bytes a referenced buffer may have beyond its declared ``byteLength``
-#: (padding to a multiple of 4, as in a GLB's binary chunk); more is refused
-BUFFER_SLACK = 3
-
-
-class SafeResolver:
-    """A trimesh resolver for the files a mesh refers to (``.mtl``, textures,
-    glTF buffers): only regular files in the mesh's folder tree are read, so a
-    FIFO or a device never blocks, each with a bound that depends on what it
-    claims to hold:
-
-    * a glTF buffer named in ``declared`` (:func:`gltf_references`): its
-      ``byteLength`` exactly (up to :data:`BUFFER_SLACK` bytes of padding
-      more, which are not read); a file smaller or larger is refused without
-      being read, the message naming the file, the field and the expectation;
-    * a picture (a glTF image, an OBJ texture):
-      :data:`axialdeform.core.safeio.MAX_IMAGE_BYTES`;
-    * anything else (a material library): ``max_bytes``
-      (:data:`axialdeform.core.safeio.MAX_REFERENCED_BYTES`).
-
-    Every refusal or failure is recorded in ``failed`` as ``(name, reason)``
-    for the loader's warning, and the refusals (not a regular file, too
-    large, not the declared size) also in ``refused`` as ``(name,
-    message)``: the loader refuses the mesh for those that are not textures."""
-
-    def __init__(self, folder: str | os.PathLike, max_bytes: int | None = None, *,
-                 declared: dict | None = None, referrer: str | None = None):
-        from .safeio import MAX_REFERENCED_BYTES
-
-        self.parent = os.path.abspath(os.fspath(folder))
-        self.max_bytes = MAX_REFERENCED_BYTES if max_bytes is None else int(max_bytes)
-        self.declared = dict(declared or {})
-        self.referrer = referrer
-        self.failed: list[tuple[str, str]] = []
-        self.refused: list[tuple[str, str]] = []
-
-    def _path(self, name: str) -> str:
-        name = str(name).replace("\\", "/")
-        return name if os.path.isabs(name) else os.path.join(self.parent, name)
-
-    def get(self, name: str) -> bytes:
-        from .errors import PathError
-        from .safeio import MAX_IMAGE_BYTES, read_regular
-
-        path = self._path(name)
-        try:
-            st = os.stat(path)
-        except OSError as exc:
-            self.failed.append((str(name), exc.strerror or "cannot be read"))
-            raise
-        if not stat.S_ISREG(st.st_mode):
-            self.failed.append((str(name), "is not a regular file"))
-            self.refused.append((str(name), f"{name}: not a regular file"))
-            raise OSError(f"{name}: not a regular file")
-        field, size = self.declared.get(str(name), (None, None))
-        by = f" by {self.referrer}" if self.referrer else ""
-        try:
-            if size is not None:
-                return bytes(self._read_declared(path, name, field, size, by))
-            if field is not None or is_image_name(name):
-                return bytes(read_regular(path, MAX_IMAGE_BYTES, f"a picture referred to{by} (a texture)"))
-            return bytes(read_regular(path, self.max_bytes, f"a file referred to{by}"))
-        except PathError as exc:
-            self.failed.append((str(name), str(exc)))
-            self.refused.append((str(name), str(exc)))
-            raise OSError(str(exc)) from None
-        except OSError as exc:
-            self.failed.append((str(name), exc.strerror or "cannot be read"))
-            raise
-
-    def _read_declared(self, path: str, name: str, field: str, size: int, by: str) -> bytearray:
-        """The first ``size`` bytes of ``path``, a buffer whose declared length is ``size``."""
-        from .errors import PathError
-        from .safeio import memory_available, open_regular, read_sized
-
-        what = f"a buffer referred to{by}"
-        if size > memory_available() // 2:
-            raise PathError(f"{name}: {self.referrer or 'the mesh'} declares {field} = {size}; expected a buffer of at most "
-                            f"{memory_available() // 2} bytes (half the memory available)")
-        with open_regular(path, what) as (fh, actual):
-            if not size <= actual <= size + BUFFER_SLACK:
-                raise PathError(f"{name}: is {actual} bytes, but {self.referrer or 'the mesh'} declares {field} = {size}; expected a file of "
-                                f"exactly {size} bytes" + (f" (or up to {BUFFER_SLACK} more of padding)" if BUFFER_SLACK else "")
-                                + (" (truncated?)" if actual < size else ""))
-            data = read_sized(fh, actual, name, what, PathError)
-        del data[size:]  # padding is not part of the buffer
-        return data
-
-    __getitem__ = get
-
-    def get_base(self):  # trimesh asks for it when writing
-        return self.parent
-
-    def namespaced(self, namespace):
-        child = SafeResolver(os.path.join(self.parent, namespace), self.max_bytes, referrer=self.referrer)
-        child.failed, child.refused = self.failed, self.refused  # one record for the whole load
-        return child
-
-    def keys(self):
-        return iter(())
-
-    def write(self, name, data):  # pragma: no cover - never used for loading
-        raise OSError("read-only resolver")
 
 
 # --------------------------------------------------------------------- visuals

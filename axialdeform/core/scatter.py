@@ -242,7 +242,7 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
 
     from PIL import Image
 
-    from .safeio import _gb, memory_available, open_regular
+    from .io.safeio import _gb, memory_available, open_regular
 
     if not os.path.lexists(path):
         raise ScatterError(f"{what} {path}: no such file")
@@ -379,7 +379,7 @@ def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=Non
             return surface_from_heights(_read_grey(path, "SURFACE", SURFACE_BYTES_PER_PIXEL), up=up, height_scale=height_scale,
                                         extent=extent, name=f"SURFACE {path}")
         from .errors import MeshError
-        from .mesh import load_mesh
+        from .io.mesh import load_mesh
 
         import warnings
 
@@ -491,7 +491,8 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
     Returns (n, 16) or (n, 19) float32.  Raises :class:`TooFewError` (with
     ``.params``, what fits) when fewer than ``n`` fit and not ``allow_fewer``.
     """
-    from .mesh import BaseMesh, load_mesh
+    from .mesh import BaseMesh
+    from .io.mesh import load_mesh
 
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
         raise ScatterError(f"count: expected a whole number >= 0, found {n!r}")

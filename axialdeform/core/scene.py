@@ -56,30 +56,19 @@ naming the file, the line and the key.
 
 from __future__ import annotations
 
-import math
 import os
-import re
-import sys
 from dataclasses import dataclass, field
+from typing import ClassVar
 from pathlib import Path
 
 import numpy as np
 
-from .errors import AxialDeformError, SceneError
+from .errors import SceneError
 from .look import BACKGROUND, Look
 
-__all__ = ["Scene", "Layer", "load_scene", "is_scene_file", "SCENE_SUFFIXES"]
+__all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
 
 SCENE_SUFFIXES = (".toml",)
-
-_TOP = {"up", "include", "terrain", "camera", "light", "wind", "layer", "background"}
-_TERRAIN = {"mesh", "heightmap", "height_scale", "extent", "color"}
-_CAMERA = {"elevation", "azimuth", "fov", "eye", "target"}
-_LIGHT = {"direction", "ambient"}
-_WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
-_LAYER = {"name", "mesh", "color", "params", "scatter", "wind"}
-_SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "seed",
-            "allow_fewer", "lift", "surface"}
 
 
 def is_scene_file(path) -> bool:
@@ -126,6 +115,9 @@ class Scene:
         What layers with ``wind = True`` sway in.
     background : (3,) float
     """
+
+    #: the class of the layers (what a scene file's reader makes)
+    layer_type: ClassVar[type] = Layer
 
     path: Path | None
     up: str = "y"
@@ -182,291 +174,14 @@ class Scene:
         return load_scene(path)
 
 
-class _Source:
-    """A scene file's text, to find the line of a key for messages."""
-
-    def __init__(self, path: Path, text: str) -> None:
-        self.path, self.lines = path, text.splitlines()
-
-    def line(self, key: str, table: str | None = None, nth: int = 0) -> int:
-        """1-based line of ``key = ...`` inside ``[table]`` (the ``nth`` ``[[table]]``), or of the table."""
-        start = 0
-        if table is not None:
-            head = re.compile(r"^\s*\[\[?\s*" + re.escape(table) + r"\s*\]\]?\s*(#.*)?$")
-            hits = [i for i, ln in enumerate(self.lines) if head.match(ln)]
-            if len(hits) > nth:
-                start = hits[nth]
-        pat = re.compile(r"^\s*(\[\[?\s*([\w-]+\.)*)?[\"']?" + re.escape(key.split(".")[-1]) + r"[\"']?\s*(=|\]|\.)")
-        for i in range(start, len(self.lines)):
-            if pat.match(self.lines[i]):
-                return i + 1
-        return start + 1
-
-    def error(self, message: str, key: str, table: str | None = None, nth: int = 0) -> SceneError:
-        return SceneError(f"{self.path}:{self.line(key, table, nth)}: key '{key}': {message}")
-
-
-def _load_toml(path: Path):
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover - Python 3.10
-        import tomli as tomllib
-    from .safeio import memory_available, read_regular
-
-    if not os.path.lexists(path):
-        raise SceneError(f"{path}: no such scene file")
-    # a regular file only (a FIFO or /dev/zero is refused without blocking), of a size
-    # whose parse fits in memory (tomllib's objects take up to ~10x the text)
-    data = read_regular(path, max(memory_available() // 12, 1 << 20), "a scene file (.toml)", SceneError)
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise SceneError(f"{path}: could not read the scene file ({exc})") from None
-    del data
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: not valid TOML: {exc}") from None
-    return data, _Source(path, text)
-
-
-def _check_keys(src: _Source, table: dict, allowed: set, where: str, name: str | None, nth: int = 0) -> None:
-    for key in table:
-        if key not in allowed:
-            raise src.error(f"unknown key in {where}; expected one of {', '.join(sorted(allowed))}", key, name, nth)
-
-
-def _numbers(src, value, key, table, nth, count: tuple, *, positive=False):
-    vals = [value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
-    if (not isinstance(vals, list) or len(vals) not in count
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in vals)
-            or (positive and not all(v > 0 for v in vals))):
-        n = " or ".join(str(c) for c in count)
-        raise src.error(f"expected {n} finite {'positive ' if positive else ''}number(s), found {value!r}", key, table, nth)
-    return [float(v) for v in vals]
-
-
-def _path(src: _Source, value, key, table, nth) -> Path:
-    if not isinstance(value, str) or not value:
-        raise src.error(f"expected a file name (a string), found {value!r}", key, table, nth)
-    path = Path(value)
-    return path if path.is_absolute() else src.path.parent / path
-
-
-def _existing(src, value, key, table, nth) -> Path:
-    path = _path(src, value, key, table, nth)
-    if not path.exists():
-        raise src.error(f"no such file {path}", key, table, nth)
-    return path
-
-
-def _wrap(src, key, table, nth):
-    """Context: re-raise a library error from loading as a SceneError with file, line and key."""
-
-    class _Ctx:
-        def __enter__(self):
-            return self
-
-        def __exit__(self, typ, exc, tb):
-            if exc is not None and isinstance(exc, AxialDeformError) and not isinstance(exc, SceneError):
-                raise src.error(str(exc), key, table, nth) from None
-            return False
-
-    return _Ctx()
-
-
 def load_scene(path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:
-    """Read, check and resolve a scene file: meshes loaded, parameters read or scattered.
+    """Read, check and resolve a scene file (:meth:`Scene.load`): meshes
+    loaded, parameters read or scattered.
 
     scale_counts : multiply every scatter recipe's ``count`` (e.g. 0.1 for a quick preview).
     """
-    path = Path(path)
-    data, src = _load_toml(path)
-    scene = Scene(path=path)
-    _check_keys(src, data, _TOP, "the scene", None)
-    up = data.get("up", "y")
-    if up not in ("x", "y", "z"):
-        raise src.error(f"expected one of x, y, z, found {up!r}", "up", None, 0)
-    scene.up = up
-    for key, allowed in (("terrain", _TERRAIN), ("camera", _CAMERA), ("light", _LIGHT), ("wind", _WIND)):
-        if key in data and not isinstance(data[key], dict):
-            raise src.error("expected a table", key, None, 0)
-        _check_keys(src, data.get(key, {}), allowed, f"[{key}]", key)
-    if "background" in data:
-        scene.background = tuple(_numbers(src, data["background"], "background", None, 0, (3,)))
-    _read_view(src, data, scene)
-    surface = _read_terrain(src, data.get("terrain"), scene)
-    if "wind" in data:
-        from .wind import Wind
+    from .io.scene import read_scene
 
-        w = data["wind"]
-        kwargs = {k: (tuple(_numbers(src, v, k, "wind", 0, (3,))) if k == "direction" else
-                      _numbers(src, v, k, "wind", 0, (1,))[0]) for k, v in w.items()}
-        with _wrap(src, next(iter(w), "wind"), "wind", 0):
-            scene.wind = Wind(**kwargs)
-    _read_layers(src, data, scene, surface, scale_counts, stack=(path.resolve(),))
-    return scene
+    return read_scene(path, Scene, scale_counts=scale_counts)
 
 
-def _read_view(src, data, scene) -> None:
-    cam = data.get("camera", {})
-    out = {}
-    for key in ("elevation", "azimuth", "fov"):
-        if key in cam:
-            out[key] = _numbers(src, cam[key], key, "camera", 0, (1,))[0]
-    for key in ("eye", "target"):
-        if key in cam:
-            out[key] = tuple(_numbers(src, cam[key], key, "camera", 0, (3,)))
-    if ("eye" in out) != ("target" in out):
-        raise src.error("eye and target go together; expected both or neither", "eye" if "eye" in out else "target",
-                        "camera", 0)
-    scene.camera = out
-    light = data.get("light", {})
-    lo = {}
-    if "direction" in light:
-        lo["light_dir"] = tuple(_numbers(src, light["direction"], "direction", "light", 0, (3,)))
-    if "ambient" in light:
-        lo["ambient"] = _numbers(src, light["ambient"], "ambient", "light", 0, (1,))[0]
-    scene.light = lo
-
-
-def _read_terrain(src, terrain, scene):
-    """The terrain's Surface (or None); sets ``scene.terrain`` to a BaseMesh of it."""
-    if not terrain:
-        return None
-    from .mesh import BaseMesh, area_weighted_normals
-    from .scatter import load_surface
-
-    if ("mesh" in terrain) == ("heightmap" in terrain):
-        raise src.error("expected exactly one of 'mesh' or 'heightmap'", next(iter(terrain), "terrain"), "terrain", 0)
-    key = "mesh" if "mesh" in terrain else "heightmap"
-    file = _existing(src, terrain[key], key, "terrain", 0)
-    hs = _numbers(src, terrain.get("height_scale", 1.0), "height_scale", "terrain", 0, (1,))[0]
-    extent = terrain.get("extent")
-    if extent is not None:
-        extent = _numbers(src, extent, "extent", "terrain", 0, (1, 2), positive=True)
-    if "color" in terrain:
-        scene.terrain_color = tuple(_numbers(src, terrain["color"], "color", "terrain", 0, (3,)))
-    with _wrap(src, key, "terrain", 0):
-        surface = load_surface(file, up=scene.up, height_scale=hs, extent=extent)
-    # the drawing copy: float32 positions and normals; the uint32 faces are the surface's own (shared)
-    v, f = surface.vertices, surface.faces
-    scene.terrain = BaseMesh(v, area_weighted_normals(v, f), f, name=str(file))
-    return surface
-
-
-def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
-    includes = data.get("include", [])
-    if isinstance(includes, str):
-        includes = [includes]
-    if not isinstance(includes, list):
-        raise src.error(f"expected a list of scene files, found {includes!r}", "include", None, 0)
-    for item in includes:
-        inc = _existing(src, item, "include", None, 0)
-        if inc.resolve() in stack:
-            chain = " -> ".join(str(p) for p in (*stack, inc.resolve()))
-            raise src.error(f"include cycle: {chain}", "include", None, 0)
-        sub, sub_src = _load_toml(inc)
-        _check_keys(sub_src, sub, _TOP, "the scene", None)
-        _read_layers(sub_src, sub, scene, surface, scale_counts, (*stack, inc.resolve()))
-    layers = data.get("layer", [])
-    if not isinstance(layers, list):
-        raise src.error("expected [[layer]] tables", "layer", None, 0)
-    for nth, layer in enumerate(layers):  # every key first: no loading before the file is known good
-        if not isinstance(layer, dict):
-            raise src.error("expected [[layer]] tables", "layer", None, 0)
-        _check_keys(src, layer, _LAYER, f"layer {nth + 1}", "layer", nth)
-        if isinstance(layer.get("scatter"), dict):
-            _check_keys(src, layer["scatter"], _SCATTER, f"layer {nth + 1} scatter", "layer", nth)
-    for nth, layer in enumerate(layers):
-        name = layer.get("name", f"layer{len(scene.layers) + 1}")
-        if any(done.name == name for done in scene.layers):
-            raise src.error(f"a second layer named {name!r}; expected unique layer names", "name", "layer", nth)
-        scene.layers.append(_read_layer(src, layer, nth, scene, surface, scale_counts, name))
-
-
-def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name) -> Layer:
-    from .mesh import load_mesh
-    from .params import read_params
-
-    _check_keys(src, layer, _LAYER, f"layer {nth + 1}", "layer", nth)
-    if "mesh" not in layer:
-        raise src.error("every layer needs a mesh (a file or 'stone' / 'leaf')", "layer", "layer", nth)
-    name = layer.get("name", default_name)
-    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
-        raise src.error(f"expected a name of letters, digits, _ . -, found {name!r}", "name", "layer", nth)
-    mesh_value = layer["mesh"]
-    from .mesh import BUNDLED_MESHES
-
-    with _wrap(src, "mesh", "layer", nth):
-        if isinstance(mesh_value, str) and mesh_value in BUNDLED_MESHES:
-            mesh = load_mesh(mesh_value)
-        else:
-            mesh = load_mesh(_existing(src, mesh_value, "mesh", "layer", nth))
-    color = tuple(_numbers(src, layer["color"], "color", "layer", nth, (3,))) if "color" in layer else None
-    wind = layer.get("wind", False)
-    if not isinstance(wind, bool):
-        raise src.error(f"expected true or false, found {wind!r}", "wind", "layer", nth)
-    if ("params" in layer) == ("scatter" in layer):
-        raise src.error("expected exactly one of 'params' (a parameter file) or a [layer.scatter] recipe",
-                        "mesh", "layer", nth)
-    if "params" in layer:
-        file = _existing(src, layer["params"], "params", "layer", nth)
-        with _wrap(src, "params", "layer", nth):
-            params = read_params(file, mesh)
-    else:
-        params, lift = _scatter_layer(src, layer["scatter"], nth, mesh, scene, surface, scale_counts)
-        return Layer(name=name, mesh=mesh, params=params, color=color, wind=wind, lift=lift)
-    return Layer(name=name, mesh=mesh, params=params, color=color, wind=wind)
-
-
-def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.ndarray:
-    from .scatter import load_surface, scatter
-
-    if not isinstance(recipe, dict):
-        raise src.error("expected a table [layer.scatter]", "scatter", "layer", nth)
-    _check_keys(src, recipe, _SCATTER, f"layer {nth + 1} scatter", "layer", nth)
-    if "count" not in recipe:
-        raise src.error("a scatter recipe needs a count", "scatter", "layer", nth)
-    count = recipe["count"]
-    if not isinstance(count, int) or isinstance(count, bool) or count < 0:
-        raise src.error(f"expected a whole number >= 0, found {count!r}", "count", "layer", nth)
-    count = max(1, int(round(count * scale_counts))) if count else 0
-    kwargs = {}
-    for key in ("min_distance", "align_to_normal", "bend"):
-        if key in recipe:
-            kwargs[key] = _numbers(src, recipe[key], key, "layer", nth, (1,))[0]
-    if "min_distance" in kwargs and scale_counts < 1:
-        kwargs["min_distance"] /= math.sqrt(scale_counts)  # a preview keeps the look: fewer, further apart
-    if "scale" in recipe:
-        kwargs["scale"] = tuple(_numbers(src, recipe["scale"], "scale", "layer", nth, (1, 2), positive=True) * 2)[:2]
-    for key, kind, what in (("anchor", str, "a string"), ("seed", int, "a whole number"),
-                            ("allow_fewer", bool, "true or false")):
-        if key in recipe:
-            if not isinstance(recipe[key], kind) or (kind is int and isinstance(recipe[key], bool)):
-                raise src.error(f"expected {what}, found {recipe[key]!r}", key, "layer", nth)
-            kwargs[key] = recipe[key]
-    from .scatter import ANCHORS
-
-    if kwargs.get("anchor", "bottom") not in ANCHORS:
-        raise src.error(f"expected one of {', '.join(ANCHORS)}, found {kwargs['anchor']!r}", "anchor", "layer", nth)
-    if "density" in recipe:
-        kwargs["density"] = _existing(src, recipe["density"], "density", "layer", nth)
-    where = surface
-    if "surface" in recipe:
-        with _wrap(src, "surface", "layer", nth):
-            where = load_surface(_existing(src, recipe["surface"], "surface", "layer", nth), up=scene.up)
-    if where is None:
-        raise src.error("a scatter recipe needs a [terrain] in the scene or a 'surface' key", "scatter", "layer", nth)
-    lift = _numbers(src, recipe.get("lift", [0.0, 0.0]), "lift", "layer", nth, (1, 2))
-    with _wrap(src, "scatter", "layer", nth):
-        params = scatter(where, mesh, count, up=scene.up, **kwargs)
-    if not any(lift):
-        return params, None
-    lo, hi = lift[0], lift[-1]
-    rng = np.random.Generator(np.random.PCG64(int(kwargs.get("seed", 0)) + 7919))
-    up_i = "xyz".index(scene.up)
-    params = params.copy()
-    added = (lo + (hi - lo) * rng.random(len(params))).astype(np.float32)
-    params[:, 10 + up_i] += added
-    return params, added

@@ -17,8 +17,8 @@ _NAMES = {
     "AxialRenderer": "renderer", "MODES": "renderer",
     "GroundPlane": "ground", "ShadowMap": "shadow",
     "Camera": "camera", "OrbitCamera": "camera", "frame_instances": "camera",
-    "SceneRenderer": "scene", "render_scene": "scene",
-    "render_image": "image", "save_png": "image",
+    "SceneRenderer": "scene", "render_scene": "image",
+    "render_image": "image",
 }
 
 __getattr__, __dir__, __all__ = attach(__name__, _NAMES)

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..core.bake import BAKE_PIECE_BYTES, bake_cpu, bake_cpu_pieces, check_bake_count, check_bake_result
 from ..core.errors import ArgumentError
-from ..core.safeio import require_finite
+from ..core.io.safeio import require_finite
 
 __all__ = ["bake", "bake_pieces", "ENGINES"]
 

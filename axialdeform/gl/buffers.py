@@ -19,7 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ParamError
-from ..core.params import as_params, dequantize_params, extend_params, quantize_params, quantize_with_table
+from ..core.params import as_params, extend_params
+from ..core.io.params import dequantize_params, quantize_params, quantize_with_table
 from ..core.record import gl_layout
 from .context import check_alive, check_released
 

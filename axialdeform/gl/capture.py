@@ -10,7 +10,7 @@ import numpy as np
 from .buffers import InstanceBuffer, as_index
 from .context import bind_framebuffer, release_framebuffer
 from ..core.errors import ParamError
-from ..core.safeio import require_finite
+from ..core.io.safeio import require_finite
 from .shaders import build_program
 
 _CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass

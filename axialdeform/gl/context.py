@@ -186,7 +186,7 @@ def check_image_size(ctx, size, samples: int = 4, panels: int = 1) -> None:
     (``panels`` of them side by side) cannot be made by ``ctx``: a side past
     the GL limits (:func:`size_limits`) or more memory than is available
     (colour + depth at ``samples``, the resolved copy and the read-back)."""
-    from ..core.safeio import memory_available
+    from ..core.io.safeio import memory_available
 
     check_alive(ctx, "the image")
     w, h = (int(size[0]), int(size[1]))

@@ -3,11 +3,9 @@ camera that frames them all, and save PNGs atomically (Pillow)."""
 
 from __future__ import annotations
 
-import os
 
 import numpy as np
 
-from ..core.atomic import atomic_path
 from .camera import UP_VECTORS, Camera
 from .context import Offscreen, check_image_size, create_context
 from ..core.errors import ArgumentError
@@ -16,7 +14,7 @@ from .ground import GroundPlane
 from .renderer import MODES
 from .shadow import ShadowMap
 
-__all__ = ["render_image", "save_png", "parse_size", "as_scene", "look_from_keywords"]
+__all__ = ["render_image", "render_scene", "parse_size", "as_scene", "look_from_keywords"]
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -179,9 +177,15 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
             ctx.release()
 
 
-def save_png(path: str | os.PathLike, image: np.ndarray) -> None:
-    """Write an ``(h, w, 3|4) uint8`` array as PNG, atomically."""
-    from PIL import Image
+def render_scene(scene, size=(800, 600), mode: str = "solid", *, ctx=None, time: float = 0.0, samples: int = 4,
+                 camera: Camera | None = None, culling: bool = True, lod: bool = False,
+                 lod_error: float = 1.0) -> np.ndarray:
+    """Deprecated: :func:`axialdeform.render_image` takes a scene
+    (``render_image(scene, size=..., modes=mode, look=scene.look.replace(samples=...))``)."""
+    import warnings
 
-    with atomic_path(path, suffix=".png") as tmp:
-        Image.fromarray(np.ascontiguousarray(image)).save(tmp, format="PNG")
+    warnings.warn("render_scene is deprecated: use axialdeform.render_image(scene, ...)", DeprecationWarning,
+                  stacklevel=2)
+    return render_image(scene, size=size, modes=mode, ctx=ctx, time=time, camera=camera,
+                        look=scene.look.replace(samples=samples),
+                        options={"culling": culling, "lod": lod, "lod_error": lod_error})

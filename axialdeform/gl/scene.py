@@ -9,7 +9,7 @@ import numpy as np
 from .camera import UP_VECTORS, Camera
 from .renderer import AxialRenderer
 
-__all__ = ["SceneRenderer", "scene_camera", "render_scene"]
+__all__ = ["SceneRenderer", "scene_camera", "TERRAIN_INSTANCE"]
 
 TERRAIN_INSTANCE = np.zeros((1, 16), dtype=np.float32)
 
@@ -143,19 +143,3 @@ class SceneRenderer:
 
     def __exit__(self, *exc) -> None:
         self.release()
-
-
-def render_scene(scene, size=(800, 600), mode: str = "solid", *, ctx=None, time: float = 0.0, samples: int = 4,
-                 camera: Camera | None = None, culling: bool = True, lod: bool = False,
-                 lod_error: float = 1.0) -> np.ndarray:
-    """Deprecated: :func:`axialdeform.render_image` takes a scene
-    (``render_image(scene, size=..., modes=mode, look=scene.look.replace(samples=...))``)."""
-    import warnings
-
-    from .image import render_image
-
-    warnings.warn("render_scene is deprecated: use axialdeform.render_image(scene, ...)", DeprecationWarning,
-                  stacklevel=2)
-    return render_image(scene, size=size, modes=mode, ctx=ctx, time=time, camera=camera,
-                        look=scene.look.replace(samples=samples),
-                        options={"culling": culling, "lod": lod, "lod_error": lod_error})

@@ -27,7 +27,6 @@ of the library (and of its CLI) goes through.
 from __future__ import annotations
 
 import contextlib
-import errno
 import os
 import stat
 import warnings
@@ -35,10 +34,10 @@ from typing import Iterable, Iterator, Sequence
 
 import numpy as np
 
-from .errors import AxialDeformError, PathError
+from ..errors import AxialDeformError, PathError
 
 __all__ = [
-    "open_regular", "read_regular", "read_sized", "SafeResolver", "check_output_path", "check_not_special",
+    "open_regular", "read_regular", "read_sized", "check_output_path", "check_not_special",
     "memory_available", "check_count", "disk_free", "check_disk_space", "require_finite", "quiet_numpy", "MAX_INSTANCES",
     "MAX_REFERENCED_BYTES", "MAX_IMAGE_BYTES",
 ]
@@ -136,14 +135,6 @@ def read_sized(fh, size: int, path, what: str = "file", error: type = PathError)
         raise error(f"{path}: grew while being read (fstat said {size} bytes); expected {what} that is not being written")
     del buf[got:]
     return buf
-
-
-def __getattr__(name):  # the one resolver lives beside the appearance code that uses it (needs trimesh)
-    if name == "SafeResolver":
-        from .material import SafeResolver
-
-        return SafeResolver
-    raise AttributeError(name)
 
 
 def _same_file(a: os.stat_result, b: os.stat_result) -> bool:

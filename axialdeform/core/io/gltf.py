@@ -43,11 +43,11 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write_bytes
-from .bake import instance_name
-from .errors import GltfError
-from .params import as_params
-from .record import ANGLES, EXTENDED_FIELDS, GLTF_ATTRIBUTES, GLTF_EXTENDED_ATTRIBUTES, POSITION, SCALE
-from .transforms import angles_from_matrices, matrices_from_quaternions, quaternions_from_angles
+from ..bake import instance_name
+from ..errors import GltfError
+from ..params import as_params
+from ..record import ANGLES, EXTENDED_FIELDS, GLTF_ATTRIBUTES, GLTF_EXTENDED_ATTRIBUTES, POSITION, SCALE
+from ..transforms import angles_from_matrices, matrices_from_quaternions, quaternions_from_angles
 
 __all__ = [
     "GltfError",
@@ -174,7 +174,7 @@ class _Appearance:
                 continue
             m = part.material
             if default_color is not None and m.is_default:  # a scene layer's colour
-                from .material import Material
+                from ..material import Material
 
                 m = Material(name=part.name if not single else str(getattr(mesh, "name", "mesh")),
                              base_color=[*default_color[:3], 1.0])
@@ -253,7 +253,7 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     out (when ``params`` are not the ones ``positions`` were baked from)."""
     params = as_params(params)
     if positions is None or normals is None:
-        from .bake import bake_cpu
+        from ..bake import bake_cpu
 
         positions, normals = bake_cpu(mesh, params, source=source)
     if len(params) == 0:
@@ -279,7 +279,7 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     nrm_view = b.view(normals, target=_ARRAY_BUFFER, stride=12)
     tan_view = None
     if tangents and "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
-        from .deform import deform_tangents
+        from ..deform import deform_tangents
 
         tangents = np.concatenate([deform_tangents(mesh.axis, mesh.positions, mesh.tangents, params),
                                    np.broadcast_to(mesh.tangents[None, :, 3:], (n, v, 1))], axis=2).astype("<f4")
@@ -429,7 +429,7 @@ def encode_scene(scene, layout: str = "baked") -> bytes:
         return _encode_scene_instanced(scene, layers)
     import trimesh
 
-    from .deform import deform
+    from ..deform import deform
 
     out = trimesh.Scene()
     parts = [("terrain", scene.terrain, None, scene.terrain_color)] if scene.terrain is not None else []
@@ -562,8 +562,8 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     """
     import pygltflib
 
-    from .errors import MeshMismatchError
-    from .mesh import BaseMesh
+    from ..errors import MeshMismatchError
+    from ..mesh import BaseMesh
 
     path = Path(path)
     where = str(path)
@@ -639,7 +639,7 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
         normals = read_accessor(gltf, blob, prim.attributes.NORMAL, "NORMAL", where)
         from_file = True
     else:
-        from .mesh import area_weighted_normals
+        from ..mesh import area_weighted_normals
 
         normals, from_file = area_weighted_normals(positions, faces), False
     mesh = BaseMesh(positions, normals, faces, name=where, normals_from_file=from_file)
@@ -665,3 +665,60 @@ def read_extras(path: str | os.PathLike) -> dict:
 
 
 # ------------------------------------------------------------------------- CLI
+
+
+def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:
+    """What trimesh drops of a glTF file's triangle primitives: ``TANGENT``
+    always, ``TEXCOORD_0`` of a primitive without a material.  A list of
+    ``(positions (k, 3) float32, {"TANGENT": (k, 4) float32, "TEXCOORD_0":
+    (k, 2) float32})`` (the keys the primitive has), one per primitive with
+    either, in the file's vertex order, read by pygltflib and
+    :func:`axialdeform.core.export.read_accessor`.  ``kind``: ``"glb"`` or
+    ``"gltf"``; ``resolver``: reads a ``.gltf``'s external buffer (a
+    :class:`~axialdeform.core.material.SafeResolver`).  Only buffer 0 is read
+    (the GLB chunk, a data URI or one ``.bin``); what cannot be read is left
+    out (tangents are then computed where a normal map needs them)."""
+    import pygltflib
+
+    from ..errors import GltfError
+
+    try:
+        if kind == "glb":
+            gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
+            blob = gltf.binary_blob() or b""
+        else:
+            gltf = pygltflib.GLTF2.from_json(bytes(data).decode("utf-8"))
+            uri = gltf.buffers[0].uri if gltf.buffers else None
+            if not uri:
+                return []
+            if uri.startswith("data:"):
+                blob = gltf.decode_data_uri(uri)
+            elif resolver is not None:
+                blob = resolver.get(uri)
+            else:
+                return []
+    except Exception:  # trimesh has read (or refused) the file already: nothing more, not a second error
+        return []
+    out = []
+    for m in gltf.meshes or []:
+        for prim in m.primitives or []:
+            a = prim.attributes
+            wanted = {"TANGENT": a.TANGENT}
+            if prim.material is None:
+                wanted["TEXCOORD_0"] = a.TEXCOORD_0
+            wanted = {k: v for k, v in wanted.items() if v is not None}
+            if not wanted or a.POSITION is None or prim.mode not in (None, 4):
+                continue
+            try:
+                views = [gltf.bufferViews[gltf.accessors[i].bufferView] for i in (a.POSITION, *wanted.values())]
+                if any(v.buffer != 0 for v in views):
+                    continue
+                pos = read_accessor(gltf, blob, a.POSITION, "POSITION", "")
+                found = {k: read_accessor(gltf, blob, i, k, "").astype(np.float32) for k, i in wanted.items()}
+            except (GltfError, IndexError, TypeError, ValueError):
+                continue
+            widths = {"TANGENT": 4, "TEXCOORD_0": 2}
+            found = {k: v for k, v in found.items() if v.shape == (len(pos), widths[k])}
+            if pos.ndim == 2 and pos.shape[1] == 3 and found:
+                out.append((pos.astype(np.float32), found))
+    return out

@@ -1,0 +1,100 @@
+"""Structural rules read from the AST (never grep): no import cycles between
+the package's modules (imports inside functions included), and imports
+inside functions stay rare (optional dependencies, import time)."""
+
+from __future__ import annotations
+
+import ast
+
+from test_layers import PACKAGE, imported_modules, package_modules
+
+#: the most imports inside functions, as a share of all imports
+MAX_FUNCTION_LEVEL_SHARE = 0.10
+
+
+def import_graph(sources: dict) -> dict:
+    """``{module: {module it imports, ...}}`` over ``sources`` (module -> (source, is_package)),
+    edges only between modules in ``sources``; ``from pkg import sub`` counts as ``pkg.sub``."""
+    graph = {}
+    for module, (source, is_package) in sources.items():
+        names = imported_modules(ast.parse(source), module, is_package)
+        edges = set()
+        for name in names:
+            if name in sources and name != module:
+                edges.add(name)
+        graph[module] = edges
+    return graph
+
+
+def find_cycles(graph: dict) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan), each sorted."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(out)
+
+
+def _sources():
+    # packages import their submodules lazily (core/lazy.py): a package's __init__
+    # is not a module the others depend on, so it takes no part in cycles
+    return {m: (p.read_text(encoding="utf-8"), pkg) for p, m, pkg in package_modules() if not pkg}
+
+
+def test_the_cycle_finder_finds_a_cycle_through_a_function_level_import():
+    sources = {
+        "axialdeform.core.a": ("from .b import x\n", False),
+        "axialdeform.core.b": ("def f():\n    from .c import y\n", False),
+        "axialdeform.core.c": ("import axialdeform.core.a\n", False),
+        "axialdeform.core.d": ("from . import a\n", False),
+    }
+    assert find_cycles(import_graph(sources)) == [["axialdeform.core.a", "axialdeform.core.b", "axialdeform.core.c"]]
+
+
+def test_no_import_cycles():
+    assert find_cycles(import_graph(_sources())) == []
+
+
+def function_level_share(sources: dict) -> tuple[int, int]:
+    """(imports inside a function, all imports) of the package's own modules."""
+    inside = total = 0
+    for source, _ in sources.values():
+        tree = ast.parse(source)
+        funcs = [n for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))]
+        in_funcs = {id(n) for f in funcs for n in ast.walk(f) if isinstance(n, (ast.Import, ast.ImportFrom))}
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)) and not (
+                    isinstance(node, ast.ImportFrom) and node.module == "__future__"):
+                total += 1
+                inside += id(node) in in_funcs
+    return inside, total
+
+
+def test_imports_inside_functions_are_rare():
+    inside, total = function_level_share(_sources())
+    assert total > 100 and PACKAGE.is_dir()
+    assert inside / total < MAX_FUNCTION_LEVEL_SHARE, f"{inside} of {total} imports are inside functions"
