@@ -20,14 +20,11 @@ DeprecationWarning naming their new home.
 from .core.errors import AxialDeformError
 from .core.lazy import attach
 
-# These share their names with modules (axialdeform.gl.bake, axialdeform.core.deform,
-# axialdeform.core.scatter), so they are bound now: importing a submodule must not
-# replace the function.
-from .gl.bake import bake
-from .core.deform import deform
-from .core.scatter import scatter
-
+# every other name is imported on first use (PEP 562): ``import axialdeform`` loads
+# no GL, mesh or image library.  (bake, deform and scatter share their names with
+# modules of core/ and gl/, not of this package: importing those never rebinds them.)
 _NAMES = {
+    "bake": "gl.bake", "deform": "core.deform", "scatter": "core.scatter",
     # mesh -> axis
     "load_mesh": "core.io.mesh", "BaseMesh": "core.mesh",
     # the record and its variation
@@ -58,7 +55,7 @@ _DEPRECATED = {name: f"axialdeform.{home}.{name}" for home, names in {
 
 _getattr, __dir__, _lazy_all = attach(__name__, _NAMES, _DEPRECATED)
 
-__all__ = sorted(["AxialDeformError", "bake", "deform", "scatter", *_lazy_all])
+__all__ = sorted(["AxialDeformError", *_lazy_all])
 
 
 def __getattr__(name: str):

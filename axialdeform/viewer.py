@@ -34,12 +34,22 @@ import logging
 import time
 from pathlib import Path
 
+import moderngl_window as mglw
 import numpy as np
 
-from .gl.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
+from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
-from .gl.renderer import MODES
+from .core.params import as_params
+from .core.variation import random_params
+from .core.wind import Wind
+from .gl.camera import UP_VECTORS, OrbitCamera
+from .gl.context import check_image_size, create_context, read_pixels
+from .gl.ground import GroundPlane
+from .gl.image import look_from_keywords
+from .gl.renderer import MODES, AxialRenderer
+from .gl.scene import SceneRenderer
+from .gl.shadow import ShadowMap
 
 __all__ = ["Viewer", "KEY_ACTIONS"]
 
@@ -83,8 +93,6 @@ class _ViewerMixin:
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        from .gl.ground import GroundPlane
-        from .gl.renderer import AxialRenderer
 
         s = self.scene
         self.mesh = s["mesh"]
@@ -113,7 +121,6 @@ class _ViewerMixin:
         self.fast = self.look.fast
         self.shadow = None
         if self.look.draws_shadow:  # shadows from the key light, redrawn each frame (one instanced draw per part)
-            from .gl.shadow import ShadowMap
 
             self.shadow = ShadowMap(self.ctx, 2048)
         self.extra = None  # the other layers and the terrain of a scene file
@@ -121,7 +128,6 @@ class _ViewerMixin:
         #: N, UP/DOWN and V act on them as on the viewer's own instances
         self.layers = []
         if s.get("extra") is not None:
-            from .gl.scene import SceneRenderer
 
             self.extra = SceneRenderer(self.ctx, s["extra"])
             self.layers = [(layer, r, np.array(layer.params, dtype=np.float32)) for layer, r in self.extra.layers()]
@@ -211,7 +217,6 @@ class _ViewerMixin:
                 self.renderer.wind = self.wind if self.scene_wind_on else None
             else:
                 if self.wind is None:
-                    from .core.wind import Wind
 
                     self.wind = Wind()
                 self.renderer.wind = None if self.renderer.wind is not None else self.wind
@@ -230,7 +235,6 @@ class _ViewerMixin:
     def regenerate(self, seed: int) -> None:
         """New offsets (the individual shapes) from ``seed``; placement and
         orientation stay.  Written in place: the count does not change."""
-        from .core.variation import random_params
 
         self.seed = int(seed)
         fresh = random_params(self.mesh, len(self.base), seed=self.seed, bend=self.bend)
@@ -313,7 +317,6 @@ class _ViewerMixin:
 
     def screenshot(self) -> np.ndarray:
         """The last drawn frame, ``(height, width, 3) uint8``, first row at the top."""
-        from .gl.context import read_pixels
 
         image = read_pixels(self.ctx, self.wnd.fbo, resolve=True)
         self.wnd.use()
@@ -321,7 +324,6 @@ class _ViewerMixin:
 
     def save_screenshot(self, path) -> None:
         """Write the last drawn frame as a PNG, atomically."""
-        from .core.io.image import save_png
 
         save_png(path, self.screenshot())
 
@@ -368,8 +370,6 @@ class Viewer:
         :data:`LOD_AUTO_COUNT` instances, so a million can be flown through,
         unless the mesh has parts or appearance).
         """
-        from .core.params import as_params
-        from .gl.image import look_from_keywords
 
         look = look_from_keywords(look, old_keywords, "Viewer.create")
 
@@ -388,7 +388,6 @@ class Viewer:
         if headless:
             argv += ["--window", "headless", "--backend", "egl"]
             # the headless window is a framebuffer: the error says the context's limit (as render's does)
-            from .gl.context import check_image_size, create_context
 
             probe = create_context()
             try:
@@ -407,7 +406,6 @@ class Viewer:
     @classmethod
     def open(cls, mesh, params, **kwargs) -> None:
         """Open a window and run until it is closed (blocking)."""
-        import moderngl_window as mglw
 
         viewer = cls.create(mesh, params, **kwargs)
         mglw.run_window_config_instance(viewer)

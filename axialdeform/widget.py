@@ -17,8 +17,10 @@ from __future__ import annotations
 import anywidget
 import traitlets
 
-from .core.params import as_params
+from .core.io.mesh import load_mesh
 from .core.io.params import encode_binary
+from .core.mesh import BaseMesh
+from .core.params import as_params
 from .web import VENDOR_FILES, build_scene, page_source, vendor_file
 
 __all__ = ["SceneWidget"]
@@ -44,8 +46,6 @@ class SceneWidget(anywidget.AnyWidget):
     status = traitlets.Dict().tag(sync=True)
 
     def __init__(self, mesh, params, *, size=(640, 480), up: str = "y", quantize: bool = True, **kwargs):
-        from .core.mesh import BaseMesh
-        from .core.io.mesh import load_mesh
 
         self._mesh = mesh if isinstance(mesh, BaseMesh) else load_mesh(mesh)
         self._quantize = bool(quantize)

@@ -61,9 +61,31 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import AxialDeformError
-from .plan import (BENCH_MODES, COUNTS, LEAF_SCENE, METHODS, QUICK_COUNTS, SCENE, SEPARATE_FRAMES, Scene, cache_root,
-                   camera, first_frame_plan, mesh_file, scene_kwargs)
-from .stats import GOALS, RECORD_KEYS, THESIS, case_stats, leaf_summary, pair_rows, records_from_stats, sort_key
+from .plan import (
+    BENCH_MODES,
+    COUNTS,
+    LEAF_SCENE,
+    METHODS,
+    QUICK_COUNTS,
+    SCENE,
+    SEPARATE_FRAMES,
+    Scene,
+    cache_root,
+    camera,
+    first_frame_plan,
+    mesh_file,
+    scene_kwargs,
+)
+from .stats import (
+    GOALS,
+    RECORD_KEYS,
+    THESIS,
+    case_stats,
+    leaf_summary,
+    pair_rows,
+    records_from_stats,
+    sort_key,
+)
 
 __all__ = ["BENCH_MODES", "COUNTS", "QUICK_COUNTS", "METHODS", "RECORD_KEYS", "THESIS", "GOALS", "run_bench",
            "DEFAULT_OUT"]
@@ -190,10 +212,10 @@ def _startup_costs(repeats: int) -> dict:
 
 def _throughput(mesh, counts, seed: int, repeats: int) -> list[dict]:
     """Vertices deformed per second: CPU reference and GPU capture (with read-back)."""
-    from ..gl.context import create_context
     from ..core.deform import deform
-    from ..gl.renderer import AxialRenderer
     from ..core.variation import random_params
+    from ..gl.context import create_context
+    from ..gl.renderer import AxialRenderer
 
     rows = []
     ctx = create_context()

@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import contextlib
 
+import moderngl
 import numpy as np
 
+from ..core.errors import AxialDeformError
 from ..gl.buffers import MeshBuffers
 from ..gl.context import draw_in_batches
-from ..core.errors import AxialDeformError
-from ..gl.renderer import AxialRenderer, _MODE_INDEX, MODES
+from ..gl.renderer import _MODE_INDEX, MODES, AxialRenderer
 
 __all__ = ["BakedMeshes"]
 
@@ -65,7 +66,6 @@ class BakedMeshes:
 
     def render(self, view, projection, look=None) -> None:
         """Draw every mesh into the bound framebuffer (one draw call each)."""
-        import moderngl
 
         self.renderer.render(view, projection, self.mode, look=look)  # no instances: sets the uniforms only
         self.ctx.enable(moderngl.DEPTH_TEST)

@@ -15,8 +15,16 @@ import sys
 import time
 from pathlib import Path
 
+import moderngl
 import numpy as np
 
+from ..core.io.image import save_png
+from ..core.io.mesh import load_mesh
+from ..core.io.params import read_params
+from ..core.variation import random_params
+from ..gl.context import Offscreen, create_context
+from ..gl.renderer import AxialRenderer
+from .baked import BakedMeshes
 from .plan import obj_name, scene_kwargs
 
 
@@ -43,7 +51,6 @@ def main(spec_text: str) -> None:
         if k >= spec["warmup"]:
             frames.append(time.perf_counter() - t)
     if spec.get("image"):
-        from ..core.io.image import save_png
 
         save_png(spec["image"], target.read())
     info["trimesh_imported"] = "trimesh" in sys.modules
@@ -82,7 +89,6 @@ def _say(line: str) -> None:
 
 def _open(spec: dict):
     """The context, the offscreen target and the camera of a measurement."""
-    from ..gl.context import Offscreen, create_context
 
     ctx = create_context()
     target = Offscreen(ctx, tuple(spec["size"]), samples=spec["samples"])
@@ -91,15 +97,11 @@ def _open(spec: dict):
 
 def _setup(ctx, spec: dict, view, proj, mode: str, stamps: dict):
     """``(draw, info)`` of the method ``spec["method"]``, set up in ``ctx``."""
-    import moderngl
 
     return _SETUPS[spec["method"]](ctx, spec, view, proj, mode, moderngl, stamps)
 
 
 def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
-    from ..core.io.mesh import load_mesh
-    from ..gl.renderer import AxialRenderer
-    from ..core.variation import random_params
 
     mesh = load_mesh(spec["mesh"])
     # the placement is computed, not read: the thesis's "all the same" reads one mesh only
@@ -110,9 +112,6 @@ def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
 
 
 def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
-    from ..core.io.mesh import load_mesh
-    from ..core.io.params import read_params
-    from ..gl.renderer import AxialRenderer
 
     mesh = load_mesh(spec["mesh"])
     params = read_params(spec["params"], mesh)
@@ -124,8 +123,6 @@ def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
 
 def _setup_loaded(ctx, spec, view, proj, mode, moderngl, stamps):
     """Read every pre-deformed OBJ file with load_mesh, one VBO/IBO/VAO each."""
-    from ..core.io.mesh import load_mesh
-    from .baked import BakedMeshes
 
     folder = Path(spec["folder"])
     meshes = None

@@ -31,6 +31,12 @@ import time
 
 import numpy as np
 
+from ..core.io.mesh import load_mesh
+from ..core.variation import random_params
+from ..gl.camera import Camera, frame_instances
+from ..gl.context import Offscreen, create_context
+from ..gl.renderer import AxialRenderer
+
 __all__ = ["field_params", "walker_camera", "run_field", "format_field", "GOALS"]
 
 #: the issue's goals (reported, never asserted)
@@ -43,7 +49,6 @@ _PASS_METHODS = (("", "cull"), ("query_", "cull (query)"))
 
 def field_params(mesh, count: int, seed: int = 14):
     """``count`` stones on a square grid on the ground (y up), 1.1 L apart."""
-    from ..core.variation import random_params
 
     return random_params(mesh, count, seed=seed, bend=0.12, placement="grid", tilt=(-0.15, 0.15))
 
@@ -59,7 +64,6 @@ def walker_camera(mesh, params, aspect: float, view: str = "across"):
     """An eye 3 L above the ground inside the field, looking 12 degrees down,
     60 degree vertical field of view, from where :data:`VIEWS` says; the far
     plane reaches past the whole field."""
-    from ..gl.camera import Camera
 
     L = mesh.axis.length
     pos = params[:, 10:13].astype(np.float64)
@@ -89,10 +93,6 @@ def run_field(count: int = 1_000_000, size=(800, 600), frames: int = 3, seed: in
     ``all_visible_frames``: frames of the all-in-view scene (default ``frames``;
     its unculled frame is the slowest of all).
     """
-    from ..core.io.mesh import load_mesh
-    from ..gl.camera import frame_instances
-    from ..gl.context import Offscreen, create_context
-    from ..gl.renderer import AxialRenderer
 
     say = progress or (lambda text: None)
     mesh = load_mesh(mesh) if isinstance(mesh, str) else mesh

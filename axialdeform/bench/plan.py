@@ -12,7 +12,13 @@ import os
 import shutil
 from pathlib import Path
 
+from ..core.bake import bake_cpu, instance_name
 from ..core.errors import AxialDeformError
+from ..core.io.bake import write_mesh_folder
+from ..core.io.mesh import BUNDLED_MESHES, bundled_mesh_path
+from ..core.io.params import write_params
+from ..core.variation import random_params
+from ..gl.camera import frame_instances
 
 METHODS = ("same", "loaded", "axial", "axial-quantized")
 COUNTS = (100, 1000, 10000, 100000)
@@ -35,7 +41,6 @@ def scene_kwargs(mesh, scene: dict) -> dict:
 
 def obj_name(i: int, count: int = 0) -> str:
     """File name of instance ``i`` in a folder of pre-deformed OBJ files."""
-    from ..core.bake import instance_name
 
     return instance_name(i, count, ".obj")
 
@@ -72,7 +77,6 @@ def cache_root(cache) -> Path:
 
 def mesh_file(source) -> Path:
     """The file of a mesh argument (a path, or a bundled mesh's name)."""
-    from ..core.io.mesh import BUNDLED_MESHES, bundled_mesh_path
 
     if isinstance(source, str) and source in BUNDLED_MESHES and not os.path.exists(source):
         return bundled_mesh_path(source)
@@ -81,7 +85,6 @@ def mesh_file(source) -> Path:
 
 def camera(mesh, params, size) -> tuple[list, list]:
     """``(view, projection)`` as nested lists: the fixed camera every child of a count gets."""
-    from ..gl.camera import frame_instances
 
     cam = frame_instances(mesh, params, size[0] / size[1])
     return cam.view().astype(float).tolist(), cam.projection(size[0] / size[1]).astype(float).tolist()
@@ -92,8 +95,6 @@ class Scene:
     the folder of pre-deformed OBJ files (cached by mesh + parameters)."""
 
     def __init__(self, mesh, mesh_path: Path, count: int, seed: int, scene: dict, cache: Path):
-        from ..core.io.params import write_params
-        from ..core.variation import random_params
 
         self.mesh, self.mesh_path, self.count, self.seed, self.scene = mesh, mesh_path, count, seed, scene
         self.params = random_params(mesh, count, seed, **scene_kwargs(mesh, scene))
@@ -124,8 +125,6 @@ class Scene:
                 f"bench cache {self.dir}: about {need >> 20} MiB needed for {self.count} OBJ files, "
                 f"{free >> 20} MiB free; use --cache DIR on a larger disk or leave out this count"
             )
-        from ..core.bake import bake_cpu
-        from ..core.io.bake import write_mesh_folder
 
         tmp = self.dir / f"objs.tmp-{os.getpid()}"
         shutil.rmtree(tmp, ignore_errors=True)

@@ -14,6 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import AxialDeformError
+from ..core.io import safeio
+from ..core.io.atomic import atomic_path, atomic_write_text
+from ..core.io.safeio import read_regular
 from .plan import BENCH_MODES, METHODS
 from .stats import GOAL_COUNT, GOALS, THESIS, goals, records_from_stats, stage_split
 
@@ -23,14 +26,13 @@ _REQUIRED = ("command", "machine", "settings", "stats", "wall_s")
 
 def load_details(path) -> dict:
     """The measurements of a run, read from its ``bench-details.json``."""
-    from ..core.io.safeio import memory_available, read_regular
 
     path = Path(path)
     if not path.exists() and not path.is_symlink():
         raise AxialDeformError(f"{path}: cannot read the bench measurements (No such file or directory)")
     # a regular file only (a FIFO or /dev/zero is refused without blocking), of a size whose parse
     # fits in memory (json's objects take up to ~10x the text; a real bench-details.json is < 1 MB)
-    data = read_regular(path, max(memory_available() // 12, 1 << 20), "the JSON written by axialdeform bench "
+    data = read_regular(path, max(safeio.memory_available() // 12, 1 << 20), "the JSON written by axialdeform bench "
                                                                        "(bench-details.json)")
     try:
         details = json.loads(bytes(data).decode("utf-8"))
@@ -56,7 +58,6 @@ def with_goals(details: dict) -> dict:
 
 def write_report(details: dict, out, plt=None) -> Path:
     """Write ``bench.md`` and the two plots into the folder ``out``; returns the report's path."""
-    from ..core.io.atomic import atomic_write_text
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -80,7 +81,6 @@ def import_pyplot():
 
 
 def plot_files(plt, stats, out: Path) -> dict:
-    from ..core.io.atomic import atomic_path
 
     files = {}
     for key, field, title, lo_key, hi_key, bars in (

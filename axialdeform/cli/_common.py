@@ -6,6 +6,16 @@ import argparse
 import math
 import sys
 
+from tqdm import tqdm
+
+from ..core.errors import ArgumentError, ParamError
+from ..core.io.mesh import load_mesh, mesh_source_path
+from ..core.io.params import read_params
+from ..core.io.safeio import check_output_path
+from ..core.lod import check_lod_error
+from ..core.params import range_warning
+from ..core.wind import Wind
+
 AXES = ("x", "y", "z")
 
 
@@ -66,7 +76,6 @@ def add_mesh_mismatch(p) -> None:
 
 def mesh_file(source):
     """The file a mesh argument names (a bundled name: the package's file), or None."""
-    from ..core.io.mesh import mesh_source_path
 
     return None if source is None else mesh_source_path(source)
 
@@ -76,9 +85,6 @@ def load(args, what: str = "output", allow_folder: bool = False):
     that ``args.output`` is neither one of them nor a device, FIFO or socket
     (:func:`~axialdeform.core.safeio.check_output_path`); warns once when the
     parameters go past the float32-safe ranges."""
-    from ..core.io.mesh import load_mesh
-    from ..core.io.params import read_params
-    from ..core.io.safeio import check_output_path
 
     check_output_path(args.output, (mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)
     mesh = load_mesh(args.mesh)
@@ -94,7 +100,6 @@ def warn(args, message: str) -> None:
 
 def warn_ranges(args, mesh, params) -> None:
     """Warn (once) when a parameter file goes past the float32-safe ranges."""
-    from ..core.params import range_warning
 
     message = range_warning(mesh, params, args.params)
     if message:
@@ -103,7 +108,6 @@ def warn_ranges(args, mesh, params) -> None:
 
 def progress_bar(total: int, desc: str, unit: str = "inst", small: int = 2000):
     """A tqdm bar on stderr (hidden for small jobs when stderr is not a terminal)."""
-    from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, unit=unit, disable=total < small and not sys.stderr.isatty(), file=sys.stderr)
 
@@ -111,7 +115,6 @@ def progress_bar(total: int, desc: str, unit: str = "inst", small: int = 2000):
 def scale_range(text: str) -> tuple[float, float]:
     """``--scale MIN:MAX`` (or one number S for S:S) as ``(lo, hi)``; anything but
     finite 0 < MIN <= MAX is a ParamError naming the argument and the range."""
-    from ..core.errors import ParamError
 
     parts = text.replace(",", ":").split(":")
     try:
@@ -126,7 +129,6 @@ def scale_range(text: str) -> tuple[float, float]:
 def extension_args(args) -> dict:
     """``--scale MIN:MAX``, ``--twist MAX``, ``--taper MAX`` as random_params keywords;
     a bad value is a ParamError naming the argument and the expected range."""
-    from ..core.errors import ParamError
 
     out = {}
     if args.scale is not None:
@@ -151,8 +153,6 @@ def add_wind_args(parser) -> None:
 
 
 def wind_arg(args):
-    from ..core.errors import ParamError
-    from ..core.wind import Wind
 
     if args.wind is None:
         if args.time is not None:
@@ -187,7 +187,6 @@ def add_cull_arguments(p) -> None:
 
 def cull_options(args) -> dict:
     """AxialRenderer keyword arguments from :func:`add_cull_arguments`'s options."""
-    from ..core.lod import check_lod_error
 
     lod = bool(args.lod or args.lod_error is not None)
     return {"culling": not args.no_cull, "lod": lod,
@@ -266,7 +265,6 @@ def check_triangles(items, modes, limit: int, fast: bool = False, frames: int = 
     drawn; over ``limit`` an :class:`ArgumentError` names the file(s), the
     counts, the product, the limit and how to raise it.
     """
-    from ..core.errors import ArgumentError
 
     if int(frames) == 0:
         return 0

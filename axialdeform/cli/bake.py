@@ -4,13 +4,26 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import (MAX_BAKE_FILES, add_mesh_and_params, add_mesh_mismatch, add_wind_args, load, positive_int,
-                      progress_bar, wind_arg)
+from ..core.bake import MESH_FORMATS
+from ..core.errors import ArgumentError
+from ..core.io.bake import check_bake_folder, write_mesh_folder, write_npz_pieces
+from ..core.io.safeio import check_disk_space
+from ..core.wind import apply_wind
+from ..gl.bake import ENGINES, bake, bake_pieces
+from . import scenes
+from ._common import (
+    MAX_BAKE_FILES,
+    add_mesh_and_params,
+    add_mesh_mismatch,
+    add_wind_args,
+    load,
+    positive_int,
+    progress_bar,
+    wind_arg,
+)
 
 
 def add_parser(sub) -> None:
-    from ..core.bake import MESH_FORMATS
-    from ..gl.bake import ENGINES
 
     b = sub.add_parser("bake", help="write every deformed instance out", description=(
         "Deform every instance and write OUT: an .npz with arrays 'positions' and 'normals', each "
@@ -32,10 +45,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-    from ..core.io.bake import check_bake_folder, write_mesh_folder
-    from ..gl.bake import bake
 
-    from . import scenes
 
     scene = scenes.scene_of(args)
     if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
@@ -53,7 +63,6 @@ def run(args) -> None:
     with progress_bar(len(positions), "writing meshes") as bar:
         bent = params
         if wind is not None:  # the tangents of a glb bend with the same wind-moved control points
-            from ..core.wind import apply_wind
 
             bent = apply_wind(wind, mesh.axis, params, args.time or 0.0)
         files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
@@ -65,7 +74,6 @@ def run(args) -> None:
 
 def check_file_count(args, out: Path, count: int) -> None:
     """Refuse a bake into a folder of more than ``--max-files`` mesh files."""
-    from ..core.errors import ArgumentError
 
     if count > args.max_files:
         raise ArgumentError(
@@ -78,10 +86,6 @@ def _bake_npz_in_pieces(args, out: Path, mesh, params, wind) -> None:
     """``bake -o OUT.npz``: :func:`~axialdeform.gl.bake.bake_pieces` (either
     engine) into :func:`~axialdeform.core.bake.write_npz_pieces`; the disk
     must hold the archive and, meanwhile, a spooled copy of the normals."""
-    from ..core.io.bake import write_npz_pieces
-    from ..gl.bake import bake_pieces
-    from ..core.errors import ArgumentError
-    from ..core.io.safeio import check_disk_space
 
     n, v = len(params), mesh.vertex_count
     array = n * v * 12

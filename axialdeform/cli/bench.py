@@ -6,7 +6,10 @@ import shlex
 import sys
 from pathlib import Path
 
+from tqdm import tqdm
+
 from ..core.errors import AxialDeformError
+from ..core.io.mesh import load_mesh
 from ._common import add_max_triangles, check_triangles, drawn_triangles
 
 
@@ -64,7 +67,6 @@ def _report_from(args) -> None:
 def _check_triangles(args, counts) -> None:
     """The largest count of the bench's mesh in each mode within ``--max-triangles``, before anything runs."""
     from ..bench import COUNTS, QUICK_COUNTS
-    from ..core.io.mesh import load_mesh
 
     if args.quick and tuple(counts) == COUNTS:
         counts = QUICK_COUNTS
@@ -96,7 +98,6 @@ def run(args) -> None:
           file=sys.stderr, flush=True)
     bar = None
     if not args.no_progress:
-        from tqdm import tqdm
 
         bar = tqdm(total=1, desc="bench", unit="step", file=sys.stderr)
 

@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+from ..core.io.mesh import load_mesh
+from ..core.io.params import check_mesh, read_param_file, write_params
+from ..core.io.safeio import check_output_path
+from ._common import mesh_file
+
 
 def add_parser(sub) -> None:
     c = sub.add_parser("convert", help="convert parameter files (text <-> binary)", description=(
@@ -14,11 +19,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-    from ..core.io.mesh import load_mesh
-    from ..core.io.params import check_mesh, read_param_file, write_params
 
-    from ..core.io.safeio import check_output_path
-    from ._common import mesh_file
 
     check_output_path(args.dst, (args.src, mesh_file(args.mesh)), "parameter file")
     pf = read_param_file(args.src)

@@ -4,6 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..core.io.image import save_png
+from ..core.io.mesh import load_mesh, mesh_source_path
+from ..core.io.safeio import check_count, check_output_path
+from ..core.look import Look
+from ..core.variation import random_params
 from ._common import add_max_triangles, check_triangles
 
 DEMO_COUNT = 2500
@@ -28,15 +33,9 @@ DEMO_BYTES_EACH = 1024
 
 
 def run(args) -> None:
-    from ..core.io.mesh import load_mesh
-    from ..core.variation import random_params
     from ..gl.camera import frame_instances
-    from ..core.look import Look
     from ..gl.image import parse_size, render_image
-    from ..core.io.image import save_png
 
-    from ..core.io.mesh import mesh_source_path
-    from ..core.io.safeio import check_count, check_output_path
 
     check_output_path(args.output, (mesh_source_path("stone"),), "PNG")  # the bundled mesh is an input too
     check_count(args.count, DEMO_BYTES_EACH, "-n/--count")

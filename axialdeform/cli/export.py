@@ -2,7 +2,16 @@
 
 from __future__ import annotations
 
-from ._common import MAX_EXPORT_MESHES, add_mesh_and_params, add_mesh_mismatch, load, positive_int
+from ..core.errors import ArgumentError
+from ..core.io.gltf import check_glb_path, export_glb
+from . import scenes
+from ._common import (
+    MAX_EXPORT_MESHES,
+    add_mesh_and_params,
+    add_mesh_mismatch,
+    load,
+    positive_int,
+)
 
 
 def add_parser(sub) -> None:
@@ -29,9 +38,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> None:
     """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
-    from ..core.io.gltf import check_glb_path, export_glb
 
-    from . import scenes
 
     out = check_glb_path(args.output)  # before the (slow) reading
     scene = scenes.scene_of(args)
@@ -39,7 +46,6 @@ def run(args) -> None:
         return scenes.export(scene, args)
     mesh, params = load(args, "exported .glb")
     if args.layout == "baked" and len(params) > args.max_meshes:  # before anything is deformed
-        from ..core.errors import ArgumentError
 
         raise ArgumentError(
             f"{out}: {args.params} holds {len(params)} instances; --baked writes one glTF mesh and node each, "

@@ -5,11 +5,16 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from tqdm import tqdm
+
+from ..core.fit import DEFAULT_MAX_RESIDUAL, fit_files, variant_paths
+from ..core.io.mesh import load_mesh, mesh_source_path
+from ..core.io.params import write_params
+from ..core.io.safeio import check_output_path
 from ._common import fraction, positive_int
 
 
 def add_parser(sub) -> None:
-    from ..core.fit import DEFAULT_MAX_RESIDUAL
 
     f = sub.add_parser("fit", help="recover parameters from existing variant meshes", description=(
         "Fit the 16 numbers of each variant of BASE: VARIANTS are mesh files with BASE's vertices in the same "
@@ -30,18 +35,12 @@ def add_parser(sub) -> None:
 
 def run(args) -> None:
     """``axialdeform fit BASE VARIANTS... -o PARAMS``."""
-    from tqdm import tqdm
 
-    from ..core.fit import fit_files, variant_paths
-    from ..core.io.mesh import load_mesh
-    from ..core.io.params import write_params
 
     out = Path(args.output)
     mesh = load_mesh(args.base)
     is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
     paths = variant_paths(args.variants)
-    from ..core.io.mesh import mesh_source_path
-    from ..core.io.safeio import check_output_path
 
     check_output_path(out, (mesh_source_path(args.base), *paths), "parameter file")
     with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:

@@ -5,6 +5,16 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..core.axis import ControlAxis
+from ..core.errors import AxialDeformError, ParamFileError
+from ..core.io.params import (
+    ParamFile,
+    decode_binary,
+    parse_text,
+    read_binary_header,
+    read_param_bytes,
+)
+
 
 def add_parser(sub) -> None:
     i = sub.add_parser("info", help="describe a parameter file", description="Header, count and checksum verdict of PARAMS.")
@@ -15,9 +25,6 @@ def add_parser(sub) -> None:
 def run(args) -> int | None:
     """Header, count and checksum verdict; a corrupt binary file still shows
     its header, then the verdict fails with status 2."""
-    from ..core.axis import ControlAxis
-    from ..core.errors import AxialDeformError, ParamFileError
-    from ..core.io.params import ParamFile, decode_binary, parse_text, read_binary_header, read_param_bytes
 
     path = Path(args.params)
     data, binary = read_param_bytes(path)  # a regular file, read with a bound

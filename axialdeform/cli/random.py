@@ -4,11 +4,20 @@ from __future__ import annotations
 
 import math
 
-from ._common import AXES, angle_range, extension_args
+from ..core.errors import ArgumentError
+from ..core.io.mesh import load_mesh
+from ..core.io.params import param_file_bytes, write_param_chunks
+from ..core.io.safeio import (
+    MAX_INSTANCES,
+    check_count,
+    check_disk_space,
+    check_output_path,
+)
+from ..core.variation import PLACEMENTS, iter_random_params
+from ._common import AXES, angle_range, extension_args, mesh_file
 
 
 def add_parser(sub) -> None:
-    from ..core.variation import PLACEMENTS
 
     r = sub.add_parser("random", help="write random parameters for a mesh", description=(
         "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf'); "
@@ -52,13 +61,7 @@ RANDOM_CHUNK = 1 << 17
 
 
 def run(args) -> None:
-    from ..core.errors import ArgumentError
-    from ..core.io.mesh import load_mesh
-    from ..core.io.params import param_file_bytes, write_param_chunks
-    from ..core.variation import iter_random_params
 
-    from ..core.io.safeio import MAX_INSTANCES, check_count, check_disk_space, check_output_path
-    from ._common import mesh_file
 
     extension = extension_args(args)  # before any work: a bad range is the first thing said
     check_output_path(args.output, (mesh_file(args.mesh),), "parameter file")

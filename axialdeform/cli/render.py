@@ -2,13 +2,35 @@
 
 from __future__ import annotations
 
-from ._common import (AXES, add_cull_arguments, add_max_triangles, add_mesh_and_params, add_mesh_mismatch,
-                      add_wind_args, check_triangles, cull_options, drawn_triangles, format_stats, load, vec3,
-                      wind_arg)
+import time
+
+import numpy as np
+
+from ..core.bounds import instance_bounds
+from ..core.errors import AxialDeformError
+from ..core.io.image import save_png
+from ..core.look import Look
+from ..gl.context import Offscreen, create_context
+from ..gl.renderer import MODES, AxialRenderer
+from . import scenes
+from ._common import (
+    AXES,
+    add_cull_arguments,
+    add_max_triangles,
+    add_mesh_and_params,
+    add_mesh_mismatch,
+    add_wind_args,
+    check_triangles,
+    cull_options,
+    drawn_triangles,
+    format_stats,
+    load,
+    vec3,
+    wind_arg,
+)
 
 
 def add_parser(sub) -> None:
-    from ..gl.renderer import MODES
 
     rd = sub.add_parser("render", help="render instances to a PNG", description=(
         "Render MESH deformed by PARAMS. Without --eye/--target/--fov the camera frames every instance; "
@@ -40,11 +62,8 @@ def add_parser(sub) -> None:
 def camera_from_args(mesh, params, size, args):
     """The automatic camera, with ``--eye``, ``--target`` and ``--fov`` put in
     where given (near and far planes then enclose every instance)."""
-    import numpy as np
 
-    from ..core.errors import AxialDeformError
-    from ..core.bounds import instance_bounds
-    from ..gl.camera import Camera, UP_VECTORS, frame_instances
+    from ..gl.camera import UP_VECTORS, Camera, frame_instances
 
     fov = 35.0 if args.fov is None else float(args.fov)
     if not 0.0 < fov < 180.0:
@@ -68,13 +87,8 @@ def camera_from_args(mesh, params, size, args):
 
 
 def run(args) -> None:
-    from ..gl.context import create_context
-    from ..core.look import Look
     from ..gl.image import parse_size, render_image
-    from ..core.io.image import save_png
-    from ..gl.renderer import AxialRenderer
 
-    from . import scenes
 
     scene = scenes.scene_of(args)
     options = cull_options(args)
@@ -102,9 +116,7 @@ def run(args) -> None:
 
 def _time_frame(ctx, renderer, camera, size, mode) -> float:
     """Seconds for one more frame of ``renderer`` (cull pass + draws, GPU finished), same camera."""
-    import time
 
-    from ..gl.context import Offscreen
 
     with Offscreen(ctx, size) as target:
         target.use()

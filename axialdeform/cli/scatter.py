@@ -10,6 +10,14 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
+
+from ..core.errors import ParamFileError, TooFewError
+from ..core.io.mesh import load_mesh, mesh_source_path
+from ..core.io.params import BINARY_SUFFIXES, write_params
+from ..core.io.safeio import check_output_path
+from ..core.scatter import ANCHORS, scatter
+from ._common import scale_range
 
 __all__ = ["add_parser", "run"]
 
@@ -25,7 +33,6 @@ def _extent(text: str) -> tuple[float, ...]:
 
 
 def add_parser(subparsers) -> None:
-    from ..core.scatter import ANCHORS
 
     s = subparsers.add_parser("scatter", help="place instances on a terrain (mesh or height map)", description=(
         "Place N instances of MESH on SURFACE (a mesh file, or a grey height-map image): area-uniform on the "
@@ -57,19 +64,9 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int | None:
-    from ..core.errors import TooFewError
-    from ..core.io.mesh import load_mesh
-    from ..core.io.params import write_params
-    from ..core.scatter import scatter
-    from ._common import scale_range
 
     scale = None if args.scale is None else scale_range(args.scale)  # checked before any file is read
-    from pathlib import Path
 
-    from ..core.errors import ParamFileError
-    from ..core.io.mesh import mesh_source_path
-    from ..core.io.params import BINARY_SUFFIXES
-    from ..core.io.safeio import check_output_path
 
     if args.quantize and Path(args.output).suffix.lower() not in BINARY_SUFFIXES:  # before the work, not after
         raise ParamFileError(f"{args.output}: the quantized form is binary only; expected a "

@@ -5,9 +5,17 @@ calls :func:`scene_of` first and hands a scene to the matching function here."""
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
-from ..core.errors import AxialDeformError
+from ..core.errors import ArgumentError, AxialDeformError, ParamError
+from ..core.io.bake import write_npz_layers
+from ..core.io.gltf import export_scene
+from ..core.io.image import save_png
+from ..core.io.safeio import check_disk_space, check_output_path
+from ..core.scene import is_scene_file, load_scene
+from ..gl.bake import bake_pieces
+from ._common import check_triangles as check
 
 __all__ = ["scene_of", "render", "bake", "export", "viewer_inputs"]
 
@@ -17,7 +25,6 @@ def scene_of(args, *, params_optional: bool = False):
 
     A MESH without PARAMS is an error unless ``params_optional`` (``view``: random parameters).
     """
-    from ..core.scene import is_scene_file, load_scene
 
     if not is_scene_file(args.mesh):
         if args.params is None and not params_optional:
@@ -30,7 +37,6 @@ def scene_of(args, *, params_optional: bool = False):
 
 def _check_output(args, what: str) -> None:
     """Refuse an output that is the scene file itself, a device, FIFO or socket."""
-    from ..core.io.safeio import check_output_path
 
     check_output_path(args.output, (args.mesh,), what)
 
@@ -38,7 +44,6 @@ def _check_output(args, what: str) -> None:
 def check_triangles(scene, args, mode: str, fast: bool = False, frames: int = 1) -> None:
     """The CLI's per-frame triangle budget (:func:`._common.check_triangles`)
     over every layer and the terrain, before anything is drawn."""
-    from ._common import check_triangles as check
 
     items = [(f"{scene.path}: layer {layer.name}", len(layer.params), len(layer.mesh.faces)) for layer in scene.layers]
     if scene.terrain is not None:
@@ -52,7 +57,6 @@ def _time(scene, args) -> float:
     if t is None:
         return 0.0
     if scene.wind is None:
-        from ..core.errors import ParamError
 
         raise ParamError(f"--time: {scene.path} has no [wind] and no --wind is given; expected a wind for the time to move")
     return float(t)
@@ -62,7 +66,6 @@ def render(scene, args, wind=None, options=None) -> None:
     """``render SCENE -o OUT.png``; ``--wind`` replaces the scene's [wind];
     ``options``: ``--no-cull``, ``--lod``, ``--lod-error`` (:func:`._common.cull_options`)."""
     from ..gl.image import parse_size, render_image
-    from ..core.io.image import save_png
 
     _check_output(args, "PNG")
     fast = bool(getattr(args, "fast", False))
@@ -78,10 +81,6 @@ def render(scene, args, wind=None, options=None) -> None:
 
 def bake(scene, args, progress, wind=None) -> None:
     """``bake SCENE -o OUT.npz``: arrays ``positions_LAYER`` and ``normals_LAYER``."""
-    from ..core.io.bake import write_npz_layers
-    from ..core.errors import ArgumentError
-    from ..core.io.safeio import check_disk_space
-    from ..gl.bake import bake_pieces
 
     out = Path(args.output)
     if out.suffix.lower() != ".npz":
@@ -113,7 +112,6 @@ def export(scene, args) -> None:
     """``export SCENE -o OUT.glb [--instanced]``: the terrain and one mesh per
     layer (baked), or per layer its base mesh once on a node with
     EXT_mesh_gpu_instancing (instanced)."""
-    from ..core.io.gltf import export_scene
 
     _check_output(args, "exported .glb")
     path = export_scene(args.output, scene, args.layout)
@@ -125,7 +123,6 @@ def viewer_inputs(scene, wind=None):
     """``(mesh, params, wind, extra)`` for the viewer: the first layer is the
     viewer's own; the other layers and the terrain are drawn with it (N,
     UP/DOWN and V act on every layer: the viewer's ``layers``)."""
-    from dataclasses import replace
 
     if not scene.layers:
         raise AxialDeformError(f"{scene.path}: the scene has no layer; expected at least one [[layer]]")

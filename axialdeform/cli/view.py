@@ -2,12 +2,28 @@
 
 from __future__ import annotations
 
-from ._common import (AXES, add_cull_arguments, add_max_triangles, add_mesh_mismatch, check_triangles, cull_options,
-                      drawn_triangles, wind_arg)
+from ..core.errors import AxialDeformError
+from ..core.io.mesh import load_mesh
+from ..core.io.params import read_params
+from ..core.io.safeio import check_count
+from ..core.look import Look
+from ..core.variation import random_params
+from ..gl.renderer import MODES
+from . import scenes
+from ._common import (
+    AXES,
+    add_cull_arguments,
+    add_max_triangles,
+    add_mesh_mismatch,
+    check_triangles,
+    cull_options,
+    drawn_triangles,
+    wind_arg,
+)
+from .random import RANDOM_BYTES_EACH
 
 
 def add_parser(sub) -> None:
-    from ..gl.renderer import MODES
 
     v = sub.add_parser("view", help="look at instances in an interactive window", description=(
         "Open MESH (a file, or 'stone' / 'leaf') deformed by PARAMS (or by random parameters) in a window: "
@@ -42,15 +58,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-    from ..core.errors import AxialDeformError
-    from ..core.look import Look
-    from ..core.io.mesh import load_mesh
-    from ..core.io.params import read_params
-    from ..core.variation import random_params
     from ..gl.image import parse_size
     from ..viewer import Viewer
 
-    from . import scenes
 
     wind = wind_arg(args)
     options = cull_options(args)
@@ -77,8 +87,6 @@ def run(args) -> None:
                         args.mode, args.max_triangles, args.fast, frames)  # before the levels of detail, any drawing
         seed = args.seed  # a file records no seed: shown only if the user names one
     else:
-        from ..core.io.safeio import check_count
-        from .random import RANDOM_BYTES_EACH
 
         check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")  # before anything is read or allocated
         mesh = load_mesh(args.mesh)

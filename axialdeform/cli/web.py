@@ -7,7 +7,12 @@ from pathlib import Path
 from urllib.parse import quote
 
 from ..core.errors import AxialDeformError
+from ..core.io.mesh import load_mesh
+from ..core.io.params import read_params
+from ..core.scene import is_scene_file
+from ..web import build_scene, build_scene_file, make_server, write_page
 from ._common import add_wind_args, wind_arg
+from .scenes import _time, scene_of
 
 __all__ = ["add_parser", "run"]
 
@@ -44,8 +49,6 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> None:
     from ..gl.image import parse_size
-    from ..core.scene import is_scene_file
-    from ..web import build_scene, build_scene_file, make_server, write_page
 
     out = Path(args.output)
     if args.serve and not 0 <= args.port <= 65535:
@@ -53,7 +56,6 @@ def run(args) -> None:
     size = parse_size(args.size) if args.size is not None else (800, 600)
     time = args.time  # the page's frozen time (None: the wind's clock runs)
     if args.mesh is not None and is_scene_file(args.mesh):
-        from .scenes import _time, scene_of
 
         scene = scene_of(args)
         if args.wind is not None:  # replaces the scene's [wind]
@@ -72,8 +74,6 @@ def run(args) -> None:
     elif (args.mesh is None) != (args.params is None):
         raise AxialDeformError("web: expected both MESH and PARAMS, a scene file .toml, or neither (with --serve)")
     elif args.mesh is not None:
-        from ..core.io.mesh import load_mesh
-        from ..core.io.params import read_params
 
         mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)

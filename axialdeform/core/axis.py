@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import MeshError
+from .errors import ArgumentError, MeshError
 
 __all__ = ["ControlAxis", "AXIS_NAMES", "PERPENDICULAR"]
 
@@ -103,7 +103,6 @@ class ControlAxis:
         """``t = (V[a] - lo) / L`` clamped to [0, 1]; ``positions`` (n, 3) -> (n,) float64."""
         p = np.asarray(positions, dtype=np.float64)
         if p.ndim == 0 or p.shape[-1] != 3:
-            from .errors import ArgumentError
 
             raise ArgumentError(f"positions: expected an array of shape (n, 3), found {p.shape}")
         return np.clip((p[..., self.index] - self.lo) / self.length, 0.0, 1.0)

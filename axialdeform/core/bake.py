@@ -10,6 +10,8 @@ import numpy as np
 
 from .deform import deform
 from .io.safeio import check_count, require_finite
+from .params import as_params
+from .wind import apply_wind
 
 __all__ = ['bake_cpu', 'bake_cpu_pieces', 'instance_name', 'part_file_names', 'check_bake_count', 'check_bake_result', 'MESH_FORMATS']
 
@@ -32,7 +34,6 @@ def bake_cpu(mesh, params, *, progress=None, wind=None, time: float = 0.0,
     nothing non-finite is ever returned to be written."""
     check_bake_count(mesh, len(params), "cpu", source)
     if wind is not None:
-        from .wind import apply_wind
 
         params = apply_wind(wind, mesh.axis, params, time)
     with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
@@ -94,7 +95,6 @@ def bake_cpu_pieces(mesh, params, *, progress=None, wind=None, time: float = 0.0
     concatenated they are exactly ``bake_cpu``'s arrays, but memory holds one
     piece.  Each piece is checked for non-finite numbers as it is made (the
     message numbers the instance in the whole file)."""
-    from .params import as_params
 
     params = as_params(params)
     v = max(mesh.vertex_count, 1)
@@ -102,7 +102,6 @@ def bake_cpu_pieces(mesh, params, *, progress=None, wind=None, time: float = 0.0
     for a in range(0, len(params), step):
         block = params[a : a + step]
         if wind is not None:
-            from .wind import apply_wind
 
             block = apply_wind(wind, mesh.axis, block, time, start=a)  # the wind's phase follows the instance index
         with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .deform import bernstein, displace
-from .transforms import rotation_matrices
+from .deform import bernstein, deform, deform_local_extended, displace
 from .params import as_params
 from .record import ANGLES, OFFSETS, POSITION
+from .transforms import rotation_matrices
 
 __all__ = ["wind_reach", "instance_bounds", "scene_box", "sphere_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
            "frustum_planes", "spheres_visible", "lod_choice"]
@@ -225,14 +225,12 @@ def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, 
         if n * len(idx) > budget:
             return instance_bounds(mesh, params)
     if params.shape[1] == 19:  # extended instances: the CPU reference places the chosen vertices
-        from .deform import deform
 
         world, _ = deform(mesh.axis, mesh.positions[idx], mesh.normals[idx], params)
         return world.reshape(-1, 3).astype(np.float64), np.zeros(n * len(idx))
     pts = mesh.positions[idx].astype(np.float64)
     p64 = params.astype(np.float64)
     if p64.shape[1] == 19:  # extended instances: the whole map of the selected vertices
-        from .deform import deform_local_extended
 
         moved, _ = deform_local_extended(mesh.axis, pts, pts, p64[:, OFFSETS].reshape(-1, 5, 2), p64[:, 16:19])
         world = moved @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2) + p64[:, None, POSITION]

@@ -37,11 +37,15 @@ from pathlib import Path
 import numpy as np
 
 from .deform import bernstein, deform, deform_local_extended, displace
-from .io.mesh import MESH_SUFFIXES
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
+from .io.mesh import MESH_SUFFIXES, load_mesh
 from .params import as_params
 from .record import ANGLES, OFFSETS, POSITION
-from .transforms import angles_from_matrices, matrices_from_rotation_vectors
+from .transforms import (
+    angles_from_matrices,
+    matrices_from_rotation_vectors,
+    rotation_matrices,
+)
 
 __all__ = [
     "TopologyError",
@@ -396,7 +400,6 @@ def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> 
 
 
 def _rotations(angles: np.ndarray) -> np.ndarray:
-    from .transforms import rotation_matrices
 
     return rotation_matrices(angles)
 
@@ -570,7 +573,6 @@ def load_variant(path: str | os.PathLike, mesh) -> np.ndarray:
     Raises :class:`TopologyError` naming the file if its vertex count, triangle
     count or triangles differ from the base mesh's.
     """
-    from .io.mesh import load_mesh
 
     variant = load_mesh(path)
     name = str(path)

@@ -4,8 +4,10 @@ CLI start pay only for the modules a program touches."""
 
 from __future__ import annotations
 
+import sys
 import warnings
 from importlib import import_module
+from importlib.util import find_spec
 
 __all__ = ["attach"]
 
@@ -26,7 +28,6 @@ def attach(package: str, names: dict[str, str], deprecated: dict[str, str] | Non
     deprecated = deprecated or {}
 
     def __getattr__(name: str):
-        import sys
 
         module = sys.modules[package]
         if name in names:
@@ -37,7 +38,6 @@ def attach(package: str, names: dict[str, str], deprecated: dict[str, str] | Non
                           DeprecationWarning, stacklevel=2)
             return getattr(import_module(home), attr)  # not cached: every use warns
         else:
-            from importlib.util import find_spec
 
             if name.startswith("_") or find_spec(f"{package}.{name}") is None:
                 raise AttributeError(f"module {package!r} has no attribute {name!r}")
@@ -46,7 +46,6 @@ def attach(package: str, names: dict[str, str], deprecated: dict[str, str] | Non
         return value
 
     def __dir__():
-        import sys
 
         return sorted(set(vars(sys.modules[package])) | set(names))
 

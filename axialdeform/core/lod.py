@@ -47,7 +47,9 @@ from functools import cached_property
 import numpy as np
 
 from .errors import ParamError
+from .material import Part
 from .mesh import area_weighted_normals, unique_edges
+from .scatter import face_areas, sample_faces
 
 __all__ = ["LodLevel", "build_lod_levels", "collapse_mapping", "spatial_chunks", "LOD_CHUNK_TRIANGLES", "LOD_REDUCTIONS", "MIN_LOD_TRIANGLES", "check_lod_error"]
 
@@ -130,7 +132,6 @@ def _surface_points(positions: np.ndarray, faces: np.ndarray, count: int, seed: 
     """The vertices (n, 3) plus ``count`` points sampled on the triangles (area-
     uniform: :func:`~axialdeform.core.scatter.sample_faces`, trimesh's
     ``sample_surface`` without its per-face arrays): (k, 3) float64."""
-    from .scatter import face_areas, sample_faces
 
     positions = np.asarray(positions, dtype=np.float64)
     points, _ = sample_faces(positions, faces, np.cumsum(face_areas(positions, faces)), count,
@@ -404,7 +405,6 @@ def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
                       f"least {MIN_LOD_TRIANGLES}; the largest has {largest}); drawing one level",
                       UserWarning, stacklevel=2)
         return [base]
-    from .material import Part
 
     full_cloud = _surface_points(mesh.positions, mesh.faces, _SAMPLE, 1)
     attributes = _attributes(mesh)

@@ -12,6 +12,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from .errors import ArgumentError
+
 __all__ = ["Look", "DEFAULT_LOOK", "LIGHT_DIR", "BACKGROUND", "AMBIENT", "LINE_COLOR"]
 
 #: unit-less direction towards the key light (world space; normalised where used)
@@ -70,7 +72,6 @@ class Look:
     fast: bool = False
 
     def __post_init__(self) -> None:
-        from .errors import ArgumentError
 
         for name in ("light_dir", "background", "line_color"):
             value = getattr(self, name)

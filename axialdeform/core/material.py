@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
 from .errors import MeshError
 
@@ -339,7 +340,6 @@ def compute_tangents(positions, normals, uvs, faces) -> np.ndarray:
 def _trimesh_material(m: Material):
     """A trimesh PBRMaterial for ``m`` (texture as a PIL image)."""
     import trimesh
-    from PIL import Image
 
     factor = np.clip(np.round(np.asarray(m.base_color, dtype=np.float64) * 255.0), 0, 255).astype(np.uint8)
     return trimesh.visual.material.PBRMaterial(

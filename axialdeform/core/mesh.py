@@ -16,8 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .arrays import as_array
 from .axis import ControlAxis
 from .errors import MeshError
+from .material import Part
 
 __all__ = ['BaseMesh', 'area_weighted_normals']
 
@@ -77,7 +79,6 @@ class BaseMesh:
     def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> "BaseMesh":
         """A mesh from arrays: ``vertices : (n, 3) float``, ``faces : (m, 3) int``
         and optional unit ``normals : (n, 3) float`` (else area-weighted ones)."""
-        from .arrays import as_array
 
         vertices = as_array(vertices, (None, 3), f"{name}: vertices", error=MeshError)
         faces = as_array(faces, (None, 3), f"{name}: faces", np.int64, error=MeshError)
@@ -340,7 +341,6 @@ def _unit_or_default(v: np.ndarray) -> np.ndarray:
 
 def _check_appearance(mesh: "BaseMesh", n: int, m: int) -> None:
     """Validate and normalise uvs/colors/tangents/parts of a BaseMesh in place."""
-    from .material import Part
 
     for key, width in (("uvs", 2), ("colors", 4), ("tangents", 4)):
         value = getattr(mesh, key)

@@ -25,12 +25,23 @@ uploading) with a :class:`ParamError`: a non-finite number has no shape.
 
 from __future__ import annotations
 
-
 import numpy as np
 
+from .arrays import as_array
 from .errors import ParamError
 from .record import (  # the record's columns and slices: one home
-    ANGLES, EXTENDED_FIELDS, EXTRA, FIELDS, as_instances, IDENTITY_EXTRA, OFFSETS, POSITION, SCALE, TAPER, TWIST, WIDTHS,
+    ANGLES,
+    EXTENDED_FIELDS,
+    EXTRA,
+    FIELDS,
+    IDENTITY_EXTRA,
+    OFFSETS,
+    POSITION,
+    SCALE,
+    TAPER,
+    TWIST,
+    WIDTHS,
+    as_instances,
 )
 
 __all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'extend_params', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L']
@@ -98,7 +109,6 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
     scale : (n,) > 0 (default 1); twist : (n,) radians (default 0);
     taper : (n,) < 1 (default 0).
     """
-    from .arrays import as_array
 
     parts = {}
     for name, value, shape in (("offsets", offsets, (None, 5, 2)), ("positions", positions, (None, 3)),

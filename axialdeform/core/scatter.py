@@ -42,14 +42,23 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
 from .axis import AXIS_NAMES, PERPENDICULAR
-from .errors import ScatterError, TooFewError
+from .deform import bernstein
+from .errors import MeshError, ScatterError, TooFewError
+from .io import safeio
+from .io.mesh import load_mesh
+from .io.safeio import _gb, open_regular
+from .material import AssetWarning
+from .mesh import BaseMesh
 from .record import as_instances
+from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
 __all__ = ["scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights", "ANCHORS", "IMAGE_SUFFIXES",
            "poisson_greedy"]
@@ -238,11 +247,8 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
     is decoded -- must fit in memory at ``bytes_per_pixel``: a small
     compressed file claiming a huge image (a decompression bomb) is refused
     with the limit, never decoded."""
-    import warnings
 
-    from PIL import Image
 
-    from .io.safeio import _gb, memory_available, open_regular
 
     if not os.path.lexists(path):
         raise ScatterError(f"{what} {path}: no such file")
@@ -252,7 +258,7 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
                 warnings.simplefilter("error", Image.DecompressionBombWarning)
                 with Image.open(fh) as img:
                     cols, rows = img.size
-                    budget = int(0.8 * memory_available())
+                    budget = int(0.8 * safeio.memory_available())
                     if cols * rows * bytes_per_pixel > budget:
                         raise ScatterError(
                             f"{what} {path}: an image of {cols}x{rows} pixels needs about "
@@ -378,12 +384,8 @@ def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=Non
         if path.suffix.lower() in IMAGE_SUFFIXES:
             return surface_from_heights(_read_grey(path, "SURFACE", SURFACE_BYTES_PER_PIXEL), up=up, height_scale=height_scale,
                                         extent=extent, name=f"SURFACE {path}")
-        from .errors import MeshError
-        from .io.mesh import load_mesh
 
-        import warnings
 
-        from .material import AssetWarning
 
         try:
             with warnings.catch_warnings():  # only the faces are used: a missing texture does not matter here
@@ -463,7 +465,6 @@ def poisson_greedy(points: np.ndarray, radius: float, fixed: np.ndarray | None =
 
 def _rotation_about(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Rodrigues: unit axes (k, 3) and angles (k,) -> (k, 3, 3)."""
-    from .transforms import matrices_from_rotation_vectors
 
     return matrices_from_rotation_vectors(axis * angle[:, None])
 
@@ -491,8 +492,6 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
     Returns (n, 16) or (n, 19) float32.  Raises :class:`TooFewError` (with
     ``.params``, what fits) when fewer than ``n`` fit and not ``allow_fewer``.
     """
-    from .mesh import BaseMesh
-    from .io.mesh import load_mesh
 
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
         raise ScatterError(f"count: expected a whole number >= 0, found {n!r}")
@@ -579,8 +578,6 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
 
 def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, scale, bend) -> np.ndarray:
     """Parameters for instances standing on ``points`` (k, 3) with surface ``normals`` (k, 3)."""
-    from .deform import bernstein
-    from .transforms import angles_from_matrices
 
     k = len(points)
     cols = 16 if scale is None else 19

@@ -58,13 +58,15 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import ClassVar
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
 from .errors import SceneError
+from .io.scene import read_scene
 from .look import BACKGROUND, Look
+from .params import as_params
 
 __all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
 
@@ -158,7 +160,6 @@ class Scene:
         name : str, optional
             The layer's name (default: the mesh's).
         """
-        from .params import as_params
 
         if up not in ("x", "y", "z"):
             raise SceneError(f"up: expected one of x, y, z, found {up!r}")
@@ -180,7 +181,6 @@ def load_scene(path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:
 
     scale_counts : multiply every scatter recipe's ``count`` (e.g. 0.1 for a quick preview).
     """
-    from .io.scene import read_scene
 
     return read_scene(path, Scene, scale_counts=scale_counts)
 

@@ -19,7 +19,7 @@ import numpy as np
 from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import as_params
-from .record import as_instances, ANGLES, OFFSETS, POSITION
+from .record import ANGLES, OFFSETS, POSITION, as_instances
 
 __all__ = ["random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
 

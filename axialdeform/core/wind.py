@@ -28,10 +28,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .axis import ControlAxis
-from .transforms import rotation_matrices
 from .errors import ParamError
 from .params import as_params
 from .record import ANGLES, OFFSETS, POSITION
+from .transforms import rotation_matrices
 
 __all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "wind_offsets", "apply_wind"]
 

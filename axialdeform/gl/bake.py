@@ -5,9 +5,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.bake import BAKE_PIECE_BYTES, bake_cpu, bake_cpu_pieces, check_bake_count, check_bake_result
+from ..core.bake import (
+    BAKE_PIECE_BYTES,
+    bake_cpu,
+    bake_cpu_pieces,
+    check_bake_count,
+    check_bake_result,
+)
 from ..core.errors import ArgumentError
 from ..core.io.safeio import require_finite
+from .context import create_context
+from .renderer import AxialRenderer
 
 __all__ = ["bake", "bake_pieces", "ENGINES"]
 
@@ -29,8 +37,6 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, wind=Non
         return bake_cpu(mesh, params, progress=progress, wind=wind, time=time, source=source)
     if engine != "gpu":
         raise ArgumentError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
-    from .context import create_context
-    from .renderer import AxialRenderer
 
     check_bake_count(mesh, len(params), "gpu", source)
     own = ctx is None
@@ -61,8 +67,6 @@ def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, w
         return
     if engine != "gpu":
         raise ArgumentError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
-    from .context import create_context
-    from .renderer import AxialRenderer
 
     step = max(1, int(piece_bytes) // (max(mesh.vertex_count, 1) * 24))
     own = ctx is None

@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.errors import ParamError
-from ..core.params import as_params, extend_params
+from ..core.errors import ArgumentError, ParamError
 from ..core.io.params import dequantize_params, quantize_params, quantize_with_table
+from ..core.params import as_params, extend_params
 from ..core.record import gl_layout
 from .context import check_alive, check_released
 
@@ -44,7 +44,6 @@ EXTENDED_FORMAT, EXTENDED_ATTRIBUTES, EXTENDED_RECORD_BYTES = gl_layout(extended
 def as_index(value, name: str) -> int:
     """``value`` as an int if it is a whole number type (int, numpy integer;
     not bool, float, str or None), else :class:`ArgumentError`."""
-    from ..core.errors import ArgumentError
 
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
         raise ArgumentError(f"{name}: expected an integer instance index, found {value!r} ({type(value).__name__})")

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pyrr
 
-from ..core.bounds import outline_points, scene_box
 from ..core.arrays import as_array
+from ..core.bounds import outline_points, scene_box
 from ..core.errors import ArgumentError
 
 __all__ = ["Camera", "camera_for_points", "OrbitCamera", "frame_instances", "frame_points", "orbit_axes", "UP_VECTORS"]

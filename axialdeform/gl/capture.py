@@ -4,13 +4,13 @@ A mixin of :class:`~axialdeform.gl.renderer.AxialRenderer`."""
 
 from __future__ import annotations
 
-
+import moderngl
 import numpy as np
 
-from .buffers import InstanceBuffer, as_index
-from .context import bind_framebuffer, release_framebuffer
 from ..core.errors import ParamError
 from ..core.io.safeio import require_finite
+from .buffers import InstanceBuffer, as_index
+from .context import bind_framebuffer, release_framebuffer
 from .shaders import build_program
 
 _CAPTURE_BYTES = 128 * 1024 * 1024  # transform feedback output per pass
@@ -39,7 +39,6 @@ class Capture:
         mesh; ``len(lod_levels) - 1`` at most), in that level's vertex order,
         bent with the base mesh's axis like every level.
         """
-        import moderngl
 
         self._check()
         start = as_index(start, "capture: start")

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import os
+
+import moderngl
 import numpy as np
 
 from ..core.errors import ContextError
+from ..core.io import safeio
 from ..core.look import BACKGROUND
 
 __all__ = ["create_context", "Offscreen", "GL_REQUIRE", "bind_framebuffer", "release_framebuffer", "read_pixels",
@@ -56,7 +60,6 @@ def flush_interval(ctx) -> int | None:
     on a software rasteriser (``GL_RENDERER`` names llvmpipe, softpipe, ...), None on
     a GPU (whose memory does not grow with what one frame draws).  The environment
     variable ``AXIALDEFORM_FLUSH_PRIMITIVES`` overrides it (0: never split)."""
-    import os
 
     cached = getattr(ctx, "_axialdeform_flush", False)
     if cached is not False:
@@ -119,7 +122,6 @@ def check_alive(ctx, what: str = "this object") -> None:
     """Raise :class:`ContextError` if ``ctx`` was released (every GL wrapper
     calls this before touching GL, so a call after the context is gone is an
     error of the library's own family, not an AttributeError from moderngl)."""
-    import moderngl
 
     if ctx is None or isinstance(getattr(ctx, "mglo", None), moderngl.InvalidObject):
         raise ContextError(f"the OpenGL context of {what} was released; create a new context (and new objects in it)")
@@ -132,7 +134,6 @@ def check_released(released: bool, what: str) -> None:
 
 
 def _alive(obj) -> bool:
-    import moderngl
 
     return obj is not None and not isinstance(obj.mglo, moderngl.InvalidObject)
 
@@ -186,7 +187,6 @@ def check_image_size(ctx, size, samples: int = 4, panels: int = 1) -> None:
     (``panels`` of them side by side) cannot be made by ``ctx``: a side past
     the GL limits (:func:`size_limits`) or more memory than is available
     (colour + depth at ``samples``, the resolved copy and the read-back)."""
-    from ..core.io.safeio import memory_available
 
     check_alive(ctx, "the image")
     w, h = (int(size[0]), int(size[1]))
@@ -195,7 +195,7 @@ def check_image_size(ctx, size, samples: int = 4, panels: int = 1) -> None:
         raise ContextError(f"size: {w}x{h} pixels; expected 1..{mw} x 1..{mh}, the most this OpenGL context can render "
                            f"({text})")
     per_pixel = 8 * max(samples, 1) + 4 + 3 * (panels + 1)
-    need, have = w * h * per_pixel, int(0.8 * memory_available())
+    need, have = w * h * per_pixel, int(0.8 * safeio.memory_available())
     if need > have:
         side = int((have / per_pixel) ** 0.5)
         raise ContextError(f"size: {w}x{h} pixels need about {need / 1024**3:.3g} GB; expected at most about "
@@ -242,7 +242,6 @@ class Offscreen:
     """
 
     def __init__(self, ctx, size: tuple[int, int], samples: int = 4):
-        import moderngl
 
         width, height = (int(size[0]), int(size[1]))
         check_image_size(ctx, (width, height), samples)

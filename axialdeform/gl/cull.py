@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import os
 
+import moderngl
 import numpy as np
 
 from ..core.bounds import frustum_planes
@@ -331,7 +332,6 @@ class CullPass:
         return IndirectDraws(self, levels)
 
     def _run_feedback(self, count: int, levels: int, uniforms: dict, prepare) -> list[int]:
-        import moderngl
 
         self._build_feedback()
         self.set_uniforms(uniforms)

@@ -5,12 +5,12 @@ A mixin of :class:`~axialdeform.gl.renderer.AxialRenderer`."""
 
 from __future__ import annotations
 
-
+import moderngl
 import numpy as np
 
-from .cull import IndirectDraws
-from .context import draw_in_batches, flush_budget
 from ..core.bounds import wind_reach
+from .context import draw_in_batches, flush_budget
+from .cull import IndirectDraws
 from .uniforms import eye_position, set_uniforms
 
 #: alpha below which a ``BLEND`` part leaves no depth in depth-only passes (shadows)
@@ -29,7 +29,6 @@ class Drawing:
         """One instanced draw per part: opaque and cut-out parts, then blended ones.
         ``instances``: how many to draw (default :attr:`count`; the visible count after culling);
         ``level``: the LOD level whose parts ``vao`` draws (its parts have the base mesh's materials)."""
-        import moderngl
 
         instances = self.count if instances is None else instances
         fbo = self.ctx.fbo
@@ -109,7 +108,6 @@ class Drawing:
               instances) -> None:
         """``instances`` instances of one level: the parts' triangles, or the
         edges in wireframe (``edges()`` returns their vao: built on first use)."""
-        import moderngl
 
         if mode == "wireframe":  # lines are never culled
             if hidden_line:
@@ -138,7 +136,6 @@ class Drawing:
         """The triangles first, pushed back a little so the lines on them pass
         the ``<=`` test: into the depth buffer only (colour kept by a (0, 1)
         blend), or with ``fill`` also drawn washed-out (``u_mode`` 3)."""
-        import moderngl
 
         set_uniforms(prog, {"u_mode": 3 if fill else 0})
         if not fill:
@@ -177,7 +174,6 @@ class Drawing:
         for a small mesh (GL 4.2); else of its index range
         (:func:`~axialdeform.gl.context.draw_in_batches`), but not when ``split`` is
         False (blended parts, whose order matters)."""
-        import moderngl
 
         if isinstance(instances, IndirectDraws):
             def draw(n, start):

@@ -12,16 +12,17 @@ part of the instanced draw.  It shares the instances' light model
 
 from __future__ import annotations
 
+import moderngl
 import numpy as np
 
+from ..core.arrays import as_array
 from ..core.axis import AXIS_NAMES
 from ..core.bounds import instance_bounds, sphere_box
 from ..core.errors import ArgumentError, AxialDeformError
 from ..core.look import DEFAULT_LOOK, Look
 from .context import require_framebuffer
-from ..core.arrays import as_array
-from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .shaders import build_program
+from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 
 __all__ = ["GroundPlane", "GROUND_COLOR"]
 
@@ -109,7 +110,6 @@ class GroundPlane:
         """
         look = DEFAULT_LOOK if look is None else look
         background, light_dir, ambient = look.background, look.light_dir, look.ambient
-        import moderngl
 
         if self._released:
             raise AxialDeformError("this GroundPlane was released; create a new one")

@@ -3,15 +3,18 @@ camera that frames them all, and save PNGs atomically (Pillow)."""
 
 from __future__ import annotations
 
+import warnings
 
 import numpy as np
 
-from .camera import UP_VECTORS, Camera
-from .context import Offscreen, check_image_size, create_context
 from ..core.errors import ArgumentError
 from ..core.look import DEFAULT_LOOK, Look
+from ..core.scene import Scene
+from .camera import UP_VECTORS, Camera
+from .context import Offscreen, check_image_size, create_context
 from .ground import GroundPlane
 from .renderer import MODES
+from .scene import SceneRenderer, scene_camera
 from .shadow import ShadowMap
 
 __all__ = ["render_image", "render_scene", "parse_size", "as_scene", "look_from_keywords"]
@@ -48,7 +51,6 @@ def look_from_keywords(look: Look | None, keywords: dict, where: str = "render_i
         raise TypeError(f"{where}() got an unexpected keyword argument {unknown[0]!r}")
     changes = {k: v for k, v in keywords.items() if v is not None}
     if changes:
-        import warnings
 
         warnings.warn(f"{where}({', '.join(f'{k}=' for k in changes)}): pass look=axialdeform.Look"
                       f"({', '.join(f'{k}=...' for k in changes)}) instead", DeprecationWarning, stacklevel=3)
@@ -59,7 +61,6 @@ def look_from_keywords(look: Look | None, keywords: dict, where: str = "render_i
 def as_scene(scene, params=None, *, up: str = "y", wind=None, parts=None):
     """``scene`` if it is a :class:`~axialdeform.core.scene.Scene`, else
     :meth:`Scene.single` of the mesh ``scene`` and ``params``."""
-    from ..core.scene import Scene
 
     if isinstance(scene, Scene):
         if params is not None:
@@ -123,7 +124,6 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
     ``line_color`` still work for one release, with a DeprecationWarning:
     they are fields of ``look``.
     """
-    from .scene import SceneRenderer, scene_camera
 
     scene = as_scene(scene, params, up=up, wind=wind, parts=parts)
     if wind is not None:
@@ -182,7 +182,6 @@ def render_scene(scene, size=(800, 600), mode: str = "solid", *, ctx=None, time:
                  lod_error: float = 1.0) -> np.ndarray:
     """Deprecated: :func:`axialdeform.render_image` takes a scene
     (``render_image(scene, size=..., modes=mode, look=scene.look.replace(samples=...))``)."""
-    import warnings
 
     warnings.warn("render_scene is deprecated: use axialdeform.render_image(scene, ...)", DeprecationWarning,
                   stacklevel=2)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ContextError
+from .buffers import _content
 from .uniforms import set_uniforms
 
 __all__ = ["AppearanceBuffer", "GpuMaterials", "ALPHA_MODE_INDEX", "GL_SRGB8_ALPHA8"]
@@ -39,7 +40,6 @@ class AppearanceBuffer:
         self._released = False
 
     def content(self, program):
-        from .buffers import _content
 
         return _content(self.buffer, ("2f", "4f", "4f"), ("in_uv", "in_color", "in_tangent"), program)
 

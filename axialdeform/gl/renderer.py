@@ -18,22 +18,24 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
+import moderngl
 import numpy as np
 
-from .buffers import InstanceBuffer, MeshBuffers
-from .cull import IndirectDraws, read_counts
-from .context import check_alive, require_framebuffer
+from ..core.arrays import as_array
 from ..core.bounds import base_radius
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
+from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 from ..core.look import DEFAULT_LOOK, Look
-from ..core.arrays import as_array
 from ..core.wind import Wind
-from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
+from .buffers import InstanceBuffer, MeshBuffers
+from .capture import Capture
+from .context import check_alive, require_framebuffer
+from .cull import IndirectDraws, _choose_indirect, read_counts
+from .draw import BLEND_DEPTH_CUTOFF, Drawing
 from .material import AppearanceBuffer, GpuMaterials
 from .shaders import build_program
+from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .variants import ShaderVariants
-from .draw import BLEND_DEPTH_CUTOFF, Drawing
-from .capture import Capture
 
 __all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS", "BLEND_DEPTH_CUTOFF"]
 
@@ -134,7 +136,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
                  extended: bool | None = None, wind: Wind | None = None, culling: bool = True, lod: bool = False,
                  lod_error: float = 1.0, indirect: bool | None = None):
         check_alive(ctx, "a new AxialRenderer")
-        from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 
         self.ctx = ctx
         self.mesh = mesh
@@ -156,7 +157,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         self._indirect = indirect
         self.shadow_result = None
         if indirect:
-            from .cull import _choose_indirect
 
             _choose_indirect(ctx, True)  # a context below GL 4.3: the error now, not at the first draw
         self.cull_back_faces = bool(mesh.is_volume) if cull_back_faces is None else bool(cull_back_faces)
@@ -338,7 +338,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         if not isinstance(look, Look):
             raise ArgumentError(f"look: expected an axialdeform.Look, found {type(look).__name__}")
         light_dir, ambient, hidden_line = look.light_dir, look.ambient, look.wire_style
-        import moderngl
 
         self._check()
         if mode not in _MODE_INDEX:
@@ -435,7 +434,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
             set_camera_uniforms(prog, shadow.view, shadow.projection)
             self._set_wind_uniforms(prog, self.wind, self.time)
             set_uniforms(prog, {"u_mode": 0})
-            import moderngl
 
             self.ctx.enable(moderngl.DEPTH_TEST)
             if state is None:
@@ -466,7 +464,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         if not self.cull_back_faces or not enabled:
             yield
             return
-        import moderngl
 
         mirrored = view is not None and projection is not None and _mirrors(view, projection)
         self.ctx.front_face = "cw" if mirrored else "ccw"

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .camera import UP_VECTORS, Camera
+from ..core.bounds import instance_bounds, outline_points
+from ..core.errors import SceneError
+from .camera import UP_VECTORS, Camera, camera_for_points
 from .renderer import AxialRenderer
 
 __all__ = ["SceneRenderer", "scene_camera", "TERRAIN_INSTANCE"]
@@ -30,8 +32,6 @@ def scene_camera(scene, aspect: float, *, margin: float = 0.03) -> Camera:
         eye, target = np.asarray(cam["eye"]), np.asarray(cam["target"])
         dist = float(np.linalg.norm(eye - target))
         return Camera(eye, target, up, fov, near=dist * 1e-3, far=dist * 10)
-    from ..core.bounds import instance_bounds, outline_points
-    from .camera import camera_for_points
 
     points, radii = [], []
     for layer in scene.layers:
@@ -92,7 +92,6 @@ class SceneRenderer:
         for layer, (renderer, _, _) in zip(self.scene.layers, self.renderers[start:]):
             if layer.name == name:
                 return renderer
-        from ..core.errors import SceneError
 
         raise SceneError(f"layer: expected one of {', '.join(x.name for x in self.scene.layers)}, found {name!r}")
 

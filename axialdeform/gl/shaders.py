@@ -12,6 +12,8 @@ import re
 from dataclasses import dataclass, field
 from importlib import resources
 
+import moderngl
+
 from ..core.errors import ShaderError
 
 __all__ = ["GLSL_VERSION", "COMPUTE_VERSION", "shader_source", "assemble", "assemble_text", "deformation_glsl", "build_program",
@@ -147,7 +149,6 @@ def build_program(ctx, vertex: str, fragment: str | None = None, *, defines: dic
     tests).  ``geometry`` names an optional geometry shader file.  Raises :class:`ShaderError` whose message names the file, the
     stage and the line of each compiler error.
     """
-    import moderngl
 
     loader = shader_source if loader is None else loader
     stages = {"vertex_shader": assemble(vertex, defines, loader=loader)}
@@ -170,7 +171,6 @@ def build_compute(ctx, name: str, *, defines: dict | None = None, loader=None):
     caller checks ``ctx.version_code``).  ``AXIAL_COMPUTE`` is defined, so
     shared files leave out their vertex attributes.  Raises
     :class:`ShaderError` naming the file and line of each compiler error."""
-    import moderngl
 
     loader = shader_source if loader is None else loader
     stage = assemble(name, {"AXIAL_COMPUTE": 1, **(defines or {})}, loader=loader)

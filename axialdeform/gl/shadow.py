@@ -19,7 +19,9 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 import numpy as np
+import pyrr
 
+from ..core.bounds import instance_bounds
 from ..core.errors import AxialDeformError
 from ..core.look import LIGHT_DIR
 from .context import bind_framebuffer, release_framebuffer
@@ -65,9 +67,7 @@ class ShadowMap:
 
     def fit_layers(self, layers, light_dir=LIGHT_DIR, *, extra=None) -> "ShadowMap":
         """:meth:`fit` over several ``[(mesh, params), ...]`` (a scene's layers)."""
-        import pyrr
 
-        from ..core.bounds import instance_bounds
 
         spheres = [np.zeros((0, 4))]
         for mesh, params in layers:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.arrays import as_array
+from ..core.errors import ArgumentError
 
 __all__ = ["camera_matrices", "eye_position", "set_uniforms", "set_camera_uniforms"]
 
@@ -14,7 +15,6 @@ def camera_matrices(view, projection) -> tuple[np.ndarray, np.ndarray]:
     """``view`` and ``projection`` checked as ``(4, 4) float32`` (pyrr layout)
     of finite numbers, ``view`` invertible (a camera; an all-zero matrix is
     not); anything else raises :class:`~axialdeform.core.errors.ArgumentError`."""
-    from ..core.errors import ArgumentError
 
     out = []
     for m, name in ((view, "view"), (projection, "projection")):

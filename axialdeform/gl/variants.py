@@ -5,13 +5,13 @@ A mixin of :class:`~axialdeform.gl.renderer.AxialRenderer`."""
 
 from __future__ import annotations
 
+import moderngl
 
-from .cull import CullPass
 from ..core.errors import ParamError, ShaderError
 from ..core.wind import Wind
-from .uniforms import set_uniforms
+from .cull import CullPass
 from .shaders import build_program
-
+from .uniforms import set_uniforms
 
 __all__ = ["ShaderVariants"]
 
@@ -169,7 +169,6 @@ class ShaderVariants:
     def _refresh_quant_uniforms(self) -> None:
         if not self.quantized:
             return
-        import moderngl
 
         programs = [o for o in self._objects if isinstance(o, moderngl.Program)]
         if self._capture is not None:

@@ -24,19 +24,18 @@ from __future__ import annotations
 
 import base64
 import html
-import inspect
 import json
 import os
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-from ..core.io.atomic import atomic_write_bytes
-from ..core.look import DEFAULT_LOOK
 from ..core.errors import AxialDeformError
+from ..core.io.atomic import atomic_write_bytes
 from ..core.io.gltf import encode_base_mesh
-from ..core.params import as_params
 from ..core.io.params import encode_binary
+from ..core.look import DEFAULT_LOOK
+from ..core.params import as_params
 
 __all__ = ["THREE_VERSION", "WebScene", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es", "write_folder", "single_file_html",
            "make_server", "scene_bytes", "embedded_file",

@@ -20,6 +20,8 @@ import tempfile
 from pathlib import Path
 from typing import Iterator
 
+from .safeio import check_not_special
+
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "sweep_stale_parts"]
 
 _PART = re.compile(r"^\..*\.axtmp(\d+)-[^.]*.*\.part$")
@@ -72,7 +74,6 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     a format from the name still see the right extension.  If the block
     raises, the temporary file is removed and ``path`` is left as it was.
     """
-    from .safeio import check_not_special
 
     path = Path(path)
     # a device, a FIFO or a symlink to one is never replaced by a regular file

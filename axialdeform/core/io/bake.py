@@ -6,14 +6,19 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import shutil
+import tempfile
+import zipfile
 from pathlib import Path
-import numpy as np
-from .atomic import atomic_path, atomic_write_bytes
-from ..material import to_trimesh_with_appearance
-from ..errors import ArgumentError, PathError
-from .safeio import check_not_special
-from ..bake import MESH_FORMATS, instance_name, part_file_names
 
+import numpy as np
+
+from ..bake import MESH_FORMATS, instance_name, part_file_names
+from ..errors import ArgumentError, PathError
+from ..material import to_trimesh_with_appearance
+from .atomic import atomic_path, atomic_write_bytes
+from .gltf import encode_baked
+from .safeio import check_not_special
 
 __all__ = ['INSTANCE_FILE', 'check_bake_folder', 'write_mesh_folder', 'write_npz', 'write_npz_layers', 'write_npz_pieces', 'write_scene_npz']
 
@@ -47,9 +52,6 @@ def write_npz_layers(path: str | os.PathLike, layers) -> Path:
     happens) that is copied in after them.  Pieces that do not add up to
     ``count`` raise :class:`ArgumentError`, as does a non-finite piece its
     producer refuses; nothing is written then."""
-    import shutil
-    import tempfile
-    import zipfile
 
     path = Path(path)
     with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh, \
@@ -163,7 +165,6 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
                 shared_written = True
             atomic_write_bytes(path, text.encode("utf-8"))
         elif fmt == "glb":
-            from .gltf import encode_baked
 
             one = slice(i, i + 1)
             atomic_write_bytes(path, encode_baked(mesh, _identity_params(1) if params is None else params[one],

@@ -36,18 +36,35 @@ metres, and nothing here re-orients or rescales the model.
 
 from __future__ import annotations
 
+import io
 import json
 import os
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
-from .atomic import atomic_write_bytes
-from ..bake import instance_name
-from ..errors import GltfError
+from ..bake import bake_cpu, instance_name
+from ..deform import deform, deform_tangents
+from ..errors import GltfError, MeshMismatchError
+from ..material import Material
+from ..mesh import BaseMesh, area_weighted_normals
 from ..params import as_params
-from ..record import ANGLES, EXTENDED_FIELDS, GLTF_ATTRIBUTES, GLTF_EXTENDED_ATTRIBUTES, POSITION, SCALE
-from ..transforms import angles_from_matrices, matrices_from_quaternions, quaternions_from_angles
+from ..record import (
+    ANGLES,
+    EXTENDED_FIELDS,
+    GLTF_ATTRIBUTES,
+    GLTF_EXTENDED_ATTRIBUTES,
+    POSITION,
+    SCALE,
+)
+from ..transforms import (
+    angles_from_matrices,
+    matrices_from_quaternions,
+    quaternions_from_angles,
+)
+from .atomic import atomic_write_bytes
+from .safeio import require_finite
 
 __all__ = [
     "GltfError",
@@ -139,9 +156,7 @@ class _Builder:
 
 
 def _png(pixels: np.ndarray) -> bytes:
-    import io
 
-    from PIL import Image
 
     out = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8), "RGBA").save(out, format="PNG")
@@ -174,7 +189,6 @@ class _Appearance:
                 continue
             m = part.material
             if default_color is not None and m.is_default:  # a scene layer's colour
-                from ..material import Material
 
                 m = Material(name=part.name if not single else str(getattr(mesh, "name", "mesh")),
                              base_color=[*default_color[:3], 1.0])
@@ -253,7 +267,6 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     out (when ``params`` are not the ones ``positions`` were baked from)."""
     params = as_params(params)
     if positions is None or normals is None:
-        from ..bake import bake_cpu
 
         positions, normals = bake_cpu(mesh, params, source=source)
     if len(params) == 0:
@@ -266,7 +279,6 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
             f"baked arrays: expected positions and normals of shape ({len(params)}, {mesh.vertex_count}, 3), "
             f"found {positions.shape} and {normals.shape}"
         )
-    from .safeio import require_finite
 
     # an overflowing deformation (huge but finite parameters) is refused before any JSON is made
     require_finite(positions, "positions", "xyz", error=GltfError, source=source)
@@ -279,7 +291,6 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     nrm_view = b.view(normals, target=_ARRAY_BUFFER, stride=12)
     tan_view = None
     if tangents and "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
-        from ..deform import deform_tangents
 
         tangents = np.concatenate([deform_tangents(mesh.axis, mesh.positions, mesh.tangents, params),
                                    np.broadcast_to(mesh.tangents[None, :, 3:], (n, v, 1))], axis=2).astype("<f4")
@@ -429,7 +440,6 @@ def encode_scene(scene, layout: str = "baked") -> bytes:
         return _encode_scene_instanced(scene, layers)
     import trimesh
 
-    from ..deform import deform
 
     out = trimesh.Scene()
     parts = [("terrain", scene.terrain, None, scene.terrain_color)] if scene.terrain is not None else []
@@ -562,8 +572,6 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     """
     import pygltflib
 
-    from ..errors import MeshMismatchError
-    from ..mesh import BaseMesh
 
     path = Path(path)
     where = str(path)
@@ -639,7 +647,6 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
         normals = read_accessor(gltf, blob, prim.attributes.NORMAL, "NORMAL", where)
         from_file = True
     else:
-        from ..mesh import area_weighted_normals
 
         normals, from_file = area_weighted_normals(positions, faces), False
     mesh = BaseMesh(positions, normals, faces, name=where, normals_from_file=from_file)
@@ -680,7 +687,6 @@ def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:
     out (tangents are then computed where a normal map needs them)."""
     import pygltflib
 
-    from ..errors import GltfError
 
     try:
         if kind == "glb":

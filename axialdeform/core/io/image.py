@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 
 import numpy as np
+from PIL import Image
 
 from .atomic import atomic_path
 
@@ -20,7 +21,6 @@ def save_png(path: str | os.PathLike, image: np.ndarray) -> None:
     image : (h, w, 3) or (h, w, 4) uint8
         First row at the top.
     """
-    from PIL import Image
 
     with atomic_path(path, suffix=".png") as tmp:
         Image.fromarray(np.ascontiguousarray(image)).save(tmp, format="PNG")

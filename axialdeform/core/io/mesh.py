@@ -8,11 +8,16 @@ import os
 import re
 from importlib import resources
 from pathlib import Path
-import numpy as np
-from ..errors import MeshError
-from ..mesh import BaseMesh, area_weighted_normals, _check_float32_range
-from .gltf import gltf_attributes
 
+import numpy as np
+
+from ..errors import MeshError
+from ..material import compute_tangents, gather_parts
+from ..mesh import BaseMesh, _check_float32_range, area_weighted_normals
+from . import safeio
+from .gltf import gltf_attributes
+from .resolver import SafeResolver, gltf_references, is_image_name
+from .safeio import read_regular
 
 __all__ = ['BUNDLED_MESHES', 'MESH_SUFFIXES', 'bundled_mesh_path', 'load_mesh', 'mesh_source_path']
 
@@ -79,12 +84,10 @@ def load_mesh(source) -> BaseMesh:
         raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
     if path.suffix.lower() not in MESH_SUFFIXES:
         raise MeshError(f"{name}: unsupported mesh file type {path.suffix!r}; expected one of {', '.join(MESH_SUFFIXES)}")
-    from .resolver import SafeResolver, gltf_references
-    from .safeio import memory_available, read_regular
 
     # a regular file (never a FIFO or a device), read with a bound; every
     # file it refers to goes through the same check (SafeResolver)
-    data = read_regular(path, max(memory_available() // 2, 1 << 20), f"a mesh file ({', '.join(MESH_SUFFIXES)})",
+    data = read_regular(path, max(safeio.memory_available() // 2, 1 << 20), f"a mesh file ({', '.join(MESH_SUFFIXES)})",
                         MeshError)
     kind = path.suffix.lower().lstrip(".")
     # each file a glTF refers to is read with the bound it declares (a buffer's byteLength)
@@ -129,7 +132,6 @@ def _refuse(name: str, resolver, declared: dict) -> None:
 
 def _is_image_name(name: str) -> bool:
     """True for a referenced file that is a picture (a texture), by its suffix."""
-    from .resolver import is_image_name
 
     return is_image_name(name)
 
@@ -165,7 +167,6 @@ def _from_loaded(loaded, name: str, file_positions=None, failed=(), dropped=()) 
     meshes become parts, node transforms applied); ``dropped``: what
     :func:`gltf_attributes` read from the file (tangents, UVs), used where
     its positions match a geometry's."""
-    from ..material import compute_tangents, gather_parts
 
     gathered = gather_parts(loaded, name, failed=failed)
     all_positions, all_faces, all_normals, raw_positions = [], [], [], []
@@ -269,7 +270,6 @@ def _source_index(positions: np.ndarray, file_positions: np.ndarray | None) -> t
 def _obj_object_count(data: bytes) -> int:
     """How many ``o NAME`` lines an OBJ file's bytes have (a byte scan, so only
     files with several objects pay for the second, splitting load)."""
-    import re
 
     return len(re.findall(rb"(?m)^[ \t]*o[ \t]", data))
 

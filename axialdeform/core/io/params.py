@@ -5,21 +5,31 @@ buffer.  The formats: ``docs/parameter-files.md``."""
 
 from __future__ import annotations
 
+import io
 import os
 import re
 import struct
+import warnings
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
+
 import numpy as np
-from .atomic import atomic_path
+
 from ..axis import AXIS_NAMES, ControlAxis
 from ..errors import MeshMismatchError, ParamError, ParamFileError
-from ..record import (  # the record's columns and slices: one home
-    EXTENDED_FIELDS, FIELDS, as_instances, SCALE, TAPER, WIDTHS,
-)
 from ..params import as_params
-
+from ..record import (  # the record's columns and slices: one home
+    EXTENDED_FIELDS,
+    FIELDS,
+    SCALE,
+    TAPER,
+    WIDTHS,
+    as_instances,
+)
+from . import safeio
+from .atomic import atomic_path
+from .safeio import open_regular
 
 __all__ = ['BINARY_SUFFIXES', 'BinaryHeader', 'ENCODING_FLOAT32', 'ENCODING_UINT16', 'HEADER_SIZE', 'MAGIC', 'ParamFile', 'TEXT_SUFFIXES', 'VERSION', 'VERSION_EXTENDED', 'axis_letter', 'check_mesh', 'decode_binary', 'dequantize_params', 'encode_binary', 'format_text', 'param_file_bytes', 'parse_text', 'quantization_error_bound', 'quantize_params', 'quantize_with_table', 'read_binary_header', 'read_param_bytes', 'read_param_file', 'read_params', 'write_param_chunks', 'write_params']
 
@@ -191,8 +201,6 @@ def _fast_chunk(chunk: bytes, width: int | None = None):
     breaks = np.flatnonzero(np.frombuffer(chunk, dtype=np.uint8) == 10)
     if np.diff(np.concatenate([[-1], breaks, [len(chunk)]])).max() > _MAX_TEXT_LINE + 1:
         return None  # a line too long: the slow path says which
-    import io
-    import warnings
 
     try:
         with warnings.catch_warnings():
@@ -609,7 +617,6 @@ def read_param_bytes(path: str | os.PathLike) -> tuple[bytes, bool]:
     """The bytes of a parameter file and whether it is binary, read with the
     checks of :func:`read_param_file` (regular file; a binary file's size
     must match its header before it is read; a text file must fit in memory)."""
-    from .safeio import memory_available, open_regular, read_sized
 
     path = Path(path)
     with open_regular(path, "a parameter file", ParamFileError) as (fh, size):
@@ -624,11 +631,11 @@ def read_param_bytes(path: str | os.PathLike) -> tuple[bytes, bool]:
             limit = size
         else:
             # text: the file, at most a third of the memory available (the parser needs about twice more)
-            limit = max(memory_available() // 3, 1 << 20)
+            limit = max(safeio.memory_available() // 3, 1 << 20)
             if size > limit:
                 raise ParamFileError(f"{path}: is {size} bytes; expected a text parameter file of at most {limit} bytes "
                                      "(a third of the memory available); use the binary form (.adp)")
-        data = read_sized(fh, size, path, "a parameter file", ParamFileError)
+        data = safeio.read_sized(fh, size, path, "a parameter file", ParamFileError)
     return data, binary
 
 

@@ -4,10 +4,14 @@ the file's folder."""
 
 from __future__ import annotations
 
+import json
 import os
 import stat
-from ..errors import MeshError
+import struct
 
+from ..errors import MeshError, PathError
+from . import safeio
+from .safeio import MAX_REFERENCED_BYTES, open_regular, read_regular
 
 __all__ = ['BUFFER_SLACK', 'IMAGE_SUFFIXES', 'SafeResolver', 'gltf_references', 'is_image_name']
 
@@ -31,8 +35,6 @@ def gltf_references(data: bytes, kind: str, name: str = "<gltf>") -> dict[str, t
     read gives ``{}`` (the mesh loader's own error says why); a buffer
     ``byteLength`` that is not a whole number >= 1 raises :class:`MeshError`
     naming ``name`` and the field."""
-    import json
-    import struct
 
     try:
         if kind == "glb":
@@ -90,7 +92,6 @@ class SafeResolver:
 
     def __init__(self, folder: str | os.PathLike, max_bytes: int | None = None, *,
                  declared: dict | None = None, referrer: str | None = None):
-        from .safeio import MAX_REFERENCED_BYTES
 
         self.parent = os.path.abspath(os.fspath(folder))
         self.max_bytes = MAX_REFERENCED_BYTES if max_bytes is None else int(max_bytes)
@@ -104,8 +105,6 @@ class SafeResolver:
         return name if os.path.isabs(name) else os.path.join(self.parent, name)
 
     def get(self, name: str) -> bytes:
-        from ..errors import PathError
-        from .safeio import MAX_IMAGE_BYTES, read_regular
 
         path = self._path(name)
         try:
@@ -123,7 +122,7 @@ class SafeResolver:
             if size is not None:
                 return bytes(self._read_declared(path, name, field, size, by))
             if field is not None or is_image_name(name):
-                return bytes(read_regular(path, MAX_IMAGE_BYTES, f"a picture referred to{by} (a texture)"))
+                return bytes(read_regular(path, safeio.MAX_IMAGE_BYTES, f"a picture referred to{by} (a texture)"))
             return bytes(read_regular(path, self.max_bytes, f"a file referred to{by}"))
         except PathError as exc:
             self.failed.append((str(name), str(exc)))
@@ -135,19 +134,17 @@ class SafeResolver:
 
     def _read_declared(self, path: str, name: str, field: str, size: int, by: str) -> bytearray:
         """The first ``size`` bytes of ``path``, a buffer whose declared length is ``size``."""
-        from ..errors import PathError
-        from .safeio import memory_available, open_regular, read_sized
 
         what = f"a buffer referred to{by}"
-        if size > memory_available() // 2:
+        if size > safeio.memory_available() // 2:
             raise PathError(f"{name}: {self.referrer or 'the mesh'} declares {field} = {size}; expected a buffer of at most "
-                            f"{memory_available() // 2} bytes (half the memory available)")
+                            f"{safeio.memory_available() // 2} bytes (half the memory available)")
         with open_regular(path, what) as (fh, actual):
             if not size <= actual <= size + BUFFER_SLACK:
                 raise PathError(f"{name}: is {actual} bytes, but {self.referrer or 'the mesh'} declares {field} = {size}; expected a file of "
                                 f"exactly {size} bytes" + (f" (or up to {BUFFER_SLACK} more of padding)" if BUFFER_SLACK else "")
                                 + (" (truncated?)" if actual < size else ""))
-            data = read_sized(fh, actual, name, what, PathError)
+            data = safeio.read_sized(fh, actual, name, what, PathError)
         del data[size:]  # padding is not part of the buffer
         return data
 

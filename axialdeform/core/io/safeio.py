@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import stat
 import warnings
 from typing import Iterable, Iterator, Sequence
@@ -223,7 +224,6 @@ def check_count(count, bytes_each: float, what: str = "count", error: type = Axi
 def disk_free(path: str | os.PathLike) -> int:
     """Bytes free for this user on the file system that ``path`` (a file to
     be written: its folder is asked) is on."""
-    import shutil
 
     folder = os.path.dirname(os.path.abspath(os.fspath(path))) or "."
     return shutil.disk_usage(folder).free

@@ -9,9 +9,17 @@ import os
 import re
 import sys
 from pathlib import Path
-import numpy as np
-from ..errors import AxialDeformError, SceneError
 
+import numpy as np
+
+from ..errors import AxialDeformError, SceneError
+from ..mesh import BaseMesh, area_weighted_normals
+from ..scatter import ANCHORS, load_surface, scatter
+from ..wind import Wind
+from . import safeio
+from .mesh import BUNDLED_MESHES, load_mesh
+from .params import read_params
+from .safeio import read_regular
 
 __all__ = ['read_scene']
 
@@ -67,13 +75,12 @@ def _load_toml(path: Path):
         import tomllib
     else:  # pragma: no cover - Python 3.10
         import tomli as tomllib
-    from .safeio import memory_available, read_regular
 
     if not os.path.lexists(path):
         raise SceneError(f"{path}: no such scene file")
     # a regular file only (a FIFO or /dev/zero is refused without blocking), of a size
     # whose parse fits in memory (tomllib's objects take up to ~10x the text)
-    data = read_regular(path, max(memory_available() // 12, 1 << 20), "a scene file (.toml)", SceneError)
+    data = read_regular(path, max(safeio.memory_available() // 12, 1 << 20), "a scene file (.toml)", SceneError)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -155,7 +162,6 @@ def read_scene(path: str | os.PathLike, scene_type, *, scale_counts: float = 1.0
     _read_view(src, data, scene)
     surface = _read_terrain(src, data.get("terrain"), scene)
     if "wind" in data:
-        from ..wind import Wind
 
         w = data["wind"]
         kwargs = {k: (tuple(_numbers(src, v, k, "wind", 0, (3,))) if k == "direction" else
@@ -192,8 +198,6 @@ def _read_terrain(src, terrain, scene):
     """The terrain's Surface (or None); sets ``scene.terrain`` to a BaseMesh of it."""
     if not terrain:
         return None
-    from ..mesh import BaseMesh, area_weighted_normals
-    from ..scatter import load_surface
 
     if ("mesh" in terrain) == ("heightmap" in terrain):
         raise src.error("expected exactly one of 'mesh' or 'heightmap'", next(iter(terrain), "terrain"), "terrain", 0)
@@ -244,8 +248,6 @@ def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
 
 
 def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
-    from .mesh import load_mesh
-    from .params import read_params
 
     _check_keys(src, layer, _LAYER, f"layer {nth + 1}", "layer", nth)
     if "mesh" not in layer:
@@ -254,7 +256,6 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
         raise src.error(f"expected a name of letters, digits, _ . -, found {name!r}", "name", "layer", nth)
     mesh_value = layer["mesh"]
-    from .mesh import BUNDLED_MESHES
 
     with _wrap(src, "mesh", "layer", nth):
         if isinstance(mesh_value, str) and mesh_value in BUNDLED_MESHES:
@@ -279,7 +280,6 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
 
 
 def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.ndarray:
-    from ..scatter import load_surface, scatter
 
     if not isinstance(recipe, dict):
         raise src.error("expected a table [layer.scatter]", "scatter", "layer", nth)
@@ -304,7 +304,6 @@ def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.n
             if not isinstance(recipe[key], kind) or (kind is int and isinstance(recipe[key], bool)):
                 raise src.error(f"expected {what}, found {recipe[key]!r}", key, "layer", nth)
             kwargs[key] = recipe[key]
-    from ..scatter import ANCHORS
 
     if kwargs.get("anchor", "bottom") not in ANCHORS:
         raise src.error(f"expected one of {', '.join(ANCHORS)}, found {kwargs['anchor']!r}", "anchor", "layer", nth)
