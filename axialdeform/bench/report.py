@@ -160,7 +160,7 @@ def _cell(x, fmt="{:.3f}"):
 
 
 def summary(details: dict) -> str:
-    """The README's summary of a run: the table at the goal count (solid) and
+    """The summary in docs/performance.md of a run: the table at the goal count (solid) and
     the goals' sentences, every number from ``details``."""
     details = with_goals(details)
     st = details["stats"]

@@ -51,6 +51,13 @@ class Camera:
         aspect : float
             Width over height of the picture.
 
+        Returns
+        -------
+        Camera
+            A new camera (this one when the plane is not in view).
+
+        Notes
+        -----
         The far plane reaches the square's farthest corner; the near plane
         the nearest point where the view frustum's edges meet the plane
         (depth is linear over the plane, so the seen part's nearest point is

@@ -118,6 +118,8 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         (:class:`ContextError` below GL 4.3); ``False`` forces the GL 3.3 one.
         Both draw the same picture.
 
+    Notes
+    -----
     A mesh with UVs, vertex colours, several parts or a material
     (:attr:`BaseMesh.has_appearance`) is drawn with ``AXIAL_MATERIAL``:
     textures (sRGB), vertex colours, ``MASK`` cut-outs, ``BLEND`` parts after
@@ -330,6 +332,8 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         time : float, optional
             Seconds; sets :attr:`time`, the clock of :attr:`wind`.
 
+        Notes
+        -----
         The base colour is :attr:`color`, world up (for the hemisphere
         ambient) :attr:`up` and the wind :attr:`wind`: set them on the
         renderer.  Animating the wind sets uniforms only: no buffer is written.
