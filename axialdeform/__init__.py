@@ -2,7 +2,7 @@
 
 The data flow -- mesh -> axis -> record -> buffers -> shader -> image -- in
 three layers, one folder each (an upper layer may import a lower one, never
-the reverse; ``tests/test_layers.py`` reads the imports and enforces it):
+the reverse; ``tests/app/test_layers.py`` reads the imports and enforces it):
 
 * ``core/`` -- pure numpy, no GL: meshes, the control axis, the instance
   record, parameters and their files, the CPU reference, scenes, the look;

@@ -1,6 +1,6 @@
 """``SceneWidget``: the web page's scene inline in a notebook (an anywidget
 running the same page code, ``axialdeform/web/app.js``).  Tested in a real
-JupyterLab (tests/test_notebook.py); Jupyter Notebook 7 and VS Code load
+JupyterLab (tests/web/test_notebook.py); Jupyter Notebook 7 and VS Code load
 anywidgets the same way but are not tested here.
 
     from axialdeform.widget import SceneWidget

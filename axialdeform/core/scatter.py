@@ -141,7 +141,7 @@ class Surface:
         The same draws from ``rng``, in the same order, and the same arithmetic
         as ``trimesh.sample.sample_surface(mesh, count, face_weight=weights,
         seed=rng)`` -- the same points and faces, bit for bit (pinned by
-        ``tests/test_scatter.py::test_sample_is_trimesh_sample_surface``) --
+        ``tests/app/test_scatter.py::test_sample_is_trimesh_sample_surface``) --
         but trimesh builds an origin and two edge vectors for EVERY face
         ((f, 3, 3) float64: 324 MB on a 1 500 x 1 500 height map) before
         picking; this gathers only the picked faces' vertices.
@@ -160,7 +160,7 @@ def sample_faces(vertices: np.ndarray, faces: np.ndarray, weight_cum: np.ndarray
     Exactly ``trimesh.sample.sample_surface(mesh, count, face_weight=weights,
     seed=rng)`` -- the same draws from ``rng`` (a numpy Generator, or a seed),
     in the same order, and the same arithmetic, so the same points bit for bit
-    (pinned by ``tests/test_scatter.py::test_sample_is_trimesh_sample_surface``)
+    (pinned by ``tests/app/test_scatter.py::test_sample_is_trimesh_sample_surface``)
     -- but trimesh builds an origin and two edge vectors for EVERY face
     ((f, 3, 3) float64: 324 MB on a 1 500 x 1 500 height map) before picking;
     this gathers only the picked faces' vertices."""
@@ -232,7 +232,7 @@ def _up_index(up) -> int:
 #: also its float32 drawing copy and normals): measured on a 1 500 x 1 500 map, peak RSS
 #: less a tiny map's, ~96 for `axialdeform scatter big.png stone -n 200 -o p.adp` and
 #: ~150 for a scene with it as [terrain] up to its first draw (tracemalloc on 600 x 600:
-#: up to 218; tests/test_scatter.py::test_height_map_memory_is_bounded_per_pixel) --
+#: up to 218; tests/app/test_scatter.py::test_height_map_memory_is_bounded_per_pixel) --
 #: with a margin, the pixel bound checked before decoding (was 500)
 SURFACE_BYTES_PER_PIXEL = 260
 #: bytes a density map costs per pixel (the float64 grey levels and one copy)

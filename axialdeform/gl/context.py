@@ -50,7 +50,7 @@ def create_context(backend: str = "egl"):
 #: 64x64 4-sample target peaked at 2.4 GB, 213 MB when finished after each
 #: 0.5 M triangles -- so big draws are split there (lines: a third as many;
 #: the cost, a finish a slice: +18 % on a frame of 20 000 stones, sliced by instances;
-#: ``tests/test_render.py::test_multisampled_frame_memory_does_not_grow_with_triangles``).
+#: ``tests/gl/test_render.py::test_multisampled_frame_memory_does_not_grow_with_triangles``).
 SOFTWARE_FLUSH_PRIMITIVES = 250_000
 _SOFTWARE = ("llvmpipe", "softpipe", "swrast", "swiftshader", "lavapipe")
 

@@ -133,7 +133,7 @@ def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
     The text is parsed in pieces of about 256 KiB cut at line breaks, each
     turned into float32 rows at once, so the memory needed beyond ``data``
     and the result is bounded (peak under 3x the text's size plus the
-    result, ``tests/test_hostile.py::test_text_parser_memory``)."""
+    result, ``tests/app/test_hostile.py::test_text_parser_memory``)."""
     view = memoryview(data).cast("B") if not isinstance(data, (bytes, bytearray)) else data
     n = len(view)
     start = 3 if bytes(view[:3]) == b"\xef\xbb\xbf" else 0  # a leading byte-order mark is tolerated

@@ -18,7 +18,7 @@ import pytest
 from axialdeform.bench import report, stats
 from axialdeform.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 COMMITTED = ROOT / "docs" / "benchmarks" / "bench-details.json"
 
 

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAGES = sorted((ROOT / "docs").glob("*.md"))
-# the notebook widget's block needs a notebook: tests/test_notebook.py runs it in a real JupyterLab
+# the notebook widget's block needs a notebook: tests/web/test_notebook.py runs it in a real JupyterLab
 BLOCKS = [(p.name, i, code) for p in PAGES
           for i, code in enumerate(re.findall(r"^```python\n(.*?)^```", p.read_text(encoding="utf-8"), re.S | re.M))
           if "SceneWidget" not in code]

@@ -29,7 +29,7 @@ from axialdeform.core.io import params as P
 from axialdeform.gl.buffers import InstanceBuffer
 from axialdeform.core.errors import ArgumentError, AxialDeformError, ContextError, ParamFileError, PathError
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 ROW = " ".join(["0.01"] * 10 + ["0", "0", "0", "0", "0", "0"]) + "\n"
 
 
@@ -194,7 +194,7 @@ def test_bake_count_checked_before_allocating(tmp_path, monkeypatch, capsys):
     f = tmp_path / "p.adp"
     P.write_params(f, np.zeros((1000, 16), np.float32))
     monkeypatch.setattr(safeio, "memory_available", lambda: 1_000_000)  # 1 MB: 1000 x 58 vertices x 24 B does not fit
-    # a folder of meshes is baked in memory (a CPU .npz is made in pieces, tests/test_streaming.py)
+    # a folder of meshes is baked in memory (a CPU .npz is made in pieces, tests/app/test_streaming.py)
     assert main(["bake", "stone", str(f), "-o", str(tmp_path / "b")]) == 2
     err = capsys.readouterr().err
     assert "instances to bake" in err and "expected at most" in err and str(f) in err

@@ -22,7 +22,7 @@ from axialdeform.core.material import AssetWarning, compute_tangents
 from conftest import shared_mesh
 
 ALPHA_TEST = "assets/AlphaBlendModeTest.glb"
-VALIDATOR = Path(__file__).resolve().parent / "gltf-validator"
+VALIDATOR = Path(__file__).resolve().parents[1] / "gltf-validator"
 
 
 def _validate(*paths):
@@ -437,7 +437,7 @@ def test_normal_map_changes_the_shading(ctx):
     plain, bumpy = with_normal_map(None), with_normal_map(stripes)
     params = np.zeros((1, 16), np.float32)
     cam = ad.frame_instances(mesh, params, 4 / 3, elevation=10.0, azimuth=90.0, margin=-0.3)
-    kw = dict(ctx=ctx, camera=cam, fast=True, parts=["Bed"])
+    kw = dict(ctx=ctx, camera=cam, look=ad.Look(fast=True), parts=["Bed"])
     a = ad.render_image(bumpy, params, (160, 120), "solid", **kw).astype(int)
     b = ad.render_image(plain, params, (160, 120), "solid", **kw).astype(int)
     differ = (np.abs(a - b).sum(axis=2) > 6).mean()
@@ -465,7 +465,7 @@ def test_textures_are_sampled_as_srgb(ctx, tmp_path):
     coloured = with_material(texture=None, base_color=(linear, linear, linear, 1))
     wrong = with_material(texture=None, base_color=(0.5, 0.5, 0.5, 1))
     params = np.zeros((1, 16), np.float32)
-    kw = dict(ctx=ctx, camera=_front_camera(mesh, params), fast=True, background=(0, 0, 0))
+    kw = dict(ctx=ctx, camera=_front_camera(mesh, params), look=ad.Look(fast=True, background=(0, 0, 0)))
     a, b, c = (ad.render_image(m, params, (48, 48), "solid", **kw).astype(int) for m in (textured, coloured, wrong))
     inside = b.sum(axis=2) > 0
     assert inside.mean() > 0.05
@@ -522,7 +522,7 @@ def test_parts_draw_from_the_culled_instances(ctx, indirect):
 
 
 def test_lod_of_a_mesh_with_parts_is_drawn_not_refused(ctx):
-    """LOD works part by part (tests/test_lod_assets.py); this file's parts are
+    """LOD works part by part (tests/gl/test_lod_assets.py); this file's parts are
     all too small to simplify, so it keeps one level and says so."""
     mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
     with pytest.warns(UserWarning, match="too few to simplify"):

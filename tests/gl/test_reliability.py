@@ -33,7 +33,7 @@ from axialdeform.core.io.params import dequantize_params, quantize_params
 
 from conftest import make_mesh
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 TETRA_V = np.array([(0, 0, 0), (1, 0, 0), (0.3, 0.8, 0), (0.3, 0.3, 0.7)], dtype=np.float64) * (2, 1, 1)
 TETRA_F = np.array([(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)])
 
@@ -247,7 +247,7 @@ def test_million_instances_one_draw_call(ctx, quantized):
     background = np.array([0.93, 0.94, 0.96])
     view = pyrr.matrix44.create_look_at((570.0, 450, 670), (150.0, 150, 150), (0, 1, 0))
     proj = pyrr.matrix44.create_perspective_projection(45, 1, 1, 3000)
-    # culling=False: the plain path draws every instance in ONE call (tests/test_cull.py covers the culled draw)
+    # culling=False: the plain path draws every instance in ONE call (tests/gl/test_cull.py covers the culled draw)
     with ad.AxialRenderer(ctx, mesh, params, quantized=quantized, culling=False) as r, \
             ad.Offscreen(ctx, (96, 96), samples=0) as target:
         assert r.count == n

@@ -8,7 +8,7 @@ import pytest
 import axialdeform as ad
 from axialdeform.gl.shaders import assemble, build_program
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def loader_from(files):

@@ -264,7 +264,7 @@ def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
 
     import sys
 
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
     from big_mesh import torus
 
     modes = ("solid", "flat", "wireframe")
@@ -359,7 +359,7 @@ def test_multisampled_frame_memory_does_not_grow_with_triangles(tmp_path):
         "    after = rss('VmHWM')\n"
         "assert ctx.error == 'GL_NO_ERROR'\n"
         "print((after - before) / 1024)\n")
-    root = Path(__file__).resolve().parent.parent
+    root = Path(__file__).resolve().parents[2]
     growth = {}
     for flush in ("0", "default"):
         env = {**os.environ, "AXIALDEFORM_FLUSH_PRIMITIVES": flush, "AXIALDEFORM_INDIRECT": "0"}

@@ -94,7 +94,7 @@ def test_moderngl_window_version_message_agrees_with_pyproject():
 
     from axialdeform import viewer
 
-    project = tomllib.loads((Path(__file__).resolve().parent.parent / "pyproject.toml").read_text())
+    project = tomllib.loads((Path(__file__).resolve().parents[2] / "pyproject.toml").read_text())
     wanted = [d for d in project["project"]["dependencies"] if d.startswith("moderngl-window")][0]
     asks = set(re.findall(r"moderngl-window>=[0-9.]+", inspect.getsource(viewer)))
     assert asks == {wanted.replace(" ", "")}

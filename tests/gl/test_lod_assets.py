@@ -284,7 +284,7 @@ def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch, indirect):
         return result
 
     with ad.AxialRenderer(ctx, mesh, params, lod=True, indirect=indirect) as r:
-        # whole draws (a multisampled frame on llvmpipe is otherwise drawn in slices: tests/test_render.py)
+        # whole draws (a multisampled frame on llvmpipe is otherwise drawn in slices: tests/gl/test_render.py)
         monkeypatch.setattr(ctx, "_axialdeform_flush", None, raising=False)
         monkeypatch.setattr(moderngl.VertexArray, "render", spy)
         monkeypatch.setattr(moderngl.VertexArray, "render_indirect", spy_indirect)
@@ -355,7 +355,7 @@ def _torus(faces):
     import sys
     from pathlib import Path
 
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
     from big_mesh import torus
 
     return torus(faces)
@@ -444,7 +444,7 @@ def test_lod_of_a_big_mesh_has_bounded_memory(tmp_path):
     import sys
     from pathlib import Path
 
-    root = Path(__file__).resolve().parent.parent
+    root = Path(__file__).resolve().parents[2]
     script = ("import resource, sys, trimesh\n"
               "sys.path.insert(0, 'tools')\n"
               "from big_mesh import torus\n"

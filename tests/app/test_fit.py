@@ -17,7 +17,7 @@ from axialdeform.core.params import ANGLES, OFFSETS, POSITION
 
 from conftest import make_mesh, shared_mesh
 
-ROOT_DIR = Path(__file__).resolve().parent.parent
+ROOT_DIR = Path(__file__).resolve().parents[2]
 TOL = 1e-5  # of L: geometry, and absolute for rotation matrices
 
 

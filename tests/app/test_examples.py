@@ -15,7 +15,7 @@ from scipy import ndimage
 
 import axialdeform as ad
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES_DIR = ROOT / "examples"
 #: every example, with the files it writes; the meta-test keeps this in step with the folder
 EXAMPLES = {
@@ -31,7 +31,7 @@ BACKGROUND = np.array([0.93, 0.94, 0.96]) * 255  # render_image's default clear 
 def test_every_example_is_tested():
     found = {p.name for p in EXAMPLES_DIR.glob("[0-9][0-9]_*.py")}
     assert found == set(EXAMPLES), (
-        f"examples/ and tests/test_examples.py disagree: untested {sorted(found - set(EXAMPLES))}, "
+        f"examples/ and tests/app/test_examples.py disagree: untested {sorted(found - set(EXAMPLES))}, "
         f"missing {sorted(set(EXAMPLES) - found)}")
 
 

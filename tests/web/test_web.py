@@ -24,7 +24,7 @@ from axialdeform.core.io.params import encode_binary
 from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_scene, embedded_file, make_server,
                              page_shaders, scene_bytes, single_file_html, vendor_file, write_page)
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 SIZE = (400, 300)
 CHROMIUM_ARGS = ["--use-angle=swiftshade", "--enable-unsafe-swiftshader", "--no-sandbox"]
 
@@ -362,7 +362,7 @@ def test_widget_in_an_executed_notebook(browser, tmp_path):
     the widget (widget-view output) and set_params changes its synced state;
     the widget state the notebook stores (what a front end receives) is then
     rendered by the widget's ESM in Chromium.  A real JupyterLab front end
-    is tested in tests/test_notebook.py; VS Code is not tested."""
+    is tested in tests/web/test_notebook.py; VS Code is not tested."""
     import nbformat
     from nbclient import NotebookClient
 

@@ -68,7 +68,7 @@ def test_quantized_encoding_lives_in_params(stone):
 def test_conventions_are_cited_from_docs_method():
     from pathlib import Path
 
-    root = Path(__file__).resolve().parent.parent
+    root = Path(__file__).resolve().parents[2]
     method = (root / "docs" / "method.md").read_text(encoding="utf-8")
     for term in ("Rz(rz) · Ry(ry) · Rx(rx)", "V'   = V + E(D(t))", "n' = normalize", "d1u d1v", "s tw tp",
                  "(x, z)", "t = (V[a] − lo) / L"):
@@ -89,7 +89,7 @@ def test_camera_uniforms_and_read_back_have_one_home():
         src = inspect.getsource(mod)
         assert "set_camera_uniforms(" in src and '["u_view"]' not in src and "np.linalg.inv(view" not in src
         assert "for name, value in" not in src
-    root = Path(__file__).resolve().parent.parent
+    root = Path(__file__).resolve().parents[2]
     sources = [inspect.getsource(viewer), inspect.getsource(context.Offscreen)]
     sources += [p.read_text() for p in sorted((root / "examples").glob("*.py"))]
     for src in sources:

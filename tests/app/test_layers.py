@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "axialdeform"
 APPLICATION = ("cli", "bench", "viewer", "web", "widget")
 GL_LIBRARIES = ("moderngl", "moderngl_window", "glcontext")

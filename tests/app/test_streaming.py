@@ -29,7 +29,7 @@ from axialdeform.core.io import params as P
 from axialdeform.core.errors import MeshError, ParamError
 from axialdeform.core.variation import iter_random_params
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 # ------------------------------------------------------------------ random

@@ -14,7 +14,7 @@ from axialdeform.cli import main
 from axialdeform.core.scene import load_scene
 from test_export import _assert_valid, validate  # noqa: F401  (the validator fixture)
 
-LANDSCAPE = __import__("pathlib").Path(__file__).resolve().parent.parent / "examples" / "landscape" / "landscape.toml"
+LANDSCAPE = __import__("pathlib").Path(__file__).resolve().parents[2] / "examples" / "landscape" / "landscape.toml"
 
 
 def write_scene(folder, body: str, name: str = "scene.toml"):
