@@ -7,6 +7,7 @@ anywidgets the same way but are not tested here.
     w = SceneWidget("stone", params)      # a mesh (or its name / file) and (n, 16) float32
     w                                     # shows it; drag to orbit
     w.set_params(other_params)            # updates the drawing in place
+    SceneWidget("landscape.toml")         # a scene file (or an axialdeform.Scene): every layer
 
 ``status`` is what the page reports: ``{"ready": True, "instances": n}`` after
 the first frame, or ``{"ready": False, "error": "..."}``.
@@ -20,8 +21,10 @@ import traitlets
 from .core.io.mesh import load_mesh
 from .core.io.params import encode_binary
 from .core.mesh import BaseMesh
+from .core.errors import AxialDeformError
 from .core.params import as_params
-from .web import VENDOR_FILES, build_scene, page_source, vendor_file
+from .core.scene import Scene, is_scene_file, load_scene
+from .web import VENDOR_FILES, build_scene, build_scene_file, page_source, vendor_file
 
 __all__ = ["SceneWidget"]
 
@@ -31,32 +34,66 @@ def _esm() -> str:
 
 
 class SceneWidget(anywidget.AnyWidget):
-    """The scene of ``mesh`` and ``params`` ((n, 16) float32) in a notebook.
+    """A scene in a notebook: the page ``axialdeform web`` writes, inline.
 
-    size : (width, height) of the canvas; the first view is ``axialdeform
-    render``'s camera at that size.  up : world up ('x', 'y', 'z').
-    quantize : send the 32-byte quantized records (default) or float32.
+    Parameters
+    ----------
+    scene : Scene, str, PathLike or BaseMesh
+        A :class:`axialdeform.Scene`, a scene file (``.toml``: every layer,
+        the terrain, the file's camera, light and wind), or a mesh (a
+        :class:`BaseMesh`, a bundled name or a mesh file) with ``params``.
+    params : (n, 16) or (n, 19) float32, optional
+        The instances of a mesh.
+    size : (int, int)
+        The canvas; the first view is ``axialdeform render``'s camera at
+        that size.
+    up : {"x", "y", "z"}
+        World up of a mesh (a scene has its own).
+    quantize : bool
+        Send the 32-byte quantized records (default) or float32.
+    look : Look, optional
+        Light, ambient, background (default: the scene's).
     """
 
     _esm = traitlets.Unicode(_esm()).tag(sync=True)
     config = traitlets.Dict().tag(sync=True)
     mesh_glb = traitlets.Bytes().tag(sync=True)
     params_adp = traitlets.Bytes().tag(sync=True)
+    #: every layer's GLB and .adp by file name (a scene of several layers); empty for one mesh
+    files = traitlets.Dict().tag(sync=True)
     _sources = traitlets.Dict().tag(sync=True)
     status = traitlets.Dict().tag(sync=True)
 
-    def __init__(self, mesh, params, *, size=(640, 480), up: str = "y", quantize: bool = True, **kwargs):
-
-        self._mesh = mesh if isinstance(mesh, BaseMesh) else load_mesh(mesh)
-        self._quantize = bool(quantize)
-        scene = build_scene(self._mesh, params, size=size, up=up, quantize=quantize, all_shaders=True)
+    def __init__(self, scene, params=None, *, size=(640, 480), up: str = "y", quantize: bool = True, look=None,
+                 **kwargs):
         sources = {key: vendor_file(rel).decode("utf-8") for key, rel in VENDOR_FILES.items()}
         sources["app"] = page_source("app.js")
-        super().__init__(config=scene.config, mesh_glb=scene.glb, params_adp=scene.adp, _sources=sources,
+        self._quantize = bool(quantize)
+        if params is None and is_scene_file(scene):
+            scene = load_scene(scene)
+        if isinstance(scene, Scene):
+            if params is not None:
+                raise AxialDeformError("params: a Scene carries its own instances; expected no params beside it")
+            self._mesh = None  # several layers: set_params has no one mesh to act on
+            web = build_scene_file(scene, size=size, quantize=quantize, look=look)
+            first = web.config["layers"][0]
+            super().__init__(config=web.config, mesh_glb=web.files[first["mesh"]["file"]],
+                             params_adp=web.files[first["params_file"]], files=dict(web.files), _sources=sources,
+                             status={}, **kwargs)
+            return
+        if params is None:
+            raise AxialDeformError("params: expected the instances ((n, 16) float32) beside a mesh, or a scene")
+        self._mesh = scene if isinstance(scene, BaseMesh) else load_mesh(scene)
+        web = build_scene(self._mesh, params, size=size, up=up, quantize=quantize, all_shaders=True, look=look)
+        super().__init__(config=web.config, mesh_glb=web.glb, params_adp=web.adp, files={}, _sources=sources,
                          status={}, **kwargs)
 
     def set_params(self, params) -> None:
-        """Draw ``params`` ((m, 16) float32, any count) instead; the camera stays."""
+        """Draw ``params`` ((m, 16) float32, any count) instead; the camera stays.
+        (A widget of one mesh; a scene's layers are its file's.)"""
+        if self._mesh is None:
+            raise AxialDeformError("set_params: this widget shows a scene of several layers; expected a widget of "
+                                   "one mesh (SceneWidget(mesh, params))")
         params = as_params(params)
         axis = self._mesh.axis
         adp = encode_binary(params, axis=axis, mesh_fingerprint=self._mesh.fingerprint, quantize=self._quantize)

@@ -36,6 +36,7 @@ from ..core.io.gltf import encode_base_mesh
 from ..core.io.params import encode_binary
 from ..core.look import DEFAULT_LOOK
 from ..core.params import as_params
+from ..core.scene import Scene
 
 __all__ = ["THREE_VERSION", "WebScene", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es", "write_folder", "single_file_html",
            "make_server", "scene_bytes", "embedded_file",
@@ -271,12 +272,15 @@ def _shaders(layers, all_shaders: bool) -> dict:
 
 def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "solid", quantize: bool = True,
                 title: str | None = None, adp: bytes | None = None, all_shaders: bool = False,
-                fixed_size: bool = True, wind=None, time: float | None = None) -> WebScene:
+                fixed_size: bool = True, wind=None, time: float | None = None, look=None) -> WebScene:
     """The page's data for ``mesh`` and ``params`` ((n, 16) float32).
 
-    The camera is :func:`axialdeform.gl.camera.frame_instances` for the canvas
-    ``size`` (width, height) -- the camera of ``axialdeform render`` at that
-    size.  ``fixed_size`` keeps the canvas at ``size``; else it fills the
+    The camera is :func:`axialdeform.gl.scene.scene_camera` of
+    :meth:`Scene.single` for the canvas ``size`` (width, height) -- the
+    camera of ``axialdeform render`` at that size; ``look`` (an
+    :class:`axialdeform.Look`, default the default look) reaches the page as
+    JSON (light, ambient, background, line colour; the page draws no ground
+    or shadow).  ``fixed_size`` keeps the canvas at ``size``; else it fills the
     window.  ``adp`` (bytes of a parameter file) is written as given instead of
     encoding ``params`` (tests use it to ship a corrupt file).  The config
     carries the shader build for these parameters (16 or 19 numbers, float32
@@ -285,29 +289,31 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
     (:class:`axialdeform.Wind`) sways the instances; ``time`` freezes its
     clock at that many seconds (else it runs; ``?t=`` on the page overrides).
     """
-    from ..gl.camera import frame_instances
+    from ..gl.scene import scene_camera  # the GL layer (pyrr) only when a page is built
 
     w, h = _check_view(size, up, mode)
     params = as_params(params)
+    cam = scene_camera(Scene.single(mesh, params, up=up, wind=wind), w / h)
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
                    quantize=quantize, adp=adp, wind=wind is not None)
     config = _config(title=title or f"{len(params)} × {mesh.name}", layers=[layer], size=(w, h),
-                     fixed_size=fixed_size, mode=mode, cam=frame_instances(mesh, params, w / h, up=up),
-                     look=DEFAULT_LOOK, up=up, wind=wind,
+                     fixed_size=fixed_size, mode=mode, cam=cam, look=look or DEFAULT_LOOK, up=up, wind=wind,
                      shaders=_shaders([layer], all_shaders), time=_time(wind, time))
     return WebScene(config, files)
 
 
 def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: bool = True,
-                     fixed_size: bool = True, wind=None, time: float | None = None) -> WebScene:
+                     fixed_size: bool = True, wind=None, time: float | None = None, look=None) -> WebScene:
     """The page's data for a loaded scene file (:func:`axialdeform.core.scene.load_scene`):
     every layer (its base mesh and parameters: one instanced draw per part),
     the terrain (one undeformed instance of itself, float32), the scene's
     camera (:func:`axialdeform.gl.scene.scene_camera` at this ``size``),
     background, light and wind (``wind`` replaces the scene's; ``time``
-    freezes its clock), as ``axialdeform render SCENE [--time T]`` draws them."""
-    from ..gl.scene import TERRAIN_INSTANCE, scene_camera
+    freezes its clock; ``look`` replaces :attr:`Scene.look`), as
+    ``axialdeform render SCENE [--time T]`` draws them."""
+
+    from ..gl.scene import TERRAIN_INSTANCE, scene_camera  # the GL layer (pyrr) only when a page is built
 
     w, h = _check_view(size, scene.up, mode)
     wind = scene.wind if wind is None else wind
@@ -328,7 +334,7 @@ def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: b
 
     cam = scene_camera(replace(scene, wind=wind), w / h)
     config = _config(title=Path(scene.path).stem, layers=layers, size=(w, h), fixed_size=fixed_size, mode=mode,
-                     cam=cam, look=scene.look, up=scene.up, wind=wind,
+                     cam=cam, look=look or scene.look, up=scene.up, wind=wind,
                      shaders=_shaders(layers, False), time=_time(wind, time))
     return WebScene(config, files)
 

@@ -32,8 +32,11 @@ export default {
     const ownKeys = (e) => e.target.setAttribute('data-lm-suppress-shortcuts', 'true');
     el.addEventListener('focusin', ownKeys);
     const report = (status) => { model.set('status', status); model.save_changes(); };
-    const view = app.mount(el, lib, { config: model.get('config'), glb: bytesOf(model.get('mesh_glb')),
-      adp: bytesOf(model.get('params_adp')) });
+    // a scene of several layers brings every file by name; one mesh, its GLB and .adp
+    const files = model.get('files') || {};
+    const view = app.mount(el, lib, Object.keys(files).length
+      ? { config: model.get('config'), files: Object.fromEntries(Object.entries(files).map(([k, v]) => [k, bytesOf(v)])) }
+      : { config: model.get('config'), glb: bytesOf(model.get('mesh_glb')), adp: bytesOf(model.get('params_adp')) });
     view.ready.then((r) => report({ ready: true, instances: r.instances }),
       (e) => report({ ready: false, error: e.message }));
     const onParams = () => view.setParams(bytesOf(model.get('params_adp')), 'parameters')

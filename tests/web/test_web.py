@@ -295,7 +295,8 @@ def _widget_page(browser, tmp_path, state: dict, esm: str):
 const state = JSON.parse(document.getElementById('state').textContent);
 const dv = (b64) => { const s = atob(b64); const a = new Uint8Array(s.length);
   for (let i = 0; i < s.length; i++) a[i] = s.charCodeAt(i); return new DataView(a.buffer); };
-const data = {}; for (const [k, v] of Object.entries(state)) data[k] = v && v.b64 !== undefined ? dv(v.b64) : v;
+const data = {}; for (const [k, v] of Object.entries(state)) data[k] = v && v.b64 !== undefined ? dv(v.b64)
+  : k === 'files' ? Object.fromEntries(Object.entries(v).map(([n, x]) => [n, dv(x.b64)])) : v;
 const listeners = {};
 const model = { get: (k) => data[k], set: (k, v) => { data[k] = v; (listeners['change:' + k] || []).forEach((f) => f()); },
   on: (e, f) => { (listeners[e] = listeners[e] || []).push(f); }, off: (e, f) => { listeners[e] = (listeners[e] || []).filter((g) => g !== f); },
@@ -351,6 +352,37 @@ def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
         assert page.locator(".axd-message").is_visible()
         page.evaluate("window.cleanup()")
         assert page.locator("canvas").count() == 0
+        assert errors == []
+    finally:
+        page.close()
+
+
+@pytest.mark.slow
+def test_widget_takes_a_scene_file(browser, tmp_path):
+    """SceneWidget(SCENE.toml): every layer and the terrain, drawn as the page of the same file draws them."""
+    from axialdeform.widget import SceneWidget
+
+    scene = ad.Scene.load(ROOT / "examples" / "landscape" / "landscape.toml")
+    for layer in scene.layers:  # a lighter scene, the same layers
+        layer.params = layer.params[:200]
+    w = SceneWidget(scene, size=SIZE)
+    assert [layer["name"] for layer in w.config["layers"]][0] == "terrain" and len(w.files) == 2 * len(w.config["layers"])
+    with pytest.raises(ad.AxialDeformError, match="several layers"):
+        w.set_params(scene.layers[0].params)
+    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
+    state = {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
+    state["files"] = {n: {"b64": base64.b64encode(b).decode()} for n, b in w.files.items()}
+    page, errors = _widget_page(browser, tmp_path, state, w._esm)
+    try:
+        status = page.evaluate("window.widgetStatus")
+        assert status == {"ready": True, "instances": scene.count}, status
+        from io import BytesIO
+
+        from PIL import Image
+
+        shot = np.asarray(Image.open(BytesIO(page.screenshot(clip=page.locator(".axd-stage").bounding_box())))
+                          .convert("RGB"))
+        assert _mask(shot, scene.background).mean() > 0.2  # the terrain and layers fill the picture
         assert errors == []
     finally:
         page.close()
