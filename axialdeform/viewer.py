@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import moderngl_window as mglw
@@ -41,6 +42,7 @@ from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamErr
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
 from .core.params import as_params
+from .core.scene import Scene
 from .core.variation import random_params
 from .core.wind import Wind
 from .gl.camera import UP_VECTORS, OrbitCamera
@@ -344,13 +346,15 @@ class Viewer:
     """Builds and runs the viewer window (see the module docstring)."""
 
     @staticmethod
-    def create(mesh, params, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int | None = None,
+    def create(scene, params=None, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int | None = None,
                bend: float = 0.08, mode: str = "solid", up: str = "y", look=None,
                on_screenshot=None, parts=None, wind=None, extra=None, culling: bool = True,
                lod: bool | None = None, lod_error: float = 1.0, **old_keywords):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
-        mesh : BaseMesh; params : (n, 16) the instances; animate : optional
+        scene : a :class:`axialdeform.Scene` (its first layer is the viewer's own:
+        N, UP/DOWN and V act on every layer; the terrain and the other layers are
+        drawn too; its look, up and wind), or a BaseMesh with params : (n, 16) the instances; animate : optional
         ``f(t_seconds) -> (n, 16)`` called every frame; tint : optional (n, 3)
         linear RGB per instance; seed : the seed ``params`` were made with,
         shown in the title (None: not known, e.g. read from a file; ``N`` then
@@ -371,6 +375,21 @@ class Viewer:
         unless the mesh has parts or appearance).
         """
 
+        mesh = scene
+        if isinstance(scene, Scene):  # the first layer is the viewer's own; the others and the terrain are drawn too
+            if params is not None:
+                raise ArgumentError("params: a Scene carries its own instances; expected no params beside it")
+            if not scene.layers:
+                raise AxialDeformError(f"{scene.path}: the scene has no layer; expected at least one [[layer]]")
+            first = scene.layers[0]
+            mesh, params, up = first.mesh, first.params, scene.up
+            wind = wind if wind is not None else (scene.wind if first.wind else None)
+            if wind is not None:
+                scene.wind = wind
+            extra = replace(scene, layers=scene.layers[1:])
+            look = scene.look.replace(ground=scene.terrain is None) if look is None else look
+        elif params is None:
+            raise ArgumentError("params: expected the instances ((n, 16) float32) beside a mesh, or a Scene")
         look = look_from_keywords(look, old_keywords, "Viewer.create")
 
         mglw = _window_config_base()

@@ -5,7 +5,6 @@ calls :func:`scene_of` first and hands a scene to the matching function here."""
 from __future__ import annotations
 
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 from ..core.errors import ArgumentError, AxialDeformError, ParamError
@@ -17,7 +16,7 @@ from ..core.scene import is_scene_file, load_scene
 from ..gl.bake import bake_pieces
 from ._common import check_triangles as check
 
-__all__ = ["scene_of", "render", "bake", "export", "viewer_inputs"]
+__all__ = ["scene_of", "render", "bake", "export"]
 
 
 def scene_of(args, *, params_optional: bool = False):
@@ -117,19 +116,6 @@ def export(scene, args) -> None:
     path = export_scene(args.output, scene, args.layout)
     print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, {args.layout}, "
           f"{path.stat().st_size} bytes)")
-
-
-def viewer_inputs(scene, wind=None):
-    """``(mesh, params, wind, extra)`` for the viewer: the first layer is the
-    viewer's own; the other layers and the terrain are drawn with it (N,
-    UP/DOWN and V act on every layer: the viewer's ``layers``)."""
-
-    if not scene.layers:
-        raise AxialDeformError(f"{scene.path}: the scene has no layer; expected at least one [[layer]]")
-    first = scene.layers[0]
-    if wind is not None:
-        scene.wind = wind
-    return first.mesh, first.params, (scene.wind if first.wind else None), replace(scene, layers=scene.layers[1:])
 
 
 if __name__ == "__main__":  # pragma: no cover

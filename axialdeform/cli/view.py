@@ -77,8 +77,7 @@ def run(args) -> None:
     scene = scenes.scene_of(args, params_optional=True)
     if scene is not None:
         scenes.check_triangles(scene, args, args.mode, args.fast, frames)  # the mode it starts in; LOD: level 0
-        mesh, params, wind, extra = scenes.viewer_inputs(scene, wind)
-        seed = args.seed
+        mesh, params, seed = scene, None, args.seed
         args.up, args.no_ground = scene.up, True
     elif args.params:
         mesh = load_mesh(args.mesh)
@@ -95,7 +94,7 @@ def run(args) -> None:
         seed = 0 if args.seed is None else args.seed
         params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed,
-                           bend=args.bend, mode=args.mode, up=args.up, look=Look(ground=not args.no_ground, fast=args.fast),
+                           bend=args.bend, mode=args.mode, up=args.up, look=(scene.look if scene is not None else Look()).replace(ground=not args.no_ground, fast=args.fast),
                            on_screenshot=lambda path: print(f"wrote {path}"), wind=wind, extra=extra,
                            parts=args.part, **options)
     if not args.headless:

@@ -271,12 +271,10 @@ def test_export_a_scene_instanced(small, tmp_path, capsys, validate):  # noqa: F
 @pytest.mark.slow
 def test_viewer_keys_act_on_every_layer_of_a_scene(small):
     """N (new shapes), UP/DOWN (bend) and V (wind) reach every layer, not only the first."""
-    from axialdeform.cli.scenes import viewer_inputs
     from axialdeform.viewer import Viewer
 
-    scene = load_scene(small)
-    mesh, params, wind, extra = viewer_inputs(scene)
-    v = Viewer.create(mesh, params, headless=True, size=(96, 72), wind=wind, extra=extra, seed=4, look=ad.Look(fast=True))  # N: seed 5 (the file: 1)
+    scene = ad.Scene.load(small)
+    v = Viewer.create(scene, headless=True, size=(96, 72), seed=4, look=ad.Look(fast=True))  # N: seed 5 (the file: 1)
     try:
         (leaves, renderer, base), = v.layers
         assert leaves.name == "leaves" and "12 instances + 40 in 1 more layer" in v.status()
