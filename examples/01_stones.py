@@ -35,7 +35,7 @@ def river_bank(mesh, count, seed):
     x = (k % cols - (cols - 1) / 2) * spacing + rng.uniform(-0.3, 0.3, count) * spacing
     z = (k // cols) * spacing + rng.uniform(-0.3, 0.3, count) * spacing
     y = rng.uniform(0.0, 0.12, count)                  # resting on the ground, some sunk deeper
-    params[:, 10:13] = np.stack([x, y, -z], axis=1)  # px py pz
+    params.position = np.stack([x, y, -z], axis=1)  # px py pz: a named view of the record
     return params
 
 
@@ -49,7 +49,7 @@ def stone_colours(count, seed):
 
 def camera(params):
     """Standing at the water's edge, looking up the bank."""
-    xyz = params[:, 10:13]
+    xyz = params.position
     depth = -xyz[:, 2].min()
     eye = (0.0, 0.3 * depth + 3.0, 0.1 * depth + 2.0)
     target = (0.0, 0.0, -0.45 * depth)

@@ -54,23 +54,22 @@ class FallingLeaves:
         n = self.count
         f = self.freq * t + self.phase[:, 0]
         flutter = self.flutter * t + self.phase[:, 1]
-        params = np.zeros((n, 16), dtype=np.float64)
+        params = ad.Instances.zeros(n)  # (n, 16) float32 with named views: offsets, position, rotation
         # offsets: u (across the leaf) sways as a travelling wave, v (out of
         # the leaf's plane) curls and uncurls with the flutter
         u = 0.05 * np.sin(flutter[:, None] - 2.0 * T[None, :])
         u -= u.mean(axis=1, keepdims=True)
         v = (self.curl + 0.6 * np.sin(flutter))[:, None] * CURL[None, :]
-        params[:, 0:10] = np.stack([u, v], axis=2).reshape(n, 10)
+        params.offsets = np.stack([u, v], axis=2)  # (n, 5, 2): (u, v) of each control point
         # position: fall (wrapping to the top), drift in x and z
         y = self.floor + np.mod(self.start[:, 1] - self.speed * t, self.size)
         x = self.start[:, 0] + self.sway[:, 0] * np.sin(f)
         z = self.start[:, 2] + self.sway[:, 0] * np.cos(0.7 * f + self.phase[:, 2])
-        params[:, 10:13] = np.stack([x, y, z], axis=1)
+        params.position = np.stack([x, y, z], axis=1)
         # orientation: lying roughly flat (rx ~ 90 deg), rocking with the sway
-        params[:, 13] = np.pi / 2 + 0.5 * np.sin(f + 0.5)
-        params[:, 14] = self.yaw + self.spin * t
-        params[:, 15] = 0.45 * np.cos(f) + 0.15 * np.sin(flutter)
-        return params.astype(np.float32)
+        params.rotation = np.stack([np.pi / 2 + 0.5 * np.sin(f + 0.5), self.yaw + self.spin * t,
+                                    0.45 * np.cos(f) + 0.15 * np.sin(flutter)], axis=1)
+        return params
 
     def colours(self, seed=1):
         """(count, 3) linear RGB: autumn greens, yellows, oranges and reds."""

@@ -36,20 +36,20 @@ class Falling:
         rng = np.random.default_rng(seed)
         n = len(layer.params)
         self.start = layer.params.astype(np.float64)
-        self.ground = self.start[:, 10 + up] - layer.lift  # where the scatter put them on the terrain
+        self.ground = ad.Instances.of(self.start).position[:, up] - layer.lift  # where the scatter put them
         self.speed = rng.uniform(0.8, 1.5, n)
         self.spin = rng.uniform(-1.5, 1.5, (n, 3))
         self.phase = rng.uniform(0, 2 * np.pi, n)
         self.up = up
 
     def at(self, t: float) -> np.ndarray:
-        p = self.start.copy()
-        fallen = np.minimum(self.speed * t, self.start[:, 10 + self.up] - self.ground)
-        p[:, 10 + self.up] -= fallen
-        landed = (self.start[:, 10 + self.up] - fallen) <= self.ground + 1e-6
+        p = ad.Instances.of(self.start).copy()  # named views of the record: position, rotation, ...
+        fallen = np.minimum(self.speed * t, p.position[:, self.up] - self.ground)
+        p.position[:, self.up] -= fallen
+        landed = (p.position[:, self.up]) <= self.ground + 1e-6
         drift = 0.4 * np.sin(1.3 * t + self.phase) * ~landed
-        p[:, 10] += drift
-        p[:, 13:16] += self.spin * np.where(landed, fallen / self.speed, t)[:, None]
+        p.position[:, 0] += drift
+        p.rotation += self.spin * np.where(landed, fallen / self.speed, t)[:, None]
         return p.astype(np.float32)
 
 

@@ -61,7 +61,7 @@ def record(folder: Path) -> None:
 
 def compare(old: Path, new: Path) -> int:
     worst = 0.0
-    for a in sorted(old.rglob("*.png")):
+    for a in sorted([*old.rglob("*.png"), *old.rglob("*.gif")]):
         if "_work" in a.parts:
             continue
         b = new / a.relative_to(old)

@@ -226,6 +226,20 @@ class Instances(np.ndarray):
     ``scale``, ``twist`` and ``taper`` ``(n,)`` (extended instances only).
     """
 
+    @classmethod
+    def zeros(cls, count: int, *, extended: bool = False) -> "Instances":
+        """``count`` instances of zeros: ``(count, 16)`` float32 (``(count, 19)``
+        extended, with ``s = 1``: the undeformed shape), to fill through the views."""
+        out = np.zeros((int(count), EXTENDED_WIDTH if extended else WIDTH), dtype=np.float32).view(cls)
+        if extended:
+            out[:, SCALE] = 1.0
+        return out
+
+    @classmethod
+    def of(cls, values) -> "Instances":
+        """``values`` ((n, 16|19) float32) as :class:`Instances`, without a copy."""
+        return np.asarray(values).view(cls)
+
     def __getattr__(self, name):
         f = _BY_NAME.get(name)
         if f is None:
