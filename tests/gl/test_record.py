@@ -95,3 +95,14 @@ def test_the_page_and_gltf_receive_the_table(stone):
     assert config["record"] == R.page_record()
     assert config["record"]["16"]["float"] == [["i_d12", 4, 0], ["i_d34", 4, 4], ["i_d5", 2, 8],
                                                ["i_position", 3, 10], ["i_angles", 3, 13]]
+
+
+def test_instances_zeros_and_of():
+    z = R.Instances.zeros(3)
+    assert z.shape == (3, 16) and z.dtype == np.float32 and not z.any()
+    e = R.Instances.zeros(2, extended=True)
+    assert e.shape == (2, 19) and np.all(e.scale == 1.0) and not e.twist.any()
+    raw = np.arange(32, dtype=np.float32).reshape(2, 16)
+    v = R.Instances.of(raw)
+    v.position[:] = 0.0
+    assert not raw[:, 10:13].any()  # a view: no copy
