@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 from .errors import ArgumentError
 
-__all__ = ["Look", "DEFAULT_LOOK", "LIGHT_DIR", "BACKGROUND", "AMBIENT", "LINE_COLOR"]
+__all__ = ["Look", "DEFAULT_LOOK", "LIGHT_DIR", "LIGHT_COLOR", "SKY_COLOR", "GROUND_COLOR", "BACKGROUND", "AMBIENT",
+           "LINE_COLOR"]
 
 #: unit-less direction towards the key light (world space; normalised where used)
 LIGHT_DIR = (0.35, 0.85, 0.4)
@@ -24,6 +25,11 @@ BACKGROUND = (0.93, 0.94, 0.96)
 AMBIENT = 0.35
 #: the colour of wireframe lines (linear RGB)
 LINE_COLOR = (0.12, 0.14, 0.18)
+#: the key light's colour (linear RGB): a warm sun
+LIGHT_COLOR = (1.0, 0.96, 0.88)
+#: the hemisphere ambient: the sky above (cool) and the bounce from the ground below (warm), linear RGB
+SKY_COLOR = (0.80, 0.88, 1.05)
+GROUND_COLOR = (0.50, 0.44, 0.38)
 _HIDDEN_LINE = ("fill", True, False)
 
 
@@ -35,8 +41,13 @@ class Look:
     ----------
     light_dir : (3,) float
         Direction towards the key light, world space (normalised where used).
+    light_color : (3,) float
+        The key light's colour (linear RGB).
     ambient : float
         Share of the sky/ground hemisphere ambient light, 0 .. 1.
+    sky_color, ground_color : (3,) float
+        The hemisphere ambient: from the sky above and bounced from the
+        ground below (linear RGB).
     background : (3,) float
         The clear colour (sRGB, 0 .. 1); the ground plane fades into it.
     line_color : (3,) float
@@ -62,7 +73,10 @@ class Look:
     """
 
     light_dir: tuple = LIGHT_DIR
+    light_color: tuple = LIGHT_COLOR
     ambient: float = AMBIENT
+    sky_color: tuple = SKY_COLOR
+    ground_color: tuple = GROUND_COLOR
     background: tuple = BACKGROUND
     line_color: tuple = LINE_COLOR
     ground: bool = True
@@ -73,7 +87,7 @@ class Look:
 
     def __post_init__(self) -> None:
 
-        for name in ("light_dir", "background", "line_color"):
+        for name in ("light_dir", "light_color", "sky_color", "ground_color", "background", "line_color"):
             value = getattr(self, name)
             try:
                 vec = tuple(float(x) for x in value)
@@ -118,7 +132,9 @@ class Look:
 
     def to_json(self) -> dict:
         """The look as the web page receives it (its config's ``"look"``)."""
-        return {"light_dir": list(self.light_dir), "ambient": self.ambient, "background": list(self.background),
+        return {"light_dir": list(self.light_dir), "light_color": list(self.light_color), "ambient": self.ambient,
+                "sky_color": list(self.sky_color), "ground_color": list(self.ground_color),
+                "background": list(self.background),
                 "line_color": list(self.line_color), "ground": self.draws_ground, "shadow": self.draws_shadow,
                 "samples": self.msaa, "hidden_line": self.wire_style}
 

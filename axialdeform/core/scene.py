@@ -20,9 +20,12 @@ on Python 3.10).
     eye = [0, 20, 40]              # with target: an explicit camera
     target = [0, 0, 0]
 
-    [light]
+    [light]                        # axialdeform.Look's light (every key optional)
     direction = [0.35, 0.85, 0.4]
     ambient = 0.35
+    color = [1.0, 0.96, 0.88]      # the sun (linear RGB)
+    sky = [0.80, 0.88, 1.05]       # the hemisphere ambient from above ...
+    ground = [0.50, 0.44, 0.38]    # ... and bounced from below
 
     [wind]                         # axialdeform.core.wind.Wind; layers with wind = true sway in it
     direction = [1, 0, 0]
@@ -112,7 +115,9 @@ class Scene:
     camera : dict
         ``elevation``, ``azimuth``, ``fov`` or ``eye`` + ``target`` (scene files).
     light : dict
-        ``light_dir``, ``ambient`` (scene files' ``[light]``).
+        ``light_dir``, ``ambient``, ``light_color``, ``sky_color``,
+        ``ground_color`` (scene files' ``[light]``); with ``background``,
+        :attr:`look`.
     wind : Wind or None
         What layers with ``wind = True`` sway in.
     background : (3,) float

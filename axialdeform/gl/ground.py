@@ -133,6 +133,7 @@ class GroundPlane:
             "u_center": tuple(self.center), "u_axis_u": tuple(axis_u), "u_axis_v": tuple(axis_v),
             "u_radius": self.radius, "u_color": self.color, "u_background": tuple(background[:3]),
             "u_light_dir": tuple(light / max(np.linalg.norm(light), 1e-12)), "u_up": tuple(self.up_vector),
+            "u_light_color": look.light_color, "u_sky_color": look.sky_color, "u_bounce_color": look.ground_color,
             "u_ambient": float(ambient), "u_cell": self.cell,
         })
         self.ctx.enable(moderngl.DEPTH_TEST)

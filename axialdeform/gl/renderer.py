@@ -376,6 +376,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
             "u_color": tuple(self.color),
             "u_line_color": tuple(look.line_color),
             "u_light_dir": tuple(_unit(light_dir, "light_dir")),
+            "u_light_color": look.light_color, "u_sky_color": look.sky_color, "u_bounce_color": look.ground_color,
             "u_up": tuple(_unit(self.up, "up")),
             "u_ambient": float(ambient),
         })

@@ -202,7 +202,9 @@ export function mount(root, lib, scene, options = {}) {
   const shared = {
     u_view: { value: null }, u_proj: { value: null }, u_eye: { value: new THREE.Vector3() },
     u_mode: { value: state.wireframe ? 2 : baseMode }, u_line_color: { value: v3(cfg.look.line_color) },
-    u_line_alpha: { value: 1.0 }, u_light_dir: { value: v3(cfg.look.light_dir) }, u_up: { value: v3(cfg.up) },
+    u_line_alpha: { value: 1.0 }, u_light_dir: { value: v3(cfg.look.light_dir) },
+    u_light_color: { value: v3(cfg.look.light_color) }, u_sky_color: { value: v3(cfg.look.sky_color) },
+    u_bounce_color: { value: v3(cfg.look.ground_color) }, u_up: { value: v3(cfg.up) },
     u_ambient: { value: cfg.look.ambient }, u_instance_base: { value: 0 },
     u_wind_dir: { value: v3(wind ? wind.direction : [1, 0, 0]) }, u_wind_gust: { value: wind ? wind.gustiness : 0 },
     u_wind_cycles: { value: new THREE.Vector2() }, u_wind_wavenumber: { value: wind ? wind.wavenumber : 0 },

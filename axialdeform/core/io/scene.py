@@ -33,7 +33,7 @@ _TERRAIN = {"mesh", "heightmap", "height_scale", "extent", "color"}
 _CAMERA = {"elevation", "azimuth", "fov", "eye", "target"}
 
 
-_LIGHT = {"direction", "ambient"}
+_LIGHT = {"direction", "ambient", "color", "sky", "ground"}
 
 
 _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
@@ -191,6 +191,9 @@ def _read_view(src, data, scene) -> None:
         lo["light_dir"] = tuple(_numbers(src, light["direction"], "direction", "light", 0, (3,)))
     if "ambient" in light:
         lo["ambient"] = _numbers(src, light["ambient"], "ambient", "light", 0, (1,))[0]
+    for key, field in (("color", "light_color"), ("sky", "sky_color"), ("ground", "ground_color")):
+        if key in light:  # the fields of axialdeform.Look
+            lo[field] = tuple(_numbers(src, light[key], key, "light", 0, (3,)))
     scene.light = lo
 
 
