@@ -15,6 +15,27 @@ ROOT = Path(__file__).resolve().parent.parent
 SHARED = ROOT.parent / "shared" / "data" / "meshes"
 
 
+#: the Khronos conformance model for alpha modes (9 textured parts)
+ALPHA_TEST = "assets/AlphaBlendModeTest.glb"
+#: the Khronos glTF validator (npm ci --prefix tests/gltf-validator)
+VALIDATOR = ROOT / "tests" / "gltf-validator"
+
+
+def validate_gltf(*paths) -> list:
+    """The Khronos validator's JSON report of each file; no node or validator is a failure."""
+    import json
+    import shutil
+    import subprocess
+
+    node = shutil.which("node")
+    if node is None or not (VALIDATOR / "node_modules" / "gltf-validator").exists():
+        pytest.fail("node and the Khronos validator are needed (npm ci --prefix tests/gltf-validator)")
+    out = subprocess.run([node, str(VALIDATOR / "validate.js"), *map(str, paths)], capture_output=True, text=True,
+                         check=True, timeout=300).stdout
+    reports = json.loads(out)
+    return reports if isinstance(reports, list) else [reports]
+
+
 def shared_mesh(rel: str) -> Path:
     """A mesh from ../shared/data/meshes; missing shared data is a failure, not a skip."""
     path = SHARED / rel

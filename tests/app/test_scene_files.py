@@ -112,7 +112,7 @@ def test_missing_layer_file_names_file_line_and_key(tmp_path):
 
         params = "nowhere.adp"
         """)
-    assert f"scene.toml:5: key 'params'" in msg and "nowhere.adp" in msg and "no such file" in msg
+    assert "scene.toml:5: key 'params'" in msg and "nowhere.adp" in msg and "no such file" in msg
 
 
 def test_include_cycle_names_file_line_and_key(tmp_path):

@@ -4,7 +4,6 @@ from the file to the picture to glTF/OBJ and back."""
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 import sys
 import warnings
@@ -19,21 +18,8 @@ from axialdeform.core.deform import deform_tangents
 from axialdeform.core.errors import ContextError, MeshError
 from axialdeform.core.material import AssetWarning, compute_tangents
 
-from conftest import shared_mesh
-
-ALPHA_TEST = "assets/AlphaBlendModeTest.glb"
-VALIDATOR = Path(__file__).resolve().parents[1] / "gltf-validator"
-
-
-def _validate(*paths):
-    node = shutil.which("node")
-    if node is None or not (VALIDATOR / "node_modules" / "gltf-validator").exists():
-        pytest.fail("node and the Khronos validator are needed (npm ci --prefix tests/gltf-validator)")
-    out = subprocess.run([node, str(VALIDATOR / "validate.js"), *map(str, paths)], capture_output=True, text=True,
-                         check=True, timeout=120).stdout
-    reports = json.loads(out)
-    return reports if isinstance(reports, list) else [reports]
-
+from conftest import ALPHA_TEST, shared_mesh
+from conftest import validate_gltf as _validate
 
 def _textured_card(folder: Path, *, mtl="card.mtl", texture="tex.png", cut=True) -> Path:
     """A 1 x 2 card with UVs and an .mtl/.png: the texture's left half is red, the right

@@ -9,7 +9,7 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core import bake as bake_mod
-from axialdeform.core import fit, mesh
+from axialdeform.core import fit
 from axialdeform.core.io import bake as bake_io
 from axialdeform.core.io import gltf as export
 from axialdeform.core.io import mesh as mesh_io

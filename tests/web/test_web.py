@@ -522,7 +522,6 @@ def scene_pages(tmp_path_factory):
     """Two scene files (a windy one without terrain; a landscape with terrain,
     textured leaf cards and stones), each exported as a folder and one file,
     and render's pictures of them."""
-    from PIL import Image
 
     base = tmp_path_factory.mktemp("scenes") / "scène files"
     base.mkdir()
@@ -591,13 +590,11 @@ seed = 5
                                capture_output=True, text=True)
             assert r.returncode == 0 and "2 layers" in r.stdout, r.stderr
     renders = {}
-    for key, args in (("windy 1.5", ["windy", "--time", "1.5"]), ("windy 0", ["windy", "--time", "0"]),
-                      ("land", ["land"])):
-        png = base / f"{key}.png"
-        r = subprocess.run(cmd + ["render", str(base / f"{args[0]}.toml"), "-o", str(png), "--size", size, *args[1:]],
-                           capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
-        renders[key] = np.asarray(Image.open(png).convert("RGB"))
+    for key, name, t in (("windy 1.5", "windy", 1.5), ("windy 0", "windy", 0.0), ("land", "land", None)):
+        # render's picture of the scene file, with the scene's look less what the page does not
+        # draw (a ground plane under a scene without terrain, shadows)
+        scene = ad.Scene.load(base / f"{name}.toml")
+        renders[key] = ad.render_image(scene, size=SIZE, time=t, look=scene.look.replace(ground=False, shadow=False))
     server, _ = make_server(base, 0)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
@@ -678,7 +675,8 @@ def test_base_mesh_glb_carries_the_material(tmp_path):
     stone = pygltflib.GLTF2().load_from_bytes(encode_base_mesh(ad.load_mesh("stone")))
     assert stone.materials == [] and stone.meshes[0].primitives[0].material is None  # plain: no material
     from conftest import shared_mesh
-    from test_assets import ALPHA_TEST, _validate
+    from conftest import ALPHA_TEST
+    from conftest import validate_gltf as _validate
 
     parts = ad.load_mesh(shared_mesh(ALPHA_TEST))
     (tmp_path / "parts.glb").write_bytes(encode_base_mesh(parts))
