@@ -80,7 +80,7 @@ class CountingContext:
 
 WRITER = r"""
 import sys, numpy as np
-from axialdeform.core.params import write_params
+from axialdeform.core.io.params import write_params
 path, n = sys.argv[1], int(sys.argv[2])
 base = np.arange(n * 16, dtype=np.float32).reshape(n, 16) % 1000
 k = int(sys.argv[3])
