@@ -186,7 +186,7 @@ def test_reader_refuses_other_files(scenes, tmp_path):
     junk.write_bytes(b"not a glb at all")
     with pytest.raises(export.GltfError, match="not a binary glTF"):
         export.read_instanced_glb(junk)
-    with pytest.raises(export.GltfError, match="no such file"):
+    with pytest.raises(export.GltfError, match="missing.glb: no such binary glTF file"):
         export.read_instanced_glb(tmp_path / "missing.glb")
 
 
@@ -257,3 +257,20 @@ def test_extended_instances_export_scale_and_twist_taper(tmp_path, validate):
     # 16-number instances keep the old layout: no SCALE
     plain = export.export_instanced(tmp_path / "plain.glb", mesh, params[:, :16])
     assert "SCALE" not in pygltflib.GLTF2.load_binary(str(plain)).nodes[0].extensions[export.INSTANCING]["attributes"]
+
+
+def test_instanced_glb_readers_use_the_bounded_reader(tmp_path):
+    """read_instanced_glb and read_extras read through core.io.safeio: a FIFO is refused
+    (never opened for a blocking read), a missing file is named, garbage is a GltfError."""
+    import os
+
+    fifo = tmp_path / "pipe.glb"
+    os.mkfifo(fifo)
+    for reader in (export.read_instanced_glb, export.read_extras):
+        with pytest.raises(ad.core.GltfError, match="pipe.glb: not a regular file"):
+            reader(fifo)
+        with pytest.raises(ad.core.GltfError, match="gone.glb: no such binary glTF file"):
+            reader(tmp_path / "gone.glb")
+    (tmp_path / "junk.glb").write_bytes(b"glTF" + b"\0" * 40)
+    with pytest.raises(ad.core.GltfError, match="junk.glb: not a binary glTF file"):
+        export.read_extras(tmp_path / "junk.glb")

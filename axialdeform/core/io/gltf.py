@@ -64,6 +64,7 @@ from ..transforms import (
     quaternions_from_angles,
 )
 from .atomic import atomic_write_bytes
+from . import safeio
 from .safeio import require_finite
 
 __all__ = [
@@ -570,21 +571,9 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     :class:`MeshMismatchError` if the recorded fingerprint does not match
     the base mesh in the file.
     """
-    import pygltflib
-
-
     path = Path(path)
     where = str(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise GltfError(f"{where}: no such file") from None
-    except OSError as exc:
-        raise GltfError(f"{where}: cannot read: {exc.strerror}") from None
-    try:
-        gltf = pygltflib.GLTF2.load_from_bytes(data)
-    except Exception as exc:  # pygltflib raises IOError, struct.error, JSON errors
-        raise GltfError(f"{where}: not a binary glTF file ({type(exc).__name__}: {exc})") from None
+    gltf = _load_glb(path)
     blob = gltf.binary_blob() or b""
     nodes = [nd for nd in gltf.nodes if (nd.extensions or {}).get(INSTANCING) and nd.mesh is not None]
     if node is not None:
@@ -658,11 +647,30 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     return mesh, as_params(params, name=where)
 
 
-def read_extras(path: str | os.PathLike) -> dict:
-    """The ``extras["axialdeform"]`` dictionaries of a GLB's scenes and nodes (for tools and tests)."""
+def _load_glb(path: Path):
+    """A GLB parsed by pygltflib from bytes read through the bounded reader
+    (a regular file, at most half the memory available); :class:`GltfError`
+    naming the file otherwise."""
     import pygltflib
 
-    gltf = pygltflib.GLTF2.load_binary(str(path))
+    where = str(path)
+    try:
+        data = safeio.read_regular(path, max(safeio.memory_available() // 2, 1 << 20), "a binary glTF file (.glb)",
+                                   GltfError)
+    except OSError as exc:
+        raise GltfError(f"{where}: cannot read: {exc.strerror}") from None
+    try:
+        gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
+    except Exception as exc:  # pygltflib raises IOError, struct.error, JSON errors
+        raise GltfError(f"{where}: not a binary glTF file ({type(exc).__name__}: {exc})") from None
+    if gltf is None:  # what pygltflib returns for bytes it does not recognise
+        raise GltfError(f"{where}: not a binary glTF file (no glTF content)")
+    return gltf
+
+
+def read_extras(path: str | os.PathLike) -> dict:
+    """The ``extras["axialdeform"]`` dictionaries of a GLB's scenes and nodes (for tools and tests)."""
+    gltf = _load_glb(Path(path))
     out = {}
     for kind, items in (("scene", gltf.scenes), ("node", gltf.nodes)):
         for k, item in enumerate(items):
