@@ -17,7 +17,7 @@ lists it.  Names that used to be here still work for one release, with a
 DeprecationWarning naming their new home.
 """
 
-from .core.errors import AxialDeformError
+from .core.errors import AxialDeformError  # noqa: F401 - the error base, a top-level name (__all__)
 from .core.lazy import attach
 
 # every other name is imported on first use (PEP 562): ``import axialdeform`` loads

@@ -18,10 +18,10 @@ from __future__ import annotations
 import anywidget
 import traitlets
 
+from .core.errors import AxialDeformError
 from .core.io.mesh import load_mesh
 from .core.io.params import encode_binary
 from .core.mesh import BaseMesh
-from .core.errors import AxialDeformError
 from .core.params import as_params
 from .core.scene import Scene, is_scene_file, load_scene
 from .web import VENDOR_FILES, build_scene, build_scene_file, page_source, vendor_file

@@ -32,6 +32,8 @@ import time
 import numpy as np
 
 from ..core.io.mesh import load_mesh
+from ..core.look import BACKGROUND
+from ..core.record import POSITION
 from ..core.variation import random_params
 from ..gl.camera import Camera, frame_instances
 from ..gl.context import Offscreen, create_context
@@ -66,7 +68,7 @@ def walker_camera(mesh, params, aspect: float, view: str = "across"):
     plane reaches past the whole field."""
 
     L = mesh.axis.length
-    pos = params[:, 10:13].astype(np.float64)
+    pos = params[:, POSITION].astype(np.float64)
     half = float(np.abs(pos[:, [0, 2]]).max()) + L
     fx, fz, heading = VIEWS[view]
     eye = np.array([fx * half, 3.0 * L, fz * half])
@@ -76,7 +78,7 @@ def walker_camera(mesh, params, aspect: float, view: str = "across"):
 
 
 def _frame(ctx, renderer, target, view, proj) -> float:
-    target.use((0.93, 0.94, 0.96))
+    target.use(BACKGROUND)
     ctx.finish()
     start = time.perf_counter()
     renderer.render(view, proj)

@@ -11,7 +11,16 @@ import numpy as np
 
 from .deform import bernstein, deform, deform_local_extended, displace
 from .params import as_params
-from .record import ANGLES, OFFSETS, POSITION
+from .record import (
+    ANGLES,
+    EXTENDED_WIDTH,
+    EXTRA,
+    OFFSETS,
+    POSITION,
+    SCALE,
+    TAPER,
+    TWIST,
+)
 from .transforms import rotation_matrices
 
 __all__ = ["wind_reach", "instance_bounds", "scene_box", "sphere_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
@@ -64,7 +73,7 @@ def instance_bounds(mesh, params, wind=None, *, radius: float | None = None) -> 
     scale = np.ones(len(params))
     grow = np.ones(len(params))
     if params.shape[1] == 19:
-        scale, grow = params[:, 16], np.maximum(1.0, np.abs(1.0 - params[:, 18]))
+        scale, grow = params[:, SCALE], np.maximum(1.0, np.abs(1.0 - params[:, TAPER]))
     centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) * scale[:, None] + params[:, POSITION]
     return centers, (radius * grow + bend) * np.abs(scale)
 
@@ -111,11 +120,11 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
         lo[:, coord] += d[:, :, k].min(axis=1)
         hi[:, coord] += d[:, :, k].max(axis=1)
     rot = rotation_matrices(params[:, ANGLES])
-    scale = params[:, 16] if params.shape[1] == 19 else np.ones(len(params))
+    scale = params[:, SCALE] if params.shape[1] == EXTENDED_WIDTH else np.ones(len(params))
     center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) * scale[:, None] + params[:, POSITION]
     half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2) * np.abs(scale)[:, None]
     if params.shape[1] == 19:  # twisted or tapered cross-sections: the box around the sphere
-        turned = (params[:, 17] != 0) | (params[:, 18] != 0)
+        turned = (params[:, TWIST] != 0) | (params[:, TAPER] != 0)
         if turned.any():
             c, r = instance_bounds(mesh, params[turned])
             center[turned], half[turned] = c, r[:, None]
@@ -232,7 +241,7 @@ def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, 
     p64 = params.astype(np.float64)
     if p64.shape[1] == 19:  # extended instances: the whole map of the selected vertices
 
-        moved, _ = deform_local_extended(mesh.axis, pts, pts, p64[:, OFFSETS].reshape(-1, 5, 2), p64[:, 16:19])
+        moved, _ = deform_local_extended(mesh.axis, pts, pts, p64[:, OFFSETS].reshape(-1, 5, 2), p64[:, EXTRA])
         world = moved @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2) + p64[:, None, POSITION]
         return world.reshape(-1, 3), np.zeros(n * len(idx))
     disp = np.einsum("vk,nkc->nvc", bernstein(mesh.axis.parameter(pts), 4), p64[:, OFFSETS].reshape(-1, 5, 2))

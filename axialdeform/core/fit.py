@@ -40,7 +40,7 @@ from .deform import bernstein, deform, deform_local_extended, displace
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .io.mesh import MESH_SUFFIXES, load_mesh
 from .params import as_params
-from .record import ANGLES, OFFSETS, POSITION
+from .record import ANGLES, EXTRA, OFFSETS, POSITION
 from .transforms import (
     angles_from_matrices,
     matrices_from_rotation_vectors,
@@ -395,7 +395,7 @@ def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> 
     out[:, OFFSETS] = (_CANONICAL @ z).reshape(n, 10)
     out[:, POSITION] = pos
     out[:, ANGLES] = angles_from_matrices(rot)
-    out[:, 16:19] = extra
+    out[:, EXTRA] = extra
     return out, rounds
 
 

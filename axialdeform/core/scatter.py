@@ -57,7 +57,7 @@ from .io.mesh import load_mesh
 from .io.safeio import _gb, open_regular
 from .material import AssetWarning
 from .mesh import BaseMesh
-from .record import as_instances
+from .record import ANGLES, OFFSETS, POSITION, SCALE, as_instances
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
 __all__ = ["scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights", "ANCHORS", "IMAGE_SUFFIXES",
@@ -610,11 +610,11 @@ def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, s
 
     s = np.ones(k) if scale is None else scale[0] + (scale[1] - scale[0]) * rolls[:, 11]
     out = np.zeros((k, cols), dtype=np.float64)
-    out[:, 0:10] = offsets.reshape(k, 10)
-    out[:, 10:13] = points - s[:, None] * (rot @ a)
-    out[:, 13:16] = angles_from_matrices(rot)
+    out[:, OFFSETS] = offsets.reshape(k, 10)
+    out[:, POSITION] = points - s[:, None] * (rot @ a)
+    out[:, ANGLES] = angles_from_matrices(rot)
     if cols == 19:
-        out[:, 16] = s
+        out[:, SCALE] = s
     out = np.ascontiguousarray(out, dtype=np.float32)
     if not np.isfinite(out).all():
         raise ScatterError("scatter: a parameter came out non-finite; expected finite surface and mesh coordinates")

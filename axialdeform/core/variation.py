@@ -19,7 +19,7 @@ import numpy as np
 from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import as_params
-from .record import ANGLES, OFFSETS, POSITION, as_instances
+from .record import ANGLES, OFFSETS, POSITION, SCALE, TAPER, TWIST, as_instances
 
 __all__ = ["random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
 
@@ -220,7 +220,7 @@ def _rows(spec: "_Spec", start: int, stop: int) -> np.ndarray:
         # the same stream, after the 16 numbers of every instance: 3 a row
         extra = _stream(spec.seed, 16 * n + 3 * start, 3 * m).reshape(m, 3)
         (s_lo, s_hi), tw, tp = spec.scale, spec.twist, spec.taper
-        out[:, 16] = s_lo + (s_hi - s_lo) * extra[:, 0]
-        out[:, 17] = abs(tw) * (2.0 * extra[:, 1] - 1.0)
-        out[:, 18] = tp * extra[:, 2]
+        out[:, SCALE] = s_lo + (s_hi - s_lo) * extra[:, 0]
+        out[:, TWIST] = abs(tw) * (2.0 * extra[:, 1] - 1.0)
+        out[:, TAPER] = tp * extra[:, 2]
     return as_params(out)

@@ -313,7 +313,10 @@ def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: b
     freezes its clock; ``look`` replaces :attr:`Scene.look`), as
     ``axialdeform render SCENE [--time T]`` draws them."""
 
-    from ..gl.scene import TERRAIN_INSTANCE, scene_camera  # the GL layer (pyrr) only when a page is built
+    from ..gl.scene import (  # the GL layer (pyrr) only when a page is built
+        TERRAIN_INSTANCE,
+        scene_camera,
+    )
 
     w, h = _check_view(size, scene.up, mode)
     wind = scene.wind if wind is None else wind

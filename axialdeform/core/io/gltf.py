@@ -63,8 +63,8 @@ from ..transforms import (
     matrices_from_quaternions,
     quaternions_from_angles,
 )
-from .atomic import atomic_write_bytes
 from . import safeio
+from .atomic import atomic_write_bytes
 from .safeio import require_finite
 
 __all__ = [
