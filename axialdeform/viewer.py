@@ -42,11 +42,13 @@ from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamErr
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
 from .core.params import as_params
+from .core.record import OFFSETS
 from .core.scene import Scene
 from .core.variation import random_params
 from .core.wind import Wind
 from .gl.camera import UP_VECTORS, OrbitCamera
 from .gl.context import check_image_size, create_context, read_pixels
+from .gl.frame import Frame
 from .gl.ground import GroundPlane
 from .gl.image import look_from_keywords
 from .gl.renderer import MODES, AxialRenderer
@@ -253,13 +255,13 @@ class _ViewerMixin:
 
     def _upload(self, params) -> None:
         shown = np.array(params, dtype=np.float32)
-        shown[:, :10] *= self.bend_scale
+        shown[:, OFFSETS] *= self.bend_scale
         self.renderer.update_params(shown)
         self._shown = shown
         for _, renderer, base in self.layers:
             if len(base):
                 other = base.copy()
-                other[:, :10] *= self.bend_scale
+                other[:, OFFSETS] *= self.bend_scale
                 renderer.update_params(other)
 
     # ------------------------------------------------------------ drawing
@@ -269,23 +271,19 @@ class _ViewerMixin:
             self._upload(self.animate(time_s))
         view, proj = self.matrices()
         look = self.look
-        light = look.light_dir
-        shadow = self.shadow
-        if shadow is not None:
-            g = self.ground
-            shadow.fit(self.mesh, getattr(self, "_shown", self.base), light,
-                       extra=[[*g.center, 0.5 * g.radius]] if self.show_ground else None)
-            self.wnd.use()
-            self.renderer.time = time_s  # the shadows bend in this frame's wind
-            self.renderer.render_shadow(shadow)
+        # the viewer's own instances, then the scene's terrain and other layers: one frame (gl/frame.py)
+        self.renderer.up = UP_VECTORS[self.up]
+        self.renderer.time = time_s  # the shadows bend in this frame's wind; the wind: uniforms only
+        renderers, casters = [self.renderer], [(self.mesh, getattr(self, "_shown", self.base))]
+        if self.extra is not None:
+            self.extra.prepare(time_s)
+            renderers += [r for r, _, _ in self.extra.renderers]
+            casters += [(layer.mesh, layer.params) for layer in self.extra.scene.layers]
+        frame = Frame(renderers, ground=self.ground if self.show_ground else None, shadow=self.shadow)
+        frame.shadow_pass(casters, look)
         self.wnd.use()
         self.ctx.clear(*look.background, 1.0, depth=1.0)
-        if self.show_ground:
-            self.ground.render(view, proj, look=look, shadow=shadow)
-        self.renderer.up = UP_VECTORS[self.up]
-        self.renderer.render(view, proj, self.mode, look=look, shadow=shadow, time=time_s)  # wind: uniforms only
-        if self.extra is not None:
-            self.extra.render(view, proj, self.mode, time=time_s)
+        frame.draw(view, proj, self.mode, look)
         self.frames += 1
         now = time.perf_counter()  # measured, not the timer's frame_time (headless steps are simulated)
         if self._last_frame is not None and now > self._last_frame:

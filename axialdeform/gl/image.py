@@ -12,9 +12,10 @@ from ..core.look import DEFAULT_LOOK, Look
 from ..core.scene import Scene
 from .camera import UP_VECTORS, Camera
 from .context import Offscreen, check_image_size, create_context
+from .frame import Frame
 from .ground import GroundPlane
 from .renderer import MODES
-from .scene import SceneRenderer, scene_camera
+from .scene import TERRAIN_INSTANCE, SceneRenderer, scene_camera
 from .shadow import ShadowMap
 
 __all__ = ["render_image", "render_scene", "parse_size", "as_scene", "look_from_keywords"]
@@ -150,22 +151,16 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
                 view, proj = cam.view(), cam.projection(w / h)
                 drawn.prepare(time)  # the shadows bend in the same wind as the picture
                 if look.draws_shadow and scene.count:
-                    extra = None
-                    if plane is not None:  # the ground's centre part receives the shadows
-                        extra = [[*plane.center, 0.5 * plane.radius]]
-                    elif scene.terrain is not None:  # the terrain receives them
-                        from .scene import TERRAIN_INSTANCE
-
+                    shadow = ShadowMap(ctx)
+                    if plane is None and scene.terrain is not None:  # the terrain casts and receives them
                         layers.append((scene.terrain, TERRAIN_INSTANCE))
-                    shadow = ShadowMap(ctx).fit_layers(layers, look.light_dir, extra=extra)
-                    drawn.render_shadow(shadow)
+                frame = Frame([r for r, _, _ in drawn.renderers], ground=plane, shadow=shadow)
+                frame.shadow_pass(layers, look)
                 with Offscreen(ctx, (w, h), samples=look.msaa) as target:
                     panels = []
                     for m in modes:
                         target.use(look.background)
-                        if plane is not None:
-                            plane.render(view, proj, look=look, shadow=shadow)
-                        drawn.render(view, proj, m, look=look, shadow=shadow, time=None)
+                        frame.draw(view, proj, m, look)
                         panels.append(target.read())
             finally:
                 for obj in (plane, shadow):
