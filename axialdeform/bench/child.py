@@ -102,7 +102,6 @@ def _setup(ctx, spec: dict, view, proj, mode: str, stamps: dict):
 
 
 def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
-
     mesh = load_mesh(spec["mesh"])
     # the placement is computed, not read: the thesis's "all the same" reads one mesh only
     params = random_params(mesh, spec["count"], spec["seed"], **scene_kwargs(mesh, spec["scene"]))
@@ -112,7 +111,6 @@ def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
 
 
 def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
-
     mesh = load_mesh(spec["mesh"])
     params = read_params(spec["params"], mesh)
     stamps["read"] = time.time()

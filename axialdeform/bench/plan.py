@@ -95,7 +95,6 @@ class Scene:
     the folder of pre-deformed OBJ files (cached by mesh + parameters)."""
 
     def __init__(self, mesh, mesh_path: Path, count: int, seed: int, scene: dict, cache: Path):
-
         self.mesh, self.mesh_path, self.count, self.seed, self.scene = mesh, mesh_path, count, seed, scene
         self.params = random_params(mesh, count, seed, **scene_kwargs(mesh, scene))
         # the writer's identity is part of the key: files from another writer are never reused

@@ -81,7 +81,6 @@ def import_pyplot():
 
 
 def plot_files(plt, stats, out: Path) -> dict:
-
     files = {}
     for key, field, title, lo_key, hi_key, bars in (
             ("fig5", "first_frame", "Time to the first frame (cf. thesis Fig. 5)", "first_frame_min_s",

@@ -153,7 +153,6 @@ def add_wind_args(parser) -> None:
 
 
 def wind_arg(args):
-
     if args.wind is None:
         if args.time is not None:
             raise ParamError("--time: only meaningful with --wind (the wind is the only thing that moves with time)")

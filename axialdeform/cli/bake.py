@@ -24,7 +24,6 @@ from ._common import (
 
 
 def add_parser(sub) -> None:
-
     b = sub.add_parser("bake", help="write every deformed instance out", description=(
         "Deform every instance and write OUT: an .npz with arrays 'positions' and 'normals', each "
         "(instances, vertices, 3) float32 in world space and the mesh file's vertex order; or a folder "
@@ -45,8 +44,6 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-
-
     scene = scenes.scene_of(args)
     if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
         return scenes.bake(scene, args, progress_bar, wind_arg(args) if args.wind is not None else None)

@@ -19,8 +19,6 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> None:
-
-
     check_output_path(args.dst, (args.src, mesh_file(args.mesh)), "parameter file")
     pf = read_param_file(args.src)
     mesh = load_mesh(args.mesh) if args.mesh else None

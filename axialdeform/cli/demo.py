@@ -36,7 +36,6 @@ def run(args) -> None:
     from ..gl.camera import frame_instances
     from ..gl.image import parse_size, render_image
 
-
     check_output_path(args.output, (mesh_source_path("stone"),), "PNG")  # the bundled mesh is an input too
     check_count(args.count, DEMO_BYTES_EACH, "-n/--count")
     mesh = load_mesh("stone")

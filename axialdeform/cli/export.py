@@ -39,7 +39,6 @@ def add_parser(sub) -> None:
 def run(args) -> None:
     """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
 
-
     out = check_glb_path(args.output)  # before the (slow) reading
     scene = scenes.scene_of(args)
     if scene is not None:

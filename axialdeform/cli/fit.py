@@ -15,7 +15,6 @@ from ._common import fraction, positive_int
 
 
 def add_parser(sub) -> None:
-
     f = sub.add_parser("fit", help="recover parameters from existing variant meshes", description=(
         "Fit the 16 numbers of each variant of BASE: VARIANTS are mesh files with BASE's vertices in the same "
         "order, or ONE folder whose mesh files, sorted by name, are instances 0, 1, 2, ... The output is binary "
@@ -35,7 +34,6 @@ def add_parser(sub) -> None:
 
 def run(args) -> None:
     """``axialdeform fit BASE VARIANTS... -o PARAMS``."""
-
 
     out = Path(args.output)
     mesh = load_mesh(args.base)

@@ -18,7 +18,6 @@ from ._common import AXES, angle_range, extension_args, mesh_file
 
 
 def add_parser(sub) -> None:
-
     r = sub.add_parser("random", help="write random parameters for a mesh", description=(
         "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf'); "
         "the output is binary for .adp, text for .txt/.csv/.dat."))
@@ -61,8 +60,6 @@ RANDOM_CHUNK = 1 << 17
 
 
 def run(args) -> None:
-
-
     extension = extension_args(args)  # before any work: a bad range is the first thing said
     check_output_path(args.output, (mesh_file(args.mesh),), "parameter file")
     count = int(args.count)

@@ -31,7 +31,6 @@ from ._common import (
 
 
 def add_parser(sub) -> None:
-
     rd = sub.add_parser("render", help="render instances to a PNG", description=(
         "Render MESH deformed by PARAMS. Without --eye/--target/--fov the camera frames every instance; "
         "any of them replaces that part of the automatic camera."))
@@ -89,7 +88,6 @@ def camera_from_args(mesh, params, size, args):
 def run(args) -> None:
     from ..gl.image import parse_size, render_image
 
-
     scene = scenes.scene_of(args)
     options = cull_options(args)
     if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
@@ -116,7 +114,6 @@ def run(args) -> None:
 
 def _time_frame(ctx, renderer, camera, size, mode) -> float:
     """Seconds for one more frame of ``renderer`` (cull pass + draws, GPU finished), same camera."""
-
 
     with Offscreen(ctx, size) as target:
         target.use()

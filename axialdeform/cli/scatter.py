@@ -33,7 +33,6 @@ def _extent(text: str) -> tuple[float, ...]:
 
 
 def add_parser(subparsers) -> None:
-
     s = subparsers.add_parser("scatter", help="place instances on a terrain (mesh or height map)", description=(
         "Place N instances of MESH on SURFACE (a mesh file, or a grey height-map image): area-uniform on the "
         "faces that face up, at least --min-distance apart, following a --density image (columns along +x, rows "
@@ -64,9 +63,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int | None:
-
     scale = None if args.scale is None else scale_range(args.scale)  # checked before any file is read
-
 
     if args.quantize and Path(args.output).suffix.lower() not in BINARY_SUFFIXES:  # before the work, not after
         raise ParamFileError(f"{args.output}: the quantized form is binary only; expected a "

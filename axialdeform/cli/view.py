@@ -24,7 +24,6 @@ from .random import RANDOM_BYTES_EACH
 
 
 def add_parser(sub) -> None:
-
     v = sub.add_parser("view", help="look at instances in an interactive window", description=(
         "Open MESH (a file, or 'stone' / 'leaf') deformed by PARAMS (or by random parameters) in a window: "
         "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
@@ -60,7 +59,6 @@ def add_parser(sub) -> None:
 def run(args) -> None:
     from ..gl.image import parse_size
     from ..viewer import Viewer
-
 
     wind = wind_arg(args)
     options = cull_options(args)

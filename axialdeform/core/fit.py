@@ -400,7 +400,6 @@ def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> 
 
 
 def _rotations(angles: np.ndarray) -> np.ndarray:
-
     return rotation_matrices(angles)
 
 

@@ -28,7 +28,6 @@ def attach(package: str, names: dict[str, str], deprecated: dict[str, str] | Non
     deprecated = deprecated or {}
 
     def __getattr__(name: str):
-
         module = sys.modules[package]
         if name in names:
             value = getattr(import_module(f".{names[name]}", package), name)
@@ -46,7 +45,6 @@ def attach(package: str, names: dict[str, str], deprecated: dict[str, str] | Non
         return value
 
     def __dir__():
-
         return sorted(set(vars(sys.modules[package])) | set(names))
 
     return __getattr__, __dir__, sorted(names)

@@ -86,7 +86,6 @@ class Look:
     fast: bool = False
 
     def __post_init__(self) -> None:
-
         for name in ("light_dir", "light_color", "sky_color", "ground_color", "background", "line_color"):
             value = getattr(self, name)
             try:

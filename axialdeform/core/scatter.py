@@ -248,8 +248,6 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
     compressed file claiming a huge image (a decompression bomb) is refused
     with the limit, never decoded."""
 
-
-
     if not os.path.lexists(path):
         raise ScatterError(f"{what} {path}: no such file")
     with open_regular(path, f"a grey image ({what})", ScatterError) as (fh, _size):
@@ -384,8 +382,6 @@ def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=Non
         if path.suffix.lower() in IMAGE_SUFFIXES:
             return surface_from_heights(_read_grey(path, "SURFACE", SURFACE_BYTES_PER_PIXEL), up=up, height_scale=height_scale,
                                         extent=extent, name=f"SURFACE {path}")
-
-
 
         try:
             with warnings.catch_warnings():  # only the faces are used: a missing texture does not matter here

@@ -134,7 +134,6 @@ def check_released(released: bool, what: str) -> None:
 
 
 def _alive(obj) -> bool:
-
     return obj is not None and not isinstance(obj.mglo, moderngl.InvalidObject)
 
 
@@ -242,7 +241,6 @@ class Offscreen:
     """
 
     def __init__(self, ctx, size: tuple[int, int], samples: int = 4):
-
         width, height = (int(size[0]), int(size[1]))
         check_image_size(ctx, (width, height), samples)
         self.ctx = ctx

@@ -332,7 +332,6 @@ class CullPass:
         return IndirectDraws(self, levels)
 
     def _run_feedback(self, count: int, levels: int, uniforms: dict, prepare) -> list[int]:
-
         self._build_feedback()
         self.set_uniforms(uniforms)
         if prepare is not None:

@@ -40,7 +40,6 @@ class AppearanceBuffer:
         self._released = False
 
     def content(self, program):
-
         return _content(self.buffer, ("2f", "4f", "4f"), ("in_uv", "in_color", "in_tangent"), program)
 
     def release(self) -> None:

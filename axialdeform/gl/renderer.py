@@ -229,7 +229,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         #: world up (unit vector), for the sky/ground hemisphere ambient
         self.up = (0.0, 1.0, 0.0)
 
-
     def _check(self) -> None:
         if self._released:
             raise AxialDeformError("this AxialRenderer was released; create a new one")
@@ -304,7 +303,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         if len(values):
             buffer.write(values.tobytes())
         self._tint_count = len(values)
-
 
     def render(self, view, projection, mode: str = "solid", *, look: Look | None = None, shadow=None,
                time: float | None = None) -> None:
@@ -412,7 +410,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
 
         self._draw_culled(cull, prog, vaos, result, draw_level)
 
-
     def render_shadow(self, shadow, *, clear: bool = True) -> None:
         """Draw the instances into ``shadow`` (a :class:`~axialdeform.gl.shadow.ShadowMap`,
         fitted with :meth:`ShadowMap.fit`): one instanced depth draw per part;
@@ -456,7 +453,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
 
             self._draw_culled(cull, prog, vaos[:1], result, draw_level)
 
-
     @contextmanager
     def culling(self, view=None, projection=None, enabled: bool = True):
         """The face-culling state of this renderer's triangle draws, for code
@@ -478,7 +474,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
             yield
         finally:
             self.ctx.disable(moderngl.CULL_FACE)
-
 
     # ------------------------------------------------------------ lifetime
     def release(self) -> None:

@@ -68,7 +68,6 @@ class ShadowMap:
     def fit_layers(self, layers, light_dir=LIGHT_DIR, *, extra=None) -> "ShadowMap":
         """:meth:`fit` over several ``[(mesh, params), ...]`` (a scene's layers)."""
 
-
         spheres = [np.zeros((0, 4))]
         for mesh, params in layers:
             centers, radii = instance_bounds(mesh, params)

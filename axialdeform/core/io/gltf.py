@@ -157,8 +157,6 @@ class _Builder:
 
 
 def _png(pixels: np.ndarray) -> bytes:
-
-
     out = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8), "RGBA").save(out, format="PNG")
     return out.getvalue()
@@ -441,7 +439,6 @@ def encode_scene(scene, layout: str = "baked") -> bytes:
         return _encode_scene_instanced(scene, layers)
     import trimesh
 
-
     out = trimesh.Scene()
     parts = [("terrain", scene.terrain, None, scene.terrain_color)] if scene.terrain is not None else []
     parts += [(layer.name, layer.mesh, layer.params, layer.color) for layer in layers]
@@ -694,7 +691,6 @@ def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:
     (the GLB chunk, a data URI or one ``.bin``); what cannot be read is left
     out (tangents are then computed where a normal map needs them)."""
     import pygltflib
-
 
     try:
         if kind == "glb":

@@ -105,7 +105,6 @@ class SafeResolver:
         return name if os.path.isabs(name) else os.path.join(self.parent, name)
 
     def get(self, name: str) -> bytes:
-
         path = self._path(name)
         try:
             st = os.stat(path)

@@ -251,7 +251,6 @@ def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
 
 
 def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
-
     _check_keys(src, layer, _LAYER, f"layer {nth + 1}", "layer", nth)
     if "mesh" not in layer:
         raise src.error("every layer needs a mesh (a file or 'stone' / 'leaf')", "layer", "layer", nth)
@@ -283,7 +282,6 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
 
 
 def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.ndarray:
-
     if not isinstance(recipe, dict):
         raise src.error("expected a table [layer.scatter]", "scatter", "layer", nth)
     _check_keys(src, recipe, _SCATTER, f"layer {nth + 1} scatter", "layer", nth)
