@@ -7,6 +7,7 @@ from pathlib import Path
 from ..core.bake import MESH_FORMATS
 from ..core.errors import ArgumentError
 from ..core.io.bake import check_bake_folder, write_mesh_folder, write_npz_pieces
+from ..core.io.mesh import mesh_source_path
 from ..core.io.safeio import check_disk_space
 from ..core.wind import apply_wind
 from ..gl.bake import ENGINES, bake, bake_pieces
@@ -53,7 +54,8 @@ def run(args) -> None:
     if out.suffix.lower() == ".npz":  # made and written in pieces: bounded by the disk, not memory
         return _bake_npz_in_pieces(args, out, mesh, params, wind)
     check_file_count(args, out, len(params))  # before anything is deformed or written
-    check_bake_folder(out, args.overwrite)  # refuse a folder of stale files before the work, not after
+    inputs = (mesh_source_path(args.mesh), args.params)
+    check_bake_folder(out, args.overwrite, inputs)  # refuse stale files, or an input to replace, before the work
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params,
                                   wind=wind, time=args.time or 0.0)
@@ -63,7 +65,7 @@ def run(args) -> None:
 
             bent = apply_wind(wind, mesh.axis, params, args.time or 0.0)
         files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
-                                  overwrite=args.overwrite, params=bent)
+                                  overwrite=args.overwrite, params=bent, inputs=inputs)
     meshes = [f for f in files if f.suffix == "." + args.format]
     beside = f" + {len(files) - len(meshes)} material/texture files" if len(files) > len(meshes) else ""
     print(f"wrote {len(meshes)} {args.format} files{beside} to {out}/ ({args.engine})")

@@ -7,7 +7,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 from ..core.errors import AxialDeformError
-from ..core.io.mesh import load_mesh
+from ..core.io.mesh import load_mesh, mesh_source_path
 from ..core.io.params import read_params
 from ..core.scene import is_scene_file
 from ..web import build_scene, build_scene_file, make_server, write_page
@@ -42,6 +42,8 @@ def add_parser(subparsers) -> None:
         if action.dest == "time":
             action.help = ("seconds: freeze the wind's clock there (a scene's [wind] or --wind; ?t= on the page "
                            "overrides) (default: the clock runs)")
+    w.add_argument("--overwrite", action="store_true",
+                   help="replace files in the output that no earlier export wrote (default: refuse; inputs never)")
     w.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C (default: only write)")
     w.add_argument("--port", type=int, default=8000, help="port for --serve; a busy one is replaced by a free one (default: %(default)s)")
     w.set_defaults(handler=run)
@@ -66,7 +68,7 @@ def run(args) -> None:
             raise AxialDeformError(f"--up: a scene file ({args.mesh}) names its own up axis; expected no --up")
         web = build_scene_file(scene, size=size, mode=args.mode, quantize=not args.float32,
                                fixed_size=args.size is not None, time=time)
-        page = write_page(out, web)
+        page = write_page(out, web, inputs=scene.sources, overwrite=args.overwrite)
         layers = [layer for layer in web.config["layers"] if not layer["terrain"]]
         print(f"wrote {page} ({len(layers)} layers{', a terrain' if len(layers) < len(web.config['layers']) else ''}, "
               f"{web.count} instances, "
@@ -79,7 +81,7 @@ def run(args) -> None:
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
         scene = build_scene(mesh, params, size=size, up=args.up, mode=args.mode, quantize=not args.float32,
                             fixed_size=args.size is not None, wind=wind_arg(args), time=time)
-        page = write_page(out, scene)
+        page = write_page(out, scene, inputs=(mesh_source_path(args.mesh), args.params), overwrite=args.overwrite)
         print(f"wrote {page} ({len(params)} instances, {'float32' if args.float32 else 'quantized'} parameters)")
     elif not args.serve:
         raise AxialDeformError("web: expected MESH and PARAMS (or --serve to serve an exported page)")

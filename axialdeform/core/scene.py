@@ -135,6 +135,9 @@ class Scene:
     light: dict = field(default_factory=dict)
     wind: object = None
     background: tuple = BACKGROUND
+    #: every file the scene was read from (the scene file, includes, meshes, parameters, images):
+    #: what an output must never replace
+    sources: list = field(default_factory=list)
 
     @property
     def count(self) -> int:

@@ -23,6 +23,7 @@ This is an application layer: ``core/`` and ``gl/`` never import it.
 from __future__ import annotations
 
 import base64
+import contextlib
 import html
 import json
 import os
@@ -423,14 +424,48 @@ def _import_map(imports: dict) -> str:
     return f'<script type="importmap">{_json_in_html({"imports": imports})}</script>'
 
 
-def write_folder(out: str | os.PathLike, scene: WebScene) -> Path:
-    """Write ``OUT/index.html`` + ``app.js``, ``scene.json``, ``mesh.glb``,
-    ``params.adp`` and ``three/`` (the vendored three.js and its licence)
-    for a static web server.  Every file is written atomically."""
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise AxialDeformError(f"{out}: exists and is not a folder; give a folder, or a name ending in .html")
-    out.mkdir(parents=True, exist_ok=True)
+#: the list of files (and their SHA-256) an export wrote into its folder: what a later export may replace
+MANIFEST = ".axialdeform-web.json"
+#: what marks a single-file page this library wrote (in its config JSON)
+_GENERATOR_MARK = b'"generator":"axialdeform"'
+
+
+def _sha256(data: bytes) -> str:
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()
+
+
+def check_page_outputs(out: Path, names, inputs=(), overwrite: bool = False) -> None:
+    """Refuse, before anything is written, to replace an input or a file this
+    command did not write.
+
+    ``names`` are the files the export writes (relative to the folder
+    ``out``; a single ``.html`` page: ``[""]``).  An output that is one of
+    ``inputs`` (by device and inode: a hard link or symlink counts) is always
+    refused; an existing output is replaced only if an earlier export wrote
+    it unchanged (the folder's :data:`MANIFEST`, or the generator mark of a
+    single page), or with ``overwrite``.
+    """
+    from ..core.io.safeio import check_output_path, read_regular
+
+    manifest = {}
+    if out.is_dir():
+        with contextlib.suppress(OSError, ValueError, AxialDeformError):  # none or unreadable: nothing is ours
+            manifest = json.loads(bytes(read_regular(out / MANIFEST, 1 << 20, "a web export's manifest")))
+    for name in names:
+        path = out / name if name else out
+        check_output_path(path, inputs, "web page")
+        if overwrite or not path.is_file():
+            continue
+        data = bytes(read_regular(path, what="a file of an earlier web export"))
+        ours = _GENERATOR_MARK in data if not name else manifest.get(name) == _sha256(data)
+        if not ours:
+            raise AxialDeformError(f"{path}: exists and was not written by an earlier axialdeform web export (or was "
+                                   "changed since); refusing to replace it (--overwrite replaces it)")
+
+
+def _folder_files(scene: WebScene) -> dict:
     head = _import_map({"three": "./three/three.module.min.js", "three/addons/": "./three/addons/"})
     page = _page(scene.config, head, "", _START + _FOLDER_ENTRY)
     files = {
@@ -441,10 +476,27 @@ def write_folder(out: str | os.PathLike, scene: WebScene) -> Path:
     }
     for rel in list(VENDOR_FILES.values()) + ["LICENSE", "VERSION"]:
         files["three/" + rel] = vendor_file(rel)
+    return files
+
+
+def write_folder(out: str | os.PathLike, scene: WebScene, *, inputs=(), overwrite: bool = False) -> Path:
+    """Write ``OUT/index.html`` + ``app.js``, ``scene.json``, ``mesh.glb``,
+    ``params.adp`` and ``three/`` (the vendored three.js and its licence)
+    for a static web server.  Every file is written atomically; none is an
+    input or a file an earlier export did not write (:func:`check_page_outputs`),
+    and :data:`MANIFEST` records what was written."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise AxialDeformError(f"{out}: exists and is not a folder; give a folder, or a name ending in .html")
+    files = _folder_files(scene)
+    check_page_outputs(out, list(files), inputs, overwrite)
+    out.mkdir(parents=True, exist_ok=True)
     for rel, data in files.items():
         path = out / rel
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write_bytes(path, data)
+    manifest = {rel: _sha256(data) for rel, data in files.items()}
+    atomic_write_bytes(out / MANIFEST, json.dumps(manifest, indent=1, sort_keys=True).encode("utf-8"))
     return out / "index.html"
 
 
@@ -480,21 +532,24 @@ def single_file_html(scene: WebScene) -> str:
     return _page(scene.config, head, data, _START + _SINGLE_ENTRY.replace("{{LOADER}}", loader))
 
 
-def write_single_file(out: str | os.PathLike, scene: WebScene) -> Path:
+def write_single_file(out: str | os.PathLike, scene: WebScene, *, inputs=(), overwrite: bool = False) -> Path:
     out = Path(out)
     if out.is_dir():
         raise AxialDeformError(f"{out}: is a folder; a single page needs a name ending in .html")
+    check_page_outputs(out, [""], inputs, overwrite)
     atomic_write_bytes(out, single_file_html(scene).encode("utf-8"))
     return out
 
 
-def write_page(out: str | os.PathLike, scene: WebScene) -> Path:
+def write_page(out: str | os.PathLike, scene: WebScene, *, inputs=(), overwrite: bool = False) -> Path:
     """``OUT.html`` (or ``.htm``): one self-contained file; anything else: a folder.
-    Returns the page's path (the file, or the folder's ``index.html``)."""
+    Returns the page's path (the file, or the folder's ``index.html``).
+    ``inputs`` are never replaced; an existing file an earlier export did
+    not write is replaced only with ``overwrite`` (:func:`check_page_outputs`)."""
     out = Path(out)
     if out.suffix.lower() in (".html", ".htm"):
-        return write_single_file(out, scene)
-    return write_folder(out, scene)
+        return write_single_file(out, scene, inputs=inputs, overwrite=overwrite)
+    return write_folder(out, scene, inputs=inputs, overwrite=overwrite)
 
 
 def scene_bytes(out: str | os.PathLike) -> dict:

@@ -101,7 +101,7 @@ INSTANCE_FILE = re.compile(r"^instance_(\d{6,})(_[A-Za-z0-9_-]+)?\.(" + "|".join
 
 
 def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None,
-                      *, overwrite: bool = False, params=None) -> list[Path]:
+                      *, overwrite: bool = False, params=None, inputs=()) -> list[Path]:
     """One mesh file per instance (``instance_000000.obj`` …), each written atomically.
 
     A mesh with appearance keeps it: ``obj`` writes ``vt``, one shared
@@ -120,11 +120,14 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
     it recognises (``instance_NNNNNN.obj|ply|glb``) that were not just
     rewritten removed; other files are left alone.  So an interrupted
     overwrite leaves every old or new file whole, never a half-written one.
+    ``inputs`` (the files the bake read) are never replaced or removed: a
+    folder whose files the bake would replace or remove holds one of them is
+    refused before anything is written.
     """
     if fmt not in MESH_FORMATS:
         raise ArgumentError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
     folder = Path(folder)
-    old = check_bake_folder(folder, overwrite)
+    old = check_bake_folder(folder, overwrite, inputs)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     plain = not mesh.has_appearance
@@ -191,11 +194,18 @@ def _identity_params(n: int) -> np.ndarray:
     return np.zeros((n, 16), dtype=np.float32)
 
 
-def check_bake_folder(folder: str | os.PathLike, overwrite: bool = False) -> list[str]:
+#: what a bake into a folder writes or removes besides instance files: the shared material and its textures
+_BAKE_COMPANIONS = re.compile(r"^(material\.mtl|.*\.(png|jpe?g|bmp|tga|webp|tiff?))$", re.I)
+
+
+def check_bake_folder(folder: str | os.PathLike, overwrite: bool = False, inputs=()) -> list[str]:
     """Check ``folder`` as the target of :func:`write_mesh_folder` before any
     work: it must be new, empty (hidden files aside), or — with
-    ``overwrite`` — anything; never a file, a device or a FIFO.  Returns the
-    names it holds now.  Changes nothing."""
+    ``overwrite`` — anything; never a file, a device or a FIFO; and none of
+    the files an overwrite would replace or remove (``instance_*`` files, the
+    material and its textures) may be one of ``inputs`` (by device and
+    inode: a hard link or a symlink of an input counts).  Returns the names
+    it holds now.  Changes nothing."""
     folder = Path(folder)
     check_not_special(folder, "output folder", allow_folder=True)
     if folder.exists() and not folder.is_dir():
@@ -205,7 +215,21 @@ def check_bake_folder(folder: str | os.PathLike, overwrite: bool = False) -> lis
         sample = ", ".join(sorted(old)[:3]) + (", ..." if len(old) > 3 else "")
         raise PathError(f"{folder}: holds {len(old)} files it did not just write ({sample}); expected a new or empty "
                         "folder (--overwrite replaces an earlier bake: it removes the old instance_* files)")
+    touched = [folder / name for name in old if INSTANCE_FILE.match(name) or _BAKE_COMPANIONS.match(name)]
+    for path in touched:
+        for src in inputs:
+            if src is not None and _same_file(path, src):
+                raise PathError(f"{path}: is the input {src}; a bake into {folder} would replace or remove it "
+                                "(--overwrite never touches an input: bake into another folder)")
     return old
+
+
+def _same_file(a, b) -> bool:
+    try:
+        sa, sb = os.stat(a), os.stat(b)
+    except OSError:
+        return False
+    return (sa.st_dev, sa.st_ino) == (sb.st_dev, sb.st_ino)
 
 
 def _folder_entries(folder: Path) -> list[str]:

@@ -17,7 +17,7 @@ from ..mesh import BaseMesh, area_weighted_normals
 from ..scatter import ANCHORS, load_surface, scatter
 from ..wind import Wind
 from . import safeio
-from .mesh import BUNDLED_MESHES, load_mesh
+from .mesh import BUNDLED_MESHES, load_mesh, mesh_source_path
 from .params import read_params
 from .safeio import read_regular
 
@@ -49,8 +49,11 @@ _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "sc
 class _Source:
     """A scene file's text, to find the line of a key for messages."""
 
-    def __init__(self, path: Path, text: str) -> None:
+    def __init__(self, path: Path, text: str, sources: list | None = None) -> None:
         self.path, self.lines = path, text.splitlines()
+        #: every file the scene reads (this one, its includes, meshes, parameters, images): shared with includes
+        self.sources = [] if sources is None else sources
+        self.sources.append(path)
 
     def line(self, key: str, table: str | None = None, nth: int = 0) -> int:
         """1-based line of ``key = ...`` inside ``[table]`` (the ``nth`` ``[[table]]``), or of the table."""
@@ -70,7 +73,11 @@ class _Source:
         return SceneError(f"{self.path}:{self.line(key, table, nth)}: key '{key}': {message}")
 
 
-def _load_toml(path: Path):
+#: the deepest chain of includes a scene file may have (a -> b -> c ... is 3)
+MAX_INCLUDE_DEPTH = 32
+
+
+def _load_toml(path: Path, sources: list | None = None):
     if sys.version_info >= (3, 11):
         import tomllib
     else:  # pragma: no cover - Python 3.10
@@ -90,7 +97,9 @@ def _load_toml(path: Path):
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
-    return data, _Source(path, text)
+    except RecursionError:  # arrays or tables nested hundreds deep: tomllib recurses
+        raise SceneError(f"{path}: not a scene file: values nested too deep to read") from None
+    return data, _Source(path, text, sources)
 
 
 def _check_keys(src: _Source, table: dict, allowed: set, where: str, name: str | None, nth: int = 0) -> None:
@@ -120,6 +129,7 @@ def _existing(src, value, key, table, nth) -> Path:
     path = _path(src, value, key, table, nth)
     if not path.exists():
         raise src.error(f"no such file {path}", key, table, nth)
+    src.sources.append(path)
     return path
 
 
@@ -169,6 +179,7 @@ def read_scene(path: str | os.PathLike, scene_type, *, scale_counts: float = 1.0
         with _wrap(src, next(iter(w), "wind"), "wind", 0):
             scene.wind = Wind(**kwargs)
     _read_layers(src, data, scene, surface, scale_counts, stack=(path.resolve(),))
+    scene.sources = list(dict.fromkeys(src.sources))
     return scene
 
 
@@ -231,7 +242,10 @@ def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
         if inc.resolve() in stack:
             chain = " -> ".join(str(p) for p in (*stack, inc.resolve()))
             raise src.error(f"include cycle: {chain}", "include", None, 0)
-        sub, sub_src = _load_toml(inc)
+        if len(stack) >= MAX_INCLUDE_DEPTH:
+            raise src.error(f"includes nested {len(stack)} deep; expected at most {MAX_INCLUDE_DEPTH} (a -> b -> ...)",
+                            "include", None, 0)
+        sub, sub_src = _load_toml(inc, src.sources)
         _check_keys(sub_src, sub, _TOP, "the scene", None)
         _read_layers(sub_src, sub, scene, surface, scale_counts, (*stack, inc.resolve()))
     layers = data.get("layer", [])
@@ -262,6 +276,7 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
     with _wrap(src, "mesh", "layer", nth):
         if isinstance(mesh_value, str) and mesh_value in BUNDLED_MESHES:
             mesh = load_mesh(mesh_value)
+            src.sources.append(mesh_source_path(mesh_value))
         else:
             mesh = load_mesh(_existing(src, mesh_value, "mesh", "layer", nth))
     color = tuple(_numbers(src, layer["color"], "color", "layer", nth, (3,))) if "color" in layer else None

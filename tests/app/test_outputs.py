@@ -1,0 +1,97 @@
+"""An output never holds an input (issue 23, item 1) and scene files are
+bounded (item 3): each attack of the issue, as a command a user types."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import axialdeform as ad
+
+
+def run(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], cwd=cwd, capture_output=True,
+                          text=True, timeout=300)
+
+
+def refused(proc, *words):
+    assert proc.returncode == 2, (proc.stdout, proc.stderr)
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    for w in words:
+        assert w in lines[0], lines[0]
+
+
+@pytest.fixture
+def folder(tmp_path):
+    ad.write_params(tmp_path / "p.adp", ad.random_params(ad.load_mesh("stone"), 20, seed=1))
+    return tmp_path
+
+
+@pytest.mark.slow
+def test_web_never_replaces_its_inputs_or_a_file_it_did_not_write(folder):
+    assert run("web", "stone", "p.adp", "-o", "site", cwd=folder).returncode == 0
+    before = {p: p.read_bytes() for p in (folder / "site").rglob("*") if p.is_file()}
+    (folder / "site" / "params.adp").write_bytes((folder / "p.adp").read_bytes())  # the user's own copy
+    # the issue's attack: the inputs live in the output folder
+    refused(run("web", "site/mesh.glb", "site/params.adp", "-o", "site", cwd=folder), "site/mesh.glb", "input")
+    # a hard link of an input is the input
+    (folder / "site2").mkdir()
+    os.link(folder / "p.adp", folder / "site2" / "params.adp")
+    refused(run("web", "stone", "p.adp", "-o", "site2", cwd=folder), "site2/params.adp", "input")
+    # a file no export wrote, or one changed since, is not replaced without --overwrite
+    (folder / "site" / "index.html").write_text("<h1>my own page</h1>")
+    refused(run("web", "stone", "p.adp", "-o", "site", cwd=folder), "site/", "--overwrite")
+    assert (folder / "site" / "index.html").read_text() == "<h1>my own page</h1>"
+    (folder / "mine.html").write_text("<h1>mine</h1>")
+    refused(run("web", "stone", "p.adp", "-o", "mine.html", cwd=folder), "mine.html", "--overwrite")
+    assert (folder / "mine.html").read_text() == "<h1>mine</h1>"
+    # the export's own unchanged files are replaced; --overwrite replaces the rest (never an input)
+    ok = run("web", "stone", "p.adp", "-o", "site", "--overwrite", cwd=folder)
+    assert ok.returncode == 0, ok.stderr
+    assert run("web", "stone", "p.adp", "-o", "site", cwd=folder).returncode == 0  # unchanged: ours
+    assert run("web", "stone", "p.adp", "-o", "page.html", cwd=folder).returncode == 0
+    assert run("web", "stone", "p.adp", "-o", "page.html", cwd=folder).returncode == 0
+    refused(run("web", "site/mesh.glb", "site/params.adp", "-o", "site", "--overwrite", cwd=folder), "input")
+    assert set(before) <= {p for p in (folder / "site").rglob("*") if p.is_file()}
+
+
+@pytest.mark.slow
+def test_bake_overwrite_never_removes_its_input_mesh(folder):
+    assert run("bake", "stone", "p.adp", "-o", "out", cwd=folder).returncode == 0
+    mesh = folder / "out" / "instance_000005.obj"
+    data = mesh.read_bytes()
+    refused(run("bake", mesh, "p.adp", "-o", "out", "--overwrite", "--ignore-mesh-mismatch", cwd=folder),
+            "instance_000005.obj", "input", "--overwrite")
+    assert mesh.read_bytes() == data
+    os.link(mesh, folder / "linked.obj")  # a hard link outside: the file inside is still the input
+    refused(run("bake", "linked.obj", "p.adp", "-o", "out", "--overwrite", "--ignore-mesh-mismatch", cwd=folder),
+            "input")
+    assert mesh.read_bytes() == data
+
+
+def test_a_scene_knows_every_file_it_read(folder):
+    (folder / "s.toml").write_text('[[layer]]\nname = "a"\nmesh = "stone"\nparams = "p.adp"\n')
+    scene = ad.Scene.load(folder / "s.toml")
+    names = {Path(p).name for p in scene.sources}
+    assert {"s.toml", "p.adp", "stone.obj"} <= names
+
+
+def test_scene_includes_and_nesting_are_bounded(folder):
+    from axialdeform.core.io.scene import MAX_INCLUDE_DEPTH
+
+    n = MAX_INCLUDE_DEPTH + 5
+    for k in range(n):
+        (folder / f"s{k}.toml").write_text(f'include = ["s{k + 1}.toml"]\n' if k + 1 < n else
+                                           '[[layer]]\nname = "a"\nmesh = "stone"\nparams = "p.adp"\n')
+    with pytest.raises(ad.core.SceneError, match=f"includes nested {MAX_INCLUDE_DEPTH} deep"):
+        ad.Scene.load(folder / "s0.toml")
+    assert ad.Scene.load(folder / f"s{n - MAX_INCLUDE_DEPTH + 1}.toml").count == 20  # within the limit: fine
+    (folder / "deep.toml").write_text("x = " + "[" * 600 + "]" * 600 + "\n")
+    with pytest.raises(ad.core.SceneError, match="deep.toml: not a scene file: values nested too deep"):
+        ad.Scene.load(folder / "deep.toml")
+    refused(run("render", "deep.toml", "-o", "r.png", cwd=folder), "deep.toml", "nested too deep")
