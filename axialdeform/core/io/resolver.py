@@ -70,6 +70,10 @@ def gltf_references(data: bytes, kind: str, name: str = "<gltf>") -> dict[str, t
 BUFFER_SLACK = 3
 
 
+class _Outside(Exception):
+    """A reference that leaves the model's folder."""
+
+
 class SafeResolver:
     """A trimesh resolver for the files a mesh refers to (``.mtl``, textures,
     glTF buffers): only regular files in the mesh's folder tree are read, so a
@@ -91,9 +95,10 @@ class SafeResolver:
     message)``: the loader refuses the mesh for those that are not textures."""
 
     def __init__(self, folder: str | os.PathLike, max_bytes: int | None = None, *,
-                 declared: dict | None = None, referrer: str | None = None):
-
+                 declared: dict | None = None, referrer: str | None = None, root: str | os.PathLike | None = None):
         self.parent = os.path.abspath(os.fspath(folder))
+        #: the model's folder: nothing outside it is read (absolute paths, ``..`` and links out of it)
+        self.root = os.path.realpath(self.parent if root is None else os.fspath(root))
         self.max_bytes = MAX_REFERENCED_BYTES if max_bytes is None else int(max_bytes)
         self.declared = dict(declared or {})
         self.referrer = referrer
@@ -101,11 +106,23 @@ class SafeResolver:
         self.refused: list[tuple[str, str]] = []
 
     def _path(self, name: str) -> str:
+        """The file ``name`` refers to, inside the model's folder; :class:`_Outside` if it is not."""
         name = str(name).replace("\\", "/")
-        return name if os.path.isabs(name) else os.path.join(self.parent, name)
+        if os.path.isabs(name) or (len(name) > 1 and name[1] == ":"):  # /etc/x, C:/x
+            raise _Outside("an absolute path")
+        path = os.path.join(self.parent, name)
+        real = os.path.realpath(path)  # through every symlink
+        if os.path.commonpath([real, self.root]) != self.root:
+            raise _Outside("a link out of it" if os.path.islink(path) else "a path out of it (..)")
+        return path
 
     def get(self, name: str) -> bytes:
-        path = self._path(name)
+        try:
+            path = self._path(name)
+        except _Outside as why:
+            # a model reads only its own folder: the part keeps its base colour, the loader warns
+            self.failed.append((str(name), f"is outside the model's folder {self.root} ({why}); not read"))
+            raise OSError(f"{name}: outside the model's folder") from None
         try:
             st = os.stat(path)
         except OSError as exc:
@@ -153,7 +170,8 @@ class SafeResolver:
         return self.parent
 
     def namespaced(self, namespace):
-        child = SafeResolver(os.path.join(self.parent, namespace), self.max_bytes, referrer=self.referrer)
+        child = SafeResolver(os.path.join(self.parent, namespace), self.max_bytes, referrer=self.referrer,
+                             root=self.root)
         child.failed, child.refused = self.failed, self.refused  # one record for the whole load
         return child
 
