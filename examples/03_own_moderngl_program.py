@@ -23,6 +23,7 @@ import numpy as np
 import pyrr
 
 import axialdeform as ad
+from axialdeform.core import record
 from axialdeform.gl.image import parse_size
 
 VERTEX = """
@@ -35,13 +36,14 @@ uniform float lo, len;      // its start and length
 
 in vec3 position;           // your own vertex buffer
 in vec3 normal;
-in vec4 d12; in vec4 d34; in vec2 d5; in vec3 pos; in vec3 rot;  // your own instance buffer
+// the instance record's attributes, as the record table names them (axialdeform.core.record)
+in vec4 i_d12; in vec4 i_d34; in vec2 i_d5; in vec3 i_position; in vec3 i_angles;
 
 out vec3 world_normal;
 out float bent;             // how far the bend moved this vertex, fraction of len
 
 void main() {
-    AxialInstance inst = axial_instance(d12, d34, d5, pos, rot);   // 16 numbers: s = 1, tw = tp = 0
+    AxialInstance inst = axial_instance(i_d12, i_d34, i_d5, i_position, i_angles);   // 16 numbers: s = 1, tw = tp = 0
     vec3 v, n;
     axial_bend(position, normal, axis, lo, len, inst, v, n);   // the bend alone
     bent = length(v - position) / len;
@@ -87,8 +89,10 @@ def main():
     vertices = ctx.buffer(np.hstack([mesh.positions, mesh.normals]).astype("f4").tobytes())
     indices = ctx.buffer(mesh.faces.astype("u4").tobytes())
     instances = ctx.buffer(params.tobytes())                    # 64 bytes an instance, divisor 1
+    # the buffer's layout comes from the record table: ("4f", "4f", "2f", "3f", "3f"), ("i_d12", ...)
+    formats, names, _ = record.gl_layout(extended=False, quantized=False)
     vao = ctx.vertex_array(prog, [(vertices, "3f 3f", "position", "normal"),
-                                  (instances, "4f 4f 2f 3f 3f/i", "d12", "d34", "d5", "pos", "rot")],
+                                  (instances, " ".join(formats) + "/i", *names)],
                            index_buffer=indices, index_element_size=4)
 
     # your own camera, straight from pyrr

@@ -22,7 +22,6 @@ import numpy as np
 from PIL import Image
 
 import axialdeform as ad
-from axialdeform.core.scene import load_scene
 from axialdeform.gl.scene import SceneRenderer, scene_camera
 
 SCENE = Path(__file__).resolve().parent / "landscape" / "landscape.toml"
@@ -62,7 +61,7 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     size, frames = ((320, 240), 5) if args.quick else ((800, 600), 24)
 
-    scene = load_scene(SCENE, scale_counts=0.4 if args.quick else 1.0)
+    scene = ad.Scene.load(SCENE, scale_counts=0.4 if args.quick else 1.0)   # layers, terrain, wind, look
     leaves = next(layer for layer in scene.layers if layer.name == "leaves")
     falling = Falling(leaves, "xyz".index(scene.up))
     ctx = ad.create_context()

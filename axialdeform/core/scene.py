@@ -177,10 +177,11 @@ class Scene:
         return cls(path=None, up=up, layers=[layer], wind=wind)
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "Scene":
+    def load(cls, path: str | os.PathLike, *, scale_counts: float = 1.0) -> "Scene":
         """A scene file (TOML, see :mod:`axialdeform.core.scene`); errors are
-        :class:`SceneError` naming the file, the line and the key."""
-        return load_scene(path)
+        :class:`SceneError` naming the file, the line and the key.
+        ``scale_counts`` multiplies every scatter recipe's ``count`` (0.1: a quick preview)."""
+        return load_scene(path, scale_counts=scale_counts)
 
 
 def load_scene(path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:
