@@ -22,6 +22,7 @@ drawn with its base colour.
 
 from __future__ import annotations
 
+import os
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -131,9 +132,28 @@ class Part:
 # --------------------------------------------------------------------- visuals
 
 
-def _pixels(image) -> np.ndarray | None:
-    """A PIL image (or None) as (h, w, 4) uint8 RGBA."""
+#: the largest texture decoded, in pixels (64 MP, 256 MB as RGBA); the environment
+#: variable ``AXIALDEFORM_MAX_TEXTURE_PIXELS`` raises (or lowers) it
+MAX_TEXTURE_PIXELS = 8192 * 8192
+
+
+def max_texture_pixels() -> int:
+    """:data:`MAX_TEXTURE_PIXELS`, or ``AXIALDEFORM_MAX_TEXTURE_PIXELS`` when set to a whole number."""
+    value = os.environ.get("AXIALDEFORM_MAX_TEXTURE_PIXELS", "")
+    return int(value) if value.strip().isdigit() else MAX_TEXTURE_PIXELS
+
+
+def _pixels(image, where: str = "") -> np.ndarray | None:
+    """A PIL image (or None) as (h, w, 4) uint8 RGBA.  Its size is read from
+    the header first: an image over :func:`max_texture_pixels` is not decoded
+    (an :class:`AssetWarning` naming ``where``; the part keeps its base colour)."""
     if image is None:
+        return None
+    size = getattr(image, "size", None)
+    if size is not None and int(size[0]) * int(size[1]) > max_texture_pixels():
+        warnings.warn(AssetWarning(
+            f"{where}: a texture of {size[0]}x{size[1]} pixels is over the budget of {max_texture_pixels()} pixels "
+            "(AXIALDEFORM_MAX_TEXTURE_PIXELS raises it); not decoded, drawn with its base colour"), stacklevel=2)
         return None
     try:
         return np.asarray(image.convert("RGBA"), dtype=np.uint8)
@@ -141,7 +161,7 @@ def _pixels(image) -> np.ndarray | None:
         return None
 
 
-def _material_of(visual, fallback_name: str) -> Material:
+def _material_of(visual, fallback_name: str, file_name: str = "") -> Material:
     import trimesh
 
     mat = getattr(visual, "material", None)
@@ -151,7 +171,7 @@ def _material_of(visual, fallback_name: str) -> Material:
         name = mat.name or fallback_name
         diffuse = np.asarray(getattr(mat, "diffuse", (255, 255, 255, 255)), dtype=np.float64).reshape(-1)[:4] / 255.0
         color = np.concatenate([srgb_to_linear(diffuse[:3]), diffuse[3:4] if diffuse.size > 3 else [1.0]])
-        texture = _pixels(getattr(mat, "image", None))
+        texture = _pixels(getattr(mat, "image", None), f"{file_name}: material {name!r}")
         if texture is not None and (texture == texture[0, 0]).all():
             # one colour (trimesh's stand-in for "no material"): the base colour says the same
             px = texture[0, 0].astype(np.float64) / 255.0
@@ -177,8 +197,8 @@ def _material_of(visual, fallback_name: str) -> Material:
     factor = getattr(mat, "baseColorFactor", None)
     # trimesh keeps glTF's linear factor as uint8 0..255
     color = np.ones(4) if factor is None else np.asarray(factor, dtype=np.float64).reshape(-1)[:4] / 255.0
-    texture = _pixels(getattr(mat, "baseColorTexture", None))
-    normal = _pixels(getattr(mat, "normalTexture", None))
+    texture = _pixels(getattr(mat, "baseColorTexture", None), f"{file_name}: material {name!r}")
+    normal = _pixels(getattr(mat, "normalTexture", None), f"{file_name}: material {name!r}, normal map")
     cutoff = getattr(mat, "alphaCutoff", None)
     return Material(name=name, base_color=color, texture=texture,
                     texture_name=None if texture is None else "embedded",
@@ -268,7 +288,7 @@ def gather_parts(loaded, file_name: str, failed=()) -> dict:
         uvs.append(_uvs_of(geom, n, file_name))
         colors.append(_colors_of(geom, n, file_name))
         fallback = node or Path(file_name).stem
-        material = _material_of(geom.visual, fallback)
+        material = _material_of(geom.visual, fallback, file_name)
         part_name = node or material.name or fallback
         parts.append(Part(name=part_name, start=start, count=len(faces), material=material))
         geometries.append((geom, transform))

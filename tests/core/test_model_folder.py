@@ -82,3 +82,19 @@ def test_a_texture_inside_the_folder_and_a_data_uri_still_load(secret, tmp_path)
         g.save_json(str(tmp_path / "model" / "x" / "leaf.gltf"))
     mesh, said = _load(tmp_path / "model" / "x" / "leaf.gltf")
     assert len(said) == 1 and "'../secret.png'" in said[0] and "outside the model's folder" in said[0]
+
+
+def test_a_texture_over_the_pixel_budget_is_not_decoded(secret, monkeypatch):
+    """The size is read from the image header; over the budget the texture is never
+    decoded (a 9000 x 9000 PNG of 258 KB took 1.36 GB in every command before)."""
+    folder = secret.parent / "model"
+    import shutil
+
+    shutil.copy(secret, folder / "own.png")  # 8 x 8 = 64 pixels
+    monkeypatch.setenv("AXIALDEFORM_MAX_TEXTURE_PIXELS", "63")
+    mesh, said = _load(_card(folder, "own.png"))
+    assert len(said) == 1 and "card.obj: material 'Leafy': a texture of 8x8 pixels is over the budget of 63" in said[0]
+    assert "AXIALDEFORM_MAX_TEXTURE_PIXELS" in said[0] and mesh.parts[0].material.texture is None
+    monkeypatch.setenv("AXIALDEFORM_MAX_TEXTURE_PIXELS", "64")
+    mesh, said = _load(_card(folder, "own.png"))
+    assert said == [] and mesh.parts[0].material.texture is not None
