@@ -1,0 +1,78 @@
+"""glTF node graphs are walked once (issue 23, item 3): a deep chain of nodes
+loads (it took 55 s and ended in a RecursionError at 1 000 nodes), a cycle is
+a MeshError naming the file, and the world transforms are trimesh's own."""
+
+from __future__ import annotations
+
+import base64
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import axialdeform as ad
+from axialdeform.core.material import _geometry_nodes
+
+SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "meshes"
+
+
+def _gltf(path: Path, nodes: list, scene_nodes: list) -> Path:
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
+    buf = pos + np.array([0, 1, 2], np.uint16).tobytes() + b"\0\0"
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": scene_nodes}], "nodes": nodes,
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+           "buffers": [{"byteLength": len(buf),
+                        "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                           {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                          "min": [0, 0, 0], "max": [1, 1, 0]},
+                         {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]}
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_a_deep_chain_of_nodes_loads_with_its_transforms(tmp_path):
+    n = 3000
+    nodes = [{"children": [k + 1], "translation": [0.001, 0, 0]} for k in range(n - 1)] + [{"mesh": 0}]
+    mesh = ad.load_mesh(_gltf(tmp_path / "chain.gltf", nodes, [0]))
+    assert np.allclose(mesh.positions.min(axis=0), [0.001 * (n - 1), 0, 0], atol=1e-4)
+
+
+def test_a_cycle_beside_the_scene_is_not_drawn(tmp_path):
+    """Nodes no scene reaches are not drawn (glTF): a cycle among them changes nothing."""
+    nodes = [{"mesh": 0}, {"children": [2]}, {"children": [1], "mesh": 0}]
+    mesh = ad.load_mesh(_gltf(tmp_path / "beside.gltf", nodes, [0]))
+    assert len(mesh.faces) == 1
+
+
+def test_a_cycle_in_the_node_graph_is_our_error(tmp_path):
+    nodes = [{"children": [1]}, {"children": [2], "mesh": 0}, {"children": [1]}]  # 0 -> 1 -> 2 -> 1
+    path = _gltf(tmp_path / "cycle.gltf", nodes, [0])
+    try:
+        loaded = trimesh.load(str(path))
+    except Exception:  # trimesh refusing it itself is fine too; then load_mesh says MeshError
+        loaded = None
+    with pytest.raises(ad.core.MeshError, match="cycle.gltf"):
+        ad.load_mesh(path)
+    assert loaded is None or isinstance(loaded, trimesh.Scene)
+
+
+def test_world_transforms_are_trimeshs():
+    """One walk gives what ``graph[node]`` gives, node by node, on the shared scenes."""
+    checked = 0
+    for path in sorted(SHARED.rglob("*.gl*")):
+        try:
+            scene = trimesh.load(str(path))
+        except Exception:  # noqa: BLE001 - files trimesh cannot read are not this test's
+            continue
+        if not isinstance(scene, trimesh.Scene):
+            continue
+        mine = {node: (m, g) for node, m, g in _geometry_nodes(scene.graph, str(path))}
+        for node in scene.graph.nodes_geometry:
+            matrix, geometry = scene.graph[node]
+            assert mine[node][1] == geometry and np.allclose(mine[node][0], matrix), (path, node)
+        checked += 1
+    assert checked >= 10, checked
