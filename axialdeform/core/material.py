@@ -23,6 +23,7 @@ drawn with its base colour.
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -250,7 +251,7 @@ def _colors_of(geom, n: int, file_name: str) -> np.ndarray | None:
 
 
 def _geometry_nodes(graph, file_name: str) -> list:
-    """``[(node, world transform (4, 4), geometry name), ...]`` of every node
+    """``[(node, world transform (4, 4), geometry name, parent), ...]`` of every node
     that carries geometry, by ONE walk of the scene graph from its root (what
     ``graph[node]`` gives, without walking from the root again for each node:
     a chain of 5 000 nested nodes took 202 s that way).  A node reached twice
@@ -268,13 +269,34 @@ def _geometry_nodes(graph, file_name: str) -> list:
             matrix = data.get("matrix")
             world[child] = world[parent] if matrix is None else world[parent] @ np.asarray(matrix, dtype=np.float64)
             if data.get("geometry") is not None:
-                out.append((child, world[child], data["geometry"]))
+                out.append((child, world[child], data["geometry"], parent))
             stack.append(child)
-    missing = set(graph.nodes_geometry) - {node for node, _, _ in out}
+    missing = set(graph.nodes_geometry) - {node for node, _, _, _ in out}
     if missing:
         raise MeshError(f"{file_name}: nodes {', '.join(sorted(map(repr, missing))[:3])} are never reached from the "
                         "scene's root (a cycle in the node graph); expected a tree")
     return out
+
+
+#: trimesh names the frame of a glTF mesh's second, third ... primitive ``NODE_xxxxxx``
+#: with 6 random hex digits: a name that changes on every load
+_RANDOM_FRAME = re.compile(r"^(?P<parent>.+)_[0-9a-f]{6}$")
+
+
+def _stable_names(placed) -> list[str]:
+    """The node names of ``placed`` (file order), trimesh's random primitive
+    frames replaced by ``NODE_k``: the node's name and the primitive's index
+    among the node's primitives, so a file loads with the same part names
+    (and fingerprint) every time."""
+    names = [str(node) for node, _, _, _ in placed]
+    count: dict[str, int] = {}
+    for i, (node, _, _, parent) in enumerate(placed):
+        m = _RANDOM_FRAME.match(str(node))
+        if m and m.group("parent") == str(parent):
+            k = count.get(str(parent), 0)
+            count[str(parent)] = k + 1
+            names[i] = f"{parent}_{k}"
+    return names
 
 
 def gather_parts(loaded, file_name: str, failed=()) -> dict:
@@ -295,7 +317,8 @@ def gather_parts(loaded, file_name: str, failed=()) -> dict:
         items = []
         order = {key: i for i, key in enumerate(loaded.geometry)}  # the file's order
         placed = sorted(_geometry_nodes(loaded.graph, file_name), key=lambda it: (order.get(it[2], 0), str(it[0])))
-        for node, transform, geom_name in placed:
+        names = _stable_names(placed)
+        for (node, transform, geom_name, _), node in zip(placed, names):
             geom = loaded.geometry.get(geom_name)
             if isinstance(geom, trimesh.Trimesh):
                 t = None if np.allclose(transform, np.eye(4)) else np.asarray(transform, dtype=np.float64)

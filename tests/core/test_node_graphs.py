@@ -70,9 +70,27 @@ def test_world_transforms_are_trimeshs():
             continue
         if not isinstance(scene, trimesh.Scene):
             continue
-        mine = {node: (m, g) for node, m, g in _geometry_nodes(scene.graph, str(path))}
+        mine = {node: (m, g) for node, m, g, _ in _geometry_nodes(scene.graph, str(path))}
         for node in scene.graph.nodes_geometry:
             matrix, geometry = scene.graph[node]
             assert mine[node][1] == geometry and np.allclose(mine[node][0], matrix), (path, node)
         checked += 1
     assert checked >= 10, checked
+
+
+def test_part_names_and_fingerprint_are_the_same_on_every_load(tmp_path):
+    """A glTF mesh of several primitives: trimesh names their frames with random
+    hex digits; the parts are ``NODE_k`` (the primitive's index), load after load."""
+    path = _gltf(tmp_path / "prims.gltf", [{"name": "Bottle", "mesh": 0}], [0])
+    doc = json.loads(path.read_text())
+    prim = doc["meshes"][0]["primitives"][0]
+    doc["meshes"][0]["primitives"] = [prim, dict(prim), dict(prim)]
+    doc["materials"] = [{"name": m} for m in ("Glass", "Cap", "Label")]
+    for k, p in enumerate(doc["meshes"][0]["primitives"]):
+        p["material"] = k
+    path.write_text(json.dumps(doc))
+    loads = [ad.load_mesh(path) for _ in range(4)]
+    names = [[p.name for p in m.parts] for m in loads]
+    assert names[0] == ["Bottle_0", "Bottle_1", "Bottle_2"] and all(n == names[0] for n in names), names
+    assert len({m.fingerprint for m in loads}) == 1
+    assert [p.material.name for p in loads[0].parts] == ["Glass", "Cap", "Label"]  # primitive order kept
