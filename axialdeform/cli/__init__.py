@@ -45,6 +45,18 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: C0 and C1 control characters and DEL: escaped before they reach the terminal
+_CONTROL = {c: f"\\x{c:02x}" for c in (*range(0x20), 0x7F, *range(0x80, 0xA0))}
+_CONTROL.update({ord("\n"): "\\n", ord("\r"): "\\r", ord("\t"): "\\t"})
+
+
+def one_line(text) -> str:
+    """``text`` safe to print as one line: a newline, an escape sequence or any
+    other control character (in a file name, say) is shown escaped, never
+    obeyed by the terminal."""
+    return str(text).translate(_CONTROL)
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -58,7 +70,7 @@ def main(argv=None) -> int:
         # the library's own warnings (an asset, a mesh too small for LOD, a pass
         # that fell back): one line, no source context
         if issubclass(category, AssetWarning) or os.path.abspath(str(filename)).startswith(package + os.sep):
-            print(f"axialdeform {args.command}: warning: {message}", file=sys.stderr)
+            print(f"axialdeform {args.command}: warning: {one_line(message)}", file=sys.stderr)
         else:
             previous(message, category, filename, lineno, file, line)
 
@@ -69,11 +81,11 @@ def main(argv=None) -> int:
         if status:
             return int(status)
     except AxialDeformError as exc:
-        print(f"axialdeform {args.command}: error: {exc}", file=sys.stderr)
+        print(f"axialdeform {args.command}: error: {one_line(exc)}", file=sys.stderr)
         return 2
     except OSError as exc:
         where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
-        print(f"axialdeform {args.command}: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        print(f"axialdeform {args.command}: error:{one_line(where)} {one_line(exc.strerror or exc)}", file=sys.stderr)
         return 2
     except MemoryError:
         print(f"axialdeform {args.command}: error: out of memory (the input asks for more than this machine has; "

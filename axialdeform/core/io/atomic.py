@@ -20,6 +20,7 @@ import tempfile
 from pathlib import Path
 from typing import Iterator
 
+from ..errors import PathError
 from .safeio import check_not_special
 
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "sweep_stale_parts"]
@@ -79,6 +80,9 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     # a device, a FIFO or a symlink to one is never replaced by a regular file
     check_not_special(path, "output")
     folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():  # say so in the user's words, not through the temporary file's name
+        what = "is not a folder" if folder.exists() else "does not exist"
+        raise PathError(f"{path}: its folder {folder} {what}; expected an existing folder for the output")
     key = os.path.abspath(folder)
     if key not in _swept:  # once per folder and process: cheap even for folders of many files
         _swept.add(key)
