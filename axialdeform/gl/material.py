@@ -18,6 +18,7 @@ import numpy as np
 
 from ..core.errors import ContextError
 from .buffers import _content
+from .context import texture_anisotropy
 from .uniforms import set_uniforms
 
 __all__ = ["AppearanceBuffer", "GpuMaterials", "ALPHA_MODE_INDEX", "GL_SRGB8_ALPHA8"]
@@ -67,7 +68,7 @@ class GpuMaterials:
         self._textures: dict[int, tuple] = {}  # id(material) -> (base texture or None, normal texture or None)
         self._objects = []
         self._released = False
-        anisotropy = float(min(8.0, getattr(ctx, "max_anisotropy", 1.0) or 1.0))
+        anisotropy = texture_anisotropy(ctx)  # none on a software rasteriser (gl/context.py)
         try:
             for part in mesh.parts:
                 m = part.material
