@@ -94,3 +94,27 @@ def test_part_names_and_fingerprint_are_the_same_on_every_load(tmp_path):
     assert names[0] == ["Bottle_0", "Bottle_1", "Bottle_2"] and all(n == names[0] for n in names), names
     assert len({m.fingerprint for m in loads}) == 1
     assert [p.material.name for p in loads[0].parts] == ["Glass", "Cap", "Label"]  # primitive order kept
+
+
+def test_skins_morph_targets_and_animations_are_said_once(tmp_path):
+    """They are drawn in the rest pose, with ONE warning naming what the file asks for."""
+    import warnings
+
+    path = _gltf(tmp_path / "rig.gltf", [{"mesh": 0, "skin": 0}, {"name": "joint"}], [0, 1])
+    doc = json.loads(path.read_text())
+    doc["skins"] = [{"joints": [1]}]
+    doc["meshes"][0]["primitives"][0]["targets"] = [{"POSITION": 0}]
+    doc["animations"] = [{"channels": [], "samplers": []}]
+    path.write_text(json.dumps(doc))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            mesh = ad.load_mesh(path)
+        except ad.core.MeshError:  # trimesh refusing the rig is fine; the point is our one warning first
+            mesh = None
+    said = [str(w.message) for w in caught if issubclass(w.category, ad.core.AssetWarning)]
+    assert len(said) == 1 and "rig.gltf: 1 skin(s), morph targets on 1 primitive(s), 1 animation(s)" in said[0]
+    assert "rest pose" in said[0]
+    assert mesh is None or len(mesh.faces) == 1
+    plain = ad.load_mesh(_gltf(tmp_path / "plain.gltf", [{"mesh": 0}], [0]))  # nothing to say
+    assert len(plain.faces) == 1

@@ -6,17 +6,18 @@ from __future__ import annotations
 
 import os
 import re
+import warnings
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MeshError
-from ..material import compute_tangents, gather_parts
+from ..material import AssetWarning, compute_tangents, gather_parts
 from ..mesh import BaseMesh, _check_float32_range, area_weighted_normals
 from . import safeio
 from .gltf import gltf_attributes
-from .resolver import SafeResolver, gltf_references, is_image_name
+from .resolver import SafeResolver, gltf_json, gltf_references, is_image_name, unsupported_features
 from .safeio import read_regular
 
 __all__ = ['BUNDLED_MESHES', 'MESH_SUFFIXES', 'bundled_mesh_path', 'load_mesh', 'mesh_source_path']
@@ -92,6 +93,11 @@ def load_mesh(source) -> BaseMesh:
     kind = path.suffix.lower().lstrip(".")
     # each file a glTF refers to is read with the bound it declares (a buffer's byteLength)
     declared = gltf_references(data, kind, name) if kind in ("gltf", "glb") else {}
+    if kind in ("gltf", "glb"):
+        rest = unsupported_features(gltf_json(data, kind))
+        if rest:  # said once, in our words: trimesh drops them silently
+            warnings.warn(AssetWarning(f"{name}: {', '.join(rest)} are not supported; the mesh is drawn in its rest "
+                                       "pose"), stacklevel=2)
     resolver = SafeResolver(path.parent, declared=declared, referrer=path.name)
     try:
         import io

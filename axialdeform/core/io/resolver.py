@@ -13,7 +13,8 @@ from ..errors import MeshError, PathError
 from . import safeio
 from .safeio import MAX_REFERENCED_BYTES, open_regular, read_regular
 
-__all__ = ['BUFFER_SLACK', 'IMAGE_SUFFIXES', 'SafeResolver', 'gltf_references', 'is_image_name']
+__all__ = ['BUFFER_SLACK', 'IMAGE_SUFFIXES', 'SafeResolver', 'gltf_json', 'gltf_references', 'is_image_name',
+           'unsupported_features']
 
 
 #: suffixes of the files a mesh refers to that are pictures (textures)
@@ -23,6 +24,37 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".gif", ".webp", ".ti
 def is_image_name(name: str) -> bool:
     """True for a referenced file that is a picture (a texture), by its suffix."""
     return os.path.splitext(str(name))[1].lower() in IMAGE_SUFFIXES
+
+
+def gltf_json(data: bytes, kind: str) -> dict:
+    """The JSON of a glTF (``kind`` ``"gltf"``) or of a GLB's JSON chunk
+    (``"glb"``), or ``{}`` when it cannot be read (the loader says why)."""
+    try:
+        if kind == "glb":
+            magic, _version, _length, chunk, ctype = struct.unpack_from("<4sIIII", data)
+            if magic != b"glTF" or ctype != 0x4E4F534A:
+                return {}
+            data = bytes(data[20 : 20 + chunk])
+        tree = json.loads(bytes(data).decode("utf-8"))
+    except (ValueError, struct.error, UnicodeDecodeError, RecursionError):
+        return {}
+    return tree if isinstance(tree, dict) else {}
+
+
+def unsupported_features(tree: dict) -> list[str]:
+    """What a glTF's JSON asks for that the bend does not draw: skins, morph
+    targets, animations (each drawn in the rest pose)."""
+    found = []
+    meshes = tree.get("meshes") if isinstance(tree.get("meshes"), list) else []
+    if isinstance(tree.get("skins"), list) and tree["skins"]:
+        found.append(f"{len(tree['skins'])} skin(s)")
+    targets = sum(1 for m in meshes if isinstance(m, dict) for p in (m.get("primitives") or [])
+                  if isinstance(p, dict) and p.get("targets"))
+    if targets:
+        found.append(f"morph targets on {targets} primitive(s)")
+    if isinstance(tree.get("animations"), list) and tree["animations"]:
+        found.append(f"{len(tree['animations'])} animation(s)")
+    return found
 
 
 def gltf_references(data: bytes, kind: str, name: str = "<gltf>") -> dict[str, tuple[str, int | None]]:
@@ -36,18 +68,8 @@ def gltf_references(data: bytes, kind: str, name: str = "<gltf>") -> dict[str, t
     ``byteLength`` that is not a whole number >= 1 raises :class:`MeshError`
     naming ``name`` and the field."""
 
-    try:
-        if kind == "glb":
-            magic, _version, _length, chunk, ctype = struct.unpack_from("<4sIIII", data)
-            if magic != b"glTF" or ctype != 0x4E4F534A:
-                return {}
-            data = bytes(data[20 : 20 + chunk])
-        tree = json.loads(bytes(data).decode("utf-8"))
-    except (ValueError, struct.error, UnicodeDecodeError):
-        return {}
+    tree = gltf_json(data, kind)
     out: dict[str, tuple[str, int | None]] = {}
-    if not isinstance(tree, dict):
-        return out
     for group in ("buffers", "images"):
         items = tree.get(group)
         for i, item in enumerate(items if isinstance(items, list) else []):
