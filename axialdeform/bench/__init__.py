@@ -348,10 +348,6 @@ def run_bench(
     elif not callable(progress):
         raise AxialDeformError(f"progress: expected a callable progress(done, total, label) or None, "
                                f"found {type(progress).__name__}")
-    if out is not None:
-        from .report import import_pyplot
-
-        import_pyplot()  # fail early, not after the run
     if quick:
         counts = QUICK_COUNTS if tuple(counts) == COUNTS else counts
         repeats = 1

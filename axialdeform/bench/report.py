@@ -57,11 +57,18 @@ def with_goals(details: dict) -> dict:
 
 
 def write_report(details: dict, out, plt=None) -> Path:
-    """Write ``bench.md`` and the two plots into the folder ``out``; returns the report's path."""
+    """Write ``bench.md`` and the two plots into the folder ``out``; returns the report's path.
+    Without matplotlib (the ``bench`` extra) the report has its tables and says
+    where the plots would be: the run is never lost for want of a plot."""
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    plots = plot_files(plt or import_pyplot(), details["stats"], out)
+    try:
+        plt = plt or import_pyplot()
+    except AxialDeformError:
+        plt = None
+    plots = plot_files(plt, details["stats"], out) if plt is not None else {
+        fig: "plots-need-matplotlib: pip install 'axialdeform[bench]'" for fig in ("fig5", "fig6")}
     path = out / "bench.md"
     atomic_write_text(path, render(with_goals(details), plots))
     return path

@@ -65,7 +65,7 @@ def positive_int(text: str) -> int:
 
 def add_mesh_and_params(p) -> None:
     """The MESH and PARAMS positional arguments of the commands that read both."""
-    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf', or a scene file (.toml, then no PARAMS)")
+    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard', or a scene file (.toml, then no PARAMS)")
     p.add_argument("params", nargs="?", help="parameter file (.adp binary, .txt/.csv/.dat text); required unless MESH is a scene file")
 
 

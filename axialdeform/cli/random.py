@@ -19,9 +19,9 @@ from ._common import AXES, angle_range, extension_args, mesh_file
 
 def add_parser(sub) -> None:
     r = sub.add_parser("random", help="write random parameters for a mesh", description=(
-        "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf'); "
+        "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf' / 'leafcard'); "
         "the output is binary for .adp, text for .txt/.csv/.dat."))
-    r.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
+    r.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
     r.add_argument("-n", "--count", type=int, required=True, help=(
         "number of instances (required, no default); at most 2147483647 and what the output's disk holds: "
         "64 bytes an instance in .adp, 32 quantized, up to 256 in text (19 numbers: 76, 38, 304); "

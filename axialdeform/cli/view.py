@@ -25,10 +25,10 @@ from .random import RANDOM_BYTES_EACH
 
 def add_parser(sub) -> None:
     v = sub.add_parser("view", help="look at instances in an interactive window", description=(
-        "Open MESH (a file, or 'stone' / 'leaf') deformed by PARAMS (or by random parameters) in a window: "
+        "Open MESH (a file, or 'stone' / 'leaf' / 'leafcard') deformed by PARAMS (or by random parameters) in a window: "
         "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
         "UP/DOWN bend amplitude, G ground, V wind, R reset camera, S screenshot, ESC quit."))
-    v.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf'")
+    v.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
     v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
     v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
     v.add_argument("--seed", type=int, default=None,

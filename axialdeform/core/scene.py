@@ -5,6 +5,7 @@ on Python 3.10).
 ::
 
     up = "y"                       # world up axis (default "y")
+    background = [0.80, 0.87, 0.95]  # the clear colour, sRGB (default: axialdeform.Look's)
     include = ["common.toml"]      # optional: layers of other scene files (paths relative to this file)
 
     [terrain]                      # optional: what scatter recipes place on, drawn as a mesh

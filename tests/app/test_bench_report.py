@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 
+import axialdeform as ad
+
 from axialdeform.bench import report, stats
 from axialdeform.cli import main
 
@@ -145,3 +147,16 @@ def test_ctrl_c_keeps_what_was_measured(tmp_path):
     assert len(cases) < 16  # 4 methods x 2 counts x 2 modes were planned
     text = (out / "bench.md").read_text()
     assert "Stopped early" in text and f"{len(cases)} method × count × mode cases" in text
+
+
+def test_report_without_matplotlib_keeps_the_run(details, tmp_path, monkeypatch):
+    """After ``pip install .`` (no ``bench`` extra) the report is written with its
+    tables and says how to get the plots: a measured run is never lost."""
+    def no_matplotlib():
+        raise ad.AxialDeformError("the bench plots need matplotlib")
+
+    monkeypatch.setattr(report, "import_pyplot", no_matplotlib)
+    path = report.write_report(details, tmp_path / "out")
+    text = path.read_text()
+    assert "axialdeform[bench]" in text and "| method | mode |" in text
+    assert not list((tmp_path / "out").glob("*.png"))
