@@ -13,7 +13,7 @@ from ..core.io.mesh import load_mesh, mesh_source_path
 from ..core.io.params import read_params
 from ..core.io.safeio import check_output_path
 from ..core.lod import check_lod_error
-from ..core.params import range_warning
+from ..core.params import check_drawable, range_warning
 from ..core.wind import Wind
 
 AXES = ("x", "y", "z")
@@ -89,6 +89,8 @@ def load(args, what: str = "output", allow_folder: bool = False):
     check_output_path(args.output, (mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)
     mesh = load_mesh(args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+    if args.command in ("render", "view", "web"):  # a picture: every number must survive the projection
+        check_drawable(params, str(args.params))
     warn_ranges(args, mesh, params)
     return mesh, params
 

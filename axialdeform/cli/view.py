@@ -7,6 +7,7 @@ from ..core.io.mesh import load_mesh
 from ..core.io.params import read_params
 from ..core.io.safeio import check_count
 from ..core.look import Look
+from ..core.params import check_drawable
 from ..core.variation import random_params
 from ..gl.renderer import MODES
 from . import scenes
@@ -80,6 +81,7 @@ def run(args) -> None:
     elif args.params:
         mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+        check_drawable(params, str(args.params))  # a picture: every number must survive the projection
         check_triangles([(f"{args.mesh} x {args.params}", len(params), drawn_triangles(mesh, args.part))],
                         args.mode, args.max_triangles, args.fast, frames)  # before the levels of detail, any drawing
         seed = args.seed  # a file records no seed: shown only if the user names one

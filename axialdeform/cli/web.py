@@ -9,6 +9,7 @@ from urllib.parse import quote
 from ..core.errors import AxialDeformError
 from ..core.io.mesh import load_mesh, mesh_source_path
 from ..core.io.params import read_params
+from ..core.params import check_drawable
 from ..core.scene import is_scene_file
 from ..web import build_scene, build_scene_file, make_server, write_page
 from ._common import add_wind_args, wind_arg
@@ -79,6 +80,7 @@ def run(args) -> None:
 
         mesh = load_mesh(args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
+        check_drawable(params, str(args.params))  # a picture: every number must survive the projection
         scene = build_scene(mesh, params, size=size, up=args.up, mode=args.mode, quantize=not args.float32,
                             fixed_size=args.size is not None, wind=wind_arg(args), time=time)
         page = write_page(out, scene, inputs=(mesh_source_path(args.mesh), args.params), overwrite=args.overwrite)

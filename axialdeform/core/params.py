@@ -44,7 +44,7 @@ from .record import (  # the record's columns and slices: one home
     as_instances,
 )
 
-__all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'extend_params', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L']
+__all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'extend_params', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L', 'check_drawable', 'DRAWABLE_MAGNITUDE']
 
 
 def as_params(values, *, name: str = "parameters", error: type = ParamError, rows=None, widths=WIDTHS) -> np.ndarray:
@@ -154,6 +154,27 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
 #: float32 precision of about 1e-5 L; beyond it errors grow in proportion
 #: (measured: ``tools/precision.py``, see docs/reliability.md)
 SAFE_DISTANCE_L = 100.0
+
+
+#: the largest offset or position a picture can be drawn with (world units): float32
+#: holds 3.4e38, and clip = proj * view * world multiplies two such magnitudes
+DRAWABLE_MAGNITUDE = 1e18
+
+
+def check_drawable(values, name: str = "parameters") -> None:
+    """:class:`ParamError` naming ``name``, the instance and the field when an
+    offset or position is too large to draw (:data:`DRAWABLE_MAGNITUDE`);
+    files may hold such numbers (they are finite float32), pictures cannot."""
+    v = np.asarray(values)
+    if v.size == 0:
+        return
+    mag = np.abs(v[:, :13])
+    row_max = mag.max(axis=1)
+    worst = int(np.argmax(row_max))
+    if row_max[worst] > DRAWABLE_MAGNITUDE:
+        col = int(np.argmax(mag[worst]))
+        raise ParamError(f"{name}: instance {worst}, field {FIELDS[col]} = {float(v[worst, col]):.6g}; expected at most "
+                         f"{DRAWABLE_MAGNITUDE:g} in magnitude to draw it (float32 cannot project it)")
 
 
 def range_warning(mesh, values, name: str = "parameters") -> str | None:

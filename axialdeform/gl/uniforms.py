@@ -22,8 +22,12 @@ def camera_matrices(view, projection) -> tuple[np.ndarray, np.ndarray]:
         if not np.isfinite(a).all():
             raise ArgumentError(f"{name}: expected finite numbers, found {a[~np.isfinite(a)][0]}")
         out.append(a)
+    view = out[0]
     with np.errstate(all="ignore"):
-        cond = np.linalg.cond(out[0])
+        # an affine view (pyrr layout: last column 0 0 0 1) is invertible when its 3x3 part is;
+        # its translation (a camera far from the origin) must not count against it
+        affine = np.array_equal(view[:, 3], [0.0, 0.0, 0.0, 1.0])
+        cond = np.linalg.cond(view[:3, :3] if affine else view)
     if not np.isfinite(cond) or cond > 1e12:
         raise ArgumentError(f"view: expected an invertible matrix (a camera), found a singular one "
                             f"(condition number {cond:.3g}), e.g. all zeros")

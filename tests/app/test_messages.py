@@ -37,3 +37,24 @@ def test_an_output_in_a_missing_folder_names_the_folder(tmp_path, command):
     proc = run(*command, cwd=tmp_path)
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
     assert "its folder missing does not exist" in proc.stderr and "axtmp" not in proc.stderr, proc.stderr
+
+
+@pytest.mark.parametrize("command", [["render", "stone", "h.adp", "-o", "h.png", "--size", "32x24"],
+                                     ["web", "stone", "h.adp", "-o", "h.html"],
+                                     ["view", "stone", "h.adp", "--headless", "--frames", "1", "--size", "32x24"]])
+def test_huge_but_finite_parameters_are_named_like_other_bad_values(tmp_path, command):
+    params = ad.random_params(ad.load_mesh("stone"), 4, seed=1)
+    params[2, 11] = 3e38  # finite float32, but no picture can project it
+    ad.write_params(tmp_path / "h.adp", params)
+    proc = run(*command, cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    assert "h.adp: instance 2, field py = 3e+38; expected at most 1e+18" in proc.stderr.splitlines()[-1]
+
+
+def test_a_camera_far_from_the_origin_is_a_camera(tmp_path):
+    """Positions a million units out draw (the view's translation is not its conditioning)."""
+    params = ad.random_params(ad.load_mesh("stone"), 4, seed=1)
+    params[:, 10] += 1e6
+    ad.write_params(tmp_path / "far.adp", params)
+    proc = run("render", "stone", "far.adp", "-o", "far.png", "--size", "32x24", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
