@@ -118,3 +118,21 @@ def test_skins_morph_targets_and_animations_are_said_once(tmp_path):
     assert mesh is None or len(mesh.faces) == 1
     plain = ad.load_mesh(_gltf(tmp_path / "plain.gltf", [{"mesh": 0}], [0]))  # nothing to say
     assert len(plain.faces) == 1
+
+
+def test_trimesh_failures_are_said_in_words():
+    """A file trimesh cannot read is a MeshError in words, never Python's own text
+    (116 of the validator suite's refusals showed ``UnboundLocalError: ...``)."""
+    import re
+    import warnings
+
+    failures = 0
+    for path in sorted((SHARED / "gltf" / "validator").rglob("*.gl*")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                ad.load_mesh(path)
+            except ad.core.MeshError as exc:
+                failures += 1
+                assert not re.search(r"\b[A-Z]\w*(Error|Exception)\b|Traceback", str(exc)), str(exc)
+    assert failures >= 5, failures

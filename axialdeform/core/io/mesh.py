@@ -121,11 +121,28 @@ def load_mesh(source) -> BaseMesh:
         raise
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         _refuse(name, resolver, declared)  # a refused buffer is the reason: say it plainly
-        raise MeshError(f"{name}: could not read the mesh file ({type(exc).__name__}: {exc})") from None
+        raise MeshError(f"{name}: could not read the mesh file: {_in_words(exc, kind)}") from None
     file_positions = _obj_positions(data) if path.suffix.lower() == ".obj" else None  # the bytes read above
     dropped = gltf_attributes(data, kind, SafeResolver(path.parent)) if kind in ("glb", "gltf") else []
     del data
     return _from_loaded(loaded, name, file_positions, resolver.failed, dropped)
+
+
+def _in_words(exc: BaseException, kind: str) -> str:
+    """What went wrong inside trimesh, in words (never Python's own text)."""
+    what = {"glb": "binary glTF", "gltf": "glTF"}.get(kind, kind.upper())
+    if isinstance(exc, KeyError) and exc.args:
+        return f"a field it needs is missing ({exc.args[0]!r}); expected a complete {what} file"
+    if isinstance(exc, (IndexError, UnboundLocalError)):
+        return f"it refers to data it does not hold (an index out of range); expected a consistent {what} file"
+    if isinstance(exc, (ValueError, TypeError)):
+        text = str(exc).splitlines()[0][:120] if str(exc) else "a value of the wrong kind"
+        return f"a malformed value ({text}); expected a valid {what} file"
+    if isinstance(exc, (UnicodeError, EOFError)):
+        return f"its bytes end early or are not text where text belongs; expected a valid {what} file"
+    if isinstance(exc, MemoryError):
+        return "it asks for more memory than this machine has"
+    return f"trimesh cannot read it; expected a valid {what} file"
 
 
 def _refuse(name: str, resolver, declared: dict) -> None:
