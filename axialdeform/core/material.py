@@ -79,6 +79,11 @@ class Material:
         Light the back of a face as its front and never cull it.
     normal_texture : (h, w, 4) uint8 or None
         Tangent-space normal map (linear).
+    sources : dict
+        ``{"texture" | "normal_texture": (bytes, mime type)}``: the image
+        files those pixels were decoded from, exactly (a PNG or JPEG of the
+        model), so exports carry them as they came instead of encoding
+        again.  Not part of equality.
     """
 
     name: str = "default"
@@ -89,6 +94,7 @@ class Material:
     alpha_cutoff: float = 0.5
     double_sided: bool = False
     normal_texture: np.ndarray | None = None
+    sources: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         color = np.asarray(self.base_color, dtype=np.float32).reshape(-1)
@@ -144,6 +150,24 @@ def max_texture_pixels() -> int:
     return int(value) if value.strip().isdigit() else MAX_TEXTURE_PIXELS
 
 
+#: the image formats glTF carries as they are (others are encoded as PNG)
+_GLTF_MIME = {"PNG": "image/png", "JPEG": "image/jpeg"}
+
+
+def _source(image) -> tuple[bytes, str] | None:
+    """The bytes a PIL image was opened from (a PNG or JPEG that trimesh read
+    from the model) with its mime type, or None."""
+    import io
+
+    fp, mime = getattr(image, "fp", None), _GLTF_MIME.get(getattr(image, "format", None) or "")
+    if mime is None or not isinstance(fp, io.BytesIO):
+        return None
+    data = fp.getvalue()
+    # the image ends at its own end marker (a buffer view may carry padding after it)
+    end, size = (data.rfind(b"IEND"), 8) if mime == "image/png" else (data.rfind(b"\xff\xd9"), 2)
+    return (data[:end + size] if end >= 0 else data), mime
+
+
 def _pixels(image, where: str = "") -> np.ndarray | None:
     """A PIL image (or None) as (h, w, 4) uint8 RGBA.  Its size is read from
     the header first: an image over :func:`max_texture_pixels` is not decoded
@@ -172,6 +196,7 @@ def _material_of(visual, fallback_name: str, file_name: str = "") -> Material:
         name = mat.name or fallback_name
         diffuse = np.asarray(getattr(mat, "diffuse", (255, 255, 255, 255)), dtype=np.float64).reshape(-1)[:4] / 255.0
         color = np.concatenate([srgb_to_linear(diffuse[:3]), diffuse[3:4] if diffuse.size > 3 else [1.0]])
+        source = _source(getattr(mat, "image", None))
         texture = _pixels(getattr(mat, "image", None), f"{file_name}: material {name!r}")
         if texture is not None and (texture == texture[0, 0]).all():
             # one colour (trimesh's stand-in for "no material"): the base colour says the same
@@ -192,21 +217,25 @@ def _material_of(visual, fallback_name: str, file_name: str = "") -> Material:
         # OBJ has no notion of sides; viewers light both (as the plain path does)
         return Material(name=name, base_color=color, texture=texture,
                         texture_name=None if texture is None else "map_Kd", alpha_mode=alpha_mode,
-                        double_sided=True)
+                        double_sided=True, sources={} if texture is None or source is None else {"texture": source})
     # PBRMaterial
     name = getattr(mat, "name", None) or fallback_name
     factor = getattr(mat, "baseColorFactor", None)
     # trimesh keeps glTF's linear factor as uint8 0..255
     color = np.ones(4) if factor is None else np.asarray(factor, dtype=np.float64).reshape(-1)[:4] / 255.0
+    sources = {key: src for key, img in (("texture", getattr(mat, "baseColorTexture", None)),
+                                         ("normal_texture", getattr(mat, "normalTexture", None)))
+               if (src := _source(img)) is not None}
     texture = _pixels(getattr(mat, "baseColorTexture", None), f"{file_name}: material {name!r}")
     normal = _pixels(getattr(mat, "normalTexture", None), f"{file_name}: material {name!r}, normal map")
+    sources = {k: v for k, v in sources.items() if (texture if k == "texture" else normal) is not None}
     cutoff = getattr(mat, "alphaCutoff", None)
     return Material(name=name, base_color=color, texture=texture,
                     texture_name=None if texture is None else "embedded",
                     alpha_mode=(getattr(mat, "alphaMode", None) or "OPAQUE").upper(),
                     alpha_cutoff=0.5 if cutoff is None else float(cutoff),
                     double_sided=bool(getattr(mat, "doubleSided", False)),
-                    normal_texture=normal)
+                    normal_texture=normal, sources=sources)
 
 
 def _uvs_of(geom, n: int, file_name: str) -> np.ndarray | None:

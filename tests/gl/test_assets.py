@@ -761,3 +761,37 @@ def test_ply_part_files_keep_vertex_colours(tmp_path):
         g = trimesh.load(f, process=False)
         srgb = np.round(255 * np.append(linear_to_srgb(want[:3]), want[3])).astype(int)
         assert len(g.vertices) == 3 and (np.abs(g.visual.vertex_colors.astype(int) - srgb) <= 1).all()
+
+
+def test_textures_pass_through_export_as_the_model_ships_them(tmp_path):
+    """A baked GLB carries the model's own image bytes (a JPEG stays that JPEG),
+    each encoded at most once: about the size of its source plus its geometry
+    (a 1.2 MB model baked to 8.6 MB a file, 45 s for 20, before)."""
+    import pygltflib
+
+    from axialdeform.core.io.bake import write_mesh_folder
+    from axialdeform.core.io.gltf import read_accessor  # noqa: F401 - the module under test
+
+    source = shared_mesh(ALPHA_TEST)
+    mesh = ad.load_mesh(source)
+    params = ad.random_params(mesh, 3, seed=2, bend=0.1)
+    pos, nrm = ad.bake(mesh, params)
+    files = write_mesh_folder(tmp_path / "out", mesh, pos, nrm, "glb", params=params)
+
+    def images(path):
+        g = pygltflib.GLTF2.load(str(path))
+        blob = g.binary_blob()
+        out = []
+        for im in g.images:
+            view = g.bufferViews[im.bufferView]
+            out.append((im.mimeType, blob[view.byteOffset or 0:(view.byteOffset or 0) + view.byteLength]))
+        return out
+
+    wanted = images(source)  # (a view of the source may hold padding after the image's end)
+    for f in files:
+        got = images(f)
+        assert got and all(any(m == wm and wb.startswith(b) and len(wb) - len(b) < 4 for wm, wb in wanted)
+                           for m, b in got), [m for m, _ in got]  # the model's own bytes and formats
+        assert any(m == "image/jpeg" for m, _ in got)  # its JPEGs stay JPEGs
+        assert f.stat().st_size < 1.5 * source.stat().st_size
+    _validate(*files[:1])

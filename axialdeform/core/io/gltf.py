@@ -156,10 +156,33 @@ class _Builder:
         return b"".join(self.gltf.save_to_bytes())
 
 
+#: id(pixels) -> (the pixels, their PNG): each image is encoded at most once a process
+#: (a bake writes the same texture into every instance's GLB); the pixels are kept
+#: alive by the entry, so an id is never reused while it is cached
+_PNG_CACHE: dict[int, tuple[np.ndarray, bytes]] = {}
+_PNG_CACHE_MAX = 16
+
+
 def _png(pixels: np.ndarray) -> bytes:
+    hit = _PNG_CACHE.get(id(pixels))
+    if hit is not None and hit[0] is pixels:
+        return hit[1]
     out = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8), "RGBA").save(out, format="PNG")
+    if len(_PNG_CACHE) >= _PNG_CACHE_MAX:
+        _PNG_CACHE.pop(next(iter(_PNG_CACHE)))
+    _PNG_CACHE[id(pixels)] = (pixels, out.getvalue())
     return out.getvalue()
+
+
+def _image_bytes(m, key: str) -> tuple[bytes, str]:
+    """The image of material ``m``'s ``key`` texture as a glTF carries it: the
+    model's own PNG or JPEG bytes when it has them (a JPEG stays that JPEG),
+    else the pixels encoded as PNG (once)."""
+    source = m.sources.get(key)
+    if source is not None:
+        return source
+    return _png(getattr(m, key)), "image/png"
 
 
 class _Appearance:
@@ -202,10 +225,11 @@ class _Appearance:
         if b.gltf.textures:
             b.gltf.samplers = [g.Sampler(magFilter=9729, minFilter=9987, wrapS=10497, wrapT=10497)]
 
-    def _texture(self, b: _Builder, pixels: np.ndarray, name: str) -> int:
+    def _texture(self, b: _Builder, m, key: str, name: str) -> int:
         g = b.g
-        view = b.view(np.frombuffer(_png(pixels), dtype=np.uint8))
-        b.gltf.images.append(g.Image(bufferView=view, mimeType="image/png", name=name))
+        data, mime = _image_bytes(m, key)
+        view = b.view(np.frombuffer(data, dtype=np.uint8))
+        b.gltf.images.append(g.Image(bufferView=view, mimeType=mime, name=name))
         b.gltf.textures.append(g.Texture(sampler=0, source=len(b.gltf.images) - 1, name=name))
         return len(b.gltf.textures) - 1
 
@@ -214,7 +238,7 @@ class _Appearance:
         pbr = g.PbrMetallicRoughness(baseColorFactor=[float(c) for c in m.base_color], metallicFactor=0.0,
                                      roughnessFactor=0.9)
         if m.texture is not None and self.mesh.uvs is not None:
-            pbr.baseColorTexture = g.TextureInfo(index=self._texture(b, m.texture, f"{m.name}_baseColor"))
+            pbr.baseColorTexture = g.TextureInfo(index=self._texture(b, m, "texture", f"{m.name}_baseColor"))
         mat = g.Material(name=m.name, pbrMetallicRoughness=pbr, alphaMode=m.alpha_mode,
                          doubleSided=bool(m.double_sided))
         if m.alpha_mode == "MASK":
@@ -222,7 +246,7 @@ class _Appearance:
         else:
             mat.alphaCutoff = None
         if m.normal_texture is not None and self.mesh.uvs is not None and self.mesh.tangents is not None:
-            mat.normalTexture = g.NormalMaterialTexture(index=self._texture(b, m.normal_texture, f"{m.name}_normal"))
+            mat.normalTexture = g.NormalMaterialTexture(index=self._texture(b, m, "normal_texture", f"{m.name}_normal"))
         b.gltf.materials.append(mat)
         return len(b.gltf.materials) - 1
 
