@@ -591,6 +591,40 @@ def case_files(folder, big: dict) -> None:
     (folder / "inc.toml").write_text('[[layer]]\nname = "inc"\nmesh = "stone"\nparams = "p.adp"\n')
 
 
+def _node_graph_gltf(path, kind: str) -> str:
+    """A glTF whose node graph is hostile: a chain of 1 500 nested nodes, or a cycle."""
+    import base64
+    import json
+
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
+    buf = pos + np.array([0, 1, 2], np.uint16).tobytes() + b"\0\0"
+    if kind == "chain":
+        nodes = [{"children": [i + 1], "translation": [0.001, 0, 0]} for i in range(1499)] + [{"mesh": 0}]
+    else:
+        nodes = [{"children": [1]}, {"children": [2], "mesh": 0}, {"children": [1]}]
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": nodes,
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+           "buffers": [{"byteLength": len(buf),
+                        "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                           {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                          "min": [0, 0, 0], "max": [1, 1, 0]},
+                         {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]}
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(json.dumps(doc))
+    return str(path)
+
+
+def _textured_obj(folder, k: int, texture: str) -> str:
+    """An OBJ whose material names ``texture``: an image bomb, or a file outside the model's folder."""
+    (folder / f"t{k}.mtl").write_text(f"newmtl T\nKd 1 1 1\nmap_Kd {texture}\n")
+    obj = folder / f"t{k}.obj"
+    obj.write_text(f"mtllib t{k}.mtl\nv 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                   "usemtl T\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+    return str(obj)
+
+
 def _resolve_scene(text: str, big: dict) -> str:
     for key, path in big.items():
         if key == "BOMB":
@@ -625,6 +659,12 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
         mesh = str(mesh)
     elif pick == 1:
         mesh = str(tmp / "m.obj")
+    elif pick == 2 and rng.random() < 0.5:  # the classes round three added: node graphs, image bombs, escapes
+        hostile = int(rng.integers(4))
+        if hostile < 2:
+            mesh = _node_graph_gltf(tmp / f"g{k}.gltf", "chain" if hostile == 0 else "cycle")
+        else:
+            mesh = _textured_obj(tmp, k, "bomb.png" if hostile == 2 else str(rng.choice(["../p.adp", "/etc/hostname"])))
     else:
         mesh = str(rng.choice(["stone", "leaf", stone]))
     inputs.append(mesh)
@@ -720,6 +760,14 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
         argv = ["bake", mesh, params, "-o", out, "--engine", pick("cpu", "gpu")]
         if rng.random() < 0.3:
             argv += ["--overwrite"]
+        if rng.random() < 0.1 and os.path.isdir(out):  # the input mesh is one of the folder's instance files
+            import shutil
+
+            own = Path(out) / "instance_000001.obj"
+            shutil.copy(stone, own)
+            argv[1] = str(own)
+            inputs.append(str(own))
+            argv += ["--overwrite", "--ignore-mesh-mismatch"]
     elif command == "export":
         argv = ["export", mesh, params, "-o", output(".glb"), pick("--baked", "--instanced")]
     elif command == "fit":
@@ -777,6 +825,19 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
         for flag in ("--allow-fewer", "--quantize"):
             if rng.random() < 0.3:
                 argv.append(flag)
+    elif command == "web" and rng.random() < 0.15:  # the inputs live in the output folder (round three)
+        import shutil
+
+        site = tmp / f"site{k}"
+        site.mkdir(exist_ok=True)
+        if os.path.isfile(params):
+            shutil.copy(params, site / "params.adp")
+            params = str(site / "params.adp")
+            inputs.append(params)
+        if rng.random() < 0.5:
+            (site / "index.html").write_text("<h1>the user's own page</h1>")
+            inputs.append(str(site / "index.html"))
+        argv = ["web", mesh, params, "-o", str(site)] + (["--overwrite"] if rng.random() < 0.5 else [])
     elif command == "web":
         if rng.random() < 0.15:
             argv = ["web", "-o", pick(str(tmp / "w-served"), str(tmp / "missing"), params, str(tmp / "fifo.bin"))]
@@ -798,6 +859,16 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
         text = scene_texts[int(rng.integers(len(scene_texts)))] if scene_texts else "[[layer]]\nmesh = \"stone\"\n"
         if big_case and rng.random() < 0.5:
             scene = big["BIG_SCENE"]
+        elif rng.random() < 0.1:  # bounded structure (round three): an include chain of 40, or 600 nested arrays
+            if rng.random() < 0.5:
+                for i in range(40):
+                    (tmp / f"chain{k}-{i}.toml").write_text(f'include = ["chain{k}-{i + 1}.toml"]\n' if i < 39 else
+                                                            '[[layer]]\nname = "a"\nmesh = "stone"\nparams = "p.adp"\n')
+                scene = str(tmp / f"chain{k}-0.toml")
+            else:
+                scene = tmp / f"deep{k}.toml"
+                scene.write_text("x = " + "[" * 600 + "]" * 600 + "\n")
+                scene = str(scene)
         else:
             scene = tmp / f"s{k}.toml"
             scene.write_text(_resolve_scene(text, big).replace('"SELF"', f'"{scene.name}"'), encoding="utf-8",
@@ -1083,6 +1154,37 @@ def _verdict(argv, status, result, stderr) -> str:
     return f"crash: exit {code} with {len(errors)} error lines: {stderr[-200:]!r}"
 
 
+def _read_inputs(argv: list, inputs: list) -> list:
+    """The inputs this command line reads: named in it, and not as its output
+    (``-o``, or convert's second file); files a command only writes may change."""
+    outs = set()
+    if "-o" in argv:
+        outs.add(argv[argv.index("-o") + 1])
+    if argv and argv[0] == "convert" and len(argv) > 2:
+        outs.add(argv[2])
+    return [p for p in inputs if p in argv and p not in outs]
+
+
+def _digests(paths, limit: int = 64 << 20) -> dict:
+    """SHA-256 of each regular input file up to ``limit`` bytes (None: gone)."""
+    import hashlib
+    import os
+    import stat as st
+
+    out = {}
+    for p in paths:
+        try:
+            info = os.stat(p)
+        except OSError:
+            if p in out or os.path.lexists(p):
+                out[p] = None
+            continue
+        if st.S_ISREG(info.st_mode) and info.st_size <= limit:
+            with open(p, "rb") as fh:
+                out[p] = hashlib.sha256(fh.read()).hexdigest()
+    return out
+
+
 def run_command(argv: list[str], timeout: float = HANG_S) -> tuple[str, float]:
     """``(verdict, seconds)`` of one command line run in a forked child (see :func:`run_isolated`)."""
     r = run_isolated(argv, timeout)
@@ -1135,6 +1237,7 @@ def fuzz_commands(seconds: float, seed: int, only: tuple = (), big_mb: float = 2
             command = pool[tried % len(pool)] if cycle else (str(rng.choice(only)) if only else None)
             argv, must = _command_case(rng, case_dir, mesh_texts, scene_texts, big, command=command)
             kinds = {p: os.lstat(p).st_mode for p in must["specials"]}
+            before = _digests(_read_inputs(argv, must["inputs"]))  # nothing lost: no input changes (round three)
             largest_in = max([input_bytes(p) for p in must["inputs"]] + [0])
             r = run_isolated(argv, serve=must["serve"])
             verdict = r["verdict"]
@@ -1142,6 +1245,9 @@ def fuzz_commands(seconds: float, seed: int, only: tuple = (), big_mb: float = 2
             largest_out = max([output_bytes(p) for p in must["outputs"]] + [0])
             if _bundled_digest() != bundled:  # an output replaced a file of the package itself
                 verdict = "crash: a bundled mesh file was overwritten"
+            changed = [p for p, d in _digests(list(before)).items() if d != before[p]]
+            if changed:
+                verdict = f"crash: an input was changed or removed: {os.path.basename(changed[0])}"
             for p, mode in kinds.items():  # a FIFO or a symlink stays what it was
                 if not os.path.lexists(p) or stat.S_IFMT(os.lstat(p).st_mode) != stat.S_IFMT(mode):
                     verdict = f"crash: {p} was replaced"
