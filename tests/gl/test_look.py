@@ -44,3 +44,15 @@ def test_scene_files_map_onto_the_look(tmp_path):
     look = ad.Scene.load(tmp_path / "s.toml").look
     assert look == ad.Look(light_dir=(0, 1, 0), ambient=0.5, light_color=(1, 0.5, 0.25), sky_color=(0.1, 0.1, 0.9),
                            background=(0.1, 0.2, 0.3))
+
+
+def test_the_ground_reaches_the_edges_of_the_picture(ctx, stone):
+    """Near and far enclose the ground plane: no straight cut where the picture's
+    bottom (and, below the horizon, its sides) would show the background."""
+    params = ad.random_params(stone, 300, seed=2003, bend=0.14, placement="disc", spacing=0.9 * stone.axis.length)
+    cam = ad.frame_instances(stone, params, 160 / 120, elevation=30.0, azimuth=20.0)  # the demo's camera
+    img = ad.render_image(stone, params, (160, 120), ctx=ctx, camera=cam, look=ad.Look(samples=0)).astype(int)
+    bg = np.round(np.array(ad.Look().background) * 255)
+    ground = np.abs(img - bg).sum(axis=2) > 12
+    assert ground[-1].all(), "the bottom row shows the background: the ground is cut by the near plane"
+    assert ground[60:, 0].all() and ground[60:, -1].all(), "the sides below the horizon show the background"
