@@ -2,7 +2,7 @@
 
 Three ways to draw ``N`` similar shapes, all real, each timed from a fresh
 process start.  Every method draws the plain picture the thesis timed, the
-``fast=True`` path of :func:`axialdeform.gl.image.render_image`: no
+``Look(fast=True)`` path of :func:`axialdeform.gl.image.render_image`: no
 multisampling (``samples=0`` by default), no shadow map, no ground, no
 hidden-line pre-pass:
 
@@ -10,7 +10,7 @@ hidden-line pre-pass:
   orientation only (``AxialRenderer(..., bend=False)``); reads one mesh file.
 * ``loaded`` — ``N`` meshes pre-deformed by the CPU reference
   (:func:`axialdeform.core.deform.deform`), one OBJ file each, read one by one with
-  :func:`axialdeform.core.mesh.load_mesh`, uploaded (one VBO/IBO/VAO each) and
+  :func:`axialdeform.core.io.mesh.load_mesh`, uploaded (one VBO/IBO/VAO each) and
   drawn with one draw call each.
 * ``axial`` — one base mesh + one binary parameter file (``.adp``, float32),
   deformed in the vertex shader, one instanced draw call;

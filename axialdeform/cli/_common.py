@@ -83,7 +83,7 @@ def mesh_file(source):
 def load(args, what: str = "output", allow_folder: bool = False):
     """``(mesh, params)`` from ``args.mesh`` and ``args.params``, after checking
     that ``args.output`` is neither one of them nor a device, FIFO or socket
-    (:func:`~axialdeform.core.safeio.check_output_path`); warns once when the
+    (:func:`~axialdeform.core.io.safeio.check_output_path`); warns once when the
     parameters go past the float32-safe ranges."""
 
     check_output_path(args.output, (mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)

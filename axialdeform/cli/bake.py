@@ -83,7 +83,7 @@ def check_file_count(args, out: Path, count: int) -> None:
 
 def _bake_npz_in_pieces(args, out: Path, mesh, params, wind) -> None:
     """``bake -o OUT.npz``: :func:`~axialdeform.gl.bake.bake_pieces` (either
-    engine) into :func:`~axialdeform.core.bake.write_npz_pieces`; the disk
+    engine) into :func:`~axialdeform.core.io.bake.write_npz_pieces`; the disk
     must hold the archive and, meanwhile, a spooled copy of the normals."""
 
     n, v = len(params), mesh.vertex_count

@@ -151,7 +151,7 @@ SHADER_INPUTS: tuple[ShaderInput, ...] = (
 #: the instanced glTF's attributes (``EXT_mesh_gpu_instancing``) that carry
 #: columns as they are: name -> (accessor type, columns); ``TRANSLATION``,
 #: ``ROTATION`` (a quaternion of the angles) and ``SCALE`` (``(s, s, s)``)
-#: are glTF's own and written by :mod:`axialdeform.core.export`
+#: are glTF's own and written by :mod:`axialdeform.core.io.gltf`
 GLTF_ATTRIBUTES: dict[str, tuple[str, tuple[int, ...]]] = {
     "_AXIAL_D12": ("VEC4", (0, 1, 2, 3)),
     "_AXIAL_D34": ("VEC4", (4, 5, 6, 7)),

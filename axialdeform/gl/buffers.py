@@ -135,7 +135,7 @@ class InstanceBuffer:
     count grows it (orphaning the old storage), a smaller count keeps it.
 
     With ``quantized=True`` each instance is 16 uint16 (32 bytes), the
-    quantization of :func:`axialdeform.core.params.quantize_params`; ``qmin`` and
+    quantization of :func:`axialdeform.core.io.params.quantize_params`; ``qmin`` and
     ``qstep`` ((16,) float32) are the per-column table the vertex shader
     needs (uniforms ``u_qmin``/``u_qstep``, four ``vec4`` each).
 

@@ -106,7 +106,7 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
 
     A mesh with appearance keeps it: ``obj`` writes ``vt``, one shared
     ``material.mtl`` and its textures beside the files; ``glb`` writes each
-    instance as :func:`axialdeform.core.export.encode_baked` does (UVs,
+    instance as :func:`axialdeform.core.io.gltf.encode_baked` does (UVs,
     colours, the material with its texture embedded, and -- given ``params``
     (n, 16|19), the instances the arrays were baked from -- tangents bent by
     the Jacobian); ``ply`` of a mesh with several parts writes one file per

@@ -709,7 +709,7 @@ def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:
     ``(positions (k, 3) float32, {"TANGENT": (k, 4) float32, "TEXCOORD_0":
     (k, 2) float32})`` (the keys the primitive has), one per primitive with
     either, in the file's vertex order, read by pygltflib and
-    :func:`axialdeform.core.export.read_accessor`.  ``kind``: ``"glb"`` or
+    :func:`axialdeform.core.io.gltf.read_accessor`.  ``kind``: ``"glb"`` or
     ``"gltf"``; ``resolver``: reads a ``.gltf``'s external buffer (a
     :class:`~axialdeform.core.material.SafeResolver`).  Only buffer 0 is read
     (the GLB chunk, a data URI or one ``.bin``); what cannot be read is left

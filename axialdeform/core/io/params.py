@@ -603,7 +603,7 @@ def read_param_file(path: str | os.PathLike) -> ParamFile:
     """Read a parameter file, text or binary (told apart by the magic bytes).
 
     The file must be a regular file (a FIFO, a device or a symlink to one is
-    refused without blocking, :func:`~axialdeform.core.safeio.open_regular`);
+    refused without blocking, :func:`~axialdeform.core.io.safeio.open_regular`);
     a binary file is read only if its size is what its header declares, a
     text file only if it fits in the memory available."""
     data, binary = read_param_bytes(path)

@@ -62,7 +62,7 @@ def gltf_references(data: bytes, kind: str, name: str = "<gltf>") -> dict[str, t
     declares about the files it refers to: ``{uri: (field, byte length)}``,
     the length a buffer's ``byteLength`` (``field`` e.g.
     ``"buffers[0].byteLength"``), None for an image (``"images[2].uri"``:
-    bounded by :data:`axialdeform.core.safeio.MAX_IMAGE_BYTES`).  ``data:``
+    bounded by :data:`axialdeform.core.io.safeio.MAX_IMAGE_BYTES`).  ``data:``
     URIs are inside the file and not listed.  A file whose JSON cannot be
     read gives ``{}`` (the mesh loader's own error says why); a buffer
     ``byteLength`` that is not a whole number >= 1 raises :class:`MeshError`
@@ -107,9 +107,9 @@ class SafeResolver:
       more, which are not read); a file smaller or larger is refused without
       being read, the message naming the file, the field and the expectation;
     * a picture (a glTF image, an OBJ texture):
-      :data:`axialdeform.core.safeio.MAX_IMAGE_BYTES`;
+      :data:`axialdeform.core.io.safeio.MAX_IMAGE_BYTES`;
     * anything else (a material library): ``max_bytes``
-      (:data:`axialdeform.core.safeio.MAX_REFERENCED_BYTES`).
+      (:data:`axialdeform.core.io.safeio.MAX_REFERENCED_BYTES`).
 
     Every refusal or failure is recorded in ``failed`` as ``(name, reason)``
     for the loader's warning, and the refusals (not a regular file, too
