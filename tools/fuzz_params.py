@@ -591,18 +591,15 @@ def case_files(folder, big: dict) -> None:
     (folder / "inc.toml").write_text('[[layer]]\nname = "inc"\nmesh = "stone"\nparams = "p.adp"\n')
 
 
-def _node_graph_gltf(path, kind: str) -> str:
-    """A glTF whose node graph is hostile: a chain of 1 500 nested nodes, or a cycle."""
+def gltf_with_nodes(path, nodes: list, scene_nodes: list) -> str:
+    """A one-triangle glTF (data-URI buffer) with the node graph ``nodes`` and the
+    scene's root nodes ``scene_nodes``: hostile graphs for the fuzzer and the tests."""
     import base64
     import json
 
     pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
     buf = pos + np.array([0, 1, 2], np.uint16).tobytes() + b"\0\0"
-    if kind == "chain":
-        nodes = [{"children": [i + 1], "translation": [0.001, 0, 0]} for i in range(1499)] + [{"mesh": 0}]
-    else:
-        nodes = [{"children": [1]}, {"children": [2], "mesh": 0}, {"children": [1]}]
-    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": nodes,
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": scene_nodes}], "nodes": nodes,
            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
            "buffers": [{"byteLength": len(buf),
                         "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}],
@@ -614,6 +611,15 @@ def _node_graph_gltf(path, kind: str) -> str:
     with open(path, "w", encoding="utf-8") as fh:
         fh.write(json.dumps(doc))
     return str(path)
+
+
+def _node_graph_gltf(path, kind: str) -> str:
+    """A glTF whose node graph is hostile: a chain of 1 500 nested nodes, or a cycle."""
+    if kind == "chain":
+        nodes = [{"children": [i + 1], "translation": [0.001, 0, 0]} for i in range(1499)] + [{"mesh": 0}]
+    else:
+        nodes = [{"children": [1]}, {"children": [2], "mesh": 0}, {"children": [1]}]
+    return gltf_with_nodes(path, nodes, [0])
 
 
 def _textured_obj(folder, k: int, texture: str) -> str:

@@ -4,8 +4,8 @@ a MeshError naming the file, and the world transforms are trimesh's own."""
 
 from __future__ import annotations
 
-import base64
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,22 +16,13 @@ import axialdeform as ad
 from axialdeform.core.material import _geometry_nodes
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "meshes"
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
+import fuzz_params  # noqa: E402 - tools/ is not a package
 
 
 def _gltf(path: Path, nodes: list, scene_nodes: list) -> Path:
-    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
-    buf = pos + np.array([0, 1, 2], np.uint16).tobytes() + b"\0\0"
-    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": scene_nodes}], "nodes": nodes,
-           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-           "buffers": [{"byteLength": len(buf),
-                        "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}],
-           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
-                           {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
-           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-                          "min": [0, 0, 0], "max": [1, 1, 0]},
-                         {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]}
-    path.write_text(json.dumps(doc))
-    return path
+    """A one-triangle glTF with this node graph (the fuzzer's own builder)."""
+    return Path(fuzz_params.gltf_with_nodes(path, nodes, scene_nodes))
 
 
 def test_a_deep_chain_of_nodes_loads_with_its_transforms(tmp_path):
