@@ -45,9 +45,10 @@ class Look:
         The key light's colour (linear RGB).
     ambient : float
         Share of the sky/ground hemisphere ambient light, 0 .. 1.
-    sky_color, ground_color : (3,) float
-        The hemisphere ambient: from the sky above and bounced from the
-        ground below (linear RGB).
+    sky_color : (3,) float
+        The hemisphere ambient from the sky above (linear RGB).
+    ground_color : (3,) float
+        The hemisphere ambient bounced from the ground below (linear RGB).
     background : (3,) float
         The clear colour (sRGB, 0 .. 1); the ground plane fades into it.
     line_color : (3,) float
