@@ -13,10 +13,11 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = sorted((ROOT / "docs").glob("*.md"))
-# the notebook widget's block needs a notebook: tests/web/test_notebook.py runs it in a real JupyterLab
-BLOCKS = [(p.name, i, code) for p in PAGES
-          for i, code in enumerate(re.findall(r"^```python\n(.*?)^```", p.read_text(encoding="utf-8"), re.S | re.M))
-          if "SceneWidget" not in code]
+# web.md's blocks are notebook cells, run one after the other in a notebook (tests/web/test_notebook.py
+# runs the widget in a real JupyterLab): here they run together, in order, in one interpreter
+BLOCKS = [(p.name, i, code) for p in PAGES if p.name != "web.md"
+          for i, code in enumerate(re.findall(r"^```python\n(.*?)^```", p.read_text(encoding="utf-8"), re.S | re.M))]
+CELLS = re.findall(r"^```python\n(.*?)^```", (ROOT / "docs" / "web.md").read_text(encoding="utf-8"), re.S | re.M)
 
 
 @pytest.mark.slow
@@ -39,4 +40,14 @@ def test_every_api_page_is_in_the_navigation():
 @pytest.mark.parametrize("page,index,code", BLOCKS, ids=[f"{p}-{i}" for p, i, _ in BLOCKS])
 def test_docs_python_block_runs(page, index, code, tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+
+
+@pytest.mark.slow
+def test_the_notebook_cells_run_in_order(tmp_path):
+    """The notebook page's cells (show, update, a scene file) run one after the other."""
+    assert len(CELLS) >= 2
+    (tmp_path / "examples").symlink_to(ROOT / "examples")  # the cells' paths are the repository's
+    proc = subprocess.run([sys.executable, "-c", "\n".join(CELLS)], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]
