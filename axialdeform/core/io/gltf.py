@@ -64,7 +64,7 @@ from ..transforms import (
     quaternions_from_angles,
 )
 from . import safeio
-from .atomic import atomic_write_bytes
+from .atomic import atomic_path, atomic_write_bytes
 from .safeio import require_finite
 
 __all__ = [
@@ -118,12 +118,15 @@ class _Builder:
         self.offset = 0
 
     def view(self, data: np.ndarray, target: int | None = None, stride: int | None = None) -> int:
-        raw = np.ascontiguousarray(data).tobytes()
+        # the array's own bytes, not a copy: a baked GLB of a big mesh holds its arrays once
+        raw = memoryview(np.ascontiguousarray(data)).cast("B")
         pad = (-len(raw)) % 4  # every bufferView starts 4-byte aligned
         self.gltf.bufferViews.append(
             self.g.BufferView(buffer=0, byteOffset=self.offset, byteLength=len(raw), target=target, byteStride=stride)
         )
-        self.chunks.append(raw + bytes(pad))
+        self.chunks.append(raw)
+        if pad:
+            self.chunks.append(bytes(pad))
         self.offset += len(raw) + pad
         return len(self.gltf.bufferViews) - 1
 
@@ -149,11 +152,26 @@ class _Builder:
         written once; ``default_color`` (linear RGB) replaces a default material."""
         return _Appearance(self, mesh, default_color)
 
+    def write_to(self, fh) -> None:
+        """The GLB into the binary file ``fh``, chunk after chunk: the binary
+        buffer is never joined in memory (what pygltflib's ``save_to_bytes``
+        writes, byte for byte)."""
+        import struct
+
+        self.gltf.buffers = [self.g.Buffer(byteLength=self.offset)]
+        text = self.gltf.gltf_to_json(separators=(",", ":"), indent=None).encode("utf-8")
+        text += b" " * ((-len(text)) % 4)  # the binary chunk starts 4-byte aligned
+        fh.write(struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(text) + 8 + self.offset))
+        fh.write(struct.pack("<I4s", len(text), b"JSON"))
+        fh.write(text)
+        fh.write(struct.pack("<I4s", self.offset, b"BIN\x00"))
+        for chunk in self.chunks:
+            fh.write(chunk)
+
     def finish(self) -> bytes:
-        blob = b"".join(self.chunks)
-        self.gltf.buffers.append(self.g.Buffer(byteLength=len(blob)))
-        self.gltf.set_binary_blob(blob)
-        return b"".join(self.gltf.save_to_bytes())
+        out = io.BytesIO()
+        self.write_to(out)
+        return out.getvalue()
 
 
 #: id(pixels) -> (the pixels, their PNG): each image is encoded at most once a process
@@ -288,6 +306,12 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     """The GLB bytes of the baked layout (see :func:`export_baked`); ``source``
     names the parameter file in errors; ``tangents=False`` leaves ``TANGENT``
     out (when ``params`` are not the ones ``positions`` were baked from)."""
+    return _build_baked(mesh, params, positions=positions, normals=normals, source=source,
+                        tangents=tangents).finish()
+
+
+def _build_baked(mesh, params, *, positions=None, normals=None, source: str | None = None,
+                 tangents: bool = True) -> "_Builder":
     params = as_params(params)
     if positions is None or normals is None:
 
@@ -331,7 +355,7 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
     b.gltf.scenes.append(g.Scene(name="axialdeform baked", nodes=list(range(n)),
                                  extras={EXTRAS_KEY: _mesh_extras(mesh, n, "baked")}))
     b.gltf.scene = 0
-    return b.finish()
+    return b
 
 
 def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, normals=None,
@@ -352,7 +376,9 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     ``extras["axialdeform"]`` records the axis and the mesh fingerprint.
     """
     path = check_glb_path(path)
-    atomic_write_bytes(path, encode_baked(mesh, params, positions=positions, normals=normals, source=source))
+    built = _build_baked(mesh, params, positions=positions, normals=normals, source=source)
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:  # streamed: the file is never whole in memory
+        built.write_to(fh)
     return path
 
 
