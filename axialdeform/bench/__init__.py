@@ -52,15 +52,26 @@ from __future__ import annotations
 
 import json
 import os
+import platform
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
+from importlib.metadata import PackageNotFoundError, version
+from importlib.util import find_spec
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
+from ..core.deform import deform
 from ..core.errors import AxialDeformError
+from ..core.io.atomic import atomic_write_text
+from ..core.io.mesh import load_mesh
+from ..core.variation import random_params
+from ..gl.context import create_context
+from ..gl.renderer import AxialRenderer
 from .plan import (
     BENCH_MODES,
     COUNTS,
@@ -76,6 +87,7 @@ from .plan import (
     mesh_file,
     scene_kwargs,
 )
+from .report import with_goals, write_report
 from .stats import (
     GOALS,
     RECORD_KEYS,
@@ -110,7 +122,6 @@ def _python_c(code: str, *args: str) -> list[str]:
 
 def _run_child(spec: dict, timeout: float) -> dict:
     """Start one child, time it from just before the start to its ``FIRST`` line."""
-    import tempfile
 
     with tempfile.TemporaryFile("w+") as err:
         wall0 = time.time()
@@ -145,8 +156,6 @@ def _run_child(spec: dict, timeout: float) -> dict:
 
 
 def _machine() -> dict:
-    import platform
-
     cpu = "unknown"
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -157,8 +166,6 @@ def _machine() -> dict:
         pass
     info = {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform(),
             "numpy": np.__version__}
-    from importlib.metadata import PackageNotFoundError, version
-    from importlib.util import find_spec
 
     try:
         info["trimesh"] = version("trimesh")
@@ -212,10 +219,6 @@ def _startup_costs(repeats: int) -> dict:
 
 def _throughput(mesh, counts, seed: int, repeats: int) -> list[dict]:
     """Vertices deformed per second: CPU reference and GPU capture (with read-back)."""
-    from ..core.deform import deform
-    from ..core.variation import random_params
-    from ..gl.context import create_context
-    from ..gl.renderer import AxialRenderer
 
     rows = []
     ctx = create_context()
@@ -262,7 +265,6 @@ def _run_frames_child(spec: dict, timeout: float) -> dict:
 
 def _picture_agreement(frames_dir: Path, count: int, modes) -> list[dict]:
     """Fraction of pixels where the ``loaded`` and ``axial`` pictures differ (by more than 8 of 255)."""
-    from PIL import Image
 
     rows = []
     for mode in modes:
@@ -340,8 +342,6 @@ def run_bench(
     stopped early, ``bench-details.json`` with ``"interrupted": true``), then
     the ``KeyboardInterrupt`` is raised again.
     """
-    from ..core.io.atomic import atomic_write_text
-    from ..core.io.mesh import load_mesh
 
     if progress is None or progress is False:
         progress = _no_progress
@@ -487,7 +487,6 @@ def run_bench(
         "startup_s": startup,
         "thesis": THESIS,
     }
-    from .report import with_goals, write_report
 
     details = with_goals(details)
     if json_path is not None:

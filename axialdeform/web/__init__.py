@@ -24,10 +24,16 @@ from __future__ import annotations
 
 import base64
 import contextlib
+import errno
+import functools
+import hashlib
 import html
 import json
+import math
+import operator
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
 from pathlib import Path
 
@@ -35,9 +41,15 @@ from ..core.errors import AxialDeformError
 from ..core.io.atomic import atomic_write_bytes
 from ..core.io.gltf import encode_base_mesh
 from ..core.io.params import encode_binary
+from ..core.io.safeio import check_output_path, read_regular
 from ..core.look import DEFAULT_LOOK
 from ..core.params import as_params
+from ..core.record import page_record
 from ..core.scene import Scene
+from ..core.wind import SECOND_HARMONIC
+from ..gl.material import ALPHA_MODE_INDEX
+from ..gl.renderer import _MODE_INDEX, DEFAULT_COLORS, MODES, _unit
+from ..gl.shaders import GLSL_VERSION, assemble
 
 __all__ = ["THREE_VERSION", "WebScene", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es", "write_folder", "single_file_html",
            "make_server", "scene_bytes", "embedded_file",
@@ -83,7 +95,6 @@ def to_glsl_es(source: str) -> str:
     """An assembled GLSL 3.30 core stage as GLSL ES 3.00 (WebGL 2): only the
     version line changes, and default precisions follow it; every other
     line, every ``#line``, stays as assembled."""
-    from ..gl.shaders import GLSL_VERSION
 
     first, _, rest = source.partition("\n")
     if first.strip() != GLSL_VERSION:
@@ -106,7 +117,6 @@ def page_shaders() -> dict:
     ``lighting.glsl``): ``{"float": {"vertex", "fragment"}, "quantized": ...,
     "float_extended": ..., "quantized_extended": ...}`` and the same four with
     ``_material`` (``AXIAL_MATERIAL``: textures, vertex colours, alpha modes)."""
-    from ..gl.shaders import assemble
 
     return {variant: {stage: to_glsl_es(assemble(name, defines).source)
                       for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
@@ -146,7 +156,6 @@ def _parts(mesh, color) -> list:
     """The parts as the page draws them (the GLB's primitives, in order):
     triangle range and material, as :class:`axialdeform.gl.material.GpuMaterials`
     binds them (a default material takes the layer's colour and is lit on both sides)."""
-    from ..gl.material import ALPHA_MODE_INDEX
 
     out = []
     for part in mesh.parts:
@@ -168,7 +177,6 @@ def _parts(mesh, color) -> list:
 def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: str, quantize: bool,
            color=None, wind: bool = False, adp: bytes | None = None, terrain: bool = False) -> dict:
     """One layer's config entry; its GLB and ``.adp`` go into ``files``."""
-    from ..gl.renderer import DEFAULT_COLORS
 
     axis = mesh.axis
     if color is None:
@@ -199,7 +207,6 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
 
 def _check_view(size, up: str, mode: str) -> tuple:
     from ..gl.camera import UP_VECTORS
-    from ..gl.renderer import MODES
 
     if mode not in MODES:
         raise AxialDeformError(f"mode: the page draws {', '.join(MODES)}, found {mode!r}")
@@ -213,9 +220,7 @@ def _check_view(size, up: str, mode: str) -> tuple:
 
 def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shaders,
             time=None) -> dict:
-    from ..core.record import page_record
     from ..gl.camera import UP_VECTORS
-    from ..gl.renderer import _MODE_INDEX, _unit
 
     return {
         "generator": "axialdeform",
@@ -244,7 +249,6 @@ def _wind_config(wind) -> dict | None:
     ``frac(f T)`` and ``frac(harmonic f T)``, as :meth:`Wind.cycles` does)."""
     if wind is None or wind.strength == 0:
         return None
-    from ..core.wind import SECOND_HARMONIC
 
     return {"strength": float(wind.strength), "direction": [float(x) for x in wind.unit_direction],
             "gustiness": float(wind.gustiness), "frequency": float(wind.frequency),
@@ -254,7 +258,6 @@ def _wind_config(wind) -> dict | None:
 def _time(wind, time):
     if time is None:
         return None
-    import math
 
     if wind is None:
         raise AxialDeformError("time: only meaningful with a wind (the wind is the only thing that moves with time)")
@@ -334,7 +337,6 @@ def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: b
                              quantize=quantize, color=item.color, wind=item.wind and wind is not None))
     if not layers:
         raise AxialDeformError(f"{scene.path}: the scene has nothing to draw; expected a terrain or a layer with instances")
-    from dataclasses import replace
 
     cam = scene_camera(replace(scene, wind=wind), w / h)
     config = _config(title=Path(scene.path).stem, layers=layers, size=(w, h), fixed_size=fixed_size, mode=mode,
@@ -431,8 +433,6 @@ _GENERATOR_MARK = b'"generator":"axialdeform"'
 
 
 def _sha256(data: bytes) -> str:
-    import hashlib
-
     return hashlib.sha256(data).hexdigest()
 
 
@@ -447,7 +447,6 @@ def check_page_outputs(out: Path, names, inputs=(), overwrite: bool = False) -> 
     it unchanged (the folder's :data:`MANIFEST`, or the generator mark of a
     single page), or with ``overwrite``.
     """
-    from ..core.io.safeio import check_output_path, read_regular
 
     manifest = {}
     if out.is_dir():
@@ -571,9 +570,6 @@ def make_server(folder: str | os.PathLike, port: int = 8000):
     Returns ``(server, busy)``: when ``port`` is taken the operating system
     picks a free one and ``busy`` is True.  Call ``server.serve_forever()``;
     ``server.server_address[1]`` is the port."""
-    import errno
-    import functools
-    from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 
     folder = Path(folder)
     if not folder.is_dir():
@@ -588,7 +584,6 @@ def make_server(folder: str | os.PathLike, port: int = 8000):
             pass
 
     handler = functools.partial(Handler, directory=str(folder))
-    import operator
 
     try:
         number = operator.index(port)

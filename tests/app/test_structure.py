@@ -59,10 +59,10 @@ def find_cycles(graph: dict) -> list[list[str]]:
     return sorted(out)
 
 
-def _sources():
-    # packages import their submodules lazily (core/lazy.py): a package's __init__
-    # is not a module the others depend on, so it takes no part in cycles
-    return {m: (p.read_text(encoding="utf-8"), pkg) for p, m, pkg in package_modules() if not pkg}
+def _sources(packages: bool = True):
+    """Every module of the package, the ``__init__`` modules included (``web`` and
+    ``bench`` are whole modules; the lazy ones import little)."""
+    return {m: (p.read_text(encoding="utf-8"), pkg) for p, m, pkg in package_modules() if packages or not pkg}
 
 
 def test_the_cycle_finder_finds_a_cycle_through_a_function_level_import():
