@@ -20,7 +20,7 @@ _NAMES = {
     "BaseMesh": "mesh", "load_mesh": "io.mesh", "BUNDLED_MESHES": "io.mesh", "bundled_mesh_path": "io.mesh",
     "ControlAxis": "axis", "Material": "material", "Part": "material", "AssetWarning": "material",
     # the record and parameters
-    "RECORD": "record", "Field": "record", "Instances": "record", "as_instances": "record",
+    "RECORD": "record", "Field": "record", "Instances": "record",
     "FIELDS": "record", "EXTENDED_FIELDS": "record",
     "as_params": "params", "make_params": "params", "extend_params": "params", "is_extended": "params",
     "read_params": "io.params", "read_param_file": "io.params", "write_params": "io.params", "ParamFile": "io.params",

@@ -41,7 +41,7 @@ from .record import (  # the record's columns and slices: one home
     TAPER,
     TWIST,
     WIDTHS,
-    as_instances,
+    Instances,
 )
 
 __all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'extend_params', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L', 'check_drawable', 'DRAWABLE_MAGNITUDE']
@@ -138,7 +138,7 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
         out[:, POSITION] = parts["positions"]
     if "angles" in parts:
         out[:, ANGLES] = parts["angles"]
-    return as_instances(as_params(out))
+    return Instances.of(as_params(out))
 
 
 # --------------------------------------------------------------------- text

@@ -31,7 +31,7 @@ import numpy as np
 __all__ = [
     "Field", "ShaderInput", "RECORD", "SHADER_INPUTS", "GLTF_ATTRIBUTES", "FIELDS", "EXTENDED_FIELDS",
     "WIDTH", "EXTENDED_WIDTH", "WIDTHS", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST", "TAPER",
-    "IDENTITY_EXTRA", "Instances", "as_instances", "field_of_column", "gl_layout", "page_layout", "page_record",
+    "IDENTITY_EXTRA", "Instances", "gl_layout", "page_layout", "page_record",
 ]
 
 
@@ -104,11 +104,6 @@ EXTRA = slice(WIDTH, EXTENDED_WIDTH)
 SCALE, TWIST, TAPER = (_BY_NAME[n].start for n in ("scale", "twist", "taper"))
 #: the values of ``s tw tp`` that give exactly the 16-number shape
 IDENTITY_EXTRA = (1.0, 0.0, 0.0)
-
-
-def field_of_column(column: int) -> str:
-    """The file's name of ``column`` (``10`` -> ``"px"``)."""
-    return EXTENDED_FIELDS[column]
 
 
 @dataclass(frozen=True)
@@ -263,8 +258,3 @@ class Instances(np.ndarray):
     def __dir__(self):
         names = [f.name for f in RECORD if not f.extended or (self.ndim == 2 and self.shape[-1] == EXTENDED_WIDTH)]
         return sorted(set(super().__dir__()) | set(names))
-
-
-def as_instances(values) -> Instances:
-    """``values`` (an ``(n, 16|19)`` array) as :class:`Instances`, without a copy."""
-    return np.asarray(values).view(Instances)

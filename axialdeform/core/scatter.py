@@ -57,7 +57,7 @@ from .io.mesh import load_mesh
 from .io.safeio import _gb, open_regular
 from .material import AssetWarning
 from .mesh import BaseMesh
-from .record import ANGLES, OFFSETS, POSITION, SCALE, as_instances
+from .record import ANGLES, OFFSETS, POSITION, SCALE, Instances
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
 __all__ = ["scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights", "ANCHORS", "IMAGE_SUFFIXES",
@@ -569,7 +569,7 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
         why = f" at spacing {min_distance:g}" if min_distance is not None else ""
         raise TooFewError(f"count: only {len(params)} of {n} instances fit on {surf.name}{why}; "
                           f"expected room for {n} (lower -n or --min-distance, or pass --allow-fewer)", params)
-    return as_instances(params)
+    return Instances.of(params)
 
 
 def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, scale, bend) -> np.ndarray:

@@ -19,7 +19,7 @@ import numpy as np
 from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import as_params
-from .record import ANGLES, OFFSETS, POSITION, SCALE, TAPER, TWIST, as_instances
+from .record import ANGLES, OFFSETS, POSITION, SCALE, TAPER, TWIST, Instances
 
 __all__ = ["random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
 
@@ -147,7 +147,7 @@ def random_params(
     """
     spec = _spec(mesh, count, seed, bend=bend, placement=placement, spacing=spacing, up=up, yaw=yaw, tilt=tilt,
                  height=height, scale=scale, twist=twist, taper=taper)
-    return as_instances(_rows(spec, 0, spec.count))
+    return Instances.of(_rows(spec, 0, spec.count))
 
 
 def iter_random_params(mesh, count: int, seed: int = 0, *, chunk: int = 1 << 18, **options):

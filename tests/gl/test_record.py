@@ -45,7 +45,7 @@ def test_named_views_share_memory_and_write_through(stone):
 
 
 def test_extended_views_and_their_errors(stone):
-    p = R.as_instances(ad.core.extend_params(ad.random_params(stone, 4, seed=1)))
+    p = R.Instances.of(ad.core.extend_params(ad.random_params(stone, 4, seed=1)))
     assert p.scale.shape == (4,) and np.all(p.scale == 1.0)
     p.twist[:] = 0.5
     assert np.all(p[:, 17] == 0.5)

@@ -17,7 +17,13 @@ from ..material import AssetWarning, compute_tangents, gather_parts
 from ..mesh import BaseMesh, _check_float32_range, area_weighted_normals
 from . import safeio
 from .gltf import gltf_attributes
-from .resolver import SafeResolver, gltf_json, gltf_references, is_image_name, unsupported_features
+from .resolver import (
+    SafeResolver,
+    gltf_json,
+    gltf_references,
+    is_image_name,
+    unsupported_features,
+)
 from .safeio import read_regular
 
 __all__ = ['BUNDLED_MESHES', 'MESH_SUFFIXES', 'bundled_mesh_path', 'load_mesh', 'mesh_source_path']

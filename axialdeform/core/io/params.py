@@ -25,7 +25,7 @@ from ..record import (  # the record's columns and slices: one home
     SCALE,
     TAPER,
     WIDTHS,
-    as_instances,
+    Instances,
 )
 from . import safeio
 from .atomic import atomic_path
@@ -666,7 +666,7 @@ def read_params(path: str | os.PathLike, mesh=None, *, allow_mesh_mismatch: bool
     pf = read_param_file(path)
     if mesh is not None and not allow_mesh_mismatch:
         check_mesh(pf, mesh, str(path))
-    return as_instances(pf.values)
+    return Instances.of(pf.values)
 
 
 def write_params(
