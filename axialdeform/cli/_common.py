@@ -143,6 +143,20 @@ def extension_args(args) -> dict:
         if not (math.isfinite(args.taper) and args.taper < 1):
             raise ParamError(f"--taper: expected a number < 1 (tp < 1: the tip keeps a size > 0), found {args.taper!r}")
         out["taper"] = args.taper
+    if getattr(args, "tint", None) is not None:
+        if not (math.isfinite(args.tint) and 0 <= args.tint <= 1):
+            raise ParamError(f"--tint: expected a variation amount between 0 and 1, found {args.tint!r}")
+        out["tint"] = args.tint
+    if getattr(args, "tint_color", None) is not None:
+        if "tint" not in out:
+            raise ParamError("--tint-color: only meaningful with --tint AMOUNT (tinted instances)")
+        try:
+            color = tuple(float(x) for x in args.tint_color.split(","))
+        except ValueError:
+            color = ()
+        if len(color) != 3 or not all(math.isfinite(c) and 0 <= c <= 1 for c in color):
+            raise ParamError(f"--tint-color: expected R,G,B linear RGB numbers in 0..1, found {args.tint_color!r}")
+        out["tint_color"] = color
     return out
 
 

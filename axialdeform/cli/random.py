@@ -13,6 +13,7 @@ from ..core.io.safeio import (
     check_disk_space,
     check_output_path,
 )
+from ..core.record import WIDTHS
 from ..core.variation import PLACEMENTS, iter_random_params
 from ._common import AXES, angle_range, extension_args, mesh_file
 
@@ -24,7 +25,7 @@ def add_parser(sub) -> None:
     r.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
     r.add_argument("-n", "--count", type=int, required=True, help=(
         "number of instances (required, no default); at most 2147483647 and what the output's disk holds: "
-        "64 bytes an instance in .adp, 32 quantized, up to 256 in text (19 numbers: 76, 38, 304); "
+        "64 bytes an instance in .adp, 32 quantized, up to 256 in text (19 numbers: 76, 38, 304; 22: 88, 44, 352); "
         "they are made and written 131072 at a time, so memory stays under 200 MB whatever the count"))
     r.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
     r.add_argument("--bend", type=float, default=0.08, help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
@@ -41,6 +42,11 @@ def add_parser(sub) -> None:
                    help="extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)")
     r.add_argument("--taper", metavar="MAX", type=float, default=None,
                    help="extended instances: taper tp drawn between 0 and MAX < 1 (default: none)")
+    r.add_argument("--tint", metavar="AMOUNT", type=float, default=None, help=(
+        "tinted instances (22 numbers): each one's colour is --tint-color times 1 - AMOUNT*u, u drawn per "
+        "channel in 0..1; AMOUNT in 0..1 (default: none)"))
+    r.add_argument("--tint-color", metavar="R,G,B", default=None,
+                   help="with --tint: the brightest tint, linear RGB in 0..1 (default: 1,1,1, the mesh's own colours)")
     r.add_argument("--quantize", action="store_true",
                    help="write the compact uint16 form, binary only: 32 bytes an instance, 38 extended (default: 64/76 bytes, lossless)")
     r.add_argument("-o", "--output", required=True, help="parameter file to write (required, no default)")
@@ -70,7 +76,7 @@ def run(args) -> None:
                             f"32-bit count), found {count}")
     # memory holds one piece whatever the count; the file must fit on its disk
     check_count(min(count, RANDOM_CHUNK), RANDOM_BYTES_EACH, f"-n/--count (made {RANDOM_CHUNK} at a time)")
-    width = 19 if extension else 16
+    width = WIDTHS[2 if "tint" in extension else 1 if extension else 0]
     fixed = param_file_bytes(args.output, 0, width, quantize=args.quantize)
     each = param_file_bytes(args.output, 1, width, quantize=args.quantize) - fixed
 

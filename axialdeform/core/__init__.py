@@ -23,6 +23,7 @@ _NAMES = {
     "RECORD": "record", "Field": "record", "Instances": "record",
     "FIELDS": "record", "EXTENDED_FIELDS": "record",
     "as_params": "params", "make_params": "params", "extend_params": "params", "is_extended": "params",
+    "tint_params": "params", "is_tinted": "params",
     "read_params": "io.params", "read_param_file": "io.params", "write_params": "io.params", "ParamFile": "io.params",
     "random_params": "variation", "load_surface": "scatter",
     "Wind": "wind", "wind_offsets": "wind", "apply_wind": "wind",

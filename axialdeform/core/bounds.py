@@ -72,7 +72,7 @@ def instance_bounds(mesh, params, wind=None, *, radius: float | None = None) -> 
     bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1) + wind_reach(mesh, wind)
     scale = np.ones(len(params))
     grow = np.ones(len(params))
-    if params.shape[1] == 19:
+    if params.shape[1] >= EXTENDED_WIDTH:
         scale, grow = params[:, SCALE], np.maximum(1.0, np.abs(1.0 - params[:, TAPER]))
     centers = np.einsum("nij,j->ni", rotation_matrices(params[:, ANGLES]), center) * scale[:, None] + params[:, POSITION]
     return centers, (radius * grow + bend) * np.abs(scale)
@@ -120,10 +120,10 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
         lo[:, coord] += d[:, :, k].min(axis=1)
         hi[:, coord] += d[:, :, k].max(axis=1)
     rot = rotation_matrices(params[:, ANGLES])
-    scale = params[:, SCALE] if params.shape[1] == EXTENDED_WIDTH else np.ones(len(params))
+    scale = params[:, SCALE] if params.shape[1] >= EXTENDED_WIDTH else np.ones(len(params))
     center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) * scale[:, None] + params[:, POSITION]
     half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2) * np.abs(scale)[:, None]
-    if params.shape[1] == 19:  # twisted or tapered cross-sections: the box around the sphere
+    if params.shape[1] >= EXTENDED_WIDTH:  # twisted or tapered cross-sections: the box around the sphere
         turned = (params[:, TWIST] != 0) | (params[:, TAPER] != 0)
         if turned.any():
             c, r = instance_bounds(mesh, params[turned])
@@ -233,13 +233,13 @@ def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, 
         idx = _support_indices(mesh.positions)
         if n * len(idx) > budget:
             return instance_bounds(mesh, params)
-    if params.shape[1] == 19:  # extended instances: the CPU reference places the chosen vertices
+    if params.shape[1] >= EXTENDED_WIDTH:  # extended instances: the CPU reference places the chosen vertices
 
         world, _ = deform(mesh.axis, mesh.positions[idx], mesh.normals[idx], params)
         return world.reshape(-1, 3).astype(np.float64), np.zeros(n * len(idx))
     pts = mesh.positions[idx].astype(np.float64)
     p64 = params.astype(np.float64)
-    if p64.shape[1] == 19:  # extended instances: the whole map of the selected vertices
+    if p64.shape[1] >= EXTENDED_WIDTH:  # extended instances: the whole map of the selected vertices
 
         moved, _ = deform_local_extended(mesh.axis, pts, pts, p64[:, OFFSETS].reshape(-1, 5, 2), p64[:, EXTRA])
         world = moved @ np.swapaxes(rotation_matrices(p64[:, ANGLES]), 1, 2) + p64[:, None, POSITION]

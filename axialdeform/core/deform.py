@@ -13,7 +13,7 @@ import numpy as np
 from .arrays import as_array
 from .axis import ControlAxis
 from .params import as_params
-from .record import ANGLES, EXTRA, OFFSETS, POSITION
+from .record import ANGLES, EXTENDED_WIDTH, EXTRA, OFFSETS, POSITION, TAPER, TWIST
 from .transforms import rotation_matrices
 
 __all__ = [
@@ -166,7 +166,7 @@ def deform(
     for a in range(0, n, step):  # chunks bound memory; each chunk is fully vectorized
         block = params[a : a + step].astype(np.float64)
         offsets = block[:, OFFSETS].reshape(-1, 5, 2)
-        if block.shape[1] == 19:
+        if block.shape[1] >= EXTENDED_WIDTH:
             moved, bent = deform_local_extended(axis, positions, normals, offsets, block[:, EXTRA])
         else:
             moved, bent = deform_local(axis, positions, normals, offsets)
@@ -202,8 +202,8 @@ def deform_tangents(axis: ControlAxis, positions: np.ndarray, tangents: np.ndarr
     i, j = axis.perpendicular
     along = tan[:, axis.index] / axis.length  # (v,)
     bent = np.broadcast_to(tan, slope.shape[:2] + (3,)).copy()
-    if params.shape[1] == 19:
-        twist, taper = params[:, 17, None], params[:, 18, None]  # (n, 1)
+    if params.shape[1] >= EXTENDED_WIDTH:
+        twist, taper = params[:, TWIST, None], params[:, TAPER, None]  # (n, 1)
         center = np.asarray(axis.center, dtype=np.float64)
         w = np.stack([p[:, i] - center[i], p[:, j] - center[j]], axis=-1)  # (v, 2)
         theta = twist * t

@@ -5,19 +5,23 @@ One instance is ``d1u d1v d2u d2v d3u d3v d4u d4v d5u d5v px py pz rx ry rz``
 about fixed X, then Y, then Z).  In memory a set of instances is a
 ``(n, 16) float32`` array.  An **extended** instance adds ``s tw tp`` (uniform
 scale > 0, twist in radians over the axis, taper < 1; see the extension
-section of ``docs/method.md``): ``(n, 19) float32``.
+section of ``docs/method.md``): ``(n, 19) float32``.  A **tinted** instance
+adds ``tr tg tb`` after those (linear RGB in 0..1 multiplying the base colour):
+``(n, 22) float32``.  The fields and their levels: :mod:`.record`.
 
 Files
 -----
 * **text** (``.txt``, ``.csv``, ``.dat``; and anything that does not start
-  with the binary magic): 16 numbers a line (or 19 on EVERY line: extended),
+  with the binary magic): 16 numbers a line (or 19 on EVERY line: extended;
+  22: tinted),
   separated by commas or white space; lines starting with ``#`` are comments.
 * **binary** (``.adp``): see ``docs/parameter-files.md``.  A fixed header
   (magic, version, encoding, count, the axis and a SHA-256 fingerprint of the
   base mesh it was made for), the payload (float32, 64 bytes per instance, or
   uint16 quantized, 32 bytes per instance) and a CRC-32 trailer over header
   and payload.  Version 1 holds 16 numbers per instance, version 2 the 19
-  of extended instances (76 bytes float32, 38 uint16 quantized).
+  of extended instances (76 bytes float32, 38 uint16 quantized), version 3
+  the 22 of tinted ones (88, 44).
 
 NaN and infinite parameters are refused everywhere (reading, writing,
 uploading) with a :class:`ParamError`: a non-finite number has no shape.
@@ -32,27 +36,35 @@ from .errors import ParamError
 from .record import (  # the record's columns and slices: one home
     ANGLES,
     EXTENDED_FIELDS,
+    EXTENDED_WIDTH,
     EXTRA,
     FIELDS,
     IDENTITY_EXTRA,
+    IDENTITY_TINT,
+    LEVEL_FIELDS,
     OFFSETS,
     POSITION,
     SCALE,
     TAPER,
+    TINT,
+    TINTED_WIDTH,
     TWIST,
     WIDTHS,
     Instances,
+    describe_widths,
+    level_of,
 )
 
-__all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'extend_params', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L', 'check_drawable', 'DRAWABLE_MAGNITUDE']
+__all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'is_tinted', 'extend_params', 'tint_params', 'TINT', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L', 'check_drawable', 'DRAWABLE_MAGNITUDE']
 
 
 def as_params(values, *, name: str = "parameters", error: type = ParamError, rows=None, widths=WIDTHS) -> np.ndarray:
-    """Check and convert to a C-contiguous ``(n, 16)`` or ``(n, 19) float32`` array.
+    """Check and convert to a C-contiguous ``(n, 16)``, ``(n, 19)`` or ``(n, 22) float32`` array.
 
-    A single record of 16 (or 19) numbers becomes ``(1, 16)`` (``(1, 19)``).
+    A single record of 16 (19, 22) numbers becomes ``(1, 16)`` (``(1, 19)``, ...).
     Raises :class:`ParamError` (or ``error``) for a wrong shape, a non-finite
-    number, or (19 columns) a scale ``s <= 0`` or a taper ``tp >= 1``;
+    number, (19 columns or more) a scale ``s <= 0`` or a taper ``tp >= 1``,
+    or (22) a tint outside 0..1;
     ``rows`` optionally names each row (e.g. its line in a file).  ``widths``
     lists the accepted numbers per instance (``(16,)`` where only the plain
     form makes sense).
@@ -64,17 +76,20 @@ def as_params(values, *, name: str = "parameters", error: type = ParamError, row
     if arr.ndim == 1 and arr.shape[0] in widths:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] not in widths:
-        expected = " or ".join(f"(n, {w})" for w in widths)
+        expected = describe_widths(tuple(f"(n, {w})" for w in widths))
         raise error(f"{name}: expected an array of shape {expected}, found {arr.shape}")
-    fields = EXTENDED_FIELDS if arr.shape[1] == 19 else FIELDS
+    fields = LEVEL_FIELDS[level_of(arr.shape[1])]
     finite = np.isfinite(arr)
     if not finite.all():
         row, col = (int(x) for x in np.argwhere(~finite)[0])
         where = f"instance {row}" if rows is None else rows[row]
         raise error(f"{name}: {where}, field {fields[col]}: expected a finite number, found {arr[row, col]}")
-    if arr.shape[1] == 19:
-        for col, bad, expected in ((SCALE, arr[:, SCALE] <= 0, "a scale s > 0"),
-                                   (TAPER, arr[:, TAPER] >= 1, "a taper tp < 1")):
+    if arr.shape[1] >= EXTENDED_WIDTH:
+        checks = [(SCALE, arr[:, SCALE] <= 0, "a scale s > 0"), (TAPER, arr[:, TAPER] >= 1, "a taper tp < 1")]
+        if arr.shape[1] >= TINTED_WIDTH:
+            checks += [(c, (arr[:, c] < 0) | (arr[:, c] > 1), "a tint in 0..1 (linear RGB)")
+                       for c in range(TINT.start, TINT.stop)]
+        for col, bad, expected in checks:
             if bad.any():
                 row = int(np.argmax(bad))
                 where = f"instance {row}" if rows is None else rows[row]
@@ -83,31 +98,54 @@ def as_params(values, *, name: str = "parameters", error: type = ParamError, row
 
 
 def is_extended(values) -> bool:
-    """True for extended instances: an array whose last axis holds 19 numbers."""
-    return np.shape(values)[-1] == 19
+    """True for extended instances: an array whose last axis holds 19
+    numbers (or 22: tinted instances are extended too)."""
+    return np.shape(values)[-1] >= EXTENDED_WIDTH
+
+
+def is_tinted(values) -> bool:
+    """True for tinted instances: an array whose last axis holds 22 numbers."""
+    return np.shape(values)[-1] >= TINTED_WIDTH
 
 
 def extend_params(values) -> np.ndarray:
     """``(n, 19) float32``: 16-number instances get ``s = 1, tw = 0, tp = 0``
-    (the same shapes); extended ones are returned checked, unchanged."""
+    (the same shapes); extended ones are returned checked, unchanged; tinted
+    ones lose their tint."""
     values = as_params(values)
-    if values.shape[1] == 19:
+    if values.shape[1] == EXTENDED_WIDTH:
         return values
-    out = np.empty((len(values), 19), dtype=np.float32)
+    if values.shape[1] > EXTENDED_WIDTH:
+        return np.ascontiguousarray(values[:, :EXTENDED_WIDTH])
+    out = np.empty((len(values), EXTENDED_WIDTH), dtype=np.float32)
     out[:, :16] = values
     out[:, EXTRA] = IDENTITY_EXTRA
     return out
 
 
+def tint_params(values, tint=IDENTITY_TINT) -> np.ndarray:
+    """``(n, 22) float32``: the instances with the tint ``tint`` ((n, 3) or
+    (3,) linear RGB in 0..1; a 16-number instance gets ``s = 1, tw = 0, tp = 0``
+    first).  ``Instances`` views: ``params.tint``."""
+    values = extend_params(values)
+    out = np.empty((len(values), TINTED_WIDTH), dtype=np.float32)
+    out[:, :EXTENDED_WIDTH] = values
+    tint = np.asarray(tint, dtype=np.float32)
+    if tint.shape not in ((3,), (len(values), 3)):
+        raise ParamError(f"tint: expected (3,) or ({len(values)}, 3) linear RGB, found shape {tint.shape}")
+    out[:, TINT] = tint
+    return Instances.of(as_params(out, name="tint"))
+
+
 def make_params(offsets=None, positions=None, angles=None, count: int | None = None, *,
-                scale=None, twist=None, taper=None) -> np.ndarray:
+                scale=None, twist=None, taper=None, tint=None) -> np.ndarray:
     """Assemble ``(n, 16)`` parameters from parts (``(n, 19)`` when any of
-    ``scale``, ``twist``, ``taper`` is given).
+    ``scale``, ``twist``, ``taper`` is given; ``(n, 22)`` with ``tint``).
 
     offsets : (n, 5, 2) model units; positions : (n, 3) world units;
     angles : (n, 3) radians.  Missing parts are zero.
     scale : (n,) > 0 (default 1); twist : (n,) radians (default 0);
-    taper : (n,) < 1 (default 0).
+    taper : (n,) < 1 (default 0); tint : (n, 3) or (3,) linear RGB in 0..1.
     """
 
     parts = {}
@@ -124,6 +162,8 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
         raise ParamError(f"make_params: expected the same number of instances in every part, found {found}")
     extra = (scale, twist, taper)
     lengths |= {len(np.atleast_1d(x)) for x in extra if x is not None and np.ndim(x) > 0}
+    if tint is not None and np.ndim(tint) == 2:
+        lengths.add(len(tint))
     if len(lengths) > 1:
         raise ParamError(f"make_params: expected the same number of instances in every part, found {sorted(lengths)}")
     n = lengths.pop() if lengths else 0
@@ -138,6 +178,8 @@ def make_params(offsets=None, positions=None, angles=None, count: int | None = N
         out[:, POSITION] = parts["positions"]
     if "angles" in parts:
         out[:, ANGLES] = parts["angles"]
+    if tint is not None:
+        return tint_params(out, tint)
     return Instances.of(as_params(out))
 
 

@@ -1,13 +1,15 @@
 """Step 3 of the data flow: the instance record.  ONE table says what an
 instance is made of; everything else is generated from it.
 
-An instance is a row of 16 float32 numbers (19 for an *extended* instance)::
+An instance is a row of 16 float32 numbers, 19 for an *extended* instance
+and 22 for a *tinted* one (the levels of the record, :data:`WIDTHS`)::
 
-    d1u d1v d2u d2v d3u d3v d4u d4v d5u d5v  px py pz  rx ry rz  [s tw tp]
+    d1u d1v d2u d2v d3u d3v d4u d4v d5u d5v  px py pz  rx ry rz  [s tw tp  [tr tg tb]]
 
-:data:`RECORD` lists its fields (name, columns, unit, how a file quantizes
-them); :data:`SHADER_INPUTS` the instanced vertex attributes that carry the
-columns to ``glsl/scene.vert`` (name, first column, size, glTF attribute).
+:data:`RECORD` lists its fields (name, columns, unit, level, how a file
+quantizes them); :data:`SHADER_INPUTS` the instanced vertex attributes that
+carry the columns to ``glsl/scene.vert`` (name, first column, size, level,
+buffer).  A file's width says its level (binary files: version = level + 1).
 From these two tables come
 
 * the column names and slices (:data:`FIELDS`, :data:`OFFSETS`, ...) used by
@@ -30,8 +32,10 @@ import numpy as np
 
 __all__ = [
     "Field", "ShaderInput", "RECORD", "SHADER_INPUTS", "GLTF_ATTRIBUTES", "FIELDS", "EXTENDED_FIELDS",
-    "WIDTH", "EXTENDED_WIDTH", "WIDTHS", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST", "TAPER",
-    "IDENTITY_EXTRA", "Instances", "gl_layout", "page_layout", "page_record",
+    "WIDTH", "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "width_of",
+    "describe_widths", "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST", "TAPER",
+    "IDENTITY_EXTRA", "Instances", "gl_layout", "page_layout", "page_record", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH",
+    "tint_columns",
 ]
 
 
@@ -49,8 +53,9 @@ class Field:
         Index of the first column in the row.
     unit : str
         What the numbers mean.
-    extended : bool
-        Only in extended (19-number) instances.
+    level : int
+        The first record level that has it: 0 every instance (16 numbers),
+        1 extended instances (19), 2 tinted instances (22).
     quantization : str
         How a quantized binary file stores it (every column today: uint16 on
         the column's own range, the table in the file's header).
@@ -63,9 +68,14 @@ class Field:
     columns: tuple[str, ...]
     start: int
     unit: str
-    extended: bool = False
+    level: int = 0
     quantization: str = "uint16 on the column's range"
     shape: tuple[int, ...] = ()
+
+    @property
+    def extended(self) -> bool:
+        """Only in extended (19-number or wider) instances."""
+        return self.level > 0
 
     @property
     def stop(self) -> int:
@@ -83,17 +93,39 @@ RECORD: tuple[Field, ...] = (
           "model units: control point i moves by (diu, div) across the axis", shape=(5, 2)),
     Field("position", ("px", "py", "pz"), 10, "world units", shape=(3,)),
     Field("rotation", ("rx", "ry", "rz"), 13, "radians about fixed X, then Y, then Z (R = Rz Ry Rx)", shape=(3,)),
-    Field("scale", ("s",), 16, "uniform scale factor (> 0)", extended=True),
-    Field("twist", ("tw",), 17, "radians of turn over the axis", extended=True),
-    Field("taper", ("tp",), 18, "cross-section shrink at the axis end (< 1)", extended=True),
+    Field("scale", ("s",), 16, "uniform scale factor (> 0)", level=1),
+    Field("twist", ("tw",), 17, "radians of turn over the axis", level=1),
+    Field("taper", ("tp",), 18, "cross-section shrink at the axis end (< 1)", level=1),
+    Field("tint", ("tr", "tg", "tb"), 19, "linear RGB in 0..1 multiplying the base colour (1 1 1: unchanged)",
+          level=2, shape=(3,)),
 )
 
+#: the column names of each level, in file order: 16, 19 and 22 names
+LEVEL_FIELDS: tuple[tuple[str, ...], ...] = tuple(
+    tuple(c for f in RECORD if f.level <= level for c in f.columns) for level in range(max(f.level for f in RECORD) + 1))
 #: names of the 16 columns, in file order
-FIELDS: tuple[str, ...] = tuple(c for f in RECORD if not f.extended for c in f.columns)
+FIELDS: tuple[str, ...] = LEVEL_FIELDS[0]
 #: names of the 19 columns of an extended instance
-EXTENDED_FIELDS: tuple[str, ...] = tuple(c for f in RECORD for c in f.columns)
-WIDTH, EXTENDED_WIDTH = len(FIELDS), len(EXTENDED_FIELDS)
-WIDTHS = (WIDTH, EXTENDED_WIDTH)
+EXTENDED_FIELDS: tuple[str, ...] = LEVEL_FIELDS[1]
+#: the numbers per instance of each level: (16, 19, 22)
+WIDTHS: tuple[int, ...] = tuple(len(names) for names in LEVEL_FIELDS)
+WIDTH, EXTENDED_WIDTH, TINTED_WIDTH = WIDTHS
+
+
+def level_of(width: int) -> int:
+    """The record level of ``width`` numbers per instance (0, 1, 2); ValueError if none."""
+    return WIDTHS.index(int(width))
+
+
+def width_of(level: int) -> int:
+    """Numbers per instance of a record level."""
+    return WIDTHS[level]
+
+
+def describe_widths(widths=WIDTHS) -> str:
+    """``"16, 19 or 22"``: the widths for an error message."""
+    w = [str(x) for x in widths]
+    return w[0] if len(w) == 1 else ", ".join(w[:-1]) + " or " + w[-1]
 
 _BY_NAME = {f.name: f for f in RECORD}
 OFFSETS = _BY_NAME["offsets"].slice
@@ -102,8 +134,12 @@ ANGLES = _BY_NAME["rotation"].slice
 #: the extension columns ``s tw tp`` of a (n, 19) array
 EXTRA = slice(WIDTH, EXTENDED_WIDTH)
 SCALE, TWIST, TAPER = (_BY_NAME[n].start for n in ("scale", "twist", "taper"))
+#: the columns ``tr tg tb`` of a (n, 22) array
+TINT = _BY_NAME["tint"].slice
 #: the values of ``s tw tp`` that give exactly the 16-number shape
 IDENTITY_EXTRA = (1.0, 0.0, 0.0)
+#: the tint that leaves the base colour as it is
+IDENTITY_TINT = (1.0, 1.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -116,32 +152,47 @@ class ShaderInput:
         The GLSL ``in`` variable.
     start, size : int
         First column and number of columns it carries (``vec{size}``).
-    extended : bool
-        Only in the extended layout (``#ifdef AXIAL_EXTENDED``).
-    gltf : str or None
-        The ``EXT_mesh_gpu_instancing`` attribute that carries the same
-        columns in an instanced glTF, where it is one of ours.
+    level : int
+        The first record level that has it (1: ``#ifdef AXIAL_EXTENDED``,
+        2: ``#ifdef AXIAL_TINT``).
+    buffer : str
+        ``"record"``: read from the instance buffer (float32, or the uint16
+        levels of a quantized one); ``"tint"``: a float32 buffer of its own,
+        so that :meth:`AxialRenderer.set_tint` re-colours without touching
+        the record, whatever the record's encoding.
     """
 
     name: str
     start: int
     size: int
-    extended: bool = False
+    level: int = 0
+    buffer: str = "record"
+
+    @property
+    def extended(self) -> bool:
+        return self.level > 0
 
     @property
     def glsl_type(self) -> str:
         return f"vec{self.size}" if self.size > 1 else "float"
 
 
-#: the float layout of the instanced buffer: 64 bytes (76 extended), divisor 1
+#: the float layout of the instanced buffer: 64 bytes (76 extended), divisor
+#: 1; the tint (tinted instances) in a float32 buffer of its own
 SHADER_INPUTS: tuple[ShaderInput, ...] = (
     ShaderInput("i_d12", 0, 4),
     ShaderInput("i_d34", 4, 4),
     ShaderInput("i_d5", 8, 2),
     ShaderInput("i_position", 10, 3),
     ShaderInput("i_angles", 13, 3),
-    ShaderInput("i_extra", 16, 3, extended=True),
+    ShaderInput("i_extra", 16, 3, level=1),
+    ShaderInput("i_tint", 19, 3, level=2, buffer="tint"),
 )
+#: numbers per instance in the instance buffer: the columns its inputs read
+RECORD_BUFFER_WIDTH: int = max(a.start + a.size for a in SHADER_INPUTS if a.buffer == "record")
+#: the highest record level the instance buffer holds (wider records leave
+#: their other columns to buffers of their own)
+_RECORD_LEVEL: int = WIDTHS.index(RECORD_BUFFER_WIDTH)
 
 #: the instanced glTF's attributes (``EXT_mesh_gpu_instancing``) that carry
 #: columns as they are: name -> (accessor type, columns); ``TRANSLATION``,
@@ -155,6 +206,9 @@ GLTF_ATTRIBUTES: dict[str, tuple[str, tuple[int, ...]]] = {
 }
 #: extended instances only: twist and taper (the scale goes to glTF's own SCALE)
 GLTF_EXTENDED_ATTRIBUTES: dict[str, tuple[str, tuple[int, ...]]] = {"_AXIAL_TWIST_TAPER": ("VEC2", (TWIST, TAPER))}
+#: tinted instances: the tint as the per-instance colour three.js's
+#: GLTFLoader already reads (``instanceColor``), so other viewers show it too
+GLTF_TINT_ATTRIBUTE: tuple[str, str, tuple[int, ...]] = ("_COLOR_0", "VEC3", tuple(range(TINT.start, TINT.stop)))
 
 
 def gl_layout(extended: bool, quantized: bool) -> tuple[tuple[str, ...], tuple[str | None, ...], int]:
@@ -173,7 +227,7 @@ def gl_layout(extended: bool, quantized: bool) -> tuple[tuple[str, ...], tuple[s
     """
     width = EXTENDED_WIDTH if extended else WIDTH
     if not quantized:
-        inputs = [a for a in SHADER_INPUTS if extended or not a.extended]
+        inputs = [a for a in SHADER_INPUTS if a.buffer == "record" and (extended or not a.extended)]
         return tuple(f"{a.size}f" for a in inputs), tuple(a.name for a in inputs), 4 * width
     formats, names = [], []
     for k, start in enumerate(range(0, width, 4)):
@@ -188,21 +242,35 @@ def gl_layout(extended: bool, quantized: bool) -> tuple[tuple[str, ...], tuple[s
     return tuple(formats), tuple(names), record
 
 
-def page_layout(extended: bool, quantized: bool = False) -> list[list]:
+def page_layout(level: int, quantized: bool = False) -> list[list]:
     """``[[name, size, first column], ...]``: the instanced attributes as the
     web page binds them to the file's records (``THREE.InterleavedBufferAttribute``
-    over the float32 or uint16 values, one record a row)."""
+    over the float32 or uint16 values, one record a row) for a file of
+    record ``level`` (``True``/``False``: extended or not).  The tint
+    (level 2) is not in it: the page reads it as :func:`page_record`'s
+    ``"tint"`` says, into a float32 attribute of its own."""
+    record_level = min(int(level), _RECORD_LEVEL)
     if quantized:
-        width = EXTENDED_WIDTH if extended else WIDTH
+        width = WIDTHS[record_level]
         return [[f"i_q{k}", min(4, width - start), start] for k, start in enumerate(range(0, width, 4))]
-    return [[a.name, a.size, a.start] for a in SHADER_INPUTS if extended or not a.extended]
+    return [[a.name, a.size, a.start] for a in SHADER_INPUTS if a.buffer == "record" and a.level <= record_level]
 
 
 def page_record() -> dict:
     """The record as the page receives it (its config's ``"record"``):
-    ``{"16": {"float": layout, "quantized": layout}, "19": {...}}``."""
-    return {str(w): {"float": page_layout(w == EXTENDED_WIDTH), "quantized": page_layout(w == EXTENDED_WIDTH, True)}
-            for w in WIDTHS}
+    ``{"16": {"float": layout, "quantized": layout}, "19": {...}, "22": {...},
+    "tint": [name, size, first column]}``."""
+    out: dict = {str(w): {"float": page_layout(level), "quantized": page_layout(level, True)}
+                 for level, w in enumerate(WIDTHS)}
+    tint = next(a for a in SHADER_INPUTS if a.buffer == "tint")
+    out["tint"] = [tint.name, tint.size, tint.start]
+    return out
+
+
+def tint_columns(values) -> np.ndarray | None:
+    """The ``(n, 3)`` tint columns of tinted instances, else ``None``."""
+    values = np.asarray(values)
+    return values[:, TINT] if values.ndim == 2 and values.shape[1] >= TINTED_WIDTH else None
 
 
 class Instances(np.ndarray):
@@ -218,16 +286,21 @@ class Instances(np.ndarray):
         params.rotation                     # (n, 3) radians
 
     ``offsets`` is ``(n, 5, 2)``; ``position`` and ``rotation`` ``(n, 3)``;
-    ``scale``, ``twist`` and ``taper`` ``(n,)`` (extended instances only).
+    ``scale``, ``twist`` and ``taper`` ``(n,)`` (extended instances only);
+    ``tint`` ``(n, 3)`` (tinted instances only).
     """
 
     @classmethod
-    def zeros(cls, count: int, *, extended: bool = False) -> "Instances":
+    def zeros(cls, count: int, *, extended: bool = False, tinted: bool = False) -> "Instances":
         """``count`` instances of zeros: ``(count, 16)`` float32 (``(count, 19)``
-        extended, with ``s = 1``: the undeformed shape), to fill through the views."""
-        out = np.zeros((int(count), EXTENDED_WIDTH if extended else WIDTH), dtype=np.float32).view(cls)
-        if extended:
+        extended, with ``s = 1``: the undeformed shape; ``(count, 22)`` tinted,
+        with the tint 1 1 1), to fill through the views."""
+        level = 2 if tinted else 1 if extended else 0
+        out = np.zeros((int(count), WIDTHS[level]), dtype=np.float32).view(cls)
+        if level >= 1:
             out[:, SCALE] = 1.0
+        if level >= 2:
+            out[:, TINT] = 1.0
         return out
 
     @classmethod
@@ -240,9 +313,11 @@ class Instances(np.ndarray):
         if f is None:
             raise AttributeError(f"{type(self).__name__!s} has no attribute {name!r}")
         if self.ndim != 2 or self.shape[1] not in WIDTHS:
-            raise AttributeError(f"{name}: named views need an (n, 16) or (n, 19) array, found shape {self.shape}")
-        if f.extended and self.shape[1] != EXTENDED_WIDTH:
-            raise AttributeError(f"{name}: only extended (n, 19) instances have it; this array is {self.shape}")
+            shapes = describe_widths(tuple(f"(n, {w})" for w in WIDTHS))
+            raise AttributeError(f"{name}: named views need an {shapes} array, found shape {self.shape}")
+        if self.shape[1] < WIDTHS[f.level]:
+            kind = "extended" if f.level == 1 else "tinted"
+            raise AttributeError(f"{name}: only {kind} (n, {WIDTHS[f.level]}) instances have it; this array is {self.shape}")
         cols = self[:, f.slice].view(np.ndarray)
         if f.shape == ():
             return cols[:, 0]
@@ -256,5 +331,6 @@ class Instances(np.ndarray):
         super().__setattr__(name, value)
 
     def __dir__(self):
-        names = [f.name for f in RECORD if not f.extended or (self.ndim == 2 and self.shape[-1] == EXTENDED_WIDTH)]
+        width = self.shape[-1] if self.ndim == 2 else 0
+        names = [f.name for f in RECORD if width >= WIDTHS[f.level]]
         return sorted(set(super().__dir__()) | set(names))

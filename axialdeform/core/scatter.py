@@ -57,7 +57,7 @@ from .io.mesh import load_mesh
 from .io.safeio import _gb, open_regular
 from .material import AssetWarning
 from .mesh import BaseMesh
-from .record import ANGLES, OFFSETS, POSITION, SCALE, Instances
+from .record import ANGLES, EXTENDED_WIDTH, OFFSETS, POSITION, SCALE, Instances
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
 __all__ = ["scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights", "ANCHORS", "IMAGE_SUFFIXES",
@@ -609,7 +609,7 @@ def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, s
     out[:, OFFSETS] = offsets.reshape(k, 10)
     out[:, POSITION] = points - s[:, None] * (rot @ a)
     out[:, ANGLES] = angles_from_matrices(rot)
-    if cols == 19:
+    if cols >= EXTENDED_WIDTH:
         out[:, SCALE] = s
     out = np.ascontiguousarray(out, dtype=np.float32)
     if not np.isfinite(out).all():

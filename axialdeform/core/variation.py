@@ -19,7 +19,7 @@ import numpy as np
 from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import as_params
-from .record import ANGLES, OFFSETS, POSITION, SCALE, TAPER, TWIST, Instances
+from .record import ANGLES, OFFSETS, POSITION, SCALE, TAPER, TINT, TWIST, WIDTHS, Instances
 
 __all__ = ["random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
 
@@ -30,6 +30,15 @@ def uniforms(seed: int, n: int) -> np.ndarray:
     """``n`` uniform doubles in [0, 1) from PCG64(seed), platform-independent."""
     _check_seed(seed)
     return _stream(seed, 0, n)
+
+
+def _number(value, name: str) -> float:
+    if isinstance(value, (bool, np.bool_)):
+        raise ParamError(f"{name}: expected a number, found {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ParamError(f"{name}: expected a number, found {value!r}") from None
 
 
 def _range(value, name: str) -> tuple[float, float]:
@@ -57,6 +66,7 @@ class _Spec:
     scale: tuple
     twist: float
     taper: float
+    tint: tuple | None = None  # (amount, (r, g, b)): tinted instances
 
 
 def _spec(
@@ -74,6 +84,8 @@ def _spec(
     scale=None,
     twist=None,
     taper=None,
+    tint=None,
+    tint_color=(1.0, 1.0, 1.0),
 ) -> "_Spec":
     """The checked options of :func:`random_params`."""
     if not isinstance(count, (int, np.integer)) or count < 0:
@@ -89,7 +101,17 @@ def _spec(
     if not (math.isfinite(spacing) and spacing > 0):
         raise ParamError(f"spacing: expected a finite distance > 0, found {spacing!r}")
     yaw, tilt, height = _range(yaw, "yaw"), _range(tilt, "tilt"), _range(height, "height")
-    extended = any(x is not None for x in (scale, twist, taper))
+    extended = any(x is not None for x in (scale, twist, taper, tint))
+    tinting = None
+    if tint is not None:
+        amount = _number(tint, "tint")
+        if not (math.isfinite(amount) and 0 <= amount <= 1):
+            raise ParamError(f"tint: expected a variation amount between 0 and 1, found {tint!r}")
+        color = np.asarray(tint_color, dtype=np.float64) if np.ndim(tint_color) == 1 else None
+        if color is None or color.shape != (3,) or not (np.isfinite(color).all() and (color >= 0).all()
+                                                         and (color <= 1).all()):
+            raise ParamError(f"tint_color: expected three linear RGB numbers in 0..1, found {tint_color!r}")
+        tinting = (amount, tuple(float(c) for c in color))
     s_lo, s_hi = _range(1.0 if scale is None else scale, "scale")
     if not s_lo > 0:
         raise ParamError(f"scale: expected MIN,MAX with 0 < MIN <= MAX, found {scale!r}")
@@ -101,7 +123,7 @@ def _spec(
         raise ParamError(f"taper: expected a number < 1, found {taper!r}")
     _check_seed(seed)
     return _Spec(int(count), int(seed), bend, length, placement, spacing, AXIS_NAMES.index(up), yaw, tilt,
-                 height, extended, (s_lo, s_hi), tw, tp)
+                 height, extended, (s_lo, s_hi), tw, tp, tinting)
 
 
 def random_params(
@@ -119,9 +141,12 @@ def random_params(
     scale=None,
     twist=None,
     taper=None,
+    tint=None,
+    tint_color=(1.0, 1.0, 1.0),
 ) -> np.ndarray:
     """Random parameters: ``(count, 16) float32``, or ``(count, 19)`` (extended
-    instances) when any of ``scale``, ``twist``, ``taper`` is given.
+    instances) when any of ``scale``, ``twist``, ``taper`` is given, or
+    ``(count, 22)`` (tinted instances) with ``tint``.
 
     mesh : BaseMesh (its axis length ``L`` scales the bend).
     bend : offsets are drawn uniformly in ``±bend·L`` per component, then
@@ -140,13 +165,18 @@ def random_params(
         uniformly (a single number: every instance that size).
     twist : ``max`` radians: ``tw`` uniform in ``[-|max|, |max|]``.
     taper : ``max`` (< 1): ``tp`` uniform between 0 and ``max``.
+    tint : ``amount`` in 0..1: each instance's tint (linear RGB multiplying
+        the mesh's base colour) is ``tint_color`` times ``1 - amount * u``,
+        ``u`` uniform in 0..1 drawn per channel.
+    tint_color : ``(r, g, b)`` in 0..1, the brightest tint (default white:
+        the mesh's own colours).
     The first 16 numbers of an instance are the same as without these (the
     extra numbers come from the same random stream, after the others).
     Instance ``i`` depends only on the seed, the options, ``count`` and ``i``:
     :func:`iter_random_params` yields the same rows in pieces.
     """
     spec = _spec(mesh, count, seed, bend=bend, placement=placement, spacing=spacing, up=up, yaw=yaw, tilt=tilt,
-                 height=height, scale=scale, twist=twist, taper=taper)
+                 height=height, scale=scale, twist=twist, taper=taper, tint=tint, tint_color=tint_color)
     return Instances.of(_rows(spec, 0, spec.count))
 
 
@@ -178,11 +208,11 @@ def _stream(seed: int, skip: int, n: int) -> np.ndarray:
 
 
 def _rows(spec: "_Spec", start: int, stop: int) -> np.ndarray:
-    """Instances ``start .. stop - 1`` of the ``spec.count`` a spec describes: (m, 16|19) float32."""
+    """Instances ``start .. stop - 1`` of the ``spec.count`` a spec describes: (m, 16|19|22) float32."""
     n, m = spec.count, stop - start
     spacing, up_i, placement = spec.spacing, spec.up, spec.placement
     u = _stream(spec.seed, 16 * start, 16 * m).reshape(m, 16)  # one row of uniforms per instance
-    out = np.zeros((m, 19 if spec.extended else 16), dtype=np.float64)
+    out = np.zeros((m, WIDTHS[2 if spec.tint else 1 if spec.extended else 0]), dtype=np.float64)
 
     offsets = (2.0 * u[:, OFFSETS] - 1.0) * spec.bend * spec.length
     offsets = offsets.reshape(m, 5, 2)
@@ -223,4 +253,9 @@ def _rows(spec: "_Spec", start: int, stop: int) -> np.ndarray:
         out[:, SCALE] = s_lo + (s_hi - s_lo) * extra[:, 0]
         out[:, TWIST] = abs(tw) * (2.0 * extra[:, 1] - 1.0)
         out[:, TAPER] = tp * extra[:, 2]
+    if spec.tint:
+        # then 3 a row for the tint, after the extended numbers of every instance
+        amount, color = spec.tint
+        u_tint = _stream(spec.seed, 19 * n + 3 * start, 3 * m).reshape(m, 3)
+        out[:, TINT] = np.asarray(color) * (1.0 - amount * u_tint)
     return as_params(out)

@@ -20,8 +20,8 @@ import numpy as np
 
 from ..core.errors import ArgumentError, ParamError
 from ..core.io.params import dequantize_params, quantize_params, quantize_with_table
-from ..core.params import as_params, extend_params
-from ..core.record import gl_layout
+from ..core.params import as_params, extend_params, is_extended
+from ..core.record import EXTENDED_WIDTH, WIDTH, gl_layout
 from .context import check_alive, check_released
 
 __all__ = [
@@ -139,10 +139,12 @@ class InstanceBuffer:
     ``qstep`` ((16,) float32) are the per-column table the vertex shader
     needs (uniforms ``u_qmin``/``u_qstep``, four ``vec4`` each).
 
-    ``extended`` (default: whether ``params`` has 19 columns) stores the 19
+    ``extended`` (default: whether ``params`` has 19 columns or more) stores the 19
     numbers of extended instances (76 bytes, or 40 quantized: the extra
     ``(3,)`` of the table go to ``u_qmin_extra``/``u_qstep_extra``); 16-number
-    parameters written to it get ``s = 1, tw = 0, tp = 0``.
+    parameters written to it get ``s = 1, tw = 0, tp = 0``.  A tinted
+    instance's tint (columns 19..21) is not stored here: the renderer keeps it
+    in a float32 buffer of its own (``i_tint``, :data:`~axialdeform.core.record.SHADER_INPUTS`).
     """
 
     def __init__(self, ctx, params=None, capacity: int | None = None, *, quantized: bool = False,
@@ -151,8 +153,8 @@ class InstanceBuffer:
         self.ctx = ctx
         self.quantized = bool(quantized)
         values = as_params(np.zeros((0, 16)) if params is None else params)
-        self.extended = values.shape[1] == 19 if extended is None else bool(extended)
-        self.columns = 19 if self.extended else 16
+        self.extended = is_extended(values) if extended is None else bool(extended)
+        self.columns = EXTENDED_WIDTH if self.extended else WIDTH
         if self.extended:
             self.record_bytes = QUANTIZED_EXTENDED_RECORD_BYTES if self.quantized else EXTENDED_RECORD_BYTES
         else:
@@ -176,7 +178,7 @@ class InstanceBuffer:
         """``values`` in this buffer's width (16-number ones extended with 1, 0, 0)."""
         if self.extended:
             return extend_params(values)
-        if values.shape[1] != 16:
+        if values.shape[1] != WIDTH:
             raise ParamError(
                 f"parameters: {values.shape[1]} numbers per instance for a buffer of 16; expected (n, 16), "
                 "or a renderer made for extended instances (extended=True)"

@@ -26,6 +26,8 @@ from ..core.bounds import base_radius
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 from ..core.look import DEFAULT_LOOK, Look
+from ..core.params import is_extended
+from ..core.record import tint_columns
 from ..core.wind import Wind
 from .buffers import InstanceBuffer, MeshBuffers
 from .capture import Capture
@@ -58,7 +60,8 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         The base mesh.
     params : (n, 16) float32, optional
         The 16 numbers per instance, or (n, 19): extended instances (scale,
-        twist, taper after the 16).
+        twist, taper after the 16), or (n, 22): tinted instances (their
+        tint colours them, as :meth:`set_tint` does).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
     bend : bool
@@ -172,7 +175,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         if mesh.has_appearance:
             defines["AXIAL_MATERIAL"] = 1
         if extended is None:
-            extended = params is not None and np.shape(params)[-1] == 19
+            extended = params is not None and is_extended(params)
         self.extended = bool(extended)
         if self.extended:
             defines["AXIAL_EXTENDED"] = 1
@@ -220,11 +223,14 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         self._capture = None  # (program, vao, scratch instances, output) built on first capture
         self._tint = None  # (program, triangles vao, edges vao, buffer) built by the first set_tint
         self._tint_count = None  # colours in the tint buffer; None: tint off
+        self._tint_from_record = False  # the tint came with tinted (n, 22) parameters, not from set_tint
         self._cull_passes = {}  # tinted -> CullPass
         self._culled = {}  # (tinted, shadowed) -> (CullPass, draw program, [(triangles vao, edges vao) per level])
         #: bounding-sphere radius about ``mesh.axis.center`` covering every LOD level
         self.bound_radius = base_radius(mesh, *[level.positions for level in self.lod_levels[1:]])
         self._set_axis_uniforms(self.program)
+        if params is not None:
+            self._record_tint(params)
         self.color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
         #: world up (unit vector), for the sky/ground hemisphere ambient
         self.up = (0.0, 1.0, 0.0)
@@ -260,6 +266,18 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         self._check()
         self.instances.set(params)
         self._refresh_quant_uniforms()
+        self._record_tint(params)
+
+    def _record_tint(self, params) -> None:
+        """Tinted parameters ((n, 22)) colour the instances by their own tint
+        (the record's ``tr tg tb``: :func:`set_tint` with them); parameters
+        without one end a tint that came from a record (not one set by hand)."""
+        tint = tint_columns(params)
+        if tint is not None:
+            self.set_tint(tint)
+            self._tint_from_record = True
+        elif self._tint_from_record:
+            self.set_tint(None)
 
     def update_params(self, params, start: int = 0) -> None:
         """Overwrite the instances ``start .. start + len(params) - 1`` in place.
@@ -268,6 +286,9 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         string, None or NaN raises :class:`ArgumentError`."""
         self._check()
         self.instances.update(params, start, setter="set_params()", name="update_params")
+        tint = tint_columns(params)
+        if tint is not None and self._tint_count is not None and len(tint):
+            self._tint[3].write(np.ascontiguousarray(tint, dtype=np.float32).tobytes(), offset=int(start) * 12)
 
     # ------------------------------------------------------------ optional tint
     def set_tint(self, colors) -> None:
@@ -276,6 +297,9 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         colors : (count, 3) linear RGB in 0..1, one row per instance in the
             order of the parameters, or None.
 
+        Tinted parameters ((n, 22): the record's ``tint`` field) call this
+        with their own colours; calling it by hand replaces those.
+
         The colours live in a second instanced buffer (12 bytes an instance)
         read by a variant of the program compiled with ``AXIAL_TINT``; the
         draw stays ONE instanced call.  A renderer that never calls this keeps
@@ -283,6 +307,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         count overwrites the buffer in place.
         """
         self._check()
+        self._tint_from_record = False
         if colors is None:
             self._tint_count = None
             return

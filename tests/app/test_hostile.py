@@ -143,7 +143,7 @@ def test_count_of_2_pow_60_allocates_nothing():
     "data, pattern",
     [
         (b"\x89ADX\r\n\x1a\n" + FLOAT_FILE[8:], "magic"),
-        (header(version=3) + FLOAT_FILE[96:], r"version: expected 1 \(16 numbers\) or 2 \(19 numbers\), found 3"),
+        (header(version=4) + FLOAT_FILE[96:], r"version: expected 1 \(16 numbers\), 2 \(19 numbers\), 3 \(22 numbers\), found 4"),
         (with_crc(header(version=7) + FLOAT_FILE[96:-4]), "version"),
         (with_crc(header(encoding=9) + FLOAT_FILE[96:-4]), "encoding"),
         (with_crc(header(header_size=64) + FLOAT_FILE[96:-4]), "header size"),

@@ -139,7 +139,7 @@ def test_wrong_magic_and_version(values):
         P.decode_binary(bytes(data))
     data = bytearray(P.encode_binary(values))
     struct.pack_into("<H", data, 8, 99)
-    with pytest.raises(ad.core.ParamFileError, match=r"version: expected 1 \(16 numbers\) or 2 \(19 numbers\), found 99"):
+    with pytest.raises(ad.core.ParamFileError, match=r"version: expected 1 \(16 numbers\), 2 \(19 numbers\), 3 \(22 numbers\), found 99"):
         P.decode_binary(bytes(data))
 
 
@@ -151,7 +151,7 @@ def test_unknown_extension_and_missing_file(tmp_path, values):
 
 
 def test_as_params_validates_shape_and_finiteness():
-    with pytest.raises(ad.core.ParamError, match=r"shape \(n, 16\) or \(n, 19\), found \(3, 15\)"):
+    with pytest.raises(ad.core.ParamError, match=r"shape \(n, 16\), \(n, 19\) or \(n, 22\), found \(3, 15\)"):
         ad.core.as_params(np.zeros((3, 15)))
     bad = np.zeros((2, 16))
     bad[1, 14] = np.inf

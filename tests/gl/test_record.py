@@ -22,10 +22,15 @@ def test_columns_and_slices_come_from_the_table():
     assert R.EXTENDED_FIELDS[16:] == ("s", "tw", "tp")
     # every column belongs to exactly one field, in order, without gaps
     cols = [c for f in R.RECORD for c in range(f.start, f.stop)]
-    assert cols == list(range(19))
+    assert cols == list(range(22))
     # every shader input covers the columns of whole fields in row order
     inputs = [c for a in R.SHADER_INPUTS for c in range(a.start, a.start + a.size)]
-    assert inputs == list(range(19))
+    assert inputs == list(range(22))
+    # the levels: each adds whole fields after the last one, its width is a prefix of the row
+    assert R.WIDTHS == (16, 19, 22) and R.LEVEL_FIELDS[2][19:] == ("tr", "tg", "tb")
+    for level, width in enumerate(R.WIDTHS):
+        assert sum(len(f.columns) for f in R.RECORD if f.level <= level) == width
+        assert all(f.stop <= width for f in R.RECORD if f.level <= level)
 
 
 def test_named_views_share_memory_and_write_through(stone):

@@ -21,14 +21,17 @@
   Extended instances (19 numbers) add ``SCALE`` (VEC3 float, ``(s, s, s)``:
   the scale is uniform, applied in model space as glTF's T·R·S does) and
   ``_AXIAL_TWIST_TAPER`` (VEC2 float, ``tw tp``); 16-number files are written
-  exactly as before.
+  exactly as before.  Tinted instances (22 numbers) add ``_COLOR_0`` (VEC3
+  float, ``tr tg tb``), the per-instance colour three.js's GLTFLoader reads
+  as ``instanceColor``; the baked layout gives each tinted instance its own
+  materials, the parts' base colour factors times its tint.
 
   and the node's ``extras["axialdeform"]`` records the control axis
   (``index``, ``lo``, ``length``) and the SHA-256 fingerprint of the base
   mesh.  A viewer that knows the extension but not the deformation draws the
   undeformed base mesh at each instance's position and orientation; a viewer
   without the extension draws the base mesh once.  :func:`read_instanced_glb`
-  reads the 16 (or 19) numbers back bit for bit.
+  reads the 16 (19, 22) numbers back bit for bit.
 
 Coordinates are written as they are: glTF says +Y is up and units are
 metres, and nothing here re-orients or rescales the model.
@@ -52,11 +55,16 @@ from ..mesh import BaseMesh, area_weighted_normals
 from ..params import as_params
 from ..record import (
     ANGLES,
-    EXTENDED_FIELDS,
     GLTF_ATTRIBUTES,
     GLTF_EXTENDED_ATTRIBUTES,
+    EXTENDED_WIDTH,
+    GLTF_TINT_ATTRIBUTE,
+    LEVEL_FIELDS,
     POSITION,
     SCALE,
+    TINTED_WIDTH,
+    WIDTHS,
+    tint_columns,
 )
 from ..transforms import (
     angles_from_matrices,
@@ -222,6 +230,7 @@ class _Appearance:
             self.attributes["COLOR_0"] = b.accessor(b.view(col, target=_ARRAY_BUFFER), _FLOAT, len(col), "VEC4",
                                                     name="COLOR_0")
         self.parts = []  # (name, indices accessor, material index or None)
+        self._tinted: dict = {}  # (material index or None, tint) -> material index
         materials: dict[int, int] = {}
         single = len(mesh.parts) == 1
         for part in mesh.parts:
@@ -268,14 +277,37 @@ class _Appearance:
         b.gltf.materials.append(mat)
         return len(b.gltf.materials) - 1
 
-    def primitives(self, attributes: dict) -> list:
+    def primitives(self, attributes: dict, b: _Builder | None = None, tint=None) -> list:
+        """The primitives of the parts over ``attributes``; with ``tint``
+        ((3,) linear RGB) each part's material is a copy whose base colour
+        factor is multiplied by it (its textures shared)."""
         import pygltflib as g
 
         out = []
         for _name, idx, material in self.parts:
+            if tint is not None:
+                material = self._tinted_material(b, material, tint)
             out.append(g.Primitive(attributes=g.Attributes(**attributes, **self.attributes), indices=idx,
                                    material=material, mode=_TRIANGLES))
         return out
+
+    def _tinted_material(self, b: _Builder, material: int | None, tint) -> int:
+        import copy
+
+        import pygltflib as g
+
+        key = (material, tuple(float(c) for c in tint))
+        if key not in self._tinted:
+            if material is None:  # glTF's default material: white, metallic 1 -- ours: dielectric
+                mat = g.Material(name="tinted", pbrMetallicRoughness=g.PbrMetallicRoughness(
+                    baseColorFactor=[1.0, 1.0, 1.0, 1.0], metallicFactor=0.0, roughnessFactor=0.9))
+            else:
+                mat = copy.deepcopy(b.gltf.materials[material])
+            base = mat.pbrMetallicRoughness.baseColorFactor or [1.0, 1.0, 1.0, 1.0]
+            mat.pbrMetallicRoughness.baseColorFactor = [float(base[c]) * key[1][c] for c in range(3)] + [float(base[3])]
+            b.gltf.materials.append(mat)
+            self._tinted[key] = len(b.gltf.materials) - 1
+        return self._tinted[key]
 
 
 
@@ -343,6 +375,7 @@ def _build_baked(mesh, params, *, positions=None, normals=None, source: str | No
                                    np.broadcast_to(mesh.tangents[None, :, 3:], (n, v, 1))], axis=2).astype("<f4")
         tan_view = b.view(np.ascontiguousarray(tangents), target=_ARRAY_BUFFER, stride=16)
     lo, hi = positions.min(axis=1), positions.max(axis=1)  # (n, 3): bounds per instance, vectorized
+    tints = tint_columns(params)
     for k in range(n):  # glTF objects per instance (JSON), not per vertex
         name = instance_name(k, n)
         pa = b.accessor(pos_view, _FLOAT, v, "VEC3", offset=k * v * 12, bounds=np.stack([lo[k], hi[k]]), name=name + "_POSITION")
@@ -350,7 +383,8 @@ def _build_baked(mesh, params, *, positions=None, normals=None, source: str | No
         attributes = {"POSITION": pa, "NORMAL": na}
         if tan_view is not None:
             attributes["TANGENT"] = b.accessor(tan_view, _FLOAT, v, "VEC4", offset=k * v * 16, name=name + "_TANGENT")
-        b.gltf.meshes.append(g.Mesh(name=name, primitives=look.primitives(attributes)))
+        b.gltf.meshes.append(g.Mesh(name=name, primitives=look.primitives(
+            attributes, b, None if tints is None else tints[k])))
         b.gltf.nodes.append(g.Node(name=name, mesh=k, extras={EXTRAS_KEY: {"instance": k}}))
     b.gltf.scenes.append(g.Scene(name="axialdeform baked", nodes=list(range(n)),
                                  extras={EXTRAS_KEY: _mesh_extras(mesh, n, "baked")}))
@@ -448,9 +482,12 @@ def _add_instanced(b: _Builder, mesh, params, node_name: str, *, color=None, ext
         "TRANSLATION": ("VEC3", params[:, POSITION]),
         "ROTATION": ("VEC4", quaternions_from_angles(params[:, ANGLES]).astype(np.float32)),
     }
-    extra_attributes = EXTENDED_ATTRIBUTES if params.shape[1] == 19 else {}
+    extra_attributes = dict(EXTENDED_ATTRIBUTES) if params.shape[1] >= EXTENDED_WIDTH else {}
     if extra_attributes:
         columns["SCALE"] = ("VEC3", np.repeat(params[:, SCALE, None], 3, axis=1))
+    if params.shape[1] >= TINTED_WIDTH:
+        name, kind, cols = GLTF_TINT_ATTRIBUTE
+        extra_attributes[name] = (kind, cols)
     columns.update({name: (kind, params[:, list(cols)])
                     for name, (kind, cols) in {**ATTRIBUTES, **extra_attributes}.items()})
     attributes = {}
@@ -502,8 +539,16 @@ def encode_scene(scene, layout: str = "baked") -> bytes:
         rgb = tuple(color) if color is not None else (0.6, 0.6, 0.6)
         material = trimesh.visual.material.PBRMaterial(name=name, baseColorFactor=[*rgb, 1.0],
                                                        metallicFactor=0.0, roughnessFactor=0.9)
+        tints = None if params is None else tint_columns(params)
+        if tints is not None:  # tinted instances: the layer's colour times each one's tint, per vertex (COLOR_0)
+            rgba = np.empty((n, v, 4), dtype=np.uint8)
+            rgba[..., :3] = np.rint(255 * np.clip(np.asarray(rgb) * tints, 0, 1))[:, None, :]
+            rgba[..., 3] = 255
+            visual = trimesh.visual.ColorVisuals(vertex_colors=rgba.reshape(-1, 4))
+        else:
+            visual = trimesh.visual.TextureVisuals(material=material)
         tm = trimesh.Trimesh(pos.reshape(-1, 3), faces, vertex_normals=nrm.reshape(-1, 3), process=False,
-                             visual=trimesh.visual.TextureVisuals(material=material))
+                             visual=visual)
         out.add_geometry(tm, geom_name=name, node_name=name)
     return out.export(file_type="glb")
 
@@ -541,7 +586,7 @@ def export_scene(path: str | os.PathLike, scene, layout: str = "baked") -> Path:
 
 
 def _field_names(cols) -> list[str]:
-    return [EXTENDED_FIELDS[c] for c in cols]
+    return [LEVEL_FIELDS[-1][c] for c in cols]
 
 
 def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
@@ -608,7 +653,7 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     -------
     mesh : BaseMesh
         The base mesh (positions, normals, triangles exactly as written).
-    params : (n, 16) float32, or (n, 19) for extended instances
+    params : (n, 16) float32, or (n, 19) for extended instances, (n, 22) for tinted ones
         The numbers per instance, bit for bit as exported: offsets from
         ``_AXIAL_D12/_AXIAL_D34/_AXIAL_D5``, position from ``TRANSLATION``,
         angles from ``_AXIAL_ANGLES`` (or, if a file lacks it, from the
@@ -643,11 +688,13 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     if len(counts) != 1:
         raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
     n = counts.pop()
-    extended = "SCALE" in cols or "_AXIAL_TWIST_TAPER" in cols
-    params = np.zeros((n, 19 if extended else 16), dtype=np.float32)
+    tint_name, tint_kind, tint_cols = GLTF_TINT_ATTRIBUTE
+    tinted = tint_name in cols
+    extended = tinted or "SCALE" in cols or "_AXIAL_TWIST_TAPER" in cols
+    params = np.zeros((n, WIDTHS[2 if tinted else 1 if extended else 0]), dtype=np.float32)
     if extended:
         params[:, SCALE] = 1.0
-        for name, (kind, idx) in EXTENDED_ATTRIBUTES.items():
+        for name, (kind, idx) in {**EXTENDED_ATTRIBUTES, **({tint_name: (tint_kind, tint_cols)} if tinted else {})}.items():
             if name in cols:
                 if cols[name].shape[1] != _COMPONENTS[kind]:
                     raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")

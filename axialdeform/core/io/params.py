@@ -20,18 +20,20 @@ from ..axis import AXIS_NAMES, ControlAxis
 from ..errors import MeshMismatchError, ParamError, ParamFileError
 from ..params import as_params
 from ..record import (  # the record's columns and slices: one home
-    EXTENDED_FIELDS,
-    FIELDS,
+    EXTENDED_WIDTH,
+    LEVEL_FIELDS,
     SCALE,
     TAPER,
     WIDTHS,
     Instances,
+    describe_widths,
+    level_of,
 )
 from . import safeio
 from .atomic import atomic_path
 from .safeio import open_regular
 
-__all__ = ['BINARY_SUFFIXES', 'BinaryHeader', 'ENCODING_FLOAT32', 'ENCODING_UINT16', 'HEADER_SIZE', 'MAGIC', 'ParamFile', 'TEXT_SUFFIXES', 'VERSION', 'VERSION_EXTENDED', 'axis_letter', 'check_mesh', 'decode_binary', 'dequantize_params', 'encode_binary', 'format_text', 'param_file_bytes', 'parse_text', 'quantization_error_bound', 'quantize_params', 'quantize_with_table', 'read_binary_header', 'read_param_bytes', 'read_param_file', 'read_params', 'write_param_chunks', 'write_params']
+__all__ = ['BINARY_SUFFIXES', 'BinaryHeader', 'ENCODING_FLOAT32', 'ENCODING_UINT16', 'HEADER_SIZE', 'MAGIC', 'ParamFile', 'TEXT_SUFFIXES', 'VERSION', 'VERSION_EXTENDED', 'VERSION_TINTED', 'axis_letter', 'check_mesh', 'decode_binary', 'dequantize_params', 'encode_binary', 'format_text', 'param_file_bytes', 'parse_text', 'quantization_error_bound', 'quantize_params', 'quantize_with_table', 'read_binary_header', 'read_param_bytes', 'read_param_file', 'read_params', 'write_param_chunks', 'write_params']
 
 
 BINARY_SUFFIXES = (".adp",)
@@ -49,7 +51,11 @@ VERSION = 1  # 16 numbers per instance
 VERSION_EXTENDED = 2  # 19 numbers per instance (s tw tp after the 16)
 
 
-_VERSIONS = {VERSION: 16, VERSION_EXTENDED: 19}
+VERSION_TINTED = 3  # 22 numbers per instance (tr tg tb after the 19)
+
+
+#: a file's version is its record level + 1 (core/record.py): version -> numbers per instance
+_VERSIONS = {level + 1: width for level, width in enumerate(WIDTHS)}
 
 
 ENCODING_FLOAT32 = 0
@@ -68,10 +74,8 @@ _HEADER = struct.Struct("<8sHHIQb3xIdd32s16x")
 HEADER_SIZE = _HEADER.size  # 96
 
 
-_QUANT = struct.Struct("<16f16f")  # per-column minimum, per-column step
-
-
-_QUANT_EXT = struct.Struct("<19f19f")  # the same for 19 columns (version 2)
+#: the decode table of a quantized file: per-column minimum, then per-column step
+_QUANT_TABLES = {w: struct.Struct(f"<{w}f{w}f") for w in WIDTHS}
 
 
 _TRAILER = struct.Struct("<I")
@@ -81,7 +85,7 @@ _MAX_TEXT_LINE = 4096
 
 
 def format_text(values: np.ndarray, header: str | None = None) -> str:
-    """The text form: one instance a line, 16 (or 19) numbers separated by spaces.
+    """The text form: one instance a line, 16 (19, 22) numbers separated by spaces.
 
     Numbers are written with 9 significant digits, which round-trips float32
     exactly.  ``header`` lines are written as ``#`` comments.
@@ -103,7 +107,7 @@ def _text_pieces(values: np.ndarray, header: str | None):
 def _text_header(width: int, header: str | None) -> str:
     """The comment lines that start a text file: ``header``, then the field names."""
     lines = ["# " + line for line in (header or "").splitlines()]
-    lines.append("# " + " ".join(EXTENDED_FIELDS if width == 19 else FIELDS))
+    lines.append("# " + " ".join(LEVEL_FIELDS[level_of(width)]))
     return "\n".join(lines) + "\n"
 
 
@@ -127,8 +131,9 @@ _SEPARATORS = re.compile(r"[,\s]+")
 
 def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
     """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``, or
-    ``(n, 19)`` when every line holds 19 numbers (a mix is an error naming the
-    line; the first data line fixes the width for the whole file).
+    ``(n, 19)`` / ``(n, 22)`` when every line holds 19 / 22 numbers (a mix is
+    an error naming the line; the first data line fixes the width for the
+    whole file).
 
     The text is parsed in pieces of about 256 KiB cut at line breaks, each
     turned into float32 rows at once, so the memory needed beyond ``data``
@@ -192,7 +197,7 @@ def _fast_chunk(chunk: bytes, width: int | None = None):
     """``(values (n, width) float32, lines)`` of a piece made only of numbers,
     commas, blanks and ``\n`` line breaks, parsed by numpy's C reader; None
     when the piece holds anything else (comments, ``\r``, other text) or
-    does not parse into ``width`` columns (16 or 19 when ``width`` is None):
+    does not parse into ``width`` columns (one of the record's widths when ``width`` is None):
     the line-by-line parser then finds the exact line and field for its message."""
     if b"#" in chunk:  # whole-line ASCII comments are dropped (their line breaks kept)
         chunk = _COMMENT_LINE.sub(b"", chunk)
@@ -216,8 +221,10 @@ def _fast_chunk(chunk: bytes, width: int | None = None):
         arr32 = arr.reshape(-1, width or 16).astype(np.float32)
     if not np.isfinite(arr32).all():  # beyond float32: the slow path names the line
         return None
-    if arr32.shape[1] == 19 and len(arr32) and ((arr32[:, SCALE] <= 0).any() or (arr32[:, TAPER] >= 1).any()):
-        return None  # a bad scale or taper: the slow path names the line and field
+    if arr32.shape[1] >= EXTENDED_WIDTH and len(arr32) and ((arr32[:, SCALE] <= 0).any() or (arr32[:, TAPER] >= 1).any()
+                                                            or (arr32[:, EXTENDED_WIDTH:] < 0).any()
+                                                            or (arr32[:, EXTENDED_WIDTH:] > 1).any()):
+        return None  # a bad scale, taper or tint: the slow path names the line and field
     lines = chunk.count(b"\n") + (0 if not chunk or chunk.endswith(b"\n") else 1)
     return np.ascontiguousarray(arr32), lines
 
@@ -243,13 +250,15 @@ def _split_lines(chunk: bytes, name: str, lineno: int, offset: int, first=None):
             continue
         tokens = [tok for tok in _SEPARATORS.split(stripped) if tok]
         if len(tokens) not in WIDTHS:
-            raise ParamFileError(f"{name}: line {k}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances)")
+            raise ParamFileError(
+                f"{name}: line {k}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances; "
+                "22: tinted)")
         if first is None:
             first = (len(tokens), k)
         elif len(tokens) != first[0]:
             raise ParamFileError(
                 f"{name}: line {k}: expected {first[0]} numbers like line {first[1]}, found {len(tokens)} "
-                "(a file holds 16 numbers on every line, or 19 on every line)"
+                f"(a file holds the same count on every line: {describe_widths()})"
             )
         rows.append(tokens)
         linenos.append(k)
@@ -269,7 +278,7 @@ def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np
                     float(tok)
                 except ValueError:
                     raise ParamFileError(
-                        f"{name}: line {linenos[k]}, field {EXTENDED_FIELDS[c]}: expected a number, found {tok[:40]!r}"
+                        f"{name}: line {linenos[k]}, field {LEVEL_FIELDS[-1][c]}: expected a number, found {tok[:40]!r}"
                     ) from None
         # numpy refused what Python's float() accepts: parse token by token
         arr = np.array([[float(tok) for tok in row] for row in rows], dtype=np.float64)
@@ -279,7 +288,7 @@ def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np
     if overflow.any():
         k, c = (int(x) for x in np.argwhere(overflow)[0])
         raise ParamFileError(
-            f"{name}: line {linenos[k]}, field {EXTENDED_FIELDS[c]}: {arr[k, c]:.9g} does not fit in float32; "
+            f"{name}: line {linenos[k]}, field {LEVEL_FIELDS[-1][c]}: {arr[k, c]:.9g} does not fit in float32; "
             f"expected a finite number of magnitude at most {float(np.finfo(np.float32).max):.7g}"
         )
     return as_params(arr32, name=name, error=ParamFileError, rows=[f"line {n}" for n in linenos])
@@ -289,7 +298,7 @@ def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np
 class ParamFile:
     """What a parameter file holds.
 
-    values : (n, 16) float32 — the parameters (decoded if quantized).
+    values : (n, 16), (n, 19) or (n, 22) float32 — the parameters (decoded if quantized).
     format : ``"text"`` or ``"binary"``.
     encoding : ``"text"``, ``"float32"`` or ``"uint16-quantized"``.
     axis : the control axis it was made for, or None if not recorded.
@@ -313,7 +322,7 @@ class ParamFile:
 
 
 def quantization_error_bound(values: np.ndarray) -> np.ndarray:
-    """Per-column bound on ``|decoded - original|`` of the quantized form: (16,) (or (19,)) float64.
+    """Per-column bound on ``|decoded - original|`` of the quantized form: (w,) float64.
 
     Each column is stored as ``min + q * step`` with ``q`` a uint16 and
     ``step = (max - min) / 65535``, so the rounding error is at most
@@ -331,7 +340,7 @@ def quantization_error_bound(values: np.ndarray) -> np.ndarray:
 def quantize_params(values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The uint16 quantization of the binary file form, as arrays.
 
-    values : (n, 16) or (n, 19) float — parameters (w columns).
+    values : (n, w) float — parameters (w = 16, 19 or 22 columns).
     Returns ``lo`` (w,) float32 (per-column minimum), ``step`` (w,) float32
     (per-column step, ``(max - min) / 65535`` widened by at most one ulp) and
     ``q`` (n, w) uint16, so that a value decodes as ``lo + q * step``
@@ -356,7 +365,7 @@ def quantize_with_table(values, lo, step, *, name: str = "update", setter: str =
     to ``setter`` (the call that re-quantizes every instance).
     """
     v = as_params(values).astype(np.float64)
-    w = v.shape[1]  # 16, or 19 for extended instances
+    w = v.shape[1]  # 16, 19 (extended) or 22 (tinted)
     lo = np.asarray(lo, dtype=np.float32).reshape(w).astype(np.float64)
     step = np.asarray(step, dtype=np.float32).reshape(w).astype(np.float64)
     q = _levels(v, lo, step)
@@ -379,12 +388,12 @@ def _levels(v: np.ndarray, lo: np.ndarray, step: np.ndarray) -> np.ndarray:
 def dequantize_params(lo, step, q) -> np.ndarray:
     """``lo + q * step`` per column, computed in float64 and rounded to float32: (n, w).
 
-    lo, step : (w,) float32; q : (n, w) uint16, w = 16 or 19.  The same
+    lo, step : (w,) float32; q : (n, w) uint16, w = 16, 19 or 22.  The same
     decode as a quantized binary file.
     """
     w = np.size(lo)
     if w not in WIDTHS:
-        raise ParamError(f"quantization table: expected 16 or 19 columns, found {w}")
+        raise ParamError(f"quantization table: expected {describe_widths()} columns, found {w}")
     lo = np.asarray(lo, dtype=np.float32).reshape(w)
     step = np.asarray(step, dtype=np.float32).reshape(w)
     q = np.asarray(q, dtype="<u2").reshape(-1, w)
@@ -392,7 +401,7 @@ def dequantize_params(lo, step, q) -> np.ndarray:
 
 
 def _quant_table(width: int) -> struct.Struct:
-    return _QUANT_EXT if width == 19 else _QUANT
+    return _QUANT_TABLES[width]
 
 
 def _quantize(values: np.ndarray) -> tuple[bytes, bytes]:
@@ -448,14 +457,15 @@ def encode_binary(
     quantize: bool = False,
 ) -> bytes:
     """The binary form of ``values`` (see ``docs/parameter-files.md``): version 1
-    for 16 numbers per instance (unchanged), version 2 for 19 (extended)."""
+    for 16 numbers per instance (unchanged), version 2 for 19 (extended),
+    version 3 for 22 (tinted)."""
     values = as_params(values)
     header = _binary_header(values.shape[1], quantize, len(values), axis, mesh_fingerprint)
     if quantize:
         table, payload = _quantize(values)
         body = header + table + payload
     else:
-        body = header + values.astype("<f4").tobytes()  # 64 (or 76) bytes per instance
+        body = header + values.astype("<f4").tobytes()  # 64 (76, 88) bytes per instance
     return body + _TRAILER.pack(zlib.crc32(body))
 
 
@@ -465,7 +475,7 @@ def _binary_header(width: int, quantize: bool, count: int, axis: ControlAxis | N
     if mesh_fingerprint is not None and len(mesh_fingerprint) != 32:
         raise ParamError(f"mesh fingerprint: expected 32 bytes, found {len(mesh_fingerprint)}")
     return _HEADER.pack(
-        MAGIC, VERSION_EXTENDED if width == 19 else VERSION, ENCODING_UINT16 if quantize else ENCODING_FLOAT32,
+        MAGIC, level_of(width) + 1, ENCODING_UINT16 if quantize else ENCODING_FLOAT32,
         HEADER_SIZE, count, -1 if axis is None else axis.index, 0,
         0.0 if axis is None else axis.lo, 0.0 if axis is None else axis.length,
         mesh_fingerprint or bytes(32),
@@ -502,7 +512,7 @@ class BinaryHeader:
 
     @property
     def columns(self) -> int:
-        """Numbers per instance: 16 (version 1) or 19 (version 2, extended)."""
+        """Numbers per instance: 16 (version 1), 19 (version 2, extended) or 22 (version 3, tinted)."""
         return _VERSIONS[self.version]
 
     @property
@@ -538,7 +548,8 @@ def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None 
         raise ParamFileError(f"{name}: magic: expected {MAGIC!r}, found {magic!r}")
     if version not in _VERSIONS:
         raise ParamFileError(
-            f"{name}: version: expected {VERSION} (16 numbers) or {VERSION_EXTENDED} (19 numbers), found {version} "
+            f"{name}: version: expected "
+            + ", ".join(f"{v} ({w} numbers)" for v, w in _VERSIONS.items()) + f", found {version} "
             "(written by a newer axialdeform?)"
         )
     if encoding not in _ENCODINGS:
@@ -657,7 +668,7 @@ def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
 
 
 def read_params(path: str | os.PathLike, mesh=None, *, allow_mesh_mismatch: bool = False) -> np.ndarray:
-    """Read a parameter file (text or binary) into ``(n, 16) float32`` (``(n, 19)``: extended).
+    """Read a parameter file (text or binary) into ``(n, 16) float32`` (``(n, 19)``: extended; ``(n, 22)``: tinted).
 
     If ``mesh`` is given and the file records the base mesh it was made for,
     a different mesh raises :class:`MeshMismatchError` unless
@@ -725,7 +736,7 @@ def write_param_chunks(
     writes for the pieces concatenated.
 
     pieces : a callable returning a fresh iterable of ``(m, width)`` arrays
-        (float32; ``width`` 16 or 19) whose lengths add up to ``count``.  It
+        (float32; ``width`` 16, 19 or 22) whose lengths add up to ``count``.  It
         is called once, or twice for the quantized form (a first pass finds
         each column's range for the decode table, the second encodes).
     Other arguments as :func:`write_params`.  Pieces that do not add up to
@@ -735,7 +746,7 @@ def write_param_chunks(
     path = Path(path)
     count, width = int(count), int(width)
     if width not in WIDTHS:
-        raise ParamError(f"width: expected 16 or 19 numbers per instance, found {width}")
+        raise ParamError(f"width: expected {describe_widths()} numbers per instance, found {width}")
     if mesh is not None:
         axis, mesh_fingerprint = mesh.axis, mesh.fingerprint
     name = str(path)
