@@ -5,7 +5,7 @@ Writes two pictures into --output (default: the current folder):
 * ``01_stones.png`` -- solid | wireframe of the SAME 16 numbers per stone,
   side by side (the thesis' Figs. 7 and 8: same parameters, same shape);
 * ``01_stones_bank.png`` -- the same stones on a ground plane, each with its
-  own colour (the optional per-instance tint).
+  own colour (the record's tint field: 22 numbers a stone).
 
     python examples/01_stones.py                  # 5000 stones, offscreen
     python examples/01_stones.py --window         # the same scene in the viewer
@@ -83,12 +83,13 @@ def main():
     image = ad.render_image(mesh, params, size, ("solid", "wireframe"), camera=cam, look=ad.Look(ground=False))
     ad.save_png(out / "01_stones.png", image)
 
-    # 2. the bank: ground plane + one colour per stone, in your own offscreen target
+    # 2. the bank: ground plane + one colour per stone, in your own offscreen target;
+    # the colours are the record's tint field (22 numbers a stone: a file keeps them)
+    params = ad.core.tint_params(params, stone_colours(count, args.seed))
     ctx = ad.create_context()
     look = ad.Look(background=(0.80, 0.86, 0.92))   # light, ambient, background: one value object
     with ad.AxialRenderer(ctx, mesh, params) as stones, ad.gl.GroundPlane(ctx, color=(0.42, 0.37, 0.30)) as ground, \
             ad.Offscreen(ctx, size) as target, ad.gl.ShadowMap(ctx) as shadow:
-        stones.set_tint(stone_colours(count, args.seed))
         ground.fit(mesh, params, margin=3.0)
         shadow.fit(mesh, params, look.light_dir)          # the key light's shadow map around the stones
         stones.render_shadow(shadow)             # one more instanced draw

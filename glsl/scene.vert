@@ -24,12 +24,16 @@ uniform int u_instance_base;     // index of the first instance drawn (capture w
 in vec3 in_position;        // base mesh, model units
 in vec3 in_normal;          // unit vertex normal
 
-// the instanced attribute buffer (divisor 1): the 16 numbers
+// the instanced attribute buffer (divisor 1): the 16 numbers (quantized:
+// quantized.glsl's i_q*, and these are not declared -- WebGL 2 counts every
+// declared attribute against its 16)
+#ifndef AXIAL_QUANTIZED
 in vec4 i_d12;
 in vec4 i_d34;
 in vec2 i_d5;
 in vec3 i_position;
 in vec3 i_angles;
+#endif
 #ifdef AXIAL_CULLED
 in int i_index;             // the instance's index before culling (the records come from cull.geom)
 #define AXIAL_INSTANCE_ID i_index
@@ -37,11 +41,12 @@ in int i_index;             // the instance's index before culling (the records 
 uniform int u_slice_base;   // the first instance of this draw (a slice of the instances, gl/renderer.py); 0 else
 #define AXIAL_INSTANCE_ID (gl_InstanceID + u_slice_base)
 #endif
-#ifdef AXIAL_EXTENDED
+#if defined(AXIAL_EXTENDED) && !defined(AXIAL_QUANTIZED)
 in vec3 i_extra;            // s tw tp: extended instances (19 numbers)
 #endif
 #ifdef AXIAL_TINT
-in vec3 i_tint;             // optional second instanced buffer: the instance's base colour (linear RGB)
+in vec3 i_tint;             // a second instanced buffer: the instance's tint (linear RGB; the record's
+                            // tr tg tb, or AxialRenderer.set_tint)
 flat out vec3 v_tint;
 #endif
 

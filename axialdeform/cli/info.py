@@ -14,6 +14,7 @@ from ..core.io.params import (
     read_binary_header,
     read_param_bytes,
 )
+from ..core.record import describe_record
 
 
 def add_parser(sub) -> None:
@@ -36,6 +37,7 @@ def run(args) -> int | None:
             raise ParamFileError(f"{path}: axis: {exc}") from None
         rows = [("file", f"{path} ({h.size} bytes)"), ("format", f"binary v{h.version}, {h.encoding_name}"),
                 ("instances", f"{h.count}" + (f" ({h.size / h.count:.1f} bytes each)" if h.count else "")),
+                ("record", describe_record(h.columns)),
                 ("axis", axis),
                 ("mesh", "sha256 " + h.fingerprint.hex() if any(h.fingerprint) else "not recorded"),
                 ("checksum", f"CRC-32 {h.stored_crc:08x} " + ("OK" if h.checksum_ok else
@@ -51,6 +53,7 @@ def run(args) -> int | None:
     print(f"file:      {path} ({pf.size} bytes)")
     print(f"format:    text, {pf.count} lines of {pf.values.shape[1]} numbers")
     print(f"instances: {pf.count}" + (f" ({pf.size / pf.count:.1f} bytes each)" if pf.count else ""))
+    print(f"record:    {describe_record(pf.values.shape[1])}")
     print("axis:      not recorded (text form)")
     print("mesh:      not recorded (text form)")
     print("checksum:  none (text form)")

@@ -34,7 +34,7 @@ __all__ = [
     "Field", "ShaderInput", "RECORD", "SHADER_INPUTS", "GLTF_ATTRIBUTES", "FIELDS", "EXTENDED_FIELDS",
     "WIDTH", "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "width_of",
     "describe_widths", "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST", "TAPER",
-    "IDENTITY_EXTRA", "Instances", "gl_layout", "page_layout", "page_record", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH",
+    "IDENTITY_EXTRA", "Instances", "gl_layout", "page_layout", "page_record", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES", "describe_record",
     "tint_columns",
 ]
 
@@ -110,6 +110,17 @@ EXTENDED_FIELDS: tuple[str, ...] = LEVEL_FIELDS[1]
 #: the numbers per instance of each level: (16, 19, 22)
 WIDTHS: tuple[int, ...] = tuple(len(names) for names in LEVEL_FIELDS)
 WIDTH, EXTENDED_WIDTH, TINTED_WIDTH = WIDTHS
+
+
+#: what each level's instances are called
+LEVEL_NAMES: tuple[str, ...] = ("plain", "extended", "tinted")
+
+
+def describe_record(width: int) -> str:
+    """``"22 numbers an instance (tinted: ... tr tg tb)"``: a width in words."""
+    level = level_of(width)
+    added = [c for c in LEVEL_FIELDS[level] if c not in (LEVEL_FIELDS[level - 1] if level else ())]
+    return f"{width} numbers an instance ({LEVEL_NAMES[level]}" + (f": ... {' '.join(added)})" if level else ")")
 
 
 def level_of(width: int) -> int:

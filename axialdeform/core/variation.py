@@ -19,7 +19,17 @@ import numpy as np
 from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import as_params
-from .record import ANGLES, OFFSETS, POSITION, SCALE, TAPER, TINT, TWIST, WIDTHS, Instances
+from .record import (
+    ANGLES,
+    OFFSETS,
+    POSITION,
+    SCALE,
+    TAPER,
+    TINT,
+    TWIST,
+    WIDTHS,
+    Instances,
+)
 
 __all__ = ["random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
 

@@ -44,7 +44,7 @@ from ..core.io.params import encode_binary
 from ..core.io.safeio import check_output_path, read_regular
 from ..core.look import DEFAULT_LOOK
 from ..core.params import as_params
-from ..core.record import page_record
+from ..core.record import level_of, page_record
 from ..core.scene import Scene
 from ..core.wind import SECOND_HARMONIC
 from ..gl.material import ALPHA_MODE_INDEX
@@ -102,12 +102,13 @@ def to_glsl_es(source: str) -> str:
     return GLSL_ES_HEADER + "\n" + rest
 
 
-#: the page's shader builds: key -> defines (``_extended``: 19-number
-#: instances; ``_material``: a mesh with UVs, colours, parts or materials)
-SHADER_VARIANTS = {
-    "float": {}, "quantized": {"AXIAL_QUANTIZED": 1},
-    "float_extended": {"AXIAL_EXTENDED": 1}, "quantized_extended": {"AXIAL_QUANTIZED": 1, "AXIAL_EXTENDED": 1},
-}
+#: the suffix of a shader build per record level and its defines: ``_extended``
+#: 19-number instances, ``_tinted`` 22 (core/record.py)
+LEVEL_VARIANTS = (("", {}), ("_extended", {"AXIAL_EXTENDED": 1}), ("_tinted", {"AXIAL_EXTENDED": 1, "AXIAL_TINT": 1}))
+#: the page's shader builds: key -> defines (``_extended`` / ``_tinted``: a
+#: record level; ``_material``: a mesh with UVs, colours, parts or materials)
+SHADER_VARIANTS = {f"{encoding}{suffix}": {**({"AXIAL_QUANTIZED": 1} if encoding == "quantized" else {}), **defines}
+                   for suffix, defines in LEVEL_VARIANTS for encoding in ("float", "quantized")}
 SHADER_VARIANTS.update({f"{k}_material": {**v, "AXIAL_MATERIAL": 1} for k, v in list(SHADER_VARIANTS.items())})
 
 
@@ -115,8 +116,9 @@ def page_shaders() -> dict:
     """The page's shaders, assembled from ``glsl/scene.vert`` / ``scene.frag``
     (which include ``axial.glsl``, ``wind.glsl``, ``quantized.glsl`` and
     ``lighting.glsl``): ``{"float": {"vertex", "fragment"}, "quantized": ...,
-    "float_extended": ..., "quantized_extended": ...}`` and the same four with
-    ``_material`` (``AXIAL_MATERIAL``: textures, vertex colours, alpha modes)."""
+    "float_extended": ..., "quantized_extended": ..., "float_tinted": ...,
+    "quantized_tinted": ...}`` and the same six with ``_material``
+    (``AXIAL_MATERIAL``: textures, vertex colours, alpha modes)."""
 
     return {variant: {stage: to_glsl_es(assemble(name, defines).source)
                       for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
@@ -125,7 +127,7 @@ def page_shaders() -> dict:
 
 def shader_key(quantize: bool, fields: int, material: bool) -> str:
     """The :data:`SHADER_VARIANTS` key of a layer."""
-    return ("quantized" if quantize else "float") + ("_extended" if fields == 19 else "") + (
+    return ("quantized" if quantize else "float") + LEVEL_VARIANTS[level_of(fields)][0] + (
         "_material" if material else "")
 
 

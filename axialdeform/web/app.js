@@ -15,8 +15,11 @@ export class SceneError extends Error {}
 
 const MAGIC = [0x89, 0x41, 0x44, 0x50, 0x0d, 0x0a, 0x1a, 0x0a];
 const HEADER = 96;
-// version 1: 16 numbers per instance; version 2: 19 (extended: s tw tp)
-const FIELDS_OF_VERSION = { 1: 16, 2: 19 };
+// version 1: 16 numbers per instance; version 2: 19 (extended: s tw tp);
+// version 3: 22 (tinted: tr tg tb) -- the record's levels (core/record.py)
+const FIELDS_OF_VERSION = { 1: 16, 2: 19, 3: 22 };
+// the shader build's suffix of each width (axialdeform.web.LEVEL_VARIANTS)
+const LEVEL_SUFFIX = { 16: '', 19: '_extended', 22: '_tinted' };
 
 let crcTable = null;
 
@@ -49,7 +52,7 @@ export function parseAdp(buffer, name) {
   if (MAGIC.some((b, i) => bytes[i] !== b)) fail('not an axialdeform parameter file (magic bytes differ)');
   const version = view.getUint16(8, true);
   const fields = FIELDS_OF_VERSION[version];
-  if (!fields) fail(`version: expected 1 or 2, found ${version} (written by a newer axialdeform?)`);
+  if (!fields) fail(`version: expected ${Object.keys(FIELDS_OF_VERSION).join(', ')}, found ${version} (written by a newer axialdeform?)`);
   const encoding = view.getUint16(10, true);
   if (encoding !== 0 && encoding !== 1) fail(`encoding: expected 0 (float32) or 1 (quantized), found ${encoding}`);
   const headerSize = view.getUint32(12, true);
@@ -235,17 +238,33 @@ export function mount(root, lib, scene, options = {}) {
       const u = layer.uniforms;
       u.u_qmin.value = p.qtable.slice(0, 16);
       u.u_qstep.value = p.qtable.slice(f, f + 16);
-      if (f === 19) {
+      if (f >= 19) {
         u.u_qmin_extra.value = new THREE.Vector3().fromArray(p.qtable, 16);
-        u.u_qstep_extra.value = new THREE.Vector3().fromArray(p.qtable, 19 + 16);
+        u.u_qstep_extra.value = new THREE.Vector3().fromArray(p.qtable, f + 16);
       }
     } else {
       for (const [n, size, off] of layout.float) geometry.setAttribute(n, new THREE.InterleavedBufferAttribute(buf, size, off, false));
     }
+    // tinted records: the tint in a float attribute of its own (as the renderer's set_tint buffer),
+    // decoded here from either encoding
+    const [tintName, tintSize, tintStart] = cfg.record.tint;
+    if (f >= tintStart + tintSize) {
+      const tint = new Float32Array(p.count * tintSize);
+      for (let i = 0; i < p.count; i++) {
+        for (let c = 0; c < tintSize; c++) {
+          const k = tintStart + c;
+          const v = p.values[i * f + k];
+          tint[i * tintSize + c] = p.encoding === 1 ? p.qtable[k] + v * p.qtable[f + k] : v;
+        }
+      }
+      geometry.setAttribute(tintName, new THREE.InstancedBufferAttribute(tint, tintSize));
+    } else if (geometry.getAttribute(tintName)) {
+      geometry.deleteAttribute(tintName);
+    }
   }
 
   function variant(layer, p) {
-    return (p.encoding === 1 ? 'quantized' : 'float') + (p.fields === 19 ? '_extended' : '') +
+    return (p.encoding === 1 ? 'quantized' : 'float') + LEVEL_SUFFIX[p.fields] +
       (layer.cfg.material ? '_material' : '');
   }
 

@@ -57,9 +57,10 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     assert config["shaders"] == {"quantized": page_shaders()["quantized"]}  # the build these parameters need
     assert build_scene(stone, params, quantize=False).config["shaders"] == {"float": page_shaders()["float"]}
     assert set(build_scene(stone, params, all_shaders=True).config["shaders"]) == {
-        "float", "quantized", "float_extended", "quantized_extended"}
+        "float", "quantized", "float_extended", "quantized_extended", "float_tinted", "quantized_tinted"}
     assert set(build_scene(ad.load_mesh("leafcard"), params, all_shaders=True).config["shaders"]) == {
-        "float_material", "quantized_material", "float_extended_material", "quantized_extended_material"}
+        "float_material", "quantized_material", "float_extended_material", "quantized_extended_material",
+        "float_tinted_material", "quantized_tinted_material"}
     assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["quantized"]["vertex"]
     adp = (tmp_path / "site" / PARAMS_FILE).read_bytes()
     assert adp == encode_binary(params, axis=stone.axis, mesh_fingerprint=stone.fingerprint, quantize=True)
@@ -79,6 +80,46 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     assert embedded_file(one, PARAMS_FILE) == adp
     assert "http://" not in one.split("<body>", 1)[1] and "https://" not in one.split("<body>", 1)[1].replace(
         "https://threejs.org", "")  # nothing fetched from the network
+
+
+@pytest.mark.parametrize("quantize", [False, True])
+def test_the_page_parser_reads_every_record_level(tmp_path, stone, quantize):
+    """``parseAdp`` of web/app.js, run in node, reads a file of each level of
+    the record table (16, 19, 22 numbers) as Python wrote it, and refuses the
+    next version with the words Python uses."""
+    import shutil
+    import subprocess
+
+    from axialdeform.core import record as R
+    from axialdeform.core.io.params import encode_binary
+
+    node = shutil.which("node")
+    assert node, "node is needed for the page's parser tests"
+    files = []
+    for level, width in enumerate(R.WIDTHS):
+        params = ad.random_params(stone, 5, seed=level, **({"scale": 1.0} if level == 1 else {}),
+                                  **({"tint": 0.5} if level == 2 else {}))
+        assert params.shape[1] == width
+        path = tmp_path / f"l{level}.adp"
+        path.write_bytes(encode_binary(params, quantize=quantize))
+        files.append((path, width, level + 1))
+    bad = bytearray(files[0][0].read_bytes())
+    bad[8:10] = (len(R.WIDTHS) + 1).to_bytes(2, "little")
+    (tmp_path / "next.adp").write_bytes(bytes(bad))
+    app = (ROOT / "axialdeform" / "web" / "app.js").as_uri()
+    script = (f"import {{ parseAdp }} from '{app}';\nimport {{ readFileSync }} from 'node:fs';\n"
+              "const out = [];\n"
+              "for (const f of process.argv.slice(1)) {\n"
+              "  const b = readFileSync(f); const ab = b.buffer.slice(b.byteOffset, b.byteOffset + b.length);\n"
+              "  try { const p = parseAdp(ab, f); out.push([p.fields, p.version, p.count]); }\n"
+              "  catch (e) { out.push(e.message); }\n"
+              "}\nconsole.log(JSON.stringify(out));\n")
+    proc = subprocess.run([node, "--input-type=module", "-e", script, *[str(f) for f, _, _ in files],
+                           str(tmp_path / "next.adp")], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    got = json.loads(proc.stdout)
+    assert got[:-1] == [[width, version, 5] for _, width, version in files]
+    assert "version: expected 1, 2, 3, found 4" in got[-1]
 
 
 def test_build_scene_refuses_bad_options(stone):
@@ -475,6 +516,36 @@ def test_extended_instances_match_render(browser, tmp_path, quantize):
     try:
         assert v.state["ready"] is True and v.state["instances"] == 700, v.state
         assert iou(v.silhouette(), render, BACKGROUND) >= 0.95
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mesh_name,quantize", [("stone", True), ("stone", False), ("leafcard", True)])
+def test_tinted_instances_match_render(browser, tmp_path, mesh_name, quantize):
+    """22-number instances (the record's tint; .adp version 3): the page colours
+    each instance by its own tint, pixel for pixel as render does, and the
+    tint shows (the same instances untinted differ)."""
+    mesh = ad.load_mesh(mesh_name)
+    params = ad.random_params(mesh, 300, seed=9, placement="disc", tint=0.9, tint_color=(1.0, 0.45, 0.2))
+    assert params.shape == (300, 22)
+    adp = tmp_path / "tint.adp"
+    ad.write_params(adp, params, mesh)
+    out = tmp_path / "tint.html"
+    write_page(out, build_scene(mesh, ad.read_params(adp, mesh), size=SIZE, quantize=quantize))
+    assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == 3
+    look = ad.Look(ground=False, shadow=False)
+    render = ad.render_image(ad.Scene.single(mesh, ad.read_params(adp, mesh)), size=SIZE, look=look)
+    plain = ad.render_image(ad.Scene.single(mesh, params[:, :19]), size=SIZE, look=look)
+    covered = _mask(render, BACKGROUND)
+    assert np.abs(plain.astype(np.float64) - render)[covered].mean() > 10.0  # the tint shows at all
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == 300, v.state
+        shot = v.silhouette()
+        assert iou(shot, render, BACKGROUND) >= 0.95
+        assert np.abs(shot.astype(np.float64) - render).mean() < 2.0  # colours too, pixel by pixel
         assert v.errors == []
     finally:
         v.close()

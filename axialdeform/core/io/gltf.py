@@ -55,9 +55,9 @@ from ..mesh import BaseMesh, area_weighted_normals
 from ..params import as_params
 from ..record import (
     ANGLES,
+    EXTENDED_WIDTH,
     GLTF_ATTRIBUTES,
     GLTF_EXTENDED_ATTRIBUTES,
-    EXTENDED_WIDTH,
     GLTF_TINT_ATTRIBUTE,
     LEVEL_FIELDS,
     POSITION,
