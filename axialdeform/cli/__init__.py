@@ -71,8 +71,11 @@ def main(argv=None) -> int:
         # that fell back): one line, no source context
         if issubclass(category, AssetWarning) or os.path.abspath(str(filename)).startswith(package + os.sep):
             print(f"axialdeform {args.command}: warning: {one_line(message)}", file=sys.stderr)
-        else:
-            previous(message, category, filename, lineno, file, line)
+        elif issubclass(category, (DeprecationWarning, PendingDeprecationWarning, ImportWarning)):
+            return  # another library's notes to its developers: not the user's business
+        else:  # another library's: one line too, never its source line
+            origin = os.path.basename(os.path.dirname(str(filename))) or os.path.basename(str(filename))
+            print(f"axialdeform {args.command}: warning (from {one_line(origin)}): {one_line(message)}", file=sys.stderr)
 
     previous, warnings.showwarning = warnings.showwarning, show
     try:

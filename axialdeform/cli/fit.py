@@ -36,7 +36,7 @@ def run(args) -> None:
     """``axialdeform fit BASE VARIANTS... -o PARAMS``."""
 
     out = Path(args.output)
-    mesh = load_mesh(args.base)
+    mesh = load_mesh(args.base, textures=False)
     is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
     paths = variant_paths(args.variants)
 

@@ -85,7 +85,7 @@ def run(args) -> None:
 
     check_disk_space(args.output, fixed + count * each, f"parameter file ({count} instances of {width} numbers)",
                      ArgumentError, expected=fits)
-    mesh = load_mesh(args.mesh)
+    mesh = load_mesh(args.mesh, textures=False)
     options = dict(bend=args.bend, placement=args.placement, spacing=args.spacing, up=args.up, yaw=args.yaw,
                    tilt=args.tilt, **extension)
     iter_random_params(mesh, count, args.seed, **options)  # bad options are refused before the file is opened

@@ -69,7 +69,7 @@ def run(args) -> int | None:
         raise ParamFileError(f"{args.output}: the quantized form is binary only; expected a "
                              f"{'/'.join(BINARY_SUFFIXES)} file name")
     check_output_path(args.output, (args.surface, mesh_source_path(args.mesh), args.density), "parameter file")
-    mesh = load_mesh(args.mesh)
+    mesh = load_mesh(args.mesh, textures=False)
     try:
         params = scatter(args.surface, mesh, args.count, min_distance=args.min_distance, density=args.density,
                          align_to_normal=args.align_to_normal, anchor=args.anchor,

@@ -22,6 +22,8 @@ drawn with its base colour.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import os
 import re
 import warnings
@@ -168,11 +170,28 @@ def _source(image) -> tuple[bytes, str] | None:
     return (data[:end + size] if end >= 0 else data), mime
 
 
+#: False while a mesh is loaded for a command that neither draws nor writes
+#: its textures (``load_mesh(..., textures=False)``): no pixel is decoded
+_DECODE_TEXTURES = contextvars.ContextVar("axialdeform_decode_textures", default=True)
+
+
+@contextlib.contextmanager
+def texture_decoding(on: bool):
+    """Within it, :func:`_pixels` decodes textures (``on``) or leaves every
+    one out (the parts keep their base colours; shapes and vertex order are
+    the same either way, so is the fingerprint)."""
+    token = _DECODE_TEXTURES.set(bool(on))
+    try:
+        yield
+    finally:
+        _DECODE_TEXTURES.reset(token)
+
+
 def _pixels(image, where: str = "") -> np.ndarray | None:
     """A PIL image (or None) as (h, w, 4) uint8 RGBA.  Its size is read from
     the header first: an image over :func:`max_texture_pixels` is not decoded
     (an :class:`AssetWarning` naming ``where``; the part keeps its base colour)."""
-    if image is None:
+    if image is None or not _DECODE_TEXTURES.get():
         return None
     size = getattr(image, "size", None)
     if size is not None and int(size[0]) * int(size[1]) > max_texture_pixels():

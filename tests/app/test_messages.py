@@ -58,3 +58,38 @@ def test_a_camera_far_from_the_origin_is_a_camera(tmp_path):
     ad.write_params(tmp_path / "far.adp", params)
     proc = run("render", "stone", "far.adp", "-o", "far.png", "--size", "32x24", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.parametrize("content,words", [
+    (b'{"asset": ', "not a glTF file: its JSON is not valid (line 1, column 11"),
+    (b"[1, 2]", "not a glTF file: its JSON is a list, expected an object"),
+    (b"\xff\xfe{}", "not a glTF file: byte 0 of its JSON is not UTF-8 text"),
+])
+def test_a_gltf_that_is_not_json_is_said_in_words(tmp_path, content, words):
+    """Said before trimesh, which would look for a ``model.gltf`` the input never mentions."""
+    (tmp_path / "m.gltf").write_bytes(content)
+    proc = run("random", "m.gltf", "-n", "2", "-o", "p.adp", cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert f"m.gltf: {words}" in proc.stderr and "model.gltf" not in proc.stderr and "Error" not in proc.stderr
+
+
+def test_pygltflib_says_nothing_of_its_own(tmp_path, stone):
+    """A GLB that pygltflib warns about (a header version it does not know, an
+    unknown chunk) read by the instanced reader: no stray lines, the result."""
+    import struct
+
+    from axialdeform.core.io.gltf import export_instanced
+
+    good = tmp_path / "i.glb"
+    export_instanced(good, stone, ad.random_params(stone, 2, seed=1))
+    data = bytearray(good.read_bytes())
+    data[4:8] = struct.pack("<I", 3)  # pygltflib: "does not support version ... larger than v2"
+    data += struct.pack("<I", 4) + b"XTRA" + b"\0" * 4  # pygltflib: "Ignoring chunk 2 with unknown type"
+    data[8:12] = struct.pack("<I", len(data))
+    odd = tmp_path / "odd.glb"
+    odd.write_bytes(bytes(data))
+    proc = subprocess.run([sys.executable, "-W", "default", "-c",
+                           "from axialdeform.core.io.gltf import read_instanced_glb as r; "
+                           f"m, p = r({str(odd)!r}); print(p.shape)"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "(2, 16)" and proc.stderr == "", proc.stderr

@@ -39,9 +39,11 @@ metres, and nothing here re-orients or rescales the model.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -754,12 +756,35 @@ def _load_glb(path: Path):
     except OSError as exc:
         raise GltfError(f"{where}: cannot read: {exc.strerror}") from None
     try:
-        gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
+        with _quiet_pygltflib():
+            gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
     except Exception as exc:  # pygltflib raises IOError, struct.error, JSON errors
-        raise GltfError(f"{where}: not a binary glTF file ({type(exc).__name__}: {exc})") from None
+        raise GltfError(f"{where}: not a binary glTF file ({_in_words(exc)})") from None
     if gltf is None:  # what pygltflib returns for bytes it does not recognise
         raise GltfError(f"{where}: not a binary glTF file (no glTF content)")
     return gltf
+
+
+@contextlib.contextmanager
+def _quiet_pygltflib():
+    """pygltflib's warnings (and prints) while it parses: what matters is
+    checked and said by this module, in its own words, once."""
+    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        warnings.simplefilter("ignore")
+        yield
+
+
+def _in_words(exc: BaseException) -> str:
+    """A parser's exception as words: its message, without Python's class
+    names (a bad length, a bad JSON text, a missing key)."""
+    if isinstance(exc, json.JSONDecodeError):
+        return f"its JSON chunk is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})"
+    if isinstance(exc, KeyError):
+        return f"the required field {exc.args[0]!r} is missing" if exc.args else "a required field is missing"
+    if isinstance(exc, UnicodeDecodeError):
+        return "its JSON chunk is not UTF-8 text"
+    text = str(exc).strip()
+    return text or "its structure is not glTF's"
 
 
 def read_extras(path: str | os.PathLike) -> dict:
@@ -791,8 +816,9 @@ def gltf_attributes(data: bytes, kind: str, resolver=None) -> list:
 
     try:
         if kind == "glb":
-            gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
-            blob = gltf.binary_blob() or b""
+            with _quiet_pygltflib():
+                gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
+                blob = gltf.binary_blob() or b""
         else:
             gltf = pygltflib.GLTF2.from_json(bytes(data).decode("utf-8"))
             uri = gltf.buffers[0].uri if gltf.buffers else None

@@ -13,12 +13,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshError
-from ..material import AssetWarning, compute_tangents, gather_parts
+from ..material import AssetWarning, compute_tangents, gather_parts, texture_decoding
 from ..mesh import BaseMesh, _check_float32_range, area_weighted_normals
 from . import safeio
 from .gltf import gltf_attributes
 from .resolver import (
     SafeResolver,
+    check_gltf_json,
     gltf_json,
     gltf_references,
     is_image_name,
@@ -54,7 +55,7 @@ def mesh_source_path(source: str | os.PathLike) -> Path:
     return Path(source)
 
 
-def load_mesh(source) -> BaseMesh:
+def load_mesh(source, *, textures: bool = True) -> BaseMesh:
     """Read a base mesh from a file, a bundled mesh by name (``"stone"``,
     ``"leaf"``), or take a ``trimesh.Trimesh`` (or a ``trimesh.Scene`` with one
     mesh) already in memory.
@@ -71,7 +72,17 @@ def load_mesh(source) -> BaseMesh:
     cannot be read is an :class:`~axialdeform.core.material.AssetWarning`.
     ``source_index`` maps each vertex to the file's own vertex order
     (``docs/parameter-files.md``, "Vertex order").
+
+    ``textures=False`` decodes no texture (for work that neither draws nor
+    writes one: making parameters, fitting, scattering); the parts keep
+    their names and base colours, and the positions, vertex order and
+    fingerprint are those of the same file loaded with its textures.
     """
+    with texture_decoding(textures):
+        return _load_mesh(source)
+
+
+def _load_mesh(source) -> BaseMesh:
     if isinstance(source, BaseMesh):
         return source
     if type(source).__module__.startswith("trimesh"):
@@ -98,6 +109,8 @@ def load_mesh(source) -> BaseMesh:
                         MeshError)
     kind = path.suffix.lower().lstrip(".")
     # each file a glTF refers to is read with the bound it declares (a buffer's byteLength)
+    if kind in ("gltf", "glb"):
+        check_gltf_json(data, kind, name)  # a file that is not glTF is said here, in words
     declared = gltf_references(data, kind, name) if kind in ("gltf", "glb") else {}
     if kind in ("gltf", "glb"):
         rest = unsupported_features(gltf_json(data, kind))

@@ -13,8 +13,8 @@ from ..errors import MeshError, PathError
 from . import safeio
 from .safeio import MAX_REFERENCED_BYTES, open_regular, read_regular
 
-__all__ = ['BUFFER_SLACK', 'IMAGE_SUFFIXES', 'SafeResolver', 'gltf_json', 'gltf_references', 'is_image_name',
-           'unsupported_features']
+__all__ = ['BUFFER_SLACK', 'IMAGE_SUFFIXES', 'SafeResolver', 'check_gltf_json', 'gltf_json', 'gltf_references',
+           'is_image_name', 'unsupported_features']
 
 
 #: suffixes of the files a mesh refers to that are pictures (textures)
@@ -39,6 +39,36 @@ def gltf_json(data: bytes, kind: str) -> dict:
     except (ValueError, struct.error, UnicodeDecodeError, RecursionError):
         return {}
     return tree if isinstance(tree, dict) else {}
+
+
+def check_gltf_json(data: bytes, kind: str, name: str) -> None:
+    """:class:`MeshError` naming ``name`` when a glTF's JSON (``kind``
+    ``"gltf"``: the file; ``"glb"``: its first chunk) is not a JSON object --
+    said here, before trimesh, which would go looking for a ``model.gltf``
+    the file never mentions."""
+    what = "binary glTF" if kind == "glb" else "glTF"
+    if kind == "glb":
+        if len(data) < 20:
+            raise MeshError(f"{name}: not a {what} file: {len(data)} bytes, shorter than the 20-byte header")
+        magic, _version, _length, chunk, ctype = struct.unpack_from("<4sIIII", data)
+        if magic != b"glTF":
+            raise MeshError(f"{name}: not a {what} file: magic {magic!r}, expected b'glTF'")
+        if ctype != 0x4E4F534A:
+            raise MeshError(f"{name}: not a {what} file: its first chunk is not JSON (type {ctype:#x}, expected 0x4e4f534a)")
+        if 20 + chunk > len(data):
+            raise MeshError(f"{name}: truncated: its JSON chunk declares {chunk} bytes, {len(data) - 20} follow the header")
+        data = bytes(data[20 : 20 + chunk])
+    try:
+        tree = json.loads(bytes(data).decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise MeshError(f"{name}: not a {what} file: byte {exc.start} of its JSON is not UTF-8 text") from None
+    except json.JSONDecodeError as exc:
+        raise MeshError(f"{name}: not a {what} file: its JSON is not valid (line {exc.lineno}, column {exc.colno}: "
+                        f"{exc.msg})") from None
+    except RecursionError:
+        raise MeshError(f"{name}: not a {what} file: its JSON is nested too deeply") from None
+    if not isinstance(tree, dict):
+        raise MeshError(f"{name}: not a {what} file: its JSON is a {type(tree).__name__}, expected an object")
 
 
 def unsupported_features(tree: dict) -> list[str]:
