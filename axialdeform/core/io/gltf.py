@@ -106,7 +106,7 @@ EXTENDED_ATTRIBUTES = GLTF_EXTENDED_ATTRIBUTES
 _FORMAT_VERSION = 1
 
 # glTF enums
-_FLOAT, _UINT16, _UINT32 = 5126, 5123, 5125
+_FLOAT, _UINT8, _UINT16, _UINT32 = 5126, 5121, 5123, 5125
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
 _TRIANGLES = 4
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
@@ -519,40 +519,75 @@ def encode_scene(scene, layout: str = "baked") -> bytes:
     :func:`export_instanced` writes one mesh (:func:`read_instanced_glb` with
     ``node=LAYER`` reads a layer back).  Neither layout holds the scene's wind.
     """
+    layers = _scene_layers(scene, layout)
+    if layout == "instanced":
+        return _encode_scene_instanced(scene, layers)
+    return _build_scene_baked(scene, layers).finish()
+
+
+def _scene_layers(scene, layout: str) -> list:
     if layout not in LAYOUTS:
         raise GltfError(f"layout: expected one of {', '.join(LAYOUTS)}, found {layout!r}")
     layers = [layer for layer in scene.layers if len(layer.params)]
     if scene.terrain is None and not layers:
         raise GltfError(f"{scene.path}: the scene has nothing to export; expected a terrain or a layer with instances")
-    if layout == "instanced":
-        return _encode_scene_instanced(scene, layers)
-    import trimesh
+    return layers
 
-    out = trimesh.Scene()
+
+def _build_scene_baked(scene, layers) -> "_Builder":
+    """The baked layout of :func:`encode_scene`: per layer (and the terrain)
+    one node and one mesh named after it holding every instance's deformed
+    world geometry (POSITION, NORMAL, uint32 indices), a PBR material of the
+    layer's colour (metallic 0, roughness 0.9); tinted instances: the colour
+    times each one's tint as COLOR_0 (normalized uint8) under a white
+    material.  The arrays are handed to the builder as they are (no copies):
+    :func:`export_scene` streams them to the file."""
+    b = _Builder()
+    g = b.g
     parts = [("terrain", scene.terrain, None, scene.terrain_color)] if scene.terrain is not None else []
     parts += [(layer.name, layer.mesh, layer.params, layer.color) for layer in layers]
     for name, mesh, params, color in parts:
         if params is None:
-            pos, nrm = mesh.positions[None], mesh.normals[None]
+            pos, nrm = mesh.positions[None].astype(np.float32), mesh.normals[None].astype(np.float32)
         else:
-            pos, nrm = deform(mesh.axis, mesh.positions, mesh.normals, params)
+            with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
+                pos, nrm = deform(mesh.axis, mesh.positions, mesh.normals, params)
+            require_finite(pos, "positions", "xyz", error=GltfError, source=name)
+            require_finite(nrm, "normals", "xyz", error=GltfError, source=name)
         n, v = pos.shape[:2]
-        faces = (np.asarray(mesh.faces)[None] + (v * np.arange(n))[:, None, None]).reshape(-1, 3)
-        rgb = tuple(color) if color is not None else (0.6, 0.6, 0.6)
-        material = trimesh.visual.material.PBRMaterial(name=name, baseColorFactor=[*rgb, 1.0],
-                                                       metallicFactor=0.0, roughnessFactor=0.9)
+        if n * v >= 2**32:
+            raise GltfError(f"{name}: {n} instances of {v} vertices are {n * v} vertices in one glTF mesh; expected "
+                            "fewer than 2^32 (uint32 indices): export fewer instances, or --instanced")
+        faces = np.asarray(mesh.faces).astype(np.uint32)
+        index = np.empty((n, len(faces), 3), dtype="<u4")
+        np.add(faces[None], (np.uint32(v) * np.arange(n, dtype=np.uint32))[:, None, None], out=index)
+        rgb = [float(c) for c in color] if color is not None else [0.6, 0.6, 0.6]
         tints = None if params is None else tint_columns(params)
-        if tints is not None:  # tinted instances: the layer's colour times each one's tint, per vertex (COLOR_0)
+        flat = pos.reshape(-1, 3)
+        attributes = {"POSITION": b.accessor(b.view(flat, target=_ARRAY_BUFFER), _FLOAT, n * v, "VEC3",
+                                             bounds=np.stack([flat.min(axis=0), flat.max(axis=0)]),
+                                             name=f"{name}_POSITION"),
+                      "NORMAL": b.accessor(b.view(nrm.reshape(-1, 3), target=_ARRAY_BUFFER), _FLOAT, n * v, "VEC3",
+                                           name=f"{name}_NORMAL")}
+        if tints is not None:  # the layer's colour times each instance's tint, per vertex
             rgba = np.empty((n, v, 4), dtype=np.uint8)
             rgba[..., :3] = np.rint(255 * np.clip(np.asarray(rgb) * tints, 0, 1))[:, None, :]
             rgba[..., 3] = 255
-            visual = trimesh.visual.ColorVisuals(vertex_colors=rgba.reshape(-1, 4))
-        else:
-            visual = trimesh.visual.TextureVisuals(material=material)
-        tm = trimesh.Trimesh(pos.reshape(-1, 3), faces, vertex_normals=nrm.reshape(-1, 3), process=False,
-                             visual=visual)
-        out.add_geometry(tm, geom_name=name, node_name=name)
-    return out.export(file_type="glb")
+            acc = b.accessor(b.view(rgba.reshape(-1, 4), target=_ARRAY_BUFFER), _UINT8, n * v, "VEC4",
+                             name=f"{name}_COLOR_0")
+            b.gltf.accessors[acc].normalized = True
+            attributes["COLOR_0"] = acc
+            rgb = [1.0, 1.0, 1.0]
+        ind = b.accessor(b.view(index.reshape(-1), target=_ELEMENT_ARRAY_BUFFER), _UINT32, index.size, "SCALAR",
+                         name=f"{name}_indices")
+        b.gltf.materials.append(g.Material(name=name, pbrMetallicRoughness=g.PbrMetallicRoughness(
+            baseColorFactor=[*rgb, 1.0], metallicFactor=0.0, roughnessFactor=0.9)))
+        b.gltf.meshes.append(g.Mesh(name=name, primitives=[g.Primitive(
+            attributes=g.Attributes(**attributes), indices=ind, material=len(b.gltf.materials) - 1, mode=_TRIANGLES)]))
+        b.gltf.nodes.append(g.Node(name=name, mesh=len(b.gltf.meshes) - 1))
+    b.gltf.scenes.append(g.Scene(nodes=list(range(len(b.gltf.nodes)))))
+    b.gltf.scene = 0
+    return b
 
 
 def _encode_scene_instanced(scene, layers) -> bytes:
@@ -583,7 +618,13 @@ def _encode_scene_instanced(scene, layers) -> bytes:
 def export_scene(path: str | os.PathLike, scene, layout: str = "baked") -> Path:
     """Write :func:`encode_scene` (``layout`` ``"baked"`` or ``"instanced"``) to ``path`` (a ``.glb``), atomically."""
     path = check_glb_path(path)
-    atomic_write_bytes(path, encode_scene(scene, layout))
+    layers = _scene_layers(scene, layout)
+    if layout == "instanced":
+        atomic_write_bytes(path, _encode_scene_instanced(scene, layers))
+        return path
+    built = _build_scene_baked(scene, layers)
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:  # streamed: the file is never whole in memory
+        built.write_to(fh)
     return path
 
 
