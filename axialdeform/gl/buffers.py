@@ -98,7 +98,7 @@ class MeshBuffers:
         if "triangles" in indices:
             self.triangles = ctx.buffer(np.ascontiguousarray(mesh.faces, dtype="u4"))
         if "edges" in indices:
-            self._edges = ctx.buffer(mesh.edges.astype("u4").tobytes())
+            self._edges = ctx.buffer(np.ascontiguousarray(mesh.edges, dtype="u4"))  # no copies
         self.triangle_indices = int(mesh.faces.size)
 
     @property
@@ -108,7 +108,7 @@ class MeshBuffers:
         check_released(self._released, "these MeshBuffers")
         if self._edges is None:
             check_alive(self.ctx, "these MeshBuffers")
-            self._edges = self.ctx.buffer(self.mesh.edges.astype("u4").tobytes())
+            self._edges = self.ctx.buffer(np.ascontiguousarray(self.mesh.edges, dtype="u4"))  # no copies
         return self._edges
 
     @property

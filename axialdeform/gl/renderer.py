@@ -203,7 +203,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
             if len(self.parts) != len(mesh.parts):  # wireframe of the chosen parts only
                 faces = np.concatenate([mesh.faces[p.start:p.start + p.count] for p in self.parts])
                 e = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0).astype("u4")
-                self._part_edges = (ctx.buffer(e.tobytes()), int(e.size))
+                self._part_edges = (ctx.buffer(e), int(e.size))
                 self._objects.append(self._part_edges[0])
             self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized, extended=self.extended)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)

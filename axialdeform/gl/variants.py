@@ -6,6 +6,7 @@ A mixin of :class:`~axialdeform.gl.renderer.AxialRenderer`."""
 from __future__ import annotations
 
 import moderngl
+import numpy as np
 
 from ..core.errors import ParamError, ShaderError
 from ..core.wind import Wind
@@ -131,7 +132,7 @@ class ShaderVariants:
             return self._level_buffers[level].edges, self._level_buffers[level].edge_indices
         if level not in self._level_edges:
             e = self.lod_levels[level].part_edges(self._draw_index)
-            buffer = self.ctx.buffer(e.astype("u4").tobytes())
+            buffer = self.ctx.buffer(np.ascontiguousarray(e, dtype="u4"))
             self._objects.append(buffer)
             self._level_edges[level] = (buffer, int(e.size))
         return self._level_edges[level]
