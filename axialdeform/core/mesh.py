@@ -174,6 +174,11 @@ class BaseMesh:
         """(k, 2) uint32 unique undirected edges of the triangles (for wireframe)."""
         return unique_edges(self.faces, len(self.positions))
 
+    def set_edges(self, edges: np.ndarray) -> None:
+        """Give :attr:`edges` when they are known without searching the
+        triangles (a height-map grid's, :func:`grid_edges`)."""
+        self.__dict__["edges"] = np.ascontiguousarray(edges, dtype=np.uint32)
+
     @cached_property
     def is_volume(self) -> bool:
         """True when the mesh bounds a volume with outward-facing triangles,
@@ -218,6 +223,25 @@ class BaseMesh:
 
 
 _F32_MAX = float(np.finfo(np.float32).max)
+
+
+def grid_edges(rows: int, cols: int) -> np.ndarray:
+    """(k, 2) uint32 edges of a ``rows`` x ``cols`` height-map grid (vertex
+    ``r * cols + c``, each cell split by the diagonal from ``(r, c + 1)`` to
+    ``(r + 1, c)``, as :func:`axialdeform.core.scatter.load_surface` makes
+    it): exactly :func:`unique_edges` of its triangles, in the same order,
+    made without sorting (a 1 500 x 1 500 map: 6.7 M edges, 54 MB, where
+    sorting them needs 3x that)."""
+    rows, cols = int(rows), int(cols)
+    v = np.arange(rows * cols, dtype=np.int64)
+    r, c = v // cols, v % cols
+    # the higher ends of each vertex's edges, in increasing order: right, down-left, down
+    ends = np.stack([v + 1, v + cols - 1, v + cols], axis=1)
+    valid = np.stack([c < cols - 1, (c > 0) & (r < rows - 1), r < rows - 1], axis=1)
+    out = np.empty((int(valid.sum()), 2), dtype=np.uint32)
+    out[:, 0] = np.broadcast_to(v[:, None], ends.shape)[valid]
+    out[:, 1] = ends[valid]
+    return out
 
 
 def unique_edges(faces: np.ndarray, vertex_count: int) -> np.ndarray:

@@ -97,6 +97,8 @@ class Surface:
     up: int
     name: str
     weights: np.ndarray
+    #: ``(rows, cols)`` of a height map's grid (its edges are known), else None
+    grid: tuple | None = None
 
     @property
     def upward(self) -> np.ndarray:
@@ -337,7 +339,7 @@ def surface_from_heights(heights, *, up: str = "y", height_scale: float = 1.0, e
         for c, col in enumerate(tri[::-1] if flip else tri):
             faces[t * half:(t + 1) * half, c] = col
     del k, corners
-    return _make_surface(verts, faces, u, name)
+    return _make_surface(verts, faces, u, name, grid=(rows, cols))
 
 
 def _trimesh_normals(triangles: np.ndarray) -> np.ndarray:
@@ -350,7 +352,7 @@ def _trimesh_normals(triangles: np.ndarray) -> np.ndarray:
     return out
 
 
-def _make_surface(vertices, faces, u: int, name: str) -> "Surface":
+def _make_surface(vertices, faces, u: int, name: str, grid=None) -> "Surface":
     """A Surface of (n, 3) vertices and (f, 3) faces (not copied when already float64 / an integer type)."""
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces)
@@ -362,7 +364,7 @@ def _make_surface(vertices, faces, u: int, name: str) -> "Surface":
     if not (weights > 0).any():
         raise ScatterError(f"{name}: no face of the surface faces up (+{AXIS_NAMES[u]}); "
                            f"expected a surface facing up somewhere (or choose --up)")
-    return Surface(vertices=vertices, faces=faces, up=u, name=name, weights=weights)
+    return Surface(vertices=vertices, faces=faces, up=u, name=name, weights=weights, grid=grid)
 
 
 def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=None) -> Surface:

@@ -124,14 +124,18 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     Returns ``target : (3,) float64`` (on the view axis, level with the
     outline's centre) and the eye's distance from it.
     """
-    pts = as_array(points, (None, 3), "points")
-    r = as_array(radii, (len(pts),), "radii")
+    sets = _point_sets(points, radii)
     if not margin < 1.0:
         raise ArgumentError(f"margin: expected a fraction below 1 (negative: crop past the edges), found {margin!r}")
     if not aspect > 0 or not 0 < fovy < 180:
         raise ArgumentError(f"camera: expected aspect > 0 and 0 < fovy < 180, found aspect {aspect!r}, fovy {fovy!r}")
-    if len(pts) == 0:
-        pts, r = np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]), np.zeros(2)
+    if not any(len(p) for p, _ in sets):
+        sets = [(np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]), np.zeros(2))]
+    # blocks of points and radii, each kept in its own dtype (float32 terrain
+    # vertices are not copied: every product below is taken in float64, and a
+    # float32 converts to float64 exactly, so the numbers are the same)
+    blocks = [(p[s:s + _FRAME_BLOCK], r[s:s + _FRAME_BLOCK]) for p, r in sets for s in range(0, len(p), _FRAME_BLOCK)]
+    count = sum(len(p) for p, _ in blocks)
     to_eye, right, cam_up = orbit_axes(up, azimuth, elevation)
     half_y = np.arctan(np.tan(np.radians(fovy) / 2) * (1 - margin))
     half_x = np.arctan(np.tan(half_y) * aspect)
@@ -142,8 +146,7 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     # a sphere is inside plane k when (p - eye) . n_k >= r, i.e. eye . n_k <= c_k
     # (over blocks of points here and below: the same numbers without (m, 3) or
     # (m, 4) float64 temporaries -- a 1 500 x 1 500 terrain is 2.25 M points)
-    blocks = [slice(s, s + _FRAME_BLOCK) for s in range(0, len(pts), _FRAME_BLOCK)]
-    c = np.min([(pts[b] @ normals.T - r[b, None]).min(axis=0) for b in blocks], axis=0)
+    c = np.min([(pb @ normals.T - rb[:, None]).min(axis=0) for pb, rb in blocks], axis=0)
     # eye = a right + b cam_up + e to_eye: the smallest e with room for a and b
     ex, ey = -(c[0] + c[1]) / (2 * sx), -(c[2] + c[3]) / (2 * sy)
     e = max(ex, ey)
@@ -153,12 +156,20 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
     # the tighter direction touches both sides, so it is centred; the other has
     # equal room measured across the planes, not in the picture: centre it there
     slack_axis, half = (cam_up, half_y) if ex >= ey else (right, half_x)
+    r = np.empty(count)
+    k = 0
+    for _, rb in blocks:
+        r[k:k + len(rb)] = rb
+        k += len(rb)
+
     def depth_across(at):
-        depth, across = np.empty(len(pts)), np.empty(len(pts))
-        for b in blocks:
-            rel = pts[b] - at
-            depth[b] = np.maximum(-(rel @ to_eye), 1e-12)
-            across[b] = rel @ slack_axis
+        depth, across = np.empty(count), np.empty(count)
+        k = 0
+        for pb, _ in blocks:
+            rel = pb - at
+            depth[k:k + len(pb)] = np.maximum(-(rel @ to_eye), 1e-12)
+            across[k:k + len(pb)] = rel @ slack_axis
+            k += len(pb)
         return depth, across
 
     for _ in range(3):
@@ -170,10 +181,30 @@ def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspec
         if ((np.abs(across) + r / np.cos(half)) / depth > np.tan(half) * (1 + 1e-9)).any():
             break  # would cut something off: keep the last placement
         eye = moved
-    center = (np.min([(pts[b] - r[b, None]).min(axis=0) for b in blocks], axis=0)
-              + np.max([(pts[b] + r[b, None]).max(axis=0) for b in blocks], axis=0)) / 2
+    center = (np.min([(pb - rb[:, None]).min(axis=0) for pb, rb in blocks], axis=0)
+              + np.max([(pb + rb[:, None]).max(axis=0) for pb, rb in blocks], axis=0)) / 2
     distance = max(float((eye - center) @ to_eye), 1e-9)
     return eye - distance * to_eye, distance
+
+
+def _point_sets(points, radii) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``[(points (m, 3) float, radii (m,) float), ...]``: one array each, or
+    lists of arrays (several sets framed together, never concatenated)."""
+    if isinstance(points, (list, tuple)) and (len(points) == 0 or np.ndim(points[0]) == 2):
+        if not isinstance(radii, (list, tuple)) or len(radii) != len(points):
+            raise ArgumentError("radii: expected one array of radii per array of points")
+        pairs = zip(points, radii)
+    else:
+        pairs = [(points, radii)]
+    out = []
+    for p, r in pairs:
+        p = np.asarray(p)
+        p = as_array(p, (None, 3), "points", p.dtype if p.dtype in (np.float32, np.float64) else np.float64)
+        r = np.asarray(r)
+        r = np.broadcast_to(r.astype(np.float64, copy=False), (len(p),)) if r.ndim == 0 else \
+            as_array(r, (len(p),), "radii", r.dtype if r.dtype in (np.float32, np.float64) else np.float64)
+        out.append((p, r))
+    return out
 
 
 def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35.0,
@@ -192,18 +223,20 @@ def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35
 def camera_for_points(points, radii, aspect: float, up: str = "y", fovy: float = 35.0,
                       azimuth: float = 35.0, elevation: float = 35.0, margin: float = 0.03) -> Camera:
     """The orbit camera that frames ``points`` (m, 3) with spheres of ``radii`` (m,)
-    (:func:`frame_points`), its near and far planes enclosing every sphere."""
-    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    radii = np.asarray(radii, dtype=np.float64).reshape(-1)
-    target, distance = frame_points(points, radii, up, azimuth, elevation, aspect, fovy, margin)
+    (:func:`frame_points`; or lists of such arrays, framed together), its near
+    and far planes enclosing every sphere."""
+    sets = _point_sets(points, radii)
+    target, distance = frame_points([p for p, _ in sets], [r for _, r in sets], up, azimuth, elevation, aspect, fovy,
+                                    margin)
     to_eye = orbit_axes(up, azimuth, elevation)[0]
     eye = target + to_eye * distance
-    if len(points):
+    if any(len(p) for p, _ in sets):
         near, far = np.inf, -np.inf
-        for s in range(0, len(points), _FRAME_BLOCK):
-            depth = (eye - points[s:s + _FRAME_BLOCK]) @ to_eye
-            near = min(near, float((depth - radii[s:s + _FRAME_BLOCK]).min()))
-            far = max(far, float((depth + radii[s:s + _FRAME_BLOCK]).max()))
+        for p, r in sets:
+            for s in range(0, len(p), _FRAME_BLOCK):
+                depth = (eye - p[s:s + _FRAME_BLOCK]) @ to_eye
+                near = min(near, float((depth - r[s:s + _FRAME_BLOCK]).min()))
+                far = max(far, float((depth + r[s:s + _FRAME_BLOCK]).max()))
     else:
         near, far = distance * 0.5, distance * 2.0
     return Camera(eye, target, UP_VECTORS[up], fovy, near=max(near * 0.95, distance * 1e-3), far=max(far * 1.05, distance * 2e-3))

@@ -44,11 +44,10 @@ def scene_camera(scene, aspect: float, *, margin: float = 0.03) -> Camera:
         points.append(c)
         radii.append(np.broadcast_to(r, (len(c),)))
     if scene.terrain is not None:
-        points.append(scene.terrain.positions)  # float32: concatenated (or read) as float64 once, below
-        radii.append(np.zeros(len(scene.terrain.positions)))
-    pts = np.concatenate(points) if points else np.zeros((0, 3))
-    rad = np.concatenate(radii) if radii else np.zeros(0)
-    return camera_for_points(pts, rad, aspect, scene.up, fov, cam.get("azimuth", 35.0), cam.get("elevation", 35.0),
+        # the terrain's float32 vertices as they are (2.25 M of a 1 500 x 1 500 map): never copied
+        points.append(scene.terrain.positions)
+        radii.append(np.broadcast_to(0.0, (len(scene.terrain.positions),)))
+    return camera_for_points(points, radii, aspect, scene.up, fov, cam.get("azimuth", 35.0), cam.get("elevation", 35.0),
                              margin)
 
 

@@ -108,3 +108,20 @@ def test_is_volume_needs_closed_consistent_outward_triangles(stone, leaf):
     one_flipped[0] = one_flipped[0, ::-1]
     assert not make_mesh(stone.positions, one_flipped).is_volume
     assert not make_mesh(stone.positions, stone.faces[1:]).is_volume  # a hole
+
+
+@pytest.mark.parametrize("rows,cols", [(2, 2), (3, 5), (7, 2), (40, 33)])
+def test_grid_edges_are_the_unique_edges_of_a_height_map(tmp_path, rows, cols):
+    """A height map's edges come from its grid (no sort of 3 keys a triangle):
+    the same edges, in the same order, as searching its triangles."""
+    from PIL import Image
+
+    from axialdeform.core.mesh import grid_edges, unique_edges
+    from axialdeform.core.scatter import load_surface
+
+    heights = (np.random.default_rng(rows * cols).random((rows, cols)) * 255).astype(np.uint8)
+    Image.fromarray(heights).save(tmp_path / "h.png")
+    for up in ("y", "z"):
+        surface = load_surface(tmp_path / "h.png", up=up)
+        assert surface.grid == (rows, cols)
+        assert np.array_equal(grid_edges(*surface.grid), unique_edges(surface.faces, len(surface.vertices)))
