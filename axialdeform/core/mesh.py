@@ -60,6 +60,9 @@ class BaseMesh:
         at UV and normal seams and drops the ones no face uses.
     source_count : int
         How many vertices the file itself lists (OBJ: its ``v`` lines).
+    grid : (rows, cols) or None
+        A height map's grid (its wireframe edges are made from it,
+        :func:`grid_edges`), else None.
     """
 
     positions: np.ndarray
@@ -74,6 +77,7 @@ class BaseMesh:
     source_index: np.ndarray | None = None
     source_count: int | None = None
     _axis: ControlAxis | None = field(default=None, repr=False)
+    grid: tuple | None = field(default=None, repr=False)
 
     @classmethod
     def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> "BaseMesh":
@@ -171,13 +175,13 @@ class BaseMesh:
 
     @cached_property
     def edges(self) -> np.ndarray:
-        """(k, 2) uint32 unique undirected edges of the triangles (for wireframe)."""
+        """(k, 2) uint32 unique undirected edges of the triangles (for wireframe):
+        a height map's from its grid (:attr:`grid`, :func:`grid_edges`), else
+        searched in the triangles (:func:`unique_edges`)."""
+        grid = getattr(self, "grid", None)
+        if grid is not None:
+            return grid_edges(*grid)
         return unique_edges(self.faces, len(self.positions))
-
-    def set_edges(self, edges: np.ndarray) -> None:
-        """Give :attr:`edges` when they are known without searching the
-        triangles (a height-map grid's, :func:`grid_edges`)."""
-        self.__dict__["edges"] = np.ascontiguousarray(edges, dtype=np.uint32)
 
     @cached_property
     def is_volume(self) -> bool:
@@ -225,6 +229,11 @@ class BaseMesh:
 _F32_MAX = float(np.finfo(np.float32).max)
 
 
+def grid_edge_count(rows: int, cols: int) -> int:
+    """How many edges :func:`grid_edges` gives (without making them)."""
+    return (int(rows) - 1) * (3 * int(cols) - 2) + int(cols) - 1
+
+
 def grid_edges(rows: int, cols: int) -> np.ndarray:
     """(k, 2) uint32 edges of a ``rows`` x ``cols`` height-map grid (vertex
     ``r * cols + c``, each cell split by the diagonal from ``(r, c + 1)`` to
@@ -233,14 +242,20 @@ def grid_edges(rows: int, cols: int) -> np.ndarray:
     made without sorting (a 1 500 x 1 500 map: 6.7 M edges, 54 MB, where
     sorting them needs 3x that)."""
     rows, cols = int(rows), int(cols)
-    v = np.arange(rows * cols, dtype=np.int64)
-    r, c = v // cols, v % cols
-    # the higher ends of each vertex's edges, in increasing order: right, down-left, down
-    ends = np.stack([v + 1, v + cols - 1, v + cols], axis=1)
-    valid = np.stack([c < cols - 1, (c > 0) & (r < rows - 1), r < rows - 1], axis=1)
-    out = np.empty((int(valid.sum()), 2), dtype=np.uint32)
-    out[:, 0] = np.broadcast_to(v[:, None], ends.shape)[valid]
-    out[:, 1] = ends[valid]
+    # one row's edges, vertex by vertex (right, down-left, down where they exist), relative to its first vertex
+    c = np.arange(cols, dtype=np.uint32)
+    offsets = [np.ones(cols, bool), c > 0, np.ones(cols, bool)]
+    offsets[0][-1] = False  # no right edge at the last column
+    ends = np.stack([c + 1, c + cols - 1, c + cols], axis=1)
+    valid = np.stack(offsets, axis=1)
+    row = np.stack([np.broadcast_to(c[:, None], ends.shape)[valid], ends[valid]], axis=1)  # (3 cols - 2, 2)
+    inner = (rows - 1) * len(row)
+    out = np.empty((inner + cols - 1, 2), dtype=np.uint32)
+    np.add(row[None], (np.arange(rows - 1, dtype=np.uint32) * np.uint32(cols))[:, None, None],
+           out=out[:inner].reshape(rows - 1, len(row), 2))
+    last = np.uint32((rows - 1) * cols)  # the last row: right edges only
+    out[inner:, 0] = c[:-1] + last
+    out[inner:, 1] = c[1:] + last
     return out
 
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core.errors import ArgumentError, ParamError
 from ..core.io.params import dequantize_params, quantize_params, quantize_with_table
+from ..core.mesh import grid_edge_count, grid_edges
 from ..core.params import as_params, extend_params, is_extended
 from ..core.record import EXTENDED_WIDTH, WIDTH, gl_layout
 from .context import check_alive, check_released
@@ -73,6 +74,16 @@ def _content(buffer, formats, names, program, per_instance=False):
     return (buffer, " ".join(fmt) + ("/i" if per_instance else ""), *used)
 
 
+def _edge_array(mesh) -> np.ndarray:
+    """The mesh's edges as uint32 pairs for a GL buffer: a height map's made
+    from its grid and not kept (the buffer holds them), else the mesh's own
+    (found once and kept by the mesh)."""
+    grid = getattr(mesh, "grid", None)
+    if grid is not None:
+        return grid_edges(*grid)
+    return np.ascontiguousarray(mesh.edges, dtype="u4")  # no copies
+
+
 class MeshBuffers:
     """Vertex (position + normal, float32) and index (uint32) buffers of a base mesh.
 
@@ -98,7 +109,7 @@ class MeshBuffers:
         if "triangles" in indices:
             self.triangles = ctx.buffer(np.ascontiguousarray(mesh.faces, dtype="u4"))
         if "edges" in indices:
-            self._edges = ctx.buffer(np.ascontiguousarray(mesh.edges, dtype="u4"))  # no copies
+            self._edges = ctx.buffer(_edge_array(mesh))
         self.triangle_indices = int(mesh.faces.size)
 
     @property
@@ -108,12 +119,15 @@ class MeshBuffers:
         check_released(self._released, "these MeshBuffers")
         if self._edges is None:
             check_alive(self.ctx, "these MeshBuffers")
-            self._edges = self.ctx.buffer(np.ascontiguousarray(self.mesh.edges, dtype="u4"))  # no copies
+            self._edges = self.ctx.buffer(_edge_array(self.mesh))
         return self._edges
 
     @property
     def edge_indices(self) -> int:
         """Number of indices in :attr:`edges` (two per edge)."""
+        grid = getattr(self.mesh, "grid", None)
+        if grid is not None:
+            return 2 * grid_edge_count(*grid)
         return int(self.mesh.edges.size)
 
     def content(self, program):

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import AxialDeformError, SceneError
-from ..mesh import BaseMesh, area_weighted_normals, grid_edges
+from ..mesh import BaseMesh, area_weighted_normals
 from ..scatter import ANCHORS, load_surface, scatter
 from ..wind import Wind
 from . import safeio
@@ -227,9 +227,8 @@ def _read_terrain(src, terrain, scene):
         surface = load_surface(file, up=scene.up, height_scale=hs, extent=extent)
     # the drawing copy: float32 positions and normals; the uint32 faces are the surface's own (shared)
     v, f = surface.vertices, surface.faces
-    scene.terrain = BaseMesh(v, area_weighted_normals(v, f), f, name=str(file))
-    if surface.grid is not None:  # a height map: its edges are the grid's (no search for wireframe)
-        scene.terrain.set_edges(grid_edges(*surface.grid))
+    # a height map: its wireframe's edges are the grid's (made when drawn, without a search)
+    scene.terrain = BaseMesh(v, area_weighted_normals(v, f), f, name=str(file), grid=surface.grid)
     return surface
 
 
