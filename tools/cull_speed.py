@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import numpy as np
+from frame_timing import alternate
 
 import axialdeform as ad
 from axialdeform.gl.camera import frame_instances
@@ -33,20 +33,10 @@ def main() -> None:
     params = ad.random_params(mesh, args.count, seed=2003, bend=0.12, spacing=1.15 * mesh.axis.length)
     cam = frame_instances(mesh, params, size[0] / size[1])
     view, proj = cam.view(), cam.projection(size[0] / size[1])
-    times = {True: [], False: []}
-    pictures = {}
     with ad.Offscreen(ctx, size, samples=0) as target, \
             ad.AxialRenderer(ctx, mesh, params, cull_back_faces=True) as culled, \
             ad.AxialRenderer(ctx, mesh, params, cull_back_faces=False) as two_sided:
-        for k in range(args.rounds + 2):  # two warm-up rounds
-            for cull, r in ((True, culled), (False, two_sided)):
-                t = time.perf_counter()
-                target.use()
-                r.render(view, proj, "solid")
-                ctx.finish()
-                if k >= 2:
-                    times[cull].append(time.perf_counter() - t)
-                pictures[cull] = target.read()
+        times, pictures = alternate(ctx, target, {True: culled, False: two_sided}, view, proj, args.rounds)
     ratios = np.array(times[True]) / np.array(times[False])
     differ = (np.abs(pictures[True].astype(int) - pictures[False]).max(axis=2) > 2).mean()
     print(f"{args.count} stones, {size[0]}x{size[1]}, {args.rounds} rounds, {ctx.info['GL_RENDERER']}")

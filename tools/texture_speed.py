@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 from pathlib import Path
 
 import numpy as np
+from frame_timing import alternate
 
 import axialdeform as ad
 from axialdeform.gl.camera import frame_instances
@@ -45,17 +45,9 @@ def main() -> None:
     cam = frame_instances(textured, params, size[0] / size[1])
     view, proj = cam.view(), cam.projection(size[0] / size[1])
     ctx = ad.create_context()
-    times = {"textured": [], "untextured": []}
     with ad.AxialRenderer(ctx, textured, params) as a, ad.AxialRenderer(ctx, plain, params) as b, \
             ad.Offscreen(ctx, size) as target:
-        for k in range(args.rounds + 2):  # two warm-up rounds
-            for name, r in (("textured", a), ("untextured", b)):
-                t = time.perf_counter()
-                target.use()
-                r.render(view, proj, "solid")
-                ctx.finish()
-                if k >= 2:
-                    times[name].append(time.perf_counter() - t)
+        times, _ = alternate(ctx, target, {"textured": a, "untextured": b}, view, proj, args.rounds)
     ratios = np.asarray(times["textured"]) / np.asarray(times["untextured"])
     print(f"{Path(args.mesh).name}: {args.count} instances, {size[0]}x{size[1]}, {args.rounds} rounds, "
           f"anisotropy {texture_anisotropy(ctx):g} ({ctx.info['GL_RENDERER']})")

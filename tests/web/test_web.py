@@ -213,6 +213,21 @@ class Visit:
         self.page.close()
 
 
+def assert_page_draws(browser, url, render: np.ndarray, instances: int) -> None:
+    """The page at ``url`` is ready with ``instances`` and draws what
+    ``render`` drew: silhouette IoU >= 0.95 and a mean colour difference
+    under 2/255, pixel by pixel; no console error."""
+    v = Visit(browser, url)
+    try:
+        assert v.state["ready"] is True and v.state["instances"] == instances, v.state
+        shot = v.silhouette()
+        assert iou(shot, render, BACKGROUND) >= 0.95
+        assert np.abs(shot.astype(np.float64) - render).mean() < 2.0  # colours too, pixel by pixel
+        assert v.errors == []
+    finally:
+        v.close()
+
+
 def _mask(image: np.ndarray, background) -> np.ndarray:
     bg = np.asarray(background) * 255.0
     return np.abs(image.astype(np.float64) - bg).max(axis=2) > 12
@@ -499,6 +514,18 @@ def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
         v.close()
 
 
+def _page_of_a_file(tmp_path, mesh, params, quantize: bool, version: int):
+    """``params`` written to an .adp, read back and made a single-file page:
+    ``(the page, the parameters read back)``; the page's .adp has ``version``."""
+    adp = tmp_path / "p.adp"
+    ad.write_params(adp, params, mesh)
+    back = ad.read_params(adp, mesh)
+    out = tmp_path / "page.html"
+    write_page(out, build_scene(mesh, back, size=SIZE, quantize=quantize))
+    assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == version
+    return out, back
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("quantize", [True, False])
 def test_extended_instances_match_render(browser, tmp_path, quantize):
@@ -506,12 +533,8 @@ def test_extended_instances_match_render(browser, tmp_path, quantize):
     mesh = ad.load_mesh("stone")
     params = ad.random_params(mesh, 700, seed=8, bend=0.12, placement="disc", scale=0.5, twist=1.2, taper=0.4)
     assert params.shape == (700, 19)
-    adp = tmp_path / "ext.adp"
-    ad.write_params(adp, params, mesh)
-    out = tmp_path / "ext.html"
-    write_page(out, build_scene(mesh, ad.read_params(adp, mesh), size=SIZE, quantize=quantize))
-    assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == 2
-    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))
+    out, back = _page_of_a_file(tmp_path, mesh, params, quantize, version=2)
+    render = ad.render_image(mesh, back, SIZE, look=ad.Look(ground=False, shadow=False))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.state["instances"] == 700, v.state
@@ -530,25 +553,13 @@ def test_tinted_instances_match_render(browser, tmp_path, mesh_name, quantize):
     mesh = ad.load_mesh(mesh_name)
     params = ad.random_params(mesh, 300, seed=9, placement="disc", tint=0.9, tint_color=(1.0, 0.45, 0.2))
     assert params.shape == (300, 22)
-    adp = tmp_path / "tint.adp"
-    ad.write_params(adp, params, mesh)
-    out = tmp_path / "tint.html"
-    write_page(out, build_scene(mesh, ad.read_params(adp, mesh), size=SIZE, quantize=quantize))
-    assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == 3
+    out, back = _page_of_a_file(tmp_path, mesh, params, quantize, version=3)
     look = ad.Look(ground=False, shadow=False)
-    render = ad.render_image(ad.Scene.single(mesh, ad.read_params(adp, mesh)), size=SIZE, look=look)
+    render = ad.render_image(ad.Scene.single(mesh, back), size=SIZE, look=look)
     plain = ad.render_image(ad.Scene.single(mesh, params[:, :19]), size=SIZE, look=look)
     covered = _mask(render, BACKGROUND)
     assert np.abs(plain.astype(np.float64) - render)[covered].mean() > 10.0  # the tint shows at all
-    v = Visit(browser, out.as_uri())
-    try:
-        assert v.state["ready"] is True and v.state["instances"] == 300, v.state
-        shot = v.silhouette()
-        assert iou(shot, render, BACKGROUND) >= 0.95
-        assert np.abs(shot.astype(np.float64) - render).mean() < 2.0  # colours too, pixel by pixel
-        assert v.errors == []
-    finally:
-        v.close()
+    assert_page_draws(browser, out.as_uri(), render, 300)
 
 
 @pytest.mark.slow
@@ -948,15 +959,7 @@ def test_parts_alpha_modes_and_vertex_colours_match_render(browser, tmp_path, re
     assert len(scene.config["layers"][0]["parts"]) == len([p for p in mesh.parts if p.count])
     write_page(out, scene)
     render = ad.render_image(mesh, params, SIZE, look=ad.Look(ground=False, shadow=False))
-    v = Visit(browser, out.as_uri())
-    try:
-        assert v.state["ready"] is True and v.state["instances"] == 30, v.state
-        shot = v.silhouette()
-        assert iou(shot, render, BACKGROUND) >= 0.95
-        assert np.abs(shot.astype(np.float64) - render).mean() < 2.0  # colours too, pixel by pixel
-        assert v.errors == []
-    finally:
-        v.close()
+    assert_page_draws(browser, out.as_uri(), render, 30)
 
 
 @pytest.mark.slow
