@@ -18,8 +18,6 @@ const HEADER = 96;
 // version 1: 16 numbers per instance; version 2: 19 (extended: s tw tp);
 // version 3: 22 (tinted: tr tg tb) -- the record's levels (core/record.py)
 const FIELDS_OF_VERSION = { 1: 16, 2: 19, 3: 22 };
-// the shader build's suffix of each width (axialdeform.web.LEVEL_VARIANTS)
-const LEVEL_SUFFIX = { 16: '', 19: '_extended', 22: '_tinted' };
 
 let crcTable = null;
 
@@ -264,7 +262,7 @@ export function mount(root, lib, scene, options = {}) {
   }
 
   function variant(layer, p) {
-    return (p.encoding === 1 ? 'quantized' : 'float') + LEVEL_SUFFIX[p.fields] +
+    return (p.encoding === 1 ? 'quantized' : 'float') + cfg.shader_suffix[String(p.fields)] +
       (layer.cfg.material ? '_material' : '');
   }
 

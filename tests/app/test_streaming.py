@@ -269,9 +269,9 @@ def test_gltf_image_over_the_cap_is_not_read(tmp_path, monkeypatch):
     monkeypatch.setattr(safeio, "MAX_IMAGE_BYTES", 100)
     (tmp_path / "tex").write_bytes(bytes(101))  # no suffix: known as a picture from images[0].uri alone
     gltf = _gltf(tmp_path, 36, TRIANGLE, images=["tex"])
-    from axialdeform.core.io.resolver import SafeResolver, gltf_references
+    from axialdeform.core.io.resolver import SafeResolver, gltf_json, gltf_references
 
-    declared = gltf_references(gltf.read_bytes(), "gltf")
+    declared = gltf_references(gltf_json(gltf.read_bytes(), "gltf", "t.gltf"))
     assert declared == {"data.bin": ("buffers[0].byteLength", 36), "tex": ("images[0].uri", None)}
     resolver = SafeResolver(tmp_path, declared=declared, referrer="t.gltf")
     with pytest.raises(OSError, match="tex: is 101 bytes; expected a picture referred to by t.gltf"):

@@ -15,6 +15,13 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
+def _ok(argv, cwd):
+    """Run ``argv`` in ``cwd``; it must succeed (its stderr is the failure message)."""
+    done = subprocess.run([str(a) for a in argv], capture_output=True, text=True, cwd=cwd)
+    assert done.returncode == 0, done.stderr
+    return done
+
+
 @pytest.mark.slow
 def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
     dist = tmp_path / "dist"
@@ -49,37 +56,32 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
 
     work = tmp_path / "elsewhere"
     work.mkdir()
-    check = subprocess.run([str(py), "-c", (
+    check = _ok([str(py), "-c", (
         "import axialdeform as ad, sys; "
         "assert ad.__file__.startswith(sys.prefix), ad.__file__; "
         "print(ad.__file__); print(ad.__version__); "
         "m = ad.load_mesh('leaf'); print(m.vertex_count); "
         "c = ad.load_mesh('leafcard'); assert c.parts[0].material.texture is not None; "
         "print(len(ad.deformation_glsl()))"
-    )], capture_output=True, text=True, cwd=work)
-    assert check.returncode == 0, check.stderr
+    )], work)
     assert str(env_dir) in check.stdout and "0+unknown" not in check.stdout
     script = env_dir / "bin" / "axialdeform"
-    demo = subprocess.run([str(script), "demo", "-n", "60", "--size", "96x64", "-o", "d.png"], capture_output=True, text=True, cwd=work)
-    assert demo.returncode == 0, demo.stderr
+    _ok([str(script), "demo", "-n", "60", "--size", "96x64", "-o", "d.png"], work)
     assert (work / "d.png").stat().st_size > 1000
     # the web page from the wheel's own page code and vendored three.js
-    rnd = subprocess.run([str(script), "random", "stone", "-n", "20", "-o", "s.adp"], capture_output=True, text=True, cwd=work)
-    assert rnd.returncode == 0, rnd.stderr
-    page = subprocess.run([str(script), "web", "stone", "s.adp", "-o", "s.html"], capture_output=True, text=True, cwd=work)
-    assert page.returncode == 0, page.stderr
+    _ok([str(script), "random", "stone", "-n", "20", "-o", "s.adp"], work)
+    _ok([str(script), "web", "stone", "s.adp", "-o", "s.html"], work)
     html = (work / "s.html").read_text(encoding="utf-8")
     assert 'id="axd-three"' in html and (work / "s.html").stat().st_size > 800_000
     # the notebook widget from the wheel: its model carries the page code and the whole
     # vendored three.js (a notebook front end fetches nothing), read from the wheel's files
-    wid = subprocess.run([str(py), "-c", (
+    wid = _ok([str(py), "-c", (
         "import sys, json; from axialdeform.widget import SceneWidget; import axialdeform as ad; "
         "m = ad.load_mesh('stone'); w = SceneWidget(m, ad.random_params(m, 5, seed=1)); "
         "import axialdeform.widget as aw; assert aw.__file__.startswith(sys.prefix), aw.__file__; "
         "print(json.dumps({k: len(v) for k, v in w._sources.items()})); "
         "assert 'export default' in w._esm and 'loadModules' in w._esm; "
         "assert all(s not in w._esm for s in ('http://', 'https://'))"
-    )], capture_output=True, text=True, cwd=work)
-    assert wid.returncode == 0, wid.stderr
+    )], work)
     sizes = json.loads(wid.stdout.strip().splitlines()[-1])
     assert set(sizes) == {"three", "orbit", "gltf", "bgu", "app"} and sizes["three"] > 600_000, sizes

@@ -40,6 +40,7 @@ metres, and nothing here re-orients or rescales the model.
 from __future__ import annotations
 
 import contextlib
+import copy
 import io
 import json
 import os
@@ -75,6 +76,7 @@ from ..transforms import (
 )
 from . import safeio
 from .atomic import atomic_path, atomic_write_bytes
+from .resolver import error_in_words
 from .safeio import require_finite
 
 __all__ = [
@@ -294,8 +296,6 @@ class _Appearance:
         return out
 
     def _tinted_material(self, b: _Builder, material: int | None, tint) -> int:
-        import copy
-
         import pygltflib as g
 
         key = (material, tuple(float(c) for c in tint))
@@ -800,7 +800,7 @@ def _load_glb(path: Path):
         with _quiet_pygltflib():
             gltf = pygltflib.GLTF2.load_from_bytes(bytes(data))
     except Exception as exc:  # pygltflib raises IOError, struct.error, JSON errors
-        raise GltfError(f"{where}: not a binary glTF file ({_in_words(exc)})") from None
+        raise GltfError(f"{where}: not a binary glTF file: {error_in_words(exc, 'glb')}") from None
     if gltf is None:  # what pygltflib returns for bytes it does not recognise
         raise GltfError(f"{where}: not a binary glTF file (no glTF content)")
     return gltf
@@ -813,19 +813,6 @@ def _quiet_pygltflib():
     with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
         warnings.simplefilter("ignore")
         yield
-
-
-def _in_words(exc: BaseException) -> str:
-    """A parser's exception as words: its message, without Python's class
-    names (a bad length, a bad JSON text, a missing key)."""
-    if isinstance(exc, json.JSONDecodeError):
-        return f"its JSON chunk is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})"
-    if isinstance(exc, KeyError):
-        return f"the required field {exc.args[0]!r} is missing" if exc.args else "a required field is missing"
-    if isinstance(exc, UnicodeDecodeError):
-        return "its JSON chunk is not UTF-8 text"
-    text = str(exc).strip()
-    return text or "its structure is not glTF's"
 
 
 def read_extras(path: str | os.PathLike) -> dict:

@@ -19,7 +19,7 @@ from . import safeio
 from .gltf import gltf_attributes
 from .resolver import (
     SafeResolver,
-    check_gltf_json,
+    error_in_words,
     gltf_json,
     gltf_references,
     is_image_name,
@@ -109,11 +109,12 @@ def _load_mesh(source) -> BaseMesh:
                         MeshError)
     kind = path.suffix.lower().lstrip(".")
     # each file a glTF refers to is read with the bound it declares (a buffer's byteLength)
+    declared = {}
     if kind in ("gltf", "glb"):
-        check_gltf_json(data, kind, name)  # a file that is not glTF is said here, in words
-    declared = gltf_references(data, kind, name) if kind in ("gltf", "glb") else {}
-    if kind in ("gltf", "glb"):
-        rest = unsupported_features(gltf_json(data, kind))
+        tree = gltf_json(data, kind, name)  # read once; a file that is not glTF is said here, in words
+        declared = gltf_references(tree, name)
+        rest = unsupported_features(tree)
+        del tree
         if rest:  # said once, in our words: trimesh drops them silently
             warnings.warn(AssetWarning(f"{name}: {', '.join(rest)} are not supported; the mesh is drawn in its rest "
                                        "pose"), stacklevel=2)
@@ -140,28 +141,11 @@ def _load_mesh(source) -> BaseMesh:
         raise
     except Exception as exc:  # trimesh raises many kinds of errors on bad files
         _refuse(name, resolver, declared)  # a refused buffer is the reason: say it plainly
-        raise MeshError(f"{name}: could not read the mesh file: {_in_words(exc, kind)}") from None
+        raise MeshError(f"{name}: could not read the mesh file: {error_in_words(exc, kind)}") from None
     file_positions = _obj_positions(data) if path.suffix.lower() == ".obj" else None  # the bytes read above
     dropped = gltf_attributes(data, kind, SafeResolver(path.parent)) if kind in ("glb", "gltf") else []
     del data
     return _from_loaded(loaded, name, file_positions, resolver.failed, dropped)
-
-
-def _in_words(exc: BaseException, kind: str) -> str:
-    """What went wrong inside trimesh, in words (never Python's own text)."""
-    what = {"glb": "binary glTF", "gltf": "glTF"}.get(kind, kind.upper())
-    if isinstance(exc, KeyError) and exc.args:
-        return f"a field it needs is missing ({exc.args[0]!r}); expected a complete {what} file"
-    if isinstance(exc, (IndexError, UnboundLocalError)):
-        return f"it refers to data it does not hold (an index out of range); expected a consistent {what} file"
-    if isinstance(exc, (ValueError, TypeError)):
-        text = str(exc).splitlines()[0][:120] if str(exc) else "a value of the wrong kind"
-        return f"a malformed value ({text}); expected a valid {what} file"
-    if isinstance(exc, (UnicodeError, EOFError)):
-        return f"its bytes end early or are not text where text belongs; expected a valid {what} file"
-    if isinstance(exc, MemoryError):
-        return "it asks for more memory than this machine has"
-    return f"trimesh cannot read it; expected a valid {what} file"
 
 
 def _refuse(name: str, resolver, declared: dict) -> None:

@@ -13,7 +13,7 @@ from ..errors import MeshError, PathError
 from . import safeio
 from .safeio import MAX_REFERENCED_BYTES, open_regular, read_regular
 
-__all__ = ['BUFFER_SLACK', 'IMAGE_SUFFIXES', 'SafeResolver', 'check_gltf_json', 'gltf_json', 'gltf_references',
+__all__ = ['BUFFER_SLACK', 'IMAGE_SUFFIXES', 'SafeResolver', 'error_in_words', 'gltf_json', 'gltf_references',
            'is_image_name', 'unsupported_features']
 
 
@@ -26,26 +26,29 @@ def is_image_name(name: str) -> bool:
     return os.path.splitext(str(name))[1].lower() in IMAGE_SUFFIXES
 
 
-def gltf_json(data: bytes, kind: str) -> dict:
-    """The JSON of a glTF (``kind`` ``"gltf"``) or of a GLB's JSON chunk
-    (``"glb"``), or ``{}`` when it cannot be read (the loader says why)."""
-    try:
-        if kind == "glb":
-            magic, _version, _length, chunk, ctype = struct.unpack_from("<4sIIII", data)
-            if magic != b"glTF" or ctype != 0x4E4F534A:
-                return {}
-            data = bytes(data[20 : 20 + chunk])
-        tree = json.loads(bytes(data).decode("utf-8"))
-    except (ValueError, struct.error, UnicodeDecodeError, RecursionError):
-        return {}
-    return tree if isinstance(tree, dict) else {}
+def error_in_words(exc: BaseException, kind: str) -> str:
+    """What went wrong inside a parser (trimesh, pygltflib) reading a ``kind``
+    file (``"obj"``, ``"glb"``, ...), in words: never Python's own text."""
+    what = {"glb": "binary glTF", "gltf": "glTF"}.get(kind, kind.upper())
+    if isinstance(exc, KeyError) and exc.args:
+        return f"a field it needs is missing ({exc.args[0]!r}); expected a complete {what} file"
+    if isinstance(exc, (IndexError, UnboundLocalError)):
+        return f"it refers to data it does not hold (an index out of range); expected a consistent {what} file"
+    if isinstance(exc, (ValueError, TypeError)):
+        text = str(exc).splitlines()[0][:120] if str(exc) else "a value of the wrong kind"
+        return f"a malformed value ({text}); expected a valid {what} file"
+    if isinstance(exc, (UnicodeError, EOFError)):
+        return f"its bytes end early or are not text where text belongs; expected a valid {what} file"
+    if isinstance(exc, MemoryError):
+        return "it asks for more memory than this machine has"
+    return f"it cannot be parsed; expected a valid {what} file"
 
 
-def check_gltf_json(data: bytes, kind: str, name: str) -> None:
-    """:class:`MeshError` naming ``name`` when a glTF's JSON (``kind``
-    ``"gltf"``: the file; ``"glb"``: its first chunk) is not a JSON object --
-    said here, before trimesh, which would go looking for a ``model.gltf``
-    the file never mentions."""
+def gltf_json(data: bytes, kind: str, name: str) -> dict:
+    """The JSON object of a glTF (``kind`` ``"gltf"``: the file; ``"glb"``:
+    its first chunk), read once per load; :class:`MeshError` naming ``name``
+    when it is not one -- said here, before trimesh, which would go looking
+    for a ``model.gltf`` the file never mentions."""
     what = "binary glTF" if kind == "glb" else "glTF"
     if kind == "glb":
         if len(data) < 20:
@@ -69,6 +72,7 @@ def check_gltf_json(data: bytes, kind: str, name: str) -> None:
         raise MeshError(f"{name}: not a {what} file: its JSON is nested too deeply") from None
     if not isinstance(tree, dict):
         raise MeshError(f"{name}: not a {what} file: its JSON is a {type(tree).__name__}, expected an object")
+    return tree
 
 
 def unsupported_features(tree: dict) -> list[str]:
@@ -87,18 +91,13 @@ def unsupported_features(tree: dict) -> list[str]:
     return found
 
 
-def gltf_references(data: bytes, kind: str, name: str = "<gltf>") -> dict[str, tuple[str, int | None]]:
-    """What a glTF (``kind`` ``"gltf"``: JSON; ``"glb"``: its JSON chunk)
-    declares about the files it refers to: ``{uri: (field, byte length)}``,
+def gltf_references(tree: dict, name: str = "<gltf>") -> dict[str, tuple[str, int | None]]:
+    """What a glTF's JSON (:func:`gltf_json`) declares about the files it refers to: ``{uri: (field, byte length)}``,
     the length a buffer's ``byteLength`` (``field`` e.g.
     ``"buffers[0].byteLength"``), None for an image (``"images[2].uri"``:
     bounded by :data:`axialdeform.core.io.safeio.MAX_IMAGE_BYTES`).  ``data:``
-    URIs are inside the file and not listed.  A file whose JSON cannot be
-    read gives ``{}`` (the mesh loader's own error says why); a buffer
-    ``byteLength`` that is not a whole number >= 1 raises :class:`MeshError`
+    URIs are inside the file and not listed.  A buffer ``byteLength`` that is not a whole number >= 1 raises :class:`MeshError`
     naming ``name`` and the field."""
-
-    tree = gltf_json(data, kind)
     out: dict[str, tuple[str, int | None]] = {}
     for group in ("buffers", "images"):
         items = tree.get(group)
