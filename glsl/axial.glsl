@@ -13,6 +13,11 @@
 //   theta = tw t and shrinks by k = 1 - tp t:  V'' = V + E(k Rot(theta) w - w) + E(D(t));
 //   W = R (s V'') + p;  normal = R normalize(cof(J) n), J = dV''/dV.
 //   s = 1, tw = 0, tp = 0 (what axial_instance(...) sets) gives exactly the 16-number result.
+// A chosen axis frame (docs/method.md): every function taking `int axis` has a twin taking
+//   `mat3 frame` -- the frame F's rows e_a, e_u, e_v as a GLSL mat3 built with
+//   transpose(mat3(e_a, e_u, e_v)), i.e. frame * v = local coordinates (F V).  The bend
+//   happens in local coordinates along their first one and goes back by F^T:
+//   V'' = V + F^T (bend(F V) - F V),  n'' = F^T bendnormal(F n);  lo, len, center are local.
 // Defining AXIAL_NO_BEND before the include keeps only the rigid part
 // (rotation + position): the "all the same" method of the benchmark.
 
@@ -129,8 +134,9 @@ void axial_world(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance in
 // then by R (the uniform scale s drops out after normalising).  Returns the unit
 // world tangent.  Wind moves the control points, so a wind-moved instance
 // (axial_wind) gives its tangent here too.
-vec3 axial_world_tangent(vec3 v, vec3 tangent, int axis, float lo, float len, vec2 center,
-                         AxialInstance inst) {
+// The model-space part of axial_world_tangent (before R; not normalised).
+vec3 axial_bend_tangent(vec3 v, vec3 tangent, int axis, float lo, float len, vec2 center,
+                        AxialInstance inst) {
     vec3 bent = tangent;
 #ifndef AXIAL_NO_BEND
     float t = clamp((v[axis] - lo) / len, 0.0, 1.0);
@@ -145,6 +151,43 @@ vec3 axial_world_tangent(vec3 v, vec3 tangent, int axis, float lo, float len, ve
                        + g * (tangent[axis] / len), axis);
     bent[axis] = tangent[axis];
 #endif
+    return bent;
+}
+
+vec3 axial_world_tangent(vec3 v, vec3 tangent, int axis, float lo, float len, vec2 center,
+                         AxialInstance inst) {
+    return normalize(axial_rotation(inst.angles) * axial_bend_tangent(v, tangent, axis, lo, len, center, inst));
+}
+
+// ---- the same map for a chosen axis frame (frame * v = F V: local coordinates, axis first) ----
+
+// The two coordinates across a framed axis (e_u . v, e_v . v).
+vec2 axial_across(vec3 v, mat3 frame) {
+    return (frame * v).yz;
+}
+
+void axial_bend(vec3 v, vec3 n, mat3 frame, float lo, float len, vec2 center, AxialInstance inst,
+                out vec3 v_out, out vec3 n_out) {
+    vec3 l = frame * v, lv, ln;
+    axial_bend(l, frame * n, 0, lo, len, center, inst, lv, ln);
+    v_out = v + transpose(frame) * (lv - l);  // zero offsets: exactly v
+    n_out = transpose(frame) * ln;
+}
+
+void axial_world(vec3 v, vec3 n, mat3 frame, float lo, float len, vec2 center, AxialInstance inst,
+                 out vec3 w_out, out vec3 wn_out) {
+    vec3 bent_v = v, bent_n = n;
+#ifndef AXIAL_NO_BEND
+    axial_bend(v, n, frame, lo, len, center, inst, bent_v, bent_n);
+#endif
+    mat3 rot = axial_rotation(inst.angles);
+    w_out = rot * (inst.scale * bent_v) + inst.position;
+    wn_out = rot * bent_n;
+}
+
+vec3 axial_world_tangent(vec3 v, vec3 tangent, mat3 frame, float lo, float len, vec2 center,
+                         AxialInstance inst) {
+    vec3 bent = transpose(frame) * axial_bend_tangent(frame * v, frame * tangent, 0, lo, len, center, inst);
     return normalize(axial_rotation(inst.angles) * bent);
 }
 

@@ -9,7 +9,13 @@
 
 uniform mat4 u_view;        // pyrr layout, uploaded as-is: clip = u_proj * u_view * world
 uniform mat4 u_proj;
+#ifdef AXIAL_FRAME
+uniform mat3 u_frame;       // a chosen axis frame: u_frame * v = local coordinates (axis first)
+#define AXIAL_AXIS u_frame
+#else
 uniform int u_axis;         // control axis of the base mesh: 0 x, 1 y, 2 z
+#define AXIAL_AXIS u_axis
+#endif
 uniform float u_lo;         // min coordinate along the axis
 uniform float u_len;        // L = max - min along the axis
 uniform vec2 u_center;      // the axis line: bounding-box centre across the axis (twist/taper turn about it)
@@ -81,14 +87,14 @@ void main() {
     AxialInstance inst = axial_instance(i_d12, i_d34, i_d5, i_position, i_angles);
 #endif
     if (u_wind_strength != 0.0) {
-        inst = axial_wind(inst, uint(AXIAL_INSTANCE_ID + u_instance_base), u_axis, u_len, u_wind_dir,
+        inst = axial_wind(inst, uint(AXIAL_INSTANCE_ID + u_instance_base), AXIAL_AXIS, u_len, u_wind_dir,
                           u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
     }
-    axial_world(in_position, in_normal, u_axis, u_lo, u_len, u_center, inst, v_world, v_normal);
+    axial_world(in_position, in_normal, AXIAL_AXIS, u_lo, u_len, u_center, inst, v_world, v_normal);
 #ifdef AXIAL_MATERIAL
     v_uv = in_uv;
     v_color = in_color;
-    v_tangent = vec4(axial_world_tangent(in_position, in_tangent.xyz, u_axis, u_lo, u_len, u_center, inst),
+    v_tangent = vec4(axial_world_tangent(in_position, in_tangent.xyz, AXIAL_AXIS, u_lo, u_len, u_center, inst),
                      in_tangent.w);
 #endif
     v_shade = 0.85 + 0.3 * instance_hash(AXIAL_INSTANCE_ID);

@@ -25,18 +25,36 @@ float axial_wind_phase(uint id) {
     return float(axial_wind_hash(id) >> 8u) * (1.0 / 16777216.0);
 }
 
-// The instance `inst` (index `id`) as the wind at this moment bends it.
 // dir: unit wind direction (world); strength: tip displacement in units of L;
 // gust: gustiness (0 = steady lean); cycles: see above; wavenumber: 1 / gust wavelength (world units).
-AxialInstance axial_wind(AxialInstance inst, uint id, int axis, float len, vec3 dir, float strength,
-                         float gust, vec2 cycles, float wavenumber) {
+// The wind's push on instance `inst` (index `id`) at this moment, in the instance's model
+// frame (model units): amp * (R^T dir).  Only its part across the axis bends (axial_wind).
+vec3 axial_wind_push(AxialInstance inst, uint id, float len, vec3 dir, float strength,
+                     float gust, vec2 cycles, float wavenumber) {
     float ph = axial_wind_phase(id) - dot(inst.position, dir) * wavenumber;
     float wave = 0.6 * sin(6.283185307179586 * (cycles.x + ph))
                + 0.4 * sin(6.283185307179586 * (cycles.y + 1.7 * ph));
     float amp = strength * len * (1.0 + gust * wave);
-    vec3 local = transpose(axial_rotation(inst.angles)) * dir;  // world -> the instance's model frame
-    vec2 u = amp * axial_across(local, axis);
+    return amp * (transpose(axial_rotation(inst.angles)) * dir);  // world -> the instance's model frame
+}
+
+// The control points moved by u (across the axis): d_k += c_k u, c = (0, 0, 1/6, 1/2, 1).
+AxialInstance axial_wind_move(AxialInstance inst, vec2 u) {
     inst.d34 += vec4(u * (1.0 / 6.0), u * 0.5);
     inst.d5 += u;
     return inst;
+}
+
+// The instance `inst` (index `id`) as the wind at this moment bends it.
+AxialInstance axial_wind(AxialInstance inst, uint id, int axis, float len, vec3 dir, float strength,
+                         float gust, vec2 cycles, float wavenumber) {
+    return axial_wind_move(inst, axial_across(axial_wind_push(inst, id, len, dir, strength, gust, cycles,
+                                                              wavenumber), axis));
+}
+
+// The same for a chosen axis frame (frame * v = local coordinates).
+AxialInstance axial_wind(AxialInstance inst, uint id, mat3 frame, float len, vec3 dir, float strength,
+                         float gust, vec2 cycles, float wavenumber) {
+    return axial_wind_move(inst, axial_across(axial_wind_push(inst, id, len, dir, strength, gust, cycles,
+                                                              wavenumber), frame));
 }

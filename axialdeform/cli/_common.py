@@ -8,6 +8,7 @@ import sys
 
 from tqdm import tqdm
 
+from ..core.axis import FRAME_NAMES
 from ..core.errors import ArgumentError, ParamError
 from ..core.io.mesh import load_mesh, mesh_source_path
 from ..core.io.params import read_params
@@ -63,10 +64,38 @@ def positive_int(text: str) -> int:
     return value
 
 
+def axis_frame(text: str):
+    """``--axis``: auto, x, y, z, oriented, or nine numbers ``a,b,c,...`` (the
+    frame's rows e_a, e_u, e_v), checked when the mesh is loaded."""
+    if text in FRAME_NAMES:
+        return text
+    try:
+        numbers = [float(x) for x in text.replace(";", ",").split(",")]
+    except ValueError:
+        numbers = []
+    if len(numbers) != 9 or not all(math.isfinite(x) for x in numbers):
+        raise argparse.ArgumentTypeError(f"expected one of {', '.join(FRAME_NAMES)} or nine numbers "
+                                         f"(the rows e_a, e_u, e_v of an orthogonal frame), found {text!r}")
+    return tuple(tuple(numbers[3 * r: 3 * r + 3]) for r in range(3))
+
+
+def add_axis(p) -> None:
+    """``--axis FRAME`` on a command that loads a mesh (``docs/method.md``, "A chosen axis frame")."""
+    p.add_argument("--axis", type=axis_frame, default="auto", metavar="FRAME",
+                   help="the mesh's axis frame: auto (longest extent, default), x, y, z, oriented (minimum-volume "
+                        "oriented box, for a model lying diagonally) or nine numbers, the rows e_a,e_u,e_v")
+
+
+def load_base(args, source, *, textures: bool = True):
+    """The base mesh ``source`` with the frame ``--axis`` chose."""
+    return load_mesh(source, textures=textures, axis=getattr(args, "axis", "auto"))
+
+
 def add_mesh_and_params(p) -> None:
-    """The MESH and PARAMS positional arguments of the commands that read both."""
+    """The MESH and PARAMS positional arguments of the commands that read both (and ``--axis``)."""
     p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard', or a scene file (.toml, then no PARAMS)")
     p.add_argument("params", nargs="?", help="parameter file (.adp binary, .txt/.csv/.dat text); required unless MESH is a scene file")
+    add_axis(p)
 
 
 def add_mesh_mismatch(p) -> None:
@@ -87,7 +116,7 @@ def load(args, what: str = "output", allow_folder: bool = False):
     parameters go past the float32-safe ranges."""
 
     check_output_path(args.output, (mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)
-    mesh = load_mesh(args.mesh)
+    mesh = load_base(args, args.mesh)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     if args.command in ("render", "view", "web"):  # a picture: every number must survive the projection
         check_drawable(params, str(args.params))

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from ..core.io.mesh import load_mesh
 from ..core.io.params import check_mesh, read_param_file, write_params
 from ..core.io.safeio import check_output_path
-from ._common import mesh_file
+from ._common import add_axis, load_base, mesh_file
 
 
 def add_parser(sub) -> None:
@@ -14,6 +13,7 @@ def add_parser(sub) -> None:
     c.add_argument("src", help="parameter file to read")
     c.add_argument("dst", help="parameter file to write (never SRC itself)")
     c.add_argument("--mesh", help="record the axis and fingerprint of this base mesh (default: keep what SRC records)")
+    add_axis(c)
     c.add_argument("--quantize", action="store_true", help="write the compact 32-byte form (default: 64 bytes, lossless)")
     c.set_defaults(handler=run)
 
@@ -21,7 +21,7 @@ def add_parser(sub) -> None:
 def run(args) -> None:
     check_output_path(args.dst, (args.src, mesh_file(args.mesh)), "parameter file")
     pf = read_param_file(args.src)
-    mesh = load_mesh(args.mesh) if args.mesh else None
+    mesh = load_base(args, args.mesh) if args.mesh else None
     if mesh is not None:
         check_mesh(pf, mesh, args.src)
     path = write_params(args.dst, pf.values, mesh, quantize=args.quantize,

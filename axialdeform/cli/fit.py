@@ -8,10 +8,10 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..core.fit import DEFAULT_MAX_RESIDUAL, fit_files, variant_paths
-from ..core.io.mesh import load_mesh, mesh_source_path
+from ..core.io.mesh import mesh_source_path
 from ..core.io.params import write_params
 from ..core.io.safeio import check_output_path
-from ._common import fraction, positive_int
+from ._common import add_axis, fraction, load_base, positive_int
 
 
 def add_parser(sub) -> None:
@@ -20,6 +20,7 @@ def add_parser(sub) -> None:
         "order, or ONE folder whose mesh files, sorted by name, are instances 0, 1, 2, ... The output is binary "
         "for .adp, text for .txt/.csv/.dat. Exit 2 if a fit's largest vertex distance exceeds --max-residual."))
     f.add_argument("base", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
+    add_axis(f)
     f.add_argument("variants", nargs="+", help="variant mesh files, or one folder of them")
     f.add_argument("-o", "--output", required=True, help="parameter file to write (required, no default)")
     f.add_argument("--max-residual", type=fraction, default=DEFAULT_MAX_RESIDUAL,
@@ -36,7 +37,7 @@ def run(args) -> None:
     """``axialdeform fit BASE VARIANTS... -o PARAMS``."""
 
     out = Path(args.output)
-    mesh = load_mesh(args.base, textures=False)
+    mesh = load_base(args, args.base, textures=False)
     is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
     paths = variant_paths(args.variants)
 

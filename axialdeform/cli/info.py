@@ -5,8 +5,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..core.axis import ControlAxis
-from ..core.errors import AxialDeformError, ParamFileError
 from ..core.io.params import (
     ParamFile,
     decode_binary,
@@ -31,10 +29,8 @@ def run(args) -> int | None:
     data, binary = read_param_bytes(path)  # a regular file, read with a bound
     if binary:
         h = read_binary_header(data, str(path))  # structural errors: one line, exit 2
-        try:
-            axis = ControlAxis(h.axis_index, h.lo, h.length).describe() if h.axis_index >= 0 else "not recorded"
-        except AxialDeformError as exc:
-            raise ParamFileError(f"{path}: axis: {exc}") from None
+        record = h.axis_record(str(path))
+        axis = "not recorded" if record is None else record.describe()
         rows = [("file", f"{path} ({h.size} bytes)"), ("format", f"binary v{h.version}, {h.encoding_name}"),
                 ("instances", f"{h.count}" + (f" ({h.size / h.count:.1f} bytes each)" if h.count else "")),
                 ("record", describe_record(h.columns)),

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 from ..core.errors import ArgumentError
-from ..core.io.mesh import load_mesh
 from ..core.io.params import param_file_bytes, write_param_chunks
 from ..core.io.safeio import (
     MAX_INSTANCES,
@@ -15,7 +14,7 @@ from ..core.io.safeio import (
 )
 from ..core.record import WIDTHS
 from ..core.variation import PLACEMENTS, iter_random_params
-from ._common import AXES, angle_range, extension_args, mesh_file
+from ._common import AXES, add_axis, angle_range, extension_args, load_base, mesh_file
 
 
 def add_parser(sub) -> None:
@@ -23,6 +22,7 @@ def add_parser(sub) -> None:
         "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf' / 'leafcard'); "
         "the output is binary for .adp, text for .txt/.csv/.dat."))
     r.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
+    add_axis(r)
     r.add_argument("-n", "--count", type=int, required=True, help=(
         "number of instances (required, no default); at most 2147483647 and what the output's disk holds: "
         "64 bytes an instance in .adp, 32 quantized, up to 256 in text (19 numbers: 76, 38, 304; 22: 88, 44, 352); "
@@ -85,7 +85,7 @@ def run(args) -> None:
 
     check_disk_space(args.output, fixed + count * each, f"parameter file ({count} instances of {width} numbers)",
                      ArgumentError, expected=fits)
-    mesh = load_mesh(args.mesh, textures=False)
+    mesh = load_base(args, args.mesh, textures=False)
     options = dict(bend=args.bend, placement=args.placement, spacing=args.spacing, up=args.up, yaw=args.yaw,
                    tilt=args.tilt, **extension)
     iter_random_params(mesh, count, args.seed, **options)  # bad options are refused before the file is opened

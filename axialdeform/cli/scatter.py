@@ -13,11 +13,11 @@ import sys
 from pathlib import Path
 
 from ..core.errors import ParamFileError, TooFewError
-from ..core.io.mesh import load_mesh, mesh_source_path
+from ..core.io.mesh import mesh_source_path
 from ..core.io.params import BINARY_SUFFIXES, write_params
 from ..core.io.safeio import check_output_path
 from ..core.scatter import ANCHORS, scatter
-from ._common import scale_range
+from ._common import add_axis, load_base, scale_range
 
 __all__ = ["add_parser", "run"]
 
@@ -40,6 +40,7 @@ def add_parser(subparsers) -> None:
         "instance, 19 with --scale)."))
     s.add_argument("surface", metavar="SURFACE", help="terrain: a mesh file, or a grey height-map image")
     s.add_argument("mesh", metavar="MESH", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
+    add_axis(s)
     s.add_argument("-n", "--count", type=int, required=True, help="how many instances (required)")
     s.add_argument("-o", "--output", required=True, help="parameter file (.adp binary; .txt/.csv/.dat text; required)")
     s.add_argument("--min-distance", type=float, default=None, metavar="D", help="least distance between instances (default: none)")
@@ -69,7 +70,7 @@ def run(args) -> int | None:
         raise ParamFileError(f"{args.output}: the quantized form is binary only; expected a "
                              f"{'/'.join(BINARY_SUFFIXES)} file name")
     check_output_path(args.output, (args.surface, mesh_source_path(args.mesh), args.density), "parameter file")
-    mesh = load_mesh(args.mesh, textures=False)
+    mesh = load_base(args, args.mesh, textures=False)
     try:
         params = scatter(args.surface, mesh, args.count, min_distance=args.min_distance, density=args.density,
                          align_to_normal=args.align_to_normal, anchor=args.anchor,

@@ -31,6 +31,8 @@ def scene_of(args, *, params_optional: bool = False):
         return None
     if args.params is not None:
         raise AxialDeformError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
+    if getattr(args, "axis", "auto") != "auto":
+        raise AxialDeformError(f"--axis: a scene file ({args.mesh}) names each layer's axis (axis = ...); expected no --axis")
     return load_scene(args.mesh)
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from ..core.errors import AxialDeformError
-from ..core.io.mesh import load_mesh
 from ..core.io.params import read_params
 from ..core.io.safeio import check_count
 from ..core.look import Look
@@ -13,12 +12,14 @@ from ..gl.renderer import MODES
 from . import scenes
 from ._common import (
     AXES,
+    add_axis,
     add_cull_arguments,
     add_max_triangles,
     add_mesh_mismatch,
     check_triangles,
     cull_options,
     drawn_triangles,
+    load_base,
     wind_arg,
 )
 from .random import RANDOM_BYTES_EACH
@@ -30,6 +31,7 @@ def add_parser(sub) -> None:
         "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
         "UP/DOWN bend amplitude, G ground, V wind, R reset camera, S screenshot, ESC quit."))
     v.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
+    add_axis(v)
     v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
     v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
     v.add_argument("--seed", type=int, default=None,
@@ -79,7 +81,7 @@ def run(args) -> None:
         mesh, params, seed = scene, None, args.seed
         args.up, args.no_ground = scene.up, True
     elif args.params:
-        mesh = load_mesh(args.mesh)
+        mesh = load_base(args, args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
         check_drawable(params, str(args.params))  # a picture: every number must survive the projection
         check_triangles([(f"{args.mesh} x {args.params}", len(params), drawn_triangles(mesh, args.part))],
@@ -88,7 +90,7 @@ def run(args) -> None:
     else:
 
         check_count(args.count, RANDOM_BYTES_EACH, "-n/--count")  # before anything is read or allocated
-        mesh = load_mesh(args.mesh)
+        mesh = load_base(args, args.mesh)
         check_triangles([(f"{args.mesh} x -n {args.count}", args.count, drawn_triangles(mesh, args.part))],
                         args.mode, args.max_triangles, args.fast, frames)  # before the parameters are made
         seed = 0 if args.seed is None else args.seed

@@ -7,12 +7,12 @@ from pathlib import Path
 from urllib.parse import quote
 
 from ..core.errors import AxialDeformError
-from ..core.io.mesh import load_mesh, mesh_source_path
+from ..core.io.mesh import mesh_source_path
 from ..core.io.params import read_params
 from ..core.params import check_drawable
 from ..core.scene import is_scene_file
 from ..web import build_scene, build_scene_file, make_server, write_page
-from ._common import add_wind_args, wind_arg
+from ._common import add_axis, add_wind_args, load_base, wind_arg
 from .scenes import _time, scene_of
 
 __all__ = ["add_parser", "run"]
@@ -27,6 +27,7 @@ def add_parser(subparsers) -> None:
         "The page: drag to orbit, W toggles wireframe; ?t=SECONDS freezes the wind's clock, ?size=WxH fixes the canvas."))
     w.add_argument("mesh", nargs="?", help="base mesh file, 'stone' / 'leaf' / 'leafcard' / 'leafcard', or a scene file .toml "
                    "(default: none: serve an exported page)")
+    add_axis(w)
     w.add_argument("params", nargs="?", help="parameter file, .adp or text (default: none: serve an exported page)")
     w.add_argument("-o", "--output", required=True, help="folder, or a name ending in .html (required)")
     w.add_argument("--size", default=None, help="canvas WIDTHxHEIGHT, fixed; the camera is render's at this size "
@@ -78,7 +79,7 @@ def run(args) -> None:
         raise AxialDeformError("web: expected both MESH and PARAMS, a scene file .toml, or neither (with --serve)")
     elif args.mesh is not None:
 
-        mesh = load_mesh(args.mesh)
+        mesh = load_base(args, args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
         check_drawable(params, str(args.params))  # a picture: every number must survive the projection
         scene = build_scene(mesh, params, size=size, up=args.up, mode=args.mode, quantize=not args.float32,

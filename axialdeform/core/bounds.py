@@ -113,13 +113,17 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     axis.  The rotated box is then boxed again (half-extents ``|R| h``).
     """
     params = as_params(params).astype(np.float64)
-    pos = mesh.positions.astype(np.float64)
+    axis = mesh.axis
+    # a chosen frame: the box of the local coordinates F·V, placed by R·Fᵀ
+    pos = axis.local(mesh.positions) if axis.framed else mesh.positions.astype(np.float64)
     lo, hi = np.broadcast_to(pos.min(axis=0), (len(params), 3)).copy(), np.broadcast_to(pos.max(axis=0), (len(params), 3)).copy()
     d = params[:, OFFSETS].reshape(-1, 5, 2)
-    for k, coord in enumerate(mesh.axis.perpendicular):
+    for k, coord in enumerate((1, 2) if axis.framed else axis.perpendicular):
         lo[:, coord] += d[:, :, k].min(axis=1)
         hi[:, coord] += d[:, :, k].max(axis=1)
     rot = rotation_matrices(params[:, ANGLES])
+    if axis.framed:
+        rot = rot @ axis.matrix.T
     scale = params[:, SCALE] if params.shape[1] >= EXTENDED_WIDTH else np.ones(len(params))
     center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) * scale[:, None] + params[:, POSITION]
     half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2) * np.abs(scale)[:, None]
@@ -233,7 +237,7 @@ def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, 
         idx = _support_indices(mesh.positions)
         if n * len(idx) > budget:
             return instance_bounds(mesh, params)
-    if params.shape[1] >= EXTENDED_WIDTH:  # extended instances: the CPU reference places the chosen vertices
+    if params.shape[1] >= EXTENDED_WIDTH or mesh.axis.framed:  # the CPU reference places the chosen vertices
 
         world, _ = deform(mesh.axis, mesh.positions[idx], mesh.normals[idx], params)
         return world.reshape(-1, 3).astype(np.float64), np.zeros(n * len(idx))

@@ -12,6 +12,7 @@ import numpy as np
 
 from .arrays import as_array
 from .axis import ControlAxis
+from .errors import ArgumentError
 from .params import as_params
 from .record import ANGLES, EXTENDED_WIDTH, EXTRA, OFFSETS, POSITION, TAPER, TWIST
 from .transforms import rotation_matrices
@@ -23,6 +24,7 @@ __all__ = [
     "displace",
     "deform_local",
     "deform_local_extended",
+    "bend_model",
     "deform",
 ]
 
@@ -59,6 +61,8 @@ def displace(axis: ControlAxis, positions: np.ndarray, disp: np.ndarray) -> np.n
     """
     p = np.asarray(positions, dtype=np.float64)
     disp = np.asarray(disp, dtype=np.float64)
+    if axis.framed:  # E(D) = D_u e_u + D_v e_v
+        return p + axis.embed(disp)
     i, j = axis.perpendicular
     moved = np.broadcast_to(p, disp.shape[:-1] + (3,)).copy()
     moved[..., i] += disp[..., 0]
@@ -137,16 +141,52 @@ def deform_local_extended(
     return moved, bent
 
 
+def bend_model(axis: ControlAxis, positions: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
+               extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The bend in model space for any axis frame (no rotation or position).
+
+    An aligned axis is :func:`deform_local` (``extra`` None) or
+    :func:`deform_local_extended`, unchanged.  A framed axis bends the local
+    coordinates ``ℓ = F·V`` along their first coordinate and goes back by
+    ``Fᵀ``: ``V'' = V + Fᵀ·(ℓ'' − ℓ)``, ``n'' = Fᵀ·n''_local``
+    (``docs/method.md``, "A chosen axis frame"), so all-zero offsets give
+    ``V`` exactly.
+
+    positions, normals : (v, 3); offsets : (n, 5, 2); extra : (n, 3) ``s tw tp`` or None.
+    Returns ``s·V''`` and unit ``n''``, each (n, v, 3) float64.
+    """
+    if not axis.framed:
+        if extra is None:
+            return deform_local(axis, positions, normals, offsets)
+        return deform_local_extended(axis, positions, normals, offsets, extra)
+    p = np.asarray(positions, dtype=np.float64)
+    lp, ln, la, f = axis.local(p), axis.local(normals), axis.local_axis(), axis.matrix
+    if extra is None:
+        moved, bent = deform_local(la, lp, ln, offsets)
+        scale = None
+    else:
+        ex = np.array(extra, dtype=np.float64)
+        scale, ex[:, 0] = ex[:, 0].copy(), 1.0  # s scales in model space, after the frame
+        moved, bent = deform_local_extended(la, lp, ln, offsets, ex)
+    moved = p + (moved - lp) @ f
+    if scale is not None:
+        moved *= scale[:, None, None]
+    return moved, bent @ f
+
+
 def deform(
-    axis: ControlAxis,
+    axis,
     positions: np.ndarray,
-    normals: np.ndarray,
-    params: np.ndarray,
+    normals: np.ndarray | None = None,
+    params: np.ndarray | None = None,
     *,
     chunk_vertices: int = 4_000_000,
     progress=None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """World-space positions and normals of every instance (the CPU reference).
+
+    Called as ``deform(mesh, params)`` with a :class:`~axialdeform.core.mesh.BaseMesh`
+    (its axis frame included), or ``deform(axis, positions, normals, params)``.
 
     axis : ControlAxis of the base mesh.
     positions, normals : (v, 3) float — base mesh, file vertex order.
@@ -156,6 +196,11 @@ def deform(
     Returns ``W = R·V' + p`` and ``R·n'`` (extended: ``W = R·(s·V'') + p``
     and ``R·n''``), each (n, v, 3) float32.
     """
+    if not isinstance(axis, ControlAxis):  # deform(mesh, params)
+        mesh = axis
+        if not hasattr(mesh, "axis") or normals is not None or params is not None:
+            raise ArgumentError("deform: expected deform(mesh, params) or deform(axis, positions, normals, params)")
+        axis, positions, normals, params = mesh.axis, mesh.positions, mesh.normals, positions
     params = as_params(params)
     positions = as_array(positions, (None, 3), "positions")
     normals = as_array(normals, (len(positions), 3), "normals")
@@ -166,10 +211,8 @@ def deform(
     for a in range(0, n, step):  # chunks bound memory; each chunk is fully vectorized
         block = params[a : a + step].astype(np.float64)
         offsets = block[:, OFFSETS].reshape(-1, 5, 2)
-        if block.shape[1] >= EXTENDED_WIDTH:
-            moved, bent = deform_local_extended(axis, positions, normals, offsets, block[:, EXTRA])
-        else:
-            moved, bent = deform_local(axis, positions, normals, offsets)
+        moved, bent = bend_model(axis, positions, normals, offsets,
+                                 block[:, EXTRA] if block.shape[1] >= EXTENDED_WIDTH else None)
         rot = rotation_matrices(block[:, ANGLES])
         out_pos[a : a + step] = np.einsum("nij,nvj->nvi", rot, moved) + block[:, None, POSITION]
         out_nrm[a : a + step] = np.einsum("nij,nvj->nvi", rot, bent)
@@ -197,6 +240,9 @@ def deform_tangents(axis: ControlAxis, positions: np.ndarray, tangents: np.ndarr
     params = as_params(params).astype(np.float64)
     p = np.asarray(positions, dtype=np.float64)
     tan = np.asarray(tangents, dtype=np.float64)[:, :3]
+    frame = axis.matrix if axis.framed else None
+    if frame is not None:  # bend in the local coordinates, back by Fᵀ (bend_model)
+        p, tan, axis = axis.local(p), axis.local(tan), axis.local_axis()
     t = axis.parameter(p)
     _, slope = axis_offsets(axis, t, params[:, OFFSETS].reshape(-1, 5, 2))
     i, j = axis.perpendicular
@@ -217,6 +263,8 @@ def deform_tangents(axis: ControlAxis, positions: np.ndarray, tangents: np.ndarr
     else:
         bent[..., i] += slope[..., 0] * along
         bent[..., j] += slope[..., 1] * along
+    if frame is not None:
+        bent = bent @ frame
     world = np.einsum("nij,nvj->nvi", rotation_matrices(params[:, ANGLES]), bent)
     world /= np.maximum(np.linalg.norm(world, axis=-1, keepdims=True), 1e-300)
     return world.astype(np.float32)

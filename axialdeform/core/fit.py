@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .deform import bernstein, deform, deform_local_extended, displace
+from .deform import bend_model, bernstein, deform, displace
 from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .io.mesh import MESH_SUFFIXES, load_mesh
 from .params import as_params
@@ -152,7 +152,9 @@ class _Model:
         self.axis = axis
         self.length = axis.length
         self.base = mesh.positions.astype(np.float64)  # (v, 3)
-        self.i, self.j = axis.perpendicular
+        # the offsets' directions e_u, e_v (model space): coordinates of an aligned axis, rows of a frame
+        self.across = None if axis.framed else axis.perpendicular
+        self.frame = axis.matrix
         # (v, 4): the Bernstein weights in the canonical basis; D(t) = basis @ z, z (4, 2)
         self.basis = bernstein(axis.parameter(self.base), 4) @ _CANONICAL
 
@@ -163,8 +165,9 @@ class _Model:
     def _offset_columns(self, rot: np.ndarray, a: np.ndarray, first: int, rows: slice = slice(None)) -> None:
         """Fill ``a[..., first:first + 8]`` with d(R·E(basis z))/dz for the vertices ``rows``."""
         basis = self.basis[rows]
-        a[..., first:first + 4] = rot[:, None, :, self.i, None] * basis[None, :, None, :]
-        a[..., first + 4:first + 8] = rot[:, None, :, self.j, None] * basis[None, :, None, :]
+        for k in range(2):  # R·e_u, R·e_v: a column of R for an aligned axis
+            col = rot[:, :, self.across[k]] if self.across is not None else rot @ self.frame[1 + k]
+            a[..., first + 4 * k:first + 4 * k + 4] = col[:, None, :, None] * basis[None, :, None, :]
 
     def linear_offsets(self, rot: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Offsets ``z`` (n, 4, 2) and positions ``p`` (n, 3) minimising the error for fixed ``R``.
@@ -284,7 +287,7 @@ def _extended_shape(m: _Model, rot, z, pos, extra, rows: slice = slice(None)) ->
     """``R·(s·V'') + p`` (n, v, 3) of canonical offsets ``z`` (n, 4, 2) and ``extra`` (n, 3) = s tw tp,
     for the base mesh's vertices ``rows`` (all of them by default)."""
     base = m.base[rows]
-    moved, _ = deform_local_extended(m.axis, base, base, _CANONICAL @ z, extra)
+    moved, _ = bend_model(m.axis, base, base, _CANONICAL @ z, extra)
     return moved @ np.swapaxes(rot, -1, -2) + pos[:, None]
 
 

@@ -9,6 +9,7 @@ Files are read with trimesh (OBJ, PLY, STL, OFF, GLB/glTF) with
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -78,6 +79,7 @@ class BaseMesh:
     source_count: int | None = None
     _axis: ControlAxis | None = field(default=None, repr=False)
     grid: tuple | None = field(default=None, repr=False)
+    axis_frame: object = field(default="auto", repr=False)
 
     @classmethod
     def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> "BaseMesh":
@@ -99,7 +101,7 @@ class BaseMesh:
 
     def __repr__(self) -> str:
         return (f"BaseMesh({self.name!r}, {self.vertex_count} vertices, {len(self.faces)} triangles, "
-                f"axis {'xyz'[self.axis.index]}, L={self.axis.length:.6g})")
+                f"axis {self.axis.name}, L={self.axis.length:.6g})")
 
     def __post_init__(self) -> None:
         with np.errstate(over="ignore", invalid="ignore"):  # out-of-range coordinates are refused below
@@ -134,7 +136,16 @@ class BaseMesh:
         object.__setattr__(self, "source_count", count)
         _check_appearance(self, len(pos), len(faces))
         # raises MeshError on a zero extent
-        object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name))
+        object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name, frame=self.axis_frame))
+
+    def with_axis(self, axis="auto") -> "BaseMesh":
+        """This mesh with another axis frame (``docs/method.md``, "A chosen axis
+        frame"): ``"auto"``, ``"x"``, ``"y"``, ``"z"``, ``"oriented"`` or a 3×3
+        matrix whose rows are ``e_a, e_u, e_v``.  Positions, faces and the
+        fingerprint stay; parameter files record the frame."""
+        if isinstance(axis, str) and axis == self.axis.kind and not (axis == "oriented"):
+            return self
+        return dataclasses.replace(self, axis_frame=axis, _axis=None)
 
     @property
     def axis(self) -> ControlAxis:

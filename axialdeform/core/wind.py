@@ -137,8 +137,7 @@ def wind_offsets(wind: Wind, axis: ControlAxis, params, time: float, *, start: i
     wave = 0.6 * np.sin(2.0 * np.pi * (c1 + ph)) + 0.4 * np.sin(2.0 * np.pi * (c2 + 1.7 * ph))
     amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
     local = np.einsum("nji,j->ni", rotation_matrices(params[:, ANGLES]), d)  # Rᵀ dir
-    i, j = axis.perpendicular
-    u = amp[:, None] * local[:, [i, j]]  # (n, 2)
+    u = amp[:, None] * axis.across(local)  # (n, 2): the push across the axis (any frame)
     return WIND_WEIGHTS[None, :, None] * u[:, None, :]
 
 

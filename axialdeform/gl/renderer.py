@@ -174,6 +174,8 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
             defines["AXIAL_QUANTIZED"] = 1
         if mesh.has_appearance:
             defines["AXIAL_MATERIAL"] = 1
+        if mesh.axis.framed:  # a chosen axis frame: u_frame instead of u_axis (glsl/scene.vert)
+            defines["AXIAL_FRAME"] = 1
         if extended is None:
             extended = params is not None and is_extended(params)
         self.extended = bool(extended)

@@ -139,9 +139,9 @@ class ShaderVariants:
 
     def _set_axis_uniforms(self, program) -> None:
         axis = self.mesh.axis
-        i, j = axis.perpendicular
-        center = (axis.center[i], axis.center[j])
-        set_uniforms(program, {"u_axis": axis.index, "u_lo": axis.lo, "u_len": axis.length, "u_center": center,
+        # u_frame is a GLSL mat3 (columns): F's rows e_a, e_u, e_v so that u_frame * v = F v
+        frame = {"u_frame": np.ascontiguousarray(axis.matrix.T)} if axis.framed else {"u_axis": axis.index}
+        set_uniforms(program, {**frame, "u_lo": axis.lo, "u_len": axis.length, "u_center": axis.line,
                                "u_instance_base": 0, "u_wind_strength": 0.0})
         self._set_quant_uniforms(program)
 

@@ -110,25 +110,29 @@ LEVEL_VARIANTS = (("", {}), ("_extended", {"AXIAL_EXTENDED": 1}), ("_tinted", {"
 SHADER_VARIANTS = {f"{encoding}{suffix}": {**({"AXIAL_QUANTIZED": 1} if encoding == "quantized" else {}), **defines}
                    for suffix, defines in LEVEL_VARIANTS for encoding in ("float", "quantized")}
 SHADER_VARIANTS.update({f"{k}_material": {**v, "AXIAL_MATERIAL": 1} for k, v in list(SHADER_VARIANTS.items())})
+#: ``_framed``: a mesh with a chosen axis frame (``u_frame`` instead of ``u_axis``)
+SHADER_VARIANTS.update({f"{k}_framed": {**v, "AXIAL_FRAME": 1} for k, v in list(SHADER_VARIANTS.items())})
 
 
-def page_shaders() -> dict:
+def page_shaders(keys=None) -> dict:
     """The page's shaders, assembled from ``glsl/scene.vert`` / ``scene.frag``
     (which include ``axial.glsl``, ``wind.glsl``, ``quantized.glsl`` and
     ``lighting.glsl``): ``{"float": {"vertex", "fragment"}, "quantized": ...,
     "float_extended": ..., "quantized_extended": ..., "float_tinted": ...,
     "quantized_tinted": ...}`` and the same six with ``_material``
-    (``AXIAL_MATERIAL``: textures, vertex colours, alpha modes)."""
+    (``AXIAL_MATERIAL``: textures, vertex colours, alpha modes), and each of
+    those with ``_framed`` (``AXIAL_FRAME``: a chosen axis frame); ``keys``:
+    only those builds."""
 
     return {variant: {stage: to_glsl_es(assemble(name, defines).source)
                       for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
-            for variant, defines in SHADER_VARIANTS.items()}
+            for variant, defines in SHADER_VARIANTS.items() if keys is None or variant in keys}
 
 
-def shader_key(quantize: bool, fields: int, material: bool) -> str:
+def shader_key(quantize: bool, fields: int, material: bool, framed: bool = False) -> str:
     """The :data:`SHADER_VARIANTS` key of a layer."""
     return ("quantized" if quantize else "float") + LEVEL_VARIANTS[level_of(fields)][0] + (
-        "_material" if material else "")
+        "_material" if material else "") + ("_framed" if framed else "")
 
 
 @dataclass
@@ -192,13 +196,16 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
         "name": name,
         "terrain": bool(terrain),  # drawn, not counted among the instances
         "instances": int(len(params)),
+        # axis -1 (the adp header's 3) and "frame" (rows e_a, e_u, e_v): a chosen axis frame, u_frame
         "mesh": {"file": glb_file, "name": Path(str(mesh.name)).name, "axis": int(axis.index), "lo": float(axis.lo),
                  "length": float(axis.length), "fingerprint": mesh.fingerprint.hex(),
                  # the axis line across the axis (twist and taper turn about it): u_center
-                 "center": [float(c) for k, c in enumerate(axis.center) if k != axis.index],
+                 "center": list(axis.line),
+                 **({"frame": [list(row) for row in axis.frame], "frame_digest": axis.frame_digest.hex()}
+                    if axis.framed else {}),
                  "vertices": int(mesh.vertex_count)},
         "params_file": params_file,
-        "shader": shader_key(quantize, params.shape[1], material),
+        "shader": shader_key(quantize, params.shape[1], material, axis.framed),
         "material": material,
         "color": [float(x) for x in color],
         "wind": bool(wind),
@@ -271,11 +278,11 @@ def _time(wind, time):
 
 
 def _shaders(layers, all_shaders: bool) -> dict:
-    shaders = page_shaders()
     if all_shaders:  # the widget, whose parameters may change: every build of its mesh's kind
-        material = layers[0]["material"]
-        return {k: v for k, v in shaders.items() if k.endswith("_material") == material}
-    return {layer["shader"]: shaders[layer["shader"]] for layer in layers}
+        material, framed = layers[0]["material"], "frame" in layers[0]["mesh"]
+        return page_shaders([k for k in SHADER_VARIANTS
+                             if ("_material" in k) == material and k.endswith("_framed") == framed])
+    return page_shaders({layer["shader"] for layer in layers})
 
 
 def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "solid", quantize: bool = True,

@@ -71,10 +71,11 @@ export function parseAdp(buffer, name) {
          `${computed.toString(16).padStart(8, '0')}): the file is corrupt`);
   }
   const axis = view.getInt8(24);
-  if (axis < -1 || axis > 2) fail(`axis: expected -1, 0, 1 or 2, found ${axis}`);
+  if (axis < -1 || axis > 3) fail(`axis: expected -1, 0, 1, 2 or 3 (a chosen frame), found ${axis}`);
   const lo = view.getFloat64(32, true);
   const length = view.getFloat64(40, true);
   const fingerprint = bytes.slice(48, 80);
+  const frameDigest = bytes.slice(80, 96); // a chosen frame's digest (zero for x, y, z)
   let qtable = null;
   let values;
   if (encoding === 1) {
@@ -85,7 +86,7 @@ export function parseAdp(buffer, name) {
     values = new Float32Array(buffer.slice(HEADER, HEADER + count * each));
     if (!values.every(Number.isFinite)) fail('values: a number is not finite (NaN or infinity)');
   }
-  return { name, version, fields, encoding, count, axis, lo, length, fingerprint, qtable, values };
+  return { name, version, fields, encoding, count, axis, lo, length, fingerprint, frameDigest, qtable, values };
 }
 
 async function sha256(bytes) {
@@ -105,7 +106,8 @@ export async function meshFingerprint(positions, index) {
 
 /** The mesh check of axialdeform.core.params.check_mesh. */
 function checkMesh(p, mesh, actual) {
-  const axisNames = ['x', 'y', 'z'];
+  const axisNames = ['x', 'y', 'z', 'a chosen frame'];
+  const meshAxis = mesh.axis === -1 ? 3 : mesh.axis; // the adp header writes a chosen frame as 3
   if (p.fingerprint.some((b) => b !== 0)) {
     const want = actual ? hex(actual) : mesh.fingerprint;
     if (hex(p.fingerprint) !== want) {
@@ -113,9 +115,9 @@ function checkMesh(p, mesh, actual) {
         `expected ${want.slice(0, 16)} of ${mesh.name}); export it with the mesh it was made for`);
     }
   }
-  if (p.axis >= 0 && p.axis !== mesh.axis) {
+  if (p.axis >= 0 && (p.axis !== meshAxis || (meshAxis === 3 && hex(p.frameDigest) !== mesh.frame_digest))) {
     throw new SceneError(`${p.name}: made for a mesh whose control axis is ${axisNames[p.axis]}, ` +
-      `but ${mesh.name}'s is ${axisNames[mesh.axis]}`);
+      `but ${mesh.name}'s is ${meshAxis === 3 ? 'another frame' : axisNames[meshAxis]}`);
   }
 }
 
@@ -263,7 +265,7 @@ export function mount(root, lib, scene, options = {}) {
 
   function variant(layer, p) {
     return (p.encoding === 1 ? 'quantized' : 'float') + cfg.shader_suffix[String(p.fields)] +
-      (layer.cfg.material ? '_material' : '');
+      (layer.cfg.material ? '_material' : '') + (layer.cfg.mesh.frame ? '_framed' : '');
   }
 
   function makeMaterials(layer, key) {
@@ -368,6 +370,8 @@ export function mount(root, lib, scene, options = {}) {
     layer.geometry = geometry;
     layer.uniforms = {
       u_axis: { value: lc.mesh.axis }, u_lo: { value: lc.mesh.lo }, u_len: { value: lc.mesh.length },
+      // a chosen axis frame: u_frame * v = F v (Matrix3.set takes rows)
+      u_frame: { value: lc.mesh.frame ? new THREE.Matrix3().set(...lc.mesh.frame.flat()) : new THREE.Matrix3() },
       u_center: { value: new THREE.Vector2().fromArray(lc.mesh.center) },
       u_qmin: { value: new Float32Array(16) }, u_qstep: { value: new Float32Array(16) },
       u_qmin_extra: { value: new THREE.Vector3() }, u_qstep_extra: { value: new THREE.Vector3() },

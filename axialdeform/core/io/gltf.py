@@ -52,7 +52,7 @@ from PIL import Image
 
 from ..bake import bake_cpu, instance_name
 from ..deform import deform, deform_tangents
-from ..errors import GltfError, MeshMismatchError
+from ..errors import AxialDeformError, GltfError, MeshMismatchError
 from ..material import Material
 from ..mesh import BaseMesh, area_weighted_normals
 from ..params import as_params
@@ -319,7 +319,9 @@ def _mesh_extras(mesh, count: int, layout: str) -> dict:
         "version": _FORMAT_VERSION,
         "layout": layout,
         "count": int(count),
-        "axis": {"index": a.index, "name": a.name, "lo": float(a.lo), "length": float(a.length)},
+        # a chosen frame (docs/method.md): index -1 and its rows e_a, e_u, e_v
+        "axis": {"index": a.index, "name": a.name, "lo": float(a.lo), "length": float(a.length),
+                 **({"frame": [list(row) for row in a.frame]} if a.framed else {})},
         "mesh_fingerprint": mesh.fingerprint.hex(),
         "mesh_vertices": mesh.vertex_count,
     }
@@ -781,6 +783,17 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     if recorded is not None and recorded != mesh.fingerprint.hex():
         raise MeshMismatchError(f"{where}: extras mesh_fingerprint {recorded[:16]} does not match the base mesh in the "
                                 f"file ({mesh.fingerprint.hex()[:16]}); the file was altered")
+    recorded_axis = extras.get("axis")
+    if isinstance(recorded_axis, dict):  # the frame the file was made with (an axis the auto rule would not pick)
+        frame = recorded_axis.get("frame") if recorded_axis.get("index") == -1 else \
+            dict(enumerate("xyz")).get(recorded_axis.get("index"))
+        if frame is None:
+            raise GltfError(f"{where}: extras axis: expected index 0, 1, 2 or -1 with a frame (3 rows of 3 numbers), "
+                            f"found {recorded_axis!r}")
+        try:
+            mesh = mesh.with_axis(frame)
+        except AxialDeformError as exc:
+            raise GltfError(f"{where}: extras axis: {exc}") from None
     return mesh, as_params(params, name=where)
 
 

@@ -55,7 +55,7 @@ def mesh_source_path(source: str | os.PathLike) -> Path:
     return Path(source)
 
 
-def load_mesh(source, *, textures: bool = True) -> BaseMesh:
+def load_mesh(source, *, textures: bool = True, axis="auto") -> BaseMesh:
     """Read a base mesh from a file, a bundled mesh by name (``"stone"``,
     ``"leaf"``), or take a ``trimesh.Trimesh`` (or a ``trimesh.Scene`` with one
     mesh) already in memory.
@@ -77,9 +77,17 @@ def load_mesh(source, *, textures: bool = True) -> BaseMesh:
     writes one: making parameters, fitting, scattering); the parts keep
     their names and base colours, and the positions, vertex order and
     fingerprint are those of the same file loaded with its textures.
+
+    ``axis`` chooses the axis frame (``docs/method.md``, "A chosen axis
+    frame"): ``"auto"`` (the longest axis-aligned extent: every earlier file
+    and picture, bit for bit), ``"x"``, ``"y"``, ``"z"`` (forced),
+    ``"oriented"`` (the minimum-volume oriented bounding box, for a model
+    lying diagonally) or a 3×3 orthogonal matrix whose rows are ``e_a, e_u,
+    e_v``.
     """
     with texture_decoding(textures):
-        return _load_mesh(source)
+        mesh = _load_mesh(source)
+    return mesh.with_axis(axis) if not (isinstance(axis, str) and axis == "auto") else mesh
 
 
 def _load_mesh(source) -> BaseMesh:

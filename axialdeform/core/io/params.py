@@ -33,7 +33,7 @@ from . import safeio
 from .atomic import atomic_path
 from .safeio import open_regular
 
-__all__ = ['BINARY_SUFFIXES', 'BinaryHeader', 'ENCODING_FLOAT32', 'ENCODING_UINT16', 'HEADER_SIZE', 'MAGIC', 'ParamFile', 'TEXT_SUFFIXES', 'VERSION', 'VERSION_EXTENDED', 'VERSION_TINTED', 'axis_letter', 'check_mesh', 'decode_binary', 'dequantize_params', 'encode_binary', 'format_text', 'param_file_bytes', 'parse_text', 'quantization_error_bound', 'quantize_params', 'quantize_with_table', 'read_binary_header', 'read_param_bytes', 'read_param_file', 'read_params', 'write_param_chunks', 'write_params']
+__all__ = ['AXIS_FRAMED', 'AxisRecord', 'BINARY_SUFFIXES', 'BinaryHeader', 'ENCODING_FLOAT32', 'ENCODING_UINT16', 'HEADER_SIZE', 'MAGIC', 'ParamFile', 'TEXT_SUFFIXES', 'VERSION', 'VERSION_EXTENDED', 'VERSION_TINTED', 'axis_letter', 'check_mesh', 'decode_binary', 'dequantize_params', 'encode_binary', 'format_text', 'param_file_bytes', 'parse_text', 'quantization_error_bound', 'quantize_params', 'quantize_with_table', 'read_binary_header', 'read_param_bytes', 'read_param_file', 'read_params', 'write_param_chunks', 'write_params']
 
 
 BINARY_SUFFIXES = (".adp",)
@@ -67,8 +67,47 @@ ENCODING_UINT16 = 1
 _ENCODINGS = {ENCODING_FLOAT32: ("float32", 64), ENCODING_UINT16: ("uint16-quantized", 32)}
 
 
-# magic, version, encoding, header size, count, axis, 3 pad, reserved, lo, L, fingerprint, 16 reserved
-_HEADER = struct.Struct("<8sHHIQb3xIdd32s16x")
+# magic, version, encoding, header size, count, axis, 3 pad, reserved, lo, L, fingerprint, frame digest
+# (16 bytes, zero for an axis-aligned axis: the bytes every earlier file has there)
+_HEADER = struct.Struct("<8sHHIQb3xIdd32s16s")
+
+
+#: the header's axis byte of a chosen (not axis-aligned) frame: its rows' digest follows the fingerprint
+AXIS_FRAMED = 3
+
+
+@dataclass(frozen=True)
+class AxisRecord:
+    """The axis a parameter file records: enough to refuse another mesh's
+    axis, not to bend (a frame is recorded by its digest).
+
+    index : 0, 1, 2 (x, y, z) or -1 for a chosen frame; lo, length : the
+    axis's ``lo`` and ``L``; frame_digest : 16 bytes (zero when aligned,
+    :attr:`ControlAxis.frame_digest`)."""
+
+    index: int
+    lo: float
+    length: float
+    frame_digest: bytes = bytes(16)
+
+    @classmethod
+    def of(cls, axis) -> "AxisRecord":
+        """The record of a :class:`ControlAxis` (or of another record)."""
+        return cls(int(axis.index), float(axis.lo), float(axis.length), bytes(axis.frame_digest))
+
+    @property
+    def framed(self) -> bool:
+        return self.index == -1
+
+    def matches(self, axis) -> bool:
+        """Whether ``axis`` (a :class:`ControlAxis`) is the one recorded."""
+        return (self.index == axis.index and self.frame_digest == axis.frame_digest
+                and bool(np.isclose(self.lo, axis.lo)) and bool(np.isclose(self.length, axis.length)))
+
+    def describe(self) -> str:
+        if self.framed:
+            return f"a chosen axis frame (digest {self.frame_digest.hex()[:16]}), lo={self.lo:.9g}, L={self.length:.9g}"
+        return ControlAxis(self.index, self.lo, self.length).describe()
 
 
 HEADER_SIZE = _HEADER.size  # 96
@@ -301,7 +340,7 @@ class ParamFile:
     values : (n, 16), (n, 19) or (n, 22) float32 — the parameters (decoded if quantized).
     format : ``"text"`` or ``"binary"``.
     encoding : ``"text"``, ``"float32"`` or ``"uint16-quantized"``.
-    axis : the control axis it was made for, or None if not recorded.
+    axis : the control axis it was made for (an :class:`AxisRecord`), or None if not recorded.
     mesh_fingerprint : 32-byte SHA-256 of the base mesh, or None.
     checksum : CRC-32 stored in the file (binary only; verified on read).
     size : file size in bytes.
@@ -310,7 +349,7 @@ class ParamFile:
     values: np.ndarray
     format: str
     encoding: str
-    axis: ControlAxis | None = None
+    axis: AxisRecord | None = None
     mesh_fingerprint: bytes | None = None
     checksum: int | None = None
     size: int = 0
@@ -474,11 +513,14 @@ def _binary_header(width: int, quantize: bool, count: int, axis: ControlAxis | N
     """The fixed header of a binary file (:data:`HEADER_SIZE` bytes)."""
     if mesh_fingerprint is not None and len(mesh_fingerprint) != 32:
         raise ParamError(f"mesh fingerprint: expected 32 bytes, found {len(mesh_fingerprint)}")
+    if axis is None:
+        index, lo, length, digest = -1, 0.0, 0.0, bytes(16)
+    else:
+        index = AXIS_FRAMED if axis.index == -1 else axis.index
+        lo, length, digest = axis.lo, axis.length, bytes(axis.frame_digest)
     return _HEADER.pack(
         MAGIC, level_of(width) + 1, ENCODING_UINT16 if quantize else ENCODING_FLOAT32,
-        HEADER_SIZE, count, -1 if axis is None else axis.index, 0,
-        0.0 if axis is None else axis.lo, 0.0 if axis is None else axis.length,
-        mesh_fingerprint or bytes(32),
+        HEADER_SIZE, count, index, 0, lo, length, mesh_fingerprint or bytes(32), digest,
     )
 
 
@@ -501,6 +543,27 @@ class BinaryHeader:
     stored_crc: int
     computed_crc: int
     size: int
+    frame_digest: bytes = bytes(16)
+
+    def axis_record(self, name: str = "<binary>") -> AxisRecord | None:
+        """The recorded axis (None: not recorded); a value outside the format
+        is a :class:`ParamFileError` naming the field."""
+        if self.axis_index not in (-1, 0, 1, 2, AXIS_FRAMED):
+            raise ParamFileError(f"{name}: axis: expected -1 (not recorded), 0, 1, 2 (x, y, z) or {AXIS_FRAMED} "
+                                 f"(a chosen frame), found {self.axis_index}")
+        if self.axis_index == -1:
+            return None
+        if self.axis_index != AXIS_FRAMED and any(self.frame_digest):
+            raise ParamFileError(f"{name}: frame digest: expected zeros for axis {AXIS_NAMES[self.axis_index]}, "
+                                 f"found {self.frame_digest.hex()}")
+        try:
+            if self.axis_index == AXIS_FRAMED:
+                if not (np.isfinite(self.lo) and np.isfinite(self.length) and self.length > 0):
+                    raise ParamFileError(f"axis length must be a finite number > 0, found L={self.length!r}")
+                return AxisRecord(-1, self.lo, self.length, self.frame_digest)
+            return AxisRecord.of(ControlAxis(index=self.axis_index, lo=self.lo, length=self.length))
+        except Exception as exc:
+            raise ParamFileError(f"{name}: axis: {exc}") from None
 
     @property
     def checksum_ok(self) -> bool:
@@ -543,7 +606,7 @@ def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None 
         raise ParamFileError(
             f"{name}: truncated: {total} bytes, expected at least {HEADER_SIZE + _TRAILER.size} (header + checksum)"
         )
-    magic, version, encoding, header_size, count, axis_index, _res, lo, length, fingerprint = _HEADER.unpack_from(data)
+    magic, version, encoding, header_size, count, axis_index, _res, lo, length, fingerprint, digest = _HEADER.unpack_from(data)
     if magic != MAGIC:
         raise ParamFileError(f"{name}: magic: expected {MAGIC!r}, found {magic!r}")
     if version not in _VERSIONS:
@@ -569,7 +632,8 @@ def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None 
         return None
     (stored,) = _TRAILER.unpack_from(data, len(data) - _TRAILER.size)
     computed = zlib.crc32(memoryview(data)[: len(data) - _TRAILER.size])
-    return BinaryHeader(version, encoding, count, axis_index, lo, length, fingerprint, stored, computed, len(data))
+    return BinaryHeader(version, encoding, count, axis_index, lo, length, fingerprint, stored, computed, len(data),
+                        digest)
 
 
 def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
@@ -580,19 +644,12 @@ def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
         raise ParamFileError(
             f"{name}: checksum: stored CRC-32 {h.stored_crc:08x}, computed {h.computed_crc:08x}; the file is corrupt"
         )
-    encoding, count, axis_index, lo, length, fingerprint = h.encoding, h.count, h.axis_index, h.lo, h.length, h.fingerprint
+    encoding, count, fingerprint = h.encoding, h.count, h.fingerprint
     enc_name = h.encoding_name
     width = h.columns
     table = _quant_table(width).size if encoding == ENCODING_UINT16 else 0
     stored, version = h.stored_crc, h.version
-    if axis_index not in (-1, 0, 1, 2):
-        raise ParamFileError(f"{name}: axis: expected -1 (not recorded), 0, 1 or 2, found {axis_index}")
-    axis = None
-    if axis_index >= 0:
-        try:
-            axis = ControlAxis(index=axis_index, lo=lo, length=length)
-        except Exception as exc:
-            raise ParamFileError(f"{name}: axis: {exc}") from None
+    axis = h.axis_record(name)
     payload = memoryview(data)[HEADER_SIZE + table : len(data) - _TRAILER.size]
     if encoding == ENCODING_UINT16:
         values = _dequantize(bytes(data[HEADER_SIZE : HEADER_SIZE + table]), payload, count, width)
@@ -660,7 +717,7 @@ def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
         )
     if pf.axis is not None:
         a = mesh.axis
-        if pf.axis.index != a.index or not np.isclose(pf.axis.lo, a.lo) or not np.isclose(pf.axis.length, a.length):
+        if not pf.axis.matches(a):
             raise MeshMismatchError(
                 f"{name}: made for {pf.axis.describe()}, but {mesh.name} has {a.describe()}; "
                 "use the mesh it was made for, or override the check"

@@ -39,7 +39,7 @@ _LIGHT = {"direction", "ambient", "color", "sky", "ground"}
 _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
 
 
-_LAYER = {"name", "mesh", "color", "params", "scatter", "wind"}
+_LAYER = {"name", "mesh", "axis", "color", "params", "scatter", "wind"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "seed",
@@ -273,6 +273,12 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
         raise src.error(f"expected a name of letters, digits, _ . -, found {name!r}", "name", "layer", nth)
     mesh_value = layer["mesh"]
+    # the axis frame (docs/method.md): "auto" | "x" | "y" | "z" | "oriented" | three rows of three numbers
+    frame = layer.get("axis", "auto")
+    if not isinstance(frame, str):  # [[e_a], [e_u], [e_v]] or nine numbers
+        flat = [x for row in frame for x in row] if isinstance(frame, list) and all(
+            isinstance(row, list) for row in frame) and len(frame) == 3 else frame
+        frame = np.reshape(_numbers(src, flat, "axis", "layer", nth, (9,)), (3, 3))
 
     with _wrap(src, "mesh", "layer", nth):
         if isinstance(mesh_value, str) and mesh_value in BUNDLED_MESHES:
@@ -280,6 +286,8 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
             src.sources.append(mesh_source_path(mesh_value))
         else:
             mesh = load_mesh(_existing(src, mesh_value, "mesh", "layer", nth))
+    with _wrap(src, "axis", "layer", nth):
+        mesh = mesh.with_axis(frame)
     color = tuple(_numbers(src, layer["color"], "color", "layer", nth, (3,))) if "color" in layer else None
     wind = layer.get("wind", False)
     if not isinstance(wind, bool):
