@@ -1008,3 +1008,30 @@ def test_mesh_page_with_wind_and_a_frozen_time_matches_render(browser, tmp_path)
         assert v.errors == []
     finally:
         v.close()
+
+
+@pytest.mark.slow
+def test_page_of_a_framed_mesh_shows_what_render_shows(browser, tmp_path):
+    """A model lying diagonally, bent along its own length (``--axis oriented``):
+    the page's ``_framed`` build draws render's picture."""
+    import trimesh
+
+    cap = trimesh.creation.capsule(height=3.0, radius=0.35, count=[16, 16])
+    t = trimesh.transformations
+    cap.apply_transform(t.rotation_matrix(0.6, [0, 0, 1]) @ t.rotation_matrix(1.1, [0, 1, 0]))
+    obj = tmp_path / "diag.obj"
+    cap.export(obj)
+    mesh = ad.load_mesh(obj, axis="oriented")
+    assert mesh.axis.framed
+    params = ad.random_params(mesh, 40, seed=3, bend=0.25, placement="disc")
+    adp = tmp_path / "rods.adp"
+    ad.write_params(adp, params, mesh)
+    out = tmp_path / "rods.html"
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", str(obj), str(adp), "--axis", "oriented",
+                        "-o", str(out), "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    look = ad.Look(ground=False, shadow=False)
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=look)
+    auto = ad.render_image(mesh.with_axis("auto"), params, SIZE, look=look)
+    assert iou(render, auto, BACKGROUND) < 0.9, iou(render, auto, BACKGROUND)  # the frame changes the picture
+    assert_page_draws(browser, out.as_uri(), render, 40)
