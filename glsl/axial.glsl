@@ -195,3 +195,101 @@ vec3 axial_world_tangent(vec3 v, vec3 tangent, mat3 frame, float lo, float len, 
 vec3 axial_world_tangent(vec3 v, vec3 tangent, int axis, float lo, float len, AxialInstance inst) {
     return axial_world_tangent(v, tangent, axis, lo, len, vec2(0.0), inst);
 }
+
+// ---- several axes in a hierarchy (docs/method.md, "Several axes"): define AXIAL_AXES K ----
+// Axis j moves a vertex by F_j^T E(D_j(t_j)) and adds F_j^T E(D_j'(t_j)) (x) e_a,j / L_j to the
+// Jacobian where t_j is not clamped; a vertex sums its own axis and every ancestor's (the chain),
+// each at the vertex itself; n' = normalize(cof(J) n).  Scale, twist and taper act about axis 0's
+// axis line before the displacements.  `frame * v` = axis j's local coordinates (axis first).
+
+// A vertex's own axis spans it exactly (t in [0, 1]); float32 rounding must not drop its slope, so
+// "clamped" (a vertex beyond an ancestor axis's end: no derivative) means beyond this slack.
+const float AXIAL_T_SLACK = 1e-4;
+
+// Add axis (frame, lo, len)'s displacement of model-space v, and its Jacobian term, to disp and jac.
+void axial_axis_add(vec3 v, mat3 frame, float lo, float len, vec4 d12, vec4 d34, vec2 d5,
+                    inout vec3 disp, inout mat3 jac) {
+    float raw = ((frame * v).x - lo) / len;
+    float t = clamp(raw, 0.0, 1.0);
+    float s = 1.0 - t;
+    vec2 d1 = d12.xy, d2 = d12.zw, d3 = d34.xy, d4 = d34.zw;
+    vec2 D = (s * s * s * s) * d1 + (4.0 * t * s * s * s) * d2 + (6.0 * t * t * s * s) * d3
+           + (4.0 * t * t * t * s) * d4 + (t * t * t * t) * d5;
+    mat3 back = transpose(frame);  // columns e_a, e_u, e_v
+    disp += back * vec3(0.0, D);
+    if (raw >= -AXIAL_T_SLACK && raw <= 1.0 + AXIAL_T_SLACK) {
+        vec2 S = 4.0 * ((s * s * s) * (d2 - d1) + (3.0 * t * s * s) * (d3 - d2)
+                      + (3.0 * t * t * s) * (d4 - d3) + (t * t * t) * (d5 - d4));
+        jac += outerProduct(back * vec3(0.0, S / len), back[0]);
+    }
+}
+
+// cof(J) n: the columns of cof(J) are the cross products of pairs of J's columns.
+vec3 axial_cofactor(mat3 j, vec3 n) {
+    return n.x * cross(j[1], j[2]) + n.y * cross(j[2], j[0]) + n.z * cross(j[0], j[1]);
+}
+
+#ifdef AXIAL_AXES
+// The texture of the child axes' offsets: instance id's axis k (1..K-1) is the three texels from
+// (id (K-1) + k - 1) 3 on, rows AXIAL_AXES_ROW texels wide (RGBA32F):
+// d1u d1v d2u d2v | d3u d3v d4u d4v | d5u d5v 0 0.
+const int AXIAL_AXES_ROW = 4095;
+
+void axial_child_offsets(sampler2D tex, int id, int k, out vec4 d12, out vec4 d34, out vec2 d5) {
+    int i = (id * (AXIAL_AXES - 1) + k - 1) * 3;
+    ivec2 at = ivec2(i % AXIAL_AXES_ROW, i / AXIAL_AXES_ROW);
+    d12 = texelFetch(tex, at, 0);
+    d34 = texelFetch(tex, at + ivec2(1, 0), 0);
+    d5 = texelFetch(tex, at + ivec2(2, 0), 0).xy;
+}
+
+// The whole map of a K-axis mesh: model-space v (of axis b) and n -> world w_out, wn_out, and the
+// model-space Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and
+// the rigid part; children: the texture above; wind: the wind's push per unit of axis length in
+// the instance's model frame (axial_wind_push with len 1; zero when still), which moves every
+// child axis j by L_j times its part across that axis on c = (0, 0, 1/6, 1/2, 1).
+void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[AXIAL_AXES],
+                      float lens[AXIAL_AXES], int parents[AXIAL_AXES], vec2 center, AxialInstance inst,
+                      sampler2D children, int id, vec3 wind, out vec3 w_out, out vec3 wn_out, out mat3 jac_out) {
+    vec3 moved = v;
+    mat3 jac = mat3(1.0);
+#ifndef AXIAL_NO_BEND
+    if (inst.twist != 0.0 || inst.taper != 0.0) {  // about axis 0's axis line, before the displacements
+        mat3 f0 = frames[0];
+        vec3 l = f0 * v;
+        float raw = (l.x - los[0]) / lens[0];
+        float t = clamp(raw, 0.0, 1.0);
+        float k = 1.0 - inst.taper * t;
+        float theta = inst.twist * t;
+        float c = cos(theta), sn = sin(theta);
+        vec2 w = l.yz - center;
+        vec2 rw = vec2(c * w.x - sn * w.y, sn * w.x + c * w.y);
+        moved += transpose(f0) * vec3(0.0, k * rw - w);
+        vec2 g = (raw >= -AXIAL_T_SLACK && raw <= 1.0 + AXIAL_T_SLACK)
+               ? ((k * inst.twist) * vec2(-rw.y, rw.x) - inst.taper * rw) / lens[0] : vec2(0.0);
+        mat3 jl = mat3(vec3(1.0, g), vec3(0.0, k * c, k * sn), vec3(0.0, -k * sn, k * c));  // columns
+        jac = transpose(f0) * jl * f0;
+    }
+    vec3 disp = vec3(0.0);
+    int j = b;
+    for (int guard = 0; guard < AXIAL_AXES; ++guard) {
+        if (j < 0) break;
+        vec4 d12 = inst.d12, d34 = inst.d34;
+        vec2 d5 = inst.d5;
+        if (j > 0) {
+            axial_child_offsets(children, id, j, d12, d34, d5);
+            vec2 u = lens[j] * (frames[j] * wind).yz;
+            d34 += vec4(u * (1.0 / 6.0), u * 0.5);
+            d5 += u;
+        }
+        axial_axis_add(v, frames[j], los[j], lens[j], d12, d34, d5, disp, jac);
+        j = parents[j];
+    }
+    moved += disp;
+#endif
+    mat3 rot = axial_rotation(inst.angles);
+    w_out = rot * (inst.scale * moved) + inst.position;
+    wn_out = rot * normalize(axial_cofactor(jac, n));
+    jac_out = jac;
+}
+#endif

@@ -29,6 +29,16 @@ uniform int u_instance_base;     // index of the first instance drawn (capture w
 
 in vec3 in_position;        // base mesh, model units
 in vec3 in_normal;          // unit vertex normal
+#ifdef AXIAL_AXES
+// several axes (AXIAL_AXES = K): the vertex's axis, every axis's frame, lo, L and parent, and
+// the child axes' offsets in a texture fetched by instance id (axial.glsl, axial_child_offsets)
+in float in_axis;
+uniform mat3 u_axes_frame[AXIAL_AXES];
+uniform float u_axes_lo[AXIAL_AXES];
+uniform float u_axes_len[AXIAL_AXES];
+uniform int u_axes_parent[AXIAL_AXES];
+uniform sampler2D u_axes_offsets;
+#endif
 
 // the instanced attribute buffer (divisor 1): the 16 numbers (quantized:
 // quantized.glsl's i_q*, and these are not declared -- WebGL 2 counts every
@@ -86,16 +96,34 @@ void main() {
 #else
     AxialInstance inst = axial_instance(i_d12, i_d34, i_d5, i_position, i_angles);
 #endif
+#ifdef AXIAL_AXES
+    vec3 push = vec3(0.0);  // the wind's push per unit of axis length: every child axis's
+#endif
     if (u_wind_strength != 0.0) {
+#ifdef AXIAL_AXES
+        push = axial_wind_push(inst, uint(AXIAL_INSTANCE_ID + u_instance_base), 1.0, u_wind_dir,
+                               u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
+#endif
         inst = axial_wind(inst, uint(AXIAL_INSTANCE_ID + u_instance_base), AXIAL_AXIS, u_len, u_wind_dir,
                           u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
     }
+#ifdef AXIAL_AXES
+    mat3 jac;
+    axial_tree_world(in_position, in_normal, int(in_axis + 0.5), u_axes_frame, u_axes_lo, u_axes_len,
+                     u_axes_parent, u_center, inst, u_axes_offsets, AXIAL_INSTANCE_ID + u_instance_base, push,
+                     v_world, v_normal, jac);
+#else
     axial_world(in_position, in_normal, AXIAL_AXIS, u_lo, u_len, u_center, inst, v_world, v_normal);
+#endif
 #ifdef AXIAL_MATERIAL
     v_uv = in_uv;
     v_color = in_color;
+#ifdef AXIAL_AXES
+    v_tangent = vec4(normalize(axial_rotation(inst.angles) * (jac * in_tangent.xyz)), in_tangent.w);
+#else
     v_tangent = vec4(axial_world_tangent(in_position, in_tangent.xyz, AXIAL_AXIS, u_lo, u_len, u_center, inst),
                      in_tangent.w);
+#endif
 #endif
     v_shade = 0.85 + 0.3 * instance_hash(AXIAL_INSTANCE_ID);
 #ifdef AXIAL_TINT

@@ -47,7 +47,9 @@ def wind_reach(mesh, wind) -> float:
     ``|wave| <= 0.6 + 0.4`` (docs/wind.md).  0 without a wind."""
     if wind is None:
         return 0.0
-    return abs(float(wind.strength)) * float(mesh.axis.length) * (1.0 + abs(float(wind.gustiness)))
+    tree = getattr(mesh, "tree", None)  # several axes: each pushes its own control points
+    length = float(mesh.axis.length) if tree is None else float(sum(a.length for a in tree.axes))
+    return abs(float(wind.strength)) * length * (1.0 + abs(float(wind.gustiness)))
 
 
 def instance_bounds(mesh, params, wind=None, *, radius: float | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -13,8 +13,18 @@ import numpy as np
 from .arrays import as_array
 from .axis import ControlAxis
 from .errors import ArgumentError
-from .params import as_params
-from .record import ANGLES, EXTENDED_WIDTH, EXTRA, OFFSETS, POSITION, TAPER, TWIST
+from .params import as_params, check_tree_params
+from .record import (
+    ANGLES,
+    EXTENDED_WIDTH,
+    EXTRA,
+    OFFSETS,
+    POSITION,
+    SCALE,
+    TAPER,
+    TWIST,
+    split_record,
+)
 from .transforms import rotation_matrices
 
 __all__ = [
@@ -26,7 +36,14 @@ __all__ = [
     "deform_local_extended",
     "bend_model",
     "deform",
+    "tree_bend",
+    "deform_tree",
 ]
+
+#: a term's ``t_j`` counts as clamped (no derivative) only beyond ``[−T_SLACK, 1 + T_SLACK]``:
+#: a vertex's own axis spans it, and float32 rounding on the GPU must not drop its slope
+#: (``AXIAL_T_SLACK`` in ``glsl/axial.glsl``; several axes only)
+T_SLACK = 1e-4
 
 _BINOMIAL = {4: np.array([1.0, 4.0, 6.0, 4.0, 1.0]), 3: np.array([1.0, 3.0, 3.0, 1.0])}
 
@@ -200,6 +217,8 @@ def deform(
         mesh = axis
         if not hasattr(mesh, "axis") or normals is not None or params is not None:
             raise ArgumentError("deform: expected deform(mesh, params) or deform(axis, positions, normals, params)")
+        if getattr(mesh, "tree", None) is not None:  # several axes: core/axes.py
+            return deform_tree(mesh, positions, progress=progress)
         axis, positions, normals, params = mesh.axis, mesh.positions, mesh.normals, positions
     params = as_params(params)
     positions = as_array(positions, (None, 3), "positions")
@@ -268,3 +287,93 @@ def deform_tangents(axis: ControlAxis, positions: np.ndarray, tangents: np.ndarr
     world = np.einsum("nij,nvj->nvi", rotation_matrices(params[:, ANGLES]), bent)
     world /= np.maximum(np.linalg.norm(world, axis=-1, keepdims=True), 1e-300)
     return world.astype(np.float32)
+
+
+# ------------------------------------------------------------------ several axes (core/axes.py)
+def _cofactor_apply(jac: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """``cof(J)·n`` for (..., 3, 3) ``J`` and (..., 3) ``n``: columns of cof(J)
+    are the cross products of pairs of J's columns."""
+    c0, c1, c2 = jac[..., :, 0], jac[..., :, 1], jac[..., :, 2]
+    return (n[..., 0, None] * np.cross(c1, c2) + n[..., 1, None] * np.cross(c2, c0)
+            + n[..., 2, None] * np.cross(c0, c1))
+
+
+def tree_bend(tree, positions, normals, offsets, extra=None, *, center=None):
+    """The bend of a K-axis mesh in model space (no rotation or position).
+
+    positions, normals : (v, 3); offsets : (n, K, 5, 2); extra : (n, 3) ``s tw tp`` or None;
+    center : axis 0's axis line (default its own).
+    Returns ``s·V''`` and unit ``n''`` (n, v, 3) float64, and the Jacobian (n, v, 3, 3).
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    nrm = np.asarray(normals, dtype=np.float64)
+    offs = np.asarray(offsets, dtype=np.float64)
+    n, v = len(offs), len(p)
+    chain = tree.chain[tree.vertex_axis]  # (v, K)
+    jac = np.broadcast_to(np.eye(3), (n, v, 3, 3)).copy()
+    moved = np.broadcast_to(p, (n, v, 3)).copy()
+    root = tree.axes[0]
+    f0 = root.matrix
+    if extra is not None:  # twist and taper about axis 0's axis line, before the displacements
+        ex = np.asarray(extra, dtype=np.float64)
+        twist, taper = ex[:, 1, None], ex[:, 2, None]
+        local = p @ f0.T
+        raw = (local[:, 0] - root.lo) / root.length
+        t = np.clip(raw, 0.0, 1.0)
+        line = np.asarray(root.line if center is None else center)
+        w = local[:, 1:] - line
+        theta, k = twist * t, 1.0 - taper * t
+        c, s = np.cos(theta), np.sin(theta)
+        rw = np.stack([c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1]], axis=-1)  # (n, v, 2)
+        moved += (k[..., None] * rw - w) @ f0[1:]
+        inside = ((raw >= -T_SLACK) & (raw <= 1 + T_SLACK)).astype(np.float64)  # beyond the ends k, θ are constant
+        g = ((k * twist)[..., None] * np.stack([-rw[..., 1], rw[..., 0]], axis=-1)
+             - taper[..., None] * rw) * (inside / root.length)[None, :, None]
+        jl = np.zeros((n, v, 3, 3))
+        jl[..., 0, 0] = 1.0
+        jl[..., 1:, 0] = g
+        jl[..., 1, 1], jl[..., 1, 2] = k * c, -k * s
+        jl[..., 2, 1], jl[..., 2, 2] = k * s, k * c
+        jac = f0.T @ jl @ f0
+    for j, axis in enumerate(tree.axes):
+        idx = np.flatnonzero(chain[:, j])
+        if not len(idx):
+            continue
+        f = axis.matrix
+        raw = (p[idx] @ f[0] - axis.lo) / axis.length
+        t = np.clip(raw, 0.0, 1.0)
+        disp, slope = axis_offsets(axis, t, offs[:, j])  # (n, |idx|, 2)
+        moved[:, idx] += disp @ f[1:]
+        inside = ((raw >= -T_SLACK) & (raw <= 1 + T_SLACK)).astype(np.float64)
+        across = (slope * (inside / axis.length)[None, :, None]) @ f[1:]  # (n, |idx|, 3)
+        jac[:, idx] += across[..., :, None] * f[0][None, None, None, :]
+    bent = _cofactor_apply(jac, np.broadcast_to(nrm, moved.shape))
+    bent /= np.maximum(np.linalg.norm(bent, axis=-1, keepdims=True), 1e-300)
+    if extra is not None:
+        moved *= np.asarray(extra, dtype=np.float64)[:, 0, None, None]
+    return moved, bent, jac
+
+
+def deform_tree(mesh, params, *, chunk_vertices: int = 1_000_000, progress=None):
+    """World positions and normals of every instance of a K-axis mesh (the
+    CPU reference): ``(n, v, 3)`` float32 each.  ``params``: (n, 10·K + 6)
+    (``+ 3`` extended, ``+ 6`` tinted)."""
+    tree = mesh.tree
+    k = tree.count
+    params = check_tree_params(params, k)
+    n, v = len(params), mesh.vertex_count
+    out_pos = np.empty((n, v, 3), dtype=np.float32)
+    out_nrm = np.empty((n, v, 3), dtype=np.float32)
+    step = max(1, chunk_vertices // max(v, 1))
+    for a in range(0, n, step):  # chunks bound memory; each chunk is vectorized
+        standard, children = split_record(params[a:a + step], k)
+        block = standard.astype(np.float64)
+        offsets = np.concatenate([block[:, :10].reshape(-1, 1, 5, 2), children.astype(np.float64)], axis=1)
+        extra = block[:, [SCALE, TWIST, TAPER]] if block.shape[1] >= EXTENDED_WIDTH else None
+        moved, bent, _ = tree_bend(tree, mesh.positions, mesh.normals, offsets, extra)
+        rot = rotation_matrices(block[:, ANGLES])
+        out_pos[a:a + step] = np.einsum("nij,nvj->nvi", rot, moved) + block[:, None, POSITION]
+        out_nrm[a:a + step] = np.einsum("nij,nvj->nvi", rot, bent)
+        if progress is not None:
+            progress.update(len(block))
+    return out_pos, out_nrm

@@ -80,6 +80,7 @@ class BaseMesh:
     _axis: ControlAxis | None = field(default=None, repr=False)
     grid: tuple | None = field(default=None, repr=False)
     axis_frame: object = field(default="auto", repr=False)
+    tree: object = field(default=None, repr=False)
 
     @classmethod
     def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> "BaseMesh":
@@ -136,16 +137,64 @@ class BaseMesh:
         object.__setattr__(self, "source_count", count)
         _check_appearance(self, len(pos), len(faces))
         # raises MeshError on a zero extent
-        object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name, frame=self.axis_frame))
+        if self.tree is not None:  # several axes: axis 0 is the root (core/axes.py)
+            if len(self.tree.vertex_axis) != len(pos):
+                raise MeshError(f"{self.name}: axes: expected {len(pos)} vertex axis indices, found {len(self.tree.vertex_axis)}")
+            object.__setattr__(self, "_axis", self.tree.axes[0])
+        else:
+            object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name, frame=self.axis_frame))
 
     def with_axis(self, axis="auto") -> "BaseMesh":
         """This mesh with another axis frame (``docs/method.md``, "A chosen axis
         frame"): ``"auto"``, ``"x"``, ``"y"``, ``"z"``, ``"oriented"`` or a 3×3
         matrix whose rows are ``e_a, e_u, e_v``.  Positions, faces and the
         fingerprint stay; parameter files record the frame."""
-        if isinstance(axis, str) and axis == self.axis.kind and not (axis == "oriented"):
+        if isinstance(axis, str) and axis == self.axis.kind and not (axis == "oriented") and self.tree is None:
             return self
-        return dataclasses.replace(self, axis_frame=axis, _axis=None)
+        return dataclasses.replace(self, axis_frame=axis, _axis=None, tree=None)
+
+    def with_axes(self, axes, axis="auto") -> "BaseMesh":
+        """This mesh with several axes in a hierarchy (``docs/method.md``,
+        "Several axes"; :mod:`axialdeform.core.axes`):
+
+        * ``"parts"`` -- one axis per part, the root the largest part, each
+          other part's parent the axis nearest its root end;
+        * a list of ``{"part": NAME, "parent": NAME, "axis": FRAME}`` (the root
+          first, without a parent; a parent before its children);
+        * ``{"vertex_axis": (v,) int, "parents": [-1, ...], "frames": [...]}``
+          -- per-vertex axis indices and a parent list;
+        * None or 1 -- one axis again.
+
+        ``axis``: the frame rule of every axis without its own (``"auto"``, ...).
+        """
+        from .axes import AxisTree, tree_from_parts, tree_from_spec, tree_from_vertices
+
+        if axes is None or (isinstance(axes, int) and axes == 1):
+            return self.with_axis(axis)
+        if isinstance(axes, AxisTree):
+            tree = axes
+        elif isinstance(axes, str):
+            if axes != "parts":
+                raise MeshError(f"{self.name}: axes: expected 'parts', a list of {{part, parent, axis}} entries or "
+                                f"per-vertex axes, found {axes!r}")
+            tree = tree_from_parts(self, axis)
+        elif isinstance(axes, dict):
+            if set(axes) - {"vertex_axis", "parents", "frames", "names"} or not {"vertex_axis", "parents"} <= set(axes):
+                raise MeshError(f"{self.name}: axes: expected keys vertex_axis and parents (and optional frames, "
+                                f"names), found {', '.join(map(str, axes))}")
+            tree = tree_from_vertices(self, axes["vertex_axis"], axes["parents"],
+                                      frames=axes.get("frames") or [axis] * len(axes["parents"]), names=axes.get("names"))
+        else:
+            tree = tree_from_spec(self, axes, axis)
+        if tree.count == 1:
+            return dataclasses.replace(self, axis_frame=tree.axes[0].matrix if tree.axes[0].framed else
+                                       "xyz"[tree.axes[0].index], _axis=None, tree=None)
+        return dataclasses.replace(self, _axis=None, tree=tree)
+
+    @property
+    def axis_count(self) -> int:
+        """K, the number of axes (1 unless :meth:`with_axes` gave it several)."""
+        return 1 if self.tree is None else self.tree.count
 
     @property
     def axis(self) -> ControlAxis:

@@ -53,6 +53,8 @@ from .record import (  # the record's columns and slices: one home
     Instances,
     describe_widths,
     level_of,
+    split_record,
+    tree_widths,
 )
 
 __all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'is_tinted', 'extend_params', 'tint_params', 'TINT', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L', 'check_drawable', 'DRAWABLE_MAGNITUDE']
@@ -243,3 +245,27 @@ def range_warning(mesh, values, name: str = "parameters") -> str | None:
     return (f"{name}: instance {worst}, field {FIELDS[col]} = {float(v[worst, col]):.6g} is {row_max[worst] / L:.3g} L "
             f"({count} instance{'s' if count != 1 else ''} beyond the safe {SAFE_DISTANCE_L:g} L); float32 steps there are "
             f"{ulp / L:.2g} L, so detail finer than that is lost (see docs/reliability.md, safe ranges)")
+
+
+def check_tree_params(values, axes: int, *, name: str = "parameters", error: type = ParamError) -> np.ndarray:
+    """:func:`~axialdeform.core.params.as_params` for a K-axis mesh: ``(n, 10·K + 6)``
+    (``+ 3``, ``+ 6``) float32, every number finite, the extension's checks on its columns."""
+    if axes == 1:
+        return as_params(values, name=name, error=error)
+    try:
+        arr = np.asarray(values, dtype=np.float32)
+    except (TypeError, ValueError) as exc:
+        raise error(f"{name}: expected numbers, found {type(values).__name__} ({exc})") from None
+    widths = tree_widths(axes)
+    if arr.ndim == 1 and arr.shape[0] in widths:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] not in widths:
+        expected = describe_widths(tuple(f"(n, {w})" for w in widths))
+        raise error(f"{name}: expected an array of shape {expected} for a mesh of {axes} axes "
+                    f"(10·K + 6 numbers an instance), found {arr.shape}")
+    standard, children = split_record(arr, axes)
+    if not np.isfinite(children).all():
+        row, col = (int(x) for x in np.argwhere(~np.isfinite(children.reshape(len(arr), -1)))[0])
+        raise error(f"{name}: instance {row}, axis {1 + col // 10} offset {col % 10}: expected a finite number")
+    as_params(standard, name=name, error=error)
+    return np.ascontiguousarray(arr)

@@ -35,7 +35,7 @@ __all__ = [
     "WIDTH", "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "width_of",
     "describe_widths", "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST", "TAPER",
     "IDENTITY_EXTRA", "Instances", "gl_layout", "page_layout", "page_record", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES", "describe_record",
-    "tint_columns",
+    "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape",
 ]
 
 
@@ -345,3 +345,37 @@ class Instances(np.ndarray):
         width = self.shape[-1] if self.ndim == 2 else 0
         names = [f.name for f in RECORD if width >= WIDTHS[f.level]]
         return sorted(set(super().__dir__()) | set(names))
+
+
+# ------------------------------------------------------------------ several axes (core/axes.py)
+def tree_width(axes: int, level: int = 0) -> int:
+    """Numbers per instance of a K-axis mesh: ``10·K + 6 + 3·level``."""
+    return 10 * int(axes) + WIDTHS[level] - 10
+
+
+def tree_widths(axes: int) -> tuple[int, ...]:
+    return tuple(tree_width(axes, level) for level in range(len(WIDTHS)))
+
+
+def split_record(values, axes: int) -> tuple[np.ndarray, np.ndarray]:
+    """A K-axis record as axis 0's standard record ``(n, 16|19|22)`` and the
+    child axes' offsets ``(n, K − 1, 5, 2)`` (both float32)."""
+    v = np.asarray(values)
+    children = v[:, 10:10 * axes].reshape(len(v), axes - 1, 5, 2)
+    return np.ascontiguousarray(np.concatenate([v[:, :10], v[:, 10 * axes:]], axis=1)), children
+
+
+def join_record(standard, children) -> np.ndarray:
+    """The inverse of :func:`split_record`: ``(n, 10·K + 6 [+3 [+3]])`` float32."""
+    s = np.asarray(standard, dtype=np.float32)
+    c = np.asarray(children, dtype=np.float32).reshape(len(s), -1)
+    return np.ascontiguousarray(np.concatenate([s[:, :10], c, s[:, 10:]], axis=1))
+
+
+def tree_shape(width: int) -> tuple[int, int]:
+    """``(K, level)`` of ``width`` numbers per instance (``width = 10·K + 6 + 3·level``);
+    ValueError if none."""
+    k, rest = divmod(int(width) - 6, 10)
+    if k < 1 or rest not in (0, 3, 6):
+        raise ValueError(f"{width} is not 10·K + 6 (+ 3, + 6) numbers")
+    return k, rest // 3

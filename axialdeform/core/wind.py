@@ -129,16 +129,24 @@ def wind_offsets(wind: Wind, axis: ControlAxis, params, time: float, *, start: i
     params : (n, 16) or (n, 19) — the instances (their index is ``start + row``).
     Returns (n, 5, 2) float64 (model units; the first two rows are 0).
     """
+    wave, local = wind_wave(wind, params, time, start=start)
+    amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
+    u = amp[:, None] * axis.across(local)  # (n, 2): the push across the axis (any frame)
+    return WIND_WEIGHTS[None, :, None] * u[:, None, :]
+
+
+def wind_wave(wind: Wind, params, time: float, *, start: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The wind's ``wave`` (n,) float64 at ``time`` and its direction in each
+    instance's model frame ``Rᵀ dir`` (n, 3) float64 (``params``: the
+    standard record, (n, 16|19|22)): what every axis's push is made of."""
     params = as_params(params).astype(np.float64)
     n = len(params)
     d = wind.unit_direction
     c1, c2 = wind.cycles(time)
     ph = wind_phase(np.arange(start, start + n)).astype(np.float64) - params[:, POSITION] @ d * wind.wavenumber
     wave = 0.6 * np.sin(2.0 * np.pi * (c1 + ph)) + 0.4 * np.sin(2.0 * np.pi * (c2 + 1.7 * ph))
-    amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
     local = np.einsum("nji,j->ni", rotation_matrices(params[:, ANGLES]), d)  # Rᵀ dir
-    u = amp[:, None] * axis.across(local)  # (n, 2): the push across the axis (any frame)
-    return WIND_WEIGHTS[None, :, None] * u[:, None, :]
+    return wave, local
 
 
 def apply_wind(wind: Wind | None, axis: ControlAxis, params, time: float, *, start: int = 0) -> np.ndarray:

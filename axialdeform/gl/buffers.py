@@ -101,9 +101,13 @@ class MeshBuffers:
         self._released = False
         # one (n, 6) float32 array handed over as it is (no hstack/astype/tobytes
         # copies: a 4.5 M-triangle terrain would hold ~160 MB more while uploading)
-        interleaved = np.empty((mesh.vertex_count, 6), dtype="f4")
+        tree = getattr(mesh, "tree", None)  # several axes: each vertex's axis as a 7th float (in_axis)
+        interleaved = np.empty((mesh.vertex_count, 6 if tree is None else 7), dtype="f4")
         interleaved[:, :3] = mesh.positions
-        interleaved[:, 3:] = mesh.normals
+        interleaved[:, 3:6] = mesh.normals
+        if tree is not None:
+            interleaved[:, 6] = tree.vertex_axis
+        self._axis_ids = tree is not None
         self.vbo = ctx.buffer(interleaved)
         del interleaved
         if "triangles" in indices:
@@ -131,6 +135,8 @@ class MeshBuffers:
         return int(self.mesh.edges.size)
 
     def content(self, program):
+        if self._axis_ids:
+            return _content(self.vbo, ("3f", "3f", "1f"), ("in_position", "in_normal", "in_axis"), program)
         return _content(self.vbo, ("3f", "3f"), ("in_position", "in_normal"), program)
 
     def release(self) -> None:

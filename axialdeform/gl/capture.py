@@ -41,6 +41,7 @@ class Capture:
         """
 
         self._check()
+        self._bind_axes()
         start = as_index(start, "capture: start")
         level = as_index(level, "capture: level")
         if not 0 <= level < len(self.lod_levels):

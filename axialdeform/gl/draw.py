@@ -80,7 +80,10 @@ class Drawing:
                         center=self.mesh.axis.center, radius=self.bound_radius,
                         lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye_position(view),
                         px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho,
-                        lod_px=self.lod_error, wind_reach=wind_reach(self.mesh, self.wind if self.bend else None),
+                        lod_px=self.lod_error,
+                        # the wind's and the child axes' reach (several axes) widen every bound
+                        wind_reach=wind_reach(self.mesh, self.wind if self.bend else None)
+                        + (self.child_reach if self.bend else 0.0),
                         prepare=self._set_quant_uniforms)
 
     def _draw_culled(self, cull, prog, vaos, result, draw_level) -> None:

@@ -22,6 +22,7 @@ import moderngl
 import numpy as np
 
 from ..core.arrays import as_array
+from ..core.axes import check_tree_params, split_record
 from ..core.bounds import base_radius
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.lod import LodLevel, build_lod_levels, check_lod_error
@@ -29,6 +30,7 @@ from ..core.look import DEFAULT_LOOK, Look
 from ..core.params import is_extended
 from ..core.record import tint_columns
 from ..core.wind import Wind
+from .axes import AxesTexture
 from .buffers import InstanceBuffer, MeshBuffers
 from .capture import Capture
 from .context import check_alive, require_framebuffer
@@ -169,7 +171,16 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         self._released = False
         self._objects = []
         self._slice_commands = None  # the one indirect command of instance slices (software rasterisers)
+        #: K, the mesh's axes: K > 1 draws with AXIAL_AXES (child offsets in a texture, gl/axes.py)
+        self.axis_count = mesh.axis_count
+        self._axes = None
+        if self.axis_count > 1 and lod:
+            raise AxialDeformError(f"{mesh.name}: lod: levels of detail of a mesh of several axes are not "
+                                   "supported yet; expected lod=False")
+        params, children = self._split_axes(params)
         defines = {} if bend else {"AXIAL_NO_BEND": 1}
+        if self.axis_count > 1:
+            defines["AXIAL_AXES"] = self.axis_count
         if self.quantized:
             defines["AXIAL_QUANTIZED"] = 1
         if mesh.has_appearance:
@@ -208,6 +219,8 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
                 self._part_edges = (ctx.buffer(e), int(e.size))
                 self._objects.append(self._part_edges[0])
             self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized, extended=self.extended)
+            if self.axis_count > 1:
+                self._axes = AxesTexture(ctx, self.axis_count, children, capacity)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
             self._vao_edges = None  # built by the first wireframe draw (lazy edges)
             #: the levels of detail (level 0 is the base mesh itself)
@@ -263,10 +276,31 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
                                vertices=int(sum(k * self.lod_levels[i].vertex_count for i, k in enumerate(counts))))
         return self._stats
 
+    def _split_axes(self, params):
+        """``params`` of a K-axis mesh as (axis 0's standard record, the child
+        axes' offsets (n, K−1, 5, 2)); ``(params, None)`` for one axis."""
+        if self.axis_count == 1 or params is None:
+            return params, (np.zeros((0, self.axis_count - 1, 5, 2), np.float32) if self.axis_count > 1 else None)
+        return split_record(check_tree_params(params, self.axis_count), self.axis_count)
+
+    @property
+    def child_reach(self) -> float:
+        """How far the child axes of any instance can move a vertex (model
+        units; 0 for one axis): what culling adds to each bound."""
+        return 0.0 if self._axes is None else self._axes.child_reach
+
+    def _bind_axes(self) -> None:
+        if self._axes is not None:
+            self._axes.bind()
+
     def set_params(self, params) -> None:
-        """Replace all parameters; the buffer is reallocated only if the count grows past its capacity."""
+        """Replace all parameters; the buffer is reallocated only if the count grows past its capacity.
+        A mesh of K axes takes ``(n, 10·K + 6)`` (``+ 3`` extended, ``+ 6`` tinted)."""
         self._check()
+        params, children = self._split_axes(params)
         self.instances.set(params)
+        if self._axes is not None:
+            self._axes.set(children)
         self._refresh_quant_uniforms()
         self._record_tint(params)
 
@@ -287,7 +321,10 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         ``start`` must be an integer (int or numpy integer): a float, a
         string, None or NaN raises :class:`ArgumentError`."""
         self._check()
+        params, children = self._split_axes(params)
         self.instances.update(params, start, setter="set_params()", name="update_params")
+        if self._axes is not None:
+            self._axes.update(children, start)
         tint = tint_columns(params)
         if tint is not None and self._tint_count is not None and len(tint):
             self._tint[3].write(np.ascontiguousarray(tint, dtype=np.float32).tobytes(), offset=int(start) * 12)
@@ -369,6 +406,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         light_dir, ambient, hidden_line = look.light_dir, look.ambient, look.wire_style
 
         self._check()
+        self._bind_axes()
         if mode not in _MODE_INDEX:
             raise ArgumentError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
         view, projection = camera_matrices(view, projection)
@@ -447,6 +485,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         map, fewer vertices.  Restores the caller's framebuffer.  ``clear=False``
         adds these casters to a map other renderers drew (a scene's layers)."""
         self._check()
+        self._bind_axes()
         state = None
         if self.culling_enabled and self.count:
             try:
@@ -516,7 +555,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
             mb.release()
         for ab in getattr(self, "_level_appearance", [])[1:]:
             ab.release()
-        for holder in ("mesh_buffers", "instances", "appearance", "materials"):
+        for holder in ("mesh_buffers", "instances", "appearance", "materials", "_axes"):
             if getattr(self, holder, None) is not None:
                 getattr(self, holder).release()
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..core.errors import ParamError, ShaderError
 from ..core.wind import Wind
+from .axes import set_axes_uniforms
 from .cull import CullPass
 from .shaders import build_program
 from .uniforms import set_uniforms
@@ -143,6 +144,8 @@ class ShaderVariants:
         frame = {"u_frame": np.ascontiguousarray(axis.matrix.T)} if axis.framed else {"u_axis": axis.index}
         set_uniforms(program, {**frame, "u_lo": axis.lo, "u_len": axis.length, "u_center": axis.line,
                                "u_instance_base": 0, "u_wind_strength": 0.0})
+        if self.mesh.tree is not None:
+            set_axes_uniforms(program, self.mesh.tree)
         self._set_quant_uniforms(program)
 
     def _set_wind_uniforms(self, program, wind, time) -> None:

@@ -55,7 +55,7 @@ def mesh_source_path(source: str | os.PathLike) -> Path:
     return Path(source)
 
 
-def load_mesh(source, *, textures: bool = True, axis="auto") -> BaseMesh:
+def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseMesh:
     """Read a base mesh from a file, a bundled mesh by name (``"stone"``,
     ``"leaf"``), or take a ``trimesh.Trimesh`` (or a ``trimesh.Scene`` with one
     mesh) already in memory.
@@ -84,9 +84,16 @@ def load_mesh(source, *, textures: bool = True, axis="auto") -> BaseMesh:
     ``"oriented"`` (the minimum-volume oriented bounding box, for a model
     lying diagonally) or a 3×3 orthogonal matrix whose rows are ``e_a, e_u,
     e_v``.
+
+    ``axes`` gives the mesh several axes in a hierarchy (a tree's trunk and
+    branches): ``"parts"``, a list of ``{"part", "parent", "axis"}`` or
+    per-vertex axes (:meth:`BaseMesh.with_axes`); ``axis`` is then the frame
+    rule of each axis that names none.
     """
     with texture_decoding(textures):
         mesh = _load_mesh(source)
+    if axes is not None:
+        return mesh.with_axes(axes, axis)
     return mesh.with_axis(axis) if not (isinstance(axis, str) and axis == "auto") else mesh
 
 

@@ -1,0 +1,278 @@
+"""Several axes in a hierarchy (trees): ``docs/method.md``, "Several axes".
+
+A base mesh may carry K ≥ 1 axes: axis 0 is the root, every other axis
+``k`` has a parent ``p(k) < k``, its own frame ``F_k`` (a child's ``e_a``
+points away from its parent: ``t = 0`` is its root end), ``lo_k``, ``L_k``
+from ITS vertices, and its own ten offsets.  Every vertex belongs to one
+axis ``b(V)`` and moves by the bend of that axis and of every ancestor,
+each evaluated at the vertex itself::
+
+    V' = V + Σ_{j ∈ chain(b(V))} F_jᵀ · E(D_j(t_j(V)))
+    J  = I + Σ_j F_jᵀ E(D_j'(t_j)) ⊗ e_a,j / L_j      (terms with a clamped t_j drop)
+    n' = normalize(cof(J) · n)
+
+Scale, twist and taper (the extended form) act on the whole mesh about
+axis 0's axis line before the displacements.  One instance is ``10·K + 6``
+numbers (``+ 3`` extended, ``+ 6`` tinted): axis 0's ten offsets, axis 1's
+ten, ..., then ``px py pz rx ry rz [s tw tp [tr tg tb]]``; K = 1 is the
+16 (19, 22) numbers exactly.
+
+In this module: the tree itself (:class:`AxisTree`), how a mesh gets one
+(:func:`tree_from_spec`, :func:`tree_from_parts`, :func:`tree_from_vertices`)
+and the wind on every axis.  The record of K axes is in
+:mod:`~axialdeform.core.record` (``tree_width``, ``split_record``,
+``join_record``) and :func:`~axialdeform.core.params.check_tree_params`; the
+CPU reference in :mod:`~axialdeform.core.deform` (``deform_tree``).  Pure numpy.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from .axis import ControlAxis
+from .deform import T_SLACK  # noqa: F401 - part of this module's story (the clamp of a chain term)
+from .errors import MeshError
+from .params import check_tree_params
+from .record import split_record
+
+__all__ = ["AxisTree", "MAX_AXES", "T_SLACK", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
+           "tree_wind_offsets", "axes_of"]
+
+#: the most axes one mesh may carry (the shader's uniform arrays are this long at most)
+MAX_AXES = 64
+
+
+
+@dataclass(frozen=True, eq=False)
+class AxisTree:
+    """The K axes of a base mesh and which vertex belongs to which.
+
+    Attributes
+    ----------
+    axes : tuple of K :class:`ControlAxis`
+        Axis 0 is the root (the mesh's :attr:`~BaseMesh.axis`).
+    parents : tuple of K int
+        ``parents[0] == -1``; ``parents[k] < k``.
+    vertex_axis : (v,) int32
+        The axis ``b(V)`` of each vertex.
+    names : tuple of K str
+        A name per axis (the part it was made from, or ``axis{k}``).
+    """
+
+    axes: tuple
+    parents: tuple
+    vertex_axis: np.ndarray
+    names: tuple = ()
+
+    def __post_init__(self) -> None:
+        k = len(self.axes)
+        if not 1 <= k <= MAX_AXES:
+            raise MeshError(f"axes: expected 1 to {MAX_AXES} axes, found {k}")
+        parents = tuple(int(p) for p in self.parents)
+        if len(parents) != k or parents[0] != -1 or any(not 0 <= p < i for i, p in enumerate(parents) if i):
+            raise MeshError(f"axes: parents: expected -1 for axis 0 and a parent p < k for every axis k, found {parents}")
+        va = np.ascontiguousarray(self.vertex_axis, dtype=np.int32)
+        if va.ndim != 1 or (len(va) and (va.min() < 0 or va.max() >= k)):
+            raise MeshError(f"axes: vertex axis indices: expected a (v,) array of 0..{k - 1}")
+        object.__setattr__(self, "parents", parents)
+        object.__setattr__(self, "vertex_axis", va)
+        object.__setattr__(self, "names", tuple(self.names) or tuple(f"axis{i}" for i in range(k)))
+
+    @property
+    def count(self) -> int:
+        """K, the number of axes."""
+        return len(self.axes)
+
+    @property
+    def depth(self) -> np.ndarray:
+        """(K,) int: each axis's level in the hierarchy (0: the root, 1: its children, ...)."""
+        d = np.zeros(self.count, dtype=int)
+        for k in range(1, self.count):
+            d[k] = d[self.parents[k]] + 1
+        return d
+
+    @property
+    def chain(self) -> np.ndarray:
+        """(K, K) bool: ``chain[b, j]`` is True when axis ``j`` is ``b`` or one of its ancestors."""
+        c = np.eye(self.count, dtype=bool)
+        for k in range(1, self.count):
+            c[k] |= c[self.parents[k]]
+        return c
+
+    @property
+    def digest(self) -> bytes:
+        """16 bytes identifying the tree (frames, lo, L, parents, vertex axes):
+        parameter files record it."""
+        h = hashlib.sha256()
+        for a in self.axes:
+            h.update(np.asarray(a.matrix, dtype="<f8").tobytes())
+            h.update(np.asarray([a.lo, a.length], dtype="<f8").tobytes())
+        h.update(np.asarray(self.parents, dtype="<i4").tobytes())
+        h.update(self.vertex_axis.astype("<i4").tobytes())
+        return h.digest()[:16]
+
+    def describe(self) -> str:
+        return f"{self.count} axes (" + ", ".join(
+            f"{n}{'' if p < 0 else ' <- ' + self.names[p]}" for n, p in zip(self.names, self.parents)) + ")"
+
+
+def axes_of(mesh) -> int:
+    """K, the number of axes of ``mesh`` (1 without a tree)."""
+    tree = getattr(mesh, "tree", None)
+    return 1 if tree is None else tree.count
+
+
+# ------------------------------------------------------------------ building a tree
+def _axis_of(positions, name, frame) -> ControlAxis:
+    return ControlAxis.from_positions(positions, name=name, frame=frame)
+
+
+def _segment(axis: ControlAxis) -> tuple[np.ndarray, np.ndarray]:
+    """The axis segment's two ends in model space: (t = 0, t = 1)."""
+    pts = axis.control_points
+    return pts[0], pts[-1]
+
+
+def _point_segment_distance(p, a, b) -> float:
+    ab = b - a
+    t = np.clip(np.dot(p - a, ab) / max(float(np.dot(ab, ab)), 1e-300), 0.0, 1.0)
+    return float(np.linalg.norm(p - (a + t * ab)))
+
+
+def _rooted(axis: ControlAxis, parent: ControlAxis, positions, name) -> ControlAxis:
+    """``axis`` with ``e_a`` negated when its ``t = 1`` end is the nearer one to
+    the parent's axis segment (so ``t = 0`` is its root)."""
+    a, b = _segment(parent)
+    lo_end, hi_end = _segment(axis)
+    if _point_segment_distance(hi_end, a, b) < _point_segment_distance(lo_end, a, b):
+        m = axis.matrix.copy()
+        m[0] = -m[0]
+        return _axis_of(positions, name, m)
+    return axis
+
+
+def tree_from_vertices(mesh, vertex_axis, parents, *, frames=None, names=None, root_children: bool = True) -> AxisTree:
+    """A tree from per-vertex axis indices ``vertex_axis`` ((v,) int) and a
+    parent list (``parents[0] = -1``); ``frames``: one frame rule per axis
+    (``"auto"`` default, ``load_mesh(axis=...)``'s values).  Child axes are
+    turned so that ``t = 0`` is their end nearer the parent's axis segment."""
+    va = np.asarray(vertex_axis)
+    if va.shape != (mesh.vertex_count,) or not np.issubdtype(va.dtype, np.integer):
+        raise MeshError(f"{mesh.name}: axes: expected {mesh.vertex_count} integer vertex axis indices, found "
+                        f"an array of shape {va.shape} ({va.dtype})")
+    k = len(parents)
+    names = tuple(names) if names is not None else tuple(f"axis{i}" for i in range(k))
+    frames = ["auto"] * k if frames is None else list(frames)
+    if len(frames) != k or len(names) != k:
+        raise MeshError(f"{mesh.name}: axes: expected one frame and one name per axis ({k}), "
+                        f"found {len(frames)} and {len(names)}")
+    axes = []
+    for i in range(k):
+        pts = mesh.positions[va == i]
+        if not len(pts):
+            raise MeshError(f"{mesh.name}: axes: axis {i} ({names[i]}) has no vertex; expected every axis to hold some")
+        axis = _axis_of(pts, f"{mesh.name}: axis {names[i]}", frames[i])
+        if i and root_children:
+            axis = _rooted(axis, axes[int(parents[i])], pts, f"{mesh.name}: axis {names[i]}")
+        axes.append(axis)
+    return AxisTree(tuple(axes), tuple(int(p) for p in parents), va.astype(np.int32), names)
+
+
+def _part_vertices(mesh) -> dict:
+    """part name -> its vertex indices (sorted)."""
+    return {p.name: np.unique(mesh.faces[p.start:p.start + p.count]) for p in mesh.parts if p.count}
+
+
+def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
+    """A tree from a list of ``{"part": NAME, "parent": NAME, "axis": FRAME}``
+    (the root has no parent and comes first; a parent comes before its
+    children).  A vertex shared by two parts belongs to the earlier axis."""
+    if not isinstance(spec, (list, tuple)) or not spec:
+        raise MeshError(f"{mesh.name}: axes: expected 'parts', per-vertex axes or a list of "
+                        "{'part', 'parent', 'axis'} entries, found " + repr(spec)[:80])
+    verts = _part_vertices(mesh)
+    order, parents, frames = [], [], []
+    for i, entry in enumerate(spec):
+        if not isinstance(entry, dict) or "part" not in entry or set(entry) - {"part", "parent", "axis"}:
+            raise MeshError(f"{mesh.name}: axes entry {i + 1}: expected a table with 'part' and optional "
+                            f"'parent' and 'axis', found {entry!r}")
+        part = entry["part"]
+        if part not in verts:
+            raise MeshError(f"{mesh.name}: axes entry {i + 1}: no part {part!r}; expected one of "
+                            + ", ".join(repr(n) for n in verts))
+        if part in order:
+            raise MeshError(f"{mesh.name}: axes entry {i + 1}: part {part!r} has an axis already")
+        parent = entry.get("parent")
+        if (parent is None) != (i == 0):
+            raise MeshError(f"{mesh.name}: axes entry {i + 1} ({part}): expected " +
+                            ("no parent for the root (the first entry)" if i == 0 else
+                             "a parent (only the first entry, the root, has none)"))
+        if parent is not None and parent not in order:
+            raise MeshError(f"{mesh.name}: axes entry {i + 1} ({part}): parent {parent!r} is not an earlier entry; "
+                            "expected a parent listed before its children")
+        order.append(part)
+        parents.append(-1 if parent is None else order.index(parent))
+        frames.append(entry.get("axis", frame))
+    missing = [n for n in verts if n not in order]
+    if missing:
+        raise MeshError(f"{mesh.name}: axes: part(s) {', '.join(repr(n) for n in missing)} have no axis; "
+                        "expected an entry for every part")
+    va = np.full(mesh.vertex_count, -1, dtype=np.int32)
+    for i, part in reversed(list(enumerate(order))):  # the earlier axis wins a shared vertex
+        va[verts[part]] = i
+    if (va < 0).any():  # vertices no triangle uses: the root's
+        va[va < 0] = 0
+    return tree_from_vertices(mesh, va, parents, frames=frames, names=order)
+
+
+def tree_from_parts(mesh, frame="auto") -> AxisTree:
+    """One axis per part: the root is the largest part (its bounding-box
+    diagonal), each other part's parent the axis whose segment is nearest to
+    one of its axis's ends (attached nearest first, so parents come first)."""
+    verts = _part_vertices(mesh)
+    names = list(verts)
+    if len(names) < 2:
+        raise MeshError(f"{mesh.name}: axes='parts': expected a mesh of several parts, found {len(names)}")
+    axes = {n: _axis_of(mesh.positions[verts[n]], f"{mesh.name}: part {n}", frame) for n in names}
+    size = {n: float(np.linalg.norm(np.ptp(mesh.positions[verts[n]], axis=0))) for n in names}
+    root = max(names, key=lambda n: (size[n], -names.index(n)))
+    order, parents = [root], [-1]
+    ends = {n: _segment(axes[n]) for n in names}
+    while len(order) < len(names):
+        best = None
+        for n in names:
+            if n in order:
+                continue
+            for i, q in enumerate(order):
+                a, b = ends[q]
+                d = min(_point_segment_distance(e, a, b) for e in ends[n])
+                if best is None or d < best[0]:
+                    best = (d, n, i)
+        order.append(best[1])
+        parents.append(best[2])
+    va = np.full(mesh.vertex_count, -1, dtype=np.int32)
+    for i, part in reversed(list(enumerate(order))):
+        va[verts[part]] = i
+    va[va < 0] = 0
+    return tree_from_vertices(mesh, va, parents, frames=[frame] * len(order), names=order)
+
+
+def tree_wind_offsets(wind, tree: AxisTree, params, time: float, *, start: int = 0) -> np.ndarray:
+    """What the wind adds to every axis's offsets: (n, K, 5, 2) float64.  Each
+    axis ``j`` is pushed across itself by ``strength·L_j·(1 + gustiness·wave)``
+    (one wave per instance, :func:`~axialdeform.core.wind.wind_wave`), on its
+    control points ``c = (0, 0, 1/6, 1/2, 1)``: the tips of the branches move most.
+    Axis 0's push is :func:`~axialdeform.core.wind.wind_offsets` exactly."""
+    from .wind import WIND_WEIGHTS, wind_wave
+
+    k = tree.count
+    standard, _ = split_record(check_tree_params(params, k), k)
+    wave, local = wind_wave(wind, standard, time, start=start)
+    out = np.empty((len(standard), k, 5, 2))
+    for j, axis in enumerate(tree.axes):
+        amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
+        out[:, j] = WIND_WEIGHTS[None, :, None] * (amp[:, None] * axis.across(local))[:, None, :]
+    return out
