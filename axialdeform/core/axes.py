@@ -18,8 +18,8 @@ ten, ..., then ``px py pz rx ry rz [s tw tp [tr tg tb]]``; K = 1 is the
 16 (19, 22) numbers exactly.
 
 In this module: the tree itself (:class:`AxisTree`), how a mesh gets one
-(:func:`tree_from_spec`, :func:`tree_from_parts`, :func:`tree_from_vertices`)
-and the wind on every axis.  The record of K axes is in
+(:func:`tree_from_spec`, :func:`tree_from_parts`, :func:`tree_from_vertices`);
+the wind on every axis is :func:`~axialdeform.core.wind.tree_wind_offsets`.  The record of K axes is in
 :mod:`~axialdeform.core.record` (``tree_width``, ``split_record``,
 ``join_record``) and :func:`~axialdeform.core.params.check_tree_params`; the
 CPU reference in :mod:`~axialdeform.core.deform` (``deform_tree``).  Pure numpy.
@@ -35,11 +35,9 @@ import numpy as np
 from .axis import ControlAxis
 from .deform import T_SLACK  # noqa: F401 - part of this module's story (the clamp of a chain term)
 from .errors import MeshError
-from .params import check_tree_params
-from .record import split_record
 
 __all__ = ["AxisTree", "MAX_AXES", "T_SLACK", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
-           "tree_wind_offsets", "axes_of"]
+           "axes_of"]
 
 #: the most axes one mesh may carry (the shader's uniform arrays are this long at most)
 MAX_AXES = 64
@@ -230,49 +228,29 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
 
 def tree_from_parts(mesh, frame="auto") -> AxisTree:
     """One axis per part: the root is the largest part (its bounding-box
-    diagonal), each other part's parent the axis whose segment is nearest to
-    one of its axis's ends (attached nearest first, so parents come first)."""
+    diagonal); each other part's parent is the axis whose segment comes
+    nearest to one of its axis's ends, attached nearest first (so parents
+    come first).  A heuristic for parts that are tubes around their axis (a
+    part whose box is dominated by something else -- a tuft of leaves at a
+    branch's tip -- has an axis segment away from the wood): the list form
+    (:func:`tree_from_spec`) says the hierarchy exactly."""
     verts = _part_vertices(mesh)
     names = list(verts)
     if len(names) < 2:
         raise MeshError(f"{mesh.name}: axes='parts': expected a mesh of several parts, found {len(names)}")
-    axes = {n: _axis_of(mesh.positions[verts[n]], f"{mesh.name}: part {n}", frame) for n in names}
-    size = {n: float(np.linalg.norm(np.ptp(mesh.positions[verts[n]], axis=0))) for n in names}
+    points = {n: mesh.positions[verts[n]] for n in names}
+    axes = {n: _axis_of(points[n], f"{mesh.name}: part {n}", frame) for n in names}
+    size = {n: float(np.linalg.norm(np.ptp(points[n].astype(np.float64), axis=0))) for n in names}
     root = max(names, key=lambda n: (size[n], -names.index(n)))
-    order, parents = [root], [-1]
     ends = {n: _segment(axes[n]) for n in names}
+    order, parents = [root], [-1]
     while len(order) < len(names):
-        best = None
-        for n in names:
-            if n in order:
-                continue
-            for i, q in enumerate(order):
-                a, b = ends[q]
-                d = min(_point_segment_distance(e, a, b) for e in ends[n])
-                if best is None or d < best[0]:
-                    best = (d, n, i)
-        order.append(best[1])
-        parents.append(best[2])
+        d, part, parent = min((min(_point_segment_distance(e, *ends[q]) for e in ends[n]), n, i)
+                              for n in names if n not in order for i, q in enumerate(order))
+        order.append(part)
+        parents.append(parent)
     va = np.full(mesh.vertex_count, -1, dtype=np.int32)
     for i, part in reversed(list(enumerate(order))):
         va[verts[part]] = i
     va[va < 0] = 0
     return tree_from_vertices(mesh, va, parents, frames=[frame] * len(order), names=order)
-
-
-def tree_wind_offsets(wind, tree: AxisTree, params, time: float, *, start: int = 0) -> np.ndarray:
-    """What the wind adds to every axis's offsets: (n, K, 5, 2) float64.  Each
-    axis ``j`` is pushed across itself by ``strength·L_j·(1 + gustiness·wave)``
-    (one wave per instance, :func:`~axialdeform.core.wind.wind_wave`), on its
-    control points ``c = (0, 0, 1/6, 1/2, 1)``: the tips of the branches move most.
-    Axis 0's push is :func:`~axialdeform.core.wind.wind_offsets` exactly."""
-    from .wind import WIND_WEIGHTS, wind_wave
-
-    k = tree.count
-    standard, _ = split_record(check_tree_params(params, k), k)
-    wave, local = wind_wave(wind, standard, time, start=start)
-    out = np.empty((len(standard), k, 5, 2))
-    for j, axis in enumerate(tree.axes):
-        amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
-        out[:, j] = WIND_WEIGHTS[None, :, None] * (amp[:, None] * axis.across(local))[:, None, :]
-    return out

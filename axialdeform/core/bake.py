@@ -10,7 +10,7 @@ import numpy as np
 
 from .deform import deform
 from .io.safeio import check_count, require_finite
-from .params import as_params
+from .params import check_tree_params
 from .wind import apply_wind
 
 __all__ = ['bake_cpu', 'bake_cpu_pieces', 'instance_name', 'part_file_names', 'check_bake_count', 'check_bake_result', 'MESH_FORMATS']
@@ -35,9 +35,9 @@ def bake_cpu(mesh, params, *, progress=None, wind=None, time: float = 0.0,
     check_bake_count(mesh, len(params), "cpu", source)
     if wind is not None:
 
-        params = apply_wind(wind, mesh.axis, params, time)
+        params = apply_wind(wind, mesh.tree or mesh.axis, params, time)  # several axes: every axis sways
     with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
-        positions, normals = deform(mesh.axis, mesh.positions, mesh.normals, params, progress=progress)
+        positions, normals = deform(mesh, params, progress=progress)
     check_bake_result(positions, normals, source)
     return positions, normals
 
@@ -96,16 +96,15 @@ def bake_cpu_pieces(mesh, params, *, progress=None, wind=None, time: float = 0.0
     piece.  Each piece is checked for non-finite numbers as it is made (the
     message numbers the instance in the whole file)."""
 
-    params = as_params(params)
+    params = check_tree_params(params, mesh.axis_count)
     v = max(mesh.vertex_count, 1)
     step = max(1, int(piece_bytes) // (v * 24))
     for a in range(0, len(params), step):
         block = params[a : a + step]
-        if wind is not None:
-
-            block = apply_wind(wind, mesh.axis, block, time, start=a)  # the wind's phase follows the instance index
+        if wind is not None:  # the wind's phase follows the instance index
+            block = apply_wind(wind, mesh.tree or mesh.axis, block, time, start=a)
         with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
-            positions, normals = deform(mesh.axis, mesh.positions, mesh.normals, block, progress=progress)
+            positions, normals = deform(mesh, block, progress=progress)
         require_finite(positions, "positions", "xyz", source=source, first=a)
         require_finite(normals, "normals", "xyz", source=source, first=a)
         yield positions, normals

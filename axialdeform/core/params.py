@@ -41,7 +41,6 @@ from .record import (  # the record's columns and slices: one home
     FIELDS,
     IDENTITY_EXTRA,
     IDENTITY_TINT,
-    LEVEL_FIELDS,
     OFFSETS,
     POSITION,
     SCALE,
@@ -52,15 +51,17 @@ from .record import (  # the record's columns and slices: one home
     WIDTHS,
     Instances,
     describe_widths,
-    level_of,
-    split_record,
+    is_record_width,
+    record_fields,
+    tree_shape,
     tree_widths,
 )
 
 __all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'is_tinted', 'extend_params', 'tint_params', 'TINT', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L', 'check_drawable', 'DRAWABLE_MAGNITUDE']
 
 
-def as_params(values, *, name: str = "parameters", error: type = ParamError, rows=None, widths=WIDTHS) -> np.ndarray:
+def as_params(values, *, name: str = "parameters", error: type = ParamError, rows=None, widths=WIDTHS,
+              axes=None) -> np.ndarray:
     """Check and convert to a C-contiguous ``(n, 16)``, ``(n, 19)`` or ``(n, 22) float32`` array.
 
     A single record of 16 (19, 22) numbers becomes ``(1, 16)`` (``(1, 19)``, ...).
@@ -69,33 +70,43 @@ def as_params(values, *, name: str = "parameters", error: type = ParamError, row
     or (22) a tint outside 0..1;
     ``rows`` optionally names each row (e.g. its line in a file).  ``widths``
     lists the accepted numbers per instance (``(16,)`` where only the plain
-    form makes sense).
+    form makes sense).  ``axes``: K, the axes of the mesh (several axes:
+    ``10·K + 6`` numbers, ``+ 3``, ``+ 6``; core/axes.py), or ``"any"`` (a
+    file, whose width says K).
     """
     try:
         arr = np.asarray(values, dtype=np.float32)
     except (TypeError, ValueError) as exc:
         raise error(f"{name}: expected numbers, found {type(values).__name__} ({exc})") from None
+    if axes == "any":
+        width = arr.shape[-1] if arr.ndim in (1, 2) else -1
+        widths = (width,) if is_record_width(width) else WIDTHS
+    elif axes is not None and axes != 1:
+        widths = tree_widths(axes)
     if arr.ndim == 1 and arr.shape[0] in widths:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] not in widths:
         expected = describe_widths(tuple(f"(n, {w})" for w in widths))
-        raise error(f"{name}: expected an array of shape {expected}, found {arr.shape}")
-    fields = LEVEL_FIELDS[level_of(arr.shape[1])]
+        many = "" if axes in (None, 1, "any") else f" for a mesh of {axes} axes (10·K + 6 numbers an instance)"
+        raise error(f"{name}: expected an array of shape {expected}{many}, found {arr.shape}")
+    fields = record_fields(arr.shape[1])
     finite = np.isfinite(arr)
     if not finite.all():
         row, col = (int(x) for x in np.argwhere(~finite)[0])
         where = f"instance {row}" if rows is None else rows[row]
         raise error(f"{name}: {where}, field {fields[col]}: expected a finite number, found {arr[row, col]}")
-    if arr.shape[1] >= EXTENDED_WIDTH:
-        checks = [(SCALE, arr[:, SCALE] <= 0, "a scale s > 0"), (TAPER, arr[:, TAPER] >= 1, "a taper tp < 1")]
-        if arr.shape[1] >= TINTED_WIDTH:
-            checks += [(c, (arr[:, c] < 0) | (arr[:, c] > 1), "a tint in 0..1 (linear RGB)")
+    k, level = tree_shape(arr.shape[1])
+    tail = 10 * (k - 1)  # the rigid part and the extension come after every axis's offsets
+    if level:
+        checks = [(SCALE, arr[:, tail + SCALE] <= 0, "a scale s > 0"), (TAPER, arr[:, tail + TAPER] >= 1, "a taper tp < 1")]
+        if level >= 2:
+            checks += [(c, (arr[:, tail + c] < 0) | (arr[:, tail + c] > 1), "a tint in 0..1 (linear RGB)")
                        for c in range(TINT.start, TINT.stop)]
         for col, bad, expected in checks:
             if bad.any():
                 row = int(np.argmax(bad))
                 where = f"instance {row}" if rows is None else rows[row]
-                raise error(f"{name}: {where}, field {fields[col]}: expected {expected}, found {arr[row, col]:.9g}")
+                raise error(f"{name}: {where}, field {fields[tail + col]}: expected {expected}, found {arr[row, tail + col]:.9g}")
     return np.ascontiguousarray(arr)
 
 
@@ -248,24 +259,5 @@ def range_warning(mesh, values, name: str = "parameters") -> str | None:
 
 
 def check_tree_params(values, axes: int, *, name: str = "parameters", error: type = ParamError) -> np.ndarray:
-    """:func:`~axialdeform.core.params.as_params` for a K-axis mesh: ``(n, 10·K + 6)``
-    (``+ 3``, ``+ 6``) float32, every number finite, the extension's checks on its columns."""
-    if axes == 1:
-        return as_params(values, name=name, error=error)
-    try:
-        arr = np.asarray(values, dtype=np.float32)
-    except (TypeError, ValueError) as exc:
-        raise error(f"{name}: expected numbers, found {type(values).__name__} ({exc})") from None
-    widths = tree_widths(axes)
-    if arr.ndim == 1 and arr.shape[0] in widths:
-        arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] not in widths:
-        expected = describe_widths(tuple(f"(n, {w})" for w in widths))
-        raise error(f"{name}: expected an array of shape {expected} for a mesh of {axes} axes "
-                    f"(10·K + 6 numbers an instance), found {arr.shape}")
-    standard, children = split_record(arr, axes)
-    if not np.isfinite(children).all():
-        row, col = (int(x) for x in np.argwhere(~np.isfinite(children.reshape(len(arr), -1)))[0])
-        raise error(f"{name}: instance {row}, axis {1 + col // 10} offset {col % 10}: expected a finite number")
-    as_params(standard, name=name, error=error)
-    return np.ascontiguousarray(arr)
+    """:func:`as_params` for a mesh of ``axes`` axes: ``(n, 10·K + 6)`` (``+ 3``, ``+ 6``) float32."""
+    return as_params(values, name=name, error=error, axes=axes)

@@ -35,7 +35,8 @@ __all__ = [
     "WIDTH", "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "width_of",
     "describe_widths", "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST", "TAPER",
     "IDENTITY_EXTRA", "Instances", "gl_layout", "page_layout", "page_record", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES", "describe_record",
-    "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape",
+    "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape", "record_fields",
+    "is_record_width", "MAX_RECORD_AXES",
 ]
 
 
@@ -379,3 +380,27 @@ def tree_shape(width: int) -> tuple[int, int]:
     if k < 1 or rest not in (0, 3, 6):
         raise ValueError(f"{width} is not 10·K + 6 (+ 3, + 6) numbers")
     return k, rest // 3
+
+
+#: the most axes a record may have (core/axes.py's MAX_AXES)
+MAX_RECORD_AXES = 64
+
+
+def is_record_width(width: int) -> bool:
+    """Whether ``width`` numbers per instance is a record: ``10·K + 6 + 3·level``,
+    1 <= K <= :data:`MAX_RECORD_AXES`, level 0, 1 or 2."""
+    try:
+        k, _ = tree_shape(width)
+    except ValueError:
+        return False
+    return k <= MAX_RECORD_AXES
+
+
+def record_fields(width: int) -> tuple[str, ...]:
+    """The column names of a record of ``width`` numbers: the level's names for
+    one axis; with K axes axis k's offsets are ``a{k}.d1u`` .. ``a{k}.d5v``
+    after axis 0's."""
+    k, level = tree_shape(width)
+    names = LEVEL_FIELDS[level]
+    children = tuple(f"a{j}.{c}" for j in range(1, k) for c in names[:10])
+    return names[:10] + children + names[10:]

@@ -29,11 +29,12 @@ import numpy as np
 
 from .axis import ControlAxis
 from .errors import ParamError
-from .params import as_params
-from .record import ANGLES, OFFSETS, POSITION
+from .params import as_params, check_tree_params
+from .record import ANGLES, OFFSETS, POSITION, split_record
 from .transforms import rotation_matrices
 
-__all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "wind_offsets", "apply_wind"]
+__all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "wind_offsets", "apply_wind", "wind_wave",
+           "tree_wind_offsets"]
 
 #: how much of the tip displacement each control point P1..P5 gets (D(t) = t²)
 WIND_WEIGHTS = np.array([0.0, 0.0, 1.0 / 6.0, 0.5, 1.0])
@@ -149,8 +150,20 @@ def wind_wave(wind: Wind, params, time: float, *, start: int = 0) -> tuple[np.nd
     return wave, local
 
 
-def apply_wind(wind: Wind | None, axis: ControlAxis, params, time: float, *, start: int = 0) -> np.ndarray:
-    """``params`` with the wind's offsets added (same shape, float32); ``None`` returns them unchanged."""
+def apply_wind(wind: Wind | None, axis, params, time: float, *, start: int = 0) -> np.ndarray:
+    """``params`` with the wind's offsets added (same shape, float32); ``None`` returns them unchanged.
+    ``axis``: the mesh's :class:`ControlAxis`, or its :class:`~axialdeform.core.axes.AxisTree`
+    (several axes: every axis is pushed, :func:`tree_wind_offsets`)."""
+    if getattr(axis, "axes", None) is not None:  # an AxisTree
+        params = check_tree_params(params, axis.count)
+        if wind is None or wind.strength == 0:
+            return params
+        out = params.copy()
+        k = axis.count
+        moved = params[:, :10 * k].astype(np.float64) + tree_wind_offsets(
+            wind, axis, params, time, start=start).reshape(len(params), -1)
+        out[:, :10 * k] = moved.astype(np.float32)
+        return out
     params = as_params(params)
     if wind is None or wind.strength == 0:
         return params
@@ -158,3 +171,19 @@ def apply_wind(wind: Wind | None, axis: ControlAxis, params, time: float, *, sta
     moved = params[:, OFFSETS].astype(np.float64) + wind_offsets(wind, axis, params, time, start=start).reshape(-1, 10)
     out[:, OFFSETS] = moved.astype(np.float32)
     return as_params(out)
+
+
+def tree_wind_offsets(wind: Wind, tree, params, time: float, *, start: int = 0) -> np.ndarray:
+    """What the wind adds to every axis's offsets: (n, K, 5, 2) float64.  Each
+    axis ``j`` is pushed across itself by ``strength·L_j·(1 + gustiness·wave)``
+    (one wave per instance, :func:`~axialdeform.core.wind.wind_wave`), on its
+    control points ``c = (0, 0, 1/6, 1/2, 1)``: the tips of the branches move most.
+    Axis 0's push is :func:`~axialdeform.core.wind.wind_offsets` exactly."""
+    k = tree.count
+    standard, _ = split_record(check_tree_params(params, k), k)
+    wave, local = wind_wave(wind, standard, time, start=start)
+    out = np.empty((len(standard), k, 5, 2))
+    for j, axis in enumerate(tree.axes):
+        amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
+        out[:, j] = WIND_WEIGHTS[None, :, None] * (amp[:, None] * axis.across(local))[:, None, :]
+    return out

@@ -22,13 +22,12 @@ import moderngl
 import numpy as np
 
 from ..core.arrays import as_array
-from ..core.axes import check_tree_params, split_record
 from ..core.bounds import base_radius
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 from ..core.look import DEFAULT_LOOK, Look
-from ..core.params import is_extended
-from ..core.record import tint_columns
+from ..core.params import check_tree_params, is_extended
+from ..core.record import split_record, tint_columns
 from ..core.wind import Wind
 from .axes import AxesTexture
 from .buffers import InstanceBuffer, MeshBuffers
