@@ -59,6 +59,7 @@ import numpy as np
 
 from axialdeform.core.io import params as P
 from axialdeform.core.errors import AxialDeformError
+from axialdeform.core.record import is_record_width
 
 
 def corpus(rng: np.random.Generator) -> list[tuple[str, bytes]]:
@@ -122,8 +123,8 @@ def mutate(data: bytes, other: bytes, rng: np.random.Generator) -> tuple[str, by
 
 
 def check(fn, data: bytes, name: str):
-    """'ok' (finite (n, 16) or (n, 19) float32: plain or extended), 'error'
-    (AxialDeformError) or 'crash: ...'."""
+    """'ok' (finite (n, w) float32 with w a record's width: 16, 19, 22, or
+    10·K + 6 (+ 3, + 6) with K axes), 'error' (AxialDeformError) or 'crash: ...'."""
     try:
         out = fn(data, name)
     except AxialDeformError as exc:
@@ -132,7 +133,7 @@ def check(fn, data: bytes, name: str):
         return f"crash: {type(exc).__name__}: {exc}"[:200], None
     values = out.values if isinstance(out, P.ParamFile) else out
     if not (isinstance(values, np.ndarray) and values.dtype == np.float32 and values.ndim == 2
-            and values.shape[1] in (16, 19) and np.isfinite(values).all()):
+            and is_record_width(values.shape[1]) and np.isfinite(values).all()):
         return "crash: silent garbage", None
     return "ok", values
 

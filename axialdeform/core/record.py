@@ -119,9 +119,10 @@ LEVEL_NAMES: tuple[str, ...] = ("plain", "extended", "tinted")
 
 def describe_record(width: int) -> str:
     """``"22 numbers an instance (tinted: ... tr tg tb)"``: a width in words."""
-    level = level_of(width)
+    k, level = tree_shape(width)
     added = [c for c in LEVEL_FIELDS[level] if c not in (LEVEL_FIELDS[level - 1] if level else ())]
-    return f"{width} numbers an instance ({LEVEL_NAMES[level]}" + (f": ... {' '.join(added)})" if level else ")")
+    axes = f", {k} axes: 10 offsets each" if k > 1 else ""
+    return f"{width} numbers an instance ({LEVEL_NAMES[level]}{axes}" + (f": ... {' '.join(added)})" if level else ")")
 
 
 def level_of(width: int) -> int:

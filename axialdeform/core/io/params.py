@@ -20,14 +20,15 @@ from ..axis import AXIS_NAMES, ControlAxis
 from ..errors import MeshMismatchError, ParamError, ParamFileError
 from ..params import as_params
 from ..record import (  # the record's columns and slices: one home
-    EXTENDED_WIDTH,
-    LEVEL_FIELDS,
-    SCALE,
-    TAPER,
+    MAX_RECORD_AXES,
     WIDTHS,
     Instances,
     describe_widths,
-    level_of,
+    is_record_width,
+    record_fields,
+    tree_shape,
+    tree_width,
+    tree_widths,
 )
 from . import safeio
 from .atomic import atomic_path
@@ -74,6 +75,9 @@ _HEADER = struct.Struct("<8sHHIQb3xIdd32s16s")
 
 #: the header's axis byte of a chosen (not axis-aligned) frame: its rows' digest follows the fingerprint
 AXIS_FRAMED = 3
+#: the header's axis byte of a mesh of several axes: the tree's digest follows the fingerprint,
+#: the count of axes K is the uint32 at offset 28 (0 in every earlier file: one axis)
+AXIS_TREE = 4
 
 
 @dataclass(frozen=True)
@@ -89,22 +93,33 @@ class AxisRecord:
     lo: float
     length: float
     frame_digest: bytes = bytes(16)
+    axes: int = 1
 
     @classmethod
-    def of(cls, axis) -> "AxisRecord":
-        """The record of a :class:`ControlAxis` (or of another record)."""
-        return cls(int(axis.index), float(axis.lo), float(axis.length), bytes(axis.frame_digest))
+    def of(cls, source) -> "AxisRecord":
+        """The record of a mesh (its axis, or its tree of several axes), a
+        :class:`ControlAxis` or another record."""
+        tree = getattr(source, "tree", None)
+        if tree is not None:  # several axes: the root's lo and L, the tree's digest
+            root = tree.axes[0]
+            return cls(-2, float(root.lo), float(root.length), tree.digest, tree.count)
+        axis = getattr(source, "axis", source)
+        return cls(int(axis.index), float(axis.lo), float(axis.length), bytes(axis.frame_digest),
+                   int(getattr(axis, "axes", 1)))
 
     @property
     def framed(self) -> bool:
         return self.index == -1
 
-    def matches(self, axis) -> bool:
-        """Whether ``axis`` (a :class:`ControlAxis`) is the one recorded."""
-        return (self.index == axis.index and self.frame_digest == axis.frame_digest
-                and bool(np.isclose(self.lo, axis.lo)) and bool(np.isclose(self.length, axis.length)))
+    def matches(self, source) -> bool:
+        """Whether ``source`` (a mesh, or a :class:`ControlAxis`) has the axis recorded."""
+        other = AxisRecord.of(source)
+        return (self.index == other.index and self.frame_digest == other.frame_digest and self.axes == other.axes
+                and bool(np.isclose(self.lo, other.lo)) and bool(np.isclose(self.length, other.length)))
 
     def describe(self) -> str:
+        if self.axes > 1:
+            return f"{self.axes} axes in a hierarchy (digest {self.frame_digest.hex()[:16]}), root lo={self.lo:.9g}, L={self.length:.9g}"
         if self.framed:
             return f"a chosen axis frame (digest {self.frame_digest.hex()[:16]}), lo={self.lo:.9g}, L={self.length:.9g}"
         return ControlAxis(self.index, self.lo, self.length).describe()
@@ -129,7 +144,7 @@ def format_text(values: np.ndarray, header: str | None = None) -> str:
     Numbers are written with 9 significant digits, which round-trips float32
     exactly.  ``header`` lines are written as ``#`` comments.
     """
-    values = as_params(values)
+    values = as_params(values, axes="any")
     return "".join(_text_pieces(values, header))
 
 
@@ -146,7 +161,7 @@ def _text_pieces(values: np.ndarray, header: str | None):
 def _text_header(width: int, header: str | None) -> str:
     """The comment lines that start a text file: ``header``, then the field names."""
     lines = ["# " + line for line in (header or "").splitlines()]
-    lines.append("# " + " ".join(LEVEL_FIELDS[level_of(width)]))
+    lines.append("# " + " ".join(record_fields(width)))
     return "\n".join(lines) + "\n"
 
 
@@ -253,17 +268,18 @@ def _fast_chunk(chunk: bytes, width: int | None = None):
     except ValueError:
         return None
     if arr.size:
-        if arr.shape[1] not in WIDTHS or (width is not None and arr.shape[1] != width):
+        if not is_record_width(arr.shape[1]) or (width is not None and arr.shape[1] != width):
             return None
         width = arr.shape[1]
     with np.errstate(over="ignore", invalid="ignore"):
         arr32 = arr.reshape(-1, width or 16).astype(np.float32)
     if not np.isfinite(arr32).all():  # beyond float32: the slow path names the line
         return None
-    if arr32.shape[1] >= EXTENDED_WIDTH and len(arr32) and ((arr32[:, SCALE] <= 0).any() or (arr32[:, TAPER] >= 1).any()
-                                                            or (arr32[:, EXTENDED_WIDTH:] < 0).any()
-                                                            or (arr32[:, EXTENDED_WIDTH:] > 1).any()):
-        return None  # a bad scale, taper or tint: the slow path names the line and field
+    if len(arr32) and tree_shape(arr32.shape[1])[1]:
+        try:
+            as_params(arr32, axes="any")
+        except ParamError:
+            return None  # a bad scale, taper or tint: the slow path names the line and field
     lines = chunk.count(b"\n") + (0 if not chunk or chunk.endswith(b"\n") else 1)
     return np.ascontiguousarray(arr32), lines
 
@@ -288,10 +304,10 @@ def _split_lines(chunk: bytes, name: str, lineno: int, offset: int, first=None):
         if not stripped or stripped.startswith("#"):
             continue
         tokens = [tok for tok in _SEPARATORS.split(stripped) if tok]
-        if len(tokens) not in WIDTHS:
+        if not is_record_width(len(tokens)):
             raise ParamFileError(
                 f"{name}: line {k}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances; "
-                "22: tinted)")
+                "22: tinted; 10·K + 6 with K axes)")
         if first is None:
             first = (len(tokens), k)
         elif len(tokens) != first[0]:
@@ -317,7 +333,7 @@ def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np
                     float(tok)
                 except ValueError:
                     raise ParamFileError(
-                        f"{name}: line {linenos[k]}, field {LEVEL_FIELDS[-1][c]}: expected a number, found {tok[:40]!r}"
+                        f"{name}: line {linenos[k]}, field {record_fields(len(row))[c]}: expected a number, found {tok[:40]!r}"
                     ) from None
         # numpy refused what Python's float() accepts: parse token by token
         arr = np.array([[float(tok) for tok in row] for row in rows], dtype=np.float64)
@@ -327,10 +343,10 @@ def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np
     if overflow.any():
         k, c = (int(x) for x in np.argwhere(overflow)[0])
         raise ParamFileError(
-            f"{name}: line {linenos[k]}, field {LEVEL_FIELDS[-1][c]}: {arr[k, c]:.9g} does not fit in float32; "
+            f"{name}: line {linenos[k]}, field {record_fields(arr.shape[1])[c]}: {arr[k, c]:.9g} does not fit in float32; "
             f"expected a finite number of magnitude at most {float(np.finfo(np.float32).max):.7g}"
         )
-    return as_params(arr32, name=name, error=ParamFileError, rows=[f"line {n}" for n in linenos])
+    return as_params(arr32, name=name, error=ParamFileError, rows=[f"line {n}" for n in linenos], axes="any")
 
 
 @dataclass(frozen=True)
@@ -368,7 +384,7 @@ def quantization_error_bound(values: np.ndarray) -> np.ndarray:
     ``step / 2``; the float32 arithmetic of the decode adds at most one
     float32 ulp of the column's largest magnitude.
     """
-    v = as_params(values).astype(np.float64)
+    v = as_params(values, axes="any").astype(np.float64)
     if len(v) == 0:
         return np.zeros(v.shape[1])
     lo, hi = v.min(axis=0), v.max(axis=0)
@@ -386,7 +402,7 @@ def quantize_params(values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     (:func:`dequantize_params`).  The GPU quantized instance buffer
     (``AxialRenderer(..., quantized=True)``) stores exactly these.
     """
-    values = as_params(values)
+    values = as_params(values, axes="any")
     w = values.shape[1]
     table, payload = _quantize(values)
     raw = _quant_table(w).unpack(table)
@@ -403,7 +419,7 @@ def quantize_with_table(values, lo, step, *, name: str = "update", setter: str =
     naming ``name``, the instance and the field (no clipping), and pointing
     to ``setter`` (the call that re-quantizes every instance).
     """
-    v = as_params(values).astype(np.float64)
+    v = as_params(values, axes="any").astype(np.float64)
     w = v.shape[1]  # 16, 19 (extended) or 22 (tinted)
     lo = np.asarray(lo, dtype=np.float32).reshape(w).astype(np.float64)
     step = np.asarray(step, dtype=np.float32).reshape(w).astype(np.float64)
@@ -431,8 +447,8 @@ def dequantize_params(lo, step, q) -> np.ndarray:
     decode as a quantized binary file.
     """
     w = np.size(lo)
-    if w not in WIDTHS:
-        raise ParamError(f"quantization table: expected {describe_widths()} columns, found {w}")
+    if not is_record_width(w):
+        raise ParamError(f"quantization table: expected {describe_widths()} columns (10·K + 6 with K axes), found {w}")
     lo = np.asarray(lo, dtype=np.float32).reshape(w)
     step = np.asarray(step, dtype=np.float32).reshape(w)
     q = np.asarray(q, dtype="<u2").reshape(-1, w)
@@ -440,7 +456,10 @@ def dequantize_params(lo, step, q) -> np.ndarray:
 
 
 def _quant_table(width: int) -> struct.Struct:
-    return _QUANT_TABLES[width]
+    table = _QUANT_TABLES.get(width)
+    if table is None:  # several axes: 10·K + 6 (+ 3, + 6) columns
+        table = _QUANT_TABLES[width] = struct.Struct(f"<{width}f{width}f")
+    return table
 
 
 def _quantize(values: np.ndarray) -> tuple[bytes, bytes]:
@@ -498,7 +517,7 @@ def encode_binary(
     """The binary form of ``values`` (see ``docs/parameter-files.md``): version 1
     for 16 numbers per instance (unchanged), version 2 for 19 (extended),
     version 3 for 22 (tinted)."""
-    values = as_params(values)
+    values = as_params(values, axes="any")
     header = _binary_header(values.shape[1], quantize, len(values), axis, mesh_fingerprint)
     if quantize:
         table, payload = _quantize(values)
@@ -513,14 +532,19 @@ def _binary_header(width: int, quantize: bool, count: int, axis: ControlAxis | N
     """The fixed header of a binary file (:data:`HEADER_SIZE` bytes)."""
     if mesh_fingerprint is not None and len(mesh_fingerprint) != 32:
         raise ParamError(f"mesh fingerprint: expected 32 bytes, found {len(mesh_fingerprint)}")
+    k, level = tree_shape(width)
     if axis is None:
         index, lo, length, digest = -1, 0.0, 0.0, bytes(16)
     else:
-        index = AXIS_FRAMED if axis.index == -1 else axis.index
-        lo, length, digest = axis.lo, axis.length, bytes(axis.frame_digest)
+        record = AxisRecord.of(axis)
+        if record.axes != k:
+            raise ParamError(f"axis: the mesh has {record.axes} axes, but the parameters are {width} numbers "
+                             f"an instance ({k} axes); expected 10·K + 6 numbers for K = {record.axes}")
+        index = {-1: AXIS_FRAMED, -2: AXIS_TREE}.get(record.index, record.index)
+        lo, length, digest = record.lo, record.length, record.frame_digest
     return _HEADER.pack(
-        MAGIC, level_of(width) + 1, ENCODING_UINT16 if quantize else ENCODING_FLOAT32,
-        HEADER_SIZE, count, index, 0, lo, length, mesh_fingerprint or bytes(32), digest,
+        MAGIC, level + 1, ENCODING_UINT16 if quantize else ENCODING_FLOAT32,
+        HEADER_SIZE, count, index, 0 if k == 1 else k, lo, length, mesh_fingerprint or bytes(32), digest,
     )
 
 
@@ -544,15 +568,23 @@ class BinaryHeader:
     computed_crc: int
     size: int
     frame_digest: bytes = bytes(16)
+    axes: int = 1
 
     def axis_record(self, name: str = "<binary>") -> AxisRecord | None:
         """The recorded axis (None: not recorded); a value outside the format
         is a :class:`ParamFileError` naming the field."""
-        if self.axis_index not in (-1, 0, 1, 2, AXIS_FRAMED):
-            raise ParamFileError(f"{name}: axis: expected -1 (not recorded), 0, 1, 2 (x, y, z) or {AXIS_FRAMED} "
-                                 f"(a chosen frame), found {self.axis_index}")
+        if self.axis_index not in (-1, 0, 1, 2, AXIS_FRAMED, AXIS_TREE):
+            raise ParamFileError(f"{name}: axis: expected -1 (not recorded), 0, 1, 2 (x, y, z), {AXIS_FRAMED} "
+                                 f"(a chosen frame) or {AXIS_TREE} (several axes), found {self.axis_index}")
+        if (self.axis_index == AXIS_TREE) != (self.axes > 1):
+            raise ParamFileError(f"{name}: axis: expected {AXIS_TREE} (several axes) exactly when the file has "
+                                 f"more than one axis, found axis {self.axis_index} with {self.axes} axes")
         if self.axis_index == -1:
             return None
+        if self.axis_index == AXIS_TREE:
+            if not (np.isfinite(self.lo) and np.isfinite(self.length) and self.length > 0):
+                raise ParamFileError(f"{name}: axis: axis length must be a finite number > 0, found L={self.length!r}")
+            return AxisRecord(-2, self.lo, self.length, self.frame_digest, self.axes)
         if self.axis_index != AXIS_FRAMED and any(self.frame_digest):
             raise ParamFileError(f"{name}: frame digest: expected zeros for axis {AXIS_NAMES[self.axis_index]}, "
                                  f"found {self.frame_digest.hex()}")
@@ -575,8 +607,9 @@ class BinaryHeader:
 
     @property
     def columns(self) -> int:
-        """Numbers per instance: 16 (version 1), 19 (version 2, extended) or 22 (version 3, tinted)."""
-        return _VERSIONS[self.version]
+        """Numbers per instance: 16 (version 1), 19 (version 2, extended) or 22 (version 3, tinted);
+        ``10·K + 6`` (``+ 3``, ``+ 6``) with K axes."""
+        return tree_width(self.axes, self.version - 1)
 
     @property
     def payload_bytes(self) -> int:
@@ -606,7 +639,8 @@ def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None 
         raise ParamFileError(
             f"{name}: truncated: {total} bytes, expected at least {HEADER_SIZE + _TRAILER.size} (header + checksum)"
         )
-    magic, version, encoding, header_size, count, axis_index, _res, lo, length, fingerprint, digest = _HEADER.unpack_from(data)
+    magic, version, encoding, header_size, count, axis_index, axes, lo, length, fingerprint, digest = _HEADER.unpack_from(data)
+    axes = max(int(axes), 1)
     if magic != MAGIC:
         raise ParamFileError(f"{name}: magic: expected {MAGIC!r}, found {magic!r}")
     if version not in _VERSIONS:
@@ -619,7 +653,9 @@ def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None 
         raise ParamFileError(f"{name}: encoding: expected 0 (float32) or 1 (uint16-quantized), found {encoding}")
     if header_size != HEADER_SIZE:
         raise ParamFileError(f"{name}: header size: expected {HEADER_SIZE}, found {header_size}")
-    width = _VERSIONS[version]
+    if axes > MAX_RECORD_AXES:
+        raise ParamFileError(f"{name}: axes: expected 1 to {MAX_RECORD_AXES} axes, found {axes}")
+    width = tree_width(axes, version - 1)
     record = _ENCODINGS[encoding][1] * width // 16
     table = _quant_table(width).size if encoding == ENCODING_UINT16 else 0
     expected = HEADER_SIZE + table + count * record + _TRAILER.size  # Python int: no overflow
@@ -633,7 +669,7 @@ def read_binary_header(data: bytes, name: str = "<binary>", *, size: int | None 
     (stored,) = _TRAILER.unpack_from(data, len(data) - _TRAILER.size)
     computed = zlib.crc32(memoryview(data)[: len(data) - _TRAILER.size])
     return BinaryHeader(version, encoding, count, axis_index, lo, length, fingerprint, stored, computed, len(data),
-                        digest)
+                        digest, axes)
 
 
 def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
@@ -655,7 +691,7 @@ def decode_binary(data: bytes, name: str = "<binary>") -> ParamFile:
         values = _dequantize(bytes(data[HEADER_SIZE : HEADER_SIZE + table]), payload, count, width)
     else:
         values = np.frombuffer(payload, dtype="<f4", count=count * width).reshape(count, width).astype(np.float32)
-    values = as_params(values, name=name, error=ParamFileError)
+    values = as_params(values, name=name, error=ParamFileError, axes="any")
     return ParamFile(
         values=values, format="binary", encoding=enc_name, axis=axis,
         mesh_fingerprint=None if fingerprint == bytes(32) else fingerprint,
@@ -715,13 +751,16 @@ def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
             f"expected {mesh.fingerprint.hex()[:16]} of {mesh.name}); use the mesh it was made for, "
             "or override the check (allow_mesh_mismatch=True / --ignore-mesh-mismatch)"
         )
-    if pf.axis is not None:
-        a = mesh.axis
-        if not pf.axis.matches(a):
-            raise MeshMismatchError(
-                f"{name}: made for {pf.axis.describe()}, but {mesh.name} has {a.describe()}; "
-                "use the mesh it was made for, or override the check"
-            )
+    if pf.axis is not None and not pf.axis.matches(mesh):
+        raise MeshMismatchError(
+            f"{name}: made for {pf.axis.describe()}, but {mesh.name} has {AxisRecord.of(mesh).describe()}; "
+            "use the mesh it was made for, or override the check"
+        )
+    k = getattr(mesh, "axis_count", 1)
+    if len(pf.values) and tree_shape(pf.values.shape[1])[0] != k:
+        raise MeshMismatchError(
+            f"{name}: {pf.values.shape[1]} numbers an instance ({tree_shape(pf.values.shape[1])[0]} axes), but "
+            f"{mesh.name} has {k} axes; expected {describe_widths(tree_widths(k))} numbers an instance")
 
 
 def read_params(path: str | os.PathLike, mesh=None, *, allow_mesh_mismatch: bool = False) -> np.ndarray:
@@ -754,7 +793,7 @@ def write_params(
     pieces (:func:`write_param_chunks`): memory beyond ``values`` stays
     bounded whatever the count.
     """
-    values = as_params(values)
+    values = as_params(values, axes="any")
 
     def pieces():
         return (values[s : s + _WRITE_ROWS] for s in range(0, len(values), _WRITE_ROWS))
@@ -802,10 +841,10 @@ def write_param_chunks(
     """
     path = Path(path)
     count, width = int(count), int(width)
-    if width not in WIDTHS:
-        raise ParamError(f"width: expected {describe_widths()} numbers per instance, found {width}")
-    if mesh is not None:
-        axis, mesh_fingerprint = mesh.axis, mesh.fingerprint
+    if not is_record_width(width):
+        raise ParamError(f"width: expected {describe_widths()} numbers per instance (10·K + 6 with K axes), found {width}")
+    if mesh is not None:  # its axis, or its tree of several axes
+        axis, mesh_fingerprint = AxisRecord.of(mesh), mesh.fingerprint
     name = str(path)
 
     def checked():
