@@ -10,8 +10,10 @@ crown tuft on top; six branches leave it at different heights and azimuths,
 rising outwards, each a tapered tube (6 rings) whose tip carries a flattened
 icosphere tuft.  Wood and leaves are told apart by vertex colour (glTF
 ``COLOR_0``, linear), so each branch is one part with one material and one
-axis.  A branch's first ring sits on the trunk's surface line, so its root
-end is the one nearer the trunk's axis (``t = 0`` there).
+axis.  A branch's first ring sits on the trunk's centre line, so its root
+end is the one nearer the trunk's axis (``t = 0`` there).  The hierarchy to
+load it with is ``axialdeform.core.axes.TREE_AXES`` (a test holds the two
+together).
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ import numpy as np
 import trimesh
 
 OUT = Path(__file__).resolve().parent.parent / "axialdeform" / "meshes" / "tree.glb"
-WOOD = (0.30, 0.18, 0.09, 1.0)
-LEAVES = (0.16, 0.38, 0.08, 1.0)
+WOOD = (0.45, 0.30, 0.18, 1.0)  # sRGB-encoded vertex colours (uint8)
+LEAVES = (0.32, 0.56, 0.16, 1.0)
 
 
 def tube(a, b, r0: float, r1: float, rings: int = 6, sides: int = 8) -> trimesh.Trimesh:
@@ -64,7 +66,8 @@ def coloured(pieces) -> trimesh.Trimesh:
     meshes = []
     for mesh, rgba in pieces:
         m = mesh.copy()
-        m.visual = trimesh.visual.ColorVisuals(m, vertex_colors=np.tile(np.array(rgba) * 255, (len(m.vertices), 1)))
+        rgba8 = np.round(np.array(rgba) * 255).astype(np.uint8)  # uint8: floats would be read as 0..1
+        m.visual = trimesh.visual.ColorVisuals(m, vertex_colors=np.tile(rgba8, (len(m.vertices), 1)))
         meshes.append(m)
     return trimesh.util.concatenate(meshes)
 
@@ -98,16 +101,6 @@ def tree_scene(branches: int = 6, seed: int = 3) -> trimesh.Scene:
                              (tuft(tip + 0.1 * (tip - root), 0.18, squash=1.0), LEAVES)])
             scene.add_geometry(twig, geom_name=f"twig{twigs}", node_name=f"twig{twigs}")
     return scene
-
-
-#: the hierarchy of the bundled tree as ``load_mesh(..., axes=TREE_AXES)`` takes it: the trunk
-#: along y, every branch and twig along its own oriented box
-def tree_axes(branches: int = 6) -> list:
-    spec = [{"part": "trunk", "axis": "y"}]
-    spec += [{"part": f"branch{k + 1}", "parent": "trunk", "axis": "oriented"} for k in range(branches)]
-    spec += [{"part": f"twig{t + 1}", "parent": f"branch{2 * t + 1}", "axis": "oriented"}
-             for t in range((branches + 1) // 2)]
-    return spec
 
 
 def main() -> None:

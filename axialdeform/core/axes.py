@@ -36,7 +36,7 @@ from .axis import ControlAxis
 from .deform import T_SLACK  # noqa: F401 - part of this module's story (the clamp of a chain term)
 from .errors import MeshError
 
-__all__ = ["AxisTree", "MAX_AXES", "T_SLACK", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
+__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "T_SLACK", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
            "axes_of"]
 
 #: the most axes one mesh may carry (the shader's uniform arrays are this long at most)
@@ -121,6 +121,13 @@ def axes_of(mesh) -> int:
     """K, the number of axes of ``mesh`` (1 without a tree)."""
     tree = getattr(mesh, "tree", None)
     return 1 if tree is None else tree.count
+
+
+#: the hierarchy of the bundled tree (``load_mesh("tree", axes=TREE_AXES)``; ``tools/make_tree.py``):
+#: the trunk along y, every branch and twig along its own oriented box
+TREE_AXES = ([{"part": "trunk", "axis": "y"}]
+             + [{"part": f"branch{k}", "parent": "trunk", "axis": "oriented"} for k in range(1, 7)]
+             + [{"part": f"twig{t}", "parent": f"branch{2 * t - 1}", "axis": "oriented"} for t in range(1, 4)])
 
 
 # ------------------------------------------------------------------ building a tree

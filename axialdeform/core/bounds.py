@@ -20,6 +20,7 @@ from .record import (
     SCALE,
     TAPER,
     TWIST,
+    split_record,
 )
 from .transforms import rotation_matrices
 
@@ -68,10 +69,11 @@ def instance_bounds(mesh, params, wind=None, *, radius: float | None = None) -> 
     may reach further).  The same sphere on the GPU: ``glsl/bounds.glsl``
     (``axial_bound_sphere``).
     """
-    params = as_params(params).astype(np.float64)
+    params, children = _standard(mesh, params)
     center = np.asarray(mesh.axis.center, dtype=np.float64)
     radius = base_radius(mesh) if radius is None else float(radius)
     bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1) + wind_reach(mesh, wind)
+    bend += _child_reach(children)
     scale = np.ones(len(params))
     grow = np.ones(len(params))
     if params.shape[1] >= EXTENDED_WIDTH:
@@ -106,6 +108,25 @@ def box_corners(lo, hi) -> np.ndarray:
     return np.where(bits == 1, hi, lo)
 
 
+def _standard(mesh, params) -> tuple[np.ndarray, np.ndarray | None]:
+    """Axis 0's record (n, 16|19|22) float64 and the child axes' offsets
+    (n, K−1, 5, 2) (None for one axis) of ``params``."""
+    k = getattr(mesh, "axis_count", 1)
+    params = as_params(params, axes=k)
+    if k == 1:
+        return params.astype(np.float64), None
+    standard, children = split_record(params, k)
+    return standard.astype(np.float64), children
+
+
+def _child_reach(children) -> np.ndarray | float:
+    """(n,) how far each instance's child axes can move a vertex: the sum of
+    their largest offsets (a vertex sums at most every axis); 0 for one axis."""
+    if children is None:
+        return 0.0
+    return np.linalg.norm(np.asarray(children, dtype=np.float64), axis=-1).max(axis=-1).sum(axis=-1)
+
+
 def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     """Axis-aligned world boxes of the deformed instances: ``lo, hi : (n, 3) float64``.
 
@@ -114,7 +135,7 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     maximum: the base mesh's box grows by exactly that range across the
     axis.  The rotated box is then boxed again (half-extents ``|R| h``).
     """
-    params = as_params(params).astype(np.float64)
+    params, children = _standard(mesh, params)
     axis = mesh.axis
     # a chosen frame: the box of the local coordinates F·V, placed by R·Fᵀ
     pos = axis.local(mesh.positions) if axis.framed else mesh.positions.astype(np.float64)
@@ -129,6 +150,7 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     scale = params[:, SCALE] if params.shape[1] >= EXTENDED_WIDTH else np.ones(len(params))
     center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) * scale[:, None] + params[:, POSITION]
     half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2) * np.abs(scale)[:, None]
+    half += (_child_reach(children) * np.abs(scale))[:, None]  # several axes: each child moves a vertex so far
     if params.shape[1] >= EXTENDED_WIDTH:  # twisted or tapered cross-sections: the box around the sphere
         turned = (params[:, TWIST] != 0) | (params[:, TAPER] != 0)
         if turned.any():
@@ -229,10 +251,15 @@ def outline_points(mesh, params, *, budget: int = 100_000) -> tuple[np.ndarray, 
       a little past them, which the framing's margin covers);
     * else the instance spheres of :func:`instance_bounds` (always hold).
     """
-    params = as_params(params)
+    params = as_params(params, axes=mesh.axis_count)
     n, v = len(params), mesh.vertex_count
     if n == 0:
         return np.zeros((0, 3)), np.zeros(0)
+    if mesh.axis_count > 1:  # several axes: every deformed vertex when they fit, else the spheres
+        if n * v > budget:
+            return instance_bounds(mesh, params)
+        world, _ = deform(mesh, params)
+        return world.reshape(-1, 3).astype(np.float64), np.zeros(n * v)
     if n * v <= budget:
         idx = np.arange(v)
     else:

@@ -173,7 +173,8 @@ class Scene:
         if up not in ("x", "y", "z"):
             raise SceneError(f"up: expected one of x, y, z, found {up!r}")
         parts = None if parts is None else tuple([parts] if isinstance(parts, str) else parts)
-        layer = Layer(str(name or getattr(mesh, "name", "mesh")), mesh, as_params(params),
+        layer = Layer(str(name or getattr(mesh, "name", "mesh")), mesh,
+                      as_params(params, axes=getattr(mesh, "axis_count", 1)),
                       color=None if color is None else tuple(color), wind=wind is not None, parts=parts)
         return cls(path=None, up=up, layers=[layer], wind=wind)
 

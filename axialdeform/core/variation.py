@@ -29,6 +29,7 @@ from .record import (
     TWIST,
     WIDTHS,
     Instances,
+    join_record,
 )
 
 __all__ = ["random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
@@ -77,6 +78,7 @@ class _Spec:
     twist: float
     taper: float
     tint: tuple | None = None  # (amount, (r, g, b)): tinted instances
+    children: tuple = ()  # several axes: (bend amplitude, L) of every child axis, in axis order
 
 
 def _spec(
@@ -104,8 +106,14 @@ def _spec(
         raise ParamError(f"placement: expected one of {', '.join(PLACEMENTS)}, found {placement!r}")
     if up not in AXIS_NAMES:
         raise ParamError(f"up: expected one of x, y, z, found {up!r}")
-    if not (math.isfinite(bend) and bend >= 0):
-        raise ParamError(f"bend: expected a finite fraction of L >= 0, found {bend!r}")
+    bends = tuple(bend) if isinstance(bend, (list, tuple, np.ndarray)) else (bend,)
+    if not bends or not all(isinstance(b, (int, float, np.floating, np.integer)) and math.isfinite(b) and b >= 0
+                            for b in bends):
+        raise ParamError(f"bend: expected a finite fraction of L >= 0 (or one per level of the hierarchy), found {bend!r}")
+    bend = float(bends[0])
+    tree = getattr(mesh, "tree", None)  # several axes: each level its own amplitude (the last one beyond)
+    children = () if tree is None else tuple(
+        (float(bends[min(d, len(bends) - 1)]), float(a.length)) for d, a in zip(tree.depth[1:], tree.axes[1:]))
     length = mesh.axis.length
     spacing = 1.1 * length if spacing is None else float(spacing)
     if not (math.isfinite(spacing) and spacing > 0):
@@ -133,7 +141,7 @@ def _spec(
         raise ParamError(f"taper: expected a number < 1, found {taper!r}")
     _check_seed(seed)
     return _Spec(int(count), int(seed), bend, length, placement, spacing, AXIS_NAMES.index(up), yaw, tilt,
-                 height, extended, (s_lo, s_hi), tw, tp, tinting)
+                 height, extended, (s_lo, s_hi), tw, tp, tinting, children)
 
 
 def random_params(
@@ -160,7 +168,12 @@ def random_params(
 
     mesh : BaseMesh (its axis length ``L`` scales the bend).
     bend : offsets are drawn uniformly in ``±bend·L`` per component, then
-        made canonical (zero mean over the five control points).
+        made canonical (zero mean over the five control points).  A mesh of
+        several axes (:meth:`BaseMesh.with_axes`) takes one amplitude per level
+        of its hierarchy (``(trunk, branches, twigs)``; the last one for any
+        deeper level): a child axis ``j``'s offsets are uniform in
+        ``±bend[level]·L_j`` with ``d₁ = 0`` (its root stays where its parent
+        puts it: joints stay closed), drawn after every other number.
     placement : ``"grid"`` (square grid on the ground plane), ``"disc"``
         (uniform in a disc on the ground plane) or ``"box"`` (uniform in a
         cube, for falling leaves).
@@ -268,4 +281,12 @@ def _rows(spec: "_Spec", start: int, stop: int) -> np.ndarray:
         amount, color = spec.tint
         u_tint = _stream(spec.seed, 19 * n + 3 * start, 3 * m).reshape(m, 3)
         out[:, TINT] = np.asarray(color) * (1.0 - amount * u_tint)
+    if spec.children:
+        # several axes: 10 numbers per child axis, after the tint block of every instance
+        k = len(spec.children)
+        u_child = _stream(spec.seed, 22 * n + 10 * k * start, 10 * k * m).reshape(m, k, 5, 2)
+        amp = np.array([b * length for b, length in spec.children])  # (k,)
+        children = (2.0 * u_child - 1.0) * amp[None, :, None, None]
+        children[:, :, 0] = 0.0  # d1 = 0: the child's root stays on its parent
+        return as_params(join_record(out, children), axes=k + 1)
     return as_params(out)

@@ -32,7 +32,7 @@ __all__ = ['BUNDLED_MESHES', 'MESH_SUFFIXES', 'bundled_mesh_path', 'load_mesh', 
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``,
 #: or ``NAME.glb`` for the textured leaf card of ``tools/make_leaf_card.py``).
-BUNDLED_MESHES = ("stone", "leaf", "leafcard")
+BUNDLED_MESHES = ("stone", "leaf", "leafcard", "tree")
 
 
 #: File name suffixes of the mesh files this library reads (base meshes, fit variants).
@@ -40,10 +40,12 @@ MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
 
 def bundled_mesh_path(name: str) -> Path:
-    """Path of a mesh shipped with the package: ``"stone"``, ``"leaf"`` or ``"leafcard"``."""
+    """Path of a mesh shipped with the package: ``"stone"``, ``"leaf"``, ``"leafcard"`` or ``"tree"``
+    (``tools/make_tree.py``: a trunk, six branches and three twigs as parts; its
+    hierarchy is :data:`~axialdeform.core.axes.TREE_AXES`)."""
     if name not in BUNDLED_MESHES:
         raise MeshError(f"unknown bundled mesh {name!r}; expected one of {', '.join(BUNDLED_MESHES)}")
-    suffix = ".glb" if name == "leafcard" else ".obj"
+    suffix = ".glb" if name in ("leafcard", "tree") else ".obj"
     return Path(str(resources.files("axialdeform.meshes").joinpath(f"{name}{suffix}")))
 
 
