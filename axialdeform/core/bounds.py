@@ -24,7 +24,7 @@ from .record import (
 )
 from .transforms import rotation_matrices
 
-__all__ = ["wind_reach", "instance_bounds", "scene_box", "sphere_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
+__all__ = ["wind_reach", "child_reach", "instance_bounds", "scene_box", "sphere_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
            "frustum_planes", "spheres_visible", "lod_choice"]
 
 
@@ -48,8 +48,9 @@ def wind_reach(mesh, wind) -> float:
     ``|wave| <= 0.6 + 0.4`` (docs/wind.md).  0 without a wind."""
     if wind is None:
         return 0.0
-    tree = getattr(mesh, "tree", None)  # several axes: each pushes its own control points
-    length = float(mesh.axis.length) if tree is None else float(sum(a.length for a in tree.axes))
+    tree = getattr(mesh, "tree", None)  # several axes: a vertex sums the pushes of its chain
+    length = float(mesh.axis.length) if tree is None else float(
+        (tree.chain.astype(np.float64) @ np.array([a.length for a in tree.axes])).max())
     return abs(float(wind.strength)) * length * (1.0 + abs(float(wind.gustiness)))
 
 
@@ -73,7 +74,7 @@ def instance_bounds(mesh, params, wind=None, *, radius: float | None = None) -> 
     center = np.asarray(mesh.axis.center, dtype=np.float64)
     radius = base_radius(mesh) if radius is None else float(radius)
     bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1) + wind_reach(mesh, wind)
-    bend += _child_reach(children)
+    bend += child_reach(mesh.tree, children)
     scale = np.ones(len(params))
     grow = np.ones(len(params))
     if params.shape[1] >= EXTENDED_WIDTH:
@@ -119,12 +120,16 @@ def _standard(mesh, params) -> tuple[np.ndarray, np.ndarray | None]:
     return standard.astype(np.float64), children
 
 
-def _child_reach(children) -> np.ndarray | float:
-    """(n,) how far each instance's child axes can move a vertex: the sum of
-    their largest offsets (a vertex sums at most every axis); 0 for one axis."""
-    if children is None:
+def child_reach(tree, children) -> np.ndarray | float:
+    """(n,) how far each instance's child axes can move a vertex: over the
+    axes ``b``, the largest sum of the largest offsets of the child axes on
+    ``b``'s chain (a vertex moves by its own chain only); 0 for one axis.
+
+    tree : :class:`~axialdeform.core.axes.AxisTree`; children : (n, K−1, 5, 2)."""
+    if children is None or tree is None:
         return 0.0
-    return np.linalg.norm(np.asarray(children, dtype=np.float64), axis=-1).max(axis=-1).sum(axis=-1)
+    largest = np.linalg.norm(np.asarray(children, dtype=np.float64), axis=-1).max(axis=-1)  # (n, K−1)
+    return (largest @ tree.chain[:, 1:].T.astype(np.float64)).max(axis=-1)
 
 
 def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
@@ -135,6 +140,7 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     maximum: the base mesh's box grows by exactly that range across the
     axis.  The rotated box is then boxed again (half-extents ``|R| h``).
     """
+    params_in = params
     params, children = _standard(mesh, params)
     axis = mesh.axis
     # a chosen frame: the box of the local coordinates F·V, placed by R·Fᵀ
@@ -150,11 +156,12 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     scale = params[:, SCALE] if params.shape[1] >= EXTENDED_WIDTH else np.ones(len(params))
     center = np.einsum("nij,nj->ni", rot, (lo + hi) / 2) * scale[:, None] + params[:, POSITION]
     half = np.einsum("nij,nj->ni", np.abs(rot), (hi - lo) / 2) * np.abs(scale)[:, None]
-    half += (_child_reach(children) * np.abs(scale))[:, None]  # several axes: each child moves a vertex so far
+    half += (child_reach(mesh.tree, children) * np.abs(scale))[:, None]  # several axes: each child moves a vertex so far
     if params.shape[1] >= EXTENDED_WIDTH:  # twisted or tapered cross-sections: the box around the sphere
         turned = (params[:, TWIST] != 0) | (params[:, TAPER] != 0)
         if turned.any():
-            c, r = instance_bounds(mesh, params[turned])
+            full = as_params(params_in, axes=mesh.axis_count)  # the whole record (every axis)
+            c, r = instance_bounds(mesh, full[turned])
             center[turned], half[turned] = c, r[:, None]
     return center - half, center + half
 

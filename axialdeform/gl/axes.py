@@ -16,6 +16,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from ..core.bounds import child_reach
 from .context import check_alive
 from .uniforms import set_uniforms
 
@@ -38,14 +39,16 @@ def _texels(children: np.ndarray) -> np.ndarray:
 class AxesTexture:
     """The child axes' offsets of every instance, as a float texture.
 
-    ctx : moderngl.Context; axes : K (≥ 2); children : (n, K−1, 5, 2) float;
+    ctx : moderngl.Context; tree : the mesh's :class:`~axialdeform.core.axes.AxisTree`
+    (K ≥ 2 axes); children : (n, K−1, 5, 2) float;
     capacity : instances it holds before it grows.
     """
 
-    def __init__(self, ctx, axes: int, children, capacity: int | None = None):
+    def __init__(self, ctx, tree, children, capacity: int | None = None):
         check_alive(ctx, "a new AxesTexture")
         self.ctx = ctx
-        self.axes = int(axes)
+        self.tree = tree
+        self.axes = int(tree.count)
         self.texture = None
         self.count = 0
         self.child_reach = 0.0
@@ -77,14 +80,12 @@ class AxesTexture:
             self.texture.write(texels[pos - first:pos - first + take].tobytes(), viewport=(x, y, w, h))
             pos += take
 
-    @staticmethod
-    def reach(children: np.ndarray) -> float:
-        """The most any instance's child axes can move a vertex: the largest
-        sum over its child axes of their largest offset (model units)."""
+    def reach(self, children: np.ndarray) -> float:
+        """The most any instance's child axes can move a vertex (model units,
+        :func:`~axialdeform.core.bounds.child_reach`)."""
         if not len(children):
             return 0.0
-        c = np.asarray(children, dtype=np.float64)
-        return float(np.linalg.norm(c, axis=-1).max(axis=-1).sum(axis=-1).max())
+        return float(np.max(child_reach(self.tree, children)))
 
     def set(self, children) -> None:
         """Replace every instance's child offsets ((n, K−1, 5, 2))."""

@@ -219,7 +219,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
                 self._objects.append(self._part_edges[0])
             self.instances = InstanceBuffer(ctx, params, capacity, quantized=self.quantized, extended=self.extended)
             if self.axis_count > 1:
-                self._axes = AxesTexture(ctx, self.axis_count, children, capacity)
+                self._axes = AxesTexture(ctx, mesh.tree, children, capacity)
             self._vao_triangles = self._vertex_array(self.program, self.mesh_buffers.triangles)
             self._vao_edges = None  # built by the first wireframe draw (lazy edges)
             #: the levels of detail (level 0 is the base mesh itself)

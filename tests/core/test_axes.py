@@ -1,0 +1,197 @@
+"""Several axes in a hierarchy (docs/method.md, "Several axes"): the tree,
+the 10·K + 6 record, the CPU reference.  No GL."""
+
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import axialdeform as ad
+from axialdeform.core import MeshError, MeshMismatchError, ParamError
+from axialdeform.core.axes import TREE_AXES, AxisTree
+from axialdeform.core.deform import bend_model, tree_bend
+from axialdeform.core.record import join_record, split_record, tree_width
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
+import make_tree  # noqa: E402 - tools/ is not a package
+
+
+def welded_tree():
+    """A trunk along y and one branch along x whose first ring is ALSO in the
+    trunk's part (coincident vertices, two indices): a closed joint to test."""
+    trunk = make_tree.tube([0, 0, 0], [0, 3, 0], 0.2, 0.1, rings=8)
+    ring = make_tree.tube([0, 1.5, 0], [1.5, 1.5, 0], 0.05, 0.02, rings=7, sides=6)
+    collar = trimesh.Trimesh(ring.vertices[:6], [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]], process=False)
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.util.concatenate([trunk, collar]), geom_name="trunk", node_name="trunk")
+    scene.add_geometry(ring, geom_name="branch", node_name="branch")
+    mesh = ad.load_mesh(scene)
+    return mesh.with_axes([{"part": "trunk", "axis": "y"}, {"part": "branch", "parent": "trunk", "axis": "x"}])
+
+
+@pytest.fixture(scope="module")
+def tree():
+    return ad.load_mesh("tree", axes=TREE_AXES)
+
+
+def test_the_bundled_tree_and_its_hierarchy(tree):
+    assert tree.axis_count == 10 and tree.tree.parents == (-1, 0, 0, 0, 0, 0, 0, 1, 3, 5)
+    assert list(tree.tree.depth) == [0, 1, 1, 1, 1, 1, 1, 2, 2, 2]
+    assert set(tree.part_names) == {e["part"] for e in TREE_AXES}
+    assert np.array_equal(tree.axis.direction, [0, 1, 0])  # the trunk: axis y
+    for k in range(1, 10):  # every child axis points away from its parent (t = 0 at its root)
+        a, parent = tree.tree.axes[k], tree.tree.axes[tree.tree.parents[k]]
+        root, tip = a.control_points[0], a.control_points[-1]
+        p0, p1 = parent.control_points[0], parent.control_points[-1]
+        def dist(x):
+            t = np.clip((x - p0) @ (p1 - p0) / ((p1 - p0) @ (p1 - p0)), 0, 1)
+            return np.linalg.norm(x - (p0 + t * (p1 - p0)))
+        assert dist(root) < dist(tip)
+    # the same tree, made again by the tool, is the bundled file's
+    fresh = ad.load_mesh(make_tree.tree_scene()).with_axes(TREE_AXES)
+    assert np.allclose(fresh.positions, tree.positions) and fresh.tree.digest == tree.tree.digest
+
+
+def test_one_axis_through_the_tree_code_is_the_plain_path():
+    stone = ad.load_mesh("stone")
+    one = dataclasses.replace(stone, tree=AxisTree((stone.axis,), (-1,), np.zeros(stone.vertex_count, np.int32)),
+                              _axis=None)
+    for extended in (False, True):
+        p = ad.random_params(stone, 9, seed=2, bend=0.2, **({"scale": (0.5, 2), "twist": 1, "taper": 0.5}
+                                                            if extended else {}))
+        a, b = ad.deform(one, p), ad.deform(stone, p)
+        np.testing.assert_allclose(a[0], b[0], atol=1e-6 * stone.axis.length)
+        np.testing.assert_allclose(a[1], b[1], atol=1e-6)
+
+
+def test_zero_offsets_give_the_mesh(tree):
+    pos, nrm = ad.deform(tree, np.zeros((2, tree_width(tree.axis_count)), np.float32))
+    assert np.array_equal(pos[0], tree.positions)
+    np.testing.assert_allclose(nrm[0], tree.normals, atol=1e-6)
+
+
+def test_a_trunk_only_bend_moves_every_vertex_as_the_trunks_field(tree):
+    p = ad.random_params(tree, 6, seed=3, bend=(0.2, 0.0))
+    assert not p[:, 10:10 * tree.axis_count].any()
+    pos, _ = ad.deform(tree, p)
+    standard, _ = split_record(p, tree.axis_count)
+    field, _ = bend_model(tree.axis, tree.positions, tree.normals, standard[:, :10].reshape(-1, 5, 2).astype(float))
+    rot = ad.core.rotation_matrices(standard[:, 13:16].astype(float))
+    expect = np.einsum("nij,nvj->nvi", rot, field) + standard[:, None, 10:13]
+    assert np.abs(pos - expect).max() <= 1e-5 * tree.axis.length
+
+
+def test_joints_stay_closed():
+    mesh = welded_tree()
+    tree = mesh.tree
+    assert mesh.axis_count == 2
+    # the coincident vertex pairs: one in the trunk, one in the branch
+    _, first, counts = np.unique(np.round(mesh.positions, 6), axis=0, return_index=True, return_counts=True)
+    keys = {tuple(np.round(v, 6)) for v, c in zip(mesh.positions[first], counts) if c == 2}
+    pairs = [np.flatnonzero((np.round(mesh.positions, 6) == k).all(axis=1)) for k in keys]
+    assert len(pairs) >= 6 and all(len(q) == 2 and tree.vertex_axis[q[0]] != tree.vertex_axis[q[1]] for q in pairs)
+    p = ad.random_params(mesh, 20, seed=4, bend=(0.1, 0.3), scale=(0.5, 1.5), twist=0.8, taper=0.4)
+    pos, _ = ad.deform(mesh, p)
+    gap = max(np.abs(pos[:, q[0]] - pos[:, q[1]]).max() for q in pairs)
+    assert gap <= 1e-5 * mesh.axis.length, gap
+    # a child whose d1 is not zero opens the joint: the test can fail
+    p[:, 10:12] = 0.05
+    pos, _ = ad.deform(mesh, p)
+    assert max(np.abs(pos[:, q[0]] - pos[:, q[1]]).max() for q in pairs) > 1e-3
+
+
+def test_tree_normals_are_exact(tree):
+    """n' = cof(J)·n is perpendicular to J·T (central differences) at points
+    strictly inside their axes (no clamp boundary between the samples)."""
+    rng = np.random.default_rng(5)
+    va = tree.tree.vertex_axis
+    offs = rng.uniform(-0.15, 0.15, (2, tree.axis_count, 5, 2))
+    offs[:, 1:, 0] = 0
+    extra = np.array([[1.2, 0.7, 0.3], [0.8, -0.5, -0.2]])
+    v = tree.positions.astype(float)
+    n = rng.normal(size=v.shape)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    _, bent, _ = tree_bend(tree.tree, v, n, offs, extra)
+    inside = np.ones(len(v), bool)
+    for j, axis in enumerate(tree.tree.axes):  # keep vertices away from every clamp boundary on their chain
+        t = (v @ axis.matrix[0] - axis.lo) / axis.length
+        near = (np.abs(t) < 1e-3) | (np.abs(t - 1) < 1e-3)
+        inside &= ~(near & tree.tree.chain[va, j])
+    h = 1e-6
+    for _ in range(2):
+        tan = np.cross(n, rng.normal(size=v.shape))
+        tan /= np.linalg.norm(tan, axis=1, keepdims=True)
+        jt = (tree_bend(tree.tree, v + h * tan, n, offs, extra)[0] - tree_bend(tree.tree, v - h * tan, n, offs, extra)[0]) / (2 * h)
+        cos = np.einsum("nvk,nvk->nv", bent, jt) / np.linalg.norm(jt, axis=-1)
+        assert np.abs(cos[:, inside]).max() < 1e-6
+
+
+def test_random_trees_keep_roots_and_the_trunk_stream(tree):
+    p = ad.random_params(tree, 50, seed=7, bend=(0.05, 0.2, 0.3))
+    assert p.shape == (50, tree_width(10))
+    standard, children = split_record(p, 10)
+    assert not children[:, :, 0].any()  # d1 = 0 on every child axis
+    # each level its own amplitude (in units of that axis's length)
+    amp = np.abs(children[:, :, 1:]).max(axis=(0, 2, 3)) / [a.length for a in tree.tree.axes[1:]]
+    assert (amp[:6] <= 0.2 + 1e-6).all() and (amp[:6] > 0.15).all() and (amp[6:] > 0.2).all()
+    # the trunk's numbers are the plain mesh's for the same seed and options
+    plain = ad.random_params(ad.load_mesh("tree"), 50, seed=7, bend=0.05)
+    assert np.array_equal(standard, plain)
+    assert np.array_equal(join_record(standard, children), p)
+
+
+def test_tree_files_round_trip_and_refuse_another_tree(tree, tmp_path):
+    p = ad.random_params(tree, 30, seed=1, bend=(0.05, 0.2), scale=(0.8, 1.2))
+    for name, quantize in (("t.adp", False), ("q.adp", True), ("t.txt", False)):
+        path = tmp_path / name
+        ad.write_params(path, p, tree, quantize=quantize)
+        back = ad.read_params(path, tree)
+        bound = ad.core.io.params.quantization_error_bound(p) if quantize else 0
+        assert back.shape == p.shape and (np.abs(back - p) <= bound + 1e-12).all()
+    text = (tmp_path / "t.txt").read_text()
+    assert "a1.d1u" in text and "a9.d5v" in text  # the field names of every axis
+    plain = ad.load_mesh("tree")
+    with pytest.raises(MeshMismatchError, match="10 axes in a hierarchy"):
+        ad.read_params(tmp_path / "t.adp", plain)
+    with pytest.raises(MeshMismatchError, match="10 axes\\), but .* has 1 axes"):
+        ad.read_params(tmp_path / "t.txt", plain)
+    other = ad.load_mesh("tree", axes="parts")  # the same mesh, another hierarchy
+    with pytest.raises(MeshMismatchError):
+        ad.read_params(tmp_path / "t.adp", other)
+
+
+def test_bad_trees_and_records_are_refused(tree):
+    mesh = ad.load_mesh("tree")
+    with pytest.raises(MeshError, match="no part 'root'"):
+        mesh.with_axes([{"part": "root"}])
+    with pytest.raises(MeshError, match="have no axis"):
+        mesh.with_axes([{"part": "trunk"}, {"part": "branch1", "parent": "trunk"}])
+    with pytest.raises(MeshError, match="is not an earlier entry"):
+        mesh.with_axes([{"part": "trunk"}, {"part": "twig1", "parent": "branch1"}] + TREE_AXES[1:7] + TREE_AXES[8:])
+    with pytest.raises(MeshError, match="expected 'parts'"):
+        mesh.with_axes("limbs")
+    with pytest.raises(ParamError, match=r"for a mesh of 10 axes \(10·K \+ 6 numbers an instance\)"):
+        ad.deform(tree, np.zeros((1, 16), np.float32))
+    bad = np.zeros((1, tree_width(10, 1)), np.float32)  # scale 0
+    with pytest.raises(ParamError, match="field s: expected a scale s > 0"):
+        ad.deform(tree, bad)
+    bad = np.zeros((1, tree_width(10)), np.float32)
+    bad[0, 35] = np.nan
+    with pytest.raises(ParamError, match="field a3.d3v: expected a finite number"):
+        ad.deform(tree, bad)
+
+
+def test_bounds_hold_every_tree_vertex(tree):
+    from axialdeform.core.bounds import instance_bounds, instance_boxes
+
+    p = ad.random_params(tree, 40, seed=9, bend=(0.1, 0.3), scale=(0.5, 2.0), twist=1.0, taper=0.5)
+    wind = ad.Wind(direction=(1, 0, 0), strength=0.3, gustiness=0.5)
+    pos = ad.bake(tree, p, "cpu", wind=wind, time=2.0)[0]
+    c, r = instance_bounds(tree, p, wind=wind)
+    assert (np.linalg.norm(pos - c[:, None], axis=-1) <= r[:, None] * (1 + 1e-6)).all()
+    lo, hi = instance_boxes(tree, p)
+    still = ad.deform(tree, p)[0]
+    assert (still >= lo[:, None] - 1e-5).all() and (still <= hi[:, None] + 1e-5).all()

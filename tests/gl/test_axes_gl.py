@@ -1,0 +1,137 @@
+"""Several axes on the GPU (AXIAL_AXES): one draw, the child axes' offsets
+fetched from a texture by instance id; the capture equals the CPU
+reference for K = 1 .. 16, with wind, quantized and extended; culling
+(its bounds cover every axis) never changes the picture."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import axialdeform as ad
+from axialdeform.core.axes import TREE_AXES
+from axialdeform.gl.renderer import AxialRenderer
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
+import make_tree  # noqa: E402 - tools/ is not a package
+
+
+def comb(k: int, seed: int = 0):
+    """A trunk and k − 1 branches (some on branches: depth up to 3), one axis each."""
+    rng = np.random.default_rng(seed)
+    scene = trimesh.Scene()
+    scene.add_geometry(make_tree.tube([0, 0, 0], [0, 3, 0], 0.15, 0.06, rings=9), geom_name="a0", node_name="a0")
+    ends = [((0.0, 0.0, 0.0), (0.0, 3.0, 0.0))]
+    spec = [{"part": "a0", "axis": "y"}]
+    for i in range(1, k):
+        parent = int(rng.integers(0, i)) if i > 3 else 0
+        a, b = map(np.asarray, ends[parent])
+        start = a + rng.uniform(0.3, 0.8) * (b - a)
+        d = rng.normal(size=3)
+        d[1] = abs(d[1]) + 0.5
+        end = start + (0.5 + 0.5 * rng.random()) * d / np.linalg.norm(d)
+        scene.add_geometry(make_tree.tube(start, end, 0.04, 0.02, rings=5, sides=5), geom_name=f"a{i}", node_name=f"a{i}")
+        ends.append((tuple(start), tuple(end)))
+        spec.append({"part": f"a{i}", "parent": f"a{parent}", "axis": "oriented"})
+    return ad.load_mesh(scene).with_axes(spec)
+
+
+def _params(mesh, n=40, seed=1, extended=False):
+    options = {"scale": (0.6, 1.4), "twist": 0.8, "taper": 0.4} if extended else {}
+    return ad.random_params(mesh, n, seed=seed, bend=(0.1, 0.3, 0.3), placement="disc", spacing=3.0, **options)
+
+
+def _check_capture(ctx, mesh, p, **kw):
+    with AxialRenderer(ctx, mesh, p, **kw) as r:
+        gpu = r.capture()
+    cpu = ad.deform(mesh, p)
+    L = mesh.axis.length
+    reach = max(1.0, float(np.abs(p[:, -9 if p.shape[1] % 10 == 9 else -6:][:, :3]).max()) / L)
+    assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * L * reach
+    assert np.abs(gpu[1] - cpu[1]).max() <= 1e-5 * 10  # normals through cof(J) in float32
+    return gpu
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 5, 8, 12, 16])
+def test_gpu_equals_cpu_for_every_axis_count(ctx, k):
+    mesh = comb(k, seed=k)
+    assert mesh.axis_count == k
+    for extended in (False, True):
+        _check_capture(ctx, mesh, _params(mesh, extended=extended))
+
+
+def test_quantized_trees_equal_the_cpu(ctx):
+    mesh = ad.load_mesh("tree", axes=TREE_AXES)
+    p = _params(mesh, n=60, extended=True)
+    with AxialRenderer(ctx, mesh, p, quantized=True) as r:
+        gpu = r.capture()
+        standard = r.instances.read()
+        children = r._axes.read()
+    from axialdeform.core.record import join_record, split_record
+
+    assert np.array_equal(children, split_record(p, 10)[1])  # the texture holds the float32 numbers as given
+    used = join_record(standard, children)
+    cpu = ad.deform(mesh, used)
+    assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * mesh.axis.length * 3
+
+
+def test_wind_sways_every_axis_on_gpu_as_on_cpu(ctx):
+    mesh = ad.load_mesh("tree", axes=TREE_AXES)
+    p = _params(mesh, n=30)
+    wind = ad.Wind(direction=(1.0, 0.0, 0.3), strength=0.15, gustiness=0.6, frequency=0.5)
+    with AxialRenderer(ctx, mesh, p, wind=wind) as r:
+        gpu = r.capture(time=4.0)
+        still = r.capture(wind=None)
+    cpu = ad.bake(mesh, p, "cpu", wind=wind, time=4.0)
+    L = mesh.axis.length
+    assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * L * 3
+    moved = np.linalg.norm(gpu[0] - still[0], axis=-1)  # the tips of the branches move most
+    va = mesh.tree.vertex_axis
+    assert moved[:, va >= 7].mean() > moved[:, va == 0].mean()
+
+
+def test_update_params_reaches_the_child_axes(ctx):
+    mesh = comb(4, seed=2)
+    p = _params(mesh, n=20)
+    q = _params(mesh, n=5, seed=9)
+    with AxialRenderer(ctx, mesh, p) as r:
+        r.update_params(q, start=7)
+        gpu = r.capture()
+    p[7:12] = q
+    cpu = ad.deform(mesh, p)
+    assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * mesh.axis.length * 3
+
+
+def test_culling_a_forest_never_changes_its_picture(ctx):
+    mesh = ad.load_mesh("tree", axes=TREE_AXES)
+    # branches swung far (2 L_j): a tree whose trunk is out of view reaches into it by its branches alone
+    p = ad.random_params(mesh, 300, seed=3, bend=(0.05, 2.0, 2.0), placement="disc", spacing=2.0)
+    look = ad.Look(ground=False, shadow=False)
+    camera = ad.Camera(eye=(6.0, 3.0, 5.0), target=(0.0, 1.5, 0.0), fovy=45.0)  # inside the forest
+    view, proj = camera.view(), camera.projection(240 / 160)
+    target = ad.Offscreen(ctx, (240, 160))
+    try:
+        with AxialRenderer(ctx, mesh, p, culling=True) as r:
+            target.use(look.background)
+            r.render(view, proj, look=look)
+            culled = target.read()
+            visible = r.stats["visible"]
+            target.use(look.background)
+            r.culling_enabled = False
+            r.render(view, proj, look=look)
+            full = target.read()
+    finally:
+        target.release()
+    assert visible < 300  # some were culled
+    assert np.array_equal(culled, full)
+    # every tree with a vertex in the view volume is kept (CPU: its deformed vertices in clip space)
+    world = ad.deform(mesh, p)[0].astype(np.float64)
+    clip = np.concatenate([world, np.ones(world.shape[:2] + (1,))], axis=-1) @ view.astype(np.float64) @ proj
+    w = clip[..., 3:]
+    inside = ((np.abs(clip[..., :3]) <= w) & (w > 0)).all(axis=-1).any(axis=-1)
+    trunks_out = inside & ~((np.abs(clip[..., :3]) <= w) & (w > 0)).all(axis=-1)[:, mesh.tree.vertex_axis == 0].any(axis=-1)
+    assert trunks_out.sum() >= 3  # trees seen by their branches alone: what the child axes' reach is for
+    assert visible >= inside.sum()
+    assert (np.abs(full.astype(int) - full[0, 0]).max(axis=-1) > 30).mean() > 0.2  # trees fill the picture
