@@ -84,11 +84,14 @@ def add_axis(p) -> None:
     p.add_argument("--axis", type=axis_frame, default="auto", metavar="FRAME",
                    help="the mesh's axis frame: auto (longest extent, default), x, y, z, oriented (minimum-volume "
                         "oriented box, for a model lying diagonally) or nine numbers, the rows e_a,e_u,e_v")
+    p.add_argument("--axes", metavar="parts|FILE.toml",
+                   help="several axes in a hierarchy (a tree): 'parts' (one axis per part) or a TOML file of "
+                        "[[axis]] part/parent/axis tables; --axis is then the frame of each axis naming none")
 
 
 def load_base(args, source, *, textures: bool = True):
-    """The base mesh ``source`` with the frame ``--axis`` chose."""
-    return load_mesh(source, textures=textures, axis=getattr(args, "axis", "auto"))
+    """The base mesh ``source`` with the frame ``--axis`` and the axes ``--axes`` chose."""
+    return load_mesh(source, textures=textures, axis=getattr(args, "axis", "auto"), axes=getattr(args, "axes", None))
 
 
 def add_mesh_and_params(p) -> None:

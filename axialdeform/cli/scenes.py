@@ -31,8 +31,9 @@ def scene_of(args, *, params_optional: bool = False):
         return None
     if args.params is not None:
         raise AxialDeformError(f"PARAMS: a scene file ({args.mesh}) names its own parameters; expected no PARAMS, found {args.params}")
-    if getattr(args, "axis", "auto") != "auto":
-        raise AxialDeformError(f"--axis: a scene file ({args.mesh}) names each layer's axis (axis = ...); expected no --axis")
+    if getattr(args, "axis", "auto") != "auto" or getattr(args, "axes", None) is not None:
+        raise AxialDeformError(f"--axis/--axes: a scene file ({args.mesh}) names each layer's axis (axis = ..., "
+                               "axes = ...); expected neither")
     return load_scene(args.mesh)
 
 

@@ -24,6 +24,7 @@ EXAMPLES = {
     "03_own_moderngl_program.py": ("03_own_moderngl_program.png",),
     "04_moderngl_window_app.py": ("04_moderngl_window_app.png",),
     "05_landscape.py": ("05_landscape.png", "05_landscape.gif"),
+    "06_forest.py": ("06_forest.png", "06_forest_close.png", "06_forest.gif"),
 }
 BACKGROUND = np.array([0.93, 0.94, 0.96]) * 255  # render_image's default clear colour
 
@@ -159,6 +160,24 @@ def test_landscape_picture_and_animation(run_example):
         frames.append(np.asarray(gif.convert("RGB")).astype(np.int16))
     assert len(frames) >= 5
     assert np.abs(frames[0] - frames[-1]).mean() > 0.3, "leaves fall and grass sways"
+
+
+@pytest.mark.slow
+def test_forest_picture_and_wind(run_example):
+    out, stdout = run_example("06_forest.py")
+    assert "trees of 10 axes: 436 bytes a tree" in stdout
+    for name in ("06_forest.png", "06_forest_close.png"):
+        image = load(out / name).astype(np.int16)
+        r, g, b = image[..., 0], image[..., 1], image[..., 2]
+        leaves = (g - r > 15) & (g - b > 15)
+        assert leaves.mean() > 0.02, f"{name}: leaves cover {leaves.mean():.1%}"
+        assert blobs(leaves) >= 10, f"{name}: only {blobs(leaves)} crowns"
+    gif = Image.open(out / "06_forest.gif")
+    frames = []
+    for i in range(gif.n_frames):
+        gif.seek(i)
+        frames.append(np.asarray(gif.convert("RGB")).astype(np.int16))
+    assert len(frames) >= 4 and np.abs(frames[0] - frames[-1]).mean() > 0.3, "the wind sways the trees"
 
 
 # ---------------------------------------------------------------- the viewer

@@ -57,6 +57,44 @@ def mesh_source_path(source: str | os.PathLike) -> Path:
     return Path(source)
 
 
+def read_axes_file(path) -> list:
+    """A hierarchy of axes from a small TOML file: ``[[axis]]`` tables with
+    ``part``, ``parent`` (none for the root, the first) and ``axis`` (a frame:
+    ``"auto"``, ``"x"``, ``"y"``, ``"z"``, ``"oriented"`` or three rows of three
+    numbers).  Returns the list :meth:`BaseMesh.with_axes` takes; a file that is
+    not one is a :class:`MeshError` naming the file and the entry."""
+    import tomllib
+
+    path = Path(path)
+    data = read_regular(path, 1 << 20, "an axes file (.toml)", MeshError)
+    try:
+        doc = tomllib.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise MeshError(f"{path}: not a TOML axes file: {exc}") from None
+    entries = doc.get("axis")
+    if set(doc) != {"axis"} or not isinstance(entries, list) or not entries:
+        raise MeshError(f"{path}: expected [[axis]] tables (part, parent, axis) and nothing else, found keys "
+                        f"{', '.join(doc) or 'none'}")
+    out = []
+    for i, entry in enumerate(entries, 1):
+        extra = set(entry) - {"part", "parent", "axis"}
+        if extra or not isinstance(entry.get("part"), str):
+            raise MeshError(f"{path}: axis {i}: expected a table with a part name, an optional parent and axis, "
+                            f"found {', '.join(sorted(entry))}")
+        if "axis" in entry and not isinstance(entry["axis"], str):
+            entry = {**entry, "axis": np.asarray(entry["axis"], dtype=np.float64)}
+        out.append(entry)
+    return out
+
+
+def axes_argument(value):
+    """``axes=`` as a user gives it: None, ``"parts"``, a path to a TOML axes
+    file (:func:`read_axes_file`), or what :meth:`BaseMesh.with_axes` takes."""
+    if isinstance(value, (str, os.PathLike)) and str(value) != "parts":
+        return read_axes_file(value)
+    return value
+
+
 def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseMesh:
     """Read a base mesh from a file, a bundled mesh by name (``"stone"``,
     ``"leaf"``), or take a ``trimesh.Trimesh`` (or a ``trimesh.Scene`` with one
@@ -88,14 +126,15 @@ def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseM
     e_v``.
 
     ``axes`` gives the mesh several axes in a hierarchy (a tree's trunk and
-    branches): ``"parts"``, a list of ``{"part", "parent", "axis"}`` or
-    per-vertex axes (:meth:`BaseMesh.with_axes`); ``axis`` is then the frame
-    rule of each axis that names none.
+    branches): ``"parts"``, a list of ``{"part", "parent", "axis"}``, a TOML
+    file of them (:func:`read_axes_file`) or per-vertex axes
+    (:meth:`BaseMesh.with_axes`); ``axis`` is then the frame rule of each axis
+    that names none.
     """
     with texture_decoding(textures):
         mesh = _load_mesh(source)
     if axes is not None:
-        return mesh.with_axes(axes, axis)
+        return mesh.with_axes(axes_argument(axes), axis)
     return mesh.with_axis(axis) if not (isinstance(axis, str) and axis == "auto") else mesh
 
 

@@ -17,7 +17,7 @@ from ..mesh import BaseMesh, area_weighted_normals
 from ..scatter import ANCHORS, load_surface, scatter
 from ..wind import Wind
 from . import safeio
-from .mesh import BUNDLED_MESHES, load_mesh, mesh_source_path
+from .mesh import BUNDLED_MESHES, axes_argument, load_mesh, mesh_source_path
 from .params import read_params
 from .safeio import read_regular
 
@@ -39,7 +39,7 @@ _LIGHT = {"direction", "ambient", "color", "sky", "ground"}
 _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
 
 
-_LAYER = {"name", "mesh", "axis", "color", "params", "scatter", "wind"}
+_LAYER = {"name", "mesh", "axis", "axes", "color", "params", "scatter", "wind"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "seed",
@@ -288,6 +288,15 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
             mesh = load_mesh(_existing(src, mesh_value, "mesh", "layer", nth))
     with _wrap(src, "axis", "layer", nth):
         mesh = mesh.with_axis(frame)
+    if "axes" in layer:  # several axes: "parts", a TOML file of [[axis]] tables, or an inline array of tables
+        axes = layer["axes"]
+        if isinstance(axes, str) and axes != "parts":
+            axes = _existing(src, axes, "axes", "layer", nth)
+        elif not (axes == "parts" or isinstance(axes, list)):
+            raise src.error(f"expected 'parts', a file name or an array of {{part, parent, axis}} tables, "
+                            f"found {axes!r}", "axes", "layer", nth)
+        with _wrap(src, "axes", "layer", nth):
+            mesh = mesh.with_axes(axes_argument(axes), frame)
     color = tuple(_numbers(src, layer["color"], "color", "layer", nth, (3,))) if "color" in layer else None
     wind = layer.get("wind", False)
     if not isinstance(wind, bool):
@@ -318,7 +327,10 @@ def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.n
     kwargs = {}
     for key in ("min_distance", "align_to_normal", "bend"):
         if key in recipe:
-            kwargs[key] = _numbers(src, recipe[key], key, "layer", nth, (1,))[0]
+            if key == "bend" and isinstance(recipe[key], list):  # several axes: an amplitude per level
+                kwargs[key] = tuple(_numbers(src, recipe[key], key, "layer", nth, tuple(range(1, 9))))
+            else:
+                kwargs[key] = _numbers(src, recipe[key], key, "layer", nth, (1,))[0]
     if "min_distance" in kwargs and scale_counts < 1:
         kwargs["min_distance"] /= math.sqrt(scale_counts)  # a preview keeps the look: fewer, further apart
     if "scale" in recipe:
