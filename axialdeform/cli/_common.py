@@ -86,7 +86,7 @@ def add_axis(p) -> None:
                         "oriented box, for a model lying diagonally) or nine numbers, the rows e_a,e_u,e_v")
     p.add_argument("--axes", metavar="parts|FILE.toml",
                    help="several axes in a hierarchy (a tree): 'parts' (one axis per part) or a TOML file of "
-                        "[[axis]] part/parent/axis tables; --axis is then the frame of each axis naming none")
+                        "[[axis]] part/parent/axis tables; --axis is then the frame of each axis naming none (default: one axis)")
 
 
 def load_base(args, source, *, textures: bool = True):

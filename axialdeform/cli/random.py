@@ -12,7 +12,7 @@ from ..core.io.safeio import (
     check_disk_space,
     check_output_path,
 )
-from ..core.record import WIDTHS
+from ..core.record import WIDTHS, tree_width
 from ..core.variation import PLACEMENTS, iter_random_params
 from ._common import AXES, add_axis, angle_range, extension_args, load_base, mesh_file
 
@@ -76,7 +76,10 @@ def run(args) -> None:
                             f"32-bit count), found {count}")
     # memory holds one piece whatever the count; the file must fit on its disk
     check_count(min(count, RANDOM_CHUNK), RANDOM_BYTES_EACH, f"-n/--count (made {RANDOM_CHUNK} at a time)")
-    width = WIDTHS[2 if "tint" in extension else 1 if extension else 0]
+    mesh = load_base(args, args.mesh, textures=False)
+    # several axes: 10·K + 6 numbers (+ 3, + 6); pieces shrink so that memory stays the same
+    width = tree_width(mesh.axis_count, 2 if "tint" in extension else 1 if extension else 0)
+    chunk = max(1, RANDOM_CHUNK * WIDTHS[0] // width)
     fixed = param_file_bytes(args.output, 0, width, quantize=args.quantize)
     each = param_file_bytes(args.output, 1, width, quantize=args.quantize) - fixed
 
@@ -85,13 +88,12 @@ def run(args) -> None:
 
     check_disk_space(args.output, fixed + count * each, f"parameter file ({count} instances of {width} numbers)",
                      ArgumentError, expected=fits)
-    mesh = load_base(args, args.mesh, textures=False)
     options = dict(bend=args.bend, placement=args.placement, spacing=args.spacing, up=args.up, yaw=args.yaw,
                    tilt=args.tilt, **extension)
     iter_random_params(mesh, count, args.seed, **options)  # bad options are refused before the file is opened
 
     def pieces():  # called twice for the quantized form: a first pass finds the decode table
-        return iter_random_params(mesh, count, args.seed, chunk=RANDOM_CHUNK, **options)
+        return iter_random_params(mesh, count, args.seed, chunk=chunk, **options)
 
     path = write_param_chunks(args.output, pieces, count, width, mesh, quantize=args.quantize)
     print(f"wrote {path} ({count} instances, {path.stat().st_size} bytes)")

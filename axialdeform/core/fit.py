@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .deform import bend_model, bernstein, deform, displace
-from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
+from .errors import ArgumentError, AxialDeformError, MeshError, ResidualError, TopologyError
 from .io.mesh import MESH_SUFFIXES, load_mesh
 from .params import as_params
 from .record import ANGLES, EXTRA, OFFSETS, POSITION
@@ -515,6 +515,9 @@ _BATCH_BYTES = 64 << 20
 
 
 def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress, extended=False):
+    if getattr(mesh, "axis_count", 1) > 1:
+        raise ArgumentError(f"{mesh.name}: fit: a mesh of {mesh.axis_count} axes cannot be fitted yet; "
+                            "expected a mesh of one axis (fit the trunk alone, or bake the trees)")
     model = _Model(mesh)
     params = np.empty((count, 19 if extended else 16), dtype=np.float32)
     rms, mx, its, names = np.empty(count), np.empty(count), np.empty(count, dtype=np.int64), []

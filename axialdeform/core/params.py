@@ -113,12 +113,18 @@ def as_params(values, *, name: str = "parameters", error: type = ParamError, row
 def is_extended(values) -> bool:
     """True for extended instances: an array whose last axis holds 19
     numbers (or 22: tinted instances are extended too)."""
-    return np.shape(values)[-1] >= EXTENDED_WIDTH
+    return _level(values) >= 1
 
 
 def is_tinted(values) -> bool:
-    """True for tinted instances: an array whose last axis holds 22 numbers."""
-    return np.shape(values)[-1] >= TINTED_WIDTH
+    """True for tinted instances: an array whose last axis holds 22 numbers (``10·K + 12`` with K axes)."""
+    return _level(values) >= 2
+
+
+def _level(values) -> int:
+    """The record level of an array's last axis (several axes too); 0 when it is no record's width."""
+    width = np.shape(values)[-1]
+    return tree_shape(width)[1] if is_record_width(width) else (2 if width >= TINTED_WIDTH else int(width >= EXTENDED_WIDTH))
 
 
 def extend_params(values) -> np.ndarray:

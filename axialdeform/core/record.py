@@ -283,7 +283,10 @@ def page_record() -> dict:
 def tint_columns(values) -> np.ndarray | None:
     """The ``(n, 3)`` tint columns of tinted instances, else ``None``."""
     values = np.asarray(values)
-    return values[:, TINT] if values.ndim == 2 and values.shape[1] >= TINTED_WIDTH else None
+    if values.ndim != 2 or not is_record_width(values.shape[1]):
+        return None
+    k, level = tree_shape(values.shape[1])  # several axes: the tint comes after every axis's offsets
+    return values[:, 10 * (k - 1) + TINT.start:10 * (k - 1) + TINT.stop] if level == 2 else None
 
 
 class Instances(np.ndarray):

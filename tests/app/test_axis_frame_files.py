@@ -108,10 +108,54 @@ def test_scene_files_name_each_layers_axis(tmp_path, capsys, diag_obj):
     png = tmp_path / "s.png"
     assert _cli(capsys, "render", path, "-o", png, "--size", "160x120")[0] == 0
     code, _, err = _cli(capsys, "render", path, "--axis", "x", "-o", png)
-    assert code == 2 and "--axis: a scene file" in err
+    assert code == 2 and "--axis/--axes: a scene file" in err
     path.write_text(textwrap.dedent(body).lstrip("\n").replace('axis = "oriented"', 'axis = [1, 2]'))
     code, _, err = _cli(capsys, "render", path, "-o", png)
     assert code == 2 and "s.toml" in err and "axis" in err and "expected 9 finite number(s)" in err
     path.write_text(textwrap.dedent(body).lstrip("\n").replace('axis = "oriented"', 'axis = "sideways"'))
     code, _, err = _cli(capsys, "render", path, "-o", png)
     assert code == 2 and "s.toml" in err and "axis: expected one of auto, x, y, z, oriented" in err
+
+
+FOREST = __import__("pathlib").Path(__file__).resolve().parents[2] / "examples" / "forest"
+
+
+def test_trees_through_the_command_line_and_gltf(tmp_path, capsys):
+    """--axes on random, info, render and export; the instanced GLB keeps the
+    tree (its frames, parents, each vertex's axis) and every child axis's
+    numbers; the Khronos validator finds no error."""
+    axes = FOREST / "tree-axes.toml"
+    adp = tmp_path / "trees.adp"
+    code, _, err = _cli(capsys, "random", "tree", "-n", 40, "--axes", axes, "--bend", 0.05, "--placement", "disc",
+                        "--spacing", 3, "-o", adp)
+    assert code == 0, err
+    tree = ad.load_mesh("tree", axes=axes)
+    params = ad.read_params(adp, tree)
+    assert params.shape == (40, 106)
+    code, out, _ = _cli(capsys, "info", adp)
+    assert code == 0 and "10 axes in a hierarchy" in out and "106 numbers an instance (plain, 10 axes" in out
+    png = tmp_path / "t.png"
+    assert _cli(capsys, "render", "tree", adp, "--axes", axes, "-o", png, "--size", "160x120")[0] == 0
+    code, _, err = _cli(capsys, "render", "tree", adp, "-o", png, "--size", "160x120")  # without its axes
+    assert code == 2 and "10 axes in a hierarchy" in err and "Traceback" not in err
+    glb, baked = tmp_path / "t.glb", tmp_path / "b.glb"
+    assert _cli(capsys, "export", "tree", adp, "--axes", axes, "--instanced", "-o", glb)[0] == 0
+    assert _cli(capsys, "export", "tree", adp, "--axes", axes, "-o", baked)[0] == 0
+    back, back_params = read_instanced_glb(glb)
+    assert back.tree.digest == tree.tree.digest and np.array_equal(back_params, params)
+    for report in validate_gltf(glb, baked):
+        assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[axis]]\npart = "trunk"\nlimb = 1\n')
+    code, _, err = _cli(capsys, "random", "tree", "-n", 3, "--axes", bad, "-o", tmp_path / "x.adp")
+    assert code == 2 and "bad.toml: axis 1: expected a table with a part name" in err
+
+
+def test_the_forest_scene_loads_its_tree():
+    scene = load_scene(FOREST / "forest.toml", scale_counts=0.05)
+    trees = scene.layers[0]
+    assert trees.mesh.axis_count == 10 and trees.params.shape[1] == 109 and trees.wind  # scaled: 10·K + 9
+    from axialdeform.core.record import split_record
+
+    _, children = split_record(trees.params, 10)
+    assert not children[:, :, 0].any() and np.abs(children).max() > 0  # child roots stay, the rest bends

@@ -195,3 +195,18 @@ def test_bounds_hold_every_tree_vertex(tree):
     lo, hi = instance_boxes(tree, p)
     still = ad.deform(tree, p)[0]
     assert (still >= lo[:, None] - 1e-5).all() and (still <= hi[:, None] + 1e-5).all()
+
+
+def test_random_trees_in_pieces_are_the_whole(tree):
+    from axialdeform.core.variation import iter_random_params
+
+    whole = ad.random_params(tree, 70, seed=11, bend=(0.05, 0.2), tint=0.3)
+    pieces = np.concatenate(list(iter_random_params(tree, 70, 11, chunk=16, bend=(0.05, 0.2), tint=0.3)))
+    assert whole.shape == (70, tree_width(10, 2)) and np.array_equal(whole, pieces)
+
+
+def test_fit_says_it_cannot_fit_trees_yet(tree):
+    from axialdeform.core import ArgumentError
+
+    with pytest.raises(ArgumentError, match="a mesh of 10 axes cannot be fitted yet"):
+        ad.fit_params(tree, [tree.positions])

@@ -67,6 +67,8 @@ from ..record import (
     SCALE,
     TINTED_WIDTH,
     WIDTHS,
+    join_record,
+    split_record,
     tint_columns,
 )
 from ..transforms import (
@@ -288,11 +290,16 @@ class _Appearance:
         import pygltflib as g
 
         out = []
+        everything = {**attributes, **self.attributes}
+        known = {k: v for k, v in everything.items() if not k.startswith("_")}
         for _name, idx, material in self.parts:
             if tint is not None:
                 material = self._tinted_material(b, material, tint)
-            out.append(g.Primitive(attributes=g.Attributes(**attributes, **self.attributes), indices=idx,
-                                   material=material, mode=_TRIANGLES))
+            attrs = g.Attributes(**known)
+            for key, value in everything.items():  # application-specific attributes: "_" and upper case
+                if key.startswith("_"):
+                    setattr(attrs, key, value)
+            out.append(g.Primitive(attributes=attrs, indices=idx, material=material, mode=_TRIANGLES))
         return out
 
     def _tinted_material(self, b: _Builder, material: int | None, tint) -> int:
@@ -315,7 +322,11 @@ class _Appearance:
 
 def _mesh_extras(mesh, count: int, layout: str) -> dict:
     a = mesh.axis
-    return {
+    tree = getattr(mesh, "tree", None)
+    axes = {} if tree is None else {"axes": {  # several axes: enough to rebuild the tree (each vertex's: _AXIAL_AXIS)
+        "count": tree.count, "names": list(tree.names), "parents": list(tree.parents),
+        "frames": [[list(row) for row in ax.matrix] for ax in tree.axes]}}
+    return {**axes,
         "version": _FORMAT_VERSION,
         "layout": layout,
         "count": int(count),
@@ -348,7 +359,8 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
 
 def _build_baked(mesh, params, *, positions=None, normals=None, source: str | None = None,
                  tangents: bool = True) -> "_Builder":
-    params = as_params(params)
+    params = as_params(params, axes=getattr(mesh, "axis_count", 1))
+    tangents = tangents and getattr(mesh, "axis_count", 1) == 1  # several axes: viewers compute their own (MikkTSpace)
     if positions is None or normals is None:
 
         positions, normals = bake_cpu(mesh, params, source=source)
@@ -429,6 +441,26 @@ def _base_attributes(b: "_Builder", mesh) -> tuple[int, int]:
     return pos, nrm
 
 
+def _vertex_attributes(b: "_Builder", mesh) -> dict:
+    """POSITION, NORMAL (and ``_AXIAL_AXIS``, each vertex's axis, for a mesh of several axes)."""
+    pos, nrm = _base_attributes(b, mesh)
+    out = {"POSITION": pos, "NORMAL": nrm}
+    tree = getattr(mesh, "tree", None)
+    if tree is not None:
+        out[AXIS_ATTRIBUTE] = b.accessor(b.view(tree.vertex_axis.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT,
+                                         mesh.vertex_count, "SCALAR", name=AXIS_ATTRIBUTE)
+    return out
+
+
+#: the vertex attribute of a mesh of several axes: each vertex's axis (float, 0 .. K − 1)
+AXIS_ATTRIBUTE = "_AXIAL_AXIS"
+
+
+def _child_columns(k: int) -> dict:
+    """The instanced attributes of child axis ``k`` (1 ..): its ten offsets as VEC4, VEC4, VEC2."""
+    return {f"_AXIAL_A{k}_D12": ("VEC4", 0), f"_AXIAL_A{k}_D34": ("VEC4", 4), f"_AXIAL_A{k}_D5": ("VEC2", 8)}
+
+
 def encode_base_mesh(mesh) -> bytes:
     """The GLB bytes of the base mesh alone (one mesh, one node): POSITION and
     NORMAL float32 in the file's vertex order and its triangles, so the
@@ -440,9 +472,8 @@ def encode_base_mesh(mesh) -> bytes:
     TEXCOORD_0, COLOR_0 and TANGENT."""
     b = _Builder()
     g = b.g
-    pos, nrm = _base_attributes(b, mesh)
     look = b.appearance(mesh)
-    attributes = {"POSITION": pos, "NORMAL": nrm}
+    attributes = _vertex_attributes(b, mesh)
     if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
         attributes["TANGENT"] = b.accessor(b.view(mesh.tangents.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT,
                                            mesh.vertex_count, "VEC4", name="base_TANGENT")
@@ -468,14 +499,17 @@ def _add_instanced(b: _Builder, mesh, params, node_name: str, *, color=None, ext
     drawing it ``len(params)`` times with ``EXT_mesh_gpu_instancing`` (the
     instanced layout of the module docs); returns the node's index.
     ``color``: linear RGB for a mesh with the default material (a scene layer's)."""
-    params = as_params(params)
+    k = getattr(mesh, "axis_count", 1)
+    params = as_params(params, axes=k)
+    children = None
+    if k > 1:  # several axes: axis 0's record as always, each child axis's offsets as _AXIAL_A{k}_*
+        params, children = split_record(params, k)
     n = len(params)
     if n == 0:
         raise GltfError("instanced export: expected at least one instance (EXT_mesh_gpu_instancing needs count >= 1)")
     g = b.g
-    pos, nrm = _base_attributes(b, mesh)
     look = b.appearance(mesh, color)
-    attributes = {"POSITION": pos, "NORMAL": nrm}
+    attributes = _vertex_attributes(b, mesh)
     if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
         attributes["TANGENT"] = b.accessor(b.view(mesh.tangents.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT,
                                            mesh.vertex_count, "VEC4", name="base_TANGENT")
@@ -494,6 +528,10 @@ def _add_instanced(b: _Builder, mesh, params, node_name: str, *, color=None, ext
         extra_attributes[name] = (kind, cols)
     columns.update({name: (kind, params[:, list(cols)])
                     for name, (kind, cols) in {**ATTRIBUTES, **extra_attributes}.items()})
+    for j in range(1, k):
+        flat = children[:, j - 1].reshape(n, 10)
+        columns.update({name: (kind, flat[:, first:first + _COMPONENTS[kind]])
+                        for name, (kind, first) in _child_columns(j).items()})
     attributes = {}
     for name, (kind, data) in columns.items():
         data = np.ascontiguousarray(data, dtype="<f4")
@@ -794,7 +832,42 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
             mesh = mesh.with_axis(frame)
         except AxialDeformError as exc:
             raise GltfError(f"{where}: extras axis: {exc}") from None
+    if "axes" in extras:  # several axes: the tree, each vertex's axis, every child axis's offsets
+        mesh, params = _read_tree(gltf, blob, prim, extras["axes"], cols, mesh, params, where)
+        return mesh, params
     return mesh, as_params(params, name=where)
+
+
+def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
+    """The mesh of several axes an instanced node records (extras ``axes``,
+    the vertex attribute ``_AXIAL_AXIS``, the instanced ``_AXIAL_A{k}_*``)."""
+    from ..axes import tree_from_vertices
+
+    try:
+        k = int(record["count"])
+        parents, frames, names = list(record["parents"]), list(record["frames"]), list(record["names"])
+    except (KeyError, TypeError, ValueError):
+        raise GltfError(f"{where}: extras axes: expected count, names, parents and frames, found {record!r}"[:300]) from None
+    index = getattr(prim.attributes, AXIS_ATTRIBUTE, None)
+    if index is None:
+        raise GltfError(f"{where}: a mesh of {k} axes needs the vertex attribute {AXIS_ATTRIBUTE}; found none")
+    va = read_accessor(gltf, blob, index, AXIS_ATTRIBUTE, where).reshape(-1)
+    if len(va) != mesh.vertex_count or not np.array_equal(va, np.round(va)):
+        raise GltfError(f"{where}: {AXIS_ATTRIBUTE}: expected one whole axis index per vertex ({mesh.vertex_count})")
+    n = len(params)
+    children = np.zeros((n, k - 1, 10), dtype=np.float32)
+    for j in range(1, k):
+        for name, (kind, first) in _child_columns(j).items():
+            if name not in cols or cols[name].shape[1] != _COMPONENTS[kind]:
+                raise GltfError(f"{where}: {INSTANCING} attributes: expected {name} ({kind}) for axis {j}")
+            children[:, j - 1, first:first + _COMPONENTS[kind]] = cols[name]
+    try:
+        tree = tree_from_vertices(mesh, va.astype(np.int64), parents, frames=[np.asarray(f) for f in frames],
+                                  names=names, root_children=False)
+        mesh = mesh.with_axes(tree)
+    except AxialDeformError as exc:
+        raise GltfError(f"{where}: extras axes: {exc}") from None
+    return mesh, as_params(join_record(params, children), name=where, axes=k)
 
 
 def _load_glb(path: Path):
