@@ -94,9 +94,8 @@ class SceneWidget(anywidget.AnyWidget):
         if self._mesh is None:
             raise AxialDeformError("set_params: this widget shows a scene of several layers; expected a widget of "
                                    "one mesh (SceneWidget(mesh, params))")
-        params = as_params(params)
-        axis = self._mesh.axis
-        adp = encode_binary(params, axis=axis, mesh_fingerprint=self._mesh.fingerprint, quantize=self._quantize)
+        params = as_params(params, axes=self._mesh.axis_count)
+        adp = encode_binary(params, axis=self._mesh, mesh_fingerprint=self._mesh.fingerprint, quantize=self._quantize)
         with self.hold_sync():  # one update message to the front end, not two
             self.params_adp = adp
             self.config = {**self.config, "instances": int(len(params))}

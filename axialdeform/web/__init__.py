@@ -44,7 +44,7 @@ from ..core.io.params import encode_binary
 from ..core.io.safeio import check_output_path, read_regular
 from ..core.look import DEFAULT_LOOK
 from ..core.params import as_params
-from ..core.record import WIDTHS, level_of, page_record
+from ..core.record import WIDTHS, level_of, page_record, tree_shape
 from ..core.scene import Scene
 from ..core.wind import SECOND_HARMONIC
 from ..gl.material import ALPHA_MODE_INDEX
@@ -131,7 +131,7 @@ def page_shaders(keys=None) -> dict:
 
 def shader_key(quantize: bool, fields: int, material: bool, framed: bool = False) -> str:
     """The :data:`SHADER_VARIANTS` key of a layer."""
-    return ("quantized" if quantize else "float") + LEVEL_VARIANTS[level_of(fields)][0] + (
+    return ("quantized" if quantize else "float") + LEVEL_VARIANTS[tree_shape(fields)[1]][0] + (
         "_material" if material else "") + ("_framed" if framed else "")
 
 
@@ -189,7 +189,7 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
         color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
     material = bool(mesh.has_appearance)
     if adp is None:
-        adp = encode_binary(params, axis=axis, mesh_fingerprint=mesh.fingerprint, quantize=quantize)
+        adp = encode_binary(params, axis=mesh, mesh_fingerprint=mesh.fingerprint, quantize=quantize)  # its axis or tree
     files[glb_file] = encode_base_mesh(mesh)
     files[params_file] = bytes(adp)
     return {
@@ -203,6 +203,12 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
                  "center": list(axis.line),
                  **({"frame": [list(row) for row in axis.frame], "frame_digest": axis.frame_digest.hex()}
                     if axis.framed else {}),
+                 # several axes (AXIAL_AXES): the tree's frames, lo, L and parents; its digest as the adp's
+                 **({"axes": {"count": mesh.tree.count, "parents": list(mesh.tree.parents),
+                              "frames": [[list(row) for row in a.matrix] for a in mesh.tree.axes],
+                              "lo": [float(a.lo) for a in mesh.tree.axes],
+                              "length": [float(a.length) for a in mesh.tree.axes]},
+                     "frame_digest": mesh.tree.digest.hex()} if mesh.tree is not None else {}),
                  "vertices": int(mesh.vertex_count)},
         "params_file": params_file,
         "shader": shader_key(quantize, params.shape[1], material, axis.framed),
@@ -307,7 +313,7 @@ def build_scene(mesh, params, *, size=(800, 600), up: str = "y", mode: str = "so
     from ..gl.scene import scene_camera  # the GL layer (pyrr) only when a page is built
 
     w, h = _check_view(size, up, mode)
-    params = as_params(params)
+    params = as_params(params, axes=mesh.axis_count)
     cam = scene_camera(Scene.single(mesh, params, up=up, wind=wind), w / h)
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
@@ -343,7 +349,7 @@ def build_scene_file(scene, *, size=(800, 600), mode: str = "solid", quantize: b
     for item in scene.layers:
         if len(item.params) == 0:
             continue
-        layers.append(_layer(item.name, item.mesh, as_params(item.params), files=files,
+        layers.append(_layer(item.name, item.mesh, as_params(item.params, axes=item.mesh.axis_count), files=files,
                              glb_file=f"layer-{item.name}.glb", params_file=f"layer-{item.name}.adp",
                              quantize=quantize, color=item.color, wind=item.wind and wind is not None))
     if not layers:

@@ -49,8 +49,11 @@ export function parseAdp(buffer, name) {
   if (bytes.length < HEADER + 4) fail(`truncated: ${bytes.length} bytes, shorter than the 96-byte header and the 4-byte checksum`);
   if (MAGIC.some((b, i) => bytes[i] !== b)) fail('not an axialdeform parameter file (magic bytes differ)');
   const version = view.getUint16(8, true);
-  const fields = FIELDS_OF_VERSION[version];
-  if (!fields) fail(`version: expected ${Object.keys(FIELDS_OF_VERSION).join(', ')}, found ${version} (written by a newer axialdeform?)`);
+  if (!FIELDS_OF_VERSION[version]) fail(`version: expected ${Object.keys(FIELDS_OF_VERSION).join(', ')}, found ${version} (written by a newer axialdeform?)`);
+  // several axes: K at offset 28 (0 in one-axis files), 10 more numbers per child axis
+  const axes = Math.max(1, view.getUint32(28, true));
+  if (axes > 64) fail(`axes: expected 1 to 64 axes, found ${axes}`);
+  const fields = FIELDS_OF_VERSION[version] + 10 * (axes - 1);
   const encoding = view.getUint16(10, true);
   if (encoding !== 0 && encoding !== 1) fail(`encoding: expected 0 (float32) or 1 (quantized), found ${encoding}`);
   const headerSize = view.getUint32(12, true);
@@ -71,7 +74,8 @@ export function parseAdp(buffer, name) {
          `${computed.toString(16).padStart(8, '0')}): the file is corrupt`);
   }
   const axis = view.getInt8(24);
-  if (axis < -1 || axis > 3) fail(`axis: expected -1, 0, 1, 2 or 3 (a chosen frame), found ${axis}`);
+  if (axis < -1 || axis > 4) fail(`axis: expected -1, 0, 1, 2, 3 (a chosen frame) or 4 (several axes), found ${axis}`);
+  if ((axis === 4) !== (axes > 1)) fail(`axis: expected 4 (several axes) exactly when the file has more than one axis, found ${axis} with ${axes}`);
   const lo = view.getFloat64(32, true);
   const length = view.getFloat64(40, true);
   const fingerprint = bytes.slice(48, 80);
@@ -86,7 +90,37 @@ export function parseAdp(buffer, name) {
     values = new Float32Array(buffer.slice(HEADER, HEADER + count * each));
     if (!values.every(Number.isFinite)) fail('values: a number is not finite (NaN or infinity)');
   }
-  return { name, version, fields, encoding, count, axis, lo, length, fingerprint, frameDigest, qtable, values };
+  return { name, version, fields, axes, encoding, count, axis, lo, length, fingerprint, frameDigest, qtable, values };
+}
+
+/** A file of K axes as axis 0's record (the parsed file's shape, 10 (K - 1) fewer
+ * fields) and the child axes' offsets as the texels of axialdeform/gl/axes.py
+ * (decoded: float32, three RGBA texels a child axis, rows of AXES_ROW texels). */
+export const AXES_ROW = 4095;
+export function splitAxes(p) {
+  if (p.axes === 1) return { std: p, texels: null, rows: 0 };
+  const f = p.fields, k = p.axes, n = p.count, sf = f - 10 * (k - 1);
+  const cols = [...Array(10).keys(), ...Array.from({ length: f - 10 * k }, (_, i) => 10 * k + i)];
+  const values = new p.values.constructor(n * sf);
+  for (let i = 0; i < n; i++) for (let c = 0; c < sf; c++) values[i * sf + c] = p.values[i * f + cols[c]];
+  let qtable = null;
+  if (p.qtable) {
+    qtable = new Float32Array(2 * sf);
+    cols.forEach((c, j) => { qtable[j] = p.qtable[c]; qtable[sf + j] = p.qtable[f + c]; });
+  }
+  const texelCount = n * (k - 1) * 3;
+  const rows = Math.max(1, Math.ceil(texelCount / AXES_ROW));
+  const texels = new Float32Array(rows * AXES_ROW * 4);
+  for (let i = 0; i < n; i++) {
+    for (let j = 1; j < k; j++) {
+      const at = ((i * (k - 1) + j - 1) * 3) * 4;
+      for (let c = 0; c < 10; c++) {
+        const col = 10 * j + c, v = p.values[i * f + col];
+        texels[at + c] = p.qtable ? p.qtable[col] + v * p.qtable[f + col] : v;
+      }
+    }
+  }
+  return { std: { ...p, fields: sf, values, qtable, axes: 1 }, texels, rows };
 }
 
 async function sha256(bytes) {
@@ -106,8 +140,8 @@ export async function meshFingerprint(positions, index) {
 
 /** The mesh check of axialdeform.core.params.check_mesh. */
 function checkMesh(p, mesh, actual) {
-  const axisNames = ['x', 'y', 'z', 'a chosen frame'];
-  const meshAxis = mesh.axis === -1 ? 3 : mesh.axis; // the adp header writes a chosen frame as 3
+  const axisNames = ['x', 'y', 'z', 'a chosen frame', 'several axes'];
+  const meshAxis = mesh.axes ? 4 : (mesh.axis === -1 ? 3 : mesh.axis); // the adp header: 3 a frame, 4 a tree
   if (p.fingerprint.some((b) => b !== 0)) {
     const want = actual ? hex(actual) : mesh.fingerprint;
     if (hex(p.fingerprint) !== want) {
@@ -115,7 +149,7 @@ function checkMesh(p, mesh, actual) {
         `expected ${want.slice(0, 16)} of ${mesh.name}); export it with the mesh it was made for`);
     }
   }
-  if (p.axis >= 0 && (p.axis !== meshAxis || (meshAxis === 3 && hex(p.frameDigest) !== mesh.frame_digest))) {
+  if (p.axis >= 0 && (p.axis !== meshAxis || (meshAxis >= 3 && hex(p.frameDigest) !== mesh.frame_digest))) {
     throw new SceneError(`${p.name}: made for a mesh whose control axis is ${axisNames[p.axis]}, ` +
       `but ${mesh.name}'s is ${meshAxis === 3 ? 'another frame' : axisNames[meshAxis]}`);
   }
@@ -278,6 +312,7 @@ export function mount(root, lib, scene, options = {}) {
       const blend = part.alpha_mode === 2;
       const m = new THREE.RawShaderMaterial({
         glslVersion: THREE.GLSL3,
+        defines: lc.mesh.axes ? { AXIAL_AXES: lc.mesh.axes.count } : {},
         vertexShader: body(sh.vertex),
         fragmentShader: body(sh.fragment),
         side: lc.cull_back_faces && !part.double_sided ? THREE.FrontSide : THREE.DoubleSide,
@@ -300,8 +335,13 @@ export function mount(root, lib, scene, options = {}) {
   }
 
   async function prepare(layer, adp, name) {
-    const p = parseAdp(adp, name);
-    checkMesh(p, layer.cfg.mesh, layer.fingerprint);
+    const whole = parseAdp(adp, name);
+    checkMesh(whole, layer.cfg.mesh, layer.fingerprint);
+    const want = layer.cfg.mesh.axes ? layer.cfg.mesh.axes.count : 1;
+    if (whole.axes !== want) throw new SceneError(`${name}: ${whole.axes} axes an instance, but ${layer.cfg.mesh.name} has ${want}`);
+    const { std: p, texels, rows } = splitAxes(whole);
+    p.texels = texels;
+    p.rows = rows;
     if (!cfg.shaders[variant(layer, p)]) {
       throw new SceneError(`${name}: ${p.fields}-number instances, but this page was exported without their shader`);
     }
@@ -319,6 +359,14 @@ export function mount(root, lib, scene, options = {}) {
       for (const n of Object.keys(layer.geometry.attributes)) if (n.startsWith('i_')) layer.geometry.deleteAttribute(n);
     }
     instanceAttributes(layer, p);
+    if (p.texels) { // several axes: the child axes' offsets, fetched by instance id (axial_child_offsets)
+      const old = layer.uniforms.u_axes_offsets.value;
+      const tex = new THREE.DataTexture(p.texels, AXES_ROW, p.rows, THREE.RGBAFormat, THREE.FloatType);
+      tex.minFilter = tex.magFilter = THREE.NearestFilter;
+      tex.needsUpdate = true;
+      layer.uniforms.u_axes_offsets.value = tex;
+      if (old) old.dispose();
+    }
     layer.geometry.instanceCount = p.count;
     layer.count = p.count;
     state.count = layers.reduce((a, l) => a + (l.cfg.terrain ? 0 : l.count), 0);
@@ -359,6 +407,11 @@ export function mount(root, lib, scene, options = {}) {
     geometry.setIndex(new THREE.BufferAttribute(index, 1));
     geometry.setAttribute('in_position', position);
     geometry.setAttribute('in_normal', base.getAttribute('normal'));
+    if (lc.mesh.axes) { // several axes: each vertex's axis (the GLB's _AXIAL_AXIS)
+      const axisOf = base.getAttribute('_axial_axis');
+      if (!axisOf) throw new SceneError(`${lc.mesh.file}: a mesh of ${lc.mesh.axes.count} axes needs _AXIAL_AXIS`);
+      geometry.setAttribute('in_axis', axisOf);
+    }
     if (lc.material) { // defaults where the mesh has none, as axialdeform.gl.material.AppearanceBuffer
       const fill = (size, v) => { const a = new Float32Array(n * size); for (let i = 0; i < a.length; i++) a[i] = v[i % size]; return a; };
       geometry.setAttribute('in_uv', base.getAttribute('uv') || new THREE.BufferAttribute(fill(2, [0, 0]), 2));
@@ -373,6 +426,12 @@ export function mount(root, lib, scene, options = {}) {
       // a chosen axis frame: u_frame * v = F v (Matrix3.set takes rows)
       u_frame: { value: lc.mesh.frame ? new THREE.Matrix3().set(...lc.mesh.frame.flat()) : new THREE.Matrix3() },
       u_center: { value: new THREE.Vector2().fromArray(lc.mesh.center) },
+      // several axes: every axis's frame (Matrix3.set takes rows), lo, L, parent, and the offsets texture
+      u_axes_frame: { value: lc.mesh.axes ? lc.mesh.axes.frames.map((f) => new THREE.Matrix3().set(...f.flat())) : [] },
+      u_axes_lo: { value: lc.mesh.axes ? lc.mesh.axes.lo : [] },
+      u_axes_len: { value: lc.mesh.axes ? lc.mesh.axes.length : [] },
+      u_axes_parent: { value: lc.mesh.axes ? new Int32Array(lc.mesh.axes.parents) : [] },
+      u_axes_offsets: { value: null },
       u_qmin: { value: new Float32Array(16) }, u_qstep: { value: new Float32Array(16) },
       u_qmin_extra: { value: new THREE.Vector3() }, u_qstep_extra: { value: new THREE.Vector3() },
       u_color: { value: v3(lc.color) }, u_wind_strength: { value: wind && lc.wind ? wind.strength : 0.0 },

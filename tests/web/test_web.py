@@ -103,6 +103,12 @@ def test_the_page_parser_reads_every_record_level(tmp_path, stone, quantize):
         path = tmp_path / f"l{level}.adp"
         path.write_bytes(encode_binary(params, quantize=quantize))
         files.append((path, width, level + 1))
+    from axialdeform.core.axes import TREE_AXES
+
+    tree = ad.load_mesh("tree", axes=TREE_AXES)  # ten axes: 106 numbers, K in the header
+    path = tmp_path / "tree.adp"
+    path.write_bytes(encode_binary(ad.random_params(tree, 5, seed=1), axis=tree, quantize=quantize))
+    files.append((path, 106, 1))
     bad = bytearray(files[0][0].read_bytes())
     bad[8:10] = (len(R.WIDTHS) + 1).to_bytes(2, "little")
     (tmp_path / "next.adp").write_bytes(bytes(bad))
@@ -1035,3 +1041,29 @@ def test_page_of_a_framed_mesh_shows_what_render_shows(browser, tmp_path):
     auto = ad.render_image(mesh.with_axis("auto"), params, SIZE, look=look)
     assert iou(render, auto, BACKGROUND) < 0.9, iou(render, auto, BACKGROUND)  # the frame changes the picture
     assert_page_draws(browser, out.as_uri(), render, 40)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("quantize", [True, False])
+def test_page_of_trees_shows_what_render_shows(browser, tmp_path, quantize):
+    """A mesh of ten axes (the bundled tree): the page splits each record into
+    axis 0's attributes and the child axes' texture, and draws render's picture."""
+    from axialdeform.core.axes import TREE_AXES
+
+    mesh = ad.load_mesh("tree", axes=TREE_AXES)
+    params = ad.random_params(mesh, 60, seed=4, bend=(0.05, 0.5, 0.5), placement="disc", spacing=3.0,
+                              scale=(0.8, 1.2))
+    out = tmp_path / "trees.html"
+    write_page(out, build_scene(mesh, params, size=SIZE, quantize=quantize))
+    look = ad.Look(ground=False, shadow=False)
+    used = params
+    if quantize:  # what the page holds: the quantized file's numbers
+        from axialdeform.core.io.params import decode_binary, encode_binary
+
+        used = decode_binary(encode_binary(params, axis=mesh, quantize=True)).values
+    render = ad.render_image(mesh, used, SIZE, look=look)
+    straight = params.copy()
+    straight[:, 10:100] = 0  # the child axes unbent: the page must bend them to match
+    unbent = ad.render_image(mesh, straight, SIZE, look=look)
+    assert iou(render, unbent, BACKGROUND) < 0.9
+    assert_page_draws(browser, out.as_uri(), render, 60)
