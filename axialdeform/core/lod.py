@@ -88,12 +88,14 @@ class LodLevel:
     colors: np.ndarray | None = None
     tangents: np.ndarray | None = None
     parts: tuple = ()
+    vertex_axis: np.ndarray | None = None  # several axes: each vertex's axis (in_axis)
 
     @classmethod
     def of(cls, mesh) -> "LodLevel":
         """Level 0: the base mesh itself (its arrays, not copies)."""
+        tree = getattr(mesh, "tree", None)
         return cls(mesh.positions, mesh.normals, mesh.faces, 0.0, mesh.uvs, mesh.colors, mesh.tangents,
-                   tuple(mesh.parts))
+                   tuple(mesh.parts), None if tree is None else tree.vertex_axis)
 
     @property
     def vertex_count(self) -> int:
@@ -172,6 +174,9 @@ def _attributes(mesh):
         value = getattr(mesh, key)
         if value is not None:
             out[key] = value.astype(np.float64)
+    tree = getattr(mesh, "tree", None)
+    if tree is not None:  # several axes: each simplified vertex takes the axis of where it lies
+        out["axis"] = tree.vertex_axis[:, None].astype(np.float64)
     return out
 
 
@@ -238,6 +243,8 @@ def _finish(attrs, positions, faces):
     fallback = area_weighted_normals(positions, faces).astype(np.float64)
     normals = np.where(length > 1e-8, normals / np.maximum(length, 1e-30), fallback)
     out = {"normals": normals.astype(np.float32)}
+    if "axis" in attrs:  # interpolated inside one axis's triangles: whole; at a joint: the nearer axis
+        out["axis"] = np.rint(attrs["axis"][:, 0]).astype(np.int32)
     if "uvs" in attrs:
         out["uvs"] = attrs["uvs"].astype(np.float32)
     if "colors" in attrs:
@@ -426,7 +433,7 @@ def build_lod_levels(mesh, reductions=LOD_REDUCTIONS) -> list[LodLevel]:
         error = max(_one_sided(full_cloud, simple_cloud), _one_sided(simple_cloud, full_cloud))
         levels.append(LodLevel(points.astype(np.float32), attrs["normals"], faces.astype(np.uint32),
                                max(error, levels[-1].error), attrs.get("uvs"), attrs.get("colors"),
-                               attrs.get("tangents"), parts))
+                               attrs.get("tangents"), parts, attrs.get("axis")))
     if len(levels) == 1:
         warnings.warn(f"{mesh.name}: simplification removed too few triangles; drawing one level",
                       UserWarning, stacklevel=2)

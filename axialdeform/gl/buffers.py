@@ -101,13 +101,15 @@ class MeshBuffers:
         self._released = False
         # one (n, 6) float32 array handed over as it is (no hstack/astype/tobytes
         # copies: a 4.5 M-triangle terrain would hold ~160 MB more while uploading)
-        tree = getattr(mesh, "tree", None)  # several axes: each vertex's axis as a 7th float (in_axis)
-        interleaved = np.empty((mesh.vertex_count, 6 if tree is None else 7), dtype="f4")
+        # several axes: each vertex's axis as a 7th float (in_axis); a LOD level carries its own
+        tree = getattr(mesh, "tree", None)
+        axis_ids = tree.vertex_axis if tree is not None else getattr(mesh, "vertex_axis", None)
+        interleaved = np.empty((mesh.vertex_count, 6 if axis_ids is None else 7), dtype="f4")
         interleaved[:, :3] = mesh.positions
         interleaved[:, 3:6] = mesh.normals
-        if tree is not None:
-            interleaved[:, 6] = tree.vertex_axis
-        self._axis_ids = tree is not None
+        if axis_ids is not None:
+            interleaved[:, 6] = axis_ids
+        self._axis_ids = axis_ids is not None
         self.vbo = ctx.buffer(interleaved)
         del interleaved
         if "triangles" in indices:

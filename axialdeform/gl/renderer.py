@@ -173,9 +173,6 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         #: K, the mesh's axes: K > 1 draws with AXIAL_AXES (child offsets in a texture, gl/axes.py)
         self.axis_count = mesh.axis_count
         self._axes = None
-        if self.axis_count > 1 and lod:
-            raise AxialDeformError(f"{mesh.name}: lod: levels of detail of a mesh of several axes are not "
-                                   "supported yet; expected lod=False")
         params, children = self._split_axes(params)
         defines = {} if bend else {"AXIAL_NO_BEND": 1}
         if self.axis_count > 1:

@@ -135,3 +135,33 @@ def test_culling_a_forest_never_changes_its_picture(ctx):
     assert trunks_out.sum() >= 3  # trees seen by their branches alone: what the child axes' reach is for
     assert visible >= inside.sum()
     assert (np.abs(full.astype(int) - full[0, 0]).max(axis=-1) > 30).mean() > 0.2  # trees fill the picture
+
+
+def test_levels_of_detail_of_a_tree_keep_each_vertex_on_its_axis(ctx):
+    """Every part is simplified on its own; each simplified vertex keeps its
+    part's axis, and the GPU bends every level as the CPU does."""
+    from axialdeform.core.axes import AxisTree
+
+    mesh = ad.load_mesh("tree", axes=TREE_AXES)
+    p = _params(mesh, n=20)
+    with AxialRenderer(ctx, mesh, p, lod=True) as r:
+        levels = r.lod_levels
+        assert len(levels) >= 3
+        for level in range(1, len(levels)):
+            lv = levels[level]
+            for part in lv.parts:  # a part's vertices: that part's axis only
+                used = np.unique(lv.faces[part.start:part.start + part.count])
+                assert set(lv.vertex_axis[used]) == {mesh.tree.names.index(part.name)}
+            gpu, _ = r.capture(level=level)
+            same = ad.BaseMesh(lv.positions, lv.normals, lv.faces, name="level",
+                               tree=AxisTree(mesh.tree.axes, mesh.tree.parents, lv.vertex_axis, mesh.tree.names))
+            cpu, _ = ad.deform(same, p)
+            assert np.abs(gpu - cpu).max() <= 1e-5 * mesh.axis.length * 3
+        target = ad.Offscreen(ctx, (160, 120))
+        try:
+            cam = ad.Camera(eye=(30.0, 12.0, 30.0), target=(0.0, 1.0, 0.0), fovy=20.0)
+            target.use()
+            r.render(cam.view(), cam.projection(160 / 120))
+            assert sum(r.stats["levels"][1:]) > 0  # far trees drawn coarser
+        finally:
+            target.release()
