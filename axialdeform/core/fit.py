@@ -40,7 +40,7 @@ from .deform import bend_model, bernstein, deform, displace
 from .errors import ArgumentError, AxialDeformError, MeshError, ResidualError, TopologyError
 from .io.mesh import MESH_SUFFIXES, load_mesh
 from .params import as_params
-from .record import ANGLES, EXTRA, OFFSETS, POSITION
+from .record import ANGLES, EXTRA, OFFSETS, POSITION, tree_width
 from .transforms import (
     angles_from_matrices,
     matrices_from_rotation_vectors,
@@ -481,7 +481,7 @@ class FitResult:
 
 def _residuals(mesh, params32: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """RMS and max vertex distance (n,) (fraction of L) of the shapes ``params32`` (n, 16) give."""
-    shapes = deform(mesh.axis, mesh.positions, mesh.normals, params32)[0].astype(np.float64)
+    shapes = deform(mesh, params32)[0].astype(np.float64)
     dist = np.linalg.norm(shapes - targets, axis=2)
     return np.sqrt(np.mean(dist**2, axis=1)) / mesh.axis.length, dist.max(axis=1) / mesh.axis.length
 
@@ -514,15 +514,101 @@ def _check_shape(mesh, positions: np.ndarray, name: str) -> np.ndarray:
 _BATCH_BYTES = 64 << 20
 
 
+class _TreeModel:
+    """What the fit of a mesh of several axes needs, computed once: the
+    design matrix of ``Rᵀ(W − p) − V = Σ_chain F_jᵀ E(D_j(t_j))`` in the
+    offsets (axis 0 in the canonical basis, every child axis's ten) and
+    ``Rᵀp``; it does not depend on the rotation, so its pseudo-inverse is
+    made once (docs/method.md, "Several axes")."""
+
+    def __init__(self, mesh) -> None:
+        tree = mesh.tree
+        self.mesh, self.k = mesh, tree.count
+        self.base = mesh.positions.astype(np.float64)
+        v, k = len(self.base), self.k
+        chain = tree.chain[tree.vertex_axis]  # (v, K)
+        cols = []
+        for j, axis in enumerate(tree.axes):
+            w = bernstein(axis.parameter(self.base), 4) * chain[:, j, None]  # (v, 5), 0 off the chain
+            if j == 0:
+                w = w @ _CANONICAL  # (v, 4): axis 0's offsets up to a shift (that is p's)
+            for e in axis.matrix[1:]:  # the u, then the v component
+                cols.append(w[:, None, :] * e[None, :, None])  # (v, 3, m)
+        cols.append(np.broadcast_to(np.eye(3), (v, 3, 3)))  # Rᵀp
+        self.design = np.concatenate(cols, axis=2).reshape(3 * v, -1)
+        self.pinv = np.linalg.pinv(self.design)
+        self.unknowns = self.design.shape[1]
+        assert self.unknowns == 8 + 10 * (k - 1) + 3
+
+    def shapes(self, x: np.ndarray) -> np.ndarray:
+        """Model-space ``V'`` (n, v, 3) of the solutions ``x`` (n, unknowns) (without Rᵀp)."""
+        x = x.copy()
+        x[:, -3:] = 0.0
+        return self.base + (x @ self.design.T).reshape(len(x), -1, 3)
+
+    def params(self, x: np.ndarray, rot: np.ndarray) -> np.ndarray:
+        """``(n, 10·K + 6)`` float64 of the solutions and rotations."""
+        n, k = len(x), self.k
+        out = np.zeros((n, 10 * k + 6))
+        out[:, :10] = np.concatenate([_CANONICAL @ x[:, 0:4, None], _CANONICAL @ x[:, 4:8, None]], axis=2).reshape(n, 10)
+        children = x[:, 8:8 + 10 * (k - 1)].reshape(n, k - 1, 2, 5)  # per axis: the u offsets, then the v offsets
+        out[:, 10:10 * k] = np.swapaxes(children, 2, 3).reshape(n, 10 * (k - 1))
+        out[:, 10 * k:10 * k + 3] = (rot @ x[:, -3:, None])[..., 0]
+        out[:, 10 * k + 3:] = angles_from_matrices(rot)
+        return out
+
+
+def _fit_batch_tree(m: "_TreeModel", targets: np.ndarray, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
+    """Fit n variants of a mesh of several axes by Gauss-Newton: start from
+    the Kabsch rotation; each round solves, for every variant at once, the
+    linear problem in the offsets, ``Rᵀp`` and a small turn ``ω`` of the
+    rotation (``Rᵀ W − V ≈ Σ_chain F_jᵀ E(D_j) + Rᵀp + ω × V'``), turns ``R``
+    by ``ω``, until ``|ω|`` and the shape's change vanish; the offsets and
+    ``Rᵀp`` of the final rotation come from the shared pseudo-inverse.
+    ``targets`` (n, v, 3) -> params (n, 10·K + 6), rounds (n,)."""
+    n, v = len(targets), len(m.base)
+    rot, _ = kabsch(m.base, targets)
+    rounds = np.zeros(n, dtype=np.int64)
+    active = np.ones(n, dtype=bool)
+    scale = float(np.ptp(m.base, axis=0).max())
+    design = m.design  # (3v, U)
+    for it in range(1, max(1, int(max_iterations)) + 1):
+        idx = np.flatnonzero(active)
+        local = np.einsum("nji,nvj->nvi", rot[idx], targets[idx])  # Rᵀ W
+        resid = (local - m.base).reshape(len(idx), -1)
+        x = resid @ m.pinv.T
+        bent = m.shapes(x)  # (a, v, 3): V'
+        a, b, c = bent[..., 0], bent[..., 1], bent[..., 2]
+        turn = np.zeros((len(idx), v, 3, 3))  # d(ω × V')/dω = −[V']×
+        turn[..., 0, 1], turn[..., 0, 2] = c, -b
+        turn[..., 1, 0], turn[..., 1, 2] = -c, a
+        turn[..., 2, 0], turn[..., 2, 1] = b, -a
+        full = np.concatenate([np.broadcast_to(design, (len(idx),) + design.shape), turn.reshape(len(idx), 3 * v, 3)],
+                              axis=2)
+        y = _solve(full, resid)
+        omega = y[:, -3:]
+        rot[idx] = rot[idx] @ matrices_from_rotation_vectors(omega)
+        rounds[idx] = it
+        moved = np.linalg.norm(omega, axis=1) * scale
+        active[idx] = moved > 1e-10 * scale
+        if not active.any():
+            break
+    local = np.einsum("nji,nvj->nvi", rot, targets)
+    x = ((local - m.base).reshape(n, -1)) @ m.pinv.T
+    return m.params(x, rot), rounds
+
+
 def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress, extended=False):
-    if getattr(mesh, "axis_count", 1) > 1:
-        raise ArgumentError(f"{mesh.name}: fit: a mesh of {mesh.axis_count} axes cannot be fitted yet; "
-                            "expected a mesh of one axis (fit the trunk alone, or bake the trees)")
-    model = _Model(mesh)
-    params = np.empty((count, 19 if extended else 16), dtype=np.float32)
+    axes = getattr(mesh, "axis_count", 1)
+    if axes > 1 and extended:
+        raise ArgumentError(f"{mesh.name}: fit: extended numbers (scale, twist, taper) of a mesh of {axes} axes "
+                            "cannot be fitted yet; expected extended=False")
+    model = _Model(mesh) if axes == 1 else _TreeModel(mesh)
+    width = tree_width(axes, 1 if extended else 0)
+    params = np.empty((count, width), dtype=np.float32)
     rms, mx, its, names = np.empty(count), np.empty(count), np.empty(count, dtype=np.int64), []
-    batch = max(1, _BATCH_BYTES // (mesh.vertex_count * 3 * (17 if extended else 14) * 8))
-    fit_batch = _fit_batch_extended if extended else _fit_batch
+    batch = max(1, _BATCH_BYTES // (mesh.vertex_count * 3 * (17 if extended else 14 if axes == 1 else width) * 8))
+    fit_batch = _fit_batch_extended if extended else _fit_batch if axes == 1 else _fit_batch_tree
     chunk: list[np.ndarray] = []
 
     def flush(end: int) -> None:  # fit the variants [end - len(chunk), end) together
@@ -543,7 +629,7 @@ def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress, exte
             flush(k)
     if chunk:
         flush(k)
-    return FitResult(as_params(params), rms, mx, its, float(max_residual), tuple(names))
+    return FitResult(as_params(params, axes=axes), rms, mx, its, float(max_residual), tuple(names))
 
 
 def fit_params(mesh, variants, *, max_residual: float = DEFAULT_MAX_RESIDUAL, max_iterations: int = 100,
