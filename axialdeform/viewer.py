@@ -42,7 +42,6 @@ from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamErr
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
 from .core.params import as_params
-from .core.record import OFFSETS
 from .core.scene import Scene
 from .core.variation import random_params
 from .core.wind import Wind
@@ -242,10 +241,13 @@ class _ViewerMixin:
 
         self.seed = int(seed)
         fresh = random_params(self.mesh, len(self.base), seed=self.seed, bend=self.bend)
-        self.base[:, :10] = fresh[:, :10]
+        cols = _offsets(self.mesh)
+        self.base[:, cols] = fresh[:, cols]
         for k, (layer, _, base) in enumerate(self.layers):  # each other layer: its own seed, derived from the seed
             if len(base):
-                base[:, :10] = random_params(layer.mesh, len(base), seed=self.seed + 7919 * (k + 1), bend=self.bend)[:, :10]
+                cols = _offsets(layer.mesh)
+                base[:, cols] = random_params(layer.mesh, len(base), seed=self.seed + 7919 * (k + 1),
+                                              bend=self.bend)[:, cols]
         self._upload(self.base)
 
     def set_bend_scale(self, scale: float) -> None:
@@ -255,13 +257,13 @@ class _ViewerMixin:
 
     def _upload(self, params) -> None:
         shown = np.array(params, dtype=np.float32)
-        shown[:, OFFSETS] *= self.bend_scale
+        shown[:, _offsets(self.mesh)] *= self.bend_scale
         self.renderer.update_params(shown)
         self._shown = shown
-        for _, renderer, base in self.layers:
+        for layer, renderer, base in self.layers:
             if len(base):
                 other = base.copy()
-                other[:, OFFSETS] *= self.bend_scale
+                other[:, _offsets(layer.mesh)] *= self.bend_scale
                 renderer.update_params(other)
 
     # ------------------------------------------------------------ drawing
@@ -391,8 +393,8 @@ class Viewer:
         look = look_from_keywords(look, old_keywords, "Viewer.create")
 
         mglw = _window_config_base()
-        params = as_params(params)
-        if animate is not None and as_params(animate(0.0)).shape != params.shape:
+        params = as_params(params, axes=mesh.axis_count)
+        if animate is not None and as_params(animate(0.0), axes=mesh.axis_count).shape != params.shape:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
                      up=up, look=look, on_screenshot=on_screenshot, parts=parts, wind=wind, extra=extra,
@@ -427,3 +429,7 @@ class Viewer:
         viewer = cls.create(mesh, params, **kwargs)
         mglw.run_window_config_instance(viewer)
 
+
+def _offsets(mesh) -> slice:
+    """The columns of every axis's offsets: 10 a axis (several axes: axis 0's, then each child's)."""
+    return slice(0, 10 * mesh.axis_count)

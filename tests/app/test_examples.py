@@ -302,3 +302,23 @@ def test_viewer_animates_the_leaves_in_place():
     finally:
         v.release()
         v.wnd.destroy()
+
+
+def test_viewer_draws_trees_and_new_seeds_bend_every_axis():
+    from axialdeform.core.axes import TREE_AXES
+    from axialdeform.viewer import Viewer
+
+    tree = ad.load_mesh("tree", axes=TREE_AXES)
+    params = ad.random_params(tree, 12, seed=2, bend=(0.05, 0.3), spacing=3.0)
+    v = Viewer.create(tree, params, headless=True, size=(160, 120), seed=2, bend=0.3)
+    try:
+        v.step()
+        first = v.screenshot()
+        before = v.base.copy()
+        after = press(v, v.wnd.keys.N)
+        assert np.abs(v.base[:, 10:100] - before[:, 10:100]).max() > 0  # the child axes got new numbers too
+        assert np.array_equal(v.base[:, 100:], before[:, 100:])  # placement and orientation stay
+        assert np.abs(after.astype(int) - first).mean() > 0.5
+    finally:
+        v.release()
+        v.wnd.destroy()
