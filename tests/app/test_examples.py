@@ -315,7 +315,7 @@ def test_viewer_draws_trees_and_new_seeds_bend_every_axis():
         v.step()
         first = v.screenshot()
         before = v.base.copy()
-        after = press(v, v.wnd.keys.N)
+        after = press(v, "n")
         assert np.abs(v.base[:, 10:100] - before[:, 10:100]).max() > 0  # the child axes got new numbers too
         assert np.array_equal(v.base[:, 100:], before[:, 100:])  # placement and orientation stay
         assert np.abs(after.astype(int) - first).mean() > 0.5
