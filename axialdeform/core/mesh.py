@@ -294,6 +294,22 @@ def grid_edge_count(rows: int, cols: int) -> int:
     return (int(rows) - 1) * (3 * int(cols) - 2) + int(cols) - 1
 
 
+def grid_edge_pieces(rows: int, cols: int, piece_rows: int = 64):
+    """:func:`grid_edges` in pieces of ``piece_rows`` grid rows, a generator of
+    ``(first edge, (k, 2) uint32)``: concatenated they are exactly
+    :func:`grid_edges`, but memory holds one piece (a GL buffer written piece
+    by piece never needs the whole 54 MB of a 1 500 x 1 500 map)."""
+    rows, cols, step = int(rows), int(cols), max(1, int(piece_rows))
+    per_row = 3 * cols - 2  # right, down-left (not at column 0), down: the edges a row starts
+    for r0 in range(0, rows - 1, step):
+        r1 = min(rows - 1, r0 + step)
+        sub = grid_edges(r1 - r0 + 1, cols)[: (r1 - r0) * per_row]  # rows r0 .. r1 - 1 as a small grid
+        yield r0 * per_row, sub + np.uint32(r0 * cols)
+    last = np.uint32((rows - 1) * cols)  # the last row: right edges only
+    c = np.arange(cols - 1, dtype=np.uint32)
+    yield (rows - 1) * per_row, np.stack([c + last, c + 1 + last], axis=1)
+
+
 def grid_edges(rows: int, cols: int) -> np.ndarray:
     """(k, 2) uint32 edges of a ``rows`` x ``cols`` height-map grid (vertex
     ``r * cols + c``, each cell split by the diagonal from ``(r, c + 1)`` to

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..core.errors import ArgumentError, ParamError
 from ..core.io.params import dequantize_params, quantize_params, quantize_with_table
-from ..core.mesh import grid_edge_count, grid_edges
+from ..core.mesh import grid_edge_count, grid_edge_pieces
 from ..core.params import as_params, extend_params, is_extended
 from ..core.record import EXTENDED_WIDTH, WIDTH, gl_layout
 from .context import check_alive, check_released
@@ -74,14 +74,18 @@ def _content(buffer, formats, names, program, per_instance=False):
     return (buffer, " ".join(fmt) + ("/i" if per_instance else ""), *used)
 
 
-def _edge_array(mesh) -> np.ndarray:
-    """The mesh's edges as uint32 pairs for a GL buffer: a height map's made
-    from its grid and not kept (the buffer holds them), else the mesh's own
-    (found once and kept by the mesh)."""
+def _edge_buffer(ctx, mesh):
+    """The mesh's edges as uint32 pairs in a GL buffer: a height map's made
+    from its grid piece by piece and not kept (the buffer holds them; memory
+    holds one piece, :func:`grid_edge_pieces`), else the mesh's own (found
+    once and kept by the mesh)."""
     grid = getattr(mesh, "grid", None)
-    if grid is not None:
-        return grid_edges(*grid)
-    return np.ascontiguousarray(mesh.edges, dtype="u4")  # no copies
+    if grid is None:
+        return ctx.buffer(np.ascontiguousarray(mesh.edges, dtype="u4"))  # no copies
+    buffer = ctx.buffer(reserve=8 * grid_edge_count(*grid))
+    for first, piece in grid_edge_pieces(*grid):
+        buffer.write(piece, offset=8 * first)
+    return buffer
 
 
 class MeshBuffers:
@@ -115,7 +119,7 @@ class MeshBuffers:
         if "triangles" in indices:
             self.triangles = ctx.buffer(np.ascontiguousarray(mesh.faces, dtype="u4"))
         if "edges" in indices:
-            self._edges = ctx.buffer(_edge_array(mesh))
+            self._edges = _edge_buffer(ctx, mesh)
         self.triangle_indices = int(mesh.faces.size)
 
     @property
@@ -125,7 +129,7 @@ class MeshBuffers:
         check_released(self._released, "these MeshBuffers")
         if self._edges is None:
             check_alive(self.ctx, "these MeshBuffers")
-            self._edges = self.ctx.buffer(_edge_array(self.mesh))
+            self._edges = _edge_buffer(self.ctx, self.mesh)
         return self._edges
 
     @property

@@ -125,3 +125,14 @@ def test_grid_edges_are_the_unique_edges_of_a_height_map(tmp_path, rows, cols):
         surface = load_surface(tmp_path / "h.png", up=up)
         assert surface.grid == (rows, cols)
         assert np.array_equal(grid_edges(*surface.grid), unique_edges(surface.faces, len(surface.vertices)))
+
+
+@pytest.mark.parametrize("rows, cols", [(2, 2), (3, 5), (65, 3), (130, 7), (200, 41)])
+def test_grid_edges_in_pieces_are_the_whole(rows, cols):
+    from axialdeform.core.mesh import grid_edge_count, grid_edge_pieces, grid_edges
+
+    full = grid_edges(rows, cols)
+    pieces = list(grid_edge_pieces(rows, cols, piece_rows=64))
+    assert np.array_equal(np.concatenate([p for _, p in pieces]), full) and len(full) == grid_edge_count(rows, cols)
+    assert [first for first, _ in pieces] == list(np.cumsum([0] + [len(p) for _, p in pieces])[:-1])
+    assert max(len(p) for _, p in pieces) <= 64 * (3 * cols - 2)  # one piece at a time
