@@ -36,8 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .deform import bend_model, bernstein, deform, displace
-from .errors import ArgumentError, AxialDeformError, MeshError, ResidualError, TopologyError
+from .deform import bend_model, bernstein, deform, displace, tree_bend
+from .errors import AxialDeformError, MeshError, ResidualError, TopologyError
 from .io.mesh import MESH_SUFFIXES, load_mesh
 from .params import as_params
 from .record import ANGLES, EXTRA, OFFSETS, POSITION, tree_width
@@ -598,17 +598,74 @@ def _fit_batch_tree(m: "_TreeModel", targets: np.ndarray, max_iterations: int) -
     return m.params(x, rot), rounds
 
 
+def _fit_batch_tree_extended(m: "_TreeModel", targets: np.ndarray, max_iterations: int):
+    """The extended numbers too (scale, twist, taper about axis 0's axis line):
+    Gauss-Newton on ``RᵀW = s·(TT(V; tw, tp) + Σ_chain F_jᵀ E(D_j)) + Rᵀp``
+    in the offsets, ``Rᵀp``, a small turn, ``s``, ``tw`` and ``tp`` (the
+    twist and taper's derivatives by central differences of the CPU
+    reference).  Starts from the similarity map (scale, Kabsch rotation).
+    ``targets`` (n, v, 3) -> params (n, 10·K + 9), rounds (n,)."""
+    n, v = len(targets), len(m.base)
+    tree = m.mesh.tree
+    scale0 = umeyama_scale(m.base, targets)
+    rot, _ = kabsch(m.base * scale0[:, None, None], targets)
+    x = np.zeros((n, m.unknowns))
+    ext = np.stack([scale0, np.zeros(n), np.zeros(n)], axis=1)  # s tw tp
+    size = float(np.ptp(m.base, axis=0).max())
+    zero = np.zeros((n, tree.count, 5, 2))
+
+    def turned(tw_tp):  # TT(V): the twisted, tapered mesh (no offsets, s = 1)
+        extra = np.concatenate([np.ones((len(tw_tp), 1)), tw_tp], axis=1)
+        return tree_bend(tree, m.base, m.base, zero[:len(tw_tp)], extra)[0]
+
+    rounds = np.zeros(n, dtype=np.int64)
+    for it in range(1, max(1, int(max_iterations)) + 1):
+        local = np.einsum("nji,nvj->nvi", rot, targets)  # Rᵀ W
+        tt = turned(ext[:, 1:])
+        bend = m.shapes(x) - m.base  # Σ(z)
+        shape = tt + bend  # V''
+        q = x[:, -3:]
+        model = ext[:, 0, None, None] * shape + q[:, None]
+        resid = (local - model).reshape(n, -1)
+        h = 1e-6
+        d_tw = (turned(ext[:, 1:] + [h, 0]) - turned(ext[:, 1:] - [h, 0])) / (2 * h)
+        d_tp = (turned(ext[:, 1:] + [0, h]) - turned(ext[:, 1:] - [0, h])) / (2 * h)
+        sv = ext[:, 0, None, None] * shape
+        a, b, c = sv[..., 0], sv[..., 1], sv[..., 2]
+        turn = np.zeros((n, v, 3, 3))  # d(ω × sV'')/dω
+        turn[..., 0, 1], turn[..., 0, 2] = c, -b
+        turn[..., 1, 0], turn[..., 1, 2] = -c, a
+        turn[..., 2, 0], turn[..., 2, 1] = b, -a
+        design = m.design.copy()
+        offsets = ext[:, 0, None, None] * design[None, :, :-3]  # s · ∂Σ/∂z
+        full = np.concatenate([offsets, np.broadcast_to(design[:, -3:], (n,) + design[:, -3:].shape),
+                               turn.reshape(n, 3 * v, 3), shape.reshape(n, 3 * v, 1),
+                               (ext[:, 0, None, None] * d_tw).reshape(n, 3 * v, 1),
+                               (ext[:, 0, None, None] * d_tp).reshape(n, 3 * v, 1)], axis=2)
+        step = _solve(full, resid)
+        u = m.unknowns
+        x += step[:, :u]
+        rot = rot @ matrices_from_rotation_vectors(step[:, u:u + 3])
+        ext += step[:, u + 3:]
+        ext[:, 2] = np.minimum(ext[:, 2], 0.99)  # a taper stays < 1
+        rounds[:] = it
+        if np.abs(step[:, u:]).max() * size < 1e-10 * size and np.abs(step[:, :u]).max() < 1e-10 * size:
+            break
+    out = np.zeros((n, 10 * m.k + 9))
+    out[:, :10 * m.k + 6] = m.params(x, rot)
+    out[:, 10 * m.k + 6:] = ext
+    return out, rounds
+
+
 def _fit_all(mesh, items, count, *, max_residual, max_iterations, progress, extended=False):
     axes = getattr(mesh, "axis_count", 1)
-    if axes > 1 and extended:
-        raise ArgumentError(f"{mesh.name}: fit: extended numbers (scale, twist, taper) of a mesh of {axes} axes "
-                            "cannot be fitted yet; expected extended=False")
     model = _Model(mesh) if axes == 1 else _TreeModel(mesh)
     width = tree_width(axes, 1 if extended else 0)
     params = np.empty((count, width), dtype=np.float32)
     rms, mx, its, names = np.empty(count), np.empty(count), np.empty(count, dtype=np.int64), []
     batch = max(1, _BATCH_BYTES // (mesh.vertex_count * 3 * (17 if extended else 14 if axes == 1 else width) * 8))
-    fit_batch = _fit_batch_extended if extended else _fit_batch if axes == 1 else _fit_batch_tree
+    fit_batch = {(False, True): _fit_batch, (True, True): _fit_batch_extended,
+                 (False, False): _fit_batch_tree, (True, False): _fit_batch_tree_extended}[(bool(extended), axes == 1)]
     chunk: list[np.ndarray] = []
 
     def flush(end: int) -> None:  # fit the variants [end - len(chunk), end) together

@@ -206,10 +206,8 @@ def test_random_trees_in_pieces_are_the_whole(tree):
 
 
 def test_fit_recovers_trees(tree):
-    """The 10·K + 6 numbers back from baked trees: the shapes they give match
-    the targets to float32 rounding; extended fits of trees are refused in words."""
-    from axialdeform.core import ArgumentError
-
+    """The 10·K + 6 (+ 3) numbers back from baked trees: the shapes they give
+    match the targets to float32 rounding."""
     p = ad.random_params(tree, 12, seed=3, bend=(0.05, 0.2, 0.25), tilt=(-0.5, 0.5))
     shapes = ad.deform(tree, p)[0]
     fit = ad.fit_params(tree, shapes)
@@ -217,5 +215,11 @@ def test_fit_recovers_trees(tree):
     back = ad.deform(tree, fit.params)[0]
     assert np.abs(back - shapes).max() <= 1e-5 * tree.axis.length
     assert fit.max.max() <= 1e-5
-    with pytest.raises(ArgumentError, match="extended numbers .* of a mesh of 10 axes cannot be fitted yet"):
-        ad.fit_params(tree, shapes, extended=True)
+    # the extended numbers too: scale, twist and taper about the trunk's axis line
+    p = ad.random_params(tree, 6, seed=4, bend=(0.05, 0.2, 0.25), tilt=(-0.5, 0.5), scale=(0.6, 1.5), twist=0.6,
+                         taper=0.4)
+    shapes = ad.deform(tree, p)[0]
+    fit = ad.fit_params(tree, shapes, extended=True)
+    assert fit.params.shape == (6, 109)
+    np.testing.assert_allclose(fit.params[:, -3:], p[:, -3:], atol=1e-4)
+    assert np.abs(ad.deform(tree, fit.params)[0] - shapes).max() <= 1e-5 * tree.axis.length
