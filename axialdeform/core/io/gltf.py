@@ -472,8 +472,8 @@ def encode_base_mesh(mesh) -> bytes:
     TEXCOORD_0, COLOR_0 and TANGENT."""
     b = _Builder()
     g = b.g
+    attributes = _vertex_attributes(b, mesh)  # before the appearance: the order earlier files have
     look = b.appearance(mesh)
-    attributes = _vertex_attributes(b, mesh)
     if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
         attributes["TANGENT"] = b.accessor(b.view(mesh.tangents.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT,
                                            mesh.vertex_count, "VEC4", name="base_TANGENT")
@@ -508,8 +508,8 @@ def _add_instanced(b: _Builder, mesh, params, node_name: str, *, color=None, ext
     if n == 0:
         raise GltfError("instanced export: expected at least one instance (EXT_mesh_gpu_instancing needs count >= 1)")
     g = b.g
+    attributes = _vertex_attributes(b, mesh)  # before the appearance: the order earlier files have
     look = b.appearance(mesh, color)
-    attributes = _vertex_attributes(b, mesh)
     if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
         attributes["TANGENT"] = b.accessor(b.view(mesh.tangents.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT,
                                            mesh.vertex_count, "VEC4", name="base_TANGENT")
