@@ -12,7 +12,7 @@ from conftest import validate_gltf
 
 import axialdeform as ad
 from axialdeform.cli import main
-from axialdeform.core.io.gltf import read_instanced_glb
+from axialdeform.core.io.gltf import export_scene, read_instanced_glb
 from axialdeform.core.scene import load_scene
 
 
@@ -151,8 +151,13 @@ def test_trees_through_the_command_line_and_gltf(tmp_path, capsys):
     assert code == 2 and "bad.toml: axis 1: expected a table with a part name" in err
 
 
-def test_the_forest_scene_loads_its_tree():
+def test_the_forest_scene_loads_its_tree(tmp_path):
     scene = load_scene(FOREST / "forest.toml", scale_counts=0.05)
+    glb = tmp_path / "forest.glb"
+    export_scene(glb, scene, "instanced")  # the forest as an instanced GLB: the tree comes back
+    back, params = read_instanced_glb(glb, node="trees")
+    assert back.tree.digest == scene.layers[0].mesh.tree.digest and np.array_equal(params, scene.layers[0].params)
+    assert validate_gltf(glb)[0]["issues"]["numErrors"] == 0
     trees = scene.layers[0]
     assert trees.mesh.axis_count == 10 and trees.params.shape[1] == 109 and trees.wind  # scaled: 10·K + 9
     from axialdeform.core.record import split_record
