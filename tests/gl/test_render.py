@@ -273,7 +273,7 @@ def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
     original_finish = moderngl.Context.finish
 
     def spy(self, mode=None, vertices=-1, first=0, instances=-1):
-        if _multisampled(ctx):  # the shadow map's depth target is single-sampled: never sliced
+        if _multisampled(ctx):  # the colour passes only (the shadow map, single-sampled, has slices of its own)
             calls.append((mode, vertices, first, instances))
         return original(self, mode, vertices=vertices, first=first, instances=instances)
 
