@@ -1165,8 +1165,9 @@ def _read_inputs(argv: list, inputs: list) -> list:
     """The inputs this command line reads: named in it, and not as its output
     (``-o``, or convert's second file); files a command only writes may change."""
     outs = set()
-    if "-o" in argv:
-        outs.add(argv[argv.index("-o") + 1])
+    for flag in ("-o", "--screenshot"):  # what a command writes (view's --screenshot too)
+        if flag in argv:
+            outs.add(argv[argv.index(flag) + 1])
     if argv and argv[0] == "convert" and len(argv) > 2:
         outs.add(argv[2])
     return [p for p in inputs if p in argv and p not in outs]
