@@ -223,3 +223,45 @@ def test_fit_recovers_trees(tree):
     assert fit.params.shape == (6, 109)
     np.testing.assert_allclose(fit.params[:, -3:], p[:, -3:], atol=1e-4)
     assert np.abs(ad.deform(tree, fit.params)[0] - shapes).max() <= 1e-5 * tree.axis.length
+
+
+def test_hostile_tree_files_are_refused_in_words(tree, tmp_path):
+    import json
+    import struct
+    import zlib
+
+    import pygltflib
+
+    from axialdeform.core import GltfError, ParamFileError
+    from axialdeform.core.io.gltf import read_instanced_glb
+    from axialdeform.core.io.params import decode_binary, encode_binary
+
+    p = ad.random_params(tree, 3, seed=1)
+    data = bytearray(encode_binary(p, axis=tree))
+
+    def fixed(b):
+        b[-4:] = zlib.crc32(bytes(b[:-4])).to_bytes(4, "little")
+        return bytes(b)
+
+    bad = bytearray(data)
+    bad[28:32] = struct.pack("<I", 65)
+    with pytest.raises(ParamFileError, match="axes: expected 1 to 64 axes, found 65"):
+        decode_binary(fixed(bad), "t.adp")
+    bad = bytearray(data)
+    bad[28:32] = struct.pack("<I", 9)  # one axis fewer: the length no longer matches the count
+    with pytest.raises(ParamFileError, match="count: the header declares 3 instances"):
+        decode_binary(fixed(bad), "t.adp")
+    one = bytearray(encode_binary(ad.random_params(ad.load_mesh("stone"), 3, seed=1), axis=ad.load_mesh("stone")))
+    one[24] = 4  # "several axes" on a one-axis file
+    with pytest.raises(ParamFileError, match="axis: expected 4 \\(several axes\\) exactly when"):
+        decode_binary(fixed(one), "s.adp")
+    # a GLB whose vertex axes point past the tree
+    glb = tmp_path / "t.glb"
+    ad.export_glb(glb, tree, p, "instanced")
+    g = pygltflib.GLTF2().load(str(glb))
+    node = next(n for n in g.nodes if n.extensions)
+    node.extras["axialdeform"]["axes"]["parents"] = [-1] + [5] * 9  # a parent after its child
+    g.save(str(tmp_path / "u.glb"))
+    with pytest.raises(GltfError, match="u.glb: extras axes: axes: parents: expected -1 for axis 0"):
+        read_instanced_glb(tmp_path / "u.glb")
+    assert json.dumps(node.extras["axialdeform"]["count"]) == "3"
