@@ -1067,3 +1067,39 @@ def test_page_of_trees_shows_what_render_shows(browser, tmp_path, quantize):
     unbent = ad.render_image(mesh, straight, SIZE, look=look)
     assert iou(render, unbent, BACKGROUND) < 0.9
     assert_page_draws(browser, out.as_uri(), render, 60)
+
+
+@pytest.mark.slow
+def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
+    """SceneWidget of a mesh of ten axes: drawn as render draws it; set_params
+    with new numbers for every axis redraws it."""
+    from axialdeform.core.axes import TREE_AXES
+    from axialdeform.core.io.params import decode_binary
+    from axialdeform.widget import SceneWidget
+
+    mesh = ad.load_mesh("tree", axes=TREE_AXES)
+    params = ad.random_params(mesh, 40, seed=2, bend=(0.05, 0.4), placement="disc", spacing=3.0)
+    w = SceneWidget(mesh, params, size=SIZE)
+    assert w.config["layers"][0]["mesh"]["axes"]["count"] == 10
+    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
+    state = {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
+    page, errors = _widget_page(browser, tmp_path, state, w._esm)
+    try:
+        assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
+        clip = page.locator(".axd-stage").bounding_box()
+        before = page.screenshot(clip=clip)
+        again = ad.random_params(mesh, 40, seed=3, bend=(0.05, 0.4), placement="disc", spacing=3.0)
+        w.set_params(again)
+        assert decode_binary(w.params_adp).values.shape == (40, 106)
+        push = "(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }"
+        page.evaluate(push, base64.b64encode(w.params_adp).decode())
+        page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
+        assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
+        for _ in range(100):
+            if page.screenshot(clip=clip) != before:
+                break
+            page.wait_for_timeout(200)
+        assert page.screenshot(clip=clip) != before
+        assert errors == []
+    finally:
+        page.close()
