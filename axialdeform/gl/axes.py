@@ -17,6 +17,7 @@ import moderngl
 import numpy as np
 
 from ..core.bounds import child_reach
+from ..core.errors import ParamError
 from .context import check_alive
 from .uniforms import set_uniforms
 
@@ -62,6 +63,11 @@ class AxesTexture:
         self.capacity = capacity
         texels = capacity * (self.axes - 1) * 3
         rows = -(-texels // ROW)
+        most = int(self.ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384) or 16384)
+        if rows > most:
+            raise ParamError(f"instances: {capacity} of {self.axes} axes need a {ROW} x {rows} offsets texture; "
+                             f"this GL takes at most {most} rows: expected at most "
+                             f"{most * ROW // (3 * (self.axes - 1))} instances in one renderer")
         self.texture = self.ctx.texture((ROW, rows), 4, dtype="f4")
         self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)  # float textures: fetched, never filtered
 

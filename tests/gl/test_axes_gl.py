@@ -165,3 +165,15 @@ def test_levels_of_detail_of_a_tree_keep_each_vertex_on_its_axis(ctx):
             assert sum(r.stats["levels"][1:]) > 0  # far trees drawn coarser
         finally:
             target.release()
+
+
+def test_more_trees_than_the_offsets_texture_holds_is_said_in_words(ctx, monkeypatch):
+    from axialdeform.core import ParamError
+
+    mesh = comb(3, seed=1)
+    p = _params(mesh, n=10)
+    monkeypatch.setitem(ctx.info, "GL_MAX_TEXTURE_SIZE", 1)  # one row: 4095 texels, 682 instances of 3 axes
+    with pytest.raises(ParamError, match="instances: 700 of 3 axes need a 4095 x 2 offsets texture"):
+        AxialRenderer(ctx, mesh, p, capacity=700).release()
+    with AxialRenderer(ctx, mesh, p, capacity=682) as r:
+        assert r.count == 10
