@@ -110,13 +110,21 @@ def _multisampled(ctx) -> bool:
     return any(getattr(a, "samples", 0) > 1 for a in attachments)
 
 
+def _depth_only(ctx) -> bool:
+    """Whether the bound framebuffer has a depth attachment and no colour one (a shadow map)."""
+    fbo = ctx.fbo
+    return not list(getattr(fbo, "color_attachments", ()) or ()) and getattr(fbo, "depth_attachment", None) is not None
+
+
 def flush_budget(ctx, per_primitive: int = 3) -> int | None:
-    """Primitives to give ``ctx`` between finishes now: None (never slice) on a GPU;
-    else :func:`flush_interval` (lines: a third), into any target -- a
-    single-sampled one too: the shadow map's depth pass of a 4.5 M-triangle
-    terrain held ~50 MB more unsliced (docs/reliability.md)."""
+    """Primitives to give ``ctx`` between finishes now: None (never slice) on a GPU
+    or into a single-sampled colour target (one draw call: llvmpipe bins a
+    bounded scene and flushes it by itself); else :func:`flush_interval` (lines:
+    a third) -- into a multisampled target, and into a depth-only one (the
+    shadow map's pass of a 4.5 M-triangle terrain held ~50 MB more unsliced,
+    docs/reliability.md)."""
     budget = flush_interval(ctx)
-    if budget is None:
+    if budget is None or not (_multisampled(ctx) or _depth_only(ctx)):
         return None
     return max(1, budget // 3) if per_primitive == 2 else budget  # a line costs ~140 bytes, a triangle ~48
 
