@@ -20,7 +20,7 @@ import numpy as np
 
 from ..core.errors import ArgumentError, ParamError
 from ..core.io.params import dequantize_params, quantize_params, quantize_with_table
-from ..core.mesh import grid_edge_count, grid_edge_pieces
+from ..core.mesh import grid_edge_count, grid_edge_pieces, grid_edges
 from ..core.params import as_params, extend_params, is_extended
 from ..core.record import EXTENDED_WIDTH, WIDTH, gl_layout
 from .context import check_alive, check_released
@@ -74,14 +74,30 @@ def _content(buffer, formats, names, program, per_instance=False):
     return (buffer, " ".join(fmt) + ("/i" if per_instance else ""), *used)
 
 
-def _edge_buffer(ctx, mesh):
+#: grid rows whose edges one draw of a height map's wireframe covers (GL >= 4.2: :meth:`MeshBuffers.grid_edge_draws`)
+GRID_BLOCK_ROWS = 16
+
+
+def _grid_block_pattern(rows: int, cols: int, block: int) -> np.ndarray:
+    """The edges of ``block`` grid rows from vertex 0, then the last row's right
+    edges from vertex 0: every block of the grid is the first part of it drawn
+    with a base vertex (``r0 · cols``), the last row the second (uint32 pairs)."""
+    first = grid_edges(min(rows, block + 1), cols)[: min(rows - 1, block) * (3 * cols - 2)]
+    c = np.arange(cols - 1, dtype=np.uint32)
+    return np.concatenate([first, np.stack([c, c + 1], axis=1)])
+
+
+def _edge_buffer(ctx, mesh, grid_block: int | None = None):
     """The mesh's edges as uint32 pairs in a GL buffer: a height map's made
     from its grid piece by piece and not kept (the buffer holds them; memory
-    holds one piece, :func:`grid_edge_pieces`), else the mesh's own (found
-    once and kept by the mesh)."""
+    holds one piece, :func:`grid_edge_pieces`) -- or, with ``grid_block``,
+    only the pattern of that many rows (:func:`_grid_block_pattern`) -- else
+    the mesh's own (found once and kept by the mesh)."""
     grid = getattr(mesh, "grid", None)
     if grid is None:
         return ctx.buffer(np.ascontiguousarray(mesh.edges, dtype="u4"))  # no copies
+    if grid_block is not None:
+        return ctx.buffer(_grid_block_pattern(*grid, grid_block))
     buffer = ctx.buffer(reserve=8 * grid_edge_count(*grid))
     for first, piece in grid_edge_pieces(*grid):
         buffer.write(piece, offset=8 * first)
@@ -118,8 +134,13 @@ class MeshBuffers:
         del interleaved
         if "triangles" in indices:
             self.triangles = ctx.buffer(np.ascontiguousarray(mesh.faces, dtype="u4"))
+        grid = getattr(mesh, "grid", None)
+        #: a height map's wireframe as blocks of rows drawn with a base vertex from ONE small
+        #: index buffer (GL >= 4.2: indirect draws with a base vertex), (rows, cols, rows a block);
+        #: None: the whole edge buffer (every other mesh, GL 3.3)
+        self.grid_blocks = None if grid is None or ctx.version_code < 420 else (*grid, GRID_BLOCK_ROWS)
         if "edges" in indices:
-            self._edges = _edge_buffer(ctx, mesh)
+            self._edges = _edge_buffer(ctx, mesh, self._block_rows)
         self.triangle_indices = int(mesh.faces.size)
 
     @property
@@ -129,7 +150,7 @@ class MeshBuffers:
         check_released(self._released, "these MeshBuffers")
         if self._edges is None:
             check_alive(self.ctx, "these MeshBuffers")
-            self._edges = _edge_buffer(self.ctx, self.mesh)
+            self._edges = _edge_buffer(self.ctx, self.mesh, self._block_rows)
         return self._edges
 
     @property
@@ -139,6 +160,21 @@ class MeshBuffers:
         if grid is not None:
             return 2 * grid_edge_count(*grid)
         return int(self.mesh.edges.size)
+
+    @property
+    def _block_rows(self) -> int | None:
+        return None if self.grid_blocks is None else self.grid_blocks[2]
+
+    def grid_edge_draws(self, instances: int, base: int = 0) -> list:
+        """The indirect commands ``(count, instances, first index, base vertex, base
+        instance)`` that draw a height map's edges block by block (:attr:`grid_blocks`),
+        in the whole buffer's order."""
+        rows, cols, block = self.grid_blocks
+        per_row = 3 * cols - 2
+        out = [(2 * min(block, rows - 1 - r0) * per_row, instances, 0, r0 * cols, base)
+               for r0 in range(0, rows - 1, block)]
+        out.append((2 * (cols - 1), instances, 2 * min(rows - 1, block) * per_row, (rows - 1) * cols, base))
+        return out
 
     def content(self, program):
         if self._axis_ids:

@@ -122,8 +122,16 @@ class Drawing:
                 self.ctx.enable(moderngl.BLEND)
                 self.ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
             try:
-                count = self._edge_count if level == 0 else self._level_edge_data(level)[1]
-                self._instanced(edges(), moderngl.LINES, count, 0, instances, ("e", level, 0))
+                blocks = self.mesh_buffers.grid_blocks if level == 0 and self._part_edges is None else None
+                if blocks is not None:  # a height map: blocks of rows from one small index buffer
+                    if isinstance(instances, IndirectDraws):  # culled: the pass's count and first record
+                        count, base = instances.slot_instances(("e", level, 0), self._edge_count, 0)
+                    else:
+                        count, base = int(instances), 0
+                    self._draw_grid_edges(edges(), count, base)
+                else:
+                    count = self._edge_count if level == 0 else self._level_edge_data(level)[1]
+                    self._instanced(edges(), moderngl.LINES, count, 0, instances, ("e", level, 0))
             finally:
                 self.ctx.depth_func = "<"
                 if fill:
@@ -206,6 +214,23 @@ class Drawing:
         # EVERY instance whatever this draw's count (culled, a level's): the same slices
         # with and without culling, so the same order and the same picture
         draw_in_batches(self.ctx, draw, vertices, first, per, max(self.count, 1))
+
+    def _draw_grid_edges(self, vao, instances: int, base: int = 0) -> None:
+        """A height map's wireframe: every block of grid rows drawn from the one
+        block-sized index buffer with its base vertex (an indirect command each,
+        in the order of the whole edge list: the same picture), the GL queue
+        finished after each block on a software rasteriser (bounded memory)."""
+        if self._slice_commands is None:
+            self._slice_commands = self.ctx.buffer(reserve=20)
+            self._objects.append(self._slice_commands)
+        finish = flush_budget(self.ctx, 2) is not None
+        if instances <= 0:
+            return
+        for command in self.mesh_buffers.grid_edge_draws(int(instances), int(base)):
+            self._slice_commands.write(np.array(command, "<u4").tobytes())
+            vao.render_indirect(self._slice_commands, moderngl.LINES, count=1, first=0)
+            if finish:
+                self.ctx.finish()
 
     def _draw_instance_slices(self, vao, mode, vertices: int, first: int, count: int, base: int, step: int) -> None:
         """Draw instances ``base .. base + count`` in slices of ``step``, the GL queue

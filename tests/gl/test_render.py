@@ -371,3 +371,54 @@ def test_multisampled_frame_memory_does_not_grow_with_triangles(tmp_path):
         growth[flush] = float(done.stdout.split()[-1])
     assert growth["0"] > 150, growth  # unsliced: the driver's memory grows (the measurement can see it)
     assert growth["default"] < 80 and growth["0"] > 3 * growth["default"], growth  # sliced: one slice at a time
+
+
+@pytest.mark.parametrize("culling", [False, True])
+def test_a_height_maps_wireframe_in_blocks_is_the_whole_edge_list(ctx, monkeypatch, culling):
+    """GL >= 4.2: a height map's edges are drawn block by block from one small
+    index buffer with base vertices -- the same picture as the whole edge
+    buffer (every hidden-line style, culled or not), and the blocks' commands
+    hold exactly the grid's edges in the same order."""
+    from axialdeform.core.mesh import BaseMesh, area_weighted_normals, grid_edges
+    from axialdeform.core.scatter import surface_from_heights
+    from axialdeform.gl import buffers
+    from axialdeform.gl.renderer import AxialRenderer
+
+    rng = np.random.default_rng(3)
+    surf = surface_from_heights(rng.random((70, 90)), height_scale=8.0, extent=(40, 30))
+    mesh = BaseMesh(surf.vertices, area_weighted_normals(surf.vertices, surf.faces), surf.faces, name="map",
+                    grid=surf.grid)
+    params = ad.random_params(mesh, 3, seed=1, bend=0.02, spacing=50)
+    cam = ad.Camera(eye=(60.0, 45.0, 70.0), target=(0.0, 0.0, 0.0), fovy=60.0)
+    view, proj = cam.view(), cam.projection(4 / 3)
+
+    def pictures():
+        out = []
+        for hidden in ("fill", True, False):
+            look = ad.Look(ground=False, shadow=False, hidden_line=hidden)
+            with AxialRenderer(ctx, mesh, params, culling=culling) as r, ad.Offscreen(ctx, (160, 120)) as t:
+                t.use((0.9, 0.9, 0.9))
+                r.render(view, proj, "wireframe", look=look)
+                out.append(t.read())
+                blocks = r.mesh_buffers.grid_blocks
+        return out, blocks
+
+    blocked, blocks = pictures()
+    assert blocks is not None
+    pattern = buffers._grid_block_pattern(*surf.grid, blocks[2])
+    rebuilt = np.concatenate([pattern[c[2] // 2:(c[2] + c[0]) // 2] + np.uint32(c[3])
+                              for c in buffers.MeshBuffers.grid_edge_draws(type("M", (), {"grid_blocks": blocks})(), 1)])
+    assert np.array_equal(rebuilt, grid_edges(*surf.grid))
+    monkeypatch.setattr(buffers, "GRID_BLOCK_ROWS", None)  # the whole edge buffer, as GL 3.3 draws it
+    monkeypatch.setattr(buffers.MeshBuffers, "_block_rows", property(lambda self: None))
+    real_init = buffers.MeshBuffers.__init__
+
+    def whole(self, *a, **k):
+        real_init(self, *a, **k)
+        self.grid_blocks = None
+    monkeypatch.setattr(buffers.MeshBuffers, "__init__", whole)
+    whole_pictures, none = pictures()
+    assert none is None
+    for a, b in zip(blocked, whole_pictures):
+        assert np.array_equal(a, b)
+    assert (np.abs(blocked[2].astype(int) - 230).max(axis=-1) > 40).mean() > 0.05  # lines were drawn
