@@ -276,6 +276,32 @@ MAX_BAKE_FILES = 10_000
 MAX_EXPORT_MESHES = 10_000
 
 
+#: The CLI's budget of triangles one baked output holds (``bake``, ``export
+#: --baked``; ``--max-triangles``): instances x triangles of the mesh, summed
+#: over layers.  Baking is writing: 2 * 10**7 triangles are a 0.5 GB glTF or
+#: 1 GB of OBJ text, about 7 s (glTF) to 22 s (OBJ) of CPU here for a
+#: 1 M-face mesh -- past it a bake is more likely a mistake than a wish
+#: (docs/reliability.md).  The Python API bakes whatever it is given.
+MAX_BAKED_TRIANGLES = 20_000_000
+
+
+def add_max_baked(p) -> None:
+    """``--max-triangles N`` of the commands that write baked geometry."""
+    p.add_argument("--max-triangles", type=positive_int, default=MAX_BAKED_TRIANGLES, metavar="N", help=(
+        "refuse to bake more than N triangles: instances x triangles of the mesh, summed over layers "
+        "(default: %(default)s: a 0.5 GB glTF, 1 GB of OBJ text)"))
+
+
+def check_baked_triangles(args, items, hint: str) -> None:
+    """Refuse a baked output of more than ``--max-triangles`` triangles, before
+    any work; ``items`` : (what, instances, triangles a mesh) a layer."""
+    total = sum(int(n) * int(t) for _, n, t in items)
+    if total > args.max_triangles:
+        what = ", ".join(f"{w} ({n} x {t} triangles)" for w, n, t in items)
+        raise ArgumentError(f"{what}: {total} triangles to bake, over the limit of {args.max_triangles}; expected "
+                            f"fewer instances, or raise the limit with --max-triangles N{hint}")
+
+
 def add_max_triangles(p) -> None:
     """``--max-triangles N`` (every command that rasterises)."""
     p.add_argument("--max-triangles", type=positive_int, default=MAX_TRIANGLES, metavar="N", help=(

@@ -14,9 +14,11 @@ from ..gl.bake import ENGINES, bake, bake_pieces
 from . import scenes
 from ._common import (
     MAX_BAKE_FILES,
+    add_max_baked,
     add_mesh_and_params,
     add_mesh_mismatch,
     add_wind_args,
+    check_baked_triangles,
     load,
     positive_int,
     progress_bar,
@@ -40,6 +42,7 @@ def add_parser(sub) -> None:
     b.add_argument("--max-files", type=positive_int, default=MAX_BAKE_FILES, metavar="N", help=(
         "refuse to write more than N mesh files into a folder (one an instance; -o OUT.npz has no such limit) "
         "(default: %(default)s)"))
+    add_max_baked(b)
     add_wind_args(b)
     b.set_defaults(handler=run)
 
@@ -51,6 +54,7 @@ def run(args) -> None:
     wind = wind_arg(args)
     out = Path(args.output)
     mesh, params = load(args, "bake output", allow_folder=out.suffix.lower() != ".npz")
+    check_baked_triangles(args, [(f"{args.mesh} x {args.params}", len(params), len(mesh.faces))], "")
     if out.suffix.lower() == ".npz":  # made and written in pieces: bounded by the disk, not memory
         return _bake_npz_in_pieces(args, out, mesh, params, wind)
     check_file_count(args, out, len(params))  # before anything is deformed or written

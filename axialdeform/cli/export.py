@@ -7,8 +7,10 @@ from ..core.io.gltf import check_glb_path, export_glb
 from . import scenes
 from ._common import (
     MAX_EXPORT_MESHES,
+    add_max_baked,
     add_mesh_and_params,
     add_mesh_mismatch,
+    check_baked_triangles,
     load,
     positive_int,
 )
@@ -33,6 +35,7 @@ def add_parser(sub) -> None:
     e.add_argument("--max-meshes", type=positive_int, default=MAX_EXPORT_MESHES, metavar="N", help=(
         "with --baked: refuse more than N instances (one glTF mesh and node each; --instanced and scene files "
         "have no such limit) (default: %(default)s)"))
+    add_max_baked(e)
     e.set_defaults(handler=run)
 
 
@@ -44,6 +47,9 @@ def run(args) -> None:
     if scene is not None:
         return scenes.export(scene, args)
     mesh, params = load(args, "exported .glb")
+    if args.layout == "baked":  # before anything is deformed
+        check_baked_triangles(args, [(f"{args.mesh} x {args.params}", len(params), len(mesh.faces))],
+                              ", or use --instanced (the base mesh once, no such limit)")
     if args.layout == "baked" and len(params) > args.max_meshes:  # before anything is deformed
 
         raise ArgumentError(

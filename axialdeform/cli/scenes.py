@@ -14,6 +14,7 @@ from ..core.io.image import save_png
 from ..core.io.safeio import check_disk_space, check_output_path
 from ..core.scene import is_scene_file, load_scene
 from ..gl.bake import bake_pieces
+from ._common import check_baked_triangles
 from ._common import check_triangles as check
 
 __all__ = ["scene_of", "render", "bake", "export"]
@@ -89,6 +90,8 @@ def bake(scene, args, progress, wind=None) -> None:
         raise AxialDeformError(f"{out}: a scene bakes to one .npz (arrays positions_LAYER, normals_LAYER); "
                                f"expected a .npz file name")
     _check_output(args, "bake output")
+    check_baked_triangles(args, [(f"layer {layer.name}", len(layer.params), len(layer.mesh.faces))
+                                 for layer in scene.layers], "")
     if wind is not None:
         scene.wind = wind
     t = _time(scene, args)
@@ -116,6 +119,9 @@ def export(scene, args) -> None:
     EXT_mesh_gpu_instancing (instanced)."""
 
     _check_output(args, "exported .glb")
+    if args.layout == "baked":  # the layers' instances baked (the terrain is written once, as it is)
+        check_baked_triangles(args, [(f"layer {layer.name}", len(layer.params), len(layer.mesh.faces))
+                                     for layer in scene.layers], ", or use --instanced (no such limit)")
     path = export_scene(args.output, scene, args.layout)
     print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, {args.layout}, "
           f"{path.stat().st_size} bytes)")

@@ -247,3 +247,21 @@ def test_view_of_a_file_shows_no_made_up_seed(tmp_path, capsys):
     assert "20 instances" in title and "seed" not in title
     assert main(["view", "stone", "-n", "20", "--seed", "7", "--headless", "--frames", "1", "--size", "64x48"]) == 0
     assert "seed 7" in capsys.readouterr().out
+
+
+def test_baked_outputs_have_a_triangle_budget(tmp_path, capsys):
+    """bake and export --baked refuse more than --max-triangles triangles
+    (instances x triangles of the mesh) before any work, in one line; the
+    option raises it; --instanced has no such limit."""
+    adp = tmp_path / "s.adp"
+    assert main(["random", "stone", "-n", "50", "-o", str(adp)]) == 0  # 50 x 112 = 5600 triangles
+    for argv in (["bake", "stone", str(adp), "-o", str(tmp_path / "b.npz")],
+                 ["bake", "stone", str(adp), "-o", str(tmp_path / "folder")],
+                 ["export", "stone", str(adp), "-o", str(tmp_path / "b.glb")]):
+        capsys.readouterr()
+        assert main(argv + ["--max-triangles", "5000"]) == 2
+        err = capsys.readouterr().err
+        assert "5600 triangles to bake, over the limit of 5000" in err and "Traceback" not in err
+        assert not (tmp_path / argv[4].split("/")[-1]).exists()  # nothing written
+        assert main(argv + ["--max-triangles", "5600"]) == 0
+    assert main(["export", "stone", str(adp), "-o", str(tmp_path / "i.glb"), "--instanced", "--max-triangles", "1"]) == 0
