@@ -28,19 +28,20 @@ CPU reference in :mod:`~axialdeform.core.deform` (``deform_tree``).  Pure numpy.
 from __future__ import annotations
 
 import hashlib
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .axis import ControlAxis
-from .deform import T_SLACK  # noqa: F401 - part of this module's story (the clamp of a chain term)
-from .errors import MeshError
+from .errors import MeshError, ParamError
+from .record import MAX_RECORD_AXES
 
-__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "T_SLACK", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
-           "axes_of"]
+#: the most axes one mesh may carry: a record's most (core/record.py)
+MAX_AXES = MAX_RECORD_AXES
 
-#: the most axes one mesh may carry (the shader's uniform arrays are this long at most)
-MAX_AXES = 64
+__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
+           "axes_of", "level_bends", "child_offsets"]
 
 
 
@@ -128,6 +129,28 @@ def axes_of(mesh) -> int:
 TREE_AXES = ([{"part": "trunk", "axis": "y"}]
              + [{"part": f"branch{k}", "parent": "trunk", "axis": "oriented"} for k in range(1, 7)]
              + [{"part": f"twig{t}", "parent": f"branch{2 * t - 1}", "axis": "oriented"} for t in range(1, 4)])
+
+
+# ------------------------------------------------------------------ variation of the child axes
+def level_bends(bend, error: type = ParamError) -> tuple[float, ...]:
+    """``bend`` as one amplitude per level of a hierarchy (a number: every
+    level the same); each a finite fraction of an axis's length >= 0, else ``error``."""
+    bends = tuple(bend) if isinstance(bend, (list, tuple, np.ndarray)) else (bend,)
+    if not bends or not all(isinstance(b, (int, float, np.integer, np.floating)) and math.isfinite(b) and b >= 0
+                            for b in bends):
+        raise error(f"bend: expected a finite fraction of L >= 0 (or one per level of the hierarchy), found {bend!r}")
+    return tuple(float(b) for b in bends)
+
+
+def child_offsets(tree: AxisTree, bends: tuple, uniform: np.ndarray) -> np.ndarray:
+    """The child axes' offsets ``(n, K − 1, 5, 2)`` float64 from uniforms in
+    [0, 1) of that shape: axis ``j`` uniform in ``±bends[level]·L_j`` (the last
+    amplitude for any deeper level), with ``d₁ = 0``: its root stays where its
+    parent puts it (joints stay closed)."""
+    amp = np.array([bends[min(d, len(bends) - 1)] * a.length for d, a in zip(tree.depth[1:], tree.axes[1:])])
+    out = (2.0 * np.asarray(uniform, dtype=np.float64) - 1.0) * amp[None, :, None, None]
+    out[:, :, 0] = 0.0
+    return out
 
 
 # ------------------------------------------------------------------ building a tree

@@ -49,6 +49,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from .axes import child_offsets, level_bends
 from .axis import AXIS_NAMES, PERPENDICULAR
 from .deform import bernstein
 from .errors import MeshError, ScatterError, TooFewError
@@ -57,7 +58,15 @@ from .io.mesh import load_mesh
 from .io.safeio import _gb, open_regular
 from .material import AssetWarning
 from .mesh import BaseMesh
-from .record import ANGLES, EXTENDED_WIDTH, OFFSETS, POSITION, SCALE, Instances, join_record
+from .record import (
+    ANGLES,
+    EXTENDED_WIDTH,
+    OFFSETS,
+    POSITION,
+    SCALE,
+    Instances,
+    join_record,
+)
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
 __all__ = ["scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights", "ANCHORS", "IMAGE_SUFFIXES",
@@ -503,12 +512,7 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
         raise ScatterError(f"anchor: expected one of {', '.join(ANCHORS)}, found {anchor!r}")
     if not (math.isfinite(align_to_normal) and 0.0 <= align_to_normal <= 1.0):
         raise ScatterError(f"align-to-normal: expected a fraction in [0, 1], found {align_to_normal!r}")
-    bends = tuple(bend) if isinstance(bend, (list, tuple, np.ndarray)) else (bend,)
-    if not bends or not all(isinstance(b, (int, float, np.integer, np.floating)) and math.isfinite(b) and b >= 0
-                            for b in bends):
-        raise ScatterError(f"bend: expected a finite fraction of L >= 0 (or one per level of the hierarchy), "
-                           f"found {bend!r}")
-    bend = bends
+    bend = level_bends(bend, ScatterError)  # one amplitude per level of a mesh of several axes
     if scale is not None:
         lo_s, hi_s = (float(scale), float(scale)) if np.isscalar(scale) else (float(scale[0]), float(scale[1]))
         if not (math.isfinite(lo_s) and math.isfinite(hi_s) and 0 < lo_s <= hi_s):
@@ -587,8 +591,7 @@ def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, s
     rolls = rng.random((k, 12))
     axis = base.axis
     length = axis.length
-    bends = tuple(bend) if isinstance(bend, tuple) else (bend,)
-    offsets = ((2.0 * rolls[:, :10] - 1.0) * bends[0] * length).reshape(k, 5, 2)
+    offsets = ((2.0 * rolls[:, :10] - 1.0) * bend[0] * length).reshape(k, 5, 2)
 
     lo, hi = base.positions.min(axis=0), base.positions.max(axis=0)
     if anchor == "origin":
@@ -621,10 +624,7 @@ def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, s
         out[:, SCALE] = s
     tree = getattr(base, "tree", None)
     if tree is not None:  # several axes: every child axis its level's amplitude, d1 = 0 (joints stay closed)
-        amp = np.array([bends[min(d, len(bends) - 1)] * a.length for d, a in zip(tree.depth[1:], tree.axes[1:])])
-        children = (2.0 * rng.random((k, tree.count - 1, 5, 2)) - 1.0) * amp[None, :, None, None]
-        children[:, :, 0] = 0.0
-        out = join_record(out, children)
+        out = join_record(out, child_offsets(tree, bend, rng.random((k, tree.count - 1, 5, 2))))
     out = np.ascontiguousarray(out, dtype=np.float32)
     if not np.isfinite(out).all():
         raise ScatterError("scatter: a parameter came out non-finite; expected finite surface and mesh coordinates")

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .axes import child_offsets, level_bends
 from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import as_params
@@ -78,7 +79,8 @@ class _Spec:
     twist: float
     taper: float
     tint: tuple | None = None  # (amount, (r, g, b)): tinted instances
-    children: tuple = ()  # several axes: (bend amplitude, L) of every child axis, in axis order
+    tree: object = None  # several axes: the mesh's AxisTree ...
+    bends: tuple = ()  # ... and the bend amplitude of each level of it
 
 
 def _spec(
@@ -106,14 +108,8 @@ def _spec(
         raise ParamError(f"placement: expected one of {', '.join(PLACEMENTS)}, found {placement!r}")
     if up not in AXIS_NAMES:
         raise ParamError(f"up: expected one of x, y, z, found {up!r}")
-    bends = tuple(bend) if isinstance(bend, (list, tuple, np.ndarray)) else (bend,)
-    if not bends or not all(isinstance(b, (int, float, np.floating, np.integer)) and math.isfinite(b) and b >= 0
-                            for b in bends):
-        raise ParamError(f"bend: expected a finite fraction of L >= 0 (or one per level of the hierarchy), found {bend!r}")
-    bend = float(bends[0])
-    tree = getattr(mesh, "tree", None)  # several axes: each level its own amplitude (the last one beyond)
-    children = () if tree is None else tuple(
-        (float(bends[min(d, len(bends) - 1)]), float(a.length)) for d, a in zip(tree.depth[1:], tree.axes[1:]))
+    bends = level_bends(bend)  # several axes: each level its own amplitude (the last one beyond)
+    bend = bends[0]
     length = mesh.axis.length
     spacing = 1.1 * length if spacing is None else float(spacing)
     if not (math.isfinite(spacing) and spacing > 0):
@@ -141,7 +137,7 @@ def _spec(
         raise ParamError(f"taper: expected a number < 1, found {taper!r}")
     _check_seed(seed)
     return _Spec(int(count), int(seed), bend, length, placement, spacing, AXIS_NAMES.index(up), yaw, tilt,
-                 height, extended, (s_lo, s_hi), tw, tp, tinting, children)
+                 height, extended, (s_lo, s_hi), tw, tp, tinting, getattr(mesh, "tree", None), bends)
 
 
 def random_params(
@@ -281,12 +277,9 @@ def _rows(spec: "_Spec", start: int, stop: int) -> np.ndarray:
         amount, color = spec.tint
         u_tint = _stream(spec.seed, 19 * n + 3 * start, 3 * m).reshape(m, 3)
         out[:, TINT] = np.asarray(color) * (1.0 - amount * u_tint)
-    if spec.children:
+    if spec.tree is not None:
         # several axes: 10 numbers per child axis, after the tint block of every instance
-        k = len(spec.children)
+        k = spec.tree.count - 1
         u_child = _stream(spec.seed, 22 * n + 10 * k * start, 10 * k * m).reshape(m, k, 5, 2)
-        amp = np.array([b * length for b, length in spec.children])  # (k,)
-        children = (2.0 * u_child - 1.0) * amp[None, :, None, None]
-        children[:, :, 0] = 0.0  # d1 = 0: the child's root stays on its parent
-        return as_params(join_record(out, children), axes=k + 1)
+        return as_params(join_record(out, child_offsets(spec.tree, spec.bends, u_child)), axes=k + 1)
     return as_params(out)
