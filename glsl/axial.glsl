@@ -106,6 +106,13 @@ mat3 axial_rotation(vec3 r) {
         c.z * s.y * c.x + s.z * s.x,   s.z * s.y * c.x - c.z * s.x,   c.y * c.x);
 }
 
+// The rigid part: a bent model-space vertex and normal placed in the world, W = R (s V'') + p.
+void axial_place(vec3 bent_v, vec3 bent_n, AxialInstance inst, out vec3 w_out, out vec3 wn_out) {
+    mat3 rot = axial_rotation(inst.angles);
+    w_out = rot * (inst.scale * bent_v) + inst.position;
+    wn_out = rot * bent_n;
+}
+
 // The whole map: model-space vertex/normal -> world-space vertex/normal.
 // `center`: the axis line (see axial_bend); W = R (s V'') + p.
 void axial_world(vec3 v, vec3 n, int axis, float lo, float len, vec2 center, AxialInstance inst,
@@ -114,9 +121,7 @@ void axial_world(vec3 v, vec3 n, int axis, float lo, float len, vec2 center, Axi
 #ifndef AXIAL_NO_BEND
     axial_bend(v, n, axis, lo, len, center, inst, bent_v, bent_n);
 #endif
-    mat3 rot = axial_rotation(inst.angles);
-    w_out = rot * (inst.scale * bent_v) + inst.position;
-    wn_out = rot * bent_n;
+    axial_place(bent_v, bent_n, inst, w_out, wn_out);
 }
 
 // The 16-number call of earlier versions: right for any instance without twist
@@ -180,9 +185,7 @@ void axial_world(vec3 v, vec3 n, mat3 frame, float lo, float len, vec2 center, A
 #ifndef AXIAL_NO_BEND
     axial_bend(v, n, frame, lo, len, center, inst, bent_v, bent_n);
 #endif
-    mat3 rot = axial_rotation(inst.angles);
-    w_out = rot * (inst.scale * bent_v) + inst.position;
-    wn_out = rot * bent_n;
+    axial_place(bent_v, bent_n, inst, w_out, wn_out);
 }
 
 vec3 axial_world_tangent(vec3 v, vec3 tangent, mat3 frame, float lo, float len, vec2 center,
@@ -287,9 +290,7 @@ void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[
     }
     moved += disp;
 #endif
-    mat3 rot = axial_rotation(inst.angles);
-    w_out = rot * (inst.scale * moved) + inst.position;
-    wn_out = rot * normalize(axial_cofactor(jac, n));
+    axial_place(moved, normalize(axial_cofactor(jac, n)), inst, w_out, wn_out);
     jac_out = jac;
 }
 #endif

@@ -70,7 +70,7 @@ def instance_bounds(mesh, params, wind=None, *, radius: float | None = None) -> 
     may reach further).  The same sphere on the GPU: ``glsl/bounds.glsl``
     (``axial_bound_sphere``).
     """
-    params, children = _standard(mesh, params)
+    params, children, _ = _standard(mesh, params)
     center = np.asarray(mesh.axis.center, dtype=np.float64)
     radius = base_radius(mesh) if radius is None else float(radius)
     bend = np.linalg.norm(params[:, OFFSETS].reshape(-1, 5, 2), axis=2).max(axis=1) + wind_reach(mesh, wind)
@@ -109,15 +109,15 @@ def box_corners(lo, hi) -> np.ndarray:
     return np.where(bits == 1, hi, lo)
 
 
-def _standard(mesh, params) -> tuple[np.ndarray, np.ndarray | None]:
-    """Axis 0's record (n, 16|19|22) float64 and the child axes' offsets
-    (n, K−1, 5, 2) (None for one axis) of ``params``."""
+def _standard(mesh, params) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Axis 0's record (n, 16|19|22) float64, the child axes' offsets
+    (n, K−1, 5, 2) (None for one axis) and the whole checked record of ``params``."""
     k = getattr(mesh, "axis_count", 1)
-    params = as_params(params, axes=k)
+    record = as_params(params, axes=k)
     if k == 1:
-        return params.astype(np.float64), None
-    standard, children = split_record(params, k)
-    return standard.astype(np.float64), children
+        return record.astype(np.float64), None, record
+    standard, children = split_record(record, k)
+    return standard.astype(np.float64), children, record
 
 
 def child_reach(tree, children) -> np.ndarray | float:
@@ -140,8 +140,7 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     maximum: the base mesh's box grows by exactly that range across the
     axis.  The rotated box is then boxed again (half-extents ``|R| h``).
     """
-    params_in = params
-    params, children = _standard(mesh, params)
+    params, children, record = _standard(mesh, params)
     axis = mesh.axis
     # a chosen frame: the box of the local coordinates F·V, placed by R·Fᵀ
     pos = axis.local(mesh.positions) if axis.framed else mesh.positions.astype(np.float64)
@@ -160,8 +159,7 @@ def instance_boxes(mesh, params) -> tuple[np.ndarray, np.ndarray]:
     if params.shape[1] >= EXTENDED_WIDTH:  # twisted or tapered cross-sections: the box around the sphere
         turned = (params[:, TWIST] != 0) | (params[:, TAPER] != 0)
         if turned.any():
-            full = as_params(params_in, axes=mesh.axis_count)  # the whole record (every axis)
-            c, r = instance_bounds(mesh, full[turned])
+            c, r = instance_bounds(mesh, record[turned])  # the whole record (every axis)
             center[turned], half[turned] = c, r[:, None]
     return center - half, center + half
 

@@ -223,15 +223,25 @@ def deform(
     params = as_params(params)
     positions = as_array(positions, (None, 3), "positions")
     normals = as_array(normals, (len(positions), 3), "normals")
-    n, v = len(params), len(positions)
+
+    def bend(rows):
+        block = rows.astype(np.float64)
+        return block, *bend_model(axis, positions, normals, block[:, OFFSETS].reshape(-1, 5, 2),
+                                  block[:, EXTRA] if block.shape[1] >= EXTENDED_WIDTH else None)
+
+    return _to_world(params, len(positions), bend, chunk_vertices, progress)
+
+
+def _to_world(params, v: int, bend, chunk_vertices: int, progress):
+    """``W = R·(s·V'') + p`` and ``R·n''`` (n, v, 3) float32 of ``params``, in
+    chunks of instances that bound memory (each fully vectorized):
+    ``bend(rows)`` gives a chunk's ``(standard record float64, s·V'', n'')``."""
+    n = len(params)
     out_pos = np.empty((n, v, 3), dtype=np.float32)
     out_nrm = np.empty((n, v, 3), dtype=np.float32)
     step = max(1, chunk_vertices // max(v, 1))
-    for a in range(0, n, step):  # chunks bound memory; each chunk is fully vectorized
-        block = params[a : a + step].astype(np.float64)
-        offsets = block[:, OFFSETS].reshape(-1, 5, 2)
-        moved, bent = bend_model(axis, positions, normals, offsets,
-                                 block[:, EXTRA] if block.shape[1] >= EXTENDED_WIDTH else None)
+    for a in range(0, n, step):
+        block, moved, bent = bend(params[a : a + step])
         rot = rotation_matrices(block[:, ANGLES])
         out_pos[a : a + step] = np.einsum("nij,nvj->nvi", rot, moved) + block[:, None, POSITION]
         out_nrm[a : a + step] = np.einsum("nij,nvj->nvi", rot, bent)
@@ -361,19 +371,13 @@ def deform_tree(mesh, params, *, chunk_vertices: int = 1_000_000, progress=None)
     tree = mesh.tree
     k = tree.count
     params = check_tree_params(params, k)
-    n, v = len(params), mesh.vertex_count
-    out_pos = np.empty((n, v, 3), dtype=np.float32)
-    out_nrm = np.empty((n, v, 3), dtype=np.float32)
-    step = max(1, chunk_vertices // max(v, 1))
-    for a in range(0, n, step):  # chunks bound memory; each chunk is vectorized
-        standard, children = split_record(params[a:a + step], k)
+
+    def bend(rows):
+        standard, children = split_record(rows, k)
         block = standard.astype(np.float64)
         offsets = np.concatenate([block[:, :10].reshape(-1, 1, 5, 2), children.astype(np.float64)], axis=1)
         extra = block[:, [SCALE, TWIST, TAPER]] if block.shape[1] >= EXTENDED_WIDTH else None
         moved, bent, _ = tree_bend(tree, mesh.positions, mesh.normals, offsets, extra)
-        rot = rotation_matrices(block[:, ANGLES])
-        out_pos[a:a + step] = np.einsum("nij,nvj->nvi", rot, moved) + block[:, None, POSITION]
-        out_nrm[a:a + step] = np.einsum("nij,nvj->nvi", rot, bent)
-        if progress is not None:
-            progress.update(len(block))
-    return out_pos, out_nrm
+        return block, moved, bent
+
+    return _to_world(params, mesh.vertex_count, bend, chunk_vertices, progress)

@@ -149,8 +149,8 @@ class BaseMesh:
         frame"): ``"auto"``, ``"x"``, ``"y"``, ``"z"``, ``"oriented"`` or a 3×3
         matrix whose rows are ``e_a, e_u, e_v``.  Positions, faces and the
         fingerprint stay; parameter files record the frame."""
-        if isinstance(axis, str) and axis == self.axis.kind and not (axis == "oriented") and self.tree is None:
-            return self
+        if isinstance(axis, str) and axis == self.axis_frame and self.tree is None:
+            return self  # the frame it has
         return dataclasses.replace(self, axis_frame=axis, _axis=None, tree=None)
 
     def with_axes(self, axes, axis="auto") -> "BaseMesh":

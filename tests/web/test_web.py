@@ -346,6 +346,12 @@ def test_bad_parameter_file_shows_why_and_draws_nothing(browser, served, scene_f
         v.close()
 
 
+def _widget_state(w) -> dict:
+    """A widget's synced state as ``_widget_page`` takes it (bytes as base64)."""
+    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
+    return {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
+
+
 def _widget_page(browser, tmp_path, state: dict, esm: str):
     """The widget's ESM run in Chromium against a minimal anywidget model
     (get/set/on/off/save_changes over the synced state; bytes arrive as
@@ -384,8 +390,7 @@ def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
 
     mesh = ad.load_mesh("stone")
     w = SceneWidget(mesh, ad.random_params(mesh, 300, seed=2), size=SIZE)
-    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
-    state = {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
+    state = _widget_state(w)
     page, errors = _widget_page(browser, tmp_path, state, w._esm)
     try:
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 300}
@@ -431,8 +436,7 @@ def test_widget_takes_a_scene_file(browser, tmp_path):
     assert [layer["name"] for layer in w.config["layers"]][0] == "terrain" and len(w.files) == 2 * len(w.config["layers"])
     with pytest.raises(ad.AxialDeformError, match="several layers"):
         w.set_params(scene.layers[0].params)
-    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
-    state = {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
+    state = _widget_state(w)
     state["files"] = {n: {"b64": base64.b64encode(b).decode()} for n, b in w.files.items()}
     page, errors = _widget_page(browser, tmp_path, state, w._esm)
     try:
@@ -1081,8 +1085,7 @@ def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
     params = ad.random_params(mesh, 40, seed=2, bend=(0.05, 0.4), placement="disc", spacing=3.0)
     w = SceneWidget(mesh, params, size=SIZE)
     assert w.config["layers"][0]["mesh"]["axes"]["count"] == 10
-    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
-    state = {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
+    state = _widget_state(w)
     page, errors = _widget_page(browser, tmp_path, state, w._esm)
     try:
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
