@@ -1,0 +1,183 @@
+// adp.js -- the binary parameter file (.adp, docs/parameter-files.md): parse,
+// check (size, CRC-32, header fields), decode.  The checks and their order
+// follow axialdeform.core.io.params.read_binary_header / decode_binary.
+
+/** The error of every check in this package: a message naming the file, the field and what was expected. */
+export class AxialError extends Error {
+  constructor(message) {
+    super(message);
+    this.name = 'AxialError';
+  }
+}
+
+const MAGIC = [0x89, 0x41, 0x44, 0x50, 0x0d, 0x0a, 0x1a, 0x0a];
+/** Bytes of the header, before the numbers. */
+export const HEADER_BYTES = 96;
+/** Numbers per instance of each file version (one axis): 16; 19 (+ s tw tp); 22 (+ tr tg tb). */
+export const NUMBERS_OF_VERSION = Object.freeze({ 1: 16, 2: 19, 3: 22 });
+/** Most axes an instance (several axes: 10 more numbers per child axis). */
+export const MAX_AXES = 64;
+
+let crcTable = null;
+
+/** CRC-32 (zlib's polynomial) of a Uint8Array. */
+export function crc32(bytes) {
+  if (crcTable === null) {
+    crcTable = new Uint32Array(256);
+    for (let n = 0; n < 256; n++) {
+      let c = n;
+      for (let k = 0; k < 8; k++) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+      crcTable[n] = c >>> 0;
+    }
+  }
+  let crc = 0xffffffff;
+  for (let i = 0; i < bytes.length; i++) crc = crcTable[(crc ^ bytes[i]) & 0xff] ^ (crc >>> 8);
+  return (crc ^ 0xffffffff) >>> 0;
+}
+
+/** Lower-case hex of a Uint8Array. */
+export function hex(bytes) {
+  return Array.from(bytes, (b) => b.toString(16).padStart(2, '0')).join('');
+}
+
+function toArrayBuffer(input) {
+  if (input instanceof ArrayBuffer) return input;
+  if (ArrayBuffer.isView(input)) return input.buffer.slice(input.byteOffset, input.byteOffset + input.byteLength);
+  throw new AxialError(`parseADP: expected an ArrayBuffer or a typed array, found ${input === null ? 'null' : typeof input}`);
+}
+
+/**
+ * Parse an .adp parameter file.
+ *
+ * Returns {name, version, encoding ('float32' | 'quantized'), count,
+ * numbersPerInstance, axes (K), axis (-1 none recorded, 0/1/2 x/y/z, 3 a chosen
+ * frame, 4 several axes), lo, length, fingerprint (hex, '' when none
+ * recorded), frameDigest (hex), data (Float32Array, count x numbersPerInstance,
+ * decoded), values and qtable (the stored numbers: float32, or uint16 and their
+ * per-column [min..., step...] table)}.  Throws AxialError naming what is wrong
+ * for a truncated, corrupt (CRC-32) or unknown file.
+ */
+export function parseADP(input, name = 'parameters') {
+  const buffer = toArrayBuffer(input);
+  const bytes = new Uint8Array(buffer);
+  const view = new DataView(buffer);
+  const fail = (what) => { throw new AxialError(`${name}: ${what}`); };
+  if (bytes.length < HEADER_BYTES + 4) fail(`truncated: ${bytes.length} bytes, shorter than the 96-byte header and the 4-byte checksum`);
+  if (MAGIC.some((b, i) => bytes[i] !== b)) fail('not an axialdeform parameter file (magic bytes differ)');
+  const version = view.getUint16(8, true);
+  if (!NUMBERS_OF_VERSION[version]) fail(`version: expected ${Object.keys(NUMBERS_OF_VERSION).join(', ')}, found ${version} (written by a newer axialdeform?)`);
+  // several axes: K at offset 28 (0 in one-axis files), 10 more numbers per child axis
+  const axes = Math.max(1, view.getUint32(28, true));
+  if (axes > MAX_AXES) fail(`axes: expected 1 to ${MAX_AXES} axes, found ${axes}`);
+  const fields = NUMBERS_OF_VERSION[version] + 10 * (axes - 1);
+  const encoding = view.getUint16(10, true);
+  if (encoding !== 0 && encoding !== 1) fail(`encoding: expected 0 (float32) or 1 (quantized), found ${encoding}`);
+  const headerSize = view.getUint32(12, true);
+  if (headerSize !== HEADER_BYTES) fail(`header size: expected 96, found ${headerSize}`);
+  const count64 = view.getBigUint64(16, true);
+  const each = encoding === 1 ? 2 * fields : 4 * fields;
+  const table = encoding === 1 ? 8 * fields : 0;
+  const expected = BigInt(HEADER_BYTES + table + 4) + count64 * BigInt(each);
+  if (BigInt(bytes.length) !== expected) {
+    const why = BigInt(bytes.length) < expected ? 'truncated' : 'too long';
+    fail(`${why}: ${bytes.length} bytes, but a count of ${count64} instances needs ${expected}`);
+  }
+  const count = Number(count64);
+  const stored = view.getUint32(bytes.length - 4, true);
+  const computed = crc32(bytes.subarray(0, bytes.length - 4));
+  if (stored !== computed) {
+    fail(`checksum: wrong CRC-32 (stored ${stored.toString(16).padStart(8, '0')}, computed ` +
+         `${computed.toString(16).padStart(8, '0')}): the file is corrupt`);
+  }
+  const axis = view.getInt8(24);
+  if (axis < -1 || axis > 4) fail(`axis: expected -1, 0, 1, 2, 3 (a chosen frame) or 4 (several axes), found ${axis}`);
+  if ((axis === 4) !== (axes > 1)) fail(`axis: expected 4 (several axes) exactly when the file has more than one axis, found ${axis} with ${axes}`);
+  const lo = view.getFloat64(32, true);
+  const length = view.getFloat64(40, true);
+  const fingerprintBytes = bytes.slice(48, 80);
+  const frameDigest = bytes.slice(80, 96); // a chosen frame's or a tree's digest (zero for x, y, z)
+  let qtable = null;
+  let values;
+  if (encoding === 1) {
+    qtable = new Float32Array(buffer.slice(HEADER_BYTES, HEADER_BYTES + table));
+    values = new Uint16Array(buffer.slice(HEADER_BYTES + table, HEADER_BYTES + table + count * each));
+    if (!qtable.every(Number.isFinite)) fail('quantization table: a number is not finite');
+  } else {
+    values = new Float32Array(buffer.slice(HEADER_BYTES, HEADER_BYTES + count * each));
+    if (!values.every(Number.isFinite)) fail('values: a number is not finite (NaN or infinity)');
+  }
+  let data = encoding === 0 ? values : null;
+  return {
+    name, version, encoding: encoding === 1 ? 'quantized' : 'float32', count, numbersPerInstance: fields,
+    fields, axes, axis, lo, length,
+    fingerprint: fingerprintBytes.some((b) => b !== 0) ? hex(fingerprintBytes) : '',
+    fingerprintBytes, frameDigest: hex(frameDigest), frameDigestBytes: frameDigest, values, qtable,
+    /** Float32Array (count x numbersPerInstance): the numbers, decoded (min + q step where quantized). */
+    get data() {
+      if (data === null) data = dequantize(values, qtable, fields);
+      return data;
+    },
+  };
+}
+
+/** value = min[c] + q * step[c] for every stored uint16 (the quantized encoding). */
+export function dequantize(values, qtable, fields) {
+  const out = new Float32Array(values.length);
+  for (let i = 0; i < values.length; i++) {
+    const c = i % fields;
+    out[i] = qtable[c] + values[i] * qtable[fields + c];
+  }
+  return out;
+}
+
+/** The record's columns (docs/parameter-files.md): numbers per instance -> {axes, offsets of axis j
+ * (10 numbers at 10 j), position, angles, scale, twist, taper, tint} (indices; null where absent). */
+export function recordLayout(numbersPerInstance, axes = 1) {
+  const base = numbersPerInstance - 10 * (axes - 1);
+  if (![16, 19, 22].includes(base) || axes < 1 || axes > MAX_AXES) {
+    throw new AxialError(`record: expected 16, 19 or 22 numbers an instance plus 10 per child axis, found ${numbersPerInstance} with ${axes} axes`);
+  }
+  const rest = 10 * axes; // p, r, then s tw tp, then the tint
+  return {
+    axes, numbersPerInstance, base,
+    position: rest, angles: rest + 3,
+    scale: base >= 19 ? rest + 6 : null, twist: base >= 19 ? rest + 7 : null, taper: base >= 19 ? rest + 8 : null,
+    tint: base >= 22 ? rest + 9 : null,
+  };
+}
+
+/** A file of K axes as axis 0's record (10 (K - 1) fewer numbers) and the child
+ * axes' offsets as the texels of axialdeform/gl/axes.py (float32, three RGBA
+ * texels a child axis, rows of AXES_ROW texels). */
+export const AXES_ROW = 4095;
+export function splitAxes(p) {
+  if (p.axes === 1) return { std: p, texels: null, rows: 0 };
+  const f = p.fields, k = p.axes, n = p.count, sf = f - 10 * (k - 1);
+  const cols = [...Array(10).keys(), ...Array.from({ length: f - 10 * k }, (_, i) => 10 * k + i)];
+  const values = new p.values.constructor(n * sf);
+  for (let i = 0; i < n; i++) for (let c = 0; c < sf; c++) values[i * sf + c] = p.values[i * f + cols[c]];
+  let qtable = null;
+  if (p.qtable) {
+    qtable = new Float32Array(2 * sf);
+    cols.forEach((c, j) => { qtable[j] = p.qtable[c]; qtable[sf + j] = p.qtable[f + c]; });
+  }
+  return { std: { ...p, fields: sf, numbersPerInstance: sf, values, qtable, axes: 1 },
+    ...childTexels(p.values, p.qtable, f, k, n) };
+}
+
+/** The child axes' offsets of `count` records (stored values, width `fields`, K axes) as RGBA32F texels. */
+export function childTexels(values, qtable, fields, k, count) {
+  const texelCount = count * (k - 1) * 3;
+  const rows = Math.max(1, Math.ceil(texelCount / AXES_ROW));
+  const texels = new Float32Array(rows * AXES_ROW * 4);
+  for (let i = 0; i < count; i++) {
+    for (let j = 1; j < k; j++) {
+      const at = ((i * (k - 1) + j - 1) * 3) * 4;
+      for (let c = 0; c < 10; c++) {
+        const col = 10 * j + c, v = values[i * fields + col];
+        texels[at + c] = qtable ? qtable[col] + v * qtable[fields + col] : v;
+      }
+    }
+  }
+  return { texels, rows };
+}

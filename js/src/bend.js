@@ -1,0 +1,172 @@
+// bend.js -- the parts of the method the CPU needs in a three.js app: each
+// instance's rigid placement (its instanceMatrix, W = R (s V'') + p with
+// R = Rz Ry Rx), the bent positions of ONE instance (raycasting against the
+// bent surface) and a bounding sphere that holds every bent instance (three's
+// frustum culling).  The drawing itself bends in the vertex shader with
+// glsl/axial.glsl (src/glsl.js); docs/method.md states the conventions.
+
+import { AxialError, recordLayout } from './adp.js';
+
+/** The rows e_a, e_u, e_v of the aligned axis x (0), y (1) or z (2): offsets go to the two other
+ * coordinates in increasing order. */
+export function alignedFrame(index) {
+  const e = [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
+  const other = [0, 1, 2].filter((c) => c !== index);
+  return [e[index], e[other[0]], e[other[1]]];
+}
+
+function mul(f, v) { // F v, F as rows
+  return [f[0][0] * v[0] + f[0][1] * v[1] + f[0][2] * v[2],
+    f[1][0] * v[0] + f[1][1] * v[1] + f[1][2] * v[2],
+    f[2][0] * v[0] + f[2][1] * v[1] + f[2][2] * v[2]];
+}
+
+/**
+ * The base mesh's control axis as the shader wants it: {frame (rows e_a, e_u, e_v), lo, length,
+ * center (the axis line: 2 numbers across the axis), axes (null, or a tree's {count, frames, lo,
+ * length, parents})}.  `spec`: the AXIALDEFORM_bend extension's object, or a node's
+ * userData.axialdeform.axis (`{index, lo, length, frame?}`), or null: then the header of the
+ * record (an aligned axis x, y, z) and the geometry's box give it.
+ */
+export function resolveAxis(spec, record, positions) {
+  let frame, lo, length, center = null, axes = null;
+  if (spec && spec.axes) {
+    const a = spec.axes;
+    axes = { count: a.count ?? a.frames.length, frames: a.frames, lo: a.lo, length: a.length, parents: a.parents };
+    if (!Array.isArray(axes.lo) || axes.lo.length !== axes.count || axes.parents.length !== axes.count) {
+      throw new AxialError(`axes: expected ${axes.count} frames, lo, length and parents`);
+    }
+  }
+  const ax = spec ? (spec.axis || spec) : null;
+  if (ax && (ax.frame || Number.isInteger(ax.index))) {
+    frame = ax.frame || alignedFrame(ax.index);
+    if (!ax.frame && (ax.index < 0 || ax.index > 2)) throw new AxialError(`axis: index ${ax.index} without a frame`);
+    lo = ax.lo; length = ax.length; center = ax.center || ax.line || null;
+  } else if (axes) {
+    frame = axes.frames[0]; lo = axes.lo[0]; length = axes.length[0];
+  } else {
+    if (!record || record.axis < 0 || record.axis > 2) {
+      throw new AxialError(`${record ? record.name : 'record'}: made for ${record && record.axis === 4 ? 'several axes' : 'a chosen axis frame'}` +
+        '; pass {axis} (the mesh\'s frame, lo, length: the GLB\'s extras or AXIALDEFORM_bend) to AxialInstancedMesh');
+    }
+    frame = alignedFrame(record.axis); lo = record.lo; length = record.length;
+  }
+  if (!(length > 0) || !Number.isFinite(lo)) throw new AxialError(`axis: expected a length > 0 and a finite lo, found ${length}, ${lo}`);
+  if (center === null) { // the box centre across the axis, in the frame's coordinates
+    const b = localBox(positions, frame);
+    center = [(b[1] + b[4]) / 2, (b[2] + b[5]) / 2];
+  }
+  return { frame, lo, length, center, axes };
+}
+
+/** [min x y z, max x y z] of F v over the vertices (Float32Array of 3 n). */
+function localBox(positions, frame) {
+  const b = [Infinity, Infinity, Infinity, -Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < positions.length; i += 3) {
+    const l = mul(frame, [positions[i], positions[i + 1], positions[i + 2]]);
+    for (let c = 0; c < 3; c++) { if (l[c] < b[c]) b[c] = l[c]; if (l[c] > b[3 + c]) b[3 + c] = l[c]; }
+  }
+  return b;
+}
+
+/** Column-major 4x4 of W = R (s V) + p for every instance: R = Rz(rz) Ry(ry) Rx(rx). Writes into
+ * `out` (Float32Array of 16 count, e.g. an InstancedMesh's instanceMatrix.array) from `first`. */
+export function instanceMatrices(data, layout, count, out, first = 0) {
+  const f = layout.numbersPerInstance;
+  for (let i = first; i < first + count; i++) {
+    const r = i * f, o = i * 16;
+    const cx = Math.cos(data[r + layout.angles]), sx = Math.sin(data[r + layout.angles]);
+    const cy = Math.cos(data[r + layout.angles + 1]), sy = Math.sin(data[r + layout.angles + 1]);
+    const cz = Math.cos(data[r + layout.angles + 2]), sz = Math.sin(data[r + layout.angles + 2]);
+    const s = layout.scale === null ? 1 : data[r + layout.scale];
+    // columns of R (axial_rotation in glsl/axial.glsl), times s
+    out[o] = s * cz * cy; out[o + 1] = s * sz * cy; out[o + 2] = -s * sy; out[o + 3] = 0;
+    out[o + 4] = s * (cz * sy * sx - sz * cx); out[o + 5] = s * (sz * sy * sx + cz * cx); out[o + 6] = s * cy * sx; out[o + 7] = 0;
+    out[o + 8] = s * (cz * sy * cx + sz * sx); out[o + 9] = s * (sz * sy * cx - cz * sx); out[o + 10] = s * cy * cx; out[o + 11] = 0;
+    out[o + 12] = data[r + layout.position]; out[o + 13] = data[r + layout.position + 1];
+    out[o + 14] = data[r + layout.position + 2]; out[o + 15] = 1;
+  }
+  return out;
+}
+
+function bernstein4(t) {
+  const s = 1 - t;
+  return [s * s * s * s, 4 * t * s * s * s, 6 * t * t * s * s, 4 * t * t * t * s, t * t * t * t];
+}
+
+/**
+ * The model-space positions of instance `i` bent (before its rigid part): V'' of docs/method.md,
+ * twist and taper about the axis line, several axes summed along each vertex's chain.
+ * positions: Float32Array (3 n); axis: resolveAxis's; vertexAxis: each vertex's axis (trees);
+ * out: Float32Array (3 n).
+ */
+export function bendPositions(positions, axis, data, layout, i, out, vertexAxis = null) {
+  const f = layout.numbersPerInstance, r = i * f;
+  const tw = layout.twist === null ? 0 : data[r + layout.twist];
+  const tp = layout.taper === null ? 0 : data[r + layout.taper];
+  const k = axis.axes ? axis.axes.count : 1;
+  const frames = axis.axes ? axis.axes.frames : [axis.frame];
+  const los = axis.axes ? axis.axes.lo : [axis.lo];
+  const lens = axis.axes ? axis.axes.length : [axis.length];
+  const parents = axis.axes ? axis.axes.parents : [-1];
+  const f0 = frames[0], [cu, cv] = axis.center;
+  for (let v = 0; v < positions.length; v += 3) {
+    const p = [positions[v], positions[v + 1], positions[v + 2]];
+    const moved = p.slice();
+    const l0 = mul(f0, p);
+    if (tw !== 0 || tp !== 0) { // the cross-section about axis 0's line: turned by tw t, shrunk by 1 - tp t
+      const t = Math.min(1, Math.max(0, (l0[0] - los[0]) / lens[0]));
+      const kk = 1 - tp * t, c = Math.cos(tw * t), s = Math.sin(tw * t);
+      const wu = l0[1] - cu, wv = l0[2] - cv;
+      const du = kk * (c * wu - s * wv) - wu, dv = kk * (s * wu + c * wv) - wv;
+      for (let c3 = 0; c3 < 3; c3++) moved[c3] += f0[1][c3] * du + f0[2][c3] * dv;
+    }
+    let j = vertexAxis ? vertexAxis[v / 3] : 0;
+    for (let guard = 0; guard < k && j >= 0; guard++) {
+      const fj = frames[j];
+      const lj = mul(fj, p);
+      const t = Math.min(1, Math.max(0, (lj[0] - los[j]) / lens[j]));
+      const w = bernstein4(t), o = r + 10 * j;
+      let du = 0, dv = 0;
+      for (let q = 0; q < 5; q++) { du += w[q] * data[o + 2 * q]; dv += w[q] * data[o + 2 * q + 1]; }
+      for (let c3 = 0; c3 < 3; c3++) moved[c3] += fj[1][c3] * du + fj[2][c3] * dv;
+      j = parents[j];
+    }
+    out[v] = moved[0]; out[v + 1] = moved[1]; out[v + 2] = moved[2];
+  }
+  return out;
+}
+
+/**
+ * Bounding spheres (model space, before the rigid part) of every bent instance: a point on axis 0's
+ * line, c, and radius = max |v - c| max(1, |1 - tp|) + the sum over the axes of max |d_i| (the Bézier
+ * curve lies in its control points' hull; twist turns about the line; taper scales across it).
+ * Returns {center: [x, y, z], radius: Float32Array(count)} (the centre is the same for all).
+ */
+export function bentRadii(positions, axis, data, layout, count, first = 0, out = null) {
+  const f0 = axis.frames ? axis.frames[0] : axis.frame;
+  const mid = axis.lo + axis.length / 2;
+  const c = [0, 1, 2].map((q) => f0[0][q] * mid + f0[1][q] * axis.center[0] + f0[2][q] * axis.center[1]);
+  let r0 = 0;
+  for (let v = 0; v < positions.length; v += 3) {
+    const dx = positions[v] - c[0], dy = positions[v + 1] - c[1], dz = positions[v + 2] - c[2];
+    r0 = Math.max(r0, dx * dx + dy * dy + dz * dz);
+  }
+  r0 = Math.sqrt(r0);
+  const k = axis.axes ? axis.axes.count : 1, f = layout.numbersPerInstance;
+  const radius = out || new Float32Array(first + count);
+  for (let i = first; i < first + count; i++) {
+    const r = i * f;
+    const tp = layout.taper === null ? 0 : data[r + layout.taper];
+    let d = 0;
+    for (let j = 0; j < k; j++) {
+      let m = 0;
+      for (let q = 0; q < 5; q++) m = Math.max(m, Math.hypot(data[r + 10 * j + 2 * q], data[r + 10 * j + 2 * q + 1]));
+      d += m;
+    }
+    radius[i] = r0 * Math.max(1, Math.abs(1 - tp)) + d;
+  }
+  return { center: c, radius };
+}
+
+export { recordLayout };

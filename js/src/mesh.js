@@ -1,0 +1,327 @@
+// mesh.js -- AxialInstancedMesh: a THREE.InstancedMesh whose instances are bent,
+// each along its own Bézier control axis, by glsl/axial.glsl injected into the
+// user's own material (onBeforeCompile), so maps, lights, shadows, fog and tone
+// mapping stay three.js's.  The rigid part of every instance (rotation, scale,
+// position) is its instanceMatrix; the bend's numbers are instanced attributes.
+
+import * as THREE from 'three';
+import { AxialError, recordLayout, childTexels, AXES_ROW } from './adp.js';
+import { AXIAL_GLSL } from './glsl.js';
+import { resolveAxis, instanceMatrices, bendPositions, bentRadii } from './bend.js';
+
+const UNIFORMS = `
+uniform mat3 axialFrame;
+uniform float axialLo;
+uniform float axialLen;
+uniform vec2 axialCenter;
+#ifdef AXIAL_AXES
+uniform mat3 axialFrames[AXIAL_AXES];
+uniform float axialLos[AXIAL_AXES];
+uniform float axialLens[AXIAL_AXES];
+uniform int axialParents[AXIAL_AXES];
+uniform sampler2D axialChildren;
+attribute float axialAxis;
+#endif
+attribute vec4 axialD12;
+attribute vec4 axialD34;
+attribute vec2 axialD5;
+attribute vec2 axialTwistTaper;
+`;
+
+// the bend of this vertex, before three's chunks: model space, the instance's rigid part
+// is instanceMatrix (three applies it in project_vertex, worldpos_vertex, defaultnormal_vertex)
+const BEND = `
+  vec3 axialV, axialN, axialT = vec3(1.0, 0.0, 0.0);
+  {
+    AxialInstance axialInst = AxialInstance(axialD12, axialD34, axialD5, vec3(0.0), vec3(0.0), 1.0,
+                                            axialTwistTaper.x, axialTwistTaper.y);
+#ifdef AXIAL_AXES
+    mat3 axialJac;
+    axial_tree_world(position, normal, int(axialAxis + 0.5), axialFrames, axialLos, axialLens, axialParents,
+                     axialCenter, axialInst, axialChildren, gl_InstanceID, vec3(0.0), axialV, axialN, axialJac);
+#ifdef USE_TANGENT
+    axialT = axialJac * tangent.xyz;
+#endif
+#else
+    axial_bend(position, normal, axialFrame, axialLo, axialLen, axialCenter, axialInst, axialV, axialN);
+#ifdef USE_TANGENT
+    axialT = transpose(axialFrame) * axial_bend_tangent(axialFrame * position, axialFrame * tangent.xyz, 0,
+                                                        axialLo, axialLen, axialCenter, axialInst);
+#endif
+#endif
+  }
+`;
+
+function replaceOnce(text, what, by, where) {
+  if (!text.includes(what)) throw new AxialError(`${where}: its vertex shader has no ${what} to bend`);
+  return text.replace(what, by);
+}
+
+/** Inject the bend into a vertex shader of three's built-in materials (the text onBeforeCompile gets). */
+export function injectBend(vertexShader, where = 'material') {
+  let vs = replaceOnce(vertexShader, 'void main() {', `${UNIFORMS}\n${AXIAL_GLSL}\nvoid main() {\n${BEND}`, where);
+  if (vs.includes('#include <beginnormal_vertex>')) {
+    vs = vs.replace('#include <beginnormal_vertex>',
+      'vec3 objectNormal = axialN;\n#ifdef USE_TANGENT\n\tvec3 objectTangent = axialT;\n#endif');
+  }
+  return replaceOnce(vs, '#include <begin_vertex>',
+    'vec3 transformed = axialV;\n#ifdef USE_ALPHAHASH\n\tvPosition = vec3( position );\n#endif', where);
+}
+
+
+/**
+ * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers.
+ *
+ * record: parseADP's result, or {count, numbersPerInstance, data (Float32Array), axes?, axis?, lo?,
+ * length?}.  options.axis: the mesh's control axis where the record's header does not say it all
+ * (a chosen frame, several axes: the GLB's AXIALDEFORM_bend or extras.axialdeform); options.capacity:
+ * room for more instances than the record has (setParams may grow count up to it).
+ * The material(s) are cloned and given the bend; shadows (customDepthMaterial,
+ * customDistanceMaterial) and raycasting use the bent shape.
+ */
+export class AxialInstancedMesh extends THREE.InstancedMesh {
+  constructor(geometry, material, record, options = {}) {
+    if (!geometry || !geometry.isBufferGeometry) throw new AxialError('AxialInstancedMesh: expected a THREE.BufferGeometry');
+    if (!record || !Number.isInteger(record.count) || !record.data) {
+      throw new AxialError('AxialInstancedMesh: expected a record ({count, numbersPerInstance, data}: parseADP\'s result)');
+    }
+    const capacity = Math.max(record.count, options.capacity || 0, 1);
+    // our own geometry: the user's attributes (shared, not copied) plus the instances' numbers
+    const own = new THREE.BufferGeometry();
+    if (geometry.index) own.setIndex(geometry.index);
+    for (const [name, attr] of Object.entries(geometry.attributes)) {
+      if (!name.startsWith('_AXIAL_')) own.setAttribute(name, attr); // GLTFLoader's copies of the instance data stay behind
+    }
+    for (const g of geometry.groups) own.addGroup(g.start, g.count, g.materialIndex);
+    own.drawRange = { ...geometry.drawRange };
+    if (!own.getAttribute('position') || !own.getAttribute('normal')) {
+      throw new AxialError('AxialInstancedMesh: the geometry needs position and normal attributes');
+    }
+    super(own, material, capacity);
+    this.isAxialInstancedMesh = true;
+    this.type = 'AxialInstancedMesh';
+    this.capacity = capacity;
+    this.baseGeometry = geometry;
+    const axes = record.axes || 1;
+    this.layout = recordLayout(record.numbersPerInstance, axes);
+    const positions = own.getAttribute('position');
+    this.axis = resolveAxis(options.axis || null, record, positions.array);
+    const treeCount = this.axis.axes ? this.axis.axes.count : 1;
+    if (treeCount !== axes) {
+      throw new AxialError(`${record.name || 'record'}: ${axes} axes an instance, but the mesh has ${treeCount}`);
+    }
+    if (axes > 1) {
+      const va = own.getAttribute('axialAxis') || own.getAttribute('_axial_axis') || options.vertexAxis;
+      if (!va) throw new AxialError('AxialInstancedMesh: a mesh of several axes needs each vertex\'s axis (_AXIAL_AXIS)');
+      this.vertexAxis = va.isBufferAttribute ? va.array : va;
+      own.setAttribute('axialAxis', va.isBufferAttribute ? va : new THREE.BufferAttribute(Float32Array.from(va), 1));
+    } else {
+      this.vertexAxis = null;
+    }
+    this.data = new Float32Array(capacity * this.layout.numbersPerInstance);
+    const inst = (size) => new THREE.InstancedBufferAttribute(new Float32Array(capacity * size), size).setUsage(THREE.DynamicDrawUsage);
+    own.setAttribute('axialD12', inst(4));
+    own.setAttribute('axialD34', inst(4));
+    own.setAttribute('axialD5', inst(2));
+    own.setAttribute('axialTwistTaper', inst(2));
+    this.instanceMatrix.setUsage(THREE.DynamicDrawUsage);
+    if (this.layout.tint !== null) this.instanceColor = new THREE.InstancedBufferAttribute(new Float32Array(capacity * 3), 3);
+    const ax = this.axis;
+    this.axialUniforms = {
+      axialFrame: { value: new THREE.Matrix3().set(...ax.frame.flat()) }, // set() takes rows: frame * v = F v
+      axialLo: { value: ax.lo }, axialLen: { value: ax.length },
+      axialCenter: { value: new THREE.Vector2(ax.center[0], ax.center[1]) },
+    };
+    this.defines = {};
+    if (ax.axes) {
+      this.defines.AXIAL_AXES = String(ax.axes.count);
+      Object.assign(this.axialUniforms, {
+        axialFrames: { value: ax.axes.frames.map((f) => new THREE.Matrix3().set(...f.flat())) },
+        axialLos: { value: Float32Array.from(ax.axes.lo) },
+        axialLens: { value: Float32Array.from(ax.axes.length) },
+        axialParents: { value: Int32Array.from(ax.axes.parents) },
+        axialChildren: { value: null },
+      });
+    }
+    this._radii = new Float32Array(capacity);
+    this._center = [0, 0, 0];
+    this.material = Array.isArray(material) ? material.map((m) => this.bendMaterial(m)) : this.bendMaterial(material);
+    this.customDepthMaterial = this.bendMaterial(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }), false);
+    this.customDistanceMaterial = this.bendMaterial(new THREE.MeshDistanceMaterial(), false);
+    this.count = 0;
+    this.setParams(record);
+  }
+
+  /** A clone of `material` (three's built-ins: Basic, Lambert, Phong, Standard, Physical, Toon,
+   * Depth, Distance, ...) whose vertex shader bends this mesh's instances. */
+  bendMaterial(material, clone = true) {
+    if (!material || !material.isMaterial) throw new AxialError('AxialInstancedMesh: expected a THREE.Material');
+    if (material.isShaderMaterial) {
+      throw new AxialError('AxialInstancedMesh: a ShaderMaterial has no three.js chunks to bend; include the exported AXIAL_GLSL in it yourself');
+    }
+    const m = clone ? material.clone() : material;
+    const uniforms = this.axialUniforms, defines = this.defines, name = m.name || m.type;
+    const before = material.onBeforeCompile;
+    m.onBeforeCompile = (shader, renderer) => {
+      if (before && before !== THREE.Material.prototype.onBeforeCompile) before.call(m, shader, renderer);
+      Object.assign(shader.uniforms, uniforms); // the same objects: updates need no recompile
+      shader.defines = { ...(shader.defines || {}), ...defines };
+      shader.vertexShader = injectBend(shader.vertexShader, name);
+    };
+    const key = material.customProgramCacheKey.bind(material);
+    m.customProgramCacheKey = () => `axialdeform:${defines.AXIAL_AXES || 1}:${key()}`;
+    m.needsUpdate = true;
+    return m;
+  }
+
+  /**
+   * Set instances' numbers in place (no reallocation): `data` (Float32Array, rows of
+   * numbersPerInstance, or a parsed record) for instances first .. first + rows - 1; the
+   * mesh's count becomes at least first + rows (at most its capacity).  Only the changed range is
+   * uploaded (addUpdateRange); the bounding sphere is recomputed.
+   */
+  setParams(data, { first = 0 } = {}) {
+    let rows = data;
+    if (rows && rows.data && Number.isInteger(rows.count)) {
+      if (rows.numbersPerInstance !== this.layout.numbersPerInstance) {
+        throw new AxialError(`${rows.name || 'record'}: ${rows.numbersPerInstance} numbers an instance, but this mesh was made for ${this.layout.numbersPerInstance}`);
+      }
+      rows = rows.data.subarray(0, rows.count * this.layout.numbersPerInstance);
+    }
+    const f = this.layout.numbersPerInstance;
+    if (!(rows instanceof Float32Array) || rows.length % f !== 0) {
+      throw new AxialError(`setParams: expected a Float32Array of rows of ${f} numbers`);
+    }
+    const n = rows.length / f;
+    if (!Number.isInteger(first) || first < 0 || first + n > this.capacity) {
+      throw new AxialError(`setParams: instances ${first} to ${first + n - 1} do not fit a capacity of ${this.capacity}`);
+    }
+    for (let i = 0; i < rows.length; i++) {
+      if (!Number.isFinite(rows[i])) throw new AxialError(`setParams: instance ${first + Math.floor(i / f)}, number ${i % f}: not finite`);
+    }
+    this.data.set(rows, first * f);
+    const L = this.layout, a = this.geometry.attributes;
+    const d12 = a.axialD12.array, d34 = a.axialD34.array, d5 = a.axialD5.array, tt = a.axialTwistTaper.array;
+    for (let i = first; i < first + n; i++) {
+      const r = i * f;
+      for (let c = 0; c < 4; c++) { d12[4 * i + c] = this.data[r + c]; d34[4 * i + c] = this.data[r + 4 + c]; }
+      d5[2 * i] = this.data[r + 8]; d5[2 * i + 1] = this.data[r + 9];
+      tt[2 * i] = L.twist === null ? 0 : this.data[r + L.twist];
+      tt[2 * i + 1] = L.taper === null ? 0 : this.data[r + L.taper];
+      if (L.tint !== null) for (let c = 0; c < 3; c++) this.instanceColor.array[3 * i + c] = this.data[r + L.tint + c];
+    }
+    instanceMatrices(this.data, L, n, this.instanceMatrix.array, first);
+    const range = (attr, size) => {
+      if (attr.clearUpdateRanges) attr.addUpdateRange(first * size, n * size);
+      attr.needsUpdate = true;
+    };
+    range(a.axialD12, 4); range(a.axialD34, 4); range(a.axialD5, 2); range(a.axialTwistTaper, 2);
+    range(this.instanceMatrix, 16);
+    if (this.instanceColor) range(this.instanceColor, 3);
+    if (this.axis.axes) this._updateChildren();
+    const pos = this.geometry.getAttribute('position').array;
+    this._center = bentRadii(pos, this.axis, this.data, L, n, first, this._radii).center;
+    this.count = Math.max(this.count, first + n);
+    this.boundingSphere = null;
+    this.boundingBox = null;
+    this.computeBoundingSphere();
+    this.dispatchEvent({ type: 'paramschange', first, count: n });
+    return this;
+  }
+
+  _updateChildren() {
+    const k = this.axis.axes.count, f = this.layout.numbersPerInstance;
+    const { texels, rows } = childTexels(this.data, null, f, k, this.capacity);
+    const u = this.axialUniforms.axialChildren;
+    if (u.value && u.value.image.height === rows) {
+      u.value.image.data.set(texels);
+    } else {
+      if (u.value) u.value.dispose();
+      u.value = new THREE.DataTexture(texels, AXES_ROW, rows, THREE.RGBAFormat, THREE.FloatType);
+      u.value.minFilter = u.value.magFilter = THREE.NearestFilter;
+    }
+    u.value.needsUpdate = true;
+  }
+
+  /** The sphere (this mesh's space) of instance i bent and placed. */
+  getInstanceBoundingSphere(i, target = new THREE.Sphere()) {
+    const m = new THREE.Matrix4().fromArray(this.instanceMatrix.array, 16 * i);
+    target.center.fromArray(this._center).applyMatrix4(m);
+    target.radius = this._radii[i] * m.getMaxScaleOnAxis();
+    return target;
+  }
+
+  computeBoundingSphere() {
+    const box = new THREE.Box3(), s = new THREE.Sphere(), v = new THREE.Vector3();
+    for (let i = 0; i < this.count; i++) {
+      this.getInstanceBoundingSphere(i, s);
+      box.expandByPoint(v.copy(s.center).addScalar(s.radius));
+      box.expandByPoint(v.copy(s.center).subScalar(s.radius));
+    }
+    this.boundingBox = box;
+    if (this.boundingSphere === null) this.boundingSphere = new THREE.Sphere();
+    if (box.isEmpty()) { this.boundingSphere.makeEmpty(); return; }
+    box.getCenter(this.boundingSphere.center);
+    let r = 0;
+    for (let i = 0; i < this.count; i++) {
+      this.getInstanceBoundingSphere(i, s);
+      r = Math.max(r, s.center.distanceTo(this.boundingSphere.center) + s.radius);
+    }
+    this.boundingSphere.radius = r;
+  }
+
+  computeBoundingBox() {
+    this.computeBoundingSphere();
+  }
+
+  /** The model-space positions (Float32Array, 3 per vertex) of instance i bent, before its instanceMatrix. */
+  bentPositions(i, out = null) {
+    const pos = this.geometry.getAttribute('position').array;
+    return bendPositions(pos, this.axis, this.data, this.layout, i, out || new Float32Array(pos.length), this.vertexAxis);
+  }
+
+  /** three's raycasting, against each instance's bent triangles (intersections carry instanceId). */
+  raycast(raycaster, intersects) {
+    if (this.count === 0) return;
+    if (this.boundingSphere === null) this.computeBoundingSphere();
+    const sphere = new THREE.Sphere().copy(this.boundingSphere).applyMatrix4(this.matrixWorld);
+    if (!raycaster.ray.intersectsSphere(sphere)) return;
+    if (!this._rayMesh) {
+      const g = new THREE.BufferGeometry();
+      if (this.geometry.index) g.setIndex(this.geometry.index);
+      for (const grp of this.geometry.groups) g.addGroup(grp.start, grp.count, grp.materialIndex);
+      g.drawRange = this.geometry.drawRange;
+      g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(this.geometry.getAttribute('position').array.length), 3));
+      this._rayMesh = new THREE.Mesh(g, this.material);
+    }
+    const mesh = this._rayMesh, m = new THREE.Matrix4(), found = [];
+    mesh.material = this.material;
+    const s = new THREE.Sphere();
+    for (let i = 0; i < this.count; i++) {
+      this.getInstanceBoundingSphere(i, s).applyMatrix4(this.matrixWorld);
+      if (!raycaster.ray.intersectsSphere(s)) continue;
+      const attr = mesh.geometry.getAttribute('position');
+      this.bentPositions(i, attr.array);
+      mesh.geometry.boundingSphere = null;
+      mesh.geometry.boundingBox = null;
+      mesh.matrixWorld.multiplyMatrices(this.matrixWorld, m.fromArray(this.instanceMatrix.array, 16 * i));
+      found.length = 0;
+      mesh.raycast(raycaster, found);
+      for (const hit of found) { hit.instanceId = i; hit.object = this; intersects.push(hit); }
+    }
+  }
+
+  /** Frees this mesh's GPU buffers, its materials (the clones), shadow materials and texture;
+   * the user's geometry and materials stay theirs. */
+  dispose() {
+    this.geometry.dispose();
+    (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => m.dispose());
+    this.customDepthMaterial.dispose();
+    this.customDistanceMaterial.dispose();
+    if (this.axialUniforms.axialChildren && this.axialUniforms.axialChildren.value) this.axialUniforms.axialChildren.value.dispose();
+    if (this._rayMesh) this._rayMesh.geometry.dispose();
+    this.dispatchEvent({ type: 'dispose' });
+    return this;
+  }
+}
+

@@ -1,0 +1,127 @@
+// node --test: the .adp parser and the CPU side of the bend against what the
+// Python library makes of the same files (fixtures: tools/make_js_fixtures.py).
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import { parseADP, AxialError, crc32, recordLayout, splitAxes } from '../src/adp.js';
+import { resolveAxis, instanceMatrices, bendPositions, bentRadii } from '../src/bend.js';
+
+const dir = new URL('./fixtures/', import.meta.url);
+const expected = JSON.parse(readFileSync(new URL('expected.json', dir), 'utf8'));
+const load = (name) => readFileSync(new URL(`${name}.adp`, dir));
+const names = Object.keys(expected);
+
+test('the fixtures cover both encodings, versions 1-3, a chosen frame and several axes', () => {
+  const e = Object.values(expected);
+  assert.deepEqual(new Set(e.map((x) => x.encoding)), new Set(['float32', 'quantized']));
+  for (const n of [16, 19, 22]) assert.ok(e.some((x) => x.numbersPerInstance === n), `${n} numbers`);
+  assert.ok(e.some((x) => x.axes && x.axes.count > 1), 'several axes');
+  assert.ok(e.some((x) => x.axis.index === -1), 'a chosen frame');
+});
+
+for (const name of names) {
+  const want = expected[name];
+  test(`parseADP ${name}: header and decoded numbers as Python reads them`, () => {
+    const p = parseADP(load(name), name);
+    assert.equal(p.count, want.count);
+    assert.equal(p.numbersPerInstance, want.numbersPerInstance);
+    assert.equal(p.encoding, want.encoding);
+    assert.equal(p.axes, want.axes ? want.axes.count : 1);
+    assert.equal(p.fingerprint, want.fingerprint);
+    assert.equal(p.data.length, want.count * want.numbersPerInstance);
+    want.data.flat().forEach((v, i) => assert.ok(Math.abs(p.data[i] - v) <= 1e-6 * Math.max(1, Math.abs(v)), `${name} number ${i}: ${p.data[i]} vs ${v}`));
+    if (want.axes) assert.equal(p.axis, 4);
+    else if (want.axis.index === -1) assert.equal(p.axis, 3);
+    else assert.equal(p.axis, want.axis.index);
+    assert.ok(Math.abs(p.length - want.axis.length) < 1e-9 * want.axis.length);
+  });
+
+  test(`bend ${name}: instanceMatrix x bendPositions = axialdeform.deform (CPU reference)`, () => {
+    const p = parseADP(load(name), name);
+    const spec = { axis: want.axis, axes: want.axes || null };
+    const positions = Float32Array.from(want.positions.flat());
+    const axis = resolveAxis(spec, p, positions);
+    const layout = recordLayout(p.numbersPerInstance, p.axes);
+    const mats = instanceMatrices(p.data, layout, p.count, new Float32Array(16 * p.count));
+    const out = new Float32Array(positions.length);
+    let worst = 0;
+    for (let i = 0; i < p.count; i++) {
+      bendPositions(positions, axis, p.data, layout, i, out, want.vertexAxis);
+      const m = mats.subarray(16 * i, 16 * i + 16);
+      for (let v = 0; v < positions.length / 3; v++) {
+        const [x, y, z] = [out[3 * v], out[3 * v + 1], out[3 * v + 2]];
+        const w = [m[0] * x + m[4] * y + m[8] * z + m[12], m[1] * x + m[5] * y + m[9] * z + m[13], m[2] * x + m[6] * y + m[10] * z + m[14]];
+        for (let c = 0; c < 3; c++) worst = Math.max(worst, Math.abs(w[c] - want.world[i][v][c]));
+      }
+    }
+    assert.ok(worst <= 1e-5 * want.length, `${name}: largest difference ${worst} (L = ${want.length})`);
+  });
+
+  test(`bounds ${name}: every bent vertex lies in its instance's sphere`, () => {
+    const p = parseADP(load(name), name);
+    const positions = Float32Array.from(want.positions.flat());
+    const axis = resolveAxis({ axis: want.axis, axes: want.axes || null }, p, positions);
+    const layout = recordLayout(p.numbersPerInstance, p.axes);
+    const { center, radius } = bentRadii(positions, axis, p.data, layout, p.count);
+    const out = new Float32Array(positions.length);
+    for (let i = 0; i < p.count; i++) {
+      bendPositions(positions, axis, p.data, layout, i, out, want.vertexAxis);
+      for (let v = 0; v < out.length; v += 3) {
+        const d = Math.hypot(out[v] - center[0], out[v + 1] - center[1], out[v + 2] - center[2]);
+        assert.ok(d <= radius[i] * (1 + 1e-6), `${name} instance ${i}: vertex at ${d} outside ${radius[i]}`);
+      }
+    }
+  });
+}
+
+test('splitAxes: axis 0 record and the child texels of a tree', () => {
+  const p = parseADP(load('tree'), 'tree');
+  const { std, texels, rows } = splitAxes(p);
+  assert.equal(std.fields, p.fields - 10 * (p.axes - 1));
+  assert.equal(rows, 1);
+  // child axis 1 of instance 0: the record's columns 10..19, in three texels (d5 in the third's xy)
+  for (let c = 0; c < 10; c++) assert.equal(texels[c], p.data[10 + c]);
+  assert.equal(texels[10], 0);
+});
+
+function corrupt(name, edit) {
+  const b = new Uint8Array(load(name));
+  edit(b, new DataView(b.buffer));
+  return b.buffer;
+}
+const fixCrc = (b, v) => v.setUint32(b.length - 4, crc32(b.subarray(0, b.length - 4)), true);
+
+const bad = {
+  'truncated': [() => load('stone16').subarray(0, 50), /stone16: truncated: 50 bytes/],
+  'cut short': [() => load('stone16').subarray(0, 200), /truncated: 200 bytes, but a count of 3 instances needs 292/],
+  'too long': [() => Buffer.concat([load('stone16'), Buffer.alloc(4)]), /too long/],
+  'magic': [() => corrupt('stone16', (b) => { b[1] = 0x42; }), /magic bytes differ/],
+  'checksum': [() => corrupt('stone16', (b) => { b[120] ^= 1; }), /checksum: wrong CRC-32 .* the file is corrupt/],
+  'version': [() => corrupt('stone16', (b, v) => { v.setUint16(8, 9, true); fixCrc(b, v); }), /version: expected 1, 2, 3, found 9/],
+  'encoding': [() => corrupt('stone16', (b, v) => { v.setUint16(10, 7, true); fixCrc(b, v); }), /encoding: expected 0 \(float32\) or 1 \(quantized\), found 7/],
+  'axes': [() => corrupt('stone16', (b, v) => { v.setUint32(28, 99, true); fixCrc(b, v); }), /axes: expected 1 to 64 axes, found 99/],
+  'axis': [() => corrupt('stone16', (b, v) => { v.setInt8(24, 9); fixCrc(b, v); }), /axis: expected -1, 0, 1, 2, 3/],
+  'not finite': [() => corrupt('stone16', (b, v) => { v.setFloat32(96, NaN, true); fixCrc(b, v); }), /values: a number is not finite/],
+};
+for (const [what, [make, message]] of Object.entries(bad)) {
+  test(`parseADP refuses a file: ${what}`, () => {
+    assert.throws(() => parseADP(make(), what === 'truncated' || what === 'cut short' ? 'stone16' : 'f.adp'),
+      (err) => err instanceof AxialError && err instanceof Error && message.test(err.message));
+  });
+}
+
+test('parseADP takes an ArrayBuffer, a typed array or a Node Buffer, and refuses other things', () => {
+  const buf = load('stone16');
+  const ab = buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength);
+  assert.equal(parseADP(ab).count, 3);
+  assert.equal(parseADP(new Uint8Array(ab)).count, 3);
+  assert.throws(() => parseADP('text'), /expected an ArrayBuffer or a typed array/);
+});
+
+test('recordLayout: columns of 16, 19, 22 numbers and of several axes', () => {
+  assert.deepEqual([recordLayout(16).position, recordLayout(16).angles, recordLayout(16).scale], [10, 13, null]);
+  assert.deepEqual([recordLayout(22).scale, recordLayout(22).twist, recordLayout(22).tint], [16, 17, 19]);
+  const t = recordLayout(16 + 90, 10);
+  assert.deepEqual([t.position, t.angles], [100, 103]);
+  assert.throws(() => recordLayout(17), /expected 16, 19 or 22 numbers/);
+});
