@@ -141,9 +141,11 @@ export function bendPositions(positions, axis, data, layout, i, out, vertexAxis 
  * Bounding spheres (model space, before the rigid part) of every bent instance: a point on axis 0's
  * line, c, and radius = max |v - c| max(1, |1 - tp|) + the sum over the axes of max |d_i| (the Bézier
  * curve lies in its control points' hull; twist turns about the line; taper scales across it).
- * Returns {center: [x, y, z], radius: Float32Array(count)} (the centre is the same for all).
+ * Returns {center: [x, y, z], radius: Float32Array(count), grow} (the centre is the same for all);
+ * `grow` (when given, Float32Array) gets the sum of the max |d_i|: no vertex moves farther (without
+ * twist and taper), so the base box grown by it holds the bent instance.
  */
-export function bentRadii(positions, axis, data, layout, count, first = 0, out = null) {
+export function bentRadii(positions, axis, data, layout, count, first = 0, out = null, grow = null) {
   const f0 = axis.frames ? axis.frames[0] : axis.frame;
   const mid = axis.lo + axis.length / 2;
   const c = [0, 1, 2].map((q) => f0[0][q] * mid + f0[1][q] * axis.center[0] + f0[2][q] * axis.center[1]);
@@ -165,8 +167,9 @@ export function bentRadii(positions, axis, data, layout, count, first = 0, out =
       d += m;
     }
     radius[i] = r0 * Math.max(1, Math.abs(1 - tp)) + d;
+    if (grow) grow[i] = d;
   }
-  return { center: c, radius };
+  return { center: c, radius, grow };
 }
 
 export { recordLayout };

@@ -42,10 +42,9 @@ export class AxialGLTFPlugin {
           object.add(bent);
           object.remove(part);
         }
-        gltf.parser.associations.set(bent, parser.associations.get(part) || {});
+        parser.associations.set(bent, parser.associations.get(part) || {});
       }
     }
-    return gltf;
   }
 }
 

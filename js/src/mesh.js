@@ -144,10 +144,16 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
       });
     }
     this._radii = new Float32Array(capacity);
+    this._grow = new Float32Array(capacity);
+    own.computeBoundingBox();
+    this._baseBox = own.boundingBox.clone();
     this._center = [0, 0, 0];
     this.material = Array.isArray(material) ? material.map((m) => this.bendMaterial(m)) : this.bendMaterial(material);
-    this.customDepthMaterial = this.bendMaterial(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }), false);
-    this.customDistanceMaterial = this.bendMaterial(new THREE.MeshDistanceMaterial(), false);
+    // the shadow passes draw the bent shape too (three picks these for castShadow)
+    this._shadowMaterials = [
+      this.bendMaterial(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }), false),
+      this.bendMaterial(new THREE.MeshDistanceMaterial(), false)];
+    [this.customDepthMaterial, this.customDistanceMaterial] = this._shadowMaterials;
     this.count = 0;
     this.setParams(record);
   }
@@ -220,7 +226,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     if (this.instanceColor) range(this.instanceColor, 3);
     if (this.axis.axes) this._updateChildren();
     const pos = this.geometry.getAttribute('position').array;
-    this._center = bentRadii(pos, this.axis, this.data, L, n, first, this._radii).center;
+    this._center = bentRadii(pos, this.axis, this.data, L, n, first, this._radii, this._grow).center;
     this.count = Math.max(this.count, first + n);
     this.boundingSphere = null;
     this.boundingBox = null;
@@ -251,13 +257,22 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     return target;
   }
 
-  computeBoundingSphere() {
-    const box = new THREE.Box3(), s = new THREE.Sphere(), v = new THREE.Vector3();
-    for (let i = 0; i < this.count; i++) {
-      this.getInstanceBoundingSphere(i, s);
-      box.expandByPoint(v.copy(s.center).addScalar(s.radius));
-      box.expandByPoint(v.copy(s.center).subScalar(s.radius));
+  /** The box (this mesh's space) of instance i bent and placed: the base box grown by how far the
+   * bend can move a vertex, through the instance's matrix (the sphere's box for twist and taper). */
+  getInstanceBoundingBox(i, target = new THREE.Box3()) {
+    const L = this.layout, r = i * L.numbersPerInstance;
+    const twisted = (L.twist !== null && this.data[r + L.twist] !== 0) || (L.taper !== null && this.data[r + L.taper] !== 0);
+    if (twisted) {
+      const s = this.getInstanceBoundingSphere(i);
+      return target.set(s.center.clone().subScalar(s.radius), s.center.clone().addScalar(s.radius));
     }
+    target.copy(this._baseBox).expandByScalar(this._grow[i]);
+    return target.applyMatrix4(new THREE.Matrix4().fromArray(this.instanceMatrix.array, 16 * i));
+  }
+
+  computeBoundingSphere() {
+    const box = new THREE.Box3(), b = new THREE.Box3(), s = new THREE.Sphere();
+    for (let i = 0; i < this.count; i++) box.union(this.getInstanceBoundingBox(i, b));
     this.boundingBox = box;
     if (this.boundingSphere === null) this.boundingSphere = new THREE.Sphere();
     if (box.isEmpty()) { this.boundingSphere.makeEmpty(); return; }
@@ -316,8 +331,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
   dispose() {
     this.geometry.dispose();
     (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => m.dispose());
-    this.customDepthMaterial.dispose();
-    this.customDistanceMaterial.dispose();
+    this._shadowMaterials.forEach((m) => m.dispose());
     if (this.axialUniforms.axialChildren && this.axialUniforms.axialChildren.value) this.axialUniforms.axialChildren.value.dispose();
     if (this._rayMesh) this._rayMesh.geometry.dispose();
     this.dispatchEvent({ type: 'dispose' });

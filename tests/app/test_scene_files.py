@@ -248,7 +248,7 @@ def test_export_a_scene_instanced(small, tmp_path, capsys, validate):  # noqa: F
 
     g = pygltflib.GLTF2.load(str(glb))
     inst = {n.name: n for n in g.nodes if (n.extensions or {}).get(INSTANCING)}
-    assert set(inst) == {"stones", "leaves"} and g.extensionsUsed == [INSTANCING]
+    assert set(inst) == {"stones", "leaves"} and g.extensionsUsed == [INSTANCING, "AXIALDEFORM_bend"]
     assert [n.name for n in g.nodes if n.mesh is not None and n.name not in inst] == ["terrain"]
     for layer in scene.layers:
         mesh, params = read_instanced_glb(glb, node=layer.name)

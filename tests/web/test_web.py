@@ -26,7 +26,6 @@ from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_sce
 
 ROOT = Path(__file__).resolve().parents[2]
 SIZE = (400, 300)
-CHROMIUM_ARGS = ["--use-angle=swiftshade", "--enable-unsafe-swiftshader", "--no-sandbox"]
 
 
 # ------------------------------------------------------------------ no browser
@@ -182,18 +181,6 @@ def test_serve_on_a_busy_port_picks_another(tmp_path):
 
 
 # ------------------------------------------------------------------ browser
-@pytest.fixture(scope="module")
-def browser():
-    chromium = shutil.which("chromium")
-    assert chromium, "Debian's chromium is required (apt-get install chromium); browser tests do not skip"
-    from playwright.sync_api import sync_playwright  # a missing package is a failure
-
-    with sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
-        yield b
-        b.close()
-
-
 class Visit:
     """One page in the browser with its console errors collected."""
 

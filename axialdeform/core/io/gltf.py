@@ -86,6 +86,8 @@ __all__ = [
     "LAYOUTS",
     "INSTANCING",
     "EXTRAS_KEY",
+    "BEND_EXTENSION",
+    "bend_extension",
     "ATTRIBUTES",
     "export_glb",
     "export_baked",
@@ -104,6 +106,8 @@ LAYOUTS = ("baked", "instanced")
 INSTANCING = "EXT_mesh_gpu_instancing"
 #: key of the dictionary this library writes into ``extras``
 EXTRAS_KEY = "axialdeform"
+#: the vendor extension carrying the bend on an instancing node (docs/gltf/AXIALDEFORM_bend)
+BEND_EXTENSION = "AXIALDEFORM_bend"
 #: the application-specific per-instance attributes (from the record table)
 ATTRIBUTES = GLTF_ATTRIBUTES
 EXTENDED_ATTRIBUTES = GLTF_EXTENDED_ATTRIBUTES
@@ -338,6 +342,23 @@ def _mesh_extras(mesh, count: int, layout: str) -> dict:
     }
 
 
+def bend_extension(mesh, numbers: int) -> dict:
+    """The ``AXIALDEFORM_bend`` object of an instancing node (``docs/gltf/AXIALDEFORM_bend``):
+    the base mesh's control axis (frame rows ``e_a, e_u, e_v``, ``lo``, ``length``, the axis line
+    ``center``), a tree's axes, the numbers per instance and the mesh fingerprint."""
+    a = mesh.axis
+    out = {"numbersPerInstance": int(numbers),
+           "axis": {"frame": a.matrix.tolist(), "lo": float(a.lo), "length": float(a.length),
+                    "center": [float(c) for c in a.line]},
+           "fingerprint": mesh.fingerprint.hex()}
+    tree = getattr(mesh, "tree", None)
+    if tree is not None:
+        out["axes"] = {"count": tree.count, "parents": [int(p) for p in tree.parents],
+                       "frames": [x.matrix.tolist() for x in tree.axes],
+                       "lo": [float(x.lo) for x in tree.axes], "length": [float(x.length) for x in tree.axes]}
+    return out
+
+
 def check_glb_path(path) -> Path:
     """``path`` as a Path when it names a .glb file that is not a folder; else :class:`GltfError`."""
     path = Path(path)
@@ -490,7 +511,7 @@ def encode_instanced(mesh, params) -> bytes:
     _add_instanced(b, mesh, params, "axialdeform instances")
     b.gltf.scenes.append(b.g.Scene(name="axialdeform instanced", nodes=[0]))
     b.gltf.scene = 0
-    b.gltf.extensionsUsed = [INSTANCING]
+    b.gltf.extensionsUsed = [INSTANCING, BEND_EXTENSION]
     return b.finish()
 
 
@@ -542,7 +563,8 @@ def _add_instanced(b: _Builder, mesh, params, node_name: str, *, color=None, ext
         node_extras["attributes"]["SCALE"] = ["s", "s", "s"]
     node_extras.update(extras or {})
     b.gltf.nodes.append(g.Node(name=node_name, mesh=len(b.gltf.meshes) - 1,
-                               extensions={INSTANCING: {"attributes": attributes}},
+                               extensions={INSTANCING: {"attributes": attributes},
+                                           BEND_EXTENSION: bend_extension(mesh, params.shape[1] + 10 * (k - 1))},
                                extras={EXTRAS_KEY: node_extras}))
     return len(b.gltf.nodes) - 1
 
@@ -651,7 +673,7 @@ def _encode_scene_instanced(scene, layers) -> bytes:
         "up": scene.up}}))
     b.gltf.scene = 0
     if layers:
-        b.gltf.extensionsUsed = [INSTANCING]
+        b.gltf.extensionsUsed = [INSTANCING, BEND_EXTENSION]
     return b.finish()
 
 

@@ -1,0 +1,153 @@
+// Type declarations of axialdeform-three (the module is plain ES2020 JavaScript).
+import * as THREE from 'three';
+import type { GLTFLoaderPlugin, GLTFParser, GLTF } from 'three/examples/jsm/loaders/GLTFLoader.js';
+
+/** The error of every check in the package: its message names the file, the field and what was expected. */
+export class AxialError extends Error {}
+
+/** A parsed .adp parameter file (parseADP). */
+export interface ADPRecord {
+  name: string;
+  version: 1 | 2 | 3;
+  encoding: 'float32' | 'quantized';
+  count: number;
+  /** 16, 19 or 22, plus 10 per axis after the first. */
+  numbersPerInstance: number;
+  fields: number;
+  /** K: axes per instance (1 unless the mesh has several axes). */
+  axes: number;
+  /** -1 none recorded, 0/1/2 the aligned axis x/y/z, 3 a chosen frame, 4 several axes. */
+  axis: number;
+  lo: number;
+  length: number;
+  /** SHA-256 hex of the base mesh the numbers were made for ('' when none recorded). */
+  fingerprint: string;
+  fingerprintBytes: Uint8Array;
+  frameDigest: string;
+  frameDigestBytes: Uint8Array;
+  /** The stored numbers: float32, or uint16 with `qtable` ([min..., step...], 2 numbersPerInstance). */
+  values: Float32Array | Uint16Array;
+  qtable: Float32Array | null;
+  /** count x numbersPerInstance numbers, decoded. */
+  readonly data: Float32Array;
+}
+
+/** The minimum AxialInstancedMesh needs: numbers, row by row. */
+export interface InstanceRecord {
+  name?: string;
+  count: number;
+  numbersPerInstance: number;
+  data: Float32Array;
+  axes?: number;
+  axis?: number;
+  lo?: number;
+  length?: number;
+}
+
+export interface RecordLayout {
+  axes: number; numbersPerInstance: number; base: 16 | 19 | 22;
+  position: number; angles: number; scale: number | null; twist: number | null; taper: number | null; tint: number | null;
+}
+
+export type Rows3 = [number[], number[], number[]];
+
+/** A control axis: the frame's rows e_a, e_u, e_v, lo, length, the axis line `center` (across). */
+export interface AxisSpec {
+  frame?: Rows3;
+  index?: 0 | 1 | 2 | -1;
+  lo: number;
+  length: number;
+  center?: [number, number];
+}
+
+/** Several axes in a hierarchy (a tree). */
+export interface AxesSpec {
+  count: number;
+  frames: Rows3[];
+  lo: number[];
+  length: number[];
+  parents: number[];
+}
+
+/** The AXIALDEFORM_bend extension object (docs/gltf/AXIALDEFORM_bend). */
+export interface BendExtension {
+  numbersPerInstance: number;
+  axis: Required<Pick<AxisSpec, 'frame' | 'lo' | 'length' | 'center'>>;
+  axes?: AxesSpec;
+  fingerprint?: string;
+}
+
+export interface ResolvedAxis {
+  frame: Rows3; lo: number; length: number; center: [number, number]; axes: AxesSpec | null;
+}
+
+export function parseADP(input: ArrayBuffer | ArrayBufferView, name?: string): ADPRecord;
+export function crc32(bytes: Uint8Array): number;
+export function hex(bytes: Uint8Array): string;
+export function dequantize(values: Uint16Array, qtable: Float32Array, fields: number): Float32Array;
+export function recordLayout(numbersPerInstance: number, axes?: number): RecordLayout;
+export function splitAxes(record: ADPRecord): { std: ADPRecord; texels: Float32Array | null; rows: number };
+export function childTexels(values: Float32Array | Uint16Array, qtable: Float32Array | null, fields: number,
+  axes: number, count: number): { texels: Float32Array; rows: number };
+export const NUMBERS_OF_VERSION: Readonly<Record<1 | 2 | 3, number>>;
+export const HEADER_BYTES: 96;
+export const MAX_AXES: 64;
+export const AXES_ROW: 4095;
+
+export function alignedFrame(index: 0 | 1 | 2): Rows3;
+export function resolveAxis(spec: { axis?: AxisSpec; axes?: AxesSpec | null } | AxisSpec | null,
+  record: InstanceRecord | null, positions: ArrayLike<number>): ResolvedAxis;
+export function instanceMatrices(data: Float32Array, layout: RecordLayout, count: number, out: Float32Array,
+  first?: number): Float32Array;
+export function bendPositions(positions: ArrayLike<number>, axis: ResolvedAxis, data: Float32Array,
+  layout: RecordLayout, instance: number, out: Float32Array, vertexAxis?: ArrayLike<number> | null): Float32Array;
+export function bentRadii(positions: ArrayLike<number>, axis: ResolvedAxis, data: Float32Array, layout: RecordLayout,
+  count: number, first?: number, out?: Float32Array | null, grow?: Float32Array | null):
+  { center: [number, number, number]; radius: Float32Array; grow: Float32Array | null };
+
+export interface AxialInstancedMeshOptions {
+  /** The mesh's axis where the record's header does not say it all (a chosen frame, several axes). */
+  axis?: { axis?: AxisSpec; axes?: AxesSpec | null } | AxisSpec;
+  /** Room for more instances than the record has. */
+  capacity?: number;
+  /** Each vertex's axis (several axes), if the geometry has no `_axial_axis` attribute. */
+  vertexAxis?: ArrayLike<number> | THREE.BufferAttribute;
+}
+
+/** A THREE.InstancedMesh whose instances are each bent along their own Bézier control axis. */
+export class AxialInstancedMesh extends THREE.InstancedMesh {
+  constructor(geometry: THREE.BufferGeometry, material: THREE.Material | THREE.Material[],
+    record: ADPRecord | InstanceRecord, options?: AxialInstancedMeshOptions);
+  readonly isAxialInstancedMesh: true;
+  readonly capacity: number;
+  readonly layout: RecordLayout;
+  readonly axis: ResolvedAxis;
+  /** capacity x numbersPerInstance: every instance's numbers (setParams writes here). */
+  readonly data: Float32Array;
+  /** The uniforms the bent materials share (axialFrame, axialLo, axialLen, axialCenter, ...). */
+  readonly axialUniforms: Record<string, THREE.IUniform>;
+  baseGeometry: THREE.BufferGeometry;
+  bendMaterial<M extends THREE.Material>(material: M, clone?: boolean): M;
+  setParams(data: Float32Array | ADPRecord | InstanceRecord, options?: { first?: number }): this;
+  getInstanceBoundingSphere(index: number, target?: THREE.Sphere): THREE.Sphere;
+  getInstanceBoundingBox(index: number, target?: THREE.Box3): THREE.Box3;
+  bentPositions(index: number, out?: Float32Array | null): Float32Array;
+  dispose(): this;
+}
+
+/** Inject the bend into the vertex shader text of a three.js built-in material. */
+export function injectBend(vertexShader: string, where?: string): string;
+
+/** GLTFLoader plugin: `loader.register((parser) => new AxialGLTFPlugin(parser))`. */
+export class AxialGLTFPlugin implements GLTFLoaderPlugin {
+  constructor(parser: GLTFParser);
+  readonly name: 'AXIALDEFORM_bend';
+  parser: GLTFParser;
+  afterRoot(gltf: GLTF): Promise<void>;
+}
+export const EXTENSION: 'AXIALDEFORM_bend';
+export function fromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): AxialInstancedMesh;
+export function recordFromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): InstanceRecord;
+
+/** The text of axialdeform's glsl/axial.glsl (axial_bend, axial_place, axial_tree_world ...). */
+export const AXIAL_GLSL: string;

@@ -1,0 +1,19 @@
+// Compiled (tsc --noEmit) by tests/web/test_three.py: the declarations describe the README's usage.
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { AxialGLTFPlugin, AxialInstancedMesh, parseADP, AxialError, type ADPRecord } from 'axialdeform-three';
+
+export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry): Promise<THREE.Object3D> {
+  const loader = new GLTFLoader();
+  loader.register((parser) => new AxialGLTFPlugin(parser));
+  const gltf = await loader.loadAsync('stones.glb');
+  const record: ADPRecord = parseADP(buffer, 'stones.adp');
+  const stones = new AxialInstancedMesh(geometry, new THREE.MeshStandardMaterial(), record, { capacity: 2 * record.count });
+  stones.setParams(record.data.subarray(0, record.numbersPerInstance), { first: 3 });
+  const n: number = stones.count + stones.layout.numbersPerInstance;
+  const hits = new THREE.Raycaster().intersectObject(stones);
+  if (hits.length && hits[0].instanceId !== undefined && n > 0) stones.dispose();
+  try { parseADP(new Uint8Array(4)); } catch (e) { if (e instanceof AxialError) console.log(e.message); }
+  gltf.scene.add(stones);
+  return gltf.scene;
+}

@@ -1,0 +1,246 @@
+"""The npm module axialdeform-three (js/) in Chromium: the examples in
+examples/web draw what ``axialdeform render`` draws, shadows and raycasting
+follow the bent shape, and ``npm pack`` makes a tarball a fresh folder installs
+and runs.  The parsers' own tests run with node's test runner (test_node_tests)."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import threading
+from io import BytesIO
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import axialdeform as ad
+from axialdeform.web import make_server
+
+ROOT = Path(__file__).resolve().parents[2]
+JS = ROOT / "js"
+EXAMPLES = ROOT / "examples" / "web"
+BACKGROUND = (0.93, 0.94, 0.96)  # Look()'s: render draws on it, the examples are set to it
+SIZE = (480, 360)
+CAMERA = ["--eye", "7,5,7", "--target", "0,0,0", "--fov", "40"]  # the examples' camera
+
+
+def cli(*args, cwd=None):
+    r = subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+    assert r.returncode == 0, r.stderr
+    return r
+
+
+def node_modules_three() -> Path:
+    three = JS / "node_modules" / "three"
+    assert (three / "build" / "three.module.js").is_file(), \
+        "js/node_modules/three is missing: the README's test command runs `npm ci --prefix js`"
+    return three
+
+
+def make_site(folder: Path, modules: bool = True) -> Path:
+    """The examples with their data: stone.obj, stones.adp (60 stones), stones.glb (instanced)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    if modules:
+        (folder / "node_modules").mkdir()
+        (folder / "node_modules" / "three").symlink_to(node_modules_three())
+        (folder / "node_modules" / "axialdeform-three").symlink_to(JS)
+    for f in EXAMPLES.iterdir():
+        shutil.copy(f, folder / f.name)
+    shutil.copy(ROOT / "tests" / "web" / "three" / "checks.html", folder / "checks.html")
+    shutil.copy(ROOT / "axialdeform" / "meshes" / "stone.obj", folder / "stone.obj")
+    cli("random", "stone", "-n", 60, "--seed", 3, "--bend", 0.15, "-o", folder / "stones.adp")
+    cli("export", "stone", folder / "stones.adp", "--instanced", "-o", folder / "stones.glb")
+    mesh = ad.load_mesh("stone")
+    one = np.zeros((1, 16), np.float32)
+    L = mesh.axis.length
+    one[0, :10] = np.array([0, 0, 0.1, 0.35, -0.2, 0.5, 0.1, 0.35, 0, 0]) * L  # an arch across, its ends in place
+    ad.write_params(folder / "one.adp", one, mesh)
+    return folder
+
+
+class Server:
+    def __init__(self, folder):
+        self.server, _ = make_server(folder, 0)
+        self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
+        self.thread.start()
+        self.url = f"http://127.0.0.1:{self.server.server_address[1]}/"
+
+    def close(self):
+        self.server.shutdown()
+        self.server.server_close()
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    folder = make_site(tmp_path_factory.mktemp("three") / "site")
+    s = Server(folder)
+    yield folder, s.url
+    s.close()
+
+
+def _mask(image, background=BACKGROUND):
+    return np.abs(image.astype(np.float64) - np.asarray(background) * 255.0).max(axis=2) > 12
+
+
+def iou(a, b) -> float:
+    ma, mb = _mask(a), _mask(b)
+    return float((ma & mb).sum() / max((ma | mb).sum(), 1))
+
+
+def example_picture(browser, url) -> tuple[np.ndarray, list]:
+    """The example at ``url`` drawn on render's background without its ground and fog."""
+    page = browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1]})
+    errors = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        page.goto(url)
+        page.wait_for_function("window.app !== undefined", timeout=120_000)
+        page.evaluate("""() => {
+            const { THREE, renderer, scene, camera, ground } = window.app;
+            renderer.setAnimationLoop(null);
+            ground.visible = false;
+            scene.fog = null;
+            scene.background = new THREE.Color().setRGB(0.93, 0.94, 0.96, THREE.SRGBColorSpace);
+            renderer.render(scene, camera);
+        }""")
+        png = page.locator("canvas").screenshot()
+        return np.asarray(Image.open(BytesIO(png)).convert("RGB")), errors
+    finally:
+        page.close()
+
+
+def render_reference(folder: Path, what) -> np.ndarray:
+    out = folder / "reference.png"
+    cli("render", *what, "--fast", *CAMERA, "--size", f"{SIZE[0]}x{SIZE[1]}", "-o", out)
+    return np.asarray(Image.open(out).convert("RGB"))
+
+
+def test_node_tests_pass():
+    """js/test with node's own runner, and src/glsl.js is what glsl/axial.glsl gives."""
+    node = shutil.which("node")
+    assert node, "Node.js is required (the README's test command)"
+    r = subprocess.run([node, "build.mjs", "--check"], cwd=JS, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run([node, "--test", "test/"], cwd=JS, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-2000:]
+    assert "# fail 0" in r.stdout and "# pass " in r.stdout
+
+
+def test_the_module_has_no_second_copy_of_the_maths():
+    """The shader text the module injects is glsl/axial.glsl verbatim (no GLSL of its own bends)."""
+    glsl = (ROOT / "glsl" / "axial.glsl").read_text()
+    built = (JS / "src" / "glsl.js").read_text()
+    import json
+
+    assert json.loads(built.split("export const AXIAL_GLSL = ", 1)[1].rstrip().rstrip(";")) == glsl
+    mesh_js = (JS / "src" / "mesh.js").read_text()
+    for maths in ("Bernstein", "s * s * s * s", "cos(", "sin("):  # the bend's formulas live in axial.glsl only
+        assert maths not in mesh_js.split("const BEND", 1)[1].split("`;", 1)[0]
+
+
+def test_fixtures_are_what_the_library_writes(tmp_path):
+    cmd = [sys.executable, str(ROOT / "tools" / "make_js_fixtures.py"), str(tmp_path)]
+    subprocess.run(cmd, check=True, capture_output=True)
+    for f in sorted((JS / "test" / "fixtures").iterdir()):
+        assert (tmp_path / f.name).read_bytes() == f.read_bytes(), f"{f.name}: rerun tools/make_js_fixtures.py"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("example", ["gltf.html", "adp.html"])
+def test_the_examples_draw_what_render_draws(browser, site, example):
+    """The GLB that `export --instanced` wrote of stones.adp, and stones.adp itself, as render draws stones.adp."""
+    folder, url = site
+    shot, errors = example_picture(browser, url + example)
+    ref = render_reference(folder, ["stone", folder / "stones.adp"])
+    assert errors == []
+    assert _mask(ref).sum() > 0.05 * ref.shape[0] * ref.shape[1]  # stones in view
+    assert iou(shot, ref) >= 0.97, iou(shot, ref)
+
+
+@pytest.mark.slow
+def test_unbent_would_not_match(browser, site):
+    """The IoU test can fail: the same GLB drawn by plain GLTFLoader (no plugin: unbent) is off."""
+    folder, url = site
+    page = (folder / "gltf.html").read_text()
+    plain = page.replace("new GLTFLoader().register((parser) => new AxialGLTFPlugin(parser))", "new GLTFLoader()")
+    assert plain != page
+    (folder / "plain.html").write_text(plain)
+    shot, errors = example_picture(browser, url + "plain.html")
+    ref = render_reference(folder, ["stone", folder / "stones.adp"])
+    assert errors == []
+    assert iou(shot, ref) < 0.9
+
+
+@pytest.fixture(scope="module")
+def checks(browser, site):
+    _folder, url = site
+    page = browser.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(url + "checks.html")
+    page.wait_for_function("window.checksReady === true", timeout=120_000)
+    yield page, errors
+    page.close()
+
+
+@pytest.mark.slow
+def test_the_bent_instance_casts_a_bent_shadow(checks):
+    page, errors = checks
+    bent, flat = (np.array(m) for m in page.evaluate("window.checks.shadows(true)"))
+    assert bent.sum() > 200 and flat.sum() > 200  # both shadows are there
+    assert (bent ^ flat).sum() > 0.15 * (bent | flat).sum()  # and they differ
+    # without the module's depth material the shadow would be the unbent one's
+    plain_bent, plain_flat = (np.array(m) for m in page.evaluate("window.checks.shadows(false)"))
+    assert (plain_bent ^ plain_flat).sum() < 0.02 * (plain_bent | plain_flat).sum()
+    assert errors == []
+
+
+@pytest.mark.slow
+def test_raycasting_hits_the_bent_surface(checks):
+    page, errors = checks
+    bent = page.evaluate("window.checks.raycasts(window.checks.bent)")
+    flat = page.evaluate("window.checks.raycasts(window.checks.flat)")
+    assert bent["ids"] and bent["drawn"] > 100
+    assert bent["agreement"] >= 0.98, bent["agreement"]
+    assert flat["agreement"] >= 0.98, flat["agreement"]
+    differ = np.array(bent["mask"]) ^ np.array(flat["mask"])
+    assert differ.sum() > 0.2 * bent["drawn"]  # the bend moved the surface the rays find
+    assert errors == []
+
+
+@pytest.mark.slow
+def test_npm_pack_installs_in_a_fresh_folder_and_runs_the_example(browser, tmp_path):
+    npm = shutil.which("npm")
+    assert npm, "npm is required (the README's test command)"
+    r = subprocess.run([npm, "pack", "--pack-destination", str(tmp_path)], cwd=JS, capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    tarball = next(tmp_path.glob("axialdeform-three-*.tgz"))
+    app = make_site(tmp_path / "app", modules=False)
+    r = subprocess.run([npm, "install", "--no-audit", "--no-fund", str(tarball), "three"], cwd=app,
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    installed = app / "node_modules" / "axialdeform-three"
+    assert (installed / "src" / "glsl.js").is_file() and (installed / "src" / "index.d.ts").is_file()
+    assert not (installed / "test").exists()  # the tarball carries the module, not its tests
+    s = Server(app)
+    try:
+        shot, errors = example_picture(browser, s.url + "gltf.html")
+    finally:
+        s.close()
+    ref = render_reference(app, ["stone", app / "stones.adp"])
+    assert errors == []
+    assert iou(shot, ref) >= 0.97, iou(shot, ref)
+
+
+def test_the_type_declarations_compile():
+    """src/index.d.ts against three's own types (@types/three), for the README's usage."""
+    node = shutil.which("node")
+    tsc = JS / "node_modules" / "typescript" / "bin" / "tsc"
+    assert tsc.is_file(), "js/node_modules/typescript is missing: the README's test command runs `npm ci --prefix js`"
+    r = subprocess.run([node, str(tsc), "-p", "test/types"], cwd=JS, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
