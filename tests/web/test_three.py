@@ -215,6 +215,7 @@ def checks(browser, site):
     page = browser.new_page()
     errors = []
     page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)  # shader errors
     page.goto(url + "checks.html")
     page.wait_for_function("window.checksReady === true", timeout=120_000)
     yield page, errors
@@ -230,6 +231,26 @@ def test_the_bent_instance_casts_a_bent_shadow(checks):
     # without the module's depth material the shadow would be the unbent one's
     plain_bent, plain_flat = (np.array(m) for m in page.evaluate("window.checks.shadows(false)"))
     assert (plain_bent ^ plain_flat).sum() < 0.02 * (plain_bent | plain_flat).sum()
+    assert errors == []
+
+
+@pytest.mark.slow
+def test_standard_physical_lambert_basic_keep_maps_lights_fog_and_tone_mapping(checks):
+    page, errors = checks
+    out = page.evaluate("window.checks.materials()")
+    ref = np.array(out["basic"]["plain"]["mask"])
+    assert ref.sum() > 500
+    for kind, v in out.items():
+        for variant, r in v.items():  # every material and variant draws the same bent silhouette
+            m = np.array(r["mask"])
+            assert (m & ref).sum() / (m | ref).sum() > 0.97, (kind, variant)
+        assert v["map"]["colours"] >= v["plain"]["colours"] + (1 if kind == "basic" else 10), kind  # the checker shows
+        fog, plain = np.array(v["fog"]["mean"]), np.array(v["map"]["mean"])
+        assert fog[0] - fog[1] > plain[0] - plain[1] + 20, kind  # red fog
+        assert np.abs(np.array(v["tone"]["mean"]) - plain).max() > 3, kind  # ACES changes the colours
+        if kind != "basic":  # lit: shading varies over the bent surface
+            assert v["plain"]["colours"] > 8, kind
+    assert out["basic"]["plain"]["colours"] <= 2  # unlit white
     assert errors == []
 
 
