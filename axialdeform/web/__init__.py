@@ -53,7 +53,7 @@ from ..gl.shaders import GLSL_VERSION, assemble
 
 __all__ = ["THREE_VERSION", "WebScene", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es", "write_folder", "single_file_html",
            "make_server", "scene_bytes", "embedded_file",
-           "write_single_file", "write_page", "vendor_file", "page_source"]
+           "write_single_file", "write_page", "vendor_file", "page_source", "module_source"]
 
 #: the files of the vendored three.js, relative to ``web/vendor/``
 VENDOR_FILES = {
@@ -74,6 +74,16 @@ def _here():
 def page_source(name: str) -> str:
     """The text of one file of the page code (``app.js``, ``loader.js``, ``page.html``)."""
     return _here().joinpath(name).read_text(encoding="utf-8")
+
+
+#: the npm module's file the page code imports (its .adp parser), and where the folder page keeps it
+MODULE_FILE = "adp.js"
+MODULE_PATH = "axialdeform-three/adp.js"
+
+
+def module_source(name: str = MODULE_FILE) -> str:
+    """The text of one file of the npm module axialdeform-three (``js/src``; the wheel's ``axialdeform/three``)."""
+    return resources.files("axialdeform.three").joinpath(name).read_text(encoding="utf-8")
 
 
 def vendor_file(relative: str) -> bytes:
@@ -406,7 +416,7 @@ import { loadModules } from '{{LOADER}}';
 const text = (id) => document.getElementById(id).textContent;
 const b64text = (id) => new TextDecoder().decode(Uint8Array.from(atob(text(id).trim()), (c) => c.charCodeAt(0)));
 const { lib, app } = await loadModules({ three: b64text('axd-three'), orbit: b64text('axd-orbit'),
-  gltf: b64text('axd-gltf'), bgu: b64text('axd-bgu'), app: b64text('axd-app') });
+  gltf: b64text('axd-gltf'), bgu: b64text('axd-bgu'), app: b64text('axd-app'), adp: b64text('axd-adp') });
 const files = {};
 for (const e of document.querySelectorAll('script[data-file]')) files[e.dataset.file] = app.fromBase64(e.textContent);
 start(async () => ({ config: JSON.parse(text('axd-config')), files }), lib, app);
@@ -482,11 +492,13 @@ def check_page_outputs(out: Path, names, inputs=(), overwrite: bool = False) -> 
 
 
 def _folder_files(scene: WebScene) -> dict:
-    head = _import_map({"three": "./three/three.module.min.js", "three/addons/": "./three/addons/"})
+    head = _import_map({"three": "./three/three.module.min.js", "three/addons/": "./three/addons/",
+                        "axialdeform-three/adp": "./" + MODULE_PATH})
     page = _page(scene.config, head, "", _START + _FOLDER_ENTRY)
     files = {
         "index.html": page.encode("utf-8"),
         "app.js": page_source("app.js").encode("utf-8"),
+        MODULE_PATH: module_source().encode("utf-8"),
         "scene.json": json.dumps(scene.config, ensure_ascii=False, indent=1).encode("utf-8"),
         **scene.files,
     }
@@ -545,6 +557,7 @@ def single_file_html(scene: WebScene) -> str:
     for key, rel in VENDOR_FILES.items():
         data += _data_script(f"axd-{key}", vendor_file(rel), "text/javascript;base64")
     data += _data_script("axd-app", page_source("app.js").encode("utf-8"), "text/javascript;base64")
+    data += _data_script("axd-adp", module_source().encode("utf-8"), "text/javascript;base64")
     return _page(scene.config, head, data, _START + _SINGLE_ENTRY.replace("{{LOADER}}", loader))
 
 
@@ -575,7 +588,7 @@ def scene_bytes(out: str | os.PathLike) -> dict:
     out = Path(out)
     size = lambda *names: sum((out / n).stat().st_size for n in names)  # noqa: E731
     config = json.loads((out / "scene.json").read_text(encoding="utf-8"))
-    return {"page": size("index.html", "app.js", "scene.json"),
+    return {"page": size("index.html", "app.js", MODULE_PATH, "scene.json"),
             "mesh": size(*(layer["mesh"]["file"] for layer in config["layers"])),
             "params": size(*(layer["params_file"] for layer in config["layers"])),
             "three": size(*("three/" + r for r in VENDOR_FILES.values()))}

@@ -8,119 +8,21 @@
 // (.adp, docs/parameter-files.md) with its CRC-32 verified and the base mesh's
 // fingerprint compared, and feeds the numbers to those shaders unchanged.
 //
-// The module imports nothing: the caller passes three.js in
-// (lib = {THREE, OrbitControls, GLTFLoader}).
+// It imports only the parser of the npm module (axialdeform-three/adp, itself
+// importing nothing); the caller passes three.js in (lib = {THREE, OrbitControls, GLTFLoader}).
 
-export class SceneError extends Error {}
+// the .adp file: parsed, checked (CRC-32, header) and split by the npm module's parser
+// (js/src/adp.js, axialdeform-three), the one parser of every JavaScript program here
+import { parseADP, splitAxes, hex, AxialError, AXES_ROW } from 'axialdeform-three/adp';
 
-const MAGIC = [0x89, 0x41, 0x44, 0x50, 0x0d, 0x0a, 0x1a, 0x0a];
-const HEADER = 96;
-// version 1: 16 numbers per instance; version 2: 19 (extended: s tw tp);
-// version 3: 22 (tinted: tr tg tb) -- the record's levels (core/record.py)
-const FIELDS_OF_VERSION = { 1: 16, 2: 19, 3: 22 };
+/** The page's errors (a message shown as it is): the module's AxialError. */
+export const SceneError = AxialError;
+export { splitAxes, AXES_ROW };
 
-let crcTable = null;
-
-/** CRC-32 (zlib's polynomial) of a Uint8Array. */
-export function crc32(bytes) {
-  if (crcTable === null) {
-    crcTable = new Uint32Array(256);
-    for (let n = 0; n < 256; n++) {
-      let c = n;
-      for (let k = 0; k < 8; k++) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
-      crcTable[n] = c >>> 0;
-    }
-  }
-  let crc = 0xffffffff;
-  for (let i = 0; i < bytes.length; i++) crc = crcTable[(crc ^ bytes[i]) & 0xff] ^ (crc >>> 8);
-  return (crc ^ 0xffffffff) >>> 0;
-}
-
-function hex(bytes) {
-  return Array.from(bytes, (b) => b.toString(16).padStart(2, '0')).join('');
-}
-
-/** Parse an .adp parameter file; the checks and their order follow
- * axialdeform.core.params.read_binary_header / decode_binary. */
+/** Parse an .adp parameter file (axialdeform-three's parseADP: every check of
+ * axialdeform.core.io.params.read_binary_header / decode_binary, in that order). */
 export function parseAdp(buffer, name) {
-  const bytes = new Uint8Array(buffer);
-  const view = new DataView(buffer);
-  const fail = (what) => { throw new SceneError(`${name}: ${what}`); };
-  if (bytes.length < HEADER + 4) fail(`truncated: ${bytes.length} bytes, shorter than the 96-byte header and the 4-byte checksum`);
-  if (MAGIC.some((b, i) => bytes[i] !== b)) fail('not an axialdeform parameter file (magic bytes differ)');
-  const version = view.getUint16(8, true);
-  if (!FIELDS_OF_VERSION[version]) fail(`version: expected ${Object.keys(FIELDS_OF_VERSION).join(', ')}, found ${version} (written by a newer axialdeform?)`);
-  // several axes: K at offset 28 (0 in one-axis files), 10 more numbers per child axis
-  const axes = Math.max(1, view.getUint32(28, true));
-  if (axes > 64) fail(`axes: expected 1 to 64 axes, found ${axes}`);
-  const fields = FIELDS_OF_VERSION[version] + 10 * (axes - 1);
-  const encoding = view.getUint16(10, true);
-  if (encoding !== 0 && encoding !== 1) fail(`encoding: expected 0 (float32) or 1 (quantized), found ${encoding}`);
-  const headerSize = view.getUint32(12, true);
-  if (headerSize !== HEADER) fail(`header size: expected 96, found ${headerSize}`);
-  const count64 = view.getBigUint64(16, true);
-  const each = encoding === 1 ? 2 * fields : 4 * fields;
-  const table = encoding === 1 ? 8 * fields : 0;
-  const expected = BigInt(HEADER + table + 4) + count64 * BigInt(each);
-  if (BigInt(bytes.length) !== expected) {
-    const why = BigInt(bytes.length) < expected ? 'truncated' : 'too long';
-    fail(`${why}: ${bytes.length} bytes, but a count of ${count64} instances needs ${expected}`);
-  }
-  const count = Number(count64);
-  const stored = view.getUint32(bytes.length - 4, true);
-  const computed = crc32(bytes.subarray(0, bytes.length - 4));
-  if (stored !== computed) {
-    fail(`checksum: wrong CRC-32 (stored ${stored.toString(16).padStart(8, '0')}, computed ` +
-         `${computed.toString(16).padStart(8, '0')}): the file is corrupt`);
-  }
-  const axis = view.getInt8(24);
-  if (axis < -1 || axis > 4) fail(`axis: expected -1, 0, 1, 2, 3 (a chosen frame) or 4 (several axes), found ${axis}`);
-  if ((axis === 4) !== (axes > 1)) fail(`axis: expected 4 (several axes) exactly when the file has more than one axis, found ${axis} with ${axes}`);
-  const lo = view.getFloat64(32, true);
-  const length = view.getFloat64(40, true);
-  const fingerprint = bytes.slice(48, 80);
-  const frameDigest = bytes.slice(80, 96); // a chosen frame's digest (zero for x, y, z)
-  let qtable = null;
-  let values;
-  if (encoding === 1) {
-    qtable = new Float32Array(buffer.slice(HEADER, HEADER + table));
-    values = new Uint16Array(buffer.slice(HEADER + table, HEADER + table + count * each));
-    if (!qtable.every(Number.isFinite)) fail('quantization table: a number is not finite');
-  } else {
-    values = new Float32Array(buffer.slice(HEADER, HEADER + count * each));
-    if (!values.every(Number.isFinite)) fail('values: a number is not finite (NaN or infinity)');
-  }
-  return { name, version, fields, axes, encoding, count, axis, lo, length, fingerprint, frameDigest, qtable, values };
-}
-
-/** A file of K axes as axis 0's record (the parsed file's shape, 10 (K - 1) fewer
- * fields) and the child axes' offsets as the texels of axialdeform/gl/axes.py
- * (decoded: float32, three RGBA texels a child axis, rows of AXES_ROW texels). */
-export const AXES_ROW = 4095;
-export function splitAxes(p) {
-  if (p.axes === 1) return { std: p, texels: null, rows: 0 };
-  const f = p.fields, k = p.axes, n = p.count, sf = f - 10 * (k - 1);
-  const cols = [...Array(10).keys(), ...Array.from({ length: f - 10 * k }, (_, i) => 10 * k + i)];
-  const values = new p.values.constructor(n * sf);
-  for (let i = 0; i < n; i++) for (let c = 0; c < sf; c++) values[i * sf + c] = p.values[i * f + cols[c]];
-  let qtable = null;
-  if (p.qtable) {
-    qtable = new Float32Array(2 * sf);
-    cols.forEach((c, j) => { qtable[j] = p.qtable[c]; qtable[sf + j] = p.qtable[f + c]; });
-  }
-  const texelCount = n * (k - 1) * 3;
-  const rows = Math.max(1, Math.ceil(texelCount / AXES_ROW));
-  const texels = new Float32Array(rows * AXES_ROW * 4);
-  for (let i = 0; i < n; i++) {
-    for (let j = 1; j < k; j++) {
-      const at = ((i * (k - 1) + j - 1) * 3) * 4;
-      for (let c = 0; c < 10; c++) {
-        const col = 10 * j + c, v = p.values[i * f + col];
-        texels[at + c] = p.qtable ? p.qtable[col] + v * p.qtable[f + col] : v;
-      }
-    }
-  }
-  return { std: { ...p, fields: sf, values, qtable, axes: 1 }, texels, rows };
+  return parseADP(buffer, name);
 }
 
 async function sha256(bytes) {
@@ -142,14 +44,14 @@ export async function meshFingerprint(positions, index) {
 function checkMesh(p, mesh, actual) {
   const axisNames = ['x', 'y', 'z', 'a chosen frame', 'several axes'];
   const meshAxis = mesh.axes ? 4 : (mesh.axis === -1 ? 3 : mesh.axis); // the adp header: 3 a frame, 4 a tree
-  if (p.fingerprint.some((b) => b !== 0)) {
+  if (p.fingerprint) {
     const want = actual ? hex(actual) : mesh.fingerprint;
-    if (hex(p.fingerprint) !== want) {
-      throw new SceneError(`${p.name}: made for a different base mesh (fingerprint ${hex(p.fingerprint).slice(0, 16)}, ` +
+    if (p.fingerprint !== want) {
+      throw new SceneError(`${p.name}: made for a different base mesh (fingerprint ${p.fingerprint.slice(0, 16)}, ` +
         `expected ${want.slice(0, 16)} of ${mesh.name}); export it with the mesh it was made for`);
     }
   }
-  if (p.axis >= 0 && (p.axis !== meshAxis || (meshAxis >= 3 && hex(p.frameDigest) !== mesh.frame_digest))) {
+  if (p.axis >= 0 && (p.axis !== meshAxis || (meshAxis >= 3 && p.frameDigest !== mesh.frame_digest))) {
     throw new SceneError(`${p.name}: made for a mesh whose control axis is ${axisNames[p.axis]}, ` +
       `but ${mesh.name}'s is ${meshAxis === 3 ? 'another frame' : axisNames[meshAxis]}`);
   }
@@ -559,8 +461,10 @@ export function mount(root, lib, scene, options = {}) {
         return;
       }
       if (first) {
-        // the first frame is on screen once the GPU has finished it
-        renderer.getContext().finish();
+        // the first frame is drawn once one of its pixels can be read back: readPixels waits for
+        // the GPU to finish the frame (gl.finish() in Chromium only flushes: it returned 1.2 to 6 s early)
+        const gl = renderer.getContext();
+        gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
         showStatus();
         first({ instances: state.count });
         first = failed = null;

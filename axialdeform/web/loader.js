@@ -3,7 +3,7 @@
 // imports between them ('three', '../utils/BufferGeometryUtils.js') are pointed
 // at those URLs.  The folder page imports the same files through an import map.
 //
-// sources = {three, orbit, gltf, bgu, app}: the text of each module.
+// sources = {three, orbit, gltf, bgu, app, adp}: the text of each module.
 export async function loadModules(sources) {
   const urls = [];
   const url = (text) => {
@@ -16,7 +16,8 @@ export async function loadModules(sources) {
   const bgu = url(fromThree(sources.bgu));
   const gltf = url(fromThree(sources.gltf).replace(/(['"])\.\.\/utils\/BufferGeometryUtils\.js\1/g, `'${bgu}'`));
   const orbit = url(fromThree(sources.orbit));
-  const app = url(sources.app);
+  const adp = url(sources.adp); // the npm module's parser (axialdeform-three/adp), imported by app.js
+  const app = url(sources.app.replace(/from\s*(['"])axialdeform-three\/adp\1/g, `from '${adp}'`));
   const [THREE, o, g, a] = await Promise.all([import(three), import(orbit), import(gltf), import(app)]);
   return { lib: { THREE, OrbitControls: o.OrbitControls, GLTFLoader: g.GLTFLoader }, app: a, urls };
 }

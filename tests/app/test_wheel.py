@@ -39,6 +39,9 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
            if p.is_file() and p.suffix != ".pyc" and "__pycache__" not in p.parts]
     assert "axialdeform/web/vendor/three.module.min.js" in web and "axialdeform/web/vendor/LICENSE" in web
     missing += [n for n in web if n not in names]
+    module = [p.name for p in (ROOT / "js" / "src").iterdir() if p.suffix in (".js", ".ts")]
+    assert "glsl.js" in module and "index.d.ts" in module and "mesh.js" in module
+    missing += [f"axialdeform/three/{n}" for n in module if f"axialdeform/three/{n}" not in names]
     assert not missing, f"the wheel lacks {missing}"
 
     # a fresh venv: only the wheel's axialdeform; the dependencies come from this

@@ -83,7 +83,7 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
 
 @pytest.mark.parametrize("quantize", [False, True])
 def test_the_page_parser_reads_every_record_level(tmp_path, stone, quantize):
-    """``parseAdp`` of web/app.js, run in node, reads a file of each level of
+    """``parseADP`` of the npm module (the parser web/app.js imports), run in node, reads a file of each level of
     the record table (16, 19, 22 numbers) as Python wrote it, and refuses the
     next version with the words Python uses."""
     import shutil
@@ -111,8 +111,8 @@ def test_the_page_parser_reads_every_record_level(tmp_path, stone, quantize):
     bad = bytearray(files[0][0].read_bytes())
     bad[8:10] = (len(R.WIDTHS) + 1).to_bytes(2, "little")
     (tmp_path / "next.adp").write_bytes(bytes(bad))
-    app = (ROOT / "axialdeform" / "web" / "app.js").as_uri()
-    script = (f"import {{ parseAdp }} from '{app}';\nimport {{ readFileSync }} from 'node:fs';\n"
+    app = (ROOT / "js" / "src" / "adp.js").as_uri()  # the page's parser: the npm module's (app.js imports it)
+    script = (f"import {{ parseADP as parseAdp }} from '{app}';\nimport {{ readFileSync }} from 'node:fs';\n"
               "const out = [];\n"
               "for (const f of process.argv.slice(1)) {\n"
               "  const b = readFileSync(f); const ab = b.buffer.slice(b.byteOffset, b.byteOffset + b.length);\n"
