@@ -76,3 +76,23 @@ def make_mesh(positions, faces, name="<test>"):
 
     positions = np.asarray(positions, dtype=np.float64)
     return ad.BaseMesh(positions, area_weighted_normals(positions, faces), faces, name=name)
+
+
+#: Chromium's flags for the web tests: WebGL 2 on SwiftShader, headless, as root
+CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"]
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Debian's chromium through Playwright, shared by the web tests.  No browser is a failure,
+    never a skip (the README's test command installs it)."""
+    import shutil
+
+    chromium = shutil.which("chromium")
+    assert chromium, "Debian's chromium is required (apt-get install chromium); browser tests do not skip"
+    from playwright.sync_api import sync_playwright  # a missing package is a failure
+
+    with sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
+        yield b
+        b.close()

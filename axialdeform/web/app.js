@@ -165,7 +165,7 @@ export function mount(root, lib, scene, options = {}) {
     const f = p.fields;
     // [name, size, first column] of each attribute: the record table's (core/record.py)
     const layout = cfg.record[String(f)];
-    if (p.encoding === 1) {
+    if (p.encoding === 'quantized') {
       for (const [n, size, off] of layout.quantized) {
         const a = new THREE.InterleavedBufferAttribute(buf, size, off, false);
         a.gpuType = THREE.IntType; // uvecN in the shader: vertexAttribIPointer
@@ -190,7 +190,7 @@ export function mount(root, lib, scene, options = {}) {
         for (let c = 0; c < tintSize; c++) {
           const k = tintStart + c;
           const v = p.values[i * f + k];
-          tint[i * tintSize + c] = p.encoding === 1 ? p.qtable[k] + v * p.qtable[f + k] : v;
+          tint[i * tintSize + c] = p.encoding === 'quantized' ? p.qtable[k] + v * p.qtable[f + k] : v;
         }
       }
       geometry.setAttribute(tintName, new THREE.InstancedBufferAttribute(tint, tintSize));
@@ -200,7 +200,7 @@ export function mount(root, lib, scene, options = {}) {
   }
 
   function variant(layer, p) {
-    return (p.encoding === 1 ? 'quantized' : 'float') + cfg.shader_suffix[String(p.fields)] +
+    return (p.encoding === 'quantized' ? 'quantized' : 'float') + cfg.shader_suffix[String(p.fields)] +
       (layer.cfg.material ? '_material' : '') + (layer.cfg.mesh.frame ? '_framed' : '');
   }
 

@@ -5,6 +5,7 @@ and runs.  The parsers' own tests run with node's test runner (test_node_tests).
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 import sys
@@ -299,3 +300,51 @@ def test_the_type_declarations_compile():
     assert tsc.is_file(), "js/node_modules/typescript is missing: the README's test command runs `npm ci --prefix js`"
     r = subprocess.run([node, str(tsc), "-p", "test/types"], cwd=JS, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+README_JS = re.findall(r"^```js\n(.*?)^```", (ROOT / "README.md").read_text(encoding="utf-8"), re.S | re.M)
+
+
+@pytest.mark.slow
+def test_the_readme_js_block_runs(browser, site):
+    """The README's three.js usage, verbatim, in a page that gives it `scene` and `geometry`."""
+    assert len(README_JS) == 1
+    folder, url = site
+    page_text = (ROOT / "tests" / "web" / "three" / "checks.html").read_text()
+    head = page_text.split("<script type=\"module\">", 1)[0]
+    (folder / "readme.html").write_text(head + """<script type="module">
+import * as THREE from 'three';
+import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
+import { mergeVertices } from 'three/addons/utils/BufferGeometryUtils.js';
+const scene = new THREE.Scene();
+const obj = (await new OBJLoader().loadAsync('stone.obj')).children[0].geometry;
+obj.deleteAttribute('normal');
+const geometry = mergeVertices(obj);
+geometry.computeVertexNormals();
+// ---- the README's block
+""" + README_JS[0] + """
+// ----
+const bent = [];
+scene.traverse((o) => { if (o.isAxialInstancedMesh) bent.push(o.count); });
+const renderer = new THREE.WebGLRenderer();
+renderer.setSize(200, 150);
+const camera = new THREE.PerspectiveCamera(40, 4 / 3, 0.1, 100);
+camera.position.set(7, 5, 7);
+camera.lookAt(0, 0, 0);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 2));
+renderer.render(scene, camera);
+window.readme = { bent, programs: renderer.info.programs.length };
+</script></body></html>
+""")
+    page = browser.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    try:
+        page.goto(url + "readme.html")
+        page.wait_for_function("window.readme !== undefined", timeout=120_000)
+        out = page.evaluate("window.readme")
+    finally:
+        page.close()
+    assert errors == []
+    assert out["bent"] == [60, 60]  # the GLB's node and the .adp's mesh, 60 stones each
