@@ -163,7 +163,11 @@ export function bentRadii(positions, axis, data, layout, count, first = 0, out =
     let d = 0;
     for (let j = 0; j < k; j++) {
       let m = 0;
-      for (let q = 0; q < 5; q++) m = Math.max(m, Math.hypot(data[r + 10 * j + 2 * q], data[r + 10 * j + 2 * q + 1]));
+      for (let q = 0; q < 5; q++) {
+        const u = data[r + 10 * j + 2 * q], v = data[r + 10 * j + 2 * q + 1];
+        m = Math.max(m, u * u + v * v);
+      }
+      m = Math.sqrt(m);
       d += m;
     }
     radius[i] = r0 * Math.max(1, Math.abs(1 - tp)) + d;

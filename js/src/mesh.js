@@ -52,6 +52,9 @@ const BEND = `
   }
 `;
 
+// scratch objects of the bounds (no allocation per instance)
+const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
+
 function replaceOnce(text, what, by, where) {
   if (!text.includes(what)) throw new AxialError(`${where}: its vertex shader has no ${what} to bend`);
   return text.replace(what, by);
@@ -148,6 +151,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     own.computeBoundingBox();
     this._baseBox = own.boundingBox.clone();
     this._center = [0, 0, 0];
+    this._sourceMaterials = material; // the user's, un-bent: a bake draws with clones of these
     this.material = Array.isArray(material) ? material.map((m) => this.bendMaterial(m)) : this.bendMaterial(material);
     // the shadow passes draw the bent shape too (three picks these for castShadow)
     this._shadowMaterials = [
@@ -205,6 +209,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     for (let i = 0; i < rows.length; i++) {
       if (!Number.isFinite(rows[i])) throw new AxialError(`setParams: instance ${first + Math.floor(i / f)}, number ${i % f}: not finite`);
     }
+    if (this._baked) this.unbake(); // moving instances bend every frame again
     this.data.set(rows, first * f);
     const L = this.layout, a = this.geometry.attributes;
     const d12 = a.axialD12.array, d34 = a.axialD34.array, d5 = a.axialD5.array, tt = a.axialTwistTaper.array;
@@ -251,7 +256,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
 
   /** The sphere (this mesh's space) of instance i bent and placed. */
   getInstanceBoundingSphere(i, target = new THREE.Sphere()) {
-    const m = new THREE.Matrix4().fromArray(this.instanceMatrix.array, 16 * i);
+    const m = _m.fromArray(this.instanceMatrix.array, 16 * i);
     target.center.fromArray(this._center).applyMatrix4(m);
     target.radius = this._radii[i] * m.getMaxScaleOnAxis();
     return target;
@@ -263,24 +268,26 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     const L = this.layout, r = i * L.numbersPerInstance;
     const twisted = (L.twist !== null && this.data[r + L.twist] !== 0) || (L.taper !== null && this.data[r + L.taper] !== 0);
     if (twisted) {
-      const s = this.getInstanceBoundingSphere(i);
-      return target.set(s.center.clone().subScalar(s.radius), s.center.clone().addScalar(s.radius));
+      const s = this.getInstanceBoundingSphere(i, _s);
+      target.min.copy(s.center).subScalar(s.radius);
+      target.max.copy(s.center).addScalar(s.radius);
+      return target;
     }
     target.copy(this._baseBox).expandByScalar(this._grow[i]);
-    return target.applyMatrix4(new THREE.Matrix4().fromArray(this.instanceMatrix.array, 16 * i));
+    return target.applyMatrix4(_m.fromArray(this.instanceMatrix.array, 16 * i));
   }
 
   computeBoundingSphere() {
-    const box = new THREE.Box3(), b = new THREE.Box3(), s = new THREE.Sphere();
-    for (let i = 0; i < this.count; i++) box.union(this.getInstanceBoundingBox(i, b));
+    const box = new THREE.Box3();
+    for (let i = 0; i < this.count; i++) box.union(this.getInstanceBoundingBox(i, _b));
     this.boundingBox = box;
     if (this.boundingSphere === null) this.boundingSphere = new THREE.Sphere();
     if (box.isEmpty()) { this.boundingSphere.makeEmpty(); return; }
-    box.getCenter(this.boundingSphere.center);
+    const c = box.getCenter(this.boundingSphere.center);
     let r = 0;
     for (let i = 0; i < this.count; i++) {
-      this.getInstanceBoundingSphere(i, s);
-      r = Math.max(r, s.center.distanceTo(this.boundingSphere.center) + s.radius);
+      const s = this.getInstanceBoundingSphere(i, _s);
+      r = Math.max(r, s.center.distanceTo(c) + s.radius);
     }
     this.boundingSphere.radius = r;
   }
@@ -326,9 +333,200 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     }
   }
 
+  /**
+   * Bend every instance ONCE on the GPU (WebGL 2 transform feedback, the same glsl/axial.glsl) and
+   * draw the result as plain geometry from then on: for instances that do not move, the frames cost
+   * what a baked mesh costs, while the file stays 40 bytes an instance.  The bent positions and
+   * normals stay on the GPU (GLBufferAttributes of a child mesh, with the un-bent clones of the
+   * materials); raycasting and the bounds stay this mesh's.  setParams() (animation) goes back to
+   * bending every frame; call bake() again when the instances rest.  Records of several axes or
+   * with a tint keep bending every frame (bake() returns false).  Returns true when baked.
+   */
+  bake(renderer) {
+    this.unbake();
+    if (this.axis.axes || this.layout.tint !== null || this.count === 0) return false;
+    const gl = renderer.getContext();
+    if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) return false;
+    const g = this.geometry, n = this.count, V = g.getAttribute('position').count;
+    const tangent = g.getAttribute('tangent');
+    const program = this._bakeProgram(gl, Boolean(tangent));
+    const buffers = [];
+    const upload = (array) => {
+      const b = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, b);
+      gl.bufferData(gl.ARRAY_BUFFER, array, gl.STATIC_DRAW);
+      buffers.push(b);
+      return b;
+    };
+    const vao = gl.createVertexArray();
+    gl.bindVertexArray(vao);
+    const bind = (name, array, size, divisor, stride = 0, offset = 0) => {
+      const at = gl.getAttribLocation(program, name);
+      if (at < 0) return;
+      gl.bindBuffer(gl.ARRAY_BUFFER, array);
+      gl.enableVertexAttribArray(at);
+      gl.vertexAttribPointer(at, size, gl.FLOAT, false, stride, offset);
+      gl.vertexAttribDivisor(at, divisor);
+    };
+    const plain = (attr) => { // a vertex attribute as a tight float array (interleaved ones unpacked)
+      if (!attr.isInterleavedBufferAttribute && attr.array instanceof Float32Array) return attr.array;
+      const out = new Float32Array(attr.count * attr.itemSize);
+      for (let i = 0; i < attr.count; i++) for (let c = 0; c < attr.itemSize; c++) out[i * attr.itemSize + c] = attr.getComponent(i, c);
+      return out;
+    };
+    bind('position', upload(plain(g.getAttribute('position'))), 3, 0);
+    bind('normal', upload(plain(g.getAttribute('normal'))), 3, 0);
+    if (tangent) bind('tangent', upload(plain(tangent)), 4, 0);
+    const a = g.attributes;
+    bind('axialD12', upload(a.axialD12.array.subarray(0, 4 * n)), 4, 1);
+    bind('axialD34', upload(a.axialD34.array.subarray(0, 4 * n)), 4, 1);
+    bind('axialD5', upload(a.axialD5.array.subarray(0, 2 * n)), 2, 1);
+    bind('axialTwistTaper', upload(a.axialTwistTaper.array.subarray(0, 2 * n)), 2, 1);
+    const mats = upload(this.instanceMatrix.array.subarray(0, 16 * n));
+    for (let c = 0; c < 4; c++) bind(`axialMatrix${c}`, mats, 4, 1, 64, 16 * c);
+    gl.useProgram(program);
+    const u = this.axialUniforms;
+    gl.uniformMatrix3fv(gl.getUniformLocation(program, 'axialFrame'), false, u.axialFrame.value.elements);
+    gl.uniform1f(gl.getUniformLocation(program, 'axialLo'), u.axialLo.value);
+    gl.uniform1f(gl.getUniformLocation(program, 'axialLen'), u.axialLen.value);
+    gl.uniform2f(gl.getUniformLocation(program, 'axialCenter'), u.axialCenter.value.x, u.axialCenter.value.y);
+    const out = (size) => {
+      const b = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, b);
+      gl.bufferData(gl.ARRAY_BUFFER, n * V * size * 4, gl.STATIC_DRAW);
+      return b;
+    };
+    const outputs = [out(3), out(3), ...(tangent ? [out(4)] : [])];
+    gl.bindBuffer(gl.ARRAY_BUFFER, null); // a buffer bound elsewhere may not be written by the feedback
+    const tf = gl.createTransformFeedback();
+    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, tf);
+    outputs.forEach((b, i) => gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, i, b));
+    gl.enable(gl.RASTERIZER_DISCARD);
+    gl.beginTransformFeedback(gl.POINTS);
+    gl.drawArraysInstanced(gl.POINTS, 0, V, n); // instance-major: instance i's vertices at i V
+    gl.endTransformFeedback();
+    gl.disable(gl.RASTERIZER_DISCARD);
+    outputs.forEach((b, i) => gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, i, null));
+    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
+    gl.deleteTransformFeedback(tf);
+    gl.bindVertexArray(null);
+    gl.deleteVertexArray(vao);
+    buffers.forEach((b) => gl.deleteBuffer(b));
+    renderer.resetState(); // three's cached GL state: we bound our own program, VAO and buffers
+
+    // the plain geometry: captured positions and normals, every other attribute repeated, indices offset
+    const baked = new THREE.BufferGeometry();
+    baked.setAttribute('position', new THREE.GLBufferAttribute(outputs[0], gl.FLOAT, 3, 4, n * V));
+    baked.setAttribute('normal', new THREE.GLBufferAttribute(outputs[1], gl.FLOAT, 3, 4, n * V));
+    if (tangent) baked.setAttribute('tangent', new THREE.GLBufferAttribute(outputs[2], gl.FLOAT, 4, 4, n * V));
+    for (const [name, attr] of Object.entries(g.attributes)) {
+      if (['position', 'normal', 'tangent'].includes(name) || name.startsWith('axial') || attr.isInstancedBufferAttribute) continue;
+      const src = plain(attr), k = attr.itemSize, rep = new src.constructor(src.length * n);
+      for (let i = 0; i < n; i++) rep.set(src, i * src.length);
+      baked.setAttribute(name, new THREE.BufferAttribute(rep, k, attr.normalized));
+    }
+    const index = g.index ? g.index.array : Uint32Array.from({ length: V }, (_, i) => i);
+    const groups = g.groups.length ? g.groups : [{ start: 0, count: index.length, materialIndex: 0 }];
+    const all = new Uint32Array(groups.reduce((t, gr) => t + Math.min(gr.count, index.length - gr.start), 0) * n);
+    let at = 0;
+    for (const gr of groups) { // each group's triangles of every instance together: one draw per material
+      const first = at, end = Math.min(gr.start + gr.count, index.length);
+      for (let i = 0; i < n; i++) {
+        const off = i * V;
+        for (let k = gr.start; k < end; k++) all[at++] = index[k] + off;
+      }
+      if (g.groups.length) baked.addGroup(first, at - first, gr.materialIndex);
+    }
+    // the index lives on the GPU only: three drops its copy once uploaded (raycasting is this mesh's)
+    baked.setIndex(new THREE.BufferAttribute(all, 1).onUpload(function drop() { this.array = null; }));
+    baked.boundingSphere = this.boundingSphere.clone();
+    baked.boundingBox = this.boundingBox.clone();
+    const source = this._sourceMaterials;
+    const materials = Array.isArray(source) ? source.map((m) => m.clone()) : source.clone();
+    const mesh = new THREE.Mesh(baked, materials);
+    mesh.name = `${this.name || 'axial'} (baked)`;
+    mesh.castShadow = this.castShadow;
+    mesh.receiveShadow = this.receiveShadow;
+    mesh.raycast = () => {}; // this mesh's raycast answers, with instanceId
+    this.add(mesh);
+    this._baked = { mesh, gl, outputs };
+    this.setBendVisible(false);
+    return true;
+  }
+
+  /** Go back to bending every frame (frees the baked geometry). */
+  unbake() {
+    if (!this._baked) return this;
+    const { mesh, gl, outputs } = this._baked;
+    this.remove(mesh);
+    mesh.geometry.dispose();
+    (Array.isArray(mesh.material) ? mesh.material : [mesh.material]).forEach((m) => m.dispose());
+    outputs.forEach((b) => gl.deleteBuffer(b));
+    this._baked = null;
+    this.setBendVisible(true);
+    return this;
+  }
+
+  /** Whether the instances are drawn from a bake (bake()) rather than bent every frame. */
+  get baked() {
+    return Boolean(this._baked);
+  }
+
+  setBendVisible(on) {
+    (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => { m.visible = on; });
+    this._shadowMaterials.forEach((m) => { m.visible = on; });
+  }
+
+  _bakeProgram(gl, tangent) {
+    const key = tangent ? 'tangent' : 'plain';
+    this._programs = this._programs || {};
+    if (this._programs[key] && this._programs[key].gl === gl) return this._programs[key].program;
+    const vs = `#version 300 es
+precision highp float;
+precision highp int;
+${tangent ? '#define USE_TANGENT' : ''}
+${AXIAL_GLSL}
+in vec3 position;
+in vec3 normal;
+in vec4 tangent;
+in vec4 axialMatrix0, axialMatrix1, axialMatrix2, axialMatrix3;
+${UNIFORMS.replace(/attribute /g, 'in ')}
+out vec3 axialOutPosition;
+out vec3 axialOutNormal;
+out vec4 axialOutTangent;
+void main() {
+${BEND}
+  mat4 m = mat4(axialMatrix0, axialMatrix1, axialMatrix2, axialMatrix3);
+  axialOutPosition = (m * vec4(axialV, 1.0)).xyz;
+  axialOutNormal = normalize(mat3(m) * axialN);
+  axialOutTangent = vec4(normalize(mat3(m) * axialT), tangent.w);
+  gl_Position = vec4(0.0);
+}`;
+    const fs = '#version 300 es\nprecision highp float;\nout vec4 color;\nvoid main() { color = vec4(0.0); }';
+    const shader = (type, text) => {
+      const sh = gl.createShader(type);
+      gl.shaderSource(sh, text);
+      gl.compileShader(sh);
+      if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new AxialError(`bake: the shader did not compile: ${gl.getShaderInfoLog(sh)}`);
+      return sh;
+    };
+    const program = gl.createProgram();
+    gl.attachShader(program, shader(gl.VERTEX_SHADER, vs));
+    gl.attachShader(program, shader(gl.FRAGMENT_SHADER, fs));
+    const varyings = ['axialOutPosition', 'axialOutNormal', ...(tangent ? ['axialOutTangent'] : [])];
+    gl.transformFeedbackVaryings(program, varyings, gl.SEPARATE_ATTRIBS);
+    gl.linkProgram(program);
+    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new AxialError(`bake: the program did not link: ${gl.getProgramInfoLog(program)}`);
+    this._programs[key] = { gl, program };
+    return program;
+  }
+
   /** Frees this mesh's GPU buffers, its materials (the clones), shadow materials and texture;
    * the user's geometry and materials stay theirs. */
   dispose() {
+    this.unbake();
+    if (this._programs) Object.values(this._programs).forEach(({ gl, program }) => gl.deleteProgram(program));
+    this._programs = null;
     this.geometry.dispose();
     (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => m.dispose());
     this._shadowMaterials.forEach((m) => m.dispose());

@@ -256,6 +256,21 @@ def test_standard_physical_lambert_basic_keep_maps_lights_fog_and_tone_mapping(c
 
 
 @pytest.mark.slow
+def test_a_bake_draws_what_bending_draws(checks):
+    """bake(): the instances bent once by transform feedback and drawn as plain geometry look as
+    when bent every frame; raycasting still answers with instanceId; setParams bends again."""
+    page, errors = checks
+    out = page.evaluate("window.checks.baking()")
+    assert out["baked"] is True and out["calls"] == 1
+    bent, baked = (np.array(out[k], dtype=np.float64).reshape(128, 128, 4)[..., :3] for k in ("bentPx", "bakedPx"))
+    assert (bent.max(axis=2) > 0).sum() > 2000
+    assert np.abs(bent - baked).mean() < 0.5 and np.abs(bent - baked).max() <= 24
+    assert out["hitId"] is not None
+    assert out["after"] == {"baked": False, "children": 0}
+    assert errors == []
+
+
+@pytest.mark.slow
 def test_raycasting_hits_the_bent_surface(checks):
     page, errors = checks
     bent = page.evaluate("window.checks.raycasts(window.checks.bent)")
