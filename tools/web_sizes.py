@@ -129,6 +129,7 @@ def peer(args, size) -> None:
             (sites[name] / "mesh.glb").write_bytes(encode_base_mesh(mesh))
             (sites[name] / "params.adp").write_bytes(encode_binary(params, axis=mesh, mesh_fingerprint=mesh.fingerprint,
                                                                   quantize=True))
+        write_page(work / "page", build_scene(mesh, params, size=size))  # `axialdeform web`'s page, for its first frame
         baked = work / "baked.glb"
         baked.write_bytes(encode_baked(mesh, params))
         subprocess.run(["node", str(gltfpack), "-i", str(baked), "-o", str(sites["peer"] / "stones.glb"), "-cc"],
@@ -152,13 +153,13 @@ def peer(args, size) -> None:
         threading.Thread(target=server.serve_forever, daemon=True).start()
         base_url = f"http://127.0.0.1:{server.server_address[1]}/"
         links = {"loopback": None, f"{args.mbit:g} Mbit/s": args.mbit}
-        results = {(link, name): [] for link in links for name in sites}
+        results = {(link, name): [] for link in links for name in [*sites, "page"]}
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=shutil.which("chromium"), args=[
                 "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox", "--enable-precise-memory-info"])
             for run in range(args.runs):
                 for link, mbit in links.items():
-                    for name in (sites if run % 2 == 0 else list(sites)[::-1]):  # alternate the order
+                    for name in ([*sites, "page"] if run % 2 == 0 else ["page", *list(sites)[::-1]]):  # alternate
                         page = browser.new_page(viewport={"width": size[0], "height": size[1]})
                         cdp = page.context.new_cdp_session(page)
                         cdp.send("Network.enable")
@@ -168,8 +169,14 @@ def peer(args, size) -> None:
                             cdp.send("Network.emulateNetworkConditions", {"offline": False, "latency": 20,
                                                                            "downloadThroughput": rate, "uploadThroughput": rate})
                         page.goto(base_url + name + "/index.html", wait_until="commit")
-                        page.wait_for_function("window.result !== undefined", timeout=600_000, polling=50)
-                        results[(link, name)].append(page.evaluate("window.result"))
+                        if name == "page":  # its own count: navigation to a finished first frame (readPixels)
+                            page.wait_for_function("window.axialdeform !== undefined", timeout=600_000, polling=50)
+                            state = page.evaluate("window.axialdeform")
+                            assert state.get("ready"), state
+                            results[(link, name)].append({"firstFrameMs": state["firstFrameMs"]})
+                        else:
+                            page.wait_for_function("window.result !== undefined", timeout=600_000, polling=50)
+                            results[(link, name)].append(page.evaluate("window.result"))
                         page.close()
             browser.close()
         server.shutdown()
@@ -187,6 +194,9 @@ def peer(args, size) -> None:
                 bake = f", the bake + its frame {med(r['bakeMs'] for r in m):.0f} ms" if name == "baked" else ""
                 print(f"  {'':>12}  module, {what}: first frame {fm / 1000:.2f} s ({fm / fp:.2f}x), "
                       f"later frames {tm:.0f} ms ({tm / tp:.2f}x), JS heap {hm / 1e6:.1f} MB{bake}")
+            fg = med(r["firstFrameMs"] for r in results[(link, "page")])
+            print(f"  {'':>12}  the page `axialdeform web` writes (its own shaders, quantized records): "
+                  f"first frame {fg / 1000:.2f} s ({fg / fp:.2f}x)")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
@@ -217,7 +227,7 @@ def main() -> None:
         baked = len(encode_baked(mesh, params))
         page_total = b["page"] + b["mesh"] + b["params"]
         print(f"{args.count} stones, {mesh.vertex_count} vertices each")
-        print(f"  page (index.html + app.js + scene.json): {b['page']:>12,} bytes")
+        print(f"  page (index.html, app.js, adp.js, scene.json): {b['page']:>6,} bytes")
         print(f"  mesh.glb:                                {b['mesh']:>12,} bytes")
         print(f"  params.adp (quantized, 32 B/instance):   {b['params']:>12,} bytes")
         print(f"  = page + mesh + params:                  {page_total:>12,} bytes")
