@@ -22,7 +22,6 @@ import statistics
 import sys
 from pathlib import Path
 
-import numpy as np
 
 import axialdeform as ad
 from axialdeform.core.io.params import encode_binary
