@@ -105,6 +105,15 @@ export function bentRadii(positions: ArrayLike<number>, axis: ResolvedAxis, data
   count: number, first?: number, out?: Float32Array | null, grow?: Float32Array | null):
   { center: [number, number, number]; radius: Float32Array; grow: Float32Array | null };
 
+/** A wind (docs/wind.md): strength is the tip displacement in units of the axis length. */
+export interface WindSpec {
+  direction: [number, number, number];
+  strength: number;
+  gustiness?: number;
+  frequency?: number;
+  wavelength?: number;
+}
+
 export interface AxialInstancedMeshOptions {
   /** The mesh's axis where the record's header does not say it all (a chosen frame, several axes). */
   axis?: { axis?: AxisSpec; axes?: AxesSpec | null } | AxisSpec;
@@ -132,6 +141,14 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
   getInstanceBoundingSphere(index: number, target?: THREE.Sphere): THREE.Sphere;
   getInstanceBoundingBox(index: number, target?: THREE.Box3): THREE.Box3;
   bentPositions(index: number, out?: Float32Array | null): Float32Array;
+  /** The wind of glsl/wind.glsl (null: none); setTime moves its clock. */
+  setWind(wind: WindSpec | null): this;
+  setTime(seconds: number): this;
+  /** Bend once on the GPU (transform feedback) and draw plain geometry; false where it keeps bending. */
+  bake(renderer: THREE.WebGLRenderer): boolean;
+  unbake(): this;
+  readonly baked: boolean;
+  setBendVisible(on: boolean): void;
   dispose(): this;
 }
 
@@ -151,3 +168,5 @@ export function recordFromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExte
 
 /** The text of axialdeform's glsl/axial.glsl (axial_bend, axial_place, axial_tree_world ...). */
 export const AXIAL_GLSL: string;
+/** The text of axialdeform's glsl/wind.glsl (axial_wind, axial_wind_push), to include after AXIAL_GLSL. */
+export const WIND_GLSL: string;

@@ -6,4 +6,4 @@ export { AxialError, parseADP, crc32, dequantize, recordLayout, splitAxes, child
 export { alignedFrame, resolveAxis, instanceMatrices, bendPositions, bentRadii } from './bend.js';
 export { AxialInstancedMesh, injectBend } from './mesh.js';
 export { AxialGLTFPlugin, EXTENSION, fromInstancedMesh, recordFromInstancedMesh } from './gltf.js';
-export { AXIAL_GLSL } from './glsl.js';
+export { AXIAL_GLSL, WIND_GLSL } from './glsl.js';

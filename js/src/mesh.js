@@ -6,7 +6,7 @@
 
 import * as THREE from 'three';
 import { AxialError, recordLayout, childTexels, AXES_ROW } from './adp.js';
-import { AXIAL_GLSL } from './glsl.js';
+import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
 import { resolveAxis, instanceMatrices, bendPositions, bentRadii } from './bend.js';
 
 const UNIFORMS = `
@@ -22,6 +22,14 @@ uniform int axialParents[AXIAL_AXES];
 uniform sampler2D axialChildren;
 attribute float axialAxis;
 #endif
+#ifdef AXIAL_WIND
+uniform vec3 axialWindDir;
+uniform float axialWindStrength;
+uniform float axialWindGust;
+uniform vec2 axialWindCycles;
+uniform float axialWindWavenumber;
+attribute vec3 axialAngles;
+#endif
 attribute vec4 axialD12;
 attribute vec4 axialD34;
 attribute vec2 axialD5;
@@ -35,10 +43,26 @@ const BEND = `
   {
     AxialInstance axialInst = AxialInstance(axialD12, axialD34, axialD5, vec3(0.0), vec3(0.0), 1.0,
                                             axialTwistTaper.x, axialTwistTaper.y);
+    vec3 axialPush = vec3(0.0);
+#ifdef AXIAL_WIND
+    if (axialWindStrength != 0.0) {  // glsl/wind.glsl: the wind moves the control points
+      AxialInstance axialPlaced = axialInst;
+      axialPlaced.position = instanceMatrix[3].xyz;
+      axialPlaced.angles = axialAngles;
+#ifdef AXIAL_AXES
+      axialPush = axial_wind_push(axialPlaced, uint(gl_InstanceID), 1.0, axialWindDir, axialWindStrength,
+                                  axialWindGust, axialWindCycles, axialWindWavenumber);
+#endif
+      axialInst = axial_wind(axialPlaced, uint(gl_InstanceID), axialFrame, axialLen, axialWindDir, axialWindStrength,
+                             axialWindGust, axialWindCycles, axialWindWavenumber);
+      axialInst.position = vec3(0.0);  // the rigid part stays instanceMatrix's
+      axialInst.angles = vec3(0.0);
+    }
+#endif
 #ifdef AXIAL_AXES
     mat3 axialJac;
     axial_tree_world(position, normal, int(axialAxis + 0.5), axialFrames, axialLos, axialLens, axialParents,
-                     axialCenter, axialInst, axialChildren, gl_InstanceID, vec3(0.0), axialV, axialN, axialJac);
+                     axialCenter, axialInst, axialChildren, gl_InstanceID, axialPush, axialV, axialN, axialJac);
 #ifdef USE_TANGENT
     axialT = axialJac * tangent.xyz;
 #endif
@@ -62,7 +86,7 @@ function replaceOnce(text, what, by, where) {
 
 /** Inject the bend into a vertex shader of three's built-in materials (the text onBeforeCompile gets). */
 export function injectBend(vertexShader, where = 'material') {
-  let vs = replaceOnce(vertexShader, 'void main() {', `${UNIFORMS}\n${AXIAL_GLSL}\nvoid main() {\n${BEND}`, where);
+  let vs = replaceOnce(vertexShader, 'void main() {', `${UNIFORMS}\n${AXIAL_GLSL}\n${WIND_GLSL}\nvoid main() {\n${BEND}`, where);
   if (vs.includes('#include <beginnormal_vertex>')) {
     vs = vs.replace('#include <beginnormal_vertex>',
       'vec3 objectNormal = axialN;\n#ifdef USE_TANGENT\n\tvec3 objectTangent = axialT;\n#endif');
@@ -127,6 +151,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     own.setAttribute('axialD34', inst(4));
     own.setAttribute('axialD5', inst(2));
     own.setAttribute('axialTwistTaper', inst(2));
+    own.setAttribute('axialAngles', inst(3)); // the wind's push needs R^T dir (the rest of R is instanceMatrix)
     this.instanceMatrix.setUsage(THREE.DynamicDrawUsage);
     if (this.layout.tint !== null) this.instanceColor = new THREE.InstancedBufferAttribute(new Float32Array(capacity * 3), 3);
     const ax = this.axis;
@@ -179,7 +204,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
       shader.vertexShader = injectBend(shader.vertexShader, name);
     };
     const key = material.customProgramCacheKey.bind(material);
-    m.customProgramCacheKey = () => `axialdeform:${defines.AXIAL_AXES || 1}:${key()}`;
+    m.customProgramCacheKey = () => `axialdeform:${defines.AXIAL_AXES || 1}:${defines.AXIAL_WIND ? 'wind' : ''}:${key()}`;
     m.needsUpdate = true;
     return m;
   }
@@ -217,6 +242,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
       const r = i * f;
       for (let c = 0; c < 4; c++) { d12[4 * i + c] = this.data[r + c]; d34[4 * i + c] = this.data[r + 4 + c]; }
       d5[2 * i] = this.data[r + 8]; d5[2 * i + 1] = this.data[r + 9];
+      for (let c = 0; c < 3; c++) a.axialAngles.array[3 * i + c] = this.data[r + L.angles + c];
       tt[2 * i] = L.twist === null ? 0 : this.data[r + L.twist];
       tt[2 * i + 1] = L.taper === null ? 0 : this.data[r + L.taper];
       if (L.tint !== null) for (let c = 0; c < 3; c++) this.instanceColor.array[3 * i + c] = this.data[r + L.tint + c];
@@ -226,7 +252,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
       if (attr.clearUpdateRanges) attr.addUpdateRange(first * size, n * size);
       attr.needsUpdate = true;
     };
-    range(a.axialD12, 4); range(a.axialD34, 4); range(a.axialD5, 2); range(a.axialTwistTaper, 2);
+    range(a.axialD12, 4); range(a.axialD34, 4); range(a.axialD5, 2); range(a.axialTwistTaper, 2); range(a.axialAngles, 3);
     range(this.instanceMatrix, 16);
     if (this.instanceColor) range(this.instanceColor, 3);
     if (this.axis.axes) this._updateChildren();
@@ -254,11 +280,71 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     u.value.needsUpdate = true;
   }
 
+  /**
+   * The wind of glsl/wind.glsl (docs/wind.md): {direction: [x, y, z] (world), strength (tip
+   * displacement in units of L), gustiness = 0.6, frequency = 0.5 (gust cycles a second),
+   * wavelength = 0 (world units between gust fronts; 0: none)}, or null for none.  It moves the
+   * control points in the vertex shader from uniforms alone; setTime(t) moves its clock.
+   */
+  setWind(wind) {
+    const on = Boolean(wind && wind.strength > 0);
+    if (on) {
+      const d = wind.direction || [1, 0, 0], n = Math.hypot(d[0], d[1], d[2]);
+      const num = (x, what) => {
+        if (!(Number.isFinite(x) && x >= 0)) throw new AxialError(`setWind: ${what}: expected a finite number >= 0, found ${x}`);
+        return x;
+      };
+      if (!(n > 0 && Number.isFinite(n))) throw new AxialError(`setWind: direction: expected 3 finite numbers, not all zero, found ${d}`);
+      this._wind = { strength: num(wind.strength, 'strength'), gustiness: num(wind.gustiness ?? 0.6, 'gustiness'),
+        frequency: num(wind.frequency ?? 0.5, 'frequency'), wavelength: num(wind.wavelength ?? 0, 'wavelength') };
+      const u = this.axialUniforms;
+      Object.assign(u, {
+        axialWindDir: u.axialWindDir || { value: new THREE.Vector3() },
+        axialWindStrength: u.axialWindStrength || { value: 0 }, axialWindGust: u.axialWindGust || { value: 0 },
+        axialWindCycles: u.axialWindCycles || { value: new THREE.Vector2() },
+        axialWindWavenumber: u.axialWindWavenumber || { value: 0 },
+      });
+      u.axialWindDir.value.set(d[0] / n, d[1] / n, d[2] / n);
+      u.axialWindStrength.value = this._wind.strength;
+      u.axialWindGust.value = this._wind.gustiness;
+      u.axialWindWavenumber.value = this._wind.wavelength > 0 ? 1 / this._wind.wavelength : 0;
+      this.setTime(this._time || 0);
+      if (this._baked) this.unbake(); // swaying instances bend every frame
+    } else {
+      this._wind = null;
+    }
+    // the wind moves a tip by at most strength L (1 + gustiness), every axis of a tree by its own L
+    const lens = this.axis.axes ? this.axis.axes.length : [this.axis.length];
+    this._windGrow = on ? this._wind.strength * (1 + this._wind.gustiness) * lens.reduce((t, x) => t + x, 0) : 0;
+    this.boundingSphere = null;
+    this.computeBoundingSphere();
+    if (on !== Boolean(this.defines.AXIAL_WIND)) {
+      if (on) this.defines.AXIAL_WIND = '1'; else delete this.defines.AXIAL_WIND;
+      this._allMaterials().forEach((m) => { m.needsUpdate = true; });
+    }
+    return this;
+  }
+
+  /** The wind's clock, in seconds: cycles = (frac(f t), frac(2.31 f t)) as axialdeform.core.wind. */
+  setTime(t) {
+    if (!Number.isFinite(t)) throw new AxialError(`setTime: expected a finite number of seconds, found ${t}`);
+    this._time = t;
+    if (this._wind) {
+      const f = this._wind.frequency, frac = (x) => x - Math.floor(x);
+      this.axialUniforms.axialWindCycles.value.set(frac(f * t), frac(2.31 * f * t));
+    }
+    return this;
+  }
+
+  _allMaterials() {
+    return [...(Array.isArray(this.material) ? this.material : [this.material]), ...this._shadowMaterials];
+  }
+
   /** The sphere (this mesh's space) of instance i bent and placed. */
   getInstanceBoundingSphere(i, target = new THREE.Sphere()) {
     const m = _m.fromArray(this.instanceMatrix.array, 16 * i);
     target.center.fromArray(this._center).applyMatrix4(m);
-    target.radius = this._radii[i] * m.getMaxScaleOnAxis();
+    target.radius = (this._radii[i] + (this._windGrow || 0)) * m.getMaxScaleOnAxis();
     return target;
   }
 
@@ -273,7 +359,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
       target.max.copy(s.center).addScalar(s.radius);
       return target;
     }
-    target.copy(this._baseBox).expandByScalar(this._grow[i]);
+    target.copy(this._baseBox).expandByScalar(this._grow[i] + (this._windGrow || 0));
     return target.applyMatrix4(_m.fromArray(this.instanceMatrix.array, 16 * i));
   }
 
@@ -344,7 +430,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    */
   bake(renderer) {
     this.unbake();
-    if (this.axis.axes || this.layout.tint !== null || this.count === 0) return false;
+    if (this.axis.axes || this.layout.tint !== null || this.count === 0 || this._wind) return false;
     const gl = renderer.getContext();
     if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) return false;
     const g = this.geometry, n = this.count, V = g.getAttribute('position').count;

@@ -104,7 +104,7 @@ def iou(a, b) -> float:
     return float((ma & mb).sum() / max((ma | mb).sum(), 1))
 
 
-def example_picture(browser, url) -> tuple[np.ndarray, list]:
+def example_picture(browser, url, extra: str = "") -> tuple[np.ndarray, list]:
     """The example at ``url`` drawn on render's background without its ground and fog."""
     page = browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1]})
     errors = []
@@ -116,6 +116,7 @@ def example_picture(browser, url) -> tuple[np.ndarray, list]:
         page.evaluate("""() => {
             const { THREE, renderer, scene, camera, ground } = window.app;
             renderer.setAnimationLoop(null);
+            """ + extra + """
             ground.visible = false;
             scene.fog = null;
             scene.background = new THREE.Color().setRGB(0.93, 0.94, 0.96, THREE.SRGBColorSpace);
@@ -127,16 +128,15 @@ def example_picture(browser, url) -> tuple[np.ndarray, list]:
         page.close()
 
 
-def render_reference(folder: Path, what) -> np.ndarray:
+def render_reference(folder: Path, what, **kw) -> np.ndarray:
     """What ``axialdeform render MESH PARAMS [--axis|--axes X] --eye 7,5,7 --target 0,0,0 --fov 40``
     draws (render_image, the command's own call), multisampled as three's antialias, without
     the ground and shadow (the examples' ground is hidden for the comparison)."""
     mesh, params, *axis = what
-    kw = {axis[0].lstrip("-"): str(axis[1])} if axis else {}
-    base = ad.load_mesh(mesh, **kw)
+    base = ad.load_mesh(mesh, **({axis[0].lstrip("-"): str(axis[1])} if axis else {}))
     look = ad.Look(ground=False, shadow=False)
     camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
-    image = ad.render_image(base, ad.read_params(params, mesh=base), size=SIZE, look=look, camera=camera)
+    image = ad.render_image(base, ad.read_params(params, mesh=base), size=SIZE, look=look, camera=camera, **kw)
     Image.fromarray(image).save(folder / "reference.png")
     return image
 
@@ -153,14 +153,16 @@ def test_node_tests_pass():
 
 
 def test_the_module_has_no_second_copy_of_the_maths():
-    """The shader text the module injects is glsl/axial.glsl verbatim (no GLSL of its own bends)."""
+    """The shader text the module injects is glsl/axial.glsl and wind.glsl verbatim (no GLSL of its own bends)."""
     glsl = (ROOT / "glsl" / "axial.glsl").read_text()
     built = (JS / "src" / "glsl.js").read_text()
     import json
 
-    assert json.loads(built.split("export const AXIAL_GLSL = ", 1)[1].rstrip().rstrip(";")) == glsl
+    axial_part, wind_part = built.split("export const AXIAL_GLSL = ", 1)[1].split("export const WIND_GLSL = ")
+    assert json.loads(axial_part.split(";\n", 1)[0]) == glsl
+    assert json.loads(wind_part.rstrip().rstrip(";")) == (ROOT / "glsl" / "wind.glsl").read_text()
     mesh_js = (JS / "src" / "mesh.js").read_text()
-    for maths in ("Bernstein", "s * s * s * s", "cos(", "sin("):  # the bend's formulas live in axial.glsl only
+    for maths in ("Bernstein", "s * s * s * s", "cos(", "sin(", "6.28"):  # the formulas live in glsl/ only
         assert maths not in mesh_js.split("const BEND", 1)[1].split("`;", 1)[0]
 
 
@@ -194,6 +196,29 @@ def test_the_plugin_draws_trees_frames_and_textured_parts_as_render(browser, sit
     Image.fromarray(shot).save(folder / f"{name}-three.png")
     Image.fromarray(ref).save(folder / f"{name}-render.png")
     assert iou(shot, ref) >= 0.97, iou(shot, ref)
+
+
+WIND = {"direction": [1, 0, 0.3], "strength": 0.35, "gustiness": 0.6, "frequency": 0.5, "wavelength": 4.0}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,mesh,opts", [("stones", "stone", []), MORE[0]], ids=["stones", "trees"])
+def test_the_wind_at_a_time_sways_as_render_draws_it(browser, site, name, mesh, opts):
+    """setWind + setTime (glsl/wind.glsl in three's materials) against render_image(wind=, time=)."""
+    import json
+
+    folder, url = site
+    sway = ("window.app.gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh) o.setWind(" + json.dumps(WIND) +
+            ").setTime(1.3); });")
+    shot, errors = example_picture(browser, url + f"gltf.html?file={name}.glb", sway)
+    wind = ad.Wind(direction=tuple(WIND["direction"]), strength=WIND["strength"], gustiness=WIND["gustiness"],
+                   frequency=WIND["frequency"], wavelength=WIND["wavelength"])
+    ref = render_reference(folder, [mesh, folder / f"{name}.adp", *opts[:2]], wind=wind, time=1.3)
+    still = render_reference(folder, [mesh, folder / f"{name}.adp", *opts[:2]])
+    Image.fromarray(np.concatenate([shot, ref, still], 1)).save(folder / f"wind-{name}.png")
+    assert errors == []
+    assert iou(shot, ref) >= 0.97, iou(shot, ref)
+    assert iou(still, ref) < 0.93  # the wind moved them visibly: the test can fail
 
 
 @pytest.mark.slow

@@ -14,6 +14,9 @@ export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry)
   const hits = new THREE.Raycaster().intersectObject(stones);
   if (hits.length && hits[0].instanceId !== undefined && n > 0) stones.dispose();
   try { parseADP(new Uint8Array(4)); } catch (e) { if (e instanceof AxialError) console.log(e.message); }
+  stones.setWind({ direction: [1, 0, 0], strength: 0.2 }).setTime(1.5);
+  const baked: boolean = stones.bake(new THREE.WebGLRenderer());
+  if (baked) stones.unbake();
   gltf.scene.add(stones);
   return gltf.scene;
 }
