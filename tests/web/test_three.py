@@ -48,6 +48,9 @@ MORE = [
     ("framed", "stone", ["--axis", "oriented", "-n", 30, "--seed", 4, "--twist", 0.8, "--taper", 0.3,
                          "--scale", "0.7:1.3", "--bend", 0.15]),
     ("leaves", "leafcard", ["--axis", "auto", "-n", 40, "--seed", 5, "--tint", 0.3, "--bend", 0.15]),
+    # the Khronos alpha-modes model: 9 textured parts (opaque, mask, blend), as an artist ships it
+    ("alpha", str(ROOT.parent / "shared" / "data" / "meshes" / "assets" / "AlphaBlendModeTest.glb"),
+     ["--axis", "auto", "-n", 4, "--seed", 1, "--bend", 0.05, "--spacing", 6]),
 ]
 
 
@@ -58,13 +61,13 @@ def make_site(folder: Path, modules: bool = True) -> Path:
         (folder / "node_modules").mkdir()
         (folder / "node_modules" / "three").symlink_to(node_modules_three())
         (folder / "node_modules" / "axialdeform-three").symlink_to(JS)
-    for f in EXAMPLES.iterdir():
+    for f in EXAMPLES.glob("*.html"):
         shutil.copy(f, folder / f.name)
     shutil.copy(ROOT / "tests" / "web" / "three" / "checks.html", folder / "checks.html")
     shutil.copy(ROOT / "axialdeform" / "meshes" / "stone.obj", folder / "stone.obj")
     cli("random", "stone", "-n", 60, "--seed", 3, "--bend", 0.15, "-o", folder / "stones.adp")
     cli("export", "stone", folder / "stones.adp", "--instanced", "-o", folder / "stones.glb")
-    for name, mesh, opts in MORE:  # a tree of ten axes, a chosen frame with twist and taper, textured tinted leaves
+    for name, mesh, opts in MORE:  # a tree of ten axes, a chosen frame with twist/taper, tinted leaves, 9 parts
         cli("random", mesh, *opts, "-o", folder / f"{name}.adp")
         cli("export", mesh, folder / f"{name}.adp", *opts[:2], "--instanced", "-o", folder / f"{name}.glb")
     mesh = ad.load_mesh("stone")
