@@ -24,7 +24,7 @@ from .core.io.params import encode_binary
 from .core.mesh import BaseMesh
 from .core.params import as_params
 from .core.scene import Scene, is_scene_file, load_scene
-from .web import VENDOR_FILES, build_scene, build_scene_file, module_source, page_source, vendor_file
+from .web import MODULE_FILES, VENDOR_FILES, build_scene, build_scene_file, module_source, page_source, vendor_file
 
 __all__ = ["SceneWidget"]
 
@@ -68,7 +68,7 @@ class SceneWidget(anywidget.AnyWidget):
                  **kwargs):
         sources = {key: vendor_file(rel).decode("utf-8") for key, rel in VENDOR_FILES.items()}
         sources["app"] = page_source("app.js")
-        sources["adp"] = module_source()  # the npm module's parser, which app.js imports
+        sources["module"] = {name: module_source(name) for name in MODULE_FILES}  # axialdeform-three: app.js imports it
         self._quantize = bool(quantize)
         if params is None and is_scene_file(scene):
             scene = load_scene(scene)

@@ -27,12 +27,33 @@ uniform vec2 u_wind_cycles;      // (fract(f T), fract(2.31 f T)), computed on t
 uniform float u_wind_wavenumber; // 1 / gust wavelength (world units), 0: no travelling fronts
 uniform int u_instance_base;     // index of the first instance drawn (capture works in chunks)
 
+#ifdef AXIAL_THREE
+// the web page: the npm module's AxialInstancedMesh (js/src/mesh.js) holds the instances, and
+// three.js binds its attributes by name: the base mesh's position and normal, each instance's
+// rigid part as instanceMatrix = T(p) R(angles) S(s) and the bend's numbers (float32)
+in vec3 position;
+in vec3 normal;
+in mat4 instanceMatrix;
+in vec4 axialD12;
+in vec4 axialD34;
+in vec2 axialD5;
+in vec2 axialTwistTaper;    // tw tp (0 0 for 16 numbers)
+in vec3 axialAngles;        // rx ry rz: R of instanceMatrix, as angles (the wind's push wants R^T)
+#define in_position position
+#define in_normal normal
+#else
 in vec3 in_position;        // base mesh, model units
 in vec3 in_normal;          // unit vertex normal
+#endif
 #ifdef AXIAL_AXES
 // several axes (AXIAL_AXES = K): the vertex's axis, every axis's frame, lo, L and parent, and
 // the child axes' offsets in a texture fetched by instance id (axial.glsl, axial_child_offsets)
+#ifdef AXIAL_THREE
+in float axialAxis;
+#define in_axis axialAxis
+#else
 in float in_axis;
+#endif
 uniform mat3 u_axes_frame[AXIAL_AXES];
 uniform float u_axes_lo[AXIAL_AXES];
 uniform float u_axes_len[AXIAL_AXES];
@@ -43,7 +64,7 @@ uniform sampler2D u_axes_offsets;
 // the instanced attribute buffer (divisor 1): the 16 numbers (quantized:
 // quantized.glsl's i_q*, and these are not declared -- WebGL 2 counts every
 // declared attribute against its 16)
-#ifndef AXIAL_QUANTIZED
+#if !defined(AXIAL_QUANTIZED) && !defined(AXIAL_THREE)
 in vec4 i_d12;
 in vec4 i_d34;
 in vec2 i_d5;
@@ -57,12 +78,17 @@ in int i_index;             // the instance's index before culling (the records 
 uniform int u_slice_base;   // the first instance of this draw (a slice of the instances, gl/renderer.py); 0 else
 #define AXIAL_INSTANCE_ID (gl_InstanceID + u_slice_base)
 #endif
-#if defined(AXIAL_EXTENDED) && !defined(AXIAL_QUANTIZED)
+#if defined(AXIAL_EXTENDED) && !defined(AXIAL_QUANTIZED) && !defined(AXIAL_THREE)
 in vec3 i_extra;            // s tw tp: extended instances (19 numbers)
 #endif
 #ifdef AXIAL_TINT
+#ifdef AXIAL_THREE
+in vec3 instanceColor;      // AxialInstancedMesh's tint: three's instanceColor (the record's tr tg tb)
+#define i_tint instanceColor
+#else
 in vec3 i_tint;             // a second instanced buffer: the instance's tint (linear RGB; the record's
                             // tr tg tb, or AxialRenderer.set_tint)
+#endif
 flat out vec3 v_tint;
 #endif
 
@@ -89,7 +115,11 @@ float instance_hash(int i) {
 }
 
 void main() {
-#ifdef AXIAL_QUANTIZED
+#ifdef AXIAL_THREE
+    // s = |first column of R S| (R orthonormal); 16-number records: s = 1, tw = tp = 0
+    AxialInstance inst = AxialInstance(axialD12, axialD34, axialD5, instanceMatrix[3].xyz, axialAngles,
+                                       length(instanceMatrix[0].xyz), axialTwistTaper.x, axialTwistTaper.y);
+#elif defined(AXIAL_QUANTIZED)
     AxialInstance inst = axial_dequantize();
 #elif defined(AXIAL_EXTENDED)
     AxialInstance inst = AxialInstance(i_d12, i_d34, i_d5, i_position, i_angles, i_extra.x, i_extra.y, i_extra.z);

@@ -76,12 +76,13 @@ def page_source(name: str) -> str:
     return _here().joinpath(name).read_text(encoding="utf-8")
 
 
-#: the npm module's file the page code imports (its .adp parser), and where the folder page keeps it
-MODULE_FILE = "adp.js"
-MODULE_PATH = "axialdeform-three/adp.js"
+#: the npm module axialdeform-three's files (js/src; the wheel's axialdeform/three), which the page code
+#: imports; the folder page keeps them in MODULE_DIR
+MODULE_FILES = ("adp.js", "glsl.js", "bend.js", "mesh.js", "gltf.js", "index.js")
+MODULE_DIR = "axialdeform-three/"
 
 
-def module_source(name: str = MODULE_FILE) -> str:
+def module_source(name: str) -> str:
     """The text of one file of the npm module axialdeform-three (``js/src``; the wheel's ``axialdeform/three``)."""
     return resources.files("axialdeform.three").joinpath(name).read_text(encoding="utf-8")
 
@@ -117,8 +118,9 @@ def to_glsl_es(source: str) -> str:
 LEVEL_VARIANTS = (("", {}), ("_extended", {"AXIAL_EXTENDED": 1}), ("_tinted", {"AXIAL_EXTENDED": 1, "AXIAL_TINT": 1}))
 #: the page's shader builds: key -> defines (``_extended`` / ``_tinted``: a
 #: record level; ``_material``: a mesh with UVs, colours, parts or materials)
-SHADER_VARIANTS = {f"{encoding}{suffix}": {**({"AXIAL_QUANTIZED": 1} if encoding == "quantized" else {}), **defines}
-                   for suffix, defines in LEVEL_VARIANTS for encoding in ("float", "quantized")}
+#: (AXIAL_THREE: the instances are the npm module's AxialInstancedMesh, whose attributes are float32
+#: -- a quantized file is decoded by its parser -- and whose rigid part is instanceMatrix)
+SHADER_VARIANTS = {f"float{suffix}": {"AXIAL_THREE": 1, **defines} for suffix, defines in LEVEL_VARIANTS}
 SHADER_VARIANTS.update({f"{k}_material": {**v, "AXIAL_MATERIAL": 1} for k, v in list(SHADER_VARIANTS.items())})
 #: ``_framed``: a mesh with a chosen axis frame (``u_frame`` instead of ``u_axis``)
 SHADER_VARIANTS.update({f"{k}_framed": {**v, "AXIAL_FRAME": 1} for k, v in list(SHADER_VARIANTS.items())})
@@ -126,13 +128,12 @@ SHADER_VARIANTS.update({f"{k}_framed": {**v, "AXIAL_FRAME": 1} for k, v in list(
 
 def page_shaders(keys=None) -> dict:
     """The page's shaders, assembled from ``glsl/scene.vert`` / ``scene.frag``
-    (which include ``axial.glsl``, ``wind.glsl``, ``quantized.glsl`` and
-    ``lighting.glsl``): ``{"float": {"vertex", "fragment"}, "quantized": ...,
-    "float_extended": ..., "quantized_extended": ..., "float_tinted": ...,
-    "quantized_tinted": ...}`` and the same six with ``_material``
-    (``AXIAL_MATERIAL``: textures, vertex colours, alpha modes), and each of
-    those with ``_framed`` (``AXIAL_FRAME``: a chosen axis frame); ``keys``:
-    only those builds."""
+    (which include ``axial.glsl``, ``wind.glsl`` and ``lighting.glsl``) with
+    ``AXIAL_THREE`` (the instances are an AxialInstancedMesh of the npm module):
+    ``{"float": {"vertex", "fragment"}, "float_extended": ..., "float_tinted": ...}``
+    and the same three with ``_material`` (``AXIAL_MATERIAL``: textures, vertex
+    colours, alpha modes), and each of those with ``_framed`` (``AXIAL_FRAME``: a
+    chosen axis frame); ``keys``: only those builds."""
 
     return {variant: {stage: to_glsl_es(assemble(name, defines).source)
                       for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
@@ -140,8 +141,9 @@ def page_shaders(keys=None) -> dict:
 
 
 def shader_key(quantize: bool, fields: int, material: bool, framed: bool = False) -> str:
-    """The :data:`SHADER_VARIANTS` key of a layer."""
-    return ("quantized" if quantize else "float") + LEVEL_VARIANTS[tree_shape(fields)[1]][0] + (
+    """The :data:`SHADER_VARIANTS` key of a layer (``quantize`` shrinks the file only: the page's
+    AxialInstancedMesh holds float32 attributes either way)."""
+    return "float" + LEVEL_VARIANTS[tree_shape(fields)[1]][0] + (
         "_material" if material else "") + ("_framed" if framed else "")
 
 
@@ -416,7 +418,9 @@ import { loadModules } from '{{LOADER}}';
 const text = (id) => document.getElementById(id).textContent;
 const b64text = (id) => new TextDecoder().decode(Uint8Array.from(atob(text(id).trim()), (c) => c.charCodeAt(0)));
 const { lib, app } = await loadModules({ three: b64text('axd-three'), orbit: b64text('axd-orbit'),
-  gltf: b64text('axd-gltf'), bgu: b64text('axd-bgu'), app: b64text('axd-app'), adp: b64text('axd-adp') });
+  gltf: b64text('axd-gltf'), bgu: b64text('axd-bgu'), app: b64text('axd-app'),
+  module: Object.fromEntries([...document.querySelectorAll('script[id^="axd-module-"]')]
+    .map((e) => [e.id.slice('axd-module-'.length) + '.js', b64text(e.id)])) });
 const files = {};
 for (const e of document.querySelectorAll('script[data-file]')) files[e.dataset.file] = app.fromBase64(e.textContent);
 start(async () => ({ config: JSON.parse(text('axd-config')), files }), lib, app);
@@ -493,12 +497,12 @@ def check_page_outputs(out: Path, names, inputs=(), overwrite: bool = False) -> 
 
 def _folder_files(scene: WebScene) -> dict:
     head = _import_map({"three": "./three/three.module.min.js", "three/addons/": "./three/addons/",
-                        "axialdeform-three/adp": "./" + MODULE_PATH})
+                        "axialdeform-three": "./" + MODULE_DIR + "index.js"})
     page = _page(scene.config, head, "", _START + _FOLDER_ENTRY)
     files = {
         "index.html": page.encode("utf-8"),
         "app.js": page_source("app.js").encode("utf-8"),
-        MODULE_PATH: module_source().encode("utf-8"),
+        **{MODULE_DIR + name: module_source(name).encode("utf-8") for name in MODULE_FILES},
         "scene.json": json.dumps(scene.config, ensure_ascii=False, indent=1).encode("utf-8"),
         **scene.files,
     }
@@ -557,7 +561,9 @@ def single_file_html(scene: WebScene) -> str:
     for key, rel in VENDOR_FILES.items():
         data += _data_script(f"axd-{key}", vendor_file(rel), "text/javascript;base64")
     data += _data_script("axd-app", page_source("app.js").encode("utf-8"), "text/javascript;base64")
-    data += _data_script("axd-adp", module_source().encode("utf-8"), "text/javascript;base64")
+    for name in MODULE_FILES:
+        data += _data_script("axd-module-" + name.split(".")[0], module_source(name).encode("utf-8"),
+                             "text/javascript;base64")
     return _page(scene.config, head, data, _START + _SINGLE_ENTRY.replace("{{LOADER}}", loader))
 
 
@@ -588,7 +594,7 @@ def scene_bytes(out: str | os.PathLike) -> dict:
     out = Path(out)
     size = lambda *names: sum((out / n).stat().st_size for n in names)  # noqa: E731
     config = json.loads((out / "scene.json").read_text(encoding="utf-8"))
-    return {"page": size("index.html", "app.js", MODULE_PATH, "scene.json"),
+    return {"page": size("index.html", "app.js", "scene.json", *(MODULE_DIR + n for n in MODULE_FILES)),
             "mesh": size(*(layer["mesh"]["file"] for layer in config["layers"])),
             "params": size(*(layer["params_file"] for layer in config["layers"])),
             "three": size(*("three/" + r for r in VENDOR_FILES.values()))}

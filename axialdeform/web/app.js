@@ -6,18 +6,18 @@
 // glsl/axial.glsl, quantized.glsl, scene.vert, scene.frag and lighting.glsl
 // (axialdeform/web/__init__.py).  This file parses the binary parameter file
 // (.adp, docs/parameter-files.md) with its CRC-32 verified and the base mesh's
-// fingerprint compared, and feeds the numbers to those shaders unchanged.
+// fingerprint compared, and hands the numbers to an AxialInstancedMesh drawn by those shaders.
 //
-// It imports only the parser of the npm module (axialdeform-three/adp, itself
-// importing nothing); the caller passes three.js in (lib = {THREE, OrbitControls, GLTFLoader}).
+// It imports the npm module axialdeform-three (which imports 'three'); the caller passes
+// three.js in too (lib = {THREE, OrbitControls, GLTFLoader}).
 
-// the .adp file: parsed, checked (CRC-32, header) and split by the npm module's parser
-// (js/src/adp.js, axialdeform-three), the one parser of every JavaScript program here
-import { parseADP, splitAxes, hex, AxialError, AXES_ROW } from 'axialdeform-three/adp';
+// the npm module axialdeform-three (js/src): its parser reads and checks the .adp files (CRC-32,
+// header) and its AxialInstancedMesh holds every layer's instances (attributes, instanceMatrix, a
+// tree's offsets texture, bounds for three's culling); the page's own shaders draw them
+import { parseADP, hex, AxialError, AxialInstancedMesh } from 'axialdeform-three';
 
 /** The page's errors (a message shown as it is): the module's AxialError. */
 export const SceneError = AxialError;
-export { splitAxes, AXES_ROW };
 
 /** Parse an .adp parameter file (axialdeform-three's parseADP: every check of
  * axialdeform.core.io.params.read_binary_header / decode_binary, in that order). */
@@ -128,7 +128,7 @@ export function mount(root, lib, scene, options = {}) {
   toggle.textContent = 'wireframe (W)';
   toggle.setAttribute('aria-pressed', 'false');
 
-  let renderer = null, controls = null, camera = null;
+  let renderer = null, controls = null, camera = null, world = null;
   let disposed = false;
   const layers = []; // {cfg, geometry, materials, mesh, fingerprint, variant, uniforms, count}
   const state = { count: 0, wireframe: cfg.mode === 'wireframe' };
@@ -158,49 +158,8 @@ export function mount(root, lib, scene, options = {}) {
     return text;
   }
 
-  function instanceAttributes(layer, p) {
-    // the file's records, as they are, in one interleaved instanced buffer
-    const geometry = layer.geometry;
-    const buf = new THREE.InstancedInterleavedBuffer(p.values, p.fields, 1);
-    const f = p.fields;
-    // [name, size, first column] of each attribute: the record table's (core/record.py)
-    const layout = cfg.record[String(f)];
-    if (p.encoding === 'quantized') {
-      for (const [n, size, off] of layout.quantized) {
-        const a = new THREE.InterleavedBufferAttribute(buf, size, off, false);
-        a.gpuType = THREE.IntType; // uvecN in the shader: vertexAttribIPointer
-        geometry.setAttribute(n, a);
-      }
-      const u = layer.uniforms;
-      u.u_qmin.value = p.qtable.slice(0, 16);
-      u.u_qstep.value = p.qtable.slice(f, f + 16);
-      if (f >= 19) {
-        u.u_qmin_extra.value = new THREE.Vector3().fromArray(p.qtable, 16);
-        u.u_qstep_extra.value = new THREE.Vector3().fromArray(p.qtable, f + 16);
-      }
-    } else {
-      for (const [n, size, off] of layout.float) geometry.setAttribute(n, new THREE.InterleavedBufferAttribute(buf, size, off, false));
-    }
-    // tinted records: the tint in a float attribute of its own (as the renderer's set_tint buffer),
-    // decoded here from either encoding
-    const [tintName, tintSize, tintStart] = cfg.record.tint;
-    if (f >= tintStart + tintSize) {
-      const tint = new Float32Array(p.count * tintSize);
-      for (let i = 0; i < p.count; i++) {
-        for (let c = 0; c < tintSize; c++) {
-          const k = tintStart + c;
-          const v = p.values[i * f + k];
-          tint[i * tintSize + c] = p.encoding === 'quantized' ? p.qtable[k] + v * p.qtable[f + k] : v;
-        }
-      }
-      geometry.setAttribute(tintName, new THREE.InstancedBufferAttribute(tint, tintSize));
-    } else if (geometry.getAttribute(tintName)) {
-      geometry.deleteAttribute(tintName);
-    }
-  }
-
-  function variant(layer, p) {
-    return (p.encoding === 'quantized' ? 'quantized' : 'float') + cfg.shader_suffix[String(p.fields)] +
+  function variant(layer, p) { // the record's level (its numbers but the child axes') picks the build
+    return 'float' + cfg.shader_suffix[String(p.fields - 10 * (p.axes - 1))] +
       (layer.cfg.material ? '_material' : '') + (layer.cfg.mesh.frame ? '_framed' : '');
   }
 
@@ -241,36 +200,33 @@ export function mount(root, lib, scene, options = {}) {
     checkMesh(whole, layer.cfg.mesh, layer.fingerprint);
     const want = layer.cfg.mesh.axes ? layer.cfg.mesh.axes.count : 1;
     if (whole.axes !== want) throw new SceneError(`${name}: ${whole.axes} axes an instance, but ${layer.cfg.mesh.name} has ${want}`);
-    const { std: p, texels, rows } = splitAxes(whole);
-    p.texels = texels;
-    p.rows = rows;
-    if (!cfg.shaders[variant(layer, p)]) {
-      throw new SceneError(`${name}: ${p.fields}-number instances, but this page was exported without their shader`);
+    if (!cfg.shaders[variant(layer, whole)]) {
+      throw new SceneError(`${name}: ${whole.fields - 10 * (whole.axes - 1)}-number instances, but this page was exported without their shader`);
     }
-    return p;
+    return whole;
   }
 
   function apply(layer, p) {
-    if (variant(layer, p) !== layer.variant) {
-      const old = layer.materials;
-      layer.materials = makeMaterials(layer, variant(layer, p));
-      if (old) old.forEach((m) => m.dispose());
-      if (layer.mesh) layer.mesh.material = layer.materials;
-      layer.variant = variant(layer, p);
-      // attributes of the other layout go
-      for (const n of Object.keys(layer.geometry.attributes)) if (n.startsWith('i_')) layer.geometry.deleteAttribute(n);
+    // a new AxialInstancedMesh for the file (its width or count may differ from the last one's)
+    const key = variant(layer, p);
+    const materials = makeMaterials(layer, key);
+    const mesh = new AxialInstancedMesh(layer.geometry, materials, p, { axis: layer.axisSpec, ownShader: true });
+    if (layer.cfg.mesh.axes) { // the child axes' offsets: the module's texture, the shader's u_axes_offsets
+      materials.forEach((m) => { m.uniforms.u_axes_offsets = mesh.axialUniforms.axialChildren; });
     }
-    instanceAttributes(layer, p);
-    if (p.texels) { // several axes: the child axes' offsets, fetched by instance id (axial_child_offsets)
-      const old = layer.uniforms.u_axes_offsets.value;
-      const tex = new THREE.DataTexture(p.texels, AXES_ROW, p.rows, THREE.RGBAFormat, THREE.FloatType);
-      tex.minFilter = tex.magFilter = THREE.NearestFilter;
-      tex.needsUpdate = true;
-      layer.uniforms.u_axes_offsets.value = tex;
-      if (old) old.dispose();
-    }
-    layer.geometry.instanceCount = p.count;
+    // the module's bounds hold every bent instance, so three culls right; the wind's sway is not in them
+    mesh.frustumCulled = !wind;
+    mesh.renderOrder = layer.order;
+    const old = layer.mesh;
+    layer.mesh = mesh;
+    layer.materials = materials;
+    layer.variant = key;
     layer.count = p.count;
+    if (world) {
+      if (old) world.remove(old);
+      world.add(mesh);
+    }
+    if (old) old.dispose(); // its geometry's buffers and its materials
     state.count = layers.reduce((a, l) => a + (l.cfg.terrain ? 0 : l.count), 0);
   }
 
@@ -305,14 +261,14 @@ export function mount(root, lib, scene, options = {}) {
     if (!adp) throw new SceneError(`${lc.params_file}: missing from the page`);
     const p = await prepare(layer, adp, lc.params_file);
     const n = position.count;
-    const geometry = new THREE.InstancedBufferGeometry();
+    const geometry = new THREE.BufferGeometry(); // the base mesh: AxialInstancedMesh adds the instances
     geometry.setIndex(new THREE.BufferAttribute(index, 1));
-    geometry.setAttribute('in_position', position);
-    geometry.setAttribute('in_normal', base.getAttribute('normal'));
+    geometry.setAttribute('position', position);
+    geometry.setAttribute('normal', base.getAttribute('normal'));
     if (lc.mesh.axes) { // several axes: each vertex's axis (the GLB's _AXIAL_AXIS)
       const axisOf = base.getAttribute('_axial_axis');
       if (!axisOf) throw new SceneError(`${lc.mesh.file}: a mesh of ${lc.mesh.axes.count} axes needs _AXIAL_AXIS`);
-      geometry.setAttribute('in_axis', axisOf);
+      geometry.setAttribute('_axial_axis', axisOf);
     }
     if (lc.material) { // defaults where the mesh has none, as axialdeform.gl.material.AppearanceBuffer
       const fill = (size, v) => { const a = new Float32Array(n * size); for (let i = 0; i < a.length; i++) a[i] = v[i % size]; return a; };
@@ -323,6 +279,9 @@ export function mount(root, lib, scene, options = {}) {
     }
     lc.parts.forEach((part, i) => geometry.addGroup(part.start * 3, part.count * 3, i));
     layer.geometry = geometry;
+    // the control axis, as the module takes it (the same numbers as the uniforms below)
+    layer.axisSpec = { axis: { index: lc.mesh.axis, frame: lc.mesh.frame, lo: lc.mesh.lo, length: lc.mesh.length,
+      center: lc.mesh.center }, axes: lc.mesh.axes || null };
     layer.uniforms = {
       u_axis: { value: lc.mesh.axis }, u_lo: { value: lc.mesh.lo }, u_len: { value: lc.mesh.length },
       // a chosen axis frame: u_frame * v = F v (Matrix3.set takes rows)
@@ -333,9 +292,7 @@ export function mount(root, lib, scene, options = {}) {
       u_axes_lo: { value: lc.mesh.axes ? lc.mesh.axes.lo : [] },
       u_axes_len: { value: lc.mesh.axes ? lc.mesh.axes.length : [] },
       u_axes_parent: { value: lc.mesh.axes ? new Int32Array(lc.mesh.axes.parents) : [] },
-      u_axes_offsets: { value: null },
-      u_qmin: { value: new Float32Array(16) }, u_qstep: { value: new Float32Array(16) },
-      u_qmin_extra: { value: new THREE.Vector3() }, u_qstep_extra: { value: new THREE.Vector3() },
+      u_axes_offsets: { value: null }, // the module's texture (apply)
       u_color: { value: v3(lc.color) }, u_wind_strength: { value: wind && lc.wind ? wind.strength : 0.0 },
     };
     return { layer, p };
@@ -357,10 +314,11 @@ export function mount(root, lib, scene, options = {}) {
 
   const ready = (async () => {
     const loaded = await Promise.all(cfg.layers.map((lc) => loadLayer(lc)));
-    for (const { layer, p } of loaded) {
+    loaded.forEach(({ layer, p }, i) => {
+      layer.order = i;
       layers.push(layer);
       apply(layer, p);
-    }
+    });
 
     THREE.ColorManagement.enabled = false; // colours are written as render's, unconverted
     renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
@@ -421,13 +379,8 @@ export function mount(root, lib, scene, options = {}) {
     shared.u_view.value = camera.matrixWorldInverse;
     shared.u_proj.value = camera.projectionMatrix;
     shared.u_eye.value = camera.position;
-    const world = new THREE.Scene();
-    layers.forEach((layer, i) => {
-      layer.mesh = new THREE.Mesh(layer.geometry, layer.materials);
-      layer.mesh.frustumCulled = false; // the bounds of the base mesh are not those of the bent instances
-      layer.mesh.renderOrder = i;
-      world.add(layer.mesh);
-    });
+    world = new THREE.Scene();
+    for (const layer of layers) world.add(layer.mesh);
 
     let frames = 0, since = performance.now(), fps = 0;
     const t0 = performance.now();
@@ -502,7 +455,7 @@ export function mount(root, lib, scene, options = {}) {
         return { instances: p.count };
       } catch (err) {
         showError(err);
-        for (const l of layers) { l.geometry.instanceCount = 0; l.count = 0; }
+        for (const l of layers) { if (l.mesh) l.mesh.count = 0; l.count = 0; }
         state.count = 0;
         throw err;
       }
@@ -514,7 +467,7 @@ export function mount(root, lib, scene, options = {}) {
       if (renderer) { renderer.setAnimationLoop(null); renderer.dispose(); }
       if (controls) controls.dispose();
       for (const l of layers) {
-        (l.materials || []).forEach((m) => m.dispose());
+        if (l.mesh) l.mesh.dispose(); // its geometry's buffers, the materials, the offsets texture
         if (l.geometry) l.geometry.dispose();
         l.textures.forEach((t) => { if (t.map) t.map.dispose(); if (t.normalMap) t.normalMap.dispose(); });
       }

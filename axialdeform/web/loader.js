@@ -3,7 +3,10 @@
 // imports between them ('three', '../utils/BufferGeometryUtils.js') are pointed
 // at those URLs.  The folder page imports the same files through an import map.
 //
-// sources = {three, orbit, gltf, bgu, app, adp}: the text of each module.
+// sources = {three, orbit, gltf, bgu, app, module: {'adp.js': text, ...}}: the text of each module.
+/** The module's files, each after the files it imports. */
+export const MODULE_ORDER = ['adp.js', 'glsl.js', 'bend.js', 'mesh.js', 'gltf.js', 'index.js'];
+
 export async function loadModules(sources) {
   const urls = [];
   const url = (text) => {
@@ -16,8 +19,15 @@ export async function loadModules(sources) {
   const bgu = url(fromThree(sources.bgu));
   const gltf = url(fromThree(sources.gltf).replace(/(['"])\.\.\/utils\/BufferGeometryUtils\.js\1/g, `'${bgu}'`));
   const orbit = url(fromThree(sources.orbit));
-  const adp = url(sources.adp); // the npm module's parser (axialdeform-three/adp), imported by app.js
-  const app = url(sources.app.replace(/from\s*(['"])axialdeform-three\/adp\1/g, `from '${adp}'`));
+  // the npm module axialdeform-three (js/src), file by file in the order of their imports: each
+  // file's './name.js' and 'three' imports pointed at the URLs made before it
+  const mod = {};
+  for (const name of MODULE_ORDER) {
+    let text = fromThree(sources.module[name]);
+    for (const [dep, u] of Object.entries(mod)) text = text.replace(new RegExp(`(['"])\\./${dep}\\1`, 'g'), `'${u}'`);
+    mod[name] = url(text);
+  }
+  const app = url(sources.app.replace(/from\s*(['"])axialdeform-three\1/g, `from '${mod['index.js']}'`));
   const [THREE, o, g, a] = await Promise.all([import(three), import(orbit), import(gltf), import(app)]);
   return { lib: { THREE, OrbitControls: o.OrbitControls, GLTFLoader: g.GLTFLoader }, app: a, urls };
 }

@@ -11,7 +11,8 @@ const bytesOf = (v) => (v instanceof DataView ? v.buffer.slice(v.byteOffset, v.b
 const LOADED = (globalThis.__axialdeformModules ??= new Map());
 
 function modules(sources) {
-  const key = ['three', 'orbit', 'gltf', 'bgu', 'app', 'adp'].map((k) => sources[k]).join('\u0000');
+  const key = [...['three', 'orbit', 'gltf', 'bgu', 'app'].map((k) => sources[k]),
+    ...Object.values(sources.module || {})].join('\u0000');
   if (!LOADED.has(key)) {
     const loading = loadModules(sources).then(({ lib, app, urls }) => {
       urls.forEach((u) => URL.revokeObjectURL(u)); // imported: the module map keeps them

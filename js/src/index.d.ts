@@ -119,6 +119,8 @@ export interface AxialInstancedMeshOptions {
   axis?: { axis?: AxisSpec; axes?: AxesSpec | null } | AxisSpec;
   /** Room for more instances than the record has. */
   capacity?: number;
+  /** The materials bend themselves (ShaderMaterials including AXIAL_GLSL): used as given. */
+  ownShader?: boolean;
   /** Each vertex's axis (several axes), if the geometry has no `_axial_axis` attribute. */
   vertexAxis?: ArrayLike<number> | THREE.BufferAttribute;
 }

@@ -102,7 +102,9 @@ export function injectBend(vertexShader, where = 'material') {
  * record: parseADP's result, or {count, numbersPerInstance, data (Float32Array), axes?, axis?, lo?,
  * length?}.  options.axis: the mesh's control axis where the record's header does not say it all
  * (a chosen frame, several axes: the GLB's AXIALDEFORM_bend or extras.axialdeform); options.capacity:
- * room for more instances than the record has (setParams may grow count up to it).
+ * room for more instances than the record has (setParams may grow count up to it); options.ownShader:
+ * the materials bend themselves (a ShaderMaterial including AXIAL_GLSL that reads this mesh's
+ * attributes axialD12, axialD34, axialD5, axialTwistTaper, axialAngles, axialAxis, instanceMatrix).
  * The material(s) are cloned and given the bend; shadows (customDepthMaterial,
  * customDistanceMaterial) and raycasting use the bent shape.
  */
@@ -176,6 +178,9 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     own.computeBoundingBox();
     this._baseBox = own.boundingBox.clone();
     this._center = [0, 0, 0];
+    // ownShader: the material(s) bend themselves (a ShaderMaterial that includes AXIAL_GLSL and reads
+    // this mesh's attributes, as axialdeform's page does): used as they are, not cloned or injected
+    this._ownShader = Boolean(options.ownShader);
     this._sourceMaterials = material; // the user's, un-bent: a bake draws with clones of these
     this.material = Array.isArray(material) ? material.map((m) => this.bendMaterial(m)) : this.bendMaterial(material);
     // the shadow passes draw the bent shape too (three picks these for castShadow)
@@ -191,6 +196,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    * Depth, Distance, ...) whose vertex shader bends this mesh's instances. */
   bendMaterial(material, clone = true) {
     if (!material || !material.isMaterial) throw new AxialError('AxialInstancedMesh: expected a THREE.Material');
+    if (this._ownShader && clone) return material;
     if (material.isShaderMaterial) {
       throw new AxialError('AxialInstancedMesh: a ShaderMaterial has no three.js chunks to bend; include the exported AXIAL_GLSL in it yourself');
     }
@@ -430,7 +436,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    */
   bake(renderer) {
     this.unbake();
-    if (this.axis.axes || this.layout.tint !== null || this.count === 0 || this._wind) return false;
+    if (this.axis.axes || this.layout.tint !== null || this.count === 0 || this._wind || this._ownShader) return false;
     const gl = renderer.getContext();
     if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) return false;
     const g = this.geometry, n = this.count, V = g.getAttribute('position').count;

@@ -31,21 +31,19 @@ SIZE = (400, 300)
 # ------------------------------------------------------------------ no browser
 def test_page_shaders_hold_the_package_deformation_verbatim():
     axial = ad.deformation_glsl().rstrip("\n")
-    quant = ad.gl.assemble("quantized.glsl").source  # noqa: F841 - assembles: the file exists and parses
-    quantized_text = (ROOT / "glsl" / "quantized.glsl").read_text().rstrip("\n")
     shaders = page_shaders()
-    for variant in ("float", "quantized"):
-        vs = shaders[variant]["vertex"]
+    assert set(shaders) == {f"float{lv}{m}{f}" for lv in ("", "_extended", "_tinted") for m in ("", "_material")
+                            for f in ("", "_framed")}
+    for variant, stages in shaders.items():
+        vs = stages["vertex"]
         assert vs.startswith("#version 300 es\nprecision highp float;\n")
         assert axial in vs, "the page's vertex shader must contain glsl/axial.glsl verbatim"
-        assert quantized_text in vs
-        assert "axial_world(" in vs.split(axial)[1]  # scene.vert calls it after the include
-        assert shaders[variant]["fragment"].startswith("#version 300 es")
-        assert "#version 330" not in vs + shaders[variant]["fragment"]
-    for variant in ("float_extended", "quantized_extended"):
-        assert axial in shaders[variant]["vertex"] and "#define AXIAL_EXTENDED 1" in shaders[variant]["vertex"]
-    assert "#define AXIAL_QUANTIZED 1" in shaders["quantized"]["vertex"]
-    assert "AXIAL_QUANTIZED 1" not in shaders["float"]["vertex"]
+        assert "#define AXIAL_THREE 1" in vs  # the instances are the npm module's AxialInstancedMesh
+        assert "axial_world(" in vs.split(axial)[1] or "axial_tree_world(" in vs.split(axial)[1]
+        assert stages["fragment"].startswith("#version 300 es")
+        assert "#version 330" not in vs + stages["fragment"]
+    for variant in ("float_extended", "float_tinted"):
+        assert "#define AXIAL_EXTENDED 1" in shaders[variant]["vertex"]
 
 
 def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
@@ -53,14 +51,14 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     scene = build_scene(stone, params, size=SIZE)
     index = write_page(tmp_path / "site", scene)
     config = json.loads((tmp_path / "site" / "scene.json").read_text(encoding="utf-8"))
-    assert config["shaders"] == {"quantized": page_shaders()["quantized"]}  # the build these parameters need
+    # the build these parameters need (a quantized file is decoded to float32 by the module's parser)
+    assert config["shaders"] == {"float": page_shaders()["float"]}
     assert build_scene(stone, params, quantize=False).config["shaders"] == {"float": page_shaders()["float"]}
     assert set(build_scene(stone, params, all_shaders=True).config["shaders"]) == {
-        "float", "quantized", "float_extended", "quantized_extended", "float_tinted", "quantized_tinted"}
+        "float", "float_extended", "float_tinted"}
     assert set(build_scene(ad.load_mesh("leafcard"), params, all_shaders=True).config["shaders"]) == {
-        "float_material", "quantized_material", "float_extended_material", "quantized_extended_material",
-        "float_tinted_material", "quantized_tinted_material"}
-    assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["quantized"]["vertex"]
+        "float_material", "float_extended_material", "float_tinted_material"}
+    assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["float"]["vertex"]
     adp = (tmp_path / "site" / PARAMS_FILE).read_bytes()
     assert adp == encode_binary(params, axis=stone.axis, mesh_fingerprint=stone.fingerprint, quantize=True)
     cam = ad.frame_instances(stone, params, SIZE[0] / SIZE[1])
