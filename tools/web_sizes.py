@@ -195,7 +195,7 @@ def peer(args, size) -> None:
                 print(f"  {'':>12}  module, {what}: first frame {fm / 1000:.2f} s ({fm / fp:.2f}x), "
                       f"later frames {tm:.0f} ms ({tm / tp:.2f}x), JS heap {hm / 1e6:.1f} MB{bake}")
             fg = med(r["firstFrameMs"] for r in results[(link, "page")])
-            print(f"  {'':>12}  the page `axialdeform web` writes (its own shaders, quantized records): "
+            print(f"  {'':>12}  the page `axialdeform web` writes (AxialInstancedMesh, the page's own shaders): "
                   f"first frame {fg / 1000:.2f} s ({fg / fp:.2f}x)")
     finally:
         shutil.rmtree(work, ignore_errors=True)
