@@ -227,7 +227,7 @@ def main() -> None:
         baked = len(encode_baked(mesh, params))
         page_total = b["page"] + b["mesh"] + b["params"]
         print(f"{args.count} stones, {mesh.vertex_count} vertices each")
-        print(f"  page (index.html, app.js, adp.js, scene.json): {b['page']:>6,} bytes")
+        print(f"  page (index.html, app.js, scene.json, module): {b['page']:>6,} bytes")
         print(f"  mesh.glb:                                {b['mesh']:>12,} bytes")
         print(f"  params.adp (quantized, 32 B/instance):   {b['params']:>12,} bytes")
         print(f"  = page + mesh + params:                  {page_total:>12,} bytes")
