@@ -236,6 +236,7 @@ def test_unbent_would_not_match(browser, site):
     ref = render_reference(folder, ["stone", folder / "stones.adp"])
     assert errors == []
     assert iou(shot, ref) < 0.9
+    assert _mask(shot).sum() > 0.6 * _mask(ref).sum()  # but every instance is there, placed and sized
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,103 @@
+// node --test: AxialInstancedMesh and the plugin's record without a GL context (three from
+// js/node_modules, a devDependency): what they build from a record, and what they refuse.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import * as THREE from 'three';
+import { parseADP, AxialInstancedMesh, AxialError, recordFromInstancedMesh, fromInstancedMesh, injectBend } from '../src/index.js';
+
+const dir = new URL('./fixtures/', import.meta.url);
+const expected = JSON.parse(readFileSync(new URL('expected.json', dir), 'utf8'));
+const record = (name) => parseADP(readFileSync(new URL(`${name}.adp`, dir)), name);
+
+function geometryOf(name) { // the fixture's vertices as a point soup with normals
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(Float32Array.from(expected[name].positions.flat()), 3));
+  g.setAttribute('normal', new THREE.BufferAttribute(new Float32Array(3 * expected[name].positions.length).fill(0.5), 3));
+  if (expected[name].vertexAxis) g.setAttribute('_axial_axis', new THREE.BufferAttribute(Float32Array.from(expected[name].vertexAxis), 1));
+  return g;
+}
+const spec = (name) => ({ axis: expected[name].axis, axes: expected[name].axes || null });
+
+test('the mesh places every instance by its matrix and bounds every bent vertex', () => {
+  for (const name of Object.keys(expected)) {
+    const mesh = new AxialInstancedMesh(geometryOf(name), new THREE.MeshStandardMaterial(), record(name), { axis: spec(name) });
+    assert.equal(mesh.count, expected[name].count);
+    const m = new THREE.Matrix4(), v = new THREE.Vector3();
+    for (let i = 0; i < mesh.count; i++) {
+      const bent = mesh.bentPositions(i);
+      m.fromArray(mesh.instanceMatrix.array, 16 * i);
+      for (let k = 0; k < bent.length / 3; k++) {
+        v.fromArray(bent, 3 * k).applyMatrix4(m);
+        const w = expected[name].world[i][k];
+        assert.ok(v.distanceTo(new THREE.Vector3(...w)) < 1e-5 * expected[name].length, `${name} ${i} ${k}`);
+        assert.ok(mesh.boundingSphere.containsPoint(v), `${name}: the bounding sphere misses a bent vertex`);
+        assert.ok(mesh.getInstanceBoundingSphere(i).containsPoint(v), `${name}: instance ${i}'s sphere`);
+      }
+    }
+    mesh.dispose();
+  }
+});
+
+test('setParams writes in place and refuses what does not fit', () => {
+  const r = record('stone16');
+  const mesh = new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), r, { capacity: 5 });
+  const d12 = mesh.geometry.getAttribute('axialD12');
+  const before = d12.array;
+  const row = r.data.slice(0, 16);
+  row[0] = 0.25;
+  mesh.setParams(row, { first: 4 });
+  assert.equal(mesh.count, 5);
+  assert.equal(d12.array, before); // no reallocation
+  assert.equal(d12.array[16], 0.25);
+  assert.throws(() => mesh.setParams(row, { first: 5 }), (e) => e instanceof AxialError && /capacity of 5/.test(e.message));
+  assert.throws(() => mesh.setParams(record('stone19')), /19 numbers an instance, but this mesh was made for 16/);
+  const bad = row.slice(); bad[3] = NaN;
+  assert.throws(() => mesh.setParams(bad), /number 3: not finite/);
+});
+
+test('the mesh refuses a geometry without normals, a frame it was not given, a tree without vertex axes', () => {
+  const g = geometryOf('stone16');
+  g.deleteAttribute('normal');
+  assert.throws(() => new AxialInstancedMesh(g, new THREE.MeshBasicMaterial(), record('stone16')), /position and normal/);
+  assert.throws(() => new AxialInstancedMesh(geometryOf('framed'), new THREE.MeshBasicMaterial(), record('framed')),
+    /chosen axis frame.*pass \{axis\}/);
+  const tree = geometryOf('tree');
+  tree.deleteAttribute('_axial_axis');
+  assert.throws(() => new AxialInstancedMesh(tree, new THREE.MeshBasicMaterial(), record('tree'), { axis: spec('tree') }),
+    /each vertex's axis/);
+  assert.throws(() => new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), record('tree'), { axis: spec('stone16') }),
+    /10 axes an instance, but the mesh has 1/);
+});
+
+test('the plugin reads the record back from GLTFLoader\'s instanced mesh, and refuses a broken extension', () => {
+  const r = record('stone19');
+  const n = r.count, f = r.numbersPerInstance, g = geometryOf('stone19');
+  const inst = new THREE.InstancedMesh(g, new THREE.MeshBasicMaterial(), n);
+  const cols = (first, size) => new THREE.BufferAttribute(Float32Array.from({ length: n * size }, (_, k) => r.data[Math.floor(k / size) * f + first + (k % size)]), size);
+  g.setAttribute('_AXIAL_D12', cols(0, 4)); g.setAttribute('_AXIAL_D34', cols(4, 4)); g.setAttribute('_AXIAL_D5', cols(8, 2));
+  g.setAttribute('_AXIAL_ANGLES', cols(13, 3)); g.setAttribute('_AXIAL_TWIST_TAPER', cols(17, 2));
+  const m = new THREE.Matrix4(), q = new THREE.Quaternion(), e = new THREE.Euler();
+  for (let i = 0; i < n; i++) {
+    e.set(r.data[i * f + 13], r.data[i * f + 14], r.data[i * f + 15], 'ZYX'); // R = Rz Ry Rx
+    const s = r.data[i * f + 16];
+    inst.setMatrixAt(i, m.compose(new THREE.Vector3(...r.data.slice(i * f + 10, i * f + 13)), q.setFromEuler(e), new THREE.Vector3(s, s, s)));
+  }
+  const ext = { numbersPerInstance: f, axis: expected.stone19.axis };
+  const back = recordFromInstancedMesh(inst, ext);
+  for (let k = 0; k < n * f; k++) assert.ok(Math.abs(back.data[k] - r.data[k]) < 1e-5, `number ${k % f} of ${Math.floor(k / f)}`);
+  const bent = fromInstancedMesh(inst, ext);
+  assert.ok(bent.isAxialInstancedMesh && bent.count === n);
+  assert.throws(() => fromInstancedMesh(inst, { numbersPerInstance: f }, 'node 0 (stones)'), /node 0 \(stones\): AXIALDEFORM_bend: expected "axis"/);
+  g.deleteAttribute('_AXIAL_D34');
+  assert.throws(() => recordFromInstancedMesh(inst, ext, 'node 3'), /node 3: AXIALDEFORM_bend needs the instance attributes _AXIAL_D34/);
+});
+
+test('injectBend replaces three\'s begin chunks and refuses a shader without them', () => {
+  const vs = 'void main() {\n#include <beginnormal_vertex>\n#include <begin_vertex>\n}';
+  const out = injectBend(vs);
+  assert.match(out, /vec3 transformed = axialV;/);
+  assert.match(out, /vec3 objectNormal = axialN;/);
+  assert.match(out, /void axial_bend\(/);
+  assert.throws(() => injectBend('void main() { gl_Position = vec4(0.0); }', 'MyMaterial'), /MyMaterial: its vertex shader has no #include <begin_vertex>/);
+});
