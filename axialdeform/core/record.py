@@ -18,7 +18,8 @@ From these two tables come
   (``params.position`` instead of ``params[:, 10:13]``);
 * the GL buffer formats and attribute names (:func:`gl_layout`);
 * the glTF ``EXT_mesh_gpu_instancing`` attributes (:data:`GLTF_ATTRIBUTES`);
-* the attribute list the web page receives (:func:`page_layout`).
+* the record's columns in JavaScript (the npm module's ``recordLayout``, js/src/adp.js; a test
+  compares them with this table).
 
 ``tests/core/test_record.py`` holds the GLSL declarations in ``glsl/`` and
 the page's JavaScript to this table.  Pure numpy: no GL here.
@@ -34,7 +35,7 @@ __all__ = [
     "Field", "ShaderInput", "RECORD", "SHADER_INPUTS", "GLTF_ATTRIBUTES", "FIELDS", "EXTENDED_FIELDS",
     "WIDTH", "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "width_of",
     "describe_widths", "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST", "TAPER",
-    "IDENTITY_EXTRA", "Instances", "gl_layout", "page_layout", "page_record", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES", "describe_record",
+    "IDENTITY_EXTRA", "Instances", "gl_layout", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES", "describe_record",
     "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape", "record_fields",
     "is_record_width", "MAX_RECORD_AXES",
 ]
@@ -253,31 +254,6 @@ def gl_layout(extended: bool, quantized: bool) -> tuple[tuple[str, ...], tuple[s
         names.append(None)
         record += 4 - record % 4
     return tuple(formats), tuple(names), record
-
-
-def page_layout(level: int, quantized: bool = False) -> list[list]:
-    """``[[name, size, first column], ...]``: the instanced attributes as the
-    web page binds them to the file's records (``THREE.InterleavedBufferAttribute``
-    over the float32 or uint16 values, one record a row) for a file of
-    record ``level`` (``True``/``False``: extended or not).  The tint
-    (level 2) is not in it: the page reads it as :func:`page_record`'s
-    ``"tint"`` says, into a float32 attribute of its own."""
-    record_level = min(int(level), _RECORD_LEVEL)
-    if quantized:
-        width = WIDTHS[record_level]
-        return [[f"i_q{k}", min(4, width - start), start] for k, start in enumerate(range(0, width, 4))]
-    return [[a.name, a.size, a.start] for a in SHADER_INPUTS if a.buffer == "record" and a.level <= record_level]
-
-
-def page_record() -> dict:
-    """The record as the page receives it (its config's ``"record"``):
-    ``{"16": {"float": layout, "quantized": layout}, "19": {...}, "22": {...},
-    "tint": [name, size, first column]}``."""
-    out: dict = {str(w): {"float": page_layout(level), "quantized": page_layout(level, True)}
-                 for level, w in enumerate(WIDTHS)}
-    tint = next(a for a in SHADER_INPUTS if a.buffer == "tint")
-    out["tint"] = [tint.name, tint.size, tint.start]
-    return out
 
 
 def tint_columns(values) -> np.ndarray | None:

@@ -44,7 +44,7 @@ from ..core.io.params import encode_binary
 from ..core.io.safeio import check_output_path, read_regular
 from ..core.look import DEFAULT_LOOK
 from ..core.params import as_params
-from ..core.record import WIDTHS, level_of, page_record, tree_shape
+from ..core.record import WIDTHS, level_of, tree_shape
 from ..core.scene import Scene
 from ..core.wind import SECOND_HARMONIC
 from ..gl.material import ALPHA_MODE_INDEX
@@ -267,7 +267,6 @@ def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shade
         "time": None if time is None else float(time),  # seconds: the wind's clock frozen there (None: it runs)
         "three": _three_version(),
         "shaders": shaders,
-        "record": page_record(),  # the instanced attributes, from the record table (core/record.py)
         # the shader build's suffix for each record width (LEVEL_VARIANTS): the page picks a file's build by it
         "shader_suffix": {str(w): LEVEL_VARIANTS[level_of(w)][0] for w in WIDTHS},
     }

@@ -169,6 +169,30 @@ def test_the_module_has_no_second_copy_of_the_maths():
         assert maths not in mesh_js.split("const BEND", 1)[1].split("`;", 1)[0]
 
 
+def test_the_modules_record_columns_are_the_record_tables():
+    """js/src/adp.js recordLayout against core/record.py, for every level and a tree of ten axes."""
+    import json
+
+    from axialdeform.core import record as R
+
+    script = ("import { recordLayout } from '" + (JS / "src" / "adp.js").as_uri() + "';\n"
+              "const out = [];\n"
+              "for (const k of [1, 10]) for (const w of " + json.dumps(list(R.WIDTHS)) + ")"
+              " out.push(recordLayout(w + 10 * (k - 1), k));\n"
+              "console.log(JSON.stringify(out));")
+    r = subprocess.run([shutil.which("node"), "--input-type=module", "-e", script], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    got = iter(json.loads(r.stdout))
+    for k in (1, 10):
+        for level, w in enumerate(R.WIDTHS):
+            lay, shift = next(got), 10 * (k - 1)
+            assert lay["position"] == R.POSITION.start + shift and lay["angles"] == R.ANGLES.start + shift
+            assert (lay["scale"], lay["twist"], lay["taper"]) == (
+                (R.SCALE + shift, R.TWIST + shift, R.TAPER + shift) if level >= 1 else (None, None, None))
+            assert lay["tint"] == (R.TINT.start + shift if level == 2 else None)
+            assert R.OFFSETS == slice(0, 10)  # axis 0's offsets first; child axis j's at 10 j
+
+
 def test_fixtures_are_what_the_library_writes(tmp_path):
     cmd = [sys.executable, str(ROOT / "tools" / "make_js_fixtures.py"), str(tmp_path)]
     subprocess.run(cmd, check=True, capture_output=True)
