@@ -249,6 +249,40 @@ def test_the_wind_at_a_time_sways_as_render_draws_it(browser, site, name, mesh, 
 
 
 @pytest.mark.slow
+def test_a_scene_file_glb_loads_every_layer_bent(browser, site, tmp_path):
+    """`export SCENE.toml --instanced` (the forest: a terrain and 2 000 ten-axis trees, 18 % of them
+    here) through the plugin, with the scene's camera, against render_image of the same scene
+    without its wind (a GLB holds no wind)."""
+    import dataclasses
+    import json
+
+    from axialdeform.gl.scene import scene_camera
+
+    folder, url = site
+    toml = (ROOT / "examples" / "forest" / "forest.toml").read_text()
+    small = tmp_path / "forest.toml"  # fewer trees: a test in software rendering
+    small.write_text(toml.replace('"tree-axes.toml"', f'"{ROOT / "examples" / "forest" / "tree-axes.toml"}"')
+                     .replace('"../landscape/', f'"{ROOT / "examples" / "landscape"}/').replace("count = 2000", "count = 360"))
+    scene = ad.Scene.load(small)
+    scene = dataclasses.replace(scene, wind=None)
+    cli("export", small, "--instanced", "-o", folder / "forest.glb")
+    cam = scene_camera(scene, SIZE[0] / SIZE[1])
+    place = ("camera.position.fromArray(" + json.dumps(list(map(float, cam.eye))) +
+             "); camera.up.fromArray(" + json.dumps(list(map(float, cam.up))) + "); camera.fov = " + str(cam.fovy) +
+             "; camera.near = " + str(cam.near) + "; camera.far = " + str(cam.far) + "; camera.updateProjectionMatrix();"
+             " camera.lookAt(...(" + json.dumps(list(map(float, cam.target))) + ")); camera.updateMatrixWorld();"
+             " let bent = 0; window.app.gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh) bent += 1; });"
+             " if (bent < 1) throw new Error('no AxialInstancedMesh');")
+    shot, errors = example_picture(browser, url + "gltf.html?file=forest.glb", place)
+    look = ad.Look(ground=False, shadow=False)
+    ref = ad.render_image(scene, size=SIZE, look=look, camera=ad.Camera(cam.eye, cam.target, cam.up, cam.fovy,
+                                                                          cam.near, cam.far))
+    Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / "forest-three-render.png")
+    assert errors == []
+    assert iou(shot, ref) >= 0.97, iou(shot, ref)
+
+
+@pytest.mark.slow
 def test_unbent_would_not_match(browser, site):
     """The IoU test can fail: the same GLB drawn by plain GLTFLoader (no plugin: unbent) is off."""
     folder, url = site
