@@ -430,18 +430,18 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    * draw the result as plain geometry from then on: for instances that do not move, the frames cost
    * what a baked mesh costs, while the file stays 40 bytes an instance.  The bent positions and
    * normals stay on the GPU (GLBufferAttributes of a child mesh, with the un-bent clones of the
-   * materials); raycasting and the bounds stay this mesh's.  setParams() (animation) goes back to
-   * bending every frame; call bake() again when the instances rest.  Records of several axes or
-   * with a tint keep bending every frame (bake() returns false).  Returns true when baked.
+   * materials; a tint becomes a colour a vertex); raycasting and the bounds stay this mesh's.
+   * setParams() (animation) and setWind() go back to bending every frame; call bake() again when
+   * the instances rest.  Returns true when baked (false: no instances, a wind, an own shader).
    */
   bake(renderer) {
     this.unbake();
-    if (this.axis.axes || this.layout.tint !== null || this.count === 0 || this._wind || this._ownShader) return false;
+    if (this.count === 0 || this._wind || this._ownShader) return false;
     const gl = renderer.getContext();
     if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) return false;
     const g = this.geometry, n = this.count, V = g.getAttribute('position').count;
     const tangent = g.getAttribute('tangent');
-    const program = this._bakeProgram(gl, Boolean(tangent));
+    const program = this._bakeProgram(gl, Boolean(tangent), this.axis.axes ? this.axis.axes.count : 0);
     const buffers = [];
     const upload = (array) => {
       const b = gl.createBuffer();
@@ -466,6 +466,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
       for (let i = 0; i < attr.count; i++) for (let c = 0; c < attr.itemSize; c++) out[i * attr.itemSize + c] = attr.getComponent(i, c);
       return out;
     };
+    if (this.axis.axes) bind('axialAxis', upload(plain(g.getAttribute('axialAxis'))), 1, 0);
     bind('position', upload(plain(g.getAttribute('position'))), 3, 0);
     bind('normal', upload(plain(g.getAttribute('normal'))), 3, 0);
     if (tangent) bind('tangent', upload(plain(tangent)), 4, 0);
@@ -482,6 +483,18 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     gl.uniform1f(gl.getUniformLocation(program, 'axialLo'), u.axialLo.value);
     gl.uniform1f(gl.getUniformLocation(program, 'axialLen'), u.axialLen.value);
     gl.uniform2f(gl.getUniformLocation(program, 'axialCenter'), u.axialCenter.value.x, u.axialCenter.value.y);
+    if (this.axis.axes) { // several axes: every axis's frame, lo, L, parent, and the child offsets' texture
+      const k = this.axis.axes.count, frames = new Float32Array(9 * k);
+      u.axialFrames.value.forEach((m, j) => frames.set(m.elements, 9 * j));
+      gl.uniformMatrix3fv(gl.getUniformLocation(program, 'axialFrames'), false, frames);
+      gl.uniform1fv(gl.getUniformLocation(program, 'axialLos'), u.axialLos.value);
+      gl.uniform1fv(gl.getUniformLocation(program, 'axialLens'), u.axialLens.value);
+      gl.uniform1iv(gl.getUniformLocation(program, 'axialParents'), u.axialParents.value);
+      renderer.initTexture(u.axialChildren.value); // uploaded by three: its GL texture, on unit 0
+      gl.activeTexture(gl.TEXTURE0);
+      gl.bindTexture(gl.TEXTURE_2D, renderer.properties.get(u.axialChildren.value).__webglTexture);
+      gl.uniform1i(gl.getUniformLocation(program, 'axialChildren'), 0);
+    }
     const out = (size) => {
       const b = gl.createBuffer();
       gl.bindBuffer(gl.ARRAY_BUFFER, b);
@@ -511,8 +524,25 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     baked.setAttribute('position', new THREE.GLBufferAttribute(outputs[0], gl.FLOAT, 3, 4, n * V));
     baked.setAttribute('normal', new THREE.GLBufferAttribute(outputs[1], gl.FLOAT, 3, 4, n * V));
     if (tangent) baked.setAttribute('tangent', new THREE.GLBufferAttribute(outputs[2], gl.FLOAT, 4, 4, n * V));
+    const source = this._sourceMaterials;
+    const tinted = this.layout.tint !== null;
+    const vertexColors = (Array.isArray(source) ? source : [source]).some((m) => m.vertexColors);
+    if (tinted) { // each instance's tint times the vertex colour (where the material uses one): a colour a vertex
+      const base = vertexColors && g.getAttribute('color') ? plain(g.getAttribute('color')) : null;
+      const k = base ? g.getAttribute('color').itemSize : 3, tint = this.instanceColor.array;
+      const colors = new Float32Array(n * V * k);
+      for (let i = 0; i < n; i++) {
+        for (let v = 0; v < V; v++) {
+          const at = (i * V + v) * k;
+          for (let c = 0; c < 3; c++) colors[at + c] = tint[3 * i + c] * (base ? base[v * k + c] : 1);
+          if (k === 4) colors[at + 3] = base[v * 4 + 3];
+        }
+      }
+      baked.setAttribute('color', new THREE.BufferAttribute(colors, k));
+    }
     for (const [name, attr] of Object.entries(g.attributes)) {
-      if (['position', 'normal', 'tangent'].includes(name) || name.startsWith('axial') || attr.isInstancedBufferAttribute) continue;
+      if (['position', 'normal', 'tangent'].includes(name) || name.startsWith('axial') || name.startsWith('_axial') ||
+          attr.isInstancedBufferAttribute || (tinted && name === 'color')) continue;
       const src = plain(attr), k = attr.itemSize, rep = new src.constructor(src.length * n);
       for (let i = 0; i < n; i++) rep.set(src, i * src.length);
       baked.setAttribute(name, new THREE.BufferAttribute(rep, k, attr.normalized));
@@ -533,8 +563,8 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     baked.setIndex(new THREE.BufferAttribute(all, 1).onUpload(function drop() { this.array = null; }));
     baked.boundingSphere = this.boundingSphere.clone();
     baked.boundingBox = this.boundingBox.clone();
-    const source = this._sourceMaterials;
     const materials = Array.isArray(source) ? source.map((m) => m.clone()) : source.clone();
+    if (tinted) (Array.isArray(materials) ? materials : [materials]).forEach((m) => { m.vertexColors = true; });
     const mesh = new THREE.Mesh(baked, materials);
     mesh.name = `${this.name || 'axial'} (baked)`;
     mesh.castShadow = this.castShadow;
@@ -569,14 +599,15 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     this._shadowMaterials.forEach((m) => { m.visible = on; });
   }
 
-  _bakeProgram(gl, tangent) {
-    const key = tangent ? 'tangent' : 'plain';
+  _bakeProgram(gl, tangent, axes = 0) {
+    const key = `${tangent ? 'tangent' : 'plain'}:${axes}`;
     this._programs = this._programs || {};
     if (this._programs[key] && this._programs[key].gl === gl) return this._programs[key].program;
     const vs = `#version 300 es
 precision highp float;
 precision highp int;
 ${tangent ? '#define USE_TANGENT' : ''}
+${axes ? `#define AXIAL_AXES ${axes}` : ''}
 ${AXIAL_GLSL}
 in vec3 position;
 in vec3 normal;

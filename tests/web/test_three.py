@@ -249,6 +249,24 @@ def test_the_wind_at_a_time_sways_as_render_draws_it(browser, site, name, mesh, 
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("name,mesh,opts", MORE[:3], ids=[m[0] for m in MORE[:3]])
+def test_baked_trees_frames_and_tinted_leaves_draw_as_render(browser, site, name, mesh, opts):
+    """bake(): ten axes (the offsets texture in the transform feedback), a chosen frame with twist and
+    taper, a tint (a colour a vertex) -- drawn as plain geometry, as render draws them."""
+    folder, url = site
+    bake = ("let baked = 0; window.app.gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh && o.bake(renderer))"
+            " baked += 1; }); if (baked < 1) throw new Error('nothing baked');")
+    shot, errors = example_picture(browser, url + f"gltf.html?file={name}.glb", bake)
+    ref = render_reference(folder, [mesh, folder / f"{name}.adp", *opts[:2]])
+    bent, _errors = example_picture(browser, url + f"gltf.html?file={name}.glb")  # the same, bent every frame
+    Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"baked-{name}.png")
+    assert errors == []
+    assert iou(shot, ref) >= 0.97, iou(shot, ref)
+    diff = np.abs(shot.astype(np.float64) - bent)
+    assert diff.mean() < 0.5 and np.percentile(diff.max(axis=2), 99.5) < 40, (diff.mean(), diff.max())
+
+
+@pytest.mark.slow
 def test_a_scene_file_glb_loads_every_layer_bent(browser, site, tmp_path):
     """`export SCENE.toml --instanced` (the forest: a terrain and 2 000 ten-axis trees, 18 % of them
     here) through the plugin, with the scene's camera, against render_image of the same scene
