@@ -376,6 +376,15 @@ def test_a_bake_draws_what_bending_draws(checks):
 
 
 @pytest.mark.slow
+def test_dispose_gives_back_what_the_mesh_made(checks):
+    page, errors = checks
+    out = page.evaluate("window.checks.disposing()")
+    assert out["during"]["geometries"] > out["before"]["geometries"]  # the mesh and its bake were on the GPU
+    assert out["after"] == out["before"], out
+    assert errors == []
+
+
+@pytest.mark.slow
 def test_raycasting_hits_the_bent_surface(checks):
     page, errors = checks
     bent = page.evaluate("window.checks.raycasts(window.checks.bent)")
