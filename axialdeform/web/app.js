@@ -214,8 +214,12 @@ export function mount(root, lib, scene, options = {}) {
     if (layer.cfg.mesh.axes) { // the child axes' offsets: the module's texture, the shader's u_axes_offsets
       materials.forEach((m) => { m.uniforms.u_axes_offsets = mesh.axialUniforms.axialChildren; });
     }
-    // the module's bounds hold every bent instance, so three culls right; the wind's sway is not in them
-    mesh.frustumCulled = !wind;
+    // the module's bounds hold every bent instance, so three culls right; with the layer's wind they
+    // grow by its reach (the page's shaders sway the instances from their own uniforms)
+    if (wind && layer.cfg.wind) {
+      mesh.setWind({ direction: wind.direction, strength: wind.strength, gustiness: wind.gustiness,
+        frequency: wind.frequency, wavelength: wind.wavenumber > 0 ? 1 / wind.wavenumber : 0 });
+    }
     mesh.renderOrder = layer.order;
     const old = layer.mesh;
     layer.mesh = mesh;
