@@ -101,3 +101,16 @@ test('injectBend replaces three\'s begin chunks and refuses a shader without the
   assert.match(out, /void axial_bend\(/);
   assert.throws(() => injectBend('void main() { gl_Position = vec4(0.0); }', 'MyMaterial'), /MyMaterial: its vertex shader has no #include <begin_vertex>/);
 });
+
+test('the axis a base mesh GLB records in extras.axialdeform (userData) is enough: a frame, a tree', () => {
+  // what encode_base_mesh writes into the node's extras (index -1 with a frame; a tree's axes)
+  const framed = expected.framed.axis;
+  const userFramed = { axis: { index: -1, name: 'frame', lo: framed.lo, length: framed.length, frame: framed.frame } };
+  const a = new AxialInstancedMesh(geometryOf('framed'), new THREE.MeshBasicMaterial(), record('framed'), { axis: userFramed });
+  assert.deepEqual(a.axis.center.map((c) => Math.round(c * 1e4)), framed.center.map((c) => Math.round(c * 1e4)));
+  const t = expected.tree;
+  const userTree = { axis: { index: t.axis.index, name: 'y', lo: t.axis.lo, length: t.axis.length },
+    axes: { count: t.axes.count, names: [], parents: t.axes.parents, frames: t.axes.frames, lo: t.axes.lo, length: t.axes.length } };
+  const b = new AxialInstancedMesh(geometryOf('tree'), new THREE.MeshBasicMaterial(), record('tree'), { axis: userTree });
+  assert.equal(b.axis.axes.count, 10);
+});

@@ -329,7 +329,9 @@ def _mesh_extras(mesh, count: int, layout: str) -> dict:
     tree = getattr(mesh, "tree", None)
     axes = {} if tree is None else {"axes": {  # several axes: enough to rebuild the tree (each vertex's: _AXIAL_AXIS)
         "count": tree.count, "names": list(tree.names), "parents": list(tree.parents),
-        "frames": [[list(row) for row in ax.matrix] for ax in tree.axes]}}
+        "frames": [[list(row) for row in ax.matrix] for ax in tree.axes],
+        # each axis's lo and L, so a loader can bend without rebuilding the tree (AxialInstancedMesh)
+        "lo": [float(ax.lo) for ax in tree.axes], "length": [float(ax.length) for ax in tree.axes]}}
     return {**axes,
         "version": _FORMAT_VERSION,
         "layout": layout,
