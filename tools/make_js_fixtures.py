@@ -1,9 +1,10 @@
 """Write js/test/fixtures/: small .adp files and what the Python library makes of them.
 
 The node tests (``node --test js/test``) parse each file with the npm module's
-``parseADP`` and bend its instances with ``bendPositions``/``instanceMatrices``,
-and compare with ``expected.json``: the header, the decoded numbers and the
-world positions :func:`axialdeform.deform` gives (the CPU reference).  Rerun
+``parseADP``, place its instances with ``instanceMatrices`` and bound them with
+``bentRadii``, and compare with ``expected.json``: the header, the decoded
+numbers, each instance's matrix and the bent world positions
+:func:`axialdeform.deform` gives (the CPU reference), which must lie in the bounds.  Rerun
 after changing the file format or the method; ``tests/test_js.py`` checks that
 the committed fixtures are what this script writes.
 
@@ -20,6 +21,7 @@ import numpy as np
 
 import axialdeform as ad
 from axialdeform.core.io.params import encode_binary
+from axialdeform.core.transforms import rotation_matrices
 
 VERTICES = 120  # of each mesh, in the expected positions (the JS test bends these)
 
@@ -35,6 +37,21 @@ def cases():
                                              tint=0.4), True
     yield "framed", turned, ad.random_params(turned, 3, seed=5, bend=0.1, twist=0.7, taper=0.2), False
     yield "tree", tree, ad.random_params(tree, 2, seed=6, twist=0.3, taper=0.2), False
+
+
+def placements(params) -> np.ndarray:
+    """(n, 16) column-major T(p) R S(s) of every instance (docs/method.md: W = R (s V'') + p)."""
+    from axialdeform.core.record import ANGLES, POSITION, SCALE, tree_shape
+
+    params = np.asarray(params, dtype=np.float64)
+    shift = 10 * (tree_shape(params.shape[1])[0] - 1)  # several axes: the child axes' offsets come first
+    rot = rotation_matrices(params[:, ANGLES.start + shift:ANGLES.stop + shift])
+    scale = params[:, SCALE + shift] if params.shape[1] - shift >= 19 else np.ones(len(params))
+    m = np.zeros((len(params), 4, 4))
+    m[:, :3, :3] = rot * scale[:, None, None]
+    m[:, :3, 3] = params[:, POSITION.start + shift:POSITION.stop + shift]
+    m[:, 3, 3] = 1.0
+    return m.transpose(0, 2, 1).reshape(len(params), 16)  # column-major, as three's Matrix4.elements
 
 
 def axis_json(mesh) -> dict:
@@ -66,6 +83,7 @@ def main(out: Path) -> None:
             "positions": mesh.positions[pick].astype(np.float64).tolist(),
             "vertexAxis": None if mesh.tree is None else mesh.tree.vertex_axis[pick].tolist(),
             "world": np.asarray(world, dtype=np.float64)[:, pick].round(7).tolist(),
+            "matrices": placements(decoded).round(7).tolist(),
             "length": float(mesh.axis.length),
         }
     text = json.dumps(expected, indent=None, separators=(",", ":"))

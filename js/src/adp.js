@@ -146,24 +146,8 @@ export function recordLayout(numbersPerInstance, axes = 1) {
   };
 }
 
-/** A file of K axes as axis 0's record (10 (K - 1) fewer numbers) and the child
- * axes' offsets as the texels of axialdeform/gl/axes.py (float32, three RGBA
- * texels a child axis, rows of AXES_ROW texels). */
+/** Texels a row of the child axes' offsets texture (glsl/axial.glsl's AXIAL_AXES_ROW). */
 export const AXES_ROW = 4095;
-export function splitAxes(p) {
-  if (p.axes === 1) return { std: p, texels: null, rows: 0 };
-  const f = p.fields, k = p.axes, n = p.count, sf = f - 10 * (k - 1);
-  const cols = [...Array(10).keys(), ...Array.from({ length: f - 10 * k }, (_, i) => 10 * k + i)];
-  const values = new p.values.constructor(n * sf);
-  for (let i = 0; i < n; i++) for (let c = 0; c < sf; c++) values[i * sf + c] = p.values[i * f + cols[c]];
-  let qtable = null;
-  if (p.qtable) {
-    qtable = new Float32Array(2 * sf);
-    cols.forEach((c, j) => { qtable[j] = p.qtable[c]; qtable[sf + j] = p.qtable[f + c]; });
-  }
-  return { std: { ...p, fields: sf, numbersPerInstance: sf, values, qtable, axes: 1 },
-    ...childTexels(p.values, p.qtable, f, k, n) };
-}
 
 /** The child axes' offsets of `count` records (stored values, width `fields`, K axes) as RGBA32F texels. */
 export function childTexels(values, qtable, fields, k, count) {

@@ -1,11 +1,11 @@
-// bend.js -- the parts of the method the CPU needs in a three.js app: each
-// instance's rigid placement (its instanceMatrix, W = R (s V'') + p with
-// R = Rz Ry Rx), the bent positions of ONE instance (raycasting against the
-// bent surface) and a bounding sphere that holds every bent instance (three's
-// frustum culling).  The drawing itself bends in the vertex shader with
-// glsl/axial.glsl (src/glsl.js); docs/method.md states the conventions.
+// bend.js -- the parts of the method the CPU needs in a three.js app: the
+// control axis as the shader wants it, each instance's rigid placement (its
+// instanceMatrix, W = R (s V'') + p with R = Rz Ry Rx) and a bounding sphere
+// that holds every bent instance (three's frustum culling).  The bend itself
+// runs only on the GPU, in glsl/axial.glsl (src/glsl.js): drawing, baking and
+// raycasting all use it; docs/method.md states the conventions.
 
-import { AxialError, recordLayout } from './adp.js';
+import { AxialError } from './adp.js';
 
 /** The rows e_a, e_u, e_v of the aligned axis x (0), y (1) or z (2): offsets go to the two other
  * coordinates in increasing order. */
@@ -89,54 +89,6 @@ export function instanceMatrices(data, layout, count, out, first = 0) {
   return out;
 }
 
-function bernstein4(t) {
-  const s = 1 - t;
-  return [s * s * s * s, 4 * t * s * s * s, 6 * t * t * s * s, 4 * t * t * t * s, t * t * t * t];
-}
-
-/**
- * The model-space positions of instance `i` bent (before its rigid part): V'' of docs/method.md,
- * twist and taper about the axis line, several axes summed along each vertex's chain.
- * positions: Float32Array (3 n); axis: resolveAxis's; vertexAxis: each vertex's axis (trees);
- * out: Float32Array (3 n).
- */
-export function bendPositions(positions, axis, data, layout, i, out, vertexAxis = null) {
-  const f = layout.numbersPerInstance, r = i * f;
-  const tw = layout.twist === null ? 0 : data[r + layout.twist];
-  const tp = layout.taper === null ? 0 : data[r + layout.taper];
-  const k = axis.axes ? axis.axes.count : 1;
-  const frames = axis.axes ? axis.axes.frames : [axis.frame];
-  const los = axis.axes ? axis.axes.lo : [axis.lo];
-  const lens = axis.axes ? axis.axes.length : [axis.length];
-  const parents = axis.axes ? axis.axes.parents : [-1];
-  const f0 = frames[0], [cu, cv] = axis.center;
-  for (let v = 0; v < positions.length; v += 3) {
-    const p = [positions[v], positions[v + 1], positions[v + 2]];
-    const moved = p.slice();
-    const l0 = mul(f0, p);
-    if (tw !== 0 || tp !== 0) { // the cross-section about axis 0's line: turned by tw t, shrunk by 1 - tp t
-      const t = Math.min(1, Math.max(0, (l0[0] - los[0]) / lens[0]));
-      const kk = 1 - tp * t, c = Math.cos(tw * t), s = Math.sin(tw * t);
-      const wu = l0[1] - cu, wv = l0[2] - cv;
-      const du = kk * (c * wu - s * wv) - wu, dv = kk * (s * wu + c * wv) - wv;
-      for (let c3 = 0; c3 < 3; c3++) moved[c3] += f0[1][c3] * du + f0[2][c3] * dv;
-    }
-    let j = vertexAxis ? vertexAxis[v / 3] : 0;
-    for (let guard = 0; guard < k && j >= 0; guard++) {
-      const fj = frames[j];
-      const lj = mul(fj, p);
-      const t = Math.min(1, Math.max(0, (lj[0] - los[j]) / lens[j]));
-      const w = bernstein4(t), o = r + 10 * j;
-      let du = 0, dv = 0;
-      for (let q = 0; q < 5; q++) { du += w[q] * data[o + 2 * q]; dv += w[q] * data[o + 2 * q + 1]; }
-      for (let c3 = 0; c3 < 3; c3++) moved[c3] += fj[1][c3] * du + fj[2][c3] * dv;
-      j = parents[j];
-    }
-    out[v] = moved[0]; out[v + 1] = moved[1]; out[v + 2] = moved[2];
-  }
-  return out;
-}
-
 /**
  * Bounding spheres (model space, before the rigid part) of every bent instance: a point on axis 0's
  * line, c, and radius = max |v - c| max(1, |1 - tp|) + the sum over the axes of max |d_i| (the Bézier
@@ -176,4 +128,3 @@ export function bentRadii(positions, axis, data, layout, count, first = 0, out =
   return { center: c, radius, grow };
 }
 
-export { recordLayout };

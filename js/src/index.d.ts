@@ -86,7 +86,6 @@ export function crc32(bytes: Uint8Array): number;
 export function hex(bytes: Uint8Array): string;
 export function dequantize(values: Uint16Array, qtable: Float32Array, fields: number): Float32Array;
 export function recordLayout(numbersPerInstance: number, axes?: number): RecordLayout;
-export function splitAxes(record: ADPRecord): { std: ADPRecord; texels: Float32Array | null; rows: number };
 export function childTexels(values: Float32Array | Uint16Array, qtable: Float32Array | null, fields: number,
   axes: number, count: number): { texels: Float32Array; rows: number };
 export const NUMBERS_OF_VERSION: Readonly<Record<1 | 2 | 3, number>>;
@@ -99,8 +98,6 @@ export function resolveAxis(spec: { axis?: AxisSpec; axes?: AxesSpec | null } | 
   record: InstanceRecord | null, positions: ArrayLike<number>): ResolvedAxis;
 export function instanceMatrices(data: Float32Array, layout: RecordLayout, count: number, out: Float32Array,
   first?: number): Float32Array;
-export function bendPositions(positions: ArrayLike<number>, axis: ResolvedAxis, data: Float32Array,
-  layout: RecordLayout, instance: number, out: Float32Array, vertexAxis?: ArrayLike<number> | null): Float32Array;
 export function bentRadii(positions: ArrayLike<number>, axis: ResolvedAxis, data: Float32Array, layout: RecordLayout,
   count: number, first?: number, out?: Float32Array | null, grow?: Float32Array | null):
   { center: [number, number, number]; radius: Float32Array; grow: Float32Array | null };
@@ -142,7 +139,6 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
   setParams(data: Float32Array | ADPRecord | InstanceRecord, options?: { first?: number }): this;
   getInstanceBoundingSphere(index: number, target?: THREE.Sphere): THREE.Sphere;
   getInstanceBoundingBox(index: number, target?: THREE.Box3): THREE.Box3;
-  bentPositions(index: number, out?: Float32Array | null): Float32Array;
   /** The wind of glsl/wind.glsl (null: none); setTime moves its clock. */
   setWind(wind: WindSpec | null): this;
   setTime(seconds: number): this;

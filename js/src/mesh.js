@@ -7,9 +7,12 @@
 import * as THREE from 'three';
 import { AxialError, recordLayout, childTexels, AXES_ROW } from './adp.js';
 import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
-import { resolveAxis, instanceMatrices, bendPositions, bentRadii } from './bend.js';
+import { resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 
 const UNIFORMS = `
+#ifndef AXIAL_ID
+#define AXIAL_ID gl_InstanceID
+#endif
 uniform mat3 axialFrame;
 uniform float axialLo;
 uniform float axialLen;
@@ -50,10 +53,10 @@ const BEND = `
       axialPlaced.position = instanceMatrix[3].xyz;
       axialPlaced.angles = axialAngles;
 #ifdef AXIAL_AXES
-      axialPush = axial_wind_push(axialPlaced, uint(gl_InstanceID), 1.0, axialWindDir, axialWindStrength,
+      axialPush = axial_wind_push(axialPlaced, uint(AXIAL_ID), 1.0, axialWindDir, axialWindStrength,
                                   axialWindGust, axialWindCycles, axialWindWavenumber);
 #endif
-      axialInst = axial_wind(axialPlaced, uint(gl_InstanceID), axialFrame, axialLen, axialWindDir, axialWindStrength,
+      axialInst = axial_wind(axialPlaced, uint(AXIAL_ID), axialFrame, axialLen, axialWindDir, axialWindStrength,
                              axialWindGust, axialWindCycles, axialWindWavenumber);
       axialInst.position = vec3(0.0);  // the rigid part stays instanceMatrix's
       axialInst.angles = vec3(0.0);
@@ -62,7 +65,7 @@ const BEND = `
 #ifdef AXIAL_AXES
     mat3 axialJac;
     axial_tree_world(position, normal, int(axialAxis + 0.5), axialFrames, axialLos, axialLens, axialParents,
-                     axialCenter, axialInst, axialChildren, gl_InstanceID, axialPush, axialV, axialN, axialJac);
+                     axialCenter, axialInst, axialChildren, AXIAL_ID, axialPush, axialV, axialN, axialJac);
 #ifdef USE_TANGENT
     axialT = axialJac * tangent.xyz;
 #endif
@@ -75,6 +78,14 @@ const BEND = `
 #endif
   }
 `;
+
+/** A vertex attribute as a tight float32 array (interleaved, integer or normalized ones unpacked). */
+function plainArray(attr) {
+  if (!attr.isInterleavedBufferAttribute && attr.array instanceof Float32Array) return attr.array;
+  const out = new Float32Array(attr.count * attr.itemSize);
+  for (let i = 0; i < attr.count; i++) for (let c = 0; c < attr.itemSize; c++) out[i * attr.itemSize + c] = attr.getComponent(i, c);
+  return out;
+}
 
 // scratch objects of the bounds (no allocation per instance)
 const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
@@ -190,6 +201,8 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     [this.customDepthMaterial, this.customDistanceMaterial] = this._shadowMaterials;
     this.count = 0;
     this.setParams(record);
+    this._renderer = null; // the last renderer that drew this mesh: raycasting bends on its GPU
+    this.onBeforeRender = (renderer) => { this._renderer = renderer; };
   }
 
   /** A clone of `material` (three's built-ins: Basic, Lambert, Phong, Standard, Physical, Toon,
@@ -388,41 +401,51 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     this.computeBoundingSphere();
   }
 
-  /** The model-space positions (Float32Array, 3 per vertex) of instance i bent, before its instanceMatrix. */
-  bentPositions(i, out = null) {
-    const pos = this.geometry.getAttribute('position').array;
-    return bendPositions(pos, this.axis, this.data, this.layout, i, out || new Float32Array(pos.length), this.vertexAxis);
-  }
-
-  /** three's raycasting, against each instance's bent triangles (intersections carry instanceId). */
+  /**
+   * three's raycasting, against each instance's bent triangles (intersections carry instanceId).
+   * The instances whose bounding sphere the ray meets are bent on the GPU by the same shader code
+   * (one transform-feedback pass, read back), so the mesh must have been drawn (or baked) once.
+   */
   raycast(raycaster, intersects) {
     if (this.count === 0) return;
     if (this.boundingSphere === null) this.computeBoundingSphere();
     const sphere = new THREE.Sphere().copy(this.boundingSphere).applyMatrix4(this.matrixWorld);
     if (!raycaster.ray.intersectsSphere(sphere)) return;
+    const ids = [];
+    for (let i = 0; i < this.count; i++) {
+      if (raycaster.ray.intersectsSphere(this.getInstanceBoundingSphere(i, _s).applyMatrix4(this.matrixWorld))) ids.push(i);
+    }
+    if (!ids.length) return;
+    if (!this._renderer) {
+      throw new AxialError('raycast: the bend runs on the GPU; draw the mesh once (or bake it) before raycasting');
+    }
+    const V = this.geometry.getAttribute('position').count;
+    const { gl, outputs } = this._feedback(this._renderer, ids, false);
+    const bent = new Float32Array(ids.length * V * 3);
+    gl.bindBuffer(gl.ARRAY_BUFFER, outputs[0]);
+    gl.getBufferSubData(gl.ARRAY_BUFFER, 0, bent);
+    gl.bindBuffer(gl.ARRAY_BUFFER, null);
+    outputs.forEach((b) => gl.deleteBuffer(b));
+    this._renderer.resetState();
     if (!this._rayMesh) {
       const g = new THREE.BufferGeometry();
       if (this.geometry.index) g.setIndex(this.geometry.index);
       for (const grp of this.geometry.groups) g.addGroup(grp.start, grp.count, grp.materialIndex);
       g.drawRange = this.geometry.drawRange;
-      g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(this.geometry.getAttribute('position').array.length), 3));
+      g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * V), 3));
       this._rayMesh = new THREE.Mesh(g, this.material);
     }
-    const mesh = this._rayMesh, m = new THREE.Matrix4(), found = [];
+    const mesh = this._rayMesh, found = [], attr = mesh.geometry.getAttribute('position');
     mesh.material = this.material;
-    const s = new THREE.Sphere();
-    for (let i = 0; i < this.count; i++) {
-      this.getInstanceBoundingSphere(i, s).applyMatrix4(this.matrixWorld);
-      if (!raycaster.ray.intersectsSphere(s)) continue;
-      const attr = mesh.geometry.getAttribute('position');
-      this.bentPositions(i, attr.array);
+    mesh.matrixWorld.copy(this.matrixWorld); // the captured positions are placed already (instanceMatrix)
+    ids.forEach((id, k) => {
+      attr.array.set(bent.subarray(k * V * 3, (k + 1) * V * 3));
       mesh.geometry.boundingSphere = null;
       mesh.geometry.boundingBox = null;
-      mesh.matrixWorld.multiplyMatrices(this.matrixWorld, m.fromArray(this.instanceMatrix.array, 16 * i));
       found.length = 0;
       mesh.raycast(raycaster, found);
-      for (const hit of found) { hit.instanceId = i; hit.object = this; intersects.push(hit); }
-    }
+      for (const hit of found) { hit.instanceId = id; hit.object = this; intersects.push(hit); }
+    });
   }
 
   /**
@@ -441,82 +464,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) return false;
     const g = this.geometry, n = this.count, V = g.getAttribute('position').count;
     const tangent = g.getAttribute('tangent');
-    const program = this._bakeProgram(gl, Boolean(tangent), this.axis.axes ? this.axis.axes.count : 0);
-    const buffers = [];
-    const upload = (array) => {
-      const b = gl.createBuffer();
-      gl.bindBuffer(gl.ARRAY_BUFFER, b);
-      gl.bufferData(gl.ARRAY_BUFFER, array, gl.STATIC_DRAW);
-      buffers.push(b);
-      return b;
-    };
-    const vao = gl.createVertexArray();
-    gl.bindVertexArray(vao);
-    const bind = (name, array, size, divisor, stride = 0, offset = 0) => {
-      const at = gl.getAttribLocation(program, name);
-      if (at < 0) return;
-      gl.bindBuffer(gl.ARRAY_BUFFER, array);
-      gl.enableVertexAttribArray(at);
-      gl.vertexAttribPointer(at, size, gl.FLOAT, false, stride, offset);
-      gl.vertexAttribDivisor(at, divisor);
-    };
-    const plain = (attr) => { // a vertex attribute as a tight float array (interleaved ones unpacked)
-      if (!attr.isInterleavedBufferAttribute && attr.array instanceof Float32Array) return attr.array;
-      const out = new Float32Array(attr.count * attr.itemSize);
-      for (let i = 0; i < attr.count; i++) for (let c = 0; c < attr.itemSize; c++) out[i * attr.itemSize + c] = attr.getComponent(i, c);
-      return out;
-    };
-    if (this.axis.axes) bind('axialAxis', upload(plain(g.getAttribute('axialAxis'))), 1, 0);
-    bind('position', upload(plain(g.getAttribute('position'))), 3, 0);
-    bind('normal', upload(plain(g.getAttribute('normal'))), 3, 0);
-    if (tangent) bind('tangent', upload(plain(tangent)), 4, 0);
-    const a = g.attributes;
-    bind('axialD12', upload(a.axialD12.array.subarray(0, 4 * n)), 4, 1);
-    bind('axialD34', upload(a.axialD34.array.subarray(0, 4 * n)), 4, 1);
-    bind('axialD5', upload(a.axialD5.array.subarray(0, 2 * n)), 2, 1);
-    bind('axialTwistTaper', upload(a.axialTwistTaper.array.subarray(0, 2 * n)), 2, 1);
-    const mats = upload(this.instanceMatrix.array.subarray(0, 16 * n));
-    for (let c = 0; c < 4; c++) bind(`axialMatrix${c}`, mats, 4, 1, 64, 16 * c);
-    gl.useProgram(program);
-    const u = this.axialUniforms;
-    gl.uniformMatrix3fv(gl.getUniformLocation(program, 'axialFrame'), false, u.axialFrame.value.elements);
-    gl.uniform1f(gl.getUniformLocation(program, 'axialLo'), u.axialLo.value);
-    gl.uniform1f(gl.getUniformLocation(program, 'axialLen'), u.axialLen.value);
-    gl.uniform2f(gl.getUniformLocation(program, 'axialCenter'), u.axialCenter.value.x, u.axialCenter.value.y);
-    if (this.axis.axes) { // several axes: every axis's frame, lo, L, parent, and the child offsets' texture
-      const k = this.axis.axes.count, frames = new Float32Array(9 * k);
-      u.axialFrames.value.forEach((m, j) => frames.set(m.elements, 9 * j));
-      gl.uniformMatrix3fv(gl.getUniformLocation(program, 'axialFrames'), false, frames);
-      gl.uniform1fv(gl.getUniformLocation(program, 'axialLos'), u.axialLos.value);
-      gl.uniform1fv(gl.getUniformLocation(program, 'axialLens'), u.axialLens.value);
-      gl.uniform1iv(gl.getUniformLocation(program, 'axialParents'), u.axialParents.value);
-      renderer.initTexture(u.axialChildren.value); // uploaded by three: its GL texture, on unit 0
-      gl.activeTexture(gl.TEXTURE0);
-      gl.bindTexture(gl.TEXTURE_2D, renderer.properties.get(u.axialChildren.value).__webglTexture);
-      gl.uniform1i(gl.getUniformLocation(program, 'axialChildren'), 0);
-    }
-    const out = (size) => {
-      const b = gl.createBuffer();
-      gl.bindBuffer(gl.ARRAY_BUFFER, b);
-      gl.bufferData(gl.ARRAY_BUFFER, n * V * size * 4, gl.STATIC_DRAW);
-      return b;
-    };
-    const outputs = [out(3), out(3), ...(tangent ? [out(4)] : [])];
-    gl.bindBuffer(gl.ARRAY_BUFFER, null); // a buffer bound elsewhere may not be written by the feedback
-    const tf = gl.createTransformFeedback();
-    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, tf);
-    outputs.forEach((b, i) => gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, i, b));
-    gl.enable(gl.RASTERIZER_DISCARD);
-    gl.beginTransformFeedback(gl.POINTS);
-    gl.drawArraysInstanced(gl.POINTS, 0, V, n); // instance-major: instance i's vertices at i V
-    gl.endTransformFeedback();
-    gl.disable(gl.RASTERIZER_DISCARD);
-    outputs.forEach((b, i) => gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, i, null));
-    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
-    gl.deleteTransformFeedback(tf);
-    gl.bindVertexArray(null);
-    gl.deleteVertexArray(vao);
-    buffers.forEach((b) => gl.deleteBuffer(b));
+    const { outputs } = this._feedback(renderer, null, Boolean(tangent));
     renderer.resetState(); // three's cached GL state: we bound our own program, VAO and buffers
 
     // the plain geometry: captured positions and normals, every other attribute repeated, indices offset
@@ -528,7 +476,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     const tinted = this.layout.tint !== null;
     const vertexColors = (Array.isArray(source) ? source : [source]).some((m) => m.vertexColors);
     if (tinted) { // each instance's tint times the vertex colour (where the material uses one): a colour a vertex
-      const base = vertexColors && g.getAttribute('color') ? plain(g.getAttribute('color')) : null;
+      const base = vertexColors && g.getAttribute('color') ? plainArray(g.getAttribute('color')) : null;
       const k = base ? g.getAttribute('color').itemSize : 3, tint = this.instanceColor.array;
       const colors = new Float32Array(n * V * k);
       for (let i = 0; i < n; i++) {
@@ -543,7 +491,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     for (const [name, attr] of Object.entries(g.attributes)) {
       if (['position', 'normal', 'tangent'].includes(name) || name.startsWith('axial') || name.startsWith('_axial') ||
           attr.isInstancedBufferAttribute || (tinted && name === 'color')) continue;
-      const src = plain(attr), k = attr.itemSize, rep = new src.constructor(src.length * n);
+      const src = plainArray(attr), k = attr.itemSize, rep = new src.constructor(src.length * n);
       for (let i = 0; i < n; i++) rep.set(src, i * src.length);
       baked.setAttribute(name, new THREE.BufferAttribute(rep, k, attr.normalized));
     }
@@ -599,8 +547,106 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     this._shadowMaterials.forEach((m) => { m.visible = on; });
   }
 
-  _bakeProgram(gl, tangent, axes = 0) {
-    const key = `${tangent ? 'tangent' : 'plain'}:${axes}`;
+  /**
+   * One transform-feedback pass of this mesh's BEND (the materials' vertex code) over instances
+   * `ids` (null: all): their placed positions, normals (and tangents) in new GL buffers, instance
+   * after instance.  Leaves GL state changed: the caller resets three's (renderer.resetState()).
+   */
+  _feedback(renderer, ids, tangent) {
+    this._renderer = renderer;
+    const gl = renderer.getContext(), g = this.geometry, V = g.getAttribute('position').count;
+    const n = ids ? ids.length : this.count;
+    const program = this._feedbackProgram(gl, tangent, this.axis.axes ? this.axis.axes.count : 0, Boolean(this._wind));
+    const buffers = [];
+    const upload = (array) => {
+      const b = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, b);
+      gl.bufferData(gl.ARRAY_BUFFER, array, gl.STATIC_DRAW);
+      buffers.push(b);
+      return b;
+    };
+    const vao = gl.createVertexArray();
+    gl.bindVertexArray(vao);
+    const bind = (name, array, size, divisor, stride = 0, offset = 0, column = 0) => {
+      const at = gl.getAttribLocation(program, name);
+      if (at < 0) return;
+      gl.bindBuffer(gl.ARRAY_BUFFER, array);
+      gl.enableVertexAttribArray(at + column);
+      gl.vertexAttribPointer(at + column, size, gl.FLOAT, false, stride, offset);
+      gl.vertexAttribDivisor(at + column, divisor);
+    };
+    // per instance: the attribute arrays as they are (all), or the rows of `ids` gathered
+    const rows = (array, size) => {
+      if (!ids) return array.subarray(0, size * n);
+      const out = new Float32Array(size * n);
+      ids.forEach((id, k) => out.set(array.subarray(size * id, size * (id + 1)), size * k));
+      return out;
+    };
+    if (this.axis.axes) bind('axialAxis', upload(plainArray(g.getAttribute('axialAxis'))), 1, 0);
+    bind('position', upload(plainArray(g.getAttribute('position'))), 3, 0);
+    bind('normal', upload(plainArray(g.getAttribute('normal'))), 3, 0);
+    if (tangent) bind('tangent', upload(plainArray(g.getAttribute('tangent'))), 4, 0);
+    const a = g.attributes;
+    for (const [name, size] of [['axialD12', 4], ['axialD34', 4], ['axialD5', 2], ['axialTwistTaper', 2], ['axialAngles', 3]]) {
+      bind(name, upload(rows(a[name].array, size)), size, 1);
+    }
+    const mats = upload(rows(this.instanceMatrix.array, 16));
+    for (let c = 0; c < 4; c++) bind('instanceMatrix', mats, 4, 1, 64, 16 * c, c);
+    bind('axialId', upload(ids ? Float32Array.from(ids) : Float32Array.from({ length: n }, (_, i) => i)), 1, 1);
+    gl.useProgram(program);
+    const u = this.axialUniforms;
+    const loc = (name) => gl.getUniformLocation(program, name);
+    gl.uniformMatrix3fv(loc('axialFrame'), false, u.axialFrame.value.elements);
+    gl.uniform1f(loc('axialLo'), u.axialLo.value);
+    gl.uniform1f(loc('axialLen'), u.axialLen.value);
+    gl.uniform2f(loc('axialCenter'), u.axialCenter.value.x, u.axialCenter.value.y);
+    if (this.axis.axes) { // several axes: every axis's frame, lo, L, parent, and the child offsets' texture
+      const k = this.axis.axes.count, frames = new Float32Array(9 * k);
+      u.axialFrames.value.forEach((m, j) => frames.set(m.elements, 9 * j));
+      gl.uniformMatrix3fv(loc('axialFrames'), false, frames);
+      gl.uniform1fv(loc('axialLos'), u.axialLos.value);
+      gl.uniform1fv(loc('axialLens'), u.axialLens.value);
+      gl.uniform1iv(loc('axialParents'), u.axialParents.value);
+      renderer.initTexture(u.axialChildren.value); // uploaded by three: its GL texture, on unit 0
+      gl.activeTexture(gl.TEXTURE0);
+      gl.bindTexture(gl.TEXTURE_2D, renderer.properties.get(u.axialChildren.value).__webglTexture);
+      gl.uniform1i(loc('axialChildren'), 0);
+    }
+    if (this._wind) { // the wind at this moment, as the materials sway the instances
+      const w = (name) => u[name].value;
+      gl.uniform3f(loc('axialWindDir'), w('axialWindDir').x, w('axialWindDir').y, w('axialWindDir').z);
+      gl.uniform1f(loc('axialWindStrength'), w('axialWindStrength'));
+      gl.uniform1f(loc('axialWindGust'), w('axialWindGust'));
+      gl.uniform2f(loc('axialWindCycles'), w('axialWindCycles').x, w('axialWindCycles').y);
+      gl.uniform1f(loc('axialWindWavenumber'), w('axialWindWavenumber'));
+    }
+    const out = (size) => {
+      const b = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, b);
+      gl.bufferData(gl.ARRAY_BUFFER, n * V * size * 4, gl.STATIC_DRAW);
+      return b;
+    };
+    const outputs = [out(3), out(3), ...(tangent ? [out(4)] : [])];
+    gl.bindBuffer(gl.ARRAY_BUFFER, null); // a buffer bound elsewhere may not be written by the feedback
+    const tf = gl.createTransformFeedback();
+    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, tf);
+    outputs.forEach((b, i) => gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, i, b));
+    gl.enable(gl.RASTERIZER_DISCARD);
+    gl.beginTransformFeedback(gl.POINTS);
+    gl.drawArraysInstanced(gl.POINTS, 0, V, n); // instance-major: instance k's vertices at k V
+    gl.endTransformFeedback();
+    gl.disable(gl.RASTERIZER_DISCARD);
+    outputs.forEach((b, i) => gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, i, null));
+    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
+    gl.deleteTransformFeedback(tf);
+    gl.bindVertexArray(null);
+    gl.deleteVertexArray(vao);
+    buffers.forEach((b) => gl.deleteBuffer(b));
+    return { gl, outputs };
+  }
+
+  _feedbackProgram(gl, tangent, axes = 0, wind = false) {
+    const key = `${tangent ? 'tangent' : 'plain'}:${axes}:${wind ? 'wind' : ''}`;
     this._programs = this._programs || {};
     if (this._programs[key] && this._programs[key].gl === gl) return this._programs[key].program;
     const vs = `#version 300 es
@@ -608,18 +654,22 @@ precision highp float;
 precision highp int;
 ${tangent ? '#define USE_TANGENT' : ''}
 ${axes ? `#define AXIAL_AXES ${axes}` : ''}
+${wind ? '#define AXIAL_WIND 1' : ''}
+#define AXIAL_ID int(axialId + 0.5)
 ${AXIAL_GLSL}
+${WIND_GLSL}
 in vec3 position;
 in vec3 normal;
 in vec4 tangent;
-in vec4 axialMatrix0, axialMatrix1, axialMatrix2, axialMatrix3;
+in mat4 instanceMatrix;
+in float axialId;           // the instance's index (the instances drawn may be a selection)
 ${UNIFORMS.replace(/attribute /g, 'in ')}
 out vec3 axialOutPosition;
 out vec3 axialOutNormal;
 out vec4 axialOutTangent;
 void main() {
 ${BEND}
-  mat4 m = mat4(axialMatrix0, axialMatrix1, axialMatrix2, axialMatrix3);
+  mat4 m = instanceMatrix;
   axialOutPosition = (m * vec4(axialV, 1.0)).xyz;
   axialOutNormal = normalize(mat3(m) * axialN);
   axialOutTangent = vec4(normalize(mat3(m) * axialT), tangent.w);

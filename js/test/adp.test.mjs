@@ -3,8 +3,8 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
-import { parseADP, AxialError, crc32, recordLayout, splitAxes } from '../src/adp.js';
-import { resolveAxis, instanceMatrices, bendPositions, bentRadii } from '../src/bend.js';
+import { parseADP, AxialError, crc32, recordLayout, childTexels } from '../src/adp.js';
+import { resolveAxis, instanceMatrices, bentRadii } from '../src/bend.js';
 
 const dir = new URL('./fixtures/', import.meta.url);
 const expected = JSON.parse(readFileSync(new URL('expected.json', dir), 'utf8'));
@@ -36,54 +36,41 @@ for (const name of names) {
     assert.ok(Math.abs(p.length - want.axis.length) < 1e-9 * want.axis.length);
   });
 
-  test(`bend ${name}: instanceMatrix x bendPositions = axialdeform.deform (CPU reference)`, () => {
+  test(`placement ${name}: instanceMatrices = T(p) R S(s) as the Python library places them`, () => {
     const p = parseADP(load(name), name);
-    const spec = { axis: want.axis, axes: want.axes || null };
-    const positions = Float32Array.from(want.positions.flat());
-    const axis = resolveAxis(spec, p, positions);
-    const layout = recordLayout(p.numbersPerInstance, p.axes);
-    const mats = instanceMatrices(p.data, layout, p.count, new Float32Array(16 * p.count));
-    const out = new Float32Array(positions.length);
-    let worst = 0;
-    for (let i = 0; i < p.count; i++) {
-      bendPositions(positions, axis, p.data, layout, i, out, want.vertexAxis);
-      const m = mats.subarray(16 * i, 16 * i + 16);
-      for (let v = 0; v < positions.length / 3; v++) {
-        const [x, y, z] = [out[3 * v], out[3 * v + 1], out[3 * v + 2]];
-        const w = [m[0] * x + m[4] * y + m[8] * z + m[12], m[1] * x + m[5] * y + m[9] * z + m[13], m[2] * x + m[6] * y + m[10] * z + m[14]];
-        for (let c = 0; c < 3; c++) worst = Math.max(worst, Math.abs(w[c] - want.world[i][v][c]));
-      }
-    }
-    assert.ok(worst <= 1e-5 * want.length, `${name}: largest difference ${worst} (L = ${want.length})`);
+    const mats = instanceMatrices(p.data, recordLayout(p.numbersPerInstance, p.axes), p.count, new Float32Array(16 * p.count));
+    want.matrices.flat().forEach((v, k) => assert.ok(Math.abs(mats[k] - v) < 1e-5 * Math.max(1, Math.abs(v)),
+      `${name} instance ${Math.floor(k / 16)} element ${k % 16}: ${mats[k]} vs ${v}`));
   });
 
-  test(`bounds ${name}: every bent vertex lies in its instance's sphere`, () => {
+  test(`bounds ${name}: every vertex axialdeform.deform bends lies in its instance's placed sphere`, () => {
     const p = parseADP(load(name), name);
     const positions = Float32Array.from(want.positions.flat());
     const axis = resolveAxis({ axis: want.axis, axes: want.axes || null }, p, positions);
     const layout = recordLayout(p.numbersPerInstance, p.axes);
     const { center, radius } = bentRadii(positions, axis, p.data, layout, p.count);
-    const out = new Float32Array(positions.length);
+    const mats = instanceMatrices(p.data, layout, p.count, new Float32Array(16 * p.count));
     for (let i = 0; i < p.count; i++) {
-      bendPositions(positions, axis, p.data, layout, i, out, want.vertexAxis);
-      for (let v = 0; v < out.length; v += 3) {
-        const d = Math.hypot(out[v] - center[0], out[v + 1] - center[1], out[v + 2] - center[2]);
-        assert.ok(d <= radius[i] * (1 + 1e-6), `${name} instance ${i}: vertex at ${d} outside ${radius[i]}`);
+      const m = mats.subarray(16 * i, 16 * i + 16), s = Math.hypot(m[0], m[1], m[2]);
+      const c = [0, 1, 2].map((r) => m[r] * center[0] + m[4 + r] * center[1] + m[8 + r] * center[2] + m[12 + r]);
+      for (const w of want.world[i]) {
+        const d = Math.hypot(w[0] - c[0], w[1] - c[1], w[2] - c[2]);
+        assert.ok(d <= radius[i] * s * (1 + 1e-6), `${name} instance ${i}: a bent vertex at ${d} outside ${radius[i] * s}`);
       }
     }
   });
 }
 
-test('splitAxes: axis 0 record and the child texels of a tree', () => {
+test('childTexels: the child axes\' offsets of a tree, three RGBA texels an axis', () => {
   const p = parseADP(load('tree'), 'tree');
-  const { std, texels, rows } = splitAxes(p);
-  assert.equal(std.fields, p.fields - 10 * (p.axes - 1));
+  const { texels, rows } = childTexels(p.values, p.qtable, p.fields, p.axes, p.count);
   assert.equal(rows, 1);
   // child axis 1 of instance 0: the record's columns 10..19, in three texels (d5 in the third's xy)
   for (let c = 0; c < 10; c++) assert.equal(texels[c], p.data[10 + c]);
   assert.equal(texels[10], 0);
+  // instance 1's child axis 2: texels from ((1 * 9) + 1) * 3
+  for (let c = 0; c < 10; c++) assert.equal(texels[((1 * 9) + 1) * 12 + c], p.data[p.fields + 20 + c]);
 });
-
 function corrupt(name, edit) {
   const b = new Uint8Array(load(name));
   edit(b, new DataView(b.buffer));

@@ -167,6 +167,10 @@ def test_the_module_has_no_second_copy_of_the_maths():
     mesh_js = (JS / "src" / "mesh.js").read_text()
     for maths in ("Bernstein", "s * s * s * s", "cos(", "sin(", "6.28"):  # the formulas live in glsl/ only
         assert maths not in mesh_js.split("const BEND", 1)[1].split("`;", 1)[0]
+    for f in (JS / "src").glob("*.js"):  # nor on the CPU: drawing, baking and raycasting bend on the GPU
+        if f.name != "glsl.js":
+            text = f.read_text().lower()
+            assert "bernstein" not in text and "s * s * s * s" not in text and "* t * t * t" not in text, f.name
 
 
 def test_the_modules_record_columns_are_the_record_tables():
@@ -414,6 +418,10 @@ def test_raycasting_hits_the_bent_surface(checks):
     assert flat["agreement"] >= 0.98, flat["agreement"]
     differ = np.array(bent["mask"]) ^ np.array(flat["mask"])
     assert differ.sum() > 0.2 * bent["drawn"]  # the bend moved the surface the rays find
+    windy = page.evaluate("window.checks.raycasts(window.checks.bent, "
+                          "{direction: [0, 0, 1], strength: 0.5, gustiness: 0, frequency: 0.5})")
+    assert windy["agreement"] >= 0.98 and windy["ids"], windy["agreement"]
+    assert (np.array(windy["mask"]) ^ np.array(bent["mask"])).sum() > 0.1 * bent["drawn"]  # the wind moved it
     assert errors == []
 
 
