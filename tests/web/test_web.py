@@ -369,6 +369,27 @@ window.cleanup = await esm.default.render({ model, el: document.getElementById('
     return page, errors
 
 
+#: what a notebook does when the kernel sets SceneWidget.params_adp (the widget harness's model)
+PUSH_PARAMS = ("(b64) => { window.widgetStatus = undefined; "
+               "window.widgetModel.set('params_adp', window.toDataView(b64)); }")
+
+
+def _push_params(page, adp: bytes) -> dict:
+    """Hand the widget new numbers as the kernel would; the status its front end reports back."""
+    page.evaluate(PUSH_PARAMS, base64.b64encode(adp).decode())
+    page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
+    return page.evaluate("window.widgetStatus")
+
+
+def _picture_changes(page, clip, before: bytes) -> bool:
+    """Whether the picture differs from ``before`` within the next frames (polled, up to 20 s)."""
+    for _ in range(100):
+        if page.screenshot(clip=clip) != before:
+            return True
+        page.wait_for_timeout(200)
+    return False
+
+
 @pytest.mark.slow
 def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
     from axialdeform.widget import SceneWidget
@@ -383,21 +404,14 @@ def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
         before = page.screenshot(clip=clip)
         w.set_params(ad.random_params(mesh, 40, seed=9))
         assert w.config["instances"] == 40
-        push = "(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }"
-        page.evaluate(push, base64.b64encode(w.params_adp).decode())
-        page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
-        assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
+        assert _push_params(page, w.params_adp) == {"ready": True, "instances": 40}
         # the status line and the picture follow within the next frames: wait for them, not a fixed time
         page.wait_for_function("document.querySelector('.axd-status').innerText.includes('40 instances')",
                                timeout=60_000)
         assert "40 instances" in page.locator(".axd-status").inner_text()
-        for _ in range(100):
-            if page.screenshot(clip=clip) != before:
-                break
-            page.wait_for_timeout(200)
-        assert page.screenshot(clip=clip) != before
+        assert _picture_changes(page, clip, before)
         # a bad update: the page says why and draws nothing
-        page.evaluate(push, base64.b64encode(w.params_adp[:-8]).decode())
+        page.evaluate(PUSH_PARAMS, base64.b64encode(w.params_adp[:-8]).decode())
         page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
         st = page.evaluate("window.widgetStatus")
         assert st["ready"] is False and "truncated" in st["error"]
@@ -1079,15 +1093,8 @@ def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
         again = ad.random_params(mesh, 40, seed=3, bend=(0.05, 0.4), placement="disc", spacing=3.0)
         w.set_params(again)
         assert decode_binary(w.params_adp).values.shape == (40, 106)
-        push = "(b64) => { window.widgetStatus = undefined; window.widgetModel.set('params_adp', window.toDataView(b64)); }"
-        page.evaluate(push, base64.b64encode(w.params_adp).decode())
-        page.wait_for_function("window.widgetStatus !== undefined", timeout=60_000)
-        assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
-        for _ in range(100):
-            if page.screenshot(clip=clip) != before:
-                break
-            page.wait_for_timeout(200)
-        assert page.screenshot(clip=clip) != before
+        assert _push_params(page, w.params_adp) == {"ready": True, "instances": 40}
+        assert _picture_changes(page, clip, before)
         assert errors == []
     finally:
         page.close()
