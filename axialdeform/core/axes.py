@@ -113,6 +113,14 @@ class AxisTree:
         h.update(self.vertex_axis.astype("<i4").tobytes())
         return h.digest()[:16]
 
+    def to_json(self) -> dict:
+        """The tree as a loader needs it to bend (the page's config, a GLB's extras and its
+        ``AXIALDEFORM_bend``): ``{count, names, parents, frames (rows e_a, e_u, e_v), lo, length}``;
+        each vertex's axis travels separately (``_AXIAL_AXIS``)."""
+        return {"count": self.count, "names": [str(n) for n in self.names], "parents": [int(p) for p in self.parents],
+                "frames": [np.asarray(a.matrix, dtype=np.float64).tolist() for a in self.axes],
+                "lo": [float(a.lo) for a in self.axes], "length": [float(a.length) for a in self.axes]}
+
     def describe(self) -> str:
         return f"{self.count} axes (" + ", ".join(
             f"{n}{'' if p < 0 else ' <- ' + self.names[p]}" for n, p in zip(self.names, self.parents)) + ")"

@@ -216,11 +216,8 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
                  **({"frame": [list(row) for row in axis.frame], "frame_digest": axis.frame_digest.hex()}
                     if axis.framed else {}),
                  # several axes (AXIAL_AXES): the tree's frames, lo, L and parents; its digest as the adp's
-                 **({"axes": {"count": mesh.tree.count, "parents": list(mesh.tree.parents),
-                              "frames": [[list(row) for row in a.matrix] for a in mesh.tree.axes],
-                              "lo": [float(a.lo) for a in mesh.tree.axes],
-                              "length": [float(a.length) for a in mesh.tree.axes]},
-                     "frame_digest": mesh.tree.digest.hex()} if mesh.tree is not None else {}),
+                 **({"axes": mesh.tree.to_json(), "frame_digest": mesh.tree.digest.hex()}
+                    if mesh.tree is not None else {}),
                  "vertices": int(mesh.vertex_count)},
         "params_file": params_file,
         "shader": shader_key(quantize, params.shape[1], material, axis.framed),

@@ -327,11 +327,8 @@ class _Appearance:
 def _mesh_extras(mesh, count: int, layout: str) -> dict:
     a = mesh.axis
     tree = getattr(mesh, "tree", None)
-    axes = {} if tree is None else {"axes": {  # several axes: enough to rebuild the tree (each vertex's: _AXIAL_AXIS)
-        "count": tree.count, "names": list(tree.names), "parents": list(tree.parents),
-        "frames": [[list(row) for row in ax.matrix] for ax in tree.axes],
-        # each axis's lo and L, so a loader can bend without rebuilding the tree (AxialInstancedMesh)
-        "lo": [float(ax.lo) for ax in tree.axes], "length": [float(ax.length) for ax in tree.axes]}}
+    # several axes: enough to rebuild the tree (each vertex's axis: _AXIAL_AXIS) and to bend it
+    axes = {} if tree is None else {"axes": tree.to_json()}
     return {**axes,
         "version": _FORMAT_VERSION,
         "layout": layout,
@@ -355,9 +352,7 @@ def bend_extension(mesh, numbers: int) -> dict:
            "fingerprint": mesh.fingerprint.hex()}
     tree = getattr(mesh, "tree", None)
     if tree is not None:
-        out["axes"] = {"count": tree.count, "parents": [int(p) for p in tree.parents],
-                       "frames": [x.matrix.tolist() for x in tree.axes],
-                       "lo": [float(x.lo) for x in tree.axes], "length": [float(x.length) for x in tree.axes]}
+        out["axes"] = {k: v for k, v in tree.to_json().items() if k != "names"}
     return out
 
 
