@@ -149,19 +149,20 @@ export function recordLayout(numbersPerInstance, axes = 1) {
 /** Texels a row of the child axes' offsets texture (glsl/axial.glsl's AXIAL_AXES_ROW). */
 export const AXES_ROW = 4095;
 
-/** The child axes' offsets of `count` records (stored values, width `fields`, K axes) as RGBA32F texels. */
-export function childTexels(values, qtable, fields, k, count) {
-  const texelCount = count * (k - 1) * 3;
-  const rows = Math.max(1, Math.ceil(texelCount / AXES_ROW));
-  const texels = new Float32Array(rows * AXES_ROW * 4);
-  for (let i = 0; i < count; i++) {
+/** Rows of AXES_ROW texels that the child axes' offsets of `count` instances of `k` axes take. */
+export function texelRows(count, k) {
+  return Math.max(1, Math.ceil((count * (k - 1) * 3) / AXES_ROW));
+}
+
+/** Write the child axes' offsets of instances first .. first + count - 1 (decoded numbers, rows of
+ * `fields`, K axes) into `texels` (RGBA32F, three texels a child axis: d1u d1v d2u d2v | d3u d3v
+ * d4u d4v | d5u d5v 0 0, instance after instance, as glsl/axial.glsl's axial_child_offsets reads). */
+export function childTexels(data, fields, k, first, count, texels) {
+  for (let i = first; i < first + count; i++) {
     for (let j = 1; j < k; j++) {
       const at = ((i * (k - 1) + j - 1) * 3) * 4;
-      for (let c = 0; c < 10; c++) {
-        const col = 10 * j + c, v = values[i * fields + col];
-        texels[at + c] = qtable ? qtable[col] + v * qtable[fields + col] : v;
-      }
+      for (let c = 0; c < 10; c++) texels[at + c] = data[i * fields + 10 * j + c];
     }
   }
-  return { texels, rows };
+  return texels;
 }

@@ -86,8 +86,9 @@ export function crc32(bytes: Uint8Array): number;
 export function hex(bytes: Uint8Array): string;
 export function dequantize(values: Uint16Array, qtable: Float32Array, fields: number): Float32Array;
 export function recordLayout(numbersPerInstance: number, axes?: number): RecordLayout;
-export function childTexels(values: Float32Array | Uint16Array, qtable: Float32Array | null, fields: number,
-  axes: number, count: number): { texels: Float32Array; rows: number };
+export function texelRows(count: number, axes: number): number;
+export function childTexels(data: Float32Array, fields: number, axes: number, first: number, count: number,
+  texels: Float32Array): Float32Array;
 export const NUMBERS_OF_VERSION: Readonly<Record<1 | 2 | 3, number>>;
 export const HEADER_BYTES: 96;
 export const MAX_AXES: 64;

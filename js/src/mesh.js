@@ -5,7 +5,7 @@
 // position) is its instanceMatrix; the bend's numbers are instanced attributes.
 
 import * as THREE from 'three';
-import { AxialError, recordLayout, childTexels, AXES_ROW } from './adp.js';
+import { AxialError, recordLayout, childTexels, texelRows, AXES_ROW } from './adp.js';
 import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
 import { resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 
@@ -183,6 +183,11 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
         axialParents: { value: Int32Array.from(ax.axes.parents) },
         axialChildren: { value: null },
       });
+      // the child axes' offsets: a float texture sized for the capacity, written range by range
+      const rows = texelRows(capacity, ax.axes.count);
+      const tex = new THREE.DataTexture(new Float32Array(rows * AXES_ROW * 4), AXES_ROW, rows, THREE.RGBAFormat, THREE.FloatType);
+      tex.minFilter = tex.magFilter = THREE.NearestFilter;
+      this.axialUniforms.axialChildren.value = tex;
     }
     this._radii = new Float32Array(capacity);
     this._grow = new Float32Array(capacity);
@@ -274,7 +279,11 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     range(a.axialD12, 4); range(a.axialD34, 4); range(a.axialD5, 2); range(a.axialTwistTaper, 2); range(a.axialAngles, 3);
     range(this.instanceMatrix, 16);
     if (this.instanceColor) range(this.instanceColor, 3);
-    if (this.axis.axes) this._updateChildren();
+    if (this.axis.axes) {
+      const tex = this.axialUniforms.axialChildren.value;
+      childTexels(this.data, f, this.axis.axes.count, first, n, tex.image.data);
+      tex.needsUpdate = true;
+    }
     const pos = this.geometry.getAttribute('position').array;
     this._center = bentRadii(pos, this.axis, this.data, L, n, first, this._radii, this._grow).center;
     this.count = Math.max(this.count, first + n);
@@ -283,20 +292,6 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     this.computeBoundingSphere();
     this.dispatchEvent({ type: 'paramschange', first, count: n });
     return this;
-  }
-
-  _updateChildren() {
-    const k = this.axis.axes.count, f = this.layout.numbersPerInstance;
-    const { texels, rows } = childTexels(this.data, null, f, k, this.capacity);
-    const u = this.axialUniforms.axialChildren;
-    if (u.value && u.value.image.height === rows) {
-      u.value.image.data.set(texels);
-    } else {
-      if (u.value) u.value.dispose();
-      u.value = new THREE.DataTexture(texels, AXES_ROW, rows, THREE.RGBAFormat, THREE.FloatType);
-      u.value.minFilter = u.value.magFilter = THREE.NearestFilter;
-    }
-    u.value.needsUpdate = true;
   }
 
   /**

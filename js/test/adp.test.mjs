@@ -3,7 +3,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
-import { parseADP, AxialError, crc32, recordLayout, childTexels } from '../src/adp.js';
+import { parseADP, AxialError, crc32, recordLayout, childTexels, texelRows, AXES_ROW } from '../src/adp.js';
 import { resolveAxis, instanceMatrices, bentRadii } from '../src/bend.js';
 
 const dir = new URL('./fixtures/', import.meta.url);
@@ -63,7 +63,8 @@ for (const name of names) {
 
 test('childTexels: the child axes\' offsets of a tree, three RGBA texels an axis', () => {
   const p = parseADP(load('tree'), 'tree');
-  const { texels, rows } = childTexels(p.values, p.qtable, p.fields, p.axes, p.count);
+  const rows = texelRows(p.count, p.axes);
+  const texels = childTexels(p.data, p.fields, p.axes, 0, p.count, new Float32Array(rows * AXES_ROW * 4));
   assert.equal(rows, 1);
   // child axis 1 of instance 0: the record's columns 10..19, in three texels (d5 in the third's xy)
   for (let c = 0; c < 10; c++) assert.equal(texels[c], p.data[10 + c]);
