@@ -15,7 +15,8 @@ Instances outside the view are culled on the GPU (``--no-cull`` turns it
 off) and, from 100 000 instances on (or with ``--lod``), far ones are drawn
 with simplified levels of detail (``--no-lod``, ``--lod-error PX``), so
 ``axialdeform view stone -n 1000000`` draws only what is in view, mostly
-with the coarse levels (docs/culling.md has measured frame times).  The window title shows the instance count, the mode, the bend amplitude, how many instances were drawn and
+with the coarse levels (docs/culling.md has measured frame times).  The window title shows the instance
+count, the mode, the bend amplitude, how many instances were drawn and
 the frame rate.  ``--headless`` runs the same viewer in moderngl-window's
 headless window (an EGL context, no display) for a number of frames and
 can save the last one (``--screenshot``), which is how the tests drive it.

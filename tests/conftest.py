@@ -12,7 +12,8 @@ import pytest
 import axialdeform as ad
 
 ROOT = Path(__file__).resolve().parent.parent
-SHARED = ROOT.parent / "shared" / "data" / "meshes"
+#: third-party test meshes carried by the repository (sources and licences in tests/data/meshes)
+DATA = ROOT / "tests" / "data" / "meshes"
 
 
 #: the Khronos conformance model for alpha modes (9 textured parts)
@@ -36,10 +37,10 @@ def validate_gltf(*paths) -> list:
     return reports if isinstance(reports, list) else [reports]
 
 
-def shared_mesh(rel: str) -> Path:
-    """A mesh from ../shared/data/meshes; missing shared data is a failure, not a skip."""
-    path = SHARED / rel
-    assert path.exists(), f"test data {path} is missing (expected the shared/ folder beside the checkout)"
+def data_mesh(rel: str) -> Path:
+    """A test mesh from ``tests/data/meshes`` (in the repository); a missing one is a failure, not a skip."""
+    path = DATA / rel
+    assert path.exists(), f"test data {path} is missing: tests/data/meshes/SOURCES.txt says where it comes from"
     return path
 
 

@@ -14,11 +14,12 @@ import argparse
 import statistics
 
 import numpy as np
-from frame_timing import alternate
 
 import axialdeform as ad
 from axialdeform.gl.camera import frame_instances
 from axialdeform.gl.image import parse_size
+
+from frame_timing import alternate
 
 
 def main() -> None:

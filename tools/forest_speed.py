@@ -22,7 +22,6 @@ import statistics
 import sys
 from pathlib import Path
 
-
 import axialdeform as ad
 from axialdeform.core.io.params import encode_binary
 from axialdeform.core.record import split_record

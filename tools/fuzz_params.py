@@ -57,8 +57,8 @@ from collections import Counter
 
 import numpy as np
 
-from axialdeform.core.io import params as P
 from axialdeform.core.errors import AxialDeformError
+from axialdeform.core.io import params as P
 from axialdeform.core.record import is_record_width
 
 
@@ -304,7 +304,8 @@ class _TimeUp(Exception):
 
 def _drive(strategy, seconds: float, seed: int, body) -> int:
     """Call ``body(example)`` for examples of ``strategy`` until ``seconds`` pass."""
-    from hypothesis import HealthCheck, Phase, Verbosity, given, seed as hseed, settings
+    from hypothesis import HealthCheck, Phase, Verbosity, given, settings
+    from hypothesis import seed as hseed
 
     end = time.monotonic() + seconds
     count = [0]
@@ -1217,11 +1218,12 @@ def fuzz_commands(seconds: float, seed: int, only: tuple = (), big_mb: float = 2
     import stat
     import tempfile
 
+    import trimesh  # noqa: F401
+
     # what the children use, imported once here (the fork shares it); no GL context in this process
     import axialdeform.cli  # noqa: F401
     import axialdeform.cli._common  # noqa: F401
     import axialdeform.gl.renderer  # noqa: F401
-    import trimesh  # noqa: F401
 
     rng = np.random.default_rng(seed)
     stats: dict = {}

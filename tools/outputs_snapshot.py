@@ -20,7 +20,7 @@ import axialdeform as ad
 out = sys.argv[1]
 os.makedirs(out, exist_ok=True)
 print(ad.__file__)
-shared = str(Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes" / "assets" / "AlphaBlendModeTest.glb")
+shared = str(Path(__file__).resolve().parents[1] / "tests" / "data" / "meshes" / "assets" / "AlphaBlendModeTest.glb")
 look = ad.Look()
 jobs = []
 stone, leaf, card = ad.load_mesh("stone"), ad.load_mesh("leaf"), ad.load_mesh("leafcard")
@@ -37,7 +37,8 @@ pics = {
   "leaf19_wind": ad.render_image(leaf, p19, (320, 240), wind=wind, time=2.5),
   "card22": ad.render_image(card, p22, (320, 240)),
   "alpha": ad.render_image(alpha, pa, (320, 240)),
-  "landscape": ad.render_image(ad.Scene.load(str(Path(__file__).resolve().parents[1] / "examples" / "landscape" / "landscape.toml"), scale_counts=0.1), size=(320, 240)),
+  "landscape": ad.render_image(ad.Scene.load(str(Path(__file__).resolve().parents[1] / "examples" / "landscape" / "landscape.toml"),
+                                             scale_counts=0.1), size=(320, 240)),
 }
 for k, v in pics.items():
     np.save(f"{out}/{k}.npy", v)

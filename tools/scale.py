@@ -25,8 +25,8 @@ import pyrr
 
 import axialdeform as ad
 from axialdeform.core.io.atomic import atomic_write_text
-from axialdeform.gl.image import parse_size
 from axialdeform.core.mesh import area_weighted_normals
+from axialdeform.gl.image import parse_size
 
 TETRA_V = np.array([(0, 0, 0), (1, 0, 0), (0.3, 0.8, 0), (0.3, 0.3, 0.7)], dtype=np.float64) * (2, 1, 1)
 TETRA_F = np.array([(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)])

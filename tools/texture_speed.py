@@ -5,7 +5,7 @@ alternating in one process so load from elsewhere hits both alike.
 
     python3 tools/texture_speed.py [MESH] [--count 100] [--size 800x600] [--rounds 15]
 
-MESH defaults to ``../shared/data/meshes/assets/AlphaBlendModeTest.glb``.
+MESH defaults to ``tests/data/meshes/assets/AlphaBlendModeTest.glb``.
 Prints the median frame time of each, the median of the per-round ratios
 textured / untextured with its quartiles (the goal on a software rasteriser:
 at most 2), and the anisotropy the renderer asked for.  A measurement, not a
@@ -19,15 +19,16 @@ import statistics
 from pathlib import Path
 
 import numpy as np
-from frame_timing import alternate
 
 import axialdeform as ad
 from axialdeform.gl.camera import frame_instances
 from axialdeform.gl.context import texture_anisotropy
 from axialdeform.gl.image import parse_size
 
+from frame_timing import alternate
+
 ROOT = Path(__file__).resolve().parent.parent
-DEFAULT = ROOT.parent / "shared" / "data" / "meshes" / "assets" / "AlphaBlendModeTest.glb"
+DEFAULT = ROOT / "tests" / "data" / "meshes" / "assets" / "AlphaBlendModeTest.glb"
 
 
 def main() -> None:

@@ -8,15 +8,22 @@ import time
 
 import axialdeform as ad
 from axialdeform.viewer import Viewer
+
 stone = ad.load_mesh("stone")
 params = ad.random_params(stone, 1_000_000, seed=0)
 for lod in (True, False):
     v = Viewer.create(stone, params, headless=True, size=(960, 720), lod=lod)
     try:
         for name, zoom in (("framed", 1.0), ("zoomed in x0.02", 0.02)):
-            v.reset_camera(); v.orbit.zoom(zoom)
+            v.reset_camera()
+            v.orbit.zoom(zoom)
             v.step(1)
-            t = time.perf_counter(); v.step(2); v.ctx.finish(); dt = (time.perf_counter() - t) / 2
-            print(f"lod={lod} {name}: {dt:.2f} s/frame, drawn {v.renderer.stats['visible']}, levels {v.renderer.stats['levels']}", flush=True)
+            t = time.perf_counter()
+            v.step(2)
+            v.ctx.finish()
+            dt = (time.perf_counter() - t) / 2
+            stats = v.renderer.stats
+            print(f"lod={lod} {name}: {dt:.2f} s/frame, drawn {stats['visible']}, levels {stats['levels']}", flush=True)
     finally:
-        v.release(); v.wnd.destroy()
+        v.release()
+        v.wnd.destroy()

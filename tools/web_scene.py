@@ -35,8 +35,7 @@ def main() -> None:
     from playwright.sync_api import sync_playwright
 
     from axialdeform.core.scene import load_scene
-    from axialdeform.gl.image import parse_size
-    from axialdeform.gl.image import render_image
+    from axialdeform.gl.image import parse_size, render_image
     from axialdeform.web import build_scene_file, write_page
 
     w, h = parse_size(args.size)
@@ -71,7 +70,8 @@ def main() -> None:
               f"{web.count:,} instances")
         print(f"  one-file page:        {page_path.stat().st_size:>12,} bytes")
         print(f"  first frame:          {state['firstFrameMs'] / 1000:.2f} s after navigation (the page's own count)")
-        print(f"  vs render at t={args.time:g}:   IoU {iou:.4f}, mean |difference| {np.abs(shot - render.astype(np.float64)).mean():.2f} of 255"
+        diff = np.abs(shot - render.astype(np.float64)).mean()
+        print(f"  vs render at t={args.time:g}:   IoU {iou:.4f}, mean |difference| {diff:.2f} of 255"
               " (the status line hidden)")
         print(f"  console errors:       {len(errors)}")
         if args.screenshot:

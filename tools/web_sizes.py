@@ -33,7 +33,6 @@ from axialdeform.core.io.gltf import encode_baked
 from axialdeform.gl.image import parse_size
 from axialdeform.web import build_scene, make_server, scene_bytes, single_file_html, write_page
 
-
 ROOT = Path(__file__).resolve().parents[1]
 JS = ROOT / "js"
 
@@ -260,7 +259,8 @@ def main() -> None:
 
                     from PIL import Image
 
-                    img = Image.open(BytesIO(page.screenshot(clip={"x": 0, "y": 0, "width": size[0], "height": size[1] + 28}))).convert("RGB")
+                    clip = {"x": 0, "y": 0, "width": size[0], "height": size[1] + 28}
+                    img = Image.open(BytesIO(page.screenshot(clip=clip))).convert("RGB")
                     img = img.resize((img.width // 2, img.height // 2), Image.LANCZOS)
                     Path(args.screenshot).parent.mkdir(parents=True, exist_ok=True)
                     img.save(args.screenshot, optimize=True)

@@ -399,7 +399,7 @@ def run_bench(
                     continue
                 step(0, f"OBJ files x {c}")
                 before = done
-                scenes[c].ensure_objs(progress=lambda n: step(n, f"OBJ files x {c}"))
+                scenes[c].ensure_objs(progress=lambda n, c=c: step(n, f"OBJ files x {c}"))
                 step(before + c - done, f"OBJ files x {c}")
         cameras = {c: camera(base, scenes[c].params, size) for c in counts}
         if frames_dir is not None:

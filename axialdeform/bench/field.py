@@ -187,7 +187,7 @@ def run_field(count: int = 1_000_000, size=(800, 600), frames: int = 3, seed: in
             "value": d["cull+lod"]["speedup"],
             "met": d["cull+lod"]["speedup"] >= GOALS["lod_speedup"]
             and d["cull+lod"]["mean_pixel_error"] <= GOALS["lod_mean_error"]}
-    for prefix, m in _PASS_METHODS:
+    for prefix, _method in _PASS_METHODS:
         share = out["all_visible"][f"{prefix}pass_share"]
         path = "indirect draws" if out["all_visible"][f"{prefix}indirect"] else "query wait"
         out["goals"][f"cull_pass_share ({path})"] = {

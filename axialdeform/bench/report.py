@@ -322,7 +322,8 @@ def render(details: dict, plots: dict) -> str:
     add("|---|---|---|---|---|---|---|---|")
     for c in counts:
         for mode in modes:
-            g = lambda m, f: by[(m, c, mode)][f] if (m, c, mode) in by else None
+            def g(m, f, c=c, mode=mode):
+                return by[(m, c, mode)][f] if (m, c, mode) in by else None
 
             def ratio(a, b):
                 return "-" if a is None or b is None else f"{a / b:.3f}"

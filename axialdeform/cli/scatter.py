@@ -49,7 +49,8 @@ def add_parser(subparsers) -> None:
                    help="tilt the up axis towards the surface normal by F in [0, 1] (default: 0, upright)")
     s.add_argument("--anchor", choices=ANCHORS, default="bottom",
                    help="point of MESH on the surface (default: %(default)s)")
-    s.add_argument("--scale", default=None, metavar="MIN:MAX", help="random uniform scale, 19 numbers an instance (default: none, 16 numbers)")
+    s.add_argument("--scale", default=None, metavar="MIN:MAX",
+                   help="random uniform scale, 19 numbers an instance (default: none, 16 numbers)")
     s.add_argument("--bend", type=float, default=0.08, metavar="B",
                    help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
     s.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")

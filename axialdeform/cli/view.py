@@ -96,7 +96,8 @@ def run(args) -> None:
         seed = 0 if args.seed is None else args.seed
         params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed,
-                           bend=args.bend, mode=args.mode, up=args.up, look=(scene.look if scene is not None else Look()).replace(ground=not args.no_ground, fast=args.fast),
+                           bend=args.bend, mode=args.mode, up=args.up,
+                           look=(scene.look if scene is not None else Look()).replace(ground=not args.no_ground, fast=args.fast),
                            on_screenshot=lambda path: print(f"wrote {path}"), wind=wind, extra=extra,
                            parts=args.part, **options)
     if not args.headless:

@@ -126,7 +126,7 @@ class ControlAxis:
             raise MeshError(f"axis length must be a finite number > 0, found L={self.length!r} (lo={self.lo!r})")
 
     @classmethod
-    def from_positions(cls, positions: np.ndarray, name: str = "<mesh>", frame="auto") -> "ControlAxis":
+    def from_positions(cls, positions: np.ndarray, name: str = "<mesh>", frame="auto") -> ControlAxis:
         """The axis of a vertex set; ``positions`` is (n, 3); ``frame`` one of
         :data:`FRAME_NAMES` or a 3×3 matrix (rows ``e_a, e_u, e_v``)."""
         p = np.asarray(positions, dtype=np.float64)
@@ -212,7 +212,7 @@ class ControlAxis:
         """``ℓ = F·V``: (..., 3) -> (..., 3) float64 local coordinates (axis first)."""
         return np.asarray(positions, dtype=np.float64) @ self.matrix.T
 
-    def local_axis(self) -> "ControlAxis":
+    def local_axis(self) -> ControlAxis:
         """This axis in its own local coordinates: axis x, the same ``lo``, ``L``
         (for an aligned axis, itself)."""
         if self.frame is None:

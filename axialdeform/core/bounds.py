@@ -24,8 +24,10 @@ from .record import (
 )
 from .transforms import rotation_matrices
 
-__all__ = ["wind_reach", "child_reach", "instance_bounds", "scene_box", "sphere_box", "box_corners", "outline_points", "base_radius", "instance_boxes",
-           "frustum_planes", "spheres_visible", "lod_choice"]
+__all__ = [
+    "wind_reach", "child_reach", "instance_bounds", "scene_box", "sphere_box", "box_corners", "outline_points",
+    "base_radius", "instance_boxes", "frustum_planes", "spheres_visible", "lod_choice",
+]
 
 
 def base_radius(mesh, *extra_positions) -> float:

@@ -354,7 +354,7 @@ def _fit_batch_extended(m: _Model, targets: np.ndarray, max_iterations: int) -> 
     lam = np.full(n, 1e-3)
     active = np.arange(n)
     eye = np.eye(17)
-    for r in range(1, max_iterations + 1):
+    for _ in range(max_iterations):
         if not active.size:
             break
         ra, za, pa, ea, wa = rot[active], z[active], pos[active], extra[active], w_all[active]
@@ -558,7 +558,7 @@ class _TreeModel:
         return out
 
 
-def _fit_batch_tree(m: "_TreeModel", targets: np.ndarray, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
+def _fit_batch_tree(m: _TreeModel, targets: np.ndarray, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
     """Fit n variants of a mesh of several axes by Gauss-Newton: start from
     the Kabsch rotation; each round solves, for every variant at once, the
     linear problem in the offsets, ``Rᵀp`` and a small turn ``ω`` of the
@@ -598,7 +598,7 @@ def _fit_batch_tree(m: "_TreeModel", targets: np.ndarray, max_iterations: int) -
     return m.params(x, rot), rounds
 
 
-def _fit_batch_tree_extended(m: "_TreeModel", targets: np.ndarray, max_iterations: int):
+def _fit_batch_tree_extended(m: _TreeModel, targets: np.ndarray, max_iterations: int):
     """The extended numbers too (scale, twist, taper about axis 0's axis line):
     Gauss-Newton on ``RᵀW = s·(TT(V; tw, tp) + Σ_chain F_jᵀ E(D_j)) + Rᵀp``
     in the offsets, ``Rᵀp``, a small turn, ``s``, ``tw`` and ``tp`` (the

@@ -51,7 +51,10 @@ from .material import Part
 from .mesh import area_weighted_normals, unique_edges
 from .scatter import face_areas, sample_faces
 
-__all__ = ["LodLevel", "build_lod_levels", "collapse_mapping", "spatial_chunks", "LOD_CHUNK_TRIANGLES", "LOD_REDUCTIONS", "MIN_LOD_TRIANGLES", "check_lod_error"]
+__all__ = [
+    "LodLevel", "build_lod_levels", "collapse_mapping", "spatial_chunks", "LOD_CHUNK_TRIANGLES", "LOD_REDUCTIONS",
+    "MIN_LOD_TRIANGLES", "check_lod_error",
+]
 
 #: fraction of the triangles removed for levels 1, 2, 3 (level 0 is the full mesh)
 LOD_REDUCTIONS = (0.5, 0.8, 0.93)
@@ -91,7 +94,7 @@ class LodLevel:
     vertex_axis: np.ndarray | None = None  # several axes: each vertex's axis (in_axis)
 
     @classmethod
-    def of(cls, mesh) -> "LodLevel":
+    def of(cls, mesh) -> LodLevel:
         """Level 0: the base mesh itself (its arrays, not copies)."""
         tree = getattr(mesh, "tree", None)
         return cls(mesh.positions, mesh.normals, mesh.faces, 0.0, mesh.uvs, mesh.colors, mesh.tangents,

@@ -107,7 +107,7 @@ class Look:
                 self.hidden_line, bool):
             raise ArgumentError(f"look.hidden_line: expected 'fill', True or False, found {self.hidden_line!r}")
 
-    def replace(self, **changes) -> "Look":
+    def replace(self, **changes) -> Look:
         """A copy with ``changes`` (:func:`dataclasses.replace`)."""
         return dataclasses.replace(self, **changes)
 

@@ -35,7 +35,10 @@ from PIL import Image
 
 from .errors import MeshError
 
-__all__ = ['Material', 'Part', 'AssetWarning', 'ALPHA_MODES', 'DEFAULT_MATERIAL', 'gather_parts', 'compute_tangents', 'srgb_to_linear', 'linear_to_srgb']
+__all__ = [
+    "Material", "Part", "AssetWarning", "ALPHA_MODES", "DEFAULT_MATERIAL", "gather_parts", "compute_tangents",
+    "srgb_to_linear", "linear_to_srgb",
+]
 
 ALPHA_MODES = ("OPAQUE", "MASK", "BLEND")
 

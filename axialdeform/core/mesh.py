@@ -83,7 +83,7 @@ class BaseMesh:
     tree: object = field(default=None, repr=False)
 
     @classmethod
-    def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> "BaseMesh":
+    def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> BaseMesh:
         """A mesh from arrays: ``vertices : (n, 3) float``, ``faces : (m, 3) int``
         and optional unit ``normals : (n, 3) float`` (else area-weighted ones)."""
 
@@ -144,7 +144,7 @@ class BaseMesh:
         else:
             object.__setattr__(self, "_axis", ControlAxis.from_positions(pos, name=self.name, frame=self.axis_frame))
 
-    def with_axis(self, axis="auto") -> "BaseMesh":
+    def with_axis(self, axis="auto") -> BaseMesh:
         """This mesh with another axis frame (``docs/method.md``, "A chosen axis
         frame"): ``"auto"``, ``"x"``, ``"y"``, ``"z"``, ``"oriented"`` or a 3×3
         matrix whose rows are ``e_a, e_u, e_v``.  Positions, faces and the
@@ -153,7 +153,7 @@ class BaseMesh:
             return self  # the frame it has
         return dataclasses.replace(self, axis_frame=axis, _axis=None, tree=None)
 
-    def with_axes(self, axes, axis="auto") -> "BaseMesh":
+    def with_axes(self, axes, axis="auto") -> BaseMesh:
         """This mesh with several axes in a hierarchy (``docs/method.md``,
         "Several axes"; :mod:`axialdeform.core.axes`):
 
@@ -454,7 +454,7 @@ def _unit_or_default(v: np.ndarray) -> np.ndarray:
     return out
 
 
-def _check_appearance(mesh: "BaseMesh", n: int, m: int) -> None:
+def _check_appearance(mesh: BaseMesh, n: int, m: int) -> None:
     """Validate and normalise uvs/colors/tangents/parts of a BaseMesh in place."""
 
     for key, width in (("uvs", 2), ("colors", 4), ("tangents", 4)):

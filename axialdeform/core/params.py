@@ -57,7 +57,11 @@ from .record import (  # the record's columns and slices: one home
     tree_widths,
 )
 
-__all__ = ['FIELDS', 'EXTENDED_FIELDS', 'OFFSETS', 'EXTRA', 'SCALE', 'TWIST', 'TAPER', 'is_extended', 'is_tinted', 'extend_params', 'tint_params', 'TINT', 'POSITION', 'ANGLES', 'as_params', 'make_params', 'range_warning', 'SAFE_DISTANCE_L', 'check_drawable', 'DRAWABLE_MAGNITUDE']
+__all__ = [
+    "FIELDS", "EXTENDED_FIELDS", "OFFSETS", "EXTRA", "SCALE", "TWIST", "TAPER", "is_extended", "is_tinted",
+    "extend_params", "tint_params", "TINT", "POSITION", "ANGLES", "as_params", "make_params", "range_warning",
+    "SAFE_DISTANCE_L", "check_drawable", "DRAWABLE_MAGNITUDE",
+]
 
 
 def as_params(values, *, name: str = "parameters", error: type = ParamError, rows=None, widths=WIDTHS,

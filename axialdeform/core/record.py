@@ -32,12 +32,12 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
-    "Field", "ShaderInput", "RECORD", "SHADER_INPUTS", "GLTF_ATTRIBUTES", "FIELDS", "EXTENDED_FIELDS",
-    "WIDTH", "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "width_of",
-    "describe_widths", "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST", "TAPER",
-    "IDENTITY_EXTRA", "Instances", "gl_layout", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES", "describe_record",
-    "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape", "record_fields",
-    "is_record_width", "MAX_RECORD_AXES",
+    "Field", "ShaderInput", "RECORD", "SHADER_INPUTS", "GLTF_ATTRIBUTES", "FIELDS", "EXTENDED_FIELDS", "WIDTH",
+    "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "width_of", "describe_widths",
+    "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST",
+    "TAPER", "IDENTITY_EXTRA", "Instances", "gl_layout", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES",
+    "describe_record", "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape",
+    "record_fields", "is_record_width", "MAX_RECORD_AXES",
 ]
 
 
@@ -283,7 +283,7 @@ class Instances(np.ndarray):
     """
 
     @classmethod
-    def zeros(cls, count: int, *, extended: bool = False, tinted: bool = False) -> "Instances":
+    def zeros(cls, count: int, *, extended: bool = False, tinted: bool = False) -> Instances:
         """``count`` instances of zeros: ``(count, 16)`` float32 (``(count, 19)``
         extended, with ``s = 1``: the undeformed shape; ``(count, 22)`` tinted,
         with the tint 1 1 1), to fill through the views."""
@@ -296,7 +296,7 @@ class Instances(np.ndarray):
         return out
 
     @classmethod
-    def of(cls, values) -> "Instances":
+    def of(cls, values) -> Instances:
         """``values`` ((n, 16|19) float32) as :class:`Instances`, without a copy."""
         return np.asarray(values).view(cls)
 

@@ -69,8 +69,10 @@ from .record import (
 )
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 
-__all__ = ["scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights", "ANCHORS", "IMAGE_SUFFIXES",
-           "poisson_greedy"]
+__all__ = [
+    "scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights",
+    "ANCHORS", "IMAGE_SUFFIXES", "poisson_greedy",
+]
 
 ANCHORS = ("bottom", "center", "origin")
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm", ".gif", ".webp")
@@ -303,7 +305,7 @@ def _grid(heights, what: str) -> np.ndarray:
 
 
 def surface_from_heights(heights, *, up: str = "y", height_scale: float = 1.0, extent=None,
-                         name: str = "<height map>") -> "Surface":
+                         name: str = "<height map>") -> Surface:
     """A terrain mesh from a height map.
 
     heights : (rows, cols) float in [0, 1] -- pixel (row, col) is the vertex at
@@ -361,7 +363,7 @@ def _trimesh_normals(triangles: np.ndarray) -> np.ndarray:
     return out
 
 
-def _make_surface(vertices, faces, u: int, name: str, grid=None) -> "Surface":
+def _make_surface(vertices, faces, u: int, name: str, grid=None) -> Surface:
     """A Surface of (n, 3) vertices and (f, 3) faces (not copied when already float64 / an integer type)."""
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces)

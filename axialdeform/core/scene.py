@@ -151,7 +151,7 @@ class Scene:
 
     @classmethod
     def single(cls, mesh, params, *, up: str = "y", wind=None, color=None, parts=None,
-               name: str | None = None) -> "Scene":
+               name: str | None = None) -> Scene:
         """A scene of one layer: ``params`` ((n, 16|19) float32) instances of ``mesh``.
 
         Parameters
@@ -179,7 +179,7 @@ class Scene:
         return cls(path=None, up=up, layers=[layer], wind=wind)
 
     @classmethod
-    def load(cls, path: str | os.PathLike, *, scale_counts: float = 1.0) -> "Scene":
+    def load(cls, path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:
         """A scene file (TOML, see :mod:`axialdeform.core.scene`); errors are
         :class:`SceneError` naming the file, the line and the key.
         ``scale_counts`` multiplies every scatter recipe's ``count`` (0.1: a quick preview)."""

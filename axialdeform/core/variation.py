@@ -100,7 +100,7 @@ def _spec(
     taper=None,
     tint=None,
     tint_color=(1.0, 1.0, 1.0),
-) -> "_Spec":
+) -> _Spec:
     """The checked options of :func:`random_params`."""
     if not isinstance(count, (int, np.integer)) or count < 0:
         raise ParamError(f"count: expected a non-negative integer, found {count!r}")
@@ -226,7 +226,7 @@ def _stream(seed: int, skip: int, n: int) -> np.ndarray:
     return (np.asarray(raw, dtype=np.uint64) >> np.uint64(11)).astype(np.float64) * 2.0**-53
 
 
-def _rows(spec: "_Spec", start: int, stop: int) -> np.ndarray:
+def _rows(spec: _Spec, start: int, stop: int) -> np.ndarray:
     """Instances ``start .. stop - 1`` of the ``spec.count`` a spec describes: (m, 16|19|22) float32."""
     n, m = spec.count, stop - start
     spacing, up_i, placement = spec.spacing, spec.up, spec.placement

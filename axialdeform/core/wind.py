@@ -93,7 +93,7 @@ class Wind:
         return np.array([(self.frequency * time) % 1.0, (SECOND_HARMONIC * self.frequency * time) % 1.0])
 
     @classmethod
-    def parse(cls, text: str, direction=(1.0, 0.0, 0.0), name: str = "--wind") -> "Wind":
+    def parse(cls, text: str, direction=(1.0, 0.0, 0.0), name: str = "--wind") -> Wind:
         """``STRENGTH[,GUSTINESS[,FREQUENCY[,WAVELENGTH]]]`` (the CLI's ``--wind``)."""
         parts = [p for p in str(text).split(",")]
         keys = ("strength", "gustiness", "frequency", "wavelength")

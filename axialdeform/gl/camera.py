@@ -37,7 +37,7 @@ class Camera:
         """(4, 4) float32 projection matrix (pyrr layout)."""
         return pyrr.matrix44.create_perspective_projection(self.fovy, aspect, self.near, self.far, dtype=np.float32)
 
-    def enclosing_square(self, center, normal, half_side: float, aspect: float) -> "Camera":
+    def enclosing_square(self, center, normal, half_side: float, aspect: float) -> Camera:
         """This camera with its near and far planes widened (never narrowed)
         so that the part of a square it sees lies between them.
 
@@ -260,7 +260,7 @@ class OrbitCamera:
 
     @classmethod
     def framing(cls, mesh, params, aspect: float, *, up: str = "y", fovy: float = 35.0, azimuth: float = 35.0,
-                elevation: float = 35.0, margin: float = 0.03) -> "OrbitCamera":
+                elevation: float = 35.0, margin: float = 0.03) -> OrbitCamera:
         """The orbit that starts where :func:`frame_instances` puts the camera."""
         cam = frame_instances(mesh, params, aspect, up, fovy, azimuth, elevation, margin)
         lo, hi = scene_box(mesh, params)

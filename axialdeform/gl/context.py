@@ -35,7 +35,8 @@ def create_context(backend: str = "egl"):
     try:
         ctx = moderngl.create_standalone_context(backend=backend, require=GL_REQUIRE)
     except Exception as exc:
-        raise ContextError(f"no OpenGL {GL_REQUIRE // 100}.{GL_REQUIRE % 100 // 10} context via {backend.upper()} ({exc}); {_HELP}") from None
+        version = f"{GL_REQUIRE // 100}.{GL_REQUIRE % 100 // 10}"
+        raise ContextError(f"no OpenGL {version} context via {backend.upper()} ({exc}); {_HELP}") from None
     if ctx.version_code < GL_REQUIRE:
         version = ctx.version_code
         ctx.release()
@@ -91,7 +92,7 @@ def flush_interval(ctx) -> int | None:
     else:
         value = SOFTWARE_FLUSH_PRIMITIVES if is_software(ctx) else None
     try:
-        setattr(ctx, "_axialdeform_flush", value)
+        ctx._axialdeform_flush = value
     except AttributeError:  # pragma: no cover - a context that takes no attributes: ask every time
         pass
     return value

@@ -84,7 +84,7 @@ def _shared_query(ctx):
     query = getattr(ctx, "_axialdeform_primitives_query", None)
     if query is None:
         query = ctx.query(primitives=True)
-        setattr(ctx, "_axialdeform_primitives_query", query)
+        ctx._axialdeform_primitives_query = query
     return query
 
 
@@ -97,7 +97,7 @@ class IndirectDraws:
     ``first``; :meth:`counts` reads the kept instances per level back (the
     one call that waits for the GPU)."""
 
-    def __init__(self, cull: "CullPass", levels: int):
+    def __init__(self, cull: CullPass, levels: int):
         self.cull = cull
         self.levels = levels
 

@@ -67,7 +67,7 @@ class GroundPlane:
         """(3,) unit world up."""
         return np.eye(3)[AXIS_NAMES.index(self.up)]
 
-    def fit(self, mesh, params, *, margin: float = 1.6, sink: float = 0.35) -> "GroundPlane":
+    def fit(self, mesh, params, *, margin: float = 1.6, sink: float = 0.35) -> GroundPlane:
         """Place the plane under the instances.
 
         The square is centred under the instances' bounding spheres and
@@ -77,7 +77,7 @@ class GroundPlane:
         """
         return self.fit_layers([(mesh, params)], margin=margin, sink=sink)
 
-    def fit_layers(self, layers, *, margin: float = 1.6, sink: float = 0.35) -> "GroundPlane":
+    def fit_layers(self, layers, *, margin: float = 1.6, sink: float = 0.35) -> GroundPlane:
         """:meth:`fit` under several ``[(mesh, params), ...]`` (a scene's layers)."""
         bounds = [instance_bounds(mesh, params) for mesh, params in layers]
         bounds = [(c, np.broadcast_to(r, (len(c),))) for c, r in bounds if len(c)]

@@ -159,7 +159,8 @@ def build_program(ctx, vertex: str, fragment: str | None = None, *, defines: dic
     try:
         return ctx.program(**{k: v.source for k, v in stages.items()}, varyings=list(varyings))
     except moderngl.Error as exc:
-        raise ShaderError(f"GLSL {' + '.join(x for x in (vertex, geometry, fragment) if x)} failed: {_translate_log(str(exc), stages)}") from None
+        names = " + ".join(x for x in (vertex, geometry, fragment) if x)
+        raise ShaderError(f"GLSL {names} failed: {_translate_log(str(exc), stages)}") from None
 
 
 #: the version compute shaders are written for (``glsl/*.comp``; GL >= 4.3 only)

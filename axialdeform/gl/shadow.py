@@ -60,12 +60,12 @@ class ShadowMap:
             self.texture.release()
             raise
 
-    def fit(self, mesh, params, light_dir=LIGHT_DIR, *, extra=None) -> "ShadowMap":
+    def fit(self, mesh, params, light_dir=LIGHT_DIR, *, extra=None) -> ShadowMap:
         """Aim the light camera at every instance (their bounding spheres);
         ``extra``: (k, 4) more spheres ``x, y, z, r`` to keep inside (a ground).  Returns self."""
         return self.fit_layers([(mesh, params)], light_dir, extra=extra)
 
-    def fit_layers(self, layers, light_dir=LIGHT_DIR, *, extra=None) -> "ShadowMap":
+    def fit_layers(self, layers, light_dir=LIGHT_DIR, *, extra=None) -> ShadowMap:
         """:meth:`fit` over several ``[(mesh, params), ...]`` (a scene's layers)."""
 
         spheres = [np.zeros((0, 4))]

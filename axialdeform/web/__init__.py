@@ -51,9 +51,11 @@ from ..gl.material import ALPHA_MODE_INDEX
 from ..gl.renderer import _MODE_INDEX, DEFAULT_COLORS, MODES, _unit
 from ..gl.shaders import GLSL_VERSION, assemble
 
-__all__ = ["THREE_VERSION", "WebScene", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es", "write_folder", "single_file_html",
-           "make_server", "scene_bytes", "embedded_file",
-           "write_single_file", "write_page", "vendor_file", "page_source", "module_source"]
+__all__ = [
+    "THREE_VERSION", "WebScene", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es",
+    "write_folder", "single_file_html", "make_server", "scene_bytes", "embedded_file", "write_single_file",
+    "write_page", "vendor_file", "page_source", "module_source",
+]
 
 #: the files of the vendored three.js, relative to ``web/vendor/``
 VENDOR_FILES = {

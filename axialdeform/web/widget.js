@@ -1,6 +1,7 @@
 // widget.js -- the anywidget front end of axialdeform.widget.SceneWidget: the
 // same page code (app.js) as the exported page, loaded from the model's
 // _sources by loadModules (loader.js, prepended to this text by Python).
+/* global loadModules */ // from loader.js, prepended by Python
 const bytesOf = (v) => (v instanceof DataView ? v.buffer.slice(v.byteOffset, v.byteOffset + v.byteLength)
   : v instanceof ArrayBuffer ? v : new Uint8Array(v).buffer);
 

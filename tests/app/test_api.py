@@ -53,7 +53,7 @@ def test_old_top_level_names_warn_and_name_their_new_home():
         home, _, attr = new.rpartition(".")
         assert value is getattr(importlib.import_module(home), attr)
     with pytest.raises(AttributeError, match="no attribute 'no_such_name'"):
-        ad.no_such_name
+        _ = ad.no_such_name
 
 
 def test_importing_the_package_stays_light():

@@ -8,12 +8,13 @@ import textwrap
 
 import numpy as np
 import pytest
-from conftest import validate_gltf
 
 import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core.io.gltf import export_scene, read_instanced_glb
 from axialdeform.core.scene import load_scene
+
+from conftest import validate_gltf
 
 
 def _cli(capsys, *args):

@@ -16,7 +16,6 @@ from pathlib import Path
 import pytest
 
 import axialdeform as ad
-
 from axialdeform.bench import report, stats
 from axialdeform.cli import main
 

@@ -16,6 +16,7 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core.io.gltf import BEND_EXTENSION, INSTANCING
+
 from conftest import validate_gltf
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -9,7 +9,8 @@ from PIL import Image
 
 import axialdeform as ad
 from axialdeform.cli import build_parser, main
-from conftest import shared_mesh
+
+from conftest import data_mesh
 
 
 def run(*args, cwd=None):
@@ -67,7 +68,7 @@ def test_off_origin_ply_with_normals_along_each_axis(tmp_path):
     """The 'done when' check: meshes not in the repository, axes x, y, z, off the origin."""
     import trimesh
 
-    base = ad.load_mesh(shared_mesh("base/rock_caustics.obj"))
+    base = ad.load_mesh(data_mesh("base/rock_caustics.obj"))
     for k, perm in enumerate(([0, 1, 2], [1, 0, 2], [1, 2, 0])):
         tm = base.to_trimesh(base.positions[:, perm] + [100.0, -50.0, 25.0], base.normals[:, perm])
         mesh_path = tmp_path / f"rock_{k}.ply"

@@ -19,9 +19,11 @@ import pytest
 import trimesh
 
 import axialdeform as ad
-from axialdeform.core.io import gltf as export
 from axialdeform.cli import main
+from axialdeform.core.io import gltf as export
 from axialdeform.core.params import ANGLES
+
+from conftest import data_mesh
 
 VALIDATOR = Path(__file__).resolve().parents[1] / "gltf-validator"
 INSTALL = "npm ci --prefix tests/gltf-validator"
@@ -83,9 +85,7 @@ def test_validator_reports_zero_errors(scenes, validate):
 
 def test_validator_catches_errors(validate):
     """The harness really fails bad files (Khronos' own invalid samples)."""
-    bad = Path(__file__).resolve().parents[3] / "shared" / "data" / "meshes" / "gltf" / "validator"
-    assert bad.exists(), f"test data {bad} is missing"
-    (report,) = validate(bad / "index_buffer_oob.gltf")
+    (report,) = validate(data_mesh("gltf/validator/index_buffer_oob.gltf"))
     assert report["issues"]["numErrors"] > 0
 
 

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
+from axialdeform.cli import main
 from axialdeform.core import fit
 from axialdeform.core.io.bake import write_mesh_folder
-from axialdeform.cli import main
 from axialdeform.core.params import ANGLES, OFFSETS, POSITION
 
-from conftest import make_mesh, shared_mesh
+from conftest import data_mesh, make_mesh
 
 ROOT_DIR = Path(__file__).resolve().parents[2]
 TOL = 1e-5  # of L: geometry, and absolute for rotation matrices
@@ -31,9 +31,9 @@ MESHES = {
     "stone-x": lambda: ad.load_mesh("stone"),
     "leaf-y": lambda: ad.load_mesh("leaf"),
     "stone-z": _stone_z,
-    "rock-x": lambda: ad.load_mesh(shared_mesh("base/rock_caustics.obj")),
+    "rock-x": lambda: ad.load_mesh(data_mesh("base/rock_caustics.obj")),
     # a perfectly flat blade: tilting its axis and bending it linearly look alike
-    "flat-blade-y": lambda: ad.load_mesh(shared_mesh("base/grass_blade_flora.obj")),
+    "flat-blade-y": lambda: ad.load_mesh(data_mesh("base/grass_blade_flora.obj")),
 }
 EXPECTED_AXIS = {"stone-x": 0, "leaf-y": 1, "stone-z": 2, "rock-x": 0, "flat-blade-y": 1}
 
@@ -320,8 +320,8 @@ def test_cli_fit_memory_is_bounded_by_the_input(tmp_path):
     bound, 3x the input + 500 MB (docs/reliability.md).  Before, the (3v, 11)
     and (3v, 14) least-squares matrices were built whole: 903 MB."""
     import os
-    import trimesh
 
+    import trimesh
     from test_streaming import _peak_rss_mb  # the child-process measurement (os.wait4, fixed mmap threshold)
 
     sys.path.insert(0, str(ROOT_DIR / "tools"))

@@ -23,11 +23,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import axialdeform as ad
-from axialdeform.core.io import params as P
 from axialdeform.core.deform import deform
 from axialdeform.core.errors import AxialDeformError, MeshError, ParamError, ParamFileError, ShaderError
+from axialdeform.core.io import params as P
 
-from conftest import SHARED, make_mesh
+from conftest import DATA, make_mesh
 
 FUZZ = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow], database=None)
 RNG = np.random.default_rng(2003)
@@ -288,10 +288,10 @@ def test_read_param_file_refuses_non_files(tmp_path):
 # --------------------------------------------------------------------- meshes
 
 
-def _shared_files():
+def _data_files():
     out = []
     for sub in ("edge_cases", "gltf", "gltf/validator"):
-        for p in sorted((SHARED / sub).iterdir()):
+        for p in sorted((DATA / sub).iterdir()):
             if p.is_file() and p.suffix.lower() not in (".bin", ".txt", ".md"):
                 out.append(p)
     return out
@@ -311,10 +311,10 @@ def _loads_and_deforms_or_mesh_error(path) -> str:
     return "loaded"
 
 
-def test_every_shared_edge_case_mesh_loads_or_raises_mesh_error():
-    files = _shared_files()
-    assert len(files) >= 50, "shared edge-case meshes are missing"
-    outcomes = {p.relative_to(SHARED).as_posix(): _loads_and_deforms_or_mesh_error(p) for p in files}
+def test_every_edge_case_mesh_loads_or_raises_mesh_error():
+    files = _data_files()
+    assert len(files) >= 50, f"the edge-case meshes in {DATA} are missing ({len(files)} found)"
+    outcomes = {p.relative_to(DATA).as_posix(): _loads_and_deforms_or_mesh_error(p) for p in files}
     # some expectations from SOURCES.txt: empty, corrupt -> errors; boxes and several meshes load
     assert outcomes["gltf/simple_pole.glb"] == "loaded"  # 11 meshes: one base mesh with 11 parts
     assert outcomes["gltf/validator/empty_file.glb"] == "error"

@@ -25,9 +25,9 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.cli import main
+from axialdeform.core.errors import ArgumentError, AxialDeformError, ContextError, ParamFileError, PathError
 from axialdeform.core.io import params as P
 from axialdeform.gl.buffers import InstanceBuffer
-from axialdeform.core.errors import ArgumentError, AxialDeformError, ContextError, ParamFileError, PathError
 
 ROOT = Path(__file__).resolve().parents[2]
 ROW = " ".join(["0.01"] * 10 + ["0", "0", "0", "0", "0", "0"]) + "\n"
@@ -512,8 +512,9 @@ def test_every_call_after_release_is_an_axialdeform_error(stone):
 # ----------------------------------------------------------- 8. the fuzzer
 
 sys.path.insert(0, str(ROOT / "tools"))
-import fuzz_params  # noqa: E402
 from hypothesis import HealthCheck, given, settings  # noqa: E402
+
+import fuzz_params  # noqa: E402
 
 
 @pytest.mark.slow
@@ -662,8 +663,8 @@ def test_library_warnings_are_one_line_on_the_cli(tmp_path, capsys):
     # before: "…/renderer.py:180: UserWarning: …" and the source line: two stray lines
     assert main(["view", str(tet), "-n", "5", "--headless", "--frames", "1", "--size", "32x24", "--lod"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"axialdeform view: warning: {tet}: 4 triangles are too few to simplify (LOD needs a part of at least 48; the largest has 4); "
-                   "drawing one level"], err
+    assert err == [f"axialdeform view: warning: {tet}: 4 triangles are too few to simplify "
+                   "(LOD needs a part of at least 48; the largest has 4); drawing one level"], err
 
 
 def test_framing_a_big_mesh_in_bounded_memory():

@@ -1,9 +1,9 @@
 """Scatter on surfaces (issue 13 item 2).
 
 The terrain is a mesh we did not make: ``base/rock_caustics.obj`` from the
-shared data (the rock of three.js's caustics example, BSD-3-Clause), a flat
+test data (the rock of three.js's caustics example, BSD-3-Clause), a flat
 rock about 19 x 14 x 7 units lying with +z up; its upper faces are the
-"terrain".  There is no terrain mesh in the shared data; this is the most
+"terrain".  There is no terrain mesh in the test data; this is the most
 terrain-like real surface there (a broad, gently curved top).
 """
 
@@ -19,14 +19,15 @@ from scipy.spatial import cKDTree
 import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core.scatter import load_surface, poisson_greedy, surface_from_heights
-from conftest import shared_mesh
+
+from conftest import data_mesh
 
 ROCK = "base/rock_caustics.obj"
 
 
 @pytest.fixture(scope="module")
 def terrain():
-    path = shared_mesh(ROCK)
+    path = data_mesh(ROCK)
     tm = trimesh.load(path, force="mesh", process=False)
     return path, tm, float(np.linalg.norm(tm.extents))
 
@@ -171,8 +172,8 @@ def test_bad_input_one_line_exit_2(terrain, tmp_path, capsys):
     Image.new("L", (1, 1), 128).save(tmp_path / "one.png")
     Image.new("L", (8, 8), 0).save(tmp_path / "black.png")
     cases = [
-        ([shared_mesh("edge_cases/empty.obj"), "stone"], "empty.obj"),
-        ([shared_mesh("edge_cases/plane.ply"), "stone"], "faces up"),  # the plane faces +z only
+        ([data_mesh("edge_cases/empty.obj"), "stone"], "empty.obj"),
+        ([data_mesh("edge_cases/plane.ply"), "stone"], "faces up"),  # the plane faces +z only
         ([tmp_path / "one.png", "stone"], "1x1"),
         ([path, "stone", "--up", "z", "--density", tmp_path / "black.png"], "black"),
         ([path, "stone", "--up", "z", "--scale", "0:1"], "0 < MIN <= MAX"),

@@ -8,11 +8,11 @@ import textwrap
 import numpy as np
 import pytest
 from PIL import Image
+from test_export import _assert_valid, validate  # noqa: F401  (the validator fixture)
 
 import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core.scene import load_scene
-from test_export import _assert_valid, validate  # noqa: F401  (the validator fixture)
 
 LANDSCAPE = __import__("pathlib").Path(__file__).resolve().parents[2] / "examples" / "landscape" / "landscape.toml"
 

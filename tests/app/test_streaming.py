@@ -25,8 +25,8 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.cli import main
-from axialdeform.core.io import params as P
 from axialdeform.core.errors import MeshError, ParamError
+from axialdeform.core.io import params as P
 from axialdeform.core.variation import iter_random_params
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -7,15 +7,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import shared_mesh
 from PIL import Image
 from test_streaming import _peak_rss_mb
 
 import axialdeform as ad
 
+from conftest import data_mesh
+
 
 def test_textures_false_keeps_the_mesh_and_decodes_nothing():
-    path = shared_mesh("assets/AlphaBlendModeTest.glb")
+    path = data_mesh("assets/AlphaBlendModeTest.glb")
     full = ad.load_mesh(path)
     bare = ad.load_mesh(path, textures=False)
     assert any(p.material.texture is not None for p in full.parts)

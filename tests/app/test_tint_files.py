@@ -8,11 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pygltflib
 import pytest
-from conftest import shared_mesh, validate_gltf
 
 import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core.io.gltf import read_instanced_glb
+
+from conftest import data_mesh, validate_gltf
 
 
 def _cli(capsys, *args):
@@ -41,7 +42,7 @@ def test_random_tint_info_render(tmp_path, capsys):
 
 @pytest.mark.parametrize("rel", [None, "assets/AlphaBlendModeTest.glb"])
 def test_both_gltf_layouts_carry_the_tint(tmp_path, rel):
-    mesh = ad.load_mesh("stone" if rel is None else shared_mesh(rel))
+    mesh = ad.load_mesh("stone" if rel is None else data_mesh(rel))
     params = ad.random_params(mesh, 6, seed=2, tint=0.7, tint_color=(0.8, 0.9, 1.0))
     inst, baked = tmp_path / "i.glb", tmp_path / "b.glb"
     ad.core.export_instanced(inst, mesh, params)

@@ -46,7 +46,7 @@ def test_the_bundled_tree_and_its_hierarchy(tree):
         a, parent = tree.tree.axes[k], tree.tree.axes[tree.tree.parents[k]]
         root, tip = a.control_points[0], a.control_points[-1]
         p0, p1 = parent.control_points[0], parent.control_points[-1]
-        def dist(x):
+        def dist(x, p0=p0, p1=p1):
             t = np.clip((x - p0) @ (p1 - p0) / ((p1 - p0) @ (p1 - p0)), 0, 1)
             return np.linalg.norm(x - (p0 + t * (p1 - p0)))
         assert dist(root) < dist(tip)

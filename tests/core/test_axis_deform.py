@@ -7,6 +7,7 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core.deform import bernstein, deform, deform_local, rotation_matrices
+
 from conftest import make_mesh
 
 BOX_FACES = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],

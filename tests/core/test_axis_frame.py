@@ -173,8 +173,9 @@ def test_files_record_the_frame_and_refuse_another(rod, tmp_path):
 
 
 def test_a_corrupt_frame_record_is_a_param_file_error():
-    from axialdeform.core import ParamFileError
     import zlib
+
+    from axialdeform.core import ParamFileError
 
     data = bytearray(encode_binary(np.zeros((1, 16), np.float32), axis=ControlAxis(0, 0.0, 1.0)))
     data[80] = 7  # a digest on an aligned axis
@@ -216,7 +217,7 @@ def test_fit_recovers_the_shapes_of_a_framed_mesh(rod, extended):
 def test_oriented_on_an_axis_aligned_model_is_its_aligned_axis():
     """The Khronos alpha test lies along x: its minimum-volume box is the
     aligned one, so 'oriented' is the index path."""
-    from conftest import shared_mesh
+    from conftest import data_mesh
 
-    mesh = ad.load_mesh(shared_mesh("assets/AlphaBlendModeTest.glb"), axis="oriented", textures=False)
+    mesh = ad.load_mesh(data_mesh("assets/AlphaBlendModeTest.glb"), axis="oriented", textures=False)
     assert not mesh.axis.framed and mesh.axis.index == 0

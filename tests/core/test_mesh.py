@@ -5,7 +5,8 @@ import pytest
 import trimesh
 
 import axialdeform as ad
-from conftest import make_mesh, shared_mesh
+
+from conftest import data_mesh, make_mesh
 
 
 def test_bundled_meshes():
@@ -19,7 +20,7 @@ def test_bundled_meshes():
 
 
 def test_vertex_count_and_order_are_kept():
-    path = shared_mesh("base/rock_caustics.obj")
+    path = data_mesh("base/rock_caustics.obj")
     raw = [list(map(float, line.split()[1:4])) for line in path.read_text().splitlines() if line.startswith("v ")]
     mesh = ad.load_mesh(path)
     # OBJ with per-corner normals may split vertices; trimesh keeps the first occurrences in order
@@ -60,7 +61,7 @@ def test_area_weighted_normals():
     ("gltf/validator/empty_file.glb", "not a binary glTF file: 0 bytes, shorter than the 20-byte header"),
 ])
 def test_bad_meshes_are_refused_with_the_file_named(rel, message):
-    path = shared_mesh(rel)
+    path = data_mesh(rel)
     with pytest.raises(ad.core.MeshError, match=message) as err:
         ad.load_mesh(path)
     assert str(path) in str(err.value)
@@ -83,7 +84,7 @@ def test_nan_and_zero_extent_and_missing(tmp_path):
 @pytest.mark.parametrize("rel", ["gltf/monkey.glb", "edge_cases/whitespace.off", "classic/teapot_trimesh.stl",
                                  "edge_cases/plane.ply", "edge_cases/polygonfaces.obj", "edge_cases/wallhole.obj"])
 def test_real_meshes_load(rel):
-    mesh = ad.load_mesh(shared_mesh(rel))
+    mesh = ad.load_mesh(data_mesh(rel))
     assert np.isfinite(mesh.normals).all() and mesh.axis.length > 0
     assert len(mesh.fingerprint) == 32
 
@@ -94,7 +95,7 @@ def test_real_meshes_load(rel):
                                  "edge_cases/not_convex.obj", "edge_cases/plane.ply", "gltf/cubevc.glb",
                                  "gltf/monkey.glb", "classic/bunny_trimesh.ply"])
 def test_is_volume_agrees_with_trimesh(rel):
-    mesh = ad.load_mesh(shared_mesh(rel))
+    mesh = ad.load_mesh(data_mesh(rel))
     tm = trimesh.Trimesh(mesh.positions, mesh.faces, process=False)
     tm.merge_vertices(merge_tex=True, merge_norm=True)  # merge by position only, as is_volume does
     assert mesh.is_volume == bool(tm.is_volume)

@@ -15,7 +15,8 @@ import trimesh
 import axialdeform as ad
 from axialdeform.core.material import _geometry_nodes
 
-SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "meshes"
+from conftest import DATA
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
 import fuzz_params  # noqa: E402 - tools/ is not a package
 
@@ -54,7 +55,7 @@ def test_a_cycle_in_the_node_graph_is_our_error(tmp_path):
 def test_world_transforms_are_trimeshs():
     """One walk gives what ``graph[node]`` gives, node by node, on the shared scenes."""
     checked = 0
-    for path in sorted(SHARED.rglob("*.gl*")):
+    for path in sorted(DATA.rglob("*.gl*")):
         try:
             scene = trimesh.load(str(path))
         except Exception:  # noqa: BLE001 - files trimesh cannot read are not this test's
@@ -66,7 +67,7 @@ def test_world_transforms_are_trimeshs():
             matrix, geometry = scene.graph[node]
             assert mine[node][1] == geometry and np.allclose(mine[node][0], matrix), (path, node)
         checked += 1
-    assert checked >= 10, checked
+    assert checked >= 10, f"only {checked} glTF scenes read under {DATA}"
 
 
 def test_part_names_and_fingerprint_are_the_same_on_every_load(tmp_path):
@@ -118,7 +119,7 @@ def test_trimesh_failures_are_said_in_words():
     import warnings
 
     failures = 0
-    for path in sorted((SHARED / "gltf" / "validator").rglob("*.gl*")):
+    for path in sorted((DATA / "gltf" / "validator").rglob("*.gl*")):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
@@ -126,4 +127,4 @@ def test_trimesh_failures_are_said_in_words():
             except ad.core.MeshError as exc:
                 failures += 1
                 assert not re.search(r"\b[A-Z]\w*(Error|Exception)\b|Traceback", str(exc)), str(exc)
-    assert failures >= 5, failures
+    assert failures >= 5, f"only {failures} of the validator's invalid files under {DATA} refused"

@@ -40,7 +40,7 @@ def test_the_field_comes_from_the_table(tinted):
     assert np.shares_memory(tinted.tint, tinted) and tinted.tint.shape == (40, 3)
     assert "tint" in dir(tinted) and "tint" not in dir(ad.random_params(ad.load_mesh("stone"), 2, scale=1.0))
     with pytest.raises(AttributeError, match=r"only tinted \(n, 22\) instances"):
-        R.Instances.of(extend_params(tinted)).tint
+        _ = R.Instances.of(extend_params(tinted)).tint
     z = R.Instances.zeros(3, tinted=True)
     assert z.shape == (3, 22) and np.all(z.tint == 1.0) and np.all(z.scale == 1.0)
 

@@ -11,7 +11,7 @@ import pytest
 import axialdeform as ad
 from axialdeform.core.fit import fit_files, fit_params
 
-from conftest import shared_mesh
+from conftest import data_mesh
 
 # a quad strip along x with a UV seam in the middle: vertices 2 and 3 have two
 # texture coordinates each, so trimesh splits them (6 `v` lines load as 8 vertices)
@@ -53,14 +53,14 @@ def test_seam_split_obj_keeps_its_file_index(tmp_path):
 
 
 def test_real_obj_with_seams_maps_every_vertex():
-    path = shared_mesh("base/rock_caustics.obj")
+    path = data_mesh("base/rock_caustics.obj")
     mesh = ad.load_mesh(path)
     file_v = _v_lines(path)
     assert mesh.vertex_count != len(file_v)  # trimesh split it
     assert mesh.source_count == len(file_v)
     assert (mesh.source_index >= 0).all()
     assert np.abs(file_v[mesh.source_index] - mesh.positions).max() < 1e-5 * mesh.axis.length
-    tet = ad.load_mesh(shared_mesh("edge_cases/textured_tetrahedron.obj"))
+    tet = ad.load_mesh(data_mesh("edge_cases/textured_tetrahedron.obj"))
     assert (tet.vertex_count, tet.source_count) == (6, 4)
 
 
@@ -70,7 +70,7 @@ def test_identity_where_nothing_was_split(stone):
 
 
 def test_fit_takes_variants_in_file_order_and_loaded_order(tmp_path):
-    mesh = ad.load_mesh(shared_mesh("base/rock_caustics.obj"))
+    mesh = ad.load_mesh(data_mesh("base/rock_caustics.obj"))
     params = ad.random_params(mesh, 3, seed=6, bend=0.15)
     world, _ = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
     # the file's own order: scatter back through source_index (split copies agree)

@@ -18,8 +18,9 @@ from axialdeform.core.deform import deform_tangents
 from axialdeform.core.errors import ContextError, MeshError
 from axialdeform.core.material import AssetWarning, compute_tangents
 
-from conftest import ALPHA_TEST, shared_mesh
+from conftest import ALPHA_TEST, data_mesh
 from conftest import validate_gltf as _validate
+
 
 def _textured_card(folder: Path, *, mtl="card.mtl", texture="tex.png", cut=True) -> Path:
     """A 1 x 2 card with UVs and an .mtl/.png: the texture's left half is red, the right
@@ -45,7 +46,7 @@ def _textured_card(folder: Path, *, mtl="card.mtl", texture="tex.png", cut=True)
 
 
 def test_alpha_blend_mode_test_loads_nine_parts_one_axis():
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     assert len(mesh.parts) == 9
     assert sum(p.count for p in mesh.parts) == len(mesh.faces)
     modes = {p.name: (p.material.alpha_mode, p.material.alpha_cutoff) for p in mesh.parts}
@@ -64,7 +65,7 @@ def test_alpha_blend_mode_test_loads_nine_parts_one_axis():
 
 
 def test_obj_objects_become_parts_in_the_file_vertex_order():
-    path = shared_mesh("edge_cases/two_objects.obj")
+    path = data_mesh("edge_cases/two_objects.obj")
     mesh = ad.load_mesh(path)
     assert [p.name for p in mesh.parts] == ["cube", "tetra"]
     merged = trimesh.load(path, process=False)  # what the file held before parts existed
@@ -74,18 +75,18 @@ def test_obj_objects_become_parts_in_the_file_vertex_order():
 
 def test_several_meshes_in_one_file_are_parts():
     for rel, parts in (("edge_cases/multibody.stl", 2), ("gltf/simple_pole.glb", 11)):
-        mesh = ad.load_mesh(shared_mesh(rel))
+        mesh = ad.load_mesh(data_mesh(rel))
         assert len(mesh.parts) == parts, rel
 
 
 def test_vertex_colours_and_textures():
-    vc = ad.load_mesh(shared_mesh("gltf/cubevc.glb"))
+    vc = ad.load_mesh(data_mesh("gltf/cubevc.glb"))
     assert vc.colors.shape == (vc.vertex_count, 4)
     assert np.allclose(vc.colors, [1, 0, 1, 1])  # the file's COLOR_0 is magenta throughout
-    quads = ad.load_mesh(shared_mesh("edge_cases/box_vertex_colors_quads_moderngl.obj"))
+    quads = ad.load_mesh(data_mesh("edge_cases/box_vertex_colors_quads_moderngl.obj"))
     assert quads.colors is not None and np.allclose(quads.colors[0], [1, 0, 0, 1])
     assert len(np.unique(quads.colors.round(3), axis=0)) > 1
-    box = ad.load_mesh(shared_mesh("gltf/BoxTextured.glb"))
+    box = ad.load_mesh(data_mesh("gltf/BoxTextured.glb"))
     assert box.uvs.shape == (24, 2) and box.parts[0].material.texture.shape[2] == 4
 
 
@@ -144,7 +145,7 @@ def test_tangents_follow_the_uv_frame():
 
 
 def test_gpu_capture_equals_cpu_for_every_part(ctx):
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     params = ad.random_params(mesh, 40, seed=3, bend=0.2)
     cpu_pos, cpu_nrm = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
     with ad.AxialRenderer(ctx, mesh, params) as r:
@@ -168,7 +169,7 @@ def test_gpu_tangents_bend_by_the_jacobian(ctx, form):
     from axialdeform.gl.shaders import build_program
     from axialdeform.gl.uniforms import set_uniforms
 
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     extended = form != "16"
     extra = dict(scale=(0.7, 1.3), twist=0.8, taper=0.5) if extended else {}
     params = ad.random_params(mesh, 16, seed=5, bend=0.3, **extra)
@@ -225,7 +226,8 @@ def test_texture_and_cutout_drawn(ctx, tmp_path):
     mesh = ad.load_mesh(_textured_card(tmp_path))
     params = np.zeros((1, 16), np.float32)
     bg = (0.0, 0.0, 0.0)
-    img = ad.render_image(mesh, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(mesh, params), look=ad.Look(background=bg, fast=True, ambient=1.0)).astype(int)
+    img = ad.render_image(mesh, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(mesh, params),
+                          look=ad.Look(background=bg, fast=True, ambient=1.0)).astype(int)
     # the card's red half (u < 0.5) is cut out: only the blue half is drawn
     def columns(image):
         return int((image.sum(axis=2) > 30).any(axis=0).sum())
@@ -239,7 +241,8 @@ def test_texture_and_cutout_drawn(ctx, tmp_path):
     assert red(img) == 0 and blue(img) > 100
     # without the cut (an opaque texture) the red half shows too, and the card is twice as wide
     opaque = ad.load_mesh(_textured_card(tmp_path, cut=False))
-    img2 = ad.render_image(opaque, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(opaque, params), look=ad.Look(background=bg, fast=True, ambient=1.0)).astype(int)
+    img2 = ad.render_image(opaque, params, (64, 64), "solid", ctx=ctx, camera=_front_camera(opaque, params),
+                           look=ad.Look(background=bg, fast=True, ambient=1.0)).astype(int)
     assert red(img2) > 100 and blue(img2) > 100
     assert 1.6 < columns(img2) / columns(img) < 2.4
 
@@ -249,7 +252,8 @@ def test_missing_texture_part_drawn_with_base_colour(ctx, tmp_path):
         warnings.simplefilter("ignore", AssetWarning)
         mesh = ad.load_mesh(_textured_card(tmp_path, texture="gone.png"))
     params = np.zeros((1, 16), np.float32)
-    img = ad.render_image(mesh, params, (48, 48), "solid", ctx=ctx, camera=_front_camera(mesh, params), look=ad.Look(background=(0, 0, 0), fast=True))
+    img = ad.render_image(mesh, params, (48, 48), "solid", ctx=ctx, camera=_front_camera(mesh, params),
+                          look=ad.Look(background=(0, 0, 0), fast=True))
     drawn = img[img.sum(axis=2) > 0]
     assert len(drawn) > 200  # the whole card, in its (white) base colour
     assert (np.abs(drawn[:, 0].astype(int) - drawn[:, 2]) < 40).all()
@@ -271,7 +275,7 @@ def test_texture_too_large_is_a_clear_error(tmp_path):
 def test_one_instanced_draw_per_part_and_part_choice(ctx, monkeypatch):
     import moderngl
 
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     params = ad.random_params(mesh, 30, seed=2)
     calls = []
     original = moderngl.VertexArray.render
@@ -303,7 +307,8 @@ def test_one_instanced_draw_per_part_and_part_choice(ctx, monkeypatch):
 def test_shadows_darken_the_ground_and_hidden_lines_hide(ctx, stone):
     params = ad.random_params(stone, 60, seed=4, bend=0.1, spacing=2.0 * stone.axis.length)
     with_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, look=ad.Look(samples=0))
-    no_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, look=ad.Look(samples=0, shadow=False))  # the ground without shadows
+    # the ground without shadows
+    no_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, look=ad.Look(samples=0, shadow=False))
     darker = (with_shadow.astype(int).sum(axis=2) < no_shadow.astype(int).sum(axis=2) - 30).mean()
     assert darker > 0.01, f"{darker:.1%} of the pixels darker with shadows"
     lines = ad.Look(background=(0, 0, 0), line_color=(1, 1, 1), samples=0, ground=False, shadow=False)
@@ -314,7 +319,8 @@ def test_shadows_darken_the_ground_and_hidden_lines_hide(ctx, stone):
     assert 0 < on_hidden < 0.8 * on_every, (on_hidden, on_every)  # back lines removed
     assert ((hidden.sum(axis=2) > 100) & ~(every.sum(axis=2) > 100)).sum() <= 0.02 * on_hidden
     # the default fills the faces (washed out) under the front lines, with the dark line colour
-    filled = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx, look=ad.Look(samples=0, ground=False, background=(0, 0, 0), line_color=(0, 0, 0)))
+    filled = ad.render_image(stone, few, (320, 240), "wireframe", ctx=ctx,
+                             look=ad.Look(samples=0, ground=False, background=(0, 0, 0), line_color=(0, 0, 0)))
     solid = ad.render_image(stone, few, (320, 240), "solid", ctx=ctx, look=ad.Look(fast=True, background=(0, 0, 0)))
     covered, silhouette = (filled.astype(int).sum(axis=2) > 30), (solid.astype(int).sum(axis=2) > 30)
     assert (covered & silhouette).sum() >= 0.95 * silhouette.sum()  # the faces, not just lines
@@ -325,7 +331,7 @@ def test_shadows_darken_the_ground_and_hidden_lines_hide(ctx, stone):
 
 
 def test_exported_glbs_keep_the_material_and_pass_the_validator(tmp_path):
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     params = ad.random_params(mesh, 3, seed=1)
     from axialdeform.core.io.gltf import export_baked, export_instanced, read_instanced_glb
 
@@ -345,7 +351,7 @@ def test_exported_glbs_keep_the_material_and_pass_the_validator(tmp_path):
 def test_vertex_colour_glb_passes_the_validator(tmp_path):
     from axialdeform.core.io.gltf import export_baked
 
-    mesh = ad.load_mesh(shared_mesh("gltf/cubevc.glb"))
+    mesh = ad.load_mesh(data_mesh("gltf/cubevc.glb"))
     path = export_baked(tmp_path / "vc.glb", mesh, ad.random_params(mesh, 2, seed=1))
     assert _validate(path)[0]["issues"]["numErrors"] == 0
     g = next(iter(trimesh.load(path).geometry.values()))
@@ -374,7 +380,7 @@ def test_bake_obj_writes_vt_mtllib_and_the_texture(tmp_path):
 def test_cli_render_part_and_unknown_part(tmp_path, capsys):
     from axialdeform.cli import main
 
-    mesh = str(shared_mesh("edge_cases/two_objects.obj"))
+    mesh = str(data_mesh("edge_cases/two_objects.obj"))
     assert main(["random", mesh, "-n", "4", "-o", str(tmp_path / "p.adp")]) == 0
     assert main(["render", mesh, str(tmp_path / "p.adp"), "-o", str(tmp_path / "x.png"), "--size", "64x48",
                  "--part", "tetra", "--fast"]) == 0
@@ -395,9 +401,10 @@ def test_bundled_leaf_card():
 
 
 def test_flat_and_wireframe_work_for_textured_parts(ctx):
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     params = ad.random_params(mesh, 6, seed=4, bend=0.1)
-    img = ad.render_image(mesh, params, (128, 96), ("solid", "flat", "wireframe"), ctx=ctx, look=ad.Look(ground=False, background=(0, 0, 0)))
+    img = ad.render_image(mesh, params, (128, 96), ("solid", "flat", "wireframe"), ctx=ctx,
+                          look=ad.Look(ground=False, background=(0, 0, 0)))
     panels = [img[:, i * 128:(i + 1) * 128].astype(int).sum(axis=2) > 30 for i in range(3)]
     assert all(p.mean() > 0.02 for p in panels)
     assert not np.array_equal(img[:, :128], img[:, 128:256])  # flat shading differs from smooth
@@ -406,7 +413,7 @@ def test_flat_and_wireframe_work_for_textured_parts(ctx):
 def test_normal_map_changes_the_shading(ctx):
     import dataclasses
 
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     # the file's normal map is subtle; a strong one (wide stripes tilted +-40 degrees about v) shows the path works
     stripes = np.zeros((64, 64, 4), np.uint8)
     tilt = np.where((np.arange(64) // 8) % 2 == 0, 0.64, -0.64)
@@ -462,7 +469,7 @@ def test_textures_are_sampled_as_srgb(ctx, tmp_path):
 def test_gltf_with_a_missing_or_fifo_image_still_loads(tmp_path):
     import os
 
-    files = trimesh.load(shared_mesh("gltf/BoxTextured.glb")).export(file_type="gltf")
+    files = trimesh.load(data_mesh("gltf/BoxTextured.glb")).export(file_type="gltf")
     for name, data in files.items():
         (tmp_path / name).write_bytes(data)
     doc = json.loads((tmp_path / "model.gltf").read_text())
@@ -486,7 +493,7 @@ def test_parts_draw_from_the_culled_instances(ctx, indirect):
     compacted output: with shadows, multisampling and hidden-line wireframe the
     picture equals the unculled one pixel for pixel, with most instances dropped
     (indirect: one draw command per part, filled in by the compute pass)."""
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     assert len(mesh.parts) > 1
     n, length = 40, mesh.axis.length
     params = ad.random_params(mesh, n, seed=2, bend=0.2)
@@ -510,7 +517,7 @@ def test_parts_draw_from_the_culled_instances(ctx, indirect):
 def test_lod_of_a_mesh_with_parts_is_drawn_not_refused(ctx):
     """LOD works part by part (tests/gl/test_lod_assets.py); this file's parts are
     all too small to simplify, so it keeps one level and says so."""
-    mesh = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     with pytest.warns(UserWarning, match="too few to simplify"):
         with ad.AxialRenderer(ctx, mesh, ad.random_params(mesh, 4, seed=1), lod=True) as r:
             assert r.lod and len(r.lod_levels) == 1
@@ -557,7 +564,7 @@ def test_tangents_stored_in_the_file_are_used_and_written_back(tmp_path):
     reads it in the file's vertex order, and export writes it back unchanged."""
     from axialdeform.core.io.gltf import export_baked, export_instanced
 
-    src = shared_mesh("gltf/cubevc.glb")
+    src = data_mesh("gltf/cubevc.glb")
     mesh = ad.load_mesh(src)
     assert mesh.uvs is not None  # TEXCOORD_0 of a primitive without a material, also dropped by trimesh
     computed = compute_tangents(mesh.positions, mesh.normals, mesh.uvs, mesh.faces)
@@ -584,7 +591,7 @@ def test_tangents_stored_in_the_file_are_used_and_written_back(tmp_path):
 def test_bake_glb_writes_the_bent_tangents(tmp_path):
     from axialdeform.cli import main
 
-    mesh_path = str(shared_mesh("gltf/cubevc.glb"))
+    mesh_path = str(data_mesh("gltf/cubevc.glb"))
     assert main(["random", mesh_path, "-n", "2", "-o", str(tmp_path / "p.adp")]) == 0
     out = tmp_path / "glb"
     assert main(["bake", mesh_path, str(tmp_path / "p.adp"), "-o", str(out), "--format", "glb"]) == 0
@@ -604,7 +611,7 @@ def test_gltf_tangents_under_a_mirroring_node(tmp_path):
     """A node transform turns the file's tangents by its linear part; a mirror flips w."""
     import pygltflib
 
-    src = shared_mesh("gltf/cubevc.glb")
+    src = data_mesh("gltf/cubevc.glb")
     g = pygltflib.GLTF2.load(str(src))
     (file_tangents,) = _gltf_tangents(src)
     g.nodes[g.scenes[g.scene or 0].nodes[0]].matrix = [-2, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]
@@ -621,14 +628,14 @@ def test_gltf_tangents_under_a_mirroring_node(tmp_path):
 def test_ply_bake_of_a_multi_part_mesh_writes_one_file_per_part(tmp_path):
     from axialdeform.cli import main
 
-    mesh_path = str(shared_mesh(ALPHA_TEST))
+    mesh_path = str(data_mesh(ALPHA_TEST))
     mesh = ad.load_mesh(mesh_path)
     assert main(["random", mesh_path, "-n", "2", "-o", str(tmp_path / "p.adp")]) == 0
     out = tmp_path / "ply"
     assert main(["bake", mesh_path, str(tmp_path / "p.adp"), "-o", str(out), "--format", "ply"]) == 0
     names = sorted(p.name for p in out.iterdir())
-    from axialdeform.core.io.bake import INSTANCE_FILE
     from axialdeform.core.bake import instance_name, part_file_names
+    from axialdeform.core.io.bake import INSTANCE_FILE
 
     want = sorted(instance_name(i, 2, ".ply", part=n) for i in range(2) for n in part_file_names(mesh.parts))
     assert names == want and len(names) == 2 * len(mesh.parts)
@@ -730,7 +737,7 @@ def test_gltf_text_files_give_their_tangents_too(tmp_path):
     import pygltflib
     from pygltflib import BufferFormat
 
-    src = shared_mesh("gltf/cubevc.glb")
+    src = data_mesh("gltf/cubevc.glb")
     (want,) = _gltf_tangents(src)
     g = pygltflib.GLTF2.load(str(src))
     g.convert_buffers(BufferFormat.DATAURI)
@@ -772,7 +779,7 @@ def test_textures_pass_through_export_as_the_model_ships_them(tmp_path):
     from axialdeform.core.io.bake import write_mesh_folder
     from axialdeform.core.io.gltf import read_accessor  # noqa: F401 - the module under test
 
-    source = shared_mesh(ALPHA_TEST)
+    source = data_mesh(ALPHA_TEST)
     mesh = ad.load_mesh(source)
     params = ad.random_params(mesh, 3, seed=2, bend=0.1)
     pos, nrm = ad.bake(mesh, params)

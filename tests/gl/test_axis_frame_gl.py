@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
-from conftest import shared_mesh
 from axialdeform.core.deform import deform_tangents
 from axialdeform.gl.renderer import AxialRenderer
+
+from conftest import data_mesh
 
 
 def rotation(a=0.6, b=0.5, c=0.3) -> np.ndarray:
@@ -68,7 +69,7 @@ def test_framed_tangents_on_the_gpu_equal_the_cpu(ctx):
     """A normal-mapped asset (the Khronos alpha test: tangents) with a chosen
     frame: the framed tangent program builds and captures the CPU shape, and
     deform_tangents stays unit and in the bent surface (⟂ to n)."""
-    mesh = ad.load_mesh(shared_mesh("assets/AlphaBlendModeTest.glb"), axis=rotation(0.2, 0.1, 0.05))
+    mesh = ad.load_mesh(data_mesh("assets/AlphaBlendModeTest.glb"), axis=rotation(0.2, 0.1, 0.05))
     assert mesh.axis.framed and mesh.tangents is not None
     p = ad.random_params(mesh, 8, seed=2, bend=0.2)
     tan = deform_tangents(mesh.axis, mesh.positions, mesh.tangents, p)

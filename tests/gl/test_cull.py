@@ -8,14 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+from test_render import meshes_for_all_axes
 
 import axialdeform as ad
-from axialdeform.core.bounds import (base_radius, frustum_planes, instance_bounds, instance_boxes, lod_choice,
-                                     spheres_visible)
+from axialdeform.core.bounds import base_radius, frustum_planes, instance_bounds, instance_boxes, lod_choice, spheres_visible
 from axialdeform.core.lod import build_lod_levels
 from axialdeform.gl.context import Offscreen
+
 from conftest import make_mesh
-from test_render import meshes_for_all_axes
 
 BACKGROUND = (0.93, 0.94, 0.96)
 
@@ -48,7 +48,7 @@ def test_bounds_hold_every_gpu_vertex_and_are_tight(ctx, tmp_path, stone, leaf):
     per axis; on average it is less than 2x."""
     rng = np.random.default_rng(14)
     for name, mesh in meshes_for_all_axes(tmp_path, stone, leaf).items():
-        for trial in range(3):
+        for _ in range(3):
             params = ad.random_params(mesh, 400, seed=int(rng.integers(1 << 30)), bend=float(rng.uniform(0.02, 0.4)),
                                       placement="disc", tilt=(-3, 3))
             with ad.AxialRenderer(ctx, mesh, params) as r:

@@ -11,7 +11,7 @@ from axialdeform.core.deform import deform, rotation_matrices
 from axialdeform.core.params import extend_params, make_params
 from axialdeform.gl.renderer import AxialRenderer
 
-from conftest import make_mesh, shared_mesh
+from conftest import data_mesh, make_mesh
 
 
 def _permuted(mesh, shift: int, name: str):
@@ -23,15 +23,15 @@ def _permuted(mesh, shift: int, name: str):
 
 @pytest.fixture(scope="module")
 def real_meshes():
-    bunny = ad.load_mesh(shared_mesh("classic/bunny_trimesh.ply"))
-    rock = ad.load_mesh(shared_mesh("base/rock_caustics.obj"))
+    bunny = ad.load_mesh(data_mesh("classic/bunny_trimesh.ply"))
+    rock = ad.load_mesh(data_mesh("base/rock_caustics.obj"))
     meshes = {
         "bunny-x": bunny,
         "bunny-y": _permuted(bunny, 1, "bunny-y"),
         "bunny-z": _permuted(bunny, 2, "bunny-z"),
         "rock-z": _permuted(rock, 2, "rock-z"),
-        "blade-y": ad.load_mesh(shared_mesh("base/grass_blade_flora.obj")),
-        "suzanne-x": ad.load_mesh(shared_mesh("gltf/monkey.glb")),
+        "blade-y": ad.load_mesh(data_mesh("base/grass_blade_flora.obj")),
+        "suzanne-x": ad.load_mesh(data_mesh("gltf/monkey.glb")),
     }
     assert {m.axis.index for m in meshes.values()} == {0, 1, 2}
     return meshes
@@ -353,8 +353,8 @@ def _golden_values():
 
 
 def _forms(values):
-    from axialdeform.core.io import params as P
     from axialdeform.core.axis import ControlAxis
+    from axialdeform.core.io import params as P
 
     ax, fp = ControlAxis(1, -0.25, 2.5), bytes(range(32))
     return {"float32": P.encode_binary(values, axis=ax, mesh_fingerprint=fp),

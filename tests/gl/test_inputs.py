@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import inspect
 import re
-import tomllib
 
 import numpy as np
 import pytest
+import tomllib
 import trimesh
 
 import axialdeform as ad

@@ -9,14 +9,14 @@ import warnings
 import numpy as np
 import pytest
 import trimesh
+from test_cull import draw, look
 
 import axialdeform as ad
 from axialdeform.core.lod import MIN_LOD_TRIANGLES, build_lod_levels
 from axialdeform.core.material import Material, Part, compute_tangents
 from axialdeform.core.mesh import area_weighted_normals
 
-from conftest import shared_mesh
-from test_cull import draw, look
+from conftest import data_mesh
 
 
 def leaf_uv(positions):
@@ -105,7 +105,7 @@ def test_levels_keep_parts_materials_and_carry_every_attribute(make):
 def test_parts_too_small_to_simplify_keep_their_triangles():
     """simple_pole.glb: 11 parts; those under MIN_LOD_TRIANGLES are carried
     unchanged into every level, the others shrink."""
-    mesh = ad.load_mesh(shared_mesh("gltf/simple_pole.glb"))
+    mesh = ad.load_mesh(data_mesh("gltf/simple_pole.glb"))
     levels = build_lod_levels(mesh)
     assert len(levels) >= 2
     for level in levels[1:]:
@@ -120,7 +120,7 @@ def test_parts_too_small_to_simplify_keep_their_triangles():
 
 
 def test_a_mesh_without_a_large_enough_part_keeps_one_level():
-    for mesh in (ad.load_mesh("leafcard"), ad.load_mesh(shared_mesh("assets/AlphaBlendModeTest.glb"))):
+    for mesh in (ad.load_mesh("leafcard"), ad.load_mesh(data_mesh("assets/AlphaBlendModeTest.glb"))):
         with pytest.warns(UserWarning, match="too few to simplify"):
             assert len(build_lod_levels(mesh)) == 1
 
@@ -241,7 +241,7 @@ def test_cli_render_lod_of_a_multi_part_file(tmp_path, capsys):
 
     from axialdeform.cli import main
 
-    pole = str(shared_mesh("gltf/simple_pole.glb"))
+    pole = str(data_mesh("gltf/simple_pole.glb"))
     params = tmp_path / "p.adp"
     assert main(["random", pole, "-n", "300", "--placement", "disc", "-o", str(params)]) == 0
     capsys.readouterr()
@@ -377,7 +377,7 @@ def test_collapse_mapping_is_the_replays_mapping(name):
         p, f = _torus(20_000)
         p, f = p.astype(np.float64), f.astype(np.int64)
     else:
-        tm = trimesh.load(shared_mesh(name), process=False, force="mesh")
+        tm = trimesh.load(data_mesh(name), process=False, force="mesh")
         p, f = np.asarray(tm.vertices, np.float64), np.asarray(tm.faces, np.int64)
     for reduction in (0.5, 0.8, 0.93):
         _, new_faces, collapses = fast_simplification.simplify(p, f, target_reduction=reduction,

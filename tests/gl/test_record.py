@@ -56,11 +56,11 @@ def test_extended_views_and_their_errors(stone):
     assert np.all(p[:, 17] == 0.5)
     plain = ad.random_params(stone, 4, seed=1)
     with pytest.raises(AttributeError, match="extended"):
-        plain.scale
+        _ = plain.scale
     with pytest.raises(AttributeError, match="no attribute 'banana'"):
-        plain.banana
+        _ = plain.banana
     with pytest.raises(AttributeError, match=r"\(n, 16\)"):
-        plain[:, 0].position
+        _ = plain[:, 0].position
 
 
 @pytest.mark.parametrize("extended", [False, True])
@@ -93,7 +93,7 @@ def test_gltf_receives_the_table(stone):
     from axialdeform.web import build_scene
 
     assert export.ATTRIBUTES is R.GLTF_ATTRIBUTES
-    for name, (kind, cols) in R.GLTF_ATTRIBUTES.items():
+    for kind, cols in R.GLTF_ATTRIBUTES.values():
         assert {"VEC2": 2, "VEC3": 3, "VEC4": 4}[kind] == len(cols)
     scene = build_scene(stone, ad.random_params(stone, 3, seed=1))
     assert "record" not in scene.config  # the page reads the columns from the npm module's recordLayout

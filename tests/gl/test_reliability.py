@@ -27,8 +27,8 @@ import pyrr
 import pytest
 
 import axialdeform as ad
-from axialdeform.core.io.atomic import sweep_stale_parts
 from axialdeform.core.deform import deform
+from axialdeform.core.io.atomic import sweep_stale_parts
 from axialdeform.core.io.params import dequantize_params, quantize_params
 
 from conftest import make_mesh
@@ -102,7 +102,7 @@ def test_killed_writer_leaves_previous_file_intact(tmp_path):
     rng = np.random.default_rng(5)
     k = 0
     completed_total = 0
-    for kill in range(8):
+    for _ in range(8):
         proc = subprocess.Popen([sys.executable, "-c", WRITER, str(path), str(n), str(k)], stdout=subprocess.PIPE,
                                 text=True, cwd=ROOT)
         try:

@@ -10,7 +10,8 @@ from scipy import ndimage
 
 import axialdeform as ad
 from axialdeform.gl.context import Offscreen
-from conftest import shared_mesh
+
+from conftest import data_mesh
 
 
 def z_axis_ply_off_origin(tmp_path, stone):
@@ -25,7 +26,7 @@ def z_axis_ply_off_origin(tmp_path, stone):
 def meshes_for_all_axes(tmp_path, stone, leaf):
     z = ad.load_mesh(z_axis_ply_off_origin(tmp_path, stone))
     assert z.normals_from_file and z.axis.name == "z"
-    return {"x": stone, "y": leaf, "z": z, "rock": ad.load_mesh(shared_mesh("base/rock_caustics.obj"))}
+    return {"x": stone, "y": leaf, "z": z, "rock": ad.load_mesh(data_mesh("base/rock_caustics.obj"))}
 
 
 def test_gpu_capture_equals_cpu_reference(ctx, tmp_path, stone, leaf):
@@ -115,7 +116,8 @@ def _mask(img, background):
 def test_solid_and_wireframe_cover_the_same_silhouette(ctx, stone):
     params = ad.random_params(stone, 60, seed=8, bend=0.25, spacing=2.5 * stone.axis.length)
     # a black background: every lit stone pixel and every line differs from it
-    img = ad.render_image(stone, params, (480, 360), ("solid", "wireframe"), ctx=ctx, look=ad.Look(samples=0, background=(0, 0, 0), line_color=(1, 1, 1), fast=True))
+    img = ad.render_image(stone, params, (480, 360), ("solid", "wireframe"), ctx=ctx,
+                          look=ad.Look(samples=0, background=(0, 0, 0), line_color=(1, 1, 1), fast=True))
     bg = img[0, 0].astype(int)
     solid, wire = _mask(img[:, :480], bg), _mask(img[:, 480:], bg)
     assert solid.mean() > 0.02
@@ -257,12 +259,12 @@ def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
     A big mesh: slices of its triangles, every instance in each: the same
     picture solid and flat; wireframe over its translucent fill up to the order
     of overlapping translucent lines."""
+    import sys
+
     import moderngl
     import trimesh as tm
 
     from axialdeform.gl.context import _multisampled, flush_interval
-
-    import sys
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
     from big_mesh import torus

@@ -33,7 +33,7 @@ import axialdeform as ad
 SIZE = (400, 300)
 CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"]
 BACKGROUND = (0.93, 0.94, 0.96)
-STARTUP_S = 180  # the server's start on a busy shared machine; a dead server fails the test at once
+STARTUP_S = 180  # the server's start on a busy machine; a dead server fails the test at once
 
 
 def _free_port() -> int:

@@ -21,8 +21,19 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core.io.params import encode_binary
-from axialdeform.web import (PARAMS_FILE, THREE_VERSION, VENDOR_FILES, build_scene, embedded_file, make_server,
-                             page_shaders, scene_bytes, single_file_html, vendor_file, write_page)
+from axialdeform.web import (
+    PARAMS_FILE,
+    THREE_VERSION,
+    VENDOR_FILES,
+    build_scene,
+    embedded_file,
+    make_server,
+    page_shaders,
+    scene_bytes,
+    single_file_html,
+    vendor_file,
+    write_page,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 SIZE = (400, 300)
@@ -34,7 +45,7 @@ def test_page_shaders_hold_the_package_deformation_verbatim():
     shaders = page_shaders()
     assert set(shaders) == {f"float{lv}{m}{f}" for lv in ("", "_extended", "_tinted") for m in ("", "_material")
                             for f in ("", "_framed")}
-    for variant, stages in shaders.items():
+    for stages in shaders.values():
         vs = stages["vertex"]
         assert vs.startswith("#version 300 es\nprecision highp float;\n")
         assert axial in vs, "the page's vertex shader must contain glsl/axial.glsl verbatim"
@@ -242,7 +253,8 @@ def scene_files(tmp_path_factory):
         r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "stone", str(adp), "-o", str(base / out),
                             "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
-    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))  # the page: no ground, no shadow
+    # the page: no ground, no shadow
+    render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))
     return {"base": base, "params": params, "mesh": mesh, "render": render}
 
 
@@ -352,7 +364,8 @@ const data = {}; for (const [k, v] of Object.entries(state)) data[k] = v && v.b6
   : k === 'files' ? Object.fromEntries(Object.entries(v).map(([n, x]) => [n, dv(x.b64)])) : v;
 const listeners = {};
 const model = { get: (k) => data[k], set: (k, v) => { data[k] = v; (listeners['change:' + k] || []).forEach((f) => f()); },
-  on: (e, f) => { (listeners[e] = listeners[e] || []).push(f); }, off: (e, f) => { listeners[e] = (listeners[e] || []).filter((g) => g !== f); },
+  on: (e, f) => { (listeners[e] = listeners[e] || []).push(f); },
+  off: (e, f) => { listeners[e] = (listeners[e] || []).filter((g) => g !== f); },
   save_changes: () => { window.widgetStatus = data.status; } };
 window.widgetModel = model; window.toDataView = dv;
 const esm = await import(URL.createObjectURL(new Blob([document.getElementById('esm').textContent], {type: 'text/javascript'})));
@@ -765,11 +778,10 @@ def test_base_mesh_glb_carries_the_material(tmp_path):
     assert "TEXCOORD_0" in g.meshes[0].primitives[0].attributes.__dict__ or g.meshes[0].primitives[0].attributes.TEXCOORD_0
     stone = pygltflib.GLTF2().load_from_bytes(encode_base_mesh(ad.load_mesh("stone")))
     assert stone.materials == [] and stone.meshes[0].primitives[0].material is None  # plain: no material
-    from conftest import shared_mesh
-    from conftest import ALPHA_TEST
+    from conftest import ALPHA_TEST, data_mesh
     from conftest import validate_gltf as _validate
 
-    parts = ad.load_mesh(shared_mesh(ALPHA_TEST))
+    parts = ad.load_mesh(data_mesh(ALPHA_TEST))
     (tmp_path / "parts.glb").write_bytes(encode_base_mesh(parts))
     for report in _validate(path, tmp_path / "parts.glb"):
         assert report["issues"]["numErrors"] == 0, report["issues"]["messages"][:5]
@@ -958,9 +970,9 @@ def test_canvas_fills_the_window_and_follows_resizes(browser, scene_files, tmp_p
 def test_parts_alpha_modes_and_vertex_colours_match_render(browser, tmp_path, rel):
     """Nine parts (OPAQUE, MASK at three cutoffs, BLEND, textured, double-sided)
     and a mesh with vertex colours: one draw per part, the same picture as render."""
-    from conftest import shared_mesh
+    from conftest import data_mesh
 
-    mesh = ad.load_mesh(shared_mesh(rel))
+    mesh = ad.load_mesh(data_mesh(rel))
     assert mesh.has_appearance
     params = ad.random_params(mesh, 30, seed=1, bend=0.1, placement="disc")
     out = tmp_path / "parts.html"

@@ -17,8 +17,8 @@ import os
 import re
 import stat
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Iterator
 
 from ..errors import PathError
 from .safeio import check_not_special

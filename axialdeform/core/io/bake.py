@@ -20,7 +20,10 @@ from .atomic import atomic_path, atomic_write_bytes
 from .gltf import encode_baked
 from .safeio import check_not_special
 
-__all__ = ['INSTANCE_FILE', 'check_bake_folder', 'write_mesh_folder', 'write_plain_obj', 'write_npz', 'write_npz_layers', 'write_npz_pieces', 'write_scene_npz']
+__all__ = [
+    "INSTANCE_FILE", "check_bake_folder", "write_mesh_folder", "write_plain_obj", "write_npz", "write_npz_layers",
+    "write_npz_pieces", "write_scene_npz",
+]
 
 
 def write_npz(path: str | os.PathLike, positions: np.ndarray, normals: np.ndarray) -> None:

@@ -165,7 +165,7 @@ class _Builder:
         view = self.view(data, target=_ELEMENT_ARRAY_BUFFER)
         return self.accessor(view, _UINT16 if small else _UINT32, data.size, "SCALAR", name=name)
 
-    def appearance(self, mesh, default_color=None) -> "_Appearance":
+    def appearance(self, mesh, default_color=None) -> _Appearance:
         """The mesh's parts (indices + material each) and its UV/colour accessors,
         written once; ``default_color`` (linear RGB) replaces a default material."""
         return _Appearance(self, mesh, default_color)
@@ -376,7 +376,7 @@ def encode_baked(mesh, params, *, positions=None, normals=None, source: str | No
 
 
 def _build_baked(mesh, params, *, positions=None, normals=None, source: str | None = None,
-                 tangents: bool = True) -> "_Builder":
+                 tangents: bool = True) -> _Builder:
     params = as_params(params, axes=getattr(mesh, "axis_count", 1))
     tangents = tangents and getattr(mesh, "axis_count", 1) == 1  # several axes: viewers compute their own (MikkTSpace)
     if positions is None or normals is None:
@@ -450,7 +450,7 @@ def export_baked(path: str | os.PathLike, mesh, params, *, positions=None, norma
     return path
 
 
-def _base_attributes(b: "_Builder", mesh) -> tuple[int, int]:
+def _base_attributes(b: _Builder, mesh) -> tuple[int, int]:
     """Accessors of the base mesh's POSITION and NORMAL (float32, file order)."""
     pos = b.accessor(b.view(mesh.positions.astype("<f4"), target=_ARRAY_BUFFER), _FLOAT, mesh.vertex_count, "VEC3",
                      bounds=mesh.positions, name="base_POSITION")
@@ -459,7 +459,7 @@ def _base_attributes(b: "_Builder", mesh) -> tuple[int, int]:
     return pos, nrm
 
 
-def _vertex_attributes(b: "_Builder", mesh) -> dict:
+def _vertex_attributes(b: _Builder, mesh) -> dict:
     """POSITION, NORMAL (and ``_AXIAL_AXIS``, each vertex's axis, for a mesh of several axes)."""
     pos, nrm = _base_attributes(b, mesh)
     out = {"POSITION": pos, "NORMAL": nrm}
@@ -593,7 +593,7 @@ def _scene_layers(scene, layout: str) -> list:
     return layers
 
 
-def _build_scene_baked(scene, layers) -> "_Builder":
+def _build_scene_baked(scene, layers) -> _Builder:
     """The baked layout of :func:`encode_scene`: per layer (and the terrain)
     one node and one mesh named after it holding every instance's deformed
     world geometry (POSITION, NORMAL, uint32 indices), a PBR material of the

@@ -297,7 +297,8 @@ def _from_loaded(loaded, name: str, file_positions=None, failed=(), dropped=()) 
         length = np.linalg.norm(file_normals, axis=1)
         usable = np.isfinite(length) & (length > 1e-12)
         computed = area_weighted_normals(positions, faces) if not usable.all() else None
-        normals = np.where(usable[:, None], file_normals / np.where(usable, length, 1.0)[:, None], computed if computed is not None else 0.0)
+        normals = np.where(usable[:, None], file_normals / np.where(usable, length, 1.0)[:, None],
+                           computed if computed is not None else 0.0)
     else:
         normals = area_weighted_normals(positions, faces)
     uvs, colors, parts = gathered["uvs"], gathered["colors"], gathered["parts"]

@@ -34,7 +34,13 @@ from . import safeio
 from .atomic import atomic_path
 from .safeio import open_regular
 
-__all__ = ['AXIS_FRAMED', 'AxisRecord', 'BINARY_SUFFIXES', 'BinaryHeader', 'ENCODING_FLOAT32', 'ENCODING_UINT16', 'HEADER_SIZE', 'MAGIC', 'ParamFile', 'TEXT_SUFFIXES', 'VERSION', 'VERSION_EXTENDED', 'VERSION_TINTED', 'axis_letter', 'check_mesh', 'decode_binary', 'dequantize_params', 'encode_binary', 'format_text', 'param_file_bytes', 'parse_text', 'quantization_error_bound', 'quantize_params', 'quantize_with_table', 'read_binary_header', 'read_param_bytes', 'read_param_file', 'read_params', 'write_param_chunks', 'write_params']
+__all__ = [
+    "AXIS_FRAMED", "AxisRecord", "BINARY_SUFFIXES", "BinaryHeader", "ENCODING_FLOAT32", "ENCODING_UINT16",
+    "HEADER_SIZE", "MAGIC", "ParamFile", "TEXT_SUFFIXES", "VERSION", "VERSION_EXTENDED", "VERSION_TINTED",
+    "axis_letter", "check_mesh", "decode_binary", "dequantize_params", "encode_binary", "format_text",
+    "param_file_bytes", "parse_text", "quantization_error_bound", "quantize_params", "quantize_with_table",
+    "read_binary_header", "read_param_bytes", "read_param_file", "read_params", "write_param_chunks", "write_params",
+]
 
 
 BINARY_SUFFIXES = (".adp",)
@@ -96,7 +102,7 @@ class AxisRecord:
     axes: int = 1
 
     @classmethod
-    def of(cls, source) -> "AxisRecord":
+    def of(cls, source) -> AxisRecord:
         """The record of a mesh (its axis, or its tree of several axes), a
         :class:`ControlAxis` or another record."""
         tree = getattr(source, "tree", None)
@@ -208,7 +214,8 @@ def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
             if m is None:
                 before = bytes(view[start:end]).count(b"\n")
                 raise ParamFileError(
-                    f"{name}: line {lineno + before + 1} is longer than {window} bytes; expected at most {_MAX_TEXT_LINE} characters a line")
+                    f"{name}: line {lineno + before + 1} is longer than {window} bytes; "
+                    f"expected at most {_MAX_TEXT_LINE} characters a line")
             cut = m.end() + (0 if isinstance(view, (bytes, bytearray)) else end)
             if view[cut - 1] == 0x0D and cut < n and view[cut] == 0x0A:
                 cut += 1

@@ -208,8 +208,9 @@ class SafeResolver:
                             f"{safeio.memory_available() // 2} bytes (half the memory available)")
         with open_regular(path, what) as (fh, actual):
             if not size <= actual <= size + BUFFER_SLACK:
-                raise PathError(f"{name}: is {actual} bytes, but {self.referrer or 'the mesh'} declares {field} = {size}; expected a file of "
-                                f"exactly {size} bytes" + (f" (or up to {BUFFER_SLACK} more of padding)" if BUFFER_SLACK else "")
+                raise PathError(f"{name}: is {actual} bytes, but {self.referrer or 'the mesh'} declares {field} = {size}; "
+                                f"expected a file of exactly {size} bytes"
+                                + (f" (or up to {BUFFER_SLACK} more of padding)" if BUFFER_SLACK else "")
                                 + (" (truncated?)" if actual < size else ""))
             data = safeio.read_sized(fh, actual, name, what, PathError)
         del data[size:]  # padding is not part of the buffer

@@ -31,7 +31,7 @@ import os
 import shutil
 import stat
 import warnings
-from typing import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 
 import numpy as np
 
