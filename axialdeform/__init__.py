@@ -11,7 +11,7 @@ the reverse; ``tests/app/test_layers.py`` reads the imports and enforces it):
 * the application -- ``cli/`` (the ``axialdeform`` command), ``bench/``,
   ``viewer.py``, ``web/`` (the WebGL page) and ``widget.py`` (the notebook widget).
 
-This top level is the product, 23 names; every other public name has one
+This top level is the product, 25 names; every other public name has one
 home in :mod:`axialdeform.core` or :mod:`axialdeform.gl`, whose ``__all__``
 lists it.  Names that used to be here still work for one release, with a
 DeprecationWarning naming their new home.
@@ -28,11 +28,11 @@ _NAMES = {
     # mesh -> axis
     "load_mesh": "core.io.mesh", "BaseMesh": "core.mesh",
     # the record and its variation
-    "Instances": "core.record", "random_params": "core.variation",
+    "Instances": "core.record", "random_params": "core.variation", "Variation": "core.variation",
     # files
     "read_params": "core.io.params", "write_params": "core.io.params",
     # scene, look, camera, wind
-    "Scene": "core.scene", "Look": "core.look", "Wind": "core.wind",
+    "Scene": "core.scene", "Look": "core.look", "Wind": "core.wind", "RenderOptions": "core.options",
     "Camera": "gl.camera", "frame_instances": "gl.camera",
     # drawing
     "create_context": "gl.context", "Offscreen": "gl.context", "AxialRenderer": "gl.renderer",
@@ -50,7 +50,7 @@ _DEPRECATED = {name: f"axialdeform.{home}.{name}" for home, names in {
              "extend_params", "is_extended", "instance_bounds", "scene_box", "load_surface", "load_scene",
              "wind_offsets", "apply_wind", "rotation_matrices"),
     "gl": ("OrbitCamera", "GroundPlane", "ShadowMap", "read_pixels", "MODES", "assemble", "assemble_text",
-           "build_program", "SceneRenderer", "render_scene"),
+           "build_program", "SceneRenderer"),
 }.items() for name in names}
 
 _getattr, __dir__, _lazy_all = attach(__name__, _NAMES, _DEPRECATED)

@@ -42,15 +42,16 @@ import numpy as np
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
+from .core.options import RenderOptions
 from .core.params import as_params
 from .core.scene import Scene
-from .core.variation import random_params
+from .core.variation import Variation, random_params
 from .core.wind import Wind
 from .gl.camera import UP_VECTORS, OrbitCamera
 from .gl.context import check_image_size, create_context, read_pixels
 from .gl.frame import Frame
 from .gl.ground import GroundPlane
-from .gl.image import look_from_keywords
+from .gl.image import look_from_keywords, pop_look_keywords
 from .gl.renderer import MODES, AxialRenderer
 from .gl.scene import SceneRenderer
 from .gl.shadow import ShadowMap
@@ -105,7 +106,7 @@ class _ViewerMixin:
         seed = s.get("seed")
         self.seed = None if seed is None else int(seed)  # None: the parameters came from elsewhere (a file)
         self.on_screenshot = s.get("on_screenshot")
-        self.bend = float(s.get("bend", 0.08))
+        self.bend = float(s.get("bend", Variation.bend))
         self.up = s.get("up", "y")
         self.mode = s.get("mode", "solid")
         if self.mode not in MODES:
@@ -343,39 +344,57 @@ class _ViewerMixin:
             self.extra.release()
 
 
+#: the viewer's own settings beside :class:`RenderOptions`' fields (:meth:`Viewer.create`)
+_VIEWER_SETTINGS = ("animate", "tint", "seed", "bend", "mode", "on_screenshot", "extra")
+
+
 class Viewer:
     """Builds and runs the viewer window (see the module docstring)."""
 
     @staticmethod
-    def create(scene, params=None, *, headless: bool = False, size=(960, 720), animate=None, tint=None, seed: int | None = None,
-               bend: float = 0.08, mode: str = "solid", up: str = "y", look=None,
-               on_screenshot=None, parts=None, wind=None, extra=None, culling: bool = True,
-               lod: bool | None = None, lod_error: float = 1.0, **old_keywords):
+    def create(scene, params=None, *, headless: bool = False, size=(960, 720), look=None,
+               options: RenderOptions | None = None, **fields):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
-        scene : a :class:`axialdeform.Scene` (its first layer is the viewer's own:
-        N, UP/DOWN and V act on every layer; the terrain and the other layers are
-        drawn too; its look, up and wind), or a BaseMesh with params : (n, 16) the instances; animate : optional
-        ``f(t_seconds) -> (n, 16)`` called every frame; tint : optional (n, 3)
-        linear RGB per instance; seed : the seed ``params`` were made with,
-        shown in the title (None: not known, e.g. read from a file; ``N`` then
-        starts at 0); bend : what ``N`` regenerates offsets with (a fraction
-        of L); on_screenshot : optional ``f(path)`` called after the S key
-        wrote a screenshot; headless : moderngl-window's headless
-        window on an EGL context (no display needed); look : how the frames
-        look (:class:`axialdeform.Look`: ground, shadow, samples, light,
-        background; ``Look(fast=True)``: no shadows, hidden lines or
-        multisampling; the old ``ground``, ``samples`` and ``fast`` keywords
-        still work, with a DeprecationWarning); parts : names
-        of the mesh's parts to draw (all by default).
-        wind : an :class:`axialdeform.Wind` animated on the GPU (``V`` toggles
-        it); params may be (n, 19): extended instances.  extra : a loaded scene
-        (:mod:`axialdeform.core.scene`) drawn too, every frame, in the same mode.
-        culling, lod, lod_error : :class:`AxialRenderer`'s (``lod=None``: on from
-        :data:`LOD_AUTO_COUNT` instances, so a million can be flown through,
-        unless the mesh has parts or appearance).
+        Parameters
+        ----------
+        scene : Scene or BaseMesh
+            A :class:`axialdeform.Scene` (its first layer is the viewer's own: N, UP/DOWN and V
+            act on every layer; the terrain and the other layers are drawn too; its look, up and
+            wind), or a BaseMesh with ``params``.
+        params : (n, 16|19|22) float32, optional
+            The instances of a mesh.
+        headless : bool
+            moderngl-window's headless window on an EGL context (no display needed).
+        size : (int, int)
+            The window's size.
+        look : Look, optional
+            How the frames look (:class:`axialdeform.Look`: ground, shadow, samples, light,
+            background; ``Look(fast=True)``: no shadows, hidden lines or multisampling; the old
+            ``ground``, ``samples`` and ``fast`` keywords still work, with a DeprecationWarning).
+        options : RenderOptions, optional
+            ``up``, ``parts`` (names of the mesh's parts to draw), ``wind`` (animated on the GPU;
+            ``V`` toggles it), ``culling``, ``lod``, ``lod_error`` (:class:`axialdeform.RenderOptions`;
+            ``lod`` not given: on from :data:`LOD_AUTO_COUNT` instances, so a million can be
+            flown through, unless the mesh has parts or appearance).
+        **fields
+            Fields of :class:`RenderOptions`, or the viewer's own settings: ``animate``
+            (``f(t_seconds) -> (n, 16)`` called every frame), ``tint`` ((n, 3) linear RGB per
+            instance), ``seed`` (the seed ``params`` were made with, shown in the title; None: not
+            known, ``N`` then starts at 0), ``bend`` (what ``N`` regenerates offsets with, a fraction
+            of L; default :attr:`Variation.bend`), ``mode`` (the first drawing mode),
+            ``on_screenshot`` (``f(path)`` called after the S key wrote a screenshot) and ``extra``
+            (a loaded scene drawn too, every frame, in the same mode).
         """
 
+        own = {k: fields.pop(k) for k in list(fields) if k in _VIEWER_SETTINGS}
+        animate, tint, seed, extra = (own.get(k) for k in ("animate", "tint", "seed", "extra"))
+        bend, mode, on_screenshot = own.get("bend", Variation.bend), own.get("mode", "solid"), own.get("on_screenshot")
+        lod_given = "lod" in fields or (options is not None and options.lod)
+        old_keywords = pop_look_keywords(fields)
+        opts = RenderOptions.of(options, fields, "Viewer.create", ("up", "parts", "wind", "culling", "lod", "lod_error"))
+        up, parts, wind, culling, lod_error = opts.up, opts.parts, opts.wind, opts.culling, opts.lod_error
+        lod = opts.lod if lod_given else None
         mesh = scene
         if isinstance(scene, Scene):  # the first layer is the viewer's own; the others and the terrain are drawn too
             if params is not None:

@@ -15,6 +15,7 @@ from ..core.io.params import read_params
 from ..core.io.safeio import check_output_path
 from ..core.lod import check_lod_error
 from ..core.params import check_drawable, range_warning
+from ..core.variation import Variation
 from ..core.wind import Wind
 
 AXES = ("x", "y", "z")
@@ -165,13 +166,13 @@ def extension_args(args) -> dict:
     a bad value is a ParamError naming the argument and the expected range."""
 
     out = {}
-    if args.scale is not None:
+    if getattr(args, "scale", None) is not None:
         out["scale"] = scale_range(args.scale)
-    if args.twist is not None:
+    if getattr(args, "twist", None) is not None:
         if not math.isfinite(args.twist):
             raise ParamError(f"--twist: expected a finite number of radians, found {args.twist!r}")
         out["twist"] = args.twist
-    if args.taper is not None:
+    if getattr(args, "taper", None) is not None:
         if not (math.isfinite(args.taper) and args.taper < 1):
             raise ParamError(f"--taper: expected a number < 1 (tp < 1: the tip keeps a size > 0), found {args.taper!r}")
         out["taper"] = args.taper
@@ -190,6 +191,55 @@ def extension_args(args) -> dict:
             raise ParamError(f"--tint-color: expected R,G,B linear RGB numbers in 0..1, found {args.tint_color!r}")
         out["tint_color"] = color
     return out
+
+
+#: the CLI's flags of each Variation field, with their help; the defaults are Variation()'s
+_VARIATION_HELP = {
+    "bend": ("B[,B...]", "offset amplitude as a fraction of the axis length L; a mesh of several axes takes one a level "
+                         "of its hierarchy (trunk,branches,twigs; the last for deeper levels) (default: {})"),
+    "yaw": ("MIN,MAX", "radians about the up axis (default: 0,2pi)"),
+    "tilt": ("MIN,MAX", "radians about the other two axes (default: {0[0]:g},{0[1]:g})"),
+    "scale": ("MIN:MAX", "extended instances: uniform scale s drawn in MIN..MAX, 0 < MIN <= MAX (default: none, 16 numbers)"),
+    "twist": ("MAX", "extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)"),
+    "taper": ("MAX", "extended instances: taper tp drawn between 0 and MAX < 1 (default: none)"),
+    "tint": ("AMOUNT", "tinted instances (22 numbers): each one's colour is --tint-color times 1 - AMOUNT*u, u drawn per "
+                       "channel in 0..1; AMOUNT in 0..1 (default: none)"),
+}
+
+
+def bend_levels(text: str):
+    """``--bend B`` or ``B,B,...`` (one amplitude per level of a hierarchy)."""
+    try:
+        values = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected B or B,B,... (fractions of L), found {text!r}") from None
+    return values[0] if len(values) == 1 else values
+
+
+def add_variation_args(parser, names=tuple(_VARIATION_HELP)) -> None:
+    """The flags of the :class:`~axialdeform.core.variation.Variation` fields ``names``, with its defaults."""
+    default = Variation()
+    types = {"bend": bend_levels, "yaw": angle_range, "tilt": angle_range, "scale": str, "twist": float,
+             "taper": float, "tint": float}
+    for name in names:
+        metavar, text = _VARIATION_HELP[name]
+        value = getattr(default, name)
+        parser.add_argument(f"--{name}", type=types[name], default=None if name == "scale" else value,
+                            metavar=metavar, help=text.format(value))
+        if name == "tint":
+            parser.add_argument("--tint-color", metavar="R,G,B", default=None, help=(
+                "with --tint: the brightest tint, linear RGB in 0..1 (default: 1,1,1, the mesh's own colours)"))
+
+
+def variation_args(args) -> dict:
+    """The :class:`Variation` fields the command line gave (those its parser has), checked with
+    the flags' names in the messages."""
+    out = {name: getattr(args, name) for name in ("bend", "yaw", "tilt") if hasattr(args, name)}
+    try:
+        Variation(**out)
+    except ParamError as exc:
+        raise ParamError(f"--{exc}") from None
+    return {**out, **extension_args(args)}
 
 
 def add_wind_args(parser) -> None:

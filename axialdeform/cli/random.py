@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 from ..core.errors import ArgumentError
 from ..core.io.params import param_file_bytes, write_param_chunks
 from ..core.io.safeio import (
@@ -13,8 +11,8 @@ from ..core.io.safeio import (
     check_output_path,
 )
 from ..core.record import WIDTHS, tree_width
-from ..core.variation import PLACEMENTS, iter_random_params
-from ._common import AXES, add_axis, angle_range, extension_args, load_base, mesh_file
+from ..core.variation import PLACEMENTS, Variation, iter_random_params
+from ._common import AXES, add_axis, add_variation_args, load_base, mesh_file, variation_args
 
 
 def add_parser(sub) -> None:
@@ -28,25 +26,10 @@ def add_parser(sub) -> None:
         "64 bytes an instance in .adp, 32 quantized, up to 256 in text (19 numbers: 76, 38, 304; 22: 88, 44, 352); "
         "they are made and written 131072 at a time, so memory stays under 200 MB whatever the count"))
     r.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
-    r.add_argument("--bend", type=float, default=0.08, help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
     r.add_argument("--placement", choices=PLACEMENTS, default="grid", help="how instances are laid out (default: %(default)s)")
     r.add_argument("--spacing", type=float, default=None, help="distance between neighbours, world units (default: 1.1 L)")
     r.add_argument("--up", choices=AXES, default="y", help="world up axis (default: %(default)s)")
-    r.add_argument("--yaw", type=angle_range, default=(0.0, 2 * math.pi),
-                   help="MIN,MAX radians about the up axis (default: 0,2pi)")
-    r.add_argument("--tilt", type=angle_range, default=(-0.25, 0.25),
-                   help="MIN,MAX radians about the other two axes (default: -0.25,0.25)")
-    r.add_argument("--scale", metavar="MIN:MAX", default=None,
-                   help="extended instances: uniform scale s drawn in MIN..MAX, 0 < MIN <= MAX (default: none, 16 numbers)")
-    r.add_argument("--twist", metavar="MAX", type=float, default=None,
-                   help="extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)")
-    r.add_argument("--taper", metavar="MAX", type=float, default=None,
-                   help="extended instances: taper tp drawn between 0 and MAX < 1 (default: none)")
-    r.add_argument("--tint", metavar="AMOUNT", type=float, default=None, help=(
-        "tinted instances (22 numbers): each one's colour is --tint-color times 1 - AMOUNT*u, u drawn per "
-        "channel in 0..1; AMOUNT in 0..1 (default: none)"))
-    r.add_argument("--tint-color", metavar="R,G,B", default=None,
-                   help="with --tint: the brightest tint, linear RGB in 0..1 (default: 1,1,1, the mesh's own colours)")
+    add_variation_args(r)
     r.add_argument("--quantize", action="store_true",
                    help="write the compact uint16 form, binary only: 32 bytes an instance, 38 extended (default: 64/76 bytes, lossless)")
     r.add_argument("-o", "--output", required=True, help="parameter file to write (required, no default)")
@@ -66,7 +49,7 @@ RANDOM_CHUNK = 1 << 17
 
 
 def run(args) -> None:
-    extension = extension_args(args)  # before any work: a bad range is the first thing said
+    variation = variation_args(args)  # before any work: a bad range is the first thing said
     check_output_path(args.output, (mesh_file(args.mesh),), "parameter file")
     count = int(args.count)
     if count < 0:
@@ -78,7 +61,8 @@ def run(args) -> None:
     check_count(min(count, RANDOM_CHUNK), RANDOM_BYTES_EACH, f"-n/--count (made {RANDOM_CHUNK} at a time)")
     mesh = load_base(args, args.mesh, textures=False)
     # several axes: 10·K + 6 numbers (+ 3, + 6); pieces shrink so that memory stays the same
-    width = tree_width(mesh.axis_count, 2 if "tint" in extension else 1 if extension else 0)
+    variation = Variation(**variation)
+    width = tree_width(mesh.axis_count, 2 if variation.tint is not None else 1 if variation.extended else 0)
     chunk = max(1, RANDOM_CHUNK * WIDTHS[0] // width)
     fixed = param_file_bytes(args.output, 0, width, quantize=args.quantize)
     each = param_file_bytes(args.output, 1, width, quantize=args.quantize) - fixed
@@ -88,12 +72,11 @@ def run(args) -> None:
 
     check_disk_space(args.output, fixed + count * each, f"parameter file ({count} instances of {width} numbers)",
                      ArgumentError, expected=fits)
-    options = dict(bend=args.bend, placement=args.placement, spacing=args.spacing, up=args.up, yaw=args.yaw,
-                   tilt=args.tilt, **extension)
-    iter_random_params(mesh, count, args.seed, **options)  # bad options are refused before the file is opened
+    options = dict(placement=args.placement, spacing=args.spacing, up=args.up)
+    iter_random_params(mesh, count, args.seed, variation, **options)  # bad options are refused before the file is opened
 
     def pieces():  # called twice for the quantized form: a first pass finds the decode table
-        return iter_random_params(mesh, count, args.seed, chunk=chunk, **options)
+        return iter_random_params(mesh, count, args.seed, variation, chunk=chunk, **options)
 
     path = write_param_chunks(args.output, pieces, count, width, mesh, quantize=args.quantize)
     print(f"wrote {path} ({count} instances, {path.stat().st_size} bytes)")

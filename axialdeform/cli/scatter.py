@@ -17,7 +17,7 @@ from ..core.io.mesh import mesh_source_path
 from ..core.io.params import BINARY_SUFFIXES, write_params
 from ..core.io.safeio import check_output_path
 from ..core.scatter import ANCHORS, scatter
-from ._common import add_axis, load_base, scale_range
+from ._common import add_axis, add_variation_args, load_base, variation_args
 
 __all__ = ["add_parser", "run"]
 
@@ -49,10 +49,7 @@ def add_parser(subparsers) -> None:
                    help="tilt the up axis towards the surface normal by F in [0, 1] (default: 0, upright)")
     s.add_argument("--anchor", choices=ANCHORS, default="bottom",
                    help="point of MESH on the surface (default: %(default)s)")
-    s.add_argument("--scale", default=None, metavar="MIN:MAX",
-                   help="random uniform scale, 19 numbers an instance (default: none, 16 numbers)")
-    s.add_argument("--bend", type=float, default=0.08, metavar="B",
-                   help="offset amplitude as a fraction of the axis length L (default: %(default)s)")
+    add_variation_args(s, ("bend", "yaw", "scale", "twist", "taper", "tint"))
     s.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
     s.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
     s.add_argument("--height-scale", type=float, default=1.0, metavar="H",
@@ -65,7 +62,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int | None:
-    scale = None if args.scale is None else scale_range(args.scale)  # checked before any file is read
+    variation = variation_args(args)  # checked before any file is read
 
     if args.quantize and Path(args.output).suffix.lower() not in BINARY_SUFFIXES:  # before the work, not after
         raise ParamFileError(f"{args.output}: the quantized form is binary only; expected a "
@@ -73,11 +70,10 @@ def run(args) -> int | None:
     check_output_path(args.output, (args.surface, mesh_source_path(args.mesh), args.density), "parameter file")
     mesh = load_base(args, args.mesh, textures=False)
     try:
-        params = scatter(args.surface, mesh, args.count, min_distance=args.min_distance, density=args.density,
-                         align_to_normal=args.align_to_normal, anchor=args.anchor,
-                         scale=scale,
-                         bend=args.bend, seed=args.seed, up=args.up, height_scale=args.height_scale,
-                         extent=args.extent, allow_fewer=args.allow_fewer)
+        params = scatter(args.surface, mesh, args.count, seed=args.seed, allow_fewer=args.allow_fewer,
+                         min_distance=args.min_distance, density=args.density, align_to_normal=args.align_to_normal,
+                         anchor=args.anchor, up=args.up, height_scale=args.height_scale, extent=args.extent,
+                         **variation)
         short = None
     except TooFewError as exc:
         params, short = exc.params, exc

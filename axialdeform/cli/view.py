@@ -7,7 +7,7 @@ from ..core.io.params import read_params
 from ..core.io.safeio import check_count
 from ..core.look import Look
 from ..core.params import check_drawable
-from ..core.variation import random_params
+from ..core.variation import Variation, random_params
 from ..gl.renderer import MODES
 from . import scenes
 from ._common import (
@@ -36,7 +36,7 @@ def add_parser(sub) -> None:
     v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
     v.add_argument("--seed", type=int, default=None,
                    help="seed of the random parameters when no PARAMS (default: 0; with PARAMS: none, the file's)")
-    v.add_argument("--bend", type=float, default=0.08, help="offset amplitude for N, fraction of L (default: %(default)s)")
+    v.add_argument("--bend", type=float, default=Variation.bend, help="offset amplitude for N, fraction of L (default: %(default)s)")
     v.add_argument("--mode", choices=MODES, default="solid", help="how to draw at the start (default: %(default)s)")
     v.add_argument("--up", choices=AXES, default="y", help="world up axis (default: %(default)s)")
     v.add_argument("--size", default="960x720", help="WIDTHxHEIGHT (default: %(default)s)")

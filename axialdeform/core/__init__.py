@@ -5,7 +5,7 @@ Modules, in the order of the data flow: ``mesh`` (load, parts, materials),
 ``axis`` (the control axis), ``record`` (THE instance record), ``params``
 (parameter arrays and files), ``variation``, ``scatter`` and ``wind`` (making
 instances), ``deform`` and ``transforms`` (the CPU reference), ``bounds``,
-``lod``, ``look``, ``scene``, ``bake``, ``fit``; plumbing: ``errors``,
+``lod``, ``look``, ``options``, ``scene``, ``bake``, ``fit``; plumbing: ``errors``,
 ``arrays``, ``lazy``.  Every file read and written: the :mod:`.io` package.
 """
 
@@ -25,12 +25,14 @@ _NAMES = {
     "as_params": "params", "make_params": "params", "extend_params": "params", "is_extended": "params",
     "tint_params": "params", "is_tinted": "params",
     "read_params": "io.params", "read_param_file": "io.params", "write_params": "io.params", "ParamFile": "io.params",
-    "random_params": "variation", "load_surface": "scatter",
+    "random_params": "variation", "Variation": "variation", "load_surface": "scatter",
+    "Placement": "scatter",
     "Wind": "wind", "wind_offsets": "wind", "apply_wind": "wind",
     # the CPU reference, bounds
     "rotation_matrices": "transforms", "instance_bounds": "bounds", "scene_box": "bounds",
     # scene and look
     "Scene": "scene", "Layer": "scene", "load_scene": "scene", "Look": "look", "DEFAULT_LOOK": "look",
+    "RenderOptions": "options",
     # out again
     "export_glb": "io.gltf", "export_instanced": "io.gltf", "export_baked": "io.gltf", "fit_params": "fit",
     "save_png": "io.image",

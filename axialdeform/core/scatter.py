@@ -43,13 +43,13 @@ from __future__ import annotations
 import math
 import os
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
-from .axes import child_offsets, level_bends
+from .axes import child_offsets
 from .axis import AXIS_NAMES, PERPENDICULAR
 from .deform import bernstein
 from .errors import MeshError, ScatterError, TooFewError
@@ -64,13 +64,18 @@ from .record import (
     OFFSETS,
     POSITION,
     SCALE,
+    TAPER,
+    TINT,
+    TWIST,
+    WIDTHS,
     Instances,
     join_record,
 )
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
+from .variation import Variation
 
 __all__ = [
-    "scatter", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights",
+    "scatter", "Placement", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights",
     "ANCHORS", "IMAGE_SUFFIXES", "poisson_greedy",
 ]
 
@@ -478,31 +483,85 @@ def _rotation_about(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return matrices_from_rotation_vectors(axis * angle[:, None])
 
 
-def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density=None,
-            align_to_normal: float = 0.0, anchor: str = "bottom", scale=None, bend: float = 0.08,
-            seed: int = 0, up: str = "y", height_scale: float = 1.0, extent=None,
-            allow_fewer: bool = False) -> np.ndarray:
-    """Place ``n`` instances of ``mesh`` on ``surface``.
+@dataclass(frozen=True)
+class Placement:
+    """Where and how instances stand on a surface (:func:`scatter`; a scene file's ``[layer.scatter]``).
 
-    surface : mesh path, height-map image path, ``trimesh.Trimesh``, BaseMesh or (rows, cols) heights.
-    mesh : BaseMesh, a mesh path or a bundled name (``"stone"``, ``"leaf"``).
-    n : int -- how many instances.
-    min_distance : float or None -- least distance between two instances' surface points.
-    density : image path or (rows, cols) float in [0, 1] over the surface's bounding box, or None.
-    align_to_normal : float in [0, 1] -- 0 upright, 1 along the surface normal.
-    anchor : ``"bottom"``, ``"center"`` or ``"origin"``.
-    scale : None, S or (MIN, MAX) with 0 < MIN <= MAX -- a uniform random scale per
-        instance; given, the result has 19 columns (``s tw tp``, ``tw = tp = 0``).
-    bend : float >= 0 -- control-offset amplitude as a fraction of the axis length L (a mesh of several
-        axes: one per level of its hierarchy, each child axis in units of its own length, d1 = 0).
-    seed : int >= 0.  up : ``"x"``, ``"y"`` or ``"z"``.
-    height_scale, extent : for a height-map surface (see :func:`surface_from_heights`).
-    allow_fewer : when fewer than ``n`` fit, return them instead of raising.
-
-    Returns (n, 16) or (n, 19) float32.  Raises :class:`TooFewError` (with
-    ``.params``, what fits) when fewer than ``n`` fit and not ``allow_fewer``.
+    Attributes
+    ----------
+    min_distance : float or None
+        Least distance between two instances' surface points (Poisson spacing); None: none.
+    density : image path, (rows, cols) float in [0, 1] or None
+        Over the surface's bounding box: where instances may go, and how densely.
+    align_to_normal : float in [0, 1]
+        0 upright, 1 along the surface normal.
+    anchor : {"bottom", "center", "origin"}
+        The point of the mesh that stands on the surface; its axis is pinned there
+        (``D(t_anchor) = 0``).
+    up : {"x", "y", "z"}
+        World up.
+    height_scale, extent
+        For a height-map surface (see :func:`surface_from_heights`).
     """
 
+    min_distance: float | None = None
+    density: object = None
+    align_to_normal: float = 0.0
+    anchor: str = "bottom"
+    up: str = "y"
+    height_scale: float = 1.0
+    extent: object = None
+
+    def __post_init__(self):
+        if self.anchor not in ANCHORS:
+            raise ScatterError(f"anchor: expected one of {', '.join(ANCHORS)}, found {self.anchor!r}")
+        if not (math.isfinite(self.align_to_normal) and 0.0 <= self.align_to_normal <= 1.0):
+            raise ScatterError(f"align-to-normal: expected a fraction in [0, 1], found {self.align_to_normal!r}")
+        if self.up not in AXIS_NAMES:
+            raise ScatterError(f"up: expected one of x, y, z, found {self.up!r}")
+
+
+#: Variation fields scatter does not read: the surface decides them (position, and the tilt by align_to_normal)
+_SURFACE_DECIDES = {"tilt": (-0.25, 0.25), "height": (0.0, 0.0)}
+
+
+def scatter(surface, mesh, n: int, variation: Variation | None = None, placement: Placement | None = None, *,
+            seed: int = 0, allow_fewer: bool = False, **fields) -> np.ndarray:
+    """Place ``n`` instances of ``mesh`` on ``surface``.
+
+    Parameters
+    ----------
+    surface : mesh path, height-map image path, trimesh.Trimesh, BaseMesh, Surface or (rows, cols) heights
+        Instances stand on its upward-facing faces.
+    mesh : BaseMesh, a mesh path or a bundled name (``"stone"``, ``"leaf"``)
+    n : int
+        How many instances.
+    variation : Variation, optional
+        Their bend (a fraction of L; a mesh of several axes: one per level, each child axis in units
+        of its own length, ``d₁ = 0``), yaw, scale, twist, taper and tint.  The surface decides the
+        position and the tilt (``align_to_normal``): a ``tilt`` or ``height`` is refused.
+    placement : Placement, optional
+        Spacing, density map, alignment, anchor, up, and a height map's scale and extent.
+    seed : int >= 0
+    allow_fewer : bool
+        When fewer than ``n`` fit, return them instead of raising.
+    **fields
+        Fields of :class:`Variation` or of :class:`Placement` (``bend=0.1, min_distance=0.5``).
+
+    Returns
+    -------
+    Instances
+        ``(n, 16)``, or ``(n, 19)`` with a scale, twist or taper, ``(n, 22)`` with a tint, float32.
+        Raises :class:`TooFewError` (with ``.params``, what fits) when fewer than ``n`` fit and not
+        ``allow_fewer``.
+    """
+
+    place_fields = {k: fields.pop(k) for k in list(fields) if k in Placement.__dataclass_fields__}
+    for key in set(fields) & set(_SURFACE_DECIDES):
+        raise ScatterError(f"{key}: scatter stands instances on the surface (tilted by align_to_normal); "
+                           f"expected no {key}")
+    variation = Variation.of(variation, fields, ScatterError)
+    placement = replace(placement or Placement(), **place_fields)
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
         raise ScatterError(f"count: expected a whole number >= 0, found {n!r}")
     n = int(n)
@@ -510,18 +569,10 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
         raise ScatterError(f"count: expected at most {MAX_INSTANCES} instances, found {n}")
     if not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ScatterError(f"seed: expected a non-negative integer, found {seed!r}")
-    if anchor not in ANCHORS:
-        raise ScatterError(f"anchor: expected one of {', '.join(ANCHORS)}, found {anchor!r}")
-    if not (math.isfinite(align_to_normal) and 0.0 <= align_to_normal <= 1.0):
-        raise ScatterError(f"align-to-normal: expected a fraction in [0, 1], found {align_to_normal!r}")
-    bend = level_bends(bend, ScatterError)  # one amplitude per level of a mesh of several axes
-    if scale is not None:
-        lo_s, hi_s = (float(scale), float(scale)) if np.isscalar(scale) else (float(scale[0]), float(scale[1]))
-        if not (math.isfinite(lo_s) and math.isfinite(hi_s) and 0 < lo_s <= hi_s):
-            raise ScatterError(f"scale: expected MIN:MAX with 0 < MIN <= MAX, found {lo_s:g}:{hi_s:g}")
+    min_distance = placement.min_distance
     base = mesh if isinstance(mesh, BaseMesh) else load_mesh(mesh)
-    surf = load_surface(surface, up=up, height_scale=height_scale, extent=extent)
-    grey = None if density is None else load_density(density)
+    surf = load_surface(surface, up=placement.up, height_scale=placement.height_scale, extent=placement.extent)
+    grey = None if placement.density is None else load_density(placement.density)
     if min_distance is not None:
         size = surf.size
         if not (math.isfinite(min_distance) and 0 < min_distance <= size):
@@ -575,9 +626,7 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
         raise ScatterError(f"density: no candidate on the upward-facing part of {surf.name} lies under a "
                            f"non-black pixel; expected white where instances may go (columns along "
                            f"+{AXIS_NAMES[surf.ground[0]]}, rows along +{AXIS_NAMES[surf.ground[1]]})")
-    params = _instances(base, points, surf.face_normals(faces), surf.up, rng,
-                        align_to_normal=align_to_normal, anchor=anchor,
-                        scale=None if scale is None else (lo_s, hi_s), bend=bend)
+    params = _instances(base, points, surf.face_normals(faces), surf.up, rng, placement, variation)
     if len(params) < n and not allow_fewer:
         why = f" at spacing {min_distance:g}" if min_distance is not None else ""
         raise TooFewError(f"count: only {len(params)} of {n} instances fit on {surf.name}{why}; "
@@ -585,11 +634,12 @@ def scatter(surface, mesh, n: int, *, min_distance: float | None = None, density
     return Instances.of(params)
 
 
-def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, scale, bend) -> np.ndarray:
+def _instances(base, points, normals, u: int, rng, placement: Placement, variation: Variation) -> np.ndarray:
     """Parameters for instances standing on ``points`` (k, 3) with surface ``normals`` (k, 3)."""
 
     k = len(points)
-    cols = 16 if scale is None else 19
+    anchor, scale, bend = placement.anchor, variation.scale, variation.bends
+    cols = WIDTHS[2 if variation.tint is not None else 1 if variation.extended else 0]
     rolls = rng.random((k, 12))
     axis = base.axis
     length = axis.length
@@ -608,12 +658,12 @@ def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, s
 
     e_up = np.zeros(3)
     e_up[u] = 1.0
-    yaw = 2 * math.pi * rolls[:, 10]
+    yaw = variation.yaw[0] + (variation.yaw[1] - variation.yaw[0]) * rolls[:, 10]
     turn = _rotation_about(np.broadcast_to(e_up, (k, 3)), yaw)
     nrm = normals / np.linalg.norm(normals, axis=1, keepdims=True)
     cross = np.cross(np.broadcast_to(e_up, (k, 3)), nrm)
     sin = np.linalg.norm(cross, axis=1)
-    angle = np.arctan2(sin, nrm[:, u]) * align_to_normal
+    angle = np.arctan2(sin, nrm[:, u]) * placement.align_to_normal
     tilt_axis = np.where(sin[:, None] > 1e-12, cross / np.where(sin > 1e-12, sin, 1.0)[:, None], 0.0)
     rot = _rotation_about(tilt_axis, angle) @ turn
 
@@ -625,8 +675,16 @@ def _instances(base, points, normals, u: int, rng, *, align_to_normal, anchor, s
     if cols >= EXTENDED_WIDTH:
         out[:, SCALE] = s
     tree = getattr(base, "tree", None)
+    children = None if tree is None else rng.random((k, tree.count - 1, 5, 2))
+    # twist, taper and tint: drawn after everything else, so the other numbers stay what they are without them
+    if variation.twist is not None or variation.taper is not None:
+        u_extra = rng.random((k, 2))
+        out[:, TWIST] = abs(variation.twist or 0.0) * (2.0 * u_extra[:, 0] - 1.0)
+        out[:, TAPER] = (variation.taper or 0.0) * u_extra[:, 1]
+    if variation.tint is not None:
+        out[:, TINT] = np.asarray(variation.tint_color) * (1.0 - variation.tint * rng.random((k, 3)))
     if tree is not None:  # several axes: every child axis its level's amplitude, d1 = 0 (joints stay closed)
-        out = join_record(out, child_offsets(tree, bend, rng.random((k, tree.count - 1, 5, 2))))
+        out = join_record(out, child_offsets(tree, bend, children))
     out = np.ascontiguousarray(out, dtype=np.float32)
     if not np.isfinite(out).all():
         raise ScatterError("scatter: a parameter came out non-finite; expected finite surface and mesh coordinates")

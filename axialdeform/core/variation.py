@@ -12,7 +12,8 @@ shared by all five is the same as a translation, see docs/parameter-files.md).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from dataclasses import fields as dataclass_fields
 
 import numpy as np
 
@@ -33,7 +34,7 @@ from .record import (
     join_record,
 )
 
-__all__ = ["random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
+__all__ = ["Variation", "random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
 
 PLACEMENTS = ("grid", "box", "disc")
 
@@ -61,46 +62,135 @@ def _range(value, name: str) -> tuple[float, float]:
 
 
 @dataclass(frozen=True)
+class Variation:
+    """How far instances differ: the ranges every random number of an instance is drawn from.
+
+    One value read by :func:`random_params`, :func:`axialdeform.scatter`, the viewer and the command
+    line (whose defaults are this class's).  Fields are checked when the value is made; a bad one is
+    a :class:`ParamError` naming it.  ``Variation(bend=0.2)`` changes one field,
+    ``variation.replace(twist=1.0)`` another.
+
+    Attributes
+    ----------
+    bend : float or sequence of float
+        Offsets are drawn uniformly in ``±bend·L`` per component, then made canonical (zero mean over
+        the five control points).  A mesh of several axes takes one amplitude per level of its
+        hierarchy (``(trunk, branches, twigs)``; the last one for any deeper level).
+    yaw : (float, float)
+        Range of the angle about the up axis (radians).
+    tilt : (float, float)
+        Range of the two other angles (radians).
+    height : (float, float)
+        Range of the position along the up axis (``random_params``' grid and disc).
+    scale : (float, float) or None
+        ``0 < min <= max``: a uniform scale per instance (a single number: every instance that size).
+    twist : float or None
+        ``tw`` uniform in ``[-|twist|, |twist|]`` radians.
+    taper : float or None
+        ``tp`` uniform between 0 and ``taper`` (< 1).
+    tint : float or None
+        An amount in 0..1: each instance's tint is ``tint_color`` times ``1 - tint·u``, ``u`` uniform
+        in 0..1 per channel.
+    tint_color : (float, float, float)
+        Linear RGB in 0..1, the brightest tint (white: the mesh's own colours).
+
+    Any of ``scale``, ``twist``, ``taper`` makes 19-number (extended) instances, ``tint`` 22-number
+    (tinted) ones; the first 16 numbers of an instance stay what they are without them.
+    """
+
+    bend: float | tuple = 0.08
+    yaw: tuple = (0.0, 2 * math.pi)
+    tilt: tuple = (-0.25, 0.25)
+    height: tuple = (0.0, 0.0)
+    scale: tuple | None = None
+    twist: float | None = None
+    taper: float | None = None
+    tint: float | None = None
+    tint_color: tuple = (1.0, 1.0, 1.0)
+
+    def __post_init__(self):
+        put = object.__setattr__
+        bends = level_bends(self.bend)  # several axes: each level its own amplitude (the last one beyond)
+        put(self, "bend", bends[0] if np.isscalar(self.bend) else bends)
+        for name in ("yaw", "tilt", "height"):
+            put(self, name, _range(getattr(self, name), name))
+        if self.scale is not None:
+            lo, hi = _range(self.scale, "scale")
+            if not lo > 0:
+                raise ParamError(f"scale: expected MIN,MAX with 0 < MIN <= MAX, found {self.scale!r}")
+            put(self, "scale", (lo, hi))
+        if self.twist is not None:
+            twist = _number(self.twist, "twist")
+            if not math.isfinite(twist):
+                raise ParamError(f"twist: expected a finite number of radians, found {self.twist!r}")
+            put(self, "twist", twist)
+        if self.taper is not None:
+            taper = _number(self.taper, "taper")
+            if not (math.isfinite(taper) and taper < 1):
+                raise ParamError(f"taper: expected a number < 1, found {self.taper!r}")
+            put(self, "taper", taper)
+        if self.tint is not None:
+            amount = _number(self.tint, "tint")
+            if not (math.isfinite(amount) and 0 <= amount <= 1):
+                raise ParamError(f"tint: expected a variation amount between 0 and 1, found {self.tint!r}")
+            put(self, "tint", amount)
+        color = np.asarray(self.tint_color, dtype=np.float64) if np.ndim(self.tint_color) == 1 else None
+        if color is None or color.shape != (3,) or not (np.isfinite(color).all() and (color >= 0).all()
+                                                         and (color <= 1).all()):
+            raise ParamError(f"tint_color: expected three linear RGB numbers in 0..1, found {self.tint_color!r}")
+        put(self, "tint_color", tuple(float(c) for c in color))
+
+    @property
+    def bends(self) -> tuple[float, ...]:
+        """The bend amplitude of each level of a hierarchy (one number: every level)."""
+        return self.bend if isinstance(self.bend, tuple) else (self.bend,)
+
+    @property
+    def extended(self) -> bool:
+        """Whether instances get the 19-number extension (scale, twist, taper) or wider."""
+        return any(x is not None for x in (self.scale, self.twist, self.taper, self.tint))
+
+    def replace(self, **fields) -> Variation:
+        """A copy with some fields changed (checked again)."""
+        return replace(self, **fields)
+
+    @classmethod
+    def of(cls, variation: Variation | None = None, fields: dict | None = None, error: type = ParamError) -> Variation:
+        """``variation`` (default: the default variation) with ``fields`` changed: the one way a function
+        that takes ``variation=`` and its fields as keywords reads them.  A keyword that is no field is
+        ``error``, naming it."""
+        base = cls() if variation is None else variation
+        if not isinstance(base, cls):
+            raise error(f"variation: expected an axialdeform.Variation, found {type(base).__name__}")
+        fields = fields or {}
+        unknown = sorted(set(fields) - {f.name for f in dataclass_fields(cls)})
+        if unknown:
+            raise error(f"{unknown[0]}: not an option; expected one of the fields of axialdeform.Variation "
+                        f"({', '.join(f.name for f in dataclass_fields(cls))})")
+        if not fields:
+            return base
+        try:
+            return replace(base, **fields)
+        except ParamError as exc:
+            raise (exc if error is ParamError else error(str(exc))) from None
+
+
+@dataclass(frozen=True)
 class _Spec:
     """Checked options of :func:`random_params`."""
 
     count: int
     seed: int
-    bend: float
     length: float
     placement: str
     spacing: float
     up: int
-    yaw: tuple
-    tilt: tuple
-    height: tuple
-    extended: bool
-    scale: tuple
-    twist: float
-    taper: float
-    tint: tuple | None = None  # (amount, (r, g, b)): tinted instances
-    tree: object = None  # several axes: the mesh's AxisTree ...
-    bends: tuple = ()  # ... and the bend amplitude of each level of it
+    variation: Variation
+    tree: object = None  # several axes: the mesh's AxisTree
 
 
-def _spec(
-    mesh,
-    count: int,
-    seed: int = 0,
-    *,
-    bend: float = 0.08,
-    placement: str = "grid",
-    spacing: float | None = None,
-    up: str = "y",
-    yaw=(0.0, 2 * math.pi),
-    tilt=(-0.25, 0.25),
-    height=(0.0, 0.0),
-    scale=None,
-    twist=None,
-    taper=None,
-    tint=None,
-    tint_color=(1.0, 1.0, 1.0),
-) -> _Spec:
+def _spec(mesh, count: int, seed: int, variation: Variation | None, fields: dict, placement: str = "grid",
+          spacing: float | None = None, up: str = "y") -> _Spec:
     """The checked options of :func:`random_params`."""
     if not isinstance(count, (int, np.integer)) or count < 0:
         raise ParamError(f"count: expected a non-negative integer, found {count!r}")
@@ -108,104 +198,67 @@ def _spec(
         raise ParamError(f"placement: expected one of {', '.join(PLACEMENTS)}, found {placement!r}")
     if up not in AXIS_NAMES:
         raise ParamError(f"up: expected one of x, y, z, found {up!r}")
-    bends = level_bends(bend)  # several axes: each level its own amplitude (the last one beyond)
-    bend = bends[0]
+    variation = Variation.of(variation, fields)
     length = mesh.axis.length
     spacing = 1.1 * length if spacing is None else float(spacing)
     if not (math.isfinite(spacing) and spacing > 0):
         raise ParamError(f"spacing: expected a finite distance > 0, found {spacing!r}")
-    yaw, tilt, height = _range(yaw, "yaw"), _range(tilt, "tilt"), _range(height, "height")
-    extended = any(x is not None for x in (scale, twist, taper, tint))
-    tinting = None
-    if tint is not None:
-        amount = _number(tint, "tint")
-        if not (math.isfinite(amount) and 0 <= amount <= 1):
-            raise ParamError(f"tint: expected a variation amount between 0 and 1, found {tint!r}")
-        color = np.asarray(tint_color, dtype=np.float64) if np.ndim(tint_color) == 1 else None
-        if color is None or color.shape != (3,) or not (np.isfinite(color).all() and (color >= 0).all()
-                                                         and (color <= 1).all()):
-            raise ParamError(f"tint_color: expected three linear RGB numbers in 0..1, found {tint_color!r}")
-        tinting = (amount, tuple(float(c) for c in color))
-    s_lo, s_hi = _range(1.0 if scale is None else scale, "scale")
-    if not s_lo > 0:
-        raise ParamError(f"scale: expected MIN,MAX with 0 < MIN <= MAX, found {scale!r}")
-    tw = 0.0 if twist is None else float(twist)
-    tp = 0.0 if taper is None else float(taper)
-    if not math.isfinite(tw):
-        raise ParamError(f"twist: expected a finite number of radians, found {twist!r}")
-    if not (math.isfinite(tp) and tp < 1):
-        raise ParamError(f"taper: expected a number < 1, found {taper!r}")
     _check_seed(seed)
-    return _Spec(int(count), int(seed), bend, length, placement, spacing, AXIS_NAMES.index(up), yaw, tilt,
-                 height, extended, (s_lo, s_hi), tw, tp, tinting, getattr(mesh, "tree", None), bends)
+    return _Spec(int(count), int(seed), length, placement, spacing, AXIS_NAMES.index(up), variation,
+                 getattr(mesh, "tree", None))
 
 
-def random_params(
-    mesh,
-    count: int,
-    seed: int = 0,
-    *,
-    bend: float = 0.08,
-    placement: str = "grid",
-    spacing: float | None = None,
-    up: str = "y",
-    yaw=(0.0, 2 * math.pi),
-    tilt=(-0.25, 0.25),
-    height=(0.0, 0.0),
-    scale=None,
-    twist=None,
-    taper=None,
-    tint=None,
-    tint_color=(1.0, 1.0, 1.0),
-) -> np.ndarray:
+def random_params(mesh, count: int, seed: int = 0, variation: Variation | None = None, *, placement: str = "grid",
+                  spacing: float | None = None, up: str = "y", **fields) -> np.ndarray:
     """Random parameters: ``(count, 16) float32``, or ``(count, 19)`` (extended
     instances) when any of ``scale``, ``twist``, ``taper`` is given, or
     ``(count, 22)`` (tinted instances) with ``tint``.
 
-    mesh : BaseMesh (its axis length ``L`` scales the bend).
-    bend : offsets are drawn uniformly in ``±bend·L`` per component, then
-        made canonical (zero mean over the five control points).  A mesh of
-        several axes (:meth:`BaseMesh.with_axes`) takes one amplitude per level
-        of its hierarchy (``(trunk, branches, twigs)``; the last one for any
-        deeper level): a child axis ``j``'s offsets are uniform in
-        ``±bend[level]·L_j`` with ``d₁ = 0`` (its root stays where its parent
-        puts it: joints stay closed), drawn after every other number.
-    placement : ``"grid"`` (square grid on the ground plane), ``"disc"``
-        (uniform in a disc on the ground plane) or ``"box"`` (uniform in a
-        cube, for falling leaves).
-    spacing : distance between neighbours in world units (default ``1.1·L``);
-        disc and box sizes are chosen so each instance gets about that much room.
-    up : ``"x"``, ``"y"`` or ``"z"``: the world up axis; the ground plane is
-        across it.
-    yaw : range of the angle about the up axis (radians).
-    tilt : range of the two other angles (radians).
-    height : range of the position along the up axis (grid and disc).
-    scale : ``(min, max)`` with ``0 < min <= max``: uniform scale ``s``, drawn
-        uniformly (a single number: every instance that size).
-    twist : ``max`` radians: ``tw`` uniform in ``[-|max|, |max|]``.
-    taper : ``max`` (< 1): ``tp`` uniform between 0 and ``max``.
-    tint : ``amount`` in 0..1: each instance's tint (linear RGB multiplying
-        the mesh's base colour) is ``tint_color`` times ``1 - amount * u``,
-        ``u`` uniform in 0..1 drawn per channel.
-    tint_color : ``(r, g, b)`` in 0..1, the brightest tint (default white:
-        the mesh's own colours).
-    The first 16 numbers of an instance are the same as without these (the
-    extra numbers come from the same random stream, after the others).
-    Instance ``i`` depends only on the seed, the options, ``count`` and ``i``:
+    Parameters
+    ----------
+    mesh : BaseMesh
+        Its axis length ``L`` scales the bend.
+    count, seed : int
+        How many instances, and the seed of the random stream.
+    variation : Variation, optional
+        How far the instances differ (:class:`Variation`: bend, yaw, tilt, height, scale, twist,
+        taper, tint); default ``Variation()``.
+    placement : {"grid", "disc", "box"}
+        A square grid on the ground plane, uniform in a disc on it, or uniform in a cube (for
+        falling leaves).
+    spacing : float, optional
+        Distance between neighbours in world units (default ``1.1·L``); disc and box sizes are
+        chosen so each instance gets about that much room.
+    up : {"x", "y", "z"}
+        The world up axis; the ground plane is across it.
+    **fields
+        Fields of :class:`Variation` that replace ``variation``'s (``bend=0.1, twist=0.5``).
+
+    A child axis ``j`` of a mesh of several axes (:meth:`BaseMesh.with_axes`) has offsets uniform in
+    ``±bend[level]·L_j`` with ``d₁ = 0`` (its root stays where its parent puts it: joints stay
+    closed), drawn after every other number.  The first 16 numbers of an instance are the same
+    with or without the extension (the extra numbers come from the same random stream, after the
+    others).  Instance ``i`` depends only on the seed, the options, ``count`` and ``i``:
     :func:`iter_random_params` yields the same rows in pieces.
+
+    Returns
+    -------
+    Instances
+        ``(count, 16|19|22)`` float32, or ``10·(K − 1)`` more columns for K axes.
     """
-    spec = _spec(mesh, count, seed, bend=bend, placement=placement, spacing=spacing, up=up, yaw=yaw, tilt=tilt,
-                 height=height, scale=scale, twist=twist, taper=taper, tint=tint, tint_color=tint_color)
+    spec = _spec(mesh, count, seed, variation, fields, placement, spacing, up)
     return Instances.of(_rows(spec, 0, spec.count))
 
 
-def iter_random_params(mesh, count: int, seed: int = 0, *, chunk: int = 1 << 18, **options):
+def iter_random_params(mesh, count: int, seed: int = 0, variation: Variation | None = None, *,
+                       chunk: int = 1 << 18, placement: str = "grid", spacing: float | None = None, up: str = "y",
+                       **fields):
     """The rows of :func:`random_params` (same arguments) in pieces of at most
     ``chunk`` instances, an iterator of ``(m, 16)`` (or ``(m, 19)``) float32
     arrays: concatenated they are exactly ``random_params(mesh, count, seed,
     ...)``, bit for bit, but memory holds one piece at a time (each piece
     starts the random stream where it is, PCG64's ``advance``)."""
-    spec = _spec(mesh, count, seed, **options)  # bad options are said here, before the first piece
+    spec = _spec(mesh, count, seed, variation, fields, placement, spacing, up)  # said before the first piece
     if not isinstance(chunk, (int, np.integer)) or chunk < 1:
         raise ParamError(f"chunk: expected a number of instances >= 1, found {chunk!r}")
     chunk = int(chunk)
@@ -231,9 +284,10 @@ def _rows(spec: _Spec, start: int, stop: int) -> np.ndarray:
     n, m = spec.count, stop - start
     spacing, up_i, placement = spec.spacing, spec.up, spec.placement
     u = _stream(spec.seed, 16 * start, 16 * m).reshape(m, 16)  # one row of uniforms per instance
-    out = np.zeros((m, WIDTHS[2 if spec.tint else 1 if spec.extended else 0]), dtype=np.float64)
+    var = spec.variation
+    out = np.zeros((m, WIDTHS[2 if var.tint is not None else 1 if var.extended else 0]), dtype=np.float64)
 
-    offsets = (2.0 * u[:, OFFSETS] - 1.0) * spec.bend * spec.length
+    offsets = (2.0 * u[:, OFFSETS] - 1.0) * var.bends[0] * spec.length
     offsets = offsets.reshape(m, 5, 2)
     offsets -= offsets.mean(axis=1, keepdims=True)
     out[:, OFFSETS] = offsets.reshape(m, 10)
@@ -256,30 +310,31 @@ def _rows(spec: _Spec, start: int, stop: int) -> np.ndarray:
         side = spacing * max(n, 1) ** (1 / 3)
         pos = (u[:, POSITION] - 0.5) * side
     if placement != "box":
-        height = spec.height
+        height = var.height
         pos[:, up_i] = height[0] + (height[1] - height[0]) * u[:, 12]
     out[:, POSITION] = pos
 
-    yaw, tilt = spec.yaw, spec.tilt
+    yaw, tilt = var.yaw, var.tilt
     angles = tilt[0] + (tilt[1] - tilt[0]) * u[:, ANGLES]
     angles[:, up_i] = yaw[0] + (yaw[1] - yaw[0]) * u[:, 13 + up_i]
     out[:, ANGLES] = angles
     del u, offsets, pos, angles
-    if spec.extended:
+    if var.extended:
         # the same stream, after the 16 numbers of every instance: 3 a row
         extra = _stream(spec.seed, 16 * n + 3 * start, 3 * m).reshape(m, 3)
-        (s_lo, s_hi), tw, tp = spec.scale, spec.twist, spec.taper
+        (s_lo, s_hi) = var.scale or (1.0, 1.0)
+        tw, tp = var.twist or 0.0, var.taper or 0.0
         out[:, SCALE] = s_lo + (s_hi - s_lo) * extra[:, 0]
         out[:, TWIST] = abs(tw) * (2.0 * extra[:, 1] - 1.0)
         out[:, TAPER] = tp * extra[:, 2]
-    if spec.tint:
+    if var.tint is not None:
         # then 3 a row for the tint, after the extended numbers of every instance
-        amount, color = spec.tint
+        amount, color = var.tint, var.tint_color
         u_tint = _stream(spec.seed, 19 * n + 3 * start, 3 * m).reshape(m, 3)
         out[:, TINT] = np.asarray(color) * (1.0 - amount * u_tint)
     if spec.tree is not None:
         # several axes: 10 numbers per child axis, after the tint block of every instance
         k = spec.tree.count - 1
         u_child = _stream(spec.seed, 22 * n + 10 * k * start, 10 * k * m).reshape(m, k, 5, 2)
-        return as_params(join_record(out, child_offsets(spec.tree, spec.bends, u_child)), axes=k + 1)
+        return as_params(join_record(out, child_offsets(spec.tree, var.bends, u_child)), axes=k + 1)
     return as_params(out)

@@ -17,7 +17,7 @@ _NAMES = {
     "AxialRenderer": "renderer", "MODES": "renderer",
     "GroundPlane": "ground", "ShadowMap": "shadow",
     "Camera": "camera", "OrbitCamera": "camera", "frame_instances": "camera",
-    "SceneRenderer": "scene", "render_scene": "image",
+    "SceneRenderer": "scene",
     "render_image": "image",
 }
 

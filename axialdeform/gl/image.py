@@ -9,6 +9,7 @@ import numpy as np
 
 from ..core.errors import ArgumentError
 from ..core.look import DEFAULT_LOOK, Look
+from ..core.options import RenderOptions
 from ..core.scene import Scene
 from .camera import UP_VECTORS, Camera
 from .context import Offscreen, check_image_size, create_context
@@ -18,7 +19,7 @@ from .renderer import MODES
 from .scene import TERRAIN_INSTANCE, SceneRenderer, scene_camera
 from .shadow import ShadowMap
 
-__all__ = ["render_image", "render_scene", "parse_size", "as_scene", "look_from_keywords"]
+__all__ = ["render_image", "parse_size", "as_scene", "look_from_keywords", "pop_look_keywords"]
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -38,6 +39,12 @@ def parse_size(text: str) -> tuple[int, int]:
 #: render_image's keywords of the old signature, now fields of :class:`Look`
 _LOOK_KEYWORDS = ("fast", "ground", "shadow", "samples", "background", "hidden_line", "light_dir", "ambient",
                   "line_color")
+
+
+def pop_look_keywords(fields: dict) -> dict:
+    """Take the old :class:`Look` keywords (``fast``, ``ground``, ...) out of ``fields``, for
+    :func:`look_from_keywords`; the rest stay."""
+    return {k: fields.pop(k) for k in list(fields) if k in _LOOK_KEYWORDS}
 
 
 def look_from_keywords(look: Look | None, keywords: dict, where: str = "render_image") -> Look:
@@ -73,8 +80,8 @@ def as_scene(scene, params=None, *, up: str = "y", wind=None, parts=None):
 
 
 def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Look | None = None,
-                 camera: Camera | None = None, up: str = "y", ctx=None, renderer=None, parts=None,
-                 time: float | None = None, wind=None, options: dict | None = None, **old_keywords) -> np.ndarray:
+                 camera: Camera | None = None, ctx=None, options: RenderOptions | None = None,
+                 **fields) -> np.ndarray:
     """Render a scene to an ``(height, width, 3) uint8`` image.
 
     Parameters
@@ -100,33 +107,31 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
         Default: :func:`~axialdeform.gl.scene.scene_camera`, the one framing
         rule (tight, bend-aware) at this aspect; near and far enclose the
         ground too.
-    up : {"x", "y", "z"}
-        World up of a mesh (a Scene has its own).
     ctx : moderngl.Context, optional
         Created (EGL) and released afterwards if None.
-    renderer : AxialRenderer, optional
-        Draw a one-layer scene with this renderer (its instances).
-    parts : sequence of str, optional
-        The mesh's parts to draw.
-    time, wind : optional
-        The wind's clock (seconds) and a :class:`axialdeform.Wind` that
-        replaces the scene's.
-    options : dict, optional
-        :class:`AxialRenderer` options of every layer (``culling``, ``lod``,
-        ``lod_error``).
+    options : RenderOptions, optional
+        What is drawn and how (:class:`axialdeform.RenderOptions`): a mesh's
+        ``up`` and ``parts``, a ``wind`` that replaces the scene's and its
+        ``time``, a ``renderer`` to draw a one-layer scene with, and every
+        layer's ``culling``, ``lod`` and ``lod_error``.
+    **fields
+        Fields of :class:`RenderOptions` that replace ``options``'
+        (``up="z", time=1.5``).  The old keywords ``fast``, ``ground``,
+        ``shadow``, ``samples``, ``background``, ``hidden_line``,
+        ``light_dir``, ``ambient`` and ``line_color`` still work for one
+        release, with a DeprecationWarning: they are fields of ``look``.
 
     Returns
     -------
     image : (h, w * len(modes), 3) uint8
         First row at the top.
-
-    The old keywords ``fast``, ``ground``, ``shadow``, ``samples``,
-    ``background``, ``hidden_line``, ``light_dir``, ``ambient`` and
-    ``line_color`` still work for one release, with a DeprecationWarning:
-    they are fields of ``look``.
     """
 
-    scene = as_scene(scene, params, up=up, wind=wind, parts=parts)
+    old_keywords = pop_look_keywords(fields)
+    opts = RenderOptions.of(options, fields, "render_image",
+                            ("up", "parts", "wind", "time", "renderer", "culling", "lod", "lod_error"))
+    wind, time, renderer = opts.wind, opts.time, opts.renderer
+    scene = as_scene(scene, params, up=opts.up, wind=wind, parts=opts.parts)
     if wind is not None:
         scene.wind = wind
     look = look_from_keywords(scene.look if look is None else look, old_keywords)
@@ -140,7 +145,8 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
         w, h = parse_size(f"{size[0]}x{size[1]}")
         check_image_size(ctx, (w, h), look.samples, panels=len(modes))  # before any work: the error says the limit
         layers = [(layer.mesh, layer.params) for layer in scene.layers]
-        with SceneRenderer(ctx, scene, renderer=renderer, **(options or {})) as drawn:
+        with SceneRenderer(ctx, scene, renderer=renderer, culling=opts.culling, lod=opts.lod,
+                           lod_error=opts.lod_error) as drawn:
             plane = shadow = None
             try:
                 if look.draws_ground and scene.terrain is None:
@@ -170,16 +176,3 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
     finally:
         if own_ctx:
             ctx.release()
-
-
-def render_scene(scene, size=(800, 600), mode: str = "solid", *, ctx=None, time: float = 0.0, samples: int = 4,
-                 camera: Camera | None = None, culling: bool = True, lod: bool = False,
-                 lod_error: float = 1.0) -> np.ndarray:
-    """Deprecated: :func:`axialdeform.render_image` takes a scene
-    (``render_image(scene, size=..., modes=mode, look=scene.look.replace(samples=...))``)."""
-
-    warnings.warn("render_scene is deprecated: use axialdeform.render_image(scene, ...)", DeprecationWarning,
-                  stacklevel=2)
-    return render_image(scene, size=size, modes=mode, ctx=ctx, time=time, camera=camera,
-                        look=scene.look.replace(samples=samples),
-                        options={"culling": culling, "lod": lod, "lod_error": lod_error})

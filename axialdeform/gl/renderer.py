@@ -26,9 +26,9 @@ from ..core.bounds import base_radius
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 from ..core.look import DEFAULT_LOOK, Look
+from ..core.options import RENDERER_FIELDS, RenderOptions
 from ..core.params import check_tree_params, is_extended
 from ..core.record import split_record, tint_columns
-from ..core.wind import Wind
 from .axes import AxesTexture
 from .buffers import InstanceBuffer, MeshBuffers
 from .capture import Capture
@@ -63,6 +63,9 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         The 16 numbers per instance, or (n, 19): extended instances (scale,
         twist, taper after the 16), or (n, 22): tinted instances (their
         tint colours them, as :meth:`set_tint` does).
+    options : RenderOptions, optional
+        How to draw (:class:`~axialdeform.core.options.RenderOptions`); its fields below may also be
+        given as keywords (``AxialRenderer(ctx, mesh, params, culling=False)``).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
     bend : bool
@@ -137,11 +140,13 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
     visible (drawn), per LOD level, and vertices processed.
     """
 
-    def __init__(self, ctx, mesh, params=None, *, capacity: int | None = None, bend: bool = True,
-                 quantized: bool = False, cull_back_faces: bool | None = None, parts=None,
-                 extended: bool | None = None, wind: Wind | None = None, culling: bool = True, lod: bool = False,
-                 lod_error: float = 1.0, indirect: bool | None = None):
+    def __init__(self, ctx, mesh, params=None, options: RenderOptions | None = None, *, capacity: int | None = None,
+                 **fields):
         check_alive(ctx, "a new AxialRenderer")
+        opts = RenderOptions.of(options, fields, "AxialRenderer", RENDERER_FIELDS)
+        bend, quantized, cull_back_faces, parts = opts.bend, opts.quantized, opts.cull_back_faces, opts.parts
+        extended, wind, culling, lod, lod_error, indirect = (opts.extended, opts.wind, opts.culling, opts.lod,
+                                                             opts.lod_error, opts.indirect)
 
         self.ctx = ctx
         self.mesh = mesh
