@@ -58,6 +58,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass, replace
 from importlib.metadata import PackageNotFoundError, version
 from importlib.util import find_spec
 from pathlib import Path
@@ -100,7 +101,7 @@ from .stats import (
 )
 
 __all__ = ["BENCH_MODES", "COUNTS", "QUICK_COUNTS", "METHODS", "RECORD_KEYS", "THESIS", "GOALS", "run_bench",
-           "DEFAULT_OUT"]
+           "BenchSettings", "DEFAULT_OUT"]
 
 #: the folder ``axialdeform bench`` writes into when no ``--out`` is given
 DEFAULT_OUT = "axialdeform-bench"
@@ -281,32 +282,11 @@ def _no_progress(done: int, total: int, label: str) -> None:
     pass
 
 
-def run_bench(
-    *,
-    mesh="stone",
-    counts=COUNTS,
-    modes=BENCH_MODES,
-    methods=METHODS,
-    repeats: int = 3,
-    frames: int = 20,
-    warmup: int = 3,
-    size=(800, 600),
-    samples: int = 0,
-    seed: int = 2003,
-    out=None,
-    json_path=None,
-    cache=None,
-    leaf: bool = True,
-    throughput: bool = True,
-    quick: bool = False,
-    progress=None,
-    command: str | None = None,
-    timeout: float = 3600.0,
-) -> list[dict]:
-    """Run the benchmark; returns the records (one dict per method x count x mode
-    with exactly the keys of :data:`RECORD_KEYS`).
+@dataclass(frozen=True)
+class BenchSettings:
+    """What the benchmark measures (:func:`run_bench`; ``axialdeform bench``'s options).
 
-    Parameters
+    Attributes
     ----------
     mesh : str or path
         Base mesh (a file, or ``"stone"`` / ``"leaf"``).
@@ -323,6 +303,42 @@ def run_bench(
         on, one warm-up round).
     size : (width, height)
         Pixels of the offscreen target; ``samples`` its MSAA samples (0: none).
+    seed : int
+        Of the instances' random parameters.
+    leaf, throughput : bool
+        Also the leaf scene and the throughput run.
+    quick : bool
+        Small counts (100, 1 000), one repeat, smaller leaf/throughput runs.
+    timeout : float
+        Seconds one child process may take.
+    """
+
+    mesh: object = "stone"
+    counts: tuple = COUNTS
+    modes: tuple = BENCH_MODES
+    methods: tuple = METHODS
+    repeats: int = 3
+    frames: int = 20
+    warmup: int = 3
+    size: tuple = (800, 600)
+    samples: int = 0
+    seed: int = 2003
+    leaf: bool = True
+    throughput: bool = True
+    quick: bool = False
+    timeout: float = 3600.0
+
+
+def run_bench(settings: BenchSettings | None = None, *, out=None, json_path=None, cache=None, progress=None,
+              command: str | None = None, **fields) -> list[dict]:
+    """Run the benchmark; returns the records (one dict per method x count x mode
+    with exactly the keys of :data:`RECORD_KEYS`).
+
+    Parameters
+    ----------
+    settings : BenchSettings, optional
+        What is measured (:class:`BenchSettings`); its fields may also be given as keywords
+        (``counts=(100,), quick=True``).
     out : path, optional
         Folder for ``bench.md``, ``bench-details.json`` and the plots.
     json_path : path, optional
@@ -330,8 +346,6 @@ def run_bench(
     cache : path, optional
         Folder for the parameter files and pre-deformed OBJ files (default
         ``~/.cache/axialdeform/bench``).
-    quick : bool
-        Small counts (100, 1 000), one repeat, smaller leaf/throughput runs.
     progress : callable, optional
         ``progress(done, total, label)`` after every step (steps done so
         far, steps in all, what runs next); the command line wraps it in a
@@ -342,6 +356,15 @@ def run_bench(
     stopped early, ``bench-details.json`` with ``"interrupted": true``), then
     the ``KeyboardInterrupt`` is raised again.
     """
+    unknown = sorted(set(fields) - set(BenchSettings.__dataclass_fields__))
+    if unknown:
+        raise TypeError(f"run_bench() got an unexpected keyword argument {unknown[0]!r}")
+    settings = replace(settings or BenchSettings(), **fields)
+    mesh, counts, modes, methods = settings.mesh, settings.counts, settings.modes, settings.methods
+    repeats, frames, warmup, size, samples = (settings.repeats, settings.frames, settings.warmup, settings.size,
+                                              settings.samples)
+    seed, leaf, throughput, quick, timeout = (settings.seed, settings.leaf, settings.throughput, settings.quick,
+                                              settings.timeout)
 
     if progress is None or progress is False:
         progress = _no_progress

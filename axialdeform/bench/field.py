@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import statistics
 import time
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -39,7 +40,7 @@ from ..gl.camera import Camera, frame_instances
 from ..gl.context import Offscreen, create_context
 from ..gl.renderer import AxialRenderer
 
-__all__ = ["field_params", "walker_camera", "run_field", "format_field", "GOALS"]
+__all__ = ["field_params", "walker_camera", "run_field", "FieldSettings", "format_field", "GOALS"]
 
 #: the issue's goals (reported, never asserted)
 GOALS = {"cull_speedup": 5.0, "lod_speedup": 20.0, "lod_mean_error": 0.01, "cull_pass_share": 0.05}
@@ -86,16 +87,45 @@ def _frame(ctx, renderer, target, view, proj) -> float:
     return time.perf_counter() - start
 
 
-def run_field(count: int = 1_000_000, size=(800, 600), frames: int = 3, seed: int = 14, lod_error: float = 1.0,
-              samples: int = 0, mesh="stone", ctx=None, progress=None, views=("across", "out"),
-              all_visible: bool = True, all_visible_frames: int | None = None) -> dict:
-    """Run the field scene; returns a dict of figures (see the module docstring).
+@dataclass(frozen=True)
+class FieldSettings:
+    """The field scene's settings beside its count, size and frames (:func:`run_field`).
 
-    ``progress(text)``: optional callable told what is being drawn.
-    ``all_visible_frames``: frames of the all-in-view scene (default ``frames``;
-    its unculled frame is the slowest of all).
+    Attributes
+    ----------
+    seed : int
+    lod_error : float
+        Pixels (the LOD renderers').
+    samples : int
+        MSAA samples of the target (0: none).
+    mesh : str or BaseMesh
+    views : sequence of str
+        The walker's views (``"across"``, ``"out"``).
+    all_visible : bool
+        Also the all-in-view scene; ``all_visible_frames`` its frames (default ``frames``; its
+        unculled frame is the slowest of all).
     """
 
+    seed: int = 14
+    lod_error: float = 1.0
+    samples: int = 0
+    mesh: object = "stone"
+    views: tuple = ("across", "out")
+    all_visible: bool = True
+    all_visible_frames: int | None = None
+
+
+def run_field(count: int = 1_000_000, size=(800, 600), frames: int = 3, *, ctx=None, progress=None,
+              settings: FieldSettings | None = None, **fields) -> dict:
+    """Run the field scene; returns a dict of figures (see the module docstring).
+
+    ``progress(text)``: optional callable told what is being drawn.  ``settings``
+    (:class:`FieldSettings`) or its fields as keywords: the rest.
+    """
+
+    settings = replace(settings or FieldSettings(), **fields)
+    seed, lod_error, samples, mesh = settings.seed, settings.lod_error, settings.samples, settings.mesh
+    views, all_visible, all_visible_frames = settings.views, settings.all_visible, settings.all_visible_frames
     say = progress or (lambda text: None)
     mesh = load_mesh(mesh) if isinstance(mesh, str) else mesh
     own = ctx is None

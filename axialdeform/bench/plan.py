@@ -131,7 +131,7 @@ class Scene:
         shutil.rmtree(tmp, ignore_errors=True)
         # the "load every one" data is exactly what `axialdeform bake MESH PARAMS -o DIR` writes
         positions, normals = bake_cpu(self.mesh, self.params)
-        written = write_mesh_folder(tmp, self.mesh, positions, normals, "obj",
+        written = write_mesh_folder(tmp, self.mesh, (positions, normals), "obj",
                                     progress=None if progress is None else _Counter(progress))
         if written and written[0].name != obj_name(0):
             raise AxialDeformError(f"bench cache: expected files named like {obj_name(0)}, found {written[0].name}")

@@ -68,7 +68,7 @@ def run(args) -> None:
         if wind is not None:  # the tangents of a glb bend with the same wind-moved control points
 
             bent = apply_wind(wind, mesh.axis, params, args.time or 0.0)
-        files = write_mesh_folder(out, mesh, positions, normals, args.format, progress=bar,
+        files = write_mesh_folder(out, mesh, (positions, normals), args.format, progress=bar,
                                   overwrite=args.overwrite, params=bent, inputs=inputs)
     meshes = [f for f in files if f.suffix == "." + args.format]
     beside = f" + {len(files) - len(meshes)} material/texture files" if len(files) > len(meshes) else ""

@@ -14,6 +14,7 @@ from ..core.bake import (
 )
 from ..core.errors import ArgumentError
 from ..core.io.safeio import require_finite
+from ..core.options import RenderOptions
 from .context import create_context
 from .renderer import AxialRenderer
 
@@ -22,17 +23,20 @@ __all__ = ["bake", "bake_pieces", "ENGINES"]
 ENGINES = ("cpu", "gpu")
 
 
-def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, wind=None,
-         time: float = 0.0, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: str | None = None,
+         options: RenderOptions | None = None, **fields) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
     in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
     or ``"gpu"`` (transform feedback of the drawing vertex shader; in ``ctx``,
     or in a context made and released here).
     ``params``: (n, 16) or (n, 19) (extended instances).
-    ``wind``: an :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
+    ``options`` (:class:`axialdeform.RenderOptions`) or its fields ``wind`` and ``time``: an
+    :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
     ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
     Counts that cannot fit in memory and non-finite results are refused,
     naming ``source`` (the parameter file): see :func:`~axialdeform.core.bake.bake_cpu`."""
+    opts = RenderOptions.of(options, fields, "bake", ("wind", "time"))
+    wind, time = opts.wind, opts.time or 0.0
     if engine == "cpu":
         return bake_cpu(mesh, params, progress=progress, wind=wind, time=time, source=source)
     if engine != "gpu":
@@ -51,8 +55,8 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, wind=Non
     return positions, normals
 
 
-def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, wind=None, time: float = 0.0,
-                source: str | None = None, piece_bytes: int = BAKE_PIECE_BYTES):
+def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: str | None = None,
+                piece_bytes: int = BAKE_PIECE_BYTES, options: RenderOptions | None = None, **fields):
     """The result of :func:`bake` in pieces of consecutive instances, a
     generator of ``(positions, normals)``, each ``(m, vertices, 3) float32``
     of at most ``piece_bytes`` together (at least one instance):
@@ -60,7 +64,9 @@ def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, w
     (the GPU holds the parameters; each piece is one :meth:`capture` of
     ``start, count``, so the wind's phase follows the instance index).
     Non-finite results are refused as they come, naming ``source`` and the
-    instance in the whole file."""
+    instance in the whole file.  ``options`` and ``fields`` as :func:`bake`'s."""
+    opts = RenderOptions.of(options, fields, "bake_pieces", ("wind", "time"))
+    wind, time = opts.wind, opts.time or 0.0
     if engine == "cpu":
         yield from bake_cpu_pieces(mesh, params, progress=progress, wind=wind, time=time, source=source,
                                    piece_bytes=piece_bytes)

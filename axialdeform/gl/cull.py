@@ -36,6 +36,7 @@ triangle of it can reach a pixel, and the picture is the one without culling.
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 
 import moderngl
 import numpy as np
@@ -45,7 +46,7 @@ from ..core.errors import ContextError
 from .buffers import _content, _format_bytes
 from .shaders import build_compute, build_program
 
-__all__ = ["CullPass", "IndirectDraws", "ALL_VISIBLE_PLANES", "indirect_supported", "INDIRECT_ENV"]
+__all__ = ["CullPass", "CullQuery", "IndirectDraws", "ALL_VISIBLE_PLANES", "indirect_supported", "INDIRECT_ENV"]
 
 #: planes no sphere is outside of (LOD without frustum culling)
 ALL_VISIBLE_PLANES = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (6, 1))
@@ -125,6 +126,59 @@ class IndirectDraws:
 def read_counts(buffer, levels: int) -> list[int]:
     """The first ``levels`` of the four uint32 counts in ``buffer``."""
     return [int(c) for c in np.frombuffer(buffer.read(size=16), dtype="<u4")[:levels]]
+
+
+@dataclass(frozen=True)
+class CullQuery:
+    """What one culling pass tests the instances against.
+
+    Attributes
+    ----------
+    view, projection : (4, 4) float32
+        The camera (pyrr layout).
+    frustum : bool
+        Test against the view frustum (False: every instance is in view).
+    center : (3,) float
+        Each instance's bounding-sphere centre in model space (the mesh's axis centre).
+    radius : float
+        The bounding-sphere radius (every LOD level, every bend).
+    lod_errors : sequence of float
+        Each level's geometric error, model units (up to 4).
+    eye : (3,) float
+        The camera's position, world.
+    px_scale : float
+        Pixels per unit of ``error / distance`` (perspective) or per unit (``ortho``).
+    ortho : bool
+        An orthographic projection.
+    lod_px : float
+        The largest screen error a level may make, pixels.
+    wind_reach : float
+        How far the wind and the child axes move a vertex beyond the bound.
+    """
+
+    view: object
+    projection: object
+    frustum: bool = True
+    center: tuple = (0.0, 0.0, 0.0)
+    radius: float = 1.0
+    lod_errors: tuple = (0.0,)
+    eye: tuple = (0.0, 0.0, 0.0)
+    px_scale: float = 1.0
+    ortho: bool = False
+    lod_px: float = 1.0
+    wind_reach: float = 0.0
+
+    def uniforms(self, levels: int) -> dict:
+        """The culling programs' uniforms for ``levels`` LOD levels."""
+        planes = frustum_planes(self.view, self.projection) if self.frustum else ALL_VISIBLE_PLANES
+        errors = np.zeros(4)
+        errors[: len(self.lod_errors)] = self.lod_errors
+        return {
+            "u_planes": planes, "u_bound_center": tuple(float(c) for c in self.center), "u_radius": float(self.radius),
+            "u_wind_reach": float(self.wind_reach),
+            "u_levels": int(levels), "u_lod_error": errors, "u_eye": tuple(float(e) for e in self.eye),
+            "u_px_scale": float(self.px_scale), "u_ortho": bool(self.ortho), "u_lod_px": float(self.lod_px),
+        }
 
 
 class CullPass:
@@ -271,26 +325,17 @@ class CullPass:
         """Whether ``count`` instances fit the storage blocks of the indirect path."""
         return max(self.instances.record_bytes, self.out_bytes) * max(count, 1) <= self.storage_limit
 
-    def run(self, count: int, levels: int, view, projection, *, frustum: bool, center, radius: float,
-            lod_errors=(0.0,), eye=(0.0, 0.0, 0.0), px_scale: float = 1.0, ortho: bool = False,
-            lod_px: float = 1.0, wind_reach: float = 0.0, prepare=None):
-        """Cull ``count`` instances.  Level ``k``'s records start at record
-        ``sum(counts[:k])`` of :attr:`output`.  ``prepare(program)`` is called
-        on each program before it runs (the renderer's quantization table).
+    def run(self, count: int, levels: int, query: CullQuery, prepare=None):
+        """Cull ``count`` instances for ``query`` (the camera and the instances' bounds).
+        Level ``k``'s records start at record ``sum(counts[:k])`` of :attr:`output`.
+        ``prepare(program)`` is called on each program before it runs (the renderer's
+        quantization table).
 
         Returns the number kept per LOD level (a list; one entry with
         ``levels == 1``) on the GL 3.3 path, which waits for the GPU's
         count; an :class:`IndirectDraws` on the indirect path, which does not."""
         self.ensure_capacity(count)
-        planes = frustum_planes(view, projection) if frustum else ALL_VISIBLE_PLANES
-        errors = np.zeros(4)
-        errors[: len(lod_errors)] = lod_errors
-        uniforms = {
-            "u_planes": planes, "u_bound_center": tuple(float(c) for c in center), "u_radius": float(radius),
-            "u_wind_reach": float(wind_reach),
-            "u_levels": int(levels), "u_lod_error": errors, "u_eye": tuple(float(e) for e in eye),
-            "u_px_scale": float(px_scale), "u_ortho": bool(ortho), "u_lod_px": float(lod_px),
-        }
+        uniforms = query.uniforms(levels)
         if self.indirect and self.fits_storage(count):
             return self._run_compute(count, levels, uniforms, prepare)
         return self._run_feedback(count, levels, uniforms, prepare)

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..core.bounds import wind_reach
 from .context import draw_in_batches, flush_budget
-from .cull import IndirectDraws
+from .cull import CullQuery, IndirectDraws
 from .uniforms import eye_position, set_uniforms
 
 #: alpha below which a ``BLEND`` part leaves no depth in depth-only passes (shadows)
@@ -76,15 +76,13 @@ class Drawing:
         level (GL 3.3 path) or an :class:`IndirectDraws` (indirect path)."""
         height = float(self.ctx.viewport[3]) if self.ctx.viewport else 1.0
         ortho = abs(float(projection[3, 3]) - 1.0) < 1e-9  # pyrr layout: w = 1 for orthographic
-        return cull.run(self.count, levels, view, projection, frustum=frustum,
-                        center=self.mesh.axis.center, radius=self.bound_radius,
-                        lod_errors=[level.error for level in self.lod_levels[:levels]], eye=eye_position(view),
-                        px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho,
-                        lod_px=self.lod_error,
-                        # the wind's and the child axes' reach (several axes) widen every bound
-                        wind_reach=wind_reach(self.mesh, self.wind if self.bend else None)
-                        + (self.child_reach if self.bend else 0.0),
-                        prepare=self._set_quant_uniforms)
+        query = CullQuery(view, projection, frustum=frustum, center=self.mesh.axis.center, radius=self.bound_radius,
+                          lod_errors=tuple(level.error for level in self.lod_levels[:levels]), eye=eye_position(view),
+                          px_scale=abs(float(projection[1, 1])) * height / 2.0, ortho=ortho, lod_px=self.lod_error,
+                          # the wind's and the child axes' reach (several axes) widen every bound
+                          wind_reach=wind_reach(self.mesh, self.wind if self.bend else None)
+                          + (self.child_reach if self.bend else 0.0))
+        return cull.run(self.count, levels, query, prepare=self._set_quant_uniforms)
 
     def _draw_culled(self, cull, prog, vaos, result, draw_level) -> None:
         """Every level's draws from the cull pass's output: ``draw_level(level,

@@ -192,7 +192,7 @@ def variant_folder(tmp_path_factory):
     params, positions = _variants(stone, count=6, seed=21)
     _, normals = ad.bake(stone, params)
     folder = tmp_path_factory.mktemp("variants")
-    write_mesh_folder(folder, stone, positions, normals, "obj")
+    write_mesh_folder(folder, stone, (positions, normals), "obj")
     return folder, params, positions
 
 

@@ -98,3 +98,29 @@ def test_imports_inside_functions_are_rare():
     inside, total = function_level_share(_sources())
     assert total > 100 and PACKAGE.is_dir()
     assert inside / total < MAX_FUNCTION_LEVEL_SHARE, f"{inside} of {total} imports are inside functions"
+
+
+def _public_signatures():
+    """(where, name, parameter count) of every public function, method and constructor of the package;
+    ``**fields`` (a value object's fields as keywords) is not counted."""
+    for path in sorted(PACKAGE.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in tree.body:
+            funcs = [(node.name, node)] if isinstance(node, ast.FunctionDef) else []
+            if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
+                funcs = [(f"{node.name}.{f.name}", f) for f in node.body if isinstance(f, ast.FunctionDef)
+                         and (not f.name.startswith("_") or f.name == "__init__")]
+            for name, f in funcs:
+                if name.startswith("_"):
+                    continue
+                a = f.args
+                names = [x.arg for x in (*a.posonlyargs, *a.args, *a.kwonlyargs)] + ([a.vararg.arg] if a.vararg else [])
+                yield path.relative_to(PACKAGE.parent), name, len([n for n in names if n not in ("self", "cls")])
+
+
+def test_no_public_function_takes_more_than_eight_parameters():
+    """Option groups are values (Variation, Placement, RenderOptions, Look, PageOptions, ...), not long
+    keyword lists."""
+    long = [f"{where}: {name} ({n})" for where, name, n in _public_signatures() if n > 8]
+    assert long == [], long
+    assert any(n == 8 for *_, n in _public_signatures())  # the walk sees the signatures

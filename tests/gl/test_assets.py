@@ -762,7 +762,7 @@ def test_ply_part_files_keep_vertex_colours(tmp_path):
                        colors=colors, parts=(Part("red", 0, 1), Part("blue", 1, 1)))
     params = np.zeros((1, 16), np.float32)
     positions, normals = ad.bake(mesh, params)
-    files = write_mesh_folder(tmp_path / "out", mesh, positions, normals, "ply")
+    files = write_mesh_folder(tmp_path / "out", mesh, (positions, normals), "ply")
     assert [f.name for f in files] == ["instance_000000_red.ply", "instance_000000_blue.ply"]
     for f, want in zip(files, (colors[0], colors[3])):
         g = trimesh.load(f, process=False)
@@ -783,7 +783,7 @@ def test_textures_pass_through_export_as_the_model_ships_them(tmp_path):
     mesh = ad.load_mesh(source)
     params = ad.random_params(mesh, 3, seed=2, bend=0.1)
     pos, nrm = ad.bake(mesh, params)
-    files = write_mesh_folder(tmp_path / "out", mesh, pos, nrm, "glb", params=params)
+    files = write_mesh_folder(tmp_path / "out", mesh, (pos, nrm), "glb", params=params)
 
     def images(path):
         g = pygltflib.GLTF2.load(str(path))

@@ -328,7 +328,7 @@ def test_fit_extended_recovers_scale_twist_taper(stone, tmp_path):
     folder = tmp_path / "variants"
     from axialdeform.core.io.bake import write_mesh_folder
 
-    write_mesh_folder(folder, stone, shapes, ad.bake(stone, p)[1], "obj")
+    write_mesh_folder(folder, stone, (shapes, ad.bake(stone, p)[1]), "obj")
     out = tmp_path / "fit.adp"
     proc = _run("fit", "stone", folder, "-o", out, "--extended")
     assert proc.returncode == 0, proc.stderr

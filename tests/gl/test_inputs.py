@@ -31,7 +31,7 @@ def test_argument_error_is_both():
     lambda m: Camera([0, 0], [0, 0, 0]),
     lambda m: ad.frame_instances(m, np.zeros((2, 16)), -1.0),
     lambda m: ad.bake(m, np.zeros((1, 16)), "fast"),
-    lambda m: ad.core.io.bake.write_mesh_folder("/tmp/never", m, np.zeros((1, 58, 3)), np.zeros((1, 58, 3)), "fbx"),
+    lambda m: ad.core.io.bake.write_mesh_folder("/tmp/never", m, (np.zeros((1, 58, 3)), np.zeros((1, 58, 3))), "fbx"),
     lambda m: ad.render_image(m, np.zeros((1, 16)), modes="shiny"),
     lambda m: ad.BaseMesh.from_arrays(np.zeros((4, 2)), [[0, 1, 2]]),
     lambda m: ad.BaseMesh.from_arrays(np.eye(3), [[0, 1, 7]]),

@@ -23,7 +23,7 @@ def test_instance_names_come_from_one_function(tmp_path, stone):
     assert child.obj_name(7) == bake_mod.instance_name(7, 0, ".obj")
     params = ad.random_params(stone, 3, seed=1)
     pos, nrm = ad.bake(stone, params)
-    files = bake_io.write_mesh_folder(tmp_path / "f", stone, pos, nrm, "obj")
+    files = bake_io.write_mesh_folder(tmp_path / "f", stone, (pos, nrm), "obj")
     assert [f.name for f in files] == [bake_mod.instance_name(i, 3, ".obj") for i in range(3)]
     for mod in (export, child):
         assert 'f"instance_{' not in inspect.getsource(mod), mod.__name__

@@ -103,9 +103,12 @@ def write_scene_npz(path: str | os.PathLike, layers: dict) -> None:
 INSTANCE_FILE = re.compile(r"^instance_(\d{6,})(_[A-Za-z0-9_-]+)?\.(" + "|".join(MESH_FORMATS) + r")$")
 
 
-def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: str = "obj", progress=None,
+def write_mesh_folder(folder: str | os.PathLike, mesh, baked, fmt: str = "obj", progress=None,
                       *, overwrite: bool = False, params=None, inputs=()) -> list[Path]:
     """One mesh file per instance (``instance_000000.obj`` …), each written atomically.
+
+    ``baked`` is ``(positions, normals)``, each ``(instances, vertices, 3)``: what
+    :func:`axialdeform.bake` returns.
 
     A mesh with appearance keeps it: ``obj`` writes ``vt``, one shared
     ``material.mtl`` and its textures beside the files; ``glb`` writes each
@@ -127,6 +130,7 @@ def write_mesh_folder(folder: str | os.PathLike, mesh, positions, normals, fmt: 
     folder whose files the bake would replace or remove holds one of them is
     refused before anything is written.
     """
+    positions, normals = baked
     if fmt not in MESH_FORMATS:
         raise ArgumentError(f"format: expected one of {', '.join(MESH_FORMATS)}, found {fmt!r}")
     folder = Path(folder)
