@@ -531,7 +531,7 @@ def _gltf_tangents(path):
     """Every primitive's TANGENT of a GLB, read with pygltflib (independent of the loader)."""
     import pygltflib
 
-    from axialdeform.core.io.gltf import read_accessor
+    from axialdeform.core.io.glb import read_accessor
 
     g = pygltflib.GLTF2.load(str(path))
     blob = g.binary_blob()
@@ -543,7 +543,7 @@ def _with_tangents(src, dst, change):
     """A copy of the GLB ``src`` whose (tightly packed) TANGENT data is ``change(tangents, normals)``."""
     import pygltflib
 
-    from axialdeform.core.io.gltf import read_accessor
+    from axialdeform.core.io.glb import read_accessor
 
     g = pygltflib.GLTF2.load(str(src))
     blob = bytearray(g.binary_blob())
@@ -777,7 +777,7 @@ def test_textures_pass_through_export_as_the_model_ships_them(tmp_path):
     import pygltflib
 
     from axialdeform.core.io.bake import write_mesh_folder
-    from axialdeform.core.io.gltf import read_accessor  # noqa: F401 - the module under test
+    from axialdeform.core.io.glb import read_accessor  # noqa: F401 - the module under test
 
     source = data_mesh(ALPHA_TEST)
     mesh = ad.load_mesh(source)

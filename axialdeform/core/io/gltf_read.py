@@ -1,0 +1,194 @@
+"""Reading an instanced GLB back: the instances of an ``EXT_mesh_gpu_instancing`` node with their
+bend (``AXIALDEFORM_bend``, and this library's ``extras``), and the ``extras`` of a file."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import AxialDeformError, GltfError, MeshMismatchError
+from ..mesh import BaseMesh, area_weighted_normals
+from ..params import as_params
+from ..record import (
+    ANGLES,
+    GLTF_TINT_ATTRIBUTE,
+    POSITION,
+    SCALE,
+    WIDTHS,
+    join_record,
+)
+from ..transforms import (
+    angles_from_matrices,
+    matrices_from_quaternions,
+)
+from .glb import (
+    ATTRIBUTES,
+    AXIS_ATTRIBUTE,
+    COMPONENTS,
+    EXTENDED_ATTRIBUTES,
+    EXTRAS_KEY,
+    INSTANCING,
+    TRIANGLES,
+    child_columns,
+    load_glb,
+    read_accessor,
+)
+
+__all__ = ["read_instanced_glb", "read_extras"]
+
+
+def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
+    """Read a GLB written by :func:`export_instanced` back (or, with ``node``,
+    the instanced node of that name: a layer of :func:`export_scene`'s
+    instanced layout).
+
+    Returns
+    -------
+    mesh : BaseMesh
+        The base mesh (positions, normals, triangles exactly as written).
+    params : (n, 16) float32, or (n, 19) for extended instances, (n, 22) for tinted ones
+        The numbers per instance, bit for bit as exported: offsets from
+        ``_AXIAL_D12/_AXIAL_D34/_AXIAL_D5``, position from ``TRANSLATION``,
+        angles from ``_AXIAL_ANGLES`` (or, if a file lacks it, from the
+        ``ROTATION`` quaternion: same rotation, angles possibly different).
+
+    Raises :class:`GltfError` for a file without an instanced node, and
+    :class:`MeshMismatchError` if the recorded fingerprint does not match
+    the base mesh in the file.
+    """
+    path = Path(path)
+    where = str(path)
+    gltf = load_glb(path)
+    blob = gltf.binary_blob() or b""
+    nodes = [nd for nd in gltf.nodes if (nd.extensions or {}).get(INSTANCING) and nd.mesh is not None]
+    if node is not None:
+        named = [nd for nd in nodes if nd.name == node]
+        if len(named) != 1:
+            raise GltfError(f"{where}: expected one node {node!r} with {INSTANCING}, found {len(named)}; "
+                            f"the instanced nodes are {', '.join(repr(nd.name) for nd in nodes) or 'none'}")
+        nodes = named
+    if len(nodes) != 1:
+        raise GltfError(f"{where}: expected exactly one node with {INSTANCING}, found {len(nodes)}"
+                        + (f" ({', '.join(repr(nd.name) for nd in nodes)}: name one with node=)" if nodes else ""))
+    node = nodes[0]
+    attrs = node.extensions[INSTANCING].get("attributes", {})
+    missing = [k for k in ("TRANSLATION", "_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5") if k not in attrs]
+    if missing or ("_AXIAL_ANGLES" not in attrs and "ROTATION" not in attrs):
+        raise GltfError(f"{where}: {INSTANCING} attributes: expected TRANSLATION, ROTATION and "
+                        f"{', '.join(ATTRIBUTES)}; missing {', '.join(missing) or 'ROTATION'}")
+    cols = {name: read_accessor(gltf, blob, attrs[name], name, where) for name in attrs}
+    counts = {len(v) for v in cols.values()}
+    if len(counts) != 1:
+        raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
+    n = counts.pop()
+    tint_name, tint_kind, tint_cols = GLTF_TINT_ATTRIBUTE
+    tinted = tint_name in cols
+    extended = tinted or "SCALE" in cols or "_AXIAL_TWIST_TAPER" in cols
+    params = np.zeros((n, WIDTHS[2 if tinted else 1 if extended else 0]), dtype=np.float32)
+    if extended:
+        params[:, SCALE] = 1.0
+        for name, (kind, idx) in {**EXTENDED_ATTRIBUTES, **({tint_name: (tint_kind, tint_cols)} if tinted else {})}.items():
+            if name in cols:
+                if cols[name].shape[1] != COMPONENTS[kind]:
+                    raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
+                params[:, list(idx)] = cols[name]
+        if "SCALE" in cols:
+            sc = cols["SCALE"]
+            if sc.shape[1] != 3 or not (sc == sc[:, :1]).all():
+                raise GltfError(f"{where}: SCALE: expected a uniform scale (VEC3 with three equal components) per instance")
+            params[:, SCALE] = sc[:, 0]
+    for name, (kind, idx) in ATTRIBUTES.items():
+        if name in cols:
+            if cols[name].shape[1] != COMPONENTS[kind]:
+                raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
+            params[:, list(idx)] = cols[name]
+    params[:, POSITION] = cols["TRANSLATION"]
+    if "_AXIAL_ANGLES" not in cols:
+
+        params[:, ANGLES] = angles_from_matrices(matrices_from_quaternions(cols["ROTATION"]))
+
+    mesh_def = gltf.meshes[node.mesh]
+    if not mesh_def.primitives:
+        raise GltfError(f"{where}: mesh {node.mesh}: expected at least one primitive, found none")
+    prim = mesh_def.primitives[0]
+    for other in mesh_def.primitives:  # one primitive per part, all over the same vertices
+        if other.mode not in (None, TRIANGLES) or other.indices is None:
+            raise GltfError(f"{where}: mesh {node.mesh}: expected indexed triangles (mode 4)")
+        if other.attributes.POSITION != prim.attributes.POSITION:
+            raise GltfError(f"{where}: mesh {node.mesh}: expected every primitive to share one POSITION accessor")
+    positions = read_accessor(gltf, blob, prim.attributes.POSITION, "POSITION", where)
+    faces = np.concatenate([read_accessor(gltf, blob, q.indices, "indices", where).reshape(-1, 3)
+                            for q in mesh_def.primitives])
+    if prim.attributes.NORMAL is not None:
+        normals = read_accessor(gltf, blob, prim.attributes.NORMAL, "NORMAL", where)
+        from_file = True
+    else:
+
+        normals, from_file = area_weighted_normals(positions, faces), False
+    mesh = BaseMesh(positions, normals, faces, name=where, normals_from_file=from_file)
+    extras = (node.extras or {}).get(EXTRAS_KEY, {})
+    recorded = extras.get("mesh_fingerprint")
+    if recorded is not None and recorded != mesh.fingerprint.hex():
+        raise MeshMismatchError(f"{where}: extras mesh_fingerprint {recorded[:16]} does not match the base mesh in the "
+                                f"file ({mesh.fingerprint.hex()[:16]}); the file was altered")
+    recorded_axis = extras.get("axis")
+    if isinstance(recorded_axis, dict):  # the frame the file was made with (an axis the auto rule would not pick)
+        frame = recorded_axis.get("frame") if recorded_axis.get("index") == -1 else \
+            dict(enumerate("xyz")).get(recorded_axis.get("index"))
+        if frame is None:
+            raise GltfError(f"{where}: extras axis: expected index 0, 1, 2 or -1 with a frame (3 rows of 3 numbers), "
+                            f"found {recorded_axis!r}")
+        try:
+            mesh = mesh.with_axis(frame)
+        except AxialDeformError as exc:
+            raise GltfError(f"{where}: extras axis: {exc}") from None
+    if "axes" in extras:  # several axes: the tree, each vertex's axis, every child axis's offsets
+        mesh, params = _read_tree(gltf, blob, prim, extras["axes"], cols, mesh, params, where)
+        return mesh, params
+    return mesh, as_params(params, name=where)
+
+
+def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
+    """The mesh of several axes an instanced node records (extras ``axes``,
+    the vertex attribute ``_AXIAL_AXIS``, the instanced ``_AXIAL_A{k}_*``)."""
+    from ..axes import tree_from_vertices
+
+    try:
+        k = int(record["count"])
+        parents, frames, names = list(record["parents"]), list(record["frames"]), list(record["names"])
+    except (KeyError, TypeError, ValueError):
+        raise GltfError(f"{where}: extras axes: expected count, names, parents and frames, found {record!r}"[:300]) from None
+    index = getattr(prim.attributes, AXIS_ATTRIBUTE, None)
+    if index is None:
+        raise GltfError(f"{where}: a mesh of {k} axes needs the vertex attribute {AXIS_ATTRIBUTE}; found none")
+    va = read_accessor(gltf, blob, index, AXIS_ATTRIBUTE, where).reshape(-1)
+    if len(va) != mesh.vertex_count or not np.array_equal(va, np.round(va)):
+        raise GltfError(f"{where}: {AXIS_ATTRIBUTE}: expected one whole axis index per vertex ({mesh.vertex_count})")
+    n = len(params)
+    children = np.zeros((n, k - 1, 10), dtype=np.float32)
+    for j in range(1, k):
+        for name, (kind, first) in child_columns(j).items():
+            if name not in cols or cols[name].shape[1] != COMPONENTS[kind]:
+                raise GltfError(f"{where}: {INSTANCING} attributes: expected {name} ({kind}) for axis {j}")
+            children[:, j - 1, first:first + COMPONENTS[kind]] = cols[name]
+    try:
+        tree = tree_from_vertices(mesh, va.astype(np.int64), parents, frames=[np.asarray(f) for f in frames],
+                                  names=names, root_children=False)
+        mesh = mesh.with_axes(tree)
+    except AxialDeformError as exc:
+        raise GltfError(f"{where}: extras axes: {exc}") from None
+    return mesh, as_params(join_record(params, children), name=where, axes=k)
+
+
+def read_extras(path: str | os.PathLike) -> dict:
+    """The ``extras["axialdeform"]`` dictionaries of a GLB's scenes and nodes (for tools and tests)."""
+    gltf = load_glb(Path(path))
+    out = {}
+    for kind, items in (("scene", gltf.scenes), ("node", gltf.nodes)):
+        for k, item in enumerate(items):
+            if item.extras and EXTRAS_KEY in item.extras:
+                out[f"{kind}/{k}"] = json.loads(json.dumps(item.extras[EXTRAS_KEY]))
+    return out
