@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ArgumentError, ParamError
-from ..core.io.params import dequantize_params, quantize_params, quantize_with_table
 from ..core.mesh import grid_edge_count, grid_edge_pieces, grid_edges
 from ..core.params import as_params, extend_params, is_extended
+from ..core.quantize import dequantize_params, quantize_params, quantize_with_table
 from ..core.record import EXTENDED_WIDTH, WIDTH, gl_layout
 from .context import check_alive, check_released
 
@@ -197,7 +197,7 @@ class InstanceBuffer:
     count grows it (orphaning the old storage), a smaller count keeps it.
 
     With ``quantized=True`` each instance is 16 uint16 (32 bytes), the
-    quantization of :func:`axialdeform.core.io.params.quantize_params`; ``qmin`` and
+    quantization of :func:`axialdeform.core.quantize.quantize_params`; ``qmin`` and
     ``qstep`` ((16,) float32) are the per-column table the vertex shader
     needs (uniforms ``u_qmin``/``u_qstep``, four ``vec4`` each).
 

@@ -73,7 +73,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
     quantized : bool
         Store each instance as 16 uint16 (32 bytes of GPU memory instead of
         64), decoded in the vertex shader (``glsl/quantized.glsl``) with the
-        per-column table of :func:`axialdeform.core.io.params.quantize_params`; what
+        per-column table of :func:`axialdeform.core.quantize.quantize_params`; what
         is drawn and captured is the deformation of the dequantized numbers.
     cull_back_faces : bool or None
         Skip the triangles that face away from the camera (GL back-face

@@ -26,6 +26,7 @@ import axialdeform as ad
 from axialdeform.core.deform import deform
 from axialdeform.core.errors import AxialDeformError, MeshError, ParamError, ParamFileError, ShaderError
 from axialdeform.core.io import params as P
+from axialdeform.core.quantize import quantization_error_bound
 
 from conftest import DATA, make_mesh
 
@@ -262,7 +263,7 @@ def test_valid_values_round_trip_every_form(rows, quantize):
             span = v.astype(np.float64).max(axis=0, initial=0) - v.astype(np.float64).min(axis=0, initial=0)
         if np.all(span < 3e38):  # a range wider than float32 cannot be quantized
             pf = P.decode_binary(P.encode_binary(v, quantize=True))
-            assert np.all(np.abs(pf.values.astype(np.float64) - v) <= P.quantization_error_bound(v) * 1.0001 + 1e-45)
+            assert np.all(np.abs(pf.values.astype(np.float64) - v) <= quantization_error_bound(v) * 1.0001 + 1e-45)
 
 
 def test_read_param_file_refuses_non_files(tmp_path):

@@ -27,6 +27,7 @@ import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core.errors import MeshError, ParamError
 from axialdeform.core.io import params as P
+from axialdeform.core.quantize import quantization_error_bound
 from axialdeform.core.variation import iter_random_params
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -185,7 +186,7 @@ def test_quantized_writer_memory_is_bounded(tmp_path):
     assert peak < 0.75 * values.nbytes, peak
     pf = P.read_param_file(tmp_path / "q.adp")
     assert pf.encoding == "uint16-quantized"
-    assert np.all(np.abs(pf.values - values) <= P.quantization_error_bound(values))
+    assert np.all(np.abs(pf.values - values) <= quantization_error_bound(values))
 
 
 @pytest.mark.slow

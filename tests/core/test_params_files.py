@@ -8,6 +8,7 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core.io import params as P
+from axialdeform.core.quantize import quantization_error_bound
 
 
 @pytest.fixture
@@ -70,7 +71,7 @@ def test_quantized_is_32_bytes_and_within_its_bound(tmp_path, values, stone):
     per_instance = (path.stat().st_size - P.HEADER_SIZE - 128 - 4) / len(values)
     assert per_instance == 32
     got = ad.read_params(path, stone)
-    bound = P.quantization_error_bound(values)
+    bound = quantization_error_bound(values)
     err = np.abs(got.astype(np.float64) - values.astype(np.float64)).max(axis=0)
     assert (err <= bound).all(), (err, bound)
     # the bound is tight enough to matter: about range / 131070

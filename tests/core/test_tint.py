@@ -9,14 +9,7 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core import record as R
-from axialdeform.core.io.params import (
-    decode_binary,
-    encode_binary,
-    format_text,
-    parse_text,
-    quantization_error_bound,
-    write_param_chunks,
-)
+from axialdeform.core.io.params import decode_binary, encode_binary, format_text, parse_text, write_param_chunks
 from axialdeform.core.params import (
     as_params,
     extend_params,
@@ -24,6 +17,7 @@ from axialdeform.core.params import (
     is_tinted,
     tint_params,
 )
+from axialdeform.core.quantize import quantization_error_bound
 
 
 @pytest.fixture(scope="module")

@@ -50,19 +50,20 @@ def test_core_bake_needs_no_gl_and_the_gpu_engine_lives_in_gl(stone, ctx):
         ad.bake(stone, params, "fast")
 
 
-def test_quantized_encoding_lives_in_params(stone):
-    from axialdeform.core.io import params as params_mod
-    from axialdeform.gl import buffers
+def test_quantization_has_one_home(stone, tmp_path):
+    """core.quantize makes the levels the GPU buffer and the binary file both store: a quantized
+    file decodes to dequantize_params(quantize_params(values))."""
+    from axialdeform.core import quantize
 
     values = ad.random_params(stone, 50, seed=3, bend=0.2)
-    lo, step, q = params_mod.quantize_params(values)
-    assert np.array_equal(params_mod.quantize_with_table(values, lo, step), q)
+    lo, step, q = quantize.quantize_params(values)
+    assert np.array_equal(quantize.quantize_with_table(values, lo, step), q)
     outside = values[:2].copy()
     outside[1, 10] = values[:, 10].max() + 1.0
     with pytest.raises(ad.core.ParamError, match="instance 1, field 10"):
-        params_mod.quantize_with_table(outside, lo, step)
-    src = inspect.getsource(buffers)
-    assert "np.rint" not in src and "65535" not in src
+        quantize.quantize_with_table(outside, lo, step)
+    ad.write_params(tmp_path / "q.adp", values, stone, quantize=True)
+    assert np.array_equal(ad.read_params(tmp_path / "q.adp", stone), quantize.dequantize_params(lo, step, q))
 
 
 def test_conventions_are_cited_from_docs_method():

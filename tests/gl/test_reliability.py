@@ -29,7 +29,7 @@ import pytest
 import axialdeform as ad
 from axialdeform.core.deform import deform
 from axialdeform.core.io.atomic import sweep_stale_parts
-from axialdeform.core.io.params import dequantize_params, quantize_params
+from axialdeform.core.quantize import dequantize_params, quantize_params
 
 from conftest import make_mesh
 

@@ -1,15 +1,12 @@
-"""Parameter files: text (one instance a line) and binary ``.adp``
-(float32 or uint16-quantized, CRC-32 checked), read through the bounded
-reader and written atomically; the quantization they share with the GPU
-buffer.  The formats: ``docs/parameter-files.md``."""
+"""Parameter files: binary ``.adp`` (float32 or uint16-quantized, CRC-32
+checked) and text (:mod:`.params_text`), read through the bounded reader and
+written atomically.  The quantization they share with the GPU buffer is
+:mod:`axialdeform.core.quantize`.  The formats: ``docs/parameter-files.md``."""
 
 from __future__ import annotations
 
-import io
 import os
-import re
 import struct
-import warnings
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,26 +16,26 @@ import numpy as np
 from ..axis import AXIS_NAMES, ControlAxis
 from ..errors import MeshMismatchError, ParamError, ParamFileError
 from ..params import as_params
+from ..quantize import dequantize_params, quant_levels, quant_range, quant_steps
 from ..record import (  # the record's columns and slices: one home
     MAX_RECORD_AXES,
     WIDTHS,
     Instances,
     describe_widths,
     is_record_width,
-    record_fields,
     tree_shape,
     tree_width,
     tree_widths,
 )
 from . import safeio
 from .atomic import atomic_path
+from .params_text import format_text, parse_text, text_body, text_header
 from .safeio import open_regular
 
 __all__ = [
     "AXIS_FRAMED", "AxisRecord", "BINARY_SUFFIXES", "BinaryHeader", "ENCODING_FLOAT32", "ENCODING_UINT16",
     "HEADER_SIZE", "MAGIC", "ParamFile", "TEXT_SUFFIXES", "VERSION", "VERSION_EXTENDED", "VERSION_TINTED",
-    "axis_letter", "check_mesh", "decode_binary", "dequantize_params", "encode_binary", "format_text",
-    "param_file_bytes", "parse_text", "quantization_error_bound", "quantize_params", "quantize_with_table",
+    "axis_letter", "check_mesh", "decode_binary", "encode_binary", "format_text", "param_file_bytes", "parse_text",
     "read_binary_header", "read_param_bytes", "read_param_file", "read_params", "write_param_chunks", "write_params",
 ]
 
@@ -141,221 +138,6 @@ _QUANT_TABLES = {w: struct.Struct(f"<{w}f{w}f") for w in WIDTHS}
 _TRAILER = struct.Struct("<I")
 
 
-_MAX_TEXT_LINE = 4096
-
-
-def format_text(values: np.ndarray, header: str | None = None) -> str:
-    """The text form: one instance a line, 16 (19, 22) numbers separated by spaces.
-
-    Numbers are written with 9 significant digits, which round-trips float32
-    exactly.  ``header`` lines are written as ``#`` comments.
-    """
-    values = as_params(values, axes="any")
-    return "".join(_text_pieces(values, header))
-
-
-#: rows formatted at a time by the text writer: its memory stays bounded
-_TEXT_ROWS = 4096
-
-
-def _text_pieces(values: np.ndarray, header: str | None):
-    """The text form in pieces of at most ``_TEXT_ROWS`` lines (a generator)."""
-    yield _text_header(values.shape[1], header)
-    yield from _text_body(values)
-
-
-def _text_header(width: int, header: str | None) -> str:
-    """The comment lines that start a text file: ``header``, then the field names."""
-    lines = ["# " + line for line in (header or "").splitlines()]
-    lines.append("# " + " ".join(record_fields(width)))
-    return "\n".join(lines) + "\n"
-
-
-def _text_body(values: np.ndarray):
-    """The lines of ``values``, at most ``_TEXT_ROWS`` a piece (a generator)."""
-    for s in range(0, len(values), _TEXT_ROWS):
-        body = np.char.mod("%.9g", values[s : s + _TEXT_ROWS].astype(np.float64))
-        yield "\n".join(" ".join(row) for row in body.tolist()) + "\n"
-
-
-#: bytes of text parsed at a time: the parser's working memory is a few
-#: times this, whatever the file's size
-_TEXT_CHUNK = 1 << 18
-
-
-_LINE_BREAK = re.compile(rb"[\r\n]")
-
-
-_SEPARATORS = re.compile(r"[,\s]+")
-
-
-def parse_text(data: bytes, name: str = "<text>") -> np.ndarray:
-    """Parse the text form (bytes, UTF-8) into ``(n, 16) float32``, or
-    ``(n, 19)`` / ``(n, 22)`` when every line holds 19 / 22 numbers (a mix is
-    an error naming the line; the first data line fixes the width for the
-    whole file).
-
-    The text is parsed in pieces of about 256 KiB cut at line breaks, each
-    turned into float32 rows at once, so the memory needed beyond ``data``
-    and the result is bounded (peak under 3x the text's size plus the
-    result, ``tests/app/test_hostile.py::test_text_parser_memory``)."""
-    view = memoryview(data).cast("B") if not isinstance(data, (bytes, bytearray)) else data
-    n = len(view)
-    start = 3 if bytes(view[:3]) == b"\xef\xbb\xbf" else 0  # a leading byte-order mark is tolerated
-    pieces: list[np.ndarray] = []
-    lineno = 0
-    first = None  # (width, line number) of the first data line: it fixes the width of every other
-    window = 4 * _MAX_TEXT_LINE + 8  # a line of at most _MAX_TEXT_LINE characters has at most 4x as many bytes
-    while start < n:
-        end = min(n, start + _TEXT_CHUNK)
-        if end < n:
-            m = _LINE_BREAK.search(view, end, min(n, end + window)) if isinstance(view, (bytes, bytearray)) else \
-                _LINE_BREAK.search(bytes(view[end : min(n, end + window)]))
-            if m is None:
-                before = bytes(view[start:end]).count(b"\n")
-                raise ParamFileError(
-                    f"{name}: line {lineno + before + 1} is longer than {window} bytes; "
-                    f"expected at most {_MAX_TEXT_LINE} characters a line")
-            cut = m.end() + (0 if isinstance(view, (bytes, bytearray)) else end)
-            if view[cut - 1] == 0x0D and cut < n and view[cut] == 0x0A:
-                cut += 1
-            end = cut
-        chunk = bytes(view[start:end])
-        fast = _fast_chunk(chunk, None if first is None else first[0])
-        if fast is not None:
-            arr, lines_in_chunk = fast
-            if len(arr):
-                if first is None:
-                    first = (arr.shape[1], lineno + _first_data_line(chunk))
-                pieces.append(arr)
-        else:
-            rows, linenos, lines_in_chunk, first = _split_lines(chunk, name, lineno, start, first)
-            if rows:
-                pieces.append(_rows_to_float32(rows, linenos, name))
-        lineno += lines_in_chunk
-        start = end
-    if not pieces:
-        return np.zeros((0, 16), dtype=np.float32)
-    return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
-
-
-_PLAIN = re.compile(rb"[0-9eE+\-., \t\n]*")
-
-
-_COMMENT_LINE = re.compile(rb"^[ \t]*#[\x20-\x7e\t]*$", re.M)
-
-
-def _first_data_line(chunk: bytes) -> int:
-    """1-based index in ``chunk`` of its first line that is neither blank nor a comment."""
-    for k, line in enumerate(chunk.split(b"\n"), start=1):
-        stripped = line.strip()
-        if stripped and not stripped.startswith(b"#"):
-            return k
-    return 1
-
-
-def _fast_chunk(chunk: bytes, width: int | None = None):
-    """``(values (n, width) float32, lines)`` of a piece made only of numbers,
-    commas, blanks and ``\n`` line breaks, parsed by numpy's C reader; None
-    when the piece holds anything else (comments, ``\r``, other text) or
-    does not parse into ``width`` columns (one of the record's widths when ``width`` is None):
-    the line-by-line parser then finds the exact line and field for its message."""
-    if b"#" in chunk:  # whole-line ASCII comments are dropped (their line breaks kept)
-        chunk = _COMMENT_LINE.sub(b"", chunk)
-    if not _PLAIN.fullmatch(chunk):
-        return None
-    breaks = np.flatnonzero(np.frombuffer(chunk, dtype=np.uint8) == 10)
-    if np.diff(np.concatenate([[-1], breaks, [len(chunk)]])).max() > _MAX_TEXT_LINE + 1:
-        return None  # a line too long: the slow path says which
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # "empty input" of a piece with blank lines only
-            arr = np.loadtxt(io.StringIO(chunk.replace(b",", b" ").decode("ascii")), dtype=np.float64, ndmin=2)
-    except ValueError:
-        return None
-    if arr.size:
-        if not is_record_width(arr.shape[1]) or (width is not None and arr.shape[1] != width):
-            return None
-        width = arr.shape[1]
-    with np.errstate(over="ignore", invalid="ignore"):
-        arr32 = arr.reshape(-1, width or 16).astype(np.float32)
-    if not np.isfinite(arr32).all():  # beyond float32: the slow path names the line
-        return None
-    if len(arr32) and tree_shape(arr32.shape[1])[1]:
-        try:
-            as_params(arr32, axes="any")
-        except ParamError:
-            return None  # a bad scale, taper or tint: the slow path names the line and field
-    lines = chunk.count(b"\n") + (0 if not chunk or chunk.endswith(b"\n") else 1)
-    return np.ascontiguousarray(arr32), lines
-
-
-def _split_lines(chunk: bytes, name: str, lineno: int, offset: int, first=None):
-    """``(rows, line numbers, lines in chunk, first)`` of one piece, line by
-    line; ``first`` is the ``(width, line number)`` of the file's first data
-    line (None until one is seen): every data line must have its width."""
-    try:
-        text = chunk.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ParamFileError(
-            f"{name}: not a parameter file: byte {offset + exc.start} is not UTF-8 text and the file does not start with the binary magic"
-        ) from None
-    rows: list[list[str]] = []
-    linenos: list[int] = []
-    lines = text.splitlines()
-    for k, line in enumerate(lines, start=lineno + 1):
-        if len(line) > _MAX_TEXT_LINE:
-            raise ParamFileError(f"{name}: line {k} is {len(line)} characters long; expected at most {_MAX_TEXT_LINE}")
-        stripped = line.strip()
-        if not stripped or stripped.startswith("#"):
-            continue
-        tokens = [tok for tok in _SEPARATORS.split(stripped) if tok]
-        if not is_record_width(len(tokens)):
-            raise ParamFileError(
-                f"{name}: line {k}: expected 16 numbers, found {len(tokens)} (or 19 on every line: extended instances; "
-                "22: tinted; 10·K + 6 with K axes)")
-        if first is None:
-            first = (len(tokens), k)
-        elif len(tokens) != first[0]:
-            raise ParamFileError(
-                f"{name}: line {k}: expected {first[0]} numbers like line {first[1]}, found {len(tokens)} "
-                f"(a file holds the same count on every line: {describe_widths()})"
-            )
-        rows.append(tokens)
-        linenos.append(k)
-    return rows, linenos, len(lines), first
-
-
-def _rows_to_float32(rows: list[list[str]], linenos: list[int], name: str) -> np.ndarray:
-    try:
-        arr = np.array(rows, dtype=np.float64)
-    except ValueError:
-        arr = None
-    if arr is None:
-        # find the offending token for the message (only on the error path)
-        for k, row in enumerate(rows):
-            for c, tok in enumerate(row):
-                try:
-                    float(tok)
-                except ValueError:
-                    raise ParamFileError(
-                        f"{name}: line {linenos[k]}, field {record_fields(len(row))[c]}: expected a number, found {tok[:40]!r}"
-                    ) from None
-        # numpy refused what Python's float() accepts: parse token by token
-        arr = np.array([[float(tok) for tok in row] for row in rows], dtype=np.float64)
-    with np.errstate(over="ignore", invalid="ignore"):
-        arr32 = arr.astype(np.float32)  # beyond float32's range becomes inf and is refused below
-    overflow = np.isfinite(arr) & ~np.isfinite(arr32)
-    if overflow.any():
-        k, c = (int(x) for x in np.argwhere(overflow)[0])
-        raise ParamFileError(
-            f"{name}: line {linenos[k]}, field {record_fields(arr.shape[1])[c]}: {arr[k, c]:.9g} does not fit in float32; "
-            f"expected a finite number of magnitude at most {float(np.finfo(np.float32).max):.7g}"
-        )
-    return as_params(arr32, name=name, error=ParamFileError, rows=[f"line {n}" for n in linenos], axes="any")
-
-
 @dataclass(frozen=True)
 class ParamFile:
     """What a parameter file holds.
@@ -383,85 +165,6 @@ class ParamFile:
         return len(self.values)
 
 
-def quantization_error_bound(values: np.ndarray) -> np.ndarray:
-    """Per-column bound on ``|decoded - original|`` of the quantized form: (w,) float64.
-
-    Each column is stored as ``min + q * step`` with ``q`` a uint16 and
-    ``step = (max - min) / 65535``, so the rounding error is at most
-    ``step / 2``; the float32 arithmetic of the decode adds at most one
-    float32 ulp of the column's largest magnitude.
-    """
-    v = as_params(values, axes="any").astype(np.float64)
-    if len(v) == 0:
-        return np.zeros(v.shape[1])
-    lo, hi = v.min(axis=0), v.max(axis=0)
-    mag = np.maximum(np.abs(lo), np.abs(hi))
-    return (hi - lo) / 65535.0 / 2.0 + mag * 2.0**-23
-
-
-def quantize_params(values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The uint16 quantization of the binary file form, as arrays.
-
-    values : (n, w) float — parameters (w = 16, 19 or 22 columns).
-    Returns ``lo`` (w,) float32 (per-column minimum), ``step`` (w,) float32
-    (per-column step, ``(max - min) / 65535`` widened by at most one ulp) and
-    ``q`` (n, w) uint16, so that a value decodes as ``lo + q * step``
-    (:func:`dequantize_params`).  The GPU quantized instance buffer
-    (``AxialRenderer(..., quantized=True)``) stores exactly these.
-    """
-    values = as_params(values, axes="any")
-    w = values.shape[1]
-    table, payload = _quantize(values)
-    raw = _quant_table(w).unpack(table)
-    q = np.frombuffer(payload, dtype="<u2").reshape(len(values), w).astype(np.uint16)
-    return np.array(raw[:w], dtype=np.float32), np.array(raw[w:], dtype=np.float32), q
-
-
-def quantize_with_table(values, lo, step, *, name: str = "update", setter: str = "set()") -> np.ndarray:
-    """Encode ``values`` with an existing table (``lo``, ``step`` from
-    :func:`quantize_params`): ``q`` (n, 16) uint16.
-
-    values : (n, 16) float; lo, step : (16,) float32.  A value outside the
-    table's range ``lo .. lo + 65535 * step`` raises :class:`ParamError`
-    naming ``name``, the instance and the field (no clipping), and pointing
-    to ``setter`` (the call that re-quantizes every instance).
-    """
-    v = as_params(values, axes="any").astype(np.float64)
-    w = v.shape[1]  # 16, 19 (extended) or 22 (tinted)
-    lo = np.asarray(lo, dtype=np.float32).reshape(w).astype(np.float64)
-    step = np.asarray(step, dtype=np.float32).reshape(w).astype(np.float64)
-    q = _levels(v, lo, step)
-    fits = (q >= 0) & (q <= 65535) & ((step > 0) | (v == lo))
-    if not fits.all():
-        row, col = (int(x) for x in np.argwhere(~fits)[0])
-        raise ParamError(
-            f"{name}: instance {row}, field {col}: {v[row, col]:.9g} is outside the quantized range "
-            f"{lo[col]:.9g}..{lo[col] + 65535 * step[col]:.9g} of the buffer; "
-            f"expected values inside it (call {setter} with every instance to re-quantize)"
-        )
-    return q.astype(np.uint16)
-
-
-def _levels(v: np.ndarray, lo: np.ndarray, step: np.ndarray) -> np.ndarray:
-    """The quantization levels ``rint((v - lo) / step)`` (float64; a zero step maps to level ``v - lo``)."""
-    return np.rint((v - lo) / np.where(step > 0, step, 1.0))
-
-
-def dequantize_params(lo, step, q) -> np.ndarray:
-    """``lo + q * step`` per column, computed in float64 and rounded to float32: (n, w).
-
-    lo, step : (w,) float32; q : (n, w) uint16, w = 16, 19 or 22.  The same
-    decode as a quantized binary file.
-    """
-    w = np.size(lo)
-    if not is_record_width(w):
-        raise ParamError(f"quantization table: expected {describe_widths()} columns (10·K + 6 with K axes), found {w}")
-    lo = np.asarray(lo, dtype=np.float32).reshape(w)
-    step = np.asarray(step, dtype=np.float32).reshape(w)
-    q = np.asarray(q, dtype="<u2").reshape(-1, w)
-    return _dequantize(_quant_table(w).pack(*lo.tolist(), *step.tolist()), q.tobytes(), len(q), w)
-
-
 def _quant_table(width: int) -> struct.Struct:
     table = _QUANT_TABLES.get(width)
     if table is None:  # several axes: 10·K + 6 (+ 3, + 6) columns
@@ -470,48 +173,14 @@ def _quant_table(width: int) -> struct.Struct:
 
 
 def _quantize(values: np.ndarray) -> tuple[bytes, bytes]:
-    lo32, step32 = _quant_steps(*_quant_range([values], values.shape[1]))
-    return _quant_table(values.shape[1]).pack(*lo32.tolist(), *step32.tolist()), _quant_levels(values, lo32, step32).tobytes()
-
-
-def _quant_range(pieces, width: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per-column minimum and maximum (float64, exact) over ``pieces`` of
-    ``(m, width)`` float32 values, zeros when there are none: the same
-    whether the values come whole or in pieces."""
-    lo = hi = None
-    for piece in pieces:
-        if len(piece):
-            p_lo, p_hi = piece.min(axis=0).astype(np.float64), piece.max(axis=0).astype(np.float64)
-            lo = p_lo if lo is None else np.minimum(lo, p_lo)
-            hi = p_hi if hi is None else np.maximum(hi, p_hi)
-    if lo is None:
-        return np.zeros(width), np.zeros(width)
-    return lo, hi
-
-
-def _quant_steps(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The decode table of a column range: ``lo`` (w,) float32 and ``step`` (w,) float32."""
-    lo32 = lo.astype(np.float32)
-    step32 = ((hi - lo32.astype(np.float64)) / 65535.0).astype(np.float32)
-    # a step that rounds to a value whose 65535 multiple falls short of the range is widened by one ulp
-    short = lo32.astype(np.float64) + 65535.0 * step32.astype(np.float64) < hi
-    step32[short] = np.nextafter(step32[short], np.float32(np.inf))
-    return lo32, step32
-
-
-def _quant_levels(values: np.ndarray, lo32: np.ndarray, step32: np.ndarray) -> np.ndarray:
-    """``values`` (m, w) as uint16 levels (little-endian) of the table ``lo32``, ``step32``."""
-    v = values.astype(np.float64)
-    return np.clip(_levels(v, lo32.astype(np.float64), step32.astype(np.float64)), 0, 65535).astype("<u2")
+    lo32, step32 = quant_steps(*quant_range([values], values.shape[1]))
+    return _quant_table(values.shape[1]).pack(*lo32.tolist(), *step32.tolist()), quant_levels(values, lo32, step32).tobytes()
 
 
 def _dequantize(table: bytes, payload: bytes, count: int, width: int = 16) -> np.ndarray:
     raw = _quant_table(width).unpack(table)
-    lo = np.array(raw[:width], dtype=np.float64)
-    step = np.array(raw[width:], dtype=np.float64)
-    q = np.frombuffer(payload, dtype="<u2", count=count * width).reshape(count, width).astype(np.float64)
-    with np.errstate(over="ignore", invalid="ignore"):  # a non-finite result is refused by as_params
-        return (lo + q * step).astype(np.float32)
+    q = np.frombuffer(payload, dtype="<u2", count=count * width).reshape(count, width)
+    return dequantize_params(np.array(raw[:width], dtype=np.float32), np.array(raw[width:], dtype=np.float32), q)
 
 
 def encode_binary(
@@ -870,13 +539,13 @@ def write_param_chunks(
         header = _binary_header(width, quantize, count, axis, mesh_fingerprint)
         table = b""
         if quantize:  # first pass: the decode table needs every column's range
-            lo32, step32 = _quant_steps(*_quant_range(checked(), width))
+            lo32, step32 = quant_steps(*quant_range(checked(), width))
             table = _quant_table(width).pack(*lo32.tolist(), *step32.tolist())
         with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             crc = zlib.crc32(header + table)
             fh.write(header + table)
             for piece in checked():  # the CRC-32 carried along: no copy of the whole payload
-                data = (_quant_levels(piece, lo32, step32) if quantize else piece.astype("<f4")).tobytes()
+                data = (quant_levels(piece, lo32, step32) if quantize else piece.astype("<f4")).tobytes()
                 crc = zlib.crc32(data, crc)
                 fh.write(data)
             fh.write(_TRAILER.pack(crc))
@@ -885,9 +554,9 @@ def write_param_chunks(
     if mesh is not None:
         text += f"\nbase mesh: {mesh.name} (sha256 {mesh.fingerprint.hex()})"
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(_text_header(width, text))
+        fh.write(text_header(width, text))
         for piece in checked():
-            for lines in _text_body(piece):
+            for lines in text_body(piece):
                 fh.write(lines)
     return path
 
