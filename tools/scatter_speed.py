@@ -19,7 +19,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 import axialdeform as ad
-from axialdeform.core.scatter import surface_from_heights
+from axialdeform.core.surface import surface_from_heights
 
 
 def main() -> None:

@@ -25,7 +25,7 @@ _NAMES = {
     "as_params": "params", "make_params": "params", "extend_params": "params", "is_extended": "params",
     "tint_params": "params", "is_tinted": "params",
     "read_params": "io.params", "read_param_file": "io.params", "write_params": "io.params", "ParamFile": "io.params",
-    "random_params": "variation", "Variation": "variation", "load_surface": "scatter",
+    "random_params": "variation", "Variation": "variation", "load_surface": "surface",
     "Placement": "scatter",
     "Wind": "wind", "wind_offsets": "wind", "apply_wind": "wind",
     # the CPU reference, bounds

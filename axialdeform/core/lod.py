@@ -49,7 +49,7 @@ import numpy as np
 from .errors import ParamError
 from .material import Part
 from .mesh import area_weighted_normals, unique_edges
-from .scatter import face_areas, sample_faces
+from .surface import face_areas, sample_faces
 
 __all__ = [
     "LodLevel", "build_lod_levels", "collapse_mapping", "spatial_chunks", "LOD_CHUNK_TRIANGLES", "LOD_REDUCTIONS",
@@ -135,7 +135,7 @@ def check_lod_error(pixels) -> float:
 
 def _surface_points(positions: np.ndarray, faces: np.ndarray, count: int, seed: int) -> np.ndarray:
     """The vertices (n, 3) plus ``count`` points sampled on the triangles (area-
-    uniform: :func:`~axialdeform.core.scatter.sample_faces`, trimesh's
+    uniform: :func:`~axialdeform.core.surface.sample_faces`, trimesh's
     ``sample_surface`` without its per-face arrays): (k, 3) float64."""
 
     positions = np.asarray(positions, dtype=np.float64)

@@ -313,7 +313,7 @@ def grid_edge_pieces(rows: int, cols: int, piece_rows: int = 64):
 def grid_edges(rows: int, cols: int) -> np.ndarray:
     """(k, 2) uint32 edges of a ``rows`` x ``cols`` height-map grid (vertex
     ``r * cols + c``, each cell split by the diagonal from ``(r, c + 1)`` to
-    ``(r + 1, c)``, as :func:`axialdeform.core.scatter.load_surface` makes
+    ``(r + 1, c)``, as :func:`axialdeform.core.surface.load_surface` makes
     it): exactly :func:`unique_edges` of its triangles, in the same order,
     made without sorting (a 1 500 x 1 500 map: 6.7 M edges, 54 MB, where
     sorting them needs 3x that)."""

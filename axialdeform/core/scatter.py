@@ -41,22 +41,15 @@ Seeded: one PCG64 stream; the same arguments and seed give the same bytes.
 from __future__ import annotations
 
 import math
-import os
-import warnings
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
-from PIL import Image
 
 from .axes import child_offsets
-from .axis import AXIS_NAMES, PERPENDICULAR
+from .axis import AXIS_NAMES
 from .deform import bernstein
-from .errors import MeshError, ScatterError, TooFewError
-from .io import safeio
+from .errors import ScatterError, TooFewError
 from .io.mesh import load_mesh
-from .io.safeio import _gb, open_regular
-from .material import AssetWarning
 from .mesh import BaseMesh
 from .record import (
     ANGLES,
@@ -71,371 +64,19 @@ from .record import (
     Instances,
     join_record,
 )
+from .surface import density_at, load_density, load_surface
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
 from .variation import Variation
 
-__all__ = [
-    "scatter", "Placement", "Surface", "load_surface", "sample_faces", "face_areas", "load_density", "surface_from_heights",
-    "ANCHORS", "IMAGE_SUFFIXES", "poisson_greedy",
-]
+__all__ = ["scatter", "Placement", "ANCHORS", "poisson_greedy"]
 
 ANCHORS = ("bottom", "center", "origin")
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm", ".gif", ".webp")
 #: most candidates drawn in one round (bounds memory: about 200 bytes each)
 MAX_CANDIDATES = 4_000_000
 #: most instances one call places (76 bytes each as 19 float32)
 MAX_INSTANCES = 10_000_000
 #: rounds of fresh candidates before giving up on reaching n
 MAX_ROUNDS = 12
-
-
-#: faces handled at once when a surface's face areas, normals and bounds are
-#: computed (bounds the temporaries: about 250 bytes a face, ~16 MB a block)
-FACE_BLOCK = 1 << 16
-
-
-@dataclass(eq=False)
-class Surface:
-    """A surface to scatter on, kept as plain arrays (no ``trimesh.Trimesh``
-    and its caches: a 1 500 x 1 500 height map is 4.5 M faces).
-
-    vertices : (n, 3) float64 -- world units.
-    faces : (f, 3) uint32 (int64 where given so) -- every face.
-    up : int -- 0, 1, 2 for x, y, z.
-    name : str -- for messages.
-    weights : (f,) float64 -- each face's area where it faces up (its normal has
-        a ``up`` component > 1e-9, trimesh's face normal and area), else 0:
-        what sampling is weighted by.
-    """
-
-    vertices: np.ndarray
-    faces: np.ndarray
-    up: int
-    name: str
-    weights: np.ndarray
-    #: ``(rows, cols)`` of a height map's grid (its edges are known), else None
-    grid: tuple | None = None
-
-    @property
-    def upward(self) -> np.ndarray:
-        """(f,) bool: the faces that face up (and have an area)."""
-        return self.weights > 0
-
-    @property
-    def mesh(self):
-        """A ``trimesh.Trimesh`` of every face, built on each call (costly on
-        a big surface: the library itself never asks for it)."""
-        import trimesh
-
-        return trimesh.Trimesh(self.vertices, self.faces, process=False)
-
-    @property
-    def ground(self) -> tuple[int, int]:
-        """The two other axes in increasing order: density columns, density rows."""
-        return PERPENDICULAR[self.up]
-
-    @property
-    def bounds(self) -> np.ndarray:
-        """(2, 3) float64: the bounding box of the vertices the faces use (as trimesh's ``bounds``)."""
-        if "_bounds" not in self.__dict__:
-            self.__dict__["_bounds"] = _used_bounds(self.vertices, self.faces)
-        return self.__dict__["_bounds"]
-
-    @property
-    def size(self) -> float:
-        """Largest extent of the bounding box of the upward-facing faces."""
-        lo, hi = _used_bounds(self.vertices, self.faces, self.weights > 0)
-        return float((hi - lo).max())
-
-    def face_normals(self, index: np.ndarray) -> np.ndarray:
-        """(k, 3) float64 unit normals of the faces ``index`` (k,) -- trimesh's
-        ``face_normals`` of those faces (zero where a face has no area)."""
-        return _trimesh_normals(self.vertices[self.faces[index]])
-
-    def sample(self, count: int, rng: np.random.Generator, weight_cum: np.ndarray | None = None):
-        """``count`` points, area-uniform over the upward faces: ``(points (count, 3)
-        float64, face_index (count,) int64)``.
-
-        The same draws from ``rng``, in the same order, and the same arithmetic
-        as ``trimesh.sample.sample_surface(mesh, count, face_weight=weights,
-        seed=rng)`` -- the same points and faces, bit for bit (pinned by
-        ``tests/app/test_scatter.py::test_sample_is_trimesh_sample_surface``) --
-        but trimesh builds an origin and two edge vectors for EVERY face
-        ((f, 3, 3) float64: 324 MB on a 1 500 x 1 500 height map) before
-        picking; this gathers only the picked faces' vertices.
-        ``weight_cum`` : ``np.cumsum(self.weights)`` if already at hand."""
-        if weight_cum is None:
-            weight_cum = np.cumsum(self.weights)
-        return sample_faces(self.vertices, self.faces, weight_cum, count, rng)
-
-
-def sample_faces(vertices: np.ndarray, faces: np.ndarray, weight_cum: np.ndarray, count: int, rng):
-    """``count`` points on the triangles ``faces`` (f, 3) of ``vertices`` (n, 3),
-    a face picked with probability in proportion to its weight (``weight_cum``
-    (f,): the running sum of the weights), uniform within it: ``(points (count, 3)
-    float64, face_index (count,) int64)``.
-
-    Exactly ``trimesh.sample.sample_surface(mesh, count, face_weight=weights,
-    seed=rng)`` -- the same draws from ``rng`` (a numpy Generator, or a seed),
-    in the same order, and the same arithmetic, so the same points bit for bit
-    (pinned by ``tests/app/test_scatter.py::test_sample_is_trimesh_sample_surface``)
-    -- but trimesh builds an origin and two edge vectors for EVERY face
-    ((f, 3, 3) float64: 324 MB on a 1 500 x 1 500 height map) before picking;
-    this gathers only the picked faces' vertices."""
-    random = np.random.default_rng(rng).random
-    face_pick = random(count) * weight_cum[-1]
-    face_index = np.searchsorted(weight_cum, face_pick)
-    f = faces[face_index]
-    tri_origins = vertices[f[:, 0]]
-    tri_vectors = vertices[f[:, 1:]]
-    tri_vectors -= np.tile(tri_origins, (1, 2)).reshape((-1, 2, 3))
-    random_lengths = random((len(tri_vectors), 2, 1))
-    random_test = random_lengths.sum(axis=1).reshape(-1) > 1.0
-    random_lengths[random_test] -= 1.0
-    random_lengths = np.abs(random_lengths)
-    sample_vector = (tri_vectors * random_lengths).sum(axis=1)
-    return sample_vector + tri_origins, face_index
-
-
-def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(f,) float64: each face's area, trimesh's ``area_faces`` computed with
-    trimesh's own functions over blocks of faces (no (f, 3, 3) array of every face)."""
-    import trimesh
-
-    areas = np.empty(len(faces))
-    for b in _blocks(len(faces)):
-        areas[b] = trimesh.triangles.area(vertices[faces[b]])
-    return areas
-
-
-def _blocks(count: int):
-    for start in range(0, count, FACE_BLOCK):
-        yield slice(start, min(start + FACE_BLOCK, count))
-
-
-def _used_bounds(vertices: np.ndarray, faces: np.ndarray, which: np.ndarray | None = None) -> np.ndarray:
-    """(2, 3) float64 min and max of the vertices used by ``faces`` (those with ``which`` (f,) bool)."""
-    used = np.zeros(len(vertices), dtype=bool)
-    for b in _blocks(len(faces)):
-        used[(faces[b] if which is None else faces[b][which[b]]).ravel()] = True
-    return np.array([[vertices[used, c].min() for c in range(3)], [vertices[used, c].max() for c in range(3)]])
-
-
-def _upward_areas(vertices: np.ndarray, faces: np.ndarray, u: int) -> np.ndarray:
-    """(f,) float64: each face's area (trimesh's ``area_faces``) where its unit normal
-    (trimesh's ``face_normals``) has a ``u`` component > 1e-9, else 0 -- computed
-    with trimesh's own functions over blocks of faces, so that no (f, 3, 3) or
-    (f, 3) array of every face is ever held."""
-    import trimesh
-
-    weights = np.empty(len(faces))
-    for b in _blocks(len(faces)):
-        crosses = trimesh.triangles.cross(vertices[faces[b]])
-        area = trimesh.triangles.area(crosses=crosses)
-        unit, valid = trimesh.util.unitize(crosses, check_valid=True)
-        nu = np.zeros(len(area))
-        nu[valid] = unit[:, u]
-        weights[b] = np.where((nu > 1e-9) & (area > 0), area, 0.0)
-    return weights
-
-
-def _up_index(up) -> int:
-    if up not in AXIS_NAMES:
-        raise ScatterError(f"up: expected one of x, y, z, found {up!r}")
-    return AXIS_NAMES.index(up)
-
-
-#: peak bytes a height-map SURFACE costs per pixel (float64 grid 24, uint32 faces 24,
-#: area weights 16 and their running sum 16, blocks of temporaries; as a scene's terrain
-#: also its float32 drawing copy and normals): measured on a 1 500 x 1 500 map, peak RSS
-#: less a tiny map's, ~96 for `axialdeform scatter big.png stone -n 200 -o p.adp` and
-#: ~150 for a scene with it as [terrain] up to its first draw (tracemalloc on 600 x 600:
-#: up to 218; tests/app/test_scatter.py::test_height_map_memory_is_bounded_per_pixel) --
-#: with a margin, the pixel bound checked before decoding (was 500)
-SURFACE_BYTES_PER_PIXEL = 260
-#: bytes a density map costs per pixel (the float64 grey levels and one copy)
-DENSITY_BYTES_PER_PIXEL = 32
-
-
-def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_PIXEL) -> np.ndarray:
-    """A grey image as float64 in [0, 1], shape (rows, cols).
-
-    The file must be a regular file (a FIFO or a device is refused without
-    blocking), and its pixel count -- read from the header, before any pixel
-    is decoded -- must fit in memory at ``bytes_per_pixel``: a small
-    compressed file claiming a huge image (a decompression bomb) is refused
-    with the limit, never decoded."""
-
-    if not os.path.lexists(path):
-        raise ScatterError(f"{what} {path}: no such file")
-    with open_regular(path, f"a grey image ({what})", ScatterError) as (fh, _size):
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("error", Image.DecompressionBombWarning)
-                with Image.open(fh) as img:
-                    cols, rows = img.size
-                    budget = int(0.8 * safeio.memory_available())
-                    if cols * rows * bytes_per_pixel > budget:
-                        raise ScatterError(
-                            f"{what} {path}: an image of {cols}x{rows} pixels needs about "
-                            f"{_gb(cols * rows * bytes_per_pixel)}; expected at most {budget // bytes_per_pixel} pixels "
-                            f"(what {_gb(budget)} of available memory holds)")
-                    img.load()
-                    if img.mode in ("I;16", "I;16B", "I;16L", "I"):
-                        grey = np.asarray(img, dtype=np.float64) / 65535.0
-                    elif img.mode == "F":
-                        grey = np.asarray(img, dtype=np.float64)
-                    else:
-                        grey = np.asarray(img.convert("L"), dtype=np.float64) / 255.0
-        except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
-            raise ScatterError(f"{what} {path}: refused as a decompression bomb ({exc})") from None
-        except (ScatterError, MemoryError):
-            raise
-        except Exception as exc:  # noqa: BLE001 - UnidentifiedImageError or any decoder failure on a hostile file
-            from PIL import UnidentifiedImageError
-
-            why = ("not an image format Pillow recognises" if isinstance(exc, UnidentifiedImageError)
-                   else f"{type(exc).__name__}: {exc}")
-            raise ScatterError(f"{what} {path}: could not read the image ({why})") from None
-    return grey
-
-
-def _grid(heights, what: str) -> np.ndarray:
-    h = np.asarray(heights, dtype=np.float64)
-    if h.ndim != 2:
-        raise ScatterError(f"{what}: expected a 2-D grey image, found an array of shape {h.shape}")
-    if not np.isfinite(h).all():
-        raise ScatterError(f"{what}: expected finite grey levels, found a non-finite value")
-    return h
-
-
-def surface_from_heights(heights, *, up: str = "y", height_scale: float = 1.0, extent=None,
-                         name: str = "<height map>") -> Surface:
-    """A terrain mesh from a height map.
-
-    heights : (rows, cols) float in [0, 1] -- pixel (row, col) is the vertex at
-        ``col`` along the first ground axis (+x for ``up="y"``) and ``row``
-        along the second (+z), the top row at the smallest coordinate; its
-        height along ``up`` is ``value * height_scale``.
-    extent : None, W or (W, D) -- the grid's size along the two ground axes
-        (default: one unit per pixel; with W alone, D keeps the pixels square).
-        The grid is centred on the origin across ``up``.
-    """
-    h = _grid(heights, name)
-    rows, cols = h.shape
-    if rows < 2 or cols < 2:
-        raise ScatterError(f"{name}: a height map of {cols}x{rows} pixels; expected at least 2x2")
-    if not (math.isfinite(height_scale) and height_scale >= 0):
-        raise ScatterError(f"height-scale: expected a finite number >= 0, found {height_scale!r}")
-    if extent is None:
-        width, depth = float(cols - 1), float(rows - 1)
-    else:
-        ext = [float(extent)] if np.isscalar(extent) else [float(x) for x in extent]
-        if len(ext) not in (1, 2) or not all(math.isfinite(x) and x > 0 for x in ext):
-            raise ScatterError(f"extent: expected W or W,D with finite sizes > 0, found {extent!r}")
-        width = ext[0]
-        depth = ext[1] if len(ext) == 2 else width * (rows - 1) / (cols - 1)
-    u = _up_index(up)
-    g0, g1 = PERPENDICULAR[u]
-    # float64 vertices (24 bytes a pixel) and uint32 faces (24 bytes a pixel), written in place
-    verts = np.empty((rows * cols, 3))
-    verts[:, g0] = np.tile((np.arange(cols) / (cols - 1) - 0.5) * width, rows)
-    verts[:, g1] = np.repeat((np.arange(rows) / (rows - 1) - 0.5) * depth, cols)
-    verts[:, u] = h.ravel() * height_scale
-    dtype = np.uint32 if rows * cols < 2**32 else np.int64
-    k = (np.arange(rows - 1, dtype=dtype)[:, None] * dtype(cols) + np.arange(cols - 1, dtype=dtype)).ravel()
-    half = len(k)
-    corners = ((k, k + cols, k + 1), (k + 1, k + cols, k + cols + 1))
-    # every face's projection on the ground has the same turn, so the first face says
-    # whether the grid faces up; else wind it the other way (as trimesh.Trimesh(verts, faces[:, ::-1]))
-    first = np.array([[c[0] for c in corners[0]]])
-    flip = _trimesh_normals(verts[first])[0, u] < 0
-    faces = np.empty((2 * half, 3), dtype=dtype)
-    for t, tri in enumerate(corners):
-        for c, col in enumerate(tri[::-1] if flip else tri):
-            faces[t * half:(t + 1) * half, c] = col
-    del k, corners
-    return _make_surface(verts, faces, u, name, grid=(rows, cols))
-
-
-def _trimesh_normals(triangles: np.ndarray) -> np.ndarray:
-    """(k, 3) float64 unit normals of ``triangles`` (k, 3, 3) as trimesh's ``face_normals`` (zero where degenerate)."""
-    import trimesh
-
-    unit, valid = trimesh.triangles.normals(triangles=triangles)
-    out = np.zeros((len(triangles), 3))
-    out[valid] = unit
-    return out
-
-
-def _make_surface(vertices, faces, u: int, name: str, grid=None) -> Surface:
-    """A Surface of (n, 3) vertices and (f, 3) faces (not copied when already float64 / an integer type)."""
-    vertices = np.asarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces)
-    if len(faces) == 0:
-        raise ScatterError(f"{name}: the surface has no faces; expected a triangle mesh")
-    if not all(np.isfinite(vertices[:, c]).all() for c in range(3)):
-        raise ScatterError(f"{name}: the surface has a non-finite vertex; expected finite coordinates")
-    weights = _upward_areas(vertices, faces, u)
-    if not (weights > 0).any():
-        raise ScatterError(f"{name}: no face of the surface faces up (+{AXIS_NAMES[u]}); "
-                           f"expected a surface facing up somewhere (or choose --up)")
-    return Surface(vertices=vertices, faces=faces, up=u, name=name, weights=weights, grid=grid)
-
-
-def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=None) -> Surface:
-    """A :class:`Surface` from a mesh file, a height-map image, a ``trimesh.Trimesh``,
-    a :class:`~axialdeform.core.mesh.BaseMesh` or a 2-D height array."""
-    import trimesh
-
-    u = _up_index(up)
-    if isinstance(source, Surface):
-        return source
-    if isinstance(source, trimesh.Trimesh):
-        return _make_surface(source.vertices.view(np.ndarray), source.faces.view(np.ndarray), u, "<surface>")
-    if hasattr(source, "positions") and hasattr(source, "faces"):  # a BaseMesh
-        return _make_surface(source.positions, source.faces, u, source.name)
-    if isinstance(source, (str, os.PathLike)):
-        path = Path(source)
-        if path.suffix.lower() in IMAGE_SUFFIXES:
-            return surface_from_heights(_read_grey(path, "SURFACE", SURFACE_BYTES_PER_PIXEL), up=up, height_scale=height_scale,
-                                        extent=extent, name=f"SURFACE {path}")
-
-        try:
-            with warnings.catch_warnings():  # only the faces are used: a missing texture does not matter here
-                warnings.simplefilter("ignore", AssetWarning)
-                base = load_mesh(path)
-        except MeshError as exc:
-            raise ScatterError(f"SURFACE {exc}") from None
-        return _make_surface(base.positions, base.faces, u, str(path))
-    return surface_from_heights(source, up=up, height_scale=height_scale, extent=extent)
-
-
-def load_density(source, name: str = "<array>") -> np.ndarray:
-    """A density map: (rows, cols) float64 in [0, 1] from an image path or an array."""
-    if isinstance(source, (str, os.PathLike)):
-        name = str(source)
-        grey = _read_grey(Path(source), "density")
-    else:
-        grey = _grid(source, name)
-    if grey.size == 0:
-        raise ScatterError(f"density {name}: the image has no pixels; expected a grey image")
-    if grey.min() < 0 or grey.max() > 1:
-        raise ScatterError(f"density {name}: grey levels must lie in [0, 1], found {grey.min():g}..{grey.max():g}")
-    if not (grey > 0).any():
-        raise ScatterError(f"density {name}: every pixel is black; expected some non-black pixel (black = none, white = full)")
-    return grey
-
-
-def _density_at(grey: np.ndarray, points: np.ndarray, surface: Surface) -> np.ndarray:
-    """Nearest-pixel grey level under each point: (k, 3) -> (k,)."""
-    rows, cols = grey.shape
-    lo, hi = surface.bounds
-    g0, g1 = surface.ground
-    span = np.where(hi - lo > 0, hi - lo, 1.0)
-    c = np.clip(np.floor((points[:, g0] - lo[g0]) / span[g0] * cols), 0, cols - 1).astype(np.int64)
-    r = np.clip(np.floor((points[:, g1] - lo[g1]) / span[g1] * rows), 0, rows - 1).astype(np.int64)
-    return grey[r, c]
 
 
 def poisson_greedy(points: np.ndarray, radius: float, fixed: np.ndarray | None = None) -> np.ndarray:
@@ -607,7 +248,7 @@ def scatter(surface, mesh, n: int, variation: Variation | None = None, placement
         count = int(min(MAX_CANDIDATES, math.ceil(want / mean_density) + 16))
         cand, fidx = surf.sample(count, rng, weight_cum)
         if grey is not None:
-            keep = rng.random(count) < _density_at(grey, cand, surf)
+            keep = rng.random(count) < density_at(grey, cand, surf)
             cand, fidx = cand[keep], fidx[keep]
         if min_distance is not None:
             keep = poisson_greedy(cand, float(min_distance), points)

@@ -603,7 +603,7 @@ def test_scatter_refuses_a_decompression_bomb_in_one_line(tmp_path):
 
 
 def test_height_map_pixels_checked_against_memory_before_decoding(tmp_path, monkeypatch, capsys):
-    from axialdeform.core import scatter
+    from axialdeform.core import surface as scatter
     from axialdeform.core.io import safeio
 
     hm = _png(tmp_path / "hm.png", np.full((200, 300), 128, np.uint8))

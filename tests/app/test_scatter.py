@@ -18,7 +18,8 @@ from scipy.spatial import cKDTree
 
 import axialdeform as ad
 from axialdeform.cli import main
-from axialdeform.core.scatter import load_surface, poisson_greedy, surface_from_heights
+from axialdeform.core.scatter import poisson_greedy
+from axialdeform.core.surface import load_surface, surface_from_heights
 
 from conftest import data_mesh
 
@@ -238,7 +239,7 @@ def test_sample_is_trimesh_sample_surface(terrain, monkeypatch):
     """Surface.sample gathers only the picked faces, yet draws what
     trimesh.sample.sample_surface draws -- the same points and faces bit for
     bit, and the generator left in the same state -- for every kind of surface."""
-    from axialdeform.core import scatter as S
+    from axialdeform.core import surface as S
 
     monkeypatch.setattr(S, "FACE_BLOCK", 97)  # many blocks: the blocked areas must equal trimesh's whole ones
     for surf in _surfaces(terrain):

@@ -118,7 +118,7 @@ def test_grid_edges_are_the_unique_edges_of_a_height_map(tmp_path, rows, cols):
     from PIL import Image
 
     from axialdeform.core.mesh import grid_edges, unique_edges
-    from axialdeform.core.scatter import load_surface
+    from axialdeform.core.surface import load_surface
 
     heights = (np.random.default_rng(rows * cols).random((rows, cols)) * 255).astype(np.uint8)
     Image.fromarray(heights).save(tmp_path / "h.png")

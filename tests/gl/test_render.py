@@ -382,7 +382,7 @@ def test_a_height_maps_wireframe_in_blocks_is_the_whole_edge_list(ctx, monkeypat
     buffer (every hidden-line style, culled or not), and the blocks' commands
     hold exactly the grid's edges in the same order."""
     from axialdeform.core.mesh import BaseMesh, area_weighted_normals, grid_edges
-    from axialdeform.core.scatter import surface_from_heights
+    from axialdeform.core.surface import surface_from_heights
     from axialdeform.gl import buffers
     from axialdeform.gl.renderer import AxialRenderer
 

@@ -14,7 +14,8 @@ import numpy as np
 
 from ..errors import AxialDeformError, SceneError
 from ..mesh import BaseMesh, area_weighted_normals
-from ..scatter import ANCHORS, load_surface, scatter
+from ..scatter import ANCHORS, scatter
+from ..surface import load_surface
 from ..wind import Wind
 from . import safeio
 from .mesh import BUNDLED_MESHES, axes_argument, load_mesh, mesh_source_path
