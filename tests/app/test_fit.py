@@ -12,6 +12,7 @@ import pytest
 import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core import fit
+from axialdeform.core import lsq as lsq_mod
 from axialdeform.core.io.bake import write_mesh_folder
 from axialdeform.core.params import ANGLES, OFFSETS, POSITION
 
@@ -289,7 +290,7 @@ def test_tall_least_squares_is_pinv_of_the_whole_system():
     a = rng.normal(size=(3, 300, 6))
     a[1, :, 5] = a[1, :, 2]  # rank 5
     b = rng.normal(size=(3, 300))
-    lsq = fit._TallLeastSquares(3, 6)
+    lsq = lsq_mod.TallLeastSquares(3, 6)
     for s in range(0, 300, 37):  # blocks of uneven size, the last one short
         lsq.add(a[:, s:s + 37], b[:, s:s + 37])
     assert lsq.r.shape == (3, 7, 7)  # only the small factor is kept
@@ -305,9 +306,9 @@ def test_blocks_of_vertices_fit_like_one_block(name, extended, monkeypatch):
     mesh = MESHES[name]()
     _, positions = _variants(mesh, count=4, seed=3, bend=0.2)
     whole = fit.fit_params(mesh, positions, extended=extended)
-    assert fit._block_rows(4, 17) >= mesh.vertex_count  # the default: one block on these meshes
-    monkeypatch.setattr(fit, "_BLOCK_BYTES", 4 * 3 * 17 * 8 * 3)  # 3 (or 4) vertices a block: many blocks
-    assert fit._block_rows(4, 11) < mesh.vertex_count / 5
+    assert lsq_mod.block_rows(4, 17) >= mesh.vertex_count  # the default: one block on these meshes
+    monkeypatch.setattr(lsq_mod, "BLOCK_BYTES", 4 * 3 * 17 * 8 * 3)  # 3 (or 4) vertices a block: many blocks
+    assert lsq_mod.block_rows(4, 11) < mesh.vertex_count / 5
     blocked = fit.fit_params(mesh, positions, extended=extended)
     assert np.abs(blocked.params - whole.params).max() <= 1e-6 * mesh.axis.length
     _assert_reproduces(mesh, blocked.params[:, :16], positions)
