@@ -171,7 +171,8 @@ def check_page_outputs(out: Path, names, inputs=(), overwrite: bool = False) -> 
 
 def _folder_files(scene: WebScene) -> dict:
     head = _import_map({"three": "./three/three.module.min.js", "three/addons/": "./three/addons/",
-                        "axialdeform-three": "./" + MODULE_DIR + "index.js"})
+                        "axialdeform-three": "./" + MODULE_DIR + "index.js",
+                        "axialdeform-three/helpers": "./" + MODULE_DIR + "helpers.js"})
     page = _page(scene.config, head, "", _START + _FOLDER_ENTRY)
     files = {
         "index.html": page.encode("utf-8"),

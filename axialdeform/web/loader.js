@@ -5,7 +5,7 @@
 //
 // sources = {three, orbit, gltf, bgu, app, module: {'adp.js': text, ...}}: the text of each module.
 /** The module's files, each after the files it imports. */
-export const MODULE_ORDER = ['adp.js', 'glsl.js', 'bend.js', 'mesh.js', 'gltf.js', 'index.js'];
+export const MODULE_ORDER = ['record.js', 'adp.js', 'glsl.js', 'bend.js', 'shader.js', 'wind.js', 'feedback.js', 'bake.js', 'raycast.js', 'mesh.js', 'gltf.js', 'index.js', 'helpers.js'];
 
 export async function loadModules(sources) {
   const urls = [];
@@ -27,7 +27,8 @@ export async function loadModules(sources) {
     for (const [dep, u] of Object.entries(mod)) text = text.replace(new RegExp(`(['"])\\./${dep}\\1`, 'g'), `'${u}'`);
     mod[name] = url(text);
   }
-  const app = url(sources.app.replace(/from\s*(['"])axialdeform-three\1/g, `from '${mod['index.js']}'`));
+  const app = url(sources.app.replace(/from\s*(['"])axialdeform-three\1/g, `from '${mod['index.js']}'`)
+    .replace(/from\s*(['"])axialdeform-three\/helpers\1/g, `from '${mod['helpers.js']}'`));
   const [THREE, o, g, a] = await Promise.all([import(three), import(orbit), import(gltf), import(app)]);
   return { lib: { THREE, OrbitControls: o.OrbitControls, GLTFLoader: g.GLTFLoader }, app: a, urls };
 }

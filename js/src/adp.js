@@ -2,6 +2,8 @@
 // check (size, CRC-32, header fields), decode.  The checks and their order
 // follow axialdeform.core.io.params.read_binary_header / decode_binary.
 
+import { RECORD, WIDTHS, MAX_AXES } from './record.js';
+
 /** The error of every check in this package: a message naming the file, the field and what was expected. */
 export class AxialError extends Error {
   constructor(message) {
@@ -14,9 +16,8 @@ const MAGIC = [0x89, 0x41, 0x44, 0x50, 0x0d, 0x0a, 0x1a, 0x0a];
 /** Bytes of the header, before the numbers. */
 export const HEADER_BYTES = 96;
 /** Numbers per instance of each file version (one axis): 16; 19 (+ s tw tp); 22 (+ tr tg tb). */
-export const NUMBERS_OF_VERSION = Object.freeze({ 1: 16, 2: 19, 3: 22 });
-/** Most axes an instance (several axes: 10 more numbers per child axis). */
-export const MAX_AXES = 64;
+export const NUMBERS_OF_VERSION = Object.freeze(Object.fromEntries(WIDTHS.map((w, level) => [level + 1, w])));
+export { MAX_AXES };
 
 let crcTable = null;
 
@@ -130,20 +131,25 @@ export function dequantize(values, qtable, fields) {
   return out;
 }
 
-/** The record's columns (docs/parameter-files.md): numbers per instance -> {axes, offsets of axis j
- * (10 numbers at 10 j), position, angles, scale, twist, taper, tint} (indices; null where absent). */
+const FIELD = Object.fromEntries(RECORD.map((f) => [f.name, f]));
+
+/** The record's columns (docs/parameter-files.md, record.js): numbers per instance -> {axes, level,
+ * offsets of axis j (10 numbers at 10 j), position, angles, scale, twist, taper, tint} (indices; null
+ * where absent). */
 export function recordLayout(numbersPerInstance, axes = 1) {
-  const base = numbersPerInstance - 10 * (axes - 1);
-  if (![16, 19, 22].includes(base) || axes < 1 || axes > MAX_AXES) {
-    throw new AxialError(`record: expected 16, 19 or 22 numbers an instance plus 10 per child axis, found ${numbersPerInstance} with ${axes} axes`);
+  const base = numbersPerInstance - 10 * (axes - 1), level = WIDTHS.indexOf(base);
+  if (level < 0 || !Number.isInteger(axes) || axes < 1 || axes > MAX_AXES) {
+    throw new AxialError(`record: expected ${WIDTHS.slice(0, -1).join(', ')} or ${WIDTHS.at(-1)} numbers an instance plus 10 per child axis, found ${numbersPerInstance} with ${axes} axes`);
   }
-  const rest = 10 * axes; // p, r, then s tw tp, then the tint
-  return {
-    axes, numbersPerInstance, base,
-    position: rest, angles: rest + 3,
-    scale: base >= 19 ? rest + 6 : null, twist: base >= 19 ? rest + 7 : null, taper: base >= 19 ? rest + 8 : null,
-    tint: base >= 22 ? rest + 9 : null,
-  };
+  const at = (name) => (FIELD[name].level <= level ? column(FIELD[name].start, axes) : null);
+  return { axes, level, numbersPerInstance, base, position: at('position'), angles: at('rotation'),
+    scale: at('scale'), twist: at('twist'), taper: at('taper'), tint: at('tint') };
+}
+
+/** Where column `start` of axis 0's record (record.js) lies in a record of `axes` axes: the child
+ * axes' 10 (K - 1) offsets come after axis 0's ten. */
+export function column(start, axes = 1) {
+  return start < 10 ? start : start + 10 * (axes - 1);
 }
 
 /** Texels a row of the child axes' offsets texture (glsl/axial.glsl's AXIAL_AXES_ROW). */

@@ -45,7 +45,7 @@ export interface InstanceRecord {
 }
 
 export interface RecordLayout {
-  axes: number; numbersPerInstance: number; base: 16 | 19 | 22;
+  axes: number; level: 0 | 1 | 2; numbersPerInstance: number; base: 16 | 19 | 22;
   position: number; angles: number; scale: number | null; twist: number | null; taper: number | null; tint: number | null;
 }
 
@@ -82,26 +82,6 @@ export interface ResolvedAxis {
 }
 
 export function parseADP(input: ArrayBuffer | ArrayBufferView, name?: string): ADPRecord;
-export function crc32(bytes: Uint8Array): number;
-export function hex(bytes: Uint8Array): string;
-export function dequantize(values: Uint16Array, qtable: Float32Array, fields: number): Float32Array;
-export function recordLayout(numbersPerInstance: number, axes?: number): RecordLayout;
-export function texelRows(count: number, axes: number): number;
-export function childTexels(data: Float32Array, fields: number, axes: number, first: number, count: number,
-  texels: Float32Array): Float32Array;
-export const NUMBERS_OF_VERSION: Readonly<Record<1 | 2 | 3, number>>;
-export const HEADER_BYTES: 96;
-export const MAX_AXES: 64;
-export const AXES_ROW: 4095;
-
-export function alignedFrame(index: 0 | 1 | 2): Rows3;
-export function resolveAxis(spec: { axis?: AxisSpec; axes?: AxesSpec | null } | AxisSpec | null,
-  record: InstanceRecord | null, positions: ArrayLike<number>): ResolvedAxis;
-export function instanceMatrices(data: Float32Array, layout: RecordLayout, count: number, out: Float32Array,
-  first?: number): Float32Array;
-export function bentRadii(positions: ArrayLike<number>, axis: ResolvedAxis, data: Float32Array, layout: RecordLayout,
-  count: number, first?: number, out?: Float32Array | null, grow?: Float32Array | null):
-  { center: [number, number, number]; radius: Float32Array; grow: Float32Array | null };
 
 /** A wind (docs/wind.md): strength is the tip displacement in units of the axis length. */
 export interface WindSpec {
@@ -137,7 +117,10 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
   readonly axialUniforms: Record<string, THREE.IUniform>;
   baseGeometry: THREE.BufferGeometry;
   bendMaterial<M extends THREE.Material>(material: M, clone?: boolean): M;
+  /** Replace the instances (the count may shrink); with {first}: updateParams(data, first). */
   setParams(data: Float32Array | ADPRecord | InstanceRecord, options?: { first?: number }): this;
+  /** Update instances start .. in place: only that range is uploaded and bounded. */
+  updateParams(rows: Float32Array | ADPRecord | InstanceRecord, start?: number): this;
   getInstanceBoundingSphere(index: number, target?: THREE.Sphere): THREE.Sphere;
   getInstanceBoundingBox(index: number, target?: THREE.Box3): THREE.Box3;
   /** The wind of glsl/wind.glsl (null: none); setTime moves its clock. */
@@ -151,9 +134,6 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
   dispose(): this;
 }
 
-/** Inject the bend into the vertex shader text of a three.js built-in material. */
-export function injectBend(vertexShader: string, where?: string): string;
-
 /** GLTFLoader plugin: `loader.register((parser) => new AxialGLTFPlugin(parser))`. */
 export class AxialGLTFPlugin implements GLTFLoaderPlugin {
   constructor(parser: GLTFParser);
@@ -162,8 +142,6 @@ export class AxialGLTFPlugin implements GLTFLoaderPlugin {
   afterRoot(gltf: GLTF): Promise<void>;
 }
 export const EXTENSION: 'AXIALDEFORM_bend';
-export function fromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): AxialInstancedMesh;
-export function recordFromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): InstanceRecord;
 
 /** The text of axialdeform's glsl/axial.glsl (axial_bend, axial_place, axial_tree_world ...). */
 export const AXIAL_GLSL: string;

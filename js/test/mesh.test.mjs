@@ -4,7 +4,8 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import * as THREE from 'three';
-import { parseADP, AxialInstancedMesh, AxialError, recordFromInstancedMesh, fromInstancedMesh, injectBend } from '../src/index.js';
+import { parseADP, AxialInstancedMesh, AxialError } from '../src/index.js';
+import { recordFromInstancedMesh, fromInstancedMesh, injectBend } from '../src/helpers.js';
 
 const dir = new URL('./fixtures/', import.meta.url);
 const expected = JSON.parse(readFileSync(new URL('expected.json', dir), 'utf8'));
@@ -52,6 +53,41 @@ test('setParams writes in place and refuses what does not fit', () => {
   assert.throws(() => mesh.setParams(record('stone19')), /19 numbers an instance, but this mesh was made for 16/);
   const bad = row.slice(); bad[3] = NaN;
   assert.throws(() => mesh.setParams(bad), /number 3: not finite/);
+});
+
+test('setParams replaces the instances (the count may shrink); updateParams updates a range and its bounds only', () => {
+  const r = record('stone16');
+  const mesh = new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), r, { capacity: 5 });
+  assert.equal(mesh.count, r.count);
+  mesh.setParams(r.data.subarray(0, 16));
+  assert.equal(mesh.count, 1); // replaced: one instance drawn, the others gone
+  const one = mesh.boundingSphere.clone();
+  mesh.setParams(r);
+  assert.equal(mesh.count, r.count);
+  assert.ok(mesh.boundingSphere.containsPoint(one.center));
+  // updateParams: only the range's bounds are computed (the other instances' are not asked for)
+  const far = r.data.slice(0, 16);
+  far[11] += 50; // instance 4 far away along y
+  const asked = [];
+  const bound = mesh.getInstanceBoundingBox.bind(mesh);
+  mesh.getInstanceBoundingBox = (i, target) => { asked.push(i); return bound(i, target); };
+  mesh.updateParams(far, 4);
+  assert.deepEqual(asked, [4]);
+  assert.equal(mesh.count, 5);
+  const placed = mesh.getInstanceBoundingSphere(4);
+  assert.ok(mesh.boundingSphere.center.distanceTo(placed.center) + placed.radius <= mesh.boundingSphere.radius + 1e-5);
+  assert.ok(mesh.boundingBox.containsBox(mesh.getInstanceBoundingBox(4)));
+  assert.throws(() => mesh.updateParams(far, 5), /capacity of 5/);
+});
+
+test("a user's onBeforeRender runs beside the mesh's own, which keeps the renderer for raycasting", () => {
+  const mesh = new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), record('stone16'));
+  const calls = [];
+  mesh.onBeforeRender = (renderer, scene) => calls.push([renderer, scene]);
+  const renderer = { fake: true };
+  mesh.onBeforeRender(renderer, 'scene');
+  assert.deepEqual(calls, [[renderer, 'scene']]);
+  assert.equal(mesh._renderer, renderer);
 });
 
 test('the mesh refuses a geometry without normals, a frame it was not given, a tree without vertex axes', () => {

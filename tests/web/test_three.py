@@ -167,9 +167,9 @@ def test_the_module_has_no_second_copy_of_the_maths():
     axial_part, wind_part = built.split("export const AXIAL_GLSL = ", 1)[1].split("export const WIND_GLSL = ")
     assert json.loads(axial_part.split(";\n", 1)[0]) == glsl
     assert json.loads(wind_part.rstrip().rstrip(";")) == (ROOT / "glsl" / "wind.glsl").read_text()
-    mesh_js = (JS / "src" / "mesh.js").read_text()
+    shader_js = (JS / "src" / "shader.js").read_text()
     for maths in ("Bernstein", "s * s * s * s", "cos(", "sin(", "6.28"):  # the formulas live in glsl/ only
-        assert maths not in mesh_js.split("const BEND", 1)[1].split("`;", 1)[0]
+        assert maths not in shader_js.split("const BEND", 1)[1].split("`;", 1)[0]
     for f in (JS / "src").glob("*.js"):  # nor on the CPU: drawing, baking and raycasting bend on the GPU
         if f.name != "glsl.js":
             text = f.read_text().lower()
@@ -198,6 +198,15 @@ def test_the_modules_record_columns_are_the_record_tables():
                 (R.SCALE + shift, R.TWIST + shift, R.TAPER + shift) if level >= 1 else (None, None, None))
             assert lay["tint"] == (R.TINT.start + shift if level == 2 else None)
             assert R.OFFSETS == slice(0, 10)  # axis 0's offsets first; child axis j's at 10 j
+
+
+def test_the_modules_record_is_what_the_python_record_generates(tmp_path):
+    """js/src/record.js (the record's fields, the instanced attributes, the wind's defaults) is what
+    tools/make_js_record.py writes from core/record.py and core/wind.py."""
+    out = tmp_path / "record.js"
+    subprocess.run([sys.executable, str(ROOT / "tools" / "make_js_record.py"), str(out)], check=True,
+                   capture_output=True)
+    assert out.read_text() == (JS / "src" / "record.js").read_text(), "rerun tools/make_js_record.py"
 
 
 def test_fixtures_are_what_the_library_writes(tmp_path):

@@ -2,6 +2,7 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import { AxialGLTFPlugin, AxialInstancedMesh, parseADP, AxialError, type ADPRecord } from 'axialdeform-three';
+import { recordLayout, WIND } from 'axialdeform-three/helpers';
 
 export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry): Promise<THREE.Object3D> {
   const loader = new GLTFLoader();
@@ -10,7 +11,8 @@ export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry)
   const record: ADPRecord = parseADP(buffer, 'stones.adp');
   const stones = new AxialInstancedMesh(geometry, new THREE.MeshStandardMaterial(), record, { capacity: 2 * record.count });
   stones.setParams(record.data.subarray(0, record.numbersPerInstance), { first: 3 });
-  const n: number = stones.count + stones.layout.numbersPerInstance;
+  stones.updateParams(record.data.subarray(0, record.numbersPerInstance), 1);
+  const n: number = stones.count + stones.layout.numbersPerInstance + recordLayout(16).level + WIND.frequency;
   const hits = new THREE.Raycaster().intersectObject(stones);
   if (hits.length && hits[0].instanceId !== undefined && n > 0) stones.dispose();
   try { parseADP(new Uint8Array(4)); } catch (e) { if (e instanceof AxialError) console.log(e.message); }

@@ -1,0 +1,95 @@
+// bake.js -- bend a mesh's instances ONCE (feedback.js) and draw the result as plain geometry until
+// they move again.
+
+import * as THREE from 'three';
+import { feedback, plainArray } from './feedback.js';
+
+/**
+ * Bend every instance ONCE on the GPU (WebGL 2 transform feedback, the same glsl/axial.glsl) and
+ * draw the result as plain geometry from then on: for instances that do not move, the frames cost
+ * what a baked mesh costs, while the file stays 40 bytes an instance.  The bent positions and
+ * normals stay on the GPU (GLBufferAttributes of a child mesh, with the un-bent clones of the
+ * materials; a tint becomes a colour a vertex); raycasting and the bounds stay the instanced mesh's.
+ * setParams() (animation) and setWind() go back to bending every frame; call bake() again when
+ * the instances rest.  Returns true when baked (false: no instances, a wind, an own shader).
+ */
+export function bake(mesh, renderer) {
+  unbake(mesh);
+  if (mesh.count === 0 || mesh._wind || mesh._ownShader) return false;
+  const gl = renderer.getContext();
+  if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) return false;
+  const g = mesh.geometry, n = mesh.count, V = g.getAttribute('position').count;
+  const tangent = g.getAttribute('tangent');
+  const { outputs } = feedback(mesh, renderer, null, Boolean(tangent));
+  renderer.resetState(); // three's cached GL state: we bound our own program, VAO and buffers
+
+  // the plain geometry: captured positions and normals, every other attribute repeated, indices offset
+  const baked = new THREE.BufferGeometry();
+  baked.setAttribute('position', new THREE.GLBufferAttribute(outputs[0], gl.FLOAT, 3, 4, n * V));
+  baked.setAttribute('normal', new THREE.GLBufferAttribute(outputs[1], gl.FLOAT, 3, 4, n * V));
+  if (tangent) baked.setAttribute('tangent', new THREE.GLBufferAttribute(outputs[2], gl.FLOAT, 4, 4, n * V));
+  const source = mesh._sourceMaterials;
+  const tinted = mesh.layout.tint !== null;
+  const vertexColors = (Array.isArray(source) ? source : [source]).some((m) => m.vertexColors);
+  if (tinted) { // each instance's tint times the vertex colour (where the material uses one): a colour a vertex
+    const base = vertexColors && g.getAttribute('color') ? plainArray(g.getAttribute('color')) : null;
+    const k = base ? g.getAttribute('color').itemSize : 3, tint = mesh.instanceColor.array;
+    const colors = new Float32Array(n * V * k);
+    for (let i = 0; i < n; i++) {
+      for (let v = 0; v < V; v++) {
+        const at = (i * V + v) * k;
+        for (let c = 0; c < 3; c++) colors[at + c] = tint[3 * i + c] * (base ? base[v * k + c] : 1);
+        if (k === 4) colors[at + 3] = base[v * 4 + 3];
+      }
+    }
+    baked.setAttribute('color', new THREE.BufferAttribute(colors, k));
+  }
+  for (const [name, attr] of Object.entries(g.attributes)) {
+    if (['position', 'normal', 'tangent'].includes(name) || name.startsWith('axial') || name.startsWith('_axial') ||
+        attr.isInstancedBufferAttribute || (tinted && name === 'color')) continue;
+    const src = plainArray(attr), k = attr.itemSize, rep = new src.constructor(src.length * n);
+    for (let i = 0; i < n; i++) rep.set(src, i * src.length);
+    baked.setAttribute(name, new THREE.BufferAttribute(rep, k, attr.normalized));
+  }
+  const index = g.index ? g.index.array : Uint32Array.from({ length: V }, (_, i) => i);
+  const groups = g.groups.length ? g.groups : [{ start: 0, count: index.length, materialIndex: 0 }];
+  const all = new Uint32Array(groups.reduce((t, gr) => t + Math.min(gr.count, index.length - gr.start), 0) * n);
+  let at = 0;
+  for (const gr of groups) { // each group's triangles of every instance together: one draw per material
+    const first = at, end = Math.min(gr.start + gr.count, index.length);
+    for (let i = 0; i < n; i++) {
+      const off = i * V;
+      for (let k = gr.start; k < end; k++) all[at++] = index[k] + off;
+    }
+    if (g.groups.length) baked.addGroup(first, at - first, gr.materialIndex);
+  }
+  // the index lives on the GPU only: three drops its copy once uploaded (raycasting is the instanced mesh's)
+  baked.setIndex(new THREE.BufferAttribute(all, 1).onUpload(function drop() { this.array = null; }));
+  baked.boundingSphere = mesh.boundingSphere.clone();
+  baked.boundingBox = mesh.boundingBox.clone();
+  const materials = Array.isArray(source) ? source.map((m) => m.clone()) : source.clone();
+  if (tinted) (Array.isArray(materials) ? materials : [materials]).forEach((m) => { m.vertexColors = true; });
+  const drawn = new THREE.Mesh(baked, materials);
+  drawn.name = `${mesh.name || 'axial'} (baked)`;
+  drawn.castShadow = mesh.castShadow;
+  drawn.receiveShadow = mesh.receiveShadow;
+  drawn.raycast = () => {}; // the instanced mesh's raycast answers, with instanceId
+  mesh.add(drawn);
+  mesh._baked = { mesh: drawn, gl, outputs };
+  mesh.setBendVisible(false);
+  return true;
+}
+
+
+/** Go back to bending every frame (frees the baked geometry). */
+export function unbake(mesh) {
+  if (!mesh._baked) return mesh;
+  const { mesh: drawn, gl, outputs } = mesh._baked;
+  mesh.remove(drawn);
+  drawn.geometry.dispose();
+  (Array.isArray(drawn.material) ? drawn.material : [drawn.material]).forEach((m) => m.dispose());
+  outputs.forEach((b) => gl.deleteBuffer(b));
+  mesh._baked = null;
+  mesh.setBendVisible(true);
+  return mesh;
+}

@@ -1,0 +1,38 @@
+// Type declarations of axialdeform-three/helpers: the parts the product is built from (the record's
+// columns, the parser's checks, the axis and bounds maths, the shader patch, the glTF plugin's steps).
+import * as THREE from 'three';
+import type { AxialInstancedMesh, AxisSpec, AxesSpec, BendExtension, InstanceRecord, RecordLayout, ResolvedAxis,
+  Rows3 } from './index.js';
+
+export function crc32(bytes: Uint8Array): number;
+export function hex(bytes: Uint8Array): string;
+export function dequantize(values: Uint16Array, qtable: Float32Array, fields: number): Float32Array;
+export function recordLayout(numbersPerInstance: number, axes?: number): RecordLayout;
+export function texelRows(count: number, axes: number): number;
+export function childTexels(data: Float32Array, fields: number, axes: number, first: number, count: number,
+  texels: Float32Array): Float32Array;
+export const NUMBERS_OF_VERSION: Readonly<Record<1 | 2 | 3, number>>;
+export const HEADER_BYTES: 96;
+export const MAX_AXES: 64;
+export const AXES_ROW: 4095;
+export function alignedFrame(index: 0 | 1 | 2): Rows3;
+export function resolveAxis(spec: { axis?: AxisSpec; axes?: AxesSpec | null } | AxisSpec | null,
+  record: InstanceRecord | null, positions: ArrayLike<number>): ResolvedAxis;
+export function instanceMatrices(data: Float32Array, layout: RecordLayout, count: number, out: Float32Array,
+  first?: number): Float32Array;
+export function bentRadii(positions: ArrayLike<number>, axis: ResolvedAxis, data: Float32Array, layout: RecordLayout,
+  count: number, first?: number, out?: Float32Array | null, grow?: Float32Array | null):
+  { center: [number, number, number]; radius: Float32Array; grow: Float32Array | null };
+/** Inject the bend into the vertex shader text of a three.js built-in material. */
+export function injectBend(vertexShader: string, where?: string): string;
+export function fromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): AxialInstancedMesh;
+export function recordFromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): InstanceRecord;
+export function column(start: number, axes?: number): number;
+
+/** The instance record (generated from axialdeform.core.record): each field's columns, first column, level. */
+export const RECORD: ReadonlyArray<{ name: string; columns: string[]; start: number; level: number }>;
+export const WIDTHS: readonly number[];
+/** The instanced attributes the bend reads: name, first column of axis 0's record, size, level. */
+export const ATTRIBUTES: ReadonlyArray<{ name: string; start: number; size: number; level: number }>;
+/** The wind's defaults and second harmonic (generated from axialdeform.core.wind). */
+export const WIND: Readonly<{ gustiness: number; frequency: number; wavelength: number; harmonic: number }>;

@@ -1,0 +1,9 @@
+// axialdeform-three/helpers: the parts the product (index.js) is built from -- the record's columns
+// (record.js, generated from the Python library), the .adp parser's checks, the axis and bounds
+// maths, the shader patch, the wind, and the glTF plugin's steps -- for tools and tests.
+export { crc32, dequantize, recordLayout, column, childTexels, texelRows, hex, NUMBERS_OF_VERSION, HEADER_BYTES,
+  MAX_AXES, AXES_ROW } from './adp.js';
+export { RECORD, WIDTHS, ATTRIBUTES, WIND } from './record.js';
+export { alignedFrame, resolveAxis, instanceMatrices, bentRadii } from './bend.js';
+export { injectBend } from './shader.js';
+export { fromInstancedMesh, recordFromInstancedMesh } from './gltf.js';

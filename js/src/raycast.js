@@ -1,0 +1,55 @@
+// raycast.js -- three's raycasting against a mesh's bent instances: the instances whose bounding
+// sphere the ray meets are bent on the GPU (feedback.js) and their triangles tested one by one.
+
+import * as THREE from 'three';
+import { AxialError } from './adp.js';
+import { feedback } from './feedback.js';
+
+const _sphere = new THREE.Sphere();
+
+/**
+ * three's raycasting, against each instance's bent triangles (intersections carry instanceId).
+ * The instances whose bounding sphere the ray meets are bent on the GPU by the same shader code
+ * (one transform-feedback pass, read back), so the mesh must have been drawn (or baked) once.
+ */
+export function raycast(mesh, raycaster, intersects) {
+  if (mesh.count === 0) return;
+  if (mesh.boundingSphere === null) mesh.computeBoundingSphere();
+  const sphere = new THREE.Sphere().copy(mesh.boundingSphere).applyMatrix4(mesh.matrixWorld);
+  if (!raycaster.ray.intersectsSphere(sphere)) return;
+  const ids = [];
+  for (let i = 0; i < mesh.count; i++) {
+    if (raycaster.ray.intersectsSphere(mesh.getInstanceBoundingSphere(i, _sphere).applyMatrix4(mesh.matrixWorld))) ids.push(i);
+  }
+  if (!ids.length) return;
+  if (!mesh._renderer) {
+    throw new AxialError('raycast: the bend runs on the GPU; draw the mesh once (or bake it) before raycasting');
+  }
+  const V = mesh.geometry.getAttribute('position').count;
+  const { gl, outputs } = feedback(mesh, mesh._renderer, ids, false);
+  const bent = new Float32Array(ids.length * V * 3);
+  gl.bindBuffer(gl.ARRAY_BUFFER, outputs[0]);
+  gl.getBufferSubData(gl.ARRAY_BUFFER, 0, bent);
+  gl.bindBuffer(gl.ARRAY_BUFFER, null);
+  outputs.forEach((b) => gl.deleteBuffer(b));
+  mesh._renderer.resetState();
+  if (!mesh._rayMesh) {
+    const g = new THREE.BufferGeometry();
+    if (mesh.geometry.index) g.setIndex(mesh.geometry.index);
+    for (const grp of mesh.geometry.groups) g.addGroup(grp.start, grp.count, grp.materialIndex);
+    g.drawRange = mesh.geometry.drawRange;
+    g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * V), 3));
+    mesh._rayMesh = new THREE.Mesh(g, mesh.material);
+  }
+  const probe = mesh._rayMesh, found = [], attr = probe.geometry.getAttribute('position');
+  probe.material = mesh.material;
+  probe.matrixWorld.copy(mesh.matrixWorld); // the captured positions are placed already (instanceMatrix)
+  ids.forEach((id, k) => {
+    attr.array.set(bent.subarray(k * V * 3, (k + 1) * V * 3));
+    probe.geometry.boundingSphere = null;
+    probe.geometry.boundingBox = null;
+    found.length = 0;
+    probe.raycast(raycaster, found);
+    for (const hit of found) { hit.instanceId = id; hit.object = mesh; intersects.push(hit); }
+  });
+}

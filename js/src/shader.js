@@ -1,0 +1,93 @@
+// shader.js -- the bend in three's own materials: glsl/axial.glsl (glsl.js) and the code that calls
+// it, injected into a built-in material's vertex shader (onBeforeCompile) before three's chunks, so
+// maps, lights, shadows, fog and tone mapping stay three.js's.
+
+import { AxialError } from './adp.js';
+import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
+
+/** The uniforms and attributes the bend reads (attribute form; the feedback pass makes them `in`). */
+export const UNIFORMS = `
+#ifndef AXIAL_ID
+#define AXIAL_ID gl_InstanceID
+#endif
+uniform mat3 axialFrame;
+uniform float axialLo;
+uniform float axialLen;
+uniform vec2 axialCenter;
+#ifdef AXIAL_AXES
+uniform mat3 axialFrames[AXIAL_AXES];
+uniform float axialLos[AXIAL_AXES];
+uniform float axialLens[AXIAL_AXES];
+uniform int axialParents[AXIAL_AXES];
+uniform sampler2D axialChildren;
+attribute float axialAxis;
+#endif
+#ifdef AXIAL_WIND
+uniform vec3 axialWindDir;
+uniform float axialWindStrength;
+uniform float axialWindGust;
+uniform vec2 axialWindCycles;
+uniform float axialWindWavenumber;
+attribute vec3 axialAngles;
+#endif
+attribute vec4 axialD12;
+attribute vec4 axialD34;
+attribute vec2 axialD5;
+attribute vec2 axialTwistTaper;
+`;
+
+// the bend of this vertex, before three's chunks: model space, the instance's rigid part
+// is instanceMatrix (three applies it in project_vertex, worldpos_vertex, defaultnormal_vertex)
+export const BEND = `
+  vec3 axialV, axialN, axialT = vec3(1.0, 0.0, 0.0);
+  {
+    AxialInstance axialInst = AxialInstance(axialD12, axialD34, axialD5, vec3(0.0), vec3(0.0), 1.0,
+                                            axialTwistTaper.x, axialTwistTaper.y);
+    vec3 axialPush = vec3(0.0);
+#ifdef AXIAL_WIND
+    if (axialWindStrength != 0.0) {  // glsl/wind.glsl: the wind moves the control points
+      AxialInstance axialPlaced = axialInst;
+      axialPlaced.position = instanceMatrix[3].xyz;
+      axialPlaced.angles = axialAngles;
+#ifdef AXIAL_AXES
+      axialPush = axial_wind_push(axialPlaced, uint(AXIAL_ID), 1.0, axialWindDir, axialWindStrength,
+                                  axialWindGust, axialWindCycles, axialWindWavenumber);
+#endif
+      axialInst = axial_wind(axialPlaced, uint(AXIAL_ID), axialFrame, axialLen, axialWindDir, axialWindStrength,
+                             axialWindGust, axialWindCycles, axialWindWavenumber);
+      axialInst.position = vec3(0.0);  // the rigid part stays instanceMatrix's
+      axialInst.angles = vec3(0.0);
+    }
+#endif
+#ifdef AXIAL_AXES
+    mat3 axialJac;
+    axial_tree_world(position, normal, int(axialAxis + 0.5), axialFrames, axialLos, axialLens, axialParents,
+                     axialCenter, axialInst, axialChildren, AXIAL_ID, axialPush, axialV, axialN, axialJac);
+#ifdef USE_TANGENT
+    axialT = axialJac * tangent.xyz;
+#endif
+#else
+    axial_bend(position, normal, axialFrame, axialLo, axialLen, axialCenter, axialInst, axialV, axialN);
+#ifdef USE_TANGENT
+    axialT = transpose(axialFrame) * axial_bend_tangent(axialFrame * position, axialFrame * tangent.xyz, 0,
+                                                        axialLo, axialLen, axialCenter, axialInst);
+#endif
+#endif
+  }
+`;
+
+function replaceOnce(text, what, by, where) {
+  if (!text.includes(what)) throw new AxialError(`${where}: its vertex shader has no ${what} to bend`);
+  return text.replace(what, by);
+}
+
+/** Inject the bend into a vertex shader of three's built-in materials (the text onBeforeCompile gets). */
+export function injectBend(vertexShader, where = 'material') {
+  let vs = replaceOnce(vertexShader, 'void main() {', `${UNIFORMS}\n${AXIAL_GLSL}\n${WIND_GLSL}\nvoid main() {\n${BEND}`, where);
+  if (vs.includes('#include <beginnormal_vertex>')) {
+    vs = vs.replace('#include <beginnormal_vertex>',
+      'vec3 objectNormal = axialN;\n#ifdef USE_TANGENT\n\tvec3 objectTangent = axialT;\n#endif');
+  }
+  return replaceOnce(vs, '#include <begin_vertex>',
+    'vec3 transformed = axialV;\n#ifdef USE_ALPHAHASH\n\tvPosition = vec3( position );\n#endif', where);
+}

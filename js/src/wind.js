@@ -1,0 +1,49 @@
+// wind.js -- the wind of glsl/wind.glsl (docs/wind.md) for a mesh: checked settings, the uniforms it
+// moves, and how far it can move a vertex (the bounds grow by it).  Its defaults are record.js's,
+// which come from axialdeform.core.wind.
+
+import * as THREE from 'three';
+import { AxialError } from './adp.js';
+import { WIND } from './record.js';
+
+/** {strength, gustiness, frequency, wavelength} of a user's wind ({direction, strength, ...}), each
+ * checked, the defaults filled in; null for no wind (none, or strength 0). */
+export function checkWind(wind) {
+  if (!(wind && wind.strength > 0)) return null;
+  const num = (x, what) => {
+    if (!(Number.isFinite(x) && x >= 0)) throw new AxialError(`setWind: ${what}: expected a finite number >= 0, found ${x}`);
+    return x;
+  };
+  const d = wind.direction || [1, 0, 0], n = Math.hypot(d[0], d[1], d[2]);
+  if (!(n > 0 && Number.isFinite(n))) throw new AxialError(`setWind: direction: expected 3 finite numbers, not all zero, found ${d}`);
+  return { direction: [d[0] / n, d[1] / n, d[2] / n], strength: num(wind.strength, 'strength'),
+    gustiness: num(wind.gustiness ?? WIND.gustiness, 'gustiness'), frequency: num(wind.frequency ?? WIND.frequency, 'frequency'),
+    wavelength: num(wind.wavelength ?? WIND.wavelength, 'wavelength') };
+}
+
+/** Set the wind's uniforms in `uniforms` (made where missing: the same objects from then on). */
+export function setWindUniforms(uniforms, wind) {
+  const u = uniforms;
+  Object.assign(u, {
+    axialWindDir: u.axialWindDir || { value: new THREE.Vector3() },
+    axialWindStrength: u.axialWindStrength || { value: 0 }, axialWindGust: u.axialWindGust || { value: 0 },
+    axialWindCycles: u.axialWindCycles || { value: new THREE.Vector2() },
+    axialWindWavenumber: u.axialWindWavenumber || { value: 0 },
+  });
+  u.axialWindDir.value.fromArray(wind.direction);
+  u.axialWindStrength.value = wind.strength;
+  u.axialWindGust.value = wind.gustiness;
+  u.axialWindWavenumber.value = wind.wavelength > 0 ? 1 / wind.wavelength : 0;
+}
+
+/** The wind's clock at `t` seconds: (frac(f t), frac(harmonic f t)), as axialdeform.core.wind. */
+export function windCycles(wind, t, target) {
+  const f = wind.frequency, frac = (x) => x - Math.floor(x);
+  return target.set(frac(f * t), frac(WIND.harmonic * f * t));
+}
+
+/** How far the wind can move a vertex: a tip by at most strength L (1 + gustiness), every axis of a
+ * tree by its own L (`lengths`). */
+export function windReach(wind, lengths) {
+  return wind ? wind.strength * (1 + wind.gustiness) * lengths.reduce((t, x) => t + x, 0) : 0;
+}
