@@ -12,7 +12,7 @@ import numpy as np
 from ..core.errors import AxialDeformError
 from ..gl.buffers import MeshBuffers
 from ..gl.context import draw_in_batches
-from ..gl.renderer import _MODE_INDEX, MODES, AxialRenderer
+from ..gl.renderer import MODE_INDEX, MODES, AxialRenderer
 
 __all__ = ["BakedMeshes"]
 
@@ -35,7 +35,7 @@ class BakedMeshes:
     """
 
     def __init__(self, ctx, like, mode: str = "solid", *, cull_back_faces: bool | None = None):
-        if mode not in _MODE_INDEX:
+        if mode not in MODE_INDEX:
             raise AxialDeformError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
         self.ctx = ctx
         self.mode = mode

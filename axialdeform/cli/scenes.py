@@ -17,7 +17,7 @@ from ..gl.bake import bake_pieces
 from ._common import check_baked_triangles
 from ._common import check_triangles as check
 
-__all__ = ["scene_of", "render", "bake", "export"]
+__all__ = ["scene_of", "render", "bake", "export", "scene_time"]
 
 
 def scene_of(args, *, params_optional: bool = False):
@@ -54,7 +54,7 @@ def check_triangles(scene, args, mode: str, fast: bool = False, frames: int = 1)
     check(items, mode, args.max_triangles, fast, frames)
 
 
-def _time(scene, args) -> float:
+def scene_time(scene, args) -> float:
     """``--time`` for a scene: it moves the scene's wind, so a scene without one refuses it."""
     t = getattr(args, "time", None)
     if t is None:
@@ -76,7 +76,7 @@ def render(scene, args, wind=None, options=None) -> None:
     if wind is not None:
         scene.wind = wind
     image = render_image(scene, size=parse_size(args.size), modes=args.mode, look=scene.look.replace(fast=fast),
-                         time=_time(scene, args), options=options)
+                         time=scene_time(scene, args), options=options)
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
           f"{image.shape[1]}x{image.shape[0]})")
@@ -94,7 +94,7 @@ def bake(scene, args, progress, wind=None) -> None:
                                  for layer in scene.layers], "")
     if wind is not None:
         scene.wind = wind
-    t = _time(scene, args)
+    t = scene_time(scene, args)
     # made and written in pieces, layer after layer: bounded by the disk, not memory
     shapes = {layer.name: (len(layer.params), layer.mesh.vertex_count, 3) for layer in scene.layers}
     needed = sum(36 * n * v for n, v, _ in shapes.values()) + (1 << 16)

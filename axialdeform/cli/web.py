@@ -13,7 +13,7 @@ from ..core.params import check_drawable
 from ..core.scene import is_scene_file
 from ..web import build_scene, build_scene_file, make_server, write_page
 from ._common import add_axis, add_wind_args, load_base, wind_arg
-from .scenes import _time, scene_of
+from .scenes import scene_of, scene_time
 
 __all__ = ["add_parser", "run"]
 
@@ -65,7 +65,7 @@ def run(args) -> None:
         if args.wind is not None:  # replaces the scene's [wind]
             scene.wind = wind_arg(args)
         if time is not None:
-            _time(scene, args)  # refuses a time without a wind
+            scene_time(scene, args)  # refuses a time without a wind
         if args.up != "y":
             raise AxialDeformError(f"--up: a scene file ({args.mesh}) names its own up axis; expected no --up")
         web = build_scene_file(scene, size=size, mode=args.mode, quantize=not args.float32,

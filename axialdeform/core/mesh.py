@@ -22,7 +22,7 @@ from .axis import ControlAxis
 from .errors import MeshError
 from .material import Part
 
-__all__ = ['BaseMesh', 'area_weighted_normals']
+__all__ = ['BaseMesh', 'area_weighted_normals', "check_float32_range"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,7 +115,7 @@ class BaseMesh:
             raise MeshError(f"{self.name}: expected normals of shape {pos.shape}, found {nrm.shape}")
         if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
             raise MeshError(f"{self.name}: expected at least one triangle (faces of shape (m, 3)), found {faces.shape}")
-        _check_float32_range(np.asarray(self.positions, dtype=np.float64), self.name)
+        check_float32_range(np.asarray(self.positions, dtype=np.float64), self.name)
         if not np.isfinite(pos).all():
             bad = int(np.argwhere(~np.isfinite(pos).all(axis=1))[0, 0])
             raise MeshError(f"{self.name}: vertex {bad} has a non-finite coordinate {pos[bad].tolist()}; expected finite numbers")
@@ -376,7 +376,7 @@ def _position_ids(positions: np.ndarray) -> np.ndarray:
     return ids
 
 
-def _check_float32_range(positions: np.ndarray, name: str) -> None:
+def check_float32_range(positions: np.ndarray, name: str) -> None:
     """Raise :class:`MeshError` if a finite float64 coordinate does not fit in float32
     (the GPU and every buffer hold float32)."""
     p = np.asarray(positions, dtype=np.float64)

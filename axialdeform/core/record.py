@@ -33,7 +33,7 @@ import numpy as np
 
 __all__ = [
     "Field", "ShaderInput", "RECORD", "SHADER_INPUTS", "GLTF_ATTRIBUTES", "FIELDS", "EXTENDED_FIELDS", "WIDTH",
-    "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "width_of", "describe_widths",
+    "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "describe_widths",
     "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST",
     "TAPER", "IDENTITY_EXTRA", "Instances", "gl_layout", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES",
     "describe_record", "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape",
@@ -58,9 +58,6 @@ class Field:
     level : int
         The first record level that has it: 0 every instance (16 numbers),
         1 extended instances (19), 2 tinted instances (22).
-    quantization : str
-        How a quantized binary file stores it (every column today: uint16 on
-        the column's own range, the table in the file's header).
     shape : tuple of int
         The shape of one instance's value in the named view (``()`` for a
         scalar).
@@ -71,13 +68,7 @@ class Field:
     start: int
     unit: str
     level: int = 0
-    quantization: str = "uint16 on the column's range"
     shape: tuple[int, ...] = ()
-
-    @property
-    def extended(self) -> bool:
-        """Only in extended (19-number or wider) instances."""
-        return self.level > 0
 
     @property
     def stop(self) -> int:
@@ -131,11 +122,6 @@ def level_of(width: int) -> int:
     return WIDTHS.index(int(width))
 
 
-def width_of(level: int) -> int:
-    """Numbers per instance of a record level."""
-    return WIDTHS[level]
-
-
 def describe_widths(widths=WIDTHS) -> str:
     """``"16, 19 or 22"``: the widths for an error message."""
     w = [str(x) for x in widths]
@@ -186,10 +172,6 @@ class ShaderInput:
     def extended(self) -> bool:
         return self.level > 0
 
-    @property
-    def glsl_type(self) -> str:
-        return f"vec{self.size}" if self.size > 1 else "float"
-
 
 #: the float layout of the instanced buffer: 64 bytes (76 extended), divisor
 #: 1; the tint (tinted instances) in a float32 buffer of its own
@@ -204,9 +186,6 @@ SHADER_INPUTS: tuple[ShaderInput, ...] = (
 )
 #: numbers per instance in the instance buffer: the columns its inputs read
 RECORD_BUFFER_WIDTH: int = max(a.start + a.size for a in SHADER_INPUTS if a.buffer == "record")
-#: the highest record level the instance buffer holds (wider records leave
-#: their other columns to buffers of their own)
-_RECORD_LEVEL: int = WIDTHS.index(RECORD_BUFFER_WIDTH)
 
 #: the instanced glTF's attributes (``EXT_mesh_gpu_instancing``) that carry
 #: columns as they are: name -> (accessor type, columns); ``TRANSLATION``,

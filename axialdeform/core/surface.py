@@ -18,7 +18,7 @@ from .axis import AXIS_NAMES, PERPENDICULAR
 from .errors import MeshError, ScatterError
 from .io import safeio
 from .io.mesh import load_mesh
-from .io.safeio import _gb, open_regular
+from .io.safeio import format_gb, open_regular
 from .material import AssetWarning
 
 __all__ = ["Surface", "load_surface", "surface_from_heights", "load_density", "density_at", "sample_faces",
@@ -216,8 +216,8 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
                     if cols * rows * bytes_per_pixel > budget:
                         raise ScatterError(
                             f"{what} {path}: an image of {cols}x{rows} pixels needs about "
-                            f"{_gb(cols * rows * bytes_per_pixel)}; expected at most {budget // bytes_per_pixel} pixels "
-                            f"(what {_gb(budget)} of available memory holds)")
+                            f"{format_gb(cols * rows * bytes_per_pixel)}; expected at most {budget // bytes_per_pixel} pixels "
+                            f"(what {format_gb(budget)} of available memory holds)")
                     img.load()
                     if img.mode in ("I;16", "I;16B", "I;16L", "I"):
                         grey = np.asarray(img, dtype=np.float64) / 65535.0

@@ -29,8 +29,7 @@ __all__ = [
     "MeshBuffers", "InstanceBuffer", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "RECORD_BYTES",
     "QUANTIZED_FORMAT", "QUANTIZED_ATTRIBUTES", "QUANTIZED_RECORD_BYTES",
     "EXTENDED_FORMAT", "EXTENDED_ATTRIBUTES", "EXTENDED_RECORD_BYTES",
-    "QUANTIZED_EXTENDED_FORMAT", "QUANTIZED_EXTENDED_ATTRIBUTES", "QUANTIZED_EXTENDED_RECORD_BYTES",
-]
+    "QUANTIZED_EXTENDED_FORMAT", "QUANTIZED_EXTENDED_ATTRIBUTES", "QUANTIZED_EXTENDED_RECORD_BYTES", "buffer_content", "format_bytes"]
 
 # the layouts of the instanced attribute buffer, generated from the record
 # table (core/record.py): float 64 bytes (76 extended); quantized 16 uint16
@@ -51,14 +50,14 @@ def as_index(value, name: str) -> int:
     return int(value)
 
 
-def _format_bytes(fmt: str) -> int:
+def format_bytes(fmt: str) -> int:
     """Bytes of one moderngl attribute format such as ``"4f"`` or ``"4u2"``."""
     count = int(fmt[0])
     size = int(fmt[-1]) if fmt[-1].isdigit() else 4
     return count * size
 
 
-def _content(buffer, formats, names, program, per_instance=False):
+def buffer_content(buffer, formats, names, program, per_instance=False):
     """A vertex-array content tuple; attributes the program does not use
     (the linker removed them) become padding so moderngl accepts it."""
     fmt = []
@@ -70,7 +69,7 @@ def _content(buffer, formats, names, program, per_instance=False):
             fmt.append(f)
             used.append(name)
         else:
-            fmt.append(f"{_format_bytes(f)}x")
+            fmt.append(f"{format_bytes(f)}x")
     return (buffer, " ".join(fmt) + ("/i" if per_instance else ""), *used)
 
 
@@ -178,8 +177,8 @@ class MeshBuffers:
 
     def content(self, program):
         if self._axis_ids:
-            return _content(self.vbo, ("3f", "3f", "1f"), ("in_position", "in_normal", "in_axis"), program)
-        return _content(self.vbo, ("3f", "3f"), ("in_position", "in_normal"), program)
+            return buffer_content(self.vbo, ("3f", "3f", "1f"), ("in_position", "in_normal", "in_axis"), program)
+        return buffer_content(self.vbo, ("3f", "3f"), ("in_position", "in_normal"), program)
 
     def release(self) -> None:
         if self._released:
@@ -277,7 +276,7 @@ class InstanceBuffer:
         return INSTANCE_FORMAT, INSTANCE_ATTRIBUTES
 
     def content(self, program):
-        return _content(self.buffer, *self.formats, program, per_instance=True)
+        return buffer_content(self.buffer, *self.formats, program, per_instance=True)
 
     def set(self, params) -> None:
         """Replace every instance; reallocates only if the count outgrows the capacity."""

@@ -43,10 +43,10 @@ import numpy as np
 
 from ..core.bounds import frustum_planes
 from ..core.errors import ContextError
-from .buffers import _content, _format_bytes
+from .buffers import buffer_content, format_bytes
 from .shaders import build_compute, build_program
 
-__all__ = ["CullPass", "CullQuery", "IndirectDraws", "ALL_VISIBLE_PLANES", "indirect_supported", "INDIRECT_ENV"]
+__all__ = ["CullPass", "CullQuery", "IndirectDraws", "ALL_VISIBLE_PLANES", "indirect_supported", "INDIRECT_ENV", "choose_indirect"]
 
 #: planes no sphere is outside of (LOD without frustum culling)
 ALL_VISIBLE_PLANES = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (6, 1))
@@ -63,7 +63,7 @@ def indirect_supported(ctx) -> bool:
     return int(getattr(ctx, "version_code", 0) or 0) >= 430
 
 
-def _choose_indirect(ctx, indirect) -> bool:
+def choose_indirect(ctx, indirect) -> bool:
     """``indirect``: None picks by version (and :data:`INDIRECT_ENV`); True
     demands the indirect path; False is the GL 3.3 path."""
     if indirect is None:
@@ -76,7 +76,7 @@ def _choose_indirect(ctx, indirect) -> bool:
 
 def _field_bytes(fmt: str) -> int:
     """Bytes of one attribute format, padding (``"2x"``) included."""
-    return int(fmt[:-1] or 1) if fmt.endswith("x") else _format_bytes(fmt)
+    return int(fmt[:-1] or 1) if fmt.endswith("x") else format_bytes(fmt)
 
 
 def _shared_query(ctx):
@@ -220,7 +220,7 @@ class CullPass:
         self.buffer = None
         self.output = None  # the buffer the draw reads: ``buffer``, or the LOD stage's
         #: whether :meth:`run` takes the indirect (compute) path
-        self.indirect = _choose_indirect(ctx, indirect)
+        self.indirect = choose_indirect(ctx, indirect)
         self.slots = {}
         self.commands = self.counts_buffer = None
         self._scratch = {}  # name -> buffer of the compute path (info, block sums, block offsets)
@@ -241,9 +241,9 @@ class CullPass:
                                      varyings=self._varyings)
         self._objects.append(self.program)
         fmts, attrs = self.instances.formats
-        content = [_content(self.instances.buffer, fmts, attrs, self.program)]
+        content = [buffer_content(self.instances.buffer, fmts, attrs, self.program)]
         if self.tint is not None:
-            content.append(_content(self.tint[0], ("3f",), ("i_tint",), self.program))
+            content.append(buffer_content(self.tint[0], ("3f",), ("i_tint",), self.program))
         self.vao = self.ctx.vertex_array(self.program, content)
         self._objects.append(self.vao)
 
@@ -300,7 +300,7 @@ class CullPass:
             self._objects.append(prog)
             fmts, attrs = self.instances.formats
             fmts, attrs = fmts + ("1i",) + (("3f",) if self.tinted else ()), attrs + ("i_index",) + (("i_tint",) if self.tinted else ())
-            vao = self.ctx.vertex_array(prog, [_content(self.buffer, fmts, attrs, prog)])
+            vao = self.ctx.vertex_array(prog, [buffer_content(self.buffer, fmts, attrs, prog)])
             self._objects.append(vao)
             self._lod_stage = [prog, vao, self.ctx.buffer(reserve=max(count, 1) * self.out_bytes)]
         out = self._lod_stage[2]

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.errors import ContextError
-from .buffers import _content
+from .buffers import buffer_content
 from .context import texture_anisotropy
 from .uniforms import set_uniforms
 
@@ -41,7 +41,7 @@ class AppearanceBuffer:
         self._released = False
 
     def content(self, program):
-        return _content(self.buffer, ("2f", "4f", "4f"), ("in_uv", "in_color", "in_tangent"), program)
+        return buffer_content(self.buffer, ("2f", "4f", "4f"), ("in_uv", "in_color", "in_tangent"), program)
 
     def release(self) -> None:
         if self._released:

@@ -33,17 +33,17 @@ from .axes import AxesTexture
 from .buffers import InstanceBuffer, MeshBuffers
 from .capture import Capture
 from .context import check_alive, require_framebuffer
-from .cull import IndirectDraws, _choose_indirect, read_counts
+from .cull import IndirectDraws, choose_indirect, read_counts
 from .draw import BLEND_DEPTH_CUTOFF, Drawing
 from .material import AppearanceBuffer, GpuMaterials
 from .shaders import build_program
 from .uniforms import camera_matrices, set_camera_uniforms, set_uniforms
 from .variants import ShaderVariants
 
-__all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS", "BLEND_DEPTH_CUTOFF"]
+__all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS", "BLEND_DEPTH_CUTOFF", "MODE_INDEX", "unit_vector"]
 
 MODES = ("solid", "flat", "wireframe")
-_MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
+MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
 #: default base colours (linear RGB) by bundled mesh name
 DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
 #: render(look=None): the default light and lines, every edge drawn (no depth pre-pass)
@@ -169,7 +169,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         self.shadow_result = None
         if indirect:
 
-            _choose_indirect(ctx, True)  # a context below GL 4.3: the error now, not at the first draw
+            choose_indirect(ctx, True)  # a context below GL 4.3: the error now, not at the first draw
         self.cull_back_faces = bool(mesh.is_volume) if cull_back_faces is None else bool(cull_back_faces)
         self.quantized = bool(quantized)
         self._released = False
@@ -408,7 +408,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
 
         self._check()
         self._bind_axes()
-        if mode not in _MODE_INDEX:
+        if mode not in MODE_INDEX:
             raise ArgumentError(f"render mode: expected one of {', '.join(MODES)}, found {mode!r}")
         view, projection = camera_matrices(view, projection)
         require_framebuffer(self.ctx, "AxialRenderer.render")
@@ -436,12 +436,12 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         set_camera_uniforms(prog, view, projection)
         self._set_wind_uniforms(prog, self.wind, self.time)
         set_uniforms(prog, {
-            "u_mode": _MODE_INDEX[mode],
+            "u_mode": MODE_INDEX[mode],
             "u_color": tuple(self.color),
             "u_line_color": tuple(look.line_color),
-            "u_light_dir": tuple(_unit(light_dir, "light_dir")),
+            "u_light_dir": tuple(unit_vector(light_dir, "light_dir")),
             "u_light_color": look.light_color, "u_sky_color": look.sky_color, "u_bounce_color": look.ground_color,
-            "u_up": tuple(_unit(self.up, "up")),
+            "u_up": tuple(unit_vector(self.up, "up")),
             "u_ambient": float(ambient),
         })
         if shadowed:
@@ -577,6 +577,6 @@ def _mirrors(view, projection) -> bool:
     return bool(det > 0.0)
 
 
-def _unit(v, name: str = "direction") -> np.ndarray:
+def unit_vector(v, name: str = "direction") -> np.ndarray:
     v = as_array(v, (3,), name)
     return v / max(np.linalg.norm(v), 1e-12)

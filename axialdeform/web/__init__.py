@@ -36,7 +36,7 @@ from ..core.record import WIDTHS, level_of, tree_shape
 from ..core.scene import Scene
 from ..core.wind import SECOND_HARMONIC
 from ..gl.material import ALPHA_MODE_INDEX
-from ..gl.renderer import _MODE_INDEX, DEFAULT_COLORS, MODES, _unit
+from ..gl.renderer import DEFAULT_COLORS, MODE_INDEX, MODES, unit_vector
 from ..gl.shaders import GLSL_VERSION, assemble
 from .files import (
     MANIFEST,
@@ -201,13 +201,13 @@ def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shade
         "size": [int(size[0]), int(size[1])],
         "fixed_size": bool(fixed_size),
         "mode": mode,
-        "mode_index": _MODE_INDEX[mode],
+        "mode_index": MODE_INDEX[mode],
         "layers": layers,
         "camera": {"eye": cam.eye.tolist(), "target": cam.target.tolist(), "up": cam.up.tolist(),
                    "fovy": cam.fovy, "near": cam.near, "far": cam.far},
         # how it looks: axialdeform.Look, the one home of the defaults (light normalised here)
-        "look": {**look.to_json(), "light_dir": [float(x) for x in _unit(look.light_dir)]},
-        "up": [float(x) for x in _unit(UP_VECTORS[up])],
+        "look": {**look.to_json(), "light_dir": [float(x) for x in unit_vector(look.light_dir)]},
+        "up": [float(x) for x in unit_vector(UP_VECTORS[up])],
         "wind": _wind_config(wind),
         "time": None if time is None else float(time),  # seconds: the wind's clock frozen there (None: it runs)
         "three": three_version(),

@@ -1,4 +1,4 @@
-"""Hostile input (issue 5): parameter files and meshes under attack, and
+"""Hostile input: parameter files and meshes under attack, and
 errors a user can act on.
 
 Every bad input must end in an :class:`axialdeform.AxialDeformError`

@@ -1,9 +1,9 @@
-"""Hostile input, round two (issue 16): bounded reads, memory proportional to
+"""Hostile input, round two: bounded reads, memory proportional to
 the input, outputs that never destroy an input, no non-finite result
 written, sizes the GL can make, lazy wireframe edges, one-line CLI errors
 that name their file, and API misuse inside the error family.
 
-Every test here failed on the code before issue 16 (a hang caught by a
+Every test here failed on the code before these checks (a hang caught by a
 subprocess timeout, a traceback, a destroyed input, a file written with
 exit 0, an exception outside ``AxialDeformError``, or a missing API),
 except ``test_edges_same_as_unique_rows``, a guard that the faster edge

@@ -1,4 +1,4 @@
-"""Messages are one line in the user's words (issue 23, item 7): a file name
+"""Messages are one line in the user's words: a file name
 with a newline or an escape sequence is printed escaped, and an output in a
 missing folder names that folder, never the temporary file."""
 

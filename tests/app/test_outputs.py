@@ -1,4 +1,4 @@
-"""An output never holds an input (issue 23, item 1) and scene files are
+"""An output never holds an input and scene files are
 bounded (item 3): each attack of the issue, as a command a user types."""
 
 from __future__ import annotations

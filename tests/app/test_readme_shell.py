@@ -1,5 +1,5 @@
 """The README's shell lines that need no display run as written, in a fresh
-folder (issue 23, item 9): a newcomer's first commands must work."""
+folder: a newcomer's first commands must work."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Scatter on surfaces (issue 13 item 2).
+"""Scatter on surfaces.
 
 The terrain is a mesh we did not make: ``base/rock_caustics.obj`` from the
 test data (the rock of three.js's caustics example, BSD-3-Clause), a flat
@@ -218,7 +218,7 @@ def test_density_white_only_where_nothing_faces_up_is_an_error(stone):
     assert (params[:, 10] <= 0).all()
 
 
-# ------------------------------------------- height maps within the memory bound (issue 16)
+# ------------------------------------------- height maps within the memory bound
 
 
 def _trimesh_weights(tm, u):

@@ -1,4 +1,4 @@
-"""Scene files (issue 13 item 4): TOML layers, terrain, camera, light, wind;
+"""Scene files: TOML layers, terrain, camera, light, wind;
 render / bake / export accept them; errors name the file, the line and the key."""
 
 from __future__ import annotations

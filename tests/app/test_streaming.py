@@ -1,4 +1,4 @@
-"""Hostile input, round two (issue 16): huge outputs made and written in
+"""Hostile input, round two: huge outputs made and written in
 pieces, bounded by disk rather than memory, and files a glTF refers to read
 with the size it declares.
 

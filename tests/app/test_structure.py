@@ -124,3 +124,24 @@ def test_no_public_function_takes_more_than_eight_parameters():
     long = [f"{where}: {name} ({n})" for where, name, n in _public_signatures() if n > 8]
     assert long == [], long
     assert any(n == 8 for *_, n in _public_signatures())  # the walk sees the signatures
+
+
+def test_no_module_imports_another_modules_private_names():
+    """A name another module needs is public in its home (in its ``__all__``), not reached for."""
+    reached = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith("axialdeform")):
+                reached += [f"{path.relative_to(PACKAGE.parent)}: {node.module}.{a.name}" for a in node.names
+                            if a.name.startswith("_") and not a.name.startswith("__")]
+    assert reached == [], reached
+
+
+def test_no_source_file_is_too_long_to_read():
+    """At most 600 lines a module of the package, 400 a file of the npm module (js/src; its generated
+    glsl.js aside): a longer one holds more than one concern."""
+    js = PACKAGE.parent / "js" / "src"
+    long = [f"{p.relative_to(PACKAGE.parent)}: {n}" for p, limit in
+            [*((p, 600) for p in PACKAGE.rglob("*.py")), *((p, 400) for p in js.glob("*.js") if p.name != "glsl.js")]
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > limit]
+    assert long == [], long

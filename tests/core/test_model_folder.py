@@ -1,4 +1,4 @@
-"""A model reads only its own folder (issue 23, item 2): a texture or material
+"""A model reads only its own folder: a texture or material
 file named by an absolute path, a ``..`` escape or a link out of the folder is
 not read -- one warning names the reference, the part keeps its base colour,
 and nothing of the file reaches an export.  Data URIs still work."""

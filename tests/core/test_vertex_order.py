@@ -1,4 +1,4 @@
-"""Issue 11, item 5: the file's own vertex order (BaseMesh.source_index) and
+"""the file's own vertex order (BaseMesh.source_index) and
 fits of variants written in it."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Anisotropic filtering only where it is cheap (issue 23, item 6): none on a
+"""Anisotropic filtering only where it is cheap: none on a
 software rasteriser, the driver's 8x on a GPU, an override for both."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Real assets (issue 12): UVs, vertex colours, materials, multi-part meshes,
+"""Real assets: UVs, vertex colours, materials, multi-part meshes,
 from the file to the picture to glTF/OBJ and back."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 14: bend-aware bounds, GPU per-instance culling, LOD, stats."""
+"""bend-aware bounds, GPU per-instance culling, LOD, stats."""
 
 from __future__ import annotations
 
@@ -472,14 +472,14 @@ def test_an_indirect_frame_never_waits_for_the_count(ctx, stone, monkeypatch):
 
 
 def test_the_path_is_chosen_by_version_and_can_be_forced(ctx, stone, monkeypatch):
-    from axialdeform.gl.cull import INDIRECT_ENV, _choose_indirect, indirect_supported
+    from axialdeform.gl.cull import INDIRECT_ENV, choose_indirect, indirect_supported
 
     class GL33:
         version_code = 330
 
-    assert not indirect_supported(GL33()) and not _choose_indirect(GL33(), None)
+    assert not indirect_supported(GL33()) and not choose_indirect(GL33(), None)
     with pytest.raises(ad.core.ContextError, match="indirect: the indirect culling path needs OpenGL >= 4.3"):
-        _choose_indirect(GL33(), True)
+        choose_indirect(GL33(), True)
     assert indirect_supported(ctx) == (ctx.version_code >= 430)
     params = field(stone, 100)
     view, proj = look(*CAMERAS["inside the field"])

@@ -1,4 +1,4 @@
-"""Extended instances (19 numbers: s tw tp), issue 13 item 1: CPU reference,
+"""Extended instances (19 numbers: s tw tp): CPU reference,
 an independent evaluation of the spec, GPU capture, files."""
 
 from __future__ import annotations

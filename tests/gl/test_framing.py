@@ -1,4 +1,4 @@
-"""Automatic framing fills the picture (issue 11, item 7) and the orbit camera
+"""Automatic framing fills the picture and the orbit camera
 is the one camera the viewer and the framing share."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 11, item 4: errors and inputs."""
+"""errors and inputs."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 14 for real assets: levels of detail of textured, coloured, multi-part
+"""real assets: levels of detail of textured, coloured, multi-part
 meshes (each part simplified on its own, UVs / colours / normals / tangents
 carried to the simplified vertices), drawn one instanced draw per level and part."""
 
@@ -349,7 +349,7 @@ def test_no_uv_is_mixed_across_a_seam():
         assert np.abs(level.uvs[:, 0] - expected_u).max() <= tol / 6 and np.abs(level.uvs[:, 1] - expected_v).max() <= tol, k
 
 
-# ---------------------------------------------------------------- big meshes (issue 16)
+# ---------------------------------------------------------------- big meshes
 
 def _torus(faces):
     import sys

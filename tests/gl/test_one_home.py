@@ -1,4 +1,4 @@
-"""Issue 11, item 2: each piece of shared logic has one home that the others call."""
+"""each piece of shared logic has one home that the others call."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Long runs and big counts (issue 5): nothing is lost, nothing leaks, a
+"""Long runs and big counts: nothing is lost, nothing leaks, a
 million instances are ONE draw call.
 
 * a writer killed with SIGKILL mid-write leaves the previous file intact and

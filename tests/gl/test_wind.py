@@ -1,4 +1,4 @@
-"""Wind on the GPU (issue 13 item 3): control points move from uniforms alone;
+"""Wind on the GPU: control points move from uniforms alone;
 the CPU reference (core/wind.py) is the same function of time."""
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import MeshError
 from ..material import AssetWarning, compute_tangents, gather_parts, texture_decoding
-from ..mesh import BaseMesh, _check_float32_range, area_weighted_normals
+from ..mesh import BaseMesh, area_weighted_normals, check_float32_range
 from . import safeio
 from .gltf import gltf_attributes
 from .resolver import (
@@ -261,7 +261,7 @@ def _from_loaded(loaded, name: str, file_positions=None, failed=(), dropped=()) 
         if not np.isfinite(positions).all():
             bad = int(np.argwhere(~np.isfinite(positions).all(axis=1))[0, 0]) + offset
             raise MeshError(f"{name}: vertex {bad} has a non-finite coordinate {positions[bad - offset].tolist()}; expected finite numbers")
-        _check_float32_range(positions, name)
+        check_float32_range(positions, name)
         if len(faces) and (faces.min() < 0 or faces.max() >= len(positions)):
             raise MeshError(
                 f"{name}: a face refers to vertex {int(faces.min() if faces.min() < 0 else faces.max())}, "
@@ -289,7 +289,7 @@ def _from_loaded(loaded, name: str, file_positions=None, failed=(), dropped=()) 
     if len(positions) == 0 or len(faces) == 0:
         raise MeshError(f"{name}: the mesh has {len(positions)} vertices and {len(faces)} faces; expected triangles")
     if any(t is not None for _, t in gathered["geometries"]):
-        _check_float32_range(positions, name)  # a node transform can push a coordinate out of range
+        check_float32_range(positions, name)  # a node transform can push a coordinate out of range
     source_index, source_count = _source_index(np.concatenate(raw_positions), file_positions)
     file_normals = np.concatenate(all_normals)
     has_file_normals = bool(np.isfinite(file_normals).all(axis=1).any())

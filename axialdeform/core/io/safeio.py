@@ -40,8 +40,7 @@ from ..errors import AxialDeformError, PathError
 __all__ = [
     "open_regular", "read_regular", "read_sized", "check_output_path", "check_not_special",
     "memory_available", "check_count", "disk_free", "check_disk_space", "require_finite", "quiet_numpy", "MAX_INSTANCES",
-    "MAX_REFERENCED_BYTES", "MAX_IMAGE_BYTES",
-]
+    "MAX_REFERENCED_BYTES", "MAX_IMAGE_BYTES", "format_gb"]
 
 #: The largest instance count any command accepts (GL draws take a signed
 #: 32-bit instance count); memory usually limits it earlier, see :func:`check_count`.
@@ -192,7 +191,7 @@ def memory_available() -> int:
     return 8 * 1024**3
 
 
-def _gb(n: float) -> str:
+def format_gb(n: float) -> str:
     return f"{n / 1024**3:.3g} GB" if n >= 1024**3 else f"{n / 1024**2:.3g} MB"
 
 
@@ -216,8 +215,8 @@ def check_count(count, bytes_each: float, what: str = "count", error: type = Axi
     most = int(min(MAX_INSTANCES, budget // max(bytes_each, 1)))
     if n > most:
         need = n * bytes_each
-        raise error(f"{what}: {n} instances need about {_gb(need)}; expected at most {most} "
-                    f"(what {_gb(budget)} of available memory holds; never more than {MAX_INSTANCES})")
+        raise error(f"{what}: {n} instances need about {format_gb(need)}; expected at most {most} "
+                    f"(what {format_gb(budget)} of available memory holds; never more than {MAX_INSTANCES})")
     return n
 
 
@@ -243,8 +242,8 @@ def check_disk_space(path: str | os.PathLike, needed: int, what: str = "output",
         return
     if needed > free:
         fits = expected(free) if expected is not None else f"at most {free} bytes"
-        raise error(f"{os.fspath(path)}: the {what} needs {int(needed)} bytes ({_gb(needed)}), but its file system has "
-                    f"{free} bytes free ({_gb(free)}); expected {fits}")
+        raise error(f"{os.fspath(path)}: the {what} needs {int(needed)} bytes ({format_gb(needed)}), but its file system has "
+                    f"{free} bytes free ({format_gb(free)}); expected {fits}")
 
 
 def require_finite(array: np.ndarray, what: str, fields: Sequence[str] | None = None, items: str = "instance",
