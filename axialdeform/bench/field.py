@@ -38,6 +38,7 @@ from ..core.record import POSITION
 from ..core.variation import random_params
 from ..gl.camera import Camera, frame_instances
 from ..gl.context import Offscreen, create_context
+from ..gl.cull import CullQuery
 from ..gl.renderer import AxialRenderer
 
 __all__ = ["field_params", "walker_camera", "run_field", "FieldSettings", "format_field", "GOALS"]
@@ -185,8 +186,8 @@ def run_field(count: int = 1_000_000, size=(800, 600), frames: int = 3, *, ctx=N
                         t_cull[m].append(_frame(ctx, renderers[m], target, tv, tp))
                         ctx.finish()
                         start = time.perf_counter()
-                        cull_pass.run(count, 1, tv, tp, frustum=True, center=mesh.axis.center,
-                                      radius=renderers[m].bound_radius)
+                        cull_pass.run(count, 1, CullQuery(tv, tp, frustum=True, center=mesh.axis.center,
+                                                          radius=renderers[m].bound_radius))
                         ctx.finish()
                         t_pass[m].append(time.perf_counter() - start)
                 f_full = statistics.median(t_full)

@@ -234,17 +234,19 @@ def random_params(mesh, count: int, seed: int = 0, variation: Variation | None =
     **fields
         Fields of :class:`Variation` that replace ``variation``'s (``bend=0.1, twist=0.5``).
 
+    Returns
+    -------
+    Instances
+        ``(count, 16|19|22)`` float32, or ``10·(K − 1)`` more columns for K axes.
+
+    Notes
+    -----
     A child axis ``j`` of a mesh of several axes (:meth:`BaseMesh.with_axes`) has offsets uniform in
     ``±bend[level]·L_j`` with ``d₁ = 0`` (its root stays where its parent puts it: joints stay
     closed), drawn after every other number.  The first 16 numbers of an instance are the same
     with or without the extension (the extra numbers come from the same random stream, after the
     others).  Instance ``i`` depends only on the seed, the options, ``count`` and ``i``:
     :func:`iter_random_params` yields the same rows in pieces.
-
-    Returns
-    -------
-    Instances
-        ``(count, 16|19|22)`` float32, or ``10·(K − 1)`` more columns for K axes.
     """
     spec = _spec(mesh, count, seed, variation, fields, placement, spacing, up)
     return Instances.of(_rows(spec, 0, spec.count))

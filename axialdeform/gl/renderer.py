@@ -68,62 +68,10 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         given as keywords (``AxialRenderer(ctx, mesh, params, culling=False)``).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
-    bend : bool
-        False draws only rotation + position (the "all the same" method).
-    quantized : bool
-        Store each instance as 16 uint16 (32 bytes of GPU memory instead of
-        64), decoded in the vertex shader (``glsl/quantized.glsl``) with the
-        per-column table of :func:`axialdeform.core.quantize.quantize_params`; what
-        is drawn and captured is the deformation of the dequantized numbers.
-    cull_back_faces : bool or None
-        Skip the triangles that face away from the camera (GL back-face
-        culling, three.js's ``side: FrontSide``).  ``None`` (the default)
-        culls exactly when the base mesh bounds a volume with outward
-        triangles (:attr:`BaseMesh.is_volume`): then no back face can be
-        seen and the picture is the same, drawn in about a third less time on a
-        software rasterizer.  Open meshes (a leaf) stay two-sided.  Culled
-        draws set ``ctx.front_face`` (``"ccw"``; ``"cw"`` for a mirroring
-        camera, such as a reflection pass) and ``ctx.cull_face = "back"``,
-        and leave ``CULL_FACE`` disabled afterwards.  A double-sided
-        material's part is never culled.
-    parts : sequence of str, optional
-        Names of the base mesh's parts to draw (all by default); see
-        :attr:`BaseMesh.parts`.  Every part is one instanced draw call over
-        the same instance buffer, and all share the mesh's ONE control axis.
-
-    extended : bool or None
-        Store 19 numbers per instance (``AXIAL_EXTENDED``: 76 bytes, 40
-        quantized).  ``None`` (the default): exactly when ``params`` has 19
-        columns.  An extended renderer takes 16-number parameters too (as
-        ``s = 1, tw = 0, tp = 0``); a 16-number one refuses 19.
-    wind : Wind or None
-        The wind drawn (and captured) from now on; see :attr:`wind` and
-        :attr:`time`.  It moves control points in the vertex shader from
-        uniforms alone: animating it writes no buffer.
-    culling : bool
-        Per-instance frustum culling on the GPU (:mod:`axialdeform.gl.cull`):
-        a transform-feedback pass keeps only the instances whose bounding
-        sphere reaches the view, and the draw reads those.  On by default: it
-        cannot change the picture (an instance is dropped only when every one
-        of its vertices lies outside one frustum plane).
-    lod : bool
-        Draw each instance with one of up to four levels of detail of the
-        base mesh (:func:`axialdeform.core.lod.build_lod_levels`), the
-        coarsest whose geometric error projects to at most ``lod_error``
-        pixels; one instanced draw per level and part (plain switches, no
-        dithering).  Changes pixels, so off by default.  Every part is
-        simplified on its own and keeps its material; UVs, vertex colours,
-        normals and tangents are carried to the simplified vertices.
-    lod_error : float
-        Allowed screen-space error of a level in pixels (> 0; default 1).
-    indirect : bool or None
-        How the culling pass reaches the draw (:mod:`axialdeform.gl.cull`):
-        ``None`` (the default) picks compute shaders + indirect draws on
-        GL >= 4.3 (the CPU never waits for the visible count) and transform
-        feedback + a query on GL 3.3 (or when the environment variable
-        ``AXIALDEFORM_INDIRECT=0``); ``True`` demands the indirect path
-        (:class:`ContextError` below GL 4.3); ``False`` forces the GL 3.3 one.
-        Both draw the same picture.
+    **fields
+        Fields of :class:`RenderOptions` that replace ``options``': ``bend``,
+        ``quantized``, ``cull_back_faces``, ``parts``, ``extended``, ``wind``, ``culling``,
+        ``lod``, ``lod_error``, ``indirect`` (what each does: its docstring).
 
     Notes
     -----
