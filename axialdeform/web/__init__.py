@@ -304,6 +304,13 @@ def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, opt
     **fields
         Fields of :class:`PageOptions` or :class:`RenderOptions` (``size=(640, 480), up="z"``).
 
+    Returns
+    -------
+    WebScene
+        The page's config and files.
+
+    Notes
+    -----
     The camera is :func:`axialdeform.gl.scene.scene_camera` of :meth:`Scene.single` for the
     canvas size.  The config carries the shader build for these parameters (16 or 19 numbers,
     float32 or quantized, with or without material); ``all_shaders`` carries the four of the mesh's
