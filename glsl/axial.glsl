@@ -45,12 +45,40 @@ vec3 axial_embed(vec2 w, int axis) {
     return vec3(w.x, w.y, 0.0);
 }
 
-// The slope D'(t) of the displacement: degree-3 Bernstein weights.
-vec2 axial_slope(float t, AxialInstance inst) {
+// The displacement D(t) = sum B4_i(t) d_{i+1}: degree-4 Bernstein weights of the five offsets.
+vec2 axial_curve(float t, vec4 d12, vec4 d34, vec2 d5) {
     float s = 1.0 - t;
-    vec2 d1 = inst.d12.xy, d2 = inst.d12.zw, d3 = inst.d34.xy, d4 = inst.d34.zw, d5 = inst.d5;
+    vec2 d1 = d12.xy, d2 = d12.zw, d3 = d34.xy, d4 = d34.zw;
+    return (s * s * s * s) * d1 + (4.0 * t * s * s * s) * d2 + (6.0 * t * t * s * s) * d3
+         + (4.0 * t * t * t * s) * d4 + (t * t * t * t) * d5;
+}
+
+// The slope D'(t) of the displacement: degree-3 Bernstein weights of the offsets' differences.
+vec2 axial_slope(float t, vec4 d12, vec4 d34, vec2 d5) {
+    float s = 1.0 - t;
+    vec2 d1 = d12.xy, d2 = d12.zw, d3 = d34.xy, d4 = d34.zw;
     return 4.0 * ((s * s * s) * (d2 - d1) + (3.0 * t * s * s) * (d3 - d2)
                 + (3.0 * t * t * s) * (d4 - d3) + (t * t * t) * (d5 - d4));
+}
+
+vec2 axial_slope(float t, AxialInstance inst) {
+    return axial_slope(t, inst.d12, inst.d34, inst.d5);
+}
+
+// The twist and taper of the cross-section at t: w (the two coordinates across the axis minus the
+// axis line's centre) turns by theta = tw t and shrinks by k = 1 - tp t.  Gives k, (cos, sin) of
+// theta and the turned rw = Rot(theta) w; exactly no change for tw = tp = 0.
+void axial_turn(float t, vec2 w, AxialInstance inst, out float k, out vec2 cs, out vec2 rw) {
+    k = 1.0 - inst.taper * t;
+    float theta = inst.twist * t;
+    cs = vec2(cos(theta), sin(theta));
+    rw = vec2(cs.x * w.x - cs.y * w.y, cs.y * w.x + cs.x * w.y);
+}
+
+// g = dV''_across/dt of the turned cross-section: D'(t) + k tw Rot(w turned by 90 degrees) - tp Rot w
+// (without D'(t) where `slope` is zero).
+vec2 axial_turn_rate(vec2 slope, float k, vec2 rw, AxialInstance inst) {
+    return slope + ((k * inst.twist) * vec2(-rw.y, rw.x) - inst.taper * rw);
 }
 
 // The two coordinates across the axis (the inverse of axial_embed).
@@ -67,24 +95,16 @@ vec2 axial_across(vec3 v, int axis) {
 void axial_bend(vec3 v, vec3 n, int axis, float lo, float len, vec2 center, AxialInstance inst,
                 out vec3 v_out, out vec3 n_out) {
     float t = clamp((v[axis] - lo) / len, 0.0, 1.0);
-    float s = 1.0 - t;
-    vec2 d1 = inst.d12.xy, d2 = inst.d12.zw, d3 = inst.d34.xy, d4 = inst.d34.zw, d5 = inst.d5;
-    // degree-4 Bernstein weights: the displacement D(t)
-    vec2 disp = (s * s * s * s) * d1 + (4.0 * t * s * s * s) * d2 + (6.0 * t * t * s * s) * d3
-              + (4.0 * t * t * t * s) * d4 + (t * t * t * t) * d5;
+    vec2 disp = axial_curve(t, inst.d12, inst.d34, inst.d5);
     vec2 slope = axial_slope(t, inst);
-    // twist and taper of the cross-section: exactly zero shift for tw = tp = 0
-    float k = 1.0 - inst.taper * t;
-    float theta = inst.twist * t;
-    float c = cos(theta), sn = sin(theta);
-    vec2 w = axial_across(v, axis) - center;
-    vec2 rw = vec2(c * w.x - sn * w.y, sn * w.x + c * w.y);
+    float k;
+    vec2 cs, rw, w = axial_across(v, axis) - center;
+    axial_turn(t, w, inst, k, cs, rw);
     v_out = v + axial_embed(k * rw - w, axis) + axial_embed(disp, axis);
-    // cof(J) n / k: across = Rot n_across, along = k n_a - g . (Rot n_across) / len,
-    // g = dV''_across/dt = D'(t) + k tw Rot(w rotated by 90 degrees) - tp Rot w
+    // cof(J) n / k: across = Rot n_across, along = k n_a - g . (Rot n_across) / len
     vec2 nw = axial_across(n, axis);
-    vec2 g = slope + ((k * inst.twist) * vec2(-rw.y, rw.x) - inst.taper * rw);
-    n_out = axial_embed(vec2(c * nw.x - sn * nw.y, sn * nw.x + c * nw.y), axis);
+    vec2 g = axial_turn_rate(slope, k, rw, inst);
+    n_out = axial_embed(vec2(cs.x * nw.x - cs.y * nw.y, cs.y * nw.x + cs.x * nw.y), axis);
     n_out[axis] = k * n[axis];
     n_out[axis] -= dot(axial_embed(g, axis), n_out) / len;
     n_out = normalize(n_out);
@@ -145,14 +165,12 @@ vec3 axial_bend_tangent(vec3 v, vec3 tangent, int axis, float lo, float len, vec
     vec3 bent = tangent;
 #ifndef AXIAL_NO_BEND
     float t = clamp((v[axis] - lo) / len, 0.0, 1.0);
-    float k = 1.0 - inst.taper * t;
-    float theta = inst.twist * t;
-    float c = cos(theta), sn = sin(theta);
-    vec2 w = axial_across(v, axis) - center;
-    vec2 rw = vec2(c * w.x - sn * w.y, sn * w.x + c * w.y);
-    vec2 g = axial_slope(t, inst) + ((k * inst.twist) * vec2(-rw.y, rw.x) - inst.taper * rw);
+    float k;
+    vec2 cs, rw;
+    axial_turn(t, axial_across(v, axis) - center, inst, k, cs, rw);
+    vec2 g = axial_turn_rate(axial_slope(t, inst), k, rw, inst);
     vec2 tw = axial_across(tangent, axis);
-    bent = axial_embed(k * vec2(c * tw.x - sn * tw.y, sn * tw.x + c * tw.y)
+    bent = axial_embed(k * vec2(cs.x * tw.x - cs.y * tw.y, cs.y * tw.x + cs.x * tw.y)
                        + g * (tangent[axis] / len), axis);
     bent[axis] = tangent[axis];
 #endif
@@ -214,16 +232,10 @@ void axial_axis_add(vec3 v, mat3 frame, float lo, float len, vec4 d12, vec4 d34,
                     inout vec3 disp, inout mat3 jac) {
     float raw = ((frame * v).x - lo) / len;
     float t = clamp(raw, 0.0, 1.0);
-    float s = 1.0 - t;
-    vec2 d1 = d12.xy, d2 = d12.zw, d3 = d34.xy, d4 = d34.zw;
-    vec2 D = (s * s * s * s) * d1 + (4.0 * t * s * s * s) * d2 + (6.0 * t * t * s * s) * d3
-           + (4.0 * t * t * t * s) * d4 + (t * t * t * t) * d5;
     mat3 back = transpose(frame);  // columns e_a, e_u, e_v
-    disp += back * vec3(0.0, D);
+    disp += back * vec3(0.0, axial_curve(t, d12, d34, d5));
     if (raw >= -AXIAL_T_SLACK && raw <= 1.0 + AXIAL_T_SLACK) {
-        vec2 S = 4.0 * ((s * s * s) * (d2 - d1) + (3.0 * t * s * s) * (d3 - d2)
-                      + (3.0 * t * t * s) * (d4 - d3) + (t * t * t) * (d5 - d4));
-        jac += outerProduct(back * vec3(0.0, S / len), back[0]);
+        jac += outerProduct(back * vec3(0.0, axial_slope(t, d12, d34, d5) / len), back[0]);
     }
 }
 
@@ -262,15 +274,13 @@ void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[
         vec3 l = f0 * v;
         float raw = (l.x - los[0]) / lens[0];
         float t = clamp(raw, 0.0, 1.0);
-        float k = 1.0 - inst.taper * t;
-        float theta = inst.twist * t;
-        float c = cos(theta), sn = sin(theta);
-        vec2 w = l.yz - center;
-        vec2 rw = vec2(c * w.x - sn * w.y, sn * w.x + c * w.y);
+        float k;
+        vec2 cs, rw, w = l.yz - center;
+        axial_turn(t, w, inst, k, cs, rw);
         moved += transpose(f0) * vec3(0.0, k * rw - w);
         vec2 g = (raw >= -AXIAL_T_SLACK && raw <= 1.0 + AXIAL_T_SLACK)
-               ? ((k * inst.twist) * vec2(-rw.y, rw.x) - inst.taper * rw) / lens[0] : vec2(0.0);
-        mat3 jl = mat3(vec3(1.0, g), vec3(0.0, k * c, k * sn), vec3(0.0, -k * sn, k * c));  // columns
+               ? axial_turn_rate(vec2(0.0), k, rw, inst) / lens[0] : vec2(0.0);
+        mat3 jl = mat3(vec3(1.0, g), vec3(0.0, k * cs.x, k * cs.y), vec3(0.0, -k * cs.y, k * cs.x));  // columns
         jac = transpose(f0) * jl * f0;
     }
     vec3 disp = vec3(0.0);
