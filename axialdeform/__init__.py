@@ -33,7 +33,7 @@ _NAMES = {
     "read_params": "core.io.params", "write_params": "core.io.params",
     # scene, look, camera, wind
     "Scene": "core.scene", "Look": "core.look", "Wind": "core.wind", "RenderOptions": "core.options",
-    "Camera": "gl.camera", "frame_instances": "gl.camera",
+    "Camera": "core.camera", "frame_instances": "core.camera",
     # drawing
     "create_context": "gl.context", "Offscreen": "gl.context", "AxialRenderer": "gl.renderer",
     "render_image": "gl.image", "save_png": "core.io.image", "deformation_glsl": "gl.shaders",
@@ -48,8 +48,8 @@ _DEPRECATED = {name: f"axialdeform.{home}.{name}" for home, names in {
              "TopologyError", "ControlAxis", "Material", "Part", "AssetWarning", "BUNDLED_MESHES",
              "bundled_mesh_path", "FIELDS", "EXTENDED_FIELDS", "as_params", "make_params", "read_param_file",
              "extend_params", "is_extended", "instance_bounds", "scene_box", "load_surface", "load_scene",
-             "wind_offsets", "apply_wind", "rotation_matrices"),
-    "gl": ("OrbitCamera", "GroundPlane", "ShadowMap", "read_pixels", "MODES", "assemble", "assemble_text",
+             "wind_offsets", "apply_wind", "rotation_matrices", "OrbitCamera"),
+    "gl": ("GroundPlane", "ShadowMap", "read_pixels", "MODES", "assemble", "assemble_text",
            "build_program", "SceneRenderer"),
 }.items() for name in names}
 

@@ -39,6 +39,7 @@ from pathlib import Path
 import moderngl_window as mglw
 import numpy as np
 
+from .core.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
@@ -47,7 +48,6 @@ from .core.params import as_params
 from .core.scene import Scene
 from .core.variation import Variation, random_params
 from .core.wind import Wind
-from .gl.camera import UP_VECTORS, OrbitCamera
 from .gl.context import check_image_size, create_context, read_pixels
 from .gl.frame import Frame
 from .gl.ground import GroundPlane

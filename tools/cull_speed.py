@@ -16,7 +16,7 @@ import statistics
 import numpy as np
 
 import axialdeform as ad
-from axialdeform.gl.camera import frame_instances
+from axialdeform.core.camera import frame_instances
 from axialdeform.gl.image import parse_size
 
 from frame_timing import alternate

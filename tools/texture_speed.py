@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 import axialdeform as ad
-from axialdeform.gl.camera import frame_instances
+from axialdeform.core.camera import frame_instances
 from axialdeform.gl.context import texture_anisotropy
 from axialdeform.gl.image import parse_size
 

@@ -21,8 +21,8 @@ import moderngl
 import numpy as np
 
 import axialdeform as ad
+from axialdeform.core.camera import frame_instances
 from axialdeform.core.wind import apply_wind
-from axialdeform.gl.camera import frame_instances
 from axialdeform.gl.image import parse_size
 
 

@@ -32,11 +32,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..core.camera import Camera, frame_instances
 from ..core.io.mesh import load_mesh
 from ..core.look import BACKGROUND
 from ..core.record import POSITION
 from ..core.variation import random_params
-from ..gl.camera import Camera, frame_instances
 from ..gl.context import Offscreen, create_context
 from ..gl.cull import CullQuery
 from ..gl.renderer import AxialRenderer

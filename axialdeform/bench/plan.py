@@ -13,12 +13,12 @@ import shutil
 from pathlib import Path
 
 from ..core.bake import bake_cpu, instance_name
+from ..core.camera import frame_instances
 from ..core.errors import AxialDeformError
 from ..core.io.bake import write_mesh_folder
 from ..core.io.mesh import BUNDLED_MESHES, bundled_mesh_path
 from ..core.io.params import write_params
 from ..core.variation import random_params
-from ..gl.camera import frame_instances
 
 METHODS = ("same", "loaded", "axial", "axial-quantized")
 COUNTS = (100, 1000, 10000, 100000)

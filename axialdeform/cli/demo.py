@@ -33,7 +33,7 @@ DEMO_BYTES_EACH = 1024
 
 
 def run(args) -> None:
-    from ..gl.camera import frame_instances
+    from ..core.camera import frame_instances
     from ..gl.image import parse_size, render_image
 
     check_output_path(args.output, (mesh_source_path("stone"),), "PNG")  # the bundled mesh is an input too

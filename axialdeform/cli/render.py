@@ -62,9 +62,9 @@ def camera_from_args(mesh, params, size, args):
     """The automatic camera, with ``--eye``, ``--target`` and ``--fov`` put in
     where given (near and far planes then enclose every instance)."""
 
-    from ..gl.camera import UP_VECTORS, Camera, frame_instances
+    from ..core.camera import FOVY, UP_VECTORS, Camera, frame_instances
 
-    fov = 35.0 if args.fov is None else float(args.fov)
+    fov = FOVY if args.fov is None else float(args.fov)
     if not 0.0 < fov < 180.0:
         raise AxialDeformError(f"--fov: expected degrees between 0 and 180, found {args.fov:g}")
     cam = frame_instances(mesh, params, size[0] / size[1], up=args.up, fovy=fov)

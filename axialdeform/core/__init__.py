@@ -32,7 +32,8 @@ _NAMES = {
     "rotation_matrices": "transforms", "instance_bounds": "bounds", "scene_box": "bounds",
     # scene and look
     "Scene": "scene", "Layer": "scene", "load_scene": "scene", "Look": "look", "DEFAULT_LOOK": "look",
-    "RenderOptions": "options",
+    "RenderOptions": "options", "Camera": "camera", "CameraSpec": "camera", "OrbitCamera": "camera",
+    "frame_instances": "camera",
     # out again
     "export_glb": "io.gltf", "export_instanced": "io.gltf", "export_baked": "io.gltf", "fit_params": "fit",
     "save_png": "io.image",

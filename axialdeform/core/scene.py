@@ -67,9 +67,10 @@ from typing import ClassVar
 
 import numpy as np
 
+from .camera import CameraSpec
 from .errors import SceneError
 from .io.scene import read_scene
-from .look import BACKGROUND, Look
+from .look import DEFAULT_LOOK, Look
 from .params import as_params
 
 __all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
@@ -113,15 +114,13 @@ class Scene:
         ``Layer(name, mesh, params, color, wind, lift, parts)``.
     terrain : BaseMesh or None
         Drawn as one undeformed instance of itself.
-    camera : dict
-        ``elevation``, ``azimuth``, ``fov`` or ``eye`` + ``target`` (scene files).
-    light : dict
-        ``light_dir``, ``ambient``, ``light_color``, ``sky_color``,
-        ``ground_color`` (scene files' ``[light]``); with ``background``,
-        :attr:`look`.
+    camera : CameraSpec
+        The file's ``[camera]``: ``elevation``, ``azimuth``, ``fov`` or ``eye`` + ``target``
+        (default: frame everything from 35 degrees up and around).
+    look : Look
+        How it looks: the file's ``[light]`` and ``background`` (default :data:`DEFAULT_LOOK`).
     wind : Wind or None
         What layers with ``wind = True`` sway in.
-    background : (3,) float
     """
 
     #: the class of the layers (what a scene file's reader makes)
@@ -132,10 +131,9 @@ class Scene:
     layers: list = field(default_factory=list)
     terrain: object = None
     terrain_color: tuple = (0.36, 0.40, 0.30)
-    camera: dict = field(default_factory=dict)
-    light: dict = field(default_factory=dict)
+    camera: CameraSpec = field(default_factory=CameraSpec)
+    look: Look = DEFAULT_LOOK
     wind: object = None
-    background: tuple = BACKGROUND
     #: every file the scene was read from (the scene file, includes, meshes, parameters, images):
     #: what an output must never replace
     sources: list = field(default_factory=list)
@@ -145,9 +143,9 @@ class Scene:
         return sum(len(layer.params) for layer in self.layers)
 
     @property
-    def look(self) -> Look:
-        """The file's ``[light]`` and ``background`` as a :class:`Look`."""
-        return Look(background=self.background, **self.light)
+    def background(self) -> tuple:
+        """The clear colour (sRGB): :attr:`look`'s."""
+        return self.look.background
 
     @classmethod
     def single(cls, mesh, params, *, up: str = "y", wind=None, color=None, parts=None,

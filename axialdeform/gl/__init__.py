@@ -16,7 +16,6 @@ _NAMES = {
     "MeshBuffers": "buffers", "InstanceBuffer": "buffers",
     "AxialRenderer": "renderer", "MODES": "renderer",
     "GroundPlane": "ground", "ShadowMap": "shadow",
-    "Camera": "camera", "OrbitCamera": "camera", "frame_instances": "camera",
     "SceneRenderer": "scene",
     "render_image": "image",
 }

@@ -7,11 +7,11 @@ import warnings
 
 import numpy as np
 
+from ..core.camera import UP_VECTORS, Camera
 from ..core.errors import ArgumentError
 from ..core.look import DEFAULT_LOOK, Look
 from ..core.options import RenderOptions
 from ..core.scene import Scene
-from .camera import UP_VECTORS, Camera
 from .context import Offscreen, check_image_size, create_context
 from .frame import Frame
 from .ground import GroundPlane

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.bounds import instance_bounds, outline_points
+from ..core.camera import UP_VECTORS, Camera, camera_for_points
 from ..core.errors import SceneError
-from .camera import UP_VECTORS, Camera, camera_for_points
 from .renderer import AxialRenderer
 
 __all__ = ["SceneRenderer", "scene_camera", "TERRAIN_INSTANCE"]
@@ -26,10 +26,10 @@ def scene_camera(scene, aspect: float, *, margin: float = 0.03) -> Camera:
     and far planes enclose them; :meth:`Camera.enclosing_square` widens them
     for a ground plane."""
     cam = scene.camera
-    fov = cam.get("fov", 35.0)
+    fov = cam.fov
     up = UP_VECTORS[scene.up]
-    if "eye" in cam:
-        eye, target = np.asarray(cam["eye"]), np.asarray(cam["target"])
+    if cam.eye is not None:
+        eye, target = np.asarray(cam.eye), np.asarray(cam.target)
         dist = float(np.linalg.norm(eye - target))
         return Camera(eye, target, up, fov, near=dist * 1e-3, far=dist * 10)
 
@@ -47,8 +47,7 @@ def scene_camera(scene, aspect: float, *, margin: float = 0.03) -> Camera:
         # the terrain's float32 vertices as they are (2.25 M of a 1 500 x 1 500 map): never copied
         points.append(scene.terrain.positions)
         radii.append(np.broadcast_to(0.0, (len(scene.terrain.positions),)))
-    return camera_for_points(points, radii, aspect, scene.up, fov, cam.get("azimuth", 35.0), cam.get("elevation", 35.0),
-                             margin)
+    return camera_for_points(points, radii, aspect, scene.up, fov, cam.azimuth, cam.elevation, margin)
 
 
 class SceneRenderer:

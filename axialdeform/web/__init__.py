@@ -178,7 +178,7 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
 
 
 def _check_view(size, up: str, mode: str) -> tuple:
-    from ..gl.camera import UP_VECTORS
+    from ..core.camera import UP_VECTORS
 
     if mode not in MODES:
         raise AxialDeformError(f"mode: the page draws {', '.join(MODES)}, found {mode!r}")
@@ -192,7 +192,7 @@ def _check_view(size, up: str, mode: str) -> tuple:
 
 def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shaders,
             time=None) -> dict:
-    from ..gl.camera import UP_VECTORS
+    from ..core.camera import UP_VECTORS
 
     return {
         "generator": "axialdeform",

@@ -69,7 +69,7 @@ def test_a_scene_loads_with_paths_relative_to_its_file(small, monkeypatch, tmp_p
     assert scene.layers[0].params.shape == (12, 16)
     assert scene.layers[1].params.shape == (40, 19) and scene.layers[1].wind and scene.layers[1].color == (0.8, 0.4, 0.1)
     assert isinstance(scene.wind, ad.core.wind.Wind) and scene.wind.strength == 0.2
-    assert scene.camera == {"elevation": 40.0}
+    assert scene.camera == ad.core.CameraSpec(elevation=40.0)
     # the scatter layer is exactly axialdeform.scatter on the terrain
     expected = ad.scatter(small.parent / "hm.png", "leaf", 40, min_distance=0.8, anchor="origin", scale=(0.5, 1.0),
                           seed=5, height_scale=3.0, extent=[20.0])

@@ -39,7 +39,8 @@ def test_callers_use_the_one_home():
     import inspect
 
     from axialdeform import viewer
-    from axialdeform.gl import camera, ground
+    from axialdeform.core import camera
+    from axialdeform.gl import ground
 
     for mod in (camera, ground, viewer):
         src = inspect.getsource(mod)

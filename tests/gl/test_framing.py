@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
-from axialdeform.gl.camera import OrbitCamera, frame_instances, orbit_axes
+from axialdeform.core.camera import OrbitCamera, frame_instances, orbit_axes
 
 
 def _extent(image):

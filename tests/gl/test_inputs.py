@@ -11,7 +11,7 @@ import tomllib
 import trimesh
 
 import axialdeform as ad
-from axialdeform.gl.camera import Camera
+from axialdeform.core.camera import Camera
 
 
 def _is_ours(exc):

@@ -214,7 +214,7 @@ def test_back_faces_are_culled_only_where_nothing_changes(ctx, stone, leaf):
     """Default culling: on for a closed outward mesh (same picture, fewer
     triangles rasterized), off for an open one (two-sided leaves), and the
     draw leaves CULL_FACE off for whatever is drawn next."""
-    from axialdeform.gl.camera import frame_instances
+    from axialdeform.core.camera import frame_instances
 
     stones = ad.random_params(stone, 300, seed=3, bend=0.2)
     leaves = ad.random_params(leaf, 300, seed=3, bend=0.2)
@@ -339,7 +339,7 @@ def test_multisampled_frame_memory_does_not_grow_with_triangles(tmp_path):
         "import axialdeform as ad\n"
         "from big_mesh import torus\n"
         "from axialdeform.gl.context import Offscreen, create_context\n"
-        "from axialdeform.gl.camera import frame_instances\n"
+        "from axialdeform.core.camera import frame_instances\n"
         "pos, faces = torus(200_000)\n"
         "import trimesh\n"
         "mesh = ad.load_mesh(trimesh.Trimesh(pos, faces, process=False))\n"

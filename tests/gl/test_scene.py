@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
-from axialdeform.gl.camera import frame_instances
+from axialdeform.core.camera import frame_instances
 
 
 def _draw(ctx, renderer, mesh, params, ground=None, size=(96, 72)):

@@ -10,8 +10,8 @@ import pytest
 
 import axialdeform as ad
 from axialdeform.core import record as R
+from axialdeform.core.camera import frame_instances
 from axialdeform.core.params import tint_params
-from axialdeform.gl.camera import frame_instances
 from axialdeform.gl.shaders import build_program
 
 

@@ -12,7 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..camera import CameraSpec
 from ..errors import AxialDeformError, SceneError
+from ..look import Look
 from ..mesh import BaseMesh, area_weighted_normals
 from ..scatter import ANCHORS, scatter
 from ..surface import load_surface
@@ -168,8 +170,6 @@ def read_scene(path: str | os.PathLike, scene_type, *, scale_counts: float = 1.0
         if key in data and not isinstance(data[key], dict):
             raise src.error("expected a table", key, None, 0)
         _check_keys(src, data.get(key, {}), allowed, f"[{key}]", key)
-    if "background" in data:
-        scene.background = tuple(_numbers(src, data["background"], "background", None, 0, (3,)))
     _read_view(src, data, scene)
     surface = _read_terrain(src, data.get("terrain"), scene)
     if "wind" in data:
@@ -196,7 +196,7 @@ def _read_view(src, data, scene) -> None:
     if ("eye" in out) != ("target" in out):
         raise src.error("eye and target go together; expected both or neither", "eye" if "eye" in out else "target",
                         "camera", 0)
-    scene.camera = out
+    scene.camera = CameraSpec(**out)
     light = data.get("light", {})
     lo = {}
     if "direction" in light:
@@ -206,7 +206,10 @@ def _read_view(src, data, scene) -> None:
     for key, field in (("color", "light_color"), ("sky", "sky_color"), ("ground", "ground_color")):
         if key in light:  # the fields of axialdeform.Look
             lo[field] = tuple(_numbers(src, light[key], key, "light", 0, (3,)))
-    scene.light = lo
+    if "background" in data:
+        lo["background"] = tuple(_numbers(src, data["background"], "background", None, 0, (3,)))
+    with _wrap(src, next(iter(light), "light"), "light", 0):
+        scene.look = Look(**lo)
 
 
 def _read_terrain(src, terrain, scene):

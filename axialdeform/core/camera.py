@@ -1,4 +1,5 @@
-"""A camera that frames every instance, with pyrr matrices.
+"""The camera: one that frames every instance, with pyrr matrices, and what a scene file says of
+its camera (:class:`CameraSpec`).  Pure numpy and pyrr: no GL here.
 
 Matrix convention (pyrr's): matrices are ``(4, 4) float32`` as pyrr builds
 them (``pyrr.matrix44.create_look_at`` / ``create_perspective_projection``);
@@ -8,22 +9,46 @@ computes ``clip = u_proj * u_view * world``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pyrr
 
-from ..core.arrays import as_array
-from ..core.bounds import outline_points, scene_box
-from ..core.errors import ArgumentError
+from .arrays import as_array
+from .bounds import outline_points, scene_box
+from .errors import ArgumentError
 
-__all__ = ["Camera", "camera_for_points", "OrbitCamera", "frame_instances", "frame_points", "orbit_axes", "UP_VECTORS"]
+__all__ = ["Camera", "CameraSpec", "FOVY", "AZIMUTH", "ELEVATION", "camera_for_points", "OrbitCamera",
+           "frame_instances", "frame_points", "orbit_axes", "UP_VECTORS"]
 
 UP_VECTORS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+#: the default vertical field of view, and the orbit's azimuth and elevation, degrees
+FOVY = AZIMUTH = ELEVATION = 35.0
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    """What a scene file says of its camera (``[camera]``): an orbit (``elevation``, ``azimuth``,
+    degrees) that frames everything, or an explicit ``eye`` and ``target``; ``fov`` either way.
+
+    :func:`axialdeform.gl.scene.scene_camera` turns it into a :class:`Camera` for an aspect.
+    """
+
+    elevation: float = ELEVATION
+    azimuth: float = AZIMUTH
+    fov: float = FOVY
+    eye: tuple | None = None
+    target: tuple | None = None
+
+    def __post_init__(self):
+        if (self.eye is None) != (self.target is None):
+            raise ArgumentError("camera: eye and target go together; expected both or neither")
 
 
 class Camera:
     """A perspective camera: eye, target, up, vertical field of view (degrees)."""
 
-    def __init__(self, eye, target, up=(0.0, 1.0, 0.0), fovy: float = 35.0, near: float = 0.01, far: float = 100.0):
+    def __init__(self, eye, target, up=(0.0, 1.0, 0.0), fovy: float = FOVY, near: float = 0.01, far: float = 100.0):
         self.eye = as_array(eye, (3,), "eye")
         self.target = as_array(target, (3,), "target")
         self.up = as_array(up, (3,), "up")
@@ -109,7 +134,7 @@ def orbit_axes(up: str, azimuth: float, elevation: float) -> tuple[np.ndarray, n
 _FRAME_BLOCK = 1 << 16
 
 
-def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspect: float, fovy: float = 35.0,
+def frame_points(points, radii, up: str, azimuth: float, elevation: float, aspect: float, fovy: float = FOVY,
                  margin: float = 0.03) -> tuple[np.ndarray, float]:
     """Target and distance of an orbit camera that just sees every sphere.
 
@@ -207,8 +232,8 @@ def _point_sets(points, radii) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
-def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35.0,
-                    azimuth: float = 35.0, elevation: float = 35.0, margin: float = 0.03) -> Camera:
+def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = FOVY,
+                    azimuth: float = AZIMUTH, elevation: float = ELEVATION, margin: float = 0.03) -> Camera:
     """A camera that sees every instance and fills the picture, looking down
     at ``elevation`` degrees.
 
@@ -220,8 +245,8 @@ def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = 35
     return camera_for_points(points, radii, aspect, up, fovy, azimuth, elevation, margin)
 
 
-def camera_for_points(points, radii, aspect: float, up: str = "y", fovy: float = 35.0,
-                      azimuth: float = 35.0, elevation: float = 35.0, margin: float = 0.03) -> Camera:
+def camera_for_points(points, radii, aspect: float, up: str = "y", fovy: float = FOVY,
+                      azimuth: float = AZIMUTH, elevation: float = ELEVATION, margin: float = 0.03) -> Camera:
     """The orbit camera that frames ``points`` (m, 3) with spheres of ``radii`` (m,)
     (:func:`frame_points`; or lists of such arrays, framed together), its near
     and far planes enclosing every sphere."""
@@ -250,8 +275,8 @@ class OrbitCamera:
     near and far planes reach (three times it) and how far it may zoom.
     """
 
-    def __init__(self, target, distance: float, azimuth: float = 35.0, elevation: float = 35.0, up: str = "y",
-                 fovy: float = 35.0, extent: float = 1.0):
+    def __init__(self, target, distance: float, azimuth: float = AZIMUTH, elevation: float = ELEVATION, up: str = "y",
+                 fovy: float = FOVY, extent: float = 1.0):
         if up not in UP_VECTORS:
             raise ArgumentError(f"up: expected one of x, y, z, found {up!r}")
         self.target = as_array(target, (3,), "target")
@@ -259,8 +284,8 @@ class OrbitCamera:
         self.up, self.fovy, self.extent = up, float(fovy), float(extent)
 
     @classmethod
-    def framing(cls, mesh, params, aspect: float, *, up: str = "y", fovy: float = 35.0, azimuth: float = 35.0,
-                elevation: float = 35.0, margin: float = 0.03) -> OrbitCamera:
+    def framing(cls, mesh, params, aspect: float, *, up: str = "y", fovy: float = FOVY, azimuth: float = AZIMUTH,
+                elevation: float = ELEVATION, margin: float = 0.03) -> OrbitCamera:
         """The orbit that starts where :func:`frame_instances` puts the camera."""
         cam = frame_instances(mesh, params, aspect, up, fovy, azimuth, elevation, margin)
         lo, hi = scene_box(mesh, params)
