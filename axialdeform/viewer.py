@@ -395,21 +395,18 @@ class Viewer:
         opts = RenderOptions.of(options, fields, "Viewer.create", ("up", "parts", "wind", "culling", "lod", "lod_error"))
         up, parts, wind, culling, lod_error = opts.up, opts.parts, opts.wind, opts.culling, opts.lod_error
         lod = opts.lod if lod_given else None
-        mesh = scene
-        if isinstance(scene, Scene):  # the first layer is the viewer's own; the others and the terrain are drawn too
-            if params is not None:
-                raise ArgumentError("params: a Scene carries its own instances; expected no params beside it")
-            if not scene.layers:
-                raise AxialDeformError(f"{scene.path}: the scene has no layer; expected at least one [[layer]]")
-            first = scene.layers[0]
-            mesh, params, up = first.mesh, first.params, scene.up
-            wind = wind if wind is not None else (scene.wind if first.wind else None)
-            if wind is not None:
-                scene.wind = wind
+        # the one mesh-or-scene check; the first layer is the viewer's own, the others and the terrain are drawn too
+        scene = Scene.of(scene, params, up=up, wind=wind, parts=parts)
+        if not scene.layers:
+            raise AxialDeformError(f"{scene.path}: the scene has no layer; expected at least one [[layer]]")
+        first = scene.layers[0]
+        mesh, params, up = first.mesh, first.params, scene.up
+        wind = wind if wind is not None else (scene.wind if first.wind else None)
+        if wind is not None:
+            scene.wind = wind
+        if len(scene.layers) > 1 or scene.terrain is not None:
             extra = replace(scene, layers=scene.layers[1:])
-            look = scene.look.replace(ground=scene.terrain is None) if look is None else look
-        elif params is None:
-            raise ArgumentError("params: expected the instances ((n, 16) float32) beside a mesh, or a Scene")
+        look = scene.look.replace(ground=scene.terrain is None) if look is None else look
         look = look_from_keywords(look, old_keywords, "Viewer.create")
 
         mglw = _window_config_base()

@@ -19,11 +19,9 @@ import anywidget
 import traitlets
 
 from .core.errors import AxialDeformError
-from .core.io.mesh import load_mesh
 from .core.io.params import encode_binary
-from .core.mesh import BaseMesh
 from .core.params import as_params
-from .core.scene import Scene, is_scene_file, load_scene
+from .core.scene import Scene
 from .web import MODULE_FILES, VENDOR_FILES, build_scene, build_scene_file, module_source, page_source, vendor_file
 
 __all__ = ["SceneWidget"]
@@ -70,11 +68,8 @@ class SceneWidget(anywidget.AnyWidget):
         sources["app"] = page_source("app.js")
         sources["module"] = {name: module_source(name) for name in MODULE_FILES}  # axialdeform-three: app.js imports it
         self._quantize = bool(quantize)
-        if params is None and is_scene_file(scene):
-            scene = load_scene(scene)
-        if isinstance(scene, Scene):
-            if params is not None:
-                raise AxialDeformError("params: a Scene carries its own instances; expected no params beside it")
+        scene = Scene.of(scene, params, up=up)  # the one mesh-or-scene check
+        if scene.path is not None or len(scene.layers) != 1 or scene.terrain is not None:
             self._mesh = None  # several layers: set_params has no one mesh to act on
             web = build_scene_file(scene, size=size, quantize=quantize, look=look)
             first = web.config["layers"][0]
@@ -82,9 +77,7 @@ class SceneWidget(anywidget.AnyWidget):
                              params_adp=web.files[first["params_file"]], files=dict(web.files), _sources=sources,
                              status={}, **kwargs)
             return
-        if params is None:
-            raise AxialDeformError("params: expected the instances ((n, 16) float32) beside a mesh, or a scene")
-        self._mesh = scene if isinstance(scene, BaseMesh) else load_mesh(scene)
+        self._mesh, params = scene.layers[0].mesh, scene.layers[0].params
         web = build_scene(self._mesh, params, size=size, up=up, quantize=quantize, all_shaders=True, look=look)
         super().__init__(config=web.config, mesh_glb=web.glb, params_adp=web.adp, files={}, _sources=sources,
                          status={}, **kwargs)

@@ -68,9 +68,11 @@ from typing import ClassVar
 import numpy as np
 
 from .camera import CameraSpec
-from .errors import SceneError
+from .errors import ArgumentError, SceneError
+from .io.mesh import load_mesh
 from .io.scene import read_scene
 from .look import DEFAULT_LOOK, Look
+from .mesh import BaseMesh
 from .params import as_params
 
 __all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
@@ -138,6 +140,14 @@ class Scene:
     #: what an output must never replace
     sources: list = field(default_factory=list)
 
+    def __post_init__(self):
+        if isinstance(self.camera, dict):  # a scene file's [camera] table as given
+            self.camera = CameraSpec(**self.camera)
+        if not isinstance(self.camera, CameraSpec):
+            raise ArgumentError(f"camera: expected an axialdeform.core.CameraSpec, found {type(self.camera).__name__}")
+        if not isinstance(self.look, Look):
+            raise ArgumentError(f"look: expected an axialdeform.Look, found {type(self.look).__name__}")
+
     @property
     def count(self) -> int:
         return sum(len(layer.params) for layer in self.layers)
@@ -175,6 +185,23 @@ class Scene:
                       as_params(params, axes=getattr(mesh, "axis_count", 1)),
                       color=None if color is None else tuple(color), wind=wind is not None, parts=parts)
         return cls(path=None, up=up, layers=[layer], wind=wind)
+
+    @classmethod
+    def of(cls, scene, params=None, *, up: str = "y", wind=None, parts=None) -> Scene:
+        """THE check of what a picture, the viewer or the widget was given: a :class:`Scene` as it
+        is; a scene file's path (with no ``params``) read by :meth:`load`; a mesh (a BaseMesh, a
+        mesh file or a bundled name) with its ``params`` as :meth:`single` (``up``, ``wind``,
+        ``parts``).  Anything else is an :class:`ArgumentError` saying what was expected."""
+        if isinstance(scene, Scene):
+            if params is not None:
+                raise ArgumentError("params: a Scene carries its own instances; expected no params beside it")
+            return scene
+        if params is None:
+            if is_scene_file(scene):
+                return cls.load(scene)
+            raise ArgumentError("params: expected the instances ((n, 16) float32) beside a mesh, or a Scene")
+        mesh = scene if isinstance(scene, BaseMesh) else load_mesh(scene)
+        return cls.single(mesh, params, up=up, wind=wind, parts=parts)
 
     @classmethod
     def load(cls, path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:

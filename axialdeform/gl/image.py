@@ -67,16 +67,9 @@ def look_from_keywords(look: Look | None, keywords: dict, where: str = "render_i
 
 
 def as_scene(scene, params=None, *, up: str = "y", wind=None, parts=None):
-    """``scene`` if it is a :class:`~axialdeform.core.scene.Scene`, else
-    :meth:`Scene.single` of the mesh ``scene`` and ``params``."""
-
-    if isinstance(scene, Scene):
-        if params is not None:
-            raise ArgumentError("params: a Scene carries its own instances; expected no params beside it")
-        return scene
-    if params is None:
-        raise ArgumentError("params: expected the instances ((n, 16) float32) beside a mesh, or a Scene")
-    return Scene.single(scene, params, up=up, wind=wind, parts=parts)
+    """:meth:`Scene.of`: ``scene`` if it is a :class:`~axialdeform.core.scene.Scene`, else a scene
+    file read or :meth:`Scene.single` of the mesh ``scene`` and ``params``."""
+    return Scene.of(scene, params, up=up, wind=wind, parts=parts)
 
 
 def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Look | None = None,
