@@ -213,7 +213,7 @@ class InstanceBuffer:
         check_alive(ctx, "a new InstanceBuffer")
         self.ctx = ctx
         self.quantized = bool(quantized)
-        values = as_params(np.zeros((0, 16)) if params is None else params)
+        values = as_params(np.zeros((0, WIDTH)) if params is None else params)
         self.extended = is_extended(values) if extended is None else bool(extended)
         self.columns = EXTENDED_WIDTH if self.extended else WIDTH
         if self.extended:

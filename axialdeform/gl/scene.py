@@ -13,7 +13,7 @@ from .renderer import AxialRenderer
 
 __all__ = ["SceneRenderer", "scene_camera", "TERRAIN_INSTANCE"]
 
-TERRAIN_INSTANCE = np.zeros((1, 16), dtype=np.float32)
+TERRAIN_INSTANCE = np.zeros((1, WIDTH), dtype=np.float32)
 
 
 def scene_camera(scene, aspect: float, *, margin: float = 0.03) -> Camera:
