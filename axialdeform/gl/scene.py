@@ -9,6 +9,7 @@ import numpy as np
 from ..core.bounds import instance_bounds, outline_points
 from ..core.camera import UP_VECTORS, Camera, camera_for_points
 from ..core.errors import SceneError
+from ..core.record import WIDTH
 from .renderer import AxialRenderer
 
 __all__ = ["SceneRenderer", "scene_camera", "TERRAIN_INSTANCE"]
