@@ -60,6 +60,7 @@ naming the file, the line and the key.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,11 +70,14 @@ import numpy as np
 
 from .camera import CameraSpec
 from .errors import ArgumentError, SceneError
-from .io.mesh import load_mesh
-from .io.scene import read_scene
+from .io.mesh import axes_argument, load_mesh
+from .io.params import read_params
+from .io.scene import LayerRecipe, SceneRecipe, parse_scene
 from .look import DEFAULT_LOOK, Look
-from .mesh import BaseMesh
+from .mesh import BaseMesh, area_weighted_normals
 from .params import as_params
+from .scatter import scatter
+from .surface import load_surface
 
 __all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
 
@@ -212,12 +216,78 @@ class Scene:
 
 
 def load_scene(path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:
-    """Read, check and resolve a scene file (:meth:`Scene.load`): meshes
-    loaded, parameters read or scattered.
+    """Read, check and resolve a scene file (:meth:`Scene.load`): the file parsed
+    (:func:`axialdeform.core.io.scene.parse_scene`), then its meshes loaded, its
+    parameters read or scattered.
 
     scale_counts : multiply every scatter recipe's ``count`` (e.g. 0.1 for a quick preview).
     """
 
-    return read_scene(path, Scene, scale_counts=scale_counts)
+    return build_scene(parse_scene(path), scale_counts=scale_counts)
+
+
+def build_scene(recipe: SceneRecipe, scene_type: type = Scene, *, scale_counts: float = 1.0) -> Scene:
+    """A :class:`Scene` from a parsed scene file: the terrain's surface and mesh made, each layer's
+    mesh loaded (its axis frame, its axes), its instances read or scattered.  What fails is a
+    :class:`SceneError` naming the file, line and key of what asked for it."""
+    scene = scene_type(path=recipe.path, up=recipe.up, camera=recipe.camera, look=recipe.look or DEFAULT_LOOK,
+                       wind=recipe.wind)
+    if recipe.terrain_color is not None:
+        scene.terrain_color = recipe.terrain_color
+    surface = None
+    if recipe.terrain is not None:
+        t = recipe.terrain
+        with t.src.wrap(t.kind, "terrain", 0):
+            surface = load_surface(t.file, up=scene.up, height_scale=t.height_scale, extent=t.extent)
+        # the drawing copy: float32 positions and normals; the uint32 faces are the surface's own (shared); a
+        # height map's wireframe edges are the grid's (made when drawn, without a search)
+        v, f = surface.vertices, surface.faces
+        scene.terrain = BaseMesh(v, area_weighted_normals(v, f), f, name=str(t.file), grid=surface.grid)
+    for layer in recipe.layers:
+        scene.layers.append(_build_layer(layer, scene, surface, scale_counts))
+    scene.sources = list(recipe.sources)
+    return scene
+
+
+def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float) -> Layer:
+    src, nth = recipe.src, recipe.nth
+    with src.wrap("mesh", "layer", nth):
+        mesh = load_mesh(recipe.mesh)
+    with src.wrap("axis", "layer", nth):
+        mesh = mesh.with_axis(recipe.frame)
+    if recipe.axes is not None:
+        with src.wrap("axes", "layer", nth):
+            mesh = mesh.with_axes(axes_argument(recipe.axes), recipe.frame)
+    lift = None
+    if recipe.params is not None:
+        with src.wrap("params", "layer", nth):
+            params = read_params(recipe.params, mesh)
+    else:
+        params, lift = _scatter(recipe, mesh, scene, surface, scale_counts)
+    return scene.layer_type(name=recipe.name, mesh=mesh, params=params, color=recipe.color, wind=recipe.wind,
+                            lift=lift)
+
+
+def _scatter(recipe: LayerRecipe, mesh, scene: Scene, surface, scale_counts: float):
+    """A scatter recipe's instances (and the heights its ``lift`` added, or None)."""
+    src, nth, sc = recipe.src, recipe.nth, recipe.scatter
+    count = max(1, int(round(sc.count * scale_counts))) if sc.count else 0
+    options = dict(sc.options)
+    if "min_distance" in options and scale_counts < 1:
+        options["min_distance"] /= math.sqrt(scale_counts)  # a preview keeps the look: fewer, further apart
+    if sc.surface is not None:
+        with src.wrap("surface", "layer", nth):
+            surface = load_surface(sc.surface, up=scene.up)
+    with src.wrap("scatter", "layer", nth):
+        params = scatter(surface, mesh, count, up=scene.up, **options)
+    lo, hi = sc.lift
+    if not (lo or hi):
+        return params, None
+    rng = np.random.Generator(np.random.PCG64(int(options.get("seed", 0)) + 7919))
+    up_i = "xyz".index(scene.up)
+    params = params.copy()
+    added = (lo + (hi - lo) * rng.random(len(params))).astype(np.float32)
+    params[:, 10 + up_i] += added
+    return params, added
 
 

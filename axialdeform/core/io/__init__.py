@@ -20,7 +20,7 @@ _NAMES = {
     "parse_text": "params", "format_text": "params", "encode_binary": "params", "decode_binary": "params",
     "quantize_params": "params", "dequantize_params": "params",
     "export_glb": "gltf", "export_instanced": "gltf", "export_baked": "gltf", "export_scene": "gltf",
-    "read_instanced_glb": "gltf", "read_scene": "scene", "write_mesh_folder": "bake", "write_npz": "bake",
+    "read_instanced_glb": "gltf", "parse_scene": "scene", "write_mesh_folder": "bake", "write_npz": "bake",
     "save_png": "image", "read_regular": "safeio", "atomic_path": "atomic",
 }
 

@@ -1,6 +1,12 @@
-"""Scene files (TOML, ``tomllib``; ``tomli`` on Python 3.10): the reader.
+"""Scene files (TOML, ``tomllib``; ``tomli`` on Python 3.10): the parser.
 The format is described in :mod:`axialdeform.core.scene`; errors are
-:class:`SceneError` naming the file, the line and the key."""
+:class:`SceneError` naming the file, the line and the key.
+
+:func:`parse_scene` reads and checks a file and its includes into a :class:`SceneRecipe`: every
+key, type and number checked, every file it names found, the light, camera and wind made; no mesh,
+surface or parameter file is read and nothing is scattered here -- :func:`axialdeform.core.scene.load_scene`
+builds the scene from the recipe, and names the file, line and key of what fails there through
+each recipe's :meth:`SceneSource.wrap`."""
 
 from __future__ import annotations
 
@@ -8,6 +14,7 @@ import math
 import os
 import re
 import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -15,16 +22,14 @@ import numpy as np
 from ..camera import CameraSpec
 from ..errors import AxialDeformError, SceneError
 from ..look import Look
-from ..mesh import BaseMesh, area_weighted_normals
-from ..scatter import ANCHORS, scatter
-from ..surface import load_surface
+from ..scatter import ANCHORS
 from ..wind import Wind
 from . import safeio
-from .mesh import BUNDLED_MESHES, axes_argument, load_mesh, mesh_source_path
-from .params import read_params
+from .mesh import BUNDLED_MESHES, mesh_source_path
 from .safeio import read_regular
 
-__all__ = ['read_scene']
+__all__ = ["parse_scene", "SceneRecipe", "LayerRecipe", "ScatterRecipe", "TerrainRecipe", "SceneSource",
+           "MAX_INCLUDE_DEPTH"]
 
 
 _TOP = {"up", "include", "terrain", "camera", "light", "wind", "layer", "background"}
@@ -49,7 +54,7 @@ _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "sc
             "allow_fewer", "lift", "surface"}
 
 
-class _Source:
+class SceneSource:
     """A scene file's text, to find the line of a key for messages."""
 
     def __init__(self, path: Path, text: str, sources: list | None = None) -> None:
@@ -74,6 +79,63 @@ class _Source:
 
     def error(self, message: str, key: str, table: str | None = None, nth: int = 0) -> SceneError:
         return SceneError(f"{self.path}:{self.line(key, table, nth)}: key '{key}': {message}")
+
+    def wrap(self, key: str, table: str | None = None, nth: int = 0):
+        """Context: re-raise a library error from building as a SceneError with file, line and key."""
+        return _wrap(self, key, table, nth)
+
+
+@dataclass
+class TerrainRecipe:
+    """``[terrain]``: a mesh or a height map (``kind``), checked, not read."""
+
+    src: SceneSource
+    kind: str  # "mesh" or "heightmap"
+    file: Path
+    height_scale: float = 1.0
+    extent: list | None = None
+
+
+@dataclass
+class ScatterRecipe:
+    """``[layer.scatter]``: :func:`axialdeform.scatter`'s arguments, checked."""
+
+    count: int
+    options: dict  # min_distance, align_to_normal, bend, scale, anchor, seed, allow_fewer, density (a Path)
+    surface: Path | None  # its own surface (None: the scene's terrain)
+    lift: tuple = (0.0, 0.0)
+
+
+@dataclass
+class LayerRecipe:
+    """One ``[[layer]]``, checked: what to load and how to make its instances."""
+
+    src: SceneSource
+    nth: int
+    name: str
+    mesh: str | Path  # a bundled name or a file
+    frame: object = "auto"
+    axes: object = None  # None, "parts", a file or an inline list
+    color: tuple | None = None
+    wind: bool = False
+    params: Path | None = None
+    scatter: ScatterRecipe | None = None
+
+
+@dataclass
+class SceneRecipe:
+    """A scene file and its includes, parsed and checked (:func:`parse_scene`)."""
+
+    path: Path
+    up: str = "y"
+    camera: CameraSpec = field(default_factory=CameraSpec)
+    look: Look | None = None
+    wind: Wind | None = None
+    terrain: TerrainRecipe | None = None
+    terrain_color: tuple | None = None
+    layers: list = field(default_factory=list)
+    #: every file the scene reads (the scene file, includes, meshes, parameters, images)
+    sources: list = field(default_factory=list)
 
 
 #: the deepest chain of includes a scene file may have (a -> b -> c ... is 3)
@@ -102,10 +164,10 @@ def _load_toml(path: Path, sources: list | None = None):
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
     except RecursionError:  # arrays or tables nested hundreds deep: tomllib recurses
         raise SceneError(f"{path}: not a scene file: values nested too deep to read") from None
-    return data, _Source(path, text, sources)
+    return data, SceneSource(path, text, sources)
 
 
-def _check_keys(src: _Source, table: dict, allowed: set, where: str, name: str | None, nth: int = 0) -> None:
+def _check_keys(src: SceneSource, table: dict, allowed: set, where: str, name: str | None, nth: int = 0) -> None:
     for key in table:
         if key not in allowed:
             raise src.error(f"unknown key in {where}; expected one of {', '.join(sorted(allowed))}", key, name, nth)
@@ -121,7 +183,7 @@ def _numbers(src, value, key, table, nth, count: tuple, *, positive=False):
     return [float(v) for v in vals]
 
 
-def _path(src: _Source, value, key, table, nth) -> Path:
+def _path(src: SceneSource, value, key, table, nth) -> Path:
     if not isinstance(value, str) or not value:
         raise src.error(f"expected a file name (a string), found {value!r}", key, table, nth)
     path = Path(value)
@@ -151,16 +213,12 @@ def _wrap(src, key, table, nth):
     return _Ctx()
 
 
-def read_scene(path: str | os.PathLike, scene_type, *, scale_counts: float = 1.0):
-    """Read, check and resolve a scene file: meshes loaded, parameters read or
-    scattered, into a new ``scene_type`` (:class:`axialdeform.Scene`; its
-    ``layer_type`` makes the layers).  Use :meth:`axialdeform.Scene.load`.
-
-    scale_counts : multiply every scatter recipe's ``count`` (e.g. 0.1 for a quick preview).
-    """
+def parse_scene(path: str | os.PathLike) -> SceneRecipe:
+    """Read and check a scene file and its includes (see the module docstring): a
+    :class:`SceneRecipe` that :func:`axialdeform.core.scene.load_scene` builds."""
     path = Path(path)
     data, src = _load_toml(path)
-    scene = scene_type(path=path)
+    scene = SceneRecipe(path=path)
     _check_keys(src, data, _TOP, "the scene", None)
     up = data.get("up", "y")
     if up not in ("x", "y", "z"):
@@ -171,7 +229,7 @@ def read_scene(path: str | os.PathLike, scene_type, *, scale_counts: float = 1.0
             raise src.error("expected a table", key, None, 0)
         _check_keys(src, data.get(key, {}), allowed, f"[{key}]", key)
     _read_view(src, data, scene)
-    surface = _read_terrain(src, data.get("terrain"), scene)
+    scene.terrain = _read_terrain(src, data.get("terrain"), scene)
     if "wind" in data:
 
         w = data["wind"]
@@ -179,7 +237,7 @@ def read_scene(path: str | os.PathLike, scene_type, *, scale_counts: float = 1.0
                       _numbers(src, v, k, "wind", 0, (1,))[0]) for k, v in w.items()}
         with _wrap(src, next(iter(w), "wind"), "wind", 0):
             scene.wind = Wind(**kwargs)
-    _read_layers(src, data, scene, surface, scale_counts, stack=(path.resolve(),))
+    _read_layers(src, data, scene, stack=(path.resolve(),))
     scene.sources = list(dict.fromkeys(src.sources))
     return scene
 
@@ -203,17 +261,17 @@ def _read_view(src, data, scene) -> None:
         lo["light_dir"] = tuple(_numbers(src, light["direction"], "direction", "light", 0, (3,)))
     if "ambient" in light:
         lo["ambient"] = _numbers(src, light["ambient"], "ambient", "light", 0, (1,))[0]
-    for key, field in (("color", "light_color"), ("sky", "sky_color"), ("ground", "ground_color")):
+    for key, name in (("color", "light_color"), ("sky", "sky_color"), ("ground", "ground_color")):
         if key in light:  # the fields of axialdeform.Look
-            lo[field] = tuple(_numbers(src, light[key], key, "light", 0, (3,)))
+            lo[name] = tuple(_numbers(src, light[key], key, "light", 0, (3,)))
     if "background" in data:
         lo["background"] = tuple(_numbers(src, data["background"], "background", None, 0, (3,)))
     with _wrap(src, next(iter(light), "light"), "light", 0):
         scene.look = Look(**lo)
 
 
-def _read_terrain(src, terrain, scene):
-    """The terrain's Surface (or None); sets ``scene.terrain`` to a BaseMesh of it."""
+def _read_terrain(src, terrain, scene) -> TerrainRecipe | None:
+    """``[terrain]`` checked (its colour set on the recipe); None without one."""
     if not terrain:
         return None
 
@@ -227,16 +285,10 @@ def _read_terrain(src, terrain, scene):
         extent = _numbers(src, extent, "extent", "terrain", 0, (1, 2), positive=True)
     if "color" in terrain:
         scene.terrain_color = tuple(_numbers(src, terrain["color"], "color", "terrain", 0, (3,)))
-    with _wrap(src, key, "terrain", 0):
-        surface = load_surface(file, up=scene.up, height_scale=hs, extent=extent)
-    # the drawing copy: float32 positions and normals; the uint32 faces are the surface's own (shared)
-    v, f = surface.vertices, surface.faces
-    # a height map: its wireframe's edges are the grid's (made when drawn, without a search)
-    scene.terrain = BaseMesh(v, area_weighted_normals(v, f), f, name=str(file), grid=surface.grid)
-    return surface
+    return TerrainRecipe(src, key, file, hs, extent)
 
 
-def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
+def _read_layers(src, data, scene, stack) -> None:
     includes = data.get("include", [])
     if isinstance(includes, str):
         includes = [includes]
@@ -252,7 +304,7 @@ def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
                             "include", None, 0)
         sub, sub_src = _load_toml(inc, src.sources)
         _check_keys(sub_src, sub, _TOP, "the scene", None)
-        _read_layers(sub_src, sub, scene, surface, scale_counts, (*stack, inc.resolve()))
+        _read_layers(sub_src, sub, scene, (*stack, inc.resolve()))
     layers = data.get("layer", [])
     if not isinstance(layers, list):
         raise src.error("expected [[layer]] tables", "layer", None, 0)
@@ -266,10 +318,10 @@ def _read_layers(src, data, scene, surface, scale_counts, stack) -> None:
         name = layer.get("name", f"layer{len(scene.layers) + 1}")
         if any(done.name == name for done in scene.layers):
             raise src.error(f"a second layer named {name!r}; expected unique layer names", "name", "layer", nth)
-        scene.layers.append(_read_layer(src, layer, nth, scene, surface, scale_counts, name))
+        scene.layers.append(_read_layer(src, layer, nth, scene, name))
 
 
-def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
+def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
     _check_keys(src, layer, _LAYER, f"layer {nth + 1}", "layer", nth)
     if "mesh" not in layer:
         raise src.error("every layer needs a mesh (a file or 'stone' / 'leaf')", "layer", "layer", nth)
@@ -284,14 +336,12 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
             isinstance(row, list) for row in frame) and len(frame) == 3 else frame
         frame = np.reshape(_numbers(src, flat, "axis", "layer", nth, (9,)), (3, 3))
 
-    with _wrap(src, "mesh", "layer", nth):
-        if isinstance(mesh_value, str) and mesh_value in BUNDLED_MESHES:
-            mesh = load_mesh(mesh_value)
-            src.sources.append(mesh_source_path(mesh_value))
-        else:
-            mesh = load_mesh(_existing(src, mesh_value, "mesh", "layer", nth))
-    with _wrap(src, "axis", "layer", nth):
-        mesh = mesh.with_axis(frame)
+    if isinstance(mesh_value, str) and mesh_value in BUNDLED_MESHES:
+        mesh = mesh_value
+        src.sources.append(mesh_source_path(mesh_value))
+    else:
+        mesh = _existing(src, mesh_value, "mesh", "layer", nth)
+    axes = None
     if "axes" in layer:  # several axes: "parts", a TOML file of [[axis]] tables, or an inline array of tables
         axes = layer["axes"]
         if isinstance(axes, str) and axes != "parts":
@@ -299,8 +349,6 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
         elif not (axes == "parts" or isinstance(axes, list)):
             raise src.error(f"expected 'parts', a file name or an array of {{part, parent, axis}} tables, "
                             f"found {axes!r}", "axes", "layer", nth)
-        with _wrap(src, "axes", "layer", nth):
-            mesh = mesh.with_axes(axes_argument(axes), frame)
     color = tuple(_numbers(src, layer["color"], "color", "layer", nth, (3,))) if "color" in layer else None
     wind = layer.get("wind", False)
     if not isinstance(wind, bool):
@@ -308,17 +356,15 @@ def _read_layer(src, layer, nth, scene, surface, scale_counts, default_name):
     if ("params" in layer) == ("scatter" in layer):
         raise src.error("expected exactly one of 'params' (a parameter file) or a [layer.scatter] recipe",
                         "mesh", "layer", nth)
+    recipe = LayerRecipe(src, nth, name, mesh, frame, axes, color, wind)
     if "params" in layer:
-        file = _existing(src, layer["params"], "params", "layer", nth)
-        with _wrap(src, "params", "layer", nth):
-            params = read_params(file, mesh)
+        recipe.params = _existing(src, layer["params"], "params", "layer", nth)
     else:
-        params, lift = _scatter_layer(src, layer["scatter"], nth, mesh, scene, surface, scale_counts)
-        return scene.layer_type(name=name, mesh=mesh, params=params, color=color, wind=wind, lift=lift)
-    return scene.layer_type(name=name, mesh=mesh, params=params, color=color, wind=wind)
+        recipe.scatter = _scatter_layer(src, layer["scatter"], nth, scene)
+    return recipe
 
 
-def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.ndarray:
+def _scatter_layer(src, recipe, nth, scene) -> ScatterRecipe:
     if not isinstance(recipe, dict):
         raise src.error("expected a table [layer.scatter]", "scatter", "layer", nth)
     _check_keys(src, recipe, _SCATTER, f"layer {nth + 1} scatter", "layer", nth)
@@ -327,7 +373,6 @@ def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.n
     count = recipe["count"]
     if not isinstance(count, int) or isinstance(count, bool) or count < 0:
         raise src.error(f"expected a whole number >= 0, found {count!r}", "count", "layer", nth)
-    count = max(1, int(round(count * scale_counts))) if count else 0
     kwargs = {}
     for key in ("min_distance", "align_to_normal", "bend"):
         if key in recipe:
@@ -335,8 +380,6 @@ def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.n
                 kwargs[key] = tuple(_numbers(src, recipe[key], key, "layer", nth, tuple(range(1, 9))))
             else:
                 kwargs[key] = _numbers(src, recipe[key], key, "layer", nth, (1,))[0]
-    if "min_distance" in kwargs and scale_counts < 1:
-        kwargs["min_distance"] /= math.sqrt(scale_counts)  # a preview keeps the look: fewer, further apart
     if "scale" in recipe:
         kwargs["scale"] = tuple(_numbers(src, recipe["scale"], "scale", "layer", nth, (1, 2), positive=True) * 2)[:2]
     for key, kind, what in (("anchor", str, "a string"), ("seed", int, "a whole number"),
@@ -350,21 +393,8 @@ def _scatter_layer(src, recipe, nth, mesh, scene, surface, scale_counts) -> np.n
         raise src.error(f"expected one of {', '.join(ANCHORS)}, found {kwargs['anchor']!r}", "anchor", "layer", nth)
     if "density" in recipe:
         kwargs["density"] = _existing(src, recipe["density"], "density", "layer", nth)
-    where = surface
-    if "surface" in recipe:
-        with _wrap(src, "surface", "layer", nth):
-            where = load_surface(_existing(src, recipe["surface"], "surface", "layer", nth), up=scene.up)
-    if where is None:
+    surface = _existing(src, recipe["surface"], "surface", "layer", nth) if "surface" in recipe else None
+    if surface is None and scene.terrain is None:
         raise src.error("a scatter recipe needs a [terrain] in the scene or a 'surface' key", "scatter", "layer", nth)
     lift = _numbers(src, recipe.get("lift", [0.0, 0.0]), "lift", "layer", nth, (1, 2))
-    with _wrap(src, "scatter", "layer", nth):
-        params = scatter(where, mesh, count, up=scene.up, **kwargs)
-    if not any(lift):
-        return params, None
-    lo, hi = lift[0], lift[-1]
-    rng = np.random.Generator(np.random.PCG64(int(kwargs.get("seed", 0)) + 7919))
-    up_i = "xyz".index(scene.up)
-    params = params.copy()
-    added = (lo + (hi - lo) * rng.random(len(params))).astype(np.float32)
-    params[:, 10 + up_i] += added
-    return params, added
+    return ScatterRecipe(count, kwargs, surface, (lift[0], lift[-1]))
