@@ -9,6 +9,24 @@
 
 uniform mat4 u_view;        // pyrr layout, uploaded as-is: clip = u_proj * u_view * world
 uniform mat4 u_proj;
+#ifdef AXIAL_THREE
+// the web page: the axis and the wind are the npm module's uniforms (js/src/mesh.js, wind.js), by
+// its names and from its mesh: one naming of them in JavaScript
+#define u_frame axialFrame
+#define u_lo axialLo
+#define u_len axialLen
+#define u_center axialCenter
+#define u_axes_frame axialFrames
+#define u_axes_lo axialLos
+#define u_axes_len axialLens
+#define u_axes_parent axialParents
+#define u_axes_offsets axialChildren
+#define u_wind_strength axialWindStrength
+#define u_wind_dir axialWindDir
+#define u_wind_gust axialWindGust
+#define u_wind_cycles axialWindCycles
+#define u_wind_wavenumber axialWindWavenumber
+#endif
 #ifdef AXIAL_FRAME
 uniform mat3 u_frame;       // a chosen axis frame: u_frame * v = local coordinates (axis first)
 #define AXIAL_AXIS u_frame

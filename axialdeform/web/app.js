@@ -85,11 +85,6 @@ export function pageOptions(search) {
 }
 
 /** The wind's two cycles at time t, as axialdeform.core.wind.Wind.cycles. */
-function windCycles(w, t) {
-  const frac = (x) => ((x % 1) + 1) % 1;
-  return [frac(w.frequency * t), frac(w.harmonic * w.frequency * t)];
-}
-
 /**
  * Draw the scene into `root`.
  * scene = {config, files: {name: ArrayBuffer}} (every layer's GLB and .adp),
@@ -146,8 +141,11 @@ export function mount(root, lib, scene, options = {}) {
     u_light_color: { value: v3(cfg.look.light_color) }, u_sky_color: { value: v3(cfg.look.sky_color) },
     u_bounce_color: { value: v3(cfg.look.ground_color) }, u_up: { value: v3(cfg.up) },
     u_ambient: { value: cfg.look.ambient }, u_instance_base: { value: 0 },
-    u_wind_dir: { value: v3(wind ? wind.direction : [1, 0, 0]) }, u_wind_gust: { value: wind ? wind.gustiness : 0 },
-    u_wind_cycles: { value: new THREE.Vector2() }, u_wind_wavenumber: { value: wind ? wind.wavenumber : 0 },
+  };
+  // a layer without wind: the module's wind uniforms, still (a windy layer's are its mesh's, setWind)
+  const still = {
+    axialWindStrength: { value: 0 }, axialWindDir: { value: new THREE.Vector3(1, 0, 0) }, axialWindGust: { value: 0 },
+    axialWindCycles: { value: new THREE.Vector2() }, axialWindWavenumber: { value: 0 },
   };
 
   function showError(err) {
@@ -212,15 +210,13 @@ export function mount(root, lib, scene, options = {}) {
     const key = variant(layer, p);
     const materials = makeMaterials(layer, key);
     const mesh = new AxialInstancedMesh(layer.geometry, materials, p, { axis: layer.axisSpec, ownShader: true });
-    if (layer.cfg.mesh.axes) { // the child axes' offsets: the module's texture, the shader's u_axes_offsets
-      materials.forEach((m) => { m.uniforms.u_axes_offsets = mesh.axialUniforms.axialChildren; });
-    }
-    // the module's bounds hold every bent instance, so three culls right; with the layer's wind they
-    // grow by its reach (the page's shaders sway the instances from their own uniforms)
+    // the module's wind (its bounds grow by the wind's reach, so three culls right)
     if (wind && layer.cfg.wind) {
       mesh.setWind({ direction: wind.direction, strength: wind.strength, gustiness: wind.gustiness,
         frequency: wind.frequency, wavelength: wind.wavenumber > 0 ? 1 / wind.wavenumber : 0 });
     }
+    // the axis (frame, lo, L, centre; a tree's axes and offsets texture) and the wind: the mesh's uniforms
+    materials.forEach((m) => Object.assign(m.uniforms, still, mesh.axialUniforms));
     mesh.renderOrder = layer.order;
     const old = layer.mesh;
     layer.mesh = mesh;
@@ -287,19 +283,9 @@ export function mount(root, lib, scene, options = {}) {
     // the control axis, as the module takes it (the same numbers as the uniforms below)
     layer.axisSpec = { axis: { index: lc.mesh.axis, frame: lc.mesh.frame, lo: lc.mesh.lo, length: lc.mesh.length,
       center: lc.mesh.center }, axes: lc.mesh.axes || null };
-    layer.uniforms = {
-      u_axis: { value: lc.mesh.axis }, u_lo: { value: lc.mesh.lo }, u_len: { value: lc.mesh.length },
-      // a chosen axis frame: u_frame * v = F v (Matrix3.set takes rows)
-      u_frame: { value: lc.mesh.frame ? new THREE.Matrix3().set(...lc.mesh.frame.flat()) : new THREE.Matrix3() },
-      u_center: { value: new THREE.Vector2().fromArray(lc.mesh.center) },
-      // several axes: every axis's frame (Matrix3.set takes rows), lo, L, parent, and the offsets texture
-      u_axes_frame: { value: lc.mesh.axes ? lc.mesh.axes.frames.map((f) => new THREE.Matrix3().set(...f.flat())) : [] },
-      u_axes_lo: { value: lc.mesh.axes ? lc.mesh.axes.lo : [] },
-      u_axes_len: { value: lc.mesh.axes ? lc.mesh.axes.length : [] },
-      u_axes_parent: { value: lc.mesh.axes ? new Int32Array(lc.mesh.axes.parents) : [] },
-      u_axes_offsets: { value: null }, // the module's texture (apply)
-      u_color: { value: v3(lc.color) }, u_wind_strength: { value: wind && lc.wind ? wind.strength : 0.0 },
-    };
+    // the page's own: the axis as an index (its axis-aligned builds) and the colour; the rest of the
+    // axis and the wind are the module mesh's uniforms (apply)
+    layer.uniforms = { u_axis: { value: lc.mesh.axis }, u_color: { value: v3(lc.color) } };
     return { layer, p };
   }
 
@@ -401,7 +387,7 @@ export function mount(root, lib, scene, options = {}) {
       controls.update();
       if (wind) {
         const t = frozen !== undefined ? frozen : (performance.now() - t0) / 1000;
-        shared.u_wind_cycles.value.fromArray(windCycles(wind, t));
+        for (const l of layers) if (l.mesh && l.cfg.wind) l.mesh.setTime(t); // the module's clock: its uniforms
       }
       renderer.render(world, camera);
       frames += 1;
