@@ -46,7 +46,19 @@ class CameraSpec:
 
 
 class Camera:
-    """A perspective camera: eye, target, up, vertical field of view (degrees)."""
+    """A perspective camera: eye, target, up, vertical field of view (degrees).
+
+    Parameters
+    ----------
+    eye, target : (3,) float
+        Where it stands and what it looks at, world units.
+    up : (3,) float
+        The world's up as the picture shows it.
+    fovy : float
+        Vertical field of view, degrees (default :data:`FOVY`).
+    near, far : float
+        The clipping planes' distances.
+    """
 
     def __init__(self, eye, target, up=(0.0, 1.0, 0.0), fovy: float = FOVY, near: float = 0.01, far: float = 100.0):
         self.eye = as_array(eye, (3,), "eye")
@@ -234,12 +246,25 @@ def _point_sets(points, radii) -> list[tuple[np.ndarray, np.ndarray]]:
 
 def frame_instances(mesh, params, aspect: float, up: str = "y", fovy: float = FOVY,
                     azimuth: float = AZIMUTH, elevation: float = ELEVATION, margin: float = 0.03) -> Camera:
-    """A camera that sees every instance and fills the picture, looking down
-    at ``elevation`` degrees.
+    """A camera that sees every instance and fills the picture, looking down at ``elevation`` degrees.
 
-    The deformed instances' outline (:func:`axialdeform.core.bounds.outline_points`)
-    is centred and the eye placed just far enough that it fits the picture's
-    width or height less ``margin`` (a fraction of the field of view).
+    Parameters
+    ----------
+    mesh : BaseMesh
+    params : (n, 16|19|22) float32
+    aspect : float
+        The picture's width / height.
+    up : {"x", "y", "z"}
+    fovy, azimuth, elevation : float
+        Degrees (defaults :data:`FOVY`, :data:`AZIMUTH`, :data:`ELEVATION`).
+    margin : float
+        A fraction of the field of view left free at the edges.
+
+    Returns
+    -------
+    Camera
+        The deformed instances' outline (:func:`axialdeform.core.bounds.outline_points`) centred and
+        the eye placed just far enough that it fits the picture's width or height.
     """
     points, radii = outline_points(mesh, params)
     return camera_for_points(points, radii, aspect, up, fovy, azimuth, elevation, margin)

@@ -202,16 +202,27 @@ def deform(
 ) -> tuple[np.ndarray, np.ndarray]:
     """World-space positions and normals of every instance (the CPU reference).
 
-    Called as ``deform(mesh, params)`` with a :class:`~axialdeform.core.mesh.BaseMesh`
-    (its axis frame included), or ``deform(axis, positions, normals, params)``.
+    Called as ``deform(mesh, params)`` with a :class:`~axialdeform.core.mesh.BaseMesh` (its axis
+    frame and axes included), or ``deform(axis, positions, normals, params)``.
 
-    axis : ControlAxis of the base mesh.
-    positions, normals : (v, 3) float — base mesh, file vertex order.
-    params : (n, 16) float — the 16 numbers per instance, or (n, 19):
-        extended instances (scale, twist, taper; :func:`deform_local_extended`).
-    progress : optional object with ``update(instances_done)`` (a tqdm bar).
-    Returns ``W = R·V' + p`` and ``R·n'`` (extended: ``W = R·(s·V'') + p``
-    and ``R·n''``), each (n, v, 3) float32.
+    Parameters
+    ----------
+    axis : ControlAxis or BaseMesh
+        The base mesh's control axis (or the mesh itself).
+    positions, normals : (v, 3) float
+        The base mesh, file vertex order (or, for a mesh, ``params`` in their place).
+    params : (n, 16) float
+        The 16 numbers per instance, or (n, 19): extended instances (scale, twist, taper;
+        :func:`deform_local_extended`).
+    chunk_vertices : int
+        Instances are done in pieces of about this many vertices (bounded memory).
+    progress : object, optional
+        With ``update(instances_done)`` (a tqdm bar).
+
+    Returns
+    -------
+    positions, normals : (n, v, 3) float32
+        ``W = R·V' + p`` and ``R·n'`` (extended: ``W = R·(s·V'') + p`` and ``R·n''``).
     """
     if not isinstance(axis, ControlAxis):  # deform(mesh, params)
         mesh = axis

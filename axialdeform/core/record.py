@@ -245,20 +245,29 @@ def tint_columns(values) -> np.ndarray | None:
 
 
 class Instances(np.ndarray):
-    """An ``(n, 16)`` or ``(n, 19)`` float32 parameter array with named views.
+    """An ``(n, 16|19|22)`` float32 parameter array with named views.
 
-    A plain :class:`numpy.ndarray` in every other way (``params[:, 10:13]``
-    still works); the views share memory with it, so writing to them
-    changes the instances::
+    A plain :class:`numpy.ndarray` in every other way (``params[:, 10:13]`` still works); the views
+    share memory with it, so writing to them changes the instances::
 
         params = ad.random_params(mesh, 100)
         params.position[:, 1] += 0.5        # lift every instance
         params.offsets[:, 4] *= 2.0         # bend the tip (d5) twice as far
         params.rotation                     # (n, 3) radians
 
-    ``offsets`` is ``(n, 5, 2)``; ``position`` and ``rotation`` ``(n, 3)``;
-    ``scale``, ``twist`` and ``taper`` ``(n,)`` (extended instances only);
-    ``tint`` ``(n, 3)`` (tinted instances only).
+    Make one with :meth:`zeros` or :meth:`of` (no copy).
+
+    Attributes
+    ----------
+    offsets : (n, 5, 2) float32
+        The five control-point offsets.
+    position : (n, 3) float32
+    rotation : (n, 3) float32
+        Radians about fixed X, then Y, then Z.
+    scale, twist, taper : (n,) float32
+        Extended instances only.
+    tint : (n, 3) float32
+        Tinted instances only.
     """
 
     @classmethod

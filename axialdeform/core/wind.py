@@ -46,11 +46,18 @@ SECOND_HARMONIC = 2.31
 class Wind:
     """A wind, the same on CPU and GPU.
 
-    direction : (3,) world direction (normalized on creation).
-    strength : tip displacement as a fraction of the axis length ``L`` (>= 0).
-    gustiness : how much the displacement swings around its mean (>= 0; 0 = a steady lean).
-    frequency : gust cycles per second (>= 0).
-    wavelength : distance between gust fronts in world units (> 0), or 0 for none.
+    Parameters
+    ----------
+    direction : (3,) float
+        World direction (normalized on creation).
+    strength : float
+        Tip displacement as a fraction of the axis length ``L`` (>= 0).
+    gustiness : float
+        How much the displacement swings around its mean (>= 0; 0 = a steady lean).
+    frequency : float
+        Gust cycles per second (>= 0).
+    wavelength : float
+        Distance between gust fronts in world units (> 0), or 0 for none.
     """
 
     direction: tuple = (1.0, 0.0, 0.0)

@@ -25,16 +25,32 @@ ENGINES = ("cpu", "gpu")
 
 def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: str | None = None,
          options: RenderOptions | None = None, **fields) -> tuple[np.ndarray, np.ndarray]:
-    """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
-    in the base mesh's vertex order.  ``engine`` is ``"cpu"`` (numpy reference)
-    or ``"gpu"`` (transform feedback of the drawing vertex shader; in ``ctx``,
-    or in a context made and released here).
-    ``params``: (n, 16) or (n, 19) (extended instances).
-    ``options`` (:class:`axialdeform.RenderOptions`) or its fields ``wind`` and ``time``: an
-    :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
-    ``progress``: optional object with ``update(instances_done)`` (a tqdm bar).
-    Counts that cannot fit in memory and non-finite results are refused,
-    naming ``source`` (the parameter file): see :func:`~axialdeform.core.bake.bake_cpu`."""
+    """Every instance bent and placed: world positions and normals in the base mesh's vertex order.
+
+    Parameters
+    ----------
+    mesh : BaseMesh
+    params : (n, 16|19|22) float32
+        The instances (a K-axis mesh: ``10·(K − 1)`` more numbers each).
+    engine : {"cpu", "gpu"}
+        The numpy reference, or transform feedback of the drawing vertex shader (in ``ctx``, or in
+        a context made and released here).
+    ctx : moderngl.Context, optional
+    progress : object, optional
+        With ``update(instances_done)`` (a tqdm bar).
+    source : str, optional
+        The parameter file, named in errors.
+    options : RenderOptions, optional
+        Its ``wind`` (an :class:`axialdeform.Wind`) taken at its ``time`` seconds.
+    **fields
+        ``wind=`` and ``time=`` as keywords.
+
+    Returns
+    -------
+    positions, normals : (n, v, 3) float32
+        Counts that cannot fit in memory and non-finite results are refused, naming ``source``
+        (:func:`~axialdeform.core.bake.bake_cpu`).
+    """
     opts = RenderOptions.of(options, fields, "bake", ("wind", "time"))
     wind, time = opts.wind, opts.time or 0.0
     if engine == "cpu":

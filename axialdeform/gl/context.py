@@ -26,7 +26,15 @@ _HELP = (
 def create_context(backend: str = "egl"):
     """A standalone (windowless) moderngl context, OpenGL 3.3 core or newer.
 
-    Raises :class:`ContextError` saying which system packages provide one.
+    Parameters
+    ----------
+    backend : str
+        moderngl's backend: ``"egl"`` (offscreen, no display needed) by default.
+
+    Returns
+    -------
+    moderngl.Context
+        Raises :class:`ContextError` saying which system packages provide one.
     """
     try:
         import moderngl
@@ -264,11 +272,20 @@ def read_pixels(ctx, fbo, *, resolve: bool | None = None) -> np.ndarray:
 
 
 class Offscreen:
-    """A multisampled colour + depth framebuffer of ``size = (width, height)``
-    pixels, resolved into a plain one for reading back.
+    """A multisampled colour + depth framebuffer, resolved into a plain one for reading back.
 
-    ``use()`` binds it and sets the viewport; ``read()`` returns
-    ``(height, width, 3) uint8`` with the first row at the top.
+    Parameters
+    ----------
+    ctx : moderngl.Context
+    size : (int, int)
+        Width and height in pixels.
+    samples : int
+        Multisampling samples (0 or 1: none; at most ``ctx.max_samples``).
+
+    Notes
+    -----
+    ``use()`` binds it and sets the viewport; ``read()`` returns ``(height, width, 3) uint8`` with
+    the first row at the top.  A context manager: ``release()`` on exit (safe twice).
     """
 
     def __init__(self, ctx, size: tuple[int, int], samples: int = 4):

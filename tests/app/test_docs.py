@@ -51,3 +51,28 @@ def test_the_notebook_cells_run_in_order(tmp_path):
     proc = subprocess.run([sys.executable, "-c", "\n".join(CELLS)], cwd=tmp_path, capture_output=True, text=True,
                           timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]
+
+
+def test_the_products_names_have_numpydoc_sections():
+    """Every function and class of the top level that takes arguments documents them
+    (``Parameters``, or ``Attributes`` for a value object): the API reference reads them."""
+    import inspect
+    import warnings
+
+    import axialdeform as ad
+
+    missing = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name in ad.__all__:
+            obj = getattr(ad, name)
+            if not (inspect.isfunction(obj) or inspect.isclass(obj)):
+                continue
+            try:
+                takes = [p for p in inspect.signature(obj).parameters if p not in ("self", "cls")]
+            except ValueError:  # an exception class: no signature of its own
+                continue
+            doc = inspect.getdoc(obj) or ""
+            if takes and "Parameters\n----------" not in doc and "Attributes\n----------" not in doc:
+                missing.append(name)
+    assert missing == [], missing

@@ -484,8 +484,25 @@ def export_instanced(path: str | os.PathLike, mesh, params) -> Path:
 
 
 def export_glb(path: str | os.PathLike, mesh, params, layout: str = "baked", *, source: str | None = None) -> Path:
-    """Write ``params`` for ``mesh`` as a GLB in ``layout`` ``"baked"`` or ``"instanced"``
-    (``source``: the parameter file, named in errors)."""
+    """Write ``params`` for ``mesh`` as a GLB.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The ``.glb`` to write (atomically).
+    mesh : BaseMesh
+    params : (n, 16|19|22) float32
+    layout : {"baked", "instanced"}
+        Every instance as its own bent mesh, or the base mesh once with ``EXT_mesh_gpu_instancing``
+        and the bend in ``AXIALDEFORM_bend``.
+    source : str, optional
+        The parameter file, named in errors.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     if layout == "baked":
         return export_baked(path, mesh, params, source=source)
     if layout == "instanced":

@@ -96,40 +96,43 @@ def axes_argument(value):
 
 
 def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseMesh:
-    """Read a base mesh from a file, a bundled mesh by name (``"stone"``,
-    ``"leaf"``), or take a ``trimesh.Trimesh`` (or a ``trimesh.Scene`` with one
-    mesh) already in memory.
+    """Read a base mesh.
 
-    A file with several meshes (glTF nodes/primitives, STL bodies, OBJ ``o``
-    objects or ``usemtl`` groups) becomes ONE base mesh with several
-    :attr:`BaseMesh.parts` (node transforms applied, the file's vertex order
-    kept); UVs, vertex colours and materials come along
-    (:mod:`axialdeform.core.material`).
+    Parameters
+    ----------
+    source : str, PathLike, trimesh.Trimesh or trimesh.Scene
+        A file (OBJ, PLY, STL, OFF, glTF/GLB), a bundled mesh by name (``"stone"``, ``"leaf"``,
+        ``"leafcard"``, ``"tree"``), or a mesh already in memory (a scene of one mesh).
+    textures : bool
+        False decodes no texture (for work that neither draws nor writes one: making parameters,
+        fitting, scattering); the parts keep their names and base colours, and the positions,
+        vertex order and fingerprint are those of the same file loaded with its textures.
+    axis : str or (3, 3) float
+        The axis frame (``docs/method.md``, "A chosen axis frame"): ``"auto"`` (the longest
+        axis-aligned extent), ``"x"``, ``"y"``, ``"z"`` (forced), ``"oriented"`` (the
+        minimum-volume oriented bounding box, for a model lying diagonally) or a 3×3 orthogonal
+        matrix whose rows are ``e_a, e_u, e_v``.
+    axes : optional
+        Several axes in a hierarchy (a tree's trunk and branches): ``"parts"``, a list of
+        ``{"part", "parent", "axis"}``, a TOML file of them (:func:`read_axes_file`) or per-vertex
+        axes (:meth:`BaseMesh.with_axes`); ``axis`` is then the frame rule of each axis that names
+        none.
 
-    Raises :class:`MeshError` (naming the file) for a missing or unreadable
-    file, no faces, non-finite coordinates, UVs or colours whose count does
-    not match the vertices, or a longest extent of zero.  A texture that
-    cannot be read is an :class:`~axialdeform.core.material.AssetWarning`.
-    ``source_index`` maps each vertex to the file's own vertex order
-    (``docs/parameter-files.md``, "Vertex order").
+    Returns
+    -------
+    BaseMesh
+        A file with several meshes (glTF nodes/primitives, STL bodies, OBJ ``o`` objects or
+        ``usemtl`` groups) becomes ONE base mesh with several :attr:`BaseMesh.parts` (node
+        transforms applied, the file's vertex order kept); UVs, vertex colours and materials come
+        along (:mod:`axialdeform.core.material`).  ``source_index`` maps each vertex to the file's
+        own vertex order (``docs/parameter-files.md``, "Vertex order").
 
-    ``textures=False`` decodes no texture (for work that neither draws nor
-    writes one: making parameters, fitting, scattering); the parts keep
-    their names and base colours, and the positions, vertex order and
-    fingerprint are those of the same file loaded with its textures.
-
-    ``axis`` chooses the axis frame (``docs/method.md``, "A chosen axis
-    frame"): ``"auto"`` (the longest axis-aligned extent: every earlier file
-    and picture, bit for bit), ``"x"``, ``"y"``, ``"z"`` (forced),
-    ``"oriented"`` (the minimum-volume oriented bounding box, for a model
-    lying diagonally) or a 3×3 orthogonal matrix whose rows are ``e_a, e_u,
-    e_v``.
-
-    ``axes`` gives the mesh several axes in a hierarchy (a tree's trunk and
-    branches): ``"parts"``, a list of ``{"part", "parent", "axis"}``, a TOML
-    file of them (:func:`read_axes_file`) or per-vertex axes
-    (:meth:`BaseMesh.with_axes`); ``axis`` is then the frame rule of each axis
-    that names none.
+    Notes
+    -----
+    Raises :class:`MeshError` (naming the file) for a missing or unreadable file, no faces,
+    non-finite coordinates, UVs or colours whose count does not match the vertices, or a longest
+    extent of zero.  A texture that cannot be read is an
+    :class:`~axialdeform.core.material.AssetWarning`.
     """
     with texture_decoding(textures):
         mesh = _load_mesh(source)

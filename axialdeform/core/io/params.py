@@ -440,11 +440,22 @@ def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
 
 
 def read_params(path: str | os.PathLike, mesh=None, *, allow_mesh_mismatch: bool = False) -> np.ndarray:
-    """Read a parameter file (text or binary) into ``(n, 16) float32`` (``(n, 19)``: extended; ``(n, 22)``: tinted).
+    """Read a parameter file (text or binary).
 
-    If ``mesh`` is given and the file records the base mesh it was made for,
-    a different mesh raises :class:`MeshMismatchError` unless
-    ``allow_mesh_mismatch`` is true.
+    Parameters
+    ----------
+    path : str or PathLike
+    mesh : BaseMesh, optional
+        If given and the file records the base mesh it was made for, a different mesh raises
+        :class:`MeshMismatchError` ...
+    allow_mesh_mismatch : bool
+        ... unless this is true.
+
+    Returns
+    -------
+    Instances
+        ``(n, 16) float32`` (``(n, 19)``: extended; ``(n, 22)``: tinted; a K-axis record
+        ``10·(K − 1)`` more).
     """
     pf = read_param_file(path)
     if mesh is not None and not allow_mesh_mismatch:
@@ -463,11 +474,26 @@ def write_params(
 ) -> Path:
     """Write parameters atomically; the format follows the extension.
 
-    ``.adp`` is binary (float32, or uint16 with ``quantize=True``); ``.txt``,
-    ``.csv`` and ``.dat`` are text.  ``mesh`` (a :class:`BaseMesh`) records
-    the axis and fingerprint of the base mesh in a binary file.  Written in
-    pieces (:func:`write_param_chunks`): memory beyond ``values`` stays
-    bounded whatever the count.
+    Parameters
+    ----------
+    path : str or PathLike
+        ``.adp`` is binary (float32, or uint16 with ``quantize=True``); ``.txt``, ``.csv`` and
+        ``.dat`` are text.
+    values : (n, 16|19|22) float32
+    mesh : BaseMesh, optional
+        Records the axis and fingerprint of the base mesh in a binary file.
+    quantize : bool
+        The compact uint16 form (binary only).
+    axis : ControlAxis, optional
+        The axis to record when no mesh is given.
+    mesh_fingerprint : bytes, optional
+        The fingerprint to record when no mesh is given.
+
+    Returns
+    -------
+    Path
+        The file written, in pieces (:func:`write_param_chunks`): memory beyond ``values`` stays
+        bounded whatever the count.
     """
     values = as_params(values, axes="any")
 
