@@ -21,7 +21,7 @@ import { hex } from 'axialdeform-three/helpers';
 export const SceneError = AxialError;
 
 /** Parse an .adp parameter file (axialdeform-three's parseADP: every check of
- * axialdeform.core.io.params.read_binary_header / decode_binary, in that order). */
+ * axialdeform.core.io.adp.read_binary_header / decode_binary, in that order). */
 export function parseAdp(buffer, name) {
   return parseADP(buffer, name);
 }

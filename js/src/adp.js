@@ -1,6 +1,6 @@
 // adp.js -- the binary parameter file (.adp, docs/parameter-files.md): parse,
 // check (size, CRC-32, header fields), decode.  The checks and their order
-// follow axialdeform.core.io.params.read_binary_header / decode_binary.
+// follow axialdeform.core.io.adp.read_binary_header / decode_binary.
 
 import { RECORD, WIDTHS, MAX_AXES } from './record.js';
 
