@@ -62,32 +62,9 @@ export function feedback(mesh, renderer, ids, tangent) {
   for (let c = 0; c < 4; c++) bind('instanceMatrix', mats, 4, 1, 64, 16 * c, c);
   bind('axialId', upload(ids ? Float32Array.from(ids) : Float32Array.from({ length: n }, (_, i) => i)), 1, 1);
   gl.useProgram(program);
-  const u = mesh.axialUniforms;
-  const loc = (name) => gl.getUniformLocation(program, name);
-  gl.uniformMatrix3fv(loc('axialFrame'), false, u.axialFrame.value.elements);
-  gl.uniform1f(loc('axialLo'), u.axialLo.value);
-  gl.uniform1f(loc('axialLen'), u.axialLen.value);
-  gl.uniform2f(loc('axialCenter'), u.axialCenter.value.x, u.axialCenter.value.y);
-  if (mesh.axis.axes) { // several axes: every axis's frame, lo, L, parent, and the child offsets' texture
-    const k = mesh.axis.axes.count, frames = new Float32Array(9 * k);
-    u.axialFrames.value.forEach((m, j) => frames.set(m.elements, 9 * j));
-    gl.uniformMatrix3fv(loc('axialFrames'), false, frames);
-    gl.uniform1fv(loc('axialLos'), u.axialLos.value);
-    gl.uniform1fv(loc('axialLens'), u.axialLens.value);
-    gl.uniform1iv(loc('axialParents'), u.axialParents.value);
-    renderer.initTexture(u.axialChildren.value); // uploaded by three: its GL texture, on unit 0
-    gl.activeTexture(gl.TEXTURE0);
-    gl.bindTexture(gl.TEXTURE_2D, renderer.properties.get(u.axialChildren.value).__webglTexture);
-    gl.uniform1i(loc('axialChildren'), 0);
-  }
-  if (mesh._wind) { // the wind at mesh moment, as the materials sway the instances
-    const w = (name) => u[name].value;
-    gl.uniform3f(loc('axialWindDir'), w('axialWindDir').x, w('axialWindDir').y, w('axialWindDir').z);
-    gl.uniform1f(loc('axialWindStrength'), w('axialWindStrength'));
-    gl.uniform1f(loc('axialWindGust'), w('axialWindGust'));
-    gl.uniform2f(loc('axialWindCycles'), w('axialWindCycles').x, w('axialWindCycles').y);
-    gl.uniform1f(loc('axialWindWavenumber'), w('axialWindWavenumber'));
-  }
+  // the mesh's uniforms, by their own names and types (no second naming of them here): the axis, a
+  // tree's axes and offsets texture, the wind at this moment
+  for (const [name, { value }] of Object.entries(mesh.axialUniforms)) setUniform(gl, renderer, program, name, value);
   const out = (size) => {
     const b = gl.createBuffer();
     gl.bindBuffer(gl.ARRAY_BUFFER, b);
@@ -160,4 +137,36 @@ gl_Position = vec4(0.0);
   if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new AxialError(`bake: the program did not link: ${gl.getProgramInfoLog(program)}`);
   mesh._programs[key] = { gl, program };
   return program;
+}
+
+
+/** Set uniform `name` of `program` from a three.js uniform value: a number, a Vector2/3, a Matrix3 or
+ * an array of them, a Float32Array / Int32Array, or a texture (three uploads it; unit 0). */
+function setUniform(gl, renderer, program, name, value) {
+  const at = gl.getUniformLocation(program, name);
+  if (at === null || value === null || value === undefined) return;
+  if (value.isTexture) {
+    renderer.initTexture(value);
+    gl.activeTexture(gl.TEXTURE0);
+    gl.bindTexture(gl.TEXTURE_2D, renderer.properties.get(value).__webglTexture);
+    gl.uniform1i(at, 0);
+  } else if (value.isMatrix3) {
+    gl.uniformMatrix3fv(at, false, value.elements);
+  } else if (Array.isArray(value) && value.length && value[0].isMatrix3) {
+    const all = new Float32Array(9 * value.length);
+    value.forEach((m, j) => all.set(m.elements, 9 * j));
+    gl.uniformMatrix3fv(at, false, all);
+  } else if (value.isVector3) {
+    gl.uniform3f(at, value.x, value.y, value.z);
+  } else if (value.isVector2) {
+    gl.uniform2f(at, value.x, value.y);
+  } else if (value instanceof Int32Array) {
+    gl.uniform1iv(at, value);
+  } else if (value instanceof Float32Array) {
+    gl.uniform1fv(at, value);
+  } else if (typeof value === 'number') {
+    gl.uniform1f(at, value);
+  } else {
+    throw new AxialError(`bake: uniform ${name}: a value of a kind this pass does not set`);
+  }
 }
