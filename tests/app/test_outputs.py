@@ -91,6 +91,23 @@ def test_scene_includes_and_nesting_are_bounded(folder):
     with pytest.raises(ad.core.SceneError, match=f"includes nested {MAX_INCLUDE_DEPTH} deep"):
         ad.Scene.load(folder / "s0.toml")
     assert ad.Scene.load(folder / f"s{n - MAX_INCLUDE_DEPTH + 1}.toml").count == 20  # within the limit: fine
+    # 24 files each including the next one TWICE (no cycle): 2**24 reads before; each is read once now,
+    # and the layers of a file included twice are in the scene once
+    for k in range(24):
+        (folder / f"d{k}.toml").write_text(f'include = ["d{k + 1}.toml", "d{k + 1}.toml"]\n')
+    (folder / "d24.toml").write_text('[[layer]]\nname = "a"\nmesh = "stone"\nparams = "p.adp"\n')
+    from axialdeform.core.io.scene import MAX_INCLUDED_FILES, parse_scene
+
+    recipe = parse_scene(folder / "d0.toml")
+    assert len(recipe.included) == 25 and [layer.name for layer in recipe.layers] == ["a"]
+    assert ad.Scene.load(folder / "d0.toml").count == 20
+    # a scene that reads more files than the bound, side by side (no deep chain): refused in one line
+    wide = MAX_INCLUDED_FILES + 2
+    for k in range(wide):
+        (folder / f"w{k}.toml").write_text("")
+    (folder / "wide.toml").write_text("include = [" + ", ".join(f'"w{k}.toml"' for k in range(wide)) + "]\n")
+    with pytest.raises(ad.core.SceneError, match=f"wide.toml:1: key 'include': the scene reads more than {MAX_INCLUDED_FILES}"):
+        ad.Scene.load(folder / "wide.toml")
     (folder / "deep.toml").write_text("x = " + "[" * 600 + "]" * 600 + "\n")
     with pytest.raises(ad.core.SceneError, match="deep.toml: not a scene file: values nested too deep"):
         ad.Scene.load(folder / "deep.toml")

@@ -29,7 +29,7 @@ from .mesh import BUNDLED_MESHES, mesh_source_path
 from .safeio import read_regular
 
 __all__ = ["parse_scene", "SceneRecipe", "LayerRecipe", "ScatterRecipe", "TerrainRecipe", "SceneSource",
-           "MAX_INCLUDE_DEPTH"]
+           "MAX_INCLUDE_DEPTH", "MAX_INCLUDED_FILES"]
 
 
 _TOP = {"up", "include", "terrain", "camera", "light", "wind", "layer", "background"}
@@ -136,10 +136,14 @@ class SceneRecipe:
     layers: list = field(default_factory=list)
     #: every file the scene reads (the scene file, includes, meshes, parameters, images)
     sources: list = field(default_factory=list)
+    #: the scene files read so far (resolved): a file included again is not read again
+    included: set = field(default_factory=set)
 
 
 #: the deepest chain of includes a scene file may have (a -> b -> c ... is 3)
 MAX_INCLUDE_DEPTH = 32
+#: the most scene files one scene may read, itself and every include (each is read once)
+MAX_INCLUDED_FILES = 256
 
 
 def _load_toml(path: Path, sources: list | None = None):
@@ -237,6 +241,7 @@ def parse_scene(path: str | os.PathLike) -> SceneRecipe:
                       _numbers(src, v, k, "wind", 0, (1,))[0]) for k, v in w.items()}
         with _wrap(src, next(iter(w), "wind"), "wind", 0):
             scene.wind = Wind(**kwargs)
+    scene.included.add(path.resolve())
     _read_layers(src, data, scene, stack=(path.resolve(),))
     scene.sources = list(dict.fromkeys(src.sources))
     return scene
@@ -302,6 +307,12 @@ def _read_layers(src, data, scene, stack) -> None:
         if len(stack) >= MAX_INCLUDE_DEPTH:
             raise src.error(f"includes nested {len(stack)} deep; expected at most {MAX_INCLUDE_DEPTH} (a -> b -> ...)",
                             "include", None, 0)
+        if inc.resolve() in scene.included:  # included before (a diamond, not a cycle): its layers are in
+            continue
+        if len(scene.included) >= MAX_INCLUDED_FILES:
+            raise src.error(f"the scene reads more than {MAX_INCLUDED_FILES} scene files; expected at most "
+                            f"{MAX_INCLUDED_FILES} (itself and its includes)", "include", None, 0)
+        scene.included.add(inc.resolve())
         sub, sub_src = _load_toml(inc, src.sources)
         _check_keys(sub_src, sub, _TOP, "the scene", None)
         _read_layers(sub_src, sub, scene, (*stack, inc.resolve()))
