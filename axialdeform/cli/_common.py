@@ -121,6 +121,8 @@ def load(args, what: str = "output", allow_folder: bool = False):
 
     check_output_path(args.output, (mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)
     mesh = load_base(args, args.mesh)
+    # the files the mesh names too (its material library, textures, buffers): never replaced
+    check_output_path(args.output, mesh.sources, what, allow_folder=allow_folder)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     if args.command in ("render", "view", "web"):  # a picture: every number must survive the projection
         check_drawable(params, str(args.params))

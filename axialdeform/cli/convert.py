@@ -23,6 +23,7 @@ def run(args) -> None:
     pf = read_param_file(args.src)
     mesh = load_base(args, args.mesh) if args.mesh else None
     if mesh is not None:
+        check_output_path(args.dst, mesh.sources, "parameter file")  # the files the mesh names too
         check_mesh(pf, mesh, args.src)
     path = write_params(args.dst, pf.values, mesh, quantize=args.quantize,
                         axis=pf.axis, mesh_fingerprint=pf.mesh_fingerprint)

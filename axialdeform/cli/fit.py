@@ -8,7 +8,6 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..core.fit import DEFAULT_MAX_RESIDUAL, fit_files, variant_paths
-from ..core.io.mesh import mesh_source_path
 from ..core.io.params import write_params
 from ..core.io.safeio import check_output_path
 from ._common import add_axis, fraction, load_base, positive_int
@@ -41,7 +40,7 @@ def run(args) -> None:
     is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
     paths = variant_paths(args.variants)
 
-    check_output_path(out, (mesh_source_path(args.base), *paths), "parameter file")
+    check_output_path(out, (*mesh.sources, *paths), "parameter file")
     with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:
         result = fit_files(mesh, paths, max_residual=args.max_residual, max_iterations=args.max_iterations,
                            progress=bar, extended=args.extended)

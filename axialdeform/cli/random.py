@@ -60,6 +60,7 @@ def run(args) -> None:
     # memory holds one piece whatever the count; the file must fit on its disk
     check_count(min(count, RANDOM_CHUNK), RANDOM_BYTES_EACH, f"-n/--count (made {RANDOM_CHUNK} at a time)")
     mesh = load_base(args, args.mesh, textures=False)
+    check_output_path(args.output, mesh.sources, "parameter file")  # the files the mesh names too
     # several axes: 10·K + 6 numbers (+ 3, + 6); pieces shrink so that memory stays the same
     variation = Variation(**variation)
     width = tree_width(mesh.axis_count, 2 if variation.tint is not None else 1 if variation.extended else 0)

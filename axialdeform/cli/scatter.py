@@ -69,6 +69,7 @@ def run(args) -> int | None:
                              f"{'/'.join(BINARY_SUFFIXES)} file name")
     check_output_path(args.output, (args.surface, mesh_source_path(args.mesh), args.density), "parameter file")
     mesh = load_base(args, args.mesh, textures=False)
+    check_output_path(args.output, mesh.sources, "parameter file")  # the files the mesh names too
     try:
         params = scatter(args.surface, mesh, args.count, seed=args.seed, allow_fewer=args.allow_fewer,
                          min_distance=args.min_distance, density=args.density, align_to_normal=args.align_to_normal,

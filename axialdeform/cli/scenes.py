@@ -35,7 +35,10 @@ def scene_of(args, *, params_optional: bool = False):
     if getattr(args, "axis", "auto") != "auto" or getattr(args, "axes", None) is not None:
         raise AxialDeformError(f"--axis/--axes: a scene file ({args.mesh}) names each layer's axis (axis = ..., "
                                "axes = ...); expected neither")
-    return load_scene(args.mesh)
+    scene = load_scene(args.mesh)
+    if getattr(args, "output", None) is not None:  # every file the scene read: never replaced
+        check_output_path(args.output, scene.sources, "output", allow_folder=True)
+    return scene
 
 
 def _check_output(args, what: str) -> None:

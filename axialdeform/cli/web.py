@@ -7,7 +7,6 @@ from pathlib import Path
 from urllib.parse import quote
 
 from ..core.errors import AxialDeformError
-from ..core.io.mesh import mesh_source_path
 from ..core.io.params import read_params
 from ..core.params import check_drawable
 from ..core.scene import is_scene_file
@@ -84,7 +83,7 @@ def run(args) -> None:
         check_drawable(params, str(args.params))  # a picture: every number must survive the projection
         scene = build_scene(mesh, params, size=size, up=args.up, mode=args.mode, quantize=not args.float32,
                             fixed_size=args.size is not None, wind=wind_arg(args), time=time)
-        page = write_page(out, scene, inputs=(mesh_source_path(args.mesh), args.params), overwrite=args.overwrite)
+        page = write_page(out, scene, inputs=(*mesh.sources, args.params), overwrite=args.overwrite)
         print(f"wrote {page} ({len(params)} instances, {'float32' if args.float32 else 'quantized'} parameters)")
     elif not args.serve:
         raise AxialDeformError("web: expected MESH and PARAMS (or --serve to serve an exported page)")

@@ -81,6 +81,9 @@ class BaseMesh:
     grid: tuple | None = field(default=None, repr=False)
     axis_frame: object = field(default="auto", repr=False)
     tree: object = field(default=None, repr=False)
+    #: every file the mesh was read from (its own, a material library, textures, buffers): what an
+    #: output must never replace; empty for a mesh made in memory
+    sources: tuple = field(default=(), repr=False)
 
     @classmethod
     def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> BaseMesh:

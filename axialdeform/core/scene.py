@@ -245,7 +245,8 @@ def build_scene(recipe: SceneRecipe, scene_type: type = Scene, *, scale_counts: 
         scene.terrain = BaseMesh(v, area_weighted_normals(v, f), f, name=str(t.file), grid=surface.grid)
     for layer in recipe.layers:
         scene.layers.append(_build_layer(layer, scene, surface, scale_counts))
-    scene.sources = list(recipe.sources)
+    # every file the scene read: the scene files, meshes and what they name, parameters, images
+    scene.sources = list(dict.fromkeys([*recipe.sources, *(s for layer in scene.layers for s in layer.mesh.sources)]))
     return scene
 
 

@@ -4,10 +4,12 @@ bounded (item 3): each attack of the issue, as a command a user types."""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import axialdeform as ad
@@ -112,3 +114,47 @@ def test_scene_includes_and_nesting_are_bounded(folder):
     with pytest.raises(ad.core.SceneError, match="deep.toml: not a scene file: values nested too deep"):
         ad.Scene.load(folder / "deep.toml")
     refused(run("render", "deep.toml", "-o", "r.png", cwd=folder), "deep.toml", "nested too deep")
+
+
+def _textured_model(folder: Path) -> None:
+    """m.obj -> lib.txt (its material library, a name a parameter file could take) -> tex.png."""
+    from PIL import Image
+
+    (folder / "m.obj").write_text("mtllib lib.txt\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                  "usemtl mat\nf 1/1 2/2 3/3\nf 1/1 3/3 4/2\nf 1/1 4/2 2/3\nf 2/1 4/2 3/3\n")
+    (folder / "lib.txt").write_text("newmtl mat\nKd 1 1 1\nmap_Kd tex.png\n")
+    Image.new("RGB", (4, 4), (200, 100, 50)).save(folder / "tex.png")
+    assert {Path(p).name for p in ad.load_mesh(folder / "m.obj").sources} == {"m.obj", "lib.txt", "tex.png"}
+
+
+def test_no_output_replaces_a_file_an_input_names(folder):
+    """Through a material library, a texture, a scene's height map, density map or layer mesh, or a
+    symlink to one of them: every command refuses in one line and the file stays what it was."""
+    _textured_model(folder)
+    ad.write_params(folder / "m.adp", ad.random_params(ad.load_mesh(folder / "m.obj"), 5, seed=2))
+    before = {n: (folder / n).read_bytes() for n in ("m.obj", "lib.txt", "tex.png")}
+    refused(run("render", "m.obj", "m.adp", "-o", "tex.png", "--size", "32x24", cwd=folder), "tex.png", "input")
+    refused(run("random", "m.obj", "-n", "3", "-o", "lib.txt", cwd=folder), "lib.txt", "input")
+    (folder / "link.png").symlink_to(folder / "tex.png")
+    refused(run("render", "m.obj", "m.adp", "-o", "link.png", "--size", "32x24", cwd=folder), "link.png", "input")
+    # a scene: its terrain's height map, a layer's density map and a layer's mesh
+    from PIL import Image
+
+    Image.fromarray(((np.add.outer(np.arange(16), np.arange(16)) * 8) % 256).astype(np.uint8)).save(folder / "hm.png")
+    Image.new("L", (8, 8), 255).save(folder / "density.png")
+    shutil.copy(Path(__file__).resolve().parents[1] / "data" / "meshes" / "gltf" / "cubevc.glb", folder / "cube.glb")
+    (folder / "s.toml").write_text(
+        '[terrain]\nheightmap = "hm.png"\nextent = 8.0\n'
+        '[[layer]]\nname = "a"\nmesh = "m.obj"\n[layer.scatter]\ncount = 5\ndensity = "density.png"\n'
+        '[[layer]]\nname = "b"\nmesh = "cube.glb"\n[layer.scatter]\ncount = 3\n')
+    more = {n: (folder / n).read_bytes() for n in ("hm.png", "density.png")}
+    refused(run("render", "s.toml", "-o", "hm.png", "--size", "32x24", cwd=folder), "hm.png", "input")
+    refused(run("render", "s.toml", "-o", "density.png", "--size", "32x24", cwd=folder), "density.png", "input")
+    (folder / "hm-link.png").symlink_to(folder / "hm.png")
+    refused(run("render", "s.toml", "-o", "hm-link.png", "--size", "32x24", cwd=folder), "hm-link.png", "input")
+    refused(run("render", "s.toml", "-o", "tex.png", "--size", "32x24", cwd=folder), "tex.png", "input")
+    more["cube.glb"] = (folder / "cube.glb").read_bytes()
+    refused(run("export", "s.toml", "-o", "cube.glb", cwd=folder), "cube.glb", "input")
+    for name, data in {**before, **more}.items():
+        assert (folder / name).read_bytes() == data, name
+    assert run("render", "s.toml", "-o", "ok.png", "--size", "32x24", cwd=folder).returncode == 0  # the scene is fine

@@ -4,6 +4,7 @@ kept, its parts and materials, every byte read through the bounded reader."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import warnings
@@ -204,7 +205,9 @@ def _load_mesh(source) -> BaseMesh:
     file_positions = _obj_positions(data) if path.suffix.lower() == ".obj" else None  # the bytes read above
     dropped = gltf_attributes(data, kind, SafeResolver(path.parent)) if kind in ("glb", "gltf") else []
     del data
-    return _from_loaded(loaded, name, file_positions, resolver.failed, dropped)
+    mesh = _from_loaded(loaded, name, file_positions, resolver.failed, dropped)
+    # every file the mesh was made from (its own, a material library, textures, buffers)
+    return dataclasses.replace(mesh, sources=(str(path), *dict.fromkeys(resolver.read)))
 
 
 def _refuse(name: str, resolver, declared: dict) -> None:

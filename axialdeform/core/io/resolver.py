@@ -155,6 +155,8 @@ class SafeResolver:
         self.referrer = referrer
         self.failed: list[tuple[str, str]] = []
         self.refused: list[tuple[str, str]] = []
+        #: every file read (paths): what the mesh was made from beside its own file
+        self.read: list[str] = []
 
     def _path(self, name: str) -> str:
         """The file ``name`` refers to, inside the model's folder; :class:`_Outside` if it is not."""
@@ -185,6 +187,7 @@ class SafeResolver:
             raise OSError(f"{name}: not a regular file")
         field, size = self.declared.get(str(name), (None, None))
         by = f" by {self.referrer}" if self.referrer else ""
+        self.read.append(path)  # named by the model: an output must never replace it, read or not
         try:
             if size is not None:
                 return bytes(self._read_declared(path, name, field, size, by))
@@ -224,7 +227,7 @@ class SafeResolver:
     def namespaced(self, namespace):
         child = SafeResolver(os.path.join(self.parent, namespace), self.max_bytes, referrer=self.referrer,
                              root=self.root)
-        child.failed, child.refused = self.failed, self.refused  # one record for the whole load
+        child.failed, child.refused, child.read = self.failed, self.refused, self.read  # one record for the whole load
         return child
 
     def keys(self):
