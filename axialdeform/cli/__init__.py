@@ -29,10 +29,20 @@ COMMANDS: tuple[str, ...] = ("demo", "random", "scatter", "render", "bake", "inf
 PLUGINS: tuple[str, ...] = ()
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, with a bad argument said in ONE line (and exit status 2) like every other error of
+    the command line, instead of the usage block and then the error."""
+
+    def error(self, message):
+        if "COMMAND" in message:  # no command at all: what there is to ask for
+            self.print_usage(sys.stderr)
+        self.exit(2, f"{self.prog}: error: {one_line(message)} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
 
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="axialdeform",
         description="Thousands of individually different shapes from one base mesh and 16 numbers per instance.",
     )

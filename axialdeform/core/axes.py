@@ -40,7 +40,7 @@ from .record import MAX_RECORD_AXES
 #: the most axes one mesh may carry: a record's most (core/record.py)
 MAX_AXES = MAX_RECORD_AXES
 
-__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
+__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "check_parents", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
            "axes_of", "level_bends", "child_offsets"]
 
 
@@ -68,11 +68,7 @@ class AxisTree:
 
     def __post_init__(self) -> None:
         k = len(self.axes)
-        if not 1 <= k <= MAX_AXES:
-            raise MeshError(f"axes: expected 1 to {MAX_AXES} axes, found {k}")
-        parents = tuple(int(p) for p in self.parents)
-        if len(parents) != k or parents[0] != -1 or any(not 0 <= p < i for i, p in enumerate(parents) if i):
-            raise MeshError(f"axes: parents: expected -1 for axis 0 and a parent p < k for every axis k, found {parents}")
+        parents = check_parents(self.parents, k)
         va = np.ascontiguousarray(self.vertex_axis, dtype=np.int32)
         if va.ndim != 1 or (len(va) and (va.min() < 0 or va.max() >= k)):
             raise MeshError(f"axes: vertex axis indices: expected a (v,) array of 0..{k - 1}")
@@ -190,6 +186,26 @@ def _rooted(axis: ControlAxis, parent: ControlAxis, positions, name) -> ControlA
     return axis
 
 
+def check_parents(parents, count: int | None = None, name: str = "") -> tuple[int, ...]:
+    """``parents`` as a tuple of ints if it is a tree's parent list -- ``-1`` for axis 0 and a parent
+    ``p < k`` for every axis ``k`` (so no cycle, no forward or negative parent), 1 to
+    :data:`MAX_AXES` of them (``count``, when given, of them) -- else a :class:`MeshError` in words."""
+    where = f"{name}: " if name else ""
+    if isinstance(parents, (str, bytes)) or not hasattr(parents, "__len__"):
+        raise MeshError(f"{where}axes: parents: expected a list of axis indices, found {parents!r:.80}")
+    if not 1 <= len(parents) <= MAX_AXES:
+        raise MeshError(f"{where}axes: expected 1 to {MAX_AXES} axes, found {len(parents)}")
+    if count is not None and len(parents) != count:
+        raise MeshError(f"{where}axes: parents: expected one parent per axis ({count}), found {len(parents)}")
+    if not all(isinstance(p, (int, np.integer)) and not isinstance(p, bool) for p in parents):
+        raise MeshError(f"{where}axes: parents: expected whole numbers, found {tuple(parents)!r:.120}")
+    out = tuple(int(p) for p in parents)
+    if out[0] != -1 or any(not 0 <= p < i for i, p in enumerate(out) if i):
+        raise MeshError(f"{where}axes: parents: expected -1 for axis 0 and a parent p < k for every axis k "
+                        f"(no cycle, no forward or negative parent), found {out!r:.120}")
+    return out
+
+
 def tree_from_vertices(mesh, vertex_axis, parents, *, frames=None, names=None, root_children: bool = True) -> AxisTree:
     """A tree from per-vertex axis indices ``vertex_axis`` ((v,) int) and a
     parent list (``parents[0] = -1``); ``frames``: one frame rule per axis
@@ -199,6 +215,7 @@ def tree_from_vertices(mesh, vertex_axis, parents, *, frames=None, names=None, r
     if va.shape != (mesh.vertex_count,) or not np.issubdtype(va.dtype, np.integer):
         raise MeshError(f"{mesh.name}: axes: expected {mesh.vertex_count} integer vertex axis indices, found "
                         f"an array of shape {va.shape} ({va.dtype})")
+    parents = check_parents(parents)  # before anything is sized by it (the caller names the file)
     k = len(parents)
     names = tuple(names) if names is not None else tuple(f"axis{i}" for i in range(k))
     frames = ["auto"] * k if frames is None else list(frames)

@@ -65,14 +65,30 @@ def axis_frame_matrix(frame, name: str = "axis") -> np.ndarray:
     return f
 
 
-def _oriented_frame(points: np.ndarray) -> np.ndarray:
+def _oriented_frame(points: np.ndarray, name: str = "<mesh>") -> np.ndarray:
     """The frame of the minimum-volume oriented bounding box (trimesh): ``e_a``
     its longest edge, ``e_u``, ``e_v`` the others in decreasing length, each
     row's largest-magnitude component made positive."""
     import trimesh  # only this frame needs it
 
-    to_origin, extents = trimesh.bounds.oriented_bounds(np.asarray(points, dtype=np.float64))
-    rows = np.asarray(to_origin, dtype=np.float64)[:3, :3]  # box axes (model space) as rows
+    p = np.asarray(points, dtype=np.float64)
+    centred = p - p.mean(axis=0)
+    _, sv, basis = np.linalg.svd(centred, full_matrices=False)  # sv descending; rows of basis: principal axes
+    sv = np.concatenate([sv, np.zeros(3 - len(sv))])
+    if not sv[0] > 0 or sv[1] <= 1e-9 * sv[0]:  # a point or a line: no box has a second side
+        raise MeshError(f"{name}: axis: 'oriented' needs points spanning an area or a volume; these lie on a line "
+                            "(use 'auto', 'x', 'y', 'z' or a frame of three rows)")
+    if sv[2] <= 1e-9 * sv[0]:
+        # flat: the minimum-area rectangle in the points' plane (trimesh's 2-D rule), the normal third
+        plane = basis[:2] if len(basis) >= 2 else basis
+        to_origin2, extents2 = trimesh.bounds.oriented_bounds_2D(centred @ plane.T)
+        across = np.asarray(to_origin2, dtype=np.float64)[:2, :2] @ plane  # the rectangle's sides, 3-D rows
+        normal = np.cross(across[0], across[1])
+        rows = np.vstack([across, normal / np.linalg.norm(normal)])
+        extents = np.array([*np.asarray(extents2, dtype=np.float64), 0.0])
+    else:
+        to_origin, extents = trimesh.bounds.oriented_bounds(p)
+        rows = np.asarray(to_origin, dtype=np.float64)[:3, :3]  # box axes (model space) as rows
     rows = rows[np.argsort(-np.asarray(extents), kind="stable")]
     sign = np.sign(rows[np.arange(3), np.argmax(np.abs(rows), axis=1)])
     rows = rows * sign[:, None]
@@ -135,7 +151,7 @@ class ControlAxis:
             if frame not in FRAME_NAMES:
                 raise ArgumentError(f"{name}: axis: expected one of {', '.join(FRAME_NAMES)} or a 3×3 matrix, found {frame!r}")
             if frame == "oriented":
-                matrix = _oriented_frame(p)
+                matrix = _oriented_frame(p, name)
             else:
                 matrix = None
         else:

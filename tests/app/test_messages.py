@@ -93,3 +93,16 @@ def test_pygltflib_says_nothing_of_its_own(tmp_path, stone):
                            f"m, p = r({str(odd)!r}); print(p.shape)"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "(2, 16)" and proc.stderr == "", proc.stderr
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["random", "stone", "--axis", "1,0,0,0,1,0,0,0,nan", "-n", "3", "-o", "x.adp"], "argument --axis"),
+    (["random", "stone", "-n", "abc", "-o", "x.adp"], "argument -n/--count"),
+    (["render", "stone", "p.adp", "--mode", "shiny", "-o", "x.png"], "argument --mode"),
+])
+def test_a_bad_argument_is_one_line(argv, words, tmp_path):
+    """argparse's refusals too: one line naming the argument, exit status 2, no usage block."""
+    proc = subprocess.run([sys.executable, "-m", "axialdeform", *argv], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=120)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and words in lines[0] and "--help" in lines[0], proc.stderr

@@ -265,3 +265,30 @@ def test_hostile_tree_files_are_refused_in_words(tree, tmp_path):
     with pytest.raises(GltfError, match="u.glb: extras axes: axes: parents: expected -1 for axis 0"):
         read_instanced_glb(tmp_path / "u.glb")
     assert json.dumps(node.extras["axialdeform"]["count"]) == "3"
+
+
+@pytest.mark.parametrize("parents", [[-1, 2, 1], [-1, 2, 0], [-1, 5, 0], [-2, 0, 0], [0, 0, 1], [-1, 0.5, 0], "ab",
+                                     list(range(-1, 70))])
+def test_bad_per_vertex_parents_are_refused_in_words(parents):
+    """A cycle, a forward, out-of-range or negative parent, a non-integer, too many axes: a MeshError
+    before anything is sized by them (they ended in IndexError)."""
+    stone = ad.load_mesh("stone")
+    va = (np.arange(stone.vertex_count) % 3).astype(int)
+    with pytest.raises(ad.core.MeshError, match="axes: (parents|expected 1 to 64 axes)"):
+        stone.with_axes({"vertex_axis": va, "parents": parents})
+
+
+def test_oriented_frames_of_flat_and_line_meshes():
+    """A flat mesh gets the minimum-area rectangle of its plane and its normal (no networkx); points on
+    a line are refused in words, naming the mesh."""
+    flat = trimesh.Trimesh(vertices=[[0, 0, 0], [2, 0.5, 0], [0, 1, 0], [2, 1.5, 0]], faces=[[0, 1, 2], [1, 3, 2]],
+                           process=False)
+    frame = ad.load_mesh(flat, axis="oriented").axis.matrix
+    assert np.allclose(frame @ frame.T, np.eye(3), atol=1e-9)
+    assert np.allclose(np.abs(frame[2]), [0, 0, 1], atol=1e-9)  # the third row is the plane's normal
+    line = trimesh.Trimesh(vertices=[[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3]], faces=[[0, 1, 2], [1, 2, 3]],
+                           process=False)
+    with pytest.raises(ad.core.MeshError, match=r"<Trimesh>: axis: 'oriented' needs points spanning an area"):
+        ad.load_mesh(line, axis="oriented")
+    card = ad.load_mesh("leafcard", axis="oriented")  # a real flat mesh
+    assert card.axis.length > 0
