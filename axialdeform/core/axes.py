@@ -289,6 +289,10 @@ def tree_from_parts(mesh, frame="auto") -> AxisTree:
     part whose box is dominated by something else -- a tuft of leaves at a
     branch's tip -- has an axis segment away from the wood): the list form
     (:func:`tree_from_spec`) says the hierarchy exactly."""
+    parts = sum(1 for p in mesh.parts if p.count)
+    if parts > MAX_AXES:  # said before any work: each part's axis and the attachment search grow with the count
+        raise MeshError(f"{mesh.name}: axes='parts': {parts} parts, but a mesh has at most {MAX_AXES} axes; expected "
+                        f"at most {MAX_AXES} parts (name the parts to bend in a list of axes instead)")
     verts = _part_vertices(mesh)
     names = list(verts)
     if len(names) < 2:

@@ -292,3 +292,19 @@ def test_oriented_frames_of_flat_and_line_meshes():
         ad.load_mesh(line, axis="oriented")
     card = ad.load_mesh("leafcard", axis="oriented")  # a real flat mesh
     assert card.axis.length > 0
+
+
+def test_too_many_parts_are_refused_before_any_axis_is_made(tmp_path, monkeypatch):
+    """axes='parts' on 300 parts said 'at most 64 axes' only after every part's axis and the whole
+    attachment search (minutes); now before the first axis is made."""
+    from axialdeform.core import axes as axes_mod
+
+    lines = []
+    for k in range(300):
+        x, y, b = k % 20, k // 20, 3 * k
+        lines.append(f"o part{k}\nv {x} {y} 0\nv {x + 0.5} {y} 0\nv {x} {y + 0.5} 0.2\nf {b + 1} {b + 2} {b + 3}")
+    (tmp_path / "p300.obj").write_text("\n".join(lines) + "\n")
+    mesh = ad.load_mesh(tmp_path / "p300.obj")
+    monkeypatch.setattr(axes_mod, "_axis_of", lambda *a, **k: pytest.fail("an axis was made before the refusal"))
+    with pytest.raises(ad.core.MeshError, match="p300.obj: axes='parts': 300 parts, but a mesh has at most 64 axes"):
+        mesh.with_axes("parts")
