@@ -55,9 +55,13 @@ def axis_frame_matrix(frame, name: str = "axis") -> np.ndarray:
         f = np.asarray(frame, dtype=np.float64)
     except (TypeError, ValueError):
         raise ArgumentError(f"{name}: expected one of {', '.join(FRAME_NAMES)} or a 3×3 matrix, found {frame!r}") from None
-    if f.shape != (3, 3) or not np.isfinite(f).all():
+    if f.shape != (3, 3):
         raise ArgumentError(f"{name}: expected one of {', '.join(FRAME_NAMES)} or a 3×3 matrix of finite numbers "
                             f"(rows e_a, e_u, e_v), found shape {f.shape}")
+    if not np.isfinite(f).all():
+        row, col = (int(x) for x in np.argwhere(~np.isfinite(f))[0])
+        raise ArgumentError(f"{name}: row {row + 1}, column {col + 1} of the frame is {f[row, col]}; expected a 3×3 "
+                            "matrix of finite numbers (rows e_a, e_u, e_v)")
     err = float(np.abs(f @ f.T - np.eye(3)).max())
     if err > FRAME_TOLERANCE:
         raise ArgumentError(f"{name}: the frame is not orthogonal (|F·Fᵀ − I| = {err:.3g}); expected orthonormal rows "

@@ -70,7 +70,7 @@ import numpy as np
 
 from .camera import CameraSpec
 from .errors import ArgumentError, SceneError
-from .io.mesh import axes_argument, load_mesh
+from .io.mesh import load_mesh, with_axes
 from .io.params import read_params
 from .io.scene import LayerRecipe, SceneRecipe, parse_scene
 from .look import DEFAULT_LOOK, Look
@@ -258,7 +258,7 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
         mesh = mesh.with_axis(recipe.frame)
     if recipe.axes is not None:
         with src.wrap("axes", "layer", nth):
-            mesh = mesh.with_axes(axes_argument(recipe.axes), recipe.frame)
+            mesh = with_axes(mesh, recipe.axes, recipe.frame)
     lift = None
     if recipe.params is not None:
         with src.wrap("params", "layer", nth):

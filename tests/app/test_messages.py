@@ -106,3 +106,12 @@ def test_a_bad_argument_is_one_line(argv, words, tmp_path):
                           timeout=120)
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1 and words in lines[0] and "--help" in lines[0], proc.stderr
+
+
+def test_an_axes_files_bad_entry_names_the_file(tmp_path):
+    (tmp_path / "ax.toml").write_text('[[axis]]\npart = "trunk"\n[[axis]]\npart = "nope"\nparent = "trunk"\n')
+    proc = subprocess.run([sys.executable, "-m", "axialdeform", "random", "tree", "--axes", "ax.toml", "-n", "2", "-o",
+                           "t.adp"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
+    assert "ax.toml: " in lines[0] and "no part 'nope'" in lines[0], lines[0]

@@ -221,3 +221,10 @@ def test_oriented_on_an_axis_aligned_model_is_its_aligned_axis():
 
     mesh = ad.load_mesh(data_mesh("assets/AlphaBlendModeTest.glb"), axis="oriented", textures=False)
     assert not mesh.axis.framed and mesh.axis.index == 0
+
+
+def test_a_frame_with_a_nan_names_the_entry():
+    frame = np.eye(3)
+    frame[2, 1] = np.nan
+    with pytest.raises(ad.core.ArgumentError, match=r"stone: axis: row 3, column 2 of the frame is nan; expected a 3×3"):
+        ad.load_mesh("stone", axis=frame)

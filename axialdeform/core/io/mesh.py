@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import AxialDeformError, MeshError
 from ..material import AssetWarning, compute_tangents, gather_parts, texture_decoding
 from ..mesh import BaseMesh, area_weighted_normals, check_float32_range
 from . import safeio
@@ -28,7 +28,7 @@ from .resolver import (
 )
 from .safeio import read_regular
 
-__all__ = ['BUNDLED_MESHES', 'MESH_SUFFIXES', 'bundled_mesh_path', 'load_mesh', 'mesh_source_path']
+__all__ = ['BUNDLED_MESHES', 'MESH_SUFFIXES', 'bundled_mesh_path', 'load_mesh', 'mesh_source_path', 'with_axes']
 
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``,
@@ -96,6 +96,18 @@ def axes_argument(value):
     return value
 
 
+def with_axes(mesh: BaseMesh, axes, axis="auto") -> BaseMesh:
+    """``mesh.with_axes`` of ``axes`` as a user gives it (:func:`axes_argument`); what is wrong with
+    an axes file's entries names the file."""
+    spec = axes_argument(axes)
+    try:
+        return mesh.with_axes(spec, axis)
+    except AxialDeformError as exc:
+        if spec is axes or str(axes) in str(exc):
+            raise
+        raise type(exc)(f"{axes}: {exc}") from None
+
+
 def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseMesh:
     """Read a base mesh.
 
@@ -138,7 +150,7 @@ def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseM
     with texture_decoding(textures):
         mesh = _load_mesh(source)
     if axes is not None:
-        return mesh.with_axes(axes_argument(axes), axis)
+        return with_axes(mesh, axes, axis)
     return mesh.with_axis(axis) if not (isinstance(axis, str) and axis == "auto") else mesh
 
 
