@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -115,3 +116,25 @@ def test_an_axes_files_bad_entry_names_the_file(tmp_path):
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1, proc.stderr
     assert "ax.toml: " in lines[0] and "no part 'nope'" in lines[0], lines[0]
+
+
+def test_no_warning_before_the_error_that_refuses_a_gltf(tmp_path):
+    """A glTF with morph targets is drawn in its rest pose, with a warning; one that is refused
+    anyway (here: no POSITION data) gets the error alone, not a warning line before it."""
+    import json
+    import warnings
+
+    import axialdeform as ad
+
+    data = json.loads((Path(__file__).resolve().parents[1] / "data" / "meshes" / "gltf" / "validator"
+                       / "valid.gltf").read_text())
+    assert any("targets" in p for m in data["meshes"] for p in m["primitives"])  # morph targets
+    for m in data["meshes"]:
+        for p in m["primitives"]:
+            p["attributes"].pop("POSITION", None)
+    (tmp_path / "bad.gltf").write_text(json.dumps(data))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(ad.AxialDeformError, match="bad.gltf"):
+            ad.load_mesh(tmp_path / "bad.gltf")
+    assert [str(w.message) for w in caught if "not supported" in str(w.message)] == []

@@ -181,15 +181,12 @@ def _load_mesh(source) -> BaseMesh:
                         MeshError)
     kind = path.suffix.lower().lstrip(".")
     # each file a glTF refers to is read with the bound it declares (a buffer's byteLength)
-    declared = {}
+    declared, rest = {}, []
     if kind in ("gltf", "glb"):
         tree = gltf_json(data, kind, name)  # read once; a file that is not glTF is said here, in words
         declared = gltf_references(tree, name)
         rest = unsupported_features(tree)
         del tree
-        if rest:  # said once, in our words: trimesh drops them silently
-            warnings.warn(AssetWarning(f"{name}: {', '.join(rest)} are not supported; the mesh is drawn in its rest "
-                                       "pose"), stacklevel=2)
     resolver = SafeResolver(path.parent, declared=declared, referrer=path.name)
     try:
         import io
@@ -218,6 +215,9 @@ def _load_mesh(source) -> BaseMesh:
     dropped = gltf_attributes(data, kind, SafeResolver(path.parent)) if kind in ("glb", "gltf") else []
     del data
     mesh = _from_loaded(loaded, name, file_positions, resolver.failed, dropped)
+    if rest:  # said once, in our words (trimesh drops them silently), and only of a mesh that loads
+        warnings.warn(AssetWarning(f"{name}: {', '.join(rest)} are not supported; the mesh is drawn in its rest "
+                                   "pose"), stacklevel=3)
     # every file the mesh was made from (its own, a material library, textures, buffers)
     return dataclasses.replace(mesh, sources=(str(path), *dict.fromkeys(resolver.read)))
 
