@@ -45,6 +45,9 @@ def add_parser(subparsers) -> None:
                            "overrides) (default: the clock runs)")
     w.add_argument("--overwrite", action="store_true",
                    help="replace files in the output that no earlier export wrote (default: refuse; inputs never)")
+    w.add_argument("--allow-outside", action="store_true",
+                   help="let a scene's page carry files from outside the scene file's folder (default: refuse: "
+                        "a page is shared, and ../ or absolute paths could reach private files)")
     w.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C (default: only write)")
     w.add_argument("--port", type=int, default=8000, help="port for --serve; a busy one is replaced by a free one (default: %(default)s)")
     w.set_defaults(handler=run)
@@ -68,7 +71,7 @@ def run(args) -> None:
         if args.up != "y":
             raise AxialDeformError(f"--up: a scene file ({args.mesh}) names its own up axis; expected no --up")
         web = build_scene_file(scene, size=size, mode=args.mode, quantize=not args.float32,
-                               fixed_size=args.size is not None, time=time)
+                               fixed_size=args.size is not None, time=time, allow_outside=args.allow_outside)
         page = write_page(out, web, inputs=scene.sources, overwrite=args.overwrite)
         layers = [layer for layer in web.config["layers"] if not layer["terrain"]]
         print(f"wrote {page} ({len(layers)} layers{', a terrain' if len(layers) < len(web.config['layers']) else ''}, "

@@ -23,11 +23,13 @@ This is an application layer: ``core/`` and ``gl/`` never import it.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..core.errors import AxialDeformError
 from ..core.io.gltf import encode_base_mesh
+from ..core.io.mesh import mesh_source_path
 from ..core.io.params import encode_binary
 from ..core.look import DEFAULT_LOOK
 from ..core.options import RenderOptions
@@ -332,8 +334,22 @@ def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, opt
     return WebScene(config, files)
 
 
+def check_inside(scene) -> None:
+    """Refuse a scene whose page would carry a file from outside the scene file's folder (``../`` or an
+    absolute path in it, or a link out of it): a page is shared.  The package's bundled meshes are fine."""
+    if scene.path is None:
+        return
+    folder = os.path.realpath(Path(scene.path).parent)
+    bundled = os.path.dirname(os.path.realpath(mesh_source_path("stone")))
+    for source in scene.sources:
+        real = os.path.realpath(source)
+        if os.path.commonpath([real, folder]) != folder and os.path.commonpath([real, bundled]) != bundled:
+            raise AxialDeformError(f"{scene.path}: names {source}, outside the scene's folder {folder}; a page carries "
+                                   "only files from there (--allow-outside to carry it anyway)")
+
+
 def build_scene_file(scene, page: PageOptions | None = None, *, look=None, options: RenderOptions | None = None,
-                     **fields) -> WebScene:
+                     allow_outside: bool = False, **fields) -> WebScene:
     """The page's data for a loaded scene file (:func:`axialdeform.core.scene.load_scene`):
     every layer (its base mesh and parameters: one instanced draw per part),
     the terrain (one undeformed instance of itself, float32), the scene's
@@ -341,7 +357,10 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
     background, light and wind (``options.wind`` replaces the scene's; ``options.time``
     freezes its clock; ``look`` replaces :attr:`Scene.look`), as
     ``axialdeform render SCENE [--time T]`` draws them.  ``page``, ``options`` and ``**fields``
-    as :func:`build_scene`'s."""
+    as :func:`build_scene`'s.  A page is shared: a file the scene names outside its own folder
+    (``../``, an absolute path, a link out of it) is refused unless ``allow_outside``."""
+    if not allow_outside:
+        check_inside(scene)
 
     from ..gl.scene import (  # the GL layer (pyrr) only when a page is built
         TERRAIN_INSTANCE,

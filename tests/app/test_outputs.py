@@ -158,3 +158,19 @@ def test_no_output_replaces_a_file_an_input_names(folder):
     for name, data in {**before, **more}.items():
         assert (folder / name).read_bytes() == data, name
     assert run("render", "s.toml", "-o", "ok.png", "--size", "32x24", cwd=folder).returncode == 0  # the scene is fine
+
+
+def test_a_page_carries_no_file_from_outside_the_scenes_folder(folder):
+    """A scene naming ../ (or an absolute path) would put that file into a page meant to be shared:
+    refused in one line unless --allow-outside; the bundled meshes are the package's, always fine."""
+    (folder / "inner").mkdir()
+    (folder / "inner" / "s.toml").write_text('[[layer]]\nname = "a"\nmesh = "stone"\nparams = "../p.adp"\n')
+    refused(run("web", "inner/s.toml", "-o", "page.html", cwd=folder), "inner/s.toml", "outside the scene's folder",
+            "--allow-outside")
+    assert not (folder / "page.html").exists()
+    (folder / "inner" / "t.toml").write_text(f'[[layer]]\nname = "a"\nmesh = "stone"\nparams = "{folder / "p.adp"}"\n')
+    refused(run("web", "inner/t.toml", "-o", "page.html", cwd=folder), "outside the scene's folder")
+    assert run("web", "inner/s.toml", "-o", "page.html", "--allow-outside", cwd=folder).returncode == 0
+    shutil.copy(folder / "p.adp", folder / "inner" / "p.adp")
+    (folder / "inner" / "u.toml").write_text('[[layer]]\nname = "a"\nmesh = "stone"\nparams = "p.adp"\n')
+    assert run("web", "inner/u.toml", "-o", "page2.html", cwd=folder).returncode == 0

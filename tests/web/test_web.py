@@ -653,10 +653,11 @@ mesh = "leaf"
 params = "leaves.adp"
 wind = true
 """)
-    _write(base / "land.toml", f"""
+    shutil.copy(LANDSCAPE / "terrain.png", base / "terrain.png")  # a page carries files of the scene's folder
+    _write(base / "land.toml", """
 background = [0.80, 0.87, 0.95]
 [terrain]
-heightmap = {json.dumps(str(LANDSCAPE / "terrain.png"))}
+heightmap = "terrain.png"
 height_scale = 6.0
 extent = [40.0, 30.0]
 color = [0.42, 0.40, 0.30]
@@ -714,10 +715,11 @@ def test_scene_page_config_has_every_layer_terrain_light_and_wind(tmp_path):
 
     mesh = ad.load_mesh("stone")
     ad.write_params(tmp_path / "s.adp", ad.random_params(mesh, 20, seed=1), mesh)
-    path = _write(tmp_path / "s.toml", f"""
+    shutil.copy(LANDSCAPE / "terrain.png", tmp_path / "terrain.png")
+    path = _write(tmp_path / "s.toml", """
 background = [0.1, 0.2, 0.3]
 [terrain]
-heightmap = {json.dumps(str(LANDSCAPE / "terrain.png"))}
+heightmap = "terrain.png"
 extent = 10.0
 [light]
 direction = [0.0, 1.0, 0.0]
