@@ -156,6 +156,14 @@ class BaseMesh:
             return self  # the frame it has
         return dataclasses.replace(self, axis_frame=axis, _axis=None, tree=None)
 
+    def with_control_axis(self, axis: ControlAxis) -> BaseMesh:
+        """This mesh with exactly ``axis`` (the numbers a file records: its frame, ``lo``, ``length``
+        and axis line), not the one its points give."""
+        out = dataclasses.replace(self, axis_frame=axis.matrix if axis.framed else "xyz"[axis.index], _axis=None,
+                                  tree=None)
+        object.__setattr__(out, "_axis", axis)
+        return out
+
     def with_axes(self, axes, axis="auto") -> BaseMesh:
         """This mesh with several axes in a hierarchy (``docs/method.md``,
         "Several axes"; :mod:`axialdeform.core.axes`):

@@ -85,3 +85,103 @@ def test_the_schema_refuses_what_a_loader_could_not_use():
                 {**good, "fingerprint": "xyz"}):
         with pytest.raises(jsonschema.ValidationError):
             jsonschema.validate(bad, SCHEMA)
+
+
+def _spec_only_glb(path: Path, ext_change=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """A GLB written from docs/gltf/AXIALDEFORM_bend alone (pygltflib and numpy, no axialdeform): a
+    box lying diagonally (30 degrees about z), its framed axis, 5 instances; no extras."""
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    frame = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    local = np.array([[x, y, z] for x in (0.0, 4.0) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+    positions = (local @ frame).astype(np.float32)  # rows: local coordinates back to model space
+    faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
+                      [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]], dtype=np.uint32)
+    rng = np.random.default_rng(3)
+    n = 5
+    offsets = rng.uniform(-0.3, 0.3, (n, 10)).astype(np.float32)
+    translation = rng.uniform(-5, 5, (n, 3)).astype(np.float32)
+    angles = np.zeros((n, 3), dtype=np.float32)
+    rotation = np.tile(np.array([0, 0, 0, 1], dtype=np.float32), (n, 1))
+    arrays = [(positions, "VEC3"), (faces.reshape(-1), "SCALAR"), (translation, "VEC3"), (rotation, "VEC4"),
+              (offsets[:, :4].copy(), "VEC4"), (offsets[:, 4:8].copy(), "VEC4"), (offsets[:, 8:].copy(), "VEC2"),
+              (angles, "VEC3")]
+    blob, views, accessors = b"", [], []
+    for k, (a, kind) in enumerate(arrays):
+        data = a.tobytes()
+        views.append(pygltflib.BufferView(buffer=0, byteOffset=len(blob), byteLength=len(data)))
+        acc = pygltflib.Accessor(bufferView=k, componentType=5125 if a.dtype == np.uint32 else 5126,
+                                 count=len(a), type=kind)
+        if k == 0:
+            acc.min, acc.max = positions.min(axis=0).tolist(), positions.max(axis=0).tolist()
+        accessors.append(acc)
+        blob += data + b"\0" * (-len(data) % 4)
+    ext = {"numbersPerInstance": 16, "axis": {"frame": frame.tolist(), "lo": 0.0, "length": 4.0, "center": [0.0, 0.0]}}
+    if ext_change:
+        ext_change(ext)
+    names = ["TRANSLATION", "ROTATION", "_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5", "_AXIAL_ANGLES"]
+    gltf = pygltflib.GLTF2(
+        scene=0, scenes=[pygltflib.Scene(nodes=[0])], buffers=[pygltflib.Buffer(byteLength=len(blob))],
+        bufferViews=views, accessors=accessors,
+        meshes=[pygltflib.Mesh(primitives=[pygltflib.Primitive(attributes=pygltflib.Attributes(POSITION=0),
+                                                               indices=1, mode=4)])],
+        nodes=[pygltflib.Node(mesh=0, extensions={INSTANCING: {"attributes": {k: 2 + i for i, k in enumerate(names)}},
+                                                  BEND_EXTENSION: ext})],
+        extensionsUsed=[INSTANCING, BEND_EXTENSION])
+    gltf.set_binary_blob(blob)
+    gltf.save_binary(str(path))
+    params = np.concatenate([offsets, translation, angles], axis=1)
+    return positions, faces, params, ext
+
+
+def test_python_reads_a_file_written_from_the_extensions_spec_alone(tmp_path):
+    """No extras: the bend is read from AXIALDEFORM_bend (the frame, lo, length, axis line) and the
+    instances bend as axialdeform bends the same mesh in the same frame."""
+    from axialdeform.core.io.gltf import read_instanced_glb
+
+    positions, faces, params, ext = _spec_only_glb(tmp_path / "spec.glb")
+    mesh, got = read_instanced_glb(tmp_path / "spec.glb")
+    assert np.array_equal(np.asarray(got), params)
+    assert mesh.axis.framed and np.allclose(mesh.axis.matrix, ext["axis"]["frame"])
+    assert (mesh.axis.lo, mesh.axis.length) == (0.0, 4.0) and np.allclose(mesh.axis.line, (0.0, 0.0))
+    ours = ad.core.BaseMesh(positions, ad.core.mesh.area_weighted_normals(positions, faces), faces).with_axis(
+        np.asarray(ext["axis"]["frame"]))
+    want, _ = ad.deform(ours, params)
+    bent, _ = ad.deform(mesh, got)
+    assert np.abs(bent - want).max() < 1e-5 * 4.0
+
+
+@pytest.mark.parametrize("change,words", [
+    (lambda e: e["axis"]["frame"][2].__setitem__(2, "nan"), "axis frame: expected 3 finite number"),
+    (lambda e: e["axis"].__setitem__("frame", [[1, 0, 0], [1, 0, 0], [0, 0, 1]]), "axis frame: the frame is not orthogonal"),
+    (lambda e: e["axis"].__setitem__("length", 0.0), "axis length: expected 1 finite positive number"),
+    (lambda e: e["axis"].__setitem__("center", [0.0]), "axis center: expected 2 finite number"),
+    (lambda e: e["axis"].__setitem__("center", "0,0"), "axis center: expected 2 finite number"),
+    (lambda e: e.__setitem__("fingerprint", 12345), "fingerprint: expected 64 lower-case hex digits"),
+    (lambda e: e.__setitem__("numbersPerInstance", 19), "numbersPerInstance: 19, but the instance attributes hold 16"),
+    (lambda e: e.__setitem__("numbersPerInstance", 17), "numbersPerInstance: expected 16, 19 or 22"),
+    (lambda e: e.__setitem__("numbersPerInstance", 26), "numbersPerInstance 26 is 2 axes an instance, but the extension has no axes"),
+    (lambda e: e.__setitem__("axis", None), "axis: expected an object"),
+])
+def test_a_broken_extension_is_refused_naming_the_field(tmp_path, change, words):
+    from axialdeform.core.io.gltf import read_instanced_glb
+
+    _spec_only_glb(tmp_path / "bad.glb", change)
+    with pytest.raises(ad.core.GltfError, match="bad.glb: node .*AXIALDEFORM_bend: " + words.replace("(", r"\(")):
+        read_instanced_glb(tmp_path / "bad.glb")
+
+
+def test_a_negative_accessor_count_and_a_numeric_fingerprint_are_refused_in_words(tmp_path):
+    from axialdeform.core.io.gltf import read_instanced_glb
+
+    _spec_only_glb(tmp_path / "n.glb")
+    g = pygltflib.GLTF2().load(str(tmp_path / "n.glb"))
+    g.accessors[2].count = -3  # TRANSLATION
+    g.save(str(tmp_path / "neg.glb"))
+    with pytest.raises(ad.core.GltfError, match=r"neg.glb: TRANSLATION: accessor 2 count: expected a whole number"):
+        read_instanced_glb(tmp_path / "neg.glb")
+    g = pygltflib.GLTF2().load(str(tmp_path / "n.glb"))
+    del g.nodes[0].extensions[BEND_EXTENSION]  # a file of this library's extras only
+    g.nodes[0].extras = {"axialdeform": {"mesh_fingerprint": 12345}}
+    g.save(str(tmp_path / "fp.glb"))
+    with pytest.raises(ad.core.GltfError, match="fp.glb: extras mesh_fingerprint: expected a hex string"):
+        read_instanced_glb(tmp_path / "fp.glb")

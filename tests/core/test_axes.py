@@ -260,10 +260,17 @@ def test_hostile_tree_files_are_refused_in_words(tree, tmp_path):
     ad.export_glb(glb, tree, p, "instanced")
     g = pygltflib.GLTF2().load(str(glb))
     node = next(n for n in g.nodes if n.extensions)
-    node.extras["axialdeform"]["axes"]["parents"] = [-1] + [5] * 9  # a parent after its child
+    bend = node.extensions["AXIALDEFORM_bend"]  # the open extension is what a reader reads
+    bend["axes"]["parents"] = [-1] + [5] * 9  # a parent after its child
     g.save(str(tmp_path / "u.glb"))
-    with pytest.raises(GltfError, match="u.glb: extras axes: axes: parents: expected -1 for axis 0"):
+    with pytest.raises(GltfError, match="u.glb: node .* AXIALDEFORM_bend: axes: parents: expected -1 for axis 0"):
         read_instanced_glb(tmp_path / "u.glb")
+    # a file with only this library's extras (before the extension): they are read, and checked
+    del node.extensions["AXIALDEFORM_bend"]
+    node.extras["axialdeform"]["axes"]["parents"] = [-1] + [5] * 9
+    g.save(str(tmp_path / "v.glb"))
+    with pytest.raises(GltfError, match="v.glb: extras axes: axes: parents: expected -1 for axis 0"):
+        read_instanced_glb(tmp_path / "v.glb")
     assert json.dumps(node.extras["axialdeform"]["count"]) == "3"
 
 

@@ -269,6 +269,12 @@ def read_accessor(gltf, blob: bytes, index, name: str, where: str) -> np.ndarray
     if acc.componentType not in DTYPES or acc.type not in COMPONENTS or acc.bufferView is None:
         raise GltfError(f"{where}: {name}: unsupported accessor ({acc.type} of component type {acc.componentType}, "
                         f"bufferView {acc.bufferView})")
+    if not (isinstance(acc.count, int) and 0 <= acc.count <= len(blob)):
+        raise GltfError(f"{where}: {name}: accessor {index} count: expected a whole number 0..{len(blob)} (what the "
+                        f"binary chunk can hold), found {acc.count!r:.40}")
+    if not (isinstance(acc.bufferView, int) and 0 <= acc.bufferView < len(gltf.bufferViews)):
+        raise GltfError(f"{where}: {name}: accessor {index} bufferView: expected 0..{len(gltf.bufferViews) - 1}, "
+                        f"found {acc.bufferView!r:.40}")
     view = gltf.bufferViews[acc.bufferView]
     dtype = np.dtype(DTYPES[acc.componentType]).newbyteorder("<")
     comps = COMPONENTS[acc.type]

@@ -3,12 +3,16 @@ bend (``AXIALDEFORM_bend``, and this library's ``extras``), and the ``extras`` o
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
 
+from ..axis import PERPENDICULAR, ControlAxis, axis_frame_matrix
 from ..errors import AxialDeformError, GltfError, MeshMismatchError
 from ..mesh import BaseMesh, area_weighted_normals
 from ..params import as_params
@@ -18,7 +22,9 @@ from ..record import (
     POSITION,
     SCALE,
     WIDTHS,
+    is_record_width,
     join_record,
+    tree_shape,
 )
 from ..transforms import (
     angles_from_matrices,
@@ -27,6 +33,7 @@ from ..transforms import (
 from .glb import (
     ATTRIBUTES,
     AXIS_ATTRIBUTE,
+    BEND_EXTENSION,
     COMPONENTS,
     EXTENDED_ATTRIBUTES,
     EXTRAS_KEY,
@@ -130,7 +137,15 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
         normals, from_file = area_weighted_normals(positions, faces), False
     mesh = BaseMesh(positions, normals, faces, name=where, normals_from_file=from_file)
     extras = (node.extras or {}).get(EXTRAS_KEY, {})
+    if not isinstance(extras, dict):
+        extras = {}
+    ext = (node.extensions or {}).get(BEND_EXTENSION)
+    if ext is not None:  # the open extension is the record; this library's extras at most a cache
+        return _read_bend(gltf, blob, prim, ext, extras, cols, mesh, params, f"{where}: node {node.name or '0'} "
+                          f"{BEND_EXTENSION}")
     recorded = extras.get("mesh_fingerprint")
+    if recorded is not None and not isinstance(recorded, str):
+        raise GltfError(f"{where}: extras mesh_fingerprint: expected a hex string, found {recorded!r:.40}")
     if recorded is not None and recorded != mesh.fingerprint.hex():
         raise MeshMismatchError(f"{where}: extras mesh_fingerprint {recorded[:16]} does not match the base mesh in the "
                                 f"file ({mesh.fingerprint.hex()[:16]}); the file was altered")
@@ -149,6 +164,94 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
         mesh, params = _read_tree(gltf, blob, prim, extras["axes"], cols, mesh, params, where)
         return mesh, params
     return mesh, as_params(params, name=where)
+
+
+def _numbers(value, count: int, where: str, positive: bool = False) -> np.ndarray:
+    """``count`` finite numbers (> 0 with ``positive``) as float64, else a GltfError naming ``where``."""
+    ok = isinstance(value, (list, tuple)) and len(value) == count and all(
+        isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and (x > 0 or not positive)
+        for x in value)
+    if not ok:
+        raise GltfError(f"{where}: expected {count} finite{' positive' if positive else ''} number(s), found "
+                        f"{value!r:.120}")
+    return np.asarray(value, dtype=np.float64)
+
+
+def _frame(value, where: str) -> np.ndarray:
+    rows = value if isinstance(value, (list, tuple)) and len(value) == 3 else None
+    if rows is None:
+        raise GltfError(f"{where}: expected 3 rows of 3 numbers (e_a, e_u, e_v), found {value!r:.120}")
+    f = np.stack([_numbers(r, 3, where) for r in rows])
+    try:
+        return axis_frame_matrix(f, where)
+    except AxialDeformError as exc:
+        raise GltfError(str(exc)) from None
+
+
+def _read_bend(gltf, blob, prim, ext, extras, cols, mesh, params, where):
+    """The bend an ``AXIALDEFORM_bend`` object records (docs/gltf/AXIALDEFORM_bend), checked before
+    anything is sized by it: the numbers per instance, the control axis (frame, lo, length, the
+    axis line), a tree's axes, the fingerprint; the mesh and its instances as the extension says."""
+    if not isinstance(ext, dict):
+        raise GltfError(f"{where}: expected an object, found {type(ext).__name__}")
+    numbers = ext.get("numbersPerInstance")
+    if not isinstance(numbers, int) or isinstance(numbers, bool) or not is_record_width(numbers):
+        raise GltfError(f"{where}: numbersPerInstance: expected 16, 19 or 22 plus 10 per axis after the first, "
+                        f"found {numbers!r:.40}")
+    axis = ext.get("axis")
+    if not isinstance(axis, dict):
+        raise GltfError(f"{where}: axis: expected an object with frame, lo, length and center, found {axis!r:.80}")
+    frame = _frame(axis.get("frame"), f"{where}: axis frame")
+    lo = float(_numbers([axis.get("lo")], 1, f"{where}: axis lo")[0])
+    length = float(_numbers([axis.get("length")], 1, f"{where}: axis length", positive=True)[0])
+    center = _numbers(axis.get("center"), 2, f"{where}: axis center")
+    fingerprint = ext.get("fingerprint")
+    if fingerprint is not None and not (isinstance(fingerprint, str) and re.fullmatch(r"[0-9a-f]{64}", fingerprint)):
+        raise GltfError(f"{where}: fingerprint: expected 64 lower-case hex digits (SHA-256), found {fingerprint!r:.80}")
+    if fingerprint is not None and fingerprint != mesh.fingerprint.hex():
+        raise MeshMismatchError(f"{where}: fingerprint {fingerprint[:16]} does not match the base mesh in the file "
+                                f"({mesh.fingerprint.hex()[:16]}); the file was altered")
+    k = tree_shape(numbers)[0]
+    axes = ext.get("axes")
+    if (k > 1) != (axes is not None):
+        raise GltfError(f"{where}: numbersPerInstance {numbers} is {k} axes an instance, but the extension "
+                        f"{'has no' if axes is None else 'has'} axes")
+    aligned = next((i for i in range(3) if np.array_equal(frame, np.eye(3)[[i, *PERPENDICULAR[i]]])), -1)
+    mid = frame.T @ np.array([lo + length / 2, *center])  # the axis line's middle, model space
+    exact = ControlAxis(index=aligned, lo=lo, length=length, center=tuple(float(c) for c in mid),
+                        frame=None if aligned >= 0 else tuple(map(tuple, frame)), kind="matrix")
+    if k == 1:
+        if params.shape[1] != numbers:
+            raise GltfError(f"{where}: numbersPerInstance: {numbers}, but the instance attributes hold "
+                            f"{params.shape[1]} numbers an instance")
+        return mesh.with_control_axis(exact), as_params(params, name=where)
+    if not isinstance(axes, dict) or axes.get("count") != k:
+        raise GltfError(f"{where}: axes: expected an object of count {k} (numbersPerInstance {numbers}), found "
+                        f"{axes!r:.80}")
+    from ..axes import check_parents
+
+    try:
+        parents = check_parents(axes.get("parents"), k)
+    except AxialDeformError as exc:
+        raise GltfError(f"{where}: {exc}") from None
+    frames = axes.get("frames")
+    if not isinstance(frames, list) or len(frames) != k:
+        raise GltfError(f"{where}: axes frames: expected {k} frames, found {frames!r:.80}")
+    frames = [_frame(f, f"{where}: axes frames[{j}]") for j, f in enumerate(frames)]
+    los = _numbers(axes.get("lo"), k, f"{where}: axes lo")
+    lengths = _numbers(axes.get("length"), k, f"{where}: axes length", positive=True)
+    cached = extras.get("axes") if isinstance(extras.get("axes"), dict) else {}
+    names = cached.get("names") if isinstance(cached.get("names"), list) and len(cached.get("names")) == k else \
+        [f"axis{j}" for j in range(k)]
+    record = {"count": k, "parents": list(parents), "frames": [f.tolist() for f in frames], "names": names}
+    mesh, params = _read_tree(gltf, blob, prim, record, cols, mesh, params, where)
+    tree = mesh.tree
+    lengths_lo = [dataclasses.replace(a, lo=float(los[j]), length=float(lengths[j])) for j, a in enumerate(tree.axes)]
+    lengths_lo[0] = exact
+    if params.shape[1] != numbers:
+        raise GltfError(f"{where}: numbersPerInstance: {numbers}, but the instance attributes hold "
+                        f"{params.shape[1]} numbers an instance")
+    return dataclasses.replace(mesh, tree=dataclasses.replace(tree, axes=tuple(lengths_lo))), params
 
 
 def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
