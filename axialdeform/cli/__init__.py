@@ -11,6 +11,7 @@ User errors print one line to stderr and exit with status 2, no traceback.
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import sys
@@ -37,6 +38,19 @@ class _Parser(argparse.ArgumentParser):
         if "COMMAND" in message:  # no command at all: what there is to ask for
             self.print_usage(sys.stderr)
         self.exit(2, f"{self.prog}: error: {one_line(message)} (see '{self.prog} --help')\n")
+
+
+#: what the operating system's refusals mean for the file being written or read
+_OS_HINTS = {errno.ENOSPC: "the disk is full; expected room for the output (free some space or write elsewhere)",
+             errno.EDQUOT: "the disk quota is used up; expected room for the output",
+             errno.EACCES: "permission denied; expected a file or folder this user may use",
+             errno.EROFS: "the file system is read-only; expected a writable place for the output"}
+
+
+def os_error_in_words(exc: OSError) -> str:
+    """An operating system error as one sentence naming the file: ``PATH: the disk is full; ...``."""
+    what = _OS_HINTS.get(exc.errno, exc.strerror or str(exc))
+    return f"{exc.filename}: {what}" if getattr(exc, "filename", None) else what
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -97,8 +111,7 @@ def main(argv=None) -> int:
         print(f"axialdeform {args.command}: error: {one_line(exc)}", file=sys.stderr)
         return 2
     except OSError as exc:
-        where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
-        print(f"axialdeform {args.command}: error:{one_line(where)} {one_line(exc.strerror or exc)}", file=sys.stderr)
+        print(f"axialdeform {args.command}: error: {one_line(os_error_in_words(exc))}", file=sys.stderr)
         return 2
     except MemoryError:
         print(f"axialdeform {args.command}: error: out of memory (the input asks for more than this machine has; "

@@ -138,3 +138,20 @@ def test_no_warning_before_the_error_that_refuses_a_gltf(tmp_path):
         with pytest.raises(ad.AxialDeformError, match="bad.gltf"):
             ad.load_mesh(tmp_path / "bad.gltf")
     assert [str(w.message) for w in caught if "not supported" in str(w.message)] == []
+
+
+def test_a_full_disk_is_said_in_words(tmp_path, monkeypatch, capsys):
+    """ENOSPC (and its kin) as a sentence naming the file, not 'PATH No space left on device'."""
+    import errno
+
+    from axialdeform.cli import main
+    from axialdeform.cli import random as random_cmd
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "r.adp"))
+
+    monkeypatch.setattr(random_cmd, "write_param_chunks", full)
+    assert main(["random", "stone", "-n", "3", "-o", str(tmp_path / "r.adp")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"axialdeform random: error: {tmp_path / 'r.adp'}: the disk is full; expected room for the output "
+                   "(free some space or write elsewhere)"], err

@@ -19,6 +19,7 @@ from ..params import as_params
 from ..record import (
     ANGLES,
     GLTF_TINT_ATTRIBUTE,
+    MAX_RECORD_AXES,
     POSITION,
     SCALE,
     WIDTHS,
@@ -264,6 +265,8 @@ def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
         parents, frames, names = list(record["parents"]), list(record["frames"]), list(record["names"])
     except (KeyError, TypeError, ValueError):
         raise GltfError(f"{where}: extras axes: expected count, names, parents and frames, found {record!r}"[:300]) from None
+    if not 2 <= k <= MAX_RECORD_AXES:  # before anything is sized by it
+        raise GltfError(f"{where}: axes count: expected 2 to {MAX_RECORD_AXES} axes, found {k}")
     index = getattr(prim.attributes, AXIS_ATTRIBUTE, None)
     if index is None:
         raise GltfError(f"{where}: a mesh of {k} axes needs the vertex attribute {AXIS_ATTRIBUTE}; found none")
