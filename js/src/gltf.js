@@ -5,6 +5,7 @@
 //     loader.register((parser) => new AxialGLTFPlugin(parser));
 
 import { AxialError } from './adp.js';
+import { MAX_AXES, WIDTHS } from './record.js';
 import { AxialInstancedMesh } from './mesh.js';
 
 /** The extension's name. */
@@ -80,11 +81,74 @@ export function recordFromInstancedMesh(mesh, ext, where = 'node') {
   return { name: where, count: n, numbersPerInstance: f, axes: k, data };
 }
 
+const FRAME_TOLERANCE = 1e-6; // as axialdeform.core.axis
+
+function numbers(value, count, where, positive = false) {
+  const ok = Array.isArray(value) && value.length === count &&
+    value.every((x) => typeof x === 'number' && Number.isFinite(x) && (!positive || x > 0));
+  if (!ok) {
+    throw new AxialError(`${where}: expected ${count} finite${positive ? ' positive' : ''} number(s), found ${JSON.stringify(value)?.slice(0, 120)}`);
+  }
+  return value;
+}
+
+function frameRows(value, where) {
+  if (!Array.isArray(value) || value.length !== 3) {
+    throw new AxialError(`${where}: expected 3 rows of 3 numbers (e_a, e_u, e_v), found ${JSON.stringify(value)?.slice(0, 120)}`);
+  }
+  const f = value.map((row) => numbers(row, 3, where));
+  let err = 0;
+  for (let i = 0; i < 3; i++) {
+    for (let j = 0; j < 3; j++) {
+      err = Math.max(err, Math.abs(f[i][0] * f[j][0] + f[i][1] * f[j][1] + f[i][2] * f[j][2] - (i === j ? 1 : 0)));
+    }
+  }
+  if (!(err <= FRAME_TOLERANCE)) throw new AxialError(`${where}: the frame is not orthogonal (|F·Fᵀ − I| = ${err.toPrecision(3)}); expected orthonormal rows`);
+  return f;
+}
+
+/**
+ * Check a node's AXIALDEFORM_bend object against docs/gltf/AXIALDEFORM_bend (the rules its schema
+ * says and those it cannot: a tree's parents before their children, orthonormal finite frames,
+ * lengths > 0, the numbers per instance matching the axes, at most 64 axes) before anything is sized
+ * by it; an AxialError naming the node and the field, as axialdeform's Python reader does.
+ */
+export function checkBendExtension(ext, where = 'node') {
+  const at = `${where}: ${EXTENSION}`;
+  if (!ext || typeof ext !== 'object' || Array.isArray(ext)) throw new AxialError(`${at}: expected an object`);
+  const f = ext.numbersPerInstance, axes = ext.axes;
+  const k = axes === undefined || axes === null ? 1 : axes.count;
+  if (!Number.isInteger(k) || k < 2 && axes != null || k > MAX_AXES) {
+    throw new AxialError(`${at}: axes count: expected 2 to ${MAX_AXES} axes, found ${JSON.stringify(k)?.slice(0, 40)}`);
+  }
+  if (!Number.isInteger(f) || !WIDTHS.includes(f - 10 * (k - 1))) {
+    throw new AxialError(`${at}: numbersPerInstance: expected ${WIDTHS.join(', ')} plus 10 per axis after the first (${k} axes), found ${JSON.stringify(f)?.slice(0, 40)}`);
+  }
+  const axis = ext.axis;
+  if (!axis || typeof axis !== 'object') throw new AxialError(`${at}: axis: expected an object with frame, lo, length and center`);
+  frameRows(axis.frame, `${at}: axis frame`);
+  numbers([axis.lo], 1, `${at}: axis lo`);
+  numbers([axis.length], 1, `${at}: axis length`, true);
+  numbers(axis.center, 2, `${at}: axis center`);
+  if (ext.fingerprint !== undefined && !(typeof ext.fingerprint === 'string' && /^[0-9a-f]{64}$/.test(ext.fingerprint))) {
+    throw new AxialError(`${at}: fingerprint: expected 64 lower-case hex digits (SHA-256), found ${JSON.stringify(ext.fingerprint)?.slice(0, 80)}`);
+  }
+  if (k > 1) {
+    const p = axes.parents;
+    if (!Array.isArray(p) || p.length !== k || p[0] !== -1 || p.some((x, i) => i > 0 && !(Number.isInteger(x) && x >= 0 && x < i))) {
+      throw new AxialError(`${at}: axes: parents: expected -1 for axis 0 and a parent p < k for every axis k (no cycle, no forward or negative parent), found ${JSON.stringify(p)?.slice(0, 120)}`);
+    }
+    if (!Array.isArray(axes.frames) || axes.frames.length !== k) throw new AxialError(`${at}: axes frames: expected ${k} frames`);
+    axes.frames.forEach((fr, j) => frameRows(fr, `${at}: axes frames[${j}]`));
+    numbers(axes.lo, k, `${at}: axes lo`);
+    numbers(axes.length, k, `${at}: axes length`, true);
+  }
+  return ext;
+}
+
 /** An AxialInstancedMesh in place of GLTFLoader's InstancedMesh (same geometry, material, name, transform). */
 export function fromInstancedMesh(mesh, ext, where = 'node') {
-  if (!ext || !ext.axis || !Number.isInteger(ext.numbersPerInstance)) {
-    throw new AxialError(`${where}: ${EXTENSION}: expected "axis" and "numbersPerInstance"`);
-  }
+  checkBendExtension(ext, where);
   const record = recordFromInstancedMesh(mesh, ext, where);
   const g = mesh.geometry;
   const bent = new AxialInstancedMesh(g, mesh.material, record, {

@@ -28,6 +28,8 @@ export function injectBend(vertexShader: string, where?: string): string;
 export function fromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): AxialInstancedMesh;
 export function recordFromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): InstanceRecord;
 export function column(start: number, axes?: number): number;
+/** Check a node's AXIALDEFORM_bend object (throws AxialError naming the node and the field). */
+export function checkBendExtension(ext: unknown, where?: string): BendExtension;
 
 /** The instance record (generated from axialdeform.core.record): each field's columns, first column, level. */
 export const RECORD: ReadonlyArray<{ name: string; columns: string[]; start: number; level: number }>;

@@ -6,4 +6,4 @@ export { crc32, dequantize, recordLayout, column, childTexels, texelRows, hex, N
 export { RECORD, WIDTHS, ATTRIBUTES, WIND } from './record.js';
 export { alignedFrame, resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 export { injectBend } from './shader.js';
-export { fromInstancedMesh, recordFromInstancedMesh } from './gltf.js';
+export { fromInstancedMesh, recordFromInstancedMesh, checkBendExtension } from './gltf.js';

@@ -5,7 +5,7 @@ import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import * as THREE from 'three';
 import { parseADP, AxialInstancedMesh, AxialError } from '../src/index.js';
-import { recordFromInstancedMesh, fromInstancedMesh, injectBend } from '../src/helpers.js';
+import { recordFromInstancedMesh, fromInstancedMesh, injectBend, checkBendExtension } from '../src/helpers.js';
 
 const dir = new URL('./fixtures/', import.meta.url);
 const expected = JSON.parse(readFileSync(new URL('expected.json', dir), 'utf8'));
@@ -122,7 +122,7 @@ test('the plugin reads the record back from GLTFLoader\'s instanced mesh, and re
   for (let k = 0; k < n * f; k++) assert.ok(Math.abs(back.data[k] - r.data[k]) < 1e-5, `number ${k % f} of ${Math.floor(k / f)}`);
   const bent = fromInstancedMesh(inst, ext);
   assert.ok(bent.isAxialInstancedMesh && bent.count === n);
-  assert.throws(() => fromInstancedMesh(inst, { numbersPerInstance: f }, 'node 0 (stones)'), /node 0 \(stones\): AXIALDEFORM_bend: expected "axis"/);
+  assert.throws(() => fromInstancedMesh(inst, { numbersPerInstance: f }, 'node 0 (stones)'), /node 0 \(stones\): AXIALDEFORM_bend: axis: expected an object/);
   g.deleteAttribute('_AXIAL_D34');
   assert.throws(() => recordFromInstancedMesh(inst, ext, 'node 3'), /node 3: AXIALDEFORM_bend needs the instance attributes _AXIAL_D34/);
 });
@@ -147,4 +147,27 @@ test('the axis a base mesh GLB records in extras.axialdeform (userData) is enoug
     axes: { count: t.axes.count, names: [], parents: t.axes.parents, frames: t.axes.frames, lo: t.axes.lo, length: t.axes.length } };
   const b = new AxialInstancedMesh(geometryOf('tree'), new THREE.MeshBasicMaterial(), record('tree'), { axis: userTree });
   assert.equal(b.axis.axes.count, 10);
+});
+
+test('the plugin refuses every broken extension of the shared corpus (js/test/cases/bend-cases.json), naming the field', () => {
+  const { cases } = JSON.parse(readFileSync(new URL('./cases/bend-cases.json', import.meta.url), 'utf8'));
+  const valid = { numbersPerInstance: 16, axis: { frame: expected.stone16.axis.frame, lo: expected.stone16.axis.lo,
+    length: expected.stone16.axis.length, center: expected.stone16.axis.center } };
+  assert.ok(checkBendExtension(structuredClone(valid), 'node 0'));
+  for (const c of cases) {
+    const ext = structuredClone(valid);
+    let at = ext;
+    for (const key of c.path.slice(0, -1)) at = at[key];
+    if (c.delete) delete at[c.path.at(-1)]; else at[c.path.at(-1)] = c.value;
+    assert.throws(() => checkBendExtension(ext, 'node 0'), (e) => e instanceof AxialError &&
+      e.message.startsWith('node 0: AXIALDEFORM_bend: ') && e.message.includes(c.expect), JSON.stringify(c));
+  }
+  // a tree's rules: parents before their children, at most 64 axes, the numbers matching the axes
+  const tree = { ...structuredClone(valid), numbersPerInstance: 36,
+    axes: { count: 3, parents: [-1, 2, 1], frames: [valid.axis.frame, valid.axis.frame, valid.axis.frame], lo: [0, 0, 0], length: [1, 1, 1] } };
+  assert.throws(() => checkBendExtension(tree, 'n'), /axes: parents: expected -1 for axis 0/);
+  tree.axes.parents = [-1, 0, 1];
+  assert.equal(checkBendExtension(tree, 'n'), tree);
+  assert.throws(() => checkBendExtension({ ...tree, axes: { ...tree.axes, count: 1e6 } }, 'n'), /axes count: expected 2 to 64 axes, found 1000000/);
+  assert.throws(() => checkBendExtension({ ...tree, numbersPerInstance: 16 }, 'n'), /numbersPerInstance/);
 });

@@ -185,3 +185,27 @@ def test_a_negative_accessor_count_and_a_numeric_fingerprint_are_refused_in_word
     g.save(str(tmp_path / "fp.glb"))
     with pytest.raises(ad.core.GltfError, match="fp.glb: extras mesh_fingerprint: expected a hex string"):
         read_instanced_glb(tmp_path / "fp.glb")
+
+
+CASES_FILE = ROOT / "js" / "test" / "cases" / "bend-cases.json"
+
+
+@pytest.mark.parametrize("case", json.loads(CASES_FILE.read_text())["cases"], ids=lambda c: "/".join(map(str, c["path"])))
+def test_both_readers_refuse_the_shared_corpus_of_broken_extensions(tmp_path, case):
+    """The same broken AXIALDEFORM_bend objects the npm module's node tests refuse (js/test/cases):
+    Python refuses each too, naming the same field."""
+    from axialdeform.core.io.gltf import read_instanced_glb
+
+    def change(ext):
+        at = ext
+        for key in case["path"][:-1]:
+            at = at[key]
+        if case.get("delete"):
+            del at[case["path"][-1]]
+        else:
+            at[case["path"][-1]] = case["value"]
+
+    _spec_only_glb(tmp_path / "bad.glb", change)
+    with pytest.raises(ad.core.GltfError) as info:
+        read_instanced_glb(tmp_path / "bad.glb")
+    assert "AXIALDEFORM_bend: " in str(info.value) and case["expect"] in str(info.value), str(info.value)
