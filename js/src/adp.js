@@ -36,6 +36,12 @@ export function crc32(bytes) {
   return (crc ^ 0xffffffff) >>> 0;
 }
 
+/** Bytes as Python writes them (b'\\x89ADP\\r\\n...'): the messages are the Python reader's, word for word. */
+function pyBytes(bytes) {
+  const named = { 9: '\\t', 10: '\\n', 13: '\\r', 39: "\\'", 92: '\\\\' };
+  return `b'${Array.from(bytes, (b) => named[b] ?? (b >= 32 && b < 127 ? String.fromCharCode(b) : `\\x${b.toString(16).padStart(2, '0')}`)).join('')}'`;
+}
+
 /** Lower-case hex of a Uint8Array. */
 export function hex(bytes) {
   return Array.from(bytes, (b) => b.toString(16).padStart(2, '0')).join('');
@@ -63,32 +69,37 @@ export function parseADP(input, name = 'parameters') {
   const bytes = new Uint8Array(buffer);
   const view = new DataView(buffer);
   const fail = (what) => { throw new AxialError(`${name}: ${what}`); };
-  if (bytes.length < HEADER_BYTES + 4) fail(`truncated: ${bytes.length} bytes, shorter than the 96-byte header and the 4-byte checksum`);
-  if (MAGIC.some((b, i) => bytes[i] !== b)) fail('not an axialdeform parameter file (magic bytes differ)');
+  // the checks, their order and their words are axialdeform.core.io.adp.read_binary_header's
+  const head = bytes.subarray(0, MAGIC.length);
+  if (head.some((b, i) => b !== MAGIC[i])) {
+    fail(`magic: expected ${pyBytes(MAGIC)}, found ${pyBytes(head)}; not a binary parameter file (the text form uses .txt, .csv, .dat)`);
+  }
+  if (bytes.length < HEADER_BYTES + 4) fail(`truncated: ${bytes.length} bytes, expected at least ${HEADER_BYTES + 4} (header + checksum)`);
   const version = view.getUint16(8, true);
-  if (!NUMBERS_OF_VERSION[version]) fail(`version: expected ${Object.keys(NUMBERS_OF_VERSION).join(', ')}, found ${version} (written by a newer axialdeform?)`);
+  if (!NUMBERS_OF_VERSION[version]) {
+    fail(`version: expected ${Object.entries(NUMBERS_OF_VERSION).map(([v, w]) => `${v} (${w} numbers)`).join(', ')}, found ${version} (written by a newer axialdeform?)`);
+  }
+  const encoding = view.getUint16(10, true);
+  if (encoding !== 0 && encoding !== 1) fail(`encoding: expected 0 (float32) or 1 (uint16-quantized), found ${encoding}`);
+  const headerSize = view.getUint32(12, true);
+  if (headerSize !== HEADER_BYTES) fail(`header size: expected ${HEADER_BYTES}, found ${headerSize}`);
   // several axes: K at offset 28 (0 in one-axis files), 10 more numbers per child axis
   const axes = Math.max(1, view.getUint32(28, true));
   if (axes > MAX_AXES) fail(`axes: expected 1 to ${MAX_AXES} axes, found ${axes}`);
   const fields = NUMBERS_OF_VERSION[version] + 10 * (axes - 1);
-  const encoding = view.getUint16(10, true);
-  if (encoding !== 0 && encoding !== 1) fail(`encoding: expected 0 (float32) or 1 (quantized), found ${encoding}`);
-  const headerSize = view.getUint32(12, true);
-  if (headerSize !== HEADER_BYTES) fail(`header size: expected 96, found ${headerSize}`);
   const count64 = view.getBigUint64(16, true);
   const each = encoding === 1 ? 2 * fields : 4 * fields;
   const table = encoding === 1 ? 8 * fields : 0;
   const expected = BigInt(HEADER_BYTES + table + 4) + count64 * BigInt(each);
   if (BigInt(bytes.length) !== expected) {
-    const why = BigInt(bytes.length) < expected ? 'truncated' : 'too long';
-    fail(`${why}: ${bytes.length} bytes, but a count of ${count64} instances needs ${expected}`);
+    fail(`count: the header declares ${count64} instances (${expected} bytes), but the file has ${bytes.length} bytes` +
+         (BigInt(bytes.length) < expected ? ' (truncated?)' : ''));
   }
   const count = Number(count64);
   const stored = view.getUint32(bytes.length - 4, true);
   const computed = crc32(bytes.subarray(0, bytes.length - 4));
   if (stored !== computed) {
-    fail(`checksum: wrong CRC-32 (stored ${stored.toString(16).padStart(8, '0')}, computed ` +
-         `${computed.toString(16).padStart(8, '0')}): the file is corrupt`);
+    fail(`checksum: stored CRC-32 ${stored.toString(16).padStart(8, '0')}, computed ${computed.toString(16).padStart(8, '0')}; the file is corrupt`);
   }
   const axis = view.getInt8(24);
   if (axis < -1 || axis > 4) fail(`axis: expected -1, 0, 1, 2, 3 (a chosen frame) or 4 (several axes), found ${axis}`);
@@ -102,23 +113,53 @@ export function parseADP(input, name = 'parameters') {
   if (encoding === 1) {
     qtable = new Float32Array(buffer.slice(HEADER_BYTES, HEADER_BYTES + table));
     values = new Uint16Array(buffer.slice(HEADER_BYTES + table, HEADER_BYTES + table + count * each));
-    if (!qtable.every(Number.isFinite)) fail('quantization table: a number is not finite');
   } else {
     values = new Float32Array(buffer.slice(HEADER_BYTES, HEADER_BYTES + count * each));
-    if (!values.every(Number.isFinite)) fail('values: a number is not finite (NaN or infinity)');
   }
-  let data = encoding === 0 ? values : null;
+  // the numbers as axialdeform.core.params.as_params checks them: finite (a quantized table may decode
+  // to infinity), a scale > 0, a taper < 1, a tint in 0..1 -- the same bytes get the same answer
+  const data = encoding === 0 ? values : dequantize(values, qtable, fields);
+  checkNumbers(data, fields, axes, name);
   return {
     name, version, encoding: encoding === 1 ? 'quantized' : 'float32', count, numbersPerInstance: fields,
     fields, axes, axis, lo, length,
     fingerprint: fingerprintBytes.some((b) => b !== 0) ? hex(fingerprintBytes) : '',
     fingerprintBytes, frameDigest: hex(frameDigest), frameDigestBytes: frameDigest, values, qtable,
     /** Float32Array (count x numbersPerInstance): the numbers, decoded (min + q step where quantized). */
-    get data() {
-      if (data === null) data = dequantize(values, qtable, fields);
-      return data;
-    },
+    data,
   };
+}
+
+const COLUMNS = RECORD.flatMap((f) => f.columns);
+
+/** The name of column `col` of a record of `axes` axes (axialdeform.core.record.record_fields). */
+export function fieldName(col, axes = 1) {
+  const child = 10 * (axes - 1);
+  if (col < 10) return COLUMNS[col];
+  if (col < 10 + child) return `a${Math.floor((col - 10) / 10) + 1}.${COLUMNS[(col - 10) % 10]}`;
+  return COLUMNS[col - child];
+}
+
+const show = (v) => (Number.isNaN(v) ? 'nan' : v === Infinity ? 'inf' : v === -Infinity ? '-inf' : String(Number(v.toPrecision(9))));
+
+/** Throw an AxialError for the first number of `data` the record refuses, as Python's reader does. */
+function checkNumbers(data, fields, axes, name) {
+  for (let i = 0; i < data.length; i++) {
+    if (!Number.isFinite(data[i])) {
+      throw new AxialError(`${name}: instance ${Math.floor(i / fields)}, field ${fieldName(i % fields, axes)}: expected a finite number, found ${show(data[i])}`);
+    }
+  }
+  const L = recordLayout(fields, axes);
+  const rules = [];
+  if (L.scale !== null) rules.push([L.scale, (v) => v <= 0, 'a scale s > 0'], [L.taper, (v) => v >= 1, 'a taper tp < 1']);
+  if (L.tint !== null) for (let c = 0; c < 3; c++) rules.push([L.tint + c, (v) => v < 0 || v > 1, 'a tint in 0..1 (linear RGB)']);
+  for (const [col, bad, what] of rules) {
+    for (let i = col; i < data.length; i += fields) {
+      if (bad(data[i])) {
+        throw new AxialError(`${name}: instance ${Math.floor(i / fields)}, field ${fieldName(col, axes)}: expected ${what}, found ${show(data[i])}`);
+      }
+    }
+  }
 }
 
 /** value = min[c] + q * step[c] for every stored uint16 (the quantized encoding). */

@@ -2,6 +2,7 @@
 base-mesh check, checksum and truncation."""
 
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -193,3 +194,32 @@ def test_header_says_the_record_bytes(tmp_path, stone, quantize, record):
         h = read_binary_header(path.read_bytes(), str(path))
         assert h.count == n and h.size == path.stat().st_size
         assert h.payload_bytes == record * n
+
+
+CASES = Path(__file__).resolve().parents[2] / "js" / "test" / "cases" / "adp"
+
+
+def test_the_shared_adp_corpus_gets_the_same_answers_in_both_readers(tmp_path):
+    """js/test/cases/adp: mutated files and the Python reader's answers (tools/make_adp_cases.py,
+    rerun here: the committed corpus is what it writes); the npm module's parseADP is held to the same
+    answers, word for word, by js/test/adp.test.mjs."""
+    import json
+    import subprocess
+    import sys
+
+    from axialdeform.core.io.adp import decode_binary
+
+    verdicts = json.loads((CASES / "verdicts.json").read_text())
+    assert len(verdicts) > 50 and sum(v != "ok" for v in verdicts.values()) > 30
+    for name, want in verdicts.items():
+        try:
+            decode_binary((CASES / name).read_bytes(), name)
+            got = "ok"
+        except ad.AxialDeformError as exc:
+            got = str(exc)
+        assert got == want, name
+    subprocess.run([sys.executable, str(Path(__file__).resolve().parents[2] / "tools" / "make_adp_cases.py"),
+                    str(tmp_path)], check=True, capture_output=True)
+    assert json.loads((tmp_path / "verdicts.json").read_text()) == verdicts
+    for name in verdicts:
+        assert (tmp_path / name).read_bytes() == (CASES / name).read_bytes(), name

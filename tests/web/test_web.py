@@ -133,7 +133,7 @@ def test_the_page_parser_reads_every_record_level(tmp_path, stone, quantize):
     assert proc.returncode == 0, proc.stderr
     got = json.loads(proc.stdout)
     assert got[:-1] == [[width, version, 5] for _, width, version in files]
-    assert "version: expected 1, 2, 3, found 4" in got[-1]
+    assert "version: expected 1 (16 numbers), 2 (19 numbers), 3 (22 numbers), found 4" in got[-1]
 
 
 def test_build_scene_refuses_bad_options(stone):
@@ -315,7 +315,7 @@ def _corrupt(kind: str, good: bytes) -> bytes:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind, words", [("truncated", "truncated"), ("checksum", "checksum: wrong CRC-32"),
+@pytest.mark.parametrize("kind, words", [("truncated", "truncated"), ("checksum", "checksum: stored CRC-32"),
                                          ("other mesh", "made for a different base mesh"),
                                          ("other glb", "not the base mesh this page was exported with")])
 def test_bad_parameter_file_shows_why_and_draws_nothing(browser, served, scene_files, kind, words):
@@ -998,7 +998,7 @@ def test_scene_page_with_a_bad_layer_file_says_which(browser, scene_pages):
     v = Visit(browser, scene_pages["url"] + quote("windy bad") + "/index.html")
     try:
         assert v.state["ready"] is False, v.state
-        assert "layer-leaves.adp" in v.state["error"] and "checksum: wrong CRC-32" in v.state["error"]
+        assert "layer-leaves.adp" in v.state["error"] and "checksum: stored CRC-32" in v.state["error"]
         assert v.page.locator(".axd-message").is_visible() and v.page.locator("canvas").count() == 0
     finally:
         v.close()
