@@ -83,18 +83,26 @@ export function recordFromInstancedMesh(mesh, ext, where = 'node') {
 
 const FRAME_TOLERANCE = 1e-6; // as axialdeform.core.axis
 
+/** A value for a message, bounded (a file's array of a million items is not copied into it). */
+function brief(value) {
+  if (Array.isArray(value) && value.length > 8) return `[${value.slice(0, 8).map(brief).join(', ')}, ... (${value.length} items)]`;
+  if (Array.isArray(value)) return `[${value.map(brief).join(', ')}]`;
+  const text = JSON.stringify(value);
+  return text === undefined ? String(value) : text.length > 80 ? `${text.slice(0, 80)}...` : text;
+}
+
 function numbers(value, count, where, positive = false) {
   const ok = Array.isArray(value) && value.length === count &&
     value.every((x) => typeof x === 'number' && Number.isFinite(x) && (!positive || x > 0));
   if (!ok) {
-    throw new AxialError(`${where}: expected ${count} finite${positive ? ' positive' : ''} number(s), found ${JSON.stringify(value)?.slice(0, 120)}`);
+    throw new AxialError(`${where}: expected ${count} finite${positive ? ' positive' : ''} number(s), found ${brief(value)}`);
   }
   return value;
 }
 
 function frameRows(value, where) {
   if (!Array.isArray(value) || value.length !== 3) {
-    throw new AxialError(`${where}: expected 3 rows of 3 numbers (e_a, e_u, e_v), found ${JSON.stringify(value)?.slice(0, 120)}`);
+    throw new AxialError(`${where}: expected 3 rows of 3 numbers (e_a, e_u, e_v), found ${brief(value)}`);
   }
   const f = value.map((row) => numbers(row, 3, where));
   let err = 0;
@@ -119,10 +127,10 @@ export function checkBendExtension(ext, where = 'node') {
   const f = ext.numbersPerInstance, axes = ext.axes;
   const k = axes === undefined || axes === null ? 1 : axes.count;
   if (!Number.isInteger(k) || k < 2 && axes != null || k > MAX_AXES) {
-    throw new AxialError(`${at}: axes count: expected 2 to ${MAX_AXES} axes, found ${JSON.stringify(k)?.slice(0, 40)}`);
+    throw new AxialError(`${at}: axes count: expected 2 to ${MAX_AXES} axes, found ${brief(k)}`);
   }
   if (!Number.isInteger(f) || !WIDTHS.includes(f - 10 * (k - 1))) {
-    throw new AxialError(`${at}: numbersPerInstance: expected ${WIDTHS.join(', ')} plus 10 per axis after the first (${k} axes), found ${JSON.stringify(f)?.slice(0, 40)}`);
+    throw new AxialError(`${at}: numbersPerInstance: expected ${WIDTHS.join(', ')} plus 10 per axis after the first (${k} axes), found ${brief(f)}`);
   }
   const axis = ext.axis;
   if (!axis || typeof axis !== 'object') throw new AxialError(`${at}: axis: expected an object with frame, lo, length and center`);
@@ -131,12 +139,12 @@ export function checkBendExtension(ext, where = 'node') {
   numbers([axis.length], 1, `${at}: axis length`, true);
   numbers(axis.center, 2, `${at}: axis center`);
   if (ext.fingerprint !== undefined && !(typeof ext.fingerprint === 'string' && /^[0-9a-f]{64}$/.test(ext.fingerprint))) {
-    throw new AxialError(`${at}: fingerprint: expected 64 lower-case hex digits (SHA-256), found ${JSON.stringify(ext.fingerprint)?.slice(0, 80)}`);
+    throw new AxialError(`${at}: fingerprint: expected 64 lower-case hex digits (SHA-256), found ${brief(ext.fingerprint)}`);
   }
   if (k > 1) {
     const p = axes.parents;
     if (!Array.isArray(p) || p.length !== k || p[0] !== -1 || p.some((x, i) => i > 0 && !(Number.isInteger(x) && x >= 0 && x < i))) {
-      throw new AxialError(`${at}: axes: parents: expected -1 for axis 0 and a parent p < k for every axis k (no cycle, no forward or negative parent), found ${JSON.stringify(p)?.slice(0, 120)}`);
+      throw new AxialError(`${at}: axes: parents: expected -1 for axis 0 and a parent p < k for every axis k (no cycle, no forward or negative parent), found ${brief(p)}`);
     }
     if (!Array.isArray(axes.frames) || axes.frames.length !== k) throw new AxialError(`${at}: axes frames: expected ${k} frames`);
     axes.frames.forEach((fr, j) => frameRows(fr, `${at}: axes frames[${j}]`));

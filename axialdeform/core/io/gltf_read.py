@@ -87,6 +87,10 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     if missing or ("_AXIAL_ANGLES" not in attrs and "ROTATION" not in attrs):
         raise GltfError(f"{where}: {INSTANCING} attributes: expected TRANSLATION, ROTATION and "
                         f"{', '.join(ATTRIBUTES)}; missing {', '.join(missing) or 'ROTATION'}")
+    children = [name for name in attrs if str(name).startswith("_AXIAL_A") and str(name)[8:9].isdigit()]
+    if len(attrs) > 16 + 3 * MAX_RECORD_AXES or len(children) > 3 * (MAX_RECORD_AXES - 1):  # before reading any
+        raise GltfError(f"{where}: {INSTANCING} attributes: {len(attrs)} of them ({len(children)} of child axes); "
+                        f"expected at most {MAX_RECORD_AXES} axes' worth")
     cols = {name: read_accessor(gltf, blob, attrs[name], name, where) for name in attrs}
     counts = {len(v) for v in cols.values()}
     if len(counts) != 1:
