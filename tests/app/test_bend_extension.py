@@ -209,3 +209,17 @@ def test_both_readers_refuse_the_shared_corpus_of_broken_extensions(tmp_path, ca
     with pytest.raises(ad.core.GltfError) as info:
         read_instanced_glb(tmp_path / "bad.glb")
     assert "AXIALDEFORM_bend: " in str(info.value) and case["expect"] in str(info.value), str(info.value)
+
+
+def test_a_node_with_more_than_64_axes_worth_of_attributes_is_refused_before_reading_them(tmp_path, monkeypatch):
+    from axialdeform.core.io import gltf_read
+
+    _spec_only_glb(tmp_path / "n.glb")
+    g = pygltflib.GLTF2().load(str(tmp_path / "n.glb"))
+    attrs = g.nodes[0].extensions[INSTANCING]["attributes"]
+    for j in range(1, 100):  # 99 child axes, every attribute the same (small) accessor
+        attrs.update({f"_AXIAL_A{j}_D12": 4, f"_AXIAL_A{j}_D34": 5, f"_AXIAL_A{j}_D5": 6})
+    g.save(str(tmp_path / "many.glb"))
+    monkeypatch.setattr(gltf_read, "read_accessor", lambda *a: pytest.fail("an accessor was read before the refusal"))
+    with pytest.raises(ad.core.GltfError, match="many.glb: EXT_mesh_gpu_instancing attributes: .* expected at most 64"):
+        gltf_read.read_instanced_glb(tmp_path / "many.glb")
