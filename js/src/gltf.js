@@ -19,6 +19,43 @@ export class AxialGLTFPlugin {
     this.name = EXTENSION;
   }
 
+  /** Before GLTFLoader reads anything of the file: every node's AXIALDEFORM_bend and the instance
+   * accessors it relies on are checked (indices in range, counts whole and equal, at most 64 axes'
+   * worth of attributes), so a broken file is an AxialError naming the node and the field, not a
+   * TypeError or RangeError from inside the loader, nor an allocation sized by the file. */
+  beforeRoot() {
+    const json = this.parser.json, nodes = json.nodes || [], accessors = json.accessors || [];
+    nodes.forEach((def, i) => {
+      const ext = def && def.extensions && def.extensions[EXTENSION];
+      if (!ext) return;
+      const where = `node ${i} (${def.name || 'unnamed'})`;
+      checkBendExtension(ext, where);
+      const inst = def.extensions.EXT_mesh_gpu_instancing;
+      const attrs = inst && inst.attributes;
+      if (!attrs || typeof attrs !== 'object') throw new AxialError(`${where}: ${EXTENSION} without EXT_mesh_gpu_instancing attributes`);
+      const names = Object.keys(attrs);
+      if (names.length > 16 + 3 * MAX_AXES) {
+        throw new AxialError(`${where}: EXT_mesh_gpu_instancing attributes: ${names.length} of them; expected at most ${MAX_AXES} axes' worth`);
+      }
+      let count = null;
+      for (const name of names) {
+        const a = attrs[name];
+        if (!Number.isInteger(a) || a < 0 || a >= accessors.length) {
+          throw new AxialError(`${where}: EXT_mesh_gpu_instancing attributes ${name}: expected an accessor index 0..${accessors.length - 1}, found ${brief(a)}`);
+        }
+        const c = accessors[a] && accessors[a].count;
+        if (!Number.isInteger(c) || c < 0 || c > 2147483647) {
+          throw new AxialError(`${where}: ${name}: accessor ${a} count: expected a whole number 0..2147483647, found ${brief(c)}`);
+        }
+        if (count !== null && c !== count) {
+          throw new AxialError(`${where}: EXT_mesh_gpu_instancing attributes have different counts (${count} and ${c}); expected one count`);
+        }
+        count = c;
+      }
+    });
+    return null;
+  }
+
   async afterRoot(gltf) {
     const parser = this.parser, nodes = parser.json.nodes || [];
     const swaps = [];

@@ -139,6 +139,8 @@ export class AxialGLTFPlugin implements GLTFLoaderPlugin {
   constructor(parser: GLTFParser);
   readonly name: 'AXIALDEFORM_bend';
   parser: GLTFParser;
+  /** Checks every AXIALDEFORM_bend and its instance accessors before the loader reads them. */
+  beforeRoot(): null;
   afterRoot(gltf: GLTF): Promise<void>;
 }
 export const EXTENSION: 'AXIALDEFORM_bend';

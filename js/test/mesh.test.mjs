@@ -4,7 +4,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import * as THREE from 'three';
-import { parseADP, AxialInstancedMesh, AxialError } from '../src/index.js';
+import { parseADP, AxialInstancedMesh, AxialError, AxialGLTFPlugin } from '../src/index.js';
 import { recordFromInstancedMesh, fromInstancedMesh, injectBend, checkBendExtension } from '../src/helpers.js';
 
 const dir = new URL('./fixtures/', import.meta.url);
@@ -170,4 +170,21 @@ test('the plugin refuses every broken extension of the shared corpus (js/test/ca
   assert.equal(checkBendExtension(tree, 'n'), tree);
   assert.throws(() => checkBendExtension({ ...tree, axes: { ...tree.axes, count: 1e6 } }, 'n'), /axes count: expected 2 to 64 axes, found 1000000/);
   assert.throws(() => checkBendExtension({ ...tree, numbersPerInstance: 16 }, 'n'), /numbersPerInstance/);
+});
+
+test('the plugin checks the extension and its instance accessors before GLTFLoader reads them (beforeRoot)', () => {
+  const valid = { numbersPerInstance: 16, axis: { frame: expected.stone16.axis.frame, lo: expected.stone16.axis.lo,
+    length: expected.stone16.axis.length, center: expected.stone16.axis.center } };
+  const file = (attrs, counts, ext = valid) => ({ json: {
+    accessors: counts.map((count) => ({ count, type: 'VEC4', componentType: 5126 })),
+    nodes: [{ name: 'stones', mesh: 0, extensions: { EXT_mesh_gpu_instancing: { attributes: attrs }, AXIALDEFORM_bend: ext } }] } });
+  const run = (parser) => new AxialGLTFPlugin(parser).beforeRoot();
+  assert.equal(run(file({ TRANSLATION: 0, _AXIAL_D12: 1 }, [5, 5])), null);
+  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 7 }, [5, 5])), /node 0 \(stones\): EXT_mesh_gpu_instancing attributes _AXIAL_D12: expected an accessor index 0..1, found 7/);
+  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 1 }, [5, -2])), /_AXIAL_D12: accessor 1 count: expected a whole number/);
+  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 1 }, [5, 2 ** 33])), /accessor 1 count: expected a whole number 0..2147483647, found 8589934592/);
+  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 1 }, [5, 6])), /different counts \(5 and 6\)/);
+  assert.throws(() => run(file({ TRANSLATION: 0 }, [5], { ...valid, axis: { ...valid.axis, frame: [[1, 0], [0, 1]] } })), /node 0 \(stones\): AXIALDEFORM_bend: axis frame: expected 3 rows/);
+  const many = Object.fromEntries(Array.from({ length: 300 }, (_, k) => [`_AXIAL_A${k}_D12`, 0]));
+  assert.throws(() => run(file(many, [5])), /300 of them; expected at most 64 axes' worth/);
 });
