@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 
 from tqdm import tqdm
 
 from ..core.axis import FRAME_NAMES
-from ..core.errors import ArgumentError, ParamError
+from ..core.errors import ArgumentError, ParamError, ParamFileError
 from ..core.io.mesh import load_mesh, mesh_source_path
 from ..core.io.params import read_params
 from ..core.io.safeio import check_output_path
@@ -120,6 +121,8 @@ def load(args, what: str = "output", allow_folder: bool = False):
     parameters go past the float32-safe ranges."""
 
     check_output_path(args.output, (mesh_file(args.mesh), args.params), what, allow_folder=allow_folder)
+    if args.params is not None and not os.path.lexists(args.params):  # said before the mesh is loaded
+        raise ParamFileError(f"{args.params}: no such parameter file")
     mesh = load_base(args, args.mesh)
     # the files the mesh names too (its material library, textures, buffers): never replaced
     check_output_path(args.output, mesh.sources, what, allow_folder=allow_folder)

@@ -88,6 +88,7 @@ def camera_from_args(mesh, params, size, args):
 def run(args) -> None:
     from ..gl.image import parse_size, render_image
 
+    size = parse_size(args.size)  # options and files are checked before any mesh is loaded
     scene = scenes.scene_of(args)
     options = cull_options(args)
     if scene is not None:  # the scene's [wind] moves with --time; --wind replaces it
@@ -97,7 +98,6 @@ def run(args) -> None:
     mesh, params = load(args, "PNG")
     check_triangles([(f"{args.mesh} x {args.params}", len(params), drawn_triangles(mesh, args.part))],
                     args.mode, args.max_triangles, args.fast, 2 if args.stats else 1)  # before the camera, context
-    size = parse_size(args.size)
     camera = camera_from_args(mesh, params, size, args)
     ctx = create_context()
     try:

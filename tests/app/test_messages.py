@@ -155,3 +155,22 @@ def test_a_full_disk_is_said_in_words(tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"axialdeform random: error: {tmp_path / 'r.adp'}: the disk is full; expected room for the output "
                    "(free some space or write elsewhere)"], err
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["render", "stone", "{tmp}/nope.adp", "-o", "{tmp}/x.png"], "nope.adp: no such parameter file"),
+    (["render", "stone", "{tmp}/p.adp", "-o", "{tmp}/x.png", "--size", "800"], "size: expected WIDTHxHEIGHT"),
+])
+def test_options_and_files_are_checked_before_the_mesh_is_loaded(argv, words, tmp_path, monkeypatch, capsys):
+    from axialdeform.cli import _common, main
+
+    ad.write_params(tmp_path / "p.adp", ad.random_params(ad.load_mesh("stone"), 3, seed=1))
+    monkeypatch.setattr(_common, "load_mesh", lambda *a, **k: pytest.fail("the mesh was loaded first"))
+    assert main([a.format(tmp=tmp_path) for a in argv]) == 2
+    assert words in capsys.readouterr().err
+
+
+def test_a_mistyped_bundled_name_says_the_bundled_names():
+    with pytest.raises(ad.core.MeshError, match=r"stones: no such mesh file; did you mean the bundled mesh 'stone'\? "
+                                                 r"\(bundled: stone, leaf, leafcard, tree\)"):
+        ad.load_mesh("stones")

@@ -5,6 +5,7 @@ kept, its parts and materials, every byte read through the bounded reader."""
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import os
 import re
 import warnings
@@ -169,7 +170,10 @@ def _load_mesh(source) -> BaseMesh:
         path = Path(source)
     name = str(source)
     if not os.path.lexists(path):
-        raise MeshError(f"{name}: no such mesh file")
+        near = difflib.get_close_matches(str(source), BUNDLED_MESHES, n=1, cutoff=0.6) if not path.suffix else []
+        hint = (f"; did you mean the bundled mesh {near[0]!r}? (bundled: {', '.join(BUNDLED_MESHES)})" if near else
+                f"; expected a mesh file or a bundled mesh ({', '.join(BUNDLED_MESHES)})" if not path.suffix else "")
+        raise MeshError(f"{name}: no such mesh file{hint}")
     if path.is_dir():
         raise MeshError(f"{name}: is a folder; expected a mesh file ({', '.join(MESH_SUFFIXES)})")
     if path.suffix.lower() not in MESH_SUFFIXES:
