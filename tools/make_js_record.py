@@ -1,5 +1,6 @@
 """Write js/src/record.js, the npm module's copy of the instance record, from the Python library's
-one table (axialdeform.core.record) and the wind's defaults (axialdeform.core.wind).
+one table (axialdeform.core.record), the wind's defaults (axialdeform.core.wind) and the frame
+tolerance (axialdeform.core.axis).
 
 The module reads its columns, its instanced attributes and the wind's defaults from this file only;
 ``tests/web/test_three.py`` checks that the committed file is what this script writes.  Rerun after
@@ -16,6 +17,7 @@ from dataclasses import fields
 from pathlib import Path
 
 from axialdeform.core import record as R
+from axialdeform.core.axis import FRAME_TOLERANCE
 from axialdeform.core.wind import SECOND_HARMONIC, Wind
 
 TARGET = Path(__file__).resolve().parents[1] / "js" / "src" / "record.js"
@@ -52,7 +54,9 @@ def generate() -> str:
         " * of axis 0's record, size, the first level that has it. */\n"
         f"export const ATTRIBUTES = Object.freeze({dump(attributes)});\n\n"
         "/** The wind's defaults and its second harmonic (cycles = frac(f t), frac(harmonic f t)). */\n"
-        f"export const WIND = Object.freeze({dump(wind)});\n"
+        f"export const WIND = Object.freeze({dump(wind)});\n\n"
+        "/** How far a frame's rows may be from orthonormal (|F F^T - I|) and still be a frame. */\n"
+        f"export const FRAME_TOLERANCE = {FRAME_TOLERANCE!r};\n"
     )
 
 

@@ -19,7 +19,7 @@ from .renderer import MODES
 from .scene import TERRAIN_INSTANCE, SceneRenderer, scene_camera
 from .shadow import ShadowMap
 
-__all__ = ["render_image", "parse_size", "as_scene", "look_from_keywords", "pop_look_keywords"]
+__all__ = ["render_image", "parse_size", "look_from_keywords", "pop_look_keywords"]
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -64,12 +64,6 @@ def look_from_keywords(look: Look | None, keywords: dict, where: str = "render_i
                       f"({', '.join(f'{k}=...' for k in changes)}) instead", DeprecationWarning, stacklevel=3)
         look = look.replace(**changes)
     return look
-
-
-def as_scene(scene, params=None, *, up: str = "y", wind=None, parts=None):
-    """:meth:`Scene.of`: ``scene`` if it is a :class:`~axialdeform.core.scene.Scene`, else a scene
-    file read or :meth:`Scene.single` of the mesh ``scene`` and ``params``."""
-    return Scene.of(scene, params, up=up, wind=wind, parts=parts)
 
 
 def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Look | None = None,
@@ -124,7 +118,7 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
     opts = RenderOptions.of(options, fields, "render_image",
                             ("up", "parts", "wind", "time", "renderer", "culling", "lod", "lod_error"))
     wind, time, renderer = opts.wind, opts.time, opts.renderer
-    scene = as_scene(scene, params, up=opts.up, wind=wind, parts=opts.parts)
+    scene = Scene.of(scene, params, up=opts.up, wind=wind, parts=opts.parts)  # the one mesh-or-scene check
     if wind is not None:
         scene.wind = wind
     look = look_from_keywords(scene.look if look is None else look, old_keywords)

@@ -5,7 +5,7 @@
 //     loader.register((parser) => new AxialGLTFPlugin(parser));
 
 import { AxialError } from './adp.js';
-import { MAX_AXES, WIDTHS } from './record.js';
+import { FRAME_TOLERANCE, MAX_AXES, WIDTHS } from './record.js';
 import { AxialInstancedMesh } from './mesh.js';
 
 /** The extension's name. */
@@ -118,7 +118,6 @@ export function recordFromInstancedMesh(mesh, ext, where = 'node') {
   return { name: where, count: n, numbersPerInstance: f, axes: k, data };
 }
 
-const FRAME_TOLERANCE = 1e-6; // as axialdeform.core.axis
 
 /** A value for a message, bounded (a file's array of a million items is not copied into it). */
 function brief(value) {

@@ -38,3 +38,4 @@ export const WIDTHS: readonly number[];
 export const ATTRIBUTES: ReadonlyArray<{ name: string; start: number; size: number; level: number }>;
 /** The wind's defaults and second harmonic (generated from axialdeform.core.wind). */
 export const WIND: Readonly<{ gustiness: number; frequency: number; wavelength: number; harmonic: number }>;
+export const FRAME_TOLERANCE: number;

@@ -18,3 +18,6 @@ export const ATTRIBUTES = Object.freeze([{"name": "axialD12", "start": 0, "size"
 
 /** The wind's defaults and its second harmonic (cycles = frac(f t), frac(harmonic f t)). */
 export const WIND = Object.freeze({"gustiness": 0.6, "frequency": 0.5, "wavelength": 0.0, "harmonic": 2.31});
+
+/** How far a frame's rows may be from orthonormal (|F F^T - I|) and still be a frame. */
+export const FRAME_TOLERANCE = 1e-06;

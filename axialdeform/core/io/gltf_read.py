@@ -225,10 +225,10 @@ def _read_bend(gltf, blob, prim, ext, extras, cols, mesh, params, where):
     mid = frame.T @ np.array([lo + length / 2, *center])  # the axis line's middle, model space
     exact = ControlAxis(index=aligned, lo=lo, length=length, center=tuple(float(c) for c in mid),
                         frame=None if aligned >= 0 else tuple(map(tuple, frame)), kind="matrix")
+    if params.shape[1] + 10 * (k - 1) != numbers:  # the child axes' 10 numbers each come from their attributes
+        raise GltfError(f"{where}: numbersPerInstance: {numbers}, but the instance attributes hold "
+                        f"{params.shape[1] + 10 * (k - 1)} numbers an instance")
     if k == 1:
-        if params.shape[1] != numbers:
-            raise GltfError(f"{where}: numbersPerInstance: {numbers}, but the instance attributes hold "
-                            f"{params.shape[1]} numbers an instance")
         return mesh.with_control_axis(exact), as_params(params, name=where)
     if not isinstance(axes, dict) or axes.get("count") != k:
         raise GltfError(f"{where}: axes: expected an object of count {k} (numbersPerInstance {numbers}), found "
@@ -253,9 +253,6 @@ def _read_bend(gltf, blob, prim, ext, extras, cols, mesh, params, where):
     tree = mesh.tree
     lengths_lo = [dataclasses.replace(a, lo=float(los[j]), length=float(lengths[j])) for j, a in enumerate(tree.axes)]
     lengths_lo[0] = exact
-    if params.shape[1] != numbers:
-        raise GltfError(f"{where}: numbersPerInstance: {numbers}, but the instance attributes hold "
-                        f"{params.shape[1]} numbers an instance")
     return dataclasses.replace(mesh, tree=dataclasses.replace(tree, axes=tuple(lengths_lo))), params
 
 
