@@ -91,6 +91,13 @@ def add_axis(p) -> None:
                         "[[axis]] part/parent/axis tables; --axis is then the frame of each axis naming none (default: one axis)")
 
 
+def add_overwrite(p, detail: str = "") -> None:
+    """``--overwrite``: the one rule for an output that exists (every command that writes takes it)."""
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an output that exists" + detail + " (default: refuse; a file an input names is "
+                        "never replaced)")
+
+
 def load_base(args, source, *, textures: bool = True):
     """The base mesh ``source`` with the frame ``--axis`` and the axes ``--axes`` chose."""
     return load_mesh(source, textures=textures, axis=getattr(args, "axis", "auto"), axes=getattr(args, "axes", None))
@@ -129,6 +136,8 @@ def load(args, what: str = "output", allow_folder: bool = False):
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
     if args.command in ("render", "view", "web"):  # a picture: every number must survive the projection
         check_drawable(params, str(args.params))
+    # the inputs' own errors first; then an output that exists is replaced only with --overwrite
+    check_output_path(args.output, (), what, allow_folder=allow_folder, overwrite=args.overwrite)
     warn_ranges(args, mesh, params)
     return mesh, params
 

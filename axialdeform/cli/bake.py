@@ -17,6 +17,7 @@ from ._common import (
     add_max_baked,
     add_mesh_and_params,
     add_mesh_mismatch,
+    add_overwrite,
     add_wind_args,
     check_baked_triangles,
     load,
@@ -36,14 +37,13 @@ def add_parser(sub) -> None:
     b.add_argument("--engine", choices=ENGINES, default="cpu", help="who deforms: numpy or the GPU (default: %(default)s)")
     b.add_argument("--format", choices=MESH_FORMATS, default="obj", help="mesh file type when OUT is a folder (default: %(default)s)")
     add_mesh_mismatch(b)
-    b.add_argument("--overwrite", action="store_true", help=(
-        "OUT may be a folder of an earlier bake: new files are written first, then the old instance_* files "
-        "not rewritten are removed (other files are kept); default: a folder holding files is refused"))
     b.add_argument("--max-files", type=positive_int, default=MAX_BAKE_FILES, metavar="N", help=(
         "refuse to write more than N mesh files into a folder (one an instance; -o OUT.npz has no such limit) "
         "(default: %(default)s)"))
     add_max_baked(b)
     add_wind_args(b)
+    add_overwrite(b, " (a folder of an earlier bake: new files are written first, then the old instance_* files "
+                     "not rewritten are removed, other files kept)")
     b.set_defaults(handler=run)
 
 

@@ -10,7 +10,8 @@ from tqdm import tqdm
 
 from ..core.errors import AxialDeformError
 from ..core.io.mesh import load_mesh
-from ._common import add_max_triangles, check_triangles, drawn_triangles
+from ..core.io.safeio import check_output_path
+from ._common import add_max_triangles, add_overwrite, check_triangles, drawn_triangles
 
 
 def add_parser(sub) -> None:
@@ -45,6 +46,7 @@ def add_parser(sub) -> None:
     b.add_argument("--report-from", metavar="DETAILS_JSON", default=None,
                    help="measure nothing: render bench.md and the plots again from a saved bench-details.json, "
                         "into --out if given, else beside the JSON (default: measure)")
+    add_overwrite(b, " (bench.md, bench-details.json, the plots and --json)")
     b.set_defaults(handler=run)
 
 
@@ -55,11 +57,26 @@ def _csv(text: str, name: str) -> tuple[str, ...]:
     return items
 
 
+#: what a run writes into --out: the one rule for existing outputs holds for each of them
+REPORT_FILES = ("bench.md", "bench-details.json", "fig5-first-frame.png", "fig6-frame-time.png")
+
+
+def _refuse_existing(args, out: Path, names=REPORT_FILES) -> None:
+    """An earlier run's report in ``out`` is replaced only with --overwrite (and never its own details)."""
+    if args.overwrite:
+        return
+    there = [out / name for name in names if (out / name).is_file()]
+    if there:
+        more = f" and {len(there) - 1} more of a report's files" if len(there) > 1 else ""
+        raise AxialDeformError(f"{there[0]}: exists{more}; refusing to replace it (--overwrite replaces it)")
+
+
 def _report_from(args) -> None:
     from ..bench.report import load_details, write_report
 
     details = load_details(args.report_from)
     out = Path(args.report_from).parent if args.out is None else Path(args.out)
+    _refuse_existing(args, out, [n for n in REPORT_FILES if n != "bench-details.json"])
     path = write_report(details, out)
     print(f"wrote {path} (from the measurements in {args.report_from})")
 
@@ -93,6 +110,9 @@ def run(args) -> None:
     _check_triangles(args, counts)
     command = shlex.join(["axialdeform", *sys.argv[1:]]) if sys.argv and "bench" in sys.argv[1:] else None
     out = Path(DEFAULT_OUT if args.out is None else args.out)
+    _refuse_existing(args, out)
+    if args.json_path:
+        check_output_path(args.json_path, (), "measurements JSON", overwrite=args.overwrite)
     how_long = "under a minute" if args.quick else "about 16 minutes on a 2-core machine; --quick for under a minute"
     print(f"axialdeform bench: writing the report into {out.resolve()}/ ({how_long}; Ctrl-C keeps what was measured)",
           file=sys.stderr, flush=True)

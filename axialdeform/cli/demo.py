@@ -9,7 +9,7 @@ from ..core.io.mesh import load_mesh, mesh_source_path
 from ..core.io.safeio import check_count, check_output_path
 from ..core.look import Look
 from ..core.variation import random_params
-from ._common import add_max_triangles, check_triangles
+from ._common import add_max_triangles, add_overwrite, check_triangles
 
 DEMO_COUNT = 2500
 
@@ -24,6 +24,7 @@ def add_parser(sub) -> None:
     d.add_argument("--fast", action="store_true",
                    help="no multisampling, ground, shadows or hidden lines (default: all of them)")
     add_max_triangles(d)
+    add_overwrite(d)
     d.set_defaults(handler=run)
 
 
@@ -36,7 +37,7 @@ def run(args) -> None:
     from ..core.camera import frame_instances
     from ..gl.image import parse_size, render_image
 
-    check_output_path(args.output, (mesh_source_path("stone"),), "PNG")  # the bundled mesh is an input too
+    check_output_path(args.output, (mesh_source_path("stone"),), "PNG", overwrite=args.overwrite)  # the bundled mesh is an input too
     check_count(args.count, DEMO_BYTES_EACH, "-n/--count")
     mesh = load_mesh("stone")
     check_triangles([(f"stone x -n {args.count}", args.count, len(mesh.faces))], ("solid", "wireframe"),

@@ -10,6 +10,7 @@ from ._common import (
     add_max_baked,
     add_mesh_and_params,
     add_mesh_mismatch,
+    add_overwrite,
     check_baked_triangles,
     load,
     positive_int,
@@ -36,6 +37,7 @@ def add_parser(sub) -> None:
         "with --baked: refuse more than N instances (one glTF mesh and node each; --instanced and scene files "
         "have no such limit) (default: %(default)s)"))
     add_max_baked(e)
+    add_overwrite(e)
     e.set_defaults(handler=run)
 
 

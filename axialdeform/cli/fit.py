@@ -10,7 +10,7 @@ from tqdm import tqdm
 from ..core.fit import DEFAULT_MAX_RESIDUAL, fit_files, variant_paths
 from ..core.io.params import write_params
 from ..core.io.safeio import check_output_path
-from ._common import add_axis, fraction, load_base, positive_int
+from ._common import add_axis, add_overwrite, fraction, load_base, positive_int
 
 
 def add_parser(sub) -> None:
@@ -29,6 +29,7 @@ def add_parser(sub) -> None:
     f.add_argument("--max-iterations", type=positive_int, default=100, help="alternation rounds per variant (default: %(default)s)")
     f.add_argument("--extended", action="store_true",
                    help="fit the 19 numbers of extended instances: scale, twist and taper too (default: the 16)")
+    add_overwrite(f)
     f.set_defaults(handler=run)
 
 
@@ -40,7 +41,7 @@ def run(args) -> None:
     is_folder = len(args.variants) == 1 and Path(args.variants[0]).is_dir()
     paths = variant_paths(args.variants)
 
-    check_output_path(out, (*mesh.sources, *paths), "parameter file")
+    check_output_path(out, (*mesh.sources, *paths), "parameter file", overwrite=args.overwrite)
     with tqdm(total=len(paths), desc="fitting", unit="mesh", file=sys.stderr, disable=None) as bar:
         result = fit_files(mesh, paths, max_residual=args.max_residual, max_iterations=args.max_iterations,
                            progress=bar, extended=args.extended)

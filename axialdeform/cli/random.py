@@ -12,7 +12,7 @@ from ..core.io.safeio import (
 )
 from ..core.record import WIDTHS, tree_width
 from ..core.variation import PLACEMENTS, Variation, iter_random_params
-from ._common import AXES, add_axis, add_variation_args, load_base, mesh_file, variation_args
+from ._common import AXES, add_axis, add_overwrite, add_variation_args, load_base, mesh_file, variation_args
 
 
 def add_parser(sub) -> None:
@@ -33,6 +33,7 @@ def add_parser(sub) -> None:
     r.add_argument("--quantize", action="store_true",
                    help="write the compact uint16 form, binary only: 32 bytes an instance, 38 extended (default: 64/76 bytes, lossless)")
     r.add_argument("-o", "--output", required=True, help="parameter file to write (required, no default)")
+    add_overwrite(r)
     r.set_defaults(handler=run)
 
 
@@ -60,7 +61,7 @@ def run(args) -> None:
     # memory holds one piece whatever the count; the file must fit on its disk
     check_count(min(count, RANDOM_CHUNK), RANDOM_BYTES_EACH, f"-n/--count (made {RANDOM_CHUNK} at a time)")
     mesh = load_base(args, args.mesh, textures=False)
-    check_output_path(args.output, mesh.sources, "parameter file")  # the files the mesh names too
+    check_output_path(args.output, mesh.sources, "parameter file", overwrite=args.overwrite)  # the files the mesh names too
     # several axes: 10·K + 6 numbers (+ 3, + 6); pieces shrink so that memory stays the same
     variation = Variation(**variation)
     width = tree_width(mesh.axis_count, 2 if variation.tint is not None else 1 if variation.extended else 0)

@@ -19,6 +19,7 @@ from ._common import (
     add_max_triangles,
     add_mesh_and_params,
     add_mesh_mismatch,
+    add_overwrite,
     add_wind_args,
     check_triangles,
     cull_options,
@@ -55,6 +56,7 @@ def add_parser(sub) -> None:
     rd.add_argument("--stats", action="store_true", help="print instances submitted / drawn / per LOD level, "
                     "vertices processed and the frame time (default: off)")
     add_max_triangles(rd)
+    add_overwrite(rd)
     rd.set_defaults(handler=run)
 
 

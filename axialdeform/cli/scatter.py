@@ -17,7 +17,7 @@ from ..core.io.mesh import mesh_source_path
 from ..core.io.params import BINARY_SUFFIXES, write_params
 from ..core.io.safeio import check_output_path
 from ..core.scatter import ANCHORS, scatter
-from ._common import add_axis, add_variation_args, load_base, variation_args
+from ._common import add_axis, add_overwrite, add_variation_args, load_base, variation_args
 
 __all__ = ["add_parser", "run"]
 
@@ -58,6 +58,7 @@ def add_parser(subparsers) -> None:
                    help="height-map SURFACE: size along x (and z); default one unit per pixel")
     s.add_argument("--allow-fewer", action="store_true", help="exit 0 when fewer than N fit (default: exit 2)")
     s.add_argument("--quantize", action="store_true", help="write the compact quantized form, binary only (default: float32)")
+    add_overwrite(s)
     s.set_defaults(handler=run)
 
 
@@ -69,7 +70,7 @@ def run(args) -> int | None:
                              f"{'/'.join(BINARY_SUFFIXES)} file name")
     check_output_path(args.output, (args.surface, mesh_source_path(args.mesh), args.density), "parameter file")
     mesh = load_base(args, args.mesh, textures=False)
-    check_output_path(args.output, mesh.sources, "parameter file")  # the files the mesh names too
+    check_output_path(args.output, mesh.sources, "parameter file", overwrite=args.overwrite)  # the files the mesh names too
     try:
         params = scatter(args.surface, mesh, args.count, seed=args.seed, allow_fewer=args.allow_fewer,
                          min_distance=args.min_distance, density=args.density, align_to_normal=args.align_to_normal,

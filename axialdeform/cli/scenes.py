@@ -37,7 +37,7 @@ def scene_of(args, *, params_optional: bool = False):
                                "axes = ...); expected neither")
     scene = load_scene(args.mesh)
     if getattr(args, "output", None) is not None:  # every file the scene read: never replaced
-        check_output_path(args.output, scene.sources, "output", allow_folder=True)
+        check_output_path(args.output, scene.sources, "output", allow_folder=True, overwrite=args.overwrite)
     return scene
 
 

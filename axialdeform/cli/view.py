@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..core.errors import AxialDeformError
 from ..core.io.params import read_params
-from ..core.io.safeio import check_count
+from ..core.io.safeio import check_count, check_output_path
 from ..core.look import Look
 from ..core.params import check_drawable
 from ..core.variation import Variation, random_params
@@ -16,6 +16,7 @@ from ._common import (
     add_cull_arguments,
     add_max_triangles,
     add_mesh_mismatch,
+    add_overwrite,
     check_triangles,
     cull_options,
     drawn_triangles,
@@ -55,6 +56,7 @@ def add_parser(sub) -> None:
     add_cull_arguments(v)
     v.add_argument("--no-lod", action="store_true", help="no levels of detail (default: on from 100 000 instances)")
     add_max_triangles(v)
+    add_overwrite(v)
     v.set_defaults(handler=run, time=None)
 
 
@@ -95,6 +97,9 @@ def run(args) -> None:
                         args.mode, args.max_triangles, args.fast, frames)  # before the parameters are made
         seed = 0 if args.seed is None else args.seed
         params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)
+    if args.screenshot:  # never an input, nor a file that exists without --overwrite
+        sources = scene.sources if scene is not None else (*mesh.sources, args.params)
+        check_output_path(args.screenshot, sources, "screenshot", overwrite=args.overwrite)
     viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed,
                            bend=args.bend, mode=args.mode, up=args.up,
                            look=(scene.look if scene is not None else Look()).replace(ground=not args.no_ground, fast=args.fast),

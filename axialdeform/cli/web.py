@@ -11,7 +11,7 @@ from ..core.io.params import read_params
 from ..core.params import check_drawable
 from ..core.scene import is_scene_file
 from ..web import build_scene, build_scene_file, make_server, write_page
-from ._common import add_axis, add_wind_args, load_base, wind_arg
+from ._common import add_axis, add_overwrite, add_wind_args, load_base, wind_arg
 from .scenes import scene_of, scene_time
 
 __all__ = ["add_parser", "run"]
@@ -43,13 +43,12 @@ def add_parser(subparsers) -> None:
         if action.dest == "time":
             action.help = ("seconds: freeze the wind's clock there (a scene's [wind] or --wind; ?t= on the page "
                            "overrides) (default: the clock runs)")
-    w.add_argument("--overwrite", action="store_true",
-                   help="replace files in the output that no earlier export wrote (default: refuse; inputs never)")
     w.add_argument("--allow-outside", action="store_true",
                    help="let a scene's page carry files from outside the scene file's folder (default: refuse: "
                         "a page is shared, and ../ or absolute paths could reach private files)")
     w.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C (default: only write)")
     w.add_argument("--port", type=int, default=8000, help="port for --serve; a busy one is replaced by a free one (default: %(default)s)")
+    add_overwrite(w, " (in a folder: the files the page is made of)")
     w.set_defaults(handler=run)
 
 

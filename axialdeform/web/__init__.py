@@ -41,7 +41,6 @@ from ..gl.material import ALPHA_MODE_INDEX
 from ..gl.renderer import DEFAULT_COLORS, MODE_INDEX, MODES, unit_vector
 from ..gl.shaders import GLSL_VERSION, assemble
 from .files import (
-    MANIFEST,
     WebScene,
     check_page_outputs,
     embedded_file,
@@ -68,7 +67,7 @@ from .sources import (
 __all__ = [
     "THREE_VERSION", "WebScene", "PageOptions", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es",
     "write_folder", "single_file_html", "make_server", "scene_bytes", "embedded_file", "write_single_file",
-    "write_page", "vendor_file", "page_source", "module_source", "MANIFEST", "check_page_outputs", "MODULE_DIR",
+    "write_page", "vendor_file", "page_source", "module_source", "check_page_outputs", "MODULE_DIR",
     "MODULE_FILES", "VENDOR_FILES",
 ]
 

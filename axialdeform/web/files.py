@@ -1,13 +1,11 @@
-"""Writing a page: a folder for a static server (``index.html`` + files, with a manifest of what
-it wrote), ONE self-contained ``.html``, and a small server for a folder page."""
+"""Writing a page: a folder for a static server (``index.html`` + files), ONE
+self-contained ``.html``, and a small server for a folder page."""
 
 from __future__ import annotations
 
 import base64
-import contextlib
 import errno
 import functools
-import hashlib
 import html
 import json
 import operator
@@ -18,10 +16,10 @@ from pathlib import Path
 
 from ..core.errors import AxialDeformError
 from ..core.io.atomic import atomic_write_bytes
-from ..core.io.safeio import check_output_path, read_regular
+from ..core.io.safeio import check_output_path
 from .sources import MODULE_DIR, MODULE_FILES, VENDOR_FILES, module_source, page_source, three_version, vendor_file
 
-__all__ = ["WebScene", "MANIFEST", "check_page_outputs", "write_folder", "single_file_html", "embedded_file",
+__all__ = ["WebScene", "check_page_outputs", "write_folder", "single_file_html", "embedded_file",
            "write_single_file", "write_page", "scene_bytes", "make_server"]
 
 
@@ -132,41 +130,25 @@ def _import_map(imports: dict) -> str:
 
 
 #: the list of files (and their SHA-256) an export wrote into its folder: what a later export may replace
-MANIFEST = ".axialdeform-web.json"
-#: what marks a single-file page this library wrote (in its config JSON)
-_GENERATOR_MARK = b'"generator":"axialdeform"'
-
-
-def _sha256(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
-
-
 def check_page_outputs(out: Path, names, inputs=(), overwrite: bool = False) -> None:
-    """Refuse, before anything is written, to replace an input or a file this
-    command did not write.
+    """Refuse, before anything is written, to replace an input, or a file
+    that exists without ``overwrite`` (the command line's one rule).
 
     ``names`` are the files the export writes (relative to the folder
     ``out``; a single ``.html`` page: ``[""]``).  An output that is one of
-    ``inputs`` (by device and inode: a hard link or symlink counts) is always
-    refused; an existing output is replaced only if an earlier export wrote
-    it unchanged (the folder's :data:`MANIFEST`, or the generator mark of a
-    single page), or with ``overwrite``.
+    ``inputs`` (by device and inode: a hard link or symlink counts) is
+    always refused, ``overwrite`` or not.
     """
 
-    manifest = {}
-    if out.is_dir():
-        with contextlib.suppress(OSError, ValueError, AxialDeformError):  # none or unreadable: nothing is ours
-            manifest = json.loads(bytes(read_regular(out / MANIFEST, 1 << 20, "a web export's manifest")))
+    existing = []
     for name in names:
         path = out / name if name else out
         check_output_path(path, inputs, "web page")
-        if overwrite or not path.is_file():
-            continue
-        data = bytes(read_regular(path, what="a file of an earlier web export"))
-        ours = _GENERATOR_MARK in data if not name else manifest.get(name) == _sha256(data)
-        if not ours:
-            raise AxialDeformError(f"{path}: exists and was not written by an earlier axialdeform web export (or was "
-                                   "changed since); refusing to replace it (--overwrite replaces it)")
+        if path.is_file():
+            existing.append(path)
+    if existing and not overwrite:
+        more = f" and {len(existing) - 1} more of the page's files" if len(existing) > 1 else ""
+        raise AxialDeformError(f"{existing[0]}: exists{more}; refusing to replace it (--overwrite replaces it)")
 
 
 def _folder_files(scene: WebScene) -> dict:
@@ -190,8 +172,7 @@ def write_folder(out: str | os.PathLike, scene: WebScene, *, inputs=(), overwrit
     """Write ``OUT/index.html`` + ``app.js``, ``scene.json``, ``mesh.glb``,
     ``params.adp`` and ``three/`` (the vendored three.js and its licence)
     for a static web server.  Every file is written atomically; none is an
-    input or a file an earlier export did not write (:func:`check_page_outputs`),
-    and :data:`MANIFEST` records what was written."""
+    input, nor a file that exists without ``overwrite`` (:func:`check_page_outputs`)."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise AxialDeformError(f"{out}: exists and is not a folder; give a folder, or a name ending in .html")
@@ -202,8 +183,6 @@ def write_folder(out: str | os.PathLike, scene: WebScene, *, inputs=(), overwrit
         path = out / rel
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write_bytes(path, data)
-    manifest = {rel: _sha256(data) for rel, data in files.items()}
-    atomic_write_bytes(out / MANIFEST, json.dumps(manifest, indent=1, sort_keys=True).encode("utf-8"))
     return out / "index.html"
 
 
@@ -254,8 +233,8 @@ def write_single_file(out: str | os.PathLike, scene: WebScene, *, inputs=(), ove
 def write_page(out: str | os.PathLike, scene: WebScene, *, inputs=(), overwrite: bool = False) -> Path:
     """``OUT.html`` (or ``.htm``): one self-contained file; anything else: a folder.
     Returns the page's path (the file, or the folder's ``index.html``).
-    ``inputs`` are never replaced; an existing file an earlier export did
-    not write is replaced only with ``overwrite`` (:func:`check_page_outputs`)."""
+    ``inputs`` are never replaced; an existing file is replaced only with
+    ``overwrite`` (:func:`check_page_outputs`)."""
     out = Path(out)
     if out.suffix.lower() in (".html", ".htm"):
         return write_single_file(out, scene, inputs=inputs, overwrite=overwrite)

@@ -137,7 +137,8 @@ def test_trees_through_the_command_line_and_gltf(tmp_path, capsys):
     assert code == 0 and "10 axes in a hierarchy" in out and "106 numbers an instance (plain, 10 axes" in out
     png = tmp_path / "t.png"
     assert _cli(capsys, "render", "tree", adp, "--axes", axes, "-o", png, "--size", "160x120")[0] == 0
-    code, _, err = _cli(capsys, "render", "tree", adp, "-o", png, "--size", "160x120")  # without its axes
+    code, _, err = _cli(capsys, "render", "tree", adp, "-o", png, "--size", "160x120")  # without its axes (said before
+    # the output that exists: an input's error comes first)
     assert code == 2 and "10 axes in a hierarchy" in err and "Traceback" not in err
     glb, baked = tmp_path / "t.glb", tmp_path / "b.glb"
     assert _cli(capsys, "export", "tree", adp, "--axes", axes, "--instanced", "-o", glb)[0] == 0

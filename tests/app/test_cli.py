@@ -77,8 +77,8 @@ def test_off_origin_ply_with_normals_along_each_axis(tmp_path):
         assert mesh.axis.index == k and mesh.normals_from_file
         params = tmp_path / f"p{k}.adp"
         assert main(["random", str(mesh_path), "-n", "1000", "--seed", str(k), "--bend", "0.2", "-o", str(params)]) == 0
-        assert main(["bake", str(mesh_path), str(params), "-o", str(tmp_path / "g.npz"), "--engine", "gpu"]) == 0
-        assert main(["bake", str(mesh_path), str(params), "-o", str(tmp_path / "c.npz"), "--engine", "cpu"]) == 0
+        assert main(["bake", str(mesh_path), str(params), "-o", str(tmp_path / "g.npz"), "--engine", "gpu", "--overwrite"]) == 0
+        assert main(["bake", str(mesh_path), str(params), "-o", str(tmp_path / "c.npz"), "--engine", "cpu", "--overwrite"]) == 0
         g, c = np.load(tmp_path / "g.npz"), np.load(tmp_path / "c.npz")
         ref, ref_n = ad.deform(mesh.axis, mesh.positions, mesh.normals, ad.read_params(params))
         assert np.abs(g["positions"] - ref).max() <= 1e-5 * mesh.axis.length

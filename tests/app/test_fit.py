@@ -236,7 +236,9 @@ def test_cli_fit_residual_limit(variant_folder, tmp_path, capsys):
     assert main(["fit", "stone", str(good), str(noisy), "-o", str(out), "--allow-residual"]) == 0
     assert "1 of 2 fits exceed" in capsys.readouterr().err
     assert ad.read_params(out).shape == (2, 16)
-    assert main(["fit", "stone", str(good), str(noisy), "-o", str(out), "--max-residual", "0.5"]) == 0
+    assert main(["fit", "stone", str(good), str(noisy), "-o", str(out), "--max-residual", "0.5"]) == 2
+    assert "out.adp: exists; refusing to replace it" in capsys.readouterr().err  # the one rule for every output
+    assert main(["fit", "stone", str(good), str(noisy), "-o", str(out), "--max-residual", "0.5", "--overwrite"]) == 0
 
 
 @pytest.mark.slow

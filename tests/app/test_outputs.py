@@ -35,7 +35,7 @@ def folder(tmp_path):
 
 
 @pytest.mark.slow
-def test_web_never_replaces_its_inputs_or_a_file_it_did_not_write(folder):
+def test_web_never_replaces_its_inputs_nor_an_existing_file_without_overwrite(folder):
     assert run("web", "stone", "p.adp", "-o", "site", cwd=folder).returncode == 0
     before = {p: p.read_bytes() for p in (folder / "site").rglob("*") if p.is_file()}
     (folder / "site" / "params.adp").write_bytes((folder / "p.adp").read_bytes())  # the user's own copy
@@ -45,19 +45,21 @@ def test_web_never_replaces_its_inputs_or_a_file_it_did_not_write(folder):
     (folder / "site2").mkdir()
     os.link(folder / "p.adp", folder / "site2" / "params.adp")
     refused(run("web", "stone", "p.adp", "-o", "site2", cwd=folder), "site2/params.adp", "input")
-    # a file no export wrote, or one changed since, is not replaced without --overwrite
+    # a file that exists is not replaced without --overwrite: the user's own, or an earlier export's
     (folder / "site" / "index.html").write_text("<h1>my own page</h1>")
-    refused(run("web", "stone", "p.adp", "-o", "site", cwd=folder), "site/", "--overwrite")
+    refused(run("web", "stone", "p.adp", "-o", "site", cwd=folder), "site/index.html: exists", "--overwrite")
     assert (folder / "site" / "index.html").read_text() == "<h1>my own page</h1>"
     (folder / "mine.html").write_text("<h1>mine</h1>")
     refused(run("web", "stone", "p.adp", "-o", "mine.html", cwd=folder), "mine.html", "--overwrite")
     assert (folder / "mine.html").read_text() == "<h1>mine</h1>"
-    # the export's own unchanged files are replaced; --overwrite replaces the rest (never an input)
+    # --overwrite replaces them (never an input)
     ok = run("web", "stone", "p.adp", "-o", "site", "--overwrite", cwd=folder)
     assert ok.returncode == 0, ok.stderr
-    assert run("web", "stone", "p.adp", "-o", "site", cwd=folder).returncode == 0  # unchanged: ours
+    assert (folder / "site" / "index.html").read_text() != "<h1>my own page</h1>"
+    refused(run("web", "stone", "p.adp", "-o", "site", cwd=folder), "exists", "--overwrite")  # an export's own too
     assert run("web", "stone", "p.adp", "-o", "page.html", cwd=folder).returncode == 0
-    assert run("web", "stone", "p.adp", "-o", "page.html", cwd=folder).returncode == 0
+    refused(run("web", "stone", "p.adp", "-o", "page.html", cwd=folder), "page.html: exists", "--overwrite")
+    assert run("web", "stone", "p.adp", "-o", "page.html", "--overwrite", cwd=folder).returncode == 0
     refused(run("web", "site/mesh.glb", "site/params.adp", "-o", "site", "--overwrite", cwd=folder), "input")
     assert set(before) <= {p for p in (folder / "site").rglob("*") if p.is_file()}
 
@@ -135,6 +137,9 @@ def test_no_output_replaces_a_file_an_input_names(folder):
     before = {n: (folder / n).read_bytes() for n in ("m.obj", "lib.txt", "tex.png")}
     refused(run("render", "m.obj", "m.adp", "-o", "tex.png", "--size", "32x24", cwd=folder), "tex.png", "input")
     refused(run("random", "m.obj", "-n", "3", "-o", "lib.txt", cwd=folder), "lib.txt", "input")
+    # --overwrite replaces an output that exists, never an input
+    refused(run("random", "m.obj", "-n", "3", "-o", "lib.txt", "--overwrite", cwd=folder), "lib.txt", "input")
+    refused(run("render", "m.obj", "m.adp", "-o", "tex.png", "--overwrite", cwd=folder), "tex.png", "input")
     (folder / "link.png").symlink_to(folder / "tex.png")
     refused(run("render", "m.obj", "m.adp", "-o", "link.png", "--size", "32x24", cwd=folder), "link.png", "input")
     # a scene: its terrain's height map, a layer's density map and a layer's mesh
@@ -174,3 +179,58 @@ def test_a_page_carries_no_file_from_outside_the_scenes_folder(folder):
     shutil.copy(folder / "p.adp", folder / "inner" / "p.adp")
     (folder / "inner" / "u.toml").write_text('[[layer]]\nname = "a"\nmesh = "stone"\nparams = "p.adp"\n')
     assert run("web", "inner/u.toml", "-o", "page2.html", cwd=folder).returncode == 0
+
+
+def _existing_output_cases(tmp: Path):
+    """Every command that writes, each aimed at a file that exists (and is no input)."""
+    ad.write_params(tmp / "p.adp", ad.random_params(ad.load_mesh("stone"), 4, seed=1))
+    (tmp / "s.toml").write_text('[[layer]]\nname = "a"\nmesh = "stone"\nparams = "p.adp"\n')
+    ad.load_mesh("stone").to_trimesh().export(str(tmp / "v.obj"))
+    (tmp / "surface.obj").write_text("v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 3 2\nf 1 4 3\n")
+    small = ["--size", "32x24"]
+    return {
+        "demo": (["demo", "-n", "4", *small, "-o", "{out}"], "out.png"),
+        "random": (["random", "stone", "-n", "3", "-o", "{out}"], "out.adp"),
+        "scatter": (["scatter", "surface.obj", "stone", "-n", "3", "-o", "{out}"], "out.adp"),
+        "render": (["render", "stone", "p.adp", *small, "-o", "{out}"], "out.png"),
+        "render scene": (["render", "s.toml", *small, "-o", "{out}"], "out.png"),
+        "bake": (["bake", "stone", "p.adp", "-o", "{out}"], "out.npz"),
+        "bake scene": (["bake", "s.toml", "-o", "{out}"], "out.npz"),
+        "bake folder": (["bake", "stone", "p.adp", "-o", "{out}"], "outdir/instance_000000.obj"),
+        "convert": (["convert", "p.adp", "{out}"], "out.txt"),
+        "export": (["export", "stone", "p.adp", "-o", "{out}"], "out.glb"),
+        "export scene": (["export", "s.toml", "-o", "{out}"], "out.glb"),
+        "fit": (["fit", "stone", "v.obj", "-o", "{out}"], "out.adp"),
+        "view": (["view", "stone", "p.adp", "--headless", "--frames", "1", *small, "--screenshot", "{out}"], "out.png"),
+        "web page": (["web", "stone", "p.adp", "-o", "{out}"], "out.html"),
+        "web folder": (["web", "stone", "p.adp", "-o", "{out}"], "site/index.html"),
+        "bench --report-from": (["bench", "--report-from", "bench-details.json", "--out", "{out}"], "rep/bench.md"),
+    }
+
+
+EXISTING = ["demo", "random", "scatter", "render", "render scene", "bake", "bake scene", "bake folder", "convert",
+            "export", "export scene", "fit", "view", "web page", "web folder", "bench --report-from"]
+
+
+@pytest.mark.parametrize("case", EXISTING)
+def test_one_rule_for_an_output_that_exists(tmp_path, monkeypatch, capsys, case):
+    """Every command that writes refuses an output that exists, in one line naming it and --overwrite,
+    and leaves it as it was; with --overwrite it replaces it."""
+    from axialdeform.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    argv, target = _existing_output_cases(tmp_path)[case]
+    if case == "bench --report-from":
+        pytest.importorskip("matplotlib")
+        shutil.copy(Path(__file__).resolve().parents[2] / "docs" / "benchmarks" / "bench-details.json", tmp_path)
+    path = tmp_path / target
+    path.parent.mkdir(exist_ok=True)
+    path.write_bytes(b"the user's own file\n")
+    out = path.parent.name if "folder" in case or case.startswith("bench") else target
+    argv = [a.replace("{out}", out) for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "exist" in err[0] and "--overwrite" in err[0] and target.split("/")[-1] in err[0], err
+    assert path.read_bytes() == b"the user's own file\n"
+    assert main([*argv, "--overwrite"]) == 0, capsys.readouterr().err
+    assert path.read_bytes() != b"the user's own file\n"

@@ -247,8 +247,8 @@ def check_bake_folder(folder: str | os.PathLike, overwrite: bool = False, inputs
     old = _folder_entries(folder)
     if old and not overwrite:
         sample = ", ".join(sorted(old)[:3]) + (", ..." if len(old) > 3 else "")
-        raise PathError(f"{folder}: holds {len(old)} files it did not just write ({sample}); expected a new or empty "
-                        "folder (--overwrite replaces an earlier bake: it removes the old instance_* files)")
+        raise PathError(f"{folder}: holds {len(old)} files that exist ({sample}); refusing to write into it, expected a "
+                        "new or empty folder (--overwrite replaces an earlier bake: it removes the old instance_* files)")
     touched = [folder / name for name in old if INSTANCE_FILE.match(name) or _BAKE_COMPANIONS.match(name)]
     for path in touched:
         for src in inputs:

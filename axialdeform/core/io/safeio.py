@@ -161,10 +161,12 @@ def check_not_special(path: str | os.PathLike, what: str = "output", allow_folde
 
 
 def check_output_path(path: str | os.PathLike, inputs: Iterable = (), what: str = "output",
-                      allow_folder: bool = False) -> None:
+                      allow_folder: bool = False, overwrite: bool = True) -> None:
     """Refuse an output ``path`` that is the same file as one of ``inputs``
     (compared by device and inode, so links and ``..`` are seen through), or
-    that exists and is not a regular file (or folder, with ``allow_folder``)."""
+    that exists and is not a regular file (or folder, with ``allow_folder``);
+    without ``overwrite``, also a regular file that exists (the command
+    line's one rule; checked after the inputs, so an input is named as one)."""
     check_not_special(path, what, allow_folder)
     try:
         out = os.stat(path)
@@ -176,6 +178,8 @@ def check_output_path(path: str | os.PathLike, inputs: Iterable = (), what: str 
         with contextlib.suppress(OSError):
             if _same_file(out, os.stat(src)):
                 raise PathError(f"{path}: is the input file {src}; refusing to overwrite an input with the {what}")
+    if not overwrite and stat.S_ISREG(out.st_mode):
+        raise PathError(f"{path}: exists; refusing to replace it with the {what} (--overwrite replaces it)")
 
 
 def memory_available() -> int:
