@@ -49,11 +49,13 @@ failed.
 from __future__ import annotations
 
 import argparse
+import os
 import struct
 import sys
 import time
 import zlib
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 
@@ -269,7 +271,6 @@ _STRATEGIES = None
 
 def prepare_folder(folder) -> None:
     """The files generated meshes may refer to: a FIFO, a small material library."""
-    import os
     from pathlib import Path
 
     folder = Path(folder)
@@ -523,7 +524,6 @@ def make_big_inputs(folder, mb: float = 20.0) -> dict:
     (binary PLY, tools/big_mesh.py), a scene file of about ``mb`` MB
     (comments and a big array) naming the big parameters, and a height map
     of about 1 500 x 1 500 pixels."""
-    import os
     import sys as _sys
     from pathlib import Path
 
@@ -566,7 +566,6 @@ def case_files(folder, big: dict) -> None:
     """The files generated cases and scenes refer to, in ``folder``: small
     valid parameter files, a mesh, height and density maps, FIFOs, a
     decompression-bomb PNG (16 000 x 12 000 black), an include file."""
-    import os
     from pathlib import Path
 
     from axialdeform.core.io.mesh import bundled_mesh_path, load_mesh
@@ -646,7 +645,6 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
     """One fuzzed command line and what must hold afterwards:
     ``{"specials": [paths that must stay FIFOs/symlinks], "inputs": [files read],
     "outputs": [paths it may write], "serve": None | "probe" | port held busy}``."""
-    import os
     from pathlib import Path
 
     from axialdeform.core.io.mesh import bundled_mesh_path
@@ -656,6 +654,7 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
     stone = str(bundled_mesh_path("stone"))
     big_case = rng.random() < 0.1
     inputs: list = []
+    axes_file = None
     # a mesh: bundled, copied, generated (possibly hostile), or big
     pick = rng.integers(5)
     if big_case and rng.random() < 0.4:
@@ -667,12 +666,29 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
         mesh = str(mesh)
     elif pick == 1:
         mesh = str(tmp / "m.obj")
-    elif pick == 2 and rng.random() < 0.5:  # the classes round three added: node graphs, image bombs, escapes
-        hostile = int(rng.integers(4))
-        if hostile < 2:
+    elif pick == 2 and rng.random() < 0.5:  # the classes rounds three and four added
+        hostile = int(rng.integers(6))
+        if hostile < 2:  # node graphs
             mesh = _node_graph_gltf(tmp / f"g{k}.gltf", "chain" if hostile == 0 else "cycle")
-        else:
+        elif hostile < 4:  # image bombs, escapes
             mesh = _textured_obj(tmp, k, "bomb.png" if hostile == 2 else str(rng.choice(["../p.adp", "/etc/hostname"])))
+        elif hostile == 4:  # an instanced GLB whose AXIALDEFORM_bend, attributes or instances are corrupted
+            import fuzz_specs
+
+            bases = big["EXT_BASES"].split(os.pathsep)
+            doc, blob = fuzz_specs.split_glb(Path(bases[int(rng.integers(len(bases)))]).read_bytes())
+            doc, blob, _ = fuzz_specs.mutate_extension(doc, blob, rng)
+            mesh = tmp / f"x{k}.glb"
+            mesh.write_bytes(fuzz_specs.join_glb(doc, blob))
+            mesh = str(mesh)
+        else:  # the bundled tree with a corrupted --axes file
+            import fuzz_specs
+            import tomllib
+
+            entries, _ = fuzz_specs.mutate_axes(tomllib.loads(fuzz_specs.TREE_AXES.read_text())["axis"], rng)
+            axes_file = tmp / f"ax{k}.toml"
+            axes_file.write_text(fuzz_specs.axes_toml(entries))
+            mesh = "tree"
     else:
         mesh = str(rng.choice(["stone", "leaf", stone]))
     inputs.append(mesh)
@@ -903,6 +919,9 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
         command = f"scene-{sub}"
     if command in ("render", "bake", "export") and rng.random() < 0.5:
         argv.append("--ignore-mesh-mismatch")
+    if axes_file is not None and command in ("random", "render", "bake", "export", "fit", "view", "web"):
+        argv += ["--axes", str(axes_file)]
+        inputs.append(str(axes_file))
     argv = [str(a) for a in argv]
     specials = [p for p in argv if _special(p)]
     return argv, {"command": command, "specials": specials, "inputs": [i for i in inputs if i],
@@ -910,7 +929,6 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
 
 
 def _special(path) -> bool:
-    import os
     import stat
 
     try:
@@ -923,7 +941,6 @@ def _special(path) -> bool:
 def input_bytes(path) -> int:
     """What an input holds: a regular file's size; an image's decoded grey
     pixels (8 bytes each: the float64 height grid it claims to hold); else 0."""
-    import os
     import stat
 
     try:
@@ -945,7 +962,6 @@ def input_bytes(path) -> int:
 
 def output_bytes(path) -> int:
     """Bytes written at ``path`` (a file, or the files of a folder)."""
-    import os
 
     if os.path.isfile(path) and not os.path.islink(path):
         return os.path.getsize(path)
@@ -968,7 +984,6 @@ def _rss_of(pid: int) -> int:
 
 def _group_cpu(pgid: int) -> float:
     """Seconds of CPU used so far by the processes of group ``pgid`` (a child and its children)."""
-    import os
 
     tick = os.sysconf("SC_CLK_TCK")
     total = 0
@@ -988,7 +1003,6 @@ def _group_cpu(pgid: int) -> float:
 def _child(argv: list[str], result_path: str) -> None:
     """In the forked child: run ``main(argv)``; never returns."""
     import json
-    import os
     import signal
     import traceback
 
@@ -1040,7 +1054,6 @@ def run_isolated(argv: list[str], timeout: float = HANG_S, serve: str | None = N
     fetched once the URL is printed, then the server is stopped with SIGINT
     (Ctrl-C), which must end it with exit 0."""
     import json
-    import os
     import signal
     import socket
     import tempfile
@@ -1137,7 +1150,6 @@ def run_isolated(argv: list[str], timeout: float = HANG_S, serve: str | None = N
 
 
 def _verdict(argv, status, result, stderr) -> str:
-    import os
 
     if os.WIFSIGNALED(status):
         return f"crash: killed by signal {os.WTERMSIG(status)}: {stderr[-200:]!r}"
@@ -1177,7 +1189,6 @@ def _read_inputs(argv: list, inputs: list) -> list:
 def _digests(paths, limit: int = 64 << 20) -> dict:
     """SHA-256 of each regular input file up to ``limit`` bytes (None: gone)."""
     import hashlib
-    import os
     import stat as st
 
     out = {}
@@ -1213,7 +1224,6 @@ def fuzz_commands(seconds: float, seed: int, only: tuple = (), big_mb: float = 2
     """Fuzz every command (or ``only`` these) for ``seconds`` (or until ``cases``
     command lines ran); ``cycle``: the commands in turn, else drawn at random
     (:data:`WEIGHTS`).  Prints the figures per command; returns 1 if any case failed."""
-    import os
     import shutil
     import stat
     import tempfile
@@ -1235,6 +1245,9 @@ def fuzz_commands(seconds: float, seed: int, only: tuple = (), big_mb: float = 2
     bundled = _bundled_digest()
     with tempfile.TemporaryDirectory(prefix="fuzz-commands-") as tmp:
         big = make_big_inputs(os.path.join(tmp, "big"), big_mb)
+        import fuzz_specs  # round four: instanced GLBs to corrupt
+
+        big["EXT_BASES"] = os.pathsep.join(str(p) for p in fuzz_specs.make_bases(Path(tmp) / "ext-bases"))
         _drive(strategies()["mesh_file"], min(3.0, seconds / 20), seed, mesh_texts.append)
         _drive(scene_strategy(), min(3.0, seconds / 20), seed, scene_texts.append)
         while time.monotonic() < end and (cases is None or tried < cases):

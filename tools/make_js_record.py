@@ -18,6 +18,7 @@ from pathlib import Path
 
 from axialdeform.core import record as R
 from axialdeform.core.axis import FRAME_TOLERANCE
+from axialdeform.core.params import DRAWABLE_MAGNITUDE
 from axialdeform.core.wind import SECOND_HARMONIC, Wind
 
 TARGET = Path(__file__).resolve().parents[1] / "js" / "src" / "record.js"
@@ -56,7 +57,9 @@ def generate() -> str:
         "/** The wind's defaults and its second harmonic (cycles = frac(f t), frac(harmonic f t)). */\n"
         f"export const WIND = Object.freeze({dump(wind)});\n\n"
         "/** How far a frame's rows may be from orthonormal (|F F^T - I|) and still be a frame. */\n"
-        f"export const FRAME_TOLERANCE = {FRAME_TOLERANCE!r};\n"
+        f"export const FRAME_TOLERANCE = {FRAME_TOLERANCE!r};\n\n"
+        "/** The largest offset or position an instance may be drawn with (float32 projects no more). */\n"
+        f"export const DRAWABLE_MAGNITUDE = {DRAWABLE_MAGNITUDE!r};\n"
     )
 
 

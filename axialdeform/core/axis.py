@@ -79,10 +79,11 @@ def _oriented_frame(points: np.ndarray, name: str = "<mesh>") -> np.ndarray:
     centred = p - p.mean(axis=0)
     _, sv, basis = np.linalg.svd(centred, full_matrices=False)  # sv descending; rows of basis: principal axes
     sv = np.concatenate([sv, np.zeros(3 - len(sv))])
-    if not sv[0] > 0 or sv[1] <= 1e-9 * sv[0]:  # a point or a line: no box has a second side
+    # float32 coordinates carry ~6e-8 relative rounding: a spread below 1e-6 of the length is rounding
+    if not sv[0] > 0 or sv[1] <= 1e-6 * sv[0]:  # a point or a line: no box has a second side
         raise MeshError(f"{name}: axis: 'oriented' needs points spanning an area or a volume; these lie on a line "
                             "(use 'auto', 'x', 'y', 'z' or a frame of three rows)")
-    if sv[2] <= 1e-9 * sv[0]:
+    if sv[2] <= 1e-6 * sv[0]:
         # flat: the minimum-area rectangle in the points' plane (trimesh's 2-D rule), the normal third
         plane = basis[:2] if len(basis) >= 2 else basis
         to_origin2, extents2 = trimesh.bounds.oriented_bounds_2D(centred @ plane.T)
@@ -91,7 +92,12 @@ def _oriented_frame(points: np.ndarray, name: str = "<mesh>") -> np.ndarray:
         rows = np.vstack([across, normal / np.linalg.norm(normal)])
         extents = np.array([*np.asarray(extents2, dtype=np.float64), 0.0])
     else:
-        to_origin, extents = trimesh.bounds.oriented_bounds(p)
+        try:
+            to_origin, extents = trimesh.bounds.oriented_bounds(p)
+        except Exception as exc:  # noqa: BLE001  qhull, or trimesh's repair of a sliver hull (networkx)
+            raise MeshError(f"{name}: axis: 'oriented' found no box for these points ({type(exc).__name__}: "
+                            f"{str(exc).splitlines()[0][:120] if str(exc) else 'no message'}); use 'auto', 'x', "
+                            "'y', 'z' or a frame of three rows") from None
         rows = np.asarray(to_origin, dtype=np.float64)[:3, :3]  # box axes (model space) as rows
     rows = rows[np.argsort(-np.asarray(extents), kind="stable")]
     sign = np.sign(rows[np.arange(3), np.argmax(np.abs(rows), axis=1)])

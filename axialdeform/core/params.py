@@ -230,15 +230,23 @@ def check_drawable(values, name: str = "parameters") -> None:
     """:class:`ParamError` naming ``name``, the instance and the field when an
     offset or position is too large to draw (:data:`DRAWABLE_MAGNITUDE`);
     files may hold such numbers (they are finite float32), pictures cannot."""
+    from .record import record_fields, tree_shape
+
     v = np.asarray(values)
     if v.size == 0:
         return
-    mag = np.abs(v[:, :13])
+    try:
+        k = tree_shape(v.shape[1])[0]
+    except ValueError:
+        k = 1
+    placed = 10 * k + 3  # every axis's offsets (10 each), then the position
+    mag = np.abs(v[:, :placed])
     row_max = mag.max(axis=1)
     worst = int(np.argmax(row_max))
     if row_max[worst] > DRAWABLE_MAGNITUDE:
         col = int(np.argmax(mag[worst]))
-        raise ParamError(f"{name}: instance {worst}, field {FIELDS[col]} = {float(v[worst, col]):.6g}; expected at most "
+        field = record_fields(v.shape[1])[col] if k > 1 else FIELDS[col]
+        raise ParamError(f"{name}: instance {worst}, field {field} = {float(v[worst, col]):.6g}; expected at most "
                          f"{DRAWABLE_MAGNITUDE:g} in magnitude to draw it (float32 cannot project it)")
 
 

@@ -101,7 +101,8 @@ def matrices_from_quaternions(quats: np.ndarray) -> np.ndarray:
     """Rotation matrices (column-vector convention, ``v -> R @ v``) of unit
     quaternions ``(n, 4)`` in ``x, y, z, w`` order: ``(n, 3, 3)`` float64."""
     q = np.asarray(quats, dtype=np.float64).reshape(-1, 4)
-    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a zero quaternion gives NaN: checked by the caller
+        q = q / np.linalg.norm(q, axis=1, keepdims=True)
     x, y, z, w = q.T
     r = np.empty((len(q), 3, 3))
     r[:, 0, 0] = 1 - 2 * (y * y + z * z)

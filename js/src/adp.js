@@ -143,7 +143,7 @@ export function fieldName(col, axes = 1) {
 const show = (v) => (Number.isNaN(v) ? 'nan' : v === Infinity ? 'inf' : v === -Infinity ? '-inf' : String(Number(v.toPrecision(9))));
 
 /** Throw an AxialError for the first number of `data` the record refuses, as Python's reader does. */
-function checkNumbers(data, fields, axes, name) {
+export function checkNumbers(data, fields, axes, name) {
   for (let i = 0; i < data.length; i++) {
     if (!Number.isFinite(data[i])) {
       throw new AxialError(`${name}: instance ${Math.floor(i / fields)}, field ${fieldName(i % fields, axes)}: expected a finite number, found ${show(data[i])}`);

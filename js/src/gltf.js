@@ -4,12 +4,68 @@
 //     const loader = new GLTFLoader();
 //     loader.register((parser) => new AxialGLTFPlugin(parser));
 
-import { AxialError } from './adp.js';
+import * as THREE from 'three';
+import { AxialError, checkNumbers } from './adp.js';
 import { FRAME_TOLERANCE, MAX_AXES, WIDTHS } from './record.js';
 import { AxialInstancedMesh } from './mesh.js';
 
 /** The extension's name. */
 export const EXTENSION = 'AXIALDEFORM_bend';
+
+/** Each instance attribute's accessor type (docs/gltf/AXIALDEFORM_bend; TRANSLATION, ROTATION and
+ * SCALE as EXT_mesh_gpu_instancing says). A child axis j's _AXIAL_A{j}_D12/_D34/_D5 as the first's. */
+const ATTRIBUTE_TYPES = { TRANSLATION: 'VEC3', ROTATION: 'VEC4', SCALE: 'VEC3', _AXIAL_D12: 'VEC4', _AXIAL_D34: 'VEC4',
+  _AXIAL_D5: 'VEC2', _AXIAL_ANGLES: 'VEC3', _AXIAL_TWIST_TAPER: 'VEC2', _COLOR_0: 'VEC3' };
+const COMPONENT_BYTES = { 5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4 };
+const TYPE_SIZES = { SCALAR: 1, VEC2: 2, VEC3: 3, VEC4: 4 };
+
+function attributeType(name) {
+  const child = /^_AXIAL_A[1-9][0-9]*(_D12|_D34|_D5)$/.exec(name);
+  return child ? ATTRIBUTE_TYPES[`_AXIAL${child[1]}`] : ATTRIBUTE_TYPES[name];
+}
+
+/** An instance attribute's accessor as axialdeform's Python reader takes it (core/io/glb.read_accessor):
+ * a known component type and type, a bufferView in range, aligned, inside its view and buffer. */
+function checkAccessor(json, a, name, where) {
+  const acc = json.accessors[a], views = json.bufferViews || [], buffers = json.buffers || [];
+  const bytes = COMPONENT_BYTES[acc.componentType], size = TYPE_SIZES[acc.type];
+  if (!bytes || !size || acc.bufferView === undefined) {
+    throw new AxialError(`${where}: ${name}: unsupported accessor (${brief(acc.type)} of component type ${brief(acc.componentType)}, bufferView ${brief(acc.bufferView)})`);
+  }
+  if (!Number.isInteger(acc.bufferView) || acc.bufferView < 0 || acc.bufferView >= views.length) {
+    throw new AxialError(`${where}: ${name}: accessor ${a} bufferView: expected 0..${views.length - 1}, found ${brief(acc.bufferView)}`);
+  }
+  const view = views[acc.bufferView] || {};
+  const viewStart = view.byteOffset || 0, offset = acc.byteOffset || 0, stride = view.byteStride || bytes * size;
+  const buffer = buffers[view.buffer];
+  if (![viewStart, offset, stride, view.byteLength].every((x) => Number.isInteger(x) && x >= 0) || !buffer) {
+    throw new AxialError(`${where}: ${name}: accessor ${a}: expected whole byte offsets and lengths and a buffer`);
+  }
+  if ((viewStart + offset) % bytes || stride % bytes) {
+    throw new AxialError(`${where}: ${name}: accessor ${a} byteOffset: expected a multiple of ${bytes} (the component's size), found ${viewStart + offset}`);
+  }
+  const need = viewStart + offset + (acc.count ? (acc.count - 1) * stride + bytes * size : 0);
+  if (need > viewStart + view.byteLength || need > buffer.byteLength) {
+    throw new AxialError(`${where}: ${name}: accessor ${a} runs past its bufferView (truncated file?)`);
+  }
+  const type = attributeType(name);
+  if (type && acc.type !== type) throw new AxialError(`${where}: ${name}: expected ${type}, found ${brief(acc.type)}`);
+}
+
+/** The attributes a node's extension needs, and the record width they hold, as Python reads them:
+ * 22 numbers with _COLOR_0, 19 with SCALE or _AXIAL_TWIST_TAPER, else 16; the child axes' three each. */
+function checkAttributes(ext, names, where) {
+  const k = ext.axes ? ext.axes.count : 1, base = ext.numbersPerInstance - 10 * (k - 1);
+  const need = ['_AXIAL_D12', '_AXIAL_D34', '_AXIAL_D5'];
+  for (let j = 1; j < k; j++) need.push(`_AXIAL_A${j}_D12`, `_AXIAL_A${j}_D34`, `_AXIAL_A${j}_D5`);
+  const missing = need.filter((a) => !names.includes(a));
+  if (!names.includes('_AXIAL_ANGLES') && !names.includes('ROTATION')) missing.push('_AXIAL_ANGLES (or ROTATION)');
+  if (missing.length) throw new AxialError(`${where}: ${EXTENSION} needs the instance attributes ${missing.join(', ')}`);
+  const held = names.includes('_COLOR_0') ? 22 : names.includes('SCALE') || names.includes('_AXIAL_TWIST_TAPER') ? 19 : 16;
+  if (held !== base) {
+    throw new AxialError(`${where}: ${EXTENSION}: numbersPerInstance: ${ext.numbersPerInstance}, but the instance attributes hold ${held + 10 * (k - 1)} numbers an instance`);
+  }
+}
 
 
 /** GLTFLoader plugin: EXT_mesh_gpu_instancing nodes with AXIALDEFORM_bend load bent. */
@@ -51,7 +107,9 @@ export class AxialGLTFPlugin {
           throw new AxialError(`${where}: EXT_mesh_gpu_instancing attributes have different counts (${count} and ${c}); expected one count`);
         }
         count = c;
+        checkAccessor(json, a, name, where);
       }
+      checkAttributes(ext, names, where);
     });
     return null;
   }
@@ -70,8 +128,15 @@ export class AxialGLTFPlugin {
       swaps.push({ object, parts, ext, where: `node ${assoc.nodes} (${def.name || 'unnamed'})` });
     });
     for (const { object, parts, ext, where } of swaps) {
+      // the placement as the file holds it (three folds TRANSLATION, ROTATION, SCALE into matrices):
+      // the position from TRANSLATION, the scale s from SCALE; the rotation from _AXIAL_ANGLES
+      const attrs = nodes[parser.associations.get(object).nodes].extensions.EXT_mesh_gpu_instancing.attributes;
+      const raw = {};
+      for (const name of ['TRANSLATION', 'SCALE']) {
+        if (attrs[name] !== undefined) raw[name] = await parser.getDependency('accessor', attrs[name]);
+      }
       for (const part of parts) {
-        const bent = fromInstancedMesh(part, ext, where);
+        const bent = fromInstancedMesh(part, ext, where, raw);
         if (part === object) {
           const parent = object.parent;
           parent.add(bent);
@@ -88,11 +153,12 @@ export class AxialGLTFPlugin {
 
 /** The record of an InstancedMesh GLTFLoader made from EXT_mesh_gpu_instancing with the _AXIAL_*
  * attributes, as AxialInstancedMesh takes it; `ext` the node's AXIALDEFORM_bend. */
-export function recordFromInstancedMesh(mesh, ext, where = 'node') {
+export function recordFromInstancedMesh(mesh, ext, where = 'node', raw = null) {
   const g = mesh.geometry, n = mesh.count, f = ext.numbersPerInstance, k = ext.axes ? ext.axes.count : 1;
   const base = f - 10 * (k - 1);
-  const need = ['_AXIAL_D12', '_AXIAL_D34', '_AXIAL_D5', '_AXIAL_ANGLES'];
-  if (base >= 19) need.push('_AXIAL_TWIST_TAPER');
+  const need = ['_AXIAL_D12', '_AXIAL_D34', '_AXIAL_D5'];
+  if (!raw) need.push('_AXIAL_ANGLES');
+  if (base >= 19 && !raw) need.push('_AXIAL_TWIST_TAPER');
   for (let j = 1; j < k; j++) need.push(`_AXIAL_A${j}_D12`, `_AXIAL_A${j}_D34`, `_AXIAL_A${j}_D5`);
   const missing = need.filter((a) => !g.getAttribute(a));
   if (missing.length) throw new AxialError(`${where}: ${EXTENSION} needs the instance attributes ${missing.join(', ')}`);
@@ -105,16 +171,40 @@ export function recordFromInstancedMesh(mesh, ext, where = 'node') {
   copy('_AXIAL_D12', 4, 0); copy('_AXIAL_D34', 4, 4); copy('_AXIAL_D5', 2, 8);
   for (let j = 1; j < k; j++) { copy(`_AXIAL_A${j}_D12`, 4, 10 * j); copy(`_AXIAL_A${j}_D34`, 4, 10 * j + 4); copy(`_AXIAL_A${j}_D5`, 2, 10 * j + 8); }
   const rest = 10 * k;
-  copy('_AXIAL_ANGLES', 3, rest + 3);
-  for (let i = 0; i < n; i++) { // position: TRANSLATION, the matrix's last column; s: the first column's length
-    data[i * f + rest] = m[16 * i + 12]; data[i * f + rest + 1] = m[16 * i + 13]; data[i * f + rest + 2] = m[16 * i + 14];
-    if (base >= 19) data[i * f + rest + 6] = Math.hypot(m[16 * i], m[16 * i + 1], m[16 * i + 2]);
+  if (g.getAttribute('_AXIAL_ANGLES')) {
+    copy('_AXIAL_ANGLES', 3, rest + 3);
+  } else { // ROTATION alone: the angles of R = Rz Ry Rx (three's Euler order 'ZYX'), as Python's reader does
+    const mat = new THREE.Matrix4(), rot = new THREE.Matrix4(), e = new THREE.Euler(), p = new THREE.Vector3();
+    const q = new THREE.Quaternion(), s = new THREE.Vector3();
+    for (let i = 0; i < n; i++) {
+      mat.fromArray(m, 16 * i).decompose(p, q, s);
+      e.setFromRotationMatrix(rot.makeRotationFromQuaternion(q), 'ZYX');
+      data[i * f + rest + 3] = e.x; data[i * f + rest + 4] = e.y; data[i * f + rest + 5] = e.z;
+    }
   }
-  if (base >= 19) copy('_AXIAL_TWIST_TAPER', 2, rest + 7);
+  if (raw) { // the file's own TRANSLATION (absent: 0) and SCALE (absent: 1; uniform, as Python takes it)
+    const t = raw.TRANSLATION, s = raw.SCALE;
+    for (let i = 0; i < n; i++) {
+      for (let c = 0; c < 3; c++) data[i * f + rest + c] = t ? t.getComponent(i, c) : 0;
+      if (base < 19) continue;
+      const x = s ? s.getComponent(i, 0) : 1;
+      if (s && !(s.getComponent(i, 1) === x && s.getComponent(i, 2) === x)) {
+        throw new AxialError(`${where}: SCALE: expected a uniform scale (VEC3 with three equal components) per instance`);
+      }
+      data[i * f + rest + 6] = x;
+    }
+  } else {
+    for (let i = 0; i < n; i++) { // position: TRANSLATION, the matrix's last column; s: the first column's length
+      data[i * f + rest] = m[16 * i + 12]; data[i * f + rest + 1] = m[16 * i + 13]; data[i * f + rest + 2] = m[16 * i + 14];
+      if (base >= 19) data[i * f + rest + 6] = Math.hypot(m[16 * i], m[16 * i + 1], m[16 * i + 2]);
+    }
+  }
+  if (base >= 19 && g.getAttribute('_AXIAL_TWIST_TAPER')) copy('_AXIAL_TWIST_TAPER', 2, rest + 7);
   if (base >= 22) {
     if (!mesh.instanceColor) throw new AxialError(`${where}: 22 numbers an instance need _COLOR_0 (the tint)`);
     for (let i = 0; i < n; i++) for (let c = 0; c < 3; c++) data[i * f + rest + 9 + c] = mesh.instanceColor.array[3 * i + c];
   }
+  checkNumbers(data, f, k, where); // finite, a scale > 0, a taper < 1, a tint in 0..1: as every reader checks
   return { name: where, count: n, numbersPerInstance: f, axes: k, data };
 }
 
@@ -161,7 +251,10 @@ export function checkBendExtension(ext, where = 'node') {
   const at = `${where}: ${EXTENSION}`;
   if (!ext || typeof ext !== 'object' || Array.isArray(ext)) throw new AxialError(`${at}: expected an object`);
   const f = ext.numbersPerInstance, axes = ext.axes;
-  const k = axes === undefined || axes === null ? 1 : axes.count;
+  if (axes !== undefined && (!axes || typeof axes !== 'object' || Array.isArray(axes))) {
+    throw new AxialError(`${at}: axes: expected an object (count, parents, frames, lo, length), found ${brief(axes)}`);
+  }
+  const k = axes === undefined ? 1 : axes.count;
   if (!Number.isInteger(k) || k < 2 && axes != null || k > MAX_AXES) {
     throw new AxialError(`${at}: axes count: expected 2 to ${MAX_AXES} axes, found ${brief(k)}`);
   }
@@ -191,9 +284,9 @@ export function checkBendExtension(ext, where = 'node') {
 }
 
 /** An AxialInstancedMesh in place of GLTFLoader's InstancedMesh (same geometry, material, name, transform). */
-export function fromInstancedMesh(mesh, ext, where = 'node') {
+export function fromInstancedMesh(mesh, ext, where = 'node', raw = null) {
   checkBendExtension(ext, where);
-  const record = recordFromInstancedMesh(mesh, ext, where);
+  const record = recordFromInstancedMesh(mesh, ext, where, raw);
   const g = mesh.geometry;
   const bent = new AxialInstancedMesh(g, mesh.material, record, {
     axis: { axis: ext.axis, axes: ext.axes || null },

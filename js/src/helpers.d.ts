@@ -25,8 +25,12 @@ export function bentRadii(positions: ArrayLike<number>, axis: ResolvedAxis, data
   { center: [number, number, number]; radius: Float32Array; grow: Float32Array | null };
 /** Inject the bend into the vertex shader text of a three.js built-in material. */
 export function injectBend(vertexShader: string, where?: string): string;
-export function fromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): AxialInstancedMesh;
-export function recordFromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string): InstanceRecord;
+/** `raw`: the node's TRANSLATION and SCALE accessors as GLTFLoader reads them (the plugin passes them); without
+ * them the position and scale come from the instance matrices. */
+export function fromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string,
+  raw?: { TRANSLATION?: THREE.BufferAttribute; SCALE?: THREE.BufferAttribute } | null): AxialInstancedMesh;
+export function recordFromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExtension, where?: string,
+  raw?: { TRANSLATION?: THREE.BufferAttribute; SCALE?: THREE.BufferAttribute } | null): InstanceRecord;
 export function column(start: number, axes?: number): number;
 /** Check a node's AXIALDEFORM_bend object (throws AxialError naming the node and the field). */
 export function checkBendExtension(ext: unknown, where?: string): BendExtension;

@@ -6,8 +6,8 @@
 // feedback.js, bake.js, raycast.js.
 
 import * as THREE from 'three';
-import { AxialError, recordLayout, childTexels, texelRows, column, AXES_ROW } from './adp.js';
-import { ATTRIBUTES } from './record.js';
+import { AxialError, recordLayout, childTexels, texelRows, column, fieldName, AXES_ROW } from './adp.js';
+import { ATTRIBUTES, DRAWABLE_MAGNITUDE } from './record.js';
 import { resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 import { injectBend } from './shader.js';
 import { checkWind, setWindUniforms, windCycles, windReach } from './wind.js';
@@ -194,7 +194,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
   /** `data` as checked rows (a Float32Array of whole rows, finite, fitting the capacity from `first`). */
   _rows(data, first, where) {
     let rows = data;
-    const f = this.layout.numbersPerInstance;
+    const L = this.layout, f = L.numbersPerInstance;
     if (rows && rows.data && Number.isInteger(rows.count)) {
       if (rows.numbersPerInstance !== f) {
         throw new AxialError(`${rows.name || 'record'}: ${rows.numbersPerInstance} numbers an instance, but this mesh was made for ${f}`);
@@ -208,8 +208,12 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     if (!Number.isInteger(first) || first < 0 || first + n > this.capacity) {
       throw new AxialError(`${where}: instances ${first} to ${first + n - 1} do not fit a capacity of ${this.capacity}`);
     }
+    const placed = 10 * L.axes + 3; // every axis's offsets, then the position: what the picture projects
     for (let i = 0; i < rows.length; i++) {
       if (!Number.isFinite(rows[i])) throw new AxialError(`${where}: instance ${first + Math.floor(i / f)}, number ${i % f}: not finite`);
+      if (i % f < placed && Math.abs(rows[i]) > DRAWABLE_MAGNITUDE) {
+        throw new AxialError(`${where}: instance ${first + Math.floor(i / f)}, field ${fieldName(i % f, L.axes)} = ${rows[i]}; expected at most ${DRAWABLE_MAGNITUDE} in magnitude to draw it (float32 cannot project it)`);
+      }
     }
     return rows;
   }

@@ -21,3 +21,6 @@ export const WIND = Object.freeze({"gustiness": 0.6, "frequency": 0.5, "waveleng
 
 /** How far a frame's rows may be from orthonormal (|F F^T - I|) and still be a frame. */
 export const FRAME_TOLERANCE = 1e-06;
+
+/** The largest offset or position an instance may be drawn with (float32 projects no more). */
+export const DRAWABLE_MAGNITUDE = 1e+18;

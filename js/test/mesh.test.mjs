@@ -123,6 +123,14 @@ test('the plugin reads the record back from GLTFLoader\'s instanced mesh, and re
   const bent = fromInstancedMesh(inst, ext);
   assert.ok(bent.isAxialInstancedMesh && bent.count === n);
   assert.throws(() => fromInstancedMesh(inst, { numbersPerInstance: f }, 'node 0 (stones)'), /node 0 \(stones\): AXIALDEFORM_bend: axis: expected an object/);
+  // a file with ROTATION alone (what the plugin passes: the file's TRANSLATION and SCALE): the same rotations
+  const angles = g.getAttribute('_AXIAL_ANGLES');
+  g.deleteAttribute('_AXIAL_ANGLES');
+  const raw = { TRANSLATION: cols(10, 3), SCALE: new THREE.BufferAttribute(Float32Array.from({ length: 3 * n }, (_, k) => r.data[Math.floor(k / 3) * f + 16]), 3) };
+  const fromQ = recordFromInstancedMesh(inst, ext, 'node 0', raw);
+  const R = (d, i) => new THREE.Matrix4().makeRotationFromEuler(new THREE.Euler(d[i * f + 13], d[i * f + 14], d[i * f + 15], 'ZYX')).elements;
+  for (let i = 0; i < n; i++) R(fromQ.data, i).forEach((v, k) => assert.ok(Math.abs(v - R(r.data, i)[k]) < 1e-5, `instance ${i}`));
+  g.setAttribute('_AXIAL_ANGLES', angles);
   g.deleteAttribute('_AXIAL_D34');
   assert.throws(() => recordFromInstancedMesh(inst, ext, 'node 3'), /node 3: AXIALDEFORM_bend needs the instance attributes _AXIAL_D34/);
 });
@@ -175,16 +183,37 @@ test('the plugin refuses every broken extension of the shared corpus (js/test/ca
 test('the plugin checks the extension and its instance accessors before GLTFLoader reads them (beforeRoot)', () => {
   const valid = { numbersPerInstance: 16, axis: { frame: expected.stone16.axis.frame, lo: expected.stone16.axis.lo,
     length: expected.stone16.axis.length, center: expected.stone16.axis.center } };
-  const file = (attrs, counts, ext = valid) => ({ json: {
-    accessors: counts.map((count) => ({ count, type: 'VEC4', componentType: 5126 })),
-    nodes: [{ name: 'stones', mesh: 0, extensions: { EXT_mesh_gpu_instancing: { attributes: attrs }, AXIALDEFORM_bend: ext } }] } });
+  const types = { TRANSLATION: 'VEC3', _AXIAL_D12: 'VEC4', _AXIAL_D34: 'VEC4', _AXIAL_D5: 'VEC2', _AXIAL_ANGLES: 'VEC3' };
+  const names = Object.keys(types);
+  // one accessor an attribute (in this order), each in its own 1 000-byte view of one buffer
+  const file = (attrs, counts, ext = valid, change = () => {}) => {
+    const json = {
+      buffers: [{ byteLength: 1000 * names.length }],
+      bufferViews: names.map((_, k) => ({ buffer: 0, byteOffset: 1000 * k, byteLength: 1000 })),
+      accessors: counts.map((count, k) => ({ count, type: types[names[k]] || 'VEC4', componentType: 5126, bufferView: k })),
+      nodes: [{ name: 'stones', mesh: 0, extensions: { EXT_mesh_gpu_instancing: { attributes: attrs }, AXIALDEFORM_bend: ext } }] };
+    change(json);
+    return { json };
+  };
+  const all = Object.fromEntries(names.map((name, k) => [name, k]));
   const run = (parser) => new AxialGLTFPlugin(parser).beforeRoot();
-  assert.equal(run(file({ TRANSLATION: 0, _AXIAL_D12: 1 }, [5, 5])), null);
-  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 7 }, [5, 5])), /node 0 \(stones\): EXT_mesh_gpu_instancing attributes _AXIAL_D12: expected an accessor index 0..1, found 7/);
-  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 1 }, [5, -2])), /_AXIAL_D12: accessor 1 count: expected a whole number/);
-  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 1 }, [5, 2 ** 33])), /accessor 1 count: expected a whole number 0..2147483647, found 8589934592/);
-  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 1 }, [5, 6])), /different counts \(5 and 6\)/);
+  assert.equal(run(file(all, [5, 5, 5, 5, 5])), null);
+  assert.throws(() => run(file({ ...all, _AXIAL_D12: 7 }, [5, 5, 5, 5, 5])), /node 0 \(stones\): EXT_mesh_gpu_instancing attributes _AXIAL_D12: expected an accessor index 0..4, found 7/);
+  assert.throws(() => run(file(all, [5, -2, 5, 5, 5])), /_AXIAL_D12: accessor 1 count: expected a whole number/);
+  assert.throws(() => run(file(all, [5, 2 ** 33, 5, 5, 5])), /accessor 1 count: expected a whole number 0..2147483647, found 8589934592/);
+  assert.throws(() => run(file(all, [5, 6, 5, 5, 5])), /different counts \(5 and 6\)/);
   assert.throws(() => run(file({ TRANSLATION: 0 }, [5], { ...valid, axis: { ...valid.axis, frame: [[1, 0], [0, 1]] } })), /node 0 \(stones\): AXIALDEFORM_bend: axis frame: expected 3 rows/);
   const many = Object.fromEntries(Array.from({ length: 300 }, (_, k) => [`_AXIAL_A${k}_D12`, 0]));
   assert.throws(() => run(file(many, [5])), /300 of them; expected at most 64 axes' worth/);
+  // the accessors themselves, as Python's reader takes them (what three would throw a TypeError or RangeError on)
+  const bad = (change) => () => run(file(all, [5, 5, 5, 5, 5], valid, change));
+  assert.throws(bad((j) => { j.accessors[1].bufferView = 99; }), /_AXIAL_D12: accessor 1 bufferView: expected 0..4, found 99/);
+  assert.throws(bad((j) => { delete j.accessors[1].bufferView; }), /_AXIAL_D12: unsupported accessor/);
+  assert.throws(bad((j) => { j.accessors[1].byteOffset = 3; }), /accessor 1 byteOffset: expected a multiple of 4/);
+  assert.throws(bad((j) => { j.accessors[1].byteOffset = 2 ** 31; }), /accessor 1 runs past its bufferView/);
+  assert.throws(bad((j) => { j.accessors[1].type = 'SCALAR'; }), /_AXIAL_D12: expected VEC4, found "SCALAR"/);
+  assert.throws(bad((j) => { j.accessors[1].componentType = 0; }), /_AXIAL_D12: unsupported accessor/);
+  // the attributes the numbers per instance need, and no more than they hold
+  assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 1, _AXIAL_D34: 2, _AXIAL_D5: 3 }, [5, 5, 5, 5])), /needs the instance attributes _AXIAL_ANGLES/);
+  assert.throws(() => run(file(all, [5, 5, 5, 5, 5], { ...valid, numbersPerInstance: 19 })), /numbersPerInstance: 19, but the instance attributes hold 16/);
 });

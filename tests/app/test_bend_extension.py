@@ -5,6 +5,7 @@ it holds what a loader needs (the axis, a tree's axes, the numbers per instance)
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -223,3 +224,55 @@ def test_a_node_with_more_than_64_axes_worth_of_attributes_is_refused_before_rea
     monkeypatch.setattr(gltf_read, "read_accessor", lambda *a: pytest.fail("an accessor was read before the refusal"))
     with pytest.raises(ad.core.GltfError, match="many.glb: EXT_mesh_gpu_instancing attributes: .* expected at most 64"):
         gltf_read.read_instanced_glb(tmp_path / "many.glb")
+
+
+# ------------------------------------- found by tools/fuzz_specs.py (both readers, the tree specs)
+
+
+def test_fuzz_both_readers_of_the_extension_and_the_tree_specs_briefly(tmp_path):
+    """200 corrupted instanced GLBs through Python's reader and the npm plugin (same verdict for each
+    file: both draw it or both refuse it in words), 200 corrupted tree specs; in a fresh process
+    (the fuzzer forks, and this one may hold GL contexts)."""
+    proc = subprocess.run([sys.executable, str(ROOT / "tools" / "fuzz_specs.py"), "--cases", "200", "--seed", "5",
+                           "--node", "--keep", str(tmp_path)], capture_output=True, text=True, timeout=600,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out
+    assert "Python read_instanced_glb: 200 files" in out and "npm AxialGLTFPlugin: 200 files" in out, out
+    assert "the two readers differ on 0" in out and "fuzz trees: 200 cases" in out, out
+    for line in (ln for ln in out.splitlines() if ln.startswith("fuzz")):
+        assert "crash 0, garbage 0, hang 0, memory 0" in line, out
+
+
+def test_what_the_fuzzer_found_is_refused_in_words(tmp_path):
+    """Each was a crash, a wrong number or a disagreement of the two readers before its fix: pygltflib read a bufferView "0" as 0 (three does not), a negative
+    byteOffset read the bytes before the view, an unaligned one made three throw a RangeError, a
+    TOML table as an axis frame a TypeError, a missing TRANSLATION was refused though
+    EXT_mesh_gpu_instancing makes it optional."""
+    from axialdeform.core.io.gltf import read_instanced_glb
+
+    sys.path.insert(0, str(ROOT / "tools"))
+    import fuzz_specs  # its GLB splitter and joiner: the JSON exactly as written, no pygltflib between
+
+    def corrupt(name, change):
+        _spec_only_glb(tmp_path / "ok.glb")
+        doc, blob = fuzz_specs.split_glb((tmp_path / "ok.glb").read_bytes())
+        change(doc)
+        (tmp_path / name).write_bytes(fuzz_specs.join_glb(doc, blob))
+        return tmp_path / name
+
+    with pytest.raises(ad.core.GltfError, match=r"str.glb: _AXIAL_D12: accessor 4 bufferView: expected a whole number, found '4'"):
+        read_instanced_glb(corrupt("str.glb", lambda d: d["accessors"][4].update(bufferView="4")))
+    with pytest.raises(ad.core.GltfError, match=r"byteOffset: expected whole numbers >= 0"):
+        read_instanced_glb(corrupt("neg.glb", lambda d: d["accessors"][5].update(byteOffset=-4)))
+    with pytest.raises(ad.core.GltfError, match=r"byteOffset: expected a multiple of 4"):
+        read_instanced_glb(corrupt("odd.glb", lambda d: d["accessors"][5].update(byteOffset=2)))
+    with pytest.raises(ad.core.GltfError, match=r"_AXIAL_D12: expected VEC4, found 3 components"):
+        read_instanced_glb(corrupt("type.glb", lambda d: d["accessors"][4].update(type="VEC3")))
+    no_t = corrupt("no-t.glb", lambda d: d["nodes"][0]["extensions"][INSTANCING]["attributes"].pop("TRANSLATION"))
+    mesh, params = read_instanced_glb(no_t)
+    assert np.array_equal(np.asarray(params)[:, 10:13], np.zeros((5, 3)))
+    (tmp_path / "ax.toml").write_text('[[axis]]\npart = "trunk"\n[[axis]]\npart = "branch1"\nparent = "trunk"\n'
+                                      'axis = {a = 1}\n')
+    with pytest.raises(ad.core.MeshError, match=r"ax.toml: axis 2 \(branch1\): axis: expected a frame name or nine"):
+        ad.load_mesh("tree", axes=tmp_path / "ax.toml")

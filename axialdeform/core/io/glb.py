@@ -8,6 +8,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import io
+import struct
 import warnings
 from pathlib import Path
 
@@ -101,7 +102,6 @@ class GlbBuilder:
         """The GLB into the binary file ``fh``, chunk after chunk: the binary
         buffer is never joined in memory (what pygltflib's ``save_to_bytes``
         writes, byte for byte)."""
-        import struct
 
         self.gltf.buffers = [self.g.Buffer(byteLength=self.offset)]
         text = self.gltf.gltf_to_json(separators=(",", ":"), indent=None).encode("utf-8")
@@ -266,6 +266,12 @@ def read_accessor(gltf, blob: bytes, index, name: str, where: str) -> np.ndarray
     if not isinstance(index, int) or not 0 <= index < len(gltf.accessors):
         raise GltfError(f"{where}: {name}: expected an accessor index, found {index!r}")
     acc = gltf.accessors[index]
+    raw = getattr(gltf, "raw_accessors", [])
+    raw = raw[index] if index < len(raw) and isinstance(raw[index], dict) else {}
+    for key in ("bufferView", "byteOffset", "componentType", "count"):
+        value = raw.get(key)
+        if value is not None and (not isinstance(value, int) or isinstance(value, bool)):
+            raise GltfError(f"{where}: {name}: accessor {index} {key}: expected a whole number, found {value!r:.40}")
     if acc.componentType not in DTYPES or acc.type not in COMPONENTS or acc.bufferView is None:
         raise GltfError(f"{where}: {name}: unsupported accessor ({acc.type} of component type {acc.componentType}, "
                         f"bufferView {acc.bufferView})")
@@ -276,11 +282,18 @@ def read_accessor(gltf, blob: bytes, index, name: str, where: str) -> np.ndarray
         raise GltfError(f"{where}: {name}: accessor {index} bufferView: expected 0..{len(gltf.bufferViews) - 1}, "
                         f"found {acc.bufferView!r:.40}")
     view = gltf.bufferViews[acc.bufferView]
+    offsets = (acc.byteOffset or 0, view.byteOffset or 0)
+    if not all(isinstance(x, int) and x >= 0 for x in offsets):
+        raise GltfError(f"{where}: {name}: accessor {index} byteOffset: expected whole numbers >= 0 (the accessor's "
+                        f"and its bufferView's), found {offsets!r:.60}")
     dtype = np.dtype(DTYPES[acc.componentType]).newbyteorder("<")
     comps = COMPONENTS[acc.type]
     item = dtype.itemsize * comps
     stride = view.byteStride or item
     start = (view.byteOffset or 0) + (acc.byteOffset or 0)
+    if start % dtype.itemsize or stride % dtype.itemsize:  # the glTF rule; a typed array in JavaScript needs it
+        raise GltfError(f"{where}: {name}: accessor {index} byteOffset: expected a multiple of {dtype.itemsize} (the "
+                        f"component's size), found {start}")
     need = start + (acc.count - 1) * stride + item if acc.count else start
     if need > (view.byteOffset or 0) + view.byteLength or need > len(blob):
         raise GltfError(f"{where}: {name}: accessor {index} runs past its bufferView (truncated file?)")
@@ -311,7 +324,22 @@ def load_glb(path: Path):
         raise GltfError(f"{where}: not a binary glTF file: {error_in_words(exc, 'glb')}") from None
     if gltf is None:  # what pygltflib returns for bytes it does not recognise
         raise GltfError(f"{where}: not a binary glTF file (no glTF content)")
+    gltf.raw_accessors = _raw_accessors(data)
     return gltf
+
+
+def _raw_accessors(data) -> list:
+    """The accessors as the file's JSON has them (pygltflib turns ``"0"`` into 0; a JavaScript
+    loader does not): what :func:`read_accessor` checks an accessor's whole numbers against."""
+    import json
+
+    try:
+        (length,) = struct.unpack_from("<I", data, 12)
+        doc = json.loads(bytes(data[20:20 + length]))
+    except (struct.error, ValueError):
+        return []  # pygltflib read it: nothing more to say here
+    accessors = doc.get("accessors") if isinstance(doc, dict) else None
+    return accessors if isinstance(accessors, list) else []
 
 
 @contextlib.contextmanager

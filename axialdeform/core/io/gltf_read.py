@@ -83,15 +83,19 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
                         + (f" ({', '.join(repr(nd.name) for nd in nodes)}: name one with node=)" if nodes else ""))
     node = nodes[0]
     attrs = node.extensions[INSTANCING].get("attributes", {})
-    missing = [k for k in ("TRANSLATION", "_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5") if k not in attrs]
+    missing = [k for k in ("_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5") if k not in attrs]
     if missing or ("_AXIAL_ANGLES" not in attrs and "ROTATION" not in attrs):
-        raise GltfError(f"{where}: {INSTANCING} attributes: expected TRANSLATION, ROTATION and "
-                        f"{', '.join(ATTRIBUTES)}; missing {', '.join(missing) or 'ROTATION'}")
+        raise GltfError(f"{where}: {INSTANCING} attributes: expected {', '.join(ATTRIBUTES)} (TRANSLATION optional); "
+                        f"missing {', '.join(missing) or '_AXIAL_ANGLES'}")
     children = [name for name in attrs if str(name).startswith("_AXIAL_A") and str(name)[8:9].isdigit()]
     if len(attrs) > 16 + 3 * MAX_RECORD_AXES or len(children) > 3 * (MAX_RECORD_AXES - 1):  # before reading any
         raise GltfError(f"{where}: {INSTANCING} attributes: {len(attrs)} of them ({len(children)} of child axes); "
                         f"expected at most {MAX_RECORD_AXES} axes' worth")
     cols = {name: read_accessor(gltf, blob, attrs[name], name, where) for name in attrs}
+    for name, col in cols.items():  # each attribute's type, as docs/gltf/AXIALDEFORM_bend says (the npm plugin too)
+        kind = _attribute_type(str(name))
+        if kind is not None and col.shape[1] != COMPONENTS[kind]:
+            raise GltfError(f"{where}: {name}: expected {kind}, found {col.shape[1]} components")
     counts = {len(v) for v in cols.values()}
     if len(counts) != 1:
         raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
@@ -117,7 +121,8 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
             if cols[name].shape[1] != COMPONENTS[kind]:
                 raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
             params[:, list(idx)] = cols[name]
-    params[:, POSITION] = cols["TRANSLATION"]
+    if "TRANSLATION" in cols:  # EXT_mesh_gpu_instancing: absent, the instances sit at the origin
+        params[:, POSITION] = cols["TRANSLATION"]
     if "_AXIAL_ANGLES" not in cols:
 
         params[:, ANGLES] = angles_from_matrices(matrices_from_quaternions(cols["ROTATION"]))
@@ -171,6 +176,16 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     return mesh, as_params(params, name=where)
 
 
+#: the type of each instance attribute (a child axis j's ``_AXIAL_A{j}_D12/_D34/_D5`` as the first's)
+_TYPES = {"TRANSLATION": "VEC3", "ROTATION": "VEC4", "SCALE": "VEC3", GLTF_TINT_ATTRIBUTE[0]: GLTF_TINT_ATTRIBUTE[1],
+          **{name: kind for name, (kind, _) in {**ATTRIBUTES, **EXTENDED_ATTRIBUTES}.items()}}
+
+
+def _attribute_type(name: str) -> str | None:
+    child = re.fullmatch(r"_AXIAL_A[1-9][0-9]*(_D12|_D34|_D5)", name)
+    return _TYPES.get("_AXIAL" + child.group(1) if child else name)
+
+
 def _numbers(value, count: int, where: str, positive: bool = False) -> np.ndarray:
     """``count`` finite numbers (> 0 with ``positive``) as float64, else a GltfError naming ``where``."""
     ok = isinstance(value, (list, tuple)) and len(value) == count and all(
@@ -210,14 +225,16 @@ def _read_bend(gltf, blob, prim, ext, extras, cols, mesh, params, where):
     lo = float(_numbers([axis.get("lo")], 1, f"{where}: axis lo")[0])
     length = float(_numbers([axis.get("length")], 1, f"{where}: axis length", positive=True)[0])
     center = _numbers(axis.get("center"), 2, f"{where}: axis center")
-    fingerprint = ext.get("fingerprint")
-    if fingerprint is not None and not (isinstance(fingerprint, str) and re.fullmatch(r"[0-9a-f]{64}", fingerprint)):
+    fingerprint = ext.get("fingerprint")  # optional; if there, a string (JSON null is not one)
+    if "fingerprint" in ext and not (isinstance(fingerprint, str) and re.fullmatch(r"[0-9a-f]{64}", fingerprint)):
         raise GltfError(f"{where}: fingerprint: expected 64 lower-case hex digits (SHA-256), found {fingerprint!r:.80}")
     if fingerprint is not None and fingerprint != mesh.fingerprint.hex():
         raise MeshMismatchError(f"{where}: fingerprint {fingerprint[:16]} does not match the base mesh in the file "
                                 f"({mesh.fingerprint.hex()[:16]}); the file was altered")
     k = tree_shape(numbers)[0]
     axes = ext.get("axes")
+    if "axes" in ext and not isinstance(axes, dict):
+        raise GltfError(f"{where}: axes: expected an object (count, parents, frames, lo, length), found {axes!r:.80}")
     if (k > 1) != (axes is not None):
         raise GltfError(f"{where}: numbersPerInstance {numbers} is {k} axes an instance, but the extension "
                         f"{'has no' if axes is None else 'has'} axes")

@@ -84,7 +84,11 @@ def read_axes_file(path) -> list:
             raise MeshError(f"{path}: axis {i}: expected a table with a part name, an optional parent and axis, "
                             f"found {', '.join(sorted(entry))}")
         if "axis" in entry and not isinstance(entry["axis"], str):
-            entry = {**entry, "axis": np.asarray(entry["axis"], dtype=np.float64)}
+            try:
+                entry = {**entry, "axis": np.asarray(entry["axis"], dtype=np.float64)}
+            except (TypeError, ValueError):
+                raise MeshError(f"{path}: axis {i} ({entry['part']}): axis: expected a frame name or nine numbers "
+                                f"(three rows), found {entry['axis']!r:.80}") from None
         out.append(entry)
     return out
 
