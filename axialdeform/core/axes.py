@@ -59,12 +59,20 @@ class AxisTree:
         The axis ``b(V)`` of each vertex.
     names : tuple of K str
         A name per axis (the part it was made from, or ``axis{k}``).
+    anchors : tuple of K float
+        Where each child axis meets its parent: ``t_a`` in [0, 1] on the child's
+        own axis (``anchors[0]`` is 0 and unused).  By default measured from
+        the geometry (:func:`joint_anchor`: the point of the child's axis
+        segment nearest its parent's); random variation pins the child's bend
+        there (:func:`child_offsets`).  Not part of the deformation, so not of
+        :attr:`digest`: a parameter file is the same for any anchors.
     """
 
     axes: tuple
     parents: tuple
     vertex_axis: np.ndarray
     names: tuple = ()
+    anchors: tuple = ()
 
     def __post_init__(self) -> None:
         k = len(self.axes)
@@ -75,6 +83,19 @@ class AxisTree:
         object.__setattr__(self, "parents", parents)
         object.__setattr__(self, "vertex_axis", va)
         object.__setattr__(self, "names", tuple(self.names) or tuple(f"axis{i}" for i in range(k)))
+        given = tuple(self.anchors) or (None,) * k
+        if len(given) != k:
+            raise MeshError(f"axes: anchors: expected one per axis ({k}), found {len(given)}")
+        anchors = [0.0]
+        for j in range(1, k):
+            t = given[j]
+            if t is None:
+                t = joint_anchor(self.axes[j], self.axes[parents[j]])
+            elif isinstance(t, bool) or not isinstance(t, (int, float, np.integer, np.floating)) or not 0 <= t <= 1:
+                raise MeshError(f"axes: anchor of axis {j} ({self.names[j]}): expected t in 0..1 on its own axis, "
+                                f"found {t!r:.40}")
+            anchors.append(float(t))
+        object.__setattr__(self, "anchors", tuple(anchors))
 
     @property
     def count(self) -> int:
@@ -118,8 +139,11 @@ class AxisTree:
                 "lo": [float(a.lo) for a in self.axes], "length": [float(a.length) for a in self.axes]}
 
     def describe(self) -> str:
+        """``K axes (trunk, branch1 <- trunk, frond2 <- trunk @ t=0.35, ...)``: the hierarchy, and
+        each child's anchor where it is not its root end."""
         return f"{self.count} axes (" + ", ".join(
-            f"{n}{'' if p < 0 else ' <- ' + self.names[p]}" for n, p in zip(self.names, self.parents)) + ")"
+            f"{n}{'' if p < 0 else ' <- ' + self.names[p]}{f' @ t={a:.2f}' if p >= 0 and a >= 0.005 else ''}"
+            for n, p, a in zip(self.names, self.parents, self.anchors)) + ")"
 
 
 def axes_of(mesh) -> int:
@@ -146,15 +170,43 @@ def level_bends(bend, error: type = ParamError) -> tuple[float, ...]:
     return tuple(float(b) for b in bends)
 
 
+def bernstein4(t) -> tuple[np.ndarray, np.ndarray]:
+    """The degree-4 Bernstein weights at ``t`` and their derivatives: two ``(..., 5)`` arrays
+    (``D(t) = Σ B_i(t) d_{i+1}``, ``D'(t) = Σ B_i'(t) d_{i+1}``)."""
+    t = np.asarray(t, dtype=np.float64)[..., None]
+    i = np.arange(5)
+    binom = np.array([1.0, 4.0, 6.0, 4.0, 1.0])
+    b = binom * t**i * (1.0 - t) ** (4 - i)
+    # d/dt B_i = 4 (B3_{i-1} - B3_i)
+    b3 = np.array([1.0, 3.0, 3.0, 1.0]) * t ** np.arange(4) * (1.0 - t) ** (3 - np.arange(4))
+    db = 4.0 * (np.concatenate([np.zeros_like(t), b3], axis=-1) - np.concatenate([b3, np.zeros_like(t)], axis=-1))
+    return b, db
+
+
+def anchor_projection(t_anchor) -> np.ndarray:
+    """``(..., 5, 5)``: the orthogonal projection of five control offsets onto those whose
+    curve is pinned at ``t_anchor`` with zero slope (``D(t_a) = 0``, ``D'(t_a) = 0``, a clamped
+    joint): ``P = I − Aᵀ (A Aᵀ)⁻¹ A`` with ``A`` the rows ``B(t_a)``, ``B'(t_a)``.  At ``t_a = 0``
+    it zeroes ``d₁`` and ``d₂``; it never lengthens the offsets."""
+    b, db = bernstein4(t_anchor)
+    a = np.stack([b, db], axis=-2)  # (..., 2, 5)
+    gram = a @ np.swapaxes(a, -1, -2)
+    return np.eye(5) - np.swapaxes(a, -1, -2) @ np.linalg.solve(gram, a)
+
+
 def child_offsets(tree: AxisTree, bends: tuple, uniform: np.ndarray) -> np.ndarray:
     """The child axes' offsets ``(n, K − 1, 5, 2)`` float64 from uniforms in
     [0, 1) of that shape: axis ``j`` uniform in ``±bends[level]·L_j`` (the last
-    amplitude for any deeper level), with ``d₁ = 0``: its root stays where its
-    parent puts it (joints stay closed)."""
+    amplitude for any deeper level), then projected onto the offsets whose
+    bend vanishes at the joint with its parent, value and slope
+    (:func:`anchor_projection` at ``tree.anchors[j]``): however the child's
+    axis runs through the joint -- a branch from its end, a leaf that
+    crosses its stem -- the joint stays closed and the child leaves it at
+    its rest angle."""
     amp = np.array([bends[min(d, len(bends) - 1)] * a.length for d, a in zip(tree.depth[1:], tree.axes[1:])])
-    out = (2.0 * np.asarray(uniform, dtype=np.float64) - 1.0) * amp[None, :, None, None]
-    out[:, :, 0] = 0.0
-    return out
+    raw = (2.0 * np.asarray(uniform, dtype=np.float64) - 1.0) * amp[None, :, None, None]
+    proj = anchor_projection(np.asarray(tree.anchors[1:], dtype=np.float64))  # (K-1, 5, 5)
+    return np.einsum("jab,njbc->njac", proj, raw)
 
 
 # ------------------------------------------------------------------ building a tree
@@ -166,6 +218,28 @@ def _segment(axis: ControlAxis) -> tuple[np.ndarray, np.ndarray]:
     """The axis segment's two ends in model space: (t = 0, t = 1)."""
     pts = axis.control_points
     return pts[0], pts[-1]
+
+
+def _closest_on_segments(a0, a1, b0, b1) -> tuple[float, float]:
+    """``(s, t)`` in [0, 1]²: the points ``a0 + s (a1 - a0)`` and ``b0 + t (b1 - b0)`` of two
+    segments nearest each other (the usual clamped solve; parallel segments: the middle of their
+    overlap, as seen from the first)."""
+    u, v, w = a1 - a0, b1 - b0, a0 - b0
+    a, b, c, d, e = u @ u, u @ v, v @ v, u @ w, v @ w
+    den = a * c - b * b
+    s = np.clip((b * e - c * d) / den, 0.0, 1.0) if den > 1e-12 * a * c else 0.5
+    t = np.clip((b * s + e) / c, 0.0, 1.0) if c > 0 else 0.0
+    s = np.clip((b * t - d) / a, 0.0, 1.0) if a > 0 else 0.0
+    return float(s), float(t)
+
+
+def joint_anchor(child: ControlAxis, parent: ControlAxis) -> float:
+    """Where a child axis meets its parent: ``t`` on the child's axis of the point of its
+    segment nearest the parent's axis segment (0 for a branch that grows from its parent's line;
+    mid-way for a leaf whose axis crosses its stem)."""
+    p0, p1 = _segment(parent)
+    c0, c1 = _segment(child)
+    return _closest_on_segments(c0, c1, p0, p1)[0]
 
 
 def _point_segment_distance(p, a, b) -> float:
@@ -206,7 +280,8 @@ def check_parents(parents, count: int | None = None, name: str = "") -> tuple[in
     return out
 
 
-def tree_from_vertices(mesh, vertex_axis, parents, *, frames=None, names=None, root_children: bool = True) -> AxisTree:
+def tree_from_vertices(mesh, vertex_axis, parents, *, frames=None, names=None, root_children: bool = True,
+                       anchors=None) -> AxisTree:
     """A tree from per-vertex axis indices ``vertex_axis`` ((v,) int) and a
     parent list (``parents[0] = -1``); ``frames``: one frame rule per axis
     (``"auto"`` default, ``load_mesh(axis=...)``'s values).  Child axes are
@@ -231,7 +306,13 @@ def tree_from_vertices(mesh, vertex_axis, parents, *, frames=None, names=None, r
         if i and root_children:
             axis = _rooted(axis, axes[int(parents[i])], pts, f"{mesh.name}: axis {names[i]}")
         axes.append(axis)
-    return AxisTree(tuple(axes), tuple(int(p) for p in parents), va.astype(np.int32), names)
+    anchors = (None,) * k if anchors is None else tuple(anchors)
+    if len(anchors) != k:
+        raise MeshError(f"{mesh.name}: axes: anchors: expected one per axis ({k}), found {len(anchors)}")
+    try:
+        return AxisTree(tuple(axes), tuple(int(p) for p in parents), va.astype(np.int32), names, anchors)
+    except MeshError as exc:
+        raise MeshError(f"{mesh.name}: {exc}") from None
 
 
 def _part_vertices(mesh) -> dict:
@@ -247,11 +328,11 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
         raise MeshError(f"{mesh.name}: axes: expected 'parts', per-vertex axes or a list of "
                         "{'part', 'parent', 'axis'} entries, found " + repr(spec)[:80])
     verts = _part_vertices(mesh)
-    order, parents, frames = [], [], []
+    order, parents, frames, anchors = [], [], [], []
     for i, entry in enumerate(spec):
-        if not isinstance(entry, dict) or "part" not in entry or set(entry) - {"part", "parent", "axis"}:
+        if not isinstance(entry, dict) or "part" not in entry or set(entry) - {"part", "parent", "axis", "anchor"}:
             raise MeshError(f"{mesh.name}: axes entry {i + 1}: expected a table with 'part' and optional "
-                            f"'parent' and 'axis', found {entry!r}")
+                            f"'parent', 'axis' and 'anchor', found {entry!r}")
         part = entry["part"]
         if part not in verts:
             raise MeshError(f"{mesh.name}: axes entry {i + 1}: no part {part!r}; expected one of "
@@ -269,6 +350,12 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
         order.append(part)
         parents.append(-1 if parent is None else order.index(parent))
         frames.append(entry.get("axis", frame))
+        anchor = entry.get("anchor")
+        if anchor is not None and (isinstance(anchor, bool) or not isinstance(anchor, (int, float)) or not 0 <= anchor <= 1
+                                   or i == 0):
+            raise MeshError(f"{mesh.name}: axes entry {i + 1} ({part}): anchor: expected t in 0..1 on the part's own "
+                            f"axis where it meets its parent (a child only), found {anchor!r:.40}")
+        anchors.append(anchor)
     missing = [n for n in verts if n not in order]
     if missing:
         raise MeshError(f"{mesh.name}: axes: part(s) {', '.join(repr(n) for n in missing)} have no axis; "
@@ -278,7 +365,7 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
         va[verts[part]] = i
     if (va < 0).any():  # vertices no triangle uses: the root's
         va[va < 0] = 0
-    return tree_from_vertices(mesh, va, parents, frames=frames, names=order)
+    return tree_from_vertices(mesh, va, parents, frames=frames, names=order, anchors=anchors)
 
 
 def tree_from_parts(mesh, frame="auto") -> AxisTree:

@@ -179,7 +179,7 @@ def scatter(surface, mesh, n: int, variation: Variation | None = None, placement
         How many instances.
     variation : Variation, optional
         Their bend (a fraction of L; a mesh of several axes: one per level, each child axis in units
-        of its own length, ``d₁ = 0``), yaw, scale, twist, taper and tint.  The surface decides the
+        of its own length, clamped at its anchor), yaw, scale, twist, taper and tint.  The surface decides the
         position and the tilt (``align_to_normal``): a ``tilt`` or ``height`` is refused.
     placement : Placement, optional
         Spacing, density map, alignment, anchor, up, and a height map's scale and extent.
@@ -324,7 +324,7 @@ def _instances(base, points, normals, u: int, rng, placement: Placement, variati
         out[:, TAPER] = (variation.taper or 0.0) * u_extra[:, 1]
     if variation.tint is not None:
         out[:, TINT] = np.asarray(variation.tint_color) * (1.0 - variation.tint * rng.random((k, 3)))
-    if tree is not None:  # several axes: every child axis its level's amplitude, d1 = 0 (joints stay closed)
+    if tree is not None:  # several axes: every child axis its level's amplitude, clamped at its anchor (joints stay closed)
         out = join_record(out, child_offsets(tree, bend, children))
     out = np.ascontiguousarray(out, dtype=np.float32)
     if not np.isfinite(out).all():

@@ -242,7 +242,7 @@ def random_params(mesh, count: int, seed: int = 0, variation: Variation | None =
     Notes
     -----
     A child axis ``j`` of a mesh of several axes (:meth:`BaseMesh.with_axes`) has offsets uniform in
-    ``±bend[level]·L_j`` with ``d₁ = 0`` (its root stays where its parent puts it: joints stay
+    ``±bend[level]·L_j``, clamped at its anchor (``D_j(t_a) = 0``, ``D_j'(t_a) = 0``: joints stay
     closed), drawn after every other number.  The first 16 numbers of an instance are the same
     with or without the extension (the extra numbers come from the same random stream, after the
     others).  Instance ``i`` depends only on the seed, the options, ``count`` and ``i``:

@@ -245,7 +245,8 @@ def test_fuzz_both_readers_of_the_extension_and_the_tree_specs_briefly(tmp_path)
 
 
 def test_what_the_fuzzer_found_is_refused_in_words(tmp_path):
-    """Each was a crash, a wrong number or a disagreement of the two readers before its fix: pygltflib read a bufferView "0" as 0 (three does not), a negative
+    """Each was a crash, a wrong number or a disagreement of the two readers before its fix:
+    pygltflib read a bufferView "0" as 0 (three does not), a negative
     byteOffset read the bytes before the view, an unaligned one made three throw a RangeError, a
     TOML table as an axis frame a TypeError, a missing TRANSLATION was refused though
     EXT_mesh_gpu_instancing makes it optional."""

@@ -79,9 +79,9 @@ def read_axes_file(path) -> list:
                         f"{', '.join(doc) or 'none'}")
     out = []
     for i, entry in enumerate(entries, 1):
-        extra = set(entry) - {"part", "parent", "axis"}
+        extra = set(entry) - {"part", "parent", "axis", "anchor"}
         if extra or not isinstance(entry.get("part"), str):
-            raise MeshError(f"{path}: axis {i}: expected a table with a part name, an optional parent and axis, "
+            raise MeshError(f"{path}: axis {i}: expected a table with a part name, an optional parent, axis and anchor, "
                             f"found {', '.join(sorted(entry))}")
         if "axis" in entry and not isinstance(entry["axis"], str):
             try:
