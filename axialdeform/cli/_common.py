@@ -89,6 +89,18 @@ def add_axis(p) -> None:
     p.add_argument("--axes", metavar="parts|FILE.toml",
                    help="several axes in a hierarchy (a tree): 'parts' (one axis per part) or a TOML file of "
                         "[[axis]] part/parent/axis tables; --axis is then the frame of each axis naming none (default: one axis)")
+    p.add_argument("--parts", type=part_list, metavar="A,B,...",
+                   help="keep only these parts of the mesh file (its scenery left out) for everything: the axes, "
+                        "bounds, framing, spacing, export; give it again wherever the parameters are used "
+                        "(default: every part)")
+
+
+def part_list(text: str) -> tuple[str, ...]:
+    """``--parts A,B,...``: the part names as the file spells them (a comma inside a name: not supported)."""
+    names = tuple(n for n in text.split(",") if n)
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected part names separated by commas, found {text!r}")
+    return names
 
 
 def add_overwrite(p, detail: str = "") -> None:
@@ -100,7 +112,8 @@ def add_overwrite(p, detail: str = "") -> None:
 
 def load_base(args, source, *, textures: bool = True):
     """The base mesh ``source`` with the frame ``--axis`` and the axes ``--axes`` chose."""
-    return load_mesh(source, textures=textures, axis=getattr(args, "axis", "auto"), axes=getattr(args, "axes", None))
+    return load_mesh(source, textures=textures, axis=getattr(args, "axis", "auto"), axes=getattr(args, "axes", None),
+                     parts=getattr(args, "parts", None))
 
 
 def add_mesh_and_params(p) -> None:

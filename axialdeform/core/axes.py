@@ -368,14 +368,45 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
     return tree_from_vertices(mesh, va, parents, frames=frames, names=order, anchors=anchors)
 
 
-def tree_from_parts(mesh, frame="auto") -> AxisTree:
-    """One axis per part: the root is the largest part (its bounding-box
-    diagonal); each other part's parent is the axis whose segment comes
-    nearest to one of its axis's ends, attached nearest first (so parents
-    come first).  A heuristic for parts that are tubes around their axis (a
-    part whose box is dominated by something else -- a tuft of leaves at a
-    branch's tip -- has an axis segment away from the wood): the list form
-    (:func:`tree_from_spec`) says the hierarchy exactly."""
+#: a part whose extent along the up axis is below this fraction of its width looks like ground
+#: or water (scenery), not like a trunk: never the root of ``axes="parts"``
+GROUND_FLATNESS = 0.2
+#: a child whose axis segment passes further than this fraction of its length from its parent's
+#: (neither crossing nor touching it) is a doubtful attachment: ``axes="parts"`` warns
+DOUBTFUL_GAP = 0.25
+#: candidate parents about as near as the nearest (within this fraction of the part's length): the
+#: one nearer the root wins (a leaf crossing the crown touches its sibling leaves as much as the trunk)
+TIE = 0.05
+
+
+def _segment_distance(a, b) -> float:
+    s, t = _closest_on_segments(*a, *b)
+    return float(np.linalg.norm(a[0] + s * (a[1] - a[0]) - (b[0] + t * (b[1] - b[0]))))
+
+
+def tree_from_parts(mesh, frame="auto", up: int = 1) -> AxisTree:
+    """One axis per part, the hierarchy found from the structure (a heuristic; the list form,
+    :func:`tree_from_spec`, says it exactly):
+
+    * the root (trunk) is the part that starts lowest along ``up`` (the model's y, glTF's up):
+      what grows from the ground and the others attach to -- never a flat, wide part (ground,
+      water: its height below :data:`GROUND_FLATNESS` of its width), which is attached last and
+      warned of (leave it out with ``parts=``);
+    * every other part attaches to the part it crosses, touches or grows out of (its nearest
+      vertex to the other's axis segment, less that part's radius about its axis), preferring
+      the one nearer the root among those about as near (within :data:`TIE` of the part's
+      length; then the one whose axis it comes nearest), so a leaf attaches to its stem, not to
+      a sibling leaf beside it;
+      nearest first, so parents come first;
+    * a part further from its parent than :data:`DOUBTFUL_GAP` of its length is warned of
+      (:class:`~axialdeform.core.material.AssetWarning`), as is every ground-like part.
+
+    The tree is returned (``mesh.with_axes("parts").tree.describe()`` says it; ``info MESH --axes
+    parts`` prints it)."""
+    import warnings
+
+    from .material import AssetWarning
+
     parts = sum(1 for p in mesh.parts if p.count)
     if parts > MAX_AXES:  # said before any work: each part's axis and the attachment search grow with the count
         raise MeshError(f"{mesh.name}: axes='parts': {parts} parts, but a mesh has at most {MAX_AXES} axes; expected "
@@ -384,17 +415,63 @@ def tree_from_parts(mesh, frame="auto") -> AxisTree:
     names = list(verts)
     if len(names) < 2:
         raise MeshError(f"{mesh.name}: axes='parts': expected a mesh of several parts, found {len(names)}")
-    points = {n: mesh.positions[verts[n]] for n in names}
+    points = {n: mesh.positions[verts[n]].astype(np.float64) for n in names}
     axes = {n: _axis_of(points[n], f"{mesh.name}: part {n}", frame) for n in names}
-    size = {n: float(np.linalg.norm(np.ptp(points[n].astype(np.float64), axis=0))) for n in names}
-    root = max(names, key=lambda n: (size[n], -names.index(n)))
-    ends = {n: _segment(axes[n]) for n in names}
-    order, parents = [root], [-1]
+    ends = {n: tuple(np.asarray(e, dtype=np.float64) for e in _segment(axes[n])) for n in names}
+    across = [i for i in range(3) if i != up]
+    height = {n: float(np.ptp(points[n][:, up])) for n in names}
+    width = {n: float(np.ptp(points[n][:, across], axis=0).max()) for n in names}
+    ground = [n for n in names if height[n] < GROUND_FLATNESS * width[n]]
+    candidates = [n for n in names if n not in ground] or names
+    root = min(candidates, key=lambda n: (float(points[n][:, up].min()), names.index(n)))
+    def to_segment(pts, q) -> np.ndarray:  # each point's distance from q's axis segment
+        a0, a1 = ends[q]
+        ab = a1 - a0
+        t = np.clip((pts - a0) @ ab / max(float(ab @ ab), 1e-300), 0.0, 1.0)
+        return np.linalg.norm(pts - (a0 + t[:, None] * ab), axis=1)
+
+    # a part's thickness about its axis (a lower quantile: a tuft at a branch's tip does not make it thick)
+    radius = {q: float(np.percentile(to_segment(points[q], q), 25)) for q in names}
+    seen: dict = {}
+
+    def contact(n, q) -> tuple[float, float]:
+        """How far n is outside q (0: it touches, crosses or enters q: a vertex of n within q's radius of
+        q's axis, or n's axis segment within q's radius of q's), and how far the two axes are apart."""
+        if (n, q) not in seen:
+            vertex_gap = float(to_segment(points[n], q).min()) - radius[q]  # a vertex of n on or in q
+            axis_gap = _segment_distance(ends[n], ends[q])  # n's axis through q's (coarse parts: few vertices)
+            seen[n, q] = (max(min(vertex_gap, axis_gap - radius[q]), 0.0), axis_gap)
+        return seen[n, q]
+
+    order, parents, depth, gaps = [root], [-1], {root: 0}, {}
     while len(order) < len(names):
-        d, part, parent = min((min(_point_segment_distance(e, *ends[q]) for e in ends[n]), n, i)
-                              for n in names if n not in order for i, q in enumerate(order))
-        order.append(part)
-        parents.append(parent)
+        best = None
+        for n in names:
+            if n in order or (n in ground and len(order) < len(names) - len(ground)):
+                continue  # ground-like parts last: nothing should grow from the water
+            length = max(axes[n].length, 1e-12)
+            gaps_to = {q: contact(n, q) for q in order}
+            dist = {q: g[0] for q, g in gaps_to.items()}
+            near = min(dist.values())
+            q = min((q for q in order if dist[q] <= near + TIE * length), key=lambda q: (depth[q], gaps_to[q][1]))
+            key = (dist[q] / length, names.index(n))
+            if best is None or key < best[0]:
+                best = (key, n, q, dist[q])
+        _, n, q, d = best
+        order.append(n)
+        parents.append(order.index(q))
+        depth[n] = depth[q] + 1
+        gaps[n] = (q, d)
+    doubtful = [f"{n!r} -> {q!r} ({d:.3g} outside it, {d / max(axes[n].length, 1e-12):.0%} of its length)"
+                for n, (q, d) in gaps.items() if n not in ground and d > DOUBTFUL_GAP * axes[n].length]
+    if ground:
+        warnings.warn(f"{mesh.name}: axes='parts': {', '.join(repr(n) for n in ground)} look like ground or water "
+                      "(flat and wide), not a tree's part; leave them out with parts= / --parts", AssetWarning,
+                      stacklevel=3)
+    if doubtful:
+        warnings.warn(f"{mesh.name}: axes='parts': doubtful attachments (the part neither crosses nor touches its "
+                      f"parent): {'; '.join(doubtful)}; name the hierarchy in an axes file if it is wrong",
+                      AssetWarning, stacklevel=3)
     va = np.full(mesh.vertex_count, -1, dtype=np.int32)
     for i, part in reversed(list(enumerate(order))):
         va[verts[part]] = i

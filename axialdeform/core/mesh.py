@@ -156,6 +156,40 @@ class BaseMesh:
             return self  # the frame it has
         return dataclasses.replace(self, axis_frame=axis, _axis=None, tree=None)
 
+    def with_parts(self, names) -> BaseMesh:
+        """This mesh with only the parts ``names`` (in the file's order; the file's names, any
+        script): what a tree file's scenery (an island, a water plane) is left out with, before
+        anything is made from the mesh -- its axis, axes, bounds, framing, spacing, export.  The
+        vertices no kept face uses are dropped (the rest keep their order and ``source_index``),
+        so the fingerprint is the smaller mesh's.
+
+        names : iterable of str
+        """
+        names = [names] if isinstance(names, str) else list(names)
+        have = [p.name for p in self.parts]
+        unknown = [n for n in names if n not in have]
+        if unknown or not names:
+            raise MeshError(f"{self.name}: parts: no part {', '.join(repr(n) for n in unknown) or '(none given)'}; "
+                            f"expected some of {', '.join(repr(n) for n in have)}")
+        keep = [p for p in self.parts if p.name in set(names)]
+        faces = np.concatenate([self.faces[p.start:p.start + p.count] for p in keep])
+        used = np.zeros(self.vertex_count, dtype=bool)
+        used[faces.ravel()] = True
+        new_index = np.cumsum(used) - 1
+        parts, start = [], 0
+        for p in keep:
+            parts.append(dataclasses.replace(p, start=start))
+            start += p.count
+        def pick(a):
+            return None if a is None else np.ascontiguousarray(a[used])
+
+        source_index = pick(self.source_index)
+        return dataclasses.replace(
+            self, positions=pick(self.positions), normals=pick(self.normals),
+            faces=new_index[faces].astype(self.faces.dtype), uvs=pick(self.uvs), colors=pick(self.colors),
+            tangents=pick(self.tangents), parts=tuple(parts), source_index=source_index, grid=None, _axis=None,
+            tree=None)
+
     def with_control_axis(self, axis: ControlAxis) -> BaseMesh:
         """This mesh with exactly ``axis`` (the numbers a file records: its frame, ``lo``, ``length``
         and axis line), not the one its points give."""

@@ -254,6 +254,9 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
     src, nth = recipe.src, recipe.nth
     with src.wrap("mesh", "layer", nth):
         mesh = load_mesh(recipe.mesh)
+    if recipe.parts is not None:
+        with src.wrap("parts", "layer", nth):
+            mesh = mesh.with_parts(recipe.parts)
     with src.wrap("axis", "layer", nth):
         mesh = mesh.with_axis(recipe.frame)
     if recipe.axes is not None:

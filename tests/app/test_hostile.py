@@ -476,7 +476,7 @@ def test_include_cycle_and_missing_include():
 
 def test_wrong_mesh_for_parameter_file(tmp_path, stone, leaf):
     path = ad.write_params(tmp_path / "stones.adp", ad.random_params(stone, 3, seed=1), stone)
-    with pytest.raises(ad.core.MeshMismatchError, match=r"stones.adp: made for .*use the mesh it was made for"):
+    with pytest.raises(ad.core.MeshMismatchError, match=r"stones.adp: made for .*load the mesh as it was made for"):
         ad.read_params(path, leaf)
     assert ad.read_params(path, leaf, allow_mesh_mismatch=True).shape == (3, 16)
 
@@ -496,7 +496,7 @@ def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, stone):
     nanfile = tmp_path / "nan.txt"
     nanfile.write_text(ROW.replace("1.5", "nan", 1))
     cases = [
-        (["render", "leaf", stones, "-o", tmp_path / "x.png"], "use the mesh it was made for"),
+        (["render", "leaf", stones, "-o", tmp_path / "x.png"], "load the mesh as it was made for"),
         (["info", garbage], "garbage.adp: count: the header declares 3 instances"),
         (["info", nanfile], "nan.txt: line 1, field d1u: expected a finite number"),
         (["render", stones, stones, "-o", tmp_path / "x.png"], "unsupported mesh file type '.adp'"),

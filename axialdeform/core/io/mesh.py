@@ -113,7 +113,7 @@ def with_axes(mesh: BaseMesh, axes, axis="auto") -> BaseMesh:
         raise type(exc)(f"{axes}: {exc}") from None
 
 
-def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseMesh:
+def load_mesh(source, *, textures: bool = True, axis="auto", axes=None, parts=None) -> BaseMesh:
     """Read a base mesh.
 
     Parameters
@@ -135,6 +135,9 @@ def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseM
         ``{"part", "parent", "axis"}``, a TOML file of them (:func:`read_axes_file`) or per-vertex
         axes (:meth:`BaseMesh.with_axes`); ``axis`` is then the frame rule of each axis that names
         none.
+    parts : list of str, optional
+        Keep only these parts (:meth:`BaseMesh.with_parts`): a file's scenery left out before the
+        axis, the axes and everything after are made.
 
     Returns
     -------
@@ -154,6 +157,8 @@ def load_mesh(source, *, textures: bool = True, axis="auto", axes=None) -> BaseM
     """
     with texture_decoding(textures):
         mesh = _load_mesh(source)
+    if parts is not None:
+        mesh = mesh.with_parts(parts)
     if axes is not None:
         return with_axes(mesh, axes, axis)
     return mesh.with_axis(axis) if not (isinstance(axis, str) and axis == "auto") else mesh

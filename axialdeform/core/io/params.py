@@ -106,19 +106,22 @@ def check_mesh(pf: ParamFile, mesh, name: str = "<params>") -> None:
     if pf.mesh_fingerprint is not None and pf.mesh_fingerprint != mesh.fingerprint:
         raise MeshMismatchError(
             f"{name}: made for a different base mesh (fingerprint {pf.mesh_fingerprint.hex()[:16]}, "
-            f"expected {mesh.fingerprint.hex()[:16]} of {mesh.name}); use the mesh it was made for, "
-            "or override the check (allow_mesh_mismatch=True / --ignore-mesh-mismatch)"
+            f"expected {mesh.fingerprint.hex()[:16]} of {mesh.name}); load the mesh as it was made for: the same "
+            "file and the same parts (parts= / --parts), or use the bundled mesh it names; or skip the check "
+            "(allow_mesh_mismatch=True / --ignore-mesh-mismatch)"
         )
     if pf.axis is not None and not pf.axis.matches(mesh):
         raise MeshMismatchError(
             f"{name}: made for {pf.axis.describe()}, but {mesh.name} has {AxisRecord.of(mesh).describe()}; "
-            "use the mesh it was made for, or override the check"
+            "give the axis frame and the axes it was made with again (axis= and axes= / --axis and --axes, the same "
+            "axes file), or skip the check (allow_mesh_mismatch=True / --ignore-mesh-mismatch)"
         )
     k = getattr(mesh, "axis_count", 1)
     if len(pf.values) and tree_shape(pf.values.shape[1])[0] != k:
         raise MeshMismatchError(
             f"{name}: {pf.values.shape[1]} numbers an instance ({tree_shape(pf.values.shape[1])[0]} axes), but "
-            f"{mesh.name} has {k} axes; expected {describe_widths(tree_widths(k))} numbers an instance")
+            f"{mesh.name} has {k} axes; expected {describe_widths(tree_widths(k))} numbers an instance (load the mesh "
+            f"with the axes it was made with: axes= / --axes, the same axes file)")
 
 
 def read_params(path: str | os.PathLike, mesh=None, *, allow_mesh_mismatch: bool = False) -> np.ndarray:

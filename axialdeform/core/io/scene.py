@@ -47,7 +47,7 @@ _LIGHT = {"direction", "ambient", "color", "sky", "ground"}
 _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
 
 
-_LAYER = {"name", "mesh", "axis", "axes", "color", "params", "scatter", "wind"}
+_LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter", "wind"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "seed",
@@ -120,6 +120,7 @@ class LayerRecipe:
     wind: bool = False
     params: Path | None = None
     scatter: ScatterRecipe | None = None
+    parts: tuple | None = None  # keep only these parts of the mesh file
 
 
 @dataclass
@@ -367,7 +368,11 @@ def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
     if ("params" in layer) == ("scatter" in layer):
         raise src.error("expected exactly one of 'params' (a parameter file) or a [layer.scatter] recipe",
                         "mesh", "layer", nth)
+    parts = layer.get("parts")
+    if parts is not None and not (isinstance(parts, list) and parts and all(isinstance(p, str) for p in parts)):
+        raise src.error(f"expected an array of part names (the mesh file's), found {parts!r:.80}", "parts", "layer", nth)
     recipe = LayerRecipe(src, nth, name, mesh, frame, axes, color, wind)
+    recipe.parts = None if parts is None else tuple(parts)
     if "params" in layer:
         recipe.params = _existing(src, layer["params"], "params", "layer", nth)
     else:
