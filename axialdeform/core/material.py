@@ -127,6 +127,16 @@ class Material:
 
 DEFAULT_MATERIAL = Material()
 
+#: the colour (linear RGB) a part with the default material is drawn with: the bundled meshes' own,
+#: else stone grey.  ``render``, the page and exports (a GLB's material) all take it from here.
+DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
+FALLBACK_COLOR = (0.46, 0.44, 0.41)
+
+
+def default_color(mesh) -> tuple:
+    """(3,) linear RGB: what a part of ``mesh`` without a material of its own is drawn with."""
+    return DEFAULT_COLORS.get(str(getattr(mesh, "name", "")), FALLBACK_COLOR)
+
 
 @dataclass(frozen=True)
 class Part:

@@ -26,6 +26,7 @@ from ..core.bounds import base_radius
 from ..core.errors import ArgumentError, AxialDeformError, ParamError, ShaderError
 from ..core.lod import LodLevel, build_lod_levels, check_lod_error
 from ..core.look import DEFAULT_LOOK, Look
+from ..core.material import DEFAULT_COLORS, default_color  # noqa: F401  the default colour's one home
 from ..core.options import RENDERER_FIELDS, RenderOptions
 from ..core.params import check_tree_params, is_extended
 from ..core.record import split_record, tint_columns
@@ -44,8 +45,6 @@ __all__ = ["AxialRenderer", "MODES", "DEFAULT_COLORS", "BLEND_DEPTH_CUTOFF", "MO
 
 MODES = ("solid", "flat", "wireframe")
 MODE_INDEX = {"solid": 0, "flat": 1, "wireframe": 2}
-#: default base colours (linear RGB) by bundled mesh name
-DEFAULT_COLORS = {"stone": (0.46, 0.44, 0.41), "leaf": (0.30, 0.52, 0.12)}
 #: render(look=None): the default light and lines, every edge drawn (no depth pre-pass)
 _PLAIN_LOOK = DEFAULT_LOOK.replace(hidden_line=False)
 
@@ -195,7 +194,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         self._set_axis_uniforms(self.program)
         if params is not None:
             self._record_tint(params)
-        self.color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
+        self.color = default_color(mesh)
         #: world up (unit vector), for the sky/ground hemisphere ambient
         self.up = (0.0, 1.0, 0.0)
 

@@ -32,13 +32,14 @@ from ..core.io.gltf import encode_base_mesh
 from ..core.io.mesh import mesh_source_path
 from ..core.io.params import encode_binary
 from ..core.look import DEFAULT_LOOK
+from ..core.material import default_color
 from ..core.options import RenderOptions
 from ..core.params import as_params
 from ..core.record import WIDTHS, level_of, tree_shape
 from ..core.scene import Scene
 from ..core.wind import SECOND_HARMONIC
 from ..gl.material import ALPHA_MODE_INDEX
-from ..gl.renderer import DEFAULT_COLORS, MODE_INDEX, MODES, unit_vector
+from ..gl.renderer import MODE_INDEX, MODES, unit_vector
 from ..gl.shaders import GLSL_VERSION, assemble
 from .files import (
     WebScene,
@@ -147,7 +148,7 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
 
     axis = mesh.axis
     if color is None:
-        color = DEFAULT_COLORS.get(str(mesh.name), (0.46, 0.44, 0.41))
+        color = default_color(mesh)
     material = bool(mesh.has_appearance)
     if adp is None:
         adp = encode_binary(params, axis=mesh, mesh_fingerprint=mesh.fingerprint, quantize=quantize)  # its axis or tree

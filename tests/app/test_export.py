@@ -289,3 +289,18 @@ def test_the_streamed_glb_is_pygltflibs_byte_for_byte(tmp_path):
         reference = b"".join(b.gltf.save_to_bytes())
         path = export.export_baked(tmp_path / f"{name}.glb", mesh, params)
         assert path.read_bytes() == reference == export.encode_baked(mesh, params)
+
+
+def test_a_mesh_without_a_material_exports_with_renders_look(tmp_path):
+    """The bundled stone has no material: its GLB gets one (dielectric, render's stone grey), not
+    glTF's default (white, metallic 1: black in three.js where nothing is reflected)."""
+    from axialdeform.core.material import default_color
+
+    stone = ad.load_mesh("stone")
+    for layout in ("instanced", "baked"):
+        path = export.export_glb(tmp_path / f"{layout}.glb", stone, ad.random_params(stone, 3, seed=1), layout)
+        gltf = pygltflib.GLTF2().load(str(path))
+        assert len(gltf.materials) == 1, layout
+        pbr = gltf.materials[0].pbrMetallicRoughness
+        assert pbr.metallicFactor == 0.0 and np.allclose(pbr.baseColorFactor[:3], default_color(stone), atol=1e-6)
+        assert all(p.material == 0 for m in gltf.meshes for p in m.primitives)

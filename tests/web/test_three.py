@@ -248,6 +248,12 @@ def test_the_examples_draw_what_render_draws(browser, site, example):
     assert errors == []
     assert _mask(ref).sum() > 0.05 * ref.shape[0] * ref.shape[1]  # stones in view
     assert iou(shot, ref) >= 0.97, iou(shot, ref)
+    # the look too: the exported GLB carries render's stone colour as a dielectric material (glTF's own
+    # default is white and metallic 1, which three.js draws black where no environment is reflected)
+    both = _mask(shot) & _mask(ref)
+    lum = lambda img: img[..., :3].astype(np.float64).mean(axis=-1)[both]  # noqa: E731
+    dark = float((lum(shot) < 12).mean())
+    assert dark < 0.05 and 0.6 < lum(shot).mean() / lum(ref).mean() < 1.6, (dark, lum(shot).mean(), lum(ref).mean())
 
 
 @pytest.mark.slow

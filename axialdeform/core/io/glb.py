@@ -17,6 +17,7 @@ from PIL import Image
 
 from ..errors import GltfError
 from ..material import Material
+from ..material import default_color as default_color_of
 from ..record import (
     GLTF_ATTRIBUTES,
     GLTF_EXTENDED_ATTRIBUTES,
@@ -95,7 +96,8 @@ class GlbBuilder:
 
     def appearance(self, mesh, default_color=None) -> Appearance:
         """The mesh's parts (indices + material each) and its UV/colour accessors,
-        written once; ``default_color`` (linear RGB) replaces a default material."""
+        written once; ``default_color`` (linear RGB) replaces a default material (else the colour
+        ``render`` draws it with)."""
         return Appearance(self, mesh, default_color)
 
     def write_to(self, fh) -> None:
@@ -170,18 +172,20 @@ class Appearance:
         self._tinted: dict = {}  # (material index or None, tint) -> material index
         materials: dict[int, int] = {}
         single = len(mesh.parts) == 1
+        if default_color is None:  # what render draws a part without a material with, dielectric (glTF's
+            default_color = default_color_of(mesh)  # own default is white and metallic 1: black in three.js)
         for part in mesh.parts:
             if part.count == 0:
                 continue
             m = part.material
-            if default_color is not None and m.is_default:  # a scene layer's colour
+            if m.is_default:  # a scene layer's colour, or render's
 
                 m = Material(name=part.name if not single else str(getattr(mesh, "name", "mesh")),
                              base_color=[*default_color[:3], 1.0])
                 part_key = ("color", part.name)
             else:
                 part_key = id(m)
-            if part_key not in materials and not (single and m.is_default):
+            if part_key not in materials:
                 materials[part_key] = self._material(b, m)
             faces = mesh.faces[part.start:part.start + part.count]
             idx = b.indices(mesh, faces, name="indices" if single else f"{part.name}_indices")
