@@ -231,6 +231,8 @@ _VARIATION_HELP = {
     "taper": ("MAX", "extended instances: taper tp drawn between 0 and MAX < 1 (default: none)"),
     "tint": ("AMOUNT", "tinted instances (22 numbers): each one's colour is --tint-color times 1 - AMOUNT*u, u drawn per "
                        "channel in 0..1; AMOUNT in 0..1 (default: none)"),
+    "droop": ("F", "a mesh of several axes: every child axis (leaf, frond) also sags toward the world's down by F of its "
+                   "length at its far end, clamped at its joint, beside the isotropic --bend (default: {})"),
 }
 
 
@@ -247,7 +249,7 @@ def add_variation_args(parser, names=tuple(_VARIATION_HELP)) -> None:
     """The flags of the :class:`~axialdeform.core.variation.Variation` fields ``names``, with its defaults."""
     default = Variation()
     types = {"bend": bend_levels, "yaw": angle_range, "tilt": angle_range, "scale": str, "twist": float,
-             "taper": float, "tint": float}
+             "taper": float, "tint": float, "droop": float}
     for name in names:
         metavar, text = _VARIATION_HELP[name]
         value = getattr(default, name)
@@ -261,7 +263,7 @@ def add_variation_args(parser, names=tuple(_VARIATION_HELP)) -> None:
 def variation_args(args) -> dict:
     """The :class:`Variation` fields the command line gave (those its parser has), checked with
     the flags' names in the messages."""
-    out = {name: getattr(args, name) for name in ("bend", "yaw", "tilt") if hasattr(args, name)}
+    out = {name: getattr(args, name) for name in ("bend", "yaw", "tilt", "droop") if hasattr(args, name)}
     try:
         Variation(**out)
     except ParamError as exc:

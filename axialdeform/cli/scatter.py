@@ -49,7 +49,7 @@ def add_parser(subparsers) -> None:
                    help="tilt the up axis towards the surface normal by F in [0, 1] (default: 0, upright)")
     s.add_argument("--anchor", choices=ANCHORS, default="bottom",
                    help="point of MESH on the surface (default: %(default)s)")
-    add_variation_args(s, ("bend", "yaw", "scale", "twist", "taper", "tint"))
+    add_variation_args(s, ("bend", "yaw", "scale", "twist", "taper", "tint", "droop"))
     s.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
     s.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
     s.add_argument("--height-scale", type=float, default=1.0, metavar="H",

@@ -209,6 +209,25 @@ def child_offsets(tree: AxisTree, bends: tuple, uniform: np.ndarray) -> np.ndarr
     return np.einsum("jab,njbc->njac", proj, raw)
 
 
+def droop_offsets(tree: AxisTree, droop: float, angles: np.ndarray, up: int = 1) -> np.ndarray:
+    """The child axes' sag toward the world's down ``(n, K − 1, 5, 2)`` float64: axis ``j`` of an
+    instance turned by ``angles`` ((n, 3), ``R = Rz·Ry·Rx``) bends toward ``down = −e_up`` seen in
+    its own frame (the ``(u, v)`` part of ``F_j Rᵀ down``), as a cantilever sags from its joint:
+    ``D(t) = droop·L_j·(u, v)·(t − t_a)² / max(t_a², (1 − t_a)²)`` (zero, with zero slope, at
+    the anchor; ``droop·L_j`` at the far end of an axis lying across the down direction)."""
+    from .transforms import rotation_matrices
+
+    world_down = -np.eye(3)[up]
+    model_down = np.einsum("nji,j->ni", rotation_matrices(np.asarray(angles, dtype=np.float64)), world_down)  # Rᵀ d
+    frames = np.stack([np.asarray(a.matrix, dtype=np.float64) for a in tree.axes[1:]])  # (K-1, 3, 3)
+    across = np.einsum("jab,nb->nja", frames, model_down)[..., 1:]  # (n, K-1, 2): down in each child's (u, v)
+    t_a = np.asarray(tree.anchors[1:], dtype=np.float64)[:, None]
+    t2, t1 = np.array([0.0, 0.0, 1 / 6, 1 / 2, 1.0]), np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+    curve = (t2 - 2 * t_a * t1 + t_a**2) / np.maximum(t_a**2, (1 - t_a) ** 2)  # (K-1, 5): (t - t_a)², peak 1
+    amp = droop * np.array([a.length for a in tree.axes[1:]])
+    return amp[None, :, None, None] * curve[None, :, :, None] * across[:, :, None, :]
+
+
 # ------------------------------------------------------------------ building a tree
 def _axis_of(positions, name, frame) -> ControlAxis:
     return ControlAxis.from_positions(positions, name=name, frame=frame)

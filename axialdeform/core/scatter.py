@@ -45,7 +45,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .axes import child_offsets
+from .axes import child_offsets, droop_offsets
 from .axis import AXIS_NAMES
 from .deform import bernstein
 from .errors import ScatterError, TooFewError
@@ -325,7 +325,10 @@ def _instances(base, points, normals, u: int, rng, placement: Placement, variati
     if variation.tint is not None:
         out[:, TINT] = np.asarray(variation.tint_color) * (1.0 - variation.tint * rng.random((k, 3)))
     if tree is not None:  # several axes: every child axis its level's amplitude, clamped at its anchor (joints stay closed)
-        out = join_record(out, child_offsets(tree, bend, children))
+        offsets = child_offsets(tree, bend, children)
+        if variation.droop:
+            offsets = offsets + droop_offsets(tree, variation.droop, out[:, ANGLES], "xyz".index(placement.up))
+        out = join_record(out, offsets)
     out = np.ascontiguousarray(out, dtype=np.float32)
     if not np.isfinite(out).all():
         raise ScatterError("scatter: a parameter came out non-finite; expected finite surface and mesh coordinates")

@@ -17,7 +17,7 @@ from dataclasses import fields as dataclass_fields
 
 import numpy as np
 
-from .axes import child_offsets, level_bends
+from .axes import child_offsets, droop_offsets, level_bends
 from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import as_params
@@ -93,6 +93,10 @@ class Variation:
         in 0..1 per channel.
     tint_color : (float, float, float)
         Linear RGB in 0..1, the brightest tint (white: the mesh's own colours).
+    droop : float
+        A mesh of several axes: each child axis (a leaf, a frond) also sags toward the world's down
+        by this fraction of its length at its far end, clamped at its joint
+        (:func:`~axialdeform.core.axes.droop_offsets`), beside the isotropic ``bend`` (0: none).
 
     Any of ``scale``, ``twist``, ``taper`` makes 19-number (extended) instances, ``tint`` 22-number
     (tinted) ones; the first 16 numbers of an instance stay what they are without them.
@@ -107,6 +111,7 @@ class Variation:
     taper: float | None = None
     tint: float | None = None
     tint_color: tuple = (1.0, 1.0, 1.0)
+    droop: float = 0.0
 
     def __post_init__(self):
         put = object.__setattr__
@@ -139,6 +144,10 @@ class Variation:
                                                          and (color <= 1).all()):
             raise ParamError(f"tint_color: expected three linear RGB numbers in 0..1, found {self.tint_color!r}")
         put(self, "tint_color", tuple(float(c) for c in color))
+        droop = _number(self.droop, "droop")
+        if not (math.isfinite(droop) and droop >= 0):
+            raise ParamError(f"droop: expected a fraction of an axis's length >= 0, found {self.droop!r}")
+        put(self, "droop", droop)
 
     @property
     def bends(self) -> tuple[float, ...]:
@@ -338,5 +347,8 @@ def _rows(spec: _Spec, start: int, stop: int) -> np.ndarray:
         # several axes: 10 numbers per child axis, after the tint block of every instance
         k = spec.tree.count - 1
         u_child = _stream(spec.seed, 22 * n + 10 * k * start, 10 * k * m).reshape(m, k, 5, 2)
-        return as_params(join_record(out, child_offsets(spec.tree, var.bends, u_child)), axes=k + 1)
+        children = child_offsets(spec.tree, var.bends, u_child)
+        if var.droop:
+            children = children + droop_offsets(spec.tree, var.droop, out[:, ANGLES], up_i)
+        return as_params(join_record(out, children), axes=k + 1)
     return as_params(out)

@@ -60,7 +60,9 @@ def test_both_gltf_layouts_carry_the_tint(tmp_path, rel):
         assert len(prims) == len(parts)
         for prim, part in zip(prims, parts):
             factor = np.array(g.materials[prim.material].pbrMetallicRoughness.baseColorFactor)
-            base = np.array(part.material.base_color) if not part.material.is_default else np.ones(4)
+            # a part without a material: render's colour for the mesh (what the export writes, as render draws it)
+            base = np.array(part.material.base_color) if not part.material.is_default else np.array(
+                [*ad.core.material.default_color(mesh), 1.0])
             assert np.allclose(factor[:3], base[:3] * params[k, 19:22], atol=1e-6)
             assert np.isclose(factor[3], base[3])
     for report in validate_gltf(inst, baked):

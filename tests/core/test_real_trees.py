@@ -177,3 +177,24 @@ def test_the_gpu_bends_an_anchored_palm_as_the_cpu_does(ctx, palm):
     reach = max(1.0, float(np.abs(np.asarray(p)[:, 10 * mesh.axis_count:10 * mesh.axis_count + 3]).max()) / mesh.axis.length)
     assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * mesh.axis.length * reach
     assert np.abs(gpu[1] - cpu[1]).max() <= 1e-4
+
+
+def test_fronds_droop_toward_the_worlds_down(palm):
+    """droop= (--droop, a scatter recipe's droop): every child axis sags toward the world's down
+    beside the isotropic bend, clamped at its joint; the trunk and the other numbers stay."""
+    mesh = ad.load_mesh(palm, parts=PALM, axes="parts", axis="oriented")
+    plain = ad.random_params(mesh, 40, seed=1, bend=(0.03, 0.05), placement="disc", spacing=5.0)
+    droop = ad.random_params(mesh, 40, seed=1, bend=(0.03, 0.05), droop=0.3, placement="disc", spacing=5.0)
+    k = mesh.axis_count
+    assert np.array_equal(np.asarray(plain)[:, :10], np.asarray(droop)[:, :10])  # the trunk's own bend
+    a, _ = ad.deform(mesh, plain)
+    b, _ = ad.deform(mesh, droop)
+    fronds = mesh.tree.vertex_axis > 0
+    tips = fronds & (np.linalg.norm(mesh.positions[:, [0, 2]], axis=1) > 1.0)  # the frond ends, away from the crown
+    assert (b[:, tips, 1] - a[:, tips, 1]).mean() < -0.1 * mesh.tree.axes[1].length  # down, in the world
+    assert np.abs(b[:, ~fronds] - a[:, ~fronds]).max() < 1e-6
+    d = np.asarray(droop)[:, 10:10 * k].reshape(40, k - 1, 5, 2).astype(np.float64)
+    bb, db = bernstein4(np.array(mesh.tree.anchors[1:]))
+    assert np.abs(np.einsum("ji,njic->njc", bb, d)).max() < 1e-5 and np.abs(np.einsum("ji,njic->njc", db, d)).max() < 1e-4
+    with pytest.raises(ad.core.ParamError, match="droop: expected a fraction"):
+        ad.Variation(droop=-1)

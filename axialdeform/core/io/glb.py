@@ -94,11 +94,12 @@ class GlbBuilder:
         view = self.view(data, target=ELEMENT_ARRAY_BUFFER)
         return self.accessor(view, UINT16 if small else UINT32, data.size, "SCALAR", name=name)
 
-    def appearance(self, mesh, default_color=None) -> Appearance:
+    def appearance(self, mesh, default_color=None, plain: bool = False) -> Appearance:
         """The mesh's parts (indices + material each) and its UV/colour accessors,
         written once; ``default_color`` (linear RGB) replaces a default material (else the colour
-        ``render`` draws it with)."""
-        return Appearance(self, mesh, default_color)
+        ``render`` draws it with); ``plain``: a mesh of one default part gets no material (the
+        page's base mesh: the page colours it)."""
+        return Appearance(self, mesh, default_color, plain)
 
     def write_to(self, fh) -> None:
         """The GLB into the binary file ``fh``, chunk after chunk: the binary
@@ -156,7 +157,7 @@ class Appearance:
     cutoff, double-sidedness, normal map), shared TEXCOORD_0 (glTF's ``v``
     points down the image: ``1 - v``) and COLOR_0 (linear RGBA float)."""
 
-    def __init__(self, b: GlbBuilder, mesh, default_color=None) -> None:
+    def __init__(self, b: GlbBuilder, mesh, default_color=None, plain: bool = False) -> None:
         g = b.g
         self.mesh = mesh
         self.attributes: dict[str, int] = {}
@@ -172,20 +173,19 @@ class Appearance:
         self._tinted: dict = {}  # (material index or None, tint) -> material index
         materials: dict[int, int] = {}
         single = len(mesh.parts) == 1
-        if default_color is None:  # what render draws a part without a material with, dielectric (glTF's
-            default_color = default_color_of(mesh)  # own default is white and metallic 1: black in three.js)
+        if default_color is None and not plain:  # what render draws a part without a material with,
+            default_color = default_color_of(mesh)  # dielectric (glTF's own is white, metallic 1: black in three.js)
         for part in mesh.parts:
             if part.count == 0:
                 continue
             m = part.material
-            if m.is_default:  # a scene layer's colour, or render's
-
+            if m.is_default and default_color is not None:  # a layer's colour, or render's; both sides lit, as render
                 m = Material(name=part.name if not single else str(getattr(mesh, "name", "mesh")),
-                             base_color=[*default_color[:3], 1.0])
+                             base_color=[*default_color[:3], 1.0], double_sided=True)
                 part_key = ("color", part.name)
             else:
                 part_key = id(m)
-            if part_key not in materials:
+            if part_key not in materials and not (plain and single and m.is_default):
                 materials[part_key] = self._material(b, m)
             faces = mesh.faces[part.start:part.start + part.count]
             idx = b.indices(mesh, faces, name="indices" if single else f"{part.name}_indices")

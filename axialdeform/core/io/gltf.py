@@ -268,7 +268,7 @@ def encode_base_mesh(mesh) -> bytes:
     b = GlbBuilder()
     g = b.g
     attributes = _vertex_attributes(b, mesh)  # before the appearance: the order earlier files have
-    look = b.appearance(mesh)
+    look = b.appearance(mesh, plain=True)  # the page colours a plain mesh itself (a layer's colour)
     if "TEXCOORD_0" in look.attributes and mesh.tangents is not None:
         attributes["TANGENT"] = b.accessor(b.view(mesh.tangents.astype("<f4"), target=ARRAY_BUFFER), FLOAT,
                                            mesh.vertex_count, "VEC4", name="base_TANGENT")

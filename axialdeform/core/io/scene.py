@@ -50,7 +50,7 @@ _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
 _LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter", "wind"}
 
 
-_SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "seed",
+_SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "droop", "seed",
             "allow_fewer", "lift", "surface"}
 
 
@@ -390,7 +390,7 @@ def _scatter_layer(src, recipe, nth, scene) -> ScatterRecipe:
     if not isinstance(count, int) or isinstance(count, bool) or count < 0:
         raise src.error(f"expected a whole number >= 0, found {count!r}", "count", "layer", nth)
     kwargs = {}
-    for key in ("min_distance", "align_to_normal", "bend"):
+    for key in ("min_distance", "align_to_normal", "bend", "droop"):
         if key in recipe:
             if key == "bend" and isinstance(recipe[key], list):  # several axes: an amplitude per level
                 kwargs[key] = tuple(_numbers(src, recipe[key], key, "layer", nth, tuple(range(1, 9))))
