@@ -79,8 +79,8 @@ def main():
     cam = camera(params)
 
     # 1. solid | wireframe, the same parameters and camera
-    # (shadows, multisampling and hidden-line wireframe are on by default; no ground here)
-    image = ad.render_image(mesh, params, size, ("solid", "wireframe"), camera=cam, look=ad.Look(ground=False))
+    # (the ground, shadows, multisampling and hidden-line wireframe are on by default)
+    image = ad.render_image(mesh, params, size, ("solid", "wireframe"), camera=cam)
     ad.save_png(out / "01_stones.png", image)
 
     # 2. the bank: ground plane + one colour per stone, in your own offscreen target;

@@ -1,6 +1,7 @@
 // ground.frag -- the ground plane: lit like the instances (lighting.glsl),
-// a faint grid every u_cell world units, fading into the background colour
-// towards the edge of the square so it has no hard horizon.
+// a faint grid every u_cell world units, fading into the background colour as
+// the view grazes it (towards the horizon, like haze) and towards the edge of
+// the square, so it has neither a hard horizon nor a visible edge.
 #include "lighting.glsl"
 #ifdef AXIAL_SHADOW
 #include "shadow.glsl"
@@ -35,6 +36,7 @@ void main() {
     sun = shadow_visibility(v_world, u_up, u_light_dir);
 #endif
     vec3 lit = to_srgb(shade_surface_shadowed(base, u_up, to_eye, u_light_dir, u_up, u_ambient, 0.0, sun));
-    float fade = smoothstep(0.55, 1.0, length(v_plane));
-    f_color = vec4(mix(lit, u_background, fade), 1.0);
+    float edge = smoothstep(0.55, 1.0, length(v_plane));
+    float haze = 1.0 - smoothstep(0.0, 0.16, abs(dot(to_eye, u_up)));  // 1 at the horizon, 0 from ~9 degrees up
+    f_color = vec4(mix(lit, u_background, max(edge, haze)), 1.0);
 }

@@ -33,7 +33,8 @@ def valley(cols: int, rows: int) -> tuple[np.ndarray, np.ndarray]:
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     h, _ = valley(64, 48)
-    Image.fromarray(np.round(h * 255).astype(np.uint8)).save(OUT / "terrain.png", optimize=True)
+    # 16 bits a height: 8 would step the gentle river bed into terraces (streaks in its shading)
+    Image.fromarray(np.round(h * 65535).astype(np.uint16)).save(OUT / "terrain.png", optimize=True)
     _, d = valley(32, 24)
     rng = np.random.default_rng(5)
     # grass: on the slopes away from the river, patchy
@@ -42,6 +43,13 @@ def main() -> None:
     # stones: on the banks only, just beside the bed
     stones = ((d > 0.08) & (d < 0.22)).astype(np.float64)
     Image.fromarray(np.round(stones * 255).astype(np.uint8)).save(OUT / "stone_density.png", optimize=True)
+    # falling leaves: over the terrain's inner part only (a leaf lifted over the edge hangs in the air
+    # beside the terrain in the picture), thinning out over the outer sixth
+    rows, cols = d.shape
+    inner = np.minimum.outer(np.minimum(np.arange(rows), np.arange(rows)[::-1]) / rows,
+                             np.minimum(np.arange(cols), np.arange(cols)[::-1]) / cols)
+    leaves = np.clip((inner - 0.08) / 0.1, 0, 1)
+    Image.fromarray(np.round(leaves * 255).astype(np.uint8)).save(OUT / "leaf_density.png", optimize=True)
 
     # a grass blade: a thin strip along +y, tapering to a point, 6 segments
     t = np.linspace(0.0, 1.0, 7)

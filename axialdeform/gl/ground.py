@@ -62,6 +62,15 @@ class GroundPlane:
             self.program.release()
             raise
 
+    #: the drawn square reaches this many times the fitted radius: far enough that the view meets the
+    #: horizon on the ground, where it fades into the background (no edge, no void under the horizon)
+    EXTENT = 8.0
+
+    @property
+    def drawn_radius(self) -> float:
+        """Half the side of the square actually drawn (world units): :attr:`EXTENT` times :attr:`radius`."""
+        return self.EXTENT * self.radius
+
     @property
     def up_vector(self) -> np.ndarray:
         """(3,) unit world up."""
@@ -131,7 +140,7 @@ class GroundPlane:
         set_camera_uniforms(prog, view, projection)
         set_uniforms(prog, {
             "u_center": tuple(self.center), "u_axis_u": tuple(axis_u), "u_axis_v": tuple(axis_v),
-            "u_radius": self.radius, "u_color": self.color, "u_background": tuple(background[:3]),
+            "u_radius": self.drawn_radius, "u_color": self.color, "u_background": tuple(background[:3]),
             "u_light_dir": tuple(light / max(np.linalg.norm(light), 1e-12)), "u_up": tuple(self.up_vector),
             "u_light_color": look.light_color, "u_sky_color": look.sky_color, "u_bounce_color": look.ground_color,
             "u_ambient": float(ambient), "u_cell": self.cell,

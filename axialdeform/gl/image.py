@@ -140,7 +140,7 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
                     plane = GroundPlane(ctx, up=scene.up).fit_layers(layers)
                 cam = camera or scene_camera(scene, w / h)
                 if plane is not None:  # near and far enclose everything drawn: the ground reaches the edges
-                    cam = cam.enclosing_square(plane.center, UP_VECTORS[scene.up], plane.radius, w / h)
+                    cam = cam.enclosing_square(plane.center, UP_VECTORS[scene.up], plane.drawn_radius, w / h)
                 view, proj = cam.view(), cam.projection(w / h)
                 drawn.prepare(time)  # the shadows bend in the same wind as the picture
                 if look.draws_shadow and scene.count:

@@ -83,6 +83,20 @@ def test_stones_solid_and_wireframe_agree(run_example):
     image = load(out / "01_stones.png")
     h, w, _ = image.shape
     assert w == 2 * h * 4 // 3, "solid | wireframe side by side, 4:3 panels"
+    # the panels stand on the ground: no bare background (a void) below the horizon
+    assert foreground(image[h // 3:], BACKGROUND).mean() > 0.99, "background showing under the stones"
+    # solid and wireframe agree: the example's stones and camera drawn without the ground, each
+    # silhouette against the background
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("stones_example", ROOT / "examples" / "01_stones.py")
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    mesh = ad.load_mesh("stone")
+    params = example.river_bank(mesh, 600, 7)
+    image = ad.render_image(mesh, params, (320, 240), ("solid", "wireframe"), camera=example.camera(params),
+                            look=ad.Look(ground=False))
+    h, w, _ = image.shape
     solid = foreground(image[:, : w // 2], BACKGROUND)
     wire = foreground(image[:, w // 2:], BACKGROUND)
     assert 0.2 < solid.mean() < 0.95, f"stones cover {solid.mean():.0%} of the solid panel"
