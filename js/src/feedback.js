@@ -23,6 +23,10 @@ export function plainArray(attr) {
  * after instance.  Leaves GL state changed: the caller resets three's (renderer.resetState()).
  */
 export function feedback(mesh, renderer, ids, tangent) {
+  if (renderer && renderer.isWebGPURenderer) {
+    throw new AxialError('AxialInstancedMesh: bending on the GPU (bake, raycast, vertices) uses WebGL 2 transform '
+      + 'feedback; three\'s WebGPURenderer has none: use WebGLRenderer (docs/three.md)');
+  }
   mesh._renderer = renderer;
   const gl = renderer.getContext(), g = mesh.geometry, V = g.getAttribute('position').count;
   const n = ids ? ids.length : mesh.count;

@@ -10,6 +10,11 @@ import { AxialError, recordLayout, childTexels, texelRows, column, fieldName, AX
 import { ATTRIBUTES, DRAWABLE_MAGNITUDE } from './record.js';
 import { resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 import { injectBend } from './shader.js';
+
+/** What WebGPURenderer gets: it never runs onBeforeCompile, so it would draw every instance unbent. */
+const UNSUPPORTED_RENDERER = 'AxialInstancedMesh: three\'s WebGPURenderer (three/webgpu, either backend) does not run '
+  + 'the onBeforeCompile patch the bend is made with, so every instance would be drawn unbent; draw this mesh with '
+  + 'WebGLRenderer (docs/three.md: what works under which renderer)';
 import { checkWind, setWindUniforms, windCycles, windReach } from './wind.js';
 import { feedback } from './feedback.js';
 import { bake, unbake } from './bake.js';
@@ -121,6 +126,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     // a user's onBeforeRender runs after ours (composed): assigning one does not lose the renderer
     let userHook = null;
     const hook = (renderer, ...rest) => {
+      if (renderer && renderer.isWebGPURenderer) throw new AxialError(UNSUPPORTED_RENDERER);
       this._renderer = renderer;
       if (userHook) userHook.call(this, renderer, ...rest);
     };
@@ -131,6 +137,11 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    * Depth, Distance, ...) whose vertex shader bends this mesh's instances. */
   bendMaterial(material, clone = true) {
     if (!material || !material.isMaterial) throw new AxialError('AxialInstancedMesh: expected a THREE.Material');
+    if (material.isNodeMaterial) {
+      throw new AxialError(`AxialInstancedMesh: ${material.type || 'a node material'} is a node material (three/webgpu): `
+        + 'the bend is injected through onBeforeCompile, which node materials never run, so every instance would be '
+        + 'drawn unbent; use the classic material (MeshStandardMaterial, ...) with WebGLRenderer (docs/three.md)');
+    }
     if (this._ownShader && clone) return material;
     if (material.isShaderMaterial) {
       throw new AxialError('AxialInstancedMesh: a ShaderMaterial has no three.js chunks to bend; include the exported AXIAL_GLSL in it yourself');

@@ -217,3 +217,22 @@ test('the plugin checks the extension and its instance accessors before GLTFLoad
   assert.throws(() => run(file({ TRANSLATION: 0, _AXIAL_D12: 1, _AXIAL_D34: 2, _AXIAL_D5: 3 }, [5, 5, 5, 5])), /needs the instance attributes _AXIAL_ANGLES/);
   assert.throws(() => run(file(all, [5, 5, 5, 5, 5], { ...valid, numbersPerInstance: 19 })), /numbersPerInstance: 19, but the instance attributes hold 16/);
 });
+
+test('never a silent unbent picture: node materials and WebGPURenderer are refused in words', () => {
+  // what three/webgpu sets on its renderer and its node materials (isWebGPURenderer, isNodeMaterial)
+  const node = Object.assign(new THREE.MeshStandardMaterial(), { isNodeMaterial: true, type: 'MeshStandardNodeMaterial' });
+  assert.throws(() => new AxialInstancedMesh(geometryOf('stone16'), node, record('stone16'), { axis: spec('stone16') }),
+    (e) => e instanceof AxialError && /MeshStandardNodeMaterial is a node material .*onBeforeCompile.*unbent.*WebGLRenderer/.test(e.message));
+  const mesh = new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshStandardMaterial(), record('stone16'), { axis: spec('stone16') });
+  const webgpu = { isWebGPURenderer: true, getContext: () => null };
+  assert.throws(() => mesh.onBeforeRender(webgpu, new THREE.Scene(), new THREE.PerspectiveCamera()),
+    (e) => e instanceof AxialError && /WebGPURenderer .*unbent.*WebGLRenderer/.test(e.message));
+  assert.throws(() => mesh.onBeforeRender(webgpu), /WebGPURenderer/, 'every frame, not once: the picture never draws unbent');
+  assert.throws(() => mesh.bake(webgpu), /bake uses WebGL 2 transform feedback; three's WebGPURenderer has none/);
+  let seen = null;
+  mesh.onBeforeRender = (r) => { seen = r; }; // a user's own hook still runs under WebGLRenderer
+  const webgl = { isWebGLRenderer: true };
+  mesh.onBeforeRender(webgl);
+  assert.equal(seen, webgl);
+  mesh.dispose();
+});
