@@ -262,10 +262,12 @@ void axial_child_offsets(sampler2D tex, int id, int k, out vec4 d12, out vec4 d3
 // model-space Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and
 // the rigid part; children: the texture above; wind: the wind's push per unit of axis length in
 // the instance's model frame (axial_wind_push with len 1; zero when still), which moves every
-// child axis j by L_j times its part across that axis on c = (0, 0, 1/6, 1/2, 1).
+// child axis j by L_j times its part across that axis on the control polygon of
+// (t - a)^2 / max(a^2, (1 - a)^2), a = anchors[j] (its joint stays; a = 0: c = (0, 0, 1/6, 1/2, 1)).
 void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[AXIAL_AXES],
-                      float lens[AXIAL_AXES], int parents[AXIAL_AXES], vec2 center, AxialInstance inst,
-                      sampler2D children, int id, vec3 wind, out vec3 w_out, out vec3 wn_out, out mat3 jac_out) {
+                      float lens[AXIAL_AXES], float anchors[AXIAL_AXES], int parents[AXIAL_AXES], vec2 center,
+                      AxialInstance inst, sampler2D children, int id, vec3 wind, out vec3 w_out, out vec3 wn_out,
+                      out mat3 jac_out) {
     vec3 moved = v;
     mat3 jac = mat3(1.0);
 #ifndef AXIAL_NO_BEND
@@ -291,9 +293,11 @@ void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[
         vec2 d5 = inst.d5;
         if (j > 0) {
             axial_child_offsets(children, id, j, d12, d34, d5);
-            vec2 u = lens[j] * (frames[j] * wind).yz;
-            d34 += vec4(u * (1.0 / 6.0), u * 0.5);
-            d5 += u;
+            float a = anchors[j];
+            vec2 u = lens[j] * (frames[j] * wind).yz / max(a * a, (1.0 - a) * (1.0 - a));
+            d12 += vec4(u * (a * a), u * (a * a - 0.5 * a));
+            d34 += vec4(u * (1.0 / 6.0 - a + a * a), u * (0.5 - 1.5 * a + a * a));
+            d5 += u * ((1.0 - a) * (1.0 - a));
         }
         axial_axis_add(v, frames[j], los[j], lens[j], d12, d34, d5, disp, jac);
         j = parents[j];

@@ -19,6 +19,7 @@ uniform mat4 u_proj;
 #define u_axes_frame axialFrames
 #define u_axes_lo axialLos
 #define u_axes_len axialLens
+#define u_axes_anchor axialAnchors
 #define u_axes_parent axialParents
 #define u_axes_offsets axialChildren
 #define u_wind_strength axialWindStrength
@@ -75,6 +76,7 @@ in float in_axis;
 uniform mat3 u_axes_frame[AXIAL_AXES];
 uniform float u_axes_lo[AXIAL_AXES];
 uniform float u_axes_len[AXIAL_AXES];
+uniform float u_axes_anchor[AXIAL_AXES];  // each child axis's joint, t on its own axis (the wind leaves it)
 uniform int u_axes_parent[AXIAL_AXES];
 uniform sampler2D u_axes_offsets;
 #endif
@@ -158,7 +160,7 @@ void main() {
 #ifdef AXIAL_AXES
     mat3 jac;
     axial_tree_world(in_position, in_normal, int(in_axis + 0.5), u_axes_frame, u_axes_lo, u_axes_len,
-                     u_axes_parent, u_center, inst, u_axes_offsets, AXIAL_INSTANCE_ID + u_instance_base, push,
+                     u_axes_anchor, u_axes_parent, u_center, inst, u_axes_offsets, AXIAL_INSTANCE_ID + u_instance_base, push,
                      v_world, v_normal, jac);
 #else
     axial_world(in_position, in_normal, AXIAL_AXIS, u_lo, u_len, u_center, inst, v_world, v_normal);

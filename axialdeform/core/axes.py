@@ -132,11 +132,12 @@ class AxisTree:
 
     def to_json(self) -> dict:
         """The tree as a loader needs it to bend (the page's config, a GLB's extras and its
-        ``AXIALDEFORM_bend``): ``{count, names, parents, frames (rows e_a, e_u, e_v), lo, length}``;
+        ``AXIALDEFORM_bend``): ``{count, names, parents, frames (rows e_a, e_u, e_v), lo, length, anchors}``;
         each vertex's axis travels separately (``_AXIAL_AXIS``)."""
         return {"count": self.count, "names": [str(n) for n in self.names], "parents": [int(p) for p in self.parents],
                 "frames": [np.asarray(a.matrix, dtype=np.float64).tolist() for a in self.axes],
-                "lo": [float(a.lo) for a in self.axes], "length": [float(a.length) for a in self.axes]}
+                "lo": [float(a.lo) for a in self.axes], "length": [float(a.length) for a in self.axes],
+                "anchors": [float(t) for t in self.anchors]}
 
     def describe(self) -> str:
         """``K axes (trunk, branch1 <- trunk, frond2 <- trunk @ t=0.35, ...)``: the hierarchy, and

@@ -129,13 +129,14 @@ class AxesTexture:
 
 def set_axes_uniforms(program, tree) -> None:
     """Every axis's frame (GLSL ``mat3``: ``u_axes_frame[k] * v = F_k v``), ``lo``,
-    ``L`` and parent, and the offsets texture's unit."""
+    ``L``, anchor and parent, and the offsets texture's unit."""
     if "u_axes_lo" not in program and "u_axes_frame" not in program:
         return
     frames = np.stack([a.matrix.T for a in tree.axes])  # column-major mat3s: F's transpose, row-major
     values = {"u_axes_frame": np.ascontiguousarray(frames, dtype=np.float32),
               "u_axes_lo": np.array([a.lo for a in tree.axes], dtype=np.float32),
               "u_axes_len": np.array([a.length for a in tree.axes], dtype=np.float32),
+              "u_axes_anchor": np.array(tree.anchors, dtype=np.float32),
               "u_axes_offsets": AXES_UNIT}
     set_uniforms(program, values)
     if "u_axes_parent" in program:

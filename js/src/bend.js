@@ -32,7 +32,8 @@ export function resolveAxis(spec, record, positions) {
   let frame, lo, length, center = null, axes = null;
   if (spec && spec.axes) {
     const a = spec.axes;
-    axes = { count: a.count ?? a.frames.length, frames: a.frames, lo: a.lo, length: a.length, parents: a.parents };
+    axes = { count: a.count ?? a.frames.length, frames: a.frames, lo: a.lo, length: a.length, parents: a.parents,
+      anchors: a.anchors || null };
     if (!Array.isArray(axes.lo) || axes.lo.length !== axes.count || axes.parents.length !== axes.count) {
       throw new AxialError(`axes: expected ${axes.count} frames, lo, length and parents`);
     }

@@ -279,6 +279,10 @@ export function checkBendExtension(ext, where = 'node') {
     axes.frames.forEach((fr, j) => frameRows(fr, `${at}: axes frames[${j}]`));
     numbers(axes.lo, k, `${at}: axes lo`);
     numbers(axes.length, k, `${at}: axes length`, true);
+    if (axes.anchors !== undefined && !(Array.isArray(axes.anchors) && axes.anchors.length === k
+        && axes.anchors.every((t) => typeof t === 'number' && t >= 0 && t <= 1))) {
+      throw new AxialError(`${at}: axes anchors: expected ${k} numbers in 0..1 (t on each axis's own length), found ${brief(axes.anchors)}`);
+    }
   }
   return ext;
 }

@@ -96,6 +96,8 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
         axialFrames: { value: ax.axes.frames.map((f) => new THREE.Matrix3().set(...f.flat())) },
         axialLos: { value: Float32Array.from(ax.axes.lo) },
         axialLens: { value: Float32Array.from(ax.axes.length) },
+        // each child axis's joint (t on its own axis): the wind leaves it; files without them: 0
+        axialAnchors: { value: Float32Array.from(ax.axes.anchors || new Array(ax.axes.count).fill(0)) },
         axialParents: { value: Int32Array.from(ax.axes.parents) },
         axialChildren: { value: null },
       });

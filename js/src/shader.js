@@ -18,6 +18,7 @@ uniform vec2 axialCenter;
 uniform mat3 axialFrames[AXIAL_AXES];
 uniform float axialLos[AXIAL_AXES];
 uniform float axialLens[AXIAL_AXES];
+uniform float axialAnchors[AXIAL_AXES];
 uniform int axialParents[AXIAL_AXES];
 uniform sampler2D axialChildren;
 attribute float axialAxis;
@@ -61,7 +62,7 @@ export const BEND = `
 #endif
 #ifdef AXIAL_AXES
     mat3 axialJac;
-    axial_tree_world(position, normal, int(axialAxis + 0.5), axialFrames, axialLos, axialLens, axialParents,
+    axial_tree_world(position, normal, int(axialAxis + 0.5), axialFrames, axialLos, axialLens, axialAnchors, axialParents,
                      axialCenter, axialInst, axialChildren, AXIAL_ID, axialPush, axialV, axialN, axialJac);
 #ifdef USE_TANGENT
     axialT = axialJac * tangent.xyz;

@@ -198,3 +198,31 @@ def test_fronds_droop_toward_the_worlds_down(palm):
     assert np.abs(np.einsum("ji,njic->njc", bb, d)).max() < 1e-5 and np.abs(np.einsum("ji,njic->njc", db, d)).max() < 1e-4
     with pytest.raises(ad.core.ParamError, match="droop: expected a fraction"):
         ad.Variation(droop=-1)
+
+
+def test_the_wind_leaves_the_joints_where_they_are(ctx, palm, tmp_path):
+    """The wind pushes a child axis on the control polygon of (t - t_a)^2: zero, with zero slope,
+    at its anchor (a frond crossing the crown sways, the crown stays closed); on the GPU as on the
+    CPU; the anchors travel in the instanced GLB (AXIALDEFORM_bend axes.anchors)."""
+    from axialdeform.core.io.gltf import export_glb, read_instanced_glb
+    from axialdeform.core.wind import anchored_wind_weights, tree_wind_offsets
+    from axialdeform.gl.renderer import AxialRenderer
+
+    mesh = ad.load_mesh(palm, parts=PALM, axes="parts", axis="oriented")
+    tree = mesh.tree
+    p = ad.random_params(mesh, 16, seed=5, bend=(0.05, 0.3), placement="disc", spacing=4.0)
+    wind = ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.5)
+    pushed = tree_wind_offsets(wind, tree, p, time=0.7)  # (n, K, 5, 2)
+    b, db = bernstein4(np.array(tree.anchors[1:]))
+    assert np.abs(np.einsum("ji,njic->njc", b, pushed[:, 1:])).max() < 1e-9
+    assert np.abs(np.einsum("ji,njic->njc", db, pushed[:, 1:])).max() < 1e-9
+    assert np.abs(pushed[:, 1:]).max() > 0.05 * tree.axes[1].length  # and it does push
+    assert np.array_equal(anchored_wind_weights(0.0), ad.core.wind.WIND_WEIGHTS)  # a root-anchored axis as before
+    with AxialRenderer(ctx, mesh, p, wind=wind) as r:
+        gpu = r.capture(time=0.7)
+    cpu = ad.deform(mesh, ad.core.wind.apply_wind(wind, tree, p, 0.7))
+    reach = max(1.0, float(np.abs(np.asarray(p)[:, 10 * tree.count:10 * tree.count + 3]).max()) / mesh.axis.length)
+    assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * mesh.axis.length * reach
+    path = export_glb(tmp_path / "palms.glb", mesh, p, "instanced")
+    back, _ = read_instanced_glb(path)
+    assert np.allclose(back.tree.anchors, tree.anchors)

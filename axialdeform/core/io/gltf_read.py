@@ -298,9 +298,14 @@ def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
             if name not in cols or cols[name].shape[1] != COMPONENTS[kind]:
                 raise GltfError(f"{where}: {INSTANCING} attributes: expected {name} ({kind}) for axis {j}")
             children[:, j - 1, first:first + COMPONENTS[kind]] = cols[name]
+    anchors = record.get("anchors")  # each child's joint (optional: measured from the geometry if absent)
+    if anchors is not None and not (isinstance(anchors, list) and len(anchors) == k and all(
+            isinstance(t, (int, float)) and not isinstance(t, bool) and 0 <= t <= 1 for t in anchors)):
+        raise GltfError(f"{where}: axes anchors: expected {k} numbers in 0..1 (t on each axis's own length), "
+                        f"found {anchors!r:.80}")
     try:
         tree = tree_from_vertices(mesh, va.astype(np.int64), parents, frames=[np.asarray(f) for f in frames],
-                                  names=names, root_children=False)
+                                  names=names, root_children=False, anchors=anchors)
         mesh = mesh.with_axes(tree)
     except AxialDeformError as exc:
         raise GltfError(f"{where}: extras axes: {exc}") from None
