@@ -26,7 +26,10 @@ def valley(cols: int, rows: int) -> tuple[np.ndarray, np.ndarray]:
     river_x = 0.25 * np.sin(2.2 * z + 0.4)  # the river winds along z
     d = np.abs(x - river_x)  # distance to the river, across
     h = 0.12 + 0.75 * np.clip(d / 0.9, 0, 1) ** 1.5 + 0.08 * np.sin(5 * x + 3 * z) * np.cos(4 * z)
-    h = np.where(d < 0.08, 0.06, h)  # the river bed
+    # the river bed, blended into the banks: a step here, sampled on the grid, stair-stepped the winding
+    # banks into regular streaks in the shading (and dark smudges on the forest's hillside)
+    s = np.clip((d - 0.05) / 0.09, 0, 1)
+    h = 0.06 + (h - 0.06) * s * s * (3 - 2 * s)
     return np.clip(h, 0, 1), d
 
 
