@@ -16,6 +16,8 @@ uniform float u_ambient;
 uniform float u_cell;       // grid spacing, world units (0: no grid)
 uniform vec3 u_axis_u;
 uniform vec3 u_axis_v;
+uniform mat4 u_view;        // the camera (as ground.vert): the plane also fades before the far plane
+uniform mat4 u_proj;
 
 in vec3 v_world;
 in vec2 v_plane;
@@ -38,5 +40,9 @@ void main() {
     vec3 lit = to_srgb(shade_surface_shadowed(base, u_up, to_eye, u_light_dir, u_up, u_ambient, 0.0, sun));
     float edge = smoothstep(0.55, 1.0, length(v_plane));
     float haze = 1.0 - smoothstep(0.0, 0.16, abs(dot(to_eye, u_up)));  // 1 at the horizon, 0 from ~9 degrees up
-    f_color = vec4(mix(lit, u_background, max(edge, haze)), 1.0);
+    // a camera whose far plane cuts the plane: faded out before it, never a hard edge
+    float depth = -(u_view * vec4(v_world, 1.0)).z;
+    float far = (u_proj[2][3] != 0.0) ? u_proj[3][2] / (u_proj[2][2] + 1.0) : 1e30;  // perspective: -2fn/(f-n) / ...
+    float clip = smoothstep(0.6 * far, 0.95 * far, depth);
+    f_color = vec4(mix(lit, u_background, max(max(edge, haze), clip)), 1.0);
 }
