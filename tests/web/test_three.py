@@ -523,14 +523,21 @@ await renderer.init();
 try { await renderer.renderAsync(scene, camera); out.render = 'drawn'; } catch (e) { out.render = said(e); }
 window.result = out;
 </script></body></html>""")
+    return page_result(browser, url + "webgpu.html", "result")[0]
+
+
+def page_result(browser, url: str, name: str) -> tuple[dict, list]:
+    """``window[name]`` of the page at ``url`` once it is set, and the page's errors."""
     page = browser.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
     try:
-        page.goto(url + "webgpu.html")
-        page.wait_for_function("window.result !== undefined", timeout=120_000)
-        out = page.evaluate("window.result")
+        page.goto(url)
+        page.wait_for_function(f"window.{name} !== undefined", timeout=120_000)
+        return page.evaluate(f"window.{name}"), errors
     finally:
         page.close()
-    return out
 
 
 def test_the_type_declarations_compile():
@@ -576,15 +583,6 @@ renderer.render(scene, camera);
 window.readme = { bent, programs: renderer.info.programs.length };
 </script></body></html>
 """)
-    page = browser.new_page()
-    errors = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    try:
-        page.goto(url + "readme.html")
-        page.wait_for_function("window.readme !== undefined", timeout=120_000)
-        out = page.evaluate("window.readme")
-    finally:
-        page.close()
+    out, errors = page_result(browser, url + "readme.html", "readme")
     assert errors == []
     assert out["bent"] == [60, 60]  # the GLB's node and the .adp's mesh, 60 stones each
