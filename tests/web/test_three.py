@@ -293,6 +293,39 @@ def test_the_wind_at_a_time_sways_as_render_draws_it(browser, site, name, mesh, 
 
 
 @pytest.mark.slow
+def test_a_palm_whose_fronds_cross_the_crown_sways_in_three_as_render_draws_it(browser, site):
+    """Anchored child axes (the fronds' joints mid-axis, at the crown) through the exported GLB
+    (AXIALDEFORM_bend axes.anchors) and the module's shader, in the wind, against render_image."""
+    import json
+
+    sys.path.insert(0, str(ROOT / "tests" / "core"))
+    from test_real_trees import PALM, palm_file
+
+    folder, url = site
+    palm = palm_file(folder / "palm.glb")
+    pick = {"parts": PALM, "axes": "parts", "axis": "oriented"}
+    mesh = ad.load_mesh(palm, **pick)
+    assert min(mesh.tree.anchors[1:]) > 0.2  # the joints are where the fronds cross the crown
+    params = ad.random_params(mesh, 9, seed=2, bend=(0.05, 0.3), placement="disc", spacing=1.6)
+    params[:, 10 * mesh.axis_count + 1] -= 2.5  # the crowns in the examples' view (the camera looks at the origin)
+    ad.write_params(folder / "palms.adp", params, mesh)
+    ad.export_glb(folder / "palms.glb", mesh, params, "instanced")
+    sway = ("window.app.gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh) o.setWind(" + json.dumps(WIND) +
+            ").setTime(1.3); });")
+    shot, errors = example_picture(browser, url + "gltf.html?file=palms.glb", sway)
+    wind = ad.Wind(direction=tuple(WIND["direction"]), strength=WIND["strength"], gustiness=WIND["gustiness"],
+                   frequency=WIND["frequency"], wavelength=WIND["wavelength"])
+    look = ad.Look(ground=False, shadow=False)
+    camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
+    ref = ad.render_image(mesh, params, size=SIZE, look=look, camera=camera, wind=wind, time=1.3)
+    still = ad.render_image(mesh, params, size=SIZE, look=look, camera=camera)
+    Image.fromarray(np.concatenate([shot, ref, still], 1)).save(folder / "wind-palms.png")
+    assert errors == []
+    assert iou(shot, ref) >= 0.95, iou(shot, ref)
+    assert iou(still, ref) < 0.93  # the wind moved the fronds visibly: the test can fail
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("name,mesh,opts", MORE[:3], ids=[m[0] for m in MORE[:3]])
 def test_baked_trees_frames_and_tinted_leaves_draw_as_render(browser, site, name, mesh, opts):
     """bake(): ten axes (the offsets texture in the transform feedback), a chosen frame with twist and
