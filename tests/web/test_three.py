@@ -158,6 +158,26 @@ def test_node_tests_pass():
     assert "# fail 0" in r.stdout and "# pass " in r.stdout
 
 
+@pytest.mark.slow
+def test_node_tests_pass_with_the_latest_three_too(tmp_path):
+    """The peer range is ">=0.160.0": js/test runs with 0.160 (the devDependency, above) and here with
+    the latest three on npm, the module's sources and tests copied into a folder of their own."""
+    npm, node = shutil.which("npm"), shutil.which("node")
+    assert npm and node, "Node.js and npm are required (the README's test command)"
+    app = tmp_path / "latest"
+    shutil.copytree(JS / "src", app / "src")
+    shutil.copytree(JS / "test", app / "test")
+    (app / "package.json").write_text(json.dumps({"name": "latest-three-check", "type": "module", "private": True}))
+    r = subprocess.run([npm, "install", "--no-audit", "--no-fund", "three@latest"], cwd=app, capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    version = json.loads((app / "node_modules" / "three" / "package.json").read_text())["version"]
+    assert int(version.split(".")[1]) > 160, version  # a newer release than the devDependency
+    r = subprocess.run([node, "--test", "test/"], cwd=app, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, f"three {version}: " + r.stdout[-3000:] + r.stderr[-2000:]
+    assert "# fail 0" in r.stdout
+
+
 def test_the_module_has_no_second_copy_of_the_maths():
     """The shader text the module injects is glsl/axial.glsl and wind.glsl verbatim (no GLSL of its own bends)."""
     glsl = (ROOT / "glsl" / "axial.glsl").read_text()
