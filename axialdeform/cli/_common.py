@@ -231,8 +231,9 @@ _VARIATION_HELP = {
     "taper": ("MAX", "extended instances: taper tp drawn between 0 and MAX < 1 (default: none)"),
     "tint": ("AMOUNT", "tinted instances (22 numbers): each one's colour is --tint-color times 1 - AMOUNT*u, u drawn per "
                        "channel in 0..1; AMOUNT in 0..1 (default: none)"),
-    "droop": ("F", "a mesh of several axes: every child axis (leaf, frond) also sags toward the world's down by F of its "
-                   "length at its far end, clamped at its joint, beside the isotropic --bend (default: {})"),
+    "droop": ("F", "a sag toward the world's down by F of an axis's length at its far end, beside the isotropic --bend: "
+                   "every child axis (leaf, frond) clamped at its joint; one axis (blade, leaf card) from its base "
+                   "(default: {})"),
 }
 
 

@@ -216,16 +216,25 @@ def droop_offsets(tree: AxisTree, droop: float, angles: np.ndarray, up: int = 1)
     its own frame (the ``(u, v)`` part of ``F_j Rᵀ down``), as a cantilever sags from its joint:
     ``D(t) = droop·L_j·(u, v)·(t − t_a)² / max(t_a², (1 − t_a)²)`` (zero, with zero slope, at
     the anchor; ``droop·L_j`` at the far end of an axis lying across the down direction)."""
+    return sag_offsets(tree.axes[1:], tree.anchors[1:], droop, angles, up)
+
+
+def sag_offsets(axes, anchors, droop: float, angles: np.ndarray, up: int = 1) -> np.ndarray:
+    """``(n, len(axes), 5, 2)`` float64: each axis (a :class:`ControlAxis`) of an instance turned by
+    ``angles`` sagging toward the world's down from its anchor ``t_a`` (``anchors``, one each),
+    ``droop·L·(u, v)·(t − t_a)² / max(t_a², (1 − t_a)²)`` with ``(u, v)`` the down direction in the
+    axis's own frame (:func:`droop_offsets` of a tree's children; a single axis: ``random_params``
+    and ``scatter``)."""
     from .transforms import rotation_matrices
 
     world_down = -np.eye(3)[up]
     model_down = np.einsum("nji,j->ni", rotation_matrices(np.asarray(angles, dtype=np.float64)), world_down)  # Rᵀ d
-    frames = np.stack([np.asarray(a.matrix, dtype=np.float64) for a in tree.axes[1:]])  # (K-1, 3, 3)
-    across = np.einsum("jab,nb->nja", frames, model_down)[..., 1:]  # (n, K-1, 2): down in each child's (u, v)
-    t_a = np.asarray(tree.anchors[1:], dtype=np.float64)[:, None]
+    frames = np.stack([np.asarray(a.matrix, dtype=np.float64) for a in axes])  # (K, 3, 3)
+    across = np.einsum("jab,nb->nja", frames, model_down)[..., 1:]  # (n, K, 2): down in each axis's (u, v)
+    t_a = np.asarray(anchors, dtype=np.float64)[:, None]
     t2, t1 = np.array([0.0, 0.0, 1 / 6, 1 / 2, 1.0]), np.array([0.0, 0.25, 0.5, 0.75, 1.0])
-    curve = (t2 - 2 * t_a * t1 + t_a**2) / np.maximum(t_a**2, (1 - t_a) ** 2)  # (K-1, 5): (t - t_a)², peak 1
-    amp = droop * np.array([a.length for a in tree.axes[1:]])
+    curve = (t2 - 2 * t_a * t1 + t_a**2) / np.maximum(t_a**2, (1 - t_a) ** 2)  # (K, 5): (t - t_a)², peak 1
+    amp = droop * np.array([a.length for a in axes])
     return amp[None, :, None, None] * curve[None, :, :, None] * across[:, :, None, :]
 
 

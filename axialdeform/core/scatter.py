@@ -45,7 +45,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .axes import child_offsets, droop_offsets
+from .axes import child_offsets, droop_offsets, sag_offsets
 from .axis import AXIS_NAMES
 from .deform import bernstein
 from .errors import ScatterError, TooFewError
@@ -313,6 +313,8 @@ def _instances(base, points, normals, u: int, rng, placement: Placement, variati
     out[:, OFFSETS] = offsets.reshape(k, 10)
     out[:, POSITION] = points - s[:, None] * (rot @ a)
     out[:, ANGLES] = angles_from_matrices(rot)
+    if variation.droop and getattr(base, "tree", None) is None:  # one axis: it sags from the anchor it stands on
+        out[:, OFFSETS] += sag_offsets([axis], [t_a], variation.droop, out[:, ANGLES], u)[:, 0].reshape(k, 10)
     if cols >= EXTENDED_WIDTH:
         out[:, SCALE] = s
     tree = getattr(base, "tree", None)

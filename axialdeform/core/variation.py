@@ -17,7 +17,7 @@ from dataclasses import fields as dataclass_fields
 
 import numpy as np
 
-from .axes import child_offsets, droop_offsets, level_bends
+from .axes import child_offsets, droop_offsets, level_bends, sag_offsets
 from .axis import AXIS_NAMES
 from .errors import ParamError
 from .params import as_params
@@ -94,9 +94,11 @@ class Variation:
     tint_color : (float, float, float)
         Linear RGB in 0..1, the brightest tint (white: the mesh's own colours).
     droop : float
-        A mesh of several axes: each child axis (a leaf, a frond) also sags toward the world's down
-        by this fraction of its length at its far end, clamped at its joint
-        (:func:`~axialdeform.core.axes.droop_offsets`), beside the isotropic ``bend`` (0: none).
+        A sag toward the world's down, beside the isotropic ``bend`` (0: none), by this fraction
+        of an axis's length at its far end (:func:`~axialdeform.core.axes.sag_offsets`): every child
+        axis of a mesh of several axes (a leaf, a frond), clamped at its joint; a single axis (a
+        blade, a leaf card) from its ``t = 0`` end (``scatter``: from the anchor it stands on;
+        ``random_params`` keeps the offsets' zero mean).
 
     Any of ``scale``, ``twist``, ``taper`` makes 19-number (extended) instances, ``tint`` 22-number
     (tinted) ones; the first 16 numbers of an instance stay what they are without them.
@@ -196,6 +198,7 @@ class _Spec:
     up: int
     variation: Variation
     tree: object = None  # several axes: the mesh's AxisTree
+    axis: object = None  # the mesh's ControlAxis (droop of a single axis)
 
 
 def _spec(mesh, count: int, seed: int, variation: Variation | None, fields: dict, placement: str = "grid",
@@ -214,7 +217,7 @@ def _spec(mesh, count: int, seed: int, variation: Variation | None, fields: dict
         raise ParamError(f"spacing: expected a finite distance > 0, found {spacing!r}")
     _check_seed(seed)
     return _Spec(int(count), int(seed), length, placement, spacing, AXIS_NAMES.index(up), variation,
-                 getattr(mesh, "tree", None))
+                 getattr(mesh, "tree", None), mesh.axis)
 
 
 def random_params(mesh, count: int, seed: int = 0, variation: Variation | None = None, *, placement: str = "grid",
@@ -329,6 +332,10 @@ def _rows(spec: _Spec, start: int, stop: int) -> np.ndarray:
     angles = tilt[0] + (tilt[1] - tilt[0]) * u[:, ANGLES]
     angles[:, up_i] = yaw[0] + (yaw[1] - yaw[0]) * u[:, 13 + up_i]
     out[:, ANGLES] = angles
+    if var.droop and spec.tree is None:  # one axis (a leaf, a blade): it sags from its t = 0 end, kept canonical
+        sag = sag_offsets([spec.axis], [0.0], var.droop, angles, up_i)[:, 0]
+        sag -= sag.mean(axis=1, keepdims=True)
+        out[:, OFFSETS] += sag.reshape(m, 10)
     del u, offsets, pos, angles
     if var.extended:
         # the same stream, after the 16 numbers of every instance: 3 a row

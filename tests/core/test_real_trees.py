@@ -226,3 +226,26 @@ def test_the_wind_leaves_the_joints_where_they_are(ctx, palm, tmp_path):
     path = export_glb(tmp_path / "palms.glb", mesh, p, "instanced")
     back, _ = read_instanced_glb(path)
     assert np.allclose(back.tree.anchors, tree.anchors)
+
+
+def test_a_single_axis_droops_too():
+    """droop on a mesh of one axis (a blade, a leaf, a stone lying along x): its far end sags toward
+    the world's down; random_params keeps the offsets' zero mean, scatter keeps the point it stands on."""
+    stone = ad.load_mesh("stone")  # its axis lies along x: the down direction is across it
+    flat = ad.random_params(stone, 100, seed=1, bend=0.0, tilt=(0.0, 0.0))
+    sag = ad.random_params(stone, 100, seed=1, bend=0.0, tilt=(0.0, 0.0), droop=0.3)
+    a, _ = ad.deform(stone, flat)
+    b, _ = ad.deform(stone, sag)
+    t = stone.axis.parameter(stone.positions)
+    tip, base = t > 0.9, t < 0.1
+    assert (b[:, tip, 1] - a[:, tip, 1]).mean() - (b[:, base, 1] - a[:, base, 1]).mean() < -0.2 * stone.axis.length
+    offsets = np.asarray(sag)[:, :10].reshape(100, 5, 2)
+    assert np.abs(offsets.mean(axis=1)).max() < 1e-6  # canonical, as random_params' offsets always are
+    ground = trimesh.creation.box(extents=[20.0, 0.1, 20.0])
+    ground.apply_translation([0.0, -0.05, 0.0])
+    still = ad.scatter(ground, stone, 30, seed=2, bend=0.0, min_distance=2.0)
+    drooped = ad.scatter(ground, stone, 30, seed=2, bend=0.0, droop=0.3, min_distance=2.0)
+    c, _ = ad.deform(stone, still)
+    d, _ = ad.deform(stone, drooped)
+    assert np.allclose(np.asarray(still)[:, 10:], np.asarray(drooped)[:, 10:])  # the same places and turns
+    assert (d[:, tip, 1] - c[:, tip, 1]).mean() < -0.1 * stone.axis.length  # the far end sags
