@@ -111,7 +111,7 @@ def add_overwrite(p, detail: str = "") -> None:
 
 
 def load_base(args, source, *, textures: bool = True):
-    """The base mesh ``source`` with the frame ``--axis`` and the axes ``--axes`` chose."""
+    """The base mesh ``source`` with the parts ``--parts``, the frame ``--axis`` and the axes ``--axes`` chose."""
     return load_mesh(source, textures=textures, axis=getattr(args, "axis", "auto"), axes=getattr(args, "axes", None),
                      parts=getattr(args, "parts", None))
 
