@@ -772,6 +772,8 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
                 output(pick(".adp", ".txt")), "--bend", pick(0.1, 1e30, -1, 0)]
         if big_case:
             argv[3] = str(int(rng.integers(100_000, 400_000)))  # a big output
+        if rng.random() < 0.2:  # issue 32's options: a sag toward the world's down
+            argv += ["--droop", pick("0.2", "-1", "nan", "1e30", "0")]
     elif command == "render":
         argv = ["render", mesh, params, "-o", output(".png"), "--size", size, "--mode",
                 pick("solid", "flat", "wireframe")]
@@ -919,6 +921,8 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
         command = f"scene-{sub}"
     if command in ("render", "bake", "export") and rng.random() < 0.5:
         argv.append("--ignore-mesh-mismatch")
+    if command in ("random", "render", "bake", "export", "view", "web", "info") and rng.random() < 0.1:
+        argv += ["--parts", pick("trunk", "nope", ",", "trunk,branch1", "stone", "\u00eele,water")]  # parts at load
     if axes_file is not None and command in ("random", "render", "bake", "export", "fit", "view", "web"):
         argv += ["--axes", str(axes_file)]
         inputs.append(str(axes_file))
