@@ -219,6 +219,17 @@ def droop_offsets(tree: AxisTree, droop: float, angles: np.ndarray, up: int = 1)
     return sag_offsets(tree.axes[1:], tree.anchors[1:], droop, angles, up)
 
 
+def sag_weights(t_anchor) -> np.ndarray:
+    """``(..., 5)``: the control polygon of ``(t − t_a)² / max(t_a², (1 − t_a)²)`` -- zero, with zero
+    slope, at the anchor ``t_a`` and 1 at the far end:
+    ``[t_a², t_a² − t_a/2, 1/6 − t_a + t_a², 1/2 − 3t_a/2 + t_a², (1 − t_a)²] / norm``
+    (``(0, 0, 1/6, 1/2, 1)`` at ``t_a = 0``).  How a child axis droops (:func:`sag_offsets`) and
+    how the wind pushes it (:func:`~axialdeform.core.wind.tree_wind_offsets`, ``glsl/axial.glsl``)."""
+    a = np.asarray(t_anchor, dtype=np.float64)[..., None]
+    t2, t1 = np.array([0.0, 0.0, 1 / 6, 1 / 2, 1.0]), np.array([0.0, 0.25, 0.5, 0.75, 1.0])  # t², t
+    return (t2 - 2 * a * t1 + a**2) / np.maximum(a**2, (1 - a) ** 2)
+
+
 def sag_offsets(axes, anchors, droop: float, angles: np.ndarray, up: int = 1) -> np.ndarray:
     """``(n, len(axes), 5, 2)`` float64: each axis (a :class:`ControlAxis`) of an instance turned by
     ``angles`` sagging toward the world's down from its anchor ``t_a`` (``anchors``, one each),
@@ -231,9 +242,7 @@ def sag_offsets(axes, anchors, droop: float, angles: np.ndarray, up: int = 1) ->
     model_down = np.einsum("nji,j->ni", rotation_matrices(np.asarray(angles, dtype=np.float64)), world_down)  # Rᵀ d
     frames = np.stack([np.asarray(a.matrix, dtype=np.float64) for a in axes])  # (K, 3, 3)
     across = np.einsum("jab,nb->nja", frames, model_down)[..., 1:]  # (n, K, 2): down in each axis's (u, v)
-    t_a = np.asarray(anchors, dtype=np.float64)[:, None]
-    t2, t1 = np.array([0.0, 0.0, 1 / 6, 1 / 2, 1.0]), np.array([0.0, 0.25, 0.5, 0.75, 1.0])
-    curve = (t2 - 2 * t_a * t1 + t_a**2) / np.maximum(t_a**2, (1 - t_a) ** 2)  # (K, 5): (t - t_a)², peak 1
+    curve = sag_weights(np.asarray(anchors, dtype=np.float64))  # (K, 5)
     amp = droop * np.array([a.length for a in axes])
     return amp[None, :, None, None] * curve[None, :, :, None] * across[:, :, None, :]
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .axes import sag_weights
 from .axis import ControlAxis
 from .errors import ParamError
 from .params import as_params, check_tree_params
@@ -34,10 +35,10 @@ from .record import ANGLES, OFFSETS, POSITION, split_record
 from .transforms import rotation_matrices
 
 __all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "wind_offsets", "apply_wind", "wind_wave",
-           "tree_wind_offsets", "anchored_wind_weights"]
+           "tree_wind_offsets"]
 
-#: how much of the tip displacement each control point P1..P5 gets (D(t) = t²)
-WIND_WEIGHTS = np.array([0.0, 0.0, 1.0 / 6.0, 0.5, 1.0])
+#: how much of the tip displacement each control point P1..P5 gets (D(t) = t²: an axis anchored at t = 0)
+WIND_WEIGHTS = sag_weights(0.0)
 #: frequency ratio of the second sine of the gust wave
 SECOND_HARMONIC = 2.31
 
@@ -180,21 +181,11 @@ def apply_wind(wind: Wind | None, axis, params, time: float, *, start: int = 0) 
     return as_params(out)
 
 
-def anchored_wind_weights(t_anchor: float) -> np.ndarray:
-    """(5,): the control polygon of ``(t − t_a)² / max(t_a², (1 − t_a)²)``, how the wind pushes a
-    child axis anchored at ``t_a`` (zero, with zero slope, at its joint; 1 at its far end):
-    ``[t_a², t_a² − t_a/2, 1/6 − t_a + t_a², 1/2 − 3t_a/2 + t_a², (1 − t_a)²] / norm``;
-    :data:`WIND_WEIGHTS` at ``t_a = 0``."""
-    a = float(t_anchor)
-    c = np.array([a * a, a * a - 0.5 * a, 1.0 / 6.0 - a + a * a, 0.5 - 1.5 * a + a * a, (1.0 - a) ** 2])
-    return c / max(a * a, (1.0 - a) ** 2)
-
-
 def tree_wind_offsets(wind: Wind, tree, params, time: float, *, start: int = 0) -> np.ndarray:
     """What the wind adds to every axis's offsets: (n, K, 5, 2) float64.  Each
     axis ``j`` is pushed across itself by ``strength·L_j·(1 + gustiness·wave)``
     (one wave per instance, :func:`~axialdeform.core.wind.wind_wave`), on its
-    control points :func:`anchored_wind_weights` of its anchor (``c = (0, 0, 1/6, 1/2, 1)`` for
+    control points :func:`~axialdeform.core.axes.sag_weights` of its anchor (``c = (0, 0, 1/6, 1/2, 1)`` for
     an axis anchored at its root end): the tips of the branches move most and the joints stay.
     Axis 0's push is :func:`~axialdeform.core.wind.wind_offsets` exactly."""
     k = tree.count
@@ -203,6 +194,6 @@ def tree_wind_offsets(wind: Wind, tree, params, time: float, *, start: int = 0) 
     out = np.empty((len(standard), k, 5, 2))
     for j, axis in enumerate(tree.axes):
         amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
-        weights = WIND_WEIGHTS if j == 0 else anchored_wind_weights(tree.anchors[j])
+        weights = WIND_WEIGHTS if j == 0 else sag_weights(tree.anchors[j])
         out[:, j] = weights[None, :, None] * (amp[:, None] * axis.across(local))[:, None, :]
     return out

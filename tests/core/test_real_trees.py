@@ -204,8 +204,9 @@ def test_the_wind_leaves_the_joints_where_they_are(ctx, palm, tmp_path):
     """The wind pushes a child axis on the control polygon of (t - t_a)^2: zero, with zero slope,
     at its anchor (a frond crossing the crown sways, the crown stays closed); on the GPU as on the
     CPU; the anchors travel in the instanced GLB (AXIALDEFORM_bend axes.anchors)."""
+    from axialdeform.core.axes import sag_weights
     from axialdeform.core.io.gltf import export_glb, read_instanced_glb
-    from axialdeform.core.wind import anchored_wind_weights, tree_wind_offsets
+    from axialdeform.core.wind import tree_wind_offsets
     from axialdeform.gl.renderer import AxialRenderer
 
     mesh = ad.load_mesh(palm, parts=PALM, axes="parts", axis="oriented")
@@ -217,7 +218,7 @@ def test_the_wind_leaves_the_joints_where_they_are(ctx, palm, tmp_path):
     assert np.abs(np.einsum("ji,njic->njc", b, pushed[:, 1:])).max() < 1e-9
     assert np.abs(np.einsum("ji,njic->njc", db, pushed[:, 1:])).max() < 1e-9
     assert np.abs(pushed[:, 1:]).max() > 0.05 * tree.axes[1].length  # and it does push
-    assert np.array_equal(anchored_wind_weights(0.0), ad.core.wind.WIND_WEIGHTS)  # a root-anchored axis as before
+    assert np.array_equal(sag_weights(0.0), [0.0, 0.0, 1 / 6, 0.5, 1.0])  # root-anchored: the wind as before
     with AxialRenderer(ctx, mesh, p, wind=wind) as r:
         gpu = r.capture(time=0.7)
     cpu = ad.deform(mesh, ad.core.wind.apply_wind(wind, tree, p, 0.7))
