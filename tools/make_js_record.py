@@ -59,7 +59,10 @@ def generate() -> str:
         "/** How far a frame's rows may be from orthonormal (|F F^T - I|) and still be a frame. */\n"
         f"export const FRAME_TOLERANCE = {FRAME_TOLERANCE!r};\n\n"
         "/** The largest offset or position an instance may be drawn with (float32 projects no more). */\n"
-        f"export const DRAWABLE_MAGNITUDE = {DRAWABLE_MAGNITUDE!r};\n"
+        f"export const DRAWABLE_MAGNITUDE = {DRAWABLE_MAGNITUDE!r};\n\n"
+        "/** Each glTF instance attribute's accessor type (a child axis's _AXIAL_A{j}_D12/_D34/_D5 as the\n"
+        " * first's): what both readers of AXIALDEFORM_bend check. */\n"
+        f"export const GLTF_INSTANCE_TYPES = Object.freeze({dump(R.GLTF_INSTANCE_TYPES)});\n"
     )
 
 

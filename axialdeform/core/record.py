@@ -34,7 +34,7 @@ import numpy as np
 __all__ = [
     "Field", "ShaderInput", "RECORD", "SHADER_INPUTS", "GLTF_ATTRIBUTES", "FIELDS", "EXTENDED_FIELDS", "WIDTH",
     "EXTENDED_WIDTH", "TINTED_WIDTH", "WIDTHS", "TINT", "IDENTITY_TINT", "level_of", "describe_widths",
-    "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST",
+    "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "GLTF_INSTANCE_TYPES", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST",
     "TAPER", "IDENTITY_EXTRA", "Instances", "gl_layout", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES",
     "describe_record", "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape",
     "record_fields", "is_record_width", "MAX_RECORD_AXES",
@@ -202,6 +202,12 @@ GLTF_EXTENDED_ATTRIBUTES: dict[str, tuple[str, tuple[int, ...]]] = {"_AXIAL_TWIS
 #: tinted instances: the tint as the per-instance colour three.js's
 #: GLTFLoader already reads (``instanceColor``), so other viewers show it too
 GLTF_TINT_ATTRIBUTE: tuple[str, str, tuple[int, ...]] = ("_COLOR_0", "VEC3", tuple(range(TINT.start, TINT.stop)))
+#: every instance attribute's accessor type, glTF's own placement included (a child axis j's
+#: ``_AXIAL_A{j}_D12/_D34/_D5`` as the first's): what both readers of the extension check
+GLTF_INSTANCE_TYPES: dict[str, str] = {
+    "TRANSLATION": "VEC3", "ROTATION": "VEC4", "SCALE": "VEC3",
+    **{name: kind for name, (kind, _) in {**GLTF_ATTRIBUTES, **GLTF_EXTENDED_ATTRIBUTES}.items()},
+    GLTF_TINT_ATTRIBUTE[0]: GLTF_TINT_ATTRIBUTE[1]}
 
 
 def gl_layout(extended: bool, quantized: bool) -> tuple[tuple[str, ...], tuple[str | None, ...], int]:

@@ -2,8 +2,7 @@
 // they move again.
 
 import * as THREE from 'three';
-import { feedback, plainArray } from './feedback.js';
-import { AxialError } from './adp.js';
+import { feedback, plainArray, refuseWebGPU } from './feedback.js';
 
 /**
  * Bend every instance ONCE on the GPU (WebGL 2 transform feedback, the same glsl/axial.glsl) and
@@ -17,10 +16,7 @@ import { AxialError } from './adp.js';
 export function bake(mesh, renderer) {
   unbake(mesh);
   if (mesh.count === 0 || mesh._wind || mesh._ownShader) return false;
-  if (renderer && renderer.isWebGPURenderer) {
-    throw new AxialError('AxialInstancedMesh: bake uses WebGL 2 transform feedback; three\'s WebGPURenderer has none: '
-      + 'use WebGLRenderer (docs/three.md)');
-  }
+  refuseWebGPU(renderer, 'has no WebGL 2 transform feedback, which bake uses');
   const gl = renderer.getContext();
   if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) return false;
   const g = mesh.geometry, n = mesh.count, V = g.getAttribute('position').count;

@@ -22,11 +22,16 @@ export function plainArray(attr) {
  * `ids` (null: all): their placed positions, normals (and tangents) in new GL buffers, instance
  * after instance.  Leaves GL state changed: the caller resets three's (renderer.resetState()).
  */
-export function feedback(mesh, renderer, ids, tangent) {
+/** Refuse three's WebGPURenderer in words (never a silent unbent picture): `what` it lacks. */
+export function refuseWebGPU(renderer, what) {
   if (renderer && renderer.isWebGPURenderer) {
-    throw new AxialError('AxialInstancedMesh: bending on the GPU (bake, raycast, vertices) uses WebGL 2 transform '
-      + 'feedback; three\'s WebGPURenderer has none: use WebGLRenderer (docs/three.md)');
+    throw new AxialError(`AxialInstancedMesh: three's WebGPURenderer (three/webgpu, either backend) ${what}; draw this `
+      + 'mesh with WebGLRenderer (docs/three.md: what works under which renderer)');
   }
+}
+
+export function feedback(mesh, renderer, ids, tangent) {
+  refuseWebGPU(renderer, 'has no WebGL 2 transform feedback, which bending on the GPU uses (bake, raycast, vertices)');
   mesh._renderer = renderer;
   const gl = renderer.getContext(), g = mesh.geometry, V = g.getAttribute('position').count;
   const n = ids ? ids.length : mesh.count;

@@ -6,22 +6,18 @@
 
 import * as THREE from 'three';
 import { AxialError, checkNumbers } from './adp.js';
-import { FRAME_TOLERANCE, MAX_AXES, WIDTHS } from './record.js';
+import { FRAME_TOLERANCE, GLTF_INSTANCE_TYPES, MAX_AXES, WIDTHS } from './record.js';
 import { AxialInstancedMesh } from './mesh.js';
 
 /** The extension's name. */
 export const EXTENSION = 'AXIALDEFORM_bend';
 
-/** Each instance attribute's accessor type (docs/gltf/AXIALDEFORM_bend; TRANSLATION, ROTATION and
- * SCALE as EXT_mesh_gpu_instancing says). A child axis j's _AXIAL_A{j}_D12/_D34/_D5 as the first's. */
-const ATTRIBUTE_TYPES = { TRANSLATION: 'VEC3', ROTATION: 'VEC4', SCALE: 'VEC3', _AXIAL_D12: 'VEC4', _AXIAL_D34: 'VEC4',
-  _AXIAL_D5: 'VEC2', _AXIAL_ANGLES: 'VEC3', _AXIAL_TWIST_TAPER: 'VEC2', _COLOR_0: 'VEC3' };
 const COMPONENT_BYTES = { 5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4 };
 const TYPE_SIZES = { SCALAR: 1, VEC2: 2, VEC3: 3, VEC4: 4 };
 
 function attributeType(name) {
   const child = /^_AXIAL_A[1-9][0-9]*(_D12|_D34|_D5)$/.exec(name);
-  return child ? ATTRIBUTE_TYPES[`_AXIAL${child[1]}`] : ATTRIBUTE_TYPES[name];
+  return child ? GLTF_INSTANCE_TYPES[`_AXIAL${child[1]}`] : GLTF_INSTANCE_TYPES[name];
 }
 
 /** An instance attribute's accessor as axialdeform's Python reader takes it (core/io/glb.read_accessor):

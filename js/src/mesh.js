@@ -11,12 +11,8 @@ import { ATTRIBUTES, DRAWABLE_MAGNITUDE } from './record.js';
 import { resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 import { injectBend } from './shader.js';
 
-/** What WebGPURenderer gets: it never runs onBeforeCompile, so it would draw every instance unbent. */
-const UNSUPPORTED_RENDERER = 'AxialInstancedMesh: three\'s WebGPURenderer (three/webgpu, either backend) does not run '
-  + 'the onBeforeCompile patch the bend is made with, so every instance would be drawn unbent; draw this mesh with '
-  + 'WebGLRenderer (docs/three.md: what works under which renderer)';
 import { checkWind, setWindUniforms, windCycles, windReach } from './wind.js';
-import { feedback } from './feedback.js';
+import { feedback, refuseWebGPU } from './feedback.js';
 import { bake, unbake } from './bake.js';
 import { raycast } from './raycast.js';
 
@@ -128,7 +124,8 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     // a user's onBeforeRender runs after ours (composed): assigning one does not lose the renderer
     let userHook = null;
     const hook = (renderer, ...rest) => {
-      if (renderer && renderer.isWebGPURenderer) throw new AxialError(UNSUPPORTED_RENDERER);
+      refuseWebGPU(renderer, 'does not run the onBeforeCompile patch the bend is made with, so every instance would '
+        + 'be drawn unbent');
       this._renderer = renderer;
       if (userHook) userHook.call(this, renderer, ...rest);
     };

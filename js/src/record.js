@@ -24,3 +24,7 @@ export const FRAME_TOLERANCE = 1e-06;
 
 /** The largest offset or position an instance may be drawn with (float32 projects no more). */
 export const DRAWABLE_MAGNITUDE = 1e+18;
+
+/** Each glTF instance attribute's accessor type (a child axis's _AXIAL_A{j}_D12/_D34/_D5 as the
+ * first's): what both readers of AXIALDEFORM_bend check. */
+export const GLTF_INSTANCE_TYPES = Object.freeze({"TRANSLATION": "VEC3", "ROTATION": "VEC4", "SCALE": "VEC3", "_AXIAL_D12": "VEC4", "_AXIAL_D34": "VEC4", "_AXIAL_D5": "VEC2", "_AXIAL_ANGLES": "VEC3", "_AXIAL_TWIST_TAPER": "VEC2", "_COLOR_0": "VEC3"});

@@ -18,6 +18,7 @@ from ..mesh import BaseMesh, area_weighted_normals
 from ..params import as_params
 from ..record import (
     ANGLES,
+    GLTF_INSTANCE_TYPES,
     GLTF_TINT_ATTRIBUTE,
     MAX_RECORD_AXES,
     POSITION,
@@ -176,14 +177,10 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
     return mesh, as_params(params, name=where)
 
 
-#: the type of each instance attribute (a child axis j's ``_AXIAL_A{j}_D12/_D34/_D5`` as the first's)
-_TYPES = {"TRANSLATION": "VEC3", "ROTATION": "VEC4", "SCALE": "VEC3", GLTF_TINT_ATTRIBUTE[0]: GLTF_TINT_ATTRIBUTE[1],
-          **{name: kind for name, (kind, _) in {**ATTRIBUTES, **EXTENDED_ATTRIBUTES}.items()}}
-
-
 def _attribute_type(name: str) -> str | None:
+    """An instance attribute's accessor type (:data:`~axialdeform.core.record.GLTF_INSTANCE_TYPES`)."""
     child = re.fullmatch(r"_AXIAL_A[1-9][0-9]*(_D12|_D34|_D5)", name)
-    return _TYPES.get("_AXIAL" + child.group(1) if child else name)
+    return GLTF_INSTANCE_TYPES.get("_AXIAL" + child.group(1) if child else name)
 
 
 def _numbers(value, count: int, where: str, positive: bool = False) -> np.ndarray:
