@@ -10,7 +10,7 @@ from tqdm import tqdm
 
 from ..core.errors import AxialDeformError
 from ..core.io.mesh import load_mesh
-from ..core.io.safeio import check_output_path
+from ..core.io.safeio import check_new_outputs, check_output_path
 from ._common import add_max_triangles, add_overwrite, check_triangles, drawn_triangles
 
 
@@ -63,12 +63,7 @@ REPORT_FILES = ("bench.md", "bench-details.json", "fig5-first-frame.png", "fig6-
 
 def _refuse_existing(args, out: Path, names=REPORT_FILES) -> None:
     """An earlier run's report in ``out`` is replaced only with --overwrite (and never its own details)."""
-    if args.overwrite:
-        return
-    there = [out / name for name in names if (out / name).is_file()]
-    if there:
-        more = f" and {len(there) - 1} more of a report's files" if len(there) > 1 else ""
-        raise AxialDeformError(f"{there[0]}: exists{more}; refusing to replace it (--overwrite replaces it)")
+    check_new_outputs([out / name for name in names], "a report's files", args.overwrite)
 
 
 def _report_from(args) -> None:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from ..core.errors import AxialDeformError
 from ..core.io.atomic import atomic_write_bytes
-from ..core.io.safeio import check_output_path
+from ..core.io.safeio import check_new_outputs, check_output_path
 from .sources import MODULE_DIR, MODULE_FILES, VENDOR_FILES, module_source, page_source, three_version, vendor_file
 
 __all__ = ["WebScene", "check_page_outputs", "write_folder", "single_file_html", "embedded_file",
@@ -140,15 +140,10 @@ def check_page_outputs(out: Path, names, inputs=(), overwrite: bool = False) -> 
     always refused, ``overwrite`` or not.
     """
 
-    existing = []
-    for name in names:
-        path = out / name if name else out
+    paths = [out / name if name else out for name in names]
+    for path in paths:
         check_output_path(path, inputs, "web page")
-        if path.is_file():
-            existing.append(path)
-    if existing and not overwrite:
-        more = f" and {len(existing) - 1} more of the page's files" if len(existing) > 1 else ""
-        raise AxialDeformError(f"{existing[0]}: exists{more}; refusing to replace it (--overwrite replaces it)")
+    check_new_outputs(paths, "the page's files", overwrite)
 
 
 def _folder_files(scene: WebScene) -> dict:

@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import AxialDeformError, PathError
 
 __all__ = [
-    "open_regular", "read_regular", "read_sized", "check_output_path", "check_not_special",
+    "open_regular", "read_regular", "read_sized", "check_output_path", "check_not_special", "check_new_outputs",
     "memory_available", "check_count", "disk_free", "check_disk_space", "require_finite", "quiet_numpy", "MAX_INSTANCES",
     "MAX_REFERENCED_BYTES", "MAX_IMAGE_BYTES", "format_gb"]
 
@@ -180,6 +180,18 @@ def check_output_path(path: str | os.PathLike, inputs: Iterable = (), what: str 
                 raise PathError(f"{path}: is the input file {src}; refusing to overwrite an input with the {what}")
     if not overwrite and stat.S_ISREG(out.st_mode):
         raise PathError(f"{path}: exists; refusing to replace it with the {what} (--overwrite replaces it)")
+
+
+def check_new_outputs(paths, what: str = "output", overwrite: bool = False) -> None:
+    """The command line's one rule for a set of outputs (a folder's files): without ``overwrite``,
+    refuse in one line if any of ``paths`` is a file that exists, naming the first and counting
+    the rest of ``what`` (``"the page's files"``)."""
+    if overwrite:
+        return
+    there = [p for p in paths if os.path.isfile(p)]
+    if there:
+        more = f" and {len(there) - 1} more of {what}" if len(there) > 1 else ""
+        raise PathError(f"{os.fspath(there[0])}: exists{more}; refusing to replace it (--overwrite replaces it)")
 
 
 def memory_available() -> int:
