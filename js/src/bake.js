@@ -19,16 +19,28 @@ export function bake(mesh, renderer) {
   refuseWebGPU(renderer, 'has no WebGL 2 transform feedback, which bake uses');
   const gl = renderer.getContext();
   if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) return false;
-  const g = mesh.geometry, n = mesh.count, V = g.getAttribute('position').count;
-  const tangent = g.getAttribute('tangent');
+  const n = mesh.count, V = mesh.geometry.getAttribute('position').count;
+  const tangent = mesh.geometry.getAttribute('tangent');
   const { outputs } = feedback(mesh, renderer, null, Boolean(tangent));
   renderer.resetState(); // three's cached GL state: we bound our own program, VAO and buffers
+  attachBake(mesh, {
+    position: new THREE.GLBufferAttribute(outputs[0], gl.FLOAT, 3, 4, n * V),
+    normal: new THREE.GLBufferAttribute(outputs[1], gl.FLOAT, 3, 4, n * V),
+    tangent: tangent ? new THREE.GLBufferAttribute(outputs[2], gl.FLOAT, 4, 4, n * V) : null,
+  }, () => outputs.forEach((b) => gl.deleteBuffer(b)));
+  return true;
+}
 
-  // the plain geometry: captured positions and normals, every other attribute repeated, indices offset
+/**
+ * Draw `mesh`'s instances from bent vertices (`bent`: {position, normal, tangent?} attributes of
+ * count x V vertices, instance by instance) as one plain child mesh, hiding the bent draw: every
+ * other attribute repeated, indices offset, the tint a colour a vertex.  `release` frees what made
+ * `bent` (unbake calls it).  Shared by WebGL 2's bake and WebGPU's bakeAsync.
+ */
+export function attachBake(mesh, bent, release) {
+  const g = mesh.geometry, n = mesh.count, V = g.getAttribute('position').count;
   const baked = new THREE.BufferGeometry();
-  baked.setAttribute('position', new THREE.GLBufferAttribute(outputs[0], gl.FLOAT, 3, 4, n * V));
-  baked.setAttribute('normal', new THREE.GLBufferAttribute(outputs[1], gl.FLOAT, 3, 4, n * V));
-  if (tangent) baked.setAttribute('tangent', new THREE.GLBufferAttribute(outputs[2], gl.FLOAT, 4, 4, n * V));
+  for (const [name, attr] of Object.entries(bent)) if (attr) baked.setAttribute(name, attr);
   const source = mesh._sourceMaterials;
   const tinted = mesh.layout.tint !== null;
   const vertexColors = (Array.isArray(source) ? source : [source]).some((m) => m.vertexColors);
@@ -76,20 +88,20 @@ export function bake(mesh, renderer) {
   drawn.receiveShadow = mesh.receiveShadow;
   drawn.raycast = () => {}; // the instanced mesh's raycast answers, with instanceId
   mesh.add(drawn);
-  mesh._baked = { mesh: drawn, gl, outputs };
+  mesh._baked = { mesh: drawn, release, bent };
   mesh.setBendVisible(false);
-  return true;
+  return drawn;
 }
 
 
 /** Go back to bending every frame (frees the baked geometry). */
 export function unbake(mesh) {
   if (!mesh._baked) return mesh;
-  const { mesh: drawn, gl, outputs } = mesh._baked;
+  const { mesh: drawn, release } = mesh._baked;
   mesh.remove(drawn);
   drawn.geometry.dispose();
   (Array.isArray(drawn.material) ? drawn.material : [drawn.material]).forEach((m) => m.dispose());
-  outputs.forEach((b) => gl.deleteBuffer(b));
+  release();
   mesh._baked = null;
   mesh.setBendVisible(true);
   return mesh;

@@ -25,8 +25,9 @@ export function plainArray(attr) {
 /** Refuse three's WebGPURenderer in words (never a silent unbent picture): `what` it lacks. */
 export function refuseWebGPU(renderer, what) {
   if (renderer && renderer.isWebGPURenderer) {
-    throw new AxialError(`AxialInstancedMesh: three's WebGPURenderer (three/webgpu, either backend) ${what}; draw this `
-      + 'mesh with WebGLRenderer (docs/three.md: what works under which renderer)');
+    throw new AxialError(`AxialInstancedMesh: three's WebGPURenderer (three/webgpu, either backend) ${what}; `
+      + 'import AxialInstancedMesh from \'axialdeform-three/webgpu\' for WebGPURenderer, or draw this mesh with '
+      + 'WebGLRenderer (docs/three.md: what works under which renderer)');
   }
 }
 

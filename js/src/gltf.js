@@ -69,6 +69,7 @@ export class AxialGLTFPlugin {
   constructor(parser) {
     this.parser = parser;
     this.name = EXTENSION;
+    this.Mesh = AxialInstancedMesh; // axialdeform-three/webgpu's plugin makes its node-material meshes
   }
 
   /** Before GLTFLoader reads anything of the file: every node's AXIALDEFORM_bend and the instance
@@ -132,7 +133,7 @@ export class AxialGLTFPlugin {
         if (attrs[name] !== undefined) raw[name] = await parser.getDependency('accessor', attrs[name]);
       }
       for (const part of parts) {
-        const bent = fromInstancedMesh(part, ext, where, raw);
+        const bent = fromInstancedMesh(part, ext, where, raw, this.Mesh);
         if (part === object) {
           const parent = object.parent;
           parent.add(bent);
@@ -284,11 +285,11 @@ export function checkBendExtension(ext, where = 'node') {
 }
 
 /** An AxialInstancedMesh in place of GLTFLoader's InstancedMesh (same geometry, material, name, transform). */
-export function fromInstancedMesh(mesh, ext, where = 'node', raw = null) {
+export function fromInstancedMesh(mesh, ext, where = 'node', raw = null, Mesh = AxialInstancedMesh) {
   checkBendExtension(ext, where);
   const record = recordFromInstancedMesh(mesh, ext, where, raw);
   const g = mesh.geometry;
-  const bent = new AxialInstancedMesh(g, mesh.material, record, {
+  const bent = new Mesh(g, mesh.material, record, {
     axis: { axis: ext.axis, axes: ext.axes || null },
     vertexAxis: g.getAttribute('_axial_axis') || undefined,
   });

@@ -114,22 +114,32 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     this._sourceMaterials = material; // the user's, un-bent: a bake draws with clones of these
     this.material = Array.isArray(material) ? material.map((m) => this.bendMaterial(m)) : this.bendMaterial(material);
     // the shadow passes draw the bent shape too (three picks these for castShadow)
-    this._shadowMaterials = [
-      this.bendMaterial(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }), false),
-      this.bendMaterial(new THREE.MeshDistanceMaterial(), false)];
-    [this.customDepthMaterial, this.customDistanceMaterial] = this._shadowMaterials;
+    this._shadowMaterials = this._makeShadowMaterials();
+    if (this._shadowMaterials.length) [this.customDepthMaterial, this.customDistanceMaterial] = this._shadowMaterials;
     this.count = 0;
     this.setParams(record);
     this._renderer = null; // the last renderer that drew this mesh: raycasting bends on its GPU
     // a user's onBeforeRender runs after ours (composed): assigning one does not lose the renderer
     let userHook = null;
     const hook = (renderer, ...rest) => {
-      refuseWebGPU(renderer, 'does not run the onBeforeCompile patch the bend is made with, so every instance would '
-        + 'be drawn unbent');
+      this._checkRenderer(renderer);
       this._renderer = renderer;
       if (userHook) userHook.call(this, renderer, ...rest);
     };
     Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
+  }
+
+  /** The materials three's shadow passes draw this mesh with (WebGLRenderer: customDepthMaterial,
+   * customDistanceMaterial, bent). */
+  _makeShadowMaterials() {
+    return [this.bendMaterial(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }), false),
+      this.bendMaterial(new THREE.MeshDistanceMaterial(), false)];
+  }
+
+  /** Throws where `renderer` cannot draw this mesh bent (three's WebGPURenderer: axialdeform-three/webgpu). */
+  _checkRenderer(renderer) {
+    refuseWebGPU(renderer, 'does not run the onBeforeCompile patch the bend is made with, so every instance would '
+      + 'be drawn unbent');
   }
 
   /** A clone of `material` (three's built-ins: Basic, Lambert, Phong, Standard, Physical, Toon,
@@ -139,7 +149,8 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     if (material.isNodeMaterial) {
       throw new AxialError(`AxialInstancedMesh: ${material.type || 'a node material'} is a node material (three/webgpu): `
         + 'the bend is injected through onBeforeCompile, which node materials never run, so every instance would be '
-        + 'drawn unbent; use the classic material (MeshStandardMaterial, ...) with WebGLRenderer (docs/three.md)');
+        + 'drawn unbent; import AxialInstancedMesh from \'axialdeform-three/webgpu\' for node materials and WebGPURenderer, '
+        + 'or use the classic material (MeshStandardMaterial, ...) with WebGLRenderer (docs/three.md)');
     }
     if (this._ownShader && clone) return material;
     if (material.isShaderMaterial) {

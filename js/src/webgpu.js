@@ -1,0 +1,367 @@
+// webgpu.js -- axialdeform-three for three's WebGPURenderer (three/webgpu, three r171 or later: its
+// WebGPU backend and its WebGL 2 fallback) and node materials:
+//
+//     import { AxialInstancedMesh, AxialGLTFPlugin } from 'axialdeform-three/webgpu';
+//
+// The same classes as 'axialdeform-three' (the record, the bounds, the wind, the tint, trees of
+// several axes, a chosen frame), but the bend is a node function on position and normal (nodes.js,
+// the port of glsl/axial.glsl) set as the material's positionNode, so three's shadow passes bend too;
+// classic materials are turned into their node twins as WebGPURenderer itself does.  Bending on the
+// GPU for bake and raycasting is a compute pass (WebGPU compute; transform feedback under the WebGL 2
+// backend, three's choice) running the same node functions, read back asynchronously.
+
+import * as THREE from 'three/webgpu';
+import {
+  Fn, If, attribute, normalLocal, tangentLocal, instanceIndex, varyingProperty,
+  reference, uniform, textureLoad, ivec2, int, float, vec4, normalize, instancedArray,
+} from 'three/tsl';
+import { AxialError, parseADP } from './adp.js';
+import { AxialInstancedMesh as WebGLAxialInstancedMesh } from './mesh.js';
+import { AxialGLTFPlugin as WebGLAxialGLTFPlugin, EXTENSION } from './gltf.js';
+import { attachBake, unbake } from './bake.js';
+import { rayCandidates, intersectBent } from './raycast.js';
+import { axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes } from './nodes.js';
+
+export { AxialError, parseADP, EXTENSION };
+export * as nodes from './nodes.js';
+
+// the classic materials WebGPURenderer converts, and their node twins (three's own NodeLibrary pairs)
+const NODE_TWINS = ['MeshBasicMaterial', 'MeshLambertMaterial', 'MeshPhongMaterial', 'MeshStandardMaterial',
+  'MeshPhysicalMaterial', 'MeshToonMaterial', 'MeshNormalMaterial', 'MeshMatcapMaterial'];
+
+const ROW = 4096; // texels a row of the compute pass's input textures
+
+function floatTexture(texels) {
+  const w = Math.max(1, Math.min(texels, ROW)), h = Math.max(1, Math.ceil(texels / ROW));
+  const tex = new THREE.DataTexture(new Float32Array(w * h * 4), w, h, THREE.RGBAFormat, THREE.FloatType);
+  tex.minFilter = tex.magFilter = THREE.NearestFilter;
+  tex.needsUpdate = true;
+  return tex;
+}
+
+const texel = (tex, i) => textureLoad(tex, ivec2(i.sub(i.div(int(ROW)).mul(int(ROW))), i.div(int(ROW))));
+
+/**
+ * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers, for
+ * WebGPURenderer: the arguments of axialdeform-three's AxialInstancedMesh; `material` a node material
+ * (MeshStandardNodeMaterial, ...) or a classic one (turned into its node twin).  The bend is the
+ * material's positionNode (with the exact normal and tangent), so shadows are bent too.
+ */
+export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
+  /** A node-material clone of `material` whose positionNode bends this mesh's instances. */
+  bendMaterial(material, clone = true) {
+    if (!material || !material.isMaterial) throw new AxialError('AxialInstancedMesh: expected a THREE.Material');
+    if (this._ownShader && clone) return material;
+    let m;
+    if (material.isNodeMaterial) {
+      if (material.positionNode) {
+        throw new AxialError(`AxialInstancedMesh: ${material.type} has a positionNode of its own; the bend sets the `
+          + 'position (and the normal) of every vertex, so it would replace yours: give the material without it, or '
+          + 'build your own from the exported nodes (axialdeform-three/webgpu nodes) with options.ownShader');
+      }
+      m = material.clone();
+    } else if (NODE_TWINS.includes(material.type)) {
+      const Twin = THREE[material.type.replace('Material', 'NodeMaterial')];
+      m = new Twin();
+      for (const key in material) { // as three's NodeLibrary.fromMaterial, keeping the twin's own identity
+        if (key === 'uuid' || key === 'type' || key.startsWith('is') || key.startsWith('_')) continue;
+        m[key] = material[key];
+      }
+    } else {
+      throw new AxialError(`AxialInstancedMesh: ${material.type} cannot be bent under WebGPURenderer: expected a node `
+        + `material (MeshStandardNodeMaterial, ...) or one of ${NODE_TWINS.join(', ')}`);
+    }
+    m.positionNode = this._positionNode();
+    m.needsUpdate = true;
+    return m;
+  }
+
+  /** WebGPURenderer's shadow passes take the material's positionNode: no materials of our own. */
+  _makeShadowMaterials() {
+    return [];
+  }
+
+  _checkRenderer(renderer) {
+    if (!renderer || !renderer.isWebGPURenderer) {
+      throw new AxialError('AxialInstancedMesh (axialdeform-three/webgpu) bends in node materials, which only three\'s '
+        + 'WebGPURenderer draws; with WebGLRenderer import AxialInstancedMesh from \'axialdeform-three\' instead');
+    }
+  }
+
+  /** The uniforms of the bend as nodes (made once; the wind's read this mesh's axialUniforms). */
+  _nodes() {
+    if (this._uniformNodes) return this._uniformNodes;
+    const ax = this.axis, u = {
+      frame: { ea: uniform(new THREE.Vector3(...ax.frame[0])), eu: uniform(new THREE.Vector3(...ax.frame[1])),
+        ev: uniform(new THREE.Vector3(...ax.frame[2])) },
+      lo: uniform(ax.lo), len: uniform(ax.length), center: uniform(new THREE.Vector2(...ax.center)), axes: null,
+    };
+    if (ax.axes) { // the axes texture: a row an axis, (e_a, lo), (e_u, len), (e_v, anchor), (parent, 0, 0, 0)
+      const k = ax.axes.count, data = new Float32Array(k * 16);
+      for (let j = 0; j < k; j++) {
+        const f = ax.axes.frames[j], a = ax.axes.anchors ? ax.axes.anchors[j] : 0;
+        data.set([...f[0], ax.axes.lo[j], ...f[1], ax.axes.length[j], ...f[2], a, ax.axes.parents[j], 0, 0, 0], 16 * j);
+      }
+      const tex = new THREE.DataTexture(data, 4, k, THREE.RGBAFormat, THREE.FloatType);
+      tex.minFilter = tex.magFilter = THREE.NearestFilter;
+      tex.needsUpdate = true;
+      u.axes = { count: k, tex, children: this.axialUniforms.axialChildren.value };
+    }
+    this._uniformNodes = u;
+    return u;
+  }
+
+  _windNodes() {
+    const w = this.axialUniforms;
+    return { dir: reference('value', 'vec3', w.axialWindDir), strength: reference('value', 'float', w.axialWindStrength),
+      gust: reference('value', 'float', w.axialWindGust), cycles: reference('value', 'vec2', w.axialWindCycles),
+      wavenumber: reference('value', 'float', w.axialWindWavenumber) };
+  }
+
+  /**
+   * The bend of vertex (v, n, tangent or null, axis b) of instance `inst` (index id): {v, n, t} in
+   * this mesh's space (W = R (s V'') + p), the one composition the draw and the compute pass share.
+   */
+  _bend(inst, id, v, n, tangent, b) {
+    const u = this._nodes();
+    let moved = inst, push = null;
+    if (this._wind) {
+      const w = this._windNodes();
+      if (u.axes) push = axialWindPush(inst, id, float(1), w);
+      moved = axialWind(inst, id, u.frame, u.len, w);
+    }
+    let bent, tan = null;
+    if (u.axes) {
+      bent = axialTreeWorld(v, n, b, u.axes.count, u.axes.tex, u.center, moved, u.axes.children, int(id), push);
+      if (tangent) tan = axialJacobianTimes(bent.jac, tangent);
+    } else {
+      bent = axialBend(v, n, u.frame, u.lo, u.len, u.center, moved);
+      if (tangent) tan = axialBendTangent(v, tangent, u.frame, u.lo, u.len, u.center, moved);
+    }
+    const placed = axialPlace(bent.v, bent.n, inst);
+    const t = tan ? normalize(placed.rot[0].mul(tan.x).add(placed.rot[1].mul(tan.y)).add(placed.rot[2].mul(tan.z))) : null;
+    return { v: placed.v, n: placed.n, t };
+  }
+
+  /** The materials' positionNode (one for every material of the mesh; made again when the wind comes or goes). */
+  _positionNode() {
+    const wind = Boolean(this._wind);
+    if (this._position && this._position.wind === wind) return this._position.node;
+    const g = this.geometry, hasTangent = Boolean(g.getAttribute('tangent'));
+    // the rigid part is placed by the bend (inst.matrix), not by three's instancing, which runs before
+    // the positionNode in some versions (r187) and after it in others (r171): three instances an
+    // InstancedMesh by its matrices only when they are an InstancedBufferAttribute, so they are a
+    // plain one here over the same array (the bounds, raycasting and the compute pass read it)
+    if (this.instanceMatrix.isInstancedBufferAttribute) {
+      this.instanceMatrix = new THREE.BufferAttribute(this.instanceMatrix.array, 16).setUsage(THREE.DynamicDrawUsage);
+    }
+    // the base mesh's vertices under names of our own (the same attributes, uploaded once): three's
+    // instancing writes positionLocal and normalLocal before the positionNode, and some versions
+    // (r171) read positionGeometry through them
+    for (const name of ['position', 'normal', 'tangent']) {
+      const alias = `axial${name[0].toUpperCase()}${name.slice(1)}`;
+      if (g.getAttribute(name) && !g.getAttribute(alias)) g.setAttribute(alias, g.getAttribute(name));
+    }
+    if (this.instanceColor && !g.getAttribute('axialTint')) g.setAttribute('axialTint', this.instanceColor);
+    const node = Fn(() => {
+      const tt = attribute('axialTwistTaper', 'vec2');
+      const matrix = [0, 1, 2, 3].map((c) => attribute(`axialMatrix${c}`, 'vec4').xyz);
+      const inst = { d12: attribute('axialD12', 'vec4'), d34: attribute('axialD34', 'vec4'), d5: attribute('axialD5', 'vec2'),
+        position: matrix[3], angles: attribute('axialAngles', 'vec3'), matrix, twist: tt.x, taper: tt.y };
+      const b = this.axis.axes ? int(attribute('axialAxis', 'float').add(0.5)) : null;
+      const r = this._bend(inst, instanceIndex, attribute('axialPosition', 'vec3'), attribute('axialNormal', 'vec3'),
+        hasTangent ? attribute('axialTangent', 'vec4').xyz : null, b);
+      normalLocal.assign(r.n);
+      if (r.t) tangentLocal.assign(r.t);
+      // the tint: the varying three's materials multiply their colour by (its instancing sets it otherwise)
+      if (this.instanceColor) varyingProperty('vec3', 'vInstanceColor').assign(attribute('axialTint', 'vec3'));
+      return r.v;
+    })();
+    this._position = { wind, node };
+    return node;
+  }
+
+  /** The record's numbers as attributes (the base's); the node materials read the instance matrices
+   * through four vec4 attributes over instanceMatrix's own array (an interleaved view, no copy). */
+  _write(rows, first) {
+    super._write(rows, first);
+    let view = this.geometry.getAttribute('axialMatrix0');
+    if (!view || view.data.array !== this.instanceMatrix.array) {
+      const buffer = new THREE.InstancedInterleavedBuffer(this.instanceMatrix.array, 16, 1).setUsage(THREE.DynamicDrawUsage);
+      for (let c = 0; c < 4; c++) this.geometry.setAttribute(`axialMatrix${c}`, new THREE.InterleavedBufferAttribute(buffer, 4, 4 * c));
+      view = this.geometry.getAttribute('axialMatrix0');
+    }
+    const n = rows.length / this.layout.numbersPerInstance;
+    if (view.data.clearUpdateRanges) view.data.addUpdateRange(first * 16, n * 16);
+    view.data.needsUpdate = true;
+  }
+
+  setWind(wind) {
+    const was = Boolean(this._wind);
+    super.setWind(wind);
+    if (Boolean(this._wind) !== was) {
+      const node = this._positionNode();
+      (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => {
+        if (!this._ownShader) m.positionNode = node;
+        m.needsUpdate = true;
+      });
+    }
+    return this;
+  }
+
+  /**
+   * Bend instances `ids` (null: all) on the GPU by a compute pass of the same node functions the
+   * materials draw with, and read them back: {ids, V, positions, normals, tangents} (Float32Array, 4
+   * numbers a vertex, instance after instance, in this mesh's space).  `renderer`: the
+   * WebGPURenderer (default: the last one that drew this mesh).
+   */
+  async bendAsync(renderer = this._renderer, ids = null) {
+    if (!renderer || !renderer.isWebGPURenderer) {
+      throw new AxialError('bendAsync: expected three\'s WebGPURenderer (or draw the mesh once with one first)');
+    }
+    if (renderer.init && !renderer._initialized) await renderer.init();
+    const g = this.geometry, V = g.getAttribute('position').count;
+    const list = ids ? Array.from(ids) : Array.from({ length: this.count }, (_, i) => i);
+    const n = list.length, total = n * V, tangent = g.getAttribute('tangent');
+    if (n === 0) return { ids: list, V, positions: new Float32Array(0), normals: new Float32Array(0), tangents: null };
+    const pass = this._computePass(total, V, Boolean(tangent));
+    // inputs: the vertices (w: the vertex's axis; then the normals, the tangents), the instances (8 texels each:
+    // d12, d34, (d5, tw, tp), (angles, id), the columns of the instance matrix)
+    const pos = g.getAttribute('position'), nrm = g.getAttribute('normal');
+    const va = this.vertexAxis;
+    for (let v = 0; v < V; v++) {
+      pass.verts.image.data.set([pos.getX(v), pos.getY(v), pos.getZ(v), va ? va[v] : 0], 4 * v);
+      pass.verts.image.data.set([nrm.getX(v), nrm.getY(v), nrm.getZ(v), 0], 4 * (V + v));
+      if (tangent) pass.verts.image.data.set([tangent.getX(v), tangent.getY(v), tangent.getZ(v), tangent.getW(v)], 4 * (2 * V + v));
+    }
+    const a = g.attributes, out = pass.insts.image.data;
+    for (let k = 0; k < n; k++) {
+      const i = list[k], o = 32 * k;
+      out.set(a.axialD12.array.subarray(4 * i, 4 * i + 4), o);
+      out.set(a.axialD34.array.subarray(4 * i, 4 * i + 4), o + 4);
+      out.set([a.axialD5.array[2 * i], a.axialD5.array[2 * i + 1], a.axialTwistTaper.array[2 * i], a.axialTwistTaper.array[2 * i + 1]], o + 8);
+      out.set([...a.axialAngles.array.subarray(3 * i, 3 * i + 3), i], o + 12);
+      out.set(this.instanceMatrix.array.subarray(16 * i, 16 * i + 16), o + 16);
+    }
+    pass.verts.needsUpdate = true;
+    pass.insts.needsUpdate = true;
+    pass.V.value = V;
+    pass.n.value = n;
+    await renderer.computeAsync(pass.kernel);
+    const read = async (buf) => new Float32Array((await renderer.getArrayBufferAsync(buf.value)).slice(0, total * 16));
+    return { ids: list, V, positions: await read(pass.outP), normals: await read(pass.outN),
+      tangents: tangent ? await read(pass.outT) : null };
+  }
+
+  /** The compute pass of bendAsync for `total` vertices (kept while the size and the wind stay). */
+  _computePass(total, V, tangent) {
+    const key = `${total}:${V}:${Boolean(this._wind)}:${tangent}`;
+    if (this._compute && this._compute.key === key) return this._compute;
+    this._releaseCompute();
+    const count = total / V;
+    const verts = floatTexture(V * (tangent ? 3 : 2)), insts = floatTexture(8 * count);
+    const outP = instancedArray(total, 'vec4'), outN = instancedArray(total, 'vec4');
+    const outT = tangent ? instancedArray(total, 'vec4') : null;
+    const Vn = uniform(V, 'int'), nn = uniform(count, 'int');
+    const kernel = Fn(() => {
+      const k = int(instanceIndex).toVar();
+      const slot = k.div(Vn).toVar(), vert = k.sub(slot.mul(Vn)).toVar();
+      If(slot.lessThan(nn), () => {
+        const p = texel(verts, vert).toVar(), nr = texel(verts, vert.add(Vn)).xyz;
+        const tg = tangent ? texel(verts, vert.add(Vn.mul(int(2)))) : null;
+        const at = slot.mul(int(8)).toVar(), q = (c) => texel(insts, at.add(int(c))).toVar();
+        const q2 = q(2), q3 = q(3), matrix = [4, 5, 6, 7].map((c) => q(c).xyz);
+        const inst = { d12: q(0), d34: q(1), d5: q2.xy, twist: q2.z, taper: q2.w, angles: q3.xyz, matrix,
+          position: matrix[3] };
+        const id = int(q3.w);
+        const r = this._bend(inst, id, p.xyz, nr, tg ? tg.xyz : null,
+          this.axis.axes ? int(p.w.add(0.5)) : null);
+        outP.element(k).assign(vec4(r.v, 1));
+        outN.element(k).assign(vec4(r.n, 0));
+        if (outT) outT.element(k).assign(vec4(r.t, tg.w));
+      });
+    })().compute(total);
+    this._compute = { key, kernel, verts, insts, outP, outN, outT, V: Vn, n: nn };
+    return this._compute;
+  }
+
+  _releaseCompute() {
+    if (!this._compute) return;
+    this._compute.verts.dispose();
+    this._compute.insts.dispose();
+    this._compute = null;
+  }
+
+  /**
+   * Bend every instance ONCE (bendAsync's compute pass) and draw the result as plain geometry until
+   * the instances move (setParams, updateParams, setWind go back to bending every frame).  Resolves
+   * true when baked (false: no instances, or a wind).  Raycasting then answers synchronously from
+   * the baked vertices.
+   */
+  async bakeAsync(renderer = this._renderer) {
+    unbake(this);
+    if (this.count === 0 || this._wind || this._ownShader) return false;
+    const r = await this.bendAsync(renderer);
+    const total = this.count * r.V;
+    const xyz = (src, k) => {
+      const o = new Float32Array(total * k);
+      for (let i = 0; i < total; i++) for (let c = 0; c < k; c++) o[i * k + c] = src[4 * i + c];
+      return o;
+    };
+    attachBake(this, {
+      position: new THREE.BufferAttribute(xyz(r.positions, 3), 3),
+      normal: new THREE.BufferAttribute(xyz(r.normals, 3), 3),
+      tangent: r.tangents ? new THREE.BufferAttribute(xyz(r.tangents, 4), 4) : null,
+    }, () => {});
+    this._baked.positions = r.positions;
+    return true;
+  }
+
+  bake() {
+    throw new AxialError('bake: under WebGPURenderer the GPU is read back asynchronously: await mesh.bakeAsync(renderer)');
+  }
+
+  /**
+   * three's raycasting: against the baked vertices where the mesh is baked (bakeAsync); otherwise
+   * WebGPU reads the GPU back only asynchronously, so it warns once and finds nothing -- use
+   * raycastAsync.
+   */
+  raycast(raycaster, intersects) {
+    const ids = rayCandidates(this, raycaster);
+    if (!ids.length) return;
+    if (this._baked && this._baked.positions) {
+      const V = this.geometry.getAttribute('position').count, all = this._baked.positions, sub = new Float32Array(ids.length * V * 4);
+      ids.forEach((id, k) => sub.set(all.subarray(id * V * 4, (id + 1) * V * 4), k * V * 4));
+      intersectBent(this, raycaster, intersects, ids, sub, 4);
+      return;
+    }
+    if (!this._warnedRaycast) {
+      console.warn('AxialInstancedMesh (axialdeform-three/webgpu): raycast() cannot read the GPU back synchronously under '
+        + 'WebGPURenderer; use await mesh.raycastAsync(raycaster), or bakeAsync() resting instances');
+      this._warnedRaycast = true;
+    }
+  }
+
+  /** The intersections of `raycaster`'s ray with the bent instances (sorted by distance, with instanceId). */
+  async raycastAsync(raycaster, renderer = this._renderer) {
+    const ids = rayCandidates(this, raycaster), hits = [];
+    if (!ids.length) return hits;
+    const r = await this.bendAsync(renderer, ids);
+    intersectBent(this, raycaster, hits, ids, r.positions, 4);
+    return hits.sort((a, b) => a.distance - b.distance);
+  }
+
+  dispose() {
+    this._releaseCompute();
+    if (this._uniformNodes && this._uniformNodes.axes) this._uniformNodes.axes.tex.dispose();
+    return super.dispose();
+  }
+}
+
+/** GLTFLoader plugin (AXIALDEFORM_bend) making axialdeform-three/webgpu's AxialInstancedMesh. */
+export class AxialGLTFPlugin extends WebGLAxialGLTFPlugin {
+  constructor(parser) {
+    super(parser);
+    this.Mesh = AxialInstancedMesh;
+  }
+}
