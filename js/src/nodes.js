@@ -10,8 +10,26 @@
 // {ea, eu, ev} (its rows: local coordinates F v = (ea.v, eu.v, ev.v), axis first).
 
 import {
-  Fn, If, Loop, float, int, uint, vec2, vec3, vec4, clamp, cos, sin, normalize, cross, dot, max, select, textureLoad, ivec2,
+  Fn, If, Loop, float, int, uint, vec2, vec3, vec4, clamp, normalize, cross, dot, max, select, textureLoad, ivec2, round,
 } from 'three/tsl';
+
+/**
+ * (cos x, sin x) to float32's own accuracy on every GPU: WGSL's sin and cos need only be within 2^-11
+ * of the truth (SwiftShader's are ~1e-4 off), which would bend a twisted instance by 1e-4 L.  Cody-Waite
+ * reduction by pi/2 (two constants), Taylor polynomials on [-pi/4, pi/4] (truncation < 4e-10), the
+ * quadrant applied exactly.  `x` a float node or a vec3 node (component by component).
+ */
+export function axialCosSin(x) {
+  const q = round(x.mul(0.6366197723675814)).toVar();
+  const r = x.sub(q.mul(1.5707963705062866)).sub(q.mul(-4.371139000186243e-8)).toVar();
+  const r2 = r.mul(r).toVar();
+  const s = r.mul(r2.mul(r2.mul(r2.mul(r2.mul(1.0 / 362880).sub(1.0 / 5040)).add(1.0 / 120)).sub(1.0 / 6)).add(1));
+  const c = r2.mul(r2.mul(r2.mul(r2.mul(r2.mul(-1.0 / 3628800).add(1.0 / 40320)).sub(1.0 / 720)).add(1.0 / 24)).sub(0.5)).add(1);
+  const m = q.sub(q.div(4).floor().mul(4)).toVar(); // the quadrant, 0..3
+  const odd = m.equal(1).or(m.equal(3)), neg = m.greaterThanEqual(1.5);
+  const cs = select(odd, s, c), sn = select(odd, c, s);
+  return { cos: select(m.equal(1).or(m.equal(2)), cs.negate(), cs).toVar(), sin: select(neg, sn.negate(), sn).toVar() };
+}
 
 /** F v: the local coordinates (axis first) of v in frame f. */
 export function axialLocal(f, v) {
@@ -49,7 +67,7 @@ export function axialSlope(t, d12, d34, d5) {
 export function axialTurn(t, w, inst) {
   const k = float(1).sub(inst.taper.mul(t)).toVar();
   const theta = inst.twist.mul(t).toVar();
-  const c = cos(theta).toVar(), s = sin(theta).toVar();
+  const { cos: c, sin: s } = axialCosSin(theta);
   const rw = vec2(c.mul(w.x).sub(s.mul(w.y)), s.mul(w.x).add(c.mul(w.y))).toVar();
   return { k, c, s, rw };
 }
@@ -88,7 +106,8 @@ export function axialBendTangent(v, tangent, f, lo, len, center, inst) {
 
 /** The columns of R = Rz(rz) Ry(ry) Rx(rx) (axial_rotation). */
 export function axialRotation(r) {
-  const c = cos(r).toVar(), s = sin(r).toVar();
+  const cx = axialCosSin(r.x), cy = axialCosSin(r.y), cz = axialCosSin(r.z);
+  const c = vec3(cx.cos, cy.cos, cz.cos).toVar(), s = vec3(cx.sin, cy.sin, cz.sin).toVar();
   return [
     vec3(c.z.mul(c.y), s.z.mul(c.y), s.y.negate()).toVar(),
     vec3(c.z.mul(s.y).mul(s.x).sub(s.z.mul(c.x)), s.z.mul(s.y).mul(s.x).add(c.z.mul(c.x)), c.y.mul(s.x)).toVar(),
@@ -129,8 +148,8 @@ export function axialWindPhase(id) {
  * uniforms {dir, strength, gust, cycles, wavenumber}. */
 export function axialWindPush(inst, id, len, w) {
   const ph = axialWindPhase(id).sub(dot(inst.position, w.dir).mul(w.wavenumber)).toVar();
-  const wave = sin(w.cycles.x.add(ph).mul(6.283185307179586)).mul(0.6)
-    .add(sin(w.cycles.y.add(ph.mul(1.7)).mul(6.283185307179586)).mul(0.4));
+  const wave = axialCosSin(w.cycles.x.add(ph).mul(6.283185307179586)).sin.mul(0.6)
+    .add(axialCosSin(w.cycles.y.add(ph.mul(1.7)).mul(6.283185307179586)).sin.mul(0.4));
   const amp = w.strength.mul(len).mul(float(1).add(w.gust.mul(wave)));
   return timesT(axialRotation(inst.angles), w.dir).mul(amp);
 }

@@ -1,4 +1,4 @@
-// webgpu.js -- axialdeform-three for three's WebGPURenderer (three/webgpu, three r171 or later: its
+// webgpu.js -- axialdeform-three for three's WebGPURenderer (three/webgpu, three r184 or later: its
 // WebGPU backend and its WebGL 2 fallback) and node materials:
 //
 //     import { AxialInstancedMesh, AxialGLTFPlugin } from 'axialdeform-three/webgpu';
@@ -12,7 +12,7 @@
 
 import * as THREE from 'three/webgpu';
 import {
-  Fn, If, attribute, normalLocal, tangentLocal, instanceIndex, varyingProperty,
+  Fn, If, attribute, instancedDynamicBufferAttribute, positionGeometry, normalGeometry, tangentGeometry, normalLocal, tangentLocal, instanceIndex, varyingProperty,
   reference, uniform, textureLoad, ivec2, int, float, vec4, normalize, instancedArray,
 } from 'three/tsl';
 import { AxialError, parseADP } from './adp.js';
@@ -28,6 +28,14 @@ export * as nodes from './nodes.js';
 // the classic materials WebGPURenderer converts, and their node twins (three's own NodeLibrary pairs)
 const NODE_TWINS = ['MeshBasicMaterial', 'MeshLambertMaterial', 'MeshPhongMaterial', 'MeshStandardMaterial',
   'MeshPhysicalMaterial', 'MeshToonMaterial', 'MeshNormalMaterial', 'MeshMatcapMaterial'];
+
+// the oldest three this entry draws right with: r171 to r181 bind the views of one instanced
+// interleaved buffer at the wrong offsets (every instance misplaced; measured with r171, r175, r178,
+// r181), r182 and r183 lose the shadow of instances after an update (measured)
+const MIN_REVISION = 184;
+// the first three whose WebGL 2 fallback keeps compute passes apart (before it, a second kernel's
+// transform feedback could write into another's buffers: measured with r171 to r186)
+const COMPUTE_FALLBACK_REVISION = 187;
 
 const ROW = 4096; // texels a row of the compute pass's input textures
 
@@ -48,6 +56,14 @@ const texel = (tex, i) => textureLoad(tex, ivec2(i.sub(i.div(int(ROW)).mul(int(R
  * material's positionNode (with the exact normal and tangent), so shadows are bent too.
  */
 export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
+  constructor(geometry, material, record, options = {}) {
+    if (!(Number(THREE.REVISION) >= MIN_REVISION)) {
+      throw new AxialError(`AxialInstancedMesh (axialdeform-three/webgpu): three r${THREE.REVISION} is older than r${MIN_REVISION}, `
+        + 'the first this entry draws right with; update three, or use \'axialdeform-three\' with WebGLRenderer');
+    }
+    super(geometry, material, record, options);
+  }
+
   /** A node-material clone of `material` whose positionNode bends this mesh's instances. */
   bendMaterial(material, clone = true) {
     if (!material || !material.isMaterial) throw new AxialError('AxialInstancedMesh: expected a THREE.Material');
@@ -64,7 +80,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
       const Twin = THREE[material.type.replace('Material', 'NodeMaterial')];
       m = new Twin();
       for (const key in material) { // as three's NodeLibrary.fromMaterial, keeping the twin's own identity
-        if (key === 'uuid' || key === 'type' || key.startsWith('is') || key.startsWith('_')) continue;
+        if (key === 'uuid' || key === 'type' || key === '_listeners' || key.startsWith('is')) continue;
         m[key] = material[key];
       }
     } else {
@@ -155,45 +171,49 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
     if (this.instanceMatrix.isInstancedBufferAttribute) {
       this.instanceMatrix = new THREE.BufferAttribute(this.instanceMatrix.array, 16).setUsage(THREE.DynamicDrawUsage);
     }
-    // the base mesh's vertices under names of our own (the same attributes, uploaded once): three's
-    // instancing writes positionLocal and normalLocal before the positionNode, and some versions
-    // (r171) read positionGeometry through them
-    for (const name of ['position', 'normal', 'tangent']) {
-      const alias = `axial${name[0].toUpperCase()}${name.slice(1)}`;
-      if (g.getAttribute(name) && !g.getAttribute(alias)) g.setAttribute(alias, g.getAttribute(name));
-    }
-    if (this.instanceColor && !g.getAttribute('axialTint')) g.setAttribute('axialTint', this.instanceColor);
     const node = Fn(() => {
-      const tt = attribute('axialTwistTaper', 'vec2');
-      const matrix = [0, 1, 2, 3].map((c) => attribute(`axialMatrix${c}`, 'vec4').xyz);
-      const inst = { d12: attribute('axialD12', 'vec4'), d34: attribute('axialD34', 'vec4'), d5: attribute('axialD5', 'vec2'),
-        position: matrix[3], angles: attribute('axialAngles', 'vec3'), matrix, twist: tt.x, taper: tt.y };
+      const packed = this._packed;
+      const q = (k) => instancedDynamicBufferAttribute(packed, 'vec4', packed.stride, 4 * k);
+      const i2 = q(2), matrix = [4, 5, 6, 7].map((k) => q(k).xyz);
+      const inst = { d12: q(0), d34: q(1), d5: i2.xy, twist: i2.z, taper: i2.w, angles: q(3).xyz, position: matrix[3], matrix };
       const b = this.axis.axes ? int(attribute('axialAxis', 'float').add(0.5)) : null;
-      const r = this._bend(inst, instanceIndex, attribute('axialPosition', 'vec3'), attribute('axialNormal', 'vec3'),
-        hasTangent ? attribute('axialTangent', 'vec4').xyz : null, b);
+      const r = this._bend(inst, instanceIndex, positionGeometry, normalGeometry, hasTangent ? tangentGeometry.xyz : null, b);
       normalLocal.assign(r.n);
       if (r.t) tangentLocal.assign(r.t);
       // the tint: the varying three's materials multiply their colour by (its instancing sets it otherwise)
-      if (this.instanceColor) varyingProperty('vec3', 'vInstanceColor').assign(attribute('axialTint', 'vec3'));
+      if (this.instanceColor) varyingProperty('vec3', 'vInstanceColor').assign(q(8).xyz);
       return r.v;
     })();
     this._position = { wind, node };
     return node;
   }
 
-  /** The record's numbers as attributes (the base's); the node materials read the instance matrices
-   * through four vec4 attributes over instanceMatrix's own array (an interleaved view, no copy). */
+  /**
+   * The record's numbers as attributes (the base's), and every number the bend reads packed into ONE
+   * instanced vertex buffer (WebGPU allows 8 vertex buffers; a textured tree would need 10 apart):
+   * 32 floats an instance (36 tinted) -- d12, d34, (d5, tw, tp), (angles, 0), the instance matrix's
+   * four columns, (tint, 0) -- read as the vec4 attributes axialInstance0 .. 8.
+   */
   _write(rows, first) {
     super._write(rows, first);
-    let view = this.geometry.getAttribute('axialMatrix0');
-    if (!view || view.data.array !== this.instanceMatrix.array) {
-      const buffer = new THREE.InstancedInterleavedBuffer(this.instanceMatrix.array, 16, 1).setUsage(THREE.DynamicDrawUsage);
-      for (let c = 0; c < 4; c++) this.geometry.setAttribute(`axialMatrix${c}`, new THREE.InterleavedBufferAttribute(buffer, 4, 4 * c));
-      view = this.geometry.getAttribute('axialMatrix0');
+    const n = rows.length / this.layout.numbersPerInstance, a = this.geometry.attributes;
+    const stride = this.instanceColor ? 36 : 32;
+    if (!this._packed) {
+      this._packed = new THREE.InstancedInterleavedBuffer(new Float32Array(this.capacity * stride), stride, 1)
+        .setUsage(THREE.DynamicDrawUsage);
     }
-    const n = rows.length / this.layout.numbersPerInstance;
-    if (view.data.clearUpdateRanges) view.data.addUpdateRange(first * 16, n * 16);
-    view.data.needsUpdate = true;
+    const packed = this._packed, out = packed.array, m = this.instanceMatrix.array;
+    for (let i = first; i < first + n; i++) {
+      const o = i * stride;
+      for (let c = 0; c < 4; c++) { out[o + c] = a.axialD12.array[4 * i + c]; out[o + 4 + c] = a.axialD34.array[4 * i + c]; }
+      out[o + 8] = a.axialD5.array[2 * i]; out[o + 9] = a.axialD5.array[2 * i + 1];
+      out[o + 10] = a.axialTwistTaper.array[2 * i]; out[o + 11] = a.axialTwistTaper.array[2 * i + 1];
+      for (let c = 0; c < 3; c++) out[o + 12 + c] = a.axialAngles.array[3 * i + c];
+      for (let c = 0; c < 16; c++) out[o + 16 + c] = m[16 * i + c];
+      if (this.instanceColor) for (let c = 0; c < 3; c++) out[o + 32 + c] = this.instanceColor.array[3 * i + c];
+    }
+    if (packed.clearUpdateRanges) packed.addUpdateRange(first * stride, n * stride);
+    packed.needsUpdate = true;
   }
 
   setWind(wind) {
@@ -220,6 +240,11 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
       throw new AxialError('bendAsync: expected three\'s WebGPURenderer (or draw the mesh once with one first)');
     }
     if (renderer.init && !renderer._initialized) await renderer.init();
+    if (!renderer.backend.isWebGPUBackend && Number(THREE.REVISION) < COMPUTE_FALLBACK_REVISION) {
+      throw new AxialError(`bendAsync: three r${THREE.REVISION}'s WebGL 2 fallback mixes up the results of compute passes `
+        + `(three r${COMPUTE_FALLBACK_REVISION} is the first where it does not); bending on the GPU for bakeAsync and `
+        + 'raycastAsync needs WebGPU or a newer three there');
+    }
     const g = this.geometry, V = g.getAttribute('position').count;
     const list = ids ? Array.from(ids) : Array.from({ length: this.count }, (_, i) => i);
     const n = list.length, total = n * V, tangent = g.getAttribute('tangent');

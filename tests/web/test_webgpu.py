@@ -1,0 +1,246 @@
+"""axialdeform-three/webgpu in Chromium: three's WebGPURenderer, its WebGPU backend (SwiftShader's
+Vulkan here) and its WebGL 2 fallback, with the oldest three the entry supports (r184: r171 to r181
+place every instance wrong and r182 to r183 lose the shadows of updated instances, three bugs
+fixed since) and the latest release the tests pin (r187).
+
+The bend there is a hand-written port of glsl/axial.glsl and glsl/wind.glsl to three's node
+functions (js/src/nodes.js): these tests hold it to ``axialdeform.deform`` on every feature, draw
+what ``render`` draws, cast bent shadows, bake and raycast, and refuse in words what they cannot bend."""
+
+from __future__ import annotations
+
+import base64
+import json
+from io import BytesIO
+
+import numpy as np
+import pytest
+from PIL import Image
+from test_three import JS, MORE, ROOT, Server, iou, make_site, render_reference
+
+import axialdeform as ad
+from axialdeform.core.io.gltf import bend_extension
+from axialdeform.core.wind import apply_wind
+
+from conftest import CHROMIUM_ARGS
+
+pytestmark = pytest.mark.slow
+
+# three's WebGPU on SwiftShader's Vulkan (the flags headless Chromium needs for a WebGPU adapter)
+WEBGPU_ARGS = CHROMIUM_ARGS + ["--enable-unsafe-webgpu", "--use-webgpu-adapter=swiftshader",
+                               "--enable-features=Vulkan", "--use-vulkan=swiftshader"]
+VERSIONS = ["three-r184", "three-r187"]  # js/package.json's devDependencies (npm aliases)
+BACKENDS = {"webgl2": True, "webgpu": False}  # forceWebGL
+WIND = {"direction": [1, 0, 0.3], "strength": 0.35, "gustiness": 0.6, "frequency": 0.5, "wavelength": 4.0}
+
+
+@pytest.fixture(scope="module")
+def webgpu_browser():
+    import shutil
+
+    chromium = shutil.which("chromium")
+    assert chromium, "Debian's chromium is required (apt-get install chromium); browser tests do not skip"
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=chromium, args=WEBGPU_ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    folder = make_site(tmp_path_factory.mktemp("webgpu") / "site")
+    (folder / "favicon.ico").write_bytes(b"")  # Chromium asks for one: not a missing file of the checks
+    page = (ROOT / "tests" / "web" / "three" / "webgpu.html").read_text()
+    for v in VERSIONS:
+        three = JS / "node_modules" / v
+        assert (three / "build" / "three.webgpu.js").is_file(), \
+            f"js/node_modules/{v} is missing: the README's test command runs `npm ci --prefix js`"
+        (folder / "node_modules" / v).symlink_to(three)
+        (folder / f"webgpu-{v}.html").write_text(page.replace("THREEDIR", v))
+    s = Server(folder)
+    yield folder, s.url
+    s.close()
+
+
+def run(browser, url: str, version: str, call: str, arg: dict, timeout=240_000):
+    """``window.checks[call](arg)`` on the page of ``version``, and the page's errors."""
+    page = browser.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    try:
+        page.goto(f"{url}webgpu-{version}.html")
+        page.wait_for_function("window.checksReady === true", timeout=timeout)
+        return page.evaluate(f"(arg) => window.checks.{call}(arg)", arg), errors
+    finally:
+        page.close()
+
+
+def png(data_url: str) -> np.ndarray:
+    return np.asarray(Image.open(BytesIO(base64.b64decode(data_url.split(",", 1)[1]))).convert("RGB"))
+
+
+# ---- the maths: every feature against axialdeform.deform ----
+
+def _case(name, mesh, params, wind=None, time=0.0):
+    ext = bend_extension(mesh, params.shape[1])
+    tree = getattr(mesh, "tree", None)
+    return {"name": name, "positions": mesh.positions.ravel().tolist(), "normals": mesh.normals.ravel().tolist(),
+            "vertexAxis": tree.vertex_axis.tolist() if tree is not None else None,
+            "axis": {"axis": ext["axis"], "axes": ext.get("axes")}, "count": len(params),
+            "numbersPerInstance": params.shape[1], "axes": tree.count if tree is not None else 1,
+            "data": np.asarray(params, np.float32).ravel().tolist(), "wind": wind, "time": time}
+
+
+def bend_cases():
+    """(case for the page, expected positions, normals, L): one aligned axis; a chosen frame with scale,
+    twist and taper; tinted leaves in the wind; a tree of ten anchored axes with twist, in the wind."""
+    stone = ad.load_mesh("stone")
+    framed = ad.load_mesh("stone", axis="oriented")
+    leaf = ad.load_mesh("leafcard", axis="auto")
+    tree = ad.load_mesh("tree", axes=str(ROOT / "examples" / "forest" / "tree-axes.toml"))
+    wind = ad.Wind(direction=tuple(WIND["direction"]), strength=WIND["strength"], gustiness=WIND["gustiness"],
+                   frequency=WIND["frequency"], wavelength=WIND["wavelength"])
+    out = []
+    for name, mesh, params, windy, t in [
+        ("stones", stone, ad.random_params(stone, 40, seed=3, bend=0.15), False, 0.0),
+        ("framed", framed, ad.random_params(framed, 30, seed=4, bend=0.15, twist=0.8, taper=0.3, scale=(0.7, 1.3)),
+         False, 0.0),
+        ("leaves", leaf, ad.random_params(leaf, 40, seed=5, bend=0.15, tint=0.3), True, 1.3),
+        ("trees", tree, ad.random_params(tree, 9, seed=2, bend=0.1, twist=0.3, spacing=3), True, 0.7),
+    ]:
+        moved = apply_wind(wind, getattr(mesh, "tree", None) or mesh.axis, params, t) if windy else params
+        pos, nrm = ad.deform(mesh, moved)
+        still = ad.deform(mesh, params)[0] if windy else None
+        out.append((_case(name, mesh, params, WIND if windy else None, t), pos, nrm, mesh.axis.length, still))
+    return out
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+@pytest.mark.parametrize("backend", list(BACKENDS))
+def test_the_node_bend_equals_the_cpu_reference(webgpu_browser, site, version, backend):
+    """World positions and normals bent by the node functions (bendAsync's compute pass: WebGPU compute,
+    or transform feedback under the WebGL 2 backend) against axialdeform.deform, wind included: positions
+    to 1e-6 L (times the positions' reach in units of L where instances stand far out), normals to 1e-5."""
+    _folder, url = site
+    cases = bend_cases()
+    out, errors = run(webgpu_browser, url, version, "bend", {"gl": BACKENDS[backend], "cases": [c[0] for c in cases]})
+    if (version, backend) == ("three-r184", "webgl2"):  # three's compute under the fallback mixes passes up there
+        assert out["error"].startswith("AxialError: bendAsync: three r184's WebGL 2 fallback"), out
+        assert errors == []
+        return
+    assert out["backend"] == backend and out["version"] == version.split("-r")[1], out.get("backend")
+    for (case, pos, nrm, L, still), got in zip(cases, out["cases"]):
+        assert (got["n"], got["V"]) == pos.shape[:2], case["name"]
+        gpos = np.array(got["positions"]).reshape(*pos.shape[:2], 4)[..., :3]
+        gnrm = np.array(got["normals"]).reshape(*pos.shape[:2], 4)[..., :3]
+        reach = max(1.0, float(np.abs(pos).max()) / L)
+        assert np.abs(gpos - pos).max() <= 1e-6 * L * reach, (case["name"], np.abs(gpos - pos).max() / L)
+        assert np.abs(gnrm - nrm).max() <= 1e-5, (case["name"], np.abs(gnrm - nrm).max())
+        if still is not None:  # the wind moved them: the comparison can fail
+            assert np.abs(still - pos).max() > 0.05 * L, case["name"]
+    assert errors == []
+
+
+# ---- the pictures: what render draws ----
+
+DRAWN = [("stones", ["stone", "stones.adp"])] + [(name, [mesh, f"{name}.adp", *opts[:2]]) for name, mesh, opts in MORE
+                                                 if name in ("trees", "framed", "leaves")]
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+@pytest.mark.parametrize("backend", list(BACKENDS))
+def test_webgpu_renderer_draws_what_render_draws(webgpu_browser, site, version, backend):
+    """The plugin's meshes under WebGPURenderer against render_image (silhouette IoU >= 0.97), and the
+    stones unbent would not match (IoU < 0.9)."""
+    folder, url = site
+    for name, what in DRAWN:
+        out, errors = run(webgpu_browser, url, version, "draw", {"gl": BACKENDS[backend], "glb": f"{name}.glb"})
+        assert out["backend"] == backend and out["meshes"] >= 1, out
+        assert all("NodeMaterial" in t for t in out["types"]), out["types"]
+        shot = png(out["png"])
+        what = [w if i != 1 else folder / w for i, w in enumerate(what)]
+        ref = render_reference(folder, what)
+        Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-{version}-{backend}-{name}.png")
+        assert iou(shot, ref) >= 0.97, (name, iou(shot, ref))
+        assert errors == []
+    # the same stones, all offsets zero, are far from render's bent picture: the comparison can fail
+    flat = ad.read_params(folder / "stones.adp", mesh=ad.load_mesh("stone"))
+    flat[:, :10] = 0
+    ad.write_params(folder / "flat.adp", flat, ad.load_mesh("stone"))
+    out, _ = run(webgpu_browser, url, version, "draw", {"gl": BACKENDS[backend], "glb": "stones.glb"})
+    ref = render_reference(folder, ["stone", folder / "stones.adp"])
+    unbent = render_reference(folder, ["stone", folder / "flat.adp"])
+    assert iou(unbent, ref) < 0.9 and iou(png(out["png"]), ref) >= 0.97
+
+
+@pytest.mark.parametrize("backend", list(BACKENDS))
+def test_webgpu_wind_sways_trees_as_render_draws_them(webgpu_browser, site, backend):
+    folder, url = site
+    name, mesh, opts = next(m for m in MORE if m[0] == "trees")
+    out, errors = run(webgpu_browser, url, VERSIONS[-1], "draw",
+                      {"gl": BACKENDS[backend], "glb": "trees.glb", "wind": WIND, "time": 1.3})
+    wind = ad.Wind(direction=tuple(WIND["direction"]), strength=WIND["strength"], gustiness=WIND["gustiness"],
+                   frequency=WIND["frequency"], wavelength=WIND["wavelength"])
+    ref = render_reference(folder, [mesh, folder / "trees.adp", *opts[:2]], wind=wind, time=1.3)
+    still = render_reference(folder, [mesh, folder / "trees.adp", *opts[:2]])
+    shot = png(out["png"])
+    Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-wind-{backend}.png")
+    assert iou(shot, ref) >= 0.95, iou(shot, ref)
+    assert iou(still, ref) < 0.93  # the wind moved them visibly
+    assert errors == []
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_the_bent_instance_casts_a_bent_shadow_under_webgpu(webgpu_browser, site, version):
+    _folder, url = site
+    (bent, flat), errors = run(webgpu_browser, url, version, "shadows", {"gl": False})
+    bent, flat = np.array(bent), np.array(flat)
+    assert bent.sum() > 200 and flat.sum() > 200  # both shadows are there
+    assert (bent ^ flat).sum() > 0.15 * (bent | flat).sum()  # and they differ: the shadow pass bends
+    assert errors == []
+
+
+@pytest.mark.parametrize("backend", list(BACKENDS))
+def test_bake_and_raycast_under_webgpu(webgpu_browser, site, backend):
+    """bakeAsync (the compute pass, read back once) draws what bending draws; raycastAsync finds the
+    instance under a ray, and so does raycast() once baked; unbaked raycast() warns once (the GPU reads
+    back asynchronously) and bake() names bakeAsync."""
+    _folder, url = site
+    out, errors = run(webgpu_browser, url, VERSIONS[-1], "baking", {"gl": BACKENDS[backend]})
+    n = out["N"]
+    bent, baked = (np.array(out[k], dtype=np.float64).reshape(n, n, 4)[..., :3] for k in ("bentPx", "bakedPx"))
+    assert out["baked"] is True
+    assert (bent.max(axis=2) > 0).sum() > 2000
+    assert np.abs(bent - baked).mean() < 0.5 and np.abs(bent - baked).max() <= 24
+    assert out["asyncId"] == 0 and out["hitId"] == 0
+    assert abs(out["asyncDistance"] - out["syncDistance"]) < 1e-4
+    assert out["unbakedSync"] == 0 and len(out["warnings"]) == 1 and "raycastAsync" in out["warnings"][0]
+    assert out["bakeSync"].startswith("AxialError: bake:") and "bakeAsync" in out["bakeSync"]
+    assert out["after"] == {"baked": False, "children": 0}
+    assert errors == []
+
+
+def test_what_cannot_be_bent_is_refused_in_words(webgpu_browser, site):
+    _folder, url = site
+    out, errors = run(webgpu_browser, url, VERSIONS[-1], "refusals", {"gl": False})
+    assert out["shaderMaterial"].startswith("AxialError: AxialInstancedMesh: ShaderMaterial cannot be bent"), out
+    assert out["lineMaterial"].startswith("AxialError: AxialInstancedMesh: LineBasicMaterial cannot be bent"), out
+    assert "positionNode of its own" in out["ownPosition"], out
+    assert out["classicMeshUnderWebGPU"].startswith("AxialError: AxialInstancedMesh: three's WebGPURenderer"), out
+    assert "axialdeform-three/webgpu" in out["classicMeshUnderWebGPU"]
+    assert "axialdeform-three/webgpu" in out["nodeMaterialToClassic"], out
+    assert "only three's WebGPURenderer" in out["webgpuMeshUnderOtherRenderer"], out
+    for kind, k in out["kinds"].items():  # every kind becomes a node material that bends, keeping its settings
+        assert k == {"node": True, "bends": True, "color": None if kind == "MeshNormalMaterial" else 0x3366cc}, (kind, k)
+    assert errors == []
+
+
+def test_the_webgpu_entry_is_exported_and_typed():
+    pkg = json.loads((JS / "package.json").read_text())
+    assert pkg["exports"]["./webgpu"] == {"types": "./src/webgpu.d.ts", "import": "./src/webgpu.js"}
+    assert (JS / "src" / "webgpu.d.ts").is_file()
+    for v in VERSIONS:
+        assert pkg["devDependencies"][v] == f"npm:three@0.{v.split('-r')[1]}.0"
