@@ -13,13 +13,14 @@
 import * as THREE from 'three/webgpu';
 import {
   Fn, If, attribute, instancedDynamicBufferAttribute, positionGeometry, normalGeometry, tangentGeometry, normalLocal, tangentLocal, instanceIndex, varyingProperty,
-  reference, uniform, textureLoad, ivec2, int, float, vec4, normalize, instancedArray,
+  reference, uniform, textureLoad, ivec2, int, uint, float, vec4, normalize, instancedArray,
 } from 'three/tsl';
 import { AxialError, parseADP } from './adp.js';
 import { AxialInstancedMesh as WebGLAxialInstancedMesh } from './mesh.js';
 import { AxialGLTFPlugin as WebGLAxialGLTFPlugin, EXTENSION } from './gltf.js';
 import { attachBake, unbake } from './bake.js';
 import { rayCandidates, intersectBent } from './raycast.js';
+import { GPUCulling } from './cull.js';
 import { axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes } from './nodes.js';
 
 export { AxialError, parseADP, EXTENSION };
@@ -159,11 +160,18 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
     return { v: placed.v, n: placed.n, t };
   }
 
-  /** The materials' positionNode (one for every material of the mesh; made again when the wind comes or goes). */
-  _positionNode() {
+  /**
+   * The materials' positionNode (one for every material of the mesh; made again when the wind comes
+   * or goes).  `culled`: {ids, level, capacity, instances, geometry} -- a level of GPU culling
+   * (cull.js): the instance is the level's visible id number instanceIndex, its numbers read from the
+   * packed buffer as storage; otherwise the packed buffer is an instanced vertex buffer.
+   */
+  _positionNode(culled = null) {
     const wind = Boolean(this._wind);
-    if (this._position && this._position.wind === wind) return this._position.node;
-    const g = this.geometry, hasTangent = Boolean(g.getAttribute('tangent'));
+    this._positions = this._positions || new Map();
+    const key = culled ? culled.level : -1, known = this._positions.get(key);
+    if (known && known.wind === wind) return known.node;
+    const g = culled ? culled.geometry : this.geometry, hasTangent = Boolean(g.getAttribute('tangent'));
     // the rigid part is placed by the bend (inst.matrix), not by three's instancing, which runs before
     // the positionNode in some versions (r187) and after it in others (r171): three instances an
     // InstancedMesh by its matrices only when they are an InstancedBufferAttribute, so they are a
@@ -172,19 +180,27 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
       this.instanceMatrix = new THREE.BufferAttribute(this.instanceMatrix.array, 16).setUsage(THREE.DynamicDrawUsage);
     }
     const node = Fn(() => {
-      const packed = this._packed;
-      const q = (k) => instancedDynamicBufferAttribute(packed, 'vec4', packed.stride, 4 * k);
+      let q, id;
+      if (culled) {
+        id = culled.ids.element(instanceIndex.add(uint(culled.level * culled.capacity))).toVar();
+        const base = id.mul(uint(culled.stride / 4)).toVar();
+        q = (k) => culled.instances.element(base.add(uint(k)));
+      } else {
+        const packed = this._packed;
+        id = instanceIndex;
+        q = (k) => instancedDynamicBufferAttribute(packed, 'vec4', packed.stride, 4 * k);
+      }
       const i2 = q(2), matrix = [4, 5, 6, 7].map((k) => q(k).xyz);
       const inst = { d12: q(0), d34: q(1), d5: i2.xy, twist: i2.z, taper: i2.w, angles: q(3).xyz, position: matrix[3], matrix };
       const b = this.axis.axes ? int(attribute('axialAxis', 'float').add(0.5)) : null;
-      const r = this._bend(inst, instanceIndex, positionGeometry, normalGeometry, hasTangent ? tangentGeometry.xyz : null, b);
+      const r = this._bend(inst, id, positionGeometry, normalGeometry, hasTangent ? tangentGeometry.xyz : null, b);
       normalLocal.assign(r.n);
       if (r.t) tangentLocal.assign(r.t);
       // the tint: the varying three's materials multiply their colour by (its instancing sets it otherwise)
       if (this.instanceColor) varyingProperty('vec3', 'vInstanceColor').assign(q(8).xyz);
       return r.v;
     })();
-    this._position = { wind, node };
+    this._positions.set(key, { wind, node });
     return node;
   }
 
@@ -214,12 +230,43 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
     }
     if (packed.clearUpdateRanges) packed.addUpdateRange(first * stride, n * stride);
     packed.needsUpdate = true;
+    if (this._culling) this._culling.updateBounds(first, n);
+  }
+
+  /**
+   * GPU culling and level of detail (WebGPU backend): `false` turns it off; `true` culls the mesh's own
+   * geometry; `{levels: [{geometry, distance}, ...]}` by increasing distance draws each visible instance
+   * with the first level nearer than its distance (none beyond the last).  A compute pass a frame tests
+   * every instance's bend-aware bounding sphere against the frustum and writes indirect draw
+   * arguments: the CPU's work a frame does not grow with the count (cull.js).
+   */
+  setGPUCulling(options = true) {
+    if (this._culling) {
+      this._culling.levels.forEach((m) => this.remove(m));
+      this._culling.dispose();
+      this._culling = null;
+      this.setBendVisible(true);
+    }
+    for (const key of [...(this._positions || new Map()).keys()]) if (key >= 0) this._positions.delete(key);
+    if (!options) return this;
+    if (this._baked) unbake(this);
+    this._culling = new GPUCulling(this, options === true ? null : options.levels);
+    this._culling.levels.forEach((m) => this.add(m));
+    this.setBendVisible(false);
+    return this;
+  }
+
+  /** Whether instances are culled on the GPU (setGPUCulling). */
+  get gpuCulled() {
+    return Boolean(this._culling);
   }
 
   setWind(wind) {
     const was = Boolean(this._wind);
     super.setWind(wind);
+    if (this._culling) this._culling.updateBounds(0, this.count); // the wind's reach grows the spheres
     if (Boolean(this._wind) !== was) {
+      if (this._culling) this._culling.rebend();
       const node = this._positionNode();
       (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => {
         if (!this._ownShader) m.positionNode = node;
@@ -324,6 +371,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
    * the baked vertices.
    */
   async bakeAsync(renderer = this._renderer) {
+    if (this._culling) throw new AxialError('bakeAsync: the mesh is culled on the GPU; mesh.setGPUCulling(false) first');
     unbake(this);
     if (this.count === 0 || this._wind || this._ownShader) return false;
     const r = await this.bendAsync(renderer);
@@ -377,6 +425,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
   }
 
   dispose() {
+    this.setGPUCulling(false);
     this._releaseCompute();
     if (this._uniformNodes && this._uniformNodes.axes) this._uniformNodes.axes.tex.dispose();
     return super.dispose();

@@ -244,3 +244,30 @@ def test_the_webgpu_entry_is_exported_and_typed():
     assert (JS / "src" / "webgpu.d.ts").is_file()
     for v in VERSIONS:
         assert pkg["devDependencies"][v] == f"npm:three@0.{v.split('-r')[1]}.0"
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_gpu_culling_draws_the_same_picture_with_fewer_instances(webgpu_browser, site, version):
+    """setGPUCulling: the compute pass keeps the instances whose bend-aware spheres meet the frustum and
+    the indirect draw draws just those: the same picture as drawing all 60, from fewer than 60; with two
+    levels by distance, each level draws some and those beyond the last none."""
+    _folder, url = site
+    out, errors = run(webgpu_browser, url, version, "culling", {"gl": False})
+    n = out["count"]
+    assert 0 < out["args"][1] < n, out["args"]  # the camera sees a corner of the field
+    assert out["args"][0] == 336  # the stone's indices a draw
+    all_px, culled = (np.array(out[k]).reshape(-1, 4)[:, :3] for k in ("all", "culledPx"))
+    assert (all_px.max(1) > 0).sum() > 5000
+    assert np.abs(all_px.astype(int) - culled).max() <= 2  # the same picture
+    assert out["after"] == {"children": 0, "culled": False}
+    lod, _ = run(webgpu_browser, url, version, "culling", {"gl": False, "levels": [5, 7]})
+    near, far = lod["args"][1], lod["args"][6]
+    assert near > 0 and far > 0 and near + far < out["args"][1], lod["args"]
+    assert errors == []
+
+
+def test_gpu_culling_under_the_webgl2_fallback_is_refused_in_words(webgpu_browser, site):
+    _folder, url = site
+    out, errors = run(webgpu_browser, url, VERSIONS[-1], "culling", {"gl": True})
+    assert out["error"].startswith("AxialError: setGPUCulling: GPU culling reads storage buffers"), out.get("error")
+    assert errors == []

@@ -1,0 +1,157 @@
+// cull.js -- GPU culling and level of detail for axialdeform-three/webgpu's AxialInstancedMesh under
+// WebGPURenderer's WebGPU backend: a compute pass a frame tests every instance's bend-aware bounding
+// sphere (the one the mesh's CPU bounds and the Python library's culling use: the base mesh's sphere
+// grown by the sum of the largest offsets, through the instance's matrix, grown by the wind's reach)
+// against the camera's frustum, picks its level by distance and appends its id to that level's list,
+// counting into the indirect draw arguments; each level draws its list with one indirect draw.  The
+// CPU sets six planes and a camera position and dispatches two passes: O(1) a frame whatever the count.
+
+import * as THREE from 'three/webgpu';
+import { Fn, If, storage, uniform, uniformArray, instanceIndex, uint, int, atomicAdd, atomicStore, dot } from 'three/tsl';
+import { AxialError } from './adp.js';
+
+const _frustum = new THREE.Frustum(), _m = new THREE.Matrix4(), _inv = new THREE.Matrix4(), _s = new THREE.Sphere();
+
+/**
+ * GPU culling of `mesh` (an AxialInstancedMesh of axialdeform-three/webgpu) in `levels`:
+ * [{geometry, distance}] by increasing distance (an instance whose bounding sphere's centre is nearer
+ * than `distance` to the camera is drawn with that level's geometry; beyond the last, not at all;
+ * default: the mesh's own geometry at any distance).  Every level's geometry carries the attributes the
+ * bend reads (position, normal; _axial_axis for several axes).
+ */
+export class GPUCulling {
+  constructor(mesh, levels = null) {
+    levels = levels || [{ geometry: mesh.geometry, distance: Infinity }];
+    if (!Array.isArray(levels) || levels.length === 0 || levels.length > 8) {
+      throw new AxialError('setGPUCulling: levels: expected 1 to 8 {geometry, distance} by increasing distance');
+    }
+    levels.forEach((l, k) => {
+      if (!l || !l.geometry || !l.geometry.isBufferGeometry || !l.geometry.getAttribute('position') || !l.geometry.getAttribute('normal')) {
+        throw new AxialError(`setGPUCulling: levels[${k}].geometry: expected a BufferGeometry with position and normal`);
+      }
+      if (!(l.distance > 0) || (k > 0 && !(l.distance > levels[k - 1].distance))) {
+        throw new AxialError(`setGPUCulling: levels[${k}].distance: expected a number > 0, larger than the level before, found ${l.distance}`);
+      }
+      if (mesh.axis.axes && !l.geometry.getAttribute('axialAxis') && !l.geometry.getAttribute('_axial_axis')) {
+        throw new AxialError(`setGPUCulling: levels[${k}].geometry: a mesh of several axes needs each vertex's axis (_axial_axis)`);
+      }
+    });
+    this.mesh = mesh;
+    const cap = mesh.capacity, L = levels.length;
+    this.capacity = cap;
+    // storage: the instances' packed numbers (the same array as the vertex buffer's), their spheres,
+    // each level's visible ids, the indirect draw arguments (5 numbers a level)
+    this.instancesAttr = new THREE.StorageBufferAttribute(mesh._packed.array, 4);
+    this.boundsAttr = new THREE.StorageBufferAttribute(new Float32Array(cap * 4), 4);
+    this.idsAttr = new THREE.StorageBufferAttribute(new Uint32Array(cap * L), 1);
+    const args = new Uint32Array(5 * L);
+    levels.forEach((l, k) => { args[5 * k] = l.geometry.index ? l.geometry.index.count : l.geometry.getAttribute('position').count; });
+    this.argsAttr = new THREE.IndirectStorageBufferAttribute(args, 5);
+    const counts = storage(this.argsAttr, 'uint', 5 * L).toAtomic();
+    const bounds = storage(this.boundsAttr, 'vec4', cap).toReadOnly();
+    const ids = storage(this.idsAttr, 'uint', cap * L);
+    this.planes = uniformArray(Array.from({ length: 6 }, () => new THREE.Vector4()), 'vec4');
+    this.eye = uniform(new THREE.Vector3());
+    this.count = uniform(0, 'uint');
+    this.distances = levels.map((l) => uniform(Number.isFinite(l.distance) ? l.distance : 3.4e38));
+    this.reset = Fn(() => {
+      for (let k = 0; k < L; k++) atomicStore(counts.element(uint(5 * k + 1)), uint(0));
+    })().compute(1);
+    this.cull = Fn(() => {
+      const i = instanceIndex.toVar();
+      If(i.lessThan(this.count), () => {
+        const b = bounds.element(i).toVar(), c = b.xyz, r = b.w;
+        let inside = null;
+        for (let p = 0; p < 6; p++) {
+          const plane = this.planes.element(int(p));
+          const test = dot(plane.xyz, c).add(plane.w).greaterThanEqual(r.negate());
+          inside = inside ? inside.and(test) : test;
+        }
+        If(inside, () => {
+          const d = c.sub(this.eye).length().toVar();
+          const level = int(L).toVar();
+          for (let k = L - 1; k >= 0; k--) If(d.lessThan(this.distances[k]), () => { level.assign(int(k)); });
+          If(level.lessThan(int(L)), () => {
+            const slot = atomicAdd(counts.element(uint(level).mul(uint(5)).add(uint(1))), uint(1)).toVar();
+            ids.element(uint(level).mul(uint(cap)).add(slot)).assign(i);
+          });
+        });
+      });
+    })().compute(cap);
+    // the levels: one plain mesh each, drawing its list of ids by one indirect draw
+    const idsRead = storage(this.idsAttr, 'uint', cap * L).toReadOnly();
+    const instances = storage(this.instancesAttr, 'vec4', this.instancesAttr.count).toReadOnly();
+    this.levels = levels.map((l, k) => {
+      const g = new THREE.BufferGeometry();
+      if (l.geometry.index) g.setIndex(l.geometry.index);
+      for (const [name, attr] of Object.entries(l.geometry.attributes)) {
+        if (name === '_axial_axis') g.setAttribute('axialAxis', attr);
+        else if (!name.startsWith('axial') || name === 'axialAxis') g.setAttribute(name, attr);
+      }
+      for (const grp of l.geometry.groups) g.addGroup(grp.start, grp.count, grp.materialIndex);
+      g.setIndirect(this.argsAttr, 20 * k);
+      const culled = { ids: idsRead, level: k, capacity: cap, stride: mesh._packed.stride, instances, geometry: g };
+      const materials = (Array.isArray(mesh.material) ? mesh.material : [mesh.material]).map((m) => {
+        const c = m.clone();
+        c.positionNode = mesh._positionNode(culled);
+        return c;
+      });
+      const drawn = new THREE.Mesh(g, Array.isArray(mesh.material) ? materials : materials[0]);
+      drawn.name = `${mesh.name || 'axial'} (GPU-culled level ${k})`;
+      drawn.frustumCulled = false; // each instance is culled on the GPU
+      drawn.castShadow = mesh.castShadow;
+      drawn.receiveShadow = mesh.receiveShadow;
+      drawn.raycast = () => {}; // the instanced mesh answers
+      drawn.userData.culled = culled;
+      return drawn;
+    });
+    // the pass runs before the first level is drawn, for the camera drawing it
+    this.levels[0].onBeforeRender = (renderer, scene, camera) => this.frame(renderer, camera);
+    this.updateBounds(0, mesh.count);
+  }
+
+  /** Every instance's sphere (the mesh's space) from first to first + count, for the pass. */
+  updateBounds(first, count) {
+    const out = this.boundsAttr.array;
+    for (let i = first; i < first + count; i++) {
+      const s = this.mesh.getInstanceBoundingSphere(i, _s);
+      out[4 * i] = s.center.x; out[4 * i + 1] = s.center.y; out[4 * i + 2] = s.center.z; out[4 * i + 3] = s.radius;
+    }
+    this.boundsAttr.needsUpdate = true;
+    this.instancesAttr.needsUpdate = true;
+  }
+
+  /** The frame's pass: the camera's planes and position in the mesh's space, two dispatches. */
+  frame(renderer, camera) {
+    const mesh = this.mesh;
+    if (!renderer.backend || !renderer.backend.isWebGPUBackend) {
+      throw new AxialError('setGPUCulling: GPU culling reads storage buffers in the vertex stage, which WebGPURenderer\'s '
+        + 'WebGL 2 fallback has not; draw with the WebGPU backend, or turn it off (mesh.setGPUCulling(false))');
+    }
+    _m.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).multiply(mesh.matrixWorld);
+    _frustum.setFromProjectionMatrix(_m, camera.coordinateSystem, camera.reversedDepth);
+    _frustum.planes.forEach((p, k) => this.planes.array[k].set(p.normal.x, p.normal.y, p.normal.z, p.constant));
+    _inv.copy(mesh.matrixWorld).invert();
+    this.eye.value.setFromMatrixPosition(camera.matrixWorld).applyMatrix4(_inv);
+    this.count.value = mesh.count;
+    renderer.compute([this.reset, this.cull]);
+  }
+
+  /** The levels' materials' positionNode again (the wind came or went). */
+  rebend() {
+    for (const drawn of this.levels) {
+      const node = this.mesh._positionNode(drawn.userData.culled);
+      (Array.isArray(drawn.material) ? drawn.material : [drawn.material]).forEach((m) => { m.positionNode = node; m.needsUpdate = true; });
+    }
+  }
+
+  dispose() {
+    for (const drawn of this.levels) {
+      drawn.geometry.dispose();
+      (Array.isArray(drawn.material) ? drawn.material : [drawn.material]).forEach((m) => m.dispose());
+    }
+    this.reset.dispose();
+    this.cull.dispose();
+  }
+}
+
