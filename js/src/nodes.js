@@ -66,9 +66,14 @@ export function axialSlope(t, d12, d34, d5) {
 /** The twist and taper of the cross-section at t (axial_turn): {k, c, s, rw}. */
 export function axialTurn(t, w, inst) {
   const k = float(1).sub(inst.taper.mul(t)).toVar();
-  const theta = inst.twist.mul(t).toVar();
-  const { cos: c, sin: s } = axialCosSin(theta);
-  const rw = vec2(c.mul(w.x).sub(s.mul(w.y)), s.mul(w.x).add(c.mul(w.y))).toVar();
+  // an instance without twist (most) skips the sine and cosine: exactly c = 1, s = 0, rw = w
+  const c = float(1).toVar(), s = float(0).toVar(), rw = vec2(w).toVar();
+  If(inst.twist.notEqual(0), () => {
+    const cs = axialCosSin(inst.twist.mul(t));
+    c.assign(cs.cos);
+    s.assign(cs.sin);
+    rw.assign(vec2(c.mul(w.x).sub(s.mul(w.y)), s.mul(w.x).add(c.mul(w.y))));
+  });
   return { k, c, s, rw };
 }
 

@@ -548,6 +548,8 @@ def test_npm_pack_installs_in_a_fresh_folder_and_runs_the_example(browser, tmp_p
     assert webgpu["node"].startswith("AxialError: AxialInstancedMesh: MeshStandardNodeMaterial is a node material"), webgpu
     assert webgpu["render"].startswith("AxialError: AxialInstancedMesh: three's WebGPURenderer"), webgpu
     assert "WebGLRenderer" in webgpu["render"], webgpu  # what to do instead (gltf.html above: it draws right)
+    assert webgpu["webgpuEntry"]["material"] == "MeshStandardNodeMaterial", webgpu  # or axialdeform-three/webgpu
+    assert webgpu["webgpuEntry"]["moved"] > 0.5, webgpu  # instance 0 read back placed far from the origin
 
 
 def _under_webgpu_renderer(browser, app: Path, url: str) -> dict:
@@ -555,7 +557,10 @@ def _under_webgpu_renderer(browser, app: Path, url: str) -> dict:
     drawn by WebGPURenderer (forceWebGL: its WebGL 2 backend)."""
     (app / "webgpu.html").write_text("""<!doctype html><html><body><script type="importmap">
 {"imports": {"three": "./node_modules/three/build/three.webgpu.js",
-             "axialdeform-three": "./node_modules/axialdeform-three/src/index.js"}}</script>
+             "three/webgpu": "./node_modules/three/build/three.webgpu.js",
+             "three/tsl": "./node_modules/three/build/three.tsl.js",
+             "axialdeform-three": "./node_modules/axialdeform-three/src/index.js",
+             "axialdeform-three/webgpu": "./node_modules/axialdeform-three/src/webgpu.js"}}</script>
 <script type="module">
 import * as THREE from 'three';
 import { AxialInstancedMesh, parseADP } from 'axialdeform-three';
@@ -574,6 +579,16 @@ const renderer = new THREE.WebGPURenderer({ forceWebGL: true });
 renderer.setSize(160, 120);
 await renderer.init();
 try { await renderer.renderAsync(scene, camera); out.render = 'drawn'; } catch (e) { out.render = said(e); }
+// and the entry made for it draws them bent, and reads them back bent (the installed tarball's webgpu.js)
+try {
+  const webgpu = await import('axialdeform-three/webgpu');
+  const bent = new webgpu.AxialInstancedMesh(geometry, new THREE.MeshStandardMaterial(), record);
+  const s2 = new THREE.Scene();
+  s2.add(bent);
+  renderer.render(s2, camera);
+  const r = await bent.bendAsync(renderer, [0]);
+  out.webgpuEntry = { material: bent.material.type, moved: Math.abs(r.positions[0] - geometry.getAttribute('position').getX(0)) };
+} catch (e) { out.webgpuEntry = said(e); }
 window.result = out;
 </script></body></html>""")
     return page_result(browser, url + "webgpu.html", "result")[0]

@@ -16,7 +16,7 @@ from io import BytesIO
 import numpy as np
 import pytest
 from PIL import Image
-from test_three import JS, MORE, ROOT, Server, iou, make_site, render_reference
+from test_three import JS, MORE, ROOT, SIZE, Server, iou, make_site, render_reference
 
 import axialdeform as ad
 from axialdeform.core.io.gltf import bend_extension
@@ -270,4 +270,43 @@ def test_gpu_culling_under_the_webgl2_fallback_is_refused_in_words(webgpu_browse
     _folder, url = site
     out, errors = run(webgpu_browser, url, VERSIONS[-1], "culling", {"gl": True})
     assert out["error"].startswith("AxialError: setGPUCulling: GPU culling reads storage buffers"), out.get("error")
+    assert errors == []
+
+
+@pytest.mark.parametrize("backend", list(BACKENDS))
+def test_the_webgpu_example_draws_what_render_draws(webgpu_browser, site, backend):
+    """examples/web/webgpu.html (WebGPURenderer, the plugin of axialdeform-three/webgpu, GPU culling on
+    the WebGPU backend) as render draws stones.adp, on render's background without its ground and fog."""
+    folder, url = site
+    text = (ROOT / "examples" / "web" / "webgpu.html").read_text()
+    (folder / "webgpu-example.html").write_text(text.replace("./node_modules/three/", f"./node_modules/{VERSIONS[-1]}/"))
+    page = webgpu_browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1]})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    try:
+        page.goto(url + "webgpu-example.html" + ("?webgl=1" if BACKENDS[backend] else ""))
+        page.wait_for_function("window.app !== undefined", timeout=240_000)
+        out = page.evaluate("""async () => {
+            const { THREE, renderer, scene, camera, ground, bent } = window.app;
+            renderer.setAnimationLoop(null);
+            ground.visible = false;
+            scene.fog = null;
+            scene.background = new THREE.Color().setRGB(0.93, 0.94, 0.96, THREE.SRGBColorSpace);
+            await renderer.compileAsync(scene, camera);
+            renderer.render(scene, camera);
+            const c = document.createElement('canvas');
+            c.width = renderer.domElement.width; c.height = renderer.domElement.height;
+            c.getContext('2d').drawImage(renderer.domElement, 0, 0);
+            return { png: c.toDataURL(), culled: bent.map((m) => m.gpuCulled),
+                     backend: renderer.backend.isWebGPUBackend ? 'webgpu' : 'webgl2' };
+        }""")
+    finally:
+        page.close()
+    shot = png(out["png"])
+    ref = render_reference(folder, ["stone", folder / "stones.adp"])
+    Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-example-{backend}.png")
+    assert out["backend"] == backend
+    assert out["culled"] == [backend == "webgpu"]  # GPU culling where the backend has it
+    assert iou(shot, ref) >= 0.97, iou(shot, ref)
     assert errors == []
