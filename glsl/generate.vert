@@ -1,0 +1,36 @@
+// generate.vert -- instance gl_VertexID of a tile by transform feedback (axialdeform.gl.generate):
+// no inputs, the record captured from the outputs.
+#include "axial.glsl"
+#include "wind.glsl"
+#include "generate.glsl"
+
+uniform uint u_seed;
+uniform int u_m;
+uniform float u_cell;
+uniform float u_jitter;
+uniform float u_bend;
+uniform vec2 u_scale;
+uniform float u_twist;
+uniform float u_taper;
+uniform float u_lowest;
+uniform ivec2 u_tile;
+
+out vec4 g_d12;
+out vec4 g_d34;
+out vec4 g_d5_px_py;
+out vec4 g_pz_angles;
+out vec3 g_extra;
+
+void main() {
+    AxialRecipe r = AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_lowest);
+    vec4 d12, d34;
+    vec2 d5;
+    vec3 position, angles, extra;
+    axial_generate(r, u_tile, gl_VertexID, d12, d34, d5, position, angles, extra);
+    g_d12 = d12;
+    g_d34 = d34;
+    g_d5_px_py = vec4(d5, position.xy);
+    g_pz_angles = vec4(position.z, angles);
+    g_extra = extra;
+    gl_Position = vec4(0.0);
+}

@@ -1,0 +1,84 @@
+"""Generated layers, the numpy reference (core/generate.py): a tile's instances are a pure function
+of the recipe, the seed, the tile and the index; the guaranteed spacing holds across tiles."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import axialdeform as ad
+from axialdeform.core.errors import AxialDeformError
+from axialdeform.core.generate import Generate, generate_tile, generate_tiles, tile_size, tiles_around
+
+STONE = ad.load_mesh("stone")
+RECIPE = Generate(rate=4.0, tile=8.0, min_distance=0.35, seed=11, bend=0.15)
+
+
+def test_a_tile_is_made_again_identically_in_any_order():
+    a = generate_tiles(RECIPE, STONE, [(0, 0), (-2, 3), (5, -1)])
+    b = np.concatenate([generate_tile(RECIPE, STONE, *t)[0] for t in [(0, 0), (-2, 3), (5, -1)]])
+    assert a.tobytes() == b.tobytes()
+    far = generate_tile(RECIPE, STONE, -2, 3)[0]
+    assert far.tobytes() == a[256:512].tobytes()  # made alone, later: the same bytes
+    assert not np.array_equal(generate_tile(RECIPE, STONE, 0, 0)[0], generate_tile(RECIPE, STONE, 0, 1)[0])
+    other = Generate(rate=4.0, tile=8.0, min_distance=0.35, seed=12, bend=0.15)
+    assert not np.array_equal(generate_tile(other, STONE, 0, 0)[0], generate_tile(RECIPE, STONE, 0, 0)[0])
+
+
+def test_the_guaranteed_distance_holds_within_and_across_tiles():
+    tiles = [(x, z) for x in range(-2, 2) for z in range(-2, 2)]
+    p = generate_tiles(RECIPE, STONE, tiles)
+    d, _ = cKDTree(p[:, [10, 12]]).query(p[:, [10, 12]], k=2)
+    assert d[:, 1].min() >= RECIPE.min_distance * (1 - 1e-6), d[:, 1].min()
+    # and without it (jitter over the whole cell) instances come closer: the check can fail
+    loose = Generate(rate=4.0, tile=8.0, min_distance=0.0, seed=11, bend=0.15)
+    q = generate_tiles(loose, STONE, tiles)
+    assert cKDTree(q[:, [10, 12]]).query(q[:, [10, 12]], k=2)[0][:, 1].min() < RECIPE.min_distance
+    # every instance lies in its own tile
+    m, c = tile_size(RECIPE)
+    for k, (tx, tz) in enumerate(tiles):
+        part = p[k * m * m:(k + 1) * m * m]
+        assert (part[:, 10] >= tx * 8.0).all() and (part[:, 10] < (tx + 1) * 8.0).all()
+        assert (part[:, 12] >= tz * 8.0).all() and (part[:, 12] < (tz + 1) * 8.0).all()
+
+
+def test_the_rate_the_fields_and_the_ground():
+    m, c = tile_size(RECIPE)
+    assert m * m / RECIPE.tile ** 2 == pytest.approx(RECIPE.rate, rel=0.3)
+    g = Generate(rate=2.0, tile=10.0, seed=3, bend=0.1, scale=(0.5, 2.0), twist=0.4, taper=0.3)
+    p, kept = generate_tile(g, STONE, 1, 1)
+    assert p.shape[1] == 19 and kept.all()
+    assert p[:, 16].min() >= 0.5 and p[:, 16].max() <= 2.0 and p[:, 16].std() > 0.2
+    assert np.abs(p[:, 17]).max() <= 0.4 and p[:, 18].min() >= 0 and p[:, 18].max() < 0.3
+    assert np.abs(p[:, 0:2]).max() == 0 and np.abs(p[:, 2:10]).max() <= 2 * 0.1 * STONE.axis.length + 1e-6
+    assert (p[:, 14] >= 0).all() and (p[:, 14] < 2 * math.pi).all() and p[:, [13, 15]].max() == 0
+    # each stands on the ground: its lowest bent point near y = 0 (the bend moves it by its offsets)
+    pos, _ = ad.deform(STONE, p)
+    low = pos[:, :, 1].min(axis=1)
+    assert np.abs(low).max() <= 2 * 0.1 * STONE.axis.length * 2.0 + 1e-5
+
+
+def test_tiles_around_a_point_nearest_first():
+    t = tiles_around(RECIPE, 4.0, 4.0, 9.0)
+    assert tuple(t[0]) == (0, 0)
+    assert {tuple(x) for x in t} >= {(-1, -1), (1, 1), (-1, 1), (1, -1)}
+    assert all(max(abs(x), abs(z)) <= 2 for x, z in t)
+
+
+@pytest.mark.parametrize("field,value,expected", [
+    ("rate", 0, "rate: expected a finite number > 0"),
+    ("tile", float("nan"), "tile: expected a finite number > 0"),
+    ("seed", -1, "seed: expected an integer 0 .. 4294967295"),
+    ("min_distance", 0.6, "min_distance: expected less than the cell side"),
+    ("taper", 1.0, "taper: expected a number in [0, 1)"),
+    ("scale", (2.0, 1.0), "scale: expected [lo, hi] with 0 < lo <= hi"),
+])
+def test_bad_recipes_name_the_field(field, value, expected):
+    kw = dict(rate=4.0, tile=8.0, min_distance=0.1, seed=1)
+    kw[field] = value
+    with pytest.raises(AxialDeformError, match="generate: " + expected.replace("[", r"\[").replace("]", r"\]")
+                       .replace("(", r"\(").replace(")", r"\)")):
+        Generate(**kw)
