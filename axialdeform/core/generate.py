@@ -39,7 +39,7 @@ from .record import EXTENDED_WIDTH, WIDTH
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
-           "GENERATED_NUMBERS"]
+           "tiles_in", "generate_extent", "GENERATED_NUMBERS"]
 
 GENERATED_NUMBERS = 16  # u_0 .. u_15 an instance
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
@@ -198,3 +198,22 @@ def tiles_around(recipe: Generate, x: float, z: float, reach: float) -> np.ndarr
     keep = dist <= reach
     order = np.argsort(dist[keep], kind="stable")
     return tiles[keep][order]
+
+
+def tiles_in(recipe: Generate, extent) -> np.ndarray:
+    """(k, 2) ints: the tiles that meet the ground ``extent`` (x0, z0, x1, z1)."""
+    x0, z0, x1, z1 = (float(v) for v in extent)
+    T = recipe.tile
+    tx, tz = np.meshgrid(np.arange(math.floor(x0 / T), math.floor(x1 / T) + 1),
+                         np.arange(math.floor(z0 / T), math.floor(z1 / T) + 1), indexing="ij")
+    return np.stack([tx.ravel(), tz.ravel()], 1)
+
+
+def generate_extent(recipe: Generate, mesh, extent) -> np.ndarray:
+    """The instances standing in the ground ``extent`` (x0, z0, x1, z1; x0 <= px < x1, z0 <= pz < z1):
+    the tiles that meet it, materialized (what ``render``, ``bake``, ``export`` and ``fit`` draw and write)."""
+    x0, z0, x1, z1 = (float(v) for v in extent)
+    p = generate_tiles(recipe, mesh, tiles_in(recipe, extent))
+    inside = (p[:, 10] >= x0) & (p[:, 10] < x1) & (p[:, 12] >= z0) & (p[:, 12] < z1)
+    return p[inside]
+

@@ -76,6 +76,7 @@ from .io.scene import LayerRecipe, SceneRecipe, parse_scene
 from .look import DEFAULT_LOOK, Look
 from .mesh import BaseMesh, area_weighted_normals
 from .params import as_params
+from .generate import generate_extent
 from .scatter import scatter
 from .surface import load_surface
 
@@ -99,6 +100,7 @@ class Layer:
     wind: bool = False
     lift: np.ndarray | None = None  # (n,) float32: height a scatter recipe's ``lift`` added along up
     parts: tuple | None = None  # names of the mesh's parts to draw (None: all)
+    generate: object = None  # a generated layer's GenerateRecipe (its params: the extent materialized)
 
 
 @dataclass
@@ -266,10 +268,13 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
     if recipe.params is not None:
         with src.wrap("params", "layer", nth):
             params = read_params(recipe.params, mesh)
+    elif recipe.generate is not None:
+        with src.wrap("generate", "layer", nth):
+            params = generate_extent(recipe.generate.generate, mesh, recipe.generate.extent)
     else:
         params, lift = _scatter(recipe, mesh, scene, surface, scale_counts)
     return scene.layer_type(name=recipe.name, mesh=mesh, params=params, color=recipe.color, wind=recipe.wind,
-                            lift=lift)
+                            lift=lift, generate=recipe.generate)
 
 
 def _scatter(recipe: LayerRecipe, mesh, scene: Scene, surface, scale_counts: float):

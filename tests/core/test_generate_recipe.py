@@ -82,3 +82,46 @@ def test_bad_recipes_name_the_field(field, value, expected):
     with pytest.raises(AxialDeformError, match="generate: " + expected.replace("[", r"\[").replace("]", r"\]")
                        .replace("(", r"\(").replace(")", r"\)")):
         Generate(**kw)
+
+
+SCENE = """[[layer]]
+name = "stones"
+mesh = "stone"
+
+[layer.generate]
+rate = 1.5
+tile = 8.0
+min_distance = 0.5
+seed = 3
+bend = 0.15
+scale = [0.6, 1.2]
+extent = [-10, -10, 10, 10]
+"""
+
+
+def test_a_scene_file_layer_is_generated_over_its_extent(tmp_path):
+    path = tmp_path / "gen.toml"
+    path.write_text(SCENE)
+    scene = ad.Scene.load(path)
+    layer = scene.layers[0]
+    recipe = Generate(rate=1.5, tile=8.0, min_distance=0.5, seed=3, bend=0.15, scale=(0.6, 1.2))
+    from axialdeform.core.generate import generate_extent
+
+    assert layer.params.tobytes() == generate_extent(recipe, STONE, (-10, -10, 10, 10)).tobytes()
+    assert 400 < len(layer.params) < 800 and layer.params.shape[1] == 19
+    assert (layer.params[:, 10] >= -10).all() and (layer.params[:, 10] < 10).all()
+    assert layer.generate.extent == (-10.0, -10.0, 10.0, 10.0)
+
+
+@pytest.mark.parametrize("change,message", [
+    (("rate = 1.5", "rate = -1"), r"gen.toml:6: key 'rate': expected a finite number > 0, found -1"),
+    (("extent = [-10, -10, 10, 10]\n", ""), r"gen.toml:\d+: key 'generate'.*needs an extent"),
+    (("seed = 3", "seed = 3\ncolour = 1"), r"key 'colour': unknown key in layer 1 generate"),
+    (("min_distance = 0.5", "min_distance = 2.0"), r"gen.toml:8: key 'min_distance': expected less than the cell side"),
+    (("extent = [-10, -10, 10, 10]", "extent = [10, -10, -10, 10]"), r"key 'extent': expected \[x0, z0, x1, z1\]"),
+])
+def test_bad_generate_recipes_name_the_file_line_and_key(tmp_path, change, message):
+    path = tmp_path / "gen.toml"
+    path.write_text(SCENE.replace(*change))
+    with pytest.raises(AxialDeformError, match=message):
+        ad.Scene.load(path)

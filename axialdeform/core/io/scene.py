@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..camera import CameraSpec
-from ..errors import AxialDeformError, SceneError
+from ..errors import AxialDeformError, ParamError, SceneError
 from ..look import Look
 from ..scatter import ANCHORS
 from ..wind import Wind
@@ -28,7 +28,7 @@ from . import safeio
 from .mesh import BUNDLED_MESHES, mesh_source_path
 from .safeio import read_regular
 
-__all__ = ["parse_scene", "SceneRecipe", "LayerRecipe", "ScatterRecipe", "TerrainRecipe", "SceneSource",
+__all__ = ["parse_scene", "SceneRecipe", "LayerRecipe", "ScatterRecipe", "GenerateRecipe", "TerrainRecipe", "SceneSource",
            "MAX_INCLUDE_DEPTH", "MAX_INCLUDED_FILES"]
 
 
@@ -47,7 +47,10 @@ _LIGHT = {"direction", "ambient", "color", "sky", "ground"}
 _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
 
 
-_LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter", "wind"}
+_LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter", "generate", "wind"}
+
+
+_GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "droop", "seed",
@@ -107,6 +110,15 @@ class ScatterRecipe:
 
 
 @dataclass
+class GenerateRecipe:
+    """``[layer.generate]``: the generator's recipe (:class:`~axialdeform.core.generate.Generate`) and the
+    ground ``extent`` (x0, z0, x1, z1) that the commands materialize."""
+
+    generate: object
+    extent: tuple
+
+
+@dataclass
 class LayerRecipe:
     """One ``[[layer]]``, checked: what to load and how to make its instances."""
 
@@ -121,6 +133,7 @@ class LayerRecipe:
     params: Path | None = None
     scatter: ScatterRecipe | None = None
     parts: tuple | None = None  # keep only these parts of the mesh file
+    generate: GenerateRecipe | None = None
 
 
 @dataclass
@@ -326,6 +339,8 @@ def _read_layers(src, data, scene, stack) -> None:
         _check_keys(src, layer, _LAYER, f"layer {nth + 1}", "layer", nth)
         if isinstance(layer.get("scatter"), dict):
             _check_keys(src, layer["scatter"], _SCATTER, f"layer {nth + 1} scatter", "layer", nth)
+        if isinstance(layer.get("generate"), dict):
+            _check_keys(src, layer["generate"], _GENERATE, f"layer {nth + 1} generate", "layer", nth)
     for nth, layer in enumerate(layers):
         name = layer.get("name", f"layer{len(scene.layers) + 1}")
         if any(done.name == name for done in scene.layers):
@@ -365,9 +380,9 @@ def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
     wind = layer.get("wind", False)
     if not isinstance(wind, bool):
         raise src.error(f"expected true or false, found {wind!r}", "wind", "layer", nth)
-    if ("params" in layer) == ("scatter" in layer):
-        raise src.error("expected exactly one of 'params' (a parameter file) or a [layer.scatter] recipe",
-                        "mesh", "layer", nth)
+    if sum(k in layer for k in ("params", "scatter", "generate")) != 1:
+        raise src.error("expected exactly one of 'params' (a parameter file), a [layer.scatter] recipe or a "
+                        "[layer.generate] recipe", "mesh", "layer", nth)
     parts = layer.get("parts")
     if parts is not None and not (isinstance(parts, list) and parts and all(isinstance(p, str) for p in parts)):
         raise src.error(f"expected an array of part names (the mesh file's), found {parts!r:.80}", "parts", "layer", nth)
@@ -375,9 +390,49 @@ def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
     recipe.parts = None if parts is None else tuple(parts)
     if "params" in layer:
         recipe.params = _existing(src, layer["params"], "params", "layer", nth)
+    elif "generate" in layer:
+        if axes is not None:
+            raise src.error("a generated layer of several axes is not built yet; expected a mesh of one axis",
+                            "generate", "layer", nth)
+        recipe.generate = _generate_layer(src, layer["generate"], nth)
     else:
         recipe.scatter = _scatter_layer(src, layer["scatter"], nth, scene)
     return recipe
+
+
+def _generate_layer(src, recipe, nth) -> GenerateRecipe:
+    """``[layer.generate]``, checked: every key's type here, the recipe's own rules by Generate."""
+    from ..generate import Generate
+
+    if not isinstance(recipe, dict):
+        raise src.error("expected a table [layer.generate]", "generate", "layer", nth)
+    _check_keys(src, recipe, _GENERATE, f"layer {nth + 1} generate", "layer", nth)
+    if "rate" not in recipe:
+        raise src.error("a generate recipe needs a rate (instances per square unit of ground)", "generate", "layer", nth)
+    if "extent" not in recipe:
+        raise src.error("a generate recipe needs an extent [x0, z0, x1, z1]: the ground the commands make",
+                        "generate", "layer", nth)
+    kwargs = {}
+    for key in ("rate", "tile", "min_distance", "bend", "twist", "taper"):
+        if key in recipe:
+            kwargs[key] = float(_numbers(src, recipe[key], key, "layer", nth, (1,))[0])
+    if "scale" in recipe:
+        kwargs["scale"] = tuple(float(x) for x in _numbers(src, recipe["scale"], "scale", "layer", nth, (2,), positive=True))
+    if "seed" in recipe:
+        if not isinstance(recipe["seed"], int) or isinstance(recipe["seed"], bool):
+            raise src.error(f"expected a whole number, found {recipe['seed']!r}", "seed", "layer", nth)
+        kwargs["seed"] = recipe["seed"]
+    extent = tuple(float(x) for x in _numbers(src, recipe["extent"], "extent", "layer", nth, (4,)))
+    if not (extent[2] > extent[0] and extent[3] > extent[1]):
+        raise src.error(f"expected [x0, z0, x1, z1] with x1 > x0 and z1 > z0, found {list(extent)}", "extent", "layer", nth)
+    try:
+        gen = Generate(**kwargs)
+    except ParamError as exc:  # "generate: FIELD: what was expected": the field's own line
+        _, field, said = (str(exc).split(": ", 2) + ["", ""])[:3]
+        if field not in recipe:
+            raise src.error(str(exc), "generate", "layer", nth) from None
+        raise src.error(said, field, "layer", nth) from None
+    return GenerateRecipe(gen, extent)
 
 
 def _scatter_layer(src, recipe, nth, scene) -> ScatterRecipe:
