@@ -70,13 +70,13 @@ import numpy as np
 
 from .camera import CameraSpec
 from .errors import ArgumentError, SceneError
+from .generate import generate_extent
 from .io.mesh import load_mesh, with_axes
 from .io.params import read_params
 from .io.scene import LayerRecipe, SceneRecipe, parse_scene
 from .look import DEFAULT_LOOK, Look
 from .mesh import BaseMesh, area_weighted_normals
 from .params import as_params
-from .generate import generate_extent
 from .scatter import scatter
 from .surface import load_surface
 

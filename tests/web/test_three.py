@@ -179,7 +179,9 @@ def test_node_tests_pass_with_the_latest_three_too(tmp_path):
 
 
 def test_the_module_has_no_second_copy_of_the_maths():
-    """The shader text the module injects is glsl/axial.glsl and wind.glsl verbatim (no GLSL of its own bends)."""
+    """The shader text the module injects is glsl/axial.glsl and wind.glsl verbatim (no GLSL of its own bends).
+    The one other copy is js/src/nodes.js, the node-function port WebGPURenderer needs (its WGSL cannot
+    include GLSL), held to axialdeform.deform on every feature by test_webgpu.py."""
     glsl = (ROOT / "glsl" / "axial.glsl").read_text()
     built = (JS / "src" / "glsl.js").read_text()
     import json
