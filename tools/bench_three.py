@@ -10,9 +10,10 @@ camera walking through the field, three ways (tools/bench_three.html, three r187
 * ``axial``: ``axialdeform-three/webgpu``'s ``AxialInstancedMesh`` under ``WebGPURenderer``
   (WebGPU backend) with GPU culling (``setGPUCulling``), every instance bent.
 
-Per mode and count, each in a page of its own: the first frame (from making the mesh to the GPU
-done), the median CPU ms of the ``render`` call, the median frame ms (until the GPU is done), the JS
-heap and how many instances were drawn.  Headless Chromium draws with SwiftShader (the CPU) unless
+Per mode and count, each run in a page of its own, the modes alternating over ``--repeats`` runs:
+the first frame (from making the mesh to the GPU done), the median CPU ms of the ``render`` call,
+the median frame ms (until the GPU is done), the JS heap and how many instances were drawn; the
+table gives the median over the runs.  Headless Chromium draws with SwiftShader (the CPU) unless
 a GPU is there: frame times then measure the CPU rasterizer, the CPU ms the library.
 
     python3 tools/bench_three.py                       # 100 000, 500 000, 1 000 000
@@ -38,7 +39,7 @@ JS = ROOT / "js"
 ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox", "--enable-unsafe-webgpu",
         "--use-webgpu-adapter=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
         "--enable-precise-memory-info"]
-MODES = ("plain", "addon", "axial", "one")
+MODES = ("plain", "addon", "axial", "one", "axial-webgl", "plain-webgpu", "axial-nocull")
 
 
 def site(folder: Path, counts, spacing: float) -> None:
@@ -59,12 +60,25 @@ def site(folder: Path, counts, spacing: float) -> None:
         ad.write_params(folder / f"stones-{n}.adp", params, stone)
 
 
+def median_run(runs: list[dict]) -> dict:
+    """One row of several runs of a mode: the median of each measure (the first error, if any)."""
+    bad = [r for r in runs if "error" in r]
+    if bad:
+        return bad[0]
+    out = dict(runs[0], repeats=len(runs))
+    for key in ("firstFrame", "cpuMs", "frameMs", "heapMB", "drawn"):
+        values = sorted(r[key] for r in runs if r.get(key) is not None)
+        out[key] = values[len(values) // 2] if values else None
+    return out
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--counts", default="100000,500000,1000000", help="instance counts, comma-separated")
-    p.add_argument("--modes", default=",".join(MODES), help="plain, addon, axial, one (comma-separated)")
+    p.add_argument("--modes", default="plain,addon,axial,one", help="some of " + ", ".join(MODES) + " (comma-separated)")
     p.add_argument("--frames", type=int, default=8, help="frames of the walk a run (medians over them)")
     p.add_argument("--spacing", type=float, default=1.5, help="grid spacing of the stones (model units)")
+    p.add_argument("--repeats", type=int, default=3, help="runs of every mode, alternated (medians over them)")
     p.add_argument("-o", "--out", default="axialdeform-bench-three", help="folder for results.json and pictures")
     p.add_argument("--overwrite", action="store_true", help="replace the results of an earlier run there")
     a = p.parse_args(argv)
@@ -93,17 +107,21 @@ def main(argv=None) -> int:
             with sync_playwright() as pw:
                 browser = pw.chromium.launch(executable_path=chromium, args=ARGS)
                 for n in counts:
+                    runs = {mode: [] for mode in modes}
+                    for _ in range(a.repeats):  # the modes alternate, so a slow spell of the machine hits all
+                        for mode in modes:
+                            page = browser.new_page(viewport={"width": 640, "height": 360})
+                            page.goto(f"{url}?mode={mode}&frames={a.frames}&adp=stones-{n}.adp")
+                            page.wait_for_function("window.result !== undefined", timeout=3_600_000)
+                            r = page.evaluate("window.result")
+                            page.close()
+                            png = r.pop("png", None)
+                            if png:
+                                (out / f"{mode}-{n}.png").write_bytes(base64.b64decode(png.split(",", 1)[1]))
+                            runs[mode].append(r)
+                            print(json.dumps(r), flush=True)
                     for mode in modes:
-                        page = browser.new_page(viewport={"width": 640, "height": 360})
-                        page.goto(f"{url}?mode={mode}&frames={a.frames}&adp=stones-{n}.adp")
-                        page.wait_for_function("window.result !== undefined", timeout=3_600_000)
-                        r = page.evaluate("window.result")
-                        page.close()
-                        png = r.pop("png", None)
-                        if png:
-                            (out / f"{mode}-{n}.png").write_bytes(base64.b64decode(png.split(",", 1)[1]))
-                        results.append(r)
-                        print(json.dumps(r), flush=True)
+                        results.append(median_run(runs[mode]))
                 browser.close()
         finally:
             server.shutdown()

@@ -1,5 +1,5 @@
 // Types of axialdeform-three/webgpu: the module's classes for three's WebGPURenderer (three r171+).
-import type { Material, Raycaster, Intersection } from 'three';
+import type { BufferGeometry, Raycaster, Intersection } from 'three';
 import type { AxialInstancedMesh as WebGLAxialInstancedMesh, AxialGLTFPlugin as WebGLAxialGLTFPlugin } from './index';
 
 export { AxialError, parseADP, EXTENSION } from './index';
@@ -13,9 +13,18 @@ export interface AxialBent {
   tangents: Float32Array | null;
 }
 
+/** A level of GPU culling: instances nearer than `distance` (and farther than the level before) drawn with `geometry`. */
+export interface CullingLevel {
+  geometry: BufferGeometry;
+  distance: number;
+}
+
 /** AxialInstancedMesh for WebGPURenderer: the bend is the node material's positionNode. */
 export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
-  bendMaterial(material: Material, clone?: boolean): Material;
+  /** GPU culling and level of detail on the WebGPU backend (false: off). */
+  setGPUCulling(options?: boolean | { levels: CullingLevel[] }): this;
+  /** Whether instances are culled on the GPU. */
+  readonly gpuCulled: boolean;
   /** Bend instances `ids` (all when null) by a compute pass and read them back. */
   bendAsync(renderer?: unknown, ids?: ArrayLike<number> | null): Promise<AxialBent>;
   /** Bend once and draw plain geometry until the instances move. */

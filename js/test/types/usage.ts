@@ -3,6 +3,7 @@ import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import { AxialGLTFPlugin, AxialInstancedMesh, parseADP, AxialError, type ADPRecord } from 'axialdeform-three';
 import { recordLayout, WIND } from 'axialdeform-three/helpers';
+import { AxialInstancedMesh as WebGPUAxialInstancedMesh, type AxialBent } from 'axialdeform-three/webgpu';
 
 export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry): Promise<THREE.Object3D> {
   const loader = new GLTFLoader();
@@ -21,4 +22,14 @@ export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry)
   if (baked) stones.unbake();
   gltf.scene.add(stones);
   return gltf.scene;
+}
+
+// axialdeform-three/webgpu: the same mesh for WebGPURenderer, its asynchronous GPU reads and culling
+export async function webgpu(geometry: THREE.BufferGeometry, record: ADPRecord, renderer: unknown): Promise<number> {
+  const stones = new WebGPUAxialInstancedMesh(geometry, new THREE.MeshStandardMaterial(), record);
+  stones.setGPUCulling({ levels: [{ geometry, distance: 50 }] });
+  const bent: AxialBent = await stones.bendAsync(renderer, [0, 1]);
+  const hits = await stones.raycastAsync(new THREE.Raycaster(), renderer);
+  const baked: boolean = await stones.setGPUCulling(false).bakeAsync(renderer);
+  return bent.positions.length + hits.length + (baked ? 1 : 0) + (stones.gpuCulled ? 1 : 0);
 }
