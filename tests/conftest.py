@@ -83,17 +83,40 @@ def make_mesh(positions, faces, name="<test>"):
 CHROMIUM_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"]
 
 
+#: and WebGPU on SwiftShader's Vulkan (tests/web/test_webgpu.py: three's WebGPURenderer)
+WEBGPU_ARGS = CHROMIUM_ARGS + ["--enable-unsafe-webgpu", "--use-webgpu-adapter=swiftshader",
+                               "--enable-features=Vulkan", "--use-vulkan=swiftshader"]
+
+
 @pytest.fixture(scope="session")
-def browser():
-    """Debian's chromium through Playwright, shared by the web tests.  No browser is a failure,
-    never a skip (the README's test command installs it)."""
+def playwright_driver():
+    """One Playwright (sync API) for the process: every browser below is launched from it."""
+    from playwright.sync_api import sync_playwright  # a missing package is a failure
+
+    with sync_playwright() as pw:
+        yield pw
+
+
+def _chromium() -> str:
     import shutil
 
     chromium = shutil.which("chromium")
     assert chromium, "Debian's chromium is required (apt-get install chromium); browser tests do not skip"
-    from playwright.sync_api import sync_playwright  # a missing package is a failure
+    return chromium
 
-    with sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
-        yield b
-        b.close()
+
+@pytest.fixture(scope="session")
+def browser(playwright_driver):
+    """Debian's chromium through Playwright, shared by the web tests.  No browser is a failure,
+    never a skip (the README's test command installs it)."""
+    b = playwright_driver.chromium.launch(executable_path=_chromium(), args=CHROMIUM_ARGS)
+    yield b
+    b.close()
+
+
+@pytest.fixture(scope="session")
+def webgpu_browser(playwright_driver):
+    """The same chromium with a WebGPU adapter (SwiftShader's Vulkan): three's WebGPU backend."""
+    b = playwright_driver.chromium.launch(executable_path=_chromium(), args=WEBGPU_ARGS)
+    yield b
+    b.close()

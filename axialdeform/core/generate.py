@@ -39,7 +39,7 @@ from .record import EXTENDED_WIDTH, WIDTH
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
-           "tiles_in", "generate_extent", "GENERATED_NUMBERS"]
+           "tiles_in", "generate_extent", "lowest_point", "GENERATED_NUMBERS"]
 
 GENERATED_NUMBERS = 16  # u_0 .. u_15 an instance
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
@@ -165,12 +165,12 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int) -> tuple[np.ndarray,
         out[:, 16] = s
         out[:, 17] = f32(recipe.twist) * (f32(2.0) * u[:, 14] - f32(1.0))
         out[:, 18] = f32(recipe.taper) * u[:, 15]
-    out[:, 11] = -f32(_lowest(mesh)) * s
+    out[:, 11] = -f32(lowest_point(mesh)) * s
     kept = np.ones(n, bool)
     return out, kept
 
 
-def _lowest(mesh) -> float:
+def lowest_point(mesh) -> float:
     """The base mesh's lowest y (its bottom stands on the ground)."""
     return float(np.asarray(mesh.positions)[:, 1].min())
 

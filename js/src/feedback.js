@@ -23,6 +23,17 @@ export function plainArray(attr) {
  * after instance.  Leaves GL state changed: the caller resets three's (renderer.resetState()).
  */
 /** Refuse three's WebGPURenderer in words (never a silent unbent picture): `what` it lacks. */
+/** Why WebGLRenderer's mesh cannot be drawn by WebGPURenderer (refuseWebGPU's `what`). */
+export const UNBENT_DRAW = 'does not run the onBeforeCompile patch the bend is made with, so every instance would be drawn unbent';
+
+/** Throws for a node material given to the WebGL entry's mesh: it would be drawn unbent. */
+export function refuseNodeMaterial(material) {
+  throw new AxialError(`AxialInstancedMesh: ${material.type || 'a node material'} is a node material (three/webgpu): `
+    + 'the bend is injected through onBeforeCompile, which node materials never run, so every instance would be '
+    + 'drawn unbent; import AxialInstancedMesh from \'axialdeform-three/webgpu\' for node materials and WebGPURenderer, '
+    + 'or use the classic material (MeshStandardMaterial, ...) with WebGLRenderer (docs/three.md)');
+}
+
 export function refuseWebGPU(renderer, what) {
   if (renderer && renderer.isWebGPURenderer) {
     throw new AxialError(`AxialInstancedMesh: three's WebGPURenderer (three/webgpu, either backend) ${what}; `

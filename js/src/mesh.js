@@ -10,12 +10,10 @@ import { AxialError, recordLayout, childTexels, texelRows, column, fieldName, AX
 import { ATTRIBUTES, DRAWABLE_MAGNITUDE } from './record.js';
 import { resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 import { injectBend } from './shader.js';
-
 import { checkWind, setWindUniforms, windCycles, windReach } from './wind.js';
-import { feedback, refuseWebGPU } from './feedback.js';
+import { feedback, refuseWebGPU, refuseNodeMaterial, UNBENT_DRAW } from './feedback.js';
 import { bake, unbake } from './bake.js';
 import { raycast } from './raycast.js';
-
 
 // scratch objects of the bounds (no allocation per instance)
 const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
@@ -129,29 +127,22 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
   }
 
-  /** The materials three's shadow passes draw this mesh with (WebGLRenderer: customDepthMaterial,
-   * customDistanceMaterial, bent). */
+  /** The bent materials of three's shadow passes (customDepthMaterial, customDistanceMaterial). */
   _makeShadowMaterials() {
     return [this.bendMaterial(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }), false),
       this.bendMaterial(new THREE.MeshDistanceMaterial(), false)];
   }
 
-  /** Throws where `renderer` cannot draw this mesh bent (three's WebGPURenderer: axialdeform-three/webgpu). */
+  /** Throws where `renderer` cannot draw this mesh bent (WebGPURenderer: axialdeform-three/webgpu). */
   _checkRenderer(renderer) {
-    refuseWebGPU(renderer, 'does not run the onBeforeCompile patch the bend is made with, so every instance would '
-      + 'be drawn unbent');
+    refuseWebGPU(renderer, UNBENT_DRAW);
   }
 
   /** A clone of `material` (three's built-ins: Basic, Lambert, Phong, Standard, Physical, Toon,
    * Depth, Distance, ...) whose vertex shader bends this mesh's instances. */
   bendMaterial(material, clone = true) {
     if (!material || !material.isMaterial) throw new AxialError('AxialInstancedMesh: expected a THREE.Material');
-    if (material.isNodeMaterial) {
-      throw new AxialError(`AxialInstancedMesh: ${material.type || 'a node material'} is a node material (three/webgpu): `
-        + 'the bend is injected through onBeforeCompile, which node materials never run, so every instance would be '
-        + 'drawn unbent; import AxialInstancedMesh from \'axialdeform-three/webgpu\' for node materials and WebGPURenderer, '
-        + 'or use the classic material (MeshStandardMaterial, ...) with WebGLRenderer (docs/three.md)');
-    }
+    if (material.isNodeMaterial) refuseNodeMaterial(material);
     if (this._ownShader && clone) return material;
     if (material.isShaderMaterial) {
       throw new AxialError('AxialInstancedMesh: a ShaderMaterial has no three.js chunks to bend; include the exported AXIAL_GLSL in it yourself');

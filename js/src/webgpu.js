@@ -12,8 +12,8 @@
 
 import * as THREE from 'three/webgpu';
 import {
-  Fn, If, attribute, instancedDynamicBufferAttribute, positionGeometry, normalGeometry, tangentGeometry, normalLocal, tangentLocal, instanceIndex, varyingProperty,
-  reference, uniform, textureLoad, ivec2, int, uint, float, vec4, normalize, instancedArray,
+  Fn, attribute, instancedDynamicBufferAttribute, positionGeometry, normalGeometry, tangentGeometry, normalLocal,
+  tangentLocal, instanceIndex, varyingProperty, reference, uniform, int, uint, float, normalize,
 } from 'three/tsl';
 import { AxialError, parseADP } from './adp.js';
 import { AxialInstancedMesh as WebGLAxialInstancedMesh } from './mesh.js';
@@ -21,6 +21,7 @@ import { AxialGLTFPlugin as WebGLAxialGLTFPlugin, EXTENSION } from './gltf.js';
 import { attachBake, unbake } from './bake.js';
 import { rayCandidates, intersectBent } from './raycast.js';
 import { GPUCulling } from './cull.js';
+import { bendAsync, releaseCompute } from './compute.js';
 import { axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes } from './nodes.js';
 
 export { AxialError, parseADP, EXTENSION };
@@ -34,21 +35,7 @@ const NODE_TWINS = ['MeshBasicMaterial', 'MeshLambertMaterial', 'MeshPhongMateri
 // interleaved buffer at the wrong offsets (every instance misplaced; measured with r171, r175, r178,
 // r181), r182 and r183 lose the shadow of instances after an update (measured)
 const MIN_REVISION = 184;
-// the first three whose WebGL 2 fallback keeps compute passes apart (before it, a second kernel's
-// transform feedback could write into another's buffers: measured with r171 to r186)
-const COMPUTE_FALLBACK_REVISION = 187;
 
-const ROW = 4096; // texels a row of the compute pass's input textures
-
-function floatTexture(texels) {
-  const w = Math.max(1, Math.min(texels, ROW)), h = Math.max(1, Math.ceil(texels / ROW));
-  const tex = new THREE.DataTexture(new Float32Array(w * h * 4), w, h, THREE.RGBAFormat, THREE.FloatType);
-  tex.minFilter = tex.magFilter = THREE.NearestFilter;
-  tex.needsUpdate = true;
-  return tex;
-}
-
-const texel = (tex, i) => textureLoad(tex, ivec2(i.sub(i.div(int(ROW)).mul(int(ROW))), i.div(int(ROW))));
 
 /**
  * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers, for
@@ -280,88 +267,10 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
    * Bend instances `ids` (null: all) on the GPU by a compute pass of the same node functions the
    * materials draw with, and read them back: {ids, V, positions, normals, tangents} (Float32Array, 4
    * numbers a vertex, instance after instance, in this mesh's space).  `renderer`: the
-   * WebGPURenderer (default: the last one that drew this mesh).
+   * WebGPURenderer (default: the last one that drew this mesh).  compute.js.
    */
-  async bendAsync(renderer = this._renderer, ids = null) {
-    if (!renderer || !renderer.isWebGPURenderer) {
-      throw new AxialError('bendAsync: expected three\'s WebGPURenderer (or draw the mesh once with one first)');
-    }
-    if (renderer.init && !renderer._initialized) await renderer.init();
-    if (!renderer.backend.isWebGPUBackend && Number(THREE.REVISION) < COMPUTE_FALLBACK_REVISION) {
-      throw new AxialError(`bendAsync: three r${THREE.REVISION}'s WebGL 2 fallback mixes up the results of compute passes `
-        + `(three r${COMPUTE_FALLBACK_REVISION} is the first where it does not); bending on the GPU for bakeAsync and `
-        + 'raycastAsync needs WebGPU or a newer three there');
-    }
-    const g = this.geometry, V = g.getAttribute('position').count;
-    const list = ids ? Array.from(ids) : Array.from({ length: this.count }, (_, i) => i);
-    const n = list.length, total = n * V, tangent = g.getAttribute('tangent');
-    if (n === 0) return { ids: list, V, positions: new Float32Array(0), normals: new Float32Array(0), tangents: null };
-    const pass = this._computePass(total, V, Boolean(tangent));
-    // inputs: the vertices (w: the vertex's axis; then the normals, the tangents), the instances (8 texels each:
-    // d12, d34, (d5, tw, tp), (angles, id), the columns of the instance matrix)
-    const pos = g.getAttribute('position'), nrm = g.getAttribute('normal');
-    const va = this.vertexAxis;
-    for (let v = 0; v < V; v++) {
-      pass.verts.image.data.set([pos.getX(v), pos.getY(v), pos.getZ(v), va ? va[v] : 0], 4 * v);
-      pass.verts.image.data.set([nrm.getX(v), nrm.getY(v), nrm.getZ(v), 0], 4 * (V + v));
-      if (tangent) pass.verts.image.data.set([tangent.getX(v), tangent.getY(v), tangent.getZ(v), tangent.getW(v)], 4 * (2 * V + v));
-    }
-    const a = g.attributes, out = pass.insts.image.data;
-    for (let k = 0; k < n; k++) {
-      const i = list[k], o = 32 * k;
-      out.set(a.axialD12.array.subarray(4 * i, 4 * i + 4), o);
-      out.set(a.axialD34.array.subarray(4 * i, 4 * i + 4), o + 4);
-      out.set([a.axialD5.array[2 * i], a.axialD5.array[2 * i + 1], a.axialTwistTaper.array[2 * i], a.axialTwistTaper.array[2 * i + 1]], o + 8);
-      out.set([...a.axialAngles.array.subarray(3 * i, 3 * i + 3), i], o + 12);
-      out.set(this.instanceMatrix.array.subarray(16 * i, 16 * i + 16), o + 16);
-    }
-    pass.verts.needsUpdate = true;
-    pass.insts.needsUpdate = true;
-    pass.V.value = V;
-    pass.n.value = n;
-    await renderer.computeAsync(pass.kernel);
-    const read = async (buf) => new Float32Array((await renderer.getArrayBufferAsync(buf.value)).slice(0, total * 16));
-    return { ids: list, V, positions: await read(pass.outP), normals: await read(pass.outN),
-      tangents: tangent ? await read(pass.outT) : null };
-  }
-
-  /** The compute pass of bendAsync for `total` vertices (kept while the size and the wind stay). */
-  _computePass(total, V, tangent) {
-    const key = `${total}:${V}:${Boolean(this._wind)}:${tangent}`;
-    if (this._compute && this._compute.key === key) return this._compute;
-    this._releaseCompute();
-    const count = total / V;
-    const verts = floatTexture(V * (tangent ? 3 : 2)), insts = floatTexture(8 * count);
-    const outP = instancedArray(total, 'vec4'), outN = instancedArray(total, 'vec4');
-    const outT = tangent ? instancedArray(total, 'vec4') : null;
-    const Vn = uniform(V, 'int'), nn = uniform(count, 'int');
-    const kernel = Fn(() => {
-      const k = int(instanceIndex).toVar();
-      const slot = k.div(Vn).toVar(), vert = k.sub(slot.mul(Vn)).toVar();
-      If(slot.lessThan(nn), () => {
-        const p = texel(verts, vert).toVar(), nr = texel(verts, vert.add(Vn)).xyz;
-        const tg = tangent ? texel(verts, vert.add(Vn.mul(int(2)))) : null;
-        const at = slot.mul(int(8)).toVar(), q = (c) => texel(insts, at.add(int(c))).toVar();
-        const q2 = q(2), q3 = q(3), matrix = [4, 5, 6, 7].map((c) => q(c).xyz);
-        const inst = { d12: q(0), d34: q(1), d5: q2.xy, twist: q2.z, taper: q2.w, angles: q3.xyz, matrix,
-          position: matrix[3] };
-        const id = int(q3.w);
-        const r = this._bend(inst, id, p.xyz, nr, tg ? tg.xyz : null,
-          this.axis.axes ? int(p.w.add(0.5)) : null);
-        outP.element(k).assign(vec4(r.v, 1));
-        outN.element(k).assign(vec4(r.n, 0));
-        if (outT) outT.element(k).assign(vec4(r.t, tg.w));
-      });
-    })().compute(total);
-    this._compute = { key, kernel, verts, insts, outP, outN, outT, V: Vn, n: nn };
-    return this._compute;
-  }
-
-  _releaseCompute() {
-    if (!this._compute) return;
-    this._compute.verts.dispose();
-    this._compute.insts.dispose();
-    this._compute = null;
+  bendAsync(renderer = this._renderer, ids = null) {
+    return bendAsync(this, renderer, ids);
   }
 
   /**
@@ -426,7 +335,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
 
   dispose() {
     this.setGPUCulling(false);
-    this._releaseCompute();
+    releaseCompute(this);
     if (this._uniformNodes && this._uniformNodes.axes) this._uniformNodes.axes.tex.dispose();
     return super.dispose();
   }

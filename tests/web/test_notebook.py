@@ -11,6 +11,7 @@ VS Code's notebook front end is not tested (it cannot run here)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import secrets
@@ -147,7 +148,7 @@ def _stage_image(page) -> np.ndarray:
 
 
 @pytest.mark.slow
-def test_widget_in_jupyterlab(tmp_path):
+def test_widget_in_jupyterlab(tmp_path, playwright_driver):
     """JupyterLab runs the cells: ``SceneWidget(...)`` draws in the output
     area, the silhouettes equal ``axialdeform render``'s (its function,
     without ground and shadow) of the same file at the same size, ``set_params`` changes the count shown and the
@@ -158,8 +159,6 @@ def test_widget_in_jupyterlab(tmp_path):
     of the network."""
     chromium = shutil.which("chromium")
     assert chromium, "Debian's chromium is required (apt-get install chromium); this test does not skip"
-    from playwright.sync_api import sync_playwright  # a missing package is a failure
-
     root = tmp_path / "notebooks ü"
     root.mkdir()
     mesh = ad.load_mesh("stone")
@@ -180,7 +179,7 @@ def test_widget_in_jupyterlab(tmp_path):
     lab = Lab(root)
     timings = {"server": lab.startup_s}
     try:
-        with sync_playwright() as pw:
+        with contextlib.nullcontext(playwright_driver) as pw:  # the process's one Playwright (conftest)
             browser = pw.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
             try:
                 page = browser.new_page(viewport={"width": 1280, "height": 1000})
