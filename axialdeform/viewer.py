@@ -41,6 +41,7 @@ import numpy as np
 
 from .core.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
+from .core.generate import generate_tiles, tiles_around
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
 from .core.options import RenderOptions
@@ -157,6 +158,11 @@ class _ViewerMixin:
             if code != "undefined":
                 self._keymap[code] = name
         self.reset_camera()
+        #: (dx, dz) world units the camera's target moves a frame (a walk), or None
+        self.walk = None if s.get("walk") is None else np.asarray(s["walk"], dtype=np.float64).reshape(2)
+        #: generated layers (core/generate.py) are made tile by tile around the camera's target
+        self.generate = s.get("generate")
+        self._tiles = {}
         self._update_title(force=True)
 
     # ------------------------------------------------------------ camera
@@ -269,8 +275,42 @@ class _ViewerMixin:
                 renderer.update_params(other)
 
     # ------------------------------------------------------------ drawing
+    def _page_tiles(self) -> None:
+        """Generated layers: the tiles within their reach of the camera's target, made when the set
+        changes (a tile is the same whatever made it, whenever); the ones out of reach are let go, so
+        the instances held stay bounded however far the camera walks (docs/generate.md)."""
+
+        target = self.orbit.target
+        jobs = []
+        if self.generate is not None:
+            jobs.append(("", self.generate, self.mesh, None))
+        for k, (layer, _, _) in enumerate(self.layers):
+            if getattr(layer, "generate", None) is not None:
+                jobs.append((layer.name, layer.generate, layer.mesh, k))
+        for key, recipe, mesh, k in jobs:
+            tiles = tiles_around(recipe.generate, float(target[0]), float(target[2]), recipe.reach)
+            wanted = frozenset(map(tuple, tiles.tolist()))
+            if self._tiles.get(key) == wanted:
+                continue
+            self._tiles[key] = wanted
+            params = generate_tiles(recipe.generate, mesh, tiles)
+            if k is None:
+                self.base = params
+                self._shown = params
+                self.renderer.set_params(params)
+                self.ground.fit_layers([(self.mesh, params)], height=0.0)  # a generated world stands on 0
+            else:
+                layer, renderer, _ = self.layers[k]
+                self.layers[k] = (layer, renderer, params)
+                layer.params = params
+                renderer.set_params(params)
+
     def on_render(self, time_s: float, frame_time: float):
         self._time = time_s
+        if self.walk is not None:
+            self.orbit.target = self.orbit.target + np.array([self.walk[0], 0.0, self.walk[1]])
+        if self.generate is not None or any(getattr(layer, "generate", None) is not None for layer, _, _ in self.layers):
+            self._page_tiles()
         if self.animate is not None:
             self._upload(self.animate(time_s))
         view, proj = self.matrices()
@@ -345,7 +385,7 @@ class _ViewerMixin:
 
 
 #: the viewer's own settings beside :class:`RenderOptions`' fields (:meth:`Viewer.create`)
-_VIEWER_SETTINGS = ("animate", "tint", "seed", "bend", "mode", "on_screenshot", "extra")
+_VIEWER_SETTINGS = ("animate", "tint", "seed", "bend", "mode", "on_screenshot", "extra", "walk")
 
 
 class Viewer:
@@ -388,7 +428,7 @@ class Viewer:
         """
 
         own = {k: fields.pop(k) for k in list(fields) if k in _VIEWER_SETTINGS}
-        animate, tint, seed, extra = (own.get(k) for k in ("animate", "tint", "seed", "extra"))
+        animate, tint, seed, extra, walk = (own.get(k) for k in ("animate", "tint", "seed", "extra", "walk"))
         bend, mode, on_screenshot = own.get("bend", Variation.bend), own.get("mode", "solid"), own.get("on_screenshot")
         lod_given = "lod" in fields or (options is not None and options.lod)
         old_keywords = pop_look_keywords(fields)
@@ -415,7 +455,7 @@ class Viewer:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
                      up=up, look=look, on_screenshot=on_screenshot, parts=parts, wind=wind, extra=extra,
-                     culling=culling, lod_error=lod_error)
+                     culling=culling, lod_error=lod_error, walk=walk, generate=first.generate)
         if lod is not None:
             scene["lod"] = bool(lod)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": look.msaa})

@@ -6,6 +6,7 @@
 // callers pass the recipe.  Conventions (docs/generate.md):
 //   tile (tx, tz) covers [tx T, (tx+1) T) x [tz T, (tz+1) T); m x m cells of side c = T / m;
 //   instance i stands in cell (i mod m, i div m), jittered by j = 1 - min_distance / c;
+//   offsets d = bend L (2 u - 1), every control point minus D(t_a) (t_a: the anchor on the axis);
 //   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24,  key = H(H(H(uint tx) ^ uint tz) ^ seed).
 
 struct AxialRecipe {
@@ -18,6 +19,8 @@ struct AxialRecipe {
     float twist;     // tw in [-twist, twist]
     float taper;     // tp in [0, taper]
     float lowest;    // the base mesh's lowest y: it stands on the ground
+    vec4 anchor_w;   // B4_0..3(t_a): the anchor's place on the axis (D(t_a) = 0: it stays put)
+    float anchor_w4; // B4_4(t_a)
 };
 
 // The tile's key.
@@ -41,11 +44,13 @@ void axial_generate(AxialRecipe r, ivec2 tile, int i, out vec4 d12, out vec4 d34
     position.x = (cx + 0.5 + r.jitter * (u[0] - 0.5)) * r.cell;
     position.z = (cz + 0.5 + r.jitter * (u[1] - 0.5)) * r.cell;
     angles = vec3(0.0, 6.283185307179586 * u[2], 0.0);
-    float d[10];
-    for (int q = 0; q < 10; ++q) d[q] = r.bend * (2.0 * u[3 + q] - 1.0);
-    d12 = vec4(0.0, 0.0, d[2] - d[0], d[3] - d[1]);  // the first control point to zero: the base stays put
-    d34 = vec4(d[4] - d[0], d[5] - d[1], d[6] - d[0], d[7] - d[1]);
-    d5 = vec2(d[8] - d[0], d[9] - d[1]);
+    vec2 d[5];
+    for (int q = 0; q < 5; ++q) d[q] = vec2(r.bend * (2.0 * u[3 + 2 * q] - 1.0), r.bend * (2.0 * u[4 + 2 * q] - 1.0));
+    // every control point shifted by D(t_a): the anchor stays where it is put
+    vec2 at = r.anchor_w.x * d[0] + r.anchor_w.y * d[1] + r.anchor_w.z * d[2] + r.anchor_w.w * d[3] + r.anchor_w4 * d[4];
+    d12 = vec4(d[0] - at, d[1] - at);
+    d34 = vec4(d[2] - at, d[3] - at);
+    d5 = d[4] - at;
     float s = r.scale.x + (r.scale.y - r.scale.x) * u[13];
     extra = vec3(s, r.twist * (2.0 * u[14] - 1.0), r.taper * u[15]);
     position.y = -r.lowest * s;

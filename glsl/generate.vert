@@ -13,6 +13,8 @@ uniform vec2 u_scale;
 uniform float u_twist;
 uniform float u_taper;
 uniform float u_lowest;
+uniform vec4 u_anchor_w;
+uniform float u_anchor_w4;
 uniform ivec2 u_tile;
 
 out vec4 g_d12;
@@ -22,7 +24,8 @@ out vec4 g_pz_angles;
 out vec3 g_extra;
 
 void main() {
-    AxialRecipe r = AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_lowest);
+    AxialRecipe r = AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_lowest,
+                                u_anchor_w, u_anchor_w4);
     vec4 d12, d34;
     vec2 d5;
     vec3 position, angles, extra;

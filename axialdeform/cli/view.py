@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from ..core.errors import AxialDeformError
 from ..core.io.params import read_params
 from ..core.io.safeio import check_count, check_output_path
@@ -54,6 +56,9 @@ def add_parser(sub) -> None:
                    help="animate a wind on the GPU, docs/wind.md; V toggles it (default: still)")
     v.add_argument("--wind-dir", metavar="X,Y,Z", default="1,0,0", help="wind direction, world (default: %(default)s)")
     add_cull_arguments(v)
+    v.add_argument("--walk", metavar="DX,DZ", default=None,
+                   help="move the camera's target DX, DZ world units a frame (a walk; a scene's generated "
+                        "layers are made tile by tile around it) (default: still)")
     v.add_argument("--no-lod", action="store_true", help="no levels of detail (default: on from 100 000 instances)")
     add_max_triangles(v)
     add_overwrite(v)
@@ -81,7 +86,8 @@ def run(args) -> None:
     if scene is not None:
         scenes.check_triangles(scene, args, args.mode, args.fast, frames)  # the mode it starts in; LOD: level 0
         mesh, params, seed = scene, None, args.seed
-        args.up, args.no_ground = scene.up, True
+        # a terrain is the scene's ground; without one, the ground plane (as render draws it)
+        args.up, args.no_ground = scene.up, args.no_ground or scene.terrain is not None
     elif args.params:
         mesh = load_base(args, args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
@@ -100,7 +106,15 @@ def run(args) -> None:
     if args.screenshot:  # never an input, nor a file that exists without --overwrite
         sources = scene.sources if scene is not None else (*mesh.sources, args.params)
         check_output_path(args.screenshot, sources, "screenshot", overwrite=args.overwrite)
-    viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed,
+    walk = None
+    if args.walk is not None:
+        try:
+            walk = [float(x) for x in args.walk.split(",")]
+        except ValueError:
+            walk = []
+        if len(walk) != 2 or not all(math.isfinite(x) for x in walk):
+            raise AxialDeformError(f"--walk: expected DX,DZ (two finite numbers), found {args.walk!r}")
+    viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed, walk=walk,
                            bend=args.bend, mode=args.mode, up=args.up,
                            look=(scene.look if scene is not None else Look()).replace(ground=not args.no_ground, fast=args.fast),
                            on_screenshot=lambda path: print(f"wrote {path}"), wind=wind, extra=extra,

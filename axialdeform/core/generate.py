@@ -20,8 +20,9 @@ Randomness: ``u_k`` (``k = 0 .. 15``; room for 32) is 24 bits of the PCG hash of
     key = H(H(H(uint tx) ^ uint tz) ^ seed);   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24
 
 (integer maths: bit-exact on every GPU and in numpy).  Then, in float32 as the shader computes them:
-a turn about up ``ry = 2 pi u2``; offsets ``d_q = bend L (2 u_{3+q} - 1)`` for the ten numbers, their
-first control point shifted to zero (the axis keeps its base: the shape stands where it is put);
+a turn about up ``ry = 2 pi u2``; offsets ``d_q = bend L (2 u_{3+q} - 1)`` for the ten numbers, every
+control point then shifted by ``-D(t_a)``, ``t_a`` the anchor's place on the axis (the centre of the
+base mesh's lowest bounding-box face: a blade's root, a lying stone's middle), so it stays put;
 ``s = lo + (hi - lo) u13``, ``tw = twist (2 u14 - 1)``, ``tp = taper u15`` (19 numbers when any of
 scale, twist, taper is given); ``py`` = the ground's height (0: a flat world) minus the base mesh's
 lowest point times ``s`` (the shape stands on the ground).
@@ -34,12 +35,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .deform import bernstein
 from .errors import ParamError
 from .record import EXTENDED_WIDTH, WIDTH
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
-           "tiles_in", "generate_extent", "lowest_point", "GENERATED_NUMBERS"]
+           "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "GENERATED_NUMBERS"]
 
 GENERATED_NUMBERS = 16  # u_0 .. u_15 an instance
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
@@ -154,10 +156,10 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int) -> tuple[np.ndarray,
     out[:, 12] = (cz + f32(0.5) + j * (u[:, 1] - f32(0.5))) * cell
     out[:, 14] = f32(2.0 * math.pi) * u[:, 2]
     amp = f32(recipe.bend * mesh.axis.length)
-    d = amp * (f32(2.0) * u[:, 3:13] - f32(1.0))
-    d[:, 2:10] -= np.tile(d[:, 0:2], 4)  # the first control point to zero: the base stays put
-    d[:, 0:2] = 0
-    out[:, 0:10] = d
+    d = (amp * (f32(2.0) * u[:, 3:13] - f32(1.0))).reshape(n, 5, 2)
+    w = anchor_weights(mesh)
+    at = w[0] * d[:, 0] + w[1] * d[:, 1] + w[2] * d[:, 2] + w[3] * d[:, 3] + w[4] * d[:, 4]  # D(t_a), float32
+    out[:, 0:10] = (d - at[:, None, :]).reshape(n, 10)  # every control point shifted: D(t_a) = 0
     s = np.ones(n, f32)
     if recipe.extended:
         lo, hi = recipe.scale if recipe.scale is not None else (1.0, 1.0)
@@ -168,6 +170,18 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int) -> tuple[np.ndarray,
     out[:, 11] = -f32(lowest_point(mesh)) * s
     kept = np.ones(n, bool)
     return out, kept
+
+
+def anchor_weights(mesh) -> np.ndarray:
+    """(5,) float32: the Bernstein weights ``B4_k(t_a)`` of the base mesh's anchor on its axis, ``t_a`` of
+    the centre of its bounding box's lowest face (what stands on the ground: a blade's root, a lying
+    stone's middle).  Shifting every control point by ``-D(t_a)`` keeps that point where it is put."""
+    p = np.asarray(mesh.positions, dtype=np.float64)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    anchor = np.array([(lo[0] + hi[0]) / 2, lo[1], (lo[2] + hi[2]) / 2])
+    a = mesh.axis
+    t = float(np.clip(((a.matrix @ anchor)[0] - a.lo) / a.length, 0.0, 1.0))
+    return bernstein(np.array(t)).astype(np.float32)
 
 
 def lowest_point(mesh) -> float:

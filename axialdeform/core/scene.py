@@ -209,6 +209,12 @@ class Scene:
         mesh = scene if isinstance(scene, BaseMesh) else load_mesh(scene)
         return cls.single(mesh, params, up=up, wind=wind, parts=parts)
 
+    @property
+    def ground_height(self) -> float | None:
+        """Where the ground is along up when the scene says so: 0 when every layer is generated (their
+        instances stand on it, docs/generate.md); None: the ground plane is fitted under the instances."""
+        return 0.0 if self.layers and all(getattr(x, "generate", None) is not None for x in self.layers) else None
+
     @classmethod
     def load(cls, path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:
         """A scene file (TOML, see :mod:`axialdeform.core.scene`); errors are

@@ -86,8 +86,9 @@ class GroundPlane:
         """
         return self.fit_layers([(mesh, params)], margin=margin, sink=sink)
 
-    def fit_layers(self, layers, *, margin: float = 1.6, sink: float = 0.35) -> GroundPlane:
-        """:meth:`fit` under several ``[(mesh, params), ...]`` (a scene's layers)."""
+    def fit_layers(self, layers, *, margin: float = 1.6, sink: float = 0.35, height: float | None = None) -> GroundPlane:
+        """:meth:`fit` under several ``[(mesh, params), ...]`` (a scene's layers); ``height``: the plane's
+        height along up where the scene knows it (generated layers stand on 0), else fitted."""
         bounds = [instance_bounds(mesh, params) for mesh, params in layers]
         bounds = [(c, np.broadcast_to(r, (len(c),))) for c, r in bounds if len(c)]
         if not bounds:
@@ -99,7 +100,7 @@ class GroundPlane:
         center = (lo + hi) / 2
         others = [i for i in range(3) if i != a]
         self.radius = float(margin * np.linalg.norm((hi - lo)[others]) / 2 + np.median(radii))
-        center[a] = np.percentile(centers[:, a] - radii, 5) + sink * float(np.median(radii))
+        center[a] = np.percentile(centers[:, a] - radii, 5) + sink * float(np.median(radii)) if height is None else height
         self.center = center
         return self
 

@@ -137,7 +137,7 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
             plane = shadow = None
             try:
                 if look.draws_ground and scene.terrain is None:
-                    plane = GroundPlane(ctx, up=scene.up).fit_layers(layers)
+                    plane = GroundPlane(ctx, up=scene.up).fit_layers(layers, height=scene.ground_height)
                 cam = camera or scene_camera(scene, w / h)
                 if plane is not None:  # near and far enclose everything drawn: the ground reaches the edges
                     cam = cam.enclosing_square(plane.center, UP_VECTORS[scene.up], plane.drawn_radius, w / h)

@@ -25,6 +25,7 @@ EXAMPLES = {
     "04_moderngl_window_app.py": ("04_moderngl_window_app.png",),
     "05_landscape.py": ("05_landscape.png", "05_landscape.gif"),
     "06_forest.py": ("06_forest.png", "06_forest_close.png", "06_forest.gif"),
+    "07_generated_walk.py": ("07_generated_walk.png", "07_generated_walk_far.png"),
 }
 BACKGROUND = np.array([0.93, 0.94, 0.96]) * 255  # render_image's default clear colour
 
@@ -336,3 +337,23 @@ def test_viewer_draws_trees_and_new_seeds_bend_every_axis():
     finally:
         v.release()
         v.wnd.destroy()
+
+
+@pytest.mark.slow
+def test_the_generated_walk_does_not_end_and_holds_the_same_count(run_example):
+    """Seven hundred units from the start the field is as full as at the start (the tiles there were
+    made as the camera came), with the same number of instances held (the far ones let go)."""
+    import re
+
+    out, stdout = run_example("07_generated_walk.py")
+    m = re.search(r"(\d+) instances held at .*?, (\d+) at .*?, (\d+) units away", stdout)
+    assert m, stdout
+    start, far, away = (int(x) for x in m.groups())
+    assert away > 500 and start == far and 2000 < start < 40_000, stdout
+    sky = np.array([0.80, 0.87, 0.95]) * 255
+    for f in EXAMPLES["07_generated_walk.py"]:
+        img = load(out / f)
+        lower = img[img.shape[0] // 2:]  # the ground half: stones and blades everywhere, no sky
+        assert foreground(lower, sky).mean() > 0.97, f
+        assert blobs(foreground(lower, lower.reshape(-1, 3).mean(axis=0))) > 40, f
+

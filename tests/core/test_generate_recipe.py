@@ -4,6 +4,7 @@ of the recipe, the seed, the tile and the index; the guaranteed spacing holds ac
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ from scipy.spatial import cKDTree
 
 import axialdeform as ad
 from axialdeform.core.errors import AxialDeformError
-from axialdeform.core.generate import Generate, generate_tile, generate_tiles, tile_size, tiles_around
+from axialdeform.core.generate import Generate, anchor_weights, generate_tile, generate_tiles, tile_size, tiles_around
 
 STONE = ad.load_mesh("stone")
 RECIPE = Generate(rate=4.0, tile=8.0, min_distance=0.35, seed=11, bend=0.15)
@@ -53,7 +54,13 @@ def test_the_rate_the_fields_and_the_ground():
     assert p.shape[1] == 19 and kept.all()
     assert p[:, 16].min() >= 0.5 and p[:, 16].max() <= 2.0 and p[:, 16].std() > 0.2
     assert np.abs(p[:, 17]).max() <= 0.4 and p[:, 18].min() >= 0 and p[:, 18].max() < 0.3
-    assert np.abs(p[:, 0:2]).max() == 0 and np.abs(p[:, 2:10]).max() <= 2 * 0.1 * STONE.axis.length + 1e-6
+    # the offsets hold the anchor (a lying stone's middle) still: D(t_a) = 0, and a blade's root: d1 = 0
+    d = p[:, :10].reshape(-1, 5, 2)
+    assert np.abs(np.einsum("k,nkc->nc", anchor_weights(STONE), d)).max() < 1e-6
+    assert np.abs(d).max() <= 4 * 0.1 * STONE.axis.length + 1e-6 and np.abs(d).max() > 0.1 * STONE.axis.length
+    grass = ad.load_mesh(str(Path(__file__).resolve().parents[2] / "examples" / "landscape" / "grass.obj"))
+    assert np.array_equal(anchor_weights(grass), [1, 0, 0, 0, 0])
+    assert np.abs(generate_tile(g, grass, 0, 0)[0][:, 0:2]).max() == 0
     assert (p[:, 14] >= 0).all() and (p[:, 14] < 2 * math.pi).all() and p[:, [13, 15]].max() == 0
     # each stands on the ground: its lowest bent point near y = 0 (the bend moves it by its offsets)
     pos, _ = ad.deform(STONE, p)
@@ -125,3 +132,20 @@ def test_bad_generate_recipes_name_the_file_line_and_key(tmp_path, change, messa
     path.write_text(SCENE.replace(*change))
     with pytest.raises(AxialDeformError, match=message):
         ad.Scene.load(path)
+
+
+def test_view_walks_a_generated_scene_and_refuses_a_bad_walk(tmp_path):
+    import subprocess
+    import sys
+
+    path = tmp_path / "gen.toml"
+    path.write_text(SCENE)
+    shot = tmp_path / "far.png"
+    run = [sys.executable, "-m", "axialdeform", "view", str(path), "--headless", "--size", "160x120"]
+    r = subprocess.run([*run, "--frames", "4", "--walk", "40,0", "--screenshot", str(shot)], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert shot.stat().st_size > 1000
+    r = subprocess.run([*run, "--walk", "1"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "--walk: expected DX,DZ (two finite numbers), found '1'" in r.stderr
+    assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1

@@ -50,7 +50,7 @@ _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
 _LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter", "generate", "wind"}
 
 
-_GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent"}
+_GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent", "reach"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "droop", "seed",
@@ -111,11 +111,13 @@ class ScatterRecipe:
 
 @dataclass
 class GenerateRecipe:
-    """``[layer.generate]``: the generator's recipe (:class:`~axialdeform.core.generate.Generate`) and the
-    ground ``extent`` (x0, z0, x1, z1) that the commands materialize."""
+    """``[layer.generate]``: the generator's recipe (:class:`~axialdeform.core.generate.Generate`), the
+    ground ``extent`` (x0, z0, x1, z1) that the commands materialize, and the ``reach`` (world units)
+    around the camera's target within which ``view`` makes tiles as it moves (default: 3 tiles)."""
 
     generate: object
     extent: tuple
+    reach: float = 0.0
 
 
 @dataclass
@@ -423,6 +425,7 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
             raise src.error(f"expected a whole number, found {recipe['seed']!r}", "seed", "layer", nth)
         kwargs["seed"] = recipe["seed"]
     extent = tuple(float(x) for x in _numbers(src, recipe["extent"], "extent", "layer", nth, (4,)))
+    reach = float(_numbers(src, recipe["reach"], "reach", "layer", nth, (1,), positive=True)[0]) if "reach" in recipe else None
     if not (extent[2] > extent[0] and extent[3] > extent[1]):
         raise src.error(f"expected [x0, z0, x1, z1] with x1 > x0 and z1 > z0, found {list(extent)}", "extent", "layer", nth)
     try:
@@ -432,7 +435,7 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
         if field not in recipe:
             raise src.error(str(exc), "generate", "layer", nth) from None
         raise src.error(said, field, "layer", nth) from None
-    return GenerateRecipe(gen, extent)
+    return GenerateRecipe(gen, extent, reach if reach is not None else 3.0 * gen.tile)
 
 
 def _scatter_layer(src, recipe, nth, scene) -> ScatterRecipe:
