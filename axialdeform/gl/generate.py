@@ -49,13 +49,14 @@ class TileGenerator:
         """A buffer that holds one tile's records."""
         return self.ctx.buffer(reserve=self.count * _FLOATS * 4)
 
-    def run(self, tile, buffer) -> None:
+    def run(self, tile, buffer, offset: int = 0) -> None:
+        """Tile ``tile``'s records into ``buffer`` from byte ``offset`` on."""
         if "u_tile" in self.program:
             self.program["u_tile"].value = (int(tile[0]), int(tile[1]))
         previous = self.ctx.fbo
         self._fbo.use()
         try:
-            self.vao.transform(buffer, mode=moderngl.POINTS, vertices=self.count)
+            self.vao.transform(buffer, mode=moderngl.POINTS, vertices=self.count, buffer_offset=int(offset))
         finally:
             bind_framebuffer(self.ctx, previous)
 

@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""Time to generate a layer: glsl/generate.glsl by transform feedback (one tile a pass, into one GPU
+buffer) and its numpy reference, against one frame's draw of the same instances.
+
+    python3 tools/bench_generate.py                    # 1 000 000 stones (tiles of 16 x 16 units, rate 4)
+    python3 tools/bench_generate.py --count 100000 --repeats 5
+
+Medians over --repeats, the methods alternated; the draw is AxialRenderer.render of the stones (one
+instanced draw, no culling) into a 640 x 480 target, finished (ctx.finish).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import time
+
+import moderngl
+import numpy as np
+
+import axialdeform as ad
+from axialdeform.core.camera import frame_instances
+from axialdeform.core.generate import Generate, generate_tiles, tile_size
+from axialdeform.gl.generate import TileGenerator
+from axialdeform.gl.renderer import AxialRenderer
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--count", type=int, default=1_000_000, help="instances (rounded up to whole tiles)")
+    p.add_argument("--repeats", type=int, default=3)
+    a = p.parse_args(argv)
+    recipe = Generate(rate=4.0, tile=16.0, min_distance=0.2, seed=1, bend=0.15, scale=(0.5, 1.0))
+    m, _ = tile_size(recipe)
+    side = math.ceil(math.sqrt(a.count / (m * m)))
+    tiles = np.array([(x, z) for x in range(side) for z in range(side)])
+    n = len(tiles) * m * m
+    stone = ad.load_mesh("stone")
+    ctx = moderngl.create_standalone_context(backend="egl")
+    gen = TileGenerator(ctx, recipe, stone)
+    out = ctx.buffer(reserve=n * 19 * 4)
+    params = generate_tiles(recipe, stone, tiles)
+    renderer = AxialRenderer(ctx, stone, params, culling=False, lod=False)
+    target = ctx.simple_framebuffer((640, 480))
+    cam = frame_instances(stone, params, 640 / 480)
+    view, proj = cam.view(), cam.projection(640 / 480)
+
+    def gpu():
+        t = time.perf_counter()
+        rec = gen.count * 19 * 4
+        for k, tile in enumerate(tiles):
+            gen.run(tile, out, offset=k * rec)
+        ctx.finish()
+        return time.perf_counter() - t
+
+    def cpu():
+        t = time.perf_counter()
+        generate_tiles(recipe, stone, tiles)
+        return time.perf_counter() - t
+
+    def draw():
+        t = time.perf_counter()
+        target.use()
+        ctx.clear(0.9, 0.9, 0.9, 1.0, depth=1.0)
+        renderer.render(view, proj, look=ad.Look(fast=True))
+        ctx.finish()
+        return time.perf_counter() - t
+
+    runs = {"generate (GPU, transform feedback)": [], "generate (numpy)": [], "draw one frame": []}
+    for _ in range(a.repeats):
+        for name, f in zip(runs, (gpu, cpu, draw)):
+            runs[name].append(f())
+    print(f"{n:,} instances ({len(tiles)} tiles of {m * m}); {ctx.info['GL_RENDERER']}; medians of {a.repeats}:")
+    for name, ts in runs.items():
+        print(f"  {name}: {1000 * statistics.median(ts):.1f} ms")
+    g, d = statistics.median(runs["generate (GPU, transform feedback)"]), statistics.median(runs["draw one frame"])
+    print(f"  GPU generation / one frame's draw: {g / d:.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
