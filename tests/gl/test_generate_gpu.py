@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
-from axialdeform.core.generate import Generate, generate_tile
+from axialdeform.core.generate import Generate, generate_tile, generate_tiles
 from axialdeform.gl.generate import TileGenerator, generate_tile_gpu
 
 RECIPES = [Generate(rate=4.0, tile=8.0, min_distance=0.3, seed=7, bend=0.1),
@@ -42,3 +42,14 @@ def test_one_program_makes_any_tile_into_a_gpu_buffer(ctx):
         gen.release()  # safe twice
     assert np.array_equal(out[0], out[2]) and not np.array_equal(out[0], out[1])
     assert np.array_equal(out[1], generate_tile(RECIPES[0], stone, 0, 0)[0])
+    # tiles side by side in one buffer (the layout of a layer's instance buffer): each at its offset
+    gen = TileGenerator(ctx, RECIPES[0], stone)
+    both = ctx.buffer(reserve=2 * gen.count * 19 * 4)
+    try:
+        gen.run((5, -5), both, offset=gen.count * 19 * 4)
+        gen.run((0, 0), both)
+        got = np.frombuffer(both.read(), np.float32).reshape(2 * gen.count, 19)[:, :16]
+    finally:
+        both.release()
+        gen.release()
+    assert np.array_equal(got, generate_tiles(RECIPES[0], stone, [(0, 0), (5, -5)]))
