@@ -1,4 +1,4 @@
-"""``axialdeform info``: describe a parameter file, or a mesh file and the axes it gets."""
+"""``axialdeform info``: describe a parameter file, a mesh file and the axes it gets, or a scene file."""
 
 from __future__ import annotations
 
@@ -15,15 +15,17 @@ from ..core.io.params import (
     read_param_bytes,
 )
 from ..core.record import describe_record
+from ..core.scene import Scene, is_scene_file
 from ._common import add_axis, load_base
 
 
 def add_parser(sub) -> None:
-    i = sub.add_parser("info", help="describe a parameter file, or a mesh file and its axes", description=(
+    i = sub.add_parser("info", help="describe a parameter file, a mesh file and its axes, or a scene file", description=(
         "Header, count and checksum verdict of a parameter file; or a mesh file's parts, its axis and, with "
-        "--axes, the tree it gets (axes=parts: the trunk and attachments the heuristic found)."))
-    i.add_argument("params", metavar="FILE", help="parameter file (.adp binary, .txt/.csv/.dat text), or a mesh file "
-                   f"({', '.join(MESH_SUFFIXES)}) or bundled name")
+        "--axes, the tree it gets (axes=parts: the trunk and attachments the heuristic found); or a scene "
+        "file's layers (a generated layer's recipe)."))
+    i.add_argument("params", metavar="FILE", help="parameter file (.adp binary, .txt/.csv/.dat text), a mesh file "
+                   f"({', '.join(MESH_SUFFIXES)}) or bundled name, or a scene file (.toml)")
     add_axis(i)
     i.set_defaults(handler=run)
 
@@ -39,12 +41,30 @@ def _mesh_info(args) -> None:
     print(f"mesh:      sha256 {mesh.fingerprint.hex()}")
 
 
+def _scene_info(args) -> None:
+    """A scene file: its layers, each with its mesh and where its instances come from (a generated
+    layer: its recipe and how many instances its extent holds)."""
+    if args.axes is not None or args.parts is not None or args.axis != "auto":
+        raise AxialDeformError(f"--axis/--axes/--parts: describe a mesh file; {args.params} is a scene file")
+    scene = Scene.load(args.params)
+    print(f"scene:     {args.params} ({len(scene.layers)} layers, {scene.count} instances"
+          + (", a terrain" if scene.terrain is not None else "") + ")")
+    for layer in scene.layers:
+        g = layer.generate
+        source = (f"generated: rate {g.generate.rate:g}, tiles of {g.generate.tile:g}, min_distance "
+                  f"{g.generate.min_distance:g}, seed {g.generate.seed}, extent {list(g.extent)}, reach {g.reach:g}"
+                  if g is not None else describe_record(layer.params.shape[1]))
+        print(f"layer:     {layer.name}: {layer.mesh.name}, {len(layer.params)} instances ({source})")
+
+
 def run(args) -> int | None:
     """Header, count and checksum verdict; a corrupt binary file still shows
     its header, then the verdict fails with status 2.  A mesh: its parts, axis and axes."""
 
     if args.params in BUNDLED_MESHES or Path(args.params).suffix.lower() in MESH_SUFFIXES:
         return _mesh_info(args)
+    if is_scene_file(args.params):
+        return _scene_info(args)
     if args.axes is not None or args.parts is not None or args.axis != "auto":
         raise AxialDeformError(f"--axis/--axes/--parts: describe a mesh file; {args.params} is a parameter file")
     path = Path(args.params)

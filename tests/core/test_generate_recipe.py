@@ -149,3 +149,21 @@ def test_view_walks_a_generated_scene_and_refuses_a_bad_walk(tmp_path):
     r = subprocess.run([*run, "--walk", "1"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and "--walk: expected DX,DZ (two finite numbers), found '1'" in r.stderr
     assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_info_describes_a_scene_file_and_its_generated_layers(tmp_path):
+    import subprocess
+    import sys
+
+    path = tmp_path / "gen.toml"
+    path.write_text(SCENE)
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path)], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    n = len(ad.Scene.load(path).layers[0].params)
+    assert f"(1 layers, {n} instances)" in r.stdout
+    assert f"layer:     stones: stone, {n} instances (generated: rate 1.5, tiles of 8, min_distance 0.5, seed 3, " \
+           "extent [-10.0, -10.0, 10.0, 10.0], reach 24)" in r.stdout, r.stdout
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), "--axes", "parts"], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 2 and "is a scene file" in r.stderr and "Traceback" not in r.stderr
