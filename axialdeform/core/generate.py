@@ -38,6 +38,7 @@ import numpy as np
 from .deform import bernstein
 from .errors import ParamError
 from .record import EXTENDED_WIDTH, WIDTH
+from .scatter import anchor_point
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
@@ -173,14 +174,11 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int) -> tuple[np.ndarray,
 
 
 def anchor_weights(mesh) -> np.ndarray:
-    """(5,) float32: the Bernstein weights ``B4_k(t_a)`` of the base mesh's anchor on its axis, ``t_a`` of
-    the centre of its bounding box's lowest face (what stands on the ground: a blade's root, a lying
-    stone's middle).  Shifting every control point by ``-D(t_a)`` keeps that point where it is put."""
-    p = np.asarray(mesh.positions, dtype=np.float64)
-    lo, hi = p.min(axis=0), p.max(axis=0)
-    anchor = np.array([(lo[0] + hi[0]) / 2, lo[1], (lo[2] + hi[2]) / 2])
-    a = mesh.axis
-    t = float(np.clip(((a.matrix @ anchor)[0] - a.lo) / a.length, 0.0, 1.0))
+    """(5,) float32: the Bernstein weights ``B4_k(t_a)`` of the base mesh's anchor on its axis: ``t_a`` of
+    scatter's ``bottom`` anchor, the centre of its bounding box's lowest face (what stands on the ground:
+    a blade's root, a lying stone's middle).  Shifting every control point by ``-D(t_a)`` keeps that
+    point where it is put."""
+    t = mesh.axis.parameter(anchor_point(mesh, "bottom", 1)[None, :])[0]
     return bernstein(np.array(t)).astype(np.float32)
 
 

@@ -118,6 +118,18 @@ def poisson_greedy(points: np.ndarray, radius: float, fixed: np.ndarray | None =
     return state == 1
 
 
+def anchor_point(base, anchor: str, u: int) -> np.ndarray:
+    """(3,) float64: the point of the base mesh that sits on the surface (model space): ``bottom``, the
+    centre of its bounding box's face at the lowest coordinate ``u`` (up); ``center``; ``origin``."""
+    if anchor == "origin":
+        return np.zeros(3)
+    lo, hi = base.positions.min(axis=0), base.positions.max(axis=0)
+    a = (lo + hi) / 2.0
+    if anchor == "bottom":
+        a[u] = lo[u]
+    return a.astype(np.float64)
+
+
 def _rotation_about(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Rodrigues: unit axes (k, 3) and angles (k,) -> (k, 3, 3)."""
 
@@ -286,13 +298,7 @@ def _instances(base, points, normals, u: int, rng, placement: Placement, variati
     length = axis.length
     offsets = ((2.0 * rolls[:, :10] - 1.0) * bend[0] * length).reshape(k, 5, 2)
 
-    lo, hi = base.positions.min(axis=0), base.positions.max(axis=0)
-    if anchor == "origin":
-        a = np.zeros(3)
-    else:
-        a = (lo + hi) / 2
-        if anchor == "bottom":
-            a[u] = lo[u]
+    a = anchor_point(base, anchor, u)
     # pin the axis at the anchor: subtract D(t_anchor) from all five offsets
     t_a = float(axis.parameter(a[None, :])[0])
     offsets -= np.einsum("i,kic->kc", bernstein(np.array(t_a), 4), offsets)[:, None, :]

@@ -10,7 +10,7 @@
 // {ea, eu, ev} (its rows: local coordinates F v = (ea.v, eu.v, ev.v), axis first).
 
 import {
-  Fn, If, Loop, float, int, uint, vec2, vec3, vec4, clamp, normalize, cross, dot, max, select, textureLoad, ivec2, round,
+  If, Loop, float, int, uint, vec2, vec3, vec4, clamp, normalize, cross, dot, max, select, textureLoad, ivec2, round,
 } from 'three/tsl';
 
 /**
@@ -245,5 +245,3 @@ export function axialTreeWorld(v, n, b, K, axesTex, center, inst, children, id, 
 export function axialJacobianTimes(jac, x) {
   return times(jac, x);
 }
-
-export { Fn };
