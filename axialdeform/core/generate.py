@@ -42,7 +42,7 @@ from .scatter import anchor_point
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
-           "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "GENERATED_NUMBERS"]
+           "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "recipe_uniforms", "GENERATED_NUMBERS"]
 
 GENERATED_NUMBERS = 16  # u_0 .. u_15 an instance
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
@@ -180,6 +180,20 @@ def anchor_weights(mesh) -> np.ndarray:
     point where it is put."""
     t = mesh.axis.parameter(anchor_point(mesh, "bottom", 1)[None, :])[0]
     return bernstein(np.array(t)).astype(np.float32)
+
+
+def recipe_uniforms(recipe: Generate, mesh) -> dict:
+    """The numbers ``glsl/generate.glsl``'s ``AxialRecipe`` takes for ``recipe`` and its base mesh (float64;
+    the GPU rounds them to float32 as the numpy reference does): ``seed``, ``m``, ``cell``, ``jitter``,
+    ``bend`` (times L), ``scale`` (lo, hi), ``twist``, ``taper``, ``lowest``, ``anchor_w`` (4) and
+    ``anchor_w4`` -- what the desktop generator and the page's are given (JSON-able)."""
+    m, cell = tile_size(recipe)
+    lo, hi = recipe.scale if recipe.scale is not None else (1.0, 1.0)
+    w = anchor_weights(mesh)
+    return {"seed": int(recipe.seed), "m": int(m), "cell": float(cell), "jitter": 1.0 - recipe.min_distance / cell,
+            "bend": float(recipe.bend * mesh.axis.length), "scale": [float(lo), float(hi)], "twist": float(recipe.twist),
+            "taper": float(recipe.taper), "lowest": lowest_point(mesh), "anchor_w": [float(x) for x in w[:4]],
+            "anchor_w4": float(w[4])}
 
 
 def lowest_point(mesh) -> float:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from ..core.generate import Generate, anchor_weights, lowest_point, tile_size
+from ..core.generate import Generate, recipe_uniforms, tile_size
 from .context import bind_framebuffer, release_framebuffer
 from .shaders import build_program
 
@@ -26,18 +26,12 @@ class TileGenerator:
     def __init__(self, ctx, recipe: Generate, mesh):
         self.ctx = ctx
         self.recipe = recipe
-        self.m, cell = tile_size(recipe)
+        self.m = tile_size(recipe)[0]
         self.count = self.m * self.m
         self.program = build_program(ctx, "generate.vert", varyings=_VARYINGS)
-        lo, hi = recipe.scale if recipe.scale is not None else (1.0, 1.0)
-        w = anchor_weights(mesh)
-        values = {"u_seed": recipe.seed, "u_m": self.m, "u_cell": cell, "u_jitter": 1.0 - recipe.min_distance / cell,
-                  "u_bend": recipe.bend * mesh.axis.length, "u_scale": (lo, hi), "u_twist": recipe.twist,
-                  "u_taper": recipe.taper, "u_lowest": lowest_point(mesh),
-                  "u_anchor_w": tuple(float(x) for x in w[:4]), "u_anchor_w4": float(w[4])}
-        for name, value in values.items():
-            if name in self.program:
-                self.program[name].value = value
+        for name, value in recipe_uniforms(recipe, mesh).items():  # AxialRecipe's fields, as the page gets them
+            if "u_" + name in self.program:
+                self.program["u_" + name].value = tuple(value) if isinstance(value, list) else value
         self.vao = ctx.vertex_array(self.program, [])
         # a draw needs a complete framebuffer even with rasterization discarded (a surfaceless EGL
         # context has none of its own): a 1 x 1 one, bound for the pass

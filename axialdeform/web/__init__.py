@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..core.errors import AxialDeformError
+from ..core.generate import recipe_uniforms, tile_size, tiles_around
 from ..core.io.gltf import encode_base_mesh
 from ..core.io.mesh import mesh_source_path
 from ..core.io.params import encode_binary
@@ -142,18 +143,31 @@ def _parts(mesh, color) -> list:
     return out
 
 
-def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: str, quantize: bool,
-           color=None, wind: bool = False, adp: bytes | None = None, terrain: bool = False) -> dict:
-    """One layer's config entry; its GLB and ``.adp`` go into ``files``."""
+def _generated(recipe, mesh) -> dict:
+    """A generated layer's recipe as the page takes it: the recipe (tiles, reach) and generate.glsl's
+    numbers as the desktop generator gets them (:func:`~axialdeform.core.generate.recipe_uniforms`)."""
+    g = recipe.generate
+    return {"recipe": {"rate": g.rate, "tile": g.tile, "min_distance": g.min_distance, "seed": g.seed, "bend": g.bend,
+                       "scale": None if g.scale is None else list(g.scale), "twist": g.twist, "taper": g.taper,
+                       "reach": float(recipe.reach)},
+            "uniforms": recipe_uniforms(g, mesh), "width": int(g.width)}
+
+
+def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: str | None, quantize: bool,
+           color=None, wind: bool = False, adp: bytes | None = None, terrain: bool = False, generate=None) -> dict:
+    """One layer's config entry; its GLB and ``.adp`` go into ``files`` (a generated layer, ``generate``
+    its :class:`GenerateRecipe`: the GLB and the recipe only -- the page makes the instances)."""
 
     axis = mesh.axis
     if color is None:
         color = default_color(mesh)
     material = bool(mesh.has_appearance)
-    if adp is None:
-        adp = encode_binary(params, axis=mesh, mesh_fingerprint=mesh.fingerprint, quantize=quantize)  # its axis or tree
     files[glb_file] = encode_base_mesh(mesh)
-    files[params_file] = bytes(adp)
+    if generate is None:
+        if adp is None:
+            adp = encode_binary(params, axis=mesh, mesh_fingerprint=mesh.fingerprint, quantize=quantize)  # its axis or tree
+        files[params_file] = bytes(adp)
+    width = params.shape[1] if generate is None else generate.generate.width
     return {
         "name": name,
         "terrain": bool(terrain),  # drawn, not counted among the instances
@@ -169,8 +183,8 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
                  **({"axes": mesh.tree.to_json(), "frame_digest": mesh.tree.digest.hex()}
                     if mesh.tree is not None else {}),
                  "vertices": int(mesh.vertex_count)},
-        "params_file": params_file,
-        "shader": shader_key(quantize, params.shape[1], material, axis.framed),
+        **({"params_file": params_file} if generate is None else {"generate": _generated(generate, mesh)}),
+        "shader": shader_key(quantize, width, material, axis.framed),
         "material": material,
         "color": [float(x) for x in color],
         "wind": bool(wind),
@@ -378,16 +392,25 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
     if scene.terrain is not None:
         layers.append(_layer("terrain", scene.terrain, TERRAIN_INSTANCE, files=files, glb_file="terrain.glb",
                              params_file="terrain.adp", quantize=False, color=scene.terrain_color, terrain=True))
+    generated_layers = []  # (config entry, recipe)
     for item in scene.layers:
-        if len(item.params) == 0:
+        generated = getattr(item, "generate", None)
+        if len(item.params) == 0 and generated is None:
             continue
+        if generated is not None:
+            generated_layers.append((len(layers), generated))
         layers.append(_layer(item.name, item.mesh, as_params(item.params, axes=item.mesh.axis_count), files=files,
-                             glb_file=f"layer-{item.name}.glb", params_file=f"layer-{item.name}.adp",
-                             quantize=quantize, color=item.color, wind=item.wind and wind is not None))
+                             glb_file=f"layer-{item.name}.glb",
+                             params_file=None if generated is not None else f"layer-{item.name}.adp",
+                             quantize=quantize, color=item.color, wind=item.wind and wind is not None,
+                             generate=generated))
     if not layers:
         raise AxialDeformError(f"{scene.path}: the scene has nothing to draw; expected a terrain or a layer with instances")
 
     cam = scene_camera(replace(scene, wind=wind), w / h)
+    for k, recipe in generated_layers:  # what the page holds at the start: the tiles within reach of the target
+        tiles = tiles_around(recipe.generate, float(cam.target[0]), float(cam.target[2]), recipe.reach)
+        layers[k]["instances"] = int(len(tiles) * tile_size(recipe.generate)[0] ** 2)
     config = _config(title=page.title or Path(scene.path).stem, layers=layers, size=(w, h),
                      fixed_size=page.fixed_size, mode=mode,
                      cam=cam, look=look or scene.look, up=scene.up, wind=wind,

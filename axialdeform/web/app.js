@@ -14,7 +14,7 @@
 // the npm module axialdeform-three (js/src): its parser reads and checks the .adp files (CRC-32,
 // header) and its AxialInstancedMesh holds every layer's instances (attributes, instanceMatrix, a
 // tree's offsets texture, bounds for three's culling); the page's own shaders draw them
-import { parseADP, AxialError, AxialInstancedMesh } from 'axialdeform-three';
+import { parseADP, AxialError, AxialInstancedMesh, AxialGeneratedMesh } from 'axialdeform-three';
 import { hex } from 'axialdeform-three/helpers';
 
 /** The page's errors (a message shown as it is): the module's AxialError. */
@@ -81,6 +81,11 @@ export function pageOptions(search) {
     if (!m || +m[1] < 1 || +m[2] < 1) throw new SceneError(`?size=${q.get('size')}: expected WIDTHxHEIGHT in pixels`);
     out.size = [+m[1], +m[2]];
   }
+  if (q.has('walk')) { // ?walk=DX,DZ: the camera and its target move that much a frame (a generated world's tiles follow)
+    const w = (q.get('walk') || '').split(',').map((x) => (x.trim() === '' ? NaN : Number(x)));
+    if (w.length !== 2 || !w.every(Number.isFinite)) throw new SceneError(`?walk=${q.get('walk')}: expected DX,DZ in world units a frame`);
+    out.walk = w;
+  }
   return out;
 }
 
@@ -127,7 +132,7 @@ export function mount(root, lib, scene, options = {}) {
   let renderer = null, controls = null, camera = null, world = null;
   let disposed = false;
   const layers = []; // {cfg, geometry, materials, mesh, fingerprint, variant, uniforms, count}
-  const state = { count: 0, wireframe: cfg.mode === 'wireframe' };
+  const state = { count: 0, frames: 0, wireframe: cfg.mode === 'wireframe' };
   const baseMode = cfg.mode === 'wireframe' ? 0 : cfg.mode_index;
   const v3 = (a) => new THREE.Vector3().fromArray(a);
   const wind = cfg.wind;
@@ -206,10 +211,14 @@ export function mount(root, lib, scene, options = {}) {
   }
 
   function apply(layer, p) {
-    // a new AxialInstancedMesh for the file (its width or count may differ from the last one's)
+    // a new AxialInstancedMesh for the file (its width or count may differ from the last one's); a
+    // generated layer's AxialGeneratedMesh makes its instances on the GPU from the recipe (countInstances)
     const key = variant(layer, p);
     const materials = makeMaterials(layer, key);
-    const mesh = new AxialInstancedMesh(layer.geometry, materials, p, { axis: layer.axisSpec, ownShader: true });
+    const gen = layer.cfg.generate;
+    const mesh = gen
+      ? new AxialGeneratedMesh(layer.geometry, materials, gen.recipe, { axis: layer.axisSpec, ownShader: true, uniforms: gen.uniforms })
+      : new AxialInstancedMesh(layer.geometry, materials, p, { axis: layer.axisSpec, ownShader: true });
     // the module's wind (its bounds grow by the wind's reach, so three culls right)
     if (wind && layer.cfg.wind) {
       mesh.setWind({ direction: wind.direction, strength: wind.strength, gustiness: wind.gustiness,
@@ -228,6 +237,11 @@ export function mount(root, lib, scene, options = {}) {
       world.add(mesh);
     }
     if (old) old.dispose(); // its geometry's buffers and its materials
+    countInstances();
+  }
+
+  function countInstances() {
+    for (const l of layers) if (l.mesh && l.mesh.isAxialGeneratedMesh) l.count = l.mesh.count;
     state.count = layers.reduce((a, l) => a + (l.cfg.terrain ? 0 : l.count), 0);
   }
 
@@ -258,9 +272,10 @@ export function mount(root, lib, scene, options = {}) {
       throw new SceneError(`${lc.mesh.file}: not the base mesh this page was exported with (fingerprint ` +
         `${hex(layer.fingerprint).slice(0, 16)}, expected ${lc.mesh.fingerprint.slice(0, 16)})`);
     }
-    const adp = files[lc.params_file];
-    if (!adp) throw new SceneError(`${lc.params_file}: missing from the page`);
-    const p = await prepare(layer, adp, lc.params_file);
+    // a generated layer has no parameter file: its records' width says its shader build
+    const adp = lc.generate ? null : files[lc.params_file];
+    if (!adp && !lc.generate) throw new SceneError(`${lc.params_file}: missing from the page`);
+    const p = lc.generate ? { fields: lc.generate.width, axes: 1, count: 0 } : await prepare(layer, adp, lc.params_file);
     const n = position.count;
     const geometry = new THREE.BufferGeometry(); // the base mesh: AxialInstancedMesh adds the instances
     geometry.setIndex(new THREE.BufferAttribute(index, 1));
@@ -384,13 +399,23 @@ export function mount(root, lib, scene, options = {}) {
     const drawn = new Promise((resolve, reject) => { first = resolve; failed = reject; });
     renderer.setAnimationLoop(() => {
       if (disposed) return;
+      if (options.walk) { // the camera walks; its target leads the tiles
+        const [dx, dz] = options.walk;
+        controls.target.x += dx; controls.target.z += dz;
+        camera.position.x += dx; camera.position.z += dz;
+      }
       controls.update();
+      // generated layers: the tiles within reach of the target, made when the set changes
+      let made = false;
+      for (const l of layers) if (l.mesh && l.mesh.isAxialGeneratedMesh && l.mesh.update(renderer, controls.target)) made = true;
+      if (made) countInstances();
       if (wind) {
         const t = frozen !== undefined ? frozen : (performance.now() - t0) / 1000;
         for (const l of layers) if (l.mesh && l.cfg.wind) l.mesh.setTime(t); // the module's clock: its uniforms
       }
       renderer.render(world, camera);
       frames += 1;
+      state.frames += 1;
       const now = performance.now();
       if (now - since >= 500) {
         fps = (frames * 1000) / (now - since);
@@ -432,12 +457,23 @@ export function mount(root, lib, scene, options = {}) {
         fixed, time: frozen === undefined ? null : frozen };
     },
     setWireframe,
+    /** Frames drawn so far. */
+    get frames() { return state.frames; },
+    /** Each generated layer's tiles and records now (its name, the tiles nearest the target first,
+     * numbers an instance, the records: m^2 a tile, in the tiles' order), for tools and tests. */
+    generated() {
+      return layers.filter((l) => l.mesh && l.mesh.isAxialGeneratedMesh).map((l) => ({
+        name: l.cfg.name, tiles: l.mesh.tiles, width: l.mesh.layout.numbersPerInstance,
+        target: controls ? controls.target.toArray() : null,
+        data: Array.from(l.mesh.data.subarray(0, l.mesh.count * l.mesh.layout.numbersPerInstance)) }));
+    },
     /** Replace the first layer's parameters by another .adp (ArrayBuffer); a
      * bad file keeps nothing wrong on screen: the message says why and nothing is drawn. */
     async setParams(adp, name = 'parameters') {
       await ready.catch(() => null);
       const layer = layers[0];
       if (!layer) return;
+      if (layer.cfg.generate) throw new SceneError(`${layer.cfg.name}: a generated layer; its instances come from its recipe, not a parameter file`);
       try {
         const p = await prepare(layer, adp, name);
         apply(layer, p);

@@ -149,3 +149,63 @@ export const EXTENSION: 'AXIALDEFORM_bend';
 export const AXIAL_GLSL: string;
 /** The text of axialdeform's glsl/wind.glsl (axial_wind, axial_wind_push), to include after AXIAL_GLSL. */
 export const WIND_GLSL: string;
+
+/** A generated layer's recipe (a scene file's [layer.generate]; docs/generate.md). */
+export interface GenerateRecipe {
+  /** Instances per square unit of ground. */
+  rate: number;
+  /** The side of a tile (world units; default 16). */
+  tile?: number;
+  /** The guaranteed distance between any two instances (< 1/sqrt(rate); default 0). */
+  min_distance?: number;
+  /** 0 .. 2^32 - 1 (default 0). */
+  seed?: number;
+  /** Offsets in [-bend L, bend L] (default 0.1). */
+  bend?: number;
+  /** A uniform scale in [lo, hi] (default none). */
+  scale?: [number, number] | null;
+  twist?: number;
+  taper?: number;
+  /** The tiles within this distance of the point are made (default 3 tiles). */
+  reach?: number;
+}
+
+/** generate.glsl's AxialRecipe numbers (axialdeform.core.generate.recipe_uniforms). */
+export interface GeneratorUniforms {
+  seed: number; m: number; cell: number; jitter: number; bend: number; scale: [number, number];
+  twist: number; taper: number; lowest: number; anchor_w: [number, number, number, number]; anchor_w4: number;
+}
+
+/** A recipe checked as the Python library checks it, its defaults filled in. */
+export function checkRecipe(recipe: GenerateRecipe): Required<GenerateRecipe>;
+/** generate.glsl's numbers from a recipe, the base mesh's positions and its resolved axis. */
+export function recipeUniforms(recipe: Required<GenerateRecipe>, positions: Float32Array,
+  axis: { frame: Rows3; lo: number; length: number }): GeneratorUniforms;
+/** The tiles any point of which lies within `reach` of (x, z), nearest first. */
+export function tilesAround(tile: number, x: number, z: number, reach: number): [number, number][];
+
+/** glsl/generate.glsl by WebGL 2 transform feedback: run(tiles) -> 19 float32 a record, tile after tile. */
+export class TileGenerator {
+  constructor(renderer: THREE.WebGLRenderer, uniforms: GeneratorUniforms);
+  readonly count: number;
+  run(tiles: [number, number][]): Float32Array;
+  dispose(): void;
+}
+
+export interface AxialGeneratedMeshOptions extends AxialInstancedMeshOptions {
+  /** generate.glsl's numbers as the Python library gave them (default: recipeUniforms). */
+  uniforms?: GeneratorUniforms;
+}
+
+/** A generated layer: instances made on the GPU from a recipe in the tiles within reach of a point. */
+export class AxialGeneratedMesh extends AxialInstancedMesh {
+  constructor(geometry: THREE.BufferGeometry, material: THREE.Material | THREE.Material[],
+    recipe: GenerateRecipe, options?: AxialGeneratedMeshOptions);
+  readonly isAxialGeneratedMesh: true;
+  readonly recipe: Required<GenerateRecipe>;
+  readonly generatorUniforms: GeneratorUniforms;
+  /** The tiles held, nearest first; their instances in that order, m^2 each. */
+  readonly tiles: [number, number][];
+  /** Make the tiles within reach of `point` if they changed; returns whether they did. */
+  update(renderer: THREE.WebGLRenderer, point: { x: number; z: number }): boolean;
+}

@@ -186,9 +186,14 @@ def test_the_module_has_no_second_copy_of_the_maths():
     built = (JS / "src" / "glsl.js").read_text()
     import json
 
-    axial_part, wind_part = built.split("export const AXIAL_GLSL = ", 1)[1].split("export const WIND_GLSL = ")
-    assert json.loads(axial_part.split(";\n", 1)[0]) == glsl
-    assert json.loads(wind_part.rstrip().rstrip(";")) == (ROOT / "glsl" / "wind.glsl").read_text()
+    consts = {m.group(1): json.loads(m.group(2)) for m in re.finditer(r"^export const (\w+) = (\".*\");$", built, re.M)}
+    assert consts["AXIAL_GLSL"] == glsl
+    assert consts["WIND_GLSL"] == (ROOT / "glsl" / "wind.glsl").read_text()
+    # the generator: generate.glsl as it is, generate.vert less its includes (the module puts those before it)
+    assert consts["GENERATE_GLSL"] == (ROOT / "glsl" / "generate.glsl").read_text()
+    vert = (ROOT / "glsl" / "generate.vert").read_text()
+    assert consts["GENERATE_VERT"] == re.sub(r"^\s*#include[^\n]*\n", "", vert, flags=re.M)
+    assert consts["GENERATE_VERT"] in vert.replace('#include "axial.glsl"\n#include "wind.glsl"\n#include "generate.glsl"\n', "")
     shader_js = (JS / "src" / "shader.js").read_text()
     for maths in ("Bernstein", "s * s * s * s", "cos(", "sin(", "6.28"):  # the formulas live in glsl/ only
         assert maths not in shader_js.split("const BEND", 1)[1].split("`;", 1)[0]

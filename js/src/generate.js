@@ -1,0 +1,276 @@
+// generate.js -- generated layers in three.js (docs/generate.md): instances made on the GPU from a
+// recipe, tile by tile around a point, by glsl/generate.glsl -- the very GLSL the Python library runs
+// (axialdeform.gl.generate), here by WebGL 2 transform feedback.  The records are read back once
+// per tile set (the mesh's instance matrices, bounds and raycasting are on the CPU); 0 bytes an
+// instance travel.  Conventions: the numpy reference axialdeform.core.generate.
+
+import { AxialError } from './adp.js';
+import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT } from './glsl.js';
+import { AxialInstancedMesh } from './mesh.js';
+import { refuseWebGPU, plainArray } from './feedback.js';
+
+/** Numbers a record the pass writes: the 16, then s, tw, tp (generate.vert's outputs, in order). */
+export const GENERATED_FLOATS = 19;
+const VARYINGS = ['g_d12', 'g_d34', 'g_d5_px_py', 'g_pz_angles', 'g_extra'];
+const BINOMIAL = [1, 4, 6, 4, 1];
+
+function bad(field, expected, value) {
+  throw new AxialError(`generate: ${field}: expected ${expected}, found ${JSON.stringify(value)}`);
+}
+const num = (v) => typeof v === 'number' && Number.isFinite(v);
+
+/** Python's round(): half to even (m must be the Python library's for the same recipe). */
+function roundHalfEven(x) {
+  const f = Math.floor(x), d = x - f;
+  if (d > 0.5) return f + 1;
+  if (d < 0.5) return f;
+  return f % 2 === 0 ? f : f + 1;
+}
+
+/** [m, cell]: cells a side of a tile, m = max(1, round(T sqrt(rate))), and the cell's side T / m. */
+export function tileSize(recipe) {
+  const m = Math.max(1, roundHalfEven(recipe.tile * Math.sqrt(recipe.rate)));
+  return [m, recipe.tile / m];
+}
+
+/**
+ * A recipe checked as axialdeform.core.generate.Generate checks it (a scene file's [layer.generate]):
+ * {rate, tile = 16, min_distance = 0, seed = 0, bend = 0.1, scale = null ([lo, hi]), twist = 0,
+ * taper = 0, reach = 3 tile}.  Returns a new object with the defaults filled in.
+ */
+export function checkRecipe(recipe) {
+  if (!recipe || typeof recipe !== 'object') throw new AxialError('generate: expected a recipe object {rate, tile, ...}');
+  const r = { tile: 16, min_distance: 0, seed: 0, bend: 0.1, scale: null, twist: 0, taper: 0, ...recipe };
+  for (const k of Object.keys(r)) {
+    if (!['rate', 'tile', 'min_distance', 'seed', 'bend', 'scale', 'twist', 'taper', 'reach', 'extent'].includes(k)) {
+      throw new AxialError(`generate: ${k}: not a key of a recipe (rate, tile, min_distance, seed, bend, scale, twist, taper, reach)`);
+    }
+  }
+  for (const k of ['rate', 'tile']) if (!(num(r[k]) && r[k] > 0)) bad(k, 'a finite number > 0', r[k]);
+  if (!(Number.isInteger(r.seed) && r.seed >= 0 && r.seed < 2 ** 32)) bad('seed', 'an integer 0 .. 4294967295', r.seed);
+  for (const k of ['min_distance', 'bend', 'twist', 'taper']) if (!(num(r[k]) && r[k] >= 0)) bad(k, 'a finite number >= 0', r[k]);
+  if (r.taper >= 1) bad('taper', 'a number in [0, 1)', r.taper);
+  const cell = tileSize(r)[1];
+  if (r.min_distance >= cell) bad('min_distance', `less than the cell side 1/sqrt(rate) = ${cell.toPrecision(6)}`, r.min_distance);
+  if (r.scale !== null && !(Array.isArray(r.scale) && r.scale.length === 2 && r.scale.every((x) => num(x) && x > 0) &&
+    r.scale[0] <= r.scale[1])) bad('scale', '[lo, hi] with 0 < lo <= hi', r.scale);
+  if (r.reach === undefined) r.reach = 3 * r.tile;
+  if (!(num(r.reach) && r.reach > 0)) bad('reach', 'a finite number > 0', r.reach);
+  return r;
+}
+
+/** Whether the records carry 19 numbers (scale, twist or taper given) or 16. */
+export function recipeWidth(recipe) {
+  return recipe.scale !== null || recipe.twist > 0 || recipe.taper > 0 ? 19 : 16;
+}
+
+/** The axis axialdeform gives a mesh by default: its longest bounding-box extent (ties: x, y, z). */
+export function autoAxis(positions) {
+  const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < positions.length; i++) {
+    const c = i % 3;
+    if (positions[i] < lo[c]) lo[c] = positions[i];
+    if (positions[i] > hi[c]) hi[c] = positions[i];
+  }
+  let index = 0;
+  for (let c = 1; c < 3; c++) if (hi[c] - lo[c] > hi[index] - lo[index]) index = c;
+  return { index, lo: lo[index], length: hi[index] - lo[index] };
+}
+
+/**
+ * The numbers generate.glsl's AxialRecipe takes (axialdeform.core.generate.recipe_uniforms): from the
+ * recipe, the base mesh's positions (Float32Array of 3 n) and its resolved axis ({frame, lo, length}).
+ * The anchor is the centre of the mesh's lowest bounding-box face (up = y), its place on the axis t_a.
+ */
+export function recipeUniforms(recipe, positions, axis) {
+  const [m, cell] = tileSize(recipe);
+  const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < positions.length; i++) {
+    const c = i % 3;
+    if (positions[i] < lo[c]) lo[c] = positions[i];
+    if (positions[i] > hi[c]) hi[c] = positions[i];
+  }
+  // as numpy does it on the float32 positions: the sum rounded to float32, then halved
+  const a = [Math.fround(lo[0] + hi[0]) / 2, lo[1], Math.fround(lo[2] + hi[2]) / 2];
+  const e = axis.frame[0];
+  const along = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
+  const t = Math.min(1, Math.max(0, (along - axis.lo) / axis.length));
+  const w = BINOMIAL.map((b, i) => Math.fround(b * t ** i * (1 - t) ** (4 - i)));
+  const [s0, s1] = recipe.scale || [1, 1];
+  return { seed: recipe.seed, m, cell, jitter: 1 - recipe.min_distance / cell, bend: recipe.bend * axis.length,
+    scale: [s0, s1], twist: recipe.twist, taper: recipe.taper, lowest: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4] };
+}
+
+/** [[tx, tz], ...]: the tiles any point of which lies within `reach` of (x, z), nearest first
+ * (axialdeform.core.generate.tiles_around). */
+export function tilesAround(tile, x, z, reach) {
+  const out = [];
+  for (let tx = Math.floor((x - reach) / tile); tx <= Math.floor((x + reach) / tile); tx++) {
+    for (let tz = Math.floor((z - reach) / tile); tz <= Math.floor((z + reach) / tile); tz++) {
+      const nx = Math.min(Math.max(x, tx * tile), (tx + 1) * tile), nz = Math.min(Math.max(z, tz * tile), (tz + 1) * tile);
+      const d = Math.hypot(nx - x, nz - z);
+      if (d <= reach) out.push([tx, tz, d]);
+    }
+  }
+  out.sort((p, q) => p[2] - q[2] || p[0] - q[0] || p[1] - q[1]);
+  return out.map(([tx, tz]) => [tx, tz]);
+}
+
+/** The most tiles tilesAround can return for `reach` (a generated mesh's capacity in tiles). */
+export function maxTiles(tile, reach) {
+  const k = Math.ceil((2 * reach) / tile) + 1;
+  return k * k;
+}
+
+/**
+ * glsl/generate.glsl in a WebGL 2 context by transform feedback: `run(tiles)` writes each tile's m^2
+ * records (19 float32 each) into one GL buffer, tile after tile, and reads them back.
+ */
+export class TileGenerator {
+  constructor(renderer, uniforms) {
+    refuseWebGPU(renderer, 'has no WebGL 2 transform feedback, which the generator runs by');
+    this.renderer = renderer;
+    const gl = (this.gl = renderer.getContext());
+    if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) {
+      throw new AxialError('TileGenerator: the generator needs a WebGL 2 context');
+    }
+    this.uniforms = uniforms;
+    this.count = uniforms.m * uniforms.m;
+    const head = '#version 300 es\nprecision highp float;\nprecision highp int;\n';
+    const shader = (type, text) => {
+      const sh = gl.createShader(type);
+      gl.shaderSource(sh, text);
+      gl.compileShader(sh);
+      if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new AxialError(`generate: the shader did not compile: ${gl.getShaderInfoLog(sh)}`);
+      return sh;
+    };
+    const program = (this.program = gl.createProgram());
+    gl.attachShader(program, shader(gl.VERTEX_SHADER, head + AXIAL_GLSL + WIND_GLSL + GENERATE_GLSL + GENERATE_VERT));
+    gl.attachShader(program, shader(gl.FRAGMENT_SHADER, head + 'out vec4 color;\nvoid main() { color = vec4(0.0); }\n'));
+    gl.transformFeedbackVaryings(program, VARYINGS, gl.INTERLEAVED_ATTRIBS);
+    gl.linkProgram(program);
+    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new AxialError(`generate: the program did not link: ${gl.getProgramInfoLog(program)}`);
+    this.vao = gl.createVertexArray();
+    this.buffer = null;
+    this.bytes = 0;
+  }
+
+  _setUniforms() {
+    const gl = this.gl, p = this.program, u = this.uniforms;
+    const at = (name) => gl.getUniformLocation(p, name);
+    gl.uniform1ui(at('u_seed'), u.seed);
+    gl.uniform1i(at('u_m'), u.m);
+    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'lowest', 'anchor_w4']) gl.uniform1f(at(`u_${k}`), u[k]);
+    gl.uniform2f(at('u_scale'), u.scale[0], u.scale[1]);
+    gl.uniform4f(at('u_anchor_w'), ...u.anchor_w);
+  }
+
+  /** The records of `tiles` ([[tx, tz], ...]): a Float32Array of tiles.length m^2 rows of 19, tile after
+   * tile, cell order (instance i of a tile in cell (i mod m, i div m)).  Leaves three's GL state reset. */
+  run(tiles) {
+    const gl = this.gl, bytes = tiles.length * this.count * GENERATED_FLOATS * 4;
+    const out = new Float32Array(bytes / 4);
+    if (!bytes) return out;
+    if (bytes > this.bytes) { // one buffer, grown as needed
+      if (this.buffer) gl.deleteBuffer(this.buffer);
+      this.buffer = gl.createBuffer();
+      gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, this.buffer);
+      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, bytes, gl.DYNAMIC_READ);
+      gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, null);
+      this.bytes = bytes;
+    }
+    gl.useProgram(this.program);
+    this._setUniforms();
+    gl.bindVertexArray(this.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, null);
+    const tf = gl.createTransformFeedback();
+    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, tf);
+    gl.enable(gl.RASTERIZER_DISCARD);
+    const tileLoc = gl.getUniformLocation(this.program, 'u_tile'), each = this.count * GENERATED_FLOATS * 4;
+    tiles.forEach(([tx, tz], k) => {
+      gl.uniform2i(tileLoc, tx, tz);
+      gl.bindBufferRange(gl.TRANSFORM_FEEDBACK_BUFFER, 0, this.buffer, k * each, each);
+      gl.beginTransformFeedback(gl.POINTS);
+      gl.drawArrays(gl.POINTS, 0, this.count);
+      gl.endTransformFeedback();
+    });
+    gl.disable(gl.RASTERIZER_DISCARD);
+    gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);
+    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
+    gl.deleteTransformFeedback(tf);
+    gl.bindBuffer(gl.COPY_READ_BUFFER, this.buffer);
+    gl.getBufferSubData(gl.COPY_READ_BUFFER, 0, out);
+    gl.bindBuffer(gl.COPY_READ_BUFFER, null);
+    gl.bindVertexArray(null);
+    this.renderer.resetState();
+    return out;
+  }
+
+  dispose() {
+    const gl = this.gl;
+    if (!gl) return;
+    if (this.buffer) gl.deleteBuffer(this.buffer);
+    gl.deleteVertexArray(this.vao);
+    gl.deleteProgram(this.program);
+    this.gl = null;
+  }
+}
+
+/**
+ * A generated layer as one three.js object: an AxialInstancedMesh whose instances are made on the GPU
+ * from `recipe` (checkRecipe) in the tiles within `recipe.reach` of a point.  Call
+ * `update(renderer, point)` before rendering (e.g. with OrbitControls' target): it makes the tiles
+ * when the set within reach changes and lets far ones go, so the instances held stay bounded.
+ * options: AxialInstancedMesh's, and `axis` (default: the mesh's longest extent, as axialdeform's),
+ * `uniforms` (generate.glsl's numbers as the Python library gave them; default: recipeUniforms).
+ */
+export class AxialGeneratedMesh extends AxialInstancedMesh {
+  constructor(geometry, material, recipe, options = {}) {
+    const r = checkRecipe(recipe);
+    const position = geometry && geometry.isBufferGeometry ? geometry.getAttribute('position') : null;
+    if (!position) throw new AxialError('AxialGeneratedMesh: expected a THREE.BufferGeometry with positions');
+    const positions = plainArray(position);
+    const [m] = tileSize(r);
+    const width = recipeWidth(r);
+    const spec = options.axis || autoAxis(positions);
+    super(geometry, material, { count: 0, numbersPerInstance: width, data: new Float32Array(0) },
+      { ...options, axis: spec, capacity: maxTiles(r.tile, r.reach) * m * m });
+    this.isAxialGeneratedMesh = true;
+    this.type = 'AxialGeneratedMesh';
+    this.recipe = r;
+    this.generatorUniforms = options.uniforms || recipeUniforms(r, positions, this.axis);
+    if (this.generatorUniforms.m !== m) throw new AxialError(`AxialGeneratedMesh: uniforms.m is ${this.generatorUniforms.m}, the recipe's ${m}`);
+    /** The tiles held ([[tx, tz], ...], nearest first), their instances in that order, m^2 each. */
+    this.tiles = [];
+    this._key = null;
+    this._generator = null;
+  }
+
+  /** Make the tiles within reach of `point` ({x, z}: a Vector3) if they changed; returns whether they did. */
+  update(renderer, point) {
+    const tiles = tilesAround(this.recipe.tile, point.x, point.z, this.recipe.reach);
+    const key = tiles.map((t) => t.join(',')).sort().join(';');
+    if (key === this._key && this._generator && this._generator.renderer === renderer) return false;
+    if (!this._generator || this._generator.renderer !== renderer) {
+      if (this._generator) this._generator.dispose();
+      this._generator = new TileGenerator(renderer, this.generatorUniforms);
+    }
+    const raw = this._generator.run(tiles);
+    const f = this.layout.numbersPerInstance, n = raw.length / GENERATED_FLOATS;
+    let rows = raw;
+    if (f !== GENERATED_FLOATS) { // the 16 numbers of each record
+      rows = new Float32Array(n * f);
+      for (let i = 0; i < n; i++) rows.set(raw.subarray(i * GENERATED_FLOATS, i * GENERATED_FLOATS + f), i * f);
+    }
+    this.tiles = tiles;
+    this._key = key;
+    this.setParams(rows);
+    return true;
+  }
+
+  dispose() {
+    if (this._generator) this._generator.dispose();
+    this._generator = null;
+    return super.dispose();
+  }
+}

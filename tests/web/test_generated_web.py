@@ -1,0 +1,237 @@
+"""Generated layers in the browser (docs/generate.md): the page of ``axialdeform web SCENE.toml`` and the
+npm module's AxialGeneratedMesh make the Python library's records from the recipe on the GPU
+(glsl/generate.glsl by WebGL 2 transform feedback), in the tiles around the camera; no per-instance
+file travels.  Debian's chromium, WebGL 2 on SwiftShader; nothing here skips."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from urllib.parse import quote
+
+import numpy as np
+import pytest
+from test_three import Server, example_picture, make_site
+from test_three import _mask as three_mask
+from test_three import iou as three_iou
+from test_web import SIZE, SKY, Visit, iou
+
+import axialdeform as ad
+from axialdeform.core.generate import Generate, generate_tiles, recipe_uniforms, tile_size, tiles_around
+
+ROOT = Path(__file__).resolve().parents[2]
+GRASS = ROOT / "examples" / "landscape" / "grass.obj"
+
+SCENE = """
+background = [0.80, 0.87, 0.95]
+[camera]
+elevation = {elevation}
+azimuth = 35
+[light]
+direction = [0.4, 0.9, 0.3]
+ambient = 0.4
+[[layer]]
+name = "stones"
+mesh = "stone"
+color = [0.58, 0.55, 0.5]
+[layer.generate]
+rate = {rate}
+tile = 8.0
+min_distance = 0.4
+seed = 11
+bend = 0.15
+scale = [0.5, 1.0]
+extent = {extent}
+reach = {reach}
+[[layer]]
+name = "grass"
+mesh = "grass.obj"
+color = [0.33, 0.5, 0.2]
+[layer.generate]
+rate = 2.0
+tile = 8.0
+min_distance = 0.2
+seed = 2
+bend = 0.25
+twist = 0.6
+extent = {extent}
+reach = {reach}
+"""
+
+
+def _scene(folder: Path, name: str, rate=0.3, extent="[-12, -12, 12, 12]", reach=20.0, elevation=18) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "grass.obj").write_bytes(GRASS.read_bytes())
+    path = folder / f"{name}.toml"
+    path.write_text(SCENE.format(rate=rate, extent=extent, reach=reach, elevation=elevation), encoding="utf-8")
+    return path
+
+
+def _web(scene: Path, out: Path):
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", str(scene), "-o", str(out), "--size",
+                        f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return r
+
+
+def _close(got, want) -> float:
+    """The largest difference of two record arrays, relative to max(1, |want|)."""
+    got, want = np.asarray(got, np.float64), np.asarray(want, np.float64)
+    assert got.shape == want.shape, (got.shape, want.shape)
+    return float((np.abs(got - want) / np.maximum(1.0, np.abs(want))).max()) if want.size else 0.0
+
+
+def test_a_generated_page_carries_the_recipe_and_no_instance_file(tmp_path):
+    """The page's files do not grow with the rate: only the recipe's numbers in scene.json change."""
+    sizes = {}
+    for rate in (0.3, 3.0):
+        scene = _scene(tmp_path / f"r{rate}", "s", rate=rate, extent="[-40, -40, 40, 40]")
+        _web(scene, tmp_path / f"page{rate}")
+        files = {p.relative_to(tmp_path / f"page{rate}").as_posix(): p.stat().st_size
+                 for p in (tmp_path / f"page{rate}").rglob("*") if p.is_file()}
+        assert not [f for f in files if f.endswith(".adp")], files
+        sizes[rate] = files
+        config = json.loads((tmp_path / f"page{rate}" / "scene.json").read_text())
+        loaded = ad.Scene.load(scene)
+        for entry, layer in zip(config["layers"], loaded.layers):
+            assert "params_file" not in entry
+            assert entry["generate"]["uniforms"] == json.loads(json.dumps(recipe_uniforms(layer.generate.generate,
+                                                                                          layer.mesh)))
+    assert sizes[0.3].keys() == sizes[3.0].keys()
+    for name, size in sizes[0.3].items():
+        assert abs(size - sizes[3.0][name]) <= (64 if name == "scene.json" else 0), name
+
+
+@pytest.fixture(scope="module")
+def generated_site(tmp_path_factory):
+    """Two scene files as pages: a walk through many tiles, and one tile (its extent) for the picture."""
+    base = tmp_path_factory.mktemp("generated") / "gen site"
+    walk = _scene(base, "walk")
+    one = _scene(base, "one", rate=0.5, extent="[0, 0, 8, 8]", reach=2.0, elevation=30)
+    _web(walk, base / "walk")
+    _web(one, base / "one")
+    _web(one, base / "one.html")
+    server = Server(base)
+    yield {"base": base, "url": server.url, "walk": walk, "one": one}
+    server.close()
+
+
+def _check_records(layers: list, scene: Path) -> int:
+    """Every generated layer's tiles are the ones within reach of the page's target, and its records the
+    Python library's for them (hash exact: positions and angles to float32 rounding).  Returns the count."""
+    loaded = {layer.name: layer for layer in ad.Scene.load(scene).layers}
+    total = 0
+    for g in layers:
+        layer = loaded[g["name"]]
+        recipe = layer.generate
+        x, _, z = g["target"]
+        want_tiles = tiles_around(recipe.generate, x, z, recipe.reach)
+        # the set (its order: nearest first when it was made, the target since then moved within it)
+        assert sorted(g["tiles"]) == sorted(want_tiles.tolist()), g["name"]
+        want = generate_tiles(recipe.generate, layer.mesh, g["tiles"])
+        got = np.asarray(g["data"], np.float32).reshape(-1, g["width"])
+        assert got.shape[0] == len(want_tiles) * tile_size(recipe.generate)[0] ** 2
+        assert _close(got, want) <= 1e-6, (g["name"], _close(got, want))
+        total += got.shape[0]
+    return total
+
+
+@pytest.mark.slow
+def test_the_page_makes_the_python_records_and_walks(browser, generated_site):
+    url = generated_site["url"] + quote("walk") + "/index.html"
+    v = Visit(browser, url)
+    try:
+        assert v.state["ready"] is True, v.state
+        layers = v.page.evaluate("window.axialdeformView.generated()")
+        assert [g["name"] for g in layers] == ["stones", "grass"]
+        held = _check_records(layers, generated_site["walk"])
+        assert held == v.state["instances"] > 1000
+        assert f"{held:,} instances" in v.page.locator(".axd-status").inner_text()
+        assert v.errors == []
+    finally:
+        v.close()
+    # walking: the camera and its target move 0.8, 0.4 a frame; the tiles follow, the count stays bounded
+    v = Visit(browser, url + "?walk=0.8,0.4")
+    try:
+        v.page.wait_for_function("window.axialdeformView.frames >= 40", timeout=240_000)
+        layers = v.page.evaluate("window.axialdeformView.generated()")
+        x, _, z = layers[0]["target"]
+        start = json.loads((generated_site["base"] / "walk" / "scene.json").read_text())["camera"]["target"]
+        assert x - start[0] >= 30 and z - start[2] >= 15, (x, z, start)
+        moved = _check_records(layers, generated_site["walk"])
+        assert abs(moved - held) <= 0.25 * held  # bounded: the tiles within reach, wherever the camera is
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["folder", "single file"])
+def test_the_generated_page_shows_what_render_shows(browser, generated_site, kind):
+    """One tile, and the scene's extent that tile: the page's picture is render's."""
+    url = (generated_site["url"] + "one/index.html" if kind == "folder"
+           else (generated_site["base"] / "one.html").as_uri())
+    scene = ad.Scene.load(generated_site["one"])
+    render = ad.render_image(scene, size=SIZE, look=scene.look.replace(ground=False, shadow=False))
+    v = Visit(browser, url)
+    try:
+        assert v.state["ready"] is True, v.state
+        assert v.state["instances"] == sum(len(layer.params) for layer in scene.layers), v.state
+        shot = v.silhouette()
+        assert iou(shot, render, SKY) >= 0.95, iou(shot, render, SKY)
+        assert np.abs(shot.astype(np.float64) - render).mean() < 3.0
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+RECIPE = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2], "reach": 5.0}
+
+
+@pytest.fixture(scope="module")
+def three_site(tmp_path_factory):
+    folder = make_site(tmp_path_factory.mktemp("gen-three") / "site")
+    s = Server(folder)
+    yield folder, s.url
+    s.close()
+
+
+@pytest.mark.slow
+def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(browser, three_site):
+    """examples/web/generated.html: AxialGeneratedMesh with three's own MeshStandardMaterial, its generator's
+    numbers computed by the module from the geometry (recipeUniforms), against the Python library."""
+    folder, url = three_site
+    page_url = url + "generated.html?recipe=" + quote(json.dumps(RECIPE))
+    page = browser.new_page(viewport={"width": 480, "height": 360})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        page.goto(page_url)
+        page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=120_000)
+        got = page.evaluate("""() => { const s = window.app.stones;
+            return { tiles: s.tiles, width: s.layout.numbersPerInstance, count: s.count,
+                     uniforms: s.generatorUniforms,
+                     data: Array.from(s.data.subarray(0, s.count * s.layout.numbersPerInstance)) }; }""")
+    finally:
+        page.close()
+    assert errors == []
+    mesh = ad.load_mesh(folder / "stone.obj")
+    recipe = Generate(**{k: v for k, v in RECIPE.items() if k != "reach"})
+    want_u = recipe_uniforms(recipe, mesh)
+    for k, v in want_u.items():
+        assert np.allclose(got["uniforms"][k], v, rtol=1e-6, atol=0), (k, got["uniforms"][k], v)
+    tiles = tiles_around(recipe, 0.0, 0.0, RECIPE["reach"])
+    assert got["tiles"] == tiles.tolist()
+    want = generate_tiles(recipe, mesh, tiles)
+    records = np.asarray(got["data"], np.float32).reshape(-1, got["width"])
+    assert _close(records, want) <= 1e-6, _close(records, want)
+    # and it draws them as render does (the example's camera; its ground and fog hidden)
+    shot, errors = example_picture(browser, page_url)
+    assert errors == []
+    look = ad.Look(ground=False, shadow=False)
+    camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
+    ref = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera)
+    assert three_mask(ref).sum() > 0.05 * ref.size / 3
+    assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
