@@ -74,7 +74,7 @@ class SceneWidget(anywidget.AnyWidget):
             web = build_scene_file(scene, size=size, quantize=quantize, look=look)
             first = web.config["layers"][0]
             super().__init__(config=web.config, mesh_glb=web.files[first["mesh"]["file"]],
-                             params_adp=web.files[first["params_file"]], files=dict(web.files), _sources=sources,
+                             params_adp=web.files.get(first.get("params_file"), b""), files=dict(web.files), _sources=sources,
                              status={}, **kwargs)
             return
         self._mesh, params = scene.layers[0].mesh, scene.layers[0].params

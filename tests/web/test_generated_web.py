@@ -16,7 +16,7 @@ import pytest
 from test_three import Server, example_picture, make_site
 from test_three import _mask as three_mask
 from test_three import iou as three_iou
-from test_web import SIZE, SKY, Visit, iou
+from test_web import SIZE, SKY, Visit, _widget_page, _widget_state, iou
 
 import axialdeform as ad
 from axialdeform.core.generate import Generate, generate_tiles, recipe_uniforms, tile_size, tiles_around
@@ -185,6 +185,27 @@ def test_the_generated_page_shows_what_render_shows(browser, generated_site, kin
         assert v.errors == []
     finally:
         v.close()
+
+
+@pytest.mark.slow
+def test_the_notebook_widget_generates_a_scene_files_layers(browser, generated_site, tmp_path):
+    """SceneWidget(SCENE.toml) of generated layers: no parameter file travels; the widget's front end
+    (the page's code) makes the tiles within reach of the camera's target."""
+    import base64
+
+    from axialdeform.widget import SceneWidget
+
+    w = SceneWidget(ad.Scene.load(generated_site["walk"]), size=SIZE)
+    assert w.params_adp == b"" and not [n for n in w.files if n.endswith(".adp")]
+    state = _widget_state(w)
+    state["files"] = {n: {"b64": base64.b64encode(b).decode()} for n, b in w.files.items()}
+    page, errors = _widget_page(browser, tmp_path, state, w._esm)
+    try:
+        status = page.evaluate("window.widgetStatus")
+        assert status == {"ready": True, "instances": w.config["instances"]} and status["instances"] > 1000, status
+        assert errors == []
+    finally:
+        page.close()
 
 
 RECIPE = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2], "reach": 5.0}
