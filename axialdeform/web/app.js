@@ -460,12 +460,13 @@ export function mount(root, lib, scene, options = {}) {
     /** Frames drawn so far. */
     get frames() { return state.frames; },
     /** Each generated layer's tiles and records now (its name, the tiles nearest the target first,
-     * numbers an instance, the records: m^2 a tile, in the tiles' order), for tools and tests. */
-    generated() {
+     * numbers an instance, the last tiles' timing, the records: m^2 a tile, in the tiles' order; not
+     * with {records: false}), for tools and tests. */
+    generated({ records = true } = {}) {
       return layers.filter((l) => l.mesh && l.mesh.isAxialGeneratedMesh).map((l) => ({
-        name: l.cfg.name, tiles: l.mesh.tiles, width: l.mesh.layout.numbersPerInstance,
+        name: l.cfg.name, tiles: l.mesh.tiles, width: l.mesh.layout.numbersPerInstance, timing: l.mesh.timing,
         target: controls ? controls.target.toArray() : null,
-        data: Array.from(l.mesh.data.subarray(0, l.mesh.count * l.mesh.layout.numbersPerInstance)) }));
+        data: records ? Array.from(l.mesh.data.subarray(0, l.mesh.count * l.mesh.layout.numbersPerInstance)) : null }));
     },
     /** Replace the first layer's parameters by another .adp (ArrayBuffer); a
      * bad file keeps nothing wrong on screen: the message says why and nothing is drawn. */

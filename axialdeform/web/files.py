@@ -239,13 +239,13 @@ def write_page(out: str | os.PathLike, scene: WebScene, *, inputs=(), overwrite:
 def scene_bytes(out: str | os.PathLike) -> dict:
     """Bytes a browser downloads for an exported folder: ``page`` (index.html,
     app.js, scene.json), ``mesh`` (every layer's GLB), ``params`` (every
-    ``.adp``) and ``three`` (the vendored three.js files the page imports)."""
+    ``.adp``; a generated layer has none) and ``three`` (the vendored three.js files the page imports)."""
     out = Path(out)
     size = lambda *names: sum((out / n).stat().st_size for n in names)  # noqa: E731
     config = json.loads((out / "scene.json").read_text(encoding="utf-8"))
     return {"page": size("index.html", "app.js", "scene.json", *(MODULE_DIR + n for n in MODULE_FILES)),
             "mesh": size(*(layer["mesh"]["file"] for layer in config["layers"])),
-            "params": size(*(layer["params_file"] for layer in config["layers"])),
+            "params": size(*(layer["params_file"] for layer in config["layers"] if "params_file" in layer)),
             "three": size(*("three/" + r for r in VENDOR_FILES.values()))}
 
 

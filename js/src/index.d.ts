@@ -206,6 +206,8 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   readonly generatorUniforms: GeneratorUniforms;
   /** The tiles held, nearest first; their instances in that order, m^2 each. */
   readonly tiles: [number, number][];
+  /** The last tiles' cost (null before the first): the GPU pass with its read-back, the mesh's own work. */
+  readonly timing: { instances: number; generateMs: number; applyMs: number } | null;
   /** Make the tiles within reach of `point` if they changed; returns whether they did. */
   update(renderer: THREE.WebGLRenderer, point: { x: number; z: number }): boolean;
 }
