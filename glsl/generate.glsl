@@ -7,7 +7,9 @@
 //   tile (tx, tz) covers [tx T, (tx+1) T) x [tz T, (tz+1) T); m x m cells of side c = T / m;
 //   instance i stands in cell (i mod m, i div m), jittered by j = 1 - min_distance / c;
 //   offsets d = bend L (2 u - 1), every control point minus D(t_a) (t_a: the anchor on the axis);
-//   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24,  key = H(H(H(uint tx) ^ uint tz) ^ seed).
+//   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24,  key = H(H(H(uint tx) ^ uint tz) ^ seed);
+//   the ground: a height map (triangles as the terrain mesh's) or y = 0; kept: inside the height map,
+//   u16 < the density map's nearest pixel, the height in the altitude band, tan^2 of the slope in its band.
 
 struct AxialRecipe {
     uint seed;
@@ -21,7 +23,48 @@ struct AxialRecipe {
     float lowest;    // the base mesh's lowest y: it stands on the ground
     vec4 anchor_w;   // B4_0..3(t_a): the anchor's place on the axis (D(t_a) = 0: it stays put)
     float anchor_w4; // B4_4(t_a)
+    float tint;      // 0: none; else tint_color (1 - tint u_{17+c})
+    vec3 tint_color;
+    // the ground's height map (its texture: world heights, texel (col, row)); has_heights false: y = 0
+    bool has_heights;
+    vec2 h_lo;       // the grid's first vertex (x0, z0)
+    vec2 h_inv;      // (cols - 1) / width, (rows - 1) / depth
+    ivec2 h_size;    // cols, rows
+    // the density map (its texture: grey levels in [0, 1]) over [d_lo, d_lo + size); repeated if d_wrap
+    bool has_density;
+    vec2 d_lo;
+    vec2 d_inv;      // cols / width, rows / depth
+    ivec2 d_size;
+    bool d_wrap;
+    vec2 altitude;   // kept where lo <= height <= hi
+    vec2 slope_tan2; // kept where lo <= tan^2 of the ground's slope <= hi
 };
+
+// The ground's height at xz on the height map's triangles (the terrain mesh's: (r,c),(r+1,c),(r,c+1)
+// and (r,c+1),(r+1,c),(r+1,c+1)), its gradient, and whether xz is over the map.
+float axial_gen_height(AxialRecipe r, sampler2D heights, vec2 xz, out vec2 grad, out bool inside) {
+    vec2 g = (xz - r.h_lo) * r.h_inv;
+    vec2 last = vec2(r.h_size - 1);
+    inside = all(greaterThanEqual(g, vec2(0.0))) && all(lessThanEqual(g, last));
+    g = clamp(g, vec2(0.0), last);
+    ivec2 c = min(ivec2(floor(g)), r.h_size - 2);
+    vec2 f = g - vec2(c);
+    float h00 = texelFetch(heights, c, 0).r, h01 = texelFetch(heights, c + ivec2(1, 0), 0).r;
+    float h10 = texelFetch(heights, c + ivec2(0, 1), 0).r, h11 = texelFetch(heights, c + ivec2(1, 1), 0).r;
+    if (f.x + f.y <= 1.0) {
+        grad = vec2(h01 - h00, h10 - h00) * r.h_inv;
+        return h00 + f.x * (h01 - h00) + f.y * (h10 - h00);
+    }
+    grad = vec2(h11 - h10, h11 - h01) * r.h_inv;
+    return h11 + (1.0 - f.x) * (h10 - h11) + (1.0 - f.y) * (h01 - h11);
+}
+
+// The density map's nearest pixel under xz (clamped at its edges, or repeated).
+float axial_gen_density(AxialRecipe r, sampler2D density, vec2 xz) {
+    ivec2 c = ivec2(floor((xz - r.d_lo) * r.d_inv));
+    c = r.d_wrap ? ((c % r.d_size) + r.d_size) % r.d_size : clamp(c, ivec2(0), r.d_size - 1);
+    return texelFetch(density, c, 0).r;
+}
 
 // The tile's key.
 uint axial_gen_key(uint seed, ivec2 tile) {
@@ -33,13 +76,14 @@ float axial_gen_u(uint key, uint i, uint k) {
     return float(axial_wind_hash(key ^ (i * 32u + k)) >> 8u) * (1.0 / 16777216.0);
 }
 
-// Instance i of tile `tile`: the 16 numbers (d12, d34, d5, position, angles) and the extension's 3.
-void axial_generate(AxialRecipe r, ivec2 tile, int i, out vec4 d12, out vec4 d34, out vec2 d5, out vec3 position,
-                    out vec3 angles, out vec3 extra) {
+// Instance i of tile `tile`: the 16 numbers (d12, d34, d5, position, angles), the extension's 3
+// (extra), the tint's 3 and whether it is kept (1.0) or dropped (0.0).
+void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 tile, int i, out vec4 d12, out vec4 d34,
+                    out vec2 d5, out vec3 position, out vec3 angles, out vec3 extra, out vec3 tint, out float kept) {
     uint key = axial_gen_key(r.seed, tile);
     uint ui = uint(i);
-    float u[16];
-    for (int k = 0; k < 16; ++k) u[k] = axial_gen_u(key, ui, uint(k));
+    float u[20];
+    for (int k = 0; k < 20; ++k) u[k] = axial_gen_u(key, ui, uint(k));
     float cx = float(tile.x * r.m + i % r.m), cz = float(tile.y * r.m + i / r.m);
     position.x = (cx + 0.5 + r.jitter * (u[0] - 0.5)) * r.cell;
     position.z = (cz + 0.5 + r.jitter * (u[1] - 0.5)) * r.cell;
@@ -53,5 +97,14 @@ void axial_generate(AxialRecipe r, ivec2 tile, int i, out vec4 d12, out vec4 d34
     d5 = d[4] - at;
     float s = r.scale.x + (r.scale.y - r.scale.x) * u[13];
     extra = vec3(s, r.twist * (2.0 * u[14] - 1.0), r.taper * u[15]);
-    position.y = -r.lowest * s;
+    tint = r.tint_color * (1.0 - r.tint * vec3(u[17], u[18], u[19]));
+    float h = 0.0;
+    vec2 grad = vec2(0.0);
+    bool inside = true;
+    if (r.has_heights) h = axial_gen_height(r, heights, position.xz, grad, inside);
+    float t2 = dot(grad, grad);
+    bool keep = inside && h >= r.altitude.x && h <= r.altitude.y && t2 >= r.slope_tan2.x && t2 <= r.slope_tan2.y;
+    if (r.has_density) keep = keep && u[16] < axial_gen_density(r, density, position.xz);
+    kept = keep ? 1.0 : 0.0;
+    position.y = h - r.lowest * s;
 }

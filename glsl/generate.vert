@@ -15,25 +15,45 @@ uniform float u_taper;
 uniform float u_lowest;
 uniform vec4 u_anchor_w;
 uniform float u_anchor_w4;
+uniform float u_tint;
+uniform vec3 u_tint_color;
+uniform bool u_has_heights;
+uniform vec2 u_h_lo;
+uniform vec2 u_h_inv;
+uniform ivec2 u_h_size;
+uniform bool u_has_density;
+uniform vec2 u_d_lo;
+uniform vec2 u_d_inv;
+uniform ivec2 u_d_size;
+uniform bool u_d_wrap;
+uniform vec2 u_altitude;
+uniform vec2 u_slope_tan2;
+uniform sampler2D u_heights;  // unit 0
+uniform sampler2D u_density;  // unit 1
 uniform ivec2 u_tile;
 
 out vec4 g_d12;
 out vec4 g_d34;
 out vec4 g_d5_px_py;
 out vec4 g_pz_angles;
-out vec3 g_extra;
+out vec4 g_extra;   // s, tw, tp, tr
+out vec3 g_tint;    // tg, tb, kept
 
 void main() {
     AxialRecipe r = AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_lowest,
-                                u_anchor_w, u_anchor_w4);
+                                u_anchor_w, u_anchor_w4, u_tint, u_tint_color, u_has_heights, u_h_lo, u_h_inv,
+                                u_h_size, u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
+                                u_slope_tan2);
     vec4 d12, d34;
     vec2 d5;
-    vec3 position, angles, extra;
-    axial_generate(r, u_tile, gl_VertexID, d12, d34, d5, position, angles, extra);
+    vec3 position, angles, extra, tint;
+    float kept;
+    axial_generate(r, u_heights, u_density, u_tile, gl_VertexID, d12, d34, d5, position, angles, extra, tint, kept);
     g_d12 = d12;
     g_d34 = d34;
     g_d5_px_py = vec4(d5, position.xy);
     g_pz_angles = vec4(position.z, angles);
-    g_extra = extra;
+    g_extra = vec4(extra, tint.r);
+    g_tint = vec3(tint.gb, kept);
     gl_Position = vec4(0.0);
 }

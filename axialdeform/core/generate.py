@@ -31,20 +31,22 @@ lowest point times ``s`` (the shape stands on the ground).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .deform import bernstein
 from .errors import ParamError
-from .record import EXTENDED_WIDTH, WIDTH
+from .record import EXTENDED_WIDTH, TINTED_WIDTH, WIDTH
 from .scatter import anchor_point
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
-           "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "recipe_uniforms", "GENERATED_NUMBERS"]
+           "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "recipe_uniforms", "GroundMaps",
+           "GENERATED_NUMBERS", "GENERATED_FLOATS"]
 
-GENERATED_NUMBERS = 16  # u_0 .. u_15 an instance
+GENERATED_NUMBERS = 20  # u_0 .. u_19 an instance
+GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
 
 
@@ -68,6 +70,14 @@ class Generate:
         A uniform scale drawn in [lo, hi] (> 0); None: 1.
     twist, taper : float
         Twist in [-twist, twist] radians, taper in [0, taper] (< 1).
+    tint : float or None
+        Each instance's colour ``tint_color (1 - tint u)``, ``u`` drawn per channel (22 numbers), 0..1.
+    tint_color : (3,) float
+        Linear RGB in 0..1: the brightest tint.
+    altitude : (2,) float or None
+        Kept only where the ground's height lies in [lo, hi] (a height map's world units).
+    slope : (2,) float or None
+        Kept only where the ground's slope lies in [lo, hi] degrees (0: level).
     """
 
     rate: float
@@ -78,6 +88,10 @@ class Generate:
     scale: tuple | None = None
     twist: float = 0.0
     taper: float = 0.0
+    tint: float | None = None
+    tint_color: tuple = (1.0, 1.0, 1.0)
+    altitude: tuple | None = None
+    slope: tuple | None = None
 
     def __post_init__(self) -> None:
         def bad(field, expected, value):
@@ -106,15 +120,85 @@ class Generate:
                                                                      for x in s) and s[0] <= s[1]):
                 bad("scale", "[lo, hi] with 0 < lo <= hi", s)
             object.__setattr__(self, "scale", (float(s[0]), float(s[1])))
+        if self.tint is not None and not (isinstance(self.tint, (int, float)) and not isinstance(self.tint, bool)
+                                          and 0 <= self.tint <= 1):
+            bad("tint", "an amount in [0, 1]", self.tint)
+        c = self.tint_color
+        if not (isinstance(c, (tuple, list)) and len(c) == 3 and all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and 0 <= x <= 1 for x in c)):
+            bad("tint_color", "three linear RGB numbers in [0, 1]", c)
+        object.__setattr__(self, "tint_color", tuple(float(x) for x in c))
+        for name, top in (("altitude", math.inf), ("slope", 90.0)):
+            v = getattr(self, name)
+            if v is None:
+                continue
+            if not (isinstance(v, (tuple, list)) and len(v) == 2 and all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)
+                    and v[0] <= v[1] and (name == "altitude" or 0 <= v[0] <= v[1] <= top)):
+                bad(name, "[lo, hi] with lo <= hi" + (" in degrees, 0..90" if name == "slope" else ""), v)
+            object.__setattr__(self, name, (float(v[0]), float(v[1])))
 
     @property
     def extended(self) -> bool:
-        """Whether the records have 19 numbers (scale, twist or taper given)."""
-        return self.scale is not None or self.twist > 0 or self.taper > 0
+        """Whether the records have 19 numbers or more (scale, twist, taper or tint given)."""
+        return self.scale is not None or self.twist > 0 or self.taper > 0 or self.tint is not None
 
     @property
     def width(self) -> int:
-        return EXTENDED_WIDTH if self.extended else WIDTH
+        return TINTED_WIDTH if self.tint is not None else EXTENDED_WIDTH if self.extended else WIDTH
+
+    @property
+    def needs_heights(self) -> bool:
+        """Whether the recipe reads the ground's height map (an altitude or slope band)."""
+        return self.altitude is not None or self.slope is not None
+
+
+@dataclass(frozen=True, eq=False)
+class GroundMaps:
+    """What a generated layer stands on and where it grows: the scene's height map and the layer's density map.
+
+    heights : (rows, cols) float32 or None
+        World heights of the terrain's grid (vertex (row, col) at ``h_lo + (col, row) / h_inv``); None: y = 0.
+    h_lo, h_inv : (2,) float32
+        The grid's first vertex (x0, z0) and ``((cols - 1) / width, (rows - 1) / depth)``.
+    density : (rows, cols) float32 or None
+        Grey levels in [0, 1]: an instance is kept where ``u16 <`` its nearest pixel.
+    d_lo, d_inv : (2,) float32
+        The map's corner (x0, z0) and ``(cols / width, rows / depth)``.
+    d_wrap : bool
+        Repeated beyond the map (a flat endless world), else its edge pixels go on.
+    """
+
+    heights: np.ndarray | None = None
+    h_lo: np.ndarray = field(default_factory=lambda: np.zeros(2, np.float32))
+    h_inv: np.ndarray = field(default_factory=lambda: np.ones(2, np.float32))
+    density: np.ndarray | None = None
+    d_lo: np.ndarray = field(default_factory=lambda: np.zeros(2, np.float32))
+    d_inv: np.ndarray = field(default_factory=lambda: np.ones(2, np.float32))
+    d_wrap: bool = False
+
+    @classmethod
+    def of(cls, terrain=None, density=None, extent=None) -> GroundMaps:
+        """From a height-map terrain (a BaseMesh or Surface with ``grid``) and a density map ((rows, cols) in [0, 1]):
+        the density covers the terrain's ground, or without one the ``extent`` (x0, z0, x1, z1), repeated."""
+        f32 = np.float32
+        kw = {}
+        if terrain is not None:
+            rows, cols = terrain.grid
+            pts = terrain.positions if hasattr(terrain, "positions") else terrain.vertices  # a BaseMesh or a Surface
+            v = np.asarray(pts, np.float64).reshape(rows, cols, 3)
+            x0, z0, x1, z1 = v[0, 0, 0], v[0, 0, 2], v[0, -1, 0], v[-1, 0, 2]
+            kw.update(heights=np.ascontiguousarray(v[:, :, 1], f32), h_lo=np.array([x0, z0], f32),
+                      h_inv=np.array([(cols - 1) / (x1 - x0), (rows - 1) / (z1 - z0)], f32))
+        if density is not None:
+            d = np.ascontiguousarray(density, f32)
+            if terrain is not None:
+                area, wrap = (x0, z0, x1, z1), False
+            else:
+                area, wrap = tuple(float(e) for e in extent), True
+            kw.update(density=d, d_lo=np.array(area[:2], f32), d_wrap=wrap,
+                      d_inv=np.array([d.shape[1] / (area[2] - area[0]), d.shape[0] / (area[3] - area[1])], f32))
+        return cls(**kw)
 
 
 def tile_size(recipe: Generate) -> tuple[int, float]:
@@ -140,9 +224,9 @@ def uniforms(key, ids) -> np.ndarray:
     return (wind_hash(x) >> np.uint32(8)).astype(np.float32) * np.float32(1.0 / 16777216.0)
 
 
-def generate_tile(recipe: Generate, mesh, tx: int, tz: int) -> tuple[np.ndarray, np.ndarray]:
-    """Every cell's instance of tile (tx, tz): ``(params, kept)`` -- ``(m^2, 16 or 19) float32`` records
-    in cell order and the ``(m^2,)`` bool of those kept (all of them: a density map is not built yet)."""
+def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Every cell's instance of tile (tx, tz): ``(params, kept)`` -- ``(m^2, 16, 19 or 22) float32`` records
+    in cell order and the ``(m^2,)`` bool of those kept (over the height map, in the bands, by the density)."""
     m, c = tile_size(recipe)
     n = m * m
     ids = np.arange(n, dtype=np.int64)
@@ -168,9 +252,47 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int) -> tuple[np.ndarray,
         out[:, 16] = s
         out[:, 17] = f32(recipe.twist) * (f32(2.0) * u[:, 14] - f32(1.0))
         out[:, 18] = f32(recipe.taper) * u[:, 15]
-    out[:, 11] = -f32(lowest_point(mesh)) * s
+    if recipe.tint is not None:
+        out[:, 19:22] = np.asarray(recipe.tint_color, f32) * (f32(1.0) - f32(recipe.tint) * u[:, 17:20])
+    g = maps if maps is not None else GroundMaps()
+    rec = recipe_uniforms(recipe, mesh, g)
+    h = np.zeros(n, f32)
+    t2 = np.zeros(n, f32)
     kept = np.ones(n, bool)
+    xz = out[:, [10, 12]]
+    if g.heights is not None:
+        h, t2, kept = _height(g, xz)
+    alt, band = np.asarray(rec["altitude"], f32), np.asarray(rec["slope_tan2"], f32)
+    kept &= (h >= alt[0]) & (h <= alt[1]) & (t2 >= band[0]) & (t2 <= band[1])
+    if g.density is not None:
+        c = np.floor((xz - g.d_lo) * g.d_inv).astype(np.int64)
+        size = np.array([g.density.shape[1], g.density.shape[0]])
+        c = np.mod(c, size) if g.d_wrap else np.clip(c, 0, size - 1)
+        kept &= u[:, 16] < g.density[c[:, 1], c[:, 0]]
+    out[:, 11] = h - f32(lowest_point(mesh)) * s
     return out, kept
+
+
+def _height(g: GroundMaps, xz: np.ndarray):
+    """The ground's height (float32) on the height map's triangles, tan^2 of its slope, and whether xz is over it
+    (axial_gen_height of glsl/generate.glsl, operation for operation)."""
+    f32 = np.float32
+    H = g.heights
+    last = np.array([H.shape[1] - 1, H.shape[0] - 1], f32)
+    gg = (xz - g.h_lo) * g.h_inv
+    inside = ((gg >= 0) & (gg <= last)).all(axis=1)
+    gg = np.clip(gg, f32(0), last)
+    c = np.minimum(np.floor(gg).astype(np.int64), (last - 1).astype(np.int64))
+    f = gg - c.astype(f32)
+    h00, h01 = H[c[:, 1], c[:, 0]], H[c[:, 1], c[:, 0] + 1]
+    h10, h11 = H[c[:, 1] + 1, c[:, 0]], H[c[:, 1] + 1, c[:, 0] + 1]
+    lower = f[:, 0] + f[:, 1] <= f32(1)
+    one = f32(1)
+    h = np.where(lower, h00 + f[:, 0] * (h01 - h00) + f[:, 1] * (h10 - h00),
+                 h11 + (one - f[:, 0]) * (h10 - h11) + (one - f[:, 1]) * (h01 - h11))
+    gx = np.where(lower, h01 - h00, h11 - h10) * g.h_inv[0]
+    gz = np.where(lower, h10 - h00, h11 - h01) * g.h_inv[1]
+    return h.astype(f32), (gx * gx + gz * gz).astype(f32), inside
 
 
 def anchor_weights(mesh) -> np.ndarray:
@@ -182,18 +304,30 @@ def anchor_weights(mesh) -> np.ndarray:
     return bernstein(np.array(t)).astype(np.float32)
 
 
-def recipe_uniforms(recipe: Generate, mesh) -> dict:
+def recipe_uniforms(recipe: Generate, mesh, maps: GroundMaps | None = None) -> dict:
     """The numbers ``glsl/generate.glsl``'s ``AxialRecipe`` takes for ``recipe`` and its base mesh (float64;
     the GPU rounds them to float32 as the numpy reference does): ``seed``, ``m``, ``cell``, ``jitter``,
     ``bend`` (times L), ``scale`` (lo, hi), ``twist``, ``taper``, ``lowest``, ``anchor_w`` (4) and
-    ``anchor_w4`` -- what the desktop generator and the page's are given (JSON-able)."""
+    ``anchor_w4``, the tint, the ground maps' placement (``has_heights``, ``h_lo``, ``h_inv``, ``h_size``,
+    ``has_density``, ``d_lo``, ``d_inv``, ``d_size``, ``d_wrap``) and the bands (``altitude``,
+    ``slope_tan2``: tan^2 of the slope's bounds) -- what the desktop generator and the page's are given
+    (JSON-able; the maps' pixels travel beside them)."""
     m, cell = tile_size(recipe)
     lo, hi = recipe.scale if recipe.scale is not None else (1.0, 1.0)
     w = anchor_weights(mesh)
+    g = maps if maps is not None else GroundMaps()
+    fl = lambda a: [float(x) for x in a]  # noqa: E731
+    alt = recipe.altitude if recipe.altitude is not None else (-3.0e38, 3.0e38)
+    slope = [math.tan(math.radians(a)) ** 2 for a in recipe.slope] if recipe.slope is not None else [0.0, 3.0e38]
     return {"seed": int(recipe.seed), "m": int(m), "cell": float(cell), "jitter": 1.0 - recipe.min_distance / cell,
             "bend": float(recipe.bend * mesh.axis.length), "scale": [float(lo), float(hi)], "twist": float(recipe.twist),
             "taper": float(recipe.taper), "lowest": lowest_point(mesh), "anchor_w": [float(x) for x in w[:4]],
-            "anchor_w4": float(w[4])}
+            "anchor_w4": float(w[4]), "tint": float(recipe.tint or 0.0), "tint_color": fl(recipe.tint_color),
+            "has_heights": g.heights is not None, "h_lo": fl(g.h_lo), "h_inv": fl(g.h_inv),
+            "h_size": [0, 0] if g.heights is None else [int(g.heights.shape[1]), int(g.heights.shape[0])],
+            "has_density": g.density is not None, "d_lo": fl(g.d_lo), "d_inv": fl(g.d_inv),
+            "d_size": [0, 0] if g.density is None else [int(g.density.shape[1]), int(g.density.shape[0])],
+            "d_wrap": bool(g.d_wrap), "altitude": fl(alt), "slope_tan2": [min(x, 3.0e38) for x in slope]}
 
 
 def lowest_point(mesh) -> float:
@@ -201,11 +335,11 @@ def lowest_point(mesh) -> float:
     return float(np.asarray(mesh.positions)[:, 1].min())
 
 
-def generate_tiles(recipe: Generate, mesh, tiles) -> np.ndarray:
-    """The kept instances of every tile in ``tiles`` ((k, 2) ints), tile after tile: (n, 16 or 19) float32."""
+def generate_tiles(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) -> np.ndarray:
+    """The kept instances of every tile in ``tiles`` ((k, 2) ints), tile after tile: (n, 16, 19 or 22) float32."""
     parts = []
     for tx, tz in np.asarray(tiles, dtype=np.int64).reshape(-1, 2):
-        p, kept = generate_tile(recipe, mesh, int(tx), int(tz))
+        p, kept = generate_tile(recipe, mesh, int(tx), int(tz), maps)
         parts.append(p[kept])
     return np.concatenate(parts) if parts else np.zeros((0, recipe.width), np.float32)
 
@@ -235,11 +369,11 @@ def tiles_in(recipe: Generate, extent) -> np.ndarray:
     return np.stack([tx.ravel(), tz.ravel()], 1)
 
 
-def generate_extent(recipe: Generate, mesh, extent) -> np.ndarray:
+def generate_extent(recipe: Generate, mesh, extent, maps: GroundMaps | None = None) -> np.ndarray:
     """The instances standing in the ground ``extent`` (x0, z0, x1, z1; x0 <= px < x1, z0 <= pz < z1):
     the tiles that meet it, materialized (what ``render``, ``bake``, ``export`` and ``fit`` draw and write)."""
     x0, z0, x1, z1 = (float(v) for v in extent)
-    p = generate_tiles(recipe, mesh, tiles_in(recipe, extent))
+    p = generate_tiles(recipe, mesh, tiles_in(recipe, extent), maps)
     inside = (p[:, 10] >= x0) & (p[:, 10] < x1) & (p[:, 12] >= z0) & (p[:, 12] < z1)
     return p[inside]
 

@@ -9,29 +9,40 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from ..core.generate import Generate, recipe_uniforms, tile_size
+from ..core.generate import GENERATED_FLOATS, Generate, GroundMaps, recipe_uniforms, tile_size
 from .context import bind_framebuffer, release_framebuffer
 from .shaders import build_program
 
 __all__ = ["TileGenerator", "generate_tile_gpu"]
 
-_VARYINGS = ("g_d12", "g_d34", "g_d5_px_py", "g_pz_angles", "g_extra")
-_FLOATS = 19  # 4 + 4 + 4 + 4 + 3 an instance
+_VARYINGS = ("g_d12", "g_d34", "g_d5_px_py", "g_pz_angles", "g_extra", "g_tint")
+_FLOATS = GENERATED_FLOATS  # 4 + 4 + 4 + 4 + 4 + 3 an instance: the 22-number record, then kept
 
 
 class TileGenerator:
-    """The generator program for one recipe and base mesh in ``ctx``; ``run(tile, buffer)`` writes tile
-    ``(tx, tz)``'s ``m^2`` records (19 float32 each: the 16 numbers, then s, tw, tp) into ``buffer``."""
+    """The generator program for one recipe and base mesh (and the ground's maps) in ``ctx``;
+    ``run(tile, buffer)`` writes tile ``(tx, tz)``'s ``m^2`` records into ``buffer``: 23 float32 each,
+    the 22-number record (the 16, s, tw, tp, the tint) then 1 (kept) or 0 (dropped)."""
 
-    def __init__(self, ctx, recipe: Generate, mesh):
+    def __init__(self, ctx, recipe: Generate, mesh, maps: GroundMaps | None = None):
         self.ctx = ctx
         self.recipe = recipe
         self.m = tile_size(recipe)[0]
         self.count = self.m * self.m
         self.program = build_program(ctx, "generate.vert", varyings=_VARYINGS)
-        for name, value in recipe_uniforms(recipe, mesh).items():  # AxialRecipe's fields, as the page gets them
+        maps = maps if maps is not None else GroundMaps()
+        for name, value in recipe_uniforms(recipe, mesh, maps).items():  # AxialRecipe's fields, as the page gets them
             if "u_" + name in self.program:
                 self.program["u_" + name].value = tuple(value) if isinstance(value, list) else value
+        # the height and density maps (1 x 1 stand-ins where there are none): float32 texels, texelFetch
+        self._textures = []
+        for unit, (name, grid) in enumerate((("u_heights", maps.heights), ("u_density", maps.density))):
+            grid = np.zeros((1, 1), np.float32) if grid is None else np.ascontiguousarray(grid, np.float32)
+            tex = ctx.texture((grid.shape[1], grid.shape[0]), 1, grid.tobytes(), dtype="f4")
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self._textures.append(tex)
+            if name in self.program:
+                self.program[name].value = unit
         self.vao = ctx.vertex_array(self.program, [])
         # a draw needs a complete framebuffer even with rasterization discarded (a surfaceless EGL
         # context has none of its own): a 1 x 1 one, bound for the pass
@@ -47,6 +58,8 @@ class TileGenerator:
         """Tile ``tile``'s records into ``buffer`` from byte ``offset`` on."""
         if "u_tile" in self.program:
             self.program["u_tile"].value = (int(tile[0]), int(tile[1]))
+        for unit, tex in enumerate(self._textures):
+            tex.use(location=unit)
         previous = self.ctx.fbo
         self._fbo.use()
         try:
@@ -62,11 +75,15 @@ class TileGenerator:
         self.program.release()
         release_framebuffer(self.ctx, self._fbo)
         self._color.release()
+        for tex in self._textures:
+            tex.release()
 
 
-def generate_tile_gpu(ctx, recipe: Generate, mesh, tx: int, tz: int) -> np.ndarray:
-    """Tile (tx, tz)'s records as the GPU makes them: ``(m^2, 16 or 19) float32``, cell order."""
-    gen = TileGenerator(ctx, recipe, mesh)
+def generate_tile_gpu(ctx, recipe: Generate, mesh, tx: int, tz: int,
+                      maps: GroundMaps | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Tile (tx, tz) as the GPU makes it: ``(records, kept)``, ``(m^2, 16, 19 or 22) float32`` in cell
+    order and the ``(m^2,)`` bool of those kept (as :func:`~axialdeform.core.generate.generate_tile`)."""
+    gen = TileGenerator(ctx, recipe, mesh, maps)
     buf = gen.buffer()
     try:
         gen.run((tx, tz), buf)
@@ -74,4 +91,4 @@ def generate_tile_gpu(ctx, recipe: Generate, mesh, tx: int, tz: int) -> np.ndarr
     finally:
         buf.release()
         gen.release()
-    return raw[:, :recipe.width].copy()
+    return raw[:, :recipe.width].copy(), raw[:, -1] > 0.5

@@ -19,7 +19,8 @@ def test_the_gpu_makes_the_numpy_records(ctx, recipe):
     stone = ad.load_mesh("stone")
     for tile in [(0, 0), (-3, 5), (1000, -7), (-40000, 123456)]:
         cpu, _ = generate_tile(recipe, stone, *tile)
-        gpu = generate_tile_gpu(ctx, recipe, stone, *tile)
+        gpu, kept = generate_tile_gpu(ctx, recipe, stone, *tile)
+        assert kept.all()
         assert gpu.shape == cpu.shape
         rel = np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))
         assert rel.max() <= 1e-6, (tile, rel.max())
@@ -35,7 +36,7 @@ def test_one_program_makes_any_tile_into_a_gpu_buffer(ctx):
         out = []
         for tile in [(2, 2), (0, 0), (2, 2)]:
             gen.run(tile, buf)
-            out.append(np.frombuffer(buf.read(), np.float32).reshape(gen.count, 19)[:, :16].copy())
+            out.append(np.frombuffer(buf.read(), np.float32).reshape(gen.count, 23)[:, :16].copy())
     finally:
         buf.release()
         gen.release()
@@ -44,12 +45,72 @@ def test_one_program_makes_any_tile_into_a_gpu_buffer(ctx):
     assert np.array_equal(out[1], generate_tile(RECIPES[0], stone, 0, 0)[0])
     # tiles side by side in one buffer (the layout of a layer's instance buffer): each at its offset
     gen = TileGenerator(ctx, RECIPES[0], stone)
-    both = ctx.buffer(reserve=2 * gen.count * 19 * 4)
+    both = ctx.buffer(reserve=2 * gen.count * 23 * 4)
     try:
-        gen.run((5, -5), both, offset=gen.count * 19 * 4)
+        gen.run((5, -5), both, offset=gen.count * 23 * 4)
         gen.run((0, 0), both)
-        got = np.frombuffer(both.read(), np.float32).reshape(2 * gen.count, 19)[:, :16]
+        got = np.frombuffer(both.read(), np.float32).reshape(2 * gen.count, 23)[:, :16]
     finally:
         both.release()
         gen.release()
     assert np.array_equal(got, generate_tiles(RECIPES[0], stone, [(0, 0), (5, -5)]))
+
+
+def _hills(rows=33, cols=41):
+    """A height map's terrain (60 x 44 units, heights 0..6) and a density map with a hole."""
+    from axialdeform.core.surface import surface_from_heights
+
+    r, c = np.mgrid[0:rows, 0:cols] / np.array([rows - 1, cols - 1])[:, None, None]
+    heights = 0.5 + 0.35 * np.sin(5 * c) * np.cos(4 * r) + 0.1 * r
+    density = np.ones((16, 16))
+    density[4:10, 6:12] = 0.0
+    density[:, :3] = 0.3
+    return surface_from_heights(heights, height_scale=6.0, extent=(60.0, 44.0)), density
+
+
+@pytest.mark.parametrize("flat", [False, True], ids=["height map", "flat, density repeated"])
+def test_the_gpu_keeps_and_places_as_numpy_on_the_ground_maps(ctx, flat):
+    """Heights on the terrain's triangles, the altitude and slope bands, the density map and the tint."""
+    from axialdeform.core.generate import GroundMaps
+
+    stone = ad.load_mesh("stone")
+    terrain, density = _hills()
+    if flat:
+        recipe = Generate(rate=3.0, tile=8.0, min_distance=0.2, seed=9, bend=0.1, tint=0.4, tint_color=(0.9, 0.8, 0.7))
+        maps = GroundMaps.of(None, density, extent=(-10, -10, 10, 10))
+    else:
+        recipe = Generate(rate=3.0, tile=8.0, min_distance=0.2, seed=9, bend=0.1, altitude=(1.0, 5.0), slope=(0.0, 35.0),
+                          scale=(0.5, 1.0))
+        maps = GroundMaps.of(terrain, density)
+    kept_all = []
+    for tile in [(0, 0), (-4, -3), (3, 2), (-1, 1), (20, 20)]:
+        cpu, kept = generate_tile(recipe, stone, *tile, maps)
+        gpu, gkept = generate_tile_gpu(ctx, recipe, stone, *tile, maps)
+        assert np.array_equal(gkept, kept), tile
+        rel = np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))
+        assert rel.max() <= 1e-6, (tile, rel.max())
+        kept_all.append(kept)
+    share = np.concatenate(kept_all[:4]).mean()
+    assert 0.2 < share < 0.95, share  # the bands and the density drop some, not all
+    if not flat:
+        assert not kept_all[4].any()  # beyond the height map nothing stands
+        p, k = generate_tile(recipe, stone, 0, 0, maps)
+        v = np.asarray(terrain.vertices)
+        # standing on the terrain: each instance's lowest point at the height of the terrain mesh's own
+        # triangle under it (trimesh's ray test, straight down)
+        import trimesh
+
+        ground_mesh = trimesh.Trimesh(v, np.asarray(terrain.faces), process=False)
+        xz = p[k][:, [10, 12]].astype(np.float64)
+        origins = np.column_stack([xz[:, 0], np.full(len(xz), 100.0), xz[:, 1]])
+        hit, ray, _ = ground_mesh.ray.intersects_location(origins, np.tile([0.0, -1.0, 0.0], (len(xz), 1)),
+                                                          multiple_hits=False)
+        ground = np.full(len(xz), np.nan)
+        ground[ray] = hit[:, 1]
+        s = p[k][:, 16]
+        assert np.allclose(p[k][:, 11] + stone.positions[:, 1].min() * s, ground, atol=1e-4)
+        assert ((ground >= 1.0 - 1e-3) & (ground <= 5.0 + 1e-3)).all()
+    else:
+        t = generate_tile(recipe, stone, 0, 0, maps)[0]
+        assert t.shape[1] == 22 and (t[:, 19:22] <= np.array([0.9, 0.8, 0.7]) + 1e-7).all()
+        assert (t[:, 19:22] >= 0.6 * np.array([0.9, 0.8, 0.7]) - 1e-7).all()
