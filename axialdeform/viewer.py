@@ -293,7 +293,7 @@ class _ViewerMixin:
             if self._tiles.get(key) == wanted:
                 continue
             self._tiles[key] = wanted
-            params = generate_tiles(recipe.generate, mesh, tiles)
+            params = generate_tiles(recipe.generate, mesh, tiles, recipe.maps)
             if k is None:
                 self.base = params
                 self._shown = params

@@ -62,7 +62,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import ClassVar
 
@@ -70,7 +70,7 @@ import numpy as np
 
 from .camera import CameraSpec
 from .errors import ArgumentError, SceneError
-from .generate import generate_extent
+from .generate import GroundMaps, generate_extent
 from .io.mesh import load_mesh, with_axes
 from .io.params import read_params
 from .io.scene import LayerRecipe, SceneRecipe, parse_scene
@@ -78,7 +78,7 @@ from .look import DEFAULT_LOOK, Look
 from .mesh import BaseMesh, area_weighted_normals
 from .params import as_params
 from .scatter import scatter
-from .surface import load_surface
+from .surface import load_density, load_surface
 
 __all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
 
@@ -213,7 +213,8 @@ class Scene:
     def ground_height(self) -> float | None:
         """Where the ground is along up when the scene says so: 0 when every layer is generated (their
         instances stand on it, docs/generate.md); None: the ground plane is fitted under the instances."""
-        return 0.0 if self.layers and all(getattr(x, "generate", None) is not None for x in self.layers) else None
+        return 0.0 if self.terrain is None and self.layers and all(getattr(x, "generate", None) is not None
+                                                                   for x in self.layers) else None
 
     @classmethod
     def load(cls, path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:
@@ -275,8 +276,19 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
         with src.wrap("params", "layer", nth):
             params = read_params(recipe.params, mesh)
     elif recipe.generate is not None:
+        gen = recipe.generate
+        if scene.terrain is not None and scene.terrain.grid is None:
+            raise src.error("a generated layer stands on a height-map terrain or on the flat ground y = 0; this "
+                            "scene's terrain is a mesh (expected [terrain] heightmap = ..., or no terrain)",
+                            "generate", "layer", nth)
+        if gen.generate.needs_heights and scene.terrain is None:
+            raise src.error("altitude and slope bands need the scene's height-map terrain ([terrain] heightmap)",
+                            "altitude" if gen.generate.altitude is not None else "slope", "layer", nth)
         with src.wrap("generate", "layer", nth):
-            params = generate_extent(recipe.generate.generate, mesh, recipe.generate.extent)
+            density = load_density(gen.density) if gen.density is not None else None
+            gen = replace(gen, maps=GroundMaps.of(scene.terrain, density, gen.extent))
+            params = generate_extent(gen.generate, mesh, gen.extent, gen.maps)
+        recipe = replace(recipe, generate=gen)
     else:
         params, lift = _scatter(recipe, mesh, scene, surface, scale_counts)
     return scene.layer_type(name=recipe.name, mesh=mesh, params=params, color=recipe.color, wind=recipe.wind,

@@ -27,6 +27,8 @@ import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import numpy as np
+
 from ..core.errors import AxialDeformError
 from ..core.generate import recipe_uniforms, tile_size, tiles_around
 from ..core.io.gltf import encode_base_mesh
@@ -143,14 +145,22 @@ def _parts(mesh, color) -> list:
     return out
 
 
-def _generated(recipe, mesh) -> dict:
-    """A generated layer's recipe as the page takes it: the recipe (tiles, reach) and generate.glsl's
-    numbers as the desktop generator gets them (:func:`~axialdeform.core.generate.recipe_uniforms`)."""
+def _generated(recipe, mesh, files: dict, name: str) -> dict:
+    """A generated layer's recipe as the page takes it: the recipe (tiles, reach), generate.glsl's numbers
+    as the desktop generator gets them (:func:`~axialdeform.core.generate.recipe_uniforms`) and the ground
+    maps' pixels (float32, little-endian, row after row: ``files``), the same whatever the count."""
     g = recipe.generate
+    maps = recipe.maps
+    grids = {}
+    for key, grid in (("heights", getattr(maps, "heights", None)), ("density", getattr(maps, "density", None))):
+        if grid is not None:
+            file = f"layer-{name}-{key}.f32"
+            files[file] = np.ascontiguousarray(grid, "<f4").tobytes()
+            grids[key] = {"file": file, "cols": int(grid.shape[1]), "rows": int(grid.shape[0])}
     return {"recipe": {"rate": g.rate, "tile": g.tile, "min_distance": g.min_distance, "seed": g.seed, "bend": g.bend,
                        "scale": None if g.scale is None else list(g.scale), "twist": g.twist, "taper": g.taper,
-                       "reach": float(recipe.reach)},
-            "uniforms": recipe_uniforms(g, mesh), "width": int(g.width)}
+                       "tint": g.tint, "tint_color": list(g.tint_color), "reach": float(recipe.reach)},
+            "uniforms": recipe_uniforms(g, mesh, maps), "maps": grids, "width": int(g.width)}
 
 
 def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: str | None, quantize: bool,
@@ -183,7 +193,7 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
                  **({"axes": mesh.tree.to_json(), "frame_digest": mesh.tree.digest.hex()}
                     if mesh.tree is not None else {}),
                  "vertices": int(mesh.vertex_count)},
-        **({"params_file": params_file} if generate is None else {"generate": _generated(generate, mesh)}),
+        **({"params_file": params_file} if generate is None else {"generate": _generated(generate, mesh, files, name)}),
         "shader": shader_key(quantize, width, material, axis.framed),
         "material": material,
         "color": [float(x) for x in color],

@@ -217,7 +217,8 @@ export function mount(root, lib, scene, options = {}) {
     const materials = makeMaterials(layer, key);
     const gen = layer.cfg.generate;
     const mesh = gen
-      ? new AxialGeneratedMesh(layer.geometry, materials, gen.recipe, { axis: layer.axisSpec, ownShader: true, uniforms: gen.uniforms })
+      ? new AxialGeneratedMesh(layer.geometry, materials, gen.recipe, { axis: layer.axisSpec, ownShader: true,
+        uniforms: gen.uniforms, maps: layer.maps })
       : new AxialInstancedMesh(layer.geometry, materials, p, { axis: layer.axisSpec, ownShader: true });
     // the module's wind (its bounds grow by the wind's reach, so three culls right)
     if (wind && layer.cfg.wind) {
@@ -276,6 +277,15 @@ export function mount(root, lib, scene, options = {}) {
     const adp = lc.generate ? null : files[lc.params_file];
     if (!adp && !lc.generate) throw new SceneError(`${lc.params_file}: missing from the page`);
     const p = lc.generate ? { fields: lc.generate.width, axes: 1, count: 0 } : await prepare(layer, adp, lc.params_file);
+    if (lc.generate) { // its ground maps: float32 pixels, row after row
+      layer.maps = {};
+      for (const [key, m] of Object.entries(lc.generate.maps || {})) {
+        if (!files[m.file] || files[m.file].byteLength !== 4 * m.cols * m.rows) {
+          throw new SceneError(`${m.file}: missing from the page or not ${m.cols} x ${m.rows} float32 pixels`);
+        }
+        layer.maps[key] = { data: new Float32Array(files[m.file].slice(0)), cols: m.cols, rows: m.rows };
+      }
+    }
     const n = position.count;
     const geometry = new THREE.BufferGeometry(); // the base mesh: AxialInstancedMesh adds the instances
     geometry.setIndex(new THREE.BufferAttribute(index, 1));

@@ -71,7 +71,8 @@ async function fetchBytes(name) {
 async function load() {
   try {
     const config = await (await fetch('scene.json')).json();
-    const names = config.layers.flatMap((l) => (l.generate ? [l.mesh.file] : [l.mesh.file, l.params_file]));
+    const names = config.layers.flatMap((l) => (l.generate
+      ? [l.mesh.file, ...Object.values(l.generate.maps || {}).map((m) => m.file)] : [l.mesh.file, l.params_file]));
     const files = {};
     await Promise.all(names.map(async (n) => { files[n] = await fetchBytes(n); }));
     return { config, files };

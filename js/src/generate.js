@@ -9,9 +9,11 @@ import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT } from './glsl.js';
 import { AxialInstancedMesh } from './mesh.js';
 import { refuseWebGPU, plainArray } from './feedback.js';
 
-/** Numbers a record the pass writes: the 16, then s, tw, tp (generate.vert's outputs, in order). */
-export const GENERATED_FLOATS = 19;
-const VARYINGS = ['g_d12', 'g_d34', 'g_d5_px_py', 'g_pz_angles', 'g_extra'];
+/** Numbers an instance the pass writes: the 22-number record (the 16, s, tw, tp, the tint), then 1 (kept)
+ * or 0 (dropped by the ground maps and bands): generate.vert's outputs, in order. */
+export const GENERATED_FLOATS = 23;
+const VARYINGS = ['g_d12', 'g_d34', 'g_d5_px_py', 'g_pz_angles', 'g_extra', 'g_tint'];
+const NO_BAND = 3.0e38;
 const BINOMIAL = [1, 4, 6, 4, 1];
 
 function bad(field, expected, value) {
@@ -40,10 +42,12 @@ export function tileSize(recipe) {
  */
 export function checkRecipe(recipe) {
   if (!recipe || typeof recipe !== 'object') throw new AxialError('generate: expected a recipe object {rate, tile, ...}');
-  const r = { tile: 16, min_distance: 0, seed: 0, bend: 0.1, scale: null, twist: 0, taper: 0, ...recipe };
+  const r = { tile: 16, min_distance: 0, seed: 0, bend: 0.1, scale: null, twist: 0, taper: 0, tint: null,
+    tint_color: [1, 1, 1], ...recipe };
   for (const k of Object.keys(r)) {
-    if (!['rate', 'tile', 'min_distance', 'seed', 'bend', 'scale', 'twist', 'taper', 'reach', 'extent'].includes(k)) {
-      throw new AxialError(`generate: ${k}: not a key of a recipe (rate, tile, min_distance, seed, bend, scale, twist, taper, reach)`);
+    if (!['rate', 'tile', 'min_distance', 'seed', 'bend', 'scale', 'twist', 'taper', 'tint', 'tint_color', 'reach',
+      'extent'].includes(k)) {
+      throw new AxialError(`generate: ${k}: not a key of a recipe (rate, tile, min_distance, seed, bend, scale, twist, taper, tint, tint_color, reach)`);
     }
   }
   for (const k of ['rate', 'tile']) if (!(num(r[k]) && r[k] > 0)) bad(k, 'a finite number > 0', r[k]);
@@ -54,13 +58,18 @@ export function checkRecipe(recipe) {
   if (r.min_distance >= cell) bad('min_distance', `less than the cell side 1/sqrt(rate) = ${cell.toPrecision(6)}`, r.min_distance);
   if (r.scale !== null && !(Array.isArray(r.scale) && r.scale.length === 2 && r.scale.every((x) => num(x) && x > 0) &&
     r.scale[0] <= r.scale[1])) bad('scale', '[lo, hi] with 0 < lo <= hi', r.scale);
+  if (r.tint !== null && !(num(r.tint) && r.tint >= 0 && r.tint <= 1)) bad('tint', 'an amount in [0, 1]', r.tint);
+  if (!(Array.isArray(r.tint_color) && r.tint_color.length === 3 && r.tint_color.every((x) => num(x) && x >= 0 && x <= 1))) {
+    bad('tint_color', 'three linear RGB numbers in [0, 1]', r.tint_color);
+  }
   if (r.reach === undefined) r.reach = 3 * r.tile;
   if (!(num(r.reach) && r.reach > 0)) bad('reach', 'a finite number > 0', r.reach);
   return r;
 }
 
-/** Whether the records carry 19 numbers (scale, twist or taper given) or 16. */
+/** Numbers a record: 22 with a tint, 19 with a scale, twist or taper, else 16. */
 export function recipeWidth(recipe) {
+  if (recipe.tint !== null) return 22;
   return recipe.scale !== null || recipe.twist > 0 || recipe.taper > 0 ? 19 : 16;
 }
 
@@ -98,7 +107,12 @@ export function recipeUniforms(recipe, positions, axis) {
   const w = BINOMIAL.map((b, i) => Math.fround(b * t ** i * (1 - t) ** (4 - i)));
   const [s0, s1] = recipe.scale || [1, 1];
   return { seed: recipe.seed, m, cell, jitter: 1 - recipe.min_distance / cell, bend: recipe.bend * axis.length,
-    scale: [s0, s1], twist: recipe.twist, taper: recipe.taper, lowest: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4] };
+    scale: [s0, s1], twist: recipe.twist, taper: recipe.taper, lowest: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4],
+    tint: recipe.tint || 0, tint_color: recipe.tint_color.slice(),
+    // no ground maps: the flat ground y = 0, no density map, no bands (the Python library's maps come
+    // with its uniforms: AxialGeneratedMesh's options.uniforms and options.maps)
+    has_heights: false, h_lo: [0, 0], h_inv: [1, 1], h_size: [0, 0], has_density: false, d_lo: [0, 0], d_inv: [1, 1],
+    d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND] };
 }
 
 /** [[tx, tz], ...]: the tiles any point of which lies within `reach` of (x, z), nearest first
@@ -124,10 +138,12 @@ export function maxTiles(tile, reach) {
 
 /**
  * glsl/generate.glsl in a WebGL 2 context by transform feedback: `run(tiles)` writes each tile's m^2
- * records (19 float32 each) into one GL buffer, tile after tile, and reads them back.
+ * instances (GENERATED_FLOATS float32 each) into one GL buffer, tile after tile, and reads them back.
+ * `maps`: {heights, density}, each {data: Float32Array (rows of cols), cols, rows} or absent, as the
+ * uniforms place them (the Python library's recipe_uniforms and ground maps).
  */
 export class TileGenerator {
-  constructor(renderer, uniforms) {
+  constructor(renderer, uniforms, maps = {}) {
     refuseWebGPU(renderer, 'has no WebGL 2 transform feedback, which the generator runs by');
     this.renderer = renderer;
     const gl = (this.gl = renderer.getContext());
@@ -153,6 +169,21 @@ export class TileGenerator {
     this.vao = gl.createVertexArray();
     this.buffer = null;
     this.bytes = 0;
+    // the height and density maps as float32 textures, read by texelFetch (a 1 x 1 stand-in where none)
+    this.textures = ['heights', 'density'].map((key) => {
+      const m = maps[key] || { data: new Float32Array(1), cols: 1, rows: 1 };
+      if (!(m.data instanceof Float32Array) || m.data.length !== m.cols * m.rows) {
+        throw new AxialError(`generate: maps.${key}: expected {data: Float32Array of cols x rows, cols, rows}`);
+      }
+      const t = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, t);
+      gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.R32F, m.cols, m.rows, 0, gl.RED, gl.FLOAT, m.data);
+      for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D, p, gl.NEAREST);
+      gl.bindTexture(gl.TEXTURE_2D, null);
+      return t;
+    });
+    renderer.resetState();
   }
 
   _setUniforms() {
@@ -163,10 +194,21 @@ export class TileGenerator {
     for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'lowest', 'anchor_w4']) gl.uniform1f(at(`u_${k}`), u[k]);
     gl.uniform2f(at('u_scale'), u.scale[0], u.scale[1]);
     gl.uniform4f(at('u_anchor_w'), ...u.anchor_w);
+    gl.uniform1f(at('u_tint'), u.tint);
+    gl.uniform3f(at('u_tint_color'), ...u.tint_color);
+    for (const k of ['has_heights', 'has_density', 'd_wrap']) gl.uniform1i(at(`u_${k}`), u[k] ? 1 : 0);
+    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
+    for (const k of ['h_size', 'd_size']) gl.uniform2i(at(`u_${k}`), u[k][0], u[k][1]);
+    this.textures.forEach((t, unit) => {
+      gl.activeTexture(gl.TEXTURE0 + unit);
+      gl.bindTexture(gl.TEXTURE_2D, t);
+      gl.uniform1i(at(unit ? 'u_density' : 'u_heights'), unit);
+    });
   }
 
-  /** The records of `tiles` ([[tx, tz], ...]): a Float32Array of tiles.length m^2 rows of 19, tile after
-   * tile, cell order (instance i of a tile in cell (i mod m, i div m)).  Leaves three's GL state reset. */
+  /** The instances of `tiles` ([[tx, tz], ...]): a Float32Array of tiles.length m^2 rows of GENERATED_FLOATS,
+   * tile after tile, cell order (instance i of a tile in cell (i mod m, i div m)), each ending in its
+   * kept flag.  Leaves three's GL state reset. */
   run(tiles) {
     const gl = this.gl, bytes = tiles.length * this.count * GENERATED_FLOATS * 4;
     const out = new Float32Array(bytes / 4);
@@ -210,6 +252,7 @@ export class TileGenerator {
     const gl = this.gl;
     if (!gl) return;
     if (this.buffer) gl.deleteBuffer(this.buffer);
+    this.textures.forEach((t) => gl.deleteTexture(t));
     gl.deleteVertexArray(this.vao);
     gl.deleteProgram(this.program);
     this.gl = null;
@@ -222,7 +265,8 @@ export class TileGenerator {
  * `update(renderer, point)` before rendering (e.g. with OrbitControls' target): it makes the tiles
  * when the set within reach changes and lets far ones go, so the instances held stay bounded.
  * options: AxialInstancedMesh's, and `axis` (default: the mesh's longest extent, as axialdeform's),
- * `uniforms` (generate.glsl's numbers as the Python library gave them; default: recipeUniforms).
+ * `uniforms` (generate.glsl's numbers as the Python library gave them; default: recipeUniforms, the
+ * flat ground) and `maps` (the ground maps those uniforms place: TileGenerator's).
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
   constructor(geometry, material, recipe, options = {}) {
@@ -239,6 +283,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     this.type = 'AxialGeneratedMesh';
     this.recipe = r;
     this.generatorUniforms = options.uniforms || recipeUniforms(r, positions, this.axis);
+    this.maps = options.maps || {};
     if (this.generatorUniforms.m !== m) throw new AxialError(`AxialGeneratedMesh: uniforms.m is ${this.generatorUniforms.m}, the recipe's ${m}`);
     /** The tiles held ([[tx, tz], ...], nearest first), their instances in that order, m^2 each. */
     this.tiles = [];
@@ -254,16 +299,18 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     if (key === this._key && this._generator && this._generator.renderer === renderer) return false;
     if (!this._generator || this._generator.renderer !== renderer) {
       if (this._generator) this._generator.dispose();
-      this._generator = new TileGenerator(renderer, this.generatorUniforms);
+      this._generator = new TileGenerator(renderer, this.generatorUniforms, this.maps);
     }
     const t0 = performance.now();
     const raw = this._generator.run(tiles);
     const t1 = performance.now();
-    const f = this.layout.numbersPerInstance, n = raw.length / GENERATED_FLOATS;
-    let rows = raw;
-    if (f !== GENERATED_FLOATS) { // the 16 numbers of each record
-      rows = new Float32Array(n * f);
-      for (let i = 0; i < n; i++) rows.set(raw.subarray(i * GENERATED_FLOATS, i * GENERATED_FLOATS + f), i * f);
+    // the kept instances' records (their first f numbers), in order
+    const f = this.layout.numbersPerInstance, all = raw.length / GENERATED_FLOATS;
+    let n = 0;
+    for (let i = 0; i < all; i++) if (raw[i * GENERATED_FLOATS + GENERATED_FLOATS - 1] > 0.5) n++;
+    const rows = new Float32Array(n * f);
+    for (let i = 0, k = 0; i < all; i++) {
+      if (raw[i * GENERATED_FLOATS + GENERATED_FLOATS - 1] > 0.5) rows.set(raw.subarray(i * GENERATED_FLOATS, i * GENERATED_FLOATS + f), f * k++);
     }
     this.tiles = tiles;
     this._key = key;

@@ -166,6 +166,9 @@ export interface GenerateRecipe {
   scale?: [number, number] | null;
   twist?: number;
   taper?: number;
+  /** Each instance's colour tint_color (1 - tint u), u per channel (22 numbers); default none. */
+  tint?: number | null;
+  tint_color?: [number, number, number];
   /** The tiles within this distance of the point are made (default 3 tiles). */
   reach?: number;
 }
@@ -174,7 +177,16 @@ export interface GenerateRecipe {
 export interface GeneratorUniforms {
   seed: number; m: number; cell: number; jitter: number; bend: number; scale: [number, number];
   twist: number; taper: number; lowest: number; anchor_w: [number, number, number, number]; anchor_w4: number;
+  tint: number; tint_color: [number, number, number];
+  has_heights: boolean; h_lo: [number, number]; h_inv: [number, number]; h_size: [number, number];
+  has_density: boolean; d_lo: [number, number]; d_inv: [number, number]; d_size: [number, number]; d_wrap: boolean;
+  altitude: [number, number]; slope_tan2: [number, number];
 }
+
+/** A ground map's pixels: float32, row after row. */
+export interface GroundMap { data: Float32Array; cols: number; rows: number }
+/** The ground maps the uniforms place: the terrain's heights, the density map. */
+export interface GroundMaps { heights?: GroundMap; density?: GroundMap }
 
 /** A recipe checked as the Python library checks it, its defaults filled in. */
 export function checkRecipe(recipe: GenerateRecipe): Required<GenerateRecipe>;
@@ -184,9 +196,10 @@ export function recipeUniforms(recipe: Required<GenerateRecipe>, positions: Floa
 /** The tiles any point of which lies within `reach` of (x, z), nearest first. */
 export function tilesAround(tile: number, x: number, z: number, reach: number): [number, number][];
 
-/** glsl/generate.glsl by WebGL 2 transform feedback: run(tiles) -> 19 float32 a record, tile after tile. */
+/** glsl/generate.glsl by WebGL 2 transform feedback: run(tiles) -> 23 float32 an instance (the 22-number
+ * record, then kept), tile after tile. */
 export class TileGenerator {
-  constructor(renderer: THREE.WebGLRenderer, uniforms: GeneratorUniforms);
+  constructor(renderer: THREE.WebGLRenderer, uniforms: GeneratorUniforms, maps?: GroundMaps);
   readonly count: number;
   run(tiles: [number, number][]): Float32Array;
   dispose(): void;
@@ -195,6 +208,8 @@ export class TileGenerator {
 export interface AxialGeneratedMeshOptions extends AxialInstancedMeshOptions {
   /** generate.glsl's numbers as the Python library gave them (default: recipeUniforms). */
   uniforms?: GeneratorUniforms;
+  /** The ground maps the uniforms place. */
+  maps?: GroundMaps;
 }
 
 /** A generated layer: instances made on the GPU from a recipe in the tiles within reach of a point. */

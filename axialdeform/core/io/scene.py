@@ -50,7 +50,8 @@ _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
 _LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter", "generate", "wind"}
 
 
-_GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent", "reach"}
+_GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent", "reach", "density",
+             "altitude", "slope", "tint", "tint_color"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "droop", "seed",
@@ -118,6 +119,8 @@ class GenerateRecipe:
     generate: object
     extent: tuple
     reach: float = 0.0
+    density: Path | None = None  # the density map's image (the scene builds the ground maps)
+    maps: object = None  # GroundMaps: the terrain's heights and the density map (made by the scene)
 
 
 @dataclass
@@ -415,9 +418,13 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
         raise src.error("a generate recipe needs an extent [x0, z0, x1, z1]: the ground the commands make",
                         "generate", "layer", nth)
     kwargs = {}
-    for key in ("rate", "tile", "min_distance", "bend", "twist", "taper"):
+    for key in ("rate", "tile", "min_distance", "bend", "twist", "taper", "tint"):
         if key in recipe:
             kwargs[key] = float(_numbers(src, recipe[key], key, "layer", nth, (1,))[0])
+    for key, n in (("altitude", 2), ("slope", 2), ("tint_color", 3)):
+        if key in recipe:
+            kwargs[key] = tuple(float(x) for x in _numbers(src, recipe[key], key, "layer", nth, (n,)))
+    density = _existing(src, recipe["density"], "density", "layer", nth) if "density" in recipe else None
     if "scale" in recipe:
         kwargs["scale"] = tuple(float(x) for x in _numbers(src, recipe["scale"], "scale", "layer", nth, (2,), positive=True))
     if "seed" in recipe:
@@ -435,7 +442,7 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
         if field not in recipe:
             raise src.error(str(exc), "generate", "layer", nth) from None
         raise src.error(said, field, "layer", nth) from None
-    return GenerateRecipe(gen, extent, reach if reach is not None else 3.0 * gen.tile)
+    return GenerateRecipe(gen, extent, reach if reach is not None else 3.0 * gen.tile, density)
 
 
 def _scatter_layer(src, recipe, nth, scene) -> ScatterRecipe:
