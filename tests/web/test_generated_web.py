@@ -22,7 +22,51 @@ import axialdeform as ad
 from axialdeform.core.generate import Generate, generate_tiles, recipe_uniforms, tile_size, tiles_around
 
 ROOT = Path(__file__).resolve().parents[2]
-GRASS = ROOT / "examples" / "landscape" / "grass.obj"
+LANDSCAPE = ROOT / "examples" / "landscape"
+GRASS = LANDSCAPE / "grass.obj"
+
+HILLS = """
+background = [0.80, 0.87, 0.95]
+[terrain]
+heightmap = "terrain.png"
+height_scale = 6.0
+extent = [40.0, 30.0]
+color = [0.42, 0.40, 0.30]
+[camera]
+elevation = 28.0
+azimuth = 25.0
+fov = 30.0
+[[layer]]
+name = "stones"
+mesh = "stone"
+color = [0.58, 0.55, 0.5]
+[layer.generate]
+rate = 1.2
+tile = 8.0
+min_distance = 0.4
+seed = 4
+bend = 0.15
+scale = [0.2, 0.45]
+density = "stone_density.png"
+altitude = [0.0, 2.5]
+extent = [-20, -15, 20, 15]
+reach = 40.0
+[[layer]]
+name = "grass"
+mesh = "grass.obj"
+[layer.generate]
+rate = 3.0
+tile = 8.0
+min_distance = 0.2
+seed = 2
+bend = 0.25
+slope = [0, 25]
+altitude = [1.5, 6]
+tint = 0.5
+tint_color = [0.4, 0.7, 0.25]
+extent = [-20, -15, 20, 15]
+reach = 40.0
+"""
 
 SCENE = """
 background = [0.80, 0.87, 0.95]
@@ -109,12 +153,17 @@ def generated_site(tmp_path_factory):
     """Two scene files as pages: a walk through many tiles, and one tile (its extent) for the picture."""
     base = tmp_path_factory.mktemp("generated") / "gen site"
     walk = _scene(base, "walk")
+    for f in ("terrain.png", "stone_density.png"):
+        (base / f).write_bytes((LANDSCAPE / f).read_bytes())
+    hills = base / "hills.toml"
+    hills.write_text(HILLS, encoding="utf-8")
+    _web(hills, base / "hills")
     one = _scene(base, "one", rate=0.5, extent="[0, 0, 8, 8]", reach=2.0, elevation=30)
     _web(walk, base / "walk")
     _web(one, base / "one")
     _web(one, base / "one.html")
     server = Server(base)
-    yield {"base": base, "url": server.url, "walk": walk, "one": one}
+    yield {"base": base, "url": server.url, "walk": walk, "one": one, "hills": hills}
     server.close()
 
 
@@ -130,9 +179,10 @@ def _check_records(layers: list, scene: Path) -> int:
         want_tiles = tiles_around(recipe.generate, x, z, recipe.reach)
         # the set (its order: nearest first when it was made, the target since then moved within it)
         assert sorted(g["tiles"]) == sorted(want_tiles.tolist()), g["name"]
-        want = generate_tiles(recipe.generate, layer.mesh, g["tiles"])
+        want = generate_tiles(recipe.generate, layer.mesh, g["tiles"], recipe.maps)
         got = np.asarray(g["data"], np.float32).reshape(-1, g["width"])
-        assert got.shape[0] == len(want_tiles) * tile_size(recipe.generate)[0] ** 2
+        if recipe.maps.heights is None and recipe.maps.density is None:  # every cell kept
+            assert got.shape[0] == len(want_tiles) * tile_size(recipe.generate)[0] ** 2
         assert _close(got, want) <= 1e-6, (g["name"], _close(got, want))
         total += got.shape[0]
     return total
@@ -206,6 +256,37 @@ def test_the_notebook_widget_generates_a_scene_files_layers(browser, generated_s
         assert errors == []
     finally:
         page.close()
+
+
+@pytest.mark.slow
+def test_a_generated_page_on_a_height_map_keeps_and_tints_as_python_and_render(browser, generated_site):
+    """Stones where the density map says and below an altitude, grass on gentle slopes above it, tinted:
+    the page's records are the Python library's, its picture render's, and no per-instance file travels."""
+    assert [f.name for f in (generated_site["base"] / "hills").glob("*.adp")] == ["terrain.adp"]
+    v = Visit(browser, generated_site["url"] + "hills/index.html")
+    scene = ad.Scene.load(generated_site["hills"])
+    try:
+        assert v.state["ready"] is True, v.state
+        layers = v.page.evaluate("window.axialdeformView.generated()")
+        held = _check_records(layers, generated_site["hills"])
+        assert held == v.state["instances"] == sum(len(x.params) for x in scene.layers)
+        grass = np.asarray(layers[1]["data"], np.float32).reshape(-1, 22)
+        assert grass.shape[0] > 500 and np.ptp(grass[:, 19]) > 0.1  # tinted, each its own
+        shot = v.silhouette()
+        render = ad.render_image(scene, size=SIZE, look=scene.look.replace(ground=False, shadow=False))
+        # the terrain fills most of both pictures: compare where they differ from the bare terrain
+        bare = ad.render_image(type(scene)(
+            path=scene.path, up=scene.up, camera=scene.camera, look=scene.look, terrain=scene.terrain,
+            terrain_color=scene.terrain_color), size=SIZE, look=scene.look.replace(ground=False, shadow=False))
+        on = lambda img: np.abs(img.astype(np.float64) - bare).max(axis=2) > 24  # noqa: E731
+        a, b = on(shot), on(render)
+        assert iou(shot, render, SKY) >= 0.95, iou(shot, render, SKY)  # the silhouette, as every page test
+        # and the instances alone (thin blades: their edges' antialiasing differs)
+        assert b.mean() > 0.03 and (a & b).sum() / (a | b).sum() >= 0.85, (b.mean(), (a & b).sum() / (a | b).sum())
+        assert np.abs(shot.astype(np.float64) - render).mean() < 3.0
+        assert v.errors == []
+    finally:
+        v.close()
 
 
 RECIPE = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2], "reach": 5.0}
