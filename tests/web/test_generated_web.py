@@ -330,7 +330,8 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
     records = np.asarray(got["data"], np.float32).reshape(-1, got["width"])
     assert _close(records, want) <= 1e-6, _close(records, want)
     # and it draws them as render does (the example's camera; its ground and fog hidden)
-    shot, errors = example_picture(browser, page_url)
+    # (the tiles made before that picture, whether or not an animation frame ran yet)
+    shot, errors = example_picture(browser, page_url, "window.app.stones.update(renderer, window.app.controls.target);")
     assert errors == []
     look = ad.Look(ground=False, shadow=False)
     camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
