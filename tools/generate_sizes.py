@@ -54,7 +54,7 @@ def _three(name: str) -> bool:  # the same for every page
 
 
 def _data(name: str) -> bool:  # the landscape's own: meshes, per-instance files, the config (shaders, recipe)
-    return name.endswith((".glb", ".adp", "scene.json"))
+    return name.endswith((".glb", ".adp", ".f32", "scene.json"))
 
 
 PARTS = {"three": _three, "code": lambda name: not _three(name) and not _data(name), "data": _data}
