@@ -31,6 +31,10 @@ def add_parser(sub) -> None:
                         help="one deformed mesh per instance (the default)")
     layout.add_argument("--instanced", dest="layout", action="store_const", const="instanced",
                         help="base mesh once + EXT_mesh_gpu_instancing (default: --baked)")
+    layout.add_argument("--generated", dest="layout", action="store_const", const="generated",
+                        help="a scene file: its generated layers as their recipe (AXIALDEFORM_bend generate: "
+                             "made around the camera by a reader that knows it; a small plain fallback for others), "
+                             "the rest as --instanced (docs/generate.md)")
     e.set_defaults(layout="baked")
     add_mesh_mismatch(e)
     e.add_argument("--max-meshes", type=positive_int, default=MAX_EXPORT_MESHES, metavar="N", help=(
@@ -45,6 +49,9 @@ def run(args) -> None:
     """``axialdeform export MESH PARAMS -o OUT.glb [--baked | --instanced]``."""
 
     out = check_glb_path(args.output)  # before the (slow) reading
+    if args.layout == "generated" and not str(args.mesh).lower().endswith(".toml"):
+        raise ArgumentError(f"{out}: --generated writes a scene file's generated layers; expected SCENE.toml, "
+                            "or --instanced / --baked for MESH PARAMS")
     scene = scenes.scene_of(args)
     if scene is not None:
         return scenes.export(scene, args)

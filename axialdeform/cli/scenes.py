@@ -126,7 +126,11 @@ def export(scene, args) -> None:
         check_baked_triangles(args, [(f"layer {layer.name}", len(layer.params), len(layer.mesh.faces))
                                      for layer in scene.layers], ", or use --instanced (no such limit)")
     path = export_scene(args.output, scene, args.layout)
-    print(f"wrote {path} ({len(scene.layers)} layers, {scene.count} instances, {args.layout}, "
+    what = f"{scene.count} instances"
+    if args.layout == "generated":
+        gen = [layer.name for layer in scene.layers if getattr(layer, "generate", None) is not None]
+        what = f"{', '.join(gen)} as their recipe with a small fallback"
+    print(f"wrote {path} ({len(scene.layers)} layers, {what}, {args.layout}, "
           f"{path.stat().st_size} bytes)")
 
 

@@ -43,7 +43,7 @@ from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
            "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "recipe_uniforms", "GroundMaps",
-           "GENERATED_NUMBERS", "GENERATED_FLOATS"]
+           "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json"]
 
 GENERATED_NUMBERS = 20  # u_0 .. u_19 an instance
 GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
@@ -328,6 +328,14 @@ def recipe_uniforms(recipe: Generate, mesh, maps: GroundMaps | None = None) -> d
             "has_density": g.density is not None, "d_lo": fl(g.d_lo), "d_inv": fl(g.d_inv),
             "d_size": [0, 0] if g.density is None else [int(g.density.shape[1]), int(g.density.shape[0])],
             "d_wrap": bool(g.d_wrap), "altitude": fl(alt), "slope_tan2": [min(x, 3.0e38) for x in slope]}
+
+
+def recipe_json(recipe: Generate, reach: float) -> dict:
+    """The recipe as the page, the notebook widget and the glTF generated form carry it (JSON): its keys
+    as a scene file's ``[layer.generate]`` spells them, and the ``reach``."""
+    return {"rate": recipe.rate, "tile": recipe.tile, "min_distance": recipe.min_distance, "seed": recipe.seed,
+            "bend": recipe.bend, "scale": None if recipe.scale is None else list(recipe.scale), "twist": recipe.twist,
+            "taper": recipe.taper, "tint": recipe.tint, "tint_color": list(recipe.tint_color), "reach": float(reach)}
 
 
 def lowest_point(mesh) -> float:

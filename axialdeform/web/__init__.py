@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import AxialDeformError
-from ..core.generate import recipe_uniforms, tile_size, tiles_around
+from ..core.generate import recipe_json, recipe_uniforms, tile_size, tiles_around
 from ..core.io.gltf import encode_base_mesh
 from ..core.io.mesh import mesh_source_path
 from ..core.io.params import encode_binary
@@ -157,9 +157,7 @@ def _generated(recipe, mesh, files: dict, name: str) -> dict:
             file = f"layer-{name}-{key}.f32"
             files[file] = np.ascontiguousarray(grid, "<f4").tobytes()
             grids[key] = {"file": file, "cols": int(grid.shape[1]), "rows": int(grid.shape[0])}
-    return {"recipe": {"rate": g.rate, "tile": g.tile, "min_distance": g.min_distance, "seed": g.seed, "bend": g.bend,
-                       "scale": None if g.scale is None else list(g.scale), "twist": g.twist, "taper": g.taper,
-                       "tint": g.tint, "tint_color": list(g.tint_color), "reach": float(recipe.reach)},
+    return {"recipe": recipe_json(g, recipe.reach),
             "uniforms": recipe_uniforms(g, mesh, maps), "maps": grids, "width": int(g.width)}
 
 

@@ -277,3 +277,74 @@ def test_what_the_fuzzer_found_is_refused_in_words(tmp_path):
                                       'axis = {a = 1}\n')
     with pytest.raises(ad.core.MeshError, match=r"ax.toml: axis 2 \(branch1\): axis: expected a frame name or nine"):
         ad.load_mesh("tree", axes=tmp_path / "ax.toml")
+
+
+def test_a_generated_scene_export_carries_the_recipe_validator_clean(tmp_path):
+    """export SCENE.toml --generated: each generated layer's node holds its recipe, the generator's numbers and
+    its ground maps (schema-valid), a small fallback of instances (the tile at the extent's centre, bent as
+    the Python library makes it), and the file is clean for the Khronos validator."""
+    from axialdeform.core.generate import generate_tiles, recipe_uniforms, tiles_around
+    from axialdeform.core.io.gltf import read_instanced_glb
+
+    scene_dir = tmp_path / "s"
+    scene_dir.mkdir()
+    for f in ("terrain.png", "stone_density.png", "grass.obj"):
+        (scene_dir / f).write_bytes((ROOT / "examples" / "landscape" / f).read_bytes())
+    (scene_dir / "hills.toml").write_text("""
+[terrain]
+heightmap = "terrain.png"
+height_scale = 6.0
+extent = [40.0, 30.0]
+[[layer]]
+name = "stones"
+mesh = "stone"
+[layer.generate]
+rate = 1.2
+tile = 8.0
+min_distance = 0.4
+seed = 4
+scale = [0.2, 0.45]
+density = "stone_density.png"
+altitude = [0.0, 2.5]
+extent = [-20, -15, 20, 15]
+[[layer]]
+name = "grass"
+mesh = "grass.obj"
+[layer.generate]
+rate = 3.0
+tile = 8.0
+tint = 0.5
+extent = [-20, -15, 20, 15]
+""")
+    glb = tmp_path / "hills.glb"
+    cli("export", scene_dir / "hills.toml", "--generated", "-o", glb)
+    found = dict((n.name, ext) for n, ext in bend_objects(glb))
+    assert set(found) == {"stones", "grass"}
+    scene = ad.Scene.load(scene_dir / "hills.toml")
+    g = pygltflib.GLTF2().load(str(glb))
+    for layer in scene.layers:
+        ext = found[layer.name]
+        jsonschema.validate(ext, SCHEMA)
+        gen = ext["generate"]
+        assert gen["uniforms"] == json.loads(json.dumps(recipe_uniforms(layer.generate.generate, layer.mesh,
+                                                                         layer.generate.maps)))
+        assert gen["recipe"]["rate"] == layer.generate.generate.rate and gen["recipe"]["reach"] == layer.generate.reach
+        assert ("heights" in gen) and (("density" in gen) == (layer.name == "stones"))
+        acc = g.accessors[gen["heights"]["accessor"]]
+        assert acc.count == gen["heights"]["cols"] * gen["heights"]["rows"] and acc.type == "SCALAR"
+        # the fallback: the first tile near the extent's centre that keeps any, as the library makes it
+        _mesh, fallback = read_instanced_glb(glb, node=layer.name)
+        tiles = tiles_around(layer.generate.generate, 0.0, 0.0, layer.generate.reach)
+        first = next(p for t in tiles if len(p := generate_tiles(layer.generate.generate, layer.mesh, [t],
+                                                                   layer.generate.maps)))
+        assert 0 < len(fallback) == len(first) < len(layer.params)
+        assert np.allclose(fallback, first, atol=1e-6)
+    [report] = validate_gltf(glb)
+    assert report["issues"]["numErrors"] == 0 and report["issues"]["numWarnings"] == 0, report["issues"]["messages"][:5]
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "export", "stone", "--generated", "-o", str(tmp_path / "x.glb")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "--generated writes a scene file's generated layers" in r.stderr, r.stderr
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "export", str(ROOT / "examples" / "forest" / "forest.toml"),
+                        "--generated", "-o", str(tmp_path / "x.glb")], capture_output=True, text=True)
+    assert r.returncode == 2 and "this scene has none" in r.stderr and "Traceback" not in r.stderr, r.stderr
+    assert not (tmp_path / "x.glb").exists()

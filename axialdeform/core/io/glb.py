@@ -33,7 +33,7 @@ __all__ = [
 ]
 
 
-LAYOUTS = ("baked", "instanced")
+LAYOUTS = ("baked", "instanced", "generated")  # generated: a scene's generated layers as their recipe
 #: the glTF extension that draws one mesh many times
 INSTANCING = "EXT_mesh_gpu_instancing"
 #: key of the dictionary this library writes into ``extras``

@@ -289,7 +289,7 @@ def encode_instanced(mesh, params) -> bytes:
     return b.finish()
 
 
-def _add_instanced(b: GlbBuilder, mesh, params, node_name: str, *, color=None, extras=None) -> int:
+def _add_instanced(b: GlbBuilder, mesh, params, node_name: str, *, color=None, extras=None, bend=None) -> int:
     """Add ``mesh`` once (POSITION, NORMAL, appearance, TANGENT) and one node
     drawing it ``len(params)`` times with ``EXT_mesh_gpu_instancing`` (the
     instanced layout of the module docs); returns the node's index.
@@ -338,7 +338,8 @@ def _add_instanced(b: GlbBuilder, mesh, params, node_name: str, *, color=None, e
     node_extras.update(extras or {})
     b.gltf.nodes.append(g.Node(name=node_name, mesh=len(b.gltf.meshes) - 1,
                                extensions={INSTANCING: {"attributes": attributes},
-                                           BEND_EXTENSION: bend_extension(mesh, params.shape[1] + 10 * (k - 1))},
+                                           BEND_EXTENSION: {**bend_extension(mesh, params.shape[1] + 10 * (k - 1)),
+                                                            **(bend or {})}},
                                extras={EXTRAS_KEY: node_extras}))
     return len(b.gltf.nodes) - 1
 
@@ -353,11 +354,13 @@ def encode_scene(scene, layout: str = "baked") -> bytes:
     colour) drawn by one node named after the layer with
     ``EXT_mesh_gpu_instancing`` and the ``_AXIAL_*`` attributes, exactly as
     :func:`export_instanced` writes one mesh (:func:`read_instanced_glb` with
-    ``node=LAYER`` reads a layer back).  Neither layout holds the scene's wind.
+    ``node=LAYER`` reads a layer back).  ``layout="generated"``: as instanced, a generated layer's node
+    carrying its recipe and a small fallback (:mod:`~axialdeform.core.io.gltf_generate`).  No layout holds
+    the scene's wind.
     """
     layers = _scene_layers(scene, layout)
-    if layout == "instanced":
-        return _encode_scene_instanced(scene, layers)
+    if layout in ("instanced", "generated"):
+        return _encode_scene_instanced(scene, layers, generated=layout == "generated")
     return _build_scene_baked(scene, layers).finish()
 
 
@@ -426,8 +429,13 @@ def _build_scene_baked(scene, layers) -> GlbBuilder:
     return b
 
 
-def _encode_scene_instanced(scene, layers) -> bytes:
-    """The instanced layout of :func:`encode_scene`."""
+def _encode_scene_instanced(scene, layers, generated: bool = False) -> bytes:
+    """The instanced layout of :func:`encode_scene`; ``generated``: a generated layer as its recipe
+    (:func:`~axialdeform.core.io.gltf_generate.generated_form`) with a small fallback of instances."""
+    from .gltf_generate import check_generated, generated_form
+
+    if generated:
+        check_generated(scene, layers)
     b = GlbBuilder()
     g = b.g
     nodes = []
@@ -439,9 +447,12 @@ def _encode_scene_instanced(scene, layers) -> bytes:
         b.gltf.nodes.append(g.Node(name="terrain", mesh=len(b.gltf.meshes) - 1))
         nodes.append(len(b.gltf.nodes) - 1)
     for layer in layers:
-        nodes.append(_add_instanced(b, layer.mesh, layer.params, layer.name,
+        params, bend = layer.params, None
+        if generated and getattr(layer, "generate", None) is not None:
+            params, bend = generated_form(b, layer)
+        nodes.append(_add_instanced(b, layer.mesh, params, layer.name,
                                     color=layer.color if layer.color is not None else (0.6, 0.6, 0.6),
-                                    extras={"layer": layer.name}))
+                                    extras={"layer": layer.name}, bend=bend))
     b.gltf.scenes.append(g.Scene(name="axialdeform scene, instanced", nodes=nodes, extras={EXTRAS_KEY: {
         "version": FORMAT_VERSION, "layout": "instanced", "layers": [layer.name for layer in layers],
         "up": scene.up}}))
@@ -452,11 +463,12 @@ def _encode_scene_instanced(scene, layers) -> bytes:
 
 
 def export_scene(path: str | os.PathLike, scene, layout: str = "baked") -> Path:
-    """Write :func:`encode_scene` (``layout`` ``"baked"`` or ``"instanced"``) to ``path`` (a ``.glb``), atomically."""
+    """Write :func:`encode_scene` (``layout`` ``"baked"``, ``"instanced"`` or ``"generated"``) to ``path``
+    (a ``.glb``), atomically."""
     path = check_glb_path(path)
     layers = _scene_layers(scene, layout)
-    if layout == "instanced":
-        atomic_write_bytes(path, _encode_scene_instanced(scene, layers))
+    if layout in ("instanced", "generated"):
+        atomic_write_bytes(path, _encode_scene_instanced(scene, layers, generated=layout == "generated"))
         return path
     built = _build_scene_baked(scene, layers)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:  # streamed: the file is never whole in memory
