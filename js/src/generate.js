@@ -4,6 +4,7 @@
 // per tile set (the mesh's instance matrices, bounds and raycasting are on the CPU); 0 bytes an
 // instance travel.  Conventions: the numpy reference axialdeform.core.generate.
 
+import * as THREE from 'three';
 import { AxialError } from './adp.js';
 import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT } from './glsl.js';
 import { AxialInstancedMesh } from './mesh.js';
@@ -14,6 +15,7 @@ import { refuseWebGPU, plainArray } from './feedback.js';
 export const GENERATED_FLOATS = 23;
 const VARYINGS = ['g_d12', 'g_d34', 'g_d5_px_py', 'g_pz_angles', 'g_extra', 'g_tint'];
 const NO_BAND = 3.0e38;
+const _eye = new THREE.Vector3();
 const BINOMIAL = [1, 4, 6, 4, 1];
 
 function bad(field, expected, value) {
@@ -266,7 +268,9 @@ export class TileGenerator {
  * when the set within reach changes and lets far ones go, so the instances held stay bounded.
  * options: AxialInstancedMesh's, and `axis` (default: the mesh's longest extent, as axialdeform's),
  * `uniforms` (generate.glsl's numbers as the Python library gave them; default: recipeUniforms, the
- * flat ground) and `maps` (the ground maps those uniforms place: TileGenerator's).
+ * flat ground), `maps` (the ground maps those uniforms place: TileGenerator's) and `autoUpdate` (make
+ * the tiles around the camera's position just before each draw, without calling update: what the
+ * glTF plugin's meshes do).  Its frustum culling is off: its tiles are around the camera.
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
   constructor(geometry, material, recipe, options = {}) {
@@ -290,6 +294,18 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     this._key = null;
     this._generator = null;
     this.timing = null;
+    this.frustumCulled = false;
+    this.autoUpdate = Boolean(options.autoUpdate);
+    // before each draw: the base mesh's hook (the renderer it draws with), the tiles around the camera
+    // (autoUpdate), then a user's own hook, which assigning onBeforeRender sets
+    const baseHook = this.onBeforeRender;
+    let userHook = null;
+    const hook = (renderer, scene, camera, ...rest) => {
+      baseHook(renderer, scene, camera, ...rest);
+      if (this.autoUpdate && renderer.isWebGLRenderer) this.update(renderer, camera.getWorldPosition(_eye));
+      if (userHook) userHook.call(this, renderer, scene, camera, ...rest);
+    };
+    Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
   }
 
   /** Make the tiles within reach of `point` ({x, z}: a Vector3) if they changed; returns whether they did. */

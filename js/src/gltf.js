@@ -8,6 +8,7 @@ import * as THREE from 'three';
 import { AxialError, checkNumbers } from './adp.js';
 import { FRAME_TOLERANCE, GLTF_INSTANCE_TYPES, MAX_AXES, WIDTHS } from './record.js';
 import { AxialInstancedMesh } from './mesh.js';
+import { AxialGeneratedMesh, checkRecipe } from './generate.js';
 
 /** The extension's name. */
 export const EXTENSION = 'AXIALDEFORM_bend';
@@ -107,6 +108,18 @@ export class AxialGLTFPlugin {
         checkAccessor(json, a, name, where);
       }
       checkAttributes(ext, names, where);
+      for (const key of ['heights', 'density']) { // the generated form's ground maps: FLOAT SCALAR, cols x rows
+        const m = ext.generate && ext.generate[key];
+        if (!m) continue;
+        if (!Number.isInteger(m.accessor) || m.accessor < 0 || m.accessor >= accessors.length) {
+          throw new AxialError(`${where}: ${EXTENSION} generate ${key} accessor: expected 0..${accessors.length - 1}, found ${brief(m.accessor)}`);
+        }
+        const acc = accessors[m.accessor];
+        if (acc.type !== 'SCALAR' || acc.componentType !== 5126 || acc.count !== m.cols * m.rows) {
+          throw new AxialError(`${where}: ${EXTENSION} generate ${key}: expected a FLOAT SCALAR accessor of ${m.cols} x ${m.rows}`);
+        }
+        checkAccessor(json, m.accessor, `generate ${key}`, where);
+      }
     });
     return null;
   }
@@ -132,8 +145,21 @@ export class AxialGLTFPlugin {
       for (const name of ['TRANSLATION', 'SCALE']) {
         if (attrs[name] !== undefined) raw[name] = await parser.getDependency('accessor', attrs[name]);
       }
+      // the generated form: the node's instances made from its recipe around the camera (the WebGL
+      // entry); the fallback instances otherwise, said once
+      let maps = null;
+      if (ext.generate && this.Mesh === AxialInstancedMesh) {
+        maps = {};
+        for (const key of ['heights', 'density']) {
+          const m = ext.generate[key];
+          if (m) maps[key] = { data: (await parser.getDependency('accessor', m.accessor)).array, cols: m.cols, rows: m.rows };
+        }
+      } else if (ext.generate && !this._warned) {
+        this._warned = true;
+        console.warn(`${where}: ${EXTENSION} generate: drawn as its fallback instances (the generator needs the WebGL entry's WebGL 2)`);
+      }
       for (const part of parts) {
-        const bent = fromInstancedMesh(part, ext, where, raw, this.Mesh);
+        const bent = maps ? fromGenerated(part, ext, maps) : fromInstancedMesh(part, ext, where, raw, this.Mesh);
         if (part === object) {
           const parent = object.parent;
           parent.add(bent);
@@ -267,6 +293,7 @@ export function checkBendExtension(ext, where = 'node') {
   if (ext.fingerprint !== undefined && !(typeof ext.fingerprint === 'string' && /^[0-9a-f]{64}$/.test(ext.fingerprint))) {
     throw new AxialError(`${at}: fingerprint: expected 64 lower-case hex digits (SHA-256), found ${brief(ext.fingerprint)}`);
   }
+  if (ext.generate !== undefined) checkGenerated(ext.generate, at, k);
   if (k > 1) {
     const p = axes.parents;
     if (!Array.isArray(p) || p.length !== k || p[0] !== -1 || p.some((x, i) => i > 0 && !(Number.isInteger(x) && x >= 0 && x < i))) {
@@ -282,6 +309,42 @@ export function checkBendExtension(ext, where = 'node') {
     }
   }
   return ext;
+}
+
+/** The generated form's object: a recipe (checkRecipe), the generator's numbers, the maps' shapes. */
+function checkGenerated(gen, at, k) {
+  if (!gen || typeof gen !== 'object' || Array.isArray(gen)) throw new AxialError(`${at}: generate: expected an object (recipe, uniforms)`);
+  if (k > 1) throw new AxialError(`${at}: generate: a generated node of several axes is not in the extension yet`);
+  try {
+    checkRecipe(gen.recipe);
+  } catch (err) {
+    throw new AxialError(`${at}: generate recipe: ${err.message.replace(/^generate: /, '')}`);
+  }
+  const u = gen.uniforms;
+  if (!u || typeof u !== 'object' || !Number.isInteger(u.m) || u.m < 1 || !Number.isInteger(u.seed)) {
+    throw new AxialError(`${at}: generate uniforms: expected generate.glsl's numbers (seed, m, cell, ...), found ${brief(u)}`);
+  }
+  for (const key of ['heights', 'density']) {
+    const m = gen[key];
+    if (m !== undefined && !(m && Number.isInteger(m.cols) && m.cols > 0 && Number.isInteger(m.rows) && m.rows > 0)) {
+      throw new AxialError(`${at}: generate ${key}: expected {accessor, cols, rows}, found ${brief(m)}`);
+    }
+  }
+}
+
+/** An AxialGeneratedMesh in place of GLTFLoader's InstancedMesh of a generated node: its recipe, the
+ * generator's numbers the file holds, the ground maps; the tiles within reach of the camera, made
+ * before it is drawn (autoUpdate). */
+function fromGenerated(mesh, ext, maps) {
+  const g = mesh.geometry;
+  const made = new AxialGeneratedMesh(g, mesh.material, ext.generate.recipe, {
+    axis: { axis: ext.axis, axes: null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
+  });
+  made.name = mesh.name;
+  made.position.copy(mesh.position); made.quaternion.copy(mesh.quaternion); made.scale.copy(mesh.scale);
+  made.userData = { ...mesh.userData, [EXTENSION]: ext };
+  made.castShadow = mesh.castShadow; made.receiveShadow = mesh.receiveShadow;
+  return made;
 }
 
 /** An AxialInstancedMesh in place of GLTFLoader's InstancedMesh (same geometry, material, name, transform). */

@@ -210,6 +210,8 @@ export interface AxialGeneratedMeshOptions extends AxialInstancedMeshOptions {
   uniforms?: GeneratorUniforms;
   /** The ground maps the uniforms place. */
   maps?: GroundMaps;
+  /** Make the tiles around the camera's position just before each draw (the glTF plugin's meshes). */
+  autoUpdate?: boolean;
 }
 
 /** A generated layer: instances made on the GPU from a recipe in the tiles within reach of a point. */
@@ -221,6 +223,8 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   readonly generatorUniforms: GeneratorUniforms;
   /** The tiles held, nearest first; their instances in that order, m^2 each. */
   readonly tiles: [number, number][];
+  /** Make the tiles around the camera before each draw, without update(). */
+  autoUpdate: boolean;
   /** The last tiles' cost (null before the first): the GPU pass with its read-back, the mesh's own work. */
   readonly timing: { instances: number; generateMs: number; applyMs: number } | null;
   /** Make the tiles within reach of `point` if they changed; returns whether they did. */

@@ -338,3 +338,58 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
     ref = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera)
     assert three_mask(ref).sum() > 0.05 * ref.size / 3
     assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
+
+
+GLTF_SCENE = """
+[[layer]]
+name = "stones"
+mesh = "stone.obj"
+[layer.generate]
+rate = 0.5
+tile = 4.0
+min_distance = 0.6
+seed = 8
+bend = 0.15
+scale = [0.5, 0.9]
+extent = [-4, -4, 4, 4]
+reach = 7.0
+"""
+
+
+@pytest.mark.slow
+def test_the_gltf_generated_form_is_generated_by_the_plugin(browser, three_site, tmp_path):
+    """export SCENE.toml --generated, loaded by a plain three.js app through AxialGLTFPlugin
+    (examples/web/gltf.html): the node becomes an AxialGeneratedMesh that makes the tiles around the camera
+    before it is drawn -- the Python library's records -- and draws them as render does."""
+    folder, url = three_site
+    (folder / "gen.toml").write_text(GLTF_SCENE)
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "export", str(folder / "gen.toml"), "--generated",
+                        "-o", str(folder / "gen.glb")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    shot, errors = example_picture(browser, url + "gltf.html?file=gen.glb")
+    assert errors == []
+    page = browser.new_page(viewport={"width": 480, "height": 360})
+    try:
+        page.goto(url + "gltf.html?file=gen.glb")
+        page.wait_for_function("window.app !== undefined", timeout=120_000)
+        got = page.evaluate("""() => { const { renderer, scene, camera, gltf } = window.app;
+            renderer.render(scene, camera);
+            let s = null;
+            gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh && !s) s = o; });
+            return { type: s.type, tiles: s.tiles, width: s.layout.numbersPerInstance, eye: camera.position.toArray(),
+                     data: Array.from(s.data.subarray(0, s.count * s.layout.numbersPerInstance)) }; }""")
+    finally:
+        page.close()
+    layer = ad.Scene.load(folder / "gen.toml").layers[0]
+    recipe = layer.generate
+    assert got["type"] == "AxialGeneratedMesh"
+    x, _, z = got["eye"]
+    assert sorted(got["tiles"]) == sorted(tiles_around(recipe.generate, x, z, recipe.reach).tolist())
+    want = generate_tiles(recipe.generate, layer.mesh, got["tiles"], recipe.maps)
+    records = np.asarray(got["data"], np.float32).reshape(-1, got["width"])
+    assert _close(records, want) <= 1e-6
+    look = ad.Look(ground=False, shadow=False)
+    camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
+    ref = ad.render_image(layer.mesh, want, size=(480, 360), look=look, camera=camera)
+    assert three_mask(ref).sum() > 0.05 * ref.size / 3
+    assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
