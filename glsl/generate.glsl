@@ -108,3 +108,21 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
     kept = keep ? 1.0 : 0.0;
     position.y = h - r.lowest * s;
 }
+
+// Child axis j (1 .. K-1) of instance i, a mesh of several axes: offsets uniform in +-amp_j, then the
+// 5 x 5 projection P_j that keeps the joint with its parent closed (axialdeform.core.axes.anchor_projection),
+// summed in order.  `children`: row j - 1 holds amp_j, then P_j row after row (26 texels).
+//   u^j_k = (H(H(key + j) ^ (32 i + k)) >> 8) / 2^24,  raw_q = amp_j (2 u^j_{2q,2q+1} - 1),  d_a = sum_b P_ab raw_b
+void axial_generate_child(uint key, int i, int j, sampler2D children, out vec2 d[5]) {
+    uint kj = axial_wind_hash(key + uint(j));
+    float amp = texelFetch(children, ivec2(0, j - 1), 0).r;
+    vec2 raw[5];
+    for (int q = 0; q < 5; ++q) {
+        raw[q] = amp * (2.0 * vec2(axial_gen_u(kj, uint(i), uint(2 * q)), axial_gen_u(kj, uint(i), uint(2 * q + 1))) - 1.0);
+    }
+    for (int a = 0; a < 5; ++a) {
+        vec2 s = vec2(0.0);
+        for (int b = 0; b < 5; ++b) s += texelFetch(children, ivec2(1 + 5 * a + b, j - 1), 0).r * raw[b];
+        d[a] = s;
+    }
+}

@@ -35,15 +35,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .axes import anchor_projection
 from .deform import bernstein
 from .errors import ParamError
-from .record import EXTENDED_WIDTH, TINTED_WIDTH, WIDTH
+from .record import EXTENDED_WIDTH, TINTED_WIDTH, WIDTH, join_record
 from .scatter import anchor_point
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
            "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "recipe_uniforms", "GroundMaps",
-           "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json"]
+           "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table"]
 
 GENERATED_NUMBERS = 20  # u_0 .. u_19 an instance
 GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
@@ -64,8 +65,10 @@ class Generate:
         The guaranteed distance between any two instances, 0 <= min_distance < 1 / sqrt(rate).
     seed : int
         0 .. 2^32 - 1.
-    bend : float
-        Offsets in [-bend L, bend L] (L: the base mesh's axis length), >= 0.
+    bend : float or tuple of float
+        Offsets in [-bend L, bend L] (L: the base mesh's axis length), >= 0; a mesh of several axes
+        takes one amplitude per level of its hierarchy (trunk, branches, ...; the last for any deeper
+        level), each axis's own L.
     scale : (2,) float or None
         A uniform scale drawn in [lo, hi] (> 0); None: 1.
     twist, taper : float
@@ -103,7 +106,13 @@ class Generate:
                 bad(name, "a finite number > 0", v)
         if not (isinstance(self.seed, int) and not isinstance(self.seed, bool) and 0 <= self.seed < 2**32):
             bad("seed", "an integer 0 .. 4294967295", self.seed)
-        for name in ("min_distance", "bend", "twist", "taper"):
+        if isinstance(self.bend, (tuple, list)):
+            if not self.bend or not all(isinstance(b, (int, float)) and not isinstance(b, bool) and math.isfinite(b)
+                                        and b >= 0 for b in self.bend):
+                bad("bend", "a finite number >= 0, or one per level of the hierarchy", self.bend)
+            object.__setattr__(self, "bend", tuple(float(b) for b in self.bend) if len(self.bend) > 1
+                               else float(self.bend[0]))
+        for name in ("min_distance", "twist", "taper") + (() if isinstance(self.bend, tuple) else ("bend",)):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
                 bad(name, "a finite number >= 0", v)
@@ -146,6 +155,11 @@ class Generate:
     @property
     def width(self) -> int:
         return TINTED_WIDTH if self.tint is not None else EXTENDED_WIDTH if self.extended else WIDTH
+
+    def level_bend(self, depth: int) -> float:
+        """The bend amplitude of a hierarchy's level ``depth`` (0: axis 0; the last one beyond)."""
+        b = self.bend if isinstance(self.bend, tuple) else (self.bend,)
+        return b[min(depth, len(b) - 1)]
 
     @property
     def needs_heights(self) -> bool:
@@ -240,7 +254,7 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     out[:, 10] = (cx + f32(0.5) + j * (u[:, 0] - f32(0.5))) * cell
     out[:, 12] = (cz + f32(0.5) + j * (u[:, 1] - f32(0.5))) * cell
     out[:, 14] = f32(2.0 * math.pi) * u[:, 2]
-    amp = f32(recipe.bend * mesh.axis.length)
+    amp = f32(recipe.level_bend(0) * mesh.axis.length)
     d = (amp * (f32(2.0) * u[:, 3:13] - f32(1.0))).reshape(n, 5, 2)
     w = anchor_weights(mesh)
     at = w[0] * d[:, 0] + w[1] * d[:, 1] + w[2] * d[:, 2] + w[3] * d[:, 3] + w[4] * d[:, 4]  # D(t_a), float32
@@ -270,7 +284,39 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
         c = np.mod(c, size) if g.d_wrap else np.clip(c, 0, size - 1)
         kept &= u[:, 16] < g.density[c[:, 1], c[:, 0]]
     out[:, 11] = h - f32(lowest_point(mesh)) * s
+    if getattr(mesh, "tree", None) is not None:
+        out = join_record(out, _children(recipe, mesh, tile_hash_key(recipe.seed, tx, tz), ids))
     return out, kept
+
+
+def children_table(recipe: Generate, mesh) -> np.ndarray:
+    """``(K - 1, 26)`` float32 of a mesh of several axes: child axis j's amplitude ``bend[level] L_j``, then
+    its 5 x 5 joint projection (:func:`~axialdeform.core.axes.anchor_projection`), row after row."""
+    tree = mesh.tree
+    amp = [recipe.level_bend(int(d)) * a.length for d, a in zip(tree.depth[1:], tree.axes[1:])]
+    proj = anchor_projection(np.asarray(tree.anchors[1:], dtype=np.float64)).reshape(-1, 25)
+    return np.column_stack([amp, proj]).astype(np.float32)
+
+
+def _children(recipe: Generate, mesh, key, ids) -> np.ndarray:
+    """``(n, K - 1, 5, 2)`` float32: the child axes' offsets (axial_generate_child of glsl/generate.glsl)."""
+    f32 = np.float32
+    table = children_table(recipe, mesh)
+    n, k = len(ids), len(table)
+    out = np.zeros((n, k, 5, 2), f32)
+    base = _u32(ids)[:, None] * np.uint32(HASH_STRIDE) + np.arange(10, dtype=np.uint32)[None, :]
+    for j in range(1, k + 1):  # a loop over the axes, not the instances
+        with np.errstate(over="ignore"):
+            kj = wind_hash(np.uint32(key) + np.uint32(j))
+        u = (wind_hash(base ^ kj) >> np.uint32(8)).astype(f32) * f32(1.0 / 16777216.0)
+        raw = (table[j - 1, 0] * (f32(2.0) * u - f32(1.0))).reshape(n, 5, 2)
+        proj = table[j - 1, 1:].reshape(5, 5)
+        for a in range(5):
+            acc = np.zeros((n, 2), f32)
+            for b in range(5):
+                acc = acc + proj[a, b] * raw[:, b]
+            out[:, j - 1, a] = acc
+    return out
 
 
 def _height(g: GroundMaps, xz: np.ndarray):
@@ -320,7 +366,7 @@ def recipe_uniforms(recipe: Generate, mesh, maps: GroundMaps | None = None) -> d
     alt = recipe.altitude if recipe.altitude is not None else (-3.0e38, 3.0e38)
     slope = [math.tan(math.radians(a)) ** 2 for a in recipe.slope] if recipe.slope is not None else [0.0, 3.0e38]
     return {"seed": int(recipe.seed), "m": int(m), "cell": float(cell), "jitter": 1.0 - recipe.min_distance / cell,
-            "bend": float(recipe.bend * mesh.axis.length), "scale": [float(lo), float(hi)], "twist": float(recipe.twist),
+            "bend": float(recipe.level_bend(0) * mesh.axis.length), "scale": [float(lo), float(hi)], "twist": float(recipe.twist),
             "taper": float(recipe.taper), "lowest": lowest_point(mesh), "anchor_w": [float(x) for x in w[:4]],
             "anchor_w4": float(w[4]), "tint": float(recipe.tint or 0.0), "tint_color": fl(recipe.tint_color),
             "has_heights": g.heights is not None, "h_lo": fl(g.h_lo), "h_inv": fl(g.h_inv),
@@ -334,7 +380,8 @@ def recipe_json(recipe: Generate, reach: float) -> dict:
     """The recipe as the page, the notebook widget and the glTF generated form carry it (JSON): its keys
     as a scene file's ``[layer.generate]`` spells them, and the ``reach``."""
     return {"rate": recipe.rate, "tile": recipe.tile, "min_distance": recipe.min_distance, "seed": recipe.seed,
-            "bend": recipe.bend, "scale": None if recipe.scale is None else list(recipe.scale), "twist": recipe.twist,
+            "bend": list(recipe.bend) if isinstance(recipe.bend, tuple) else recipe.bend,
+            "scale": None if recipe.scale is None else list(recipe.scale), "twist": recipe.twist,
             "taper": recipe.taper, "tint": recipe.tint, "tint_color": list(recipe.tint_color), "reach": float(reach)}
 
 
@@ -344,12 +391,15 @@ def lowest_point(mesh) -> float:
 
 
 def generate_tiles(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) -> np.ndarray:
-    """The kept instances of every tile in ``tiles`` ((k, 2) ints), tile after tile: (n, 16, 19 or 22) float32."""
+    """The kept instances of every tile in ``tiles`` ((k, 2) ints), tile after tile: (n, 16, 19 or 22) float32
+    (10 more an instance for every child axis of a mesh of several axes)."""
     parts = []
     for tx, tz in np.asarray(tiles, dtype=np.int64).reshape(-1, 2):
         p, kept = generate_tile(recipe, mesh, int(tx), int(tz), maps)
         parts.append(p[kept])
-    return np.concatenate(parts) if parts else np.zeros((0, recipe.width), np.float32)
+    tree = getattr(mesh, "tree", None)
+    width = recipe.width + (0 if tree is None else 10 * (tree.count - 1))
+    return np.concatenate(parts) if parts else np.zeros((0, width), np.float32)
 
 
 def tiles_around(recipe: Generate, x: float, z: float, reach: float) -> np.ndarray:

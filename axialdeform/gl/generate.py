@@ -9,7 +9,8 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from ..core.generate import GENERATED_FLOATS, Generate, GroundMaps, recipe_uniforms, tile_size
+from ..core.generate import GENERATED_FLOATS, Generate, GroundMaps, children_table, recipe_uniforms, tile_size
+from ..core.record import join_record
 from .context import bind_framebuffer, release_framebuffer
 from .shaders import build_program
 
@@ -17,6 +18,8 @@ __all__ = ["TileGenerator", "generate_tile_gpu"]
 
 _VARYINGS = ("g_d12", "g_d34", "g_d5_px_py", "g_pz_angles", "g_extra", "g_tint")
 _FLOATS = GENERATED_FLOATS  # 4 + 4 + 4 + 4 + 4 + 3 an instance: the 22-number record, then kept
+_CHILD_VARYINGS = tuple(f"c_{k}" for k in range(15))
+CHILD_AXES_A_PASS = 6  # generate_children.vert: 60 numbers an instance a pass
 
 
 class TileGenerator:
@@ -44,6 +47,20 @@ class TileGenerator:
             if name in self.program:
                 self.program[name].value = unit
         self.vao = ctx.vertex_array(self.program, [])
+        # a mesh of several axes: the child axes' offsets by a second program, six axes a pass
+        self.children = None
+        tree = getattr(mesh, "tree", None)
+        if tree is not None:
+            table = children_table(recipe, mesh)
+            self.child_count = len(table)
+            self.child_program = build_program(ctx, "generate_children.vert", varyings=_CHILD_VARYINGS)
+            self.children = ctx.texture((table.shape[1], table.shape[0]), 1, np.ascontiguousarray(table).tobytes(),
+                                        dtype="f4")
+            self.children.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            for name, value in (("u_seed", recipe.seed), ("u_children_n", self.child_count), ("u_children", 2)):
+                if name in self.child_program:
+                    self.child_program[name].value = value
+            self.child_vao = ctx.vertex_array(self.child_program, [])
         # a draw needs a complete framebuffer even with rasterization discarded (a surfaceless EGL
         # context has none of its own): a 1 x 1 one, bound for the pass
         self._color = ctx.renderbuffer((1, 1))
@@ -67,10 +84,34 @@ class TileGenerator:
         finally:
             bind_framebuffer(self.ctx, previous)
 
+    @property
+    def passes(self) -> int:
+        """The child passes a tile needs (0: one axis)."""
+        return 0 if self.children is None else -(-self.child_count // CHILD_AXES_A_PASS)
+
+    def run_children(self, tile, buffer, step: int, offset: int = 0) -> None:
+        """Pass ``step`` of tile ``tile``'s child offsets (axes ``6 step + 1`` .. ``6 step + 6``, 60 float32 an
+        instance, zeros past the last axis) into ``buffer`` from byte ``offset`` on."""
+        p = self.child_program
+        for name, value in (("u_tile", (int(tile[0]), int(tile[1]))), ("u_first", CHILD_AXES_A_PASS * step + 1)):
+            if name in p:
+                p[name].value = value
+        self.children.use(location=2)
+        previous = self.ctx.fbo
+        self._fbo.use()
+        try:
+            self.child_vao.transform(buffer, mode=moderngl.POINTS, vertices=self.count, buffer_offset=int(offset))
+        finally:
+            bind_framebuffer(self.ctx, previous)
+
     def release(self) -> None:
         if self._released:
             return
         self._released = True
+        if self.children is not None:
+            self.child_vao.release()
+            self.child_program.release()
+            self.children.release()
         self.vao.release()
         self.program.release()
         release_framebuffer(self.ctx, self._fbo)
@@ -85,10 +126,20 @@ def generate_tile_gpu(ctx, recipe: Generate, mesh, tx: int, tz: int,
     order and the ``(m^2,)`` bool of those kept (as :func:`~axialdeform.core.generate.generate_tile`)."""
     gen = TileGenerator(ctx, recipe, mesh, maps)
     buf = gen.buffer()
+    kids = ctx.buffer(reserve=gen.count * 60 * 4) if gen.passes else None
     try:
         gen.run((tx, tz), buf)
         raw = np.frombuffer(buf.read(), np.float32).reshape(gen.count, _FLOATS)
+        records = raw[:, :recipe.width].copy()
+        if gen.passes:
+            parts = []
+            for step in range(gen.passes):
+                gen.run_children((tx, tz), kids, step)
+                parts.append(np.frombuffer(kids.read(), np.float32).reshape(gen.count, 60))
+            records = join_record(records, np.concatenate(parts, axis=1)[:, :10 * gen.child_count])
     finally:
         buf.release()
+        if kids is not None:
+            kids.release()
         gen.release()
-    return raw[:, :recipe.width].copy(), raw[:, -1] > 0.5
+    return records, raw[:, -1] > 0.5

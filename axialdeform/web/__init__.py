@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import AxialDeformError
-from ..core.generate import recipe_json, recipe_uniforms, tile_size, tiles_around
+from ..core.generate import children_table, generate_tiles, recipe_json, recipe_uniforms, tiles_around
 from ..core.io.gltf import encode_base_mesh
 from ..core.io.mesh import mesh_source_path
 from ..core.io.params import encode_binary
@@ -148,11 +148,14 @@ def _parts(mesh, color) -> list:
 def _generated(recipe, mesh, files: dict, name: str) -> dict:
     """A generated layer's recipe as the page takes it: the recipe (tiles, reach), generate.glsl's numbers
     as the desktop generator gets them (:func:`~axialdeform.core.generate.recipe_uniforms`) and the ground
-    maps' pixels (float32, little-endian, row after row: ``files``), the same whatever the count."""
+    maps' pixels and a tree's child-axis table (float32, little-endian, row after row: ``files``), the
+    same whatever the count."""
     g = recipe.generate
     maps = recipe.maps
     grids = {}
-    for key, grid in (("heights", getattr(maps, "heights", None)), ("density", getattr(maps, "density", None))):
+    tree = getattr(mesh, "tree", None)  # several axes: the child axes' amplitudes and joint projections
+    for key, grid in (("heights", getattr(maps, "heights", None)), ("density", getattr(maps, "density", None)),
+                      ("children", None if tree is None else children_table(g, mesh))):
         if grid is not None:
             file = f"layer-{name}-{key}.f32"
             files[file] = np.ascontiguousarray(grid, "<f4").tobytes()
@@ -406,7 +409,7 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
         if len(item.params) == 0 and generated is None:
             continue
         if generated is not None:
-            generated_layers.append((len(layers), generated))
+            generated_layers.append((len(layers), (generated, item.mesh)))
         layers.append(_layer(item.name, item.mesh, as_params(item.params, axes=item.mesh.axis_count), files=files,
                              glb_file=f"layer-{item.name}.glb",
                              params_file=None if generated is not None else f"layer-{item.name}.adp",
@@ -416,9 +419,9 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
         raise AxialDeformError(f"{scene.path}: the scene has nothing to draw; expected a terrain or a layer with instances")
 
     cam = scene_camera(replace(scene, wind=wind), w / h)
-    for k, recipe in generated_layers:  # what the page holds at the start: the tiles within reach of the target
+    for k, (recipe, mesh) in generated_layers:  # what the page holds at the start: the tiles within reach of the target
         tiles = tiles_around(recipe.generate, float(cam.target[0]), float(cam.target[2]), recipe.reach)
-        layers[k]["instances"] = int(len(tiles) * tile_size(recipe.generate)[0] ** 2)
+        layers[k]["instances"] = int(len(generate_tiles(recipe.generate, mesh, tiles, recipe.maps)))
     config = _config(title=page.title or Path(scene.path).stem, layers=layers, size=(w, h),
                      fixed_size=page.fixed_size, mode=mode,
                      cam=cam, look=look or scene.look, up=scene.up, wind=wind,

@@ -6,7 +6,7 @@
 
 import * as THREE from 'three';
 import { AxialError } from './adp.js';
-import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT } from './glsl.js';
+import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT, GENERATE_CHILDREN_VERT } from './glsl.js';
 import { AxialInstancedMesh } from './mesh.js';
 import { refuseWebGPU, plainArray } from './feedback.js';
 
@@ -14,6 +14,7 @@ import { refuseWebGPU, plainArray } from './feedback.js';
  * or 0 (dropped by the ground maps and bands): generate.vert's outputs, in order. */
 export const GENERATED_FLOATS = 23;
 const VARYINGS = ['g_d12', 'g_d34', 'g_d5_px_py', 'g_pz_angles', 'g_extra', 'g_tint'];
+const CHILD_VARYINGS = Array.from({ length: 15 }, (_, k) => `c_${k}`);
 const NO_BAND = 3.0e38;
 const _eye = new THREE.Vector3();
 const BINOMIAL = [1, 4, 6, 4, 1];
@@ -54,7 +55,10 @@ export function checkRecipe(recipe) {
   }
   for (const k of ['rate', 'tile']) if (!(num(r[k]) && r[k] > 0)) bad(k, 'a finite number > 0', r[k]);
   if (!(Number.isInteger(r.seed) && r.seed >= 0 && r.seed < 2 ** 32)) bad('seed', 'an integer 0 .. 4294967295', r.seed);
-  for (const k of ['min_distance', 'bend', 'twist', 'taper']) if (!(num(r[k]) && r[k] >= 0)) bad(k, 'a finite number >= 0', r[k]);
+  for (const k of ['min_distance', 'twist', 'taper']) if (!(num(r[k]) && r[k] >= 0)) bad(k, 'a finite number >= 0', r[k]);
+  // one amplitude, or one per level of a mesh of several axes (the generator's own numbers hold them)
+  const bends = Array.isArray(r.bend) ? r.bend : [r.bend];
+  if (!bends.length || !bends.every((b) => num(b) && b >= 0)) bad('bend', 'a finite number >= 0, or one per level', r.bend);
   if (r.taper >= 1) bad('taper', 'a number in [0, 1)', r.taper);
   const cell = tileSize(r)[1];
   if (r.min_distance >= cell) bad('min_distance', `less than the cell side 1/sqrt(rate) = ${cell.toPrecision(6)}`, r.min_distance);
@@ -108,7 +112,8 @@ export function recipeUniforms(recipe, positions, axis) {
   const t = Math.min(1, Math.max(0, (along - axis.lo) / axis.length));
   const w = BINOMIAL.map((b, i) => Math.fround(b * t ** i * (1 - t) ** (4 - i)));
   const [s0, s1] = recipe.scale || [1, 1];
-  return { seed: recipe.seed, m, cell, jitter: 1 - recipe.min_distance / cell, bend: recipe.bend * axis.length,
+  const bend = Array.isArray(recipe.bend) ? recipe.bend[0] : recipe.bend;
+  return { seed: recipe.seed, m, cell, jitter: 1 - recipe.min_distance / cell, bend: bend * axis.length,
     scale: [s0, s1], twist: recipe.twist, taper: recipe.taper, lowest: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4],
     tint: recipe.tint || 0, tint_color: recipe.tint_color.slice(),
     // no ground maps: the flat ground y = 0, no density map, no bands (the Python library's maps come
@@ -140,9 +145,10 @@ export function maxTiles(tile, reach) {
 
 /**
  * glsl/generate.glsl in a WebGL 2 context by transform feedback: `run(tiles)` writes each tile's m^2
- * instances (GENERATED_FLOATS float32 each) into one GL buffer, tile after tile, and reads them back.
- * `maps`: {heights, density}, each {data: Float32Array (rows of cols), cols, rows} or absent, as the
- * uniforms place them (the Python library's recipe_uniforms and ground maps).
+ * instances (GENERATED_FLOATS float32 each) into one GL buffer, tile after tile, and reads them back;
+ * `runChildren(tiles)` a mesh of several axes' child offsets (10 a child axis, generate_children.vert).
+ * `maps`: {heights, density, children}: the ground maps, each {data: Float32Array (rows of cols), cols,
+ * rows}, as the uniforms place them, and the child axes' table (K - 1 rows of 26: amp_j, P_j).
  */
 export class TileGenerator {
   constructor(renderer, uniforms, maps = {}) {
@@ -154,25 +160,11 @@ export class TileGenerator {
     }
     this.uniforms = uniforms;
     this.count = uniforms.m * uniforms.m;
-    const head = '#version 300 es\nprecision highp float;\nprecision highp int;\n';
-    const shader = (type, text) => {
-      const sh = gl.createShader(type);
-      gl.shaderSource(sh, text);
-      gl.compileShader(sh);
-      if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new AxialError(`generate: the shader did not compile: ${gl.getShaderInfoLog(sh)}`);
-      return sh;
-    };
-    const program = (this.program = gl.createProgram());
-    gl.attachShader(program, shader(gl.VERTEX_SHADER, head + AXIAL_GLSL + WIND_GLSL + GENERATE_GLSL + GENERATE_VERT));
-    gl.attachShader(program, shader(gl.FRAGMENT_SHADER, head + 'out vec4 color;\nvoid main() { color = vec4(0.0); }\n'));
-    gl.transformFeedbackVaryings(program, VARYINGS, gl.INTERLEAVED_ATTRIBS);
-    gl.linkProgram(program);
-    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new AxialError(`generate: the program did not link: ${gl.getProgramInfoLog(program)}`);
+    this.program = this._program(GENERATE_VERT, VARYINGS);
     this.vao = gl.createVertexArray();
-    this.buffer = null;
-    this.bytes = 0;
-    // the height and density maps as float32 textures, read by texelFetch (a 1 x 1 stand-in where none)
-    this.textures = ['heights', 'density'].map((key) => {
+    this.buffers = {};
+    // the maps as float32 textures read by texelFetch (a 1 x 1 stand-in where none)
+    this.textures = ['heights', 'density', 'children'].map((key) => {
       const m = maps[key] || { data: new Float32Array(1), cols: 1, rows: 1 };
       if (!(m.data instanceof Float32Array) || m.data.length !== m.cols * m.rows) {
         throw new AxialError(`generate: maps.${key}: expected {data: Float32Array of cols x rows, cols, rows}`);
@@ -185,55 +177,75 @@ export class TileGenerator {
       gl.bindTexture(gl.TEXTURE_2D, null);
       return t;
     });
+    this.childCount = maps.children ? maps.children.rows : 0;
+    this.childProgram = this.childCount ? this._program(GENERATE_CHILDREN_VERT, CHILD_VARYINGS) : null;
     renderer.resetState();
   }
 
-  _setUniforms() {
-    const gl = this.gl, p = this.program, u = this.uniforms;
+  _program(main, varyings) {
+    const gl = this.gl, head = '#version 300 es\nprecision highp float;\nprecision highp int;\n';
+    const shader = (type, text) => {
+      const sh = gl.createShader(type);
+      gl.shaderSource(sh, text);
+      gl.compileShader(sh);
+      if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new AxialError(`generate: the shader did not compile: ${gl.getShaderInfoLog(sh)}`);
+      return sh;
+    };
+    const program = gl.createProgram();
+    gl.attachShader(program, shader(gl.VERTEX_SHADER, head + AXIAL_GLSL + WIND_GLSL + GENERATE_GLSL + main));
+    gl.attachShader(program, shader(gl.FRAGMENT_SHADER, head + 'out vec4 color;\nvoid main() { color = vec4(0.0); }\n'));
+    gl.transformFeedbackVaryings(program, varyings, gl.INTERLEAVED_ATTRIBS);
+    gl.linkProgram(program);
+    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new AxialError(`generate: the program did not link: ${gl.getProgramInfoLog(program)}`);
+    return program;
+  }
+
+  _setUniforms(p) {
+    const gl = this.gl, u = this.uniforms;
     const at = (name) => gl.getUniformLocation(p, name);
     gl.uniform1ui(at('u_seed'), u.seed);
     gl.uniform1i(at('u_m'), u.m);
-    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'lowest', 'anchor_w4']) gl.uniform1f(at(`u_${k}`), u[k]);
+    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'lowest', 'anchor_w4', 'tint']) gl.uniform1f(at(`u_${k}`), u[k]);
     gl.uniform2f(at('u_scale'), u.scale[0], u.scale[1]);
     gl.uniform4f(at('u_anchor_w'), ...u.anchor_w);
-    gl.uniform1f(at('u_tint'), u.tint);
     gl.uniform3f(at('u_tint_color'), ...u.tint_color);
     for (const k of ['has_heights', 'has_density', 'd_wrap']) gl.uniform1i(at(`u_${k}`), u[k] ? 1 : 0);
     for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
     for (const k of ['h_size', 'd_size']) gl.uniform2i(at(`u_${k}`), u[k][0], u[k][1]);
+    gl.uniform1i(at('u_children_n'), this.childCount);
     this.textures.forEach((t, unit) => {
       gl.activeTexture(gl.TEXTURE0 + unit);
       gl.bindTexture(gl.TEXTURE_2D, t);
-      gl.uniform1i(at(unit ? 'u_density' : 'u_heights'), unit);
+      gl.uniform1i(at(['u_heights', 'u_density', 'u_children'][unit]), unit);
     });
   }
 
-  /** The instances of `tiles` ([[tx, tz], ...]): a Float32Array of tiles.length m^2 rows of GENERATED_FLOATS,
-   * tile after tile, cell order (instance i of a tile in cell (i mod m, i div m)), each ending in its
-   * kept flag.  Leaves three's GL state reset. */
-  run(tiles) {
-    const gl = this.gl, bytes = tiles.length * this.count * GENERATED_FLOATS * 4;
+  /** One transform-feedback draw of `program` for each of `jobs` ({tile, first}), `floats` a vertex, into
+   * one buffer (grown as needed), read back.  Leaves three's GL state reset. */
+  _feedback(program, jobs, floats) {
+    const gl = this.gl, each = this.count * floats * 4, bytes = jobs.length * each;
     const out = new Float32Array(bytes / 4);
     if (!bytes) return out;
-    if (bytes > this.bytes) { // one buffer, grown as needed
-      if (this.buffer) gl.deleteBuffer(this.buffer);
-      this.buffer = gl.createBuffer();
-      gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, this.buffer);
+    let buffer = this.buffers[floats];
+    if (!buffer || buffer.bytes < bytes) {
+      if (buffer) gl.deleteBuffer(buffer.gl);
+      buffer = this.buffers[floats] = { gl: gl.createBuffer(), bytes };
+      gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, buffer.gl);
       gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, bytes, gl.DYNAMIC_READ);
       gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, null);
-      this.bytes = bytes;
     }
-    gl.useProgram(this.program);
-    this._setUniforms();
+    gl.useProgram(program);
+    this._setUniforms(program);
     gl.bindVertexArray(this.vao);
     gl.bindBuffer(gl.ARRAY_BUFFER, null);
     const tf = gl.createTransformFeedback();
     gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, tf);
     gl.enable(gl.RASTERIZER_DISCARD);
-    const tileLoc = gl.getUniformLocation(this.program, 'u_tile'), each = this.count * GENERATED_FLOATS * 4;
-    tiles.forEach(([tx, tz], k) => {
-      gl.uniform2i(tileLoc, tx, tz);
-      gl.bindBufferRange(gl.TRANSFORM_FEEDBACK_BUFFER, 0, this.buffer, k * each, each);
+    const tileAt = gl.getUniformLocation(program, 'u_tile'), firstAt = gl.getUniformLocation(program, 'u_first');
+    jobs.forEach(({ tile, first }, k) => {
+      gl.uniform2i(tileAt, tile[0], tile[1]);
+      if (firstAt !== null) gl.uniform1i(firstAt, first);
+      gl.bindBufferRange(gl.TRANSFORM_FEEDBACK_BUFFER, 0, buffer.gl, k * each, each);
       gl.beginTransformFeedback(gl.POINTS);
       gl.drawArrays(gl.POINTS, 0, this.count);
       gl.endTransformFeedback();
@@ -242,7 +254,7 @@ export class TileGenerator {
     gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);
     gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
     gl.deleteTransformFeedback(tf);
-    gl.bindBuffer(gl.COPY_READ_BUFFER, this.buffer);
+    gl.bindBuffer(gl.COPY_READ_BUFFER, buffer.gl);
     gl.getBufferSubData(gl.COPY_READ_BUFFER, 0, out);
     gl.bindBuffer(gl.COPY_READ_BUFFER, null);
     gl.bindVertexArray(null);
@@ -250,13 +262,34 @@ export class TileGenerator {
     return out;
   }
 
+  /** The instances of `tiles` ([[tx, tz], ...]): a Float32Array of tiles.length m^2 rows of GENERATED_FLOATS,
+   * tile after tile, cell order (instance i of a tile in cell (i mod m, i div m)), each ending in its
+   * kept flag. */
+  run(tiles) {
+    return this._feedback(this.program, tiles.map((tile) => ({ tile })), GENERATED_FLOATS);
+  }
+
+  /** A mesh of several axes: the child offsets of `tiles`' instances, 10 (K - 1) a row in run's order. */
+  runChildren(tiles) {
+    const passes = Math.ceil(this.childCount / 6), n = tiles.length * this.count, w = 10 * this.childCount;
+    const jobs = [];
+    for (let p = 0; p < passes; p++) for (const tile of tiles) jobs.push({ tile, first: 6 * p + 1 });
+    const raw = this._feedback(this.childProgram, jobs, 60), out = new Float32Array(n * w);
+    for (let p = 0; p < passes; p++) { // pass p holds axes 6p+1 .. 6p+6 of every instance
+      const width = Math.min(60, w - 60 * p);
+      for (let i = 0; i < n; i++) out.set(raw.subarray((p * n + i) * 60, (p * n + i) * 60 + width), i * w + 60 * p);
+    }
+    return out;
+  }
+
   dispose() {
     const gl = this.gl;
     if (!gl) return;
-    if (this.buffer) gl.deleteBuffer(this.buffer);
+    Object.values(this.buffers).forEach((b) => gl.deleteBuffer(b.gl));
     this.textures.forEach((t) => gl.deleteTexture(t));
     gl.deleteVertexArray(this.vao);
     gl.deleteProgram(this.program);
+    if (this.childProgram) gl.deleteProgram(this.childProgram);
     this.gl = null;
   }
 }
@@ -279,15 +312,19 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     if (!position) throw new AxialError('AxialGeneratedMesh: expected a THREE.BufferGeometry with positions');
     const positions = plainArray(position);
     const [m] = tileSize(r);
-    const width = recipeWidth(r);
     const spec = options.axis || autoAxis(positions);
-    super(geometry, material, { count: 0, numbersPerInstance: width, data: new Float32Array(0) },
+    const axes = spec.axes ? spec.axes.count : 1; // a mesh of several axes: 10 more numbers a child axis
+    super(geometry, material, { count: 0, numbersPerInstance: recipeWidth(r) + 10 * (axes - 1), axes, data: new Float32Array(0) },
       { ...options, axis: spec, capacity: maxTiles(r.tile, r.reach) * m * m });
     this.isAxialGeneratedMesh = true;
     this.type = 'AxialGeneratedMesh';
     this.recipe = r;
     this.generatorUniforms = options.uniforms || recipeUniforms(r, positions, this.axis);
     this.maps = options.maps || {};
+    if (axes > 1 && !(this.maps.children && this.maps.children.rows === axes - 1 && this.maps.children.cols === 26)) {
+      throw new AxialError(`AxialGeneratedMesh: a mesh of ${axes} axes needs options.maps.children (${axes - 1} rows of 26: each `
+        + 'child axis\'s amplitude and joint projection, as axialdeform web and export write them)');
+    }
     if (this.generatorUniforms.m !== m) throw new AxialError(`AxialGeneratedMesh: uniforms.m is ${this.generatorUniforms.m}, the recipe's ${m}`);
     /** The tiles held ([[tx, tz], ...], nearest first), their instances in that order, m^2 each. */
     this.tiles = [];
@@ -318,15 +355,20 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
       this._generator = new TileGenerator(renderer, this.generatorUniforms, this.maps);
     }
     const t0 = performance.now();
-    const raw = this._generator.run(tiles);
+    const raw = this._generator.run(tiles), G = GENERATED_FLOATS;
+    const kids = this.layout.axes > 1 ? this._generator.runChildren(tiles) : null;
     const t1 = performance.now();
-    // the kept instances' records (their first f numbers), in order
-    const f = this.layout.numbersPerInstance, all = raw.length / GENERATED_FLOATS;
+    // the kept instances' records in order: axis 0's offsets, the child axes' (a tree), the rest
+    const f = this.layout.numbersPerInstance, c = 10 * (this.layout.axes - 1), all = raw.length / G;
     let n = 0;
-    for (let i = 0; i < all; i++) if (raw[i * GENERATED_FLOATS + GENERATED_FLOATS - 1] > 0.5) n++;
+    for (let i = 0; i < all; i++) if (raw[i * G + G - 1] > 0.5) n++;
     const rows = new Float32Array(n * f);
     for (let i = 0, k = 0; i < all; i++) {
-      if (raw[i * GENERATED_FLOATS + GENERATED_FLOATS - 1] > 0.5) rows.set(raw.subarray(i * GENERATED_FLOATS, i * GENERATED_FLOATS + f), f * k++);
+      if (!(raw[i * G + G - 1] > 0.5)) continue;
+      rows.set(raw.subarray(i * G, i * G + 10), f * k);
+      if (kids) rows.set(kids.subarray(i * c, (i + 1) * c), f * k + 10);
+      rows.set(raw.subarray(i * G + 10, i * G + f - c), f * k + 10 + c);
+      k++;
     }
     this.tiles = tiles;
     this._key = key;

@@ -160,8 +160,8 @@ export interface GenerateRecipe {
   min_distance?: number;
   /** 0 .. 2^32 - 1 (default 0). */
   seed?: number;
-  /** Offsets in [-bend L, bend L] (default 0.1). */
-  bend?: number;
+  /** Offsets in [-bend L, bend L] (default 0.1); a mesh of several axes: one per level. */
+  bend?: number | number[];
   /** A uniform scale in [lo, hi] (default none). */
   scale?: [number, number] | null;
   twist?: number;

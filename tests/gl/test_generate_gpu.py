@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -114,3 +116,26 @@ def test_the_gpu_keeps_and_places_as_numpy_on_the_ground_maps(ctx, flat):
         t = generate_tile(recipe, stone, 0, 0, maps)[0]
         assert t.shape[1] == 22 and (t[:, 19:22] <= np.array([0.9, 0.8, 0.7]) + 1e-7).all()
         assert (t[:, 19:22] >= 0.6 * np.array([0.9, 0.8, 0.7]) - 1e-7).all()
+
+
+def test_the_gpu_makes_a_trees_child_axes_as_numpy(ctx):
+    """A mesh of ten axes: each level its bend, every child axis's offsets projected so its joint stays."""
+    from axialdeform.core.axes import bernstein4
+
+    tree = ad.load_mesh("tree", axes=str(Path(__file__).resolve().parents[2] / "examples" / "forest" / "tree-axes.toml"))
+    recipe = Generate(rate=0.2, tile=16.0, min_distance=0.5, seed=21, bend=(0.04, 0.25), scale=(0.8, 1.1))
+    for tile in [(0, 0), (-2, 7)]:
+        cpu, kept = generate_tile(recipe, tree, *tile)
+        gpu, gkept = generate_tile_gpu(ctx, recipe, tree, *tile)
+        assert cpu.shape == gpu.shape == (kept.size, 19 + 90) and np.array_equal(kept, gkept)
+        rel = np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))
+        assert rel.max() <= 1e-6, (tile, rel.max())
+    # each child axis bends within its level's amplitude, and not at its joint (value and slope zero there)
+    from axialdeform.core.record import split_record
+
+    _std, children = split_record(cpu, tree.axis_count)
+    b, db = bernstein4(np.asarray(tree.tree.anchors[1:]))
+    at_joint = np.einsum("jq,njqc->njc", b, children.reshape(len(cpu), 9, 5, 2))
+    slope = np.einsum("jq,njqc->njc", db, children.reshape(len(cpu), 9, 5, 2))
+    assert np.abs(at_joint).max() < 1e-5 and np.abs(slope).max() < 1e-4
+    assert np.abs(children).max() > 0.01  # they do bend

@@ -105,6 +105,27 @@ reach = {reach}
 """
 
 
+TREES = """
+background = [0.80, 0.87, 0.95]
+[camera]
+elevation = 20
+azimuth = 30
+[[layer]]
+name = "trees"
+mesh = "tree"
+axes = "tree-axes.toml"
+[layer.generate]
+rate = 0.02
+tile = 16.0
+min_distance = 3.0
+seed = 5
+bend = [0.03, 0.25]
+scale = [0.8, 1.2]
+extent = [-24, -24, 24, 24]
+reach = 30.0
+"""
+
+
 def _scene(folder: Path, name: str, rate=0.3, extent="[-12, -12, 12, 12]", reach=20.0, elevation=18) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "grass.obj").write_bytes(GRASS.read_bytes())
@@ -155,6 +176,10 @@ def generated_site(tmp_path_factory):
     walk = _scene(base, "walk")
     for f in ("terrain.png", "stone_density.png"):
         (base / f).write_bytes((LANDSCAPE / f).read_bytes())
+    (base / "tree-axes.toml").write_bytes((ROOT / "examples" / "forest" / "tree-axes.toml").read_bytes())
+    trees = base / "trees.toml"
+    trees.write_text(TREES, encoding="utf-8")
+    _web(trees, base / "trees")
     hills = base / "hills.toml"
     hills.write_text(HILLS, encoding="utf-8")
     _web(hills, base / "hills")
@@ -163,7 +188,7 @@ def generated_site(tmp_path_factory):
     _web(one, base / "one")
     _web(one, base / "one.html")
     server = Server(base)
-    yield {"base": base, "url": server.url, "walk": walk, "one": one, "hills": hills}
+    yield {"base": base, "url": server.url, "walk": walk, "one": one, "hills": hills, "trees": trees}
     server.close()
 
 
@@ -284,6 +309,24 @@ def test_a_generated_page_on_a_height_map_keeps_and_tints_as_python_and_render(b
         # and the instances alone (thin blades: their edges' antialiasing differs)
         assert b.mean() > 0.03 and (a & b).sum() / (a | b).sum() >= 0.85, (b.mean(), (a & b).sum() / (a | b).sum())
         assert np.abs(shot.astype(np.float64) - render).mean() < 3.0
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_a_generated_page_of_trees_bends_every_level_as_python(browser, generated_site):
+    """A mesh of ten axes: the page makes axis 0's numbers and every child axis's (each level its bend, the
+    joints closed) on the GPU; the records are the Python library's."""
+    v = Visit(browser, generated_site["url"] + "trees/index.html")
+    try:
+        assert v.state["ready"] is True, v.state
+        layers = v.page.evaluate("window.axialdeformView.generated()")
+        assert layers[0]["width"] == 19 + 90
+        held = _check_records(layers, generated_site["trees"])
+        assert held == v.state["instances"] > 40
+        children = np.asarray(layers[0]["data"], np.float32).reshape(held, -1)[:, 10:100]
+        assert np.abs(children).max() > 0.01
         assert v.errors == []
     finally:
         v.close()

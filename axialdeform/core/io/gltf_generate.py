@@ -32,6 +32,9 @@ def generated_form(b, layer) -> tuple[np.ndarray, dict]:
     SCALAR accessor of rows x cols world heights or grey levels, row after row."""
     gen = layer.generate
     recipe, maps = gen.generate, gen.maps
+    if getattr(layer.mesh, "tree", None) is not None:
+        raise GltfError(f"layer {layer.name}: a generated layer of several axes has no glTF generated form yet; "
+                        "expected --instanced (its extent materialized)")
     x0, z0, x1, z1 = gen.extent
     fallback = np.zeros((0, recipe.width), np.float32)
     for tile in tiles_around(recipe, (x0 + x1) / 2, (z0 + z1) / 2, gen.reach)[:FALLBACK_TILES]:

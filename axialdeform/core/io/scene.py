@@ -396,9 +396,6 @@ def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
     if "params" in layer:
         recipe.params = _existing(src, layer["params"], "params", "layer", nth)
     elif "generate" in layer:
-        if axes is not None:
-            raise src.error("a generated layer of several axes is not built yet; expected a mesh of one axis",
-                            "generate", "layer", nth)
         recipe.generate = _generate_layer(src, layer["generate"], nth)
     else:
         recipe.scatter = _scatter_layer(src, layer["scatter"], nth, scene)
@@ -418,9 +415,12 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
         raise src.error("a generate recipe needs an extent [x0, z0, x1, z1]: the ground the commands make",
                         "generate", "layer", nth)
     kwargs = {}
-    for key in ("rate", "tile", "min_distance", "bend", "twist", "taper", "tint"):
+    for key in ("rate", "tile", "min_distance", "twist", "taper", "tint"):
         if key in recipe:
             kwargs[key] = float(_numbers(src, recipe[key], key, "layer", nth, (1,))[0])
+    if "bend" in recipe:  # one amplitude, or one per level of a mesh of several axes
+        bends = _numbers(src, recipe["bend"], "bend", "layer", nth, tuple(range(1, 17)))
+        kwargs["bend"] = bends[0] if len(bends) == 1 else tuple(bends)
     for key, n in (("altitude", 2), ("slope", 2), ("tint_color", 3)):
         if key in recipe:
             kwargs[key] = tuple(float(x) for x in _numbers(src, recipe[key], key, "layer", nth, (n,)))
