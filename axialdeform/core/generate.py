@@ -38,8 +38,8 @@ import numpy as np
 from .axes import anchor_projection
 from .deform import bernstein
 from .errors import ParamError
+from .mesh import anchor_point
 from .record import EXTENDED_WIDTH, TINTED_WIDTH, WIDTH, join_record
-from .scatter import anchor_point
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",

@@ -22,7 +22,7 @@ from .axis import ControlAxis
 from .errors import MeshError
 from .material import Part
 
-__all__ = ['BaseMesh', 'area_weighted_normals', "check_float32_range"]
+__all__ = ['BaseMesh', 'area_weighted_normals', "check_float32_range", "anchor_point"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -526,3 +526,15 @@ def _check_appearance(mesh: BaseMesh, n: int, m: int) -> None:
     if end != m:
         raise MeshError(f"{mesh.name}: the parts cover {end} faces; expected all {m}")
     object.__setattr__(mesh, "parts", parts)
+
+
+def anchor_point(base, anchor: str, u: int) -> np.ndarray:
+    """(3,) float64: the point of the base mesh that sits on the surface (model space): ``bottom``, the
+    centre of its bounding box's face at the lowest coordinate ``u`` (up); ``center``; ``origin``."""
+    if anchor == "origin":
+        return np.zeros(3)
+    lo, hi = base.positions.min(axis=0), base.positions.max(axis=0)
+    a = (lo + hi) / 2.0
+    if anchor == "bottom":
+        a[u] = lo[u]
+    return a.astype(np.float64)

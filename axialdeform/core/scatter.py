@@ -50,7 +50,7 @@ from .axis import AXIS_NAMES
 from .deform import bernstein
 from .errors import ScatterError, TooFewError
 from .io.mesh import load_mesh
-from .mesh import BaseMesh
+from .mesh import BaseMesh, anchor_point
 from .record import (
     ANGLES,
     EXTENDED_WIDTH,
@@ -116,18 +116,6 @@ def poisson_greedy(points: np.ndarray, radius: float, fixed: np.ndarray | None =
         state[b[new[a]]] = -1
         state[a[new[b]]] = -1
     return state == 1
-
-
-def anchor_point(base, anchor: str, u: int) -> np.ndarray:
-    """(3,) float64: the point of the base mesh that sits on the surface (model space): ``bottom``, the
-    centre of its bounding box's face at the lowest coordinate ``u`` (up); ``center``; ``origin``."""
-    if anchor == "origin":
-        return np.zeros(3)
-    lo, hi = base.positions.min(axis=0), base.positions.max(axis=0)
-    a = (lo + hi) / 2.0
-    if anchor == "bottom":
-        a[u] = lo[u]
-    return a.astype(np.float64)
 
 
 def _rotation_about(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
