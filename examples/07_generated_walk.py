@@ -1,5 +1,5 @@
-"""A walk through a generated landscape that does not end: river-bank stones and grass blades made
-from two recipes (examples/generated/walk.toml, ``[layer.generate]``, docs/generate.md) -- no list of
+"""A walk through a generated landscape that does not end: river-bank stones, grass blades and trees
+of ten axes made from three recipes (examples/generated/walk.toml, ``[layer.generate]``, docs/generate.md) -- no list of
 instances anywhere.  The viewer makes the tiles within reach of the camera as it walks and lets the
 far ones go, so what it holds stays the same size however far it goes.
 
