@@ -9,7 +9,8 @@
 //   offsets d = bend L (2 u - 1), every control point minus D(t_a) (t_a: the anchor on the axis);
 //   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24,  key = H(H(H(uint tx) ^ uint tz) ^ seed);
 //   the ground: a height map (triangles as the terrain mesh's) or y = 0; kept: inside the height map,
-//   u16 < the density map's nearest pixel, the height in the altitude band, tan^2 of the slope in its band.
+//   u16 < the density map's nearest pixel, the height in the altitude band, tan^2 of the slope in its band,
+//   u20 in this mesh's share (a layer of several meshes).
 
 struct AxialRecipe {
     uint seed;
@@ -38,6 +39,7 @@ struct AxialRecipe {
     bool d_wrap;
     vec2 altitude;   // kept where lo <= height <= hi
     vec2 slope_tan2; // kept where lo <= tan^2 of the ground's slope <= hi
+    vec2 choice;     // kept where lo <= u20 < hi: this mesh's share of a layer of several meshes
 };
 
 // The ground's height at xz on the height map's triangles (the terrain mesh's: (r,c),(r+1,c),(r,c+1)
@@ -82,8 +84,8 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
                     out vec2 d5, out vec3 position, out vec3 angles, out vec3 extra, out vec3 tint, out float kept) {
     uint key = axial_gen_key(r.seed, tile);
     uint ui = uint(i);
-    float u[20];
-    for (int k = 0; k < 20; ++k) u[k] = axial_gen_u(key, ui, uint(k));
+    float u[21];
+    for (int k = 0; k < 21; ++k) u[k] = axial_gen_u(key, ui, uint(k));
     float cx = float(tile.x * r.m + i % r.m), cz = float(tile.y * r.m + i / r.m);
     position.x = (cx + 0.5 + r.jitter * (u[0] - 0.5)) * r.cell;
     position.z = (cz + 0.5 + r.jitter * (u[1] - 0.5)) * r.cell;
@@ -103,7 +105,8 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
     bool inside = true;
     if (r.has_heights) h = axial_gen_height(r, heights, position.xz, grad, inside);
     float t2 = dot(grad, grad);
-    bool keep = inside && h >= r.altitude.x && h <= r.altitude.y && t2 >= r.slope_tan2.x && t2 <= r.slope_tan2.y;
+    bool keep = inside && h >= r.altitude.x && h <= r.altitude.y && t2 >= r.slope_tan2.x && t2 <= r.slope_tan2.y
+                && u[20] >= r.choice.x && u[20] < r.choice.y;
     if (r.has_density) keep = keep && u[16] < axial_gen_density(r, density, position.xz);
     kept = keep ? 1.0 : 0.0;
     position.y = h - r.lowest * s;

@@ -46,7 +46,7 @@ __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile"
            "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "recipe_uniforms", "GroundMaps",
            "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table"]
 
-GENERATED_NUMBERS = 20  # u_0 .. u_19 an instance
+GENERATED_NUMBERS = 21  # u_0 .. u_20 an instance
 GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
 
@@ -81,6 +81,8 @@ class Generate:
         Kept only where the ground's height lies in [lo, hi] (a height map's world units).
     slope : (2,) float or None
         Kept only where the ground's slope lies in [lo, hi] degrees (0: level).
+    choice : (2,) float
+        Kept only where ``lo <= u20 < hi``: this mesh's share of a layer of several meshes (weights).
     """
 
     rate: float
@@ -95,6 +97,7 @@ class Generate:
     tint_color: tuple = (1.0, 1.0, 1.0)
     altitude: tuple | None = None
     slope: tuple | None = None
+    choice: tuple = (0.0, 1.0)
 
     def __post_init__(self) -> None:
         def bad(field, expected, value):
@@ -277,7 +280,9 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     if g.heights is not None:
         h, t2, kept = _height(g, xz)
     alt, band = np.asarray(rec["altitude"], f32), np.asarray(rec["slope_tan2"], f32)
+    choice = np.asarray(rec["choice"], f32)
     kept &= (h >= alt[0]) & (h <= alt[1]) & (t2 >= band[0]) & (t2 <= band[1])
+    kept &= (u[:, 20] >= choice[0]) & (u[:, 20] < choice[1])
     if g.density is not None:
         c = np.floor((xz - g.d_lo) * g.d_inv).astype(np.int64)
         size = np.array([g.density.shape[1], g.density.shape[0]])
@@ -373,7 +378,8 @@ def recipe_uniforms(recipe: Generate, mesh, maps: GroundMaps | None = None) -> d
             "h_size": [0, 0] if g.heights is None else [int(g.heights.shape[1]), int(g.heights.shape[0])],
             "has_density": g.density is not None, "d_lo": fl(g.d_lo), "d_inv": fl(g.d_inv),
             "d_size": [0, 0] if g.density is None else [int(g.density.shape[1]), int(g.density.shape[0])],
-            "d_wrap": bool(g.d_wrap), "altitude": fl(alt), "slope_tan2": [min(x, 3.0e38) for x in slope]}
+            "d_wrap": bool(g.d_wrap), "altitude": fl(alt), "slope_tan2": [min(x, 3.0e38) for x in slope],
+            "choice": fl(recipe.choice)}
 
 
 def recipe_json(recipe: Generate, reach: float) -> dict:

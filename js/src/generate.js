@@ -119,7 +119,7 @@ export function recipeUniforms(recipe, positions, axis) {
     // no ground maps: the flat ground y = 0, no density map, no bands (the Python library's maps come
     // with its uniforms: AxialGeneratedMesh's options.uniforms and options.maps)
     has_heights: false, h_lo: [0, 0], h_inv: [1, 1], h_size: [0, 0], has_density: false, d_lo: [0, 0], d_inv: [1, 1],
-    d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND] };
+    d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND], choice: [0, 1] };
 }
 
 /** [[tx, tz], ...]: the tiles any point of which lies within `reach` of (x, z), nearest first
@@ -210,7 +210,7 @@ export class TileGenerator {
     gl.uniform4f(at('u_anchor_w'), ...u.anchor_w);
     gl.uniform3f(at('u_tint_color'), ...u.tint_color);
     for (const k of ['has_heights', 'has_density', 'd_wrap']) gl.uniform1i(at(`u_${k}`), u[k] ? 1 : 0);
-    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
+    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2', 'choice']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
     for (const k of ['h_size', 'd_size']) gl.uniform2i(at(`u_${k}`), u[k][0], u[k][1]);
     gl.uniform1i(at('u_children_n'), this.childCount);
     this.textures.forEach((t, unit) => {

@@ -180,7 +180,7 @@ export interface GeneratorUniforms {
   tint: number; tint_color: [number, number, number];
   has_heights: boolean; h_lo: [number, number]; h_inv: [number, number]; h_size: [number, number];
   has_density: boolean; d_lo: [number, number]; d_inv: [number, number]; d_size: [number, number]; d_wrap: boolean;
-  altitude: [number, number]; slope_tan2: [number, number];
+  altitude: [number, number]; slope_tan2: [number, number]; choice: [number, number];
 }
 
 /** A ground map's pixels: float32, row after row. */

@@ -174,3 +174,32 @@ def test_info_describes_a_scene_file_and_its_generated_layers(tmp_path):
     r = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), "--axes", "parts"], capture_output=True,
                        text=True, timeout=300)
     assert r.returncode == 2 and "is a scene file" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_several_meshes_in_one_layer_share_its_grid_by_weights(tmp_path):
+    """mesh = [a, b] with weights: one generated layer a mesh, named NAME-1, NAME-2; each instance of the
+    recipe is one mesh's (disjoint shares of u20), about in proportion to the weights."""
+    from axialdeform.core.generate import generate_tile
+
+    grass = Path(__file__).resolve().parents[2] / "examples" / "landscape" / "grass.obj"
+    (tmp_path / "grass.obj").write_bytes(grass.read_bytes())
+    path = tmp_path / "mix.toml"
+    path.write_text(SCENE.replace('mesh = "stone"', 'mesh = ["stone", "grass.obj"]').replace("seed = 3", "seed = 3\nweights = [3, 1]"))
+    scene = ad.Scene.load(path)
+    assert [layer.name for layer in scene.layers] == ["stones-1", "stones-2"]
+    a, b = (layer.generate.generate for layer in scene.layers)
+    assert a.choice == (0.0, 0.75) and b.choice == (0.75, 1.0)
+    ka = generate_tile(a, scene.layers[0].mesh, 0, 0)[1]
+    kb = generate_tile(b, scene.layers[1].mesh, 0, 0)[1]
+    assert not (ka & kb).any() and (ka | kb).all() and 0.6 < ka.mean() < 0.9
+    # the same cells' places: one grid
+    pa = generate_tile(a, scene.layers[0].mesh, 0, 0)[0]
+    pb = generate_tile(b, scene.layers[1].mesh, 0, 0)[0]
+    assert np.array_equal(pa[:, [10, 12]], pb[:, [10, 12]])
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SCENE.replace("seed = 3", "seed = 3\nweights = [3, 1]"))
+    with pytest.raises(AxialDeformError, match=r"bad.toml:\d+: key 'weights': weights pick among several meshes"):
+        ad.Scene.load(bad)
+    bad.write_text(SCENE.replace('mesh = "stone"', 'mesh = ["stone", "grass.obj"]').replace("seed = 3", "seed = 3\nweights = [3]"))
+    with pytest.raises(AxialDeformError, match=r"key 'weights': expected 2 finite positive"):
+        ad.Scene.load(bad)

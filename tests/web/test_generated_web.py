@@ -123,6 +123,16 @@ bend = [0.03, 0.25]
 scale = [0.8, 1.2]
 extent = [-24, -24, 24, 24]
 reach = 30.0
+[[layer]]
+name = "ground"
+mesh = ["stone", "grass.obj"]
+[layer.generate]
+rate = 0.5
+tile = 16.0
+seed = 6
+weights = [1, 3]
+extent = [-24, -24, 24, 24]
+reach = 30.0
 """
 
 
@@ -206,7 +216,7 @@ def _check_records(layers: list, scene: Path) -> int:
         assert sorted(g["tiles"]) == sorted(want_tiles.tolist()), g["name"]
         want = generate_tiles(recipe.generate, layer.mesh, g["tiles"], recipe.maps)
         got = np.asarray(g["data"], np.float32).reshape(-1, g["width"])
-        if recipe.maps.heights is None and recipe.maps.density is None:  # every cell kept
+        if recipe.maps.heights is None and recipe.maps.density is None and recipe.generate.choice == (0, 1):  # all kept
             assert got.shape[0] == len(want_tiles) * tile_size(recipe.generate)[0] ** 2
         assert _close(got, want) <= 1e-6, (g["name"], _close(got, want))
         total += got.shape[0]
@@ -317,15 +327,18 @@ def test_a_generated_page_on_a_height_map_keeps_and_tints_as_python_and_render(b
 @pytest.mark.slow
 def test_a_generated_page_of_trees_bends_every_level_as_python(browser, generated_site):
     """A mesh of ten axes: the page makes axis 0's numbers and every child axis's (each level its bend, the
-    joints closed) on the GPU; the records are the Python library's."""
+    joints closed) on the GPU; the records are the Python library's.  Beside them a layer of two meshes by
+    weights: two layers on one grid, each its share."""
     v = Visit(browser, generated_site["url"] + "trees/index.html")
     try:
         assert v.state["ready"] is True, v.state
         layers = v.page.evaluate("window.axialdeformView.generated()")
-        assert layers[0]["width"] == 19 + 90
+        assert [g["name"] for g in layers] == ["trees", "ground-1", "ground-2"] and layers[0]["width"] == 19 + 90
         held = _check_records(layers, generated_site["trees"])
         assert held == v.state["instances"] > 40
-        children = np.asarray(layers[0]["data"], np.float32).reshape(held, -1)[:, 10:100]
+        n = [len(g["data"]) // g["width"] for g in layers]
+        assert 2 * n[1] < n[2] < 5 * n[1]  # weights 1 : 3
+        children = np.asarray(layers[0]["data"], np.float32).reshape(n[0], -1)[:, 10:100]
         assert np.abs(children).max() > 0.01
         assert v.errors == []
     finally:

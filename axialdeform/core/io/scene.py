@@ -14,7 +14,7 @@ import math
 import os
 import re
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +51,7 @@ _LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter",
 
 
 _GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent", "reach", "density",
-             "altitude", "slope", "tint", "tint_color"}
+             "altitude", "slope", "tint", "tint_color", "weights"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "droop", "seed",
@@ -350,7 +350,40 @@ def _read_layers(src, data, scene, stack) -> None:
         name = layer.get("name", f"layer{len(scene.layers) + 1}")
         if any(done.name == name for done in scene.layers):
             raise src.error(f"a second layer named {name!r}; expected unique layer names", "name", "layer", nth)
+        if isinstance(layer.get("mesh"), list):  # several meshes in one generated layer, by weights
+            scene.layers.extend(_mixed_layers(src, layer, nth, scene, name))
+            continue
+        if isinstance(layer.get("generate"), dict) and "weights" in layer["generate"]:
+            raise src.error("weights pick among several meshes; expected mesh = [...] beside them", "weights", "layer", nth)
         scene.layers.append(_read_layer(src, layer, nth, scene, name))
+
+
+def _mixed_layers(src, layer, nth, scene, name) -> list:
+    """``mesh = [a, b, ...]`` with ``[layer.generate] weights = [...]``: one generated layer a mesh (named
+    NAME-1, NAME-2, ...), all on the recipe's one grid; each keeps the instances whose ``u20`` falls in its
+    share of [0, 1) (docs/generate.md), so together they are the recipe's instances, each one mesh."""
+    meshes = layer["mesh"]
+    gen = layer.get("generate")
+    if not isinstance(gen, dict):
+        raise src.error("several meshes in one layer need a [layer.generate] recipe (their weights)", "mesh", "layer", nth)
+    if not (meshes and all(isinstance(m, str) for m in meshes)) or len(meshes) > 16:
+        raise src.error(f"expected 1 to 16 mesh names, found {meshes!r:.80}", "mesh", "layer", nth)
+    weights = _numbers(src, gen.get("weights", [1.0] * len(meshes)), "weights", "layer", nth, (len(meshes),),
+                       positive=True)
+    edges = np.concatenate([[0.0], np.cumsum(weights) / np.sum(weights)])
+    edges[-1] = 1.0
+    out = []
+    for k, mesh in enumerate(meshes):
+        sub_name = f"{name}-{k + 1}"
+        if any(done.name == sub_name for done in scene.layers):
+            raise src.error(f"a second layer named {sub_name!r}; expected unique layer names", "name", "layer", nth)
+        sub = _read_layer(src, {**layer, "mesh": mesh, "generate": {x: v for x, v in gen.items() if x != "weights"}},
+                          nth, scene, sub_name)
+        sub.name = sub_name
+        sub.generate = replace(sub.generate, generate=replace(sub.generate.generate, choice=(float(edges[k]),
+                                                                                          float(edges[k + 1]))))
+        out.append(sub)
+    return out
 
 
 def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
