@@ -21,7 +21,7 @@ struct AxialRecipe {
     vec2 scale;      // lo, hi (1, 1: none)
     float twist;     // tw in [-twist, twist]
     float taper;     // tp in [0, taper]
-    float lowest;    // the base mesh's lowest y: it stands on the ground
+    float anchor_y;  // the anchor's y on the base mesh (bottom: its lowest y): it stands on the ground
     vec4 anchor_w;   // B4_0..3(t_a): the anchor's place on the axis (D(t_a) = 0: it stays put)
     float anchor_w4; // B4_4(t_a)
     float tint;      // 0: none; else tint_color (1 - tint u_{17+c})
@@ -40,6 +40,7 @@ struct AxialRecipe {
     vec2 altitude;   // kept where lo <= height <= hi
     vec2 slope_tan2; // kept where lo <= tan^2 of the ground's slope <= hi
     vec2 choice;     // kept where lo <= u20 < hi: this mesh's share of a layer of several meshes
+    vec2 lift;       // an extra height lo + (hi - lo) u21 (world units)
 };
 
 // The ground's height at xz on the height map's triangles (the terrain mesh's: (r,c),(r+1,c),(r,c+1)
@@ -84,8 +85,8 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
                     out vec2 d5, out vec3 position, out vec3 angles, out vec3 extra, out vec3 tint, out float kept) {
     uint key = axial_gen_key(r.seed, tile);
     uint ui = uint(i);
-    float u[21];
-    for (int k = 0; k < 21; ++k) u[k] = axial_gen_u(key, ui, uint(k));
+    float u[22];
+    for (int k = 0; k < 22; ++k) u[k] = axial_gen_u(key, ui, uint(k));
     float cx = float(tile.x * r.m + i % r.m), cz = float(tile.y * r.m + i / r.m);
     position.x = (cx + 0.5 + r.jitter * (u[0] - 0.5)) * r.cell;
     position.z = (cz + 0.5 + r.jitter * (u[1] - 0.5)) * r.cell;
@@ -109,7 +110,7 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
                 && u[20] >= r.choice.x && u[20] < r.choice.y;
     if (r.has_density) keep = keep && u[16] < axial_gen_density(r, density, position.xz);
     kept = keep ? 1.0 : 0.0;
-    position.y = h - r.lowest * s;
+    position.y = h - r.anchor_y * s + (r.lift.x + (r.lift.y - r.lift.x) * u[21]);
 }
 
 // Child axis j (1 .. K-1) of instance i, a mesh of several axes: offsets uniform in +-amp_j, then the

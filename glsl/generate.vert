@@ -12,7 +12,8 @@ uniform float u_bend;
 uniform vec2 u_scale;
 uniform float u_twist;
 uniform float u_taper;
-uniform float u_lowest;
+uniform float u_anchor_y;
+uniform vec2 u_lift;
 uniform vec4 u_anchor_w;
 uniform float u_anchor_w4;
 uniform float u_tint;
@@ -41,10 +42,10 @@ out vec4 g_extra;   // s, tw, tp, tr
 out vec3 g_tint;    // tg, tb, kept
 
 void main() {
-    AxialRecipe r = AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_lowest,
+    AxialRecipe r = AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_anchor_y,
                                 u_anchor_w, u_anchor_w4, u_tint, u_tint_color, u_has_heights, u_h_lo, u_h_inv,
                                 u_h_size, u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
-                                u_slope_tan2, u_choice);
+                                u_slope_tan2, u_choice, u_lift);
     vec4 d12, d34;
     vec2 d5;
     vec3 position, angles, extra, tint;

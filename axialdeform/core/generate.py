@@ -46,7 +46,7 @@ __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile"
            "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "recipe_uniforms", "GroundMaps",
            "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table"]
 
-GENERATED_NUMBERS = 21  # u_0 .. u_20 an instance
+GENERATED_NUMBERS = 22  # u_0 .. u_21 an instance
 GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
 
@@ -83,6 +83,11 @@ class Generate:
         Kept only where the ground's slope lies in [lo, hi] degrees (0: level).
     choice : (2,) float
         Kept only where ``lo <= u20 < hi``: this mesh's share of a layer of several meshes (weights).
+    anchor : {"bottom", "center", "origin"}
+        The base mesh's point that stands on the ground (as ``[layer.scatter]``'s): its bounding box's
+        lowest face's centre, its centre (half sunk: a stone in a river bed), its origin.
+    lift : (2,) float or None
+        An extra height in [lo, hi] world units (``[layer.scatter]``'s): leaves above the ground.
     """
 
     rate: float
@@ -98,6 +103,8 @@ class Generate:
     altitude: tuple | None = None
     slope: tuple | None = None
     choice: tuple = (0.0, 1.0)
+    anchor: str = "bottom"
+    lift: tuple | None = None
 
     def __post_init__(self) -> None:
         def bad(field, expected, value):
@@ -140,13 +147,15 @@ class Generate:
                 isinstance(x, (int, float)) and not isinstance(x, bool) and 0 <= x <= 1 for x in c)):
             bad("tint_color", "three linear RGB numbers in [0, 1]", c)
         object.__setattr__(self, "tint_color", tuple(float(x) for x in c))
-        for name, top in (("altitude", math.inf), ("slope", 90.0)):
+        if self.anchor not in ("bottom", "center", "origin"):
+            bad("anchor", "one of bottom, center, origin", self.anchor)
+        for name, top in (("altitude", math.inf), ("slope", 90.0), ("lift", math.inf)):
             v = getattr(self, name)
             if v is None:
                 continue
             if not (isinstance(v, (tuple, list)) and len(v) == 2 and all(
                     isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)
-                    and v[0] <= v[1] and (name == "altitude" or 0 <= v[0] <= v[1] <= top)):
+                    and v[0] <= v[1] and (name != "slope" or 0 <= v[0] <= v[1] <= top)):
                 bad(name, "[lo, hi] with lo <= hi" + (" in degrees, 0..90" if name == "slope" else ""), v)
             object.__setattr__(self, name, (float(v[0]), float(v[1])))
 
@@ -259,7 +268,7 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     out[:, 14] = f32(2.0 * math.pi) * u[:, 2]
     amp = f32(recipe.level_bend(0) * mesh.axis.length)
     d = (amp * (f32(2.0) * u[:, 3:13] - f32(1.0))).reshape(n, 5, 2)
-    w = anchor_weights(mesh)
+    w = anchor_weights(mesh, recipe.anchor)
     at = w[0] * d[:, 0] + w[1] * d[:, 1] + w[2] * d[:, 2] + w[3] * d[:, 3] + w[4] * d[:, 4]  # D(t_a), float32
     out[:, 0:10] = (d - at[:, None, :]).reshape(n, 10)  # every control point shifted: D(t_a) = 0
     s = np.ones(n, f32)
@@ -288,7 +297,8 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
         size = np.array([g.density.shape[1], g.density.shape[0]])
         c = np.mod(c, size) if g.d_wrap else np.clip(c, 0, size - 1)
         kept &= u[:, 16] < g.density[c[:, 1], c[:, 0]]
-    out[:, 11] = h - f32(lowest_point(mesh)) * s
+    lift = np.asarray(rec["lift"], f32)
+    out[:, 11] = h - f32(rec["anchor_y"]) * s + (lift[0] + (lift[1] - lift[0]) * u[:, 21])
     if getattr(mesh, "tree", None) is not None:
         out = join_record(out, _children(recipe, mesh, tile_hash_key(recipe.seed, tx, tz), ids))
     return out, kept
@@ -346,40 +356,41 @@ def _height(g: GroundMaps, xz: np.ndarray):
     return h.astype(f32), (gx * gx + gz * gz).astype(f32), inside
 
 
-def anchor_weights(mesh) -> np.ndarray:
+def anchor_weights(mesh, anchor: str = "bottom") -> np.ndarray:
     """(5,) float32: the Bernstein weights ``B4_k(t_a)`` of the base mesh's anchor on its axis: ``t_a`` of
     scatter's ``bottom`` anchor, the centre of its bounding box's lowest face (what stands on the ground:
     a blade's root, a lying stone's middle).  Shifting every control point by ``-D(t_a)`` keeps that
     point where it is put."""
-    t = mesh.axis.parameter(anchor_point(mesh, "bottom", 1)[None, :])[0]
+    t = mesh.axis.parameter(anchor_point(mesh, anchor, 1)[None, :])[0]
     return bernstein(np.array(t)).astype(np.float32)
 
 
 def recipe_uniforms(recipe: Generate, mesh, maps: GroundMaps | None = None) -> dict:
     """The numbers ``glsl/generate.glsl``'s ``AxialRecipe`` takes for ``recipe`` and its base mesh (float64;
     the GPU rounds them to float32 as the numpy reference does): ``seed``, ``m``, ``cell``, ``jitter``,
-    ``bend`` (times L), ``scale`` (lo, hi), ``twist``, ``taper``, ``lowest``, ``anchor_w`` (4) and
-    ``anchor_w4``, the tint, the ground maps' placement (``has_heights``, ``h_lo``, ``h_inv``, ``h_size``,
+    ``bend`` (times L), ``scale`` (lo, hi), ``twist``, ``taper``, ``anchor_y``, ``anchor_w`` (4) and
+    ``anchor_w4``, the lift, the tint, the ground maps' placement (``has_heights``, ``h_lo``, ``h_inv``, ``h_size``,
     ``has_density``, ``d_lo``, ``d_inv``, ``d_size``, ``d_wrap``) and the bands (``altitude``,
     ``slope_tan2``: tan^2 of the slope's bounds) -- what the desktop generator and the page's are given
     (JSON-able; the maps' pixels travel beside them)."""
     m, cell = tile_size(recipe)
     lo, hi = recipe.scale if recipe.scale is not None else (1.0, 1.0)
-    w = anchor_weights(mesh)
+    w = anchor_weights(mesh, recipe.anchor)
     g = maps if maps is not None else GroundMaps()
     fl = lambda a: [float(x) for x in a]  # noqa: E731
     alt = recipe.altitude if recipe.altitude is not None else (-3.0e38, 3.0e38)
     slope = [math.tan(math.radians(a)) ** 2 for a in recipe.slope] if recipe.slope is not None else [0.0, 3.0e38]
     return {"seed": int(recipe.seed), "m": int(m), "cell": float(cell), "jitter": 1.0 - recipe.min_distance / cell,
             "bend": float(recipe.level_bend(0) * mesh.axis.length), "scale": [float(lo), float(hi)], "twist": float(recipe.twist),
-            "taper": float(recipe.taper), "lowest": lowest_point(mesh), "anchor_w": [float(x) for x in w[:4]],
+            "taper": float(recipe.taper), "anchor_y": float(anchor_point(mesh, recipe.anchor, 1)[1]),
+            "anchor_w": [float(x) for x in w[:4]],
             "anchor_w4": float(w[4]), "tint": float(recipe.tint or 0.0), "tint_color": fl(recipe.tint_color),
             "has_heights": g.heights is not None, "h_lo": fl(g.h_lo), "h_inv": fl(g.h_inv),
             "h_size": [0, 0] if g.heights is None else [int(g.heights.shape[1]), int(g.heights.shape[0])],
             "has_density": g.density is not None, "d_lo": fl(g.d_lo), "d_inv": fl(g.d_inv),
             "d_size": [0, 0] if g.density is None else [int(g.density.shape[1]), int(g.density.shape[0])],
             "d_wrap": bool(g.d_wrap), "altitude": fl(alt), "slope_tan2": [min(x, 3.0e38) for x in slope],
-            "choice": fl(recipe.choice)}
+            "choice": fl(recipe.choice), "lift": fl(recipe.lift or (0.0, 0.0))}
 
 
 def recipe_json(recipe: Generate, reach: float) -> dict:

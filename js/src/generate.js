@@ -114,12 +114,13 @@ export function recipeUniforms(recipe, positions, axis) {
   const [s0, s1] = recipe.scale || [1, 1];
   const bend = Array.isArray(recipe.bend) ? recipe.bend[0] : recipe.bend;
   return { seed: recipe.seed, m, cell, jitter: 1 - recipe.min_distance / cell, bend: bend * axis.length,
-    scale: [s0, s1], twist: recipe.twist, taper: recipe.taper, lowest: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4],
+    scale: [s0, s1], twist: recipe.twist, taper: recipe.taper, anchor_y: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4],
     tint: recipe.tint || 0, tint_color: recipe.tint_color.slice(),
     // no ground maps: the flat ground y = 0, no density map, no bands (the Python library's maps come
     // with its uniforms: AxialGeneratedMesh's options.uniforms and options.maps)
     has_heights: false, h_lo: [0, 0], h_inv: [1, 1], h_size: [0, 0], has_density: false, d_lo: [0, 0], d_inv: [1, 1],
-    d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND], choice: [0, 1] };
+    d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND], choice: [0, 1],
+    lift: [0, 0] };
 }
 
 /** [[tx, tz], ...]: the tiles any point of which lies within `reach` of (x, z), nearest first
@@ -205,12 +206,12 @@ export class TileGenerator {
     const at = (name) => gl.getUniformLocation(p, name);
     gl.uniform1ui(at('u_seed'), u.seed);
     gl.uniform1i(at('u_m'), u.m);
-    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'lowest', 'anchor_w4', 'tint']) gl.uniform1f(at(`u_${k}`), u[k]);
+    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'anchor_y', 'anchor_w4', 'tint']) gl.uniform1f(at(`u_${k}`), u[k]);
     gl.uniform2f(at('u_scale'), u.scale[0], u.scale[1]);
     gl.uniform4f(at('u_anchor_w'), ...u.anchor_w);
     gl.uniform3f(at('u_tint_color'), ...u.tint_color);
     for (const k of ['has_heights', 'has_density', 'd_wrap']) gl.uniform1i(at(`u_${k}`), u[k] ? 1 : 0);
-    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2', 'choice']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
+    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2', 'choice', 'lift']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
     for (const k of ['h_size', 'd_size']) gl.uniform2i(at(`u_${k}`), u[k][0], u[k][1]);
     gl.uniform1i(at('u_children_n'), this.childCount);
     this.textures.forEach((t, unit) => {

@@ -176,11 +176,11 @@ export interface GenerateRecipe {
 /** generate.glsl's AxialRecipe numbers (axialdeform.core.generate.recipe_uniforms). */
 export interface GeneratorUniforms {
   seed: number; m: number; cell: number; jitter: number; bend: number; scale: [number, number];
-  twist: number; taper: number; lowest: number; anchor_w: [number, number, number, number]; anchor_w4: number;
+  twist: number; taper: number; anchor_y: number; anchor_w: [number, number, number, number]; anchor_w4: number;
   tint: number; tint_color: [number, number, number];
   has_heights: boolean; h_lo: [number, number]; h_inv: [number, number]; h_size: [number, number];
   has_density: boolean; d_lo: [number, number]; d_inv: [number, number]; d_size: [number, number]; d_wrap: boolean;
-  altitude: [number, number]; slope_tan2: [number, number]; choice: [number, number];
+  altitude: [number, number]; slope_tan2: [number, number]; choice: [number, number]; lift: [number, number];
 }
 
 /** A ground map's pixels: float32, row after row. */

@@ -129,6 +129,8 @@ def test_a_scene_file_layer_is_generated_over_its_extent(tmp_path):
     (("seed = 3", "seed = 3\naltitude = [0, 2]"), r"gen.toml:10: key 'altitude': altitude and slope bands need the scene's height-map"),
     (("seed = 3", "seed = 3\nslope = [10, 100]"), r"gen.toml:10: key 'slope': expected \[lo, hi\] with lo <= hi in degrees, 0..90"),
     (("seed = 3", "seed = 3\ntint = 1.5"), r"gen.toml:10: key 'tint': expected an amount in \[0, 1\]"),
+    (("seed = 3", 'seed = 3\nanchor = "top"'), r"gen.toml:10: key 'anchor': expected one of bottom, center, origin"),
+    (("seed = 3", "seed = 3\nlift = [1, 0]"), r"gen.toml:10: key 'lift': expected \[lo, hi\] with lo <= hi"),
     (("seed = 3", "seed = 3\ntint_color = [1, 2, 0]"), r"gen.toml:10: key 'tint_color': expected three linear RGB"),
     (("seed = 3", 'seed = 3\ndensity = "nowhere.png"'), r"gen.toml:10: key 'density'.*nowhere.png"),
     (("[[layer]]", f'[terrain]\nmesh = "{(Path(ad.__file__).parent / "meshes" / "stone.obj").as_posix()}"\n[[layer]]'),
@@ -203,3 +205,26 @@ def test_several_meshes_in_one_layer_share_its_grid_by_weights(tmp_path):
     bad.write_text(SCENE.replace('mesh = "stone"', 'mesh = ["stone", "grass.obj"]').replace("seed = 3", "seed = 3\nweights = [3]"))
     with pytest.raises(AxialDeformError, match=r"key 'weights': expected 2 finite positive"):
         ad.Scene.load(bad)
+
+
+def test_anchor_and_lift_place_the_instance_as_scatter_does():
+    """anchor = center sinks a stone to its middle, origin puts the mesh's origin on the ground; lift raises
+    each by its own amount in [lo, hi]; the anchor stays where it is put whatever the bend."""
+    from axialdeform.core.generate import generate_tile
+    from axialdeform.core.mesh import anchor_point
+
+    base = Generate(rate=2.0, tile=8.0, seed=4, bend=0.2)
+    bottom = generate_tile(base, STONE, 0, 0)[0]
+    for anchor in ("center", "origin"):
+        p = generate_tile(Generate(rate=2.0, tile=8.0, seed=4, bend=0.2, anchor=anchor), STONE, 0, 0)[0]
+        a = anchor_point(STONE, anchor, 1)
+        assert np.allclose(p[:, 11], -a[1]) and np.allclose(p[:, [10, 12]], bottom[:, [10, 12]])
+        # the anchor's place on the axis: the offsets there vanish (D(t_a) = 0)
+        from axialdeform.core.deform import bernstein
+
+        t = STONE.axis.parameter(a[None, :])[0]
+        at = np.einsum("q,nqc->nc", bernstein(np.array(t)), p[:, :10].reshape(-1, 5, 2))
+        assert np.abs(at).max() < 1e-6
+    lifted = generate_tile(Generate(rate=2.0, tile=8.0, seed=4, bend=0.2, lift=(0.5, 1.5)), STONE, 0, 0)[0]
+    up = lifted[:, 11] - bottom[:, 11]
+    assert (up >= 0.5 - 1e-6).all() and (up <= 1.5 + 1e-6).all() and np.ptp(up) > 0.5

@@ -84,6 +84,10 @@ def test_the_gpu_keeps_and_places_as_numpy_on_the_ground_maps(ctx, flat):
     else:
         recipe = Generate(rate=3.0, tile=8.0, min_distance=0.2, seed=9, bend=0.1, altitude=(1.0, 5.0), slope=(0.0, 35.0),
                           scale=(0.5, 1.0))
+        sunk = Generate(rate=3.0, tile=8.0, seed=9, bend=0.1, scale=(0.5, 1.0), anchor="center", lift=(0.1, 0.4))
+        cpu, _ = generate_tile(sunk, stone, 1, 1, GroundMaps.of(terrain, None))
+        gpu, _ = generate_tile_gpu(ctx, sunk, stone, 1, 1, GroundMaps.of(terrain, None))
+        assert (np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))).max() <= 1e-6
         maps = GroundMaps.of(terrain, density)
     kept_all = []
     for tile in [(0, 0), (-4, -3), (3, 2), (-1, 1), (20, 20)]:

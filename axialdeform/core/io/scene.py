@@ -51,7 +51,7 @@ _LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter",
 
 
 _GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent", "reach", "density",
-             "altitude", "slope", "tint", "tint_color", "weights"}
+             "altitude", "slope", "tint", "tint_color", "weights", "anchor", "lift"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "droop", "seed",
@@ -454,7 +454,9 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
     if "bend" in recipe:  # one amplitude, or one per level of a mesh of several axes
         bends = _numbers(src, recipe["bend"], "bend", "layer", nth, tuple(range(1, 17)))
         kwargs["bend"] = bends[0] if len(bends) == 1 else tuple(bends)
-    for key, n in (("altitude", 2), ("slope", 2), ("tint_color", 3)):
+    if "anchor" in recipe:
+        kwargs["anchor"] = recipe["anchor"]  # Generate names what it expects
+    for key, n in (("altitude", 2), ("slope", 2), ("tint_color", 3), ("lift", 2)):
         if key in recipe:
             kwargs[key] = tuple(float(x) for x in _numbers(src, recipe[key], key, "layer", nth, (n,)))
     density = _existing(src, recipe["density"], "density", "layer", nth) if "density" in recipe else None
