@@ -41,7 +41,64 @@ struct AxialRecipe {
     vec2 slope_tan2; // kept where lo <= tan^2 of the ground's slope <= hi
     vec2 choice;     // kept where lo <= u20 < hi: this mesh's share of a layer of several meshes
     vec2 lift;       // an extra height lo + (hi - lo) u21 (world units)
+    float align;     // align_to_normal: the turn toward the ground's normal, a fraction of its angle
+    vec2 anchor_xz;  // the anchor's x, z on the base mesh (with anchor_y: the point that rests on the ground)
 };
+
+// cos and sin of x to float32 rounding on every GPU (the builtins' precision is the implementation's):
+// reduction by pi/2 (two constants), Taylor polynomials on [-pi/4, pi/4], the quadrant applied exactly
+// (axialCosSin of js/src/nodes.js; axialdeform.core.generate._cos_sin, operation for operation).
+vec2 axial_gen_cos_sin(float x) {
+    float q = floor(x * 0.6366197723675814 + 0.5);
+    float r = (x - q * 1.5707963705062866) - q * -4.371139000186243e-8;
+    float r2 = r * r;
+    float s = r * (r2 * (r2 * (r2 * (r2 * (1.0 / 362880.0) - 1.0 / 5040.0) + 1.0 / 120.0) - 1.0 / 6.0) + 1.0);
+    float c = r2 * (r2 * (r2 * (r2 * (r2 * (-1.0 / 3628800.0) + 1.0 / 40320.0) - 1.0 / 720.0) + 1.0 / 24.0) - 0.5) + 1.0;
+    float m = q - 4.0 * floor(q * 0.25);
+    bool odd = m == 1.0 || m == 3.0;
+    float cs = odd ? s : c, sn = odd ? c : s;
+    return vec2((m == 1.0 || m == 2.0) ? -cs : cs, m >= 1.5 ? -sn : sn);
+}
+
+// atan2(y, x) to a few float32 ulps on every GPU (Cephes' atanf: reduction to [0, tan(pi/8)], its polynomial).
+float axial_gen_atan2(float y, float x) {
+    float ax = abs(x), ay = abs(y);
+    if (ax == 0.0 && ay == 0.0) return 0.0;
+    bool swap = ay > ax;
+    float t = swap ? ax / ay : ay / ax;  // in [0, 1]
+    float base = 0.0;
+    if (t > 0.41421356237309503) { base = 0.7853981633974483; t = (t - 1.0) / (t + 1.0); }
+    float z = t * t;
+    float a = (((8.05374449538e-2 * z - 1.38776856032e-1) * z + 1.99777106478e-1) * z - 3.33329491539e-1) * z * t + t + base;
+    if (swap) a = 1.5707963267948966 - a;
+    if (x < 0.0) a = 3.141592653589793 - a;
+    return y < 0.0 ? -a : a;
+}
+
+// The turn of an instance that leans toward the ground's normal (gradient grad) by the fraction r.align,
+// after its turn ry about up: R = Rt(k, align angle(up, n)) Ry(ry), k = up x n / |up x n|, as Euler
+// angles (rx, ry, rz) of R = Rz Ry Rx (axialdeform.core.transforms.angles_from_matrices), and (R a).y.
+vec3 axial_gen_lean(AxialRecipe r, float ry, vec2 grad, out float ay) {
+    float inv = inversesqrt(grad.x * grad.x + 1.0 + grad.y * grad.y);
+    vec3 n = vec3(-grad.x, 1.0, -grad.y) * inv;
+    float sn = sqrt(n.x * n.x + n.z * n.z);
+    vec3 k = sn > 1e-12 ? vec3(n.z, 0.0, -n.x) / sn : vec3(0.0);
+    vec2 ta = axial_gen_cos_sin(axial_gen_atan2(sn, n.y) * r.align);
+    vec2 ty = axial_gen_cos_sin(ry);
+    // Rt = I + sin K + (1 - cos) K^2 (Rodrigues), K the cross-product matrix of k (k.y = 0)
+    float c1 = 1.0 - ta.x;
+    mat3 rt = mat3(1.0 - c1 * k.z * k.z, ta.y * k.z, c1 * k.x * k.z,       // column 0
+                   -ta.y * k.z, 1.0 - c1 * (k.x * k.x + k.z * k.z), ta.y * k.x,  // column 1
+                   c1 * k.x * k.z, -ta.y * k.x, 1.0 - c1 * k.x * k.x);      // column 2
+    mat3 ryM = mat3(ty.x, 0.0, -ty.y, 0.0, 1.0, 0.0, ty.y, 0.0, ty.x);
+    mat3 m = rt * ryM;  // m[col][row]
+    float cy = sqrt(m[0][0] * m[0][0] + m[0][1] * m[0][1]);
+    vec3 angles = cy < 1e-9 ? vec3(axial_gen_atan2(-m[2][1], m[1][1]), axial_gen_atan2(-m[0][2], cy), 0.0)
+                            : vec3(axial_gen_atan2(m[1][2], m[2][2]), axial_gen_atan2(-m[0][2], cy),
+                                   axial_gen_atan2(m[0][1], m[0][0]));
+    ay = m[0][1] * r.anchor_xz.x + m[1][1] * r.anchor_y + m[2][1] * r.anchor_xz.y;
+    return angles;
+}
 
 // The ground's height at xz on the height map's triangles (the terrain mesh's: (r,c),(r+1,c),(r,c+1)
 // and (r,c+1),(r+1,c),(r+1,c+1)), its gradient, and whether xz is over the map.
@@ -110,7 +167,9 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
                 && u[20] >= r.choice.x && u[20] < r.choice.y;
     if (r.has_density) keep = keep && u[16] < axial_gen_density(r, density, position.xz);
     kept = keep ? 1.0 : 0.0;
-    position.y = h - r.anchor_y * s + (r.lift.x + (r.lift.y - r.lift.x) * u[21]);
+    float ay = r.anchor_y;
+    if (r.align > 0.0 && r.has_heights) angles = axial_gen_lean(r, angles.y, grad, ay);
+    position.y = h - ay * s + (r.lift.x + (r.lift.y - r.lift.x) * u[21]);
 }
 
 // Child axis j (1 .. K-1) of instance i, a mesh of several axes: offsets uniform in +-amp_j, then the

@@ -30,6 +30,8 @@ uniform bool u_d_wrap;
 uniform vec2 u_altitude;
 uniform vec2 u_slope_tan2;
 uniform vec2 u_choice;
+uniform float u_align;
+uniform vec2 u_anchor_xz;
 uniform sampler2D u_heights;  // unit 0
 uniform sampler2D u_density;  // unit 1
 uniform ivec2 u_tile;
@@ -45,7 +47,7 @@ void main() {
     AxialRecipe r = AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_anchor_y,
                                 u_anchor_w, u_anchor_w4, u_tint, u_tint_color, u_has_heights, u_h_lo, u_h_inv,
                                 u_h_size, u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
-                                u_slope_tan2, u_choice, u_lift);
+                                u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz);
     vec4 d12, d34;
     vec2 d5;
     vec3 position, angles, extra, tint;

@@ -83,6 +83,9 @@ class Generate:
         Kept only where the ground's slope lies in [lo, hi] degrees (0: level).
     choice : (2,) float
         Kept only where ``lo <= u20 < hi``: this mesh's share of a layer of several meshes (weights).
+    align_to_normal : float
+        On a height map, each instance leans toward the ground's normal by this fraction of the angle
+        between up and the normal (``[layer.scatter]``'s), in [0, 1].
     anchor : {"bottom", "center", "origin"}
         The base mesh's point that stands on the ground (as ``[layer.scatter]``'s): its bounding box's
         lowest face's centre, its centre (half sunk: a stone in a river bed), its origin.
@@ -105,6 +108,7 @@ class Generate:
     choice: tuple = (0.0, 1.0)
     anchor: str = "bottom"
     lift: tuple | None = None
+    align_to_normal: float = 0.0
 
     def __post_init__(self) -> None:
         def bad(field, expected, value):
@@ -147,6 +151,9 @@ class Generate:
                 isinstance(x, (int, float)) and not isinstance(x, bool) and 0 <= x <= 1 for x in c)):
             bad("tint_color", "three linear RGB numbers in [0, 1]", c)
         object.__setattr__(self, "tint_color", tuple(float(x) for x in c))
+        a = self.align_to_normal
+        if not (isinstance(a, (int, float)) and not isinstance(a, bool) and 0 <= a <= 1):
+            bad("align_to_normal", "a fraction in [0, 1]", a)
         if self.anchor not in ("bottom", "center", "origin"):
             bad("anchor", "one of bottom, center, origin", self.anchor)
         for name, top in (("altitude", math.inf), ("slope", 90.0), ("lift", math.inf)):
@@ -286,8 +293,9 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     t2 = np.zeros(n, f32)
     kept = np.ones(n, bool)
     xz = out[:, [10, 12]]
+    grad = np.zeros((n, 2), f32)
     if g.heights is not None:
-        h, t2, kept = _height(g, xz)
+        h, t2, kept, grad = _height(g, xz)
     alt, band = np.asarray(rec["altitude"], f32), np.asarray(rec["slope_tan2"], f32)
     choice = np.asarray(rec["choice"], f32)
     kept &= (h >= alt[0]) & (h <= alt[1]) & (t2 >= band[0]) & (t2 <= band[1])
@@ -298,7 +306,10 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
         c = np.mod(c, size) if g.d_wrap else np.clip(c, 0, size - 1)
         kept &= u[:, 16] < g.density[c[:, 1], c[:, 0]]
     lift = np.asarray(rec["lift"], f32)
-    out[:, 11] = h - f32(rec["anchor_y"]) * s + (lift[0] + (lift[1] - lift[0]) * u[:, 21])
+    ay = np.full(n, f32(rec["anchor_y"]), f32)
+    if recipe.align_to_normal > 0 and g.heights is not None:
+        out[:, 13:16], ay = _lean(rec, out[:, 14], grad)
+    out[:, 11] = h - ay * s + (lift[0] + (lift[1] - lift[0]) * u[:, 21])
     if getattr(mesh, "tree", None) is not None:
         out = join_record(out, _children(recipe, mesh, tile_hash_key(recipe.seed, tx, tz), ids))
     return out, kept
@@ -353,7 +364,74 @@ def _height(g: GroundMaps, xz: np.ndarray):
                  h11 + (one - f[:, 0]) * (h10 - h11) + (one - f[:, 1]) * (h01 - h11))
     gx = np.where(lower, h01 - h00, h11 - h10) * g.h_inv[0]
     gz = np.where(lower, h10 - h00, h11 - h01) * g.h_inv[1]
-    return h.astype(f32), (gx * gx + gz * gz).astype(f32), inside
+    return h.astype(f32), (gx * gx + gz * gz).astype(f32), inside, np.column_stack([gx, gz]).astype(f32)
+
+
+def _cos_sin(x):
+    """(cos x, sin x) in float32 as axial_gen_cos_sin of glsl/generate.glsl computes them."""
+    f32 = np.float32
+    x = np.asarray(x, f32)
+    q = np.floor(x * f32(0.6366197723675814) + f32(0.5))
+    r = (x - q * f32(1.5707963705062866)) - q * f32(-4.371139000186243e-8)
+    r2 = r * r
+    s = r * (r2 * (r2 * (r2 * (r2 * f32(1.0 / 362880.0) - f32(1.0 / 5040.0)) + f32(1.0 / 120.0)) - f32(1.0 / 6.0)) + f32(1))
+    c = r2 * (r2 * (r2 * (r2 * (r2 * f32(-1.0 / 3628800.0) + f32(1.0 / 40320.0)) - f32(1.0 / 720.0)) + f32(1.0 / 24.0))
+              - f32(0.5)) + f32(1)
+    m = q - f32(4) * np.floor(q * f32(0.25))
+    odd = (m == 1) | (m == 3)
+    cs, sn = np.where(odd, s, c), np.where(odd, c, s)
+    return np.where((m == 1) | (m == 2), -cs, cs).astype(f32), np.where(m >= 1.5, -sn, sn).astype(f32)
+
+
+def _atan2(y, x):
+    """atan2 in float32 as axial_gen_atan2 of glsl/generate.glsl (Cephes' atanf)."""
+    f32 = np.float32
+    y, x = np.asarray(y, f32), np.asarray(x, f32)
+    ax, ay = np.abs(x), np.abs(y)
+    swap = ay > ax
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(swap, ax / ay, ay / ax).astype(f32)
+    t = np.where((ax == 0) & (ay == 0), f32(0), t)
+    big = t > f32(0.41421356237309503)
+    base = np.where(big, f32(0.7853981633974483), f32(0))
+    t = np.where(big, (t - f32(1)) / (t + f32(1)), t).astype(f32)
+    z = t * t
+    a = (((f32(8.05374449538e-2) * z - f32(1.38776856032e-1)) * z + f32(1.99777106478e-1)) * z
+         - f32(3.33329491539e-1)) * z * t + t + base
+    a = np.where(swap, f32(1.5707963267948966) - a, a)
+    a = np.where(x < 0, f32(3.141592653589793) - a, a)
+    a = np.where(y < 0, -a, a)
+    return np.where((ax == 0) & (ay == 0), f32(0), a).astype(f32)
+
+
+def _lean(rec: dict, ry, grad):
+    """Euler angles ((n, 3) float32) and the anchor's height after the turn ((n,) float32) of instances that
+    lean toward the ground's normal (axial_gen_lean of glsl/generate.glsl, operation for operation)."""
+    f32 = np.float32
+    gx, gz = grad[:, 0], grad[:, 1]
+    inv = f32(1) / np.sqrt(gx * gx + f32(1) + gz * gz)
+    nx, ny, nz = -gx * inv, inv, -gz * inv
+    sn = np.sqrt(nx * nx + nz * nz)
+    safe = np.where(sn > f32(1e-12), sn, f32(1))
+    kx, kz = np.where(sn > f32(1e-12), nz / safe, f32(0)), np.where(sn > f32(1e-12), -nx / safe, f32(0))
+    ca, sa = _cos_sin(_atan2(sn, ny) * f32(rec["align"]))
+    cy_, sy_ = _cos_sin(ry)
+    c1 = f32(1) - ca
+    rt = np.empty((len(gx), 3, 3), f32)  # rows
+    rt[:, 0] = np.column_stack([f32(1) - c1 * kz * kz, -sa * kz, c1 * kx * kz])
+    rt[:, 1] = np.column_stack([sa * kz, f32(1) - c1 * (kx * kx + kz * kz), -sa * kx])
+    rt[:, 2] = np.column_stack([c1 * kx * kz, sa * kx, f32(1) - c1 * kx * kx])
+    ryM = np.zeros((len(gx), 3, 3), f32)
+    ryM[:, 0, 0], ryM[:, 0, 2], ryM[:, 1, 1], ryM[:, 2, 0], ryM[:, 2, 2] = cy_, sy_, f32(1), -sy_, cy_
+    m = np.einsum("nij,njk->nik", rt, ryM).astype(f32)  # R, rows
+    cyy = np.sqrt(m[:, 0, 0] * m[:, 0, 0] + m[:, 1, 0] * m[:, 1, 0])
+    locked = cyy < f32(1e-9)
+    rx = np.where(locked, _atan2(-m[:, 1, 2], m[:, 1, 1]), _atan2(m[:, 2, 1], m[:, 2, 2]))
+    ryy = _atan2(-m[:, 2, 0], cyy)
+    rz = np.where(locked, f32(0), _atan2(m[:, 1, 0], m[:, 0, 0]))
+    ax_, az_ = (f32(v) for v in rec["anchor_xz"])
+    ay = m[:, 1, 0] * ax_ + m[:, 1, 1] * f32(rec["anchor_y"]) + m[:, 1, 2] * az_
+    return np.column_stack([rx, ryy, rz]).astype(f32), ay.astype(f32)
 
 
 def anchor_weights(mesh, anchor: str = "bottom") -> np.ndarray:
@@ -390,7 +468,8 @@ def recipe_uniforms(recipe: Generate, mesh, maps: GroundMaps | None = None) -> d
             "has_density": g.density is not None, "d_lo": fl(g.d_lo), "d_inv": fl(g.d_inv),
             "d_size": [0, 0] if g.density is None else [int(g.density.shape[1]), int(g.density.shape[0])],
             "d_wrap": bool(g.d_wrap), "altitude": fl(alt), "slope_tan2": [min(x, 3.0e38) for x in slope],
-            "choice": fl(recipe.choice), "lift": fl(recipe.lift or (0.0, 0.0))}
+            "choice": fl(recipe.choice), "lift": fl(recipe.lift or (0.0, 0.0)),
+            "align": float(recipe.align_to_normal), "anchor_xz": fl(anchor_point(mesh, recipe.anchor, 1)[[0, 2]])}
 
 
 def recipe_json(recipe: Generate, reach: float) -> dict:

@@ -120,7 +120,7 @@ export function recipeUniforms(recipe, positions, axis) {
     // with its uniforms: AxialGeneratedMesh's options.uniforms and options.maps)
     has_heights: false, h_lo: [0, 0], h_inv: [1, 1], h_size: [0, 0], has_density: false, d_lo: [0, 0], d_inv: [1, 1],
     d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND], choice: [0, 1],
-    lift: [0, 0] };
+    lift: [0, 0], align: 0, anchor_xz: [a[0], a[2]] };
 }
 
 /** [[tx, tz], ...]: the tiles any point of which lies within `reach` of (x, z), nearest first
@@ -206,12 +206,12 @@ export class TileGenerator {
     const at = (name) => gl.getUniformLocation(p, name);
     gl.uniform1ui(at('u_seed'), u.seed);
     gl.uniform1i(at('u_m'), u.m);
-    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'anchor_y', 'anchor_w4', 'tint']) gl.uniform1f(at(`u_${k}`), u[k]);
+    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'anchor_y', 'anchor_w4', 'tint', 'align']) gl.uniform1f(at(`u_${k}`), u[k]);
     gl.uniform2f(at('u_scale'), u.scale[0], u.scale[1]);
     gl.uniform4f(at('u_anchor_w'), ...u.anchor_w);
     gl.uniform3f(at('u_tint_color'), ...u.tint_color);
     for (const k of ['has_heights', 'has_density', 'd_wrap']) gl.uniform1i(at(`u_${k}`), u[k] ? 1 : 0);
-    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2', 'choice', 'lift']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
+    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2', 'choice', 'lift', 'anchor_xz']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
     for (const k of ['h_size', 'd_size']) gl.uniform2i(at(`u_${k}`), u[k][0], u[k][1]);
     gl.uniform1i(at('u_children_n'), this.childCount);
     this.textures.forEach((t, unit) => {
@@ -303,8 +303,8 @@ export class TileGenerator {
  * options: AxialInstancedMesh's, and `axis` (default: the mesh's longest extent, as axialdeform's),
  * `uniforms` (generate.glsl's numbers as the Python library gave them; default: recipeUniforms, the
  * flat ground), `maps` (the ground maps those uniforms place: TileGenerator's) and `autoUpdate` (make
- * the tiles around the camera's position just before each draw, without calling update: what the
- * glTF plugin's meshes do).  Its frustum culling is off: its tiles are around the camera.
+ * the tiles around the camera's position by itself, without calling update: what the glTF plugin's
+ * meshes do; they are drawn from the second frame on, the first telling it the renderer and camera).  Its frustum culling is off: its tiles are around the camera.
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
   constructor(geometry, material, recipe, options = {}) {
@@ -334,16 +334,29 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     this.timing = null;
     this.frustumCulled = false;
     this.autoUpdate = Boolean(options.autoUpdate);
-    // before each draw: the base mesh's hook (the renderer it draws with), the tiles around the camera
-    // (autoUpdate), then a user's own hook, which assigning onBeforeRender sets
+    // autoUpdate: each draw says which renderer and camera (the base mesh's hook, then ours, then a
+    // user's own, which assigning onBeforeRender sets); the tiles are made when the next render updates
+    // the world's matrices, before three uploads the instances (made in onBeforeRender, they would be
+    // drawn a frame late), the very first ones at once
     const baseHook = this.onBeforeRender;
     let userHook = null;
+    this._drawnBy = null;
     const hook = (renderer, scene, camera, ...rest) => {
       baseHook(renderer, scene, camera, ...rest);
-      if (this.autoUpdate && renderer.isWebGLRenderer) this.update(renderer, camera.getWorldPosition(_eye));
+      if (this.autoUpdate && renderer.isWebGLRenderer) {
+        const first = this._drawnBy === null;
+        this._drawnBy = { renderer, camera };
+        if (first) this.update(renderer, camera.getWorldPosition(_eye));
+      }
       if (userHook) userHook.call(this, renderer, scene, camera, ...rest);
     };
     Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
+  }
+
+  updateMatrixWorld(force) {
+    super.updateMatrixWorld(force);
+    const d = this._drawnBy;
+    if (this.autoUpdate && d) this.update(d.renderer, d.camera.getWorldPosition(_eye));
   }
 
   /** Make the tiles within reach of `point` ({x, z}: a Vector3) if they changed; returns whether they did. */

@@ -181,6 +181,7 @@ export interface GeneratorUniforms {
   has_heights: boolean; h_lo: [number, number]; h_inv: [number, number]; h_size: [number, number];
   has_density: boolean; d_lo: [number, number]; d_inv: [number, number]; d_size: [number, number]; d_wrap: boolean;
   altitude: [number, number]; slope_tan2: [number, number]; choice: [number, number]; lift: [number, number];
+  align: number; anchor_xz: [number, number];
 }
 
 /** A ground map's pixels: float32, row after row. */
@@ -223,7 +224,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   readonly generatorUniforms: GeneratorUniforms;
   /** The tiles held, nearest first; their instances in that order, m^2 each. */
   readonly tiles: [number, number][];
-  /** Make the tiles around the camera before each draw, without update(). */
+  /** Make the tiles around the camera by itself, without update(): drawn from the second frame on. */
   autoUpdate: boolean;
   /** The last tiles' cost (null before the first): the GPU pass with its read-back, the mesh's own work. */
   readonly timing: { instances: number; generateMs: number; applyMs: number } | null;

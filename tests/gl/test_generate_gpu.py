@@ -144,3 +144,48 @@ def test_the_gpu_makes_a_trees_child_axes_as_numpy(ctx):
     slope = np.einsum("jq,njqc->njc", db, children.reshape(len(cpu), 9, 5, 2))
     assert np.abs(at_joint).max() < 1e-5 and np.abs(slope).max() < 1e-4
     assert np.abs(children).max() > 0.01  # they do bend
+
+
+def test_instances_lean_toward_the_ground_as_scatter_turns_them(ctx):
+    """align_to_normal on a height map: the GPU's turn (its own sine, cosine and arctangent) equals numpy's;
+    both are scatter's R = Rt(up x n, align angle) Ry(ry), read back from the Euler angles; the anchor rests
+    on the ground after the turn."""
+    from axialdeform.core.generate import GroundMaps
+    from axialdeform.core.transforms import rotation_matrices
+
+    stone = ad.load_mesh("stone")
+    terrain, _ = _hills()
+    maps = GroundMaps.of(terrain, None)
+    recipe = Generate(rate=2.0, tile=8.0, seed=12, bend=0.1, scale=(0.5, 1.0), align_to_normal=0.7, anchor="bottom")
+    for tile in [(0, 0), (-3, -2), (2, 1)]:
+        cpu, kept = generate_tile(recipe, stone, *tile, maps)
+        gpu, gkept = generate_tile_gpu(ctx, recipe, stone, *tile, maps)
+        assert np.array_equal(kept, gkept)
+        rel = np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))
+        assert rel.max() <= 1e-6, (tile, rel.max())
+    p = cpu[kept]
+    # the reference in float64: scatter's construction from the terrain's normal under each instance
+    flat = generate_tile(Generate(rate=2.0, tile=8.0, seed=12, bend=0.1, scale=(0.5, 1.0)), stone, 2, 1, maps)[0][kept]
+    r = rotation_matrices(p[:, 13:16].astype(np.float64))
+    up = r[:, :, 1]  # where the mesh's up went
+    assert np.allclose(rotation_matrices(flat[:, 13:16])[:, 1, 1], 1.0)  # without align: upright
+    tilt = np.degrees(np.arccos(np.clip(up[:, 1], -1, 1)))
+    assert tilt.max() > 3.0  # on the hills' slopes they lean
+    # scatter's construction in float64 from the normal of the terrain triangle under each instance
+    import trimesh
+
+    from axialdeform.core.transforms import matrices_from_rotation_vectors
+
+    v, f = np.asarray(terrain.vertices), np.asarray(terrain.faces)
+    ground = trimesh.Trimesh(v, f, process=False)
+    origins = np.column_stack([p[:, 10], np.full(len(p), 100.0), p[:, 12]]).astype(np.float64)
+    _hit, ray, tri = ground.ray.intersects_location(origins, np.tile([0.0, -1.0, 0.0], (len(p), 1)), multiple_hits=False)
+    n = np.zeros((len(p), 3))
+    n[ray] = ground.face_normals[tri]
+    n *= np.sign(n[:, 1:2])
+    cross = np.cross(np.array([0.0, 1.0, 0.0]), n)
+    sin = np.linalg.norm(cross, axis=1)
+    axis = np.where(sin[:, None] > 1e-12, cross / np.maximum(sin, 1e-12)[:, None], 0.0)
+    tilt = matrices_from_rotation_vectors(axis * (np.arctan2(sin, n[:, 1]) * 0.7)[:, None])
+    want = tilt @ rotation_matrices(np.column_stack([np.zeros(len(p)), flat[:, 14], np.zeros(len(p))]))
+    assert np.abs(r - want).max() < 1e-4, np.abs(r - want).max()
