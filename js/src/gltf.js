@@ -108,7 +108,7 @@ export class AxialGLTFPlugin {
         checkAccessor(json, a, name, where);
       }
       checkAttributes(ext, names, where);
-      for (const key of ['heights', 'density']) { // the generated form's ground maps: FLOAT SCALAR, cols x rows
+      for (const key of ['heights', 'density', 'children']) { // the generated form's maps: FLOAT SCALAR, cols x rows
         const m = ext.generate && ext.generate[key];
         if (!m) continue;
         if (!Number.isInteger(m.accessor) || m.accessor < 0 || m.accessor >= accessors.length) {
@@ -150,7 +150,7 @@ export class AxialGLTFPlugin {
       let maps = null;
       if (ext.generate && this.Mesh === AxialInstancedMesh) {
         maps = {};
-        for (const key of ['heights', 'density']) {
+        for (const key of ['heights', 'density', 'children']) {
           const m = ext.generate[key];
           if (m) maps[key] = { data: (await parser.getDependency('accessor', m.accessor)).array, cols: m.cols, rows: m.rows };
         }
@@ -314,7 +314,9 @@ export function checkBendExtension(ext, where = 'node') {
 /** The generated form's object: a recipe (checkRecipe), the generator's numbers, the maps' shapes. */
 function checkGenerated(gen, at, k) {
   if (!gen || typeof gen !== 'object' || Array.isArray(gen)) throw new AxialError(`${at}: generate: expected an object (recipe, uniforms)`);
-  if (k > 1) throw new AxialError(`${at}: generate: a generated node of several axes is not in the extension yet`);
+  if (k > 1 && !(gen.children && gen.children.cols === 26 && gen.children.rows === k - 1)) {
+    throw new AxialError(`${at}: generate children: a node of ${k} axes needs its child-axis table (${k - 1} rows of 26), found ${brief(gen.children)}`);
+  }
   try {
     checkRecipe(gen.recipe);
   } catch (err) {
@@ -324,7 +326,7 @@ function checkGenerated(gen, at, k) {
   if (!u || typeof u !== 'object' || !Number.isInteger(u.m) || u.m < 1 || !Number.isInteger(u.seed)) {
     throw new AxialError(`${at}: generate uniforms: expected generate.glsl's numbers (seed, m, cell, ...), found ${brief(u)}`);
   }
-  for (const key of ['heights', 'density']) {
+  for (const key of ['heights', 'density', 'children']) {
     const m = gen[key];
     if (m !== undefined && !(m && Number.isInteger(m.cols) && m.cols > 0 && Number.isInteger(m.rows) && m.rows > 0)) {
       throw new AxialError(`${at}: generate ${key}: expected {accessor, cols, rows}, found ${brief(m)}`);
@@ -338,7 +340,8 @@ function checkGenerated(gen, at, k) {
 function fromGenerated(mesh, ext, maps) {
   const g = mesh.geometry;
   const made = new AxialGeneratedMesh(g, mesh.material, ext.generate.recipe, {
-    axis: { axis: ext.axis, axes: null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
+    axis: { axis: ext.axis, axes: ext.axes || null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
+    vertexAxis: g.getAttribute('_axial_axis') || undefined,
   });
   made.name = mesh.name;
   made.position.copy(mesh.position); made.quaternion.copy(mesh.quaternion); made.scale.copy(mesh.scale);

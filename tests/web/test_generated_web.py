@@ -454,3 +454,37 @@ def test_the_gltf_generated_form_is_generated_by_the_plugin(browser, three_site,
     ref = ad.render_image(layer.mesh, want, size=(480, 360), look=look, camera=camera)
     assert three_mask(ref).sum() > 0.05 * ref.size / 3
     assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
+
+
+@pytest.mark.slow
+def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site):
+    """A generated layer of ten axes in the glTF generated form (its child-axis table an accessor): the
+    plugin's AxialGeneratedMesh makes the Python library's records, child axes and all."""
+    folder, url = three_site
+    (folder / "gen-trees.toml").write_text(TREES.replace('axes = "tree-axes.toml"', 'axes = "{}"'.format(
+        (ROOT / "examples" / "forest" / "tree-axes.toml").as_posix())).split("[[layer]]\nname = \"ground\"")[0])
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "export", str(folder / "gen-trees.toml"), "--generated",
+                        "-o", str(folder / "gen-trees.glb")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    page = browser.new_page(viewport={"width": 480, "height": 360})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        page.goto(url + "gltf.html?file=gen-trees.glb")
+        page.wait_for_function("window.app !== undefined", timeout=120_000)
+        got = page.evaluate("""() => { const { renderer, scene, camera, gltf } = window.app;
+            renderer.render(scene, camera);
+            renderer.render(scene, camera);
+            let s = null;
+            gltf.scene.traverse((o) => { if (o.isAxialGeneratedMesh && !s) s = o; });
+            return { tiles: s.tiles, width: s.layout.numbersPerInstance, eye: camera.position.toArray(),
+                     data: Array.from(s.data.subarray(0, s.count * s.layout.numbersPerInstance)) }; }""")
+    finally:
+        page.close()
+    assert errors == []
+    layer = ad.Scene.load(folder / "gen-trees.toml").layers[0]
+    assert got["width"] == 19 + 90
+    x, _, z = got["eye"]
+    assert sorted(got["tiles"]) == sorted(tiles_around(layer.generate.generate, x, z, layer.generate.reach).tolist())
+    want = generate_tiles(layer.generate.generate, layer.mesh, got["tiles"], layer.generate.maps)
+    assert _close(np.asarray(got["data"], np.float32).reshape(-1, got["width"]), want) <= 1e-6

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import GltfError
-from ..generate import generate_tiles, recipe_json, recipe_uniforms, tiles_around
+from ..generate import children_table, generate_tiles, recipe_json, recipe_uniforms, tiles_around
 from .glb import FLOAT
 
 __all__ = ["generated_form", "check_generated", "FALLBACK_TILES"]
@@ -28,13 +28,10 @@ def check_generated(scene, layers) -> None:
 def generated_form(b, layer) -> tuple[np.ndarray, dict]:
     """A generated layer's fallback instances ((n, 16, 19 or 22) float32: the first tile near its extent's
     centre that keeps any) and the ``generate`` member of its node's ``AXIALDEFORM_bend``: the recipe, the
-    generator's numbers (:func:`~axialdeform.core.generate.recipe_uniforms`) and each ground map as a FLOAT
-    SCALAR accessor of rows x cols world heights or grey levels, row after row."""
+    generator's numbers (:func:`~axialdeform.core.generate.recipe_uniforms`) and each ground map (and a tree's
+    child-axis table) as a FLOAT SCALAR accessor of rows x cols numbers, row after row."""
     gen = layer.generate
     recipe, maps = gen.generate, gen.maps
-    if getattr(layer.mesh, "tree", None) is not None:
-        raise GltfError(f"layer {layer.name}: a generated layer of several axes has no glTF generated form yet; "
-                        "expected --instanced (its extent materialized)")
     x0, z0, x1, z1 = gen.extent
     fallback = np.zeros((0, recipe.width), np.float32)
     for tile in tiles_around(recipe, (x0 + x1) / 2, (z0 + z1) / 2, gen.reach)[:FALLBACK_TILES]:
@@ -45,8 +42,10 @@ def generated_form(b, layer) -> tuple[np.ndarray, dict]:
         raise GltfError(f"layer {layer.name}: the {FALLBACK_TILES} tiles nearest its extent's centre keep no "
                         "instance; a generated node needs a fallback of at least one (move the extent)")
     spec = {"recipe": recipe_json(recipe, gen.reach), "uniforms": recipe_uniforms(recipe, layer.mesh, maps)}
-    for key in ("heights", "density"):
-        grid = getattr(maps, key, None) if maps is not None else None
+    tree = getattr(layer.mesh, "tree", None)  # several axes: each child axis's amplitude and joint projection
+    for key in ("heights", "density", "children"):
+        grid = (children_table(recipe, layer.mesh) if tree is not None else None) if key == "children" else (
+            getattr(maps, key, None) if maps is not None else None)
         if grid is not None:
             data = np.ascontiguousarray(grid, "<f4").ravel()
             spec[key] = {"accessor": b.accessor(b.view(data), FLOAT, len(data), "SCALAR", name=f"{layer.name}_{key}"),
