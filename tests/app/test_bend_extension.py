@@ -341,6 +341,23 @@ extent = [-20, -15, 20, 15]
         assert np.allclose(fallback, first, atol=1e-6)
     [report] = validate_gltf(glb)
     assert report["issues"]["numErrors"] == 0 and report["issues"]["numWarnings"] == 0, report["issues"]["messages"][:5]
+    # a layer of trees: its child-axis table travels as an accessor too (schema-valid, validator-clean)
+    (scene_dir / "trees.toml").write_text(f"""
+[[layer]]
+name = "trees"
+mesh = "tree"
+axes = "{(ROOT / 'examples' / 'forest' / 'tree-axes.toml').as_posix()}"
+[layer.generate]
+rate = 0.02
+tile = 16.0
+bend = [0.03, 0.25]
+extent = [-16, -16, 16, 16]
+""")
+    cli("export", scene_dir / "trees.toml", "--generated", "-o", tmp_path / "trees.glb")
+    [(_n, ext)] = bend_objects(tmp_path / "trees.glb")
+    jsonschema.validate(ext, SCHEMA)
+    assert ext["generate"]["children"]["rows"] == 9 and ext["generate"]["children"]["cols"] == 26
+    assert validate_gltf(tmp_path / "trees.glb")[0]["issues"]["numErrors"] == 0
     r = subprocess.run([sys.executable, "-m", "axialdeform", "export", "stone", "--generated", "-o", str(tmp_path / "x.glb")],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "--generated writes a scene file's generated layers" in r.stderr, r.stderr
