@@ -53,8 +53,29 @@ def _scene_info(args) -> None:
         g = layer.generate
         source = (f"generated: rate {g.generate.rate:g}, tiles of {g.generate.tile:g}, min_distance "
                   f"{g.generate.min_distance:g}, seed {g.generate.seed}, extent {list(g.extent)}, reach {g.reach:g}"
-                  if g is not None else describe_record(layer.params.shape[1]))
+                  + _generated_extras(g) if g is not None else describe_record(layer.params.shape[1]))
         print(f"layer:     {layer.name}: {layer.mesh.name}, {len(layer.params)} instances ({source})")
+
+
+def _generated_extras(g) -> str:
+    """What else a generated layer's recipe says: its ground maps, bands, share, anchor, lean, lift, tint."""
+    r, out = g.generate, []
+    if g.density is not None:
+        out.append(f"density {g.density.name}")
+    for name in ("altitude", "slope", "lift"):
+        if getattr(r, name) is not None:
+            out.append(f"{name} {list(getattr(r, name))}")
+    if r.choice != (0.0, 1.0):
+        out.append(f"share [{r.choice[0]:g}, {r.choice[1]:g})")
+    if r.anchor != "bottom":
+        out.append(f"anchor {r.anchor}")
+    if r.align_to_normal:
+        out.append(f"align_to_normal {r.align_to_normal:g}")
+    if r.tint is not None:
+        out.append(f"tint {r.tint:g}")
+    if getattr(g.maps, "heights", None) is not None:
+        out.append("on the height map")
+    return "".join(f", {x}" for x in out)
 
 
 def run(args) -> int | None:

@@ -173,6 +173,9 @@ def test_info_describes_a_scene_file_and_its_generated_layers(tmp_path):
     assert f"(1 layers, {n} instances)" in r.stdout
     assert f"layer:     stones: stone, {n} instances (generated: rate 1.5, tiles of 8, min_distance 0.5, seed 3, " \
            "extent [-10.0, -10.0, 10.0, 10.0], reach 24)" in r.stdout, r.stdout
+    path.write_text(SCENE.replace("seed = 3", 'seed = 3\ntint = 0.3\nlift = [0, 1]\nanchor = "center"'))
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path)], capture_output=True, text=True, timeout=300)
+    assert "reach 24, lift [0.0, 1.0], anchor center, tint 0.3)" in r.stdout, r.stdout
     r = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), "--axes", "parts"], capture_output=True,
                        text=True, timeout=300)
     assert r.returncode == 2 and "is a scene file" in r.stderr and "Traceback" not in r.stderr
