@@ -77,10 +77,15 @@ class TileGenerator:
             self.program["u_tile"].value = (int(tile[0]), int(tile[1]))
         for unit, tex in enumerate(self._textures):
             tex.use(location=unit)
+        self._transform(self.vao, buffer, offset)
+
+    def _transform(self, vao, buffer, offset) -> None:
+        """One pass of ``vao`` over the tile's instances into ``buffer`` at byte ``offset`` (its own 1 x 1
+        framebuffer bound meanwhile)."""
         previous = self.ctx.fbo
         self._fbo.use()
         try:
-            self.vao.transform(buffer, mode=moderngl.POINTS, vertices=self.count, buffer_offset=int(offset))
+            vao.transform(buffer, mode=moderngl.POINTS, vertices=self.count, buffer_offset=int(offset))
         finally:
             bind_framebuffer(self.ctx, previous)
 
@@ -97,12 +102,7 @@ class TileGenerator:
             if name in p:
                 p[name].value = value
         self.children.use(location=2)
-        previous = self.ctx.fbo
-        self._fbo.use()
-        try:
-            self.child_vao.transform(buffer, mode=moderngl.POINTS, vertices=self.count, buffer_offset=int(offset))
-        finally:
-            bind_framebuffer(self.ctx, previous)
+        self._transform(self.child_vao, buffer, offset)
 
     def release(self) -> None:
         if self._released:

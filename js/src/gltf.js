@@ -339,10 +339,14 @@ function checkGenerated(gen, at, k) {
  * before it is drawn (autoUpdate). */
 function fromGenerated(mesh, ext, maps) {
   const g = mesh.geometry;
-  const made = new AxialGeneratedMesh(g, mesh.material, ext.generate.recipe, {
+  return adopt(mesh, ext, new AxialGeneratedMesh(g, mesh.material, ext.generate.recipe, {
     axis: { axis: ext.axis, axes: ext.axes || null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
     vertexAxis: g.getAttribute('_axial_axis') || undefined,
-  });
+  }));
+}
+
+/** `made` takes GLTFLoader's mesh's place: its name, transform, user data (and the extension), shadows. */
+function adopt(mesh, ext, made) {
   made.name = mesh.name;
   made.position.copy(mesh.position); made.quaternion.copy(mesh.quaternion); made.scale.copy(mesh.scale);
   made.userData = { ...mesh.userData, [EXTENSION]: ext };
@@ -355,13 +359,8 @@ export function fromInstancedMesh(mesh, ext, where = 'node', raw = null, Mesh = 
   checkBendExtension(ext, where);
   const record = recordFromInstancedMesh(mesh, ext, where, raw);
   const g = mesh.geometry;
-  const bent = new Mesh(g, mesh.material, record, {
+  return adopt(mesh, ext, new Mesh(g, mesh.material, record, {
     axis: { axis: ext.axis, axes: ext.axes || null },
     vertexAxis: g.getAttribute('_axial_axis') || undefined,
-  });
-  bent.name = mesh.name;
-  bent.position.copy(mesh.position); bent.quaternion.copy(mesh.quaternion); bent.scale.copy(mesh.scale);
-  bent.userData = { ...mesh.userData, [EXTENSION]: ext };
-  bent.castShadow = mesh.castShadow; bent.receiveShadow = mesh.receiveShadow;
-  return bent;
+  }));
 }
