@@ -5,7 +5,7 @@ and the generated page (``axialdeform web`` of the recipe: no per-instance file;
 tiles within reach of the camera on the GPU).  Both pages hold the same instances at their start.
 
     .venv/bin/python tools/generate_sizes.py [--counts 10000,100000,1000000] [--runs 3] [--mbit 10]
-                                             [--peer-max 100000]
+                                             [--peer-max 150000] [--bytes-only]
 
 Headless Chromium (Debian's), SwiftShader WebGL 2 -- a software rasterizer: frame times are a CPU's.
 First frame: from the start of the navigation to the first frame finished (the page's own count,
@@ -150,6 +150,7 @@ def main() -> None:
     ap.add_argument("--mbit", type=float, default=10.0)
     ap.add_argument("--size", default="800x600")
     ap.add_argument("--peer-max", type=int, default=150_000)
+    ap.add_argument("--bytes-only", action="store_true", help="the bytes alone: no browser, no first frames")
     args = ap.parse_args()
     size = tuple(int(x) for x in args.size.split("x"))
     med = statistics.median
@@ -162,7 +163,7 @@ def main() -> None:
             sizes = {"gen": {k: _bytes(gen, f) for k, f in PARTS.items()},
                      "adp": {k: _bytes(adp, f) for k, f in PARTS.items()}}
             peer = built["peer"]
-            times = first_frames(work, ["adp", "gen"], args.runs, args.mbit, size)
+            times = {} if args.bytes_only else first_frames(work, ["adp", "gen"], args.runs, args.mbit, size)
             rows.append((built, sizes, peer, times))
             print(f"\n{built['count']:,} stones ({built['tiles']} tiles of {TILE:g} x {TILE:g}; stone: "
                   f"{ad.load_mesh('stone').vertex_count} vertices):")
