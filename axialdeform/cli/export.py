@@ -34,7 +34,7 @@ def add_parser(sub) -> None:
     layout.add_argument("--generated", dest="layout", action="store_const", const="generated",
                         help="a scene file: its generated layers as their recipe (AXIALDEFORM_bend generate: "
                              "made around the camera by a reader that knows it; a small plain fallback for others), "
-                             "the rest as --instanced (docs/generate.md)")
+                             "the rest as --instanced (docs/generate.md; default: --baked)")
     e.set_defaults(layout="baked")
     add_mesh_mismatch(e)
     e.add_argument("--max-meshes", type=positive_int, default=MAX_EXPORT_MESHES, metavar="N", help=(

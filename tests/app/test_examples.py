@@ -353,7 +353,8 @@ def test_the_generated_walk_does_not_end_and_holds_the_same_count(run_example):
     sky = np.array([0.80, 0.87, 0.95]) * 255
     for f in EXAMPLES["07_generated_walk.py"]:
         img = load(out / f)
-        lower = img[img.shape[0] // 2:]  # the ground half: stones and blades everywhere, no sky
+        lower = img[img.shape[0] // 2:]  # the ground half: stones, blades and trees everywhere, no sky
         assert foreground(lower, sky).mean() > 0.97, f
-        assert blobs(foreground(lower, lower.reshape(-1, 3).mean(axis=0))) > 40, f
+        # many separate things on the ground (the ground's colour: the commonest, the median pixel)
+        assert blobs(foreground(lower, np.median(lower.reshape(-1, 3), axis=0))) > 40, f
 
