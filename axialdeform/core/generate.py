@@ -14,18 +14,20 @@ in cell ``(i mod m, i div m)``, jittered: ``x = (tx m + cx + 1/2 + j (u0 - 1/2))
 ``c - j c = min_distance`` apart along the axis that separates them -- the guaranteed minimum
 distance, in one tile and across tiles alike (the grid is one grid over the whole world).
 
-Randomness: ``u_k`` (``k = 0 .. 15``; room for 32) is 24 bits of the PCG hash of ``glsl/wind.glsl``
+Randomness: ``u_k`` (``k = 0 .. 21``; room for 32) is 24 bits of the PCG hash of ``glsl/wind.glsl``
 (:func:`~axialdeform.core.wind.wind_hash`) chained over the seed, the tile and ``32 i + k``::
 
     key = H(H(H(uint tx) ^ uint tz) ^ seed);   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24
 
 (integer maths: bit-exact on every GPU and in numpy).  Then, in float32 as the shader computes them:
 a turn about up ``ry = 2 pi u2``; offsets ``d_q = bend L (2 u_{3+q} - 1)`` for the ten numbers, every
-control point then shifted by ``-D(t_a)``, ``t_a`` the anchor's place on the axis (the centre of the
-base mesh's lowest bounding-box face: a blade's root, a lying stone's middle), so it stays put;
+control point then shifted by ``-D(t_a)``, ``t_a`` the anchor's place on the axis, so it stays put;
 ``s = lo + (hi - lo) u13``, ``tw = twist (2 u14 - 1)``, ``tp = taper u15`` (19 numbers when any of
-scale, twist, taper is given); ``py`` = the ground's height (0: a flat world) minus the base mesh's
-lowest point times ``s`` (the shape stands on the ground).
+scale, twist, taper is given), the tint from ``u17 .. u19`` (22 numbers); ``py`` = the ground's height
+(0: a flat world; a height map: its triangles) minus the anchor's height times ``s``, plus the lift
+(``u21``); kept by the height map, the altitude and slope bands, the density map (``u16``) and the
+mesh's share (``u20``); a tree's child axes from hash streams of their own (:func:`children_table`).
+docs/generate.md states every formula.
 """
 
 from __future__ import annotations
@@ -43,7 +45,7 @@ from .record import EXTENDED_WIDTH, TINTED_WIDTH, WIDTH, join_record
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
-           "tiles_in", "generate_extent", "lowest_point", "anchor_weights", "recipe_uniforms", "GroundMaps",
+           "tiles_in", "generate_extent", "anchor_weights", "recipe_uniforms", "GroundMaps",
            "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table"]
 
 GENERATED_NUMBERS = 22  # u_0 .. u_21 an instance
@@ -479,11 +481,6 @@ def recipe_json(recipe: Generate, reach: float) -> dict:
             "bend": list(recipe.bend) if isinstance(recipe.bend, tuple) else recipe.bend,
             "scale": None if recipe.scale is None else list(recipe.scale), "twist": recipe.twist,
             "taper": recipe.taper, "tint": recipe.tint, "tint_color": list(recipe.tint_color), "reach": float(reach)}
-
-
-def lowest_point(mesh) -> float:
-    """The base mesh's lowest y (its bottom stands on the ground)."""
-    return float(np.asarray(mesh.positions)[:, 1].min())
 
 
 def generate_tiles(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) -> np.ndarray:
