@@ -34,6 +34,9 @@ from axialdeform.core.generate import Generate, generate_tiles, tile_size, tiles
 from axialdeform.core.io.gltf import encode_baked
 from axialdeform.web import make_server
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from web_sizes import open_page  # noqa: E402  (tools/: the same throttled page as the other size tool)
+
 ROOT = Path(__file__).resolve().parents[1]
 JS = ROOT / "js"
 RATE, TILE = 0.25, 16.0  # 64 stones a tile
@@ -115,14 +118,7 @@ def first_frames(work: Path, names, runs: int, mbit: float, size) -> dict:
         for run in range(runs):
             for link, rate in links.items():
                 for name in (names if run % 2 == 0 else names[::-1]):  # alternated
-                    page = browser.new_page(viewport={"width": size[0], "height": size[1] + 40})
-                    cdp = page.context.new_cdp_session(page)
-                    cdp.send("Network.enable")
-                    cdp.send("Network.setCacheDisabled", {"cacheDisabled": True})
-                    if rate:
-                        bps = rate * 1e6 / 8
-                        cdp.send("Network.emulateNetworkConditions", {"offline": False, "latency": 20,
-                                                                       "downloadThroughput": bps, "uploadThroughput": bps})
+                    page = open_page(browser, (size[0], size[1] + 40), rate)
                     page.goto(url + name + "/index.html", wait_until="commit")
                     page.wait_for_function("window.axialdeform !== undefined", timeout=900_000, polling=50)
                     state = page.evaluate("window.axialdeform")

@@ -94,6 +94,20 @@ gltf.scene.traverse((o) => { if (o.isMesh) o.material = new THREE.MeshStandardMa
 scene.add(gltf.scene);"""
 
 
+def open_page(browser, viewport, mbit=None):
+    """A new page with the cache off and, with ``mbit``, the network throttled by CDP emulation to that
+    many Mbit/s each way with 20 ms of latency (what a first visit over such a link downloads)."""
+    page = browser.new_page(viewport={"width": viewport[0], "height": viewport[1]})
+    cdp = page.context.new_cdp_session(page)
+    cdp.send("Network.enable")
+    cdp.send("Network.setCacheDisabled", {"cacheDisabled": True})
+    if mbit:
+        rate = mbit * 1e6 / 8
+        cdp.send("Network.emulateNetworkConditions", {"offline": False, "latency": 20,
+                                                       "downloadThroughput": rate, "uploadThroughput": rate})
+    return page
+
+
 def peer(args, size) -> None:
     """The npm module against gltfpack's meshopt-compressed baked GLB (see the module docs)."""
     import gzip
@@ -159,14 +173,7 @@ def peer(args, size) -> None:
             for run in range(args.runs):
                 for link, mbit in links.items():
                     for name in ([*sites, "page"] if run % 2 == 0 else ["page", *list(sites)[::-1]]):  # alternate
-                        page = browser.new_page(viewport={"width": size[0], "height": size[1]})
-                        cdp = page.context.new_cdp_session(page)
-                        cdp.send("Network.enable")
-                        cdp.send("Network.setCacheDisabled", {"cacheDisabled": True})
-                        if mbit:
-                            rate = mbit * 1e6 / 8
-                            cdp.send("Network.emulateNetworkConditions", {"offline": False, "latency": 20,
-                                                                           "downloadThroughput": rate, "uploadThroughput": rate})
+                        page = open_page(browser, size, mbit)
                         page.goto(base_url + name + "/index.html", wait_until="commit")
                         if name == "page":  # its own count: navigation to a finished first frame (readPixels)
                             page.wait_for_function("window.axialdeform !== undefined", timeout=600_000, polling=50)

@@ -141,22 +141,32 @@ axialOutNormal = normalize(mat3(m) * axialN);
 axialOutTangent = vec4(normalize(mat3(m) * axialT), tangent.w);
 gl_Position = vec4(0.0);
 }`;
+  const varyings = ['axialOutPosition', 'axialOutNormal', ...(tangent ? ['axialOutTangent'] : [])];
+  const program = feedbackLink(gl, vs, varyings, gl.SEPARATE_ATTRIBS, 'bake');
+  mesh._programs[key] = { gl, program };
+  return program;
+}
+
+/**
+ * A transform-feedback program of WebGL 2 (the module's raw passes: the bend's, the generator's):
+ * vertex shader `vs` (its own #version line), a fragment shader that writes nothing, `varyings`
+ * captured in `mode`.  A compile or link error is an AxialError that names the pass (`what`).
+ */
+export function feedbackLink(gl, vs, varyings, mode, what) {
   const fs = '#version 300 es\nprecision highp float;\nout vec4 color;\nvoid main() { color = vec4(0.0); }';
   const shader = (type, text) => {
     const sh = gl.createShader(type);
     gl.shaderSource(sh, text);
     gl.compileShader(sh);
-    if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new AxialError(`bake: the shader did not compile: ${gl.getShaderInfoLog(sh)}`);
+    if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new AxialError(`${what}: the shader did not compile: ${gl.getShaderInfoLog(sh)}`);
     return sh;
   };
   const program = gl.createProgram();
   gl.attachShader(program, shader(gl.VERTEX_SHADER, vs));
   gl.attachShader(program, shader(gl.FRAGMENT_SHADER, fs));
-  const varyings = ['axialOutPosition', 'axialOutNormal', ...(tangent ? ['axialOutTangent'] : [])];
-  gl.transformFeedbackVaryings(program, varyings, gl.SEPARATE_ATTRIBS);
+  gl.transformFeedbackVaryings(program, varyings, mode);
   gl.linkProgram(program);
-  if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new AxialError(`bake: the program did not link: ${gl.getProgramInfoLog(program)}`);
-  mesh._programs[key] = { gl, program };
+  if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new AxialError(`${what}: the program did not link: ${gl.getProgramInfoLog(program)}`);
   return program;
 }
 

@@ -8,7 +8,7 @@ import * as THREE from 'three';
 import { AxialError } from './adp.js';
 import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT, GENERATE_CHILDREN_VERT } from './glsl.js';
 import { AxialInstancedMesh } from './mesh.js';
-import { refuseWebGPU, plainArray } from './feedback.js';
+import { refuseWebGPU, plainArray, feedbackLink } from './feedback.js';
 
 /** Numbers an instance the pass writes: the 22-number record (the 16, s, tw, tp, the tint), then 1 (kept)
  * or 0 (dropped by the ground maps and bands): generate.vert's outputs, in order. */
@@ -184,21 +184,9 @@ export class TileGenerator {
   }
 
   _program(main, varyings) {
-    const gl = this.gl, head = '#version 300 es\nprecision highp float;\nprecision highp int;\n';
-    const shader = (type, text) => {
-      const sh = gl.createShader(type);
-      gl.shaderSource(sh, text);
-      gl.compileShader(sh);
-      if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new AxialError(`generate: the shader did not compile: ${gl.getShaderInfoLog(sh)}`);
-      return sh;
-    };
-    const program = gl.createProgram();
-    gl.attachShader(program, shader(gl.VERTEX_SHADER, head + AXIAL_GLSL + WIND_GLSL + GENERATE_GLSL + main));
-    gl.attachShader(program, shader(gl.FRAGMENT_SHADER, head + 'out vec4 color;\nvoid main() { color = vec4(0.0); }\n'));
-    gl.transformFeedbackVaryings(program, varyings, gl.INTERLEAVED_ATTRIBS);
-    gl.linkProgram(program);
-    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new AxialError(`generate: the program did not link: ${gl.getProgramInfoLog(program)}`);
-    return program;
+    const head = '#version 300 es\nprecision highp float;\nprecision highp int;\n';
+    return feedbackLink(this.gl, head + AXIAL_GLSL + WIND_GLSL + GENERATE_GLSL + main, varyings,
+      this.gl.INTERLEAVED_ATTRIBS, 'generate');
   }
 
   _setUniforms(p) {
