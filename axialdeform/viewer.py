@@ -41,7 +41,7 @@ import numpy as np
 
 from .core.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
-from .core.generate import generate_tiles, tiles_around
+from .core.generate import tile_spheres, tiles_around
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
 from .core.options import RenderOptions
@@ -51,6 +51,7 @@ from .core.variation import Variation, random_params
 from .core.wind import Wind
 from .gl.context import check_image_size, create_context, read_pixels
 from .gl.frame import Frame
+from .gl.generated import GeneratedTiles
 from .gl.ground import GroundPlane
 from .gl.image import look_from_keywords, pop_look_keywords
 from .gl.renderer import MODES, AxialRenderer
@@ -162,7 +163,10 @@ class _ViewerMixin:
         self.walk = None if s.get("walk") is None else np.asarray(s["walk"], dtype=np.float64).reshape(2)
         #: generated layers (core/generate.py) are made tile by tile around the camera's target
         self.generate = s.get("generate")
-        self._tiles = {}
+        self._tiles = {}  # key -> the tiles held (a frozenset)
+        self._gpu = {}  # key -> GeneratedTiles: the GPU makes the instances straight into the layer's renderer
+        self._spheres = {}  # key -> (k, 4) the held tiles' bounds (shadows, the ground)
+        self._rounds = 0  # N pressed: generated layers take seed + 7919 rounds
         self._update_title(force=True)
 
     # ------------------------------------------------------------ camera
@@ -248,11 +252,14 @@ class _ViewerMixin:
         orientation stay.  Written in place: the count does not change."""
 
         self.seed = int(seed)
-        fresh = random_params(self.mesh, len(self.base), seed=self.seed, bend=self.bend)
-        cols = _offsets(self.mesh)
-        self.base[:, cols] = fresh[:, cols]
+        self._rounds += 1  # generated layers: another seed of their recipe, the tiles made again
+        self._tiles.clear()
+        if self.generate is None:
+            fresh = random_params(self.mesh, len(self.base), seed=self.seed, bend=self.bend)
+            cols = _offsets(self.mesh)
+            self.base[:, cols] = fresh[:, cols]
         for k, (layer, _, base) in enumerate(self.layers):  # each other layer: its own seed, derived from the seed
-            if len(base):
+            if len(base) and getattr(layer, "generate", None) is None:
                 cols = _offsets(layer.mesh)
                 base[:, cols] = random_params(layer.mesh, len(base), seed=self.seed + 7919 * (k + 1),
                                               bend=self.bend)[:, cols]
@@ -264,46 +271,49 @@ class _ViewerMixin:
         self._upload(self.base)
 
     def _upload(self, params) -> None:
-        shown = np.array(params, dtype=np.float32)
-        shown[:, _offsets(self.mesh)] *= self.bend_scale
-        self.renderer.update_params(shown)
-        self._shown = shown
+        self._tiles.clear()  # generated layers: made again with their offsets scaled
+        for gpu in self._gpu.values():
+            gpu.set_bend_scale(self.bend_scale)
+        if self.generate is None:
+            shown = np.array(params, dtype=np.float32)
+            shown[:, _offsets(self.mesh)] *= self.bend_scale
+            self.renderer.update_params(shown)
+            self._shown = shown
         for layer, renderer, base in self.layers:
-            if len(base):
+            if len(base) and getattr(layer, "generate", None) is None:
                 other = base.copy()
                 other[:, _offsets(layer.mesh)] *= self.bend_scale
                 renderer.update_params(other)
 
     # ------------------------------------------------------------ drawing
     def _page_tiles(self) -> None:
-        """Generated layers: the tiles within their reach of the camera's target, made when the set
-        changes (a tile is the same whatever made it, whenever); the ones out of reach are let go, so
-        the instances held stay bounded however far the camera walks (docs/generate.md)."""
+        """Generated layers: the tiles within their reach of the camera's target, made on the GPU straight into
+        the layer's renderer when the set changes (gl/generated.py: no record on the CPU; a tile is the same
+        whatever made it, whenever); the ones out of reach are let go, so the instances held stay bounded
+        however far the camera walks (docs/generate.md)."""
 
         target = self.orbit.target
         jobs = []
         if self.generate is not None:
-            jobs.append(("", self.generate, self.mesh, None))
-        for k, (layer, _, _) in enumerate(self.layers):
+            jobs.append(("", self.generate, self.mesh, self.renderer))
+        for layer, renderer, _ in self.layers:
             if getattr(layer, "generate", None) is not None:
-                jobs.append((layer.name, layer.generate, layer.mesh, k))
-        for key, recipe, mesh, k in jobs:
+                jobs.append((layer.name, layer.generate, layer.mesh, renderer))
+        for key, recipe, mesh, renderer in jobs:
             tiles = tiles_around(recipe.generate, float(target[0]), float(target[2]), recipe.reach)
             wanted = frozenset(map(tuple, tiles.tolist()))
             if self._tiles.get(key) == wanted:
                 continue
             self._tiles[key] = wanted
-            params = generate_tiles(recipe.generate, mesh, tiles, recipe.maps)
-            if k is None:
-                self.base = params
-                self._shown = params
-                self.renderer.set_params(params)
-                self.ground.fit_layers([(self.mesh, params)], height=0.0)  # a generated world stands on 0
-            else:
-                layer, renderer, _ = self.layers[k]
-                self.layers[k] = (layer, renderer, params)
-                layer.params = params
-                renderer.set_params(params)
+            gpu = self._gpu.get(key)
+            if gpu is None:
+                gpu = self._gpu[key] = GeneratedTiles(renderer, recipe.generate, mesh, recipe.maps)
+                gpu.set_bend_scale(self.bend_scale)
+            gpu.set_seed(recipe.generate.seed + 7919 * self._rounds)
+            gpu.make(tiles)
+            self._spheres[key] = tile_spheres(gpu.recipe, mesh, tiles, recipe.maps)
+            if key == "":  # a generated world stands on 0
+                self.ground.fit_spheres(self._spheres[key][:, :3], self._spheres[key][:, 3], height=0.0)
 
     def on_render(self, time_s: float, frame_time: float):
         self._time = time_s
@@ -318,13 +328,15 @@ class _ViewerMixin:
         # the viewer's own instances, then the scene's terrain and other layers: one frame (gl/frame.py)
         self.renderer.up = UP_VECTORS[self.up]
         self.renderer.time = time_s  # the shadows bend in this frame's wind; the wind: uniforms only
-        renderers, casters = [self.renderer], [(self.mesh, getattr(self, "_shown", self.base))]
+        renderers = [self.renderer]
+        casters = [] if self.generate is not None else [(self.mesh, getattr(self, "_shown", self.base))]
         if self.extra is not None:
             self.extra.prepare(time_s)
             renderers += [r for r, _, _ in self.extra.renderers]
-            casters += [(layer.mesh, layer.params) for layer in self.extra.scene.layers]
+            casters += [(layer.mesh, layer.params) for layer in self.extra.scene.layers
+                        if getattr(layer, "generate", None) is None]
         frame = Frame(renderers, ground=self.ground if self.show_ground else None, shadow=self.shadow)
-        frame.shadow_pass(casters, look)
+        frame.shadow_pass(casters, look, spheres=np.vstack([np.zeros((0, 4)), *self._spheres.values()]))
         self.wnd.use()
         self.ctx.clear(*look.background, 1.0, depth=1.0)
         frame.draw(view, proj, self.mode, look)
@@ -341,7 +353,7 @@ class _ViewerMixin:
         wind = self.renderer.wind
         shown = self.renderer.stats.get("visible", self.renderer.count)
         seed = "" if self.seed is None else f" - seed {self.seed}"
-        others = (f" + {sum(len(b) for _, _, b in self.layers)} in {len(self.layers)} more "
+        others = (f" + {sum(r.count for _, r, _ in self.layers)} in {len(self.layers)} more "
                   f"layer{'s' if len(self.layers) != 1 else ''}") if self.layers else ""
         return (f"axialdeform view - {self.mesh.name}: {self.renderer.count} instances{others} - {self.mode} - "
                 f"bend x{self.bend_scale:.2f}{seed}"
@@ -376,6 +388,8 @@ class _ViewerMixin:
 
     def release(self) -> None:
         """Free the renderer and the ground plane (the window keeps its context)."""
+        for gpu in self._gpu.values():
+            gpu.release()
         self.renderer.release()
         self.ground.release()
         if self.shadow is not None:

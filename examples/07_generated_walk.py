@@ -28,7 +28,7 @@ SCENE = Path(__file__).resolve().parent / "generated" / "walk.toml"
 
 def held(viewer) -> int:
     """Instances the viewer holds now: its own layer and the scene's others."""
-    return viewer.renderer.count + sum(len(base) for _, _, base in viewer.layers)
+    return viewer.renderer.count + sum(renderer.count for _, renderer, _ in viewer.layers)
 
 
 def main():

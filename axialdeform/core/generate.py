@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .axes import anchor_projection
+from .bounds import child_reach
 from .deform import bernstein
 from .errors import ParamError
 from .mesh import anchor_point
@@ -46,7 +47,8 @@ from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
            "tiles_in", "generate_extent", "anchor_weights", "recipe_uniforms", "GroundMaps",
-           "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table"]
+           "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table",
+           "child_bound", "tile_spheres"]
 
 GENERATED_NUMBERS = 22  # u_0 .. u_21 an instance
 GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
@@ -528,3 +530,42 @@ def generate_extent(recipe: Generate, mesh, extent, maps: GroundMaps | None = No
     inside = (p[:, 10] >= x0) & (p[:, 10] < x1) & (p[:, 12] >= z0) & (p[:, 12] < z1)
     return p[inside]
 
+
+
+def child_bound(recipe: Generate, mesh) -> float:
+    """How far a generated tree's child axes can move a vertex (model units; 0 for one axis): child axis
+    ``j``'s offsets are ``P_j raw``, ``|raw_b| <= amp_j`` per component, so ``|d_a| <= sqrt 2 amp_j
+    sum_b |P_ab|``; summed along each chain (:func:`~axialdeform.core.bounds.child_reach`)."""
+    tree = getattr(mesh, "tree", None)
+    if tree is None or tree.count < 2:
+        return 0.0
+    table = children_table(recipe, mesh).astype(np.float64)
+    most = np.abs(table[:, 0])[:, None] * np.abs(table[:, 1:].reshape(-1, 5, 5)).sum(axis=2)  # (K - 1, 5)
+    worst = np.repeat(most[None, :, :, None], 2, axis=3)  # each component at its bound: |d_a| = sqrt 2 most
+    return float(child_reach(tree, worst)[0])
+
+
+def tile_spheres(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) -> np.ndarray:
+    """``(k, 4)`` float64 ``x, y, z, r``: a sphere holding every instance tile ``tiles[k]`` can make, found
+    from the recipe alone (no instance made): what a view frames, shadows and stands a ground under when
+    the instances live on the GPU.  An instance's vertices lie within ``s (|v| + 2 sqrt 2 bend L + the
+    child axes' bound)`` of its position (``|v|``: the base mesh's farthest vertex from its origin;
+    ``d_q - D(t_a)``: at most twice ``bend L`` a component); its position lies in its tile, at the ground's
+    height range (the height map's lowest and highest; 0 flat) minus the anchor's height times ``s``, plus the lift."""
+    tiles = np.asarray(tiles, dtype=np.float64).reshape(-1, 2)
+    g = maps if maps is not None else GroundMaps()
+    T = float(recipe.tile)
+    s_hi = max(recipe.scale) if recipe.scale is not None else 1.0
+    s_lo = min(recipe.scale) if recipe.scale is not None else 1.0
+    far = float(np.sqrt((np.asarray(mesh.positions, np.float64) ** 2).sum(axis=1)).max())
+    local = far + 2.0 * math.sqrt(2.0) * recipe.level_bend(0) * mesh.axis.length + child_bound(recipe, mesh)
+    h_lo, h_hi = (0.0, 0.0) if g.heights is None else (float(g.heights.min()), float(g.heights.max()))
+    lift = recipe.lift or (0.0, 0.0)
+    ay = float(anchor_point(mesh, recipe.anchor, 1)[1])
+    ys = [h - ay * s + f for h in (h_lo, h_hi) for s in (s_lo, s_hi) for f in lift]
+    y_lo, y_hi = min(ys), max(ys)
+    radius = math.hypot(T / math.sqrt(2.0), (y_hi - y_lo) / 2.0) + s_hi * local
+    out = np.empty((len(tiles), 4))
+    out[:, 0], out[:, 2] = (tiles[:, 0] + 0.5) * T, (tiles[:, 1] + 0.5) * T
+    out[:, 1], out[:, 3] = (y_lo + y_hi) / 2.0, radius
+    return out

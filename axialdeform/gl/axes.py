@@ -103,6 +103,12 @@ class AxesTexture:
         self.count = len(children)
         self.child_reach = self.reach(children)
 
+    def reserve(self, capacity: int) -> None:
+        """Room for ``capacity`` instances (a new texture past the capacity: what it held is gone); a GPU pass
+        then writes the texels (:mod:`~axialdeform.gl.generated`) and sets :attr:`count` and :attr:`child_reach`."""
+        if int(capacity) > self.capacity:
+            self._allocate(max(int(capacity), 2 * self.capacity))
+
     def update(self, children, start: int) -> None:
         """Overwrite instances ``start ..`` (the bound only grows: culling stays safe)."""
         children = np.asarray(children, dtype=np.float32)

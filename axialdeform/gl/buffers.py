@@ -290,6 +290,15 @@ class InstanceBuffer:
         if self.count:
             self.buffer.write(self._encode_all(values))
 
+    def reserve(self, capacity: int) -> None:
+        """Room for ``capacity`` instances (grown, orphaning the old storage, only past the capacity); nothing
+        is written: a GPU pass writes them and sets :attr:`count` (a generated layer, :mod:`~axialdeform.gl.generated`)."""
+        self._check()
+        if int(capacity) > self.capacity:
+            self.capacity = int(capacity)
+            self.buffer.orphan(self.capacity * self.record_bytes)
+            self.reallocations += 1
+
     def update(self, params, start: int = 0, *, setter: str = "set()", name: str = "update") -> None:
         """Overwrite instances ``start .. start + len(params) - 1`` in place.
         ``start`` must be an integer (int or numpy integer).

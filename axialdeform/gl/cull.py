@@ -46,7 +46,8 @@ from ..core.errors import ContextError
 from .buffers import buffer_content, format_bytes
 from .shaders import build_compute, build_program
 
-__all__ = ["CullPass", "CullQuery", "IndirectDraws", "ALL_VISIBLE_PLANES", "indirect_supported", "INDIRECT_ENV", "choose_indirect"]
+__all__ = ["CullPass", "CullQuery", "IndirectDraws", "shared_query", "ALL_VISIBLE_PLANES", "indirect_supported",
+           "INDIRECT_ENV", "choose_indirect"]
 
 #: planes no sphere is outside of (LOD without frustum culling)
 ALL_VISIBLE_PLANES = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (6, 1))
@@ -79,7 +80,7 @@ def _field_bytes(fmt: str) -> int:
     return int(fmt[:-1] or 1) if fmt.endswith("x") else format_bytes(fmt)
 
 
-def _shared_query(ctx):
+def shared_query(ctx):
     """ONE ``GL_PRIMITIVES_GENERATED`` query per context, kept on it: moderngl 5
     cannot delete a query, so a query per pass would leak one per renderer."""
     query = getattr(ctx, "_axialdeform_primitives_query", None)
@@ -214,7 +215,7 @@ class CullPass:
         self._defines, self._varyings = defs, names
         self.program = None  # the GL 3.3 pass (transform feedback), built on first use
         self._lod_stage = None  # (program, vao, output buffer): its second, per-level stage, built on first use
-        self.query = _shared_query(ctx)
+        self.query = shared_query(ctx)
         #: bytes of one compacted record: the instance record, the index, the tint
         self.out_bytes = instances.record_bytes + 4 + (12 if self.tinted else 0)
         self.buffer = None

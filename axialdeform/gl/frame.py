@@ -5,6 +5,8 @@ viewer draw every picture through it."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..core.look import Look
 
 __all__ = ["Frame"]
@@ -28,15 +30,17 @@ class Frame:
         self.ground = ground
         self.shadow = shadow
 
-    def shadow_pass(self, casters, look: Look) -> None:
+    def shadow_pass(self, casters, look: Look, spheres=None) -> None:
         """Aim the shadow map at ``casters`` (``[(mesh, params), ...]``: their
-        bounding spheres, with the ground's centre) and draw every renderer
-        into it (one map, cleared once).  Without a shadow map, nothing."""
+        bounding spheres, with the ground's centre, and ``spheres``: (k, 4)
+        ``x, y, z, r`` more, e.g. generated tiles whose instances live on the GPU)
+        and draw every renderer into it (one map, cleared once).  Without a shadow map, nothing."""
         if self.shadow is None:
             return
-        extra = None
+        extra = [np.zeros((0, 4))] if spheres is None else [np.asarray(spheres, dtype=np.float64).reshape(-1, 4)]
         if self.ground is not None:  # the ground's centre part receives the shadows
-            extra = [[*self.ground.center, 0.5 * self.ground.radius]]
+            extra.append(np.array([[*self.ground.center, 0.5 * self.ground.radius]]))
+        extra = np.vstack(extra)
         self.shadow.fit_layers(casters, look.light_dir, extra=extra)
         for k, renderer in enumerate(self.renderers):
             renderer.render_shadow(self.shadow, clear=k == 0)

@@ -34,7 +34,9 @@ class TileGenerator:
         self.count = self.m * self.m
         self.program = build_program(ctx, "generate.vert", varyings=_VARYINGS)
         maps = maps if maps is not None else GroundMaps()
-        for name, value in recipe_uniforms(recipe, mesh, maps).items():  # AxialRecipe's fields, as the page gets them
+        values = recipe_uniforms(recipe, mesh, maps)
+        self._bend = values["bend"]
+        for name, value in values.items():  # AxialRecipe's fields, as the page gets them
             if "u_" + name in self.program:
                 self.program["u_" + name].value = tuple(value) if isinstance(value, list) else value
         # the height and density maps (1 x 1 stand-ins where there are none): float32 texels, texelFetch
@@ -51,7 +53,7 @@ class TileGenerator:
         self.children = None
         tree = getattr(mesh, "tree", None)
         if tree is not None:
-            table = children_table(recipe, mesh)
+            table = self._table = children_table(recipe, mesh)
             self.child_count = len(table)
             self.child_program = build_program(ctx, "generate_children.vert", varyings=_CHILD_VARYINGS)
             self.children = ctx.texture((table.shape[1], table.shape[0]), 1, np.ascontiguousarray(table).tobytes(),
@@ -77,17 +79,28 @@ class TileGenerator:
             self.program["u_tile"].value = (int(tile[0]), int(tile[1]))
         for unit, tex in enumerate(self._textures):
             tex.use(location=unit)
-        self._transform(self.vao, buffer, offset)
+        self.transform(self.vao, buffer, offset)
 
-    def _transform(self, vao, buffer, offset) -> None:
-        """One pass of ``vao`` over the tile's instances into ``buffer`` at byte ``offset`` (its own 1 x 1
-        framebuffer bound meanwhile)."""
+    def transform(self, vao, buffer, offset: int = 0, vertices: int | None = None) -> None:
+        """One transform-feedback pass of ``vao`` over ``vertices`` points (default: a tile's instances) into
+        ``buffer`` at byte ``offset``, its own 1 x 1 framebuffer bound meanwhile (a surfaceless context has none)."""
         previous = self.ctx.fbo
         self._fbo.use()
         try:
-            vao.transform(buffer, mode=moderngl.POINTS, vertices=self.count, buffer_offset=int(offset))
+            vao.transform(buffer, mode=moderngl.POINTS, vertices=self.count if vertices is None else int(vertices),
+                          buffer_offset=int(offset))
         finally:
             bind_framebuffer(self.ctx, previous)
+
+    def set_bend_scale(self, scale: float) -> None:
+        """Every offset times ``scale`` (the viewer's UP/DOWN keys): the root's amplitude and each child
+        axis's, as the records' offsets times ``scale`` (the offsets are linear in them)."""
+        if "u_bend" in self.program:
+            self.program["u_bend"].value = self._bend * float(scale)
+        if self.children is not None:
+            table = self._table.copy()
+            table[:, 0] *= np.float32(scale)
+            self.children.write(np.ascontiguousarray(table).tobytes())
 
     @property
     def passes(self) -> int:
@@ -102,7 +115,7 @@ class TileGenerator:
             if name in p:
                 p[name].value = value
         self.children.use(location=2)
-        self._transform(self.child_vao, buffer, offset)
+        self.transform(self.child_vao, buffer, offset)
 
     def release(self) -> None:
         if self._released:

@@ -93,8 +93,17 @@ class GroundPlane:
         bounds = [(c, np.broadcast_to(r, (len(c),))) for c, r in bounds if len(c)]
         if not bounds:
             return self
-        centers = np.concatenate([c for c, _ in bounds])
-        radii = np.concatenate([r for _, r in bounds])
+        return self.fit_spheres(np.concatenate([c for c, _ in bounds]), np.concatenate([r for _, r in bounds]),
+                                margin=margin, sink=sink, height=height)
+
+    def fit_spheres(self, centers, radii, *, margin: float = 1.6, sink: float = 0.35,
+                    height: float | None = None) -> GroundPlane:
+        """:meth:`fit` under spheres (``centers`` (n, 3), ``radii`` (n,)): the instances' bounds, or generated
+        tiles' (:func:`~axialdeform.core.generate.tile_spheres`) whose instances live on the GPU."""
+        centers = np.asarray(centers, dtype=np.float64).reshape(-1, 3)
+        radii = np.broadcast_to(np.asarray(radii, dtype=np.float64), (len(centers),))
+        if not len(centers):
+            return self
         a = AXIS_NAMES.index(self.up)
         lo, hi = sphere_box(centers, radii)  # the scene's box
         center = (lo + hi) / 2

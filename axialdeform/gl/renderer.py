@@ -277,6 +277,38 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         if tint is not None and self._tint_count is not None and len(tint):
             self._tint[3].write(np.ascontiguousarray(tint, dtype=np.float32).tobytes(), offset=int(start) * 12)
 
+    # ------------------------------------------------------------ instances written on the GPU
+    def gpu_targets(self, capacity: int, *, tint: bool = False) -> tuple:
+        """Room for ``capacity`` instances that a GPU pass writes (a generated layer, :mod:`~axialdeform.gl.generated`):
+        ``(instance buffer, tint buffer or None, child-axes texture or None)``, grown where needed, nothing
+        written.  The pass writes the records in this renderer's layout (float32, 16 numbers or 19 extended),
+        the tints (``tint=True``: 3 float32 an instance) and a tree's child-axis texels, then calls
+        :meth:`gpu_written`."""
+        self._check()
+        if self.quantized:
+            raise AxialDeformError("gpu_targets: instances written on the GPU need a float32 renderer (quantized=False)")
+        self.instances.reserve(capacity)
+        if self._axes is not None:
+            self._axes.reserve(capacity)
+        buffer = None
+        if tint:
+            if self._tint is None:
+                self.set_tint(np.zeros((0, 3), np.float32))
+            buffer = self._tint[3]
+            if buffer.size < capacity * 12:
+                buffer.orphan(capacity * 12)
+        return self.instances.buffer, buffer, None if self._axes is None else self._axes.texture
+
+    def gpu_written(self, count: int, *, tint: bool = False, child_reach: float = 0.0) -> None:
+        """``count`` instances are in :meth:`gpu_targets`' buffers (with their tints, with child axes that move
+        a vertex at most ``child_reach`` model units: culling's bound)."""
+        self.instances.count = int(count)
+        self._tint_count = int(count) if tint else None
+        self._tint_from_record = bool(tint)
+        if self._axes is not None:
+            self._axes.count = int(count)
+            self._axes.child_reach = float(child_reach)
+
     # ------------------------------------------------------------ optional tint
     def set_tint(self, colors) -> None:
         """Give every instance its own base colour; ``None`` goes back to ``color``.

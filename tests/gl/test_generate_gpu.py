@@ -189,3 +189,113 @@ def test_instances_lean_toward_the_ground_as_scatter_turns_them(ctx):
     tilt = matrices_from_rotation_vectors(axis * (np.arctan2(sin, n[:, 1]) * 0.7)[:, None])
     want = tilt @ rotation_matrices(np.column_stack([np.zeros(len(p)), flat[:, 14], np.zeros(len(p))]))
     assert np.abs(r - want).max() < 1e-4, np.abs(r - want).max()
+
+
+def _tree():
+    return ad.load_mesh("tree", axes=str(Path(__file__).resolve().parents[2] / "examples" / "forest" / "tree-axes.toml"))
+
+
+@pytest.mark.parametrize("kind", ["16 numbers", "tinted on the ground maps", "tree of ten axes"])
+def test_tiles_are_made_straight_into_the_renderers_buffers(ctx, kind):
+    """GeneratedTiles: the kept instances compacted on the GPU into the renderer's own instance buffer, tint
+    buffer and child-axes texture equal generate_tiles for the same tiles, in its order; the bounds found
+    from the recipe alone hold every instance; a second make replaces the first."""
+    from axialdeform.core.bounds import instance_bounds
+    from axialdeform.core.generate import GroundMaps, tile_spheres
+    from axialdeform.core.record import split_record
+    from axialdeform.gl.generated import GeneratedTiles
+    from axialdeform.gl.renderer import AxialRenderer
+
+    mesh, maps = ad.load_mesh("stone"), None
+    if kind == "16 numbers":
+        recipe = RECIPES[0]
+    elif kind == "tinted on the ground maps":
+        terrain, density = _hills()
+        maps = GroundMaps.of(terrain, density)
+        recipe = Generate(rate=3.0, tile=8.0, min_distance=0.2, seed=9, bend=0.1, altitude=(1.0, 5.0), scale=(0.5, 1.0),
+                          tint=0.4, lift=(0.0, 0.3), align_to_normal=0.5)
+    else:
+        mesh, recipe = _tree(), Generate(rate=0.2, tile=16.0, min_distance=0.5, seed=21, bend=(0.04, 0.25),
+                                         scale=(0.8, 1.1))
+    width = recipe.width + 10 * (mesh.axis_count - 1)
+    renderer = AxialRenderer(ctx, mesh, np.zeros((0, width), np.float32))
+    gen = GeneratedTiles(renderer, recipe, mesh, maps)
+    try:
+        for tiles in ([(0, 0), (1, 0), (-1, 2), (3, -2)], [(2, 2), (-3, -1)]):
+            cpu = generate_tiles(recipe, mesh, tiles, maps)
+            assert gen.make(tiles) == renderer.count == len(cpu) > 0
+            std, children = split_record(cpu, mesh.axis_count) if mesh.axis_count > 1 else (cpu, None)
+            assert np.array_equal(renderer.instances.read(), std[:, :renderer.instances.columns])
+            if recipe.tint is not None:
+                tint = np.frombuffer(renderer._tint[3].read(size=12 * len(cpu)), np.float32).reshape(-1, 3)
+                assert np.array_equal(tint, cpu[:, 19:22])
+            if children is not None:
+                got = renderer._axes.read()
+                assert np.abs(got - children).max() <= 1e-6 and np.abs(children).max() > 0.01
+                assert renderer.child_reach >= renderer._axes.reach(children)  # culling's bound holds them
+            # the tiles' spheres (from the recipe alone) hold every instance's bounding sphere
+            centers, radii = instance_bounds(mesh, cpu)
+            spheres = tile_spheres(recipe, mesh, tiles, maps)
+            own = np.repeat(np.arange(len(tiles)), [len(generate_tiles(recipe, mesh, [t], maps)) for t in tiles])
+            assert (np.linalg.norm(centers - spheres[own, :3], axis=1) + radii <= spheres[own, 3] + 1e-9).all()
+        assert gen.make([]) == renderer.count == 0
+    finally:
+        gen.release()
+        gen.release()  # safe twice
+        renderer.release()
+
+
+def test_a_quantized_renderer_cannot_take_gpu_made_instances(ctx):
+    from axialdeform.core.errors import AxialDeformError
+    from axialdeform.gl.renderer import AxialRenderer
+
+    stone = ad.load_mesh("stone")
+    renderer = AxialRenderer(ctx, stone, np.zeros((4, 16), np.float32), quantized=True)
+    try:
+        with pytest.raises(AxialDeformError, match="quantized=False"):
+            renderer.gpu_targets(10)
+    finally:
+        renderer.release()
+
+
+def test_view_draws_the_gpus_records_and_makes_none_on_the_cpu(monkeypatch):
+    """The viewer's generated layers (stones, grass, trees of ten axes) are made on the GPU into the
+    renderers: with numpy's generator made to fail, a walk still fills every layer, and what each renderer
+    holds equals the numpy reference for the tiles within reach.  N (another seed) and UP (more bend) make
+    them again on the GPU, as numpy makes them with seed + 7919 and offsets x 1.25."""
+    import axialdeform.core.generate as core_generate
+    from axialdeform.core.record import split_record
+    from axialdeform.viewer import Viewer
+
+    scene = ad.Scene.load(Path(__file__).resolve().parents[2] / "examples" / "generated" / "walk.toml")
+    v = Viewer.create(scene, headless=True, size=(96, 72), walk=(30.0, 18.0))
+
+    def refuse(*_a, **_k):
+        raise AssertionError("a tile was made on the CPU")
+
+    try:
+        monkeypatch.setattr(core_generate, "generate_tile", refuse)
+        v.step(3)
+        v.on_key_event("N", v.wnd.keys.ACTION_PRESS, None)
+        v.on_key_event("UP", v.wnd.keys.ACTION_PRESS, None)
+        v.step(1)
+        monkeypatch.undo()
+        t = v.orbit.target
+        jobs = [(v.generate, v.mesh, v.renderer)] + [(layer.generate, layer.mesh, r) for layer, r, _ in v.layers]
+        assert len(jobs) == 3 and v.layers[-1][0].mesh.axis_count == 10
+        from dataclasses import replace
+
+        for rec, mesh, renderer in jobs:
+            again = replace(rec.generate, seed=rec.generate.seed + 7919)
+            cpu = generate_tiles(again, mesh, core_generate.tiles_around(again, float(t[0]), float(t[2]), rec.reach),
+                                 rec.maps)
+            assert renderer.count == len(cpu) > 0
+            cpu[:, :10 * mesh.axis_count] *= np.float32(1.25)
+            std, children = split_record(cpu, mesh.axis_count) if mesh.axis_count > 1 else (cpu, None)
+            got = renderer.instances.read()
+            assert (np.abs(got - std[:, :got.shape[1]]) / np.maximum(1.0, np.abs(std[:, :got.shape[1]]))).max() <= 1e-6
+            if children is not None:
+                assert np.abs(renderer._axes.read() - children).max() <= 1e-6
+    finally:
+        v.release()
+        v.wnd.destroy()

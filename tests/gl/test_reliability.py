@@ -166,7 +166,7 @@ def test_1000_renderers_leave_nothing_behind(ctx):
 
     for i in range(50):  # warm-up: shader caches, allocator pools
         cycle(i)
-    # moderngl 5 cannot delete a query: the culling pass keeps ONE per context (gl/cull.py _shared_query)
+    # moderngl 5 cannot delete a query: the culling pass keeps ONE per context (gl/cull.py shared_query)
     shared = [o for o in counting.created if isinstance(o, moderngl.Query)]
     assert len(shared) <= 1  # none if an earlier test in the session made it
     for query in shared:
