@@ -242,7 +242,7 @@ export function mount(root, lib, scene, options = {}) {
   }
 
   function countInstances() {
-    for (const l of layers) if (l.mesh && l.mesh.isAxialGeneratedMesh) l.count = l.mesh.count;
+    for (const l of layers) if (l.mesh && l.mesh.isAxialGeneratedMesh) l.count = l.mesh.kept; // its slots drawn: count
     state.count = layers.reduce((a, l) => a + (l.cfg.terrain ? 0 : l.count), 0);
   }
 
@@ -470,13 +470,13 @@ export function mount(root, lib, scene, options = {}) {
     /** Frames drawn so far. */
     get frames() { return state.frames; },
     /** Each generated layer's tiles and records now (its name, the tiles nearest the target first,
-     * numbers an instance, the last tiles' timing, the records: m^2 a tile, in the tiles' order; not
-     * with {records: false}), for tools and tests. */
+     * numbers an instance, the last tiles' timing, the kept records in the tiles' order, read back from
+     * the GPU; not with {records: false}), for tools and tests. */
     generated({ records = true } = {}) {
       return layers.filter((l) => l.mesh && l.mesh.isAxialGeneratedMesh).map((l) => ({
         name: l.cfg.name, tiles: l.mesh.tiles, width: l.mesh.layout.numbersPerInstance, timing: l.mesh.timing,
         target: controls ? controls.target.toArray() : null,
-        data: records ? Array.from(l.mesh.data.subarray(0, l.mesh.count * l.mesh.layout.numbersPerInstance)) : null }));
+        data: records ? Array.from(l.mesh.records()) : null })); // read back from the GPU: only when asked
     },
     /** Replace the first layer's parameters by another .adp (ArrayBuffer); a
      * bad file keeps nothing wrong on screen: the message says why and nothing is drawn. */

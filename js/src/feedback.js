@@ -77,7 +77,7 @@ export function feedback(mesh, renderer, ids, tangent) {
   bind('position', upload(plainArray(g.getAttribute('position'))), 3, 0);
   bind('normal', upload(plainArray(g.getAttribute('normal'))), 3, 0);
   if (tangent) bind('tangent', upload(plainArray(g.getAttribute('tangent'))), 4, 0);
-  const a = g.attributes;
+  const a = mesh._cpuAttributes || g.attributes; // a generated mesh draws from GPU-written copies of these
   for (const { name, size } of ATTRIBUTES) bind(name, upload(rows(a[name].array, size)), size, 1);
   const mats = upload(rows(mesh.instanceMatrix.array, 16));
   for (let c = 0; c < 4; c++) bind('instanceMatrix', mats, 4, 1, 64, 16 * c, c);
@@ -149,11 +149,12 @@ gl_Position = vec4(0.0);
 
 /**
  * A transform-feedback program of WebGL 2 (the module's raw passes: the bend's, the generator's):
- * vertex shader `vs` (its own #version line), a fragment shader that writes nothing, `varyings`
- * captured in `mode`.  A compile or link error is an AxialError that names the pass (`what`).
+ * vertex shader `vs` (its own #version line), a fragment shader that writes nothing (or `fs`: a pass
+ * that draws, `varyings` then []), `varyings` captured in `mode`.  A compile or link error is an
+ * AxialError that names the pass (`what`).
  */
-export function feedbackLink(gl, vs, varyings, mode, what) {
-  const fs = '#version 300 es\nprecision highp float;\nout vec4 color;\nvoid main() { color = vec4(0.0); }';
+export function feedbackLink(gl, vs, varyings, mode, what,
+  fs = '#version 300 es\nprecision highp float;\nout vec4 color;\nvoid main() { color = vec4(0.0); }') {
   const shader = (type, text) => {
     const sh = gl.createShader(type);
     gl.shaderSource(sh, text);

@@ -1,20 +1,17 @@
 // generate.js -- generated layers in three.js (docs/generate.md): instances made on the GPU from a
 // recipe, tile by tile around a point, by glsl/generate.glsl -- the very GLSL the Python library runs
-// (axialdeform.gl.generate), here by WebGL 2 transform feedback.  The records are read back once
-// per tile set (the mesh's instance matrices, bounds and raycasting are on the CPU); 0 bytes an
-// instance travel.  Conventions: the numpy reference axialdeform.core.generate.
+// (axialdeform.gl.generate), here by WebGL 2 transform feedback (tiles.js), drawn from the buffers the
+// GPU wrote; 0 bytes an instance travel and none is read back to draw.  The recipe's checks, its
+// uniforms and the tiles around a point: the numpy reference axialdeform.core.generate's conventions.
 
 import * as THREE from 'three';
 import { AxialError } from './adp.js';
-import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT, GENERATE_CHILDREN_VERT } from './glsl.js';
 import { AxialInstancedMesh } from './mesh.js';
-import { refuseWebGPU, plainArray, feedbackLink } from './feedback.js';
+import { plainArray } from './feedback.js';
+import { ATTRIBUTES } from './record.js';
+import { TileGenerator, TileAttributes, GENERATED_FLOATS } from './tiles.js';
 
-/** Numbers an instance the pass writes: the 22-number record (the 16, s, tw, tp, the tint), then 1 (kept)
- * or 0 (dropped by the ground maps and bands): generate.vert's outputs, in order. */
-export const GENERATED_FLOATS = 23;
-const VARYINGS = ['g_d12', 'g_d34', 'g_d5_px_py', 'g_pz_angles', 'g_extra', 'g_tint'];
-const CHILD_VARYINGS = Array.from({ length: 15 }, (_, k) => `c_${k}`);
+export { TileGenerator, GENERATED_FLOATS };
 const NO_BAND = 3.0e38;
 const _eye = new THREE.Vector3();
 const BINOMIAL = [1, 4, 6, 4, 1];
@@ -145,145 +142,6 @@ export function maxTiles(tile, reach) {
 }
 
 /**
- * glsl/generate.glsl in a WebGL 2 context by transform feedback: `run(tiles)` writes each tile's m^2
- * instances (GENERATED_FLOATS float32 each) into one GL buffer, tile after tile, and reads them back;
- * `runChildren(tiles)` a mesh of several axes' child offsets (10 a child axis, generate_children.vert).
- * `maps`: {heights, density, children}: the ground maps, each {data: Float32Array (rows of cols), cols,
- * rows}, as the uniforms place them, and the child axes' table (K - 1 rows of 26: amp_j, P_j).
- */
-export class TileGenerator {
-  constructor(renderer, uniforms, maps = {}) {
-    refuseWebGPU(renderer, 'has no WebGL 2 transform feedback, which the generator runs by');
-    this.renderer = renderer;
-    const gl = (this.gl = renderer.getContext());
-    if (typeof WebGL2RenderingContext === 'undefined' || !(gl instanceof WebGL2RenderingContext)) {
-      throw new AxialError('TileGenerator: the generator needs a WebGL 2 context');
-    }
-    this.uniforms = uniforms;
-    this.count = uniforms.m * uniforms.m;
-    this.program = this._program(GENERATE_VERT, VARYINGS);
-    this.vao = gl.createVertexArray();
-    this.buffers = {};
-    // the maps as float32 textures read by texelFetch (a 1 x 1 stand-in where none)
-    this.textures = ['heights', 'density', 'children'].map((key) => {
-      const m = maps[key] || { data: new Float32Array(1), cols: 1, rows: 1 };
-      if (!(m.data instanceof Float32Array) || m.data.length !== m.cols * m.rows) {
-        throw new AxialError(`generate: maps.${key}: expected {data: Float32Array of cols x rows, cols, rows}`);
-      }
-      const t = gl.createTexture();
-      gl.bindTexture(gl.TEXTURE_2D, t);
-      gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
-      gl.texImage2D(gl.TEXTURE_2D, 0, gl.R32F, m.cols, m.rows, 0, gl.RED, gl.FLOAT, m.data);
-      for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D, p, gl.NEAREST);
-      gl.bindTexture(gl.TEXTURE_2D, null);
-      return t;
-    });
-    this.childCount = maps.children ? maps.children.rows : 0;
-    this.childProgram = this.childCount ? this._program(GENERATE_CHILDREN_VERT, CHILD_VARYINGS) : null;
-    renderer.resetState();
-  }
-
-  _program(main, varyings) {
-    const head = '#version 300 es\nprecision highp float;\nprecision highp int;\n';
-    return feedbackLink(this.gl, head + AXIAL_GLSL + WIND_GLSL + GENERATE_GLSL + main, varyings,
-      this.gl.INTERLEAVED_ATTRIBS, 'generate');
-  }
-
-  _setUniforms(p) {
-    const gl = this.gl, u = this.uniforms;
-    const at = (name) => gl.getUniformLocation(p, name);
-    gl.uniform1ui(at('u_seed'), u.seed);
-    gl.uniform1i(at('u_m'), u.m);
-    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'anchor_y', 'anchor_w4', 'tint', 'align']) gl.uniform1f(at(`u_${k}`), u[k]);
-    gl.uniform2f(at('u_scale'), u.scale[0], u.scale[1]);
-    gl.uniform4f(at('u_anchor_w'), ...u.anchor_w);
-    gl.uniform3f(at('u_tint_color'), ...u.tint_color);
-    for (const k of ['has_heights', 'has_density', 'd_wrap']) gl.uniform1i(at(`u_${k}`), u[k] ? 1 : 0);
-    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2', 'choice', 'lift', 'anchor_xz']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
-    for (const k of ['h_size', 'd_size']) gl.uniform2i(at(`u_${k}`), u[k][0], u[k][1]);
-    gl.uniform1i(at('u_children_n'), this.childCount);
-    this.textures.forEach((t, unit) => {
-      gl.activeTexture(gl.TEXTURE0 + unit);
-      gl.bindTexture(gl.TEXTURE_2D, t);
-      gl.uniform1i(at(['u_heights', 'u_density', 'u_children'][unit]), unit);
-    });
-  }
-
-  /** One transform-feedback draw of `program` for each of `jobs` ({tile, first}), `floats` a vertex, into
-   * one buffer (grown as needed), read back.  Leaves three's GL state reset. */
-  _feedback(program, jobs, floats) {
-    const gl = this.gl, each = this.count * floats * 4, bytes = jobs.length * each;
-    const out = new Float32Array(bytes / 4);
-    if (!bytes) return out;
-    let buffer = this.buffers[floats];
-    if (!buffer || buffer.bytes < bytes) {
-      if (buffer) gl.deleteBuffer(buffer.gl);
-      buffer = this.buffers[floats] = { gl: gl.createBuffer(), bytes };
-      gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, buffer.gl);
-      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, bytes, gl.DYNAMIC_READ);
-      gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, null);
-    }
-    gl.useProgram(program);
-    this._setUniforms(program);
-    gl.bindVertexArray(this.vao);
-    gl.bindBuffer(gl.ARRAY_BUFFER, null);
-    const tf = gl.createTransformFeedback();
-    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, tf);
-    gl.enable(gl.RASTERIZER_DISCARD);
-    const tileAt = gl.getUniformLocation(program, 'u_tile'), firstAt = gl.getUniformLocation(program, 'u_first');
-    jobs.forEach(({ tile, first }, k) => {
-      gl.uniform2i(tileAt, tile[0], tile[1]);
-      if (firstAt !== null) gl.uniform1i(firstAt, first);
-      gl.bindBufferRange(gl.TRANSFORM_FEEDBACK_BUFFER, 0, buffer.gl, k * each, each);
-      gl.beginTransformFeedback(gl.POINTS);
-      gl.drawArrays(gl.POINTS, 0, this.count);
-      gl.endTransformFeedback();
-    });
-    gl.disable(gl.RASTERIZER_DISCARD);
-    gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);
-    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
-    gl.deleteTransformFeedback(tf);
-    gl.bindBuffer(gl.COPY_READ_BUFFER, buffer.gl);
-    gl.getBufferSubData(gl.COPY_READ_BUFFER, 0, out);
-    gl.bindBuffer(gl.COPY_READ_BUFFER, null);
-    gl.bindVertexArray(null);
-    this.renderer.resetState();
-    return out;
-  }
-
-  /** The instances of `tiles` ([[tx, tz], ...]): a Float32Array of tiles.length m^2 rows of GENERATED_FLOATS,
-   * tile after tile, cell order (instance i of a tile in cell (i mod m, i div m)), each ending in its
-   * kept flag. */
-  run(tiles) {
-    return this._feedback(this.program, tiles.map((tile) => ({ tile })), GENERATED_FLOATS);
-  }
-
-  /** A mesh of several axes: the child offsets of `tiles`' instances, 10 (K - 1) a row in run's order. */
-  runChildren(tiles) {
-    const passes = Math.ceil(this.childCount / 6), n = tiles.length * this.count, w = 10 * this.childCount;
-    const jobs = [];
-    for (let p = 0; p < passes; p++) for (const tile of tiles) jobs.push({ tile, first: 6 * p + 1 });
-    const raw = this._feedback(this.childProgram, jobs, 60), out = new Float32Array(n * w);
-    for (let p = 0; p < passes; p++) { // pass p holds axes 6p+1 .. 6p+6 of every instance
-      const width = Math.min(60, w - 60 * p);
-      for (let i = 0; i < n; i++) out.set(raw.subarray((p * n + i) * 60, (p * n + i) * 60 + width), i * w + 60 * p);
-    }
-    return out;
-  }
-
-  dispose() {
-    const gl = this.gl;
-    if (!gl) return;
-    Object.values(this.buffers).forEach((b) => gl.deleteBuffer(b.gl));
-    this.textures.forEach((t) => gl.deleteTexture(t));
-    gl.deleteVertexArray(this.vao);
-    gl.deleteProgram(this.program);
-    if (this.childProgram) gl.deleteProgram(this.childProgram);
-    this.gl = null;
-  }
-}
-
-/**
  * A generated layer as one three.js object: an AxialInstancedMesh whose instances are made on the GPU
  * from `recipe` (checkRecipe) in the tiles within `recipe.reach` of a point.  Call
  * `update(renderer, point)` before rendering (e.g. with OrbitControls' target): it makes the tiles
@@ -320,6 +178,8 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     this._key = null;
     this._generator = null;
     this.timing = null;
+    /** How many of the `count` slots drawn are kept (the rest collapse to a point). */
+    this.kept = 0;
     this.frustumCulled = false;
     this.autoUpdate = Boolean(options.autoUpdate);
     // autoUpdate: each draw says which renderer and camera (the base mesh's hook, then ours, then a
@@ -347,41 +207,134 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     if (this.autoUpdate && d) this.update(d.renderer, d.camera.getWorldPosition(_eye));
   }
 
-  /** Make the tiles within reach of `point` ({x, z}: a Vector3) if they changed; returns whether they did. */
+  /** Make the tiles within reach of `point` ({x, z}: a Vector3) if they changed; returns whether they did.
+   * The GPU writes them where three draws from (tiles.js): every slot of the tiles drawn (`count`), the
+   * ones a tile does not keep collapsed to a point; `kept` says how many are kept. */
   update(renderer, point) {
     const tiles = tilesAround(this.recipe.tile, point.x, point.z, this.recipe.reach);
     const key = tiles.map((t) => t.join(',')).sort().join(';');
     if (key === this._key && this._generator && this._generator.renderer === renderer) return false;
-    if (!this._generator || this._generator.renderer !== renderer) {
-      if (this._generator) this._generator.dispose();
-      this._generator = new TileGenerator(renderer, this.generatorUniforms, this.maps);
-    }
-    const t0 = performance.now();
-    const raw = this._generator.run(tiles), G = GENERATED_FLOATS;
-    const kids = this.layout.axes > 1 ? this._generator.runChildren(tiles) : null;
-    const t1 = performance.now();
-    // the kept instances' records in order: axis 0's offsets, the child axes' (a tree), the rest
-    const f = this.layout.numbersPerInstance, c = 10 * (this.layout.axes - 1), all = raw.length / G;
-    let n = 0;
-    for (let i = 0; i < all; i++) if (raw[i * G + G - 1] > 0.5) n++;
-    const rows = new Float32Array(n * f);
-    for (let i = 0, k = 0; i < all; i++) {
-      if (!(raw[i * G + G - 1] > 0.5)) continue;
-      rows.set(raw.subarray(i * G, i * G + 10), f * k);
-      if (kids) rows.set(kids.subarray(i * c, (i + 1) * c), f * k + 10);
-      rows.set(raw.subarray(i * G + 10, i * G + f - c), f * k + 10 + c);
-      k++;
-    }
-    this.tiles = tiles;
-    this._key = key;
-    this.setParams(rows);
-    /** The last tiles' cost: the GPU pass with its read-back, and the mesh's own work (matrices, bounds). */
-    this.timing = { instances: n, generateMs: t1 - t0, applyMs: performance.now() - t1 };
+    if (!this._generator || this._generator.renderer !== renderer) this._start(renderer);
+    const t0 = performance.now(), gen = this._generator, n = tiles.length * gen.count;
+    const slots = gen.make(tiles);
+    const children = this.axis.axes ? this.axialUniforms.axialChildren.value : null;
+    this._gpu.write(slots, n, tiles, children);
+    if (children && !this._gpu.drawsTexels) this._uploadTexels(tiles, n, children);
+    Object.assign(this, { tiles, _key: key, _slots: slots, _materialized: false, count: n, boundingSphere: null, boundingBox: null });
+    const kept = this._gpu.kept(slots, n);
+    this.kept = kept !== null ? kept : this._rows(false).n;
+    /** The last tiles' cost: the GPU passes and the one pixel of the count read back. */
+    this.timing = { instances: this.kept, slots: n, generateMs: performance.now() - t0 };
+    this.dispatchEvent({ type: 'paramschange', first: 0, count: n });
     return true;
   }
 
+  /** The generator and the GPU's attributes for `renderer`; three draws from those (the CPU copies stay
+   * for what needs the records there: raycasting, bake, the bounds, read back when asked). */
+  _start(renderer) {
+    if (this._generator) { this._generator.dispose(); this._gpu.dispose(); }
+    this._generator = new TileGenerator(renderer, this.generatorUniforms, this.maps);
+    const names = [...ATTRIBUTES.map((a) => a.name), 'instanceMatrix', ...(this.layout.tint !== null ? ['instanceColor'] : [])];
+    this._gpu = new TileAttributes(renderer, this._generator, this.capacity, names, this.layout.axes);
+    this._cpuAttributes = this._cpuAttributes || Object.fromEntries(ATTRIBUTES.map((a) => [a.name, this.geometry.getAttribute(a.name)]));
+    for (const [name, attr] of Object.entries(this._gpu.attributes)) this.geometry.setAttribute(name, attr);
+  }
+
+  /** Where a context cannot draw into float textures: the child axes' texels read back and uploaded. */
+  _uploadTexels(tiles, n, texture) {
+    const kids = this._generator.runChildren(tiles), c = 10 * (this.layout.axes - 1), out = texture.image.data;
+    for (let i = 0; i < n; i++) {
+      for (let j = 0; j < c / 10; j++) {
+        const at = (i * (c / 10) + j) * 12, from = i * c + 10 * j;
+        out.set(kids.subarray(from, from + 10), at);
+        out[at + 10] = out[at + 11] = 0;
+      }
+    }
+    texture.needsUpdate = true;
+  }
+
+  /** The slots read back as records: {rows (one a slot, zeros where dropped; or only the kept ones with
+   * `compact`), kept (a flag a slot), n (the kept)}: axis 0's offsets, the child axes' (a tree), the rest. */
+  _rows(compact) {
+    const gen = this._generator, G = GENERATED_FLOATS;
+    if (!this._slots) return { rows: new Float32Array(0), kept: new Uint8Array(0), n: 0 };
+    const raw = gen.read(this._slots), all = raw.length / G;
+    const kids = this.layout.axes > 1 ? gen.runChildren(this.tiles) : null;
+    const f = this.layout.numbersPerInstance, c = 10 * (this.layout.axes - 1), kept = new Uint8Array(all);
+    let n = 0;
+    for (let i = 0; i < all; i++) if (raw[i * G + G - 1] > 0.5) { kept[i] = 1; n++; }
+    const rows = new Float32Array((compact ? n : all) * f);
+    for (let i = 0, k = 0; i < all; i++) {
+      if (!kept[i] && compact) continue;
+      const r = f * (compact ? k++ : i);
+      if (!kept[i]) continue;
+      rows.set(raw.subarray(i * G, i * G + 10), r);
+      if (kids) rows.set(kids.subarray(i * c, (i + 1) * c), r + 10);
+      rows.set(raw.subarray(i * G + 10, i * G + f - c), r + 10 + c);
+    }
+    return { rows, kept, n };
+  }
+
+  /** The kept instances' records (Float32Array, rows of numbersPerInstance), as the Python library's
+   * generate_tiles gives them for `tiles`: read back from the GPU (tools and tests; drawing needs none). */
+  records() {
+    return this._rows(true).rows;
+  }
+
+  /** The records on the CPU, one a slot (what raycasting, bake and the bounds read), read back once a tile set. */
+  _materialize() {
+    if (this._materialized || !this._slots) return;
+    this._materialized = true;
+    const { rows, kept } = this._rows(false);
+    this._write(rows, 0);
+    const m = this.instanceMatrix.array;
+    kept.forEach((k, i) => { if (!k) { m.fill(0, 16 * i, 16 * i + 16); m[16 * i + 15] = 1; this._radii[i] = 0; } });
+  }
+
+  /** Before the records are read back (raycast, bake): a sphere and box holding every instance the tiles
+   * held can make, found from the recipe alone (three sorts by it each frame); then the instances'. */
+  computeBoundingSphere() {
+    if (!this._slots || this._materialized) return super.computeBoundingSphere();
+    const u = this.generatorUniforms, T = this.recipe.tile, xs = this.tiles.map((t) => t[0]), zs = this.tiles.map((t) => t[1]);
+    const heights = u.has_heights && this.maps.heights ? this.maps.heights.data : [0];
+    let h0 = Infinity, h1 = -Infinity;
+    for (const h of heights) { h0 = Math.min(h0, h); h1 = Math.max(h1, h); }
+    if (this._far === undefined) { // the farthest vertex from the origin, and how far the child axes reach
+      const p = plainArray(this.geometry.getAttribute('position')), c = this.maps.children;
+      this._far = 0;
+      for (let i = 0; i < p.length; i += 3) this._far = Math.max(this._far, Math.hypot(p[i], p[i + 1], p[i + 2]));
+      this._kids = 0;
+      for (let j = 0; c && j < c.rows; j++) {
+        let most = 0;
+        for (let a = 0; a < 5; a++) most = Math.max(most, [0, 1, 2, 3, 4].reduce((acc, b) => acc + Math.abs(c.data[26 * j + 1 + 5 * a + b]), 0));
+        this._kids += Math.SQRT2 * Math.abs(c.data[26 * j]) * most;
+      }
+    }
+    const s = Math.max(...u.scale), reach = s * (this._far + 2 * Math.SQRT2 * Math.abs(u.bend) + this._kids + Math.abs(u.anchor_y));
+    this.boundingBox = new THREE.Box3(new THREE.Vector3(Math.min(...xs) * T - reach, h0 + u.lift[0] - reach, Math.min(...zs) * T - reach),
+      new THREE.Vector3((Math.max(...xs) + 1) * T + reach, h1 + u.lift[1] + reach, (Math.max(...zs) + 1) * T + reach));
+    this.boundingSphere = this.boundingBox.getBoundingSphere(this.boundingSphere || new THREE.Sphere());
+  }
+
+  raycast(raycaster, intersects) {
+    this._fromRecords();
+    return super.raycast(raycaster, intersects);
+  }
+
+  bake(renderer) {
+    this._fromRecords();
+    return super.bake(renderer);
+  }
+
+  /** The records read back (once a tile set) and the bounds made from them. */
+  _fromRecords() {
+    if (!this._slots || this._materialized) return;
+    this._materialize();
+    this.computeBoundingSphere();
+  }
+
   dispose() {
-    if (this._generator) this._generator.dispose();
+    if (this._generator) { this._generator.dispose(); this._gpu.dispose(); }
     this._generator = null;
     return super.dispose();
   }

@@ -197,11 +197,16 @@ export function recipeUniforms(recipe: Required<GenerateRecipe>, positions: Floa
 /** The tiles any point of which lies within `reach` of (x, z), nearest first. */
 export function tilesAround(tile: number, x: number, z: number, reach: number): [number, number][];
 
-/** glsl/generate.glsl by WebGL 2 transform feedback: run(tiles) -> 23 float32 an instance (the 22-number
- * record, then kept), tile after tile. */
+/** A GL buffer of slots the generator left on the GPU. */
+export interface GeneratedSlots { buffer: WebGLBuffer; bytes: number }
+
+/** glsl/generate.glsl by WebGL 2 transform feedback: make(tiles) -> a GL buffer of 23 float32 an instance
+ * (the 22-number record, then kept), tile after tile, left on the GPU; run(tiles) reads it back. */
 export class TileGenerator {
   constructor(renderer: THREE.WebGLRenderer, uniforms: GeneratorUniforms, maps?: GroundMaps);
   readonly count: number;
+  make(tiles: [number, number][]): GeneratedSlots;
+  read(slots: GeneratedSlots): Float32Array;
   run(tiles: [number, number][]): Float32Array;
   dispose(): void;
 }
@@ -226,8 +231,12 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   readonly tiles: [number, number][];
   /** Make the tiles around the camera by itself, without update(): drawn from the second frame on. */
   autoUpdate: boolean;
-  /** The last tiles' cost (null before the first): the GPU pass with its read-back, the mesh's own work. */
-  readonly timing: { instances: number; generateMs: number; applyMs: number } | null;
+  /** How many of the `count` slots drawn are kept (the dropped ones collapse to a point). */
+  readonly kept: number;
+  /** The last tiles' cost (null before the first): the GPU passes and the count's one pixel. */
+  readonly timing: { instances: number; slots: number; generateMs: number } | null;
+  /** The kept instances' records, as the Python library's generate_tiles gives them (read back). */
+  records(): Float32Array;
   /** Make the tiles within reach of `point` if they changed; returns whether they did. */
   update(renderer: THREE.WebGLRenderer, point: { x: number; z: number }): boolean;
 }

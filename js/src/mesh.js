@@ -234,7 +234,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    * the instance matrices, the tint, the child axes' texels and the instances' bounds. */
   _write(rows, first) {
     if (this._baked) unbake(this); // moving instances bend every frame again
-    const L = this.layout, f = L.numbersPerInstance, n = rows.length / f, a = this.geometry.attributes;
+    const L = this.layout, f = L.numbersPerInstance, n = rows.length / f, a = this._cpuAttributes || this.geometry.attributes;
     this.data.set(rows, first * f);
     const range = (attr, size) => {
       if (attr.clearUpdateRanges) attr.addUpdateRange(first * size, n * size);

@@ -254,6 +254,51 @@ def test_the_page_makes_the_python_records_and_walks(browser, generated_site):
         v.close()
 
 
+# counts what the page's WebGL 2 context reads back and uploads (bytes), from the page's first script on
+_GL_TRAFFIC = """(() => {
+  const t = window.__glTraffic = { reads: 0, readBytes: 0, pixels: 0, uploads: 0 };
+  const P = WebGL2RenderingContext.prototype;
+  const getBuffer = P.getBufferSubData, readPixels = P.readPixels, data = P.bufferData, sub = P.bufferSubData;
+  P.getBufferSubData = function (...a) { t.reads += 1; t.readBytes += a[2].byteLength; return getBuffer.apply(this, a); };
+  P.readPixels = function (...a) { t.pixels += a[2] * a[3]; return readPixels.apply(this, a); };
+  P.bufferData = function (...a) { if (typeof a[1] !== 'number' && a[1]) t.uploads += a[1].byteLength; return data.apply(this, a); };
+  P.bufferSubData = function (...a) { t.uploads += a[2].byteLength; return sub.apply(this, a); };
+})();"""
+
+
+@pytest.mark.slow
+def test_the_page_draws_the_gpus_records_and_reads_none_back(browser, generated_site):
+    """Walking, the page makes tile sets again and again, and neither reads a record back nor uploads one:
+    the GPU writes the attributes three draws from (js/src/tiles.js); what comes back is one pixel a
+    tile set (the count kept) and the page's own first-frame pixel.  Asked for its records, it reads them."""
+    page = browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1] + 40})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.add_init_script(_GL_TRAFFIC)
+    try:
+        page.goto(generated_site["url"] + "walk/index.html?walk=1.6,0.8")
+        page.wait_for_function("window.axialdeform && window.axialdeform.ready === true", timeout=120_000)
+        page.wait_for_function("window.axialdeformView.frames >= 3", timeout=120_000)
+        before = page.evaluate("({...window.__glTraffic})")
+        sets = page.evaluate("""async () => { const v = window.axialdeformView, seen = new Set();
+            const key = () => JSON.stringify(v.generated({records: false}).map((g) => g.tiles));
+            seen.add(key());
+            for (let k = 0; k < 400 && seen.size < 4; k++) { await new Promise(requestAnimationFrame); seen.add(key()); }
+            return seen.size; }""")
+        after = page.evaluate("({...window.__glTraffic})")
+        assert sets >= 4, sets  # three tile sets made while walking
+        assert after["reads"] == before["reads"] and after["readBytes"] == before["readBytes"], (before, after)
+        assert after["pixels"] - before["pixels"] <= 2 * 2 * sets  # the count kept: a pixel a layer a set
+        # no upload of the instances (a stone's record is 76 bytes; 2 layers hold thousands): a few uniforms' worth
+        assert after["uploads"] - before["uploads"] < 4096, (before, after)
+        counts = page.evaluate("window.axialdeformView.generated()")
+        assert page.evaluate("window.__glTraffic.reads") > after["reads"]  # records() reads them back, when asked
+        assert _check_records(counts, generated_site["walk"]) > 1000
+        assert errors == []
+    finally:
+        page.close()
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("kind", ["folder", "single file"])
 def test_the_generated_page_shows_what_render_shows(browser, generated_site, kind):
@@ -373,8 +418,9 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
         page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=120_000)
         got = page.evaluate("""() => { const s = window.app.stones;
             return { tiles: s.tiles, width: s.layout.numbersPerInstance, count: s.count,
-                     uniforms: s.generatorUniforms,
-                     data: Array.from(s.data.subarray(0, s.count * s.layout.numbersPerInstance)) }; }""")
+                     uniforms: s.generatorUniforms, slots: s.count, kept: s.kept,
+                     sphere: [...s.boundingSphere.center.toArray(), s.boundingSphere.radius],  // the recipe's bound
+                     data: Array.from(s.records()) }; }""")
     finally:
         page.close()
     assert errors == []
@@ -388,6 +434,13 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
     want = generate_tiles(recipe, mesh, tiles)
     records = np.asarray(got["data"], np.float32).reshape(-1, got["width"])
     assert _close(records, want) <= 1e-6, _close(records, want)
+    # every slot of the tiles drawn, the kept ones counted on the GPU; the bound three sorts by (found from
+    # the recipe before any record is read back) holds every instance
+    assert got["slots"] == len(tiles) * tile_size(recipe)[0] ** 2 and got["kept"] == len(want)
+    from axialdeform.core.bounds import instance_bounds
+
+    centers, radii = instance_bounds(mesh, want)
+    assert (np.linalg.norm(centers - got["sphere"][:3], axis=1) + radii <= got["sphere"][3] * (1 + 1e-6)).all()
     # and it draws them as render does (the example's camera; its ground and fog hidden)
     # (the tiles made before that picture, whether or not an animation frame ran yet)
     shot, errors = example_picture(browser, page_url, "window.app.stones.update(renderer, window.app.controls.target);")
@@ -438,7 +491,7 @@ def test_the_gltf_generated_form_is_generated_by_the_plugin(browser, three_site,
             let s = null;
             gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh && !s) s = o; });
             return { type: s.type, tiles: s.tiles, width: s.layout.numbersPerInstance, eye: camera.position.toArray(),
-                     data: Array.from(s.data.subarray(0, s.count * s.layout.numbersPerInstance)) }; }""")
+                     data: Array.from(s.records()) }; }""")
     finally:
         page.close()
     layer = ad.Scene.load(folder / "gen.toml").layers[0]
@@ -478,7 +531,7 @@ def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site)
             let s = null;
             gltf.scene.traverse((o) => { if (o.isAxialGeneratedMesh && !s) s = o; });
             return { tiles: s.tiles, width: s.layout.numbersPerInstance, eye: camera.position.toArray(),
-                     data: Array.from(s.data.subarray(0, s.count * s.layout.numbersPerInstance)) }; }""")
+                     data: Array.from(s.records()) }; }""")
     finally:
         page.close()
     assert errors == []
