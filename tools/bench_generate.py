@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Time to generate a layer: glsl/generate.glsl by transform feedback (one tile a pass, into one GPU
-buffer) and its numpy reference, against one frame's draw of the same instances.
+buffer), the same compacted into a renderer's own buffers (``GeneratedTiles.make``: what ``view`` does
+when the tiles change) and the numpy reference, against one frame's draw of the same instances.
 
     python3 tools/bench_generate.py                    # 1 000 000 stones (tiles of 16 x 16 units, rate 4)
     python3 tools/bench_generate.py --count 100000 --repeats 5
@@ -21,8 +22,9 @@ import numpy as np
 
 import axialdeform as ad
 from axialdeform.core.camera import frame_instances
-from axialdeform.core.generate import Generate, generate_tiles, tile_size
+from axialdeform.core.generate import GENERATED_FLOATS, Generate, generate_tiles, tile_size
 from axialdeform.gl.generate import TileGenerator
+from axialdeform.gl.generated import GeneratedTiles
 from axialdeform.gl.renderer import AxialRenderer
 
 
@@ -39,19 +41,26 @@ def main(argv=None) -> int:
     stone = ad.load_mesh("stone")
     ctx = moderngl.create_standalone_context(backend="egl")
     gen = TileGenerator(ctx, recipe, stone)
-    out = ctx.buffer(reserve=n * 19 * 4)
+    out = ctx.buffer(reserve=n * GENERATED_FLOATS * 4)
     params = generate_tiles(recipe, stone, tiles)
     renderer = AxialRenderer(ctx, stone, params, culling=False, lod=False)
+    held = AxialRenderer(ctx, stone, params[:0], culling=False, lod=False, extended=True)
+    into = GeneratedTiles(held, recipe, stone)
     target = ctx.simple_framebuffer((640, 480))
     cam = frame_instances(stone, params, 640 / 480)
     view, proj = cam.view(), cam.projection(640 / 480)
 
     def gpu():
         t = time.perf_counter()
-        rec = gen.count * 19 * 4
+        rec = gen.count * GENERATED_FLOATS * 4
         for k, tile in enumerate(tiles):
             gen.run(tile, out, offset=k * rec)
         ctx.finish()
+        return time.perf_counter() - t
+
+    def compact():
+        t = time.perf_counter()
+        into.make(tiles)  # ends reading the count back: the passes are finished
         return time.perf_counter() - t
 
     def cpu():
@@ -67,15 +76,19 @@ def main(argv=None) -> int:
         ctx.finish()
         return time.perf_counter() - t
 
-    runs = {"generate (GPU, transform feedback)": [], "generate (numpy)": [], "draw one frame": []}
+    runs = {"generate (GPU, transform feedback)": [], "generate into a renderer (GPU, + compaction)": [],
+            "generate (numpy)": [], "draw one frame": []}
     for _ in range(a.repeats):
-        for name, f in zip(runs, (gpu, cpu, draw)):
+        for name, f in zip(runs, (gpu, compact, cpu, draw)):
             runs[name].append(f())
     print(f"{n:,} instances ({len(tiles)} tiles of {m * m}); {ctx.info['GL_RENDERER']}; medians of {a.repeats}:")
     for name, ts in runs.items():
         print(f"  {name}: {1000 * statistics.median(ts):.1f} ms")
     g, d = statistics.median(runs["generate (GPU, transform feedback)"]), statistics.median(runs["draw one frame"])
-    print(f"  GPU generation / one frame's draw: {g / d:.3f}")
+    c = statistics.median(runs["generate into a renderer (GPU, + compaction)"])
+    print(f"  GPU generation / one frame's draw: {g / d:.3f}; into a renderer: {c / d:.3f}")
+    if held.count != len(params):
+        raise SystemExit(f"the renderer holds {held.count:,}, numpy made {len(params):,}")
     return 0
 
 
