@@ -530,8 +530,18 @@ def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site)
             renderer.render(scene, camera);
             let s = null;
             gltf.scene.traverse((o) => { if (o.isAxialGeneratedMesh && !s) s = o; });
+            // the offsets texture the draw fetches, as the GPU drew its texels (generate_axes.vert): slot order
+            const gl = renderer.getContext(), tex = s.axialUniforms.axialChildren.value;
+            const fbo = gl.createFramebuffer(), texels = new Float32Array(tex.image.width * 4 * 4);
+            gl.bindFramebuffer(gl.FRAMEBUFFER, fbo);
+            gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D,
+                                    renderer.properties.get(tex).__webglTexture, 0);
+            gl.readPixels(0, 0, tex.image.width, 4, gl.RGBA, gl.FLOAT, texels);
+            gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+            gl.deleteFramebuffer(fbo);
+            renderer.resetState();
             return { tiles: s.tiles, width: s.layout.numbersPerInstance, eye: camera.position.toArray(),
-                     data: Array.from(s.records()) }; }""")
+                     slots: s.count, texels: Array.from(texels), data: Array.from(s.records()) }; }""")
     finally:
         page.close()
     assert errors == []
@@ -541,3 +551,16 @@ def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site)
     assert sorted(got["tiles"]) == sorted(tiles_around(layer.generate.generate, x, z, layer.generate.reach).tolist())
     want = generate_tiles(layer.generate.generate, layer.mesh, got["tiles"], layer.generate.maps)
     assert _close(np.asarray(got["data"], np.float32).reshape(-1, got["width"]), want) <= 1e-6
+    # the texels the GPU drew for the draw (not read back by records()): every kept slot's child axes, the
+    # Python library's, in the texture's layout (three texels an axis: d1 d2 | d3 d4 | d5 0 0)
+    from axialdeform.core.generate import generate_tile
+
+    slots = [generate_tile(layer.generate.generate, layer.mesh, tx, tz, layer.generate.maps) for tx, tz in got["tiles"]]
+    records, kept = np.concatenate([p for p, _ in slots]), np.concatenate([k for _, k in slots])
+    assert got["slots"] == len(kept) and kept.any()
+    texels = np.asarray(got["texels"], np.float32).reshape(-1, 12)  # an axis's three texels
+    first = min(len(texels) // 9, len(kept))  # the slots the rows read hold
+    drawn = texels[:first * 9].reshape(first, 9, 12)[:, :, :10]
+    children = records[:first, 10:100].reshape(first, 9, 10)
+    assert kept[:first].sum() > 5
+    assert _close(drawn[kept[:first]].reshape(-1, 10), children[kept[:first]].reshape(-1, 10)) <= 1e-6
