@@ -249,7 +249,9 @@ class _ViewerMixin:
     # ------------------------------------------------------------ parameters
     def regenerate(self, seed: int) -> None:
         """New offsets (the individual shapes) from ``seed``; placement and
-        orientation stay.  Written in place: the count does not change."""
+        orientation stay.  Written in place: the count does not change.  Generated
+        layers take their recipe's seed + 7919 a call instead: other instances, made
+        again on the GPU (their places too: the seed draws them)."""
 
         self.seed = int(seed)
         self._rounds += 1  # generated layers: another seed of their recipe, the tiles made again
