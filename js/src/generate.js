@@ -296,10 +296,11 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   computeBoundingSphere() {
     if (!this._slots || this._materialized) return super.computeBoundingSphere();
     const u = this.generatorUniforms, T = this.recipe.tile, xs = this.tiles.map((t) => t[0]), zs = this.tiles.map((t) => t[1]);
-    const heights = u.has_heights && this.maps.heights ? this.maps.heights.data : [0];
-    let h0 = Infinity, h1 = -Infinity;
-    for (const h of heights) { h0 = Math.min(h0, h); h1 = Math.max(h1, h); }
-    if (this._far === undefined) { // the farthest vertex from the origin, and how far the child axes reach
+    if (this._far === undefined) { // once: the ground's height range, the farthest vertex from the origin, the child axes' reach
+      const heights = u.has_heights && this.maps.heights ? this.maps.heights.data : [0];
+      let lo = Infinity, hi = -Infinity;
+      for (const h of heights) { lo = Math.min(lo, h); hi = Math.max(hi, h); }
+      this._ground = [lo, hi];
       const p = plainArray(this.geometry.getAttribute('position')), c = this.maps.children;
       this._far = 0;
       for (let i = 0; i < p.length; i += 3) this._far = Math.max(this._far, Math.hypot(p[i], p[i + 1], p[i + 2]));
@@ -311,6 +312,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
       }
     }
     const s = Math.max(...u.scale), reach = s * (this._far + 2 * Math.SQRT2 * Math.abs(u.bend) + this._kids + Math.abs(u.anchor_y));
+    const [h0, h1] = this._ground;
     this.boundingBox = new THREE.Box3(new THREE.Vector3(Math.min(...xs) * T - reach, h0 + u.lift[0] - reach, Math.min(...zs) * T - reach),
       new THREE.Vector3((Math.max(...xs) + 1) * T + reach, h1 + u.lift[1] + reach, (Math.max(...zs) + 1) * T + reach));
     this.boundingSphere = this.boundingBox.getBoundingSphere(this.boundingSphere || new THREE.Sphere());

@@ -234,6 +234,7 @@ export class TileAttributes {
     this.vao = gl.createVertexArray();
     this.source = null;
     this.axes = axes;
+    const floats = Boolean(gl.getExtension('EXT_color_buffer_float')); // float colour targets (three asks for it too)
     if (axes > 1) {
       this.axesProgram = linkDraw(gl, HEAD + '#define AXIAL_SLOT_CELLS 1\n' + AXIAL_GLSL + WIND_GLSL + GENERATE_GLSL
         + GENERATE_AXES_VERT, HEAD + GENERATE_AXES_FRAG);
@@ -241,9 +242,9 @@ export class TileAttributes {
       this.fbo = gl.createFramebuffer();
       // float colour targets: drawn into only where the context renders to them, else the texels are read
       // back and uploaded (AxialGeneratedMesh's fallback)
-      this.drawsTexels = Boolean(gl.getExtension('EXT_color_buffer_float'));
+      this.drawsTexels = floats;
     }
-    this.counts = Boolean(gl.getExtension('EXT_color_buffer_float') && gl.getExtension('EXT_float_blend'));
+    this.counts = floats && Boolean(gl.getExtension('EXT_float_blend'));
     if (this.counts) this._countPass();
     renderer.resetState();
   }
