@@ -421,8 +421,20 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
                      uniforms: s.generatorUniforms, slots: s.count, kept: s.kept,
                      sphere: [...s.boundingSphere.center.toArray(), s.boundingSphere.radius],  // the recipe's bound
                      data: Array.from(s.records()) }; }""")
+        # picking: a ray straight down onto the first kept instance hits that instance (raycasting reads the
+        # tile set back, once, when first asked), its instanceId the slot the GPU drew it in
+        f = got["width"]
+        hit = page.evaluate("""([x, z]) => { const { THREE, stones } = window.app;
+            const ray = new THREE.Raycaster(new THREE.Vector3(x, 50, z), new THREE.Vector3(0, -1, 0));
+            const hits = ray.intersectObject(stones);
+            if (!hits.length) return null;
+            const f = stones.layout.numbersPerInstance, id = hits[0].instanceId;
+            return { id, slots: stones.count, at: Array.from(stones.data.subarray(id * f + 10, id * f + 13)),
+                     point: hits[0].point.toArray() }; }""", [got["data"][10], got["data"][12]])
     finally:
         page.close()
+    assert hit is not None and 0 <= hit["id"] < hit["slots"], hit
+    assert np.allclose(hit["at"], got["data"][10:13], atol=1e-5), (hit, got["data"][:f])
     assert errors == []
     mesh = ad.load_mesh(folder / "stone.obj")
     recipe = Generate(**{k: v for k, v in RECIPE.items() if k != "reach"})
