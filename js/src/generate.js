@@ -5,7 +5,7 @@
 // uniforms and the tiles around a point: the numpy reference axialdeform.core.generate's conventions.
 
 import * as THREE from 'three';
-import { AxialError } from './adp.js';
+import { AxialError, AXES_ROW, texelRows } from './adp.js';
 import { AxialInstancedMesh } from './mesh.js';
 import { plainArray } from './feedback.js';
 import { ATTRIBUTES } from './record.js';
@@ -161,8 +161,19 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     const [m] = tileSize(r);
     const spec = options.axis || autoAxis(positions);
     const axes = spec.axes ? spec.axes.count : 1; // a mesh of several axes: 10 more numbers a child axis
+    // the CPU copies of the records start empty (capacity 1): the GPU draws, and they grow only when a
+    // raycast or bake asks for the records (_materialize); the GPU's buffers hold every slot within reach
     super(geometry, material, { count: 0, numbersPerInstance: recipeWidth(r) + 10 * (axes - 1), axes, data: new Float32Array(0) },
-      { ...options, axis: spec, capacity: maxTiles(r.tile, r.reach) * m * m });
+      { ...options, axis: spec, capacity: 1 });
+    this.capacity = maxTiles(r.tile, r.reach) * m * m;
+    if (axes > 1) { // the child axes' texture the draw reads, for every slot (the GPU draws its texels)
+      const old = this.axialUniforms.axialChildren.value, rows = texelRows(this.capacity, axes);
+      const tex = new THREE.DataTexture(new Float32Array(rows * AXES_ROW * 4), AXES_ROW, rows, THREE.RGBAFormat, THREE.FloatType);
+      tex.minFilter = tex.magFilter = THREE.NearestFilter;
+      tex.needsUpdate = true; // its storage: three allocates it at the first upload
+      this.axialUniforms.axialChildren.value = tex;
+      old.dispose();
+    }
     this.isAxialGeneratedMesh = true;
     this.type = 'AxialGeneratedMesh';
     this.recipe = r;
@@ -281,11 +292,20 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     return this._rows(true).rows;
   }
 
-  /** The records on the CPU, one a slot (what raycasting, bake and the bounds read), read back once a tile set. */
+  /** The records on the CPU, one a slot (what raycasting, bake and the bounds read), read back once a tile set
+   * into CPU copies grown to the slots drawn. */
   _materialize() {
     if (this._materialized || !this._slots) return;
     this._materialized = true;
-    const { rows, kept } = this._rows(false);
+    const { rows, kept } = this._rows(false), n = kept.length;
+    if (this._radii.length < n) {
+      this.data = new Float32Array(n * this.layout.numbersPerInstance);
+      this._radii = new Float32Array(n);
+      this._grow = new Float32Array(n);
+      for (const a of ATTRIBUTES) this._cpuAttributes[a.name] = new THREE.InstancedBufferAttribute(new Float32Array(n * a.size), a.size);
+      this.instanceMatrix = new THREE.InstancedBufferAttribute(new Float32Array(n * 16), 16);
+      if (this.instanceColor) this.instanceColor = new THREE.InstancedBufferAttribute(new Float32Array(n * 3), 3);
+    }
     this._write(rows, 0);
     const m = this.instanceMatrix.array;
     kept.forEach((k, i) => { if (!k) { m.fill(0, 16 * i, 16 * i + 16); m[16 * i + 15] = 1; this._radii[i] = 0; } });

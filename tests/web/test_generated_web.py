@@ -418,7 +418,7 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
         page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=120_000)
         got = page.evaluate("""() => { const s = window.app.stones;
             return { tiles: s.tiles, width: s.layout.numbersPerInstance, count: s.count,
-                     uniforms: s.generatorUniforms, slots: s.count, kept: s.kept,
+                     uniforms: s.generatorUniforms, slots: s.count, kept: s.kept, cpu: s.data.length,
                      sphere: [...s.boundingSphere.center.toArray(), s.boundingSphere.radius],  // the recipe's bound
                      data: Array.from(s.records()) }; }""")
         # picking: a ray straight down onto the first kept instance hits that instance (raycasting reads the
@@ -429,11 +429,13 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
             const hits = ray.intersectObject(stones);
             if (!hits.length) return null;
             const f = stones.layout.numbersPerInstance, id = hits[0].instanceId;
-            return { id, slots: stones.count, at: Array.from(stones.data.subarray(id * f + 10, id * f + 13)),
+            return { id, slots: stones.count, cpu: stones.data.length, at: Array.from(stones.data.subarray(id * f + 10, id * f + 13)),
                      point: hits[0].point.toArray() }; }""", [got["data"][10], got["data"][12]])
     finally:
         page.close()
     assert hit is not None and 0 <= hit["id"] < hit["slots"], hit
+    # drawing needs no CPU copy of the records: one row until the raycast asked, then one a slot
+    assert got["cpu"] == f and hit["cpu"] == hit["slots"] * f
     assert np.allclose(hit["at"], got["data"][10:13], atol=1e-5), (hit, got["data"][:f])
     assert errors == []
     mesh = ad.load_mesh(folder / "stone.obj")
