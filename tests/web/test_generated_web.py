@@ -466,6 +466,38 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
     assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
 
 
+@pytest.mark.slow
+def test_the_generated_mesh_draws_from_the_gpu_with_three_r187(browser, tmp_path):
+    """The peer range reaches three r187 (the devDependency three-r187): the GPU-written attributes (three's
+    GLBufferAttribute flagged instanced) draw there too -- the same records, the picture render's."""
+    folder = make_site(tmp_path / "site")
+    (folder / "node_modules" / "three").unlink()
+    (folder / "node_modules" / "three").symlink_to(ROOT / "js" / "node_modules" / "three-r187")
+    server = Server(folder)
+    page_url = server.url + "generated.html?recipe=" + quote(json.dumps(RECIPE))
+    page = browser.new_page(viewport={"width": 480, "height": 360})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        page.goto(page_url)
+        page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=120_000)
+        got = page.evaluate("""() => { const s = window.app.stones;
+            return { revision: window.app.THREE.REVISION, tiles: s.tiles, width: s.layout.numbersPerInstance,
+                     kept: s.kept, data: Array.from(s.records()) }; }""")
+        page.close()
+        shot, errors2 = example_picture(browser, page_url, "window.app.stones.update(renderer, window.app.controls.target);")
+    finally:
+        server.close()
+    assert errors == [] and errors2 == [] and got["revision"] == "187"
+    mesh = ad.load_mesh(folder / "stone.obj")
+    recipe = Generate(**{k: v for k, v in RECIPE.items() if k != "reach"})
+    want = generate_tiles(recipe, mesh, got["tiles"])
+    assert got["kept"] == len(want) and _close(np.asarray(got["data"], np.float32).reshape(-1, got["width"]), want) <= 1e-6
+    look, camera = ad.Look(ground=False, shadow=False), ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
+    ref = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera)
+    assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
+
+
 GLTF_SCENE = """
 [[layer]]
 name = "stones"
