@@ -404,18 +404,24 @@ def three_site(tmp_path_factory):
     s.close()
 
 
+def _generated_app(browser, page_url):
+    """examples/web/generated.html at ``page_url`` with its first frames drawn: (page, its errors)."""
+    page = browser.new_page(viewport={"width": 480, "height": 360})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(page_url)
+    page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=120_000)
+    return page, errors
+
+
 @pytest.mark.slow
 def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(browser, three_site):
     """examples/web/generated.html: AxialGeneratedMesh with three's own MeshStandardMaterial, its generator's
     numbers computed by the module from the geometry (recipeUniforms), against the Python library."""
     folder, url = three_site
     page_url = url + "generated.html?recipe=" + quote(json.dumps(RECIPE))
-    page = browser.new_page(viewport={"width": 480, "height": 360})
-    errors = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
+    page, errors = _generated_app(browser, page_url)
     try:
-        page.goto(page_url)
-        page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=120_000)
         got = page.evaluate("""() => { const s = window.app.stones;
             return { tiles: s.tiles, width: s.layout.numbersPerInstance, count: s.count,
                      uniforms: s.generatorUniforms, slots: s.count, kept: s.kept, cpu: s.data.length,
@@ -475,12 +481,8 @@ def test_the_generated_mesh_draws_from_the_gpu_with_three_r187(browser, tmp_path
     (folder / "node_modules" / "three").symlink_to(ROOT / "js" / "node_modules" / "three-r187")
     server = Server(folder)
     page_url = server.url + "generated.html?recipe=" + quote(json.dumps(RECIPE))
-    page = browser.new_page(viewport={"width": 480, "height": 360})
-    errors = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
     try:
-        page.goto(page_url)
-        page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=120_000)
+        page, errors = _generated_app(browser, page_url)
         got = page.evaluate("""() => { const s = window.app.stones;
             return { revision: window.app.THREE.REVISION, tiles: s.tiles, width: s.layout.numbersPerInstance,
                      kept: s.kept, data: Array.from(s.records()) }; }""")
