@@ -254,8 +254,7 @@ class _ViewerMixin:
         again on the GPU (their places too: the seed draws them)."""
 
         self.seed = int(seed)
-        self._rounds += 1  # generated layers: another seed of their recipe, the tiles made again
-        self._tiles.clear()
+        self._rounds += 1  # generated layers: another seed of their recipe, the tiles made again (_upload)
         if self.generate is None:
             fresh = random_params(self.mesh, len(self.base), seed=self.seed, bend=self.bend)
             cols = _offsets(self.mesh)
