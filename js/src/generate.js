@@ -142,6 +142,118 @@ export function maxTiles(tile, reach) {
 }
 
 /**
+ * Slots as records: `raw` the generator's slots (GENERATED_FLOATS each: TileGenerator.run's order), `kids`
+ * the child axes' offsets (10 (K - 1) a slot) or null: {rows (one a slot, zeros where dropped; or only the
+ * kept ones with `compact`), kept (a flag a slot), n (the kept)}: axis 0's offsets, the child axes', the rest.
+ */
+export function slotRows(raw, kids, layout, compact) {
+  const G = GENERATED_FLOATS, all = raw.length / G;
+  const f = layout.numbersPerInstance, c = 10 * (layout.axes - 1), kept = new Uint8Array(all);
+  let n = 0;
+  for (let i = 0; i < all; i++) if (raw[i * G + G - 1] > 0.5) { kept[i] = 1; n++; }
+  const rows = new Float32Array((compact ? n : all) * f);
+  for (let i = 0, k = 0; i < all; i++) {
+    if (!kept[i] && compact) continue;
+    const r = f * (compact ? k++ : i);
+    if (!kept[i]) continue;
+    rows.set(raw.subarray(i * G, i * G + 10), r);
+    if (kids) rows.set(kids.subarray(i * c, (i + 1) * c), r + 10);
+    rows.set(raw.subarray(i * G + 10, i * G + f - c), r + 10 + c);
+  }
+  return { rows, kept, n };
+}
+
+/**
+ * A generated mesh's boundingBox and boundingSphere before its records are read back: a box holding
+ * every instance its tiles can make, found from the recipe alone (the ground's height range, the base
+ * mesh's farthest vertex, the bend's and the child axes' reach, the scale, the lift).
+ */
+export function recipeBounds(mesh) {
+  const u = mesh.generatorUniforms, T = mesh.recipe.tile, xs = mesh.tiles.map((t) => t[0]), zs = mesh.tiles.map((t) => t[1]);
+  if (mesh._far === undefined) { // once: the ground's height range, the farthest vertex from the origin, the child axes' reach
+    const heights = u.has_heights && mesh.maps.heights ? mesh.maps.heights.data : [0];
+    let lo = Infinity, hi = -Infinity;
+    for (const h of heights) { lo = Math.min(lo, h); hi = Math.max(hi, h); }
+    mesh._ground = [lo, hi];
+    const p = plainArray(mesh.geometry.getAttribute('position')), c = mesh.maps.children;
+    mesh._far = 0;
+    for (let i = 0; i < p.length; i += 3) mesh._far = Math.max(mesh._far, Math.hypot(p[i], p[i + 1], p[i + 2]));
+    mesh._kids = 0;
+    for (let j = 0; c && j < c.rows; j++) {
+      let most = 0;
+      for (let a = 0; a < 5; a++) most = Math.max(most, [0, 1, 2, 3, 4].reduce((acc, b) => acc + Math.abs(c.data[26 * j + 1 + 5 * a + b]), 0));
+      mesh._kids += Math.SQRT2 * Math.abs(c.data[26 * j]) * most;
+    }
+  }
+  const s = Math.max(...u.scale), reach = s * (mesh._far + 2 * Math.SQRT2 * Math.abs(u.bend) + mesh._kids + Math.abs(u.anchor_y));
+  const [h0, h1] = mesh._ground;
+  mesh.boundingBox = new THREE.Box3(new THREE.Vector3(Math.min(...xs) * T - reach, h0 + u.lift[0] - reach, Math.min(...zs) * T - reach),
+    new THREE.Vector3((Math.max(...xs) + 1) * T + reach, h1 + u.lift[1] + reach, (Math.max(...zs) + 1) * T + reach));
+  mesh.boundingSphere = mesh.boundingBox.getBoundingSphere(mesh.boundingSphere || new THREE.Sphere());
+}
+
+/** What a generated mesh's base constructor takes: {r (the recipe checked), positions, record (no
+ * instances: the GPU draws them), options (capacity 1: the CPU copies grow only when a raycast or bake
+ * asks for the records)}; `who` names the class in errors. */
+export function generatedBase(geometry, recipe, options, who) {
+  const r = checkRecipe(recipe);
+  const position = geometry && geometry.isBufferGeometry ? geometry.getAttribute('position') : null;
+  if (!position) throw new AxialError(`${who}: expected a THREE.BufferGeometry with positions`);
+  const positions = plainArray(position);
+  const spec = options.axis || autoAxis(positions);
+  const axes = spec.axes ? spec.axes.count : 1; // a mesh of several axes: 10 more numbers a child axis
+  const record = { count: 0, numbersPerInstance: recipeWidth(r) + 10 * (axes - 1), axes, data: new Float32Array(0) };
+  return { r, positions, record, options: { ...options, axis: spec, capacity: 1 } };
+}
+
+/**
+ * The generated mesh `mesh` (just made by its base constructor from generatedBase's `base`): its
+ * capacity in slots, recipe, generator's numbers, maps, tiles, and the hook of autoUpdate (`drawsOn`:
+ * whether a renderer is the one this class generates with).  `childTexture`: the child axes' texture
+ * the draw reads, sized for every slot (the WebGL module's; the GPU draws its texels).
+ */
+export function adoptGenerated(mesh, base, options, drawsOn, childTexture) {
+  const { r, positions } = base, [m] = tileSize(r), axes = mesh.layout.axes, who = mesh.constructor.name;
+  mesh.capacity = maxTiles(r.tile, r.reach) * m * m;
+  if (axes > 1 && childTexture) {
+    const old = mesh.axialUniforms.axialChildren.value, rows = texelRows(mesh.capacity, axes);
+    const tex = new THREE.DataTexture(new Float32Array(rows * AXES_ROW * 4), AXES_ROW, rows, THREE.RGBAFormat, THREE.FloatType);
+    tex.minFilter = tex.magFilter = THREE.NearestFilter;
+    tex.needsUpdate = true; // its storage: three allocates it at the first upload
+    mesh.axialUniforms.axialChildren.value = tex;
+    old.dispose();
+  }
+  mesh.isAxialGeneratedMesh = true;
+  mesh.type = 'AxialGeneratedMesh';
+  mesh.recipe = r;
+  mesh.generatorUniforms = options.uniforms || recipeUniforms(r, positions, mesh.axis);
+  mesh.maps = options.maps || {};
+  if (axes > 1 && !(mesh.maps.children && mesh.maps.children.rows === axes - 1 && mesh.maps.children.cols === 26)) {
+    throw new AxialError(`${who}: a mesh of ${axes} axes needs options.maps.children (${axes - 1} rows of 26: each `
+      + 'child axis\'s amplitude and joint projection, as axialdeform web and export write them)');
+  }
+  if (mesh.generatorUniforms.m !== m) throw new AxialError(`${who}: uniforms.m is ${mesh.generatorUniforms.m}, the recipe's ${m}`);
+  Object.assign(mesh, { tiles: [], _key: null, _generator: null, timing: null, kept: 0, frustumCulled: false,
+    autoUpdate: Boolean(options.autoUpdate), _drawnBy: null });
+  // autoUpdate: each draw says which renderer and camera (the base mesh's hook, then ours, then a
+  // user's own, which assigning onBeforeRender sets); the tiles are made when the next render updates
+  // the world's matrices, before three uploads the instances (made in onBeforeRender, they would be
+  // drawn a frame late), the very first ones at once
+  const baseHook = mesh.onBeforeRender;
+  let userHook = null;
+  const hook = (renderer, scene, camera, ...rest) => {
+    baseHook(renderer, scene, camera, ...rest);
+    if (mesh.autoUpdate && drawsOn(renderer)) {
+      const first = mesh._drawnBy === null;
+      mesh._drawnBy = { renderer, camera };
+      if (first) mesh.update(renderer, camera.getWorldPosition(_eye));
+    }
+    if (userHook) userHook.call(mesh, renderer, scene, camera, ...rest);
+  };
+  Object.defineProperty(mesh, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
+}
+
+/**
  * A generated layer as one three.js object: an AxialInstancedMesh whose instances are made on the GPU
  * from `recipe` (checkRecipe) in the tiles within `recipe.reach` of a point.  Call
  * `update(renderer, point)` before rendering (e.g. with OrbitControls' target): it makes the tiles
@@ -150,66 +262,16 @@ export function maxTiles(tile, reach) {
  * `uniforms` (generate.glsl's numbers as the Python library gave them; default: recipeUniforms, the
  * flat ground), `maps` (the ground maps those uniforms place: TileGenerator's) and `autoUpdate` (make
  * the tiles around the camera's position by itself, without calling update: what the glTF plugin's
- * meshes do; they are drawn from the second frame on, the first telling it the renderer and camera).  Its frustum culling is off: its tiles are around the camera.
+ * meshes do; they are drawn from the second frame on, the first telling it the renderer and camera).
+ * Its frustum culling is off: its tiles are around the camera.  `tiles`: the tiles held ([[tx, tz],
+ * ...], nearest first), their instances in that order, m^2 each; `kept`: how many of the `count`
+ * slots drawn are kept (the rest collapse to a point).
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
   constructor(geometry, material, recipe, options = {}) {
-    const r = checkRecipe(recipe);
-    const position = geometry && geometry.isBufferGeometry ? geometry.getAttribute('position') : null;
-    if (!position) throw new AxialError('AxialGeneratedMesh: expected a THREE.BufferGeometry with positions');
-    const positions = plainArray(position);
-    const [m] = tileSize(r);
-    const spec = options.axis || autoAxis(positions);
-    const axes = spec.axes ? spec.axes.count : 1; // a mesh of several axes: 10 more numbers a child axis
-    // the CPU copies of the records start empty (capacity 1): the GPU draws, and they grow only when a
-    // raycast or bake asks for the records (_materialize); the GPU's buffers hold every slot within reach
-    super(geometry, material, { count: 0, numbersPerInstance: recipeWidth(r) + 10 * (axes - 1), axes, data: new Float32Array(0) },
-      { ...options, axis: spec, capacity: 1 });
-    this.capacity = maxTiles(r.tile, r.reach) * m * m;
-    if (axes > 1) { // the child axes' texture the draw reads, for every slot (the GPU draws its texels)
-      const old = this.axialUniforms.axialChildren.value, rows = texelRows(this.capacity, axes);
-      const tex = new THREE.DataTexture(new Float32Array(rows * AXES_ROW * 4), AXES_ROW, rows, THREE.RGBAFormat, THREE.FloatType);
-      tex.minFilter = tex.magFilter = THREE.NearestFilter;
-      tex.needsUpdate = true; // its storage: three allocates it at the first upload
-      this.axialUniforms.axialChildren.value = tex;
-      old.dispose();
-    }
-    this.isAxialGeneratedMesh = true;
-    this.type = 'AxialGeneratedMesh';
-    this.recipe = r;
-    this.generatorUniforms = options.uniforms || recipeUniforms(r, positions, this.axis);
-    this.maps = options.maps || {};
-    if (axes > 1 && !(this.maps.children && this.maps.children.rows === axes - 1 && this.maps.children.cols === 26)) {
-      throw new AxialError(`AxialGeneratedMesh: a mesh of ${axes} axes needs options.maps.children (${axes - 1} rows of 26: each `
-        + 'child axis\'s amplitude and joint projection, as axialdeform web and export write them)');
-    }
-    if (this.generatorUniforms.m !== m) throw new AxialError(`AxialGeneratedMesh: uniforms.m is ${this.generatorUniforms.m}, the recipe's ${m}`);
-    /** The tiles held ([[tx, tz], ...], nearest first), their instances in that order, m^2 each. */
-    this.tiles = [];
-    this._key = null;
-    this._generator = null;
-    this.timing = null;
-    /** How many of the `count` slots drawn are kept (the rest collapse to a point). */
-    this.kept = 0;
-    this.frustumCulled = false;
-    this.autoUpdate = Boolean(options.autoUpdate);
-    // autoUpdate: each draw says which renderer and camera (the base mesh's hook, then ours, then a
-    // user's own, which assigning onBeforeRender sets); the tiles are made when the next render updates
-    // the world's matrices, before three uploads the instances (made in onBeforeRender, they would be
-    // drawn a frame late), the very first ones at once
-    const baseHook = this.onBeforeRender;
-    let userHook = null;
-    this._drawnBy = null;
-    const hook = (renderer, scene, camera, ...rest) => {
-      baseHook(renderer, scene, camera, ...rest);
-      if (this.autoUpdate && renderer.isWebGLRenderer) {
-        const first = this._drawnBy === null;
-        this._drawnBy = { renderer, camera };
-        if (first) this.update(renderer, camera.getWorldPosition(_eye));
-      }
-      if (userHook) userHook.call(this, renderer, scene, camera, ...rest);
-    };
-    Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
+    const base = generatedBase(geometry, recipe, options, 'AxialGeneratedMesh');
+    super(geometry, material, base.record, base.options);
+    adoptGenerated(this, base, options, (renderer) => renderer.isWebGLRenderer, true);
   }
 
   updateMatrixWorld(force) {
@@ -264,26 +326,11 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     texture.needsUpdate = true;
   }
 
-  /** The slots read back as records: {rows (one a slot, zeros where dropped; or only the kept ones with
-   * `compact`), kept (a flag a slot), n (the kept)}: axis 0's offsets, the child axes' (a tree), the rest. */
+  /** The slots read back as records (slotRows). */
   _rows(compact) {
-    const gen = this._generator, G = GENERATED_FLOATS;
+    const gen = this._generator;
     if (!this._slots) return { rows: new Float32Array(0), kept: new Uint8Array(0), n: 0 };
-    const raw = gen.read(this._slots), all = raw.length / G;
-    const kids = this.layout.axes > 1 ? gen.runChildren(this.tiles) : null;
-    const f = this.layout.numbersPerInstance, c = 10 * (this.layout.axes - 1), kept = new Uint8Array(all);
-    let n = 0;
-    for (let i = 0; i < all; i++) if (raw[i * G + G - 1] > 0.5) { kept[i] = 1; n++; }
-    const rows = new Float32Array((compact ? n : all) * f);
-    for (let i = 0, k = 0; i < all; i++) {
-      if (!kept[i] && compact) continue;
-      const r = f * (compact ? k++ : i);
-      if (!kept[i]) continue;
-      rows.set(raw.subarray(i * G, i * G + 10), r);
-      if (kids) rows.set(kids.subarray(i * c, (i + 1) * c), r + 10);
-      rows.set(raw.subarray(i * G + 10, i * G + f - c), r + 10 + c);
-    }
-    return { rows, kept, n };
+    return slotRows(gen.read(this._slots), this.layout.axes > 1 ? gen.runChildren(this.tiles) : null, this.layout, compact);
   }
 
   /** The kept instances' records (Float32Array, rows of numbersPerInstance), as the Python library's
@@ -311,31 +358,10 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     kept.forEach((k, i) => { if (!k) { m.fill(0, 16 * i, 16 * i + 16); m[16 * i + 15] = 1; this._radii[i] = 0; } });
   }
 
-  /** Before the records are read back (raycast, bake): a sphere and box holding every instance the tiles
-   * held can make, found from the recipe alone (three sorts by it each frame); then the instances'. */
+  /** Before the records are read back (raycast, bake): recipeBounds; then the instances'. */
   computeBoundingSphere() {
     if (!this._slots || this._materialized) return super.computeBoundingSphere();
-    const u = this.generatorUniforms, T = this.recipe.tile, xs = this.tiles.map((t) => t[0]), zs = this.tiles.map((t) => t[1]);
-    if (this._far === undefined) { // once: the ground's height range, the farthest vertex from the origin, the child axes' reach
-      const heights = u.has_heights && this.maps.heights ? this.maps.heights.data : [0];
-      let lo = Infinity, hi = -Infinity;
-      for (const h of heights) { lo = Math.min(lo, h); hi = Math.max(hi, h); }
-      this._ground = [lo, hi];
-      const p = plainArray(this.geometry.getAttribute('position')), c = this.maps.children;
-      this._far = 0;
-      for (let i = 0; i < p.length; i += 3) this._far = Math.max(this._far, Math.hypot(p[i], p[i + 1], p[i + 2]));
-      this._kids = 0;
-      for (let j = 0; c && j < c.rows; j++) {
-        let most = 0;
-        for (let a = 0; a < 5; a++) most = Math.max(most, [0, 1, 2, 3, 4].reduce((acc, b) => acc + Math.abs(c.data[26 * j + 1 + 5 * a + b]), 0));
-        this._kids += Math.SQRT2 * Math.abs(c.data[26 * j]) * most;
-      }
-    }
-    const s = Math.max(...u.scale), reach = s * (this._far + 2 * Math.SQRT2 * Math.abs(u.bend) + this._kids + Math.abs(u.anchor_y));
-    const [h0, h1] = this._ground;
-    this.boundingBox = new THREE.Box3(new THREE.Vector3(Math.min(...xs) * T - reach, h0 + u.lift[0] - reach, Math.min(...zs) * T - reach),
-      new THREE.Vector3((Math.max(...xs) + 1) * T + reach, h1 + u.lift[1] + reach, (Math.max(...zs) + 1) * T + reach));
-    this.boundingSphere = this.boundingBox.getBoundingSphere(this.boundingSphere || new THREE.Sphere());
+    recipeBounds(this);
   }
 
   raycast(raycaster, intersects) {

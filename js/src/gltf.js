@@ -71,6 +71,7 @@ export class AxialGLTFPlugin {
     this.parser = parser;
     this.name = EXTENSION;
     this.Mesh = AxialInstancedMesh; // axialdeform-three/webgpu's plugin makes its node-material meshes
+    this.Generated = AxialGeneratedMesh; // and its generated ones
   }
 
   /** Before GLTFLoader reads anything of the file: every node's AXIALDEFORM_bend and the instance
@@ -145,10 +146,10 @@ export class AxialGLTFPlugin {
       for (const name of ['TRANSLATION', 'SCALE']) {
         if (attrs[name] !== undefined) raw[name] = await parser.getDependency('accessor', attrs[name]);
       }
-      // the generated form: the node's instances made from its recipe around the camera (the WebGL
-      // entry); the fallback instances otherwise, said once
+      // the generated form: the node's instances made from its recipe around the camera (this.Generated:
+      // each entry's generated mesh); the fallback instances where there is none, said once
       let maps = null;
-      if (ext.generate && this.Mesh === AxialInstancedMesh) {
+      if (ext.generate && this.Generated) {
         maps = {};
         for (const key of ['heights', 'density', 'children']) {
           const m = ext.generate[key];
@@ -156,10 +157,10 @@ export class AxialGLTFPlugin {
         }
       } else if (ext.generate && !this._warned) {
         this._warned = true;
-        console.warn(`${where}: ${EXTENSION} generate: drawn as its fallback instances (the generator needs the WebGL entry's WebGL 2)`);
+        console.warn(`${where}: ${EXTENSION} generate: drawn as its fallback instances (this plugin has no generated mesh)`);
       }
       for (const part of parts) {
-        const bent = maps ? fromGenerated(part, ext, maps) : fromInstancedMesh(part, ext, where, raw, this.Mesh);
+        const bent = maps ? fromGenerated(part, ext, maps, this.Generated) : fromInstancedMesh(part, ext, where, raw, this.Mesh);
         if (part === object) {
           const parent = object.parent;
           parent.add(bent);
@@ -337,9 +338,9 @@ function checkGenerated(gen, at, k) {
 /** An AxialGeneratedMesh in place of GLTFLoader's InstancedMesh of a generated node: its recipe, the
  * generator's numbers the file holds, the ground maps; the tiles within reach of the camera, made
  * before it is drawn (autoUpdate). */
-function fromGenerated(mesh, ext, maps) {
+function fromGenerated(mesh, ext, maps, Generated = AxialGeneratedMesh) {
   const g = mesh.geometry;
-  return adopt(mesh, ext, new AxialGeneratedMesh(g, mesh.material, ext.generate.recipe, {
+  return adopt(mesh, ext, new Generated(g, mesh.material, ext.generate.recipe, {
     axis: { axis: ext.axis, axes: ext.axes || null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
     vertexAxis: g.getAttribute('_axial_axis') || undefined,
   }));

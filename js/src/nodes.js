@@ -180,7 +180,7 @@ function treeAxis(axesTex, j) {
 /**
  * The whole map of a K-axis mesh (axial_tree_world): model-space v of axis b (an int node) and n ->
  * {v, n, jac (columns)} in the mesh's space.  children: the child offsets' texture (the mesh's
- * axialChildren), id: the instance (int node), wind: the push per unit of axis length (a vec3 node)
+ * axialChildren) or a function of a texel's index (an int node) giving it (a storage buffer's), id: the instance (int node), wind: the push per unit of axis length (a vec3 node)
  * or null.
  */
 export function axialTreeWorld(v, n, b, K, axesTex, center, inst, children, id, wind) {
@@ -211,10 +211,16 @@ export function axialTreeWorld(v, n, b, K, axesTex, center, inst, children, id, 
       const d12 = vec4(inst.d12).toVar(), d34 = vec4(inst.d34).toVar(), d5 = vec2(inst.d5).toVar();
       If(j.greaterThan(int(0)), () => {
         const i = id.mul(int(K - 1)).add(j).sub(int(1)).mul(int(3)).toVar();
-        const at = ivec2(i.sub(i.div(int(AXES_ROW)).mul(int(AXES_ROW))), i.div(int(AXES_ROW))).toVar();
-        d12.assign(textureLoad(children, at));
-        d34.assign(textureLoad(children, at.add(ivec2(1, 0))));
-        d5.assign(textureLoad(children, at.add(ivec2(2, 0))).xy);
+        if (typeof children === 'function') { // texel i of a storage buffer (a generated mesh's)
+          d12.assign(children(i));
+          d34.assign(children(i.add(int(1))));
+          d5.assign(children(i.add(int(2))).xy);
+        } else {
+          const at = ivec2(i.sub(i.div(int(AXES_ROW)).mul(int(AXES_ROW))), i.div(int(AXES_ROW))).toVar();
+          d12.assign(textureLoad(children, at));
+          d34.assign(textureLoad(children, at.add(ivec2(1, 0))));
+          d5.assign(textureLoad(children, at.add(ivec2(2, 0))).xy);
+        }
         if (wind) {
           const a = ax.anchor.toVar();
           const u = axialLocal(ax.f, wind).yz.mul(ax.len).div(max(a.mul(a), float(1).sub(a).mul(float(1).sub(a)))).toVar();

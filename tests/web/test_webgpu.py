@@ -309,3 +309,106 @@ def test_the_webgpu_example_draws_what_render_draws(webgpu_browser, site, backen
     assert out["culled"] == [backend == "webgpu"]  # GPU culling where the backend has it
     assert iou(shot, ref) >= 0.97, iou(shot, ref)
     assert errors == []
+
+
+# ---- generated layers: the compute port of glsl/generate.glsl (generate_nodes.js) ----
+
+GEN_STONES = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2],
+              "twist": 0.5, "tint": 0.3}
+
+
+def _gen_case(name, mesh, recipe, reach, maps=None, point=(0.0, 0.0), uniforms=True, picture=False):
+    """A generated layer for the page's ``generate`` check: the base mesh, the recipe, the Python library's
+    numbers (or none: the module computes them), the ground maps and child-axis table, the point."""
+    from axialdeform.core.generate import children_table, recipe_json, recipe_uniforms
+
+    ext = bend_extension(mesh, recipe.width)
+    tree = getattr(mesh, "tree", None)
+    grids = {"heights": getattr(maps, "heights", None), "density": getattr(maps, "density", None),
+             "children": None if tree is None else children_table(recipe, mesh)}
+    case = {"name": name, "positions": mesh.positions.ravel().tolist(), "normals": mesh.normals.ravel().tolist(),
+            "index": mesh.faces.ravel().tolist(), "vertexAxis": tree.vertex_axis.tolist() if tree is not None else None,
+            "axis": {"axis": ext["axis"], "axes": ext.get("axes")}, "recipe": recipe_json(recipe, reach),
+            "maps": {k: {"data": np.asarray(g, np.float32).ravel().tolist(), "cols": int(g.shape[1]), "rows": int(g.shape[0])}
+                     for k, g in grids.items() if g is not None},
+            "point": list(point), "picture": picture, "side": tree is not None}
+    if uniforms:
+        case["uniforms"] = json.loads(json.dumps(recipe_uniforms(recipe, mesh, maps)))
+    return case
+
+
+def generated_cases(tmp_path):
+    """(case, mesh, recipe, maps): stones on the flat ground (the module's own numbers), tinted and twisted;
+    stones and grass on a height map (density map, altitude and slope bands, leaning with the ground); a
+    tree of ten axes (every level its bend, the joints closed)."""
+    from test_generated_web import HILLS, LANDSCAPE, TREES
+
+    from axialdeform.core.generate import Generate
+
+    stone = ad.load_mesh("stone")
+    flat = Generate(**GEN_STONES)
+    out = [(_gen_case("stones", stone, flat, 5.0, uniforms=False, picture=True), stone, flat, None)]
+    for f in ("terrain.png", "stone_density.png", "grass.obj"):
+        (tmp_path / f).write_bytes((LANDSCAPE / f).read_bytes())
+    (tmp_path / "tree-axes.toml").write_bytes((ROOT / "examples" / "forest" / "tree-axes.toml").read_bytes())
+    for name, text, point in (("hills", HILLS, (3.0, -2.0)), ("trees", TREES, (0.0, 0.0))):
+        (tmp_path / f"{name}.toml").write_text(text, encoding="utf-8")
+        for layer in ad.Scene.load(tmp_path / f"{name}.toml").layers[:2 if name == "hills" else 1]:
+            g = layer.generate
+            reach = 9.0 if name == "hills" else 20.0  # a few tiles
+            out.append((_gen_case(f"{name}-{layer.name}", layer.mesh, g.generate, reach, g.maps, point),
+                        layer.mesh, g.generate, g.maps))
+    return out
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser, site, version, tmp_path):
+    """axialdeform-three/webgpu's AxialGeneratedMesh: its compute pass (generate_nodes.js, WebGPU backend)
+    makes the Python library's records for the tiles around a point -- flat ground, a height map with
+    density, bands and leaning, a tree of ten axes --, counts the kept ones on the GPU, draws them as
+    render does (silhouette IoU >= 0.95), and a ray straight down hits the first one."""
+    from test_generated_web import _close
+
+    from axialdeform.core.generate import generate_tiles, tile_size, tiles_around
+
+    folder, url = site
+    cases = generated_cases(tmp_path)
+    out, errors = run(webgpu_browser, url, version, "generate", {"gl": False, "cases": [c[0] for c in cases]})
+    assert out["backend"] == "webgpu" and errors == [], (out.get("backend"), errors)
+    for (case, mesh, recipe, maps), got in zip(cases, out["cases"]):
+        name = case["name"]
+        assert "error" not in got, (name, got.get("error"))
+        reach = case["recipe"]["reach"]
+        tiles = tiles_around(recipe, *case["point"], reach)
+        assert got["tiles"] == tiles.tolist(), name
+        assert got["made"] is True and got["again"] is False and got["keptBefore"] is None, name
+        want = generate_tiles(recipe, mesh, tiles, maps)
+        records = np.asarray(got["data"], np.float32).reshape(-1, got["width"])
+        assert got["slots"] == len(tiles) * tile_size(recipe)[0] ** 2 and got["kept"] == got["counted"] == len(want), name
+        assert len(want) > 10 and _close(records, want) <= 1e-6, (name, _close(records, want))
+        assert got["cpu"] == got["width"]  # drawing needed no CPU copy of the records: one row
+        # the ray hits the instance it was aimed at (across a tree's trunk: that tree or one in front of it)
+        assert got["hit"] is not None, name
+        at = 10 * (getattr(mesh, "tree", None).count if case["side"] else 1)  # the position: after the offsets
+        hit = np.abs(records[:, at:at + 3] - got["hit"]["at"]).max(axis=1) <= 1e-5
+        assert (hit[0] if not case["side"] else hit.any()), (name, got["hit"])
+        if case["picture"]:
+            shot = png(got["png"])
+            look = ad.Look(ground=False, shadow=False)
+            camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
+            ref = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera)
+            Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-generated-{version}.png")
+            assert _mask(ref).sum() > 0.05 * ref.size / 3
+            assert iou(shot, ref) >= 0.95, iou(shot, ref)
+
+
+def test_a_generated_mesh_under_the_webgl2_fallback_is_refused_in_words(webgpu_browser, site, tmp_path):
+    from axialdeform.core.generate import Generate
+
+    stone = ad.load_mesh("stone")
+    case = _gen_case("stones", stone, Generate(**GEN_STONES), 5.0)
+    out, errors = run(webgpu_browser, site[1], VERSIONS[-1], "generate", {"gl": True, "cases": [case]})
+    said = out["cases"][0]["error"]
+    assert said.startswith("AxialError: AxialGeneratedMesh (axialdeform-three/webgpu): the generated instances"), said
+    assert "WebGPU backend" in said and "WebGLRenderer" in said
+    assert errors == []
