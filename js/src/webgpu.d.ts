@@ -1,8 +1,10 @@
-// Types of axialdeform-three/webgpu: the module's classes for three's WebGPURenderer (three r171+).
+// Types of axialdeform-three/webgpu: the module's classes for three's WebGPURenderer (three r184+).
 import type { BufferGeometry, Raycaster, Intersection } from 'three';
-import type { AxialInstancedMesh as WebGLAxialInstancedMesh, AxialGLTFPlugin as WebGLAxialGLTFPlugin } from './index';
+import type { Material } from 'three';
+import type { AxialInstancedMesh as WebGLAxialInstancedMesh, AxialGLTFPlugin as WebGLAxialGLTFPlugin, GenerateRecipe,
+  GeneratorUniforms, AxialGeneratedMeshOptions } from './index';
 
-export { AxialError, parseADP, EXTENSION } from './index';
+export { AxialError, parseADP, EXTENSION, checkRecipe, recipeUniforms, tilesAround } from './index';
 
 /** What bendAsync reads back: 4 numbers a vertex (x, y, z, w), instance after instance, in the mesh's space. */
 export interface AxialBent {
@@ -33,8 +35,36 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
   raycastAsync(raycaster: Raycaster, renderer?: unknown): Promise<Intersection[]>;
 }
 
-/** GLTFLoader plugin (AXIALDEFORM_bend) making this entry's AxialInstancedMesh. */
+/**
+ * A generated layer under WebGPURenderer's WebGPU backend: its tiles' instances made by a compute pass of
+ * the port of glsl/generate.glsl into the storage buffer the materials read.
+ */
+export class AxialGeneratedMesh extends AxialInstancedMesh {
+  constructor(geometry: BufferGeometry, material: Material | Material[], recipe: GenerateRecipe,
+    options?: AxialGeneratedMeshOptions);
+  readonly isAxialGeneratedMesh: true;
+  readonly recipe: Required<GenerateRecipe>;
+  readonly generatorUniforms: GeneratorUniforms;
+  /** The tiles held, nearest first; their instances in that order, m^2 each. */
+  readonly tiles: [number, number][];
+  /** Make the tiles around the camera by itself, without update(). */
+  autoUpdate: boolean;
+  /** How many of the `count` slots drawn are kept: null until `counted` resolves (read back asynchronously). */
+  readonly kept: number | null;
+  /** The count of the last tiles kept, once read back. */
+  readonly counted: Promise<number | null>;
+  /** The last tiles' cost on the CPU (null before the first). */
+  readonly timing: { slots: number; generateMs: number } | null;
+  /** Make the tiles within reach of `point` if they changed (one compute dispatch); returns whether they did. */
+  update(renderer: unknown, point: { x: number; z: number }): boolean;
+  /** The kept instances' records, as the Python library's generate_tiles gives them (read back). */
+  recordsAsync(renderer?: unknown): Promise<Float32Array>;
+}
+
+/** GLTFLoader plugin (AXIALDEFORM_bend) making this entry's AxialInstancedMesh (AxialGeneratedMesh for the generated form). */
 export class AxialGLTFPlugin extends WebGLAxialGLTFPlugin {}
 
 /** The bend as three.js node functions (the port of glsl/axial.glsl and glsl/wind.glsl). */
 export const nodes: Record<string, (...args: any[]) => any>;
+/** A generated layer's instance as three.js node functions (the port of glsl/generate.glsl). */
+export const generateNodes: Record<string, (...args: any[]) => any>;

@@ -11,14 +11,18 @@ from __future__ import annotations
 
 import base64
 import json
+import subprocess
+import sys
 from io import BytesIO
 
 import numpy as np
 import pytest
 from PIL import Image
+from test_generated_web import GLTF_SCENE, HILLS, LANDSCAPE, TREES, _close
 from test_three import JS, MORE, ROOT, SIZE, Server, _mask, iou, make_site, render_reference
 
 import axialdeform as ad
+from axialdeform.core.generate import Generate, children_table, generate_tiles, recipe_json, recipe_uniforms, tile_size, tiles_around
 from axialdeform.core.io.gltf import bend_extension
 from axialdeform.core.wind import apply_wind
 
@@ -320,8 +324,6 @@ GEN_STONES = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 
 def _gen_case(name, mesh, recipe, reach, maps=None, point=(0.0, 0.0), uniforms=True, picture=False):
     """A generated layer for the page's ``generate`` check: the base mesh, the recipe, the Python library's
     numbers (or none: the module computes them), the ground maps and child-axis table, the point."""
-    from axialdeform.core.generate import children_table, recipe_json, recipe_uniforms
-
     ext = bend_extension(mesh, recipe.width)
     tree = getattr(mesh, "tree", None)
     grids = {"heights": getattr(maps, "heights", None), "density": getattr(maps, "density", None),
@@ -341,10 +343,6 @@ def generated_cases(tmp_path):
     """(case, mesh, recipe, maps): stones on the flat ground (the module's own numbers), tinted and twisted;
     stones and grass on a height map (density map, altitude and slope bands, leaning with the ground); a
     tree of ten axes (every level its bend, the joints closed)."""
-    from test_generated_web import HILLS, LANDSCAPE, TREES
-
-    from axialdeform.core.generate import Generate
-
     stone = ad.load_mesh("stone")
     flat = Generate(**GEN_STONES)
     out = [(_gen_case("stones", stone, flat, 5.0, uniforms=False, picture=True), stone, flat, None)]
@@ -367,10 +365,6 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
     makes the Python library's records for the tiles around a point -- flat ground, a height map with
     density, bands and leaning, a tree of ten axes --, counts the kept ones on the GPU, draws them as
     render does (silhouette IoU >= 0.95), and a ray straight down hits the first one."""
-    from test_generated_web import _close
-
-    from axialdeform.core.generate import generate_tiles, tile_size, tiles_around
-
     folder, url = site
     cases = generated_cases(tmp_path)
     out, errors = run(webgpu_browser, url, version, "generate", {"gl": False, "cases": [c[0] for c in cases]})
@@ -403,12 +397,34 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
 
 
 def test_a_generated_mesh_under_the_webgl2_fallback_is_refused_in_words(webgpu_browser, site, tmp_path):
-    from axialdeform.core.generate import Generate
-
     stone = ad.load_mesh("stone")
     case = _gen_case("stones", stone, Generate(**GEN_STONES), 5.0)
     out, errors = run(webgpu_browser, site[1], VERSIONS[-1], "generate", {"gl": True, "cases": [case]})
     said = out["cases"][0]["error"]
     assert said.startswith("AxialError: AxialGeneratedMesh (axialdeform-three/webgpu): the generated instances"), said
     assert "WebGPU backend" in said and "WebGLRenderer" in said
+    assert errors == []
+
+
+def test_the_gltf_generated_form_is_generated_under_webgpu(webgpu_browser, site):
+    """export SCENE.toml --generated, loaded by this entry's AxialGLTFPlugin: the node becomes this entry's
+    AxialGeneratedMesh, which makes the tiles around the camera as it is drawn (autoUpdate) and draws
+    what render draws of the Python library's records for those tiles."""
+    folder, url = site
+    (folder / "gen.toml").write_text(GLTF_SCENE)
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "export", str(folder / "gen.toml"), "--generated",
+                        "-o", str(folder / "gen.glb")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    out, errors = run(webgpu_browser, url, VERSIONS[-1], "draw", {"gl": False, "glb": "gen.glb"})
+    assert out["meshes"] == 1 and out["generated"] == [True], out
+    layer = ad.Scene.load(folder / "gen.toml").layers[0]
+    g = layer.generate
+    want = generate_tiles(g.generate, layer.mesh, tiles_around(g.generate, 7.0, 7.0, g.reach), g.maps)
+    look = ad.Look(ground=False, shadow=False)
+    camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
+    ref = ad.render_image(layer.mesh, want, size=SIZE, look=look, camera=camera)
+    shot = png(out["png"])
+    Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / "webgpu-generated-gltf.png")
+    assert _mask(ref).sum() > 0.05 * ref.size / 3
+    assert iou(shot, ref) >= 0.95, iou(shot, ref)
     assert errors == []

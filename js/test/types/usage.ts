@@ -3,7 +3,8 @@ import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import { AxialGLTFPlugin, AxialInstancedMesh, parseADP, AxialError, type ADPRecord } from 'axialdeform-three';
 import { recordLayout, WIND } from 'axialdeform-three/helpers';
-import { AxialInstancedMesh as WebGPUAxialInstancedMesh, type AxialBent } from 'axialdeform-three/webgpu';
+import { AxialInstancedMesh as WebGPUAxialInstancedMesh, AxialGeneratedMesh as WebGPUAxialGeneratedMesh,
+  type AxialBent } from 'axialdeform-three/webgpu';
 
 export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry): Promise<THREE.Object3D> {
   const loader = new GLTFLoader();
@@ -32,4 +33,14 @@ export async function webgpu(geometry: THREE.BufferGeometry, record: ADPRecord, 
   const hits = await stones.raycastAsync(new THREE.Raycaster(), renderer);
   const baked: boolean = await stones.setGPUCulling(false).bakeAsync(renderer);
   return bent.positions.length + hits.length + (baked ? 1 : 0) + (stones.gpuCulled ? 1 : 0);
+}
+
+// a generated layer under WebGPURenderer: the tiles around a point by a compute pass, read back asynchronously
+export async function generatedWebGPU(geometry: THREE.BufferGeometry, renderer: unknown): Promise<number> {
+  const stones = new WebGPUAxialGeneratedMesh(geometry, new THREE.MeshStandardMaterial(), { rate: 1, tile: 8, reach: 20 });
+  const made: boolean = stones.update(renderer, new THREE.Vector3(0, 0, 0));
+  const kept = await stones.counted;
+  const records: Float32Array = await stones.recordsAsync();
+  const hits = await stones.raycastAsync(new THREE.Raycaster(), renderer);
+  return (made ? 1 : 0) + (kept ?? 0) + records.length + hits.length + stones.tiles.length;
 }
