@@ -428,3 +428,47 @@ def test_the_gltf_generated_form_is_generated_under_webgpu(webgpu_browser, site)
     assert _mask(ref).sum() > 0.05 * ref.size / 3
     assert iou(shot, ref) >= 0.95, iou(shot, ref)
     assert errors == []
+
+
+def test_the_generated_webgpu_example_draws_what_render_draws(webgpu_browser, site):
+    """examples/web/generated-webgpu.html (the recipe from the address, its ground and fog hidden) draws
+    what render draws of the Python library's records for the tiles around its orbit target."""
+    from urllib.parse import quote
+
+    folder, url = site
+    text = (ROOT / "examples" / "web" / "generated-webgpu.html").read_text()
+    (folder / "generated-webgpu.html").write_text(text.replace("./node_modules/three/", f"./node_modules/{VERSIONS[-1]}/"))
+    recipe = {**GEN_STONES, "reach": 5.0}
+    page = webgpu_browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1]})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    try:
+        page.goto(url + "generated-webgpu.html?recipe=" + quote(json.dumps(recipe)))
+        page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=240_000)
+        out = page.evaluate("""async () => {
+            const { THREE, renderer, scene, camera, ground, stones } = window.app;
+            renderer.setAnimationLoop(null);
+            ground.visible = false;
+            scene.fog = null;
+            scene.background = new THREE.Color().setRGB(0.93, 0.94, 0.96, THREE.SRGBColorSpace);
+            renderer.render(scene, camera);
+            const c = document.createElement('canvas');
+            c.width = renderer.domElement.width; c.height = renderer.domElement.height;
+            c.getContext('2d').drawImage(renderer.domElement, 0, 0);
+            return { png: c.toDataURL(), tiles: stones.tiles, kept: await stones.counted };
+        }""")
+    finally:
+        page.close()
+    stone = ad.load_mesh(folder / "stone.obj")
+    g = Generate(**GEN_STONES)
+    assert out["tiles"] == tiles_around(g, 0.0, 0.0, 5.0).tolist()
+    want = generate_tiles(g, stone, out["tiles"])
+    assert out["kept"] == len(want)
+    look = ad.Look(ground=False, shadow=False)
+    camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
+    ref = ad.render_image(stone, want, size=SIZE, look=look, camera=camera)
+    shot = png(out["png"])
+    Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / "webgpu-generated-example.png")
+    assert iou(shot, ref) >= 0.95, iou(shot, ref)
+    assert errors == []
