@@ -1,5 +1,6 @@
 // generate.vert -- instance gl_VertexID of a tile by transform feedback (axialdeform.gl.generate):
-// no inputs, the record captured from the outputs.
+// no inputs, the record captured from the outputs.  generate.comp (GL >= 4.3) includes it for its
+// uniforms and axial_gen_recipe (AXIAL_COMPUTE defined: no outputs, no main).
 #include "axial.glsl"
 #include "wind.glsl"
 #include "generate.glsl"
@@ -36,6 +37,15 @@ uniform sampler2D u_heights;  // unit 0
 uniform sampler2D u_density;  // unit 1
 uniform ivec2 u_tile;
 
+// the recipe from the uniforms above
+AxialRecipe axial_gen_recipe() {
+    return AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_anchor_y,
+                       u_anchor_w, u_anchor_w4, u_tint, u_tint_color, u_has_heights, u_h_lo, u_h_inv,
+                       u_h_size, u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
+                       u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz);
+}
+
+#ifndef AXIAL_COMPUTE
 out vec4 g_d12;
 out vec4 g_d34;
 out vec4 g_d5_px_py;
@@ -44,10 +54,7 @@ out vec4 g_extra;   // s, tw, tp, tr
 out vec3 g_tint;    // tg, tb, kept
 
 void main() {
-    AxialRecipe r = AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_anchor_y,
-                                u_anchor_w, u_anchor_w4, u_tint, u_tint_color, u_has_heights, u_h_lo, u_h_inv,
-                                u_h_size, u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
-                                u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz);
+    AxialRecipe r = axial_gen_recipe();
     vec4 d12, d34;
     vec2 d5;
     vec3 position, angles, extra, tint;
@@ -61,3 +68,4 @@ void main() {
     g_tint = vec3(tint.gb, kept);
     gl_Position = vec4(0.0);
 }
+#endif

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Time to generate a layer: glsl/generate.glsl by transform feedback (one tile a pass, into one GPU
-buffer), the same compacted into a renderer's own buffers (``GeneratedTiles.make``: what ``view`` does
+"""Time to generate a layer: glsl/generate.glsl's slots by a compute shader (glsl/generate.comp, GL >= 4.3;
+all the tiles in one dispatch) and by transform feedback (glsl/generate.vert; a pass a tile), into one GPU
+buffer; the slots compacted into a renderer's own buffers (``GeneratedTiles.make``: what ``view`` does
 when the tiles change) and the numpy reference, against one frame's draw of the same instances.
 
     python3 tools/bench_generate.py                    # 1 000 000 stones (tiles of 16 x 16 units, rate 4)
@@ -45,7 +46,8 @@ def main(argv=None) -> int:
     n = len(tiles) * m * m
     stone = ad.load_mesh("stone")
     ctx = moderngl.create_standalone_context(backend="egl")
-    gen = TileGenerator(ctx, recipe, stone)
+    ways = {"compute": TileGenerator(ctx, recipe, stone, compute=True),
+            "transform feedback": TileGenerator(ctx, recipe, stone, compute=False)}
     out = ctx.buffer(reserve=n * GENERATED_FLOATS * 4)
     params = generate_tiles(recipe, stone, tiles)
     renderer = AxialRenderer(ctx, stone, params, culling=False, lod=False)
@@ -55,13 +57,13 @@ def main(argv=None) -> int:
     cam = frame_instances(stone, params, 640 / 480)
     view, proj = cam.view(), cam.projection(640 / 480)
 
-    def gpu():
-        t = time.perf_counter()
-        rec = gen.count * GENERATED_FLOATS * 4
-        for k, tile in enumerate(tiles):
-            gen.run(tile, out, offset=k * rec)
-        ctx.finish()
-        return time.perf_counter() - t
+    def slots(gen):
+        def run():
+            t = time.perf_counter()
+            gen.run_tiles(tiles, out)
+            ctx.finish()
+            return time.perf_counter() - t
+        return run
 
     def compact():
         t = time.perf_counter()
@@ -81,17 +83,19 @@ def main(argv=None) -> int:
         ctx.finish()
         return time.perf_counter() - t
 
-    runs = {"generate (GPU, transform feedback)": [], "generate into a renderer (GPU, + compaction)": [],
-            "generate (numpy)": [], "draw one frame": []}
+    runs = {"generate (GPU, compute)": [], "generate (GPU, transform feedback)": [],
+            "generate into a renderer (GPU, + compaction)": [], "generate (numpy)": [], "draw one frame": []}
     for _ in range(a.repeats):
-        for name, f in zip(runs, (gpu, compact, cpu, draw)):
+        for name, f in zip(runs, (slots(ways["compute"]), slots(ways["transform feedback"]), compact, cpu, draw)):
             runs[name].append(f())
     print(f"{n:,} instances ({len(tiles)} tiles of {m * m}); {ctx.info['GL_RENDERER']}; medians of {a.repeats}:")
     for name, ts in runs.items():
         print(f"  {name}: {1000 * statistics.median(ts):.1f} ms")
-    g, d = statistics.median(runs["generate (GPU, transform feedback)"]), statistics.median(runs["draw one frame"])
+    g, d = statistics.median(runs["generate (GPU, compute)"]), statistics.median(runs["draw one frame"])
+    f = statistics.median(runs["generate (GPU, transform feedback)"])
     c = statistics.median(runs["generate into a renderer (GPU, + compaction)"])
-    print(f"  GPU generation / one frame's draw: {g / d:.3f}; into a renderer: {c / d:.3f}")
+    print(f"  GPU generation / one frame's draw: {g / d:.3f} (compute), {f / d:.3f} (transform feedback); "
+          f"into a renderer: {c / d:.3f}")
     if held.count != len(params):
         raise SystemExit(f"the renderer holds {held.count:,}, numpy made {len(params):,}")
     return 0

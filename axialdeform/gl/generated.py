@@ -2,8 +2,9 @@
 
 :class:`GeneratedTiles` ``.make(tiles)``, every time the tiles within reach change:
 
-1. ``glsl/generate.vert`` writes every tile's ``m^2`` slots (23 float32: the 22-number record, then kept)
-   into one scratch buffer, tile after tile (:class:`~axialdeform.gl.generate.TileGenerator`);
+1. ``glsl/generate.comp`` (GL >= 4.3; ``glsl/generate.vert`` by transform feedback on 3.3) writes every
+   tile's ``m^2`` slots (23 float32: the 22-number record, then kept) into one scratch buffer, tile after
+   tile (:class:`~axialdeform.gl.generate.TileGenerator`);
 2. ``glsl/generate_keep.vert`` + ``generate_keep.geom`` compact the kept slots, in slot order, by
    transform feedback into the :class:`~axialdeform.gl.renderer.AxialRenderer`'s instance buffer (the
    record's 16 or 19 numbers, its layout's), its tint buffer (a tinted recipe) and, for a tree, a scratch buffer of each
@@ -48,15 +49,17 @@ class GeneratedTiles:
     when the recipe has a tint; the mesh's axes).
 
     renderer : AxialRenderer; recipe : Generate; mesh : the layer's BaseMesh (one axis or a tree);
-    maps : GroundMaps (the height and density maps), optional.
+    maps : GroundMaps (the height and density maps), optional; compute : the slots by a compute shader
+    (:class:`~axialdeform.gl.generate.TileGenerator`'s: None, the default, where the context has one).
     """
 
-    def __init__(self, renderer, recipe: Generate, mesh, maps: GroundMaps | None = None):
+    def __init__(self, renderer, recipe: Generate, mesh, maps: GroundMaps | None = None,
+                 compute: bool | None = None):
         self.ctx = ctx = renderer.ctx
         self.renderer = renderer
         self.recipe = recipe
         self.mesh = mesh
-        self.generator = TileGenerator(ctx, recipe, mesh, maps)
+        self.generator = TileGenerator(ctx, recipe, mesh, maps, compute=compute)
         self.tinted = recipe.width == TINTED_WIDTH
         self.tree = mesh.tree if mesh.axis_count > 1 else None
         self.count = 0  # instances kept by the last make
@@ -114,8 +117,7 @@ class GeneratedTiles:
             self.renderer.gpu_written(0, tint=self.tinted)
             return 0
         raw = self._grow("_raw", n * _SLOT)
-        for k, tile in enumerate(tiles):
-            gen.run(tile, raw, offset=k * gen.count * _SLOT)
+        gen.run_tiles(tiles, raw)
         instances, tint, texture = self.renderer.gpu_targets(n, tint=self.tinted)
         self.count = self._compact("record", instances, n)
         if self.tinted:
@@ -160,10 +162,9 @@ class GeneratedTiles:
     def set_seed(self, seed: int) -> None:
         """Another seed (the viewer's N key): the next :meth:`make` makes other instances in the same tiles."""
         self.recipe = replace(self.recipe, seed=int(seed) % 2 ** 32)
-        for prog in (self.generator.program, self.generator.child_program if self.tree is not None else None,
-                     self._axes if self.tree is not None else None):
-            if prog is not None and "u_seed" in prog:
-                prog["u_seed"].value = self.recipe.seed
+        self.generator.set_seed(self.recipe.seed)
+        if self.tree is not None and "u_seed" in self._axes:
+            self._axes["u_seed"].value = self.recipe.seed
 
     def set_bend_scale(self, scale: float) -> None:
         """Every offset times ``scale`` from the next :meth:`make` on (the viewer's UP/DOWN keys)."""

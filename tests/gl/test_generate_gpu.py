@@ -1,4 +1,5 @@
-"""Generated layers on the GPU (glsl/generate.glsl by transform feedback) equal the numpy reference."""
+"""Generated layers on the GPU (glsl/generate.glsl by a compute shader on GL >= 4.3 and by transform feedback,
+both run here) equal the numpy reference."""
 
 from __future__ import annotations
 
@@ -8,8 +9,12 @@ import numpy as np
 import pytest
 
 import axialdeform as ad
+from axialdeform.core import ContextError
 from axialdeform.core.generate import Generate, generate_tile, generate_tiles
-from axialdeform.gl.generate import TileGenerator, generate_tile_gpu
+from axialdeform.gl.generate import TileGenerator, compute_available, generate_tile_gpu
+
+#: both ways of writing the slots: glsl/generate.comp and glsl/generate.vert by transform feedback
+WAYS = pytest.mark.parametrize("compute", [True, False], ids=["compute", "transform feedback"])
 
 RECIPES = [Generate(rate=4.0, tile=8.0, min_distance=0.3, seed=7, bend=0.1),
            Generate(rate=2.5, tile=10.0, min_distance=0.1, seed=4_000_000_000, bend=0.2, scale=(0.7, 1.3),
@@ -17,11 +22,12 @@ RECIPES = [Generate(rate=4.0, tile=8.0, min_distance=0.3, seed=7, bend=0.1),
 
 
 @pytest.mark.parametrize("recipe", RECIPES, ids=["16 numbers", "19 numbers"])
-def test_the_gpu_makes_the_numpy_records(ctx, recipe):
+@WAYS
+def test_the_gpu_makes_the_numpy_records(ctx, recipe, compute):
     stone = ad.load_mesh("stone")
     for tile in [(0, 0), (-3, 5), (1000, -7), (-40000, 123456)]:
         cpu, _ = generate_tile(recipe, stone, *tile)
-        gpu, kept = generate_tile_gpu(ctx, recipe, stone, *tile)
+        gpu, kept = generate_tile_gpu(ctx, recipe, stone, *tile, compute=compute)
         assert kept.all()
         assert gpu.shape == cpu.shape
         rel = np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))
@@ -30,9 +36,10 @@ def test_the_gpu_makes_the_numpy_records(ctx, recipe):
     assert np.array_equal(gpu[:, [10, 12]], cpu[:, [10, 12]])
 
 
-def test_one_program_makes_any_tile_into_a_gpu_buffer(ctx):
+@WAYS
+def test_one_program_makes_any_tile_into_a_gpu_buffer(ctx, compute):
     stone = ad.load_mesh("stone")
-    gen = TileGenerator(ctx, RECIPES[0], stone)
+    gen = TileGenerator(ctx, RECIPES[0], stone, compute=compute)
     buf = gen.buffer()
     try:
         out = []
@@ -46,7 +53,7 @@ def test_one_program_makes_any_tile_into_a_gpu_buffer(ctx):
     assert np.array_equal(out[0], out[2]) and not np.array_equal(out[0], out[1])
     assert np.array_equal(out[1], generate_tile(RECIPES[0], stone, 0, 0)[0])
     # tiles side by side in one buffer (the layout of a layer's instance buffer): each at its offset
-    gen = TileGenerator(ctx, RECIPES[0], stone)
+    gen = TileGenerator(ctx, RECIPES[0], stone, compute=compute)
     both = ctx.buffer(reserve=2 * gen.count * 23 * 4)
     try:
         gen.run((5, -5), both, offset=gen.count * 23 * 4)
@@ -71,7 +78,8 @@ def _hills(rows=33, cols=41):
 
 
 @pytest.mark.parametrize("flat", [False, True], ids=["height map", "flat, density repeated"])
-def test_the_gpu_keeps_and_places_as_numpy_on_the_ground_maps(ctx, flat):
+@WAYS
+def test_the_gpu_keeps_and_places_as_numpy_on_the_ground_maps(ctx, flat, compute):
     """Heights on the terrain's triangles, the altitude and slope bands, the density map and the tint."""
     from axialdeform.core.generate import GroundMaps
 
@@ -86,13 +94,13 @@ def test_the_gpu_keeps_and_places_as_numpy_on_the_ground_maps(ctx, flat):
                           scale=(0.5, 1.0))
         sunk = Generate(rate=3.0, tile=8.0, seed=9, bend=0.1, scale=(0.5, 1.0), anchor="center", lift=(0.1, 0.4))
         cpu, _ = generate_tile(sunk, stone, 1, 1, GroundMaps.of(terrain, None))
-        gpu, _ = generate_tile_gpu(ctx, sunk, stone, 1, 1, GroundMaps.of(terrain, None))
+        gpu, _ = generate_tile_gpu(ctx, sunk, stone, 1, 1, GroundMaps.of(terrain, None), compute=compute)
         assert (np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))).max() <= 1e-6
         maps = GroundMaps.of(terrain, density)
     kept_all = []
     for tile in [(0, 0), (-4, -3), (3, 2), (-1, 1), (20, 20)]:
         cpu, kept = generate_tile(recipe, stone, *tile, maps)
-        gpu, gkept = generate_tile_gpu(ctx, recipe, stone, *tile, maps)
+        gpu, gkept = generate_tile_gpu(ctx, recipe, stone, *tile, maps, compute=compute)
         assert np.array_equal(gkept, kept), tile
         rel = np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))
         assert rel.max() <= 1e-6, (tile, rel.max())
@@ -123,7 +131,8 @@ def test_the_gpu_keeps_and_places_as_numpy_on_the_ground_maps(ctx, flat):
         assert (t[:, 19:22] >= 0.6 * np.array([0.9, 0.8, 0.7]) - 1e-7).all()
 
 
-def test_the_gpu_makes_a_trees_child_axes_as_numpy(ctx):
+@WAYS
+def test_the_gpu_makes_a_trees_child_axes_as_numpy(ctx, compute):
     """A mesh of ten axes: each level its bend, every child axis's offsets projected so its joint stays."""
     from axialdeform.core.axes import bernstein4
 
@@ -131,7 +140,7 @@ def test_the_gpu_makes_a_trees_child_axes_as_numpy(ctx):
     recipe = Generate(rate=0.2, tile=16.0, min_distance=0.5, seed=21, bend=(0.04, 0.25), scale=(0.8, 1.1))
     for tile in [(0, 0), (-2, 7)]:
         cpu, kept = generate_tile(recipe, tree, *tile)
-        gpu, gkept = generate_tile_gpu(ctx, recipe, tree, *tile)
+        gpu, gkept = generate_tile_gpu(ctx, recipe, tree, *tile, compute=compute)
         assert cpu.shape == gpu.shape == (kept.size, 19 + 90) and np.array_equal(kept, gkept)
         rel = np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))
         assert rel.max() <= 1e-6, (tile, rel.max())
@@ -146,7 +155,8 @@ def test_the_gpu_makes_a_trees_child_axes_as_numpy(ctx):
     assert np.abs(children).max() > 0.01  # they do bend
 
 
-def test_instances_lean_toward_the_ground_as_scatter_turns_them(ctx):
+@WAYS
+def test_instances_lean_toward_the_ground_as_scatter_turns_them(ctx, compute):
     """align_to_normal on a height map: the GPU's turn (its own sine, cosine and arctangent) equals numpy's;
     both are scatter's R = Rt(up x n, align angle) Ry(ry), read back from the Euler angles; the anchor rests
     on the ground after the turn."""
@@ -159,7 +169,7 @@ def test_instances_lean_toward_the_ground_as_scatter_turns_them(ctx):
     recipe = Generate(rate=2.0, tile=8.0, seed=12, bend=0.1, scale=(0.5, 1.0), align_to_normal=0.7, anchor="bottom")
     for tile in [(0, 0), (-3, -2), (2, 1)]:
         cpu, kept = generate_tile(recipe, stone, *tile, maps)
-        gpu, gkept = generate_tile_gpu(ctx, recipe, stone, *tile, maps)
+        gpu, gkept = generate_tile_gpu(ctx, recipe, stone, *tile, maps, compute=compute)
         assert np.array_equal(kept, gkept)
         rel = np.abs(gpu - cpu) / np.maximum(1.0, np.abs(cpu))
         assert rel.max() <= 1e-6, (tile, rel.max())
@@ -196,7 +206,8 @@ def _tree():
 
 
 @pytest.mark.parametrize("kind", ["16 numbers", "tinted on the ground maps", "tree of ten axes"])
-def test_tiles_are_made_straight_into_the_renderers_buffers(ctx, kind):
+@WAYS
+def test_tiles_are_made_straight_into_the_renderers_buffers(ctx, kind, compute):
     """GeneratedTiles: the kept instances compacted on the GPU into the renderer's own instance buffer, tint
     buffer and child-axes texture equal generate_tiles for the same tiles, in its order; the bounds found
     from the recipe alone hold every instance; a second make replaces the first."""
@@ -219,7 +230,8 @@ def test_tiles_are_made_straight_into_the_renderers_buffers(ctx, kind):
                                          scale=(0.8, 1.1))
     width = recipe.width + 10 * (mesh.axis_count - 1)
     renderer = AxialRenderer(ctx, mesh, np.zeros((0, width), np.float32))
-    gen = GeneratedTiles(renderer, recipe, mesh, maps)
+    gen = GeneratedTiles(renderer, recipe, mesh, maps, compute=compute)
+    assert (gen.generator.compute is not None) == compute
     try:
         for tiles in ([(0, 0), (1, 0), (-1, 2), (3, -2)], [(2, 2), (-3, -1)]):
             cpu = generate_tiles(recipe, mesh, tiles, maps)
@@ -299,3 +311,24 @@ def test_view_draws_the_gpus_records_and_makes_none_on_the_cpu(monkeypatch):
     finally:
         v.release()
         v.wnd.destroy()
+
+
+def test_the_compute_path_is_the_default_where_the_context_has_one(ctx):
+    """GL >= 4.3 (llvmpipe's 4.5 here): the slots by glsl/generate.comp unless told otherwise; compute=True
+    on a context without compute shaders is a ContextError naming what it needs."""
+    stone = ad.load_mesh("stone")
+    assert compute_available(ctx)
+    gen = TileGenerator(ctx, RECIPES[0], stone)
+    try:
+        assert gen.compute is not None
+    finally:
+        gen.release()
+
+    class GL33:
+        version_code = 330
+
+        def __getattr__(self, name):
+            return getattr(ctx, name)
+
+    with pytest.raises(ContextError, match=r"compute=True needs OpenGL >= 4.3.*has 330"):
+        TileGenerator(GL33(), RECIPES[0], stone, compute=True)
