@@ -165,6 +165,16 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
         + 'in the vertex stage, which WebGPURenderer\'s WebGL 2 fallback has not; draw with its WebGPU backend, or use '
         + 'AxialGeneratedMesh from \'axialdeform-three\' with WebGLRenderer (WebGL 2 transform feedback)');
     }
+    // every slot within reach in one storage buffer: WebGPU binds at most maxStorageBufferBindingSize bytes
+    const limit = renderer.backend.device.limits.maxStorageBufferBindingSize;
+    const bytes = Math.max(this._drawnAttr.array.byteLength, this._kidsAttr ? this._kidsAttr.array.byteLength : 0,
+      this.capacity * GENERATED_FLOATS * 4);
+    if (bytes > limit) {
+      throw new AxialError(`AxialGeneratedMesh: ${this.capacity} slots (the tiles of ${this.recipe.tile} within a reach of `
+        + `${this.recipe.reach}) need a storage buffer of ${bytes} bytes, above this device's maxStorageBufferBindingSize `
+        + `(${limit}); ask the adapter for more (new WebGPURenderer({ requiredLimits: { maxStorageBufferBindingSize: `
+        + 'adapter.limits.maxStorageBufferBindingSize } }), as examples/web/generated-webgpu.html does) or give a smaller reach');
+    }
   }
 
   /** Make the tiles within reach of `point` ({x, z}) if they changed (one compute dispatch of every slot);

@@ -397,12 +397,22 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
 
 
 def test_a_generated_mesh_under_the_webgl2_fallback_is_refused_in_words(webgpu_browser, site, tmp_path):
+    """Under the WebGL 2 fallback: an AxialError naming the WebGPU backend and WebGLRenderer.  On the WebGPU
+    backend, tiles whose slots need a storage buffer above the device's binding limit (128 MiB by default):
+    an AxialError naming the limit and how to ask for more -- not a validation error in the console and
+    nothing drawn."""
     stone = ad.load_mesh("stone")
     case = _gen_case("stones", stone, Generate(**GEN_STONES), 5.0)
     out, errors = run(webgpu_browser, site[1], VERSIONS[-1], "generate", {"gl": True, "cases": [case]})
     said = out["cases"][0]["error"]
     assert said.startswith("AxialError: AxialGeneratedMesh (axialdeform-three/webgpu): the generated instances"), said
     assert "WebGPU backend" in said and "WebGLRenderer" in said
+    assert errors == []
+    huge = _gen_case("huge", stone, Generate(rate=4.0, tile=16.0, seed=1), 290.0)  # 1 478 656 slots
+    out, errors = run(webgpu_browser, site[1], VERSIONS[-1], "generate", {"gl": False, "cases": [huge]})
+    said = out["cases"][0]["error"]
+    assert said.startswith("AxialError: AxialGeneratedMesh: 1478656 slots"), said
+    assert "maxStorageBufferBindingSize (134217728)" in said and "requiredLimits" in said
     assert errors == []
 
 
