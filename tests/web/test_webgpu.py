@@ -321,7 +321,7 @@ GEN_STONES = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 
               "twist": 0.5, "tint": 0.3}
 
 
-def _gen_case(name, mesh, recipe, reach, maps=None, point=(0.0, 0.0), uniforms=True, picture=False):
+def _gen_case(name, mesh, recipe, reach, maps=None, point=(0.0, 0.0), uniforms=True, picture=False, wind=None):
     """A generated layer for the page's ``generate`` check: the base mesh, the recipe, the Python library's
     numbers (or none: the module computes them), the ground maps and child-axis table, the point."""
     ext = bend_extension(mesh, recipe.width)
@@ -333,7 +333,7 @@ def _gen_case(name, mesh, recipe, reach, maps=None, point=(0.0, 0.0), uniforms=T
             "axis": {"axis": ext["axis"], "axes": ext.get("axes")}, "recipe": recipe_json(recipe, reach),
             "maps": {k: {"data": np.asarray(g, np.float32).ravel().tolist(), "cols": int(g.shape[1]), "rows": int(g.shape[0])}
                      for k, g in grids.items() if g is not None},
-            "point": list(point), "picture": picture, "side": tree is not None}
+            "point": list(point), "picture": picture, "side": tree is not None, "wind": wind, "time": 1.3}
     if uniforms:
         case["uniforms"] = json.loads(json.dumps(recipe_uniforms(recipe, mesh, maps)))
     return case
@@ -345,7 +345,10 @@ def generated_cases(tmp_path):
     tree of ten axes (every level its bend, the joints closed)."""
     stone = ad.load_mesh("stone")
     flat = Generate(**GEN_STONES)
-    out = [(_gen_case("stones", stone, flat, 5.0, uniforms=False, picture=True), stone, flat, None)]
+    sparse = Generate(**{**GEN_STONES, "rate": 0.25, "scale": [1.0, 1.4]})  # each its own silhouette
+    out = [(_gen_case("stones", stone, flat, 5.0, uniforms=False, picture=True), stone, flat, None),
+           (_gen_case("stones in the wind", stone, sparse, 8.0, uniforms=False, picture=True, wind=WIND), stone, sparse,
+            None)]
     for f in ("terrain.png", "stone_density.png", "grass.obj"):
         (tmp_path / f).write_bytes((LANDSCAPE / f).read_bytes())
     (tmp_path / "tree-axes.toml").write_bytes((ROOT / "examples" / "forest" / "tree-axes.toml").read_bytes())
@@ -390,10 +393,15 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
             shot = png(got["png"])
             look = ad.Look(ground=False, shadow=False)
             camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
-            ref = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera)
-            Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-generated-{version}.png")
+            wind = ad.Wind(direction=tuple(WIND["direction"]), strength=WIND["strength"], gustiness=WIND["gustiness"],
+                           frequency=WIND["frequency"], wavelength=WIND["wavelength"]) if case["wind"] else None
+            ref = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera, wind=wind, time=case["time"])
+            Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-generated-{version}-{name}.png")
             assert _mask(ref).sum() > 0.05 * ref.size / 3
-            assert iou(shot, ref) >= 0.95, iou(shot, ref)
+            assert iou(shot, ref) >= 0.95, (name, iou(shot, ref))
+            if wind is not None:  # the wind moved them visibly: the comparison can fail
+                still = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera)
+                assert iou(still, ref) < 0.93, iou(still, ref)
 
 
 def test_a_generated_mesh_under_the_webgl2_fallback_is_refused_in_words(webgpu_browser, site, tmp_path):
