@@ -14,6 +14,7 @@ import json
 import subprocess
 import sys
 from io import BytesIO
+from urllib.parse import quote
 
 import numpy as np
 import pytest
@@ -276,22 +277,21 @@ def test_gpu_culling_under_the_webgl2_fallback_is_refused_in_words(webgpu_browse
     assert errors == []
 
 
-@pytest.mark.parametrize("backend", list(BACKENDS))
-def test_the_webgpu_example_draws_what_render_draws(webgpu_browser, site, backend):
-    """examples/web/webgpu.html (WebGPURenderer, the plugin of axialdeform-three/webgpu, GPU culling on
-    the WebGPU backend) as render draws stones.adp, on render's background without its ground and fog."""
-    folder, url = site
-    text = (ROOT / "examples" / "web" / "webgpu.html").read_text()
-    (folder / "webgpu-example.html").write_text(text.replace("./node_modules/three/", f"./node_modules/{VERSIONS[-1]}/"))
-    page = webgpu_browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1]})
+def example_picture_webgpu(browser, folder, url, name: str, query: str, ready: str, extra: str):
+    """examples/web/NAME with three r187, drawn once on render's background without its ground and fog:
+    ``{png, backend, ...}`` (``extra``: more fields, a JS object's entries over window.app's names) and
+    the page's errors.  ``ready``: what the page must have done first (a JS expression)."""
+    text = (ROOT / "examples" / "web" / name).read_text()
+    (folder / name).write_text(text.replace("./node_modules/three/", f"./node_modules/{VERSIONS[-1]}/"))
+    page = browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1]})
     errors = []
     page.on("pageerror", lambda e: errors.append(str(e)))
     page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
     try:
-        page.goto(url + "webgpu-example.html" + ("?webgl=1" if BACKENDS[backend] else ""))
-        page.wait_for_function("window.app !== undefined", timeout=240_000)
+        page.goto(url + name + query)
+        page.wait_for_function(ready, timeout=240_000)
         out = page.evaluate("""async () => {
-            const { THREE, renderer, scene, camera, ground, bent } = window.app;
+            const app = window.app, { THREE, renderer, scene, camera, ground } = app;
             renderer.setAnimationLoop(null);
             ground.visible = false;
             scene.fog = null;
@@ -301,11 +301,20 @@ def test_the_webgpu_example_draws_what_render_draws(webgpu_browser, site, backen
             const c = document.createElement('canvas');
             c.width = renderer.domElement.width; c.height = renderer.domElement.height;
             c.getContext('2d').drawImage(renderer.domElement, 0, 0);
-            return { png: c.toDataURL(), culled: bent.map((m) => m.gpuCulled),
-                     backend: renderer.backend.isWebGPUBackend ? 'webgpu' : 'webgl2' };
-        }""")
+            return { png: c.toDataURL(), backend: renderer.backend.isWebGPUBackend ? 'webgpu' : 'webgl2', EXTRA };
+        }""".replace("EXTRA", extra))
     finally:
         page.close()
+    return out, errors
+
+
+@pytest.mark.parametrize("backend", list(BACKENDS))
+def test_the_webgpu_example_draws_what_render_draws(webgpu_browser, site, backend):
+    """examples/web/webgpu.html (WebGPURenderer, the plugin of axialdeform-three/webgpu, GPU culling on
+    the WebGPU backend) as render draws stones.adp, on render's background without its ground and fog."""
+    folder, url = site
+    out, errors = example_picture_webgpu(webgpu_browser, folder, url, "webgpu.html", "?webgl=1" if BACKENDS[backend] else "",
+                                         "window.app !== undefined", "culled: app.bent.map((m) => m.gpuCulled)")
     shot = png(out["png"])
     ref = render_reference(folder, ["stone", folder / "stones.adp"])
     Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-example-{backend}.png")
@@ -451,33 +460,13 @@ def test_the_gltf_generated_form_is_generated_under_webgpu(webgpu_browser, site)
 def test_the_generated_webgpu_example_draws_what_render_draws(webgpu_browser, site):
     """examples/web/generated-webgpu.html (the recipe from the address, its ground and fog hidden) draws
     what render draws of the Python library's records for the tiles around its orbit target."""
-    from urllib.parse import quote
-
     folder, url = site
-    text = (ROOT / "examples" / "web" / "generated-webgpu.html").read_text()
-    (folder / "generated-webgpu.html").write_text(text.replace("./node_modules/three/", f"./node_modules/{VERSIONS[-1]}/"))
     recipe = {**GEN_STONES, "reach": 5.0}
-    page = webgpu_browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1]})
-    errors = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    try:
-        page.goto(url + "generated-webgpu.html?recipe=" + quote(json.dumps(recipe)))
-        page.wait_for_function("window.app !== undefined && window.app.frames >= 2", timeout=240_000)
-        out = page.evaluate("""async () => {
-            const { THREE, renderer, scene, camera, ground, stones } = window.app;
-            renderer.setAnimationLoop(null);
-            ground.visible = false;
-            scene.fog = null;
-            scene.background = new THREE.Color().setRGB(0.93, 0.94, 0.96, THREE.SRGBColorSpace);
-            renderer.render(scene, camera);
-            const c = document.createElement('canvas');
-            c.width = renderer.domElement.width; c.height = renderer.domElement.height;
-            c.getContext('2d').drawImage(renderer.domElement, 0, 0);
-            return { png: c.toDataURL(), tiles: stones.tiles, kept: await stones.counted };
-        }""")
-    finally:
-        page.close()
+    out, errors = example_picture_webgpu(webgpu_browser, folder, url, "generated-webgpu.html",
+                                         "?recipe=" + quote(json.dumps(recipe)),
+                                         "window.app !== undefined && window.app.frames >= 2",
+                                         "tiles: app.stones.tiles, kept: await app.stones.counted")
+    assert out["backend"] == "webgpu"
     stone = ad.load_mesh(folder / "stone.obj")
     g = Generate(**GEN_STONES)
     assert out["tiles"] == tiles_around(g, 0.0, 0.0, 5.0).tolist()
