@@ -121,7 +121,8 @@ class _ViewerMixin:
         # levels of detail part by part, carrying UVs, colours and tangents (core/lod.py)
         lod = s.get("lod", len(self.base) >= LOD_AUTO_COUNT)
         self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, parts=s.get("parts"), wind=self.wind,
-                                      culling=s.get("culling", True), lod=lod, lod_error=s.get("lod_error", 1.0))
+                                      culling=s.get("culling", True), lod=lod, lod_error=s.get("lod_error", 1.0),
+                                      position_ids=s.get("generate") is not None)
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)

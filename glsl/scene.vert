@@ -127,6 +127,14 @@ out vec3 v_world;           // world position
 out vec3 v_normal;          // world normal (analytic)
 flat out float v_shade;     // per-instance brightness variation, 0.85 .. 1.15
 
+// the id of an instance's wind phase: its index, or (AXIAL_POSITION_IDS: a generated layer's instances,
+// whose index changes as tiles come and go) its lasting identity from where it stands (wind.glsl)
+#ifdef AXIAL_POSITION_IDS
+#define AXIAL_PHASE_ID axial_position_id(inst.position)
+#else
+#define AXIAL_PHASE_ID uint(AXIAL_INSTANCE_ID + u_instance_base)
+#endif
+
 float instance_hash(int i) {
     uint h = uint(i) * 747796405u + 2891336453u;
     h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
@@ -151,10 +159,10 @@ void main() {
 #endif
     if (u_wind_strength != 0.0) {
 #ifdef AXIAL_AXES
-        push = axial_wind_push(inst, uint(AXIAL_INSTANCE_ID + u_instance_base), 1.0, u_wind_dir,
+        push = axial_wind_push(inst, AXIAL_PHASE_ID, 1.0, u_wind_dir,
                                u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
 #endif
-        inst = axial_wind(inst, uint(AXIAL_INSTANCE_ID + u_instance_base), AXIAL_AXIS, u_len, u_wind_dir,
+        inst = axial_wind(inst, AXIAL_PHASE_ID, AXIAL_AXIS, u_len, u_wind_dir,
                           u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
     }
 #ifdef AXIAL_AXES
@@ -175,7 +183,11 @@ void main() {
                      in_tangent.w);
 #endif
 #endif
+#ifdef AXIAL_POSITION_IDS
+    v_shade = 0.85 + 0.3 * instance_hash(int(axial_position_id(inst.position)));
+#else
     v_shade = 0.85 + 0.3 * instance_hash(AXIAL_INSTANCE_ID);
+#endif
 #ifdef AXIAL_TINT
     v_tint = i_tint;
 #endif

@@ -20,6 +20,13 @@ uint axial_wind_hash(uint i) {
     return (h >> 22u) ^ h;
 }
 
+// A generated instance's lasting identity (docs/generate.md), from where it stands: the float32 bits of
+// its x and z hashed.  Its index changes as tiles come and go; this does not, so neither do its wind
+// phase and shade (AXIAL_POSITION_IDS in scene.vert).
+uint axial_position_id(vec3 p) {
+    return axial_wind_hash(floatBitsToUint(p.x) ^ axial_wind_hash(floatBitsToUint(p.z)));
+}
+
 // The instance's phase in [0, 1): 24 bits of the hash, exact in float32.
 float axial_wind_phase(uint id) {
     return float(axial_wind_hash(id) >> 8u) * (1.0 / 16777216.0);

@@ -105,7 +105,8 @@ def bake(scene, args, progress, wind=None) -> None:
                      "copy of a layer's normals)", ArgumentError)
     with progress(scene.count, f"{len(scene.layers)} layers ({args.engine})") as bar:
         pieces = [bake_pieces(layer.mesh, layer.params, args.engine, progress=bar,
-                              wind=scene.wind if layer.wind else None, time=t, source=f"{scene.path}: {layer.name}")
+                              wind=scene.wind if layer.wind else None, time=t, source=f"{scene.path}: {layer.name}",
+                              position_ids=layer.generate is not None)
                   for layer in scene.layers]
         try:
             write_npz_layers(out, [(f"_{layer.name}", p, len(layer.params), layer.mesh.vertex_count)

@@ -19,11 +19,13 @@ MESH_FORMATS = ("obj", "ply", "glb")
 
 
 def bake_cpu(mesh, params, *, progress=None, wind=None, time: float = 0.0,
-             source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+             source: str | None = None, position_ids: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Deformed world positions and normals, each ``(instances, vertices, 3) float32``,
     in the base mesh's vertex order, by the numpy reference (:func:`deform`).
     ``params``: (n, 16) or (n, 19) (extended instances); ``wind``: an
     :class:`axialdeform.Wind` taken at ``time`` seconds (or None).
+    ``position_ids``: the wind's phases hash where the instances stand (a generated layer's:
+    :func:`~axialdeform.core.wind.position_ids`), not their index.
     ``progress``: optional object with ``update(instances_done)``.  The GPU
     engine and the switch between them: :func:`axialdeform.gl.bake.bake`.
 
@@ -35,7 +37,8 @@ def bake_cpu(mesh, params, *, progress=None, wind=None, time: float = 0.0,
     check_bake_count(mesh, len(params), "cpu", source)
     if wind is not None:
 
-        params = apply_wind(wind, mesh.tree or mesh.axis, params, time)  # several axes: every axis sways
+        params = apply_wind(wind, mesh.tree or mesh.axis, params, time,  # several axes: every axis sways
+                            ids="position" if position_ids else "index")
     with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
         positions, normals = deform(mesh, params, progress=progress)
     check_bake_result(positions, normals, source)
@@ -88,7 +91,7 @@ BAKE_PIECE_BYTES = 1 << 23
 
 
 def bake_cpu_pieces(mesh, params, *, progress=None, wind=None, time: float = 0.0, source: str | None = None,
-                    piece_bytes: int = BAKE_PIECE_BYTES):
+                    piece_bytes: int = BAKE_PIECE_BYTES, position_ids: bool = False):
     """The result of :func:`bake_cpu` in pieces of consecutive instances, a
     generator of ``(positions, normals)``, each ``(m, vertices, 3) float32``
     with ``m * vertices * 24 <= piece_bytes`` (at least one instance):
@@ -101,8 +104,9 @@ def bake_cpu_pieces(mesh, params, *, progress=None, wind=None, time: float = 0.0
     step = max(1, int(piece_bytes) // (v * 24))
     for a in range(0, len(params), step):
         block = params[a : a + step]
-        if wind is not None:  # the wind's phase follows the instance index
-            block = apply_wind(wind, mesh.tree or mesh.axis, block, time, start=a)
+        if wind is not None:  # the wind's phase follows the instance index (or where it stands)
+            block = apply_wind(wind, mesh.tree or mesh.axis, block, time, start=a,
+                               ids="position" if position_ids else "index")
         with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
             positions, normals = deform(mesh, block, progress=progress)
         require_finite(positions, "positions", "xyz", source=source, first=a)

@@ -34,7 +34,8 @@ from .params import as_params, check_tree_params
 from .record import ANGLES, OFFSETS, POSITION, split_record
 from .transforms import rotation_matrices
 
-__all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "wind_offsets", "apply_wind", "wind_wave",
+__all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "position_ids", "wind_offsets", "apply_wind",
+           "wind_wave",
            "tree_wind_offsets"]
 
 #: how much of the tip displacement each control point P1..P5 gets (D(t) = t²: an axis anchored at t = 0)
@@ -132,36 +133,57 @@ def wind_phase(ids) -> np.ndarray:
     return (wind_hash(ids) >> np.uint32(8)).astype(np.float32) * np.float32(1.0 / 16777216.0)
 
 
-def wind_offsets(wind: Wind, axis: ControlAxis, params, time: float, *, start: int = 0) -> np.ndarray:
+def position_ids(params) -> np.ndarray:
+    """A generated instance's lasting identity, ``axial_position_id`` of ``glsl/wind.glsl``: (n,) uint32, the
+    hash of the float32 bits of its x and z (``params``: the standard record, (n, 16|19|22)).  Its index
+    changes as tiles come and go; this does not, so neither do its wind phase and shade."""
+    p = np.ascontiguousarray(as_params(params)[:, POSITION], dtype=np.float32)
+    return wind_hash(p[:, 0].view(np.uint32) ^ wind_hash(p[:, 2].view(np.uint32)))
+
+
+def _phase_ids(params, start: int, ids: str) -> np.ndarray:
+    """The ids the wind's phase hashes: the instance indices ``start + row`` (``ids="index"``) or, for a
+    generated layer's instances, :func:`position_ids` (``ids="position"``)."""
+    if ids == "position":
+        return position_ids(params)
+    if ids != "index":
+        raise ParamError(f"wind: ids: expected 'index' or 'position', found {ids!r}")
+    return np.arange(start, start + len(params))
+
+
+def wind_offsets(wind: Wind, axis: ControlAxis, params, time: float, *, start: int = 0,
+                 ids: str = "index") -> np.ndarray:
     """What the wind adds to every instance's control-point offsets at ``time``.
 
-    params : (n, 16) or (n, 19) — the instances (their index is ``start + row``).
+    params : (n, 16) or (n, 19) — the instances (their index is ``start + row``); ids : the phases' ids
+    (``"index"``, or ``"position"``: a generated layer's, :func:`position_ids`).
     Returns (n, 5, 2) float64 (model units; the first two rows are 0).
     """
-    wave, local = wind_wave(wind, params, time, start=start)
+    wave, local = wind_wave(wind, params, time, start=start, ids=ids)
     amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)
     u = amp[:, None] * axis.across(local)  # (n, 2): the push across the axis (any frame)
     return WIND_WEIGHTS[None, :, None] * u[:, None, :]
 
 
-def wind_wave(wind: Wind, params, time: float, *, start: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def wind_wave(wind: Wind, params, time: float, *, start: int = 0, ids: str = "index") -> tuple[np.ndarray, np.ndarray]:
     """The wind's ``wave`` (n,) float64 at ``time`` and its direction in each
     instance's model frame ``Rᵀ dir`` (n, 3) float64 (``params``: the
     standard record, (n, 16|19|22)): what every axis's push is made of."""
+    phase_ids = _phase_ids(params, start, ids)
     params = as_params(params).astype(np.float64)
-    n = len(params)
     d = wind.unit_direction
     c1, c2 = wind.cycles(time)
-    ph = wind_phase(np.arange(start, start + n)).astype(np.float64) - params[:, POSITION] @ d * wind.wavenumber
+    ph = wind_phase(phase_ids).astype(np.float64) - params[:, POSITION] @ d * wind.wavenumber
     wave = 0.6 * np.sin(2.0 * np.pi * (c1 + ph)) + 0.4 * np.sin(2.0 * np.pi * (c2 + 1.7 * ph))
     local = np.einsum("nji,j->ni", rotation_matrices(params[:, ANGLES]), d)  # Rᵀ dir
     return wave, local
 
 
-def apply_wind(wind: Wind | None, axis, params, time: float, *, start: int = 0) -> np.ndarray:
+def apply_wind(wind: Wind | None, axis, params, time: float, *, start: int = 0, ids: str = "index") -> np.ndarray:
     """``params`` with the wind's offsets added (same shape, float32); ``None`` returns them unchanged.
     ``axis``: the mesh's :class:`ControlAxis`, or its :class:`~axialdeform.core.axes.AxisTree`
-    (several axes: every axis is pushed, :func:`tree_wind_offsets`)."""
+    (several axes: every axis is pushed, :func:`tree_wind_offsets`); ``ids``: the phases' ids, the
+    instance indices from ``start`` (``"index"``) or a generated layer's :func:`position_ids` (``"position"``)."""
     if getattr(axis, "axes", None) is not None:  # an AxisTree
         params = check_tree_params(params, axis.count)
         if wind is None or wind.strength == 0:
@@ -169,19 +191,20 @@ def apply_wind(wind: Wind | None, axis, params, time: float, *, start: int = 0) 
         out = params.copy()
         k = axis.count
         moved = params[:, :10 * k].astype(np.float64) + tree_wind_offsets(
-            wind, axis, params, time, start=start).reshape(len(params), -1)
+            wind, axis, params, time, start=start, ids=ids).reshape(len(params), -1)
         out[:, :10 * k] = moved.astype(np.float32)
         return out
     params = as_params(params)
     if wind is None or wind.strength == 0:
         return params
     out = params.copy()
-    moved = params[:, OFFSETS].astype(np.float64) + wind_offsets(wind, axis, params, time, start=start).reshape(-1, 10)
+    moved = params[:, OFFSETS].astype(np.float64) + wind_offsets(wind, axis, params, time, start=start,
+                                                                 ids=ids).reshape(-1, 10)
     out[:, OFFSETS] = moved.astype(np.float32)
     return as_params(out)
 
 
-def tree_wind_offsets(wind: Wind, tree, params, time: float, *, start: int = 0) -> np.ndarray:
+def tree_wind_offsets(wind: Wind, tree, params, time: float, *, start: int = 0, ids: str = "index") -> np.ndarray:
     """What the wind adds to every axis's offsets: (n, K, 5, 2) float64.  Each
     axis ``j`` is pushed across itself by ``strength·L_j·(1 + gustiness·wave)``
     (one wave per instance, :func:`~axialdeform.core.wind.wind_wave`), on its
@@ -190,7 +213,7 @@ def tree_wind_offsets(wind: Wind, tree, params, time: float, *, start: int = 0) 
     Axis 0's push is :func:`~axialdeform.core.wind.wind_offsets` exactly."""
     k = tree.count
     standard, _ = split_record(check_tree_params(params, k), k)
-    wave, local = wind_wave(wind, standard, time, start=start)
+    wave, local = wind_wave(wind, standard, time, start=start, ids=ids)
     out = np.empty((len(standard), k, 5, 2))
     for j, axis in enumerate(tree.axes):
         amp = wind.strength * axis.length * (1.0 + wind.gustiness * wave)  # (n,)

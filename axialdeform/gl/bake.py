@@ -24,7 +24,7 @@ ENGINES = ("cpu", "gpu")
 
 
 def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: str | None = None,
-         options: RenderOptions | None = None, **fields) -> tuple[np.ndarray, np.ndarray]:
+         options: RenderOptions | None = None, position_ids: bool = False, **fields) -> tuple[np.ndarray, np.ndarray]:
     """Every instance bent and placed: world positions and normals in the base mesh's vertex order.
 
     Parameters
@@ -42,6 +42,8 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
         The parameter file, named in errors.
     options : RenderOptions, optional
         Its ``wind`` (an :class:`axialdeform.Wind`) taken at its ``time`` seconds.
+    position_ids : bool, optional
+        The wind's phases hash where the instances stand, not their index (a generated layer's).
     **fields
         ``wind=`` and ``time=`` as keywords.
 
@@ -54,7 +56,7 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
     opts = RenderOptions.of(options, fields, "bake", ("wind", "time"))
     wind, time = opts.wind, opts.time or 0.0
     if engine == "cpu":
-        return bake_cpu(mesh, params, progress=progress, wind=wind, time=time, source=source)
+        return bake_cpu(mesh, params, progress=progress, wind=wind, time=time, source=source, position_ids=position_ids)
     if engine != "gpu":
         raise ArgumentError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
 
@@ -62,7 +64,7 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
     own = ctx is None
     ctx = create_context() if own else ctx
     try:
-        with AxialRenderer(ctx, mesh, params, wind=wind) as r:
+        with AxialRenderer(ctx, mesh, params, wind=wind, position_ids=position_ids) as r:
             positions, normals = r.capture(progress=progress, time=time, check_finite=False)
     finally:
         if own:
@@ -72,7 +74,8 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
 
 
 def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: str | None = None,
-                piece_bytes: int = BAKE_PIECE_BYTES, options: RenderOptions | None = None, **fields):
+                piece_bytes: int = BAKE_PIECE_BYTES, options: RenderOptions | None = None, position_ids: bool = False,
+                **fields):
     """The result of :func:`bake` in pieces of consecutive instances, a
     generator of ``(positions, normals)``, each ``(m, vertices, 3) float32``
     of at most ``piece_bytes`` together (at least one instance):
@@ -80,12 +83,12 @@ def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, s
     (the GPU holds the parameters; each piece is one :meth:`capture` of
     ``start, count``, so the wind's phase follows the instance index).
     Non-finite results are refused as they come, naming ``source`` and the
-    instance in the whole file.  ``options`` and ``fields`` as :func:`bake`'s."""
+    instance in the whole file.  ``options``, ``position_ids`` and ``fields`` as :func:`bake`'s."""
     opts = RenderOptions.of(options, fields, "bake_pieces", ("wind", "time"))
     wind, time = opts.wind, opts.time or 0.0
     if engine == "cpu":
         yield from bake_cpu_pieces(mesh, params, progress=progress, wind=wind, time=time, source=source,
-                                   piece_bytes=piece_bytes)
+                                   piece_bytes=piece_bytes, position_ids=position_ids)
         return
     if engine != "gpu":
         raise ArgumentError(f"engine: expected one of {', '.join(ENGINES)}, found {engine!r}")
@@ -94,7 +97,7 @@ def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, s
     own = ctx is None
     ctx = create_context() if own else ctx
     try:
-        with AxialRenderer(ctx, mesh, params, wind=wind) as r:
+        with AxialRenderer(ctx, mesh, params, wind=wind, position_ids=position_ids) as r:
             for a in range(0, r.count, step):
                 m = min(step, r.count - a)
                 positions, normals = r.capture(a, m, progress=progress, time=time, check_finite=False)

@@ -67,6 +67,9 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         given as keywords (``AxialRenderer(ctx, mesh, params, culling=False)``).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
+    position_ids : bool, optional
+        The instances' wind phases and shades hash where they stand (``axial_position_id``) instead of
+        their index: a generated layer's, whose index changes as tiles come and go (default False).
     **fields
         Fields of :class:`RenderOptions` that replace ``options``': ``bend``,
         ``quantized``, ``cull_back_faces``, ``parts``, ``extended``, ``wind``, ``culling``,
@@ -88,7 +91,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
     """
 
     def __init__(self, ctx, mesh, params=None, options: RenderOptions | None = None, *, capacity: int | None = None,
-                 **fields):
+                 position_ids: bool = False, **fields):
         check_alive(ctx, "a new AxialRenderer")
         opts = RenderOptions.of(options, fields, "AxialRenderer", RENDERER_FIELDS)
         bend, quantized, cull_back_faces, parts = opts.bend, opts.quantized, opts.cull_back_faces, opts.parts
@@ -140,6 +143,10 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         self.extended = bool(extended)
         if self.extended:
             defines["AXIAL_EXTENDED"] = 1
+        #: the instances' wind phases and shades hash where they stand, not their index (a generated layer's)
+        self.position_ids = bool(position_ids)
+        if self.position_ids:
+            defines["AXIAL_POSITION_IDS"] = 1
         self._defines = defines
         self.appearance = None
         self.materials = None

@@ -79,7 +79,8 @@ class SceneRenderer:
                                        scene.terrain_color, False))
             for layer in scene.layers:
                 r = renderer if renderer is not None and len(scene.layers) == 1 else AxialRenderer(
-                    ctx, layer.mesh, layer.params, culling=culling, lod=lod, lod_error=lod_error, parts=layer.parts)
+                    ctx, layer.mesh, layer.params, culling=culling, lod=lod, lod_error=lod_error, parts=layer.parts,
+                    position_ids=getattr(layer, "generate", None) is not None)
                 self.renderers.append((r, layer.color, layer.wind))
         except BaseException:
             self.release()

@@ -332,3 +332,65 @@ def test_the_compute_path_is_the_default_where_the_context_has_one(ctx):
 
     with pytest.raises(ContextError, match=r"compute=True needs OpenGL >= 4.3.*has 330"):
         TileGenerator(GL33(), RECIPES[0], stone, compute=True)
+
+
+def test_a_generated_instance_keeps_its_sway_and_shade_when_its_tiles_are_made_again(ctx):
+    """The view makes the tiles within reach again, in another order, as the camera walks: an instance's index
+    changes, so a generated layer's wind phase and shade hash where it stands (AXIAL_POSITION_IDS,
+    core.wind.position_ids): its bent vertices in the wind are the same whichever tile set it was made in,
+    and equal the CPU reference with those ids; phases by index would differ (the check can fail)."""
+    from axialdeform.core.wind import apply_wind
+    from axialdeform.gl.generated import GeneratedTiles
+    from axialdeform.gl.renderer import AxialRenderer
+
+    stone = ad.load_mesh("stone")
+    recipe = Generate(rate=1.0, tile=4.0, min_distance=0.3, seed=12, bend=0.1)
+    wind = ad.Wind(direction=(1.0, 0.0, 0.3), strength=0.3, gustiness=0.7)
+    renderer = AxialRenderer(ctx, stone, np.zeros((0, 16), np.float32), wind=wind, position_ids=True)
+    gen = GeneratedTiles(renderer, recipe, stone)
+    try:
+        bent = []
+        for tiles in ([(0, 0), (1, 0), (5, 5)], [(7, -3), (1, 0), (2, 2), (0, 0)]):
+            gen.make(tiles)
+            positions, _ = renderer.capture(time=1.3)
+            records = generate_tiles(recipe, stone, tiles)
+            cpu, _ = ad.deform(stone, apply_wind(wind, stone.axis, records, 1.3, ids="position"))
+            assert np.abs(positions - cpu).max() <= 1e-5 * stone.axis.length
+            by_index, _ = ad.deform(stone, apply_wind(wind, stone.axis, records, 1.3))
+            assert np.abs(by_index - cpu).max() > 0.05 * stone.axis.length
+            bent.append({tuple(r[10:13]): p for r, p in zip(records, positions)})
+        shared = bent[0].keys() & bent[1].keys()  # tiles (0, 0) and (1, 0): made twice, other indices
+        assert len(shared) == 2 * recipe_cells(recipe)
+        assert all(np.array_equal(bent[0][k], bent[1][k]) for k in shared)
+    finally:
+        gen.release()
+        renderer.release()
+    # the shade too: the same tiles made in two orders draw the same picture; by index they would not
+    from axialdeform.core.camera import Camera
+    from axialdeform.gl.context import release_framebuffer
+
+    camera = Camera(eye=(4.0, 6.0, 9.0), target=(4.0, 0.0, 2.0), fovy=40.0, near=0.1, far=100.0)
+    pictures = {}
+    for ids in (True, False):
+        renderer = AxialRenderer(ctx, stone, np.zeros((0, 16), np.float32), position_ids=ids)
+        gen = GeneratedTiles(renderer, recipe, stone)
+        target = ctx.simple_framebuffer((160, 120))
+        try:
+            for order in ([(0, 0), (1, 0)], [(1, 0), (0, 0)]):
+                target.use()
+                gen.make(order)
+                ctx.clear(0.9, 0.9, 0.9, 1.0, depth=1.0)
+                renderer.render(camera.view(), camera.projection(160 / 120), look=ad.Look(fast=True))
+                pictures[ids, order[0]] = np.frombuffer(target.read(), np.uint8).astype(int)
+        finally:
+            gen.release()
+            renderer.release()
+            release_framebuffer(ctx, target)
+    assert np.array_equal(pictures[True, (0, 0)], pictures[True, (1, 0)])
+    assert np.abs(pictures[False, (0, 0)] - pictures[False, (1, 0)]).max() > 10
+
+
+def recipe_cells(recipe) -> int:
+    from axialdeform.core.generate import tile_size
+
+    return tile_size(recipe)[0] ** 2
