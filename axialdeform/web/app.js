@@ -177,7 +177,9 @@ export function mount(root, lib, scene, options = {}) {
       const blend = part.alpha_mode === 2;
       const m = new THREE.RawShaderMaterial({
         glslVersion: THREE.GLSL3,
-        defines: lc.mesh.axes ? { AXIAL_AXES: lc.mesh.axes.count } : {},
+        // a generated layer's wind phases and shades hash where its instances stand (their slots change
+        // as tiles come and go): AXIAL_POSITION_IDS, as the Python library draws it
+        defines: { ...(lc.mesh.axes ? { AXIAL_AXES: lc.mesh.axes.count } : {}), ...(lc.generate ? { AXIAL_POSITION_IDS: 1 } : {}) },
         vertexShader: body(sh.vertex),
         fragmentShader: body(sh.fragment),
         side: lc.cull_back_faces && !part.double_sided ? THREE.FrontSide : THREE.DoubleSide,

@@ -121,6 +121,7 @@ precision highp int;
 ${tangent ? '#define USE_TANGENT' : ''}
 ${axes ? `#define AXIAL_AXES ${axes}` : ''}
 ${wind ? '#define AXIAL_WIND 1' : ''}
+${mesh.defines.AXIAL_POSITION_IDS ? '#define AXIAL_POSITION_IDS 1' : ''}
 #define AXIAL_ID int(axialId + 0.5)
 ${AXIAL_GLSL}
 ${WIND_GLSL}

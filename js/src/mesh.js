@@ -157,7 +157,8 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
       shader.vertexShader = injectBend(shader.vertexShader, name);
     };
     const key = material.customProgramCacheKey.bind(material);
-    m.customProgramCacheKey = () => `axialdeform:${defines.AXIAL_AXES || 1}:${defines.AXIAL_WIND ? 'wind' : ''}:${key()}`;
+    m.customProgramCacheKey = () => `axialdeform:${defines.AXIAL_AXES || 1}:${defines.AXIAL_WIND ? 'wind' : ''}:`
+      + `${defines.AXIAL_POSITION_IDS ? 'position-ids' : ''}:${key()}`;
     m.needsUpdate = true;
     return m;
   }

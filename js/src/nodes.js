@@ -11,6 +11,7 @@
 
 import {
   If, Loop, float, int, uint, vec2, vec3, vec4, clamp, normalize, cross, dot, max, select, textureLoad, ivec2, round,
+  floatBitsToUint,
 } from 'three/tsl';
 
 /**
@@ -142,6 +143,11 @@ export function axialWindHash(i) {
   const h = uint(i).mul(uint(747796405)).add(uint(2891336453)).toVar();
   h.assign(h.shiftRight(h.shiftRight(uint(28)).add(uint(4))).bitXor(h).mul(uint(277803737)));
   return h.shiftRight(uint(22)).bitXor(h);
+}
+
+/** A generated instance's lasting identity (axial_position_id): the float32 bits of its x and z hashed. */
+export function axialPositionId(p) {
+  return axialWindHash(floatBitsToUint(p.x).bitXor(axialWindHash(floatBitsToUint(p.z))));
 }
 
 /** The instance's phase in [0, 1) (axial_wind_phase). */

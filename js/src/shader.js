@@ -10,6 +10,13 @@ export const UNIFORMS = `
 #ifndef AXIAL_ID
 #define AXIAL_ID gl_InstanceID
 #endif
+// the id of an instance's wind phase: its index, or (a generated mesh's, whose slots change as tiles come
+// and go) where it stands (axial_position_id of glsl/wind.glsl)
+#ifdef AXIAL_POSITION_IDS
+#define AXIAL_PHASE_ID axial_position_id(axialPlaced.position)
+#else
+#define AXIAL_PHASE_ID uint(AXIAL_ID)
+#endif
 uniform mat3 axialFrame;
 uniform float axialLo;
 uniform float axialLen;
@@ -51,10 +58,10 @@ export const BEND = `
       axialPlaced.position = instanceMatrix[3].xyz;
       axialPlaced.angles = axialAngles;
 #ifdef AXIAL_AXES
-      axialPush = axial_wind_push(axialPlaced, uint(AXIAL_ID), 1.0, axialWindDir, axialWindStrength,
+      axialPush = axial_wind_push(axialPlaced, AXIAL_PHASE_ID, 1.0, axialWindDir, axialWindStrength,
                                   axialWindGust, axialWindCycles, axialWindWavenumber);
 #endif
-      axialInst = axial_wind(axialPlaced, uint(AXIAL_ID), axialFrame, axialLen, axialWindDir, axialWindStrength,
+      axialInst = axial_wind(axialPlaced, AXIAL_PHASE_ID, axialFrame, axialLen, axialWindDir, axialWindStrength,
                              axialWindGust, axialWindCycles, axialWindWavenumber);
       axialInst.position = vec3(0.0);  // the rigid part stays instanceMatrix's
       axialInst.angles = vec3(0.0);

@@ -14,7 +14,9 @@ import { attachBake, unbake } from './bake.js';
 import { rayCandidates, intersectBent } from './raycast.js';
 import { GPUCulling } from './cull.js';
 import { bendAsync, releaseCompute } from './compute.js';
-import { axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes } from './nodes.js';
+import {
+  axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes, axialPositionId,
+} from './nodes.js';
 
 
 // the classic materials WebGPURenderer converts, and their node twins (three's own NodeLibrary pairs)
@@ -121,8 +123,9 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
     let moved = inst, push = null;
     if (this._wind) {
       const w = this._windNodes();
-      if (u.axes) push = axialWindPush(inst, id, float(1), w);
-      moved = axialWind(inst, id, u.frame, u.len, w);
+      const phaseId = this.positionIds ? axialPositionId(inst.position) : id; // a generated mesh's: where it stands
+      if (u.axes) push = axialWindPush(inst, phaseId, float(1), w);
+      moved = axialWind(inst, phaseId, u.frame, u.len, w);
     }
     let bent, tan = null;
     if (u.axes) {
