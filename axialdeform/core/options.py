@@ -85,6 +85,10 @@ class RenderOptions:
         quantized).  ``None`` (the default): exactly when ``params`` has 19
         columns.  An extended renderer takes 16-number parameters too (as
         ``s = 1, tw = 0, tp = 0``); a 16-number one refuses 19.
+    position_ids : bool
+        The instances' wind phases and shades hash where they stand
+        (:func:`~axialdeform.core.wind.position_ids`), not their index: a generated layer's, whose
+        index changes as tiles come and go (a scene's generated layers are drawn so by themselves).
     """
 
     up: str = "y"
@@ -100,6 +104,7 @@ class RenderOptions:
     cull_back_faces: bool | None = None
     bend: bool = True
     extended: bool | None = None
+    position_ids: bool = False
 
     def __post_init__(self):
         if self.up not in AXIS_NAMES:
@@ -149,4 +154,4 @@ class RenderOptions:
 #: the fields an :class:`~axialdeform.gl.renderer.AxialRenderer` reads (``up``, ``time`` and
 #: ``renderer`` belong to a picture)
 RENDERER_FIELDS = ("parts", "wind", "culling", "lod", "lod_error", "indirect", "quantized", "cull_back_faces",
-                   "bend", "extended")
+                   "bend", "extended", "position_ids")

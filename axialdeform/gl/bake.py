@@ -24,7 +24,7 @@ ENGINES = ("cpu", "gpu")
 
 
 def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: str | None = None,
-         options: RenderOptions | None = None, position_ids: bool = False, **fields) -> tuple[np.ndarray, np.ndarray]:
+         options: RenderOptions | None = None, **fields) -> tuple[np.ndarray, np.ndarray]:
     """Every instance bent and placed: world positions and normals in the base mesh's vertex order.
 
     Parameters
@@ -41,11 +41,10 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
     source : str, optional
         The parameter file, named in errors.
     options : RenderOptions, optional
-        Its ``wind`` (an :class:`axialdeform.Wind`) taken at its ``time`` seconds.
-    position_ids : bool, optional
-        The wind's phases hash where the instances stand, not their index (a generated layer's).
+        Its ``wind`` (an :class:`axialdeform.Wind`) taken at its ``time`` seconds, and its
+        ``position_ids`` (the wind's phases hash where the instances stand: a generated layer's).
     **fields
-        ``wind=`` and ``time=`` as keywords.
+        ``wind=``, ``time=`` and ``position_ids=`` as keywords.
 
     Returns
     -------
@@ -53,8 +52,8 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
         Counts that cannot fit in memory and non-finite results are refused, naming ``source``
         (:func:`~axialdeform.core.bake.bake_cpu`).
     """
-    opts = RenderOptions.of(options, fields, "bake", ("wind", "time"))
-    wind, time = opts.wind, opts.time or 0.0
+    opts = RenderOptions.of(options, fields, "bake", ("wind", "time", "position_ids"))
+    wind, time, position_ids = opts.wind, opts.time or 0.0, opts.position_ids
     if engine == "cpu":
         return bake_cpu(mesh, params, progress=progress, wind=wind, time=time, source=source, position_ids=position_ids)
     if engine != "gpu":
@@ -74,8 +73,7 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
 
 
 def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: str | None = None,
-                piece_bytes: int = BAKE_PIECE_BYTES, options: RenderOptions | None = None, position_ids: bool = False,
-                **fields):
+                piece_bytes: int = BAKE_PIECE_BYTES, options: RenderOptions | None = None, **fields):
     """The result of :func:`bake` in pieces of consecutive instances, a
     generator of ``(positions, normals)``, each ``(m, vertices, 3) float32``
     of at most ``piece_bytes`` together (at least one instance):
@@ -83,9 +81,9 @@ def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, s
     (the GPU holds the parameters; each piece is one :meth:`capture` of
     ``start, count``, so the wind's phase follows the instance index).
     Non-finite results are refused as they come, naming ``source`` and the
-    instance in the whole file.  ``options``, ``position_ids`` and ``fields`` as :func:`bake`'s."""
-    opts = RenderOptions.of(options, fields, "bake_pieces", ("wind", "time"))
-    wind, time = opts.wind, opts.time or 0.0
+    instance in the whole file.  ``options`` and ``fields`` as :func:`bake`'s."""
+    opts = RenderOptions.of(options, fields, "bake_pieces", ("wind", "time", "position_ids"))
+    wind, time, position_ids = opts.wind, opts.time or 0.0, opts.position_ids
     if engine == "cpu":
         yield from bake_cpu_pieces(mesh, params, progress=progress, wind=wind, time=time, source=source,
                                    piece_bytes=piece_bytes, position_ids=position_ids)

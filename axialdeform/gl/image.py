@@ -100,7 +100,8 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
         What is drawn and how (:class:`axialdeform.RenderOptions`): a mesh's
         ``up`` and ``parts``, a ``wind`` that replaces the scene's and its
         ``time``, a ``renderer`` to draw a one-layer scene with, and every
-        layer's ``culling``, ``lod`` and ``lod_error``.
+        layer's ``culling``, ``lod``, ``lod_error`` and ``position_ids`` (a scene's generated
+        layers have them whatever it says).
     **fields
         Fields of :class:`RenderOptions` that replace ``options``'
         (``up="z", time=1.5``).  The old keywords ``fast``, ``ground``,
@@ -116,7 +117,7 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
 
     old_keywords = pop_look_keywords(fields)
     opts = RenderOptions.of(options, fields, "render_image",
-                            ("up", "parts", "wind", "time", "renderer", "culling", "lod", "lod_error"))
+                            ("up", "parts", "wind", "time", "renderer", "culling", "lod", "lod_error", "position_ids"))
     wind, time, renderer = opts.wind, opts.time, opts.renderer
     scene = Scene.of(scene, params, up=opts.up, wind=wind, parts=opts.parts)  # the one mesh-or-scene check
     if wind is not None:
@@ -133,7 +134,7 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
         check_image_size(ctx, (w, h), look.samples, panels=len(modes))  # before any work: the error says the limit
         layers = [(layer.mesh, layer.params) for layer in scene.layers]
         with SceneRenderer(ctx, scene, renderer=renderer, culling=opts.culling, lod=opts.lod,
-                           lod_error=opts.lod_error) as drawn:
+                           lod_error=opts.lod_error, position_ids=opts.position_ids) as drawn:
             plane = shadow = None
             try:
                 if look.draws_ground and scene.terrain is None:

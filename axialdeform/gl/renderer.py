@@ -67,13 +67,10 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         given as keywords (``AxialRenderer(ctx, mesh, params, culling=False)``).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
-    position_ids : bool, optional
-        The instances' wind phases and shades hash where they stand (``axial_position_id``) instead of
-        their index: a generated layer's, whose index changes as tiles come and go (default False).
     **fields
         Fields of :class:`RenderOptions` that replace ``options``': ``bend``,
         ``quantized``, ``cull_back_faces``, ``parts``, ``extended``, ``wind``, ``culling``,
-        ``lod``, ``lod_error``, ``indirect`` (what each does: its docstring).
+        ``lod``, ``lod_error``, ``indirect``, ``position_ids`` (what each does: its docstring).
 
     Notes
     -----
@@ -91,7 +88,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
     """
 
     def __init__(self, ctx, mesh, params=None, options: RenderOptions | None = None, *, capacity: int | None = None,
-                 position_ids: bool = False, **fields):
+                 **fields):
         check_alive(ctx, "a new AxialRenderer")
         opts = RenderOptions.of(options, fields, "AxialRenderer", RENDERER_FIELDS)
         bend, quantized, cull_back_faces, parts = opts.bend, opts.quantized, opts.cull_back_faces, opts.parts
@@ -144,7 +141,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         if self.extended:
             defines["AXIAL_EXTENDED"] = 1
         #: the instances' wind phases and shades hash where they stand, not their index (a generated layer's)
-        self.position_ids = bool(position_ids)
+        self.position_ids = bool(opts.position_ids)
         if self.position_ids:
             defines["AXIAL_POSITION_IDS"] = 1
         self._defines = defines

@@ -58,11 +58,12 @@ class SceneRenderer:
     culling, lod, lod_error : each layer's :class:`AxialRenderer` options
     (per-instance culling, levels of detail -- textured and multi-part layer
     meshes too, one draw per level and part); the terrain, ONE instance, is
-    always drawn whole.
+    always drawn whole.  position_ids : every layer's wind phases and shades hash where its
+    instances stand (a generated layer's always do: :class:`~axialdeform.core.options.RenderOptions`).
     """
 
     def __init__(self, ctx, scene, *, culling: bool = True, lod: bool = False, lod_error: float = 1.0,
-                 renderer: AxialRenderer | None = None):
+                 renderer: AxialRenderer | None = None, position_ids: bool = False):
         self.ctx = ctx
         self.scene = scene
         self.renderers = []
@@ -80,7 +81,7 @@ class SceneRenderer:
             for layer in scene.layers:
                 r = renderer if renderer is not None and len(scene.layers) == 1 else AxialRenderer(
                     ctx, layer.mesh, layer.params, culling=culling, lod=lod, lod_error=lod_error, parts=layer.parts,
-                    position_ids=getattr(layer, "generate", None) is not None)
+                    position_ids=position_ids or getattr(layer, "generate", None) is not None)
                 self.renderers.append((r, layer.color, layer.wind))
         except BaseException:
             self.release()

@@ -505,8 +505,6 @@ def test_the_modules_generated_mesh_sways_as_render_sways_a_generated_layer(brow
     """AxialGeneratedMesh in the wind: its slots change as tiles come and go, so its wind phases hash where
     each instance stands (AXIAL_POSITION_IDS), as render draws a generated layer -- the same picture
     (IoU >= 0.95), closer than with phases by index, and not the still one."""
-    from dataclasses import replace
-
     folder, url = three_site
     recipe = {**RECIPE, "rate": 0.25, "scale": [1.0, 1.4]}
     wind = {"direction": [1, 0, 0.3], "strength": 0.35, "gustiness": 0.6, "frequency": 0.5, "wavelength": 4.0}
@@ -520,9 +518,8 @@ def test_the_modules_generated_mesh_sways_as_render_sways_a_generated_layer(brow
     w = ad.Wind(direction=tuple(wind["direction"]), strength=wind["strength"], gustiness=wind["gustiness"],
                 frequency=wind["frequency"], wavelength=wind["wavelength"])
     look, camera = ad.Look(ground=False, shadow=False), ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
-    scene = ad.Scene.single(mesh, want, wind=w)
-    scene.layers[0] = replace(scene.layers[0], generate=g)  # a generated layer: phases from where they stand
-    ref = ad.render_image(scene, size=(480, 360), look=look, camera=camera, time=1.3)
+    # a generated layer's instances: their phases hash where they stand
+    ref = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera, wind=w, time=1.3, position_ids=True)
     by_index = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera, wind=w, time=1.3)
     still = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera)
     assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
