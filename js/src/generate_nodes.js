@@ -16,11 +16,11 @@ import { Vector2, Vector3, Vector4 } from 'three/webgpu';
 import { axialWindHash } from './nodes.js';
 
 /** generate.glsl's AxialRecipe from generatorUniforms (generate.js's recipeUniforms, or the Python
- * library's): every number a uniform node (`set(u)` changes them: same layout, no new pipeline), the
- * booleans has_heights, has_density, d_wrap plain. */
+ * library's): every number a uniform node, the booleans has_heights, has_density, d_wrap plain (they
+ * choose the code). */
 export function recipeNodes(u) {
   const v2 = (a) => uniform(new Vector2(a[0], a[1]));
-  const r = {
+  return {
     seed: uniform(u.seed, 'uint'), m: uniform(u.m, 'int'), cell: uniform(u.cell), jitter: uniform(u.jitter),
     bend: uniform(u.bend), scale: v2(u.scale), twist: uniform(u.twist), taper: uniform(u.taper),
     anchor_y: uniform(u.anchor_y), anchor_w: uniform(new Vector4(...u.anchor_w)), anchor_w4: uniform(u.anchor_w4),
@@ -30,14 +30,6 @@ export function recipeNodes(u) {
     anchor_xz: v2(u.anchor_xz),
     has_heights: Boolean(u.has_heights), has_density: Boolean(u.has_density), d_wrap: Boolean(u.d_wrap),
   };
-  r.set = (w) => {
-    for (const [k, node] of Object.entries(r)) {
-      if (!node || !node.isNode) continue;
-      if (typeof node.value === 'number') node.value = w[k];
-      else node.value.fromArray(w[k]);
-    }
-  };
-  return r;
 }
 
 /** (cos x, sin x) to float32 rounding on every GPU (axial_gen_cos_sin): reduction by pi/2 (two
