@@ -238,7 +238,6 @@ export function adoptGenerated(mesh, base, options, drawsOn, childTexture) {
   // its slots change as tiles come and go: the wind's phases hash where the instances stand (glsl/wind.glsl's
   // axial_position_id), as the Python library draws a generated layer
   mesh.defines.AXIAL_POSITION_IDS = '1';
-  mesh.positionIds = true;
   // autoUpdate: each draw says which renderer and camera (the base mesh's hook, then ours, then a
   // user's own, which assigning onBeforeRender sets); the tiles are made when the next render updates
   // the world's matrices, before three uploads the instances (made in onBeforeRender, they would be

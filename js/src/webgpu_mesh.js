@@ -123,7 +123,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
     let moved = inst, push = null;
     if (this._wind) {
       const w = this._windNodes();
-      const phaseId = this.positionIds ? axialPositionId(inst.position) : id; // a generated mesh's: where it stands
+      const phaseId = this.defines.AXIAL_POSITION_IDS ? axialPositionId(inst.position) : id; // a generated mesh's: where it stands
       if (u.axes) push = axialWindPush(inst, phaseId, float(1), w);
       moved = axialWind(inst, phaseId, u.frame, u.len, w);
     }
