@@ -10,7 +10,7 @@ from ..core.errors import AxialDeformError
 from ..core.io.params import read_params
 from ..core.params import check_drawable
 from ..core.scene import is_scene_file
-from ..web import build_scene, build_scene_file, make_server, write_page
+from ..web import build_scene, build_scene_file, make_server, page_files, write_page
 from ._common import add_axis, add_overwrite, add_wind_args, load_base, wind_arg
 from .scenes import scene_of, scene_time
 
@@ -95,7 +95,11 @@ def run(args) -> None:
             raise AxialDeformError(f"{page}: no exported page to serve; give MESH and PARAMS to write one")
     if not args.serve:
         return
-    server, busy = make_server(page.parent, args.port)
+    if page.name == "index.html" and (page.parent / "scene.json").is_file():
+        files = page_files(page.parent)  # a folder page: its own files, nothing else of the folder
+    else:
+        files = [page.name]  # one self-contained page: that file alone
+    server, busy = make_server(page.parent, args.port, files=files)
     port = server.server_address[1]
     if busy:
         print(f"axialdeform web: port {args.port} is busy; using {port}", file=sys.stderr)

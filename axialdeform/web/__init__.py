@@ -48,13 +48,14 @@ from .files import (
     WebScene,
     check_page_outputs,
     embedded_file,
-    make_server,
+    page_files,
     scene_bytes,
     single_file_html,
     write_folder,
     write_page,
     write_single_file,
 )
+from .serve import make_server
 from .sources import (
     MESH_FILE,
     MODULE_DIR,
@@ -70,7 +71,7 @@ from .sources import (
 
 __all__ = [
     "THREE_VERSION", "WebScene", "PageOptions", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es",
-    "write_folder", "single_file_html", "make_server", "scene_bytes", "embedded_file", "write_single_file",
+    "write_folder", "single_file_html", "make_server", "page_files", "scene_bytes", "embedded_file", "write_single_file",
     "write_page", "vendor_file", "page_source", "module_source", "check_page_outputs", "MODULE_DIR",
     "MODULE_FILES", "VENDOR_FILES",
 ]

@@ -1,17 +1,13 @@
 """Writing a page: a folder for a static server (``index.html`` + files), ONE
-self-contained ``.html``, and a small server for a folder page."""
+self-contained ``.html``, and the list of a folder page's files (what ``serve`` answers)."""
 
 from __future__ import annotations
 
 import base64
-import errno
-import functools
 import html
 import json
-import operator
 import os
 from dataclasses import dataclass
-from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
 from ..core.errors import AxialDeformError
@@ -20,7 +16,7 @@ from ..core.io.safeio import check_new_outputs, check_output_path
 from .sources import MODULE_DIR, MODULE_FILES, VENDOR_FILES, module_source, page_source, three_version, vendor_file
 
 __all__ = ["WebScene", "check_page_outputs", "write_folder", "single_file_html", "embedded_file",
-           "write_single_file", "write_page", "scene_bytes", "make_server"]
+           "write_single_file", "write_page", "scene_bytes", "page_files"]
 
 
 @dataclass
@@ -250,37 +246,32 @@ def scene_bytes(out: str | os.PathLike) -> dict:
             "three": size(*("three/" + r for r in VENDOR_FILES.values()))}
 
 
-def make_server(folder: str | os.PathLike, port: int = 8000):
-    """An HTTP server for ``folder`` on 127.0.0.1 (not started).
-
-    Returns ``(server, busy)``: when ``port`` is taken the operating system
-    picks a free one and ``busy`` is True.  Call ``server.serve_forever()``;
-    ``server.server_address[1]`` is the port."""
-
+def page_files(folder: str | os.PathLike) -> frozenset:
+    """The relative paths (``/``-separated) of the files a folder page written by :func:`write_folder` is
+    made of, read from its ``scene.json`` as the page's loader reads it: ``index.html``, ``app.js``,
+    ``scene.json``, the npm module's files, the vendored three.js and every layer's mesh, parameter file
+    and ground maps.  What a server of the page answers (:func:`~axialdeform.web.serve.make_server`)."""
     folder = Path(folder)
-    if not folder.is_dir():
-        raise AxialDeformError(f"{folder}: no such folder to serve")
-
-    class Handler(SimpleHTTPRequestHandler):
-        extensions_map = {**SimpleHTTPRequestHandler.extensions_map, ".js": "text/javascript",
-                          ".json": "application/json", ".glb": "model/gltf-binary",
-                          ".adp": "application/octet-stream", ".html": "text/html; charset=utf-8"}
-
-        def log_message(self, format, *args):  # quiet: the CLI prints the URL only
-            pass
-
-    handler = functools.partial(Handler, directory=str(folder))
-
+    path = folder / "scene.json"
     try:
-        number = operator.index(port)
-    except TypeError:
-        number = -1
-    if not 0 <= number <= 65535:
-        raise AxialDeformError(f"serve: expected a TCP port 0..65535 (0: any free one), found {port!r}")
-    port = number
-    try:
-        return ThreadingHTTPServer(("127.0.0.1", int(port)), handler), False
+        config = json.loads(path.read_text(encoding="utf-8"))
+        layers = config["layers"]
+        names = set()
+        for layer in layers:
+            gen = layer.get("generate")
+            if gen:
+                names.add(layer["mesh"]["file"])
+                names.update(m["file"] for m in (gen.get("maps") or {}).values())
+            else:
+                names.update((layer["mesh"]["file"], layer["params_file"]))
     except OSError as exc:
-        if exc.errno not in (errno.EADDRINUSE, errno.EACCES):
-            raise AxialDeformError(f"serve: cannot listen on 127.0.0.1:{port}: {exc.strerror}") from None
-    return ThreadingHTTPServer(("127.0.0.1", 0), handler), True
+        raise AxialDeformError(f"{path}: cannot read the page's scene ({exc.strerror}); expected a folder "
+                               "written by 'axialdeform web'") from None
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise AxialDeformError(f"{path}: not a page's scene.json ({type(exc).__name__}: {str(exc)[:80]}); "
+                               "expected a folder written by 'axialdeform web'") from None
+    if not all(isinstance(n, str) for n in names):
+        raise AxialDeformError(f"{path}: layers: expected file names (strings)")
+    fixed = {"index.html", "app.js", "scene.json", *(MODULE_DIR + n for n in MODULE_FILES),
+             *("three/" + r for r in [*VENDOR_FILES.values(), "LICENSE", "VERSION"])}
+    return frozenset(fixed | names)
