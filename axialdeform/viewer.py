@@ -41,7 +41,7 @@ import numpy as np
 
 from .core.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
-from .core.generate import tile_spheres, tiles_around
+from .core.generate import tile_spheres, tiles_around, world_edge
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
 from .core.options import RenderOptions
@@ -317,10 +317,22 @@ class _ViewerMixin:
             if key == "":  # a generated world stands on 0
                 self.ground.fit_spheres(self._spheres[key][:, :3], self._spheres[key][:, 3], height=0.0)
 
+    def _in_world(self, target: np.ndarray) -> np.ndarray:
+        """``target`` with x and z held within the generated layers' world (docs/generate.md, "Bounds"): a walk
+        stops at the nearest world's edge, where float32 positions still keep the cell grid."""
+        recipes = [self.generate] if self.generate is not None else []
+        recipes += [layer.generate for layer, _, _ in self.layers if getattr(layer, "generate", None) is not None]
+        if not recipes:
+            return target
+        edge = min(world_edge(r.generate) for r in recipes)
+        out = np.array(target, dtype=np.float64)
+        out[[0, 2]] = np.clip(out[[0, 2]], -edge, edge)
+        return out
+
     def on_render(self, time_s: float, frame_time: float):
         self._time = time_s
         if self.walk is not None:
-            self.orbit.target = self.orbit.target + np.array([self.walk[0], 0.0, self.walk[1]])
+            self.orbit.target = self._in_world(self.orbit.target + np.array([self.walk[0], 0.0, self.walk[1]]))
         if self.generate is not None or any(getattr(layer, "generate", None) is not None for layer, _, _ in self.layers):
             self._page_tiles()
         if self.animate is not None:

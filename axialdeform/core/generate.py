@@ -33,6 +33,7 @@ docs/generate.md states every formula.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,13 +47,27 @@ from .record import EXTENDED_WIDTH, TINTED_WIDTH, WIDTH, join_record
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
-           "tiles_in", "generate_extent", "anchor_weights", "recipe_uniforms", "GroundMaps",
+           "tiles_in", "check_extent", "check_reach", "reach_tiles", "generate_extent", "anchor_weights", "recipe_uniforms", "GroundMaps",
            "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table",
-           "child_bound", "tile_spheres"]
+           "child_bound", "tile_spheres", "world_edge", "slot_limit", "check_slots", "MAX_TILE_SLOTS", "MAX_SLOTS",
+           "MAX_BEND", "WORLD_CELLS"]
 
 GENERATED_NUMBERS = 22  # u_0 .. u_21 an instance
 GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
+
+# ---- bounds, checked from the recipe alone before any array is made (docs/generate.md, "Bounds")
+#: the most cells a tile may have (``m^2``)
+MAX_TILE_SLOTS = 1 << 20
+#: the most slots one command makes at once (an extent, or the tiles within reach); the environment
+#: variable ``AXIALDEFORM_MAX_SLOTS`` raises (or lowers) it
+MAX_SLOTS = 1 << 24
+#: the largest bend amplitude, in axis lengths
+MAX_BEND = 100.0
+#: the world of a recipe ends ``WORLD_CELLS`` cells from the origin along x and z: there float32 positions
+#: are still exact to 1/256 of a cell (2^16 c has a float32 spacing of c / 128), so the guaranteed
+#: ``min_distance`` holds to within c / 128 on every tile the generator makes; no tile beyond is made
+WORLD_CELLS = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -136,6 +151,14 @@ class Generate:
                 bad(name, "a finite number >= 0", v)
         if self.taper >= 1:
             bad("taper", "a number in [0, 1)", self.taper)
+        for b in (self.bend if isinstance(self.bend, tuple) else (self.bend,)):
+            if b > MAX_BEND:
+                bad("bend", f"at most {MAX_BEND:g} (axis lengths)", self.bend)
+        cells = self.tile * math.sqrt(self.rate)
+        if not cells < 4 * math.sqrt(MAX_TILE_SLOTS) or max(1, round(cells)) ** 2 > MAX_TILE_SLOTS:
+            blame = "tile" if self.rate * 32.0 ** 2 <= MAX_TILE_SLOTS else "rate"  # a tile of 32 would hold the rate
+            bad(blame, f"a tile of at most {MAX_TILE_SLOTS} cells (rate x tile^2 = {self.rate * self.tile ** 2:.6g}): "
+                "a smaller tile or a lower rate", getattr(self, blame))
         cell = tile_size(self)[1]
         if self.min_distance >= cell:
             bad("min_distance", f"less than the cell side 1/sqrt(rate) = {cell:.6g} (the rate leaves no more room)",
@@ -169,6 +192,10 @@ class Generate:
                     and v[0] <= v[1] and (name != "slope" or 0 <= v[0] <= v[1] <= top)):
                 bad(name, "[lo, hi] with lo <= hi" + (" in degrees, 0..90" if name == "slope" else ""), v)
             object.__setattr__(self, name, (float(v[0]), float(v[1])))
+        if self.lift is not None and max(abs(x) for x in self.lift) > world_edge(self):
+            bad("lift", f"heights within the world's edge, +-{world_edge(self):.6g} (WORLD_CELLS cells)", self.lift)
+        if self.scale is not None and self.scale[1] > MAX_BEND:
+            bad("scale", f"[lo, hi] with hi at most {MAX_BEND:g}", self.scale)
 
     @property
     def extended(self) -> bool:
@@ -242,6 +269,41 @@ def tile_size(recipe: Generate) -> tuple[int, float]:
     """(m, c): cells a side of a tile and the cell side, ``m = max(1, round(T sqrt(rate)))``, ``c = T / m``."""
     m = max(1, int(round(recipe.tile * math.sqrt(recipe.rate))))
     return m, recipe.tile / m
+
+
+def world_edge(recipe: Generate) -> float:
+    """The world's edge ``E = WORLD_CELLS c`` (world units): the generator makes the tiles that lie in
+    ``[-E, E]^2`` and no other (float32 positions keep the cell grid, and so ``min_distance``, to c/128 there)."""
+    return WORLD_CELLS * tile_size(recipe)[1]
+
+
+def slot_limit() -> int:
+    """The most slots one command makes at once: :data:`MAX_SLOTS`, or ``AXIALDEFORM_MAX_SLOTS``."""
+    raw = os.environ.get("AXIALDEFORM_MAX_SLOTS")
+    if raw is None:
+        return MAX_SLOTS
+    try:
+        value = int(raw)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise ParamError(f"AXIALDEFORM_MAX_SLOTS: expected a whole number >= 1, found {raw!r:.40}")
+    return value
+
+
+def check_slots(recipe: Generate, tiles: int, what: str, mesh=None) -> int:
+    """The slots ``tiles`` tiles of ``recipe`` hold (``tiles m^2``), or a :class:`ParamError` when that is
+    above :func:`slot_limit` (``what``: what asked for them, named in the message) -- checked before any
+    array is made.  A mesh of K axes counts its child axes: each slot holds K axes' numbers."""
+    m = tile_size(recipe)[0]
+    slots = int(tiles) * m * m
+    axes = getattr(getattr(mesh, "tree", None), "count", 1) or 1
+    limit = slot_limit()
+    if slots * axes > limit:
+        more = f" x {axes} axes" if axes > 1 else ""
+        raise ParamError(f"generate: {what}: {int(tiles)} tiles of {m * m} cells = {slots}{more} slots; expected at "
+                         f"most {limit} (a smaller extent or reach, a lower rate, or raise AXIALDEFORM_MAX_SLOTS)")
+    return slots
 
 
 def _u32(x) -> np.ndarray:
@@ -497,11 +559,27 @@ def generate_tiles(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None
     return np.concatenate(parts) if parts else np.zeros((0, width), np.float32)
 
 
+def _world_tiles(recipe: Generate) -> tuple[int, int]:
+    """The first and last tile index (along x and z alike) that lies wholly within the world's edge."""
+    T, E = float(recipe.tile), world_edge(recipe)
+    return math.ceil(-E / T), math.floor(E / T) - 1
+
+
 def tiles_around(recipe: Generate, x: float, z: float, reach: float) -> np.ndarray:
-    """(k, 2) ints: the tiles any point of which lies within ``reach`` of (x, z), nearest first."""
+    """(k, 2) ints: the tiles any point of which lies within ``reach`` of (x, z), nearest first -- those
+    within the world's edge (:func:`world_edge`); ParamError when they hold more slots than
+    :func:`slot_limit`."""
+    x, z, reach = float(x), float(z), float(reach)
+    if not (math.isfinite(x) and math.isfinite(z) and math.isfinite(reach) and reach >= 0):
+        raise ParamError(f"generate: expected a finite point and reach >= 0, found ({x!r}, {z!r}) and {reach!r}")
     T = recipe.tile
-    lo_x, hi_x = math.floor((x - reach) / T), math.floor((x + reach) / T)
-    lo_z, hi_z = math.floor((z - reach) / T), math.floor((z + reach) / T)
+    first, last = _world_tiles(recipe)
+    span = lambda v: (max(first, math.floor(max(v - reach, -2.0 ** 62) / T)),  # noqa: E731
+                      min(last, math.floor(min(v + reach, 2.0 ** 62) / T)))
+    (lo_x, hi_x), (lo_z, hi_z) = span(x), span(z)
+    if hi_x < lo_x or hi_z < lo_z:
+        return np.zeros((0, 2), np.int64)
+    check_slots(recipe, (hi_x - lo_x + 1) * (hi_z - lo_z + 1), "reach")
     tx, tz = np.meshgrid(np.arange(lo_x, hi_x + 1), np.arange(lo_z, hi_z + 1), indexing="ij")
     tiles = np.stack([tx.ravel(), tz.ravel()], 1)
     # the nearest point of each tile to (x, z)
@@ -513,23 +591,66 @@ def tiles_around(recipe: Generate, x: float, z: float, reach: float) -> np.ndarr
     return tiles[keep][order]
 
 
+def reach_tiles(recipe: Generate, reach: float) -> int:
+    """The most tiles :func:`tiles_around` can return for ``reach``: ``(ceil(2 reach / T) + 1)^2`` (a
+    generated mesh's capacity in tiles, in the page and the npm module alike)."""
+    k = math.ceil(2.0 * float(reach) / recipe.tile) + 1
+    return k * k
+
+
+def check_reach(recipe: Generate, reach: float, mesh=None) -> int:
+    """The slots the tiles within ``reach`` may hold, or a ParamError naming ``reach`` when it is not finite
+    and > 0, reaches past the world (2 E), or asks for more slots than :func:`slot_limit`."""
+    reach = float(reach)
+    E = world_edge(recipe)
+    if not (math.isfinite(reach) and 0 < reach <= 2 * E):
+        raise ParamError(f"generate: reach: expected a distance > 0 and at most the world's width {2 * E:.6g}, "
+                         f"found {reach!r}")
+    return check_slots(recipe, reach_tiles(recipe, reach), "reach", mesh)
+
+
+def check_extent(recipe: Generate, extent) -> tuple:
+    """``extent`` (x0, z0, x1, z1) as floats, or a ParamError naming ``extent`` when it is not finite,
+    empty, or reaches beyond the world's edge (:func:`world_edge`)."""
+    try:
+        x0, z0, x1, z1 = (float(v) for v in extent)
+    except (TypeError, ValueError):
+        raise ParamError(f"generate: extent: expected [x0, z0, x1, z1], found {extent!r:.80}") from None
+    E = world_edge(recipe)
+    if not all(math.isfinite(v) for v in (x0, z0, x1, z1)) or not (x1 > x0 and z1 > z0):
+        raise ParamError(f"generate: extent: expected finite [x0, z0, x1, z1] with x1 > x0 and z1 > z0, "
+                         f"found {[x0, z0, x1, z1]}")
+    if max(abs(x0), abs(z0), abs(x1), abs(z1)) > E:
+        raise ParamError(f"generate: extent: expected the ground within the world's edge, +-{E:.6g} "
+                         f"(WORLD_CELLS = {WORLD_CELLS} cells of {tile_size(recipe)[1]:.6g}), found {[x0, z0, x1, z1]}")
+    return x0, z0, x1, z1
+
+
 def tiles_in(recipe: Generate, extent) -> np.ndarray:
-    """(k, 2) ints: the tiles that meet the ground ``extent`` (x0, z0, x1, z1)."""
-    x0, z0, x1, z1 = (float(v) for v in extent)
+    """(k, 2) ints: the tiles that meet the ground ``extent`` (x0, z0, x1, z1) within the world's edge."""
+    x0, z0, x1, z1 = check_extent(recipe, extent)
     T = recipe.tile
-    tx, tz = np.meshgrid(np.arange(math.floor(x0 / T), math.floor(x1 / T) + 1),
-                         np.arange(math.floor(z0 / T), math.floor(z1 / T) + 1), indexing="ij")
+    first, last = _world_tiles(recipe)
+    lo_x, hi_x = max(first, math.floor(x0 / T)), min(last, math.floor(x1 / T))
+    lo_z, hi_z = max(first, math.floor(z0 / T)), min(last, math.floor(z1 / T))
+    if hi_x < lo_x or hi_z < lo_z:
+        return np.zeros((0, 2), np.int64)
+    check_slots(recipe, (hi_x - lo_x + 1) * (hi_z - lo_z + 1), "the extent")
+    tx, tz = np.meshgrid(np.arange(lo_x, hi_x + 1), np.arange(lo_z, hi_z + 1), indexing="ij")
     return np.stack([tx.ravel(), tz.ravel()], 1)
 
 
 def generate_extent(recipe: Generate, mesh, extent, maps: GroundMaps | None = None) -> np.ndarray:
     """The instances standing in the ground ``extent`` (x0, z0, x1, z1; x0 <= px < x1, z0 <= pz < z1):
     the tiles that meet it, materialized (what ``render``, ``bake``, ``export`` and ``fit`` draw and write)."""
-    x0, z0, x1, z1 = (float(v) for v in extent)
-    p = generate_tiles(recipe, mesh, tiles_in(recipe, extent), maps)
-    inside = (p[:, 10] >= x0) & (p[:, 10] < x1) & (p[:, 12] >= z0) & (p[:, 12] < z1)
+    x0, z0, x1, z1 = check_extent(recipe, extent)
+    tiles = tiles_in(recipe, extent)
+    check_slots(recipe, len(tiles), "the extent", mesh)
+    p = generate_tiles(recipe, mesh, tiles, maps)
+    axes = getattr(getattr(mesh, "tree", None), "count", 1) or 1
+    px, pz = p[:, 10 * axes], p[:, 10 * axes + 2]  # the position follows every axis's offsets
+    inside = (px >= x0) & (px < x1) & (pz >= z0) & (pz < z1)
     return p[inside]
-
 
 
 def child_bound(recipe: Generate, mesh) -> float:

@@ -70,13 +70,13 @@ import numpy as np
 
 from .camera import CameraSpec
 from .errors import ArgumentError, SceneError
-from .generate import GroundMaps, generate_extent
+from .generate import GroundMaps, check_reach, generate_extent
 from .io.mesh import load_mesh, with_axes
 from .io.params import read_params
 from .io.scene import LayerRecipe, SceneRecipe, parse_scene
 from .look import DEFAULT_LOOK, Look
 from .mesh import BaseMesh, area_weighted_normals
-from .params import as_params
+from .params import as_params, check_drawable
 from .scatter import scatter
 from .surface import load_density, load_surface
 
@@ -287,7 +287,9 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
         with src.wrap("generate", "layer", nth):
             density = load_density(gen.density) if gen.density is not None else None
             gen = replace(gen, maps=GroundMaps.of(scene.terrain, density, gen.extent))
+            check_reach(gen.generate, gen.reach, mesh)  # a tree's slots hold every axis: bounded before any is made
             params = generate_extent(gen.generate, mesh, gen.extent, gen.maps)
+            check_drawable(params, "the generated instances")  # what a parameter file is held to
         recipe = replace(recipe, generate=gen)
     else:
         params, lift = _scatter(recipe, mesh, scene, surface, scale_counts)

@@ -44,6 +44,11 @@ WIND_WEIGHTS = sag_weights(0.0)
 SECOND_HARMONIC = 2.31
 
 
+#: the most a wind may displace a tip, in axis lengths (``strength``, ``gustiness``): more draws nothing a
+#: picture can show (a parameter file's offsets have the same kind of bound)
+MAX_WIND = 100.0
+
+
 @dataclass(frozen=True)
 class Wind:
     """A wind, the same on CPU and GPU.
@@ -81,6 +86,8 @@ class Wind:
             value = getattr(self, name)
             if not (isinstance(value, (int, float, np.floating, np.integer)) and math.isfinite(value) and value >= 0):
                 raise ParamError(f"wind {name}: expected a finite number >= 0, found {value!r}")
+            if name in ("strength", "gustiness") and value > MAX_WIND:
+                raise ParamError(f"wind {name}: expected at most {MAX_WIND:g} (axis lengths), found {value!r}")
         object.__setattr__(self, "direction", tuple(float(x) for x in d))
         object.__setattr__(self, "_unit", tuple(float(x) for x in d / norm))
 

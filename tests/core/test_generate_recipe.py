@@ -125,7 +125,7 @@ def test_a_scene_file_layer_is_generated_over_its_extent(tmp_path):
     (("extent = [-10, -10, 10, 10]\n", ""), r"gen.toml:\d+: key 'generate'.*needs an extent"),
     (("seed = 3", "seed = 3\ncolour = 1"), r"key 'colour': unknown key in layer 1 generate"),
     (("min_distance = 0.5", "min_distance = 2.0"), r"gen.toml:8: key 'min_distance': expected less than the cell side"),
-    (("extent = [-10, -10, 10, 10]", "extent = [10, -10, -10, 10]"), r"key 'extent': expected \[x0, z0, x1, z1\]"),
+    (("extent = [-10, -10, 10, 10]", "extent = [10, -10, -10, 10]"), r"key 'extent': expected finite \[x0, z0, x1, z1\] with x1 > x0"),
     (("seed = 3", "seed = 3\naltitude = [0, 2]"), r"gen.toml:10: key 'altitude': altitude and slope bands need the scene's height-map"),
     (("seed = 3", "seed = 3\nslope = [10, 100]"), r"gen.toml:10: key 'slope': expected \[lo, hi\] with lo <= hi in degrees, 0..90"),
     (("seed = 3", "seed = 3\ntint = 1.5"), r"gen.toml:10: key 'tint': expected an amount in \[0, 1\]"),

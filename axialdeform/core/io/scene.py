@@ -370,6 +370,7 @@ def _mixed_layers(src, layer, nth, scene, name) -> list:
         raise src.error(f"expected 1 to 16 mesh names, found {meshes!r:.80}", "mesh", "layer", nth)
     weights = _numbers(src, gen.get("weights", [1.0] * len(meshes)), "weights", "layer", nth, (len(meshes),),
                        positive=True)
+    weights = np.asarray(weights, np.float64) / np.max(weights)  # 1e308 twice is two halves, not inf / inf
     edges = np.concatenate([[0.0], np.cumsum(weights) / np.sum(weights)])
     edges[-1] = 1.0
     out = []
@@ -437,7 +438,7 @@ def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
 
 def _generate_layer(src, recipe, nth) -> GenerateRecipe:
     """``[layer.generate]``, checked: every key's type here, the recipe's own rules by Generate."""
-    from ..generate import Generate
+    from ..generate import Generate, check_extent, check_reach, check_slots, tiles_in
 
     if not isinstance(recipe, dict):
         raise src.error("expected a table [layer.generate]", "generate", "layer", nth)
@@ -468,16 +469,19 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
         kwargs["seed"] = recipe["seed"]
     extent = tuple(float(x) for x in _numbers(src, recipe["extent"], "extent", "layer", nth, (4,)))
     reach = float(_numbers(src, recipe["reach"], "reach", "layer", nth, (1,), positive=True)[0]) if "reach" in recipe else None
-    if not (extent[2] > extent[0] and extent[3] > extent[1]):
-        raise src.error(f"expected [x0, z0, x1, z1] with x1 > x0 and z1 > z0, found {list(extent)}", "extent", "layer", nth)
     try:
         gen = Generate(**kwargs)
+        extent = check_extent(gen, extent)
+        reach = reach if reach is not None else 3.0 * gen.tile
+        check_reach(gen, reach)
+        check_slots(gen, len(tiles_in(gen, extent)), "the extent")
     except ParamError as exc:  # "generate: FIELD: what was expected": the field's own line
         _, field, said = (str(exc).split(": ", 2) + ["", ""])[:3]
+        field = {"the extent": "extent", "the tiles within reach": "reach"}.get(field, field)
         if field not in recipe:
             raise src.error(str(exc), "generate", "layer", nth) from None
         raise src.error(said, field, "layer", nth) from None
-    return GenerateRecipe(gen, extent, reach if reach is not None else 3.0 * gen.tile, density)
+    return GenerateRecipe(gen, extent, reach, density)
 
 
 def _scatter_layer(src, recipe, nth, scene) -> ScatterRecipe:
