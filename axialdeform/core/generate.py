@@ -61,7 +61,7 @@ HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
 MAX_TILE_SLOTS = 1 << 20
 #: the most slots one command makes at once (an extent, or the tiles within reach); the environment
 #: variable ``AXIALDEFORM_MAX_SLOTS`` raises (or lowers) it
-MAX_SLOTS = 1 << 24
+MAX_SLOTS = 1 << 22
 #: the largest bend amplitude, in axis lengths
 MAX_BEND = 100.0
 #: the world of a recipe ends ``WORLD_CELLS`` cells from the origin along x and z: there float32 positions

@@ -10,8 +10,9 @@ import { AxialInstancedMesh } from './mesh.js';
 import { plainArray } from './feedback.js';
 import { ATTRIBUTES } from './record.js';
 import { TileGenerator, TileAttributes, GENERATED_FLOATS } from './tiles.js';
+import { MAX_SLOTS, checkRecipeBounds, checkSlots, worldEdge } from './limits.js';
 
-export { TileGenerator, GENERATED_FLOATS };
+export { TileGenerator, GENERATED_FLOATS, worldEdge };
 const NO_BAND = 3.0e38;
 const _eye = new THREE.Vector3();
 const BINOMIAL = [1, 4, 6, 4, 1];
@@ -67,6 +68,7 @@ export function checkRecipe(recipe) {
   }
   if (r.reach === undefined) r.reach = 3 * r.tile;
   if (!(num(r.reach) && r.reach > 0)) bad('reach', 'a finite number > 0', r.reach);
+  checkRecipeBounds(r, ...tileSize(r));
   return r;
 }
 
@@ -121,11 +123,15 @@ export function recipeUniforms(recipe, positions, axis) {
 }
 
 /** [[tx, tz], ...]: the tiles any point of which lies within `reach` of (x, z), nearest first
- * (axialdeform.core.generate.tiles_around). */
-export function tilesAround(tile, x, z, reach) {
-  const out = [];
-  for (let tx = Math.floor((x - reach) / tile); tx <= Math.floor((x + reach) / tile); tx++) {
-    for (let tz = Math.floor((z - reach) / tile); tz <= Math.floor((z + reach) / tile); tz++) {
+ * (axialdeform.core.generate.tiles_around); with `edge` (the world's, worldEdge) only the tiles wholly in
+ * [-edge, edge]^2: beyond it none. */
+export function tilesAround(tile, x, z, reach, edge = Infinity) {
+  const out = [], first = Math.ceil(-edge / tile), last = Math.floor(edge / tile) - 1;
+  if (!(Number.isFinite(x) && Number.isFinite(z) && reach >= 0)) return out;
+  const span = (v) => [Math.max(first, Math.floor((v - reach) / tile)), Math.min(last, Math.floor((v + reach) / tile))];
+  const [x0, x1] = span(x), [z0, z1] = span(z);
+  for (let tx = x0; tx <= x1; tx++) {
+    for (let tz = z0; tz <= z1; tz++) {
       const nx = Math.min(Math.max(x, tx * tile), (tx + 1) * tile), nz = Math.min(Math.max(z, tz * tile), (tz + 1) * tile);
       const d = Math.hypot(nx - x, nz - z);
       if (d <= reach) out.push([tx, tz, d]);
@@ -202,6 +208,7 @@ export function generatedBase(geometry, recipe, options, who) {
   const positions = plainArray(position);
   const spec = options.axis || autoAxis(positions);
   const axes = spec.axes ? spec.axes.count : 1; // a mesh of several axes: 10 more numbers a child axis
+  checkSlots(maxTiles(r.tile, r.reach), tileSize(r)[0], axes, options.maxSlots ?? MAX_SLOTS); // before any array
   const record = { count: 0, numbersPerInstance: recipeWidth(r) + 10 * (axes - 1), axes, data: new Float32Array(0) };
   return { r, positions, record, options: { ...options, axis: spec, capacity: 1 } };
 }
@@ -287,7 +294,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
    * The GPU writes them where three draws from (tiles.js): every slot of the tiles drawn (`count`), the
    * ones a tile does not keep collapsed to a point; `kept` says how many are kept. */
   update(renderer, point) {
-    const tiles = tilesAround(this.recipe.tile, point.x, point.z, this.recipe.reach);
+    const tiles = tilesAround(this.recipe.tile, point.x, point.z, this.recipe.reach, worldEdge(tileSize(this.recipe)[1]));
     const key = tiles.map((t) => t.join(',')).sort().join(';');
     if (key === this._key && this._generator && this._generator.renderer === renderer) return false;
     if (!this._generator || this._generator.renderer !== renderer) this._start(renderer);

@@ -14,9 +14,11 @@ import { AxialError, AXES_ROW, texelRows } from './adp.js';
 import { AxialInstancedMesh } from './webgpu_mesh.js';
 import { unbake } from './bake.js';
 import { ATTRIBUTES } from './record.js';
-import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, GENERATED_FLOATS } from './generate.js';
+import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, tileSize, worldEdge, GENERATED_FLOATS } from './generate.js';
 import { recipeNodes, axialGenerate, axialGenerateChild, axialGenKey } from './generate_nodes.js';
 import { axialRotation } from './nodes.js';
+
+const WEBGPU_DEFAULT_BINDING = 134217728; // maxStorageBufferBindingSize a device has unless asked for more
 
 const _eye = new THREE.Vector3();
 
@@ -45,6 +47,15 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     super(geometry, material, base.record, base.options);
     adoptGenerated(this, base, options, (renderer) => renderer.isWebGPURenderer, false);
     const cap = this.capacity, K = this.layout.axes, stride = this.layout.tint !== null ? 36 : 32;
+    // the largest storage buffer, checked before any is allocated (the device's own limit again at the first draw)
+    const limit = options.maxStorageBufferBindingSize ?? WEBGPU_DEFAULT_BINDING;
+    const bytes = Math.max(cap * stride, K > 1 ? cap * (K - 1) * 12 : 0, cap * GENERATED_FLOATS) * 4;
+    if (bytes > limit) {
+      throw new AxialError(`AxialGeneratedMesh: ${cap} slots (the tiles of ${this.recipe.tile} within a reach of ${this.recipe.reach}) `
+        + `need a storage buffer of ${bytes} bytes, above maxStorageBufferBindingSize ${limit} (WebGPU's default); give a smaller `
+        + 'reach, or the option maxStorageBufferBindingSize with the limit the renderer was given (new WebGPURenderer({ '
+        + 'requiredLimits: { maxStorageBufferBindingSize: adapter.limits.maxStorageBufferBindingSize } }))');
+    }
     this.kept = null;
     this.counted = Promise.resolve(null);
     // the GPU's buffers: the drawn instances, the child axes' offsets (3 texels an axis), the slots as
@@ -181,7 +192,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
    * returns whether they did.  `kept` is null until the count read back (`counted`) resolves. */
   update(renderer, point) {
     this._check(renderer);
-    const tiles = tilesAround(this.recipe.tile, point.x, point.z, this.recipe.reach);
+    const tiles = tilesAround(this.recipe.tile, point.x, point.z, this.recipe.reach, worldEdge(tileSize(this.recipe)[1]));
     const key = tiles.map((t) => t.join(',')).sort().join(';');
     if (key === this._key && this._madeBy === renderer) return false;
     if (this._baked) unbake(this);

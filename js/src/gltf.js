@@ -8,7 +8,8 @@ import * as THREE from 'three';
 import { AxialError, checkNumbers } from './adp.js';
 import { FRAME_TOLERANCE, GLTF_INSTANCE_TYPES, MAX_AXES, WIDTHS } from './record.js';
 import { AxialInstancedMesh } from './mesh.js';
-import { AxialGeneratedMesh, checkRecipe } from './generate.js';
+import { AxialGeneratedMesh, checkRecipe, maxTiles, tileSize } from './generate.js';
+import { MAX_MAP_TEXELS, MAX_SLOTS, checkSlots, checkUniforms } from './limits.js';
 
 /** The extension's name. */
 export const EXTENSION = 'AXIALDEFORM_bend';
@@ -67,8 +68,11 @@ function checkAttributes(ext, names, where) {
 
 /** GLTFLoader plugin: EXT_mesh_gpu_instancing nodes with AXIALDEFORM_bend load bent. */
 export class AxialGLTFPlugin {
-  constructor(parser) {
+  /** `options.maxSlots`: the most slots a generated node may hold (limits.js's MAX_SLOTS; a file asking
+   * for more is refused in one line before anything is allocated). */
+  constructor(parser, options = {}) {
     this.parser = parser;
+    this.options = options;
     this.name = EXTENSION;
     this.Mesh = AxialInstancedMesh; // axialdeform-three/webgpu's plugin makes its node-material meshes
     this.Generated = AxialGeneratedMesh; // and its generated ones
@@ -84,7 +88,7 @@ export class AxialGLTFPlugin {
       const ext = def && def.extensions && def.extensions[EXTENSION];
       if (!ext) return;
       const where = `node ${i} (${def.name || 'unnamed'})`;
-      checkBendExtension(ext, where);
+      checkBendExtension(ext, where, this.options);
       const inst = def.extensions.EXT_mesh_gpu_instancing;
       const attrs = inst && inst.attributes;
       if (!attrs || typeof attrs !== 'object') throw new AxialError(`${where}: ${EXTENSION} without EXT_mesh_gpu_instancing attributes`);
@@ -160,7 +164,7 @@ export class AxialGLTFPlugin {
         console.warn(`${where}: ${EXTENSION} generate: drawn as its fallback instances (this plugin has no generated mesh)`);
       }
       for (const part of parts) {
-        const bent = maps ? fromGenerated(part, ext, maps, this.Generated) : fromInstancedMesh(part, ext, where, raw, this.Mesh);
+        const bent = maps ? fromGenerated(part, ext, maps, this.Generated, this.options) : fromInstancedMesh(part, ext, where, raw, this.Mesh);
         if (part === object) {
           const parent = object.parent;
           parent.add(bent);
@@ -271,7 +275,7 @@ function frameRows(value, where) {
  * lengths > 0, the numbers per instance matching the axes, at most 64 axes) before anything is sized
  * by it; an AxialError naming the node and the field, as axialdeform's Python reader does.
  */
-export function checkBendExtension(ext, where = 'node') {
+export function checkBendExtension(ext, where = 'node', options = {}) {
   const at = `${where}: ${EXTENSION}`;
   if (!ext || typeof ext !== 'object' || Array.isArray(ext)) throw new AxialError(`${at}: expected an object`);
   const f = ext.numbersPerInstance, axes = ext.axes;
@@ -294,7 +298,7 @@ export function checkBendExtension(ext, where = 'node') {
   if (ext.fingerprint !== undefined && !(typeof ext.fingerprint === 'string' && /^[0-9a-f]{64}$/.test(ext.fingerprint))) {
     throw new AxialError(`${at}: fingerprint: expected 64 lower-case hex digits (SHA-256), found ${brief(ext.fingerprint)}`);
   }
-  if (ext.generate !== undefined) checkGenerated(ext.generate, at, k);
+  if (ext.generate !== undefined) checkGenerated(ext.generate, at, k, ext.axis.length, options.maxSlots ?? MAX_SLOTS);
   if (k > 1) {
     const p = axes.parents;
     if (!Array.isArray(p) || p.length !== k || p[0] !== -1 || p.some((x, i) => i > 0 && !(Number.isInteger(x) && x >= 0 && x < i))) {
@@ -313,35 +317,43 @@ export function checkBendExtension(ext, where = 'node') {
 }
 
 /** The generated form's object: a recipe (checkRecipe), the generator's numbers, the maps' shapes. */
-function checkGenerated(gen, at, k) {
+function checkGenerated(gen, at, k, axisLength, maxSlots) {
   if (!gen || typeof gen !== 'object' || Array.isArray(gen)) throw new AxialError(`${at}: generate: expected an object (recipe, uniforms)`);
   if (k > 1 && !(gen.children && gen.children.cols === 26 && gen.children.rows === k - 1)) {
     throw new AxialError(`${at}: generate children: a node of ${k} axes needs its child-axis table (${k - 1} rows of 26), found ${brief(gen.children)}`);
   }
+  let r;
   try {
-    checkRecipe(gen.recipe);
+    r = checkRecipe(gen.recipe);
   } catch (err) {
     throw new AxialError(`${at}: generate recipe: ${err.message.replace(/^generate: /, '')}`);
   }
   const u = gen.uniforms;
-  if (!u || typeof u !== 'object' || !Number.isInteger(u.m) || u.m < 1 || !Number.isInteger(u.seed)) {
+  if (!u || typeof u !== 'object' || Array.isArray(u)) {
     throw new AxialError(`${at}: generate uniforms: expected generate.glsl's numbers (seed, m, cell, ...), found ${brief(u)}`);
   }
   for (const key of ['heights', 'density', 'children']) {
     const m = gen[key];
-    if (m !== undefined && !(m && Number.isInteger(m.cols) && m.cols > 0 && Number.isInteger(m.rows) && m.rows > 0)) {
-      throw new AxialError(`${at}: generate ${key}: expected {accessor, cols, rows}, found ${brief(m)}`);
+    if (m !== undefined && !(m && Number.isInteger(m.cols) && m.cols > 0 && Number.isInteger(m.rows) && m.rows > 0
+        && m.cols * m.rows <= MAX_MAP_TEXELS)) {
+      throw new AxialError(`${at}: generate ${key}: expected {accessor, cols, rows} of at most ${MAX_MAP_TEXELS} numbers, found ${brief(m)}`);
     }
+  }
+  try {
+    checkUniforms(u, r, axisLength, { heights: gen.heights, density: gen.density }, ...tileSize(r));
+    checkSlots(maxTiles(r.tile, r.reach), tileSize(r)[0], k, maxSlots);
+  } catch (err) {
+    throw new AxialError(`${at}: ${err.message}`);
   }
 }
 
 /** An AxialGeneratedMesh in place of GLTFLoader's InstancedMesh of a generated node: its recipe, the
  * generator's numbers the file holds, the ground maps; the tiles within reach of the camera, made
  * before it is drawn (autoUpdate). */
-function fromGenerated(mesh, ext, maps, Generated = AxialGeneratedMesh) {
+function fromGenerated(mesh, ext, maps, Generated = AxialGeneratedMesh, options = {}) {
   const g = mesh.geometry;
   return adopt(mesh, ext, new Generated(g, mesh.material, ext.generate.recipe, {
-    axis: { axis: ext.axis, axes: ext.axes || null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
+    ...options, axis: { axis: ext.axis, axes: ext.axes || null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
     vertexAxis: g.getAttribute('_axial_axis') || undefined,
   }));
 }

@@ -33,7 +33,7 @@ export function recordFromInstancedMesh(mesh: THREE.InstancedMesh, ext: BendExte
   raw?: { TRANSLATION?: THREE.BufferAttribute; SCALE?: THREE.BufferAttribute } | null): InstanceRecord;
 export function column(start: number, axes?: number): number;
 /** Check a node's AXIALDEFORM_bend object (throws AxialError naming the node and the field). */
-export function checkBendExtension(ext: unknown, where?: string): BendExtension;
+export function checkBendExtension(ext: unknown, where?: string, options?: { maxSlots?: number }): BendExtension;
 
 /** The instance record (generated from axialdeform.core.record): each field's columns, first column, level. */
 export const RECORD: ReadonlyArray<{ name: string; columns: string[]; start: number; level: number }>;

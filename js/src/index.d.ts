@@ -136,7 +136,8 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
 
 /** GLTFLoader plugin: `loader.register((parser) => new AxialGLTFPlugin(parser))`. */
 export class AxialGLTFPlugin implements GLTFLoaderPlugin {
-  constructor(parser: GLTFParser);
+  /** `options.maxSlots`: the most slots a generated node may hold (default 4 194 304). */
+  constructor(parser: GLTFParser, options?: { maxSlots?: number });
   readonly name: 'AXIALDEFORM_bend';
   parser: GLTFParser;
   /** Checks every AXIALDEFORM_bend and its instance accessors before the loader reads them. */
@@ -195,7 +196,8 @@ export function checkRecipe(recipe: GenerateRecipe): Required<GenerateRecipe>;
 export function recipeUniforms(recipe: Required<GenerateRecipe>, positions: Float32Array,
   axis: { frame: Rows3; lo: number; length: number }): GeneratorUniforms;
 /** The tiles any point of which lies within `reach` of (x, z), nearest first. */
-export function tilesAround(tile: number, x: number, z: number, reach: number): [number, number][];
+/** `edge`: the world's edge (no tile beyond it; default none). */
+export function tilesAround(tile: number, x: number, z: number, reach: number, edge?: number): [number, number][];
 
 /** A GL buffer of slots the generator left on the GPU. */
 export interface GeneratedSlots { buffer: WebGLBuffer; bytes: number }
@@ -218,6 +220,10 @@ export interface AxialGeneratedMeshOptions extends AxialInstancedMeshOptions {
   maps?: GroundMaps;
   /** Make the tiles around the camera's position just before each draw (the glTF plugin's meshes). */
   autoUpdate?: boolean;
+  /** The most slots the tiles within reach may hold, each axis counted (default 4 194 304). */
+  maxSlots?: number;
+  /** WebGPU: the renderer's maxStorageBufferBindingSize, checked before any buffer is allocated (default 134 217 728). */
+  maxStorageBufferBindingSize?: number;
 }
 
 /** A generated layer: instances made on the GPU from a recipe in the tiles within reach of a point. */

@@ -62,7 +62,9 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
 }
 
 /** GLTFLoader plugin (AXIALDEFORM_bend) making this entry's AxialInstancedMesh (AxialGeneratedMesh for the generated form). */
-export class AxialGLTFPlugin extends WebGLAxialGLTFPlugin {}
+export class AxialGLTFPlugin extends WebGLAxialGLTFPlugin {
+  constructor(parser: import('three/addons/loaders/GLTFLoader.js').GLTFParser, options?: { maxSlots?: number });
+}
 
 /** The bend as three.js node functions (the port of glsl/axial.glsl and glsl/wind.glsl). */
 export const nodes: Record<string, (...args: any[]) => any>;

@@ -25,8 +25,8 @@ export * as generateNodes from './generate_nodes.js';
 /** GLTFLoader plugin (AXIALDEFORM_bend) making axialdeform-three/webgpu's AxialInstancedMesh, and its
  * AxialGeneratedMesh for a node in the generated form. */
 export class AxialGLTFPlugin extends WebGLAxialGLTFPlugin {
-  constructor(parser) {
-    super(parser);
+  constructor(parser, options = {}) {
+    super(parser, options);
     this.Mesh = AxialInstancedMesh;
     this.Generated = AxialGeneratedMesh;
   }

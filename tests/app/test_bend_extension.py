@@ -333,7 +333,7 @@ extent = [-20, -15, 20, 15]
         acc = g.accessors[gen["heights"]["accessor"]]
         assert acc.count == gen["heights"]["cols"] * gen["heights"]["rows"] and acc.type == "SCALAR"
         # the fallback: the first tile near the extent's centre that keeps any, as the library makes it
-        _mesh, fallback = read_instanced_glb(glb, node=layer.name)
+        _mesh, fallback = read_instanced_glb(glb, node=layer.name, fallback=True)
         tiles = tiles_around(layer.generate.generate, 0.0, 0.0, layer.generate.reach)
         first = next(p for t in tiles if len(p := generate_tiles(layer.generate.generate, layer.mesh, [t],
                                                                    layer.generate.maps)))

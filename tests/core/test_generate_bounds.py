@@ -54,7 +54,7 @@ def test_amplitudes_and_heights_are_bounded():
 
 def test_slots_are_counted_before_an_array_is_made(monkeypatch):
     g = Generate(rate=4.0, tile=16)  # 1 024 cells a tile
-    with pytest.raises(ParamError, match=r"reach: .* expected at most 16777216 .*AXIALDEFORM_MAX_SLOTS"):
+    with pytest.raises(ParamError, match=r"reach: .* expected at most 4194304 .*AXIALDEFORM_MAX_SLOTS"):
         check_reach(g, 2000.0)
     with pytest.raises(ParamError, match="the extent: .*AXIALDEFORM_MAX_SLOTS"):
         tiles_in(g, (-2100, -2100, 2100, 2100))

@@ -6,13 +6,35 @@ still shows some of the layer and one with it makes the tiles around its camera
 
 from __future__ import annotations
 
+import dataclasses
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
-from ..errors import GltfError
-from ..generate import children_table, generate_tiles, recipe_json, recipe_uniforms, tiles_around
+from ..errors import GltfError, ParamError
+from ..generate import (
+    Generate,
+    GroundMaps,
+    check_reach,
+    check_slots,
+    children_table,
+    generate_tiles,
+    reach_tiles,
+    recipe_json,
+    recipe_uniforms,
+    tile_size,
+    tiles_around,
+    world_edge,
+)
+from ..mesh import anchor_point
 from .glb import FLOAT
 
-__all__ = ["generated_form", "check_generated", "FALLBACK_TILES"]
+__all__ = ["generated_form", "check_generated", "FALLBACK_TILES", "GeneratedNode", "check_generated_form",
+           "read_generated_glb", "MAX_MAP_TEXELS"]
+
+#: the most numbers a ground map or child-axis table of the generated form may hold (4096^2; js/src/limits.js)
+MAX_MAP_TEXELS = 1 << 24
 
 #: the most tiles the fallback looks through for instances (nearest the extent's centre first)
 FALLBACK_TILES = 9
@@ -51,3 +73,210 @@ def generated_form(b, layer) -> tuple[np.ndarray, dict]:
             spec[key] = {"accessor": b.accessor(b.view(data), FLOAT, len(data), "SCALAR", name=f"{layer.name}_{key}"),
                          "cols": int(grid.shape[1]), "rows": int(grid.shape[0])}
     return fallback, {"generate": spec}
+
+
+# ---------------------------------------------------------------------------------------------- reading
+@dataclass(frozen=True, eq=False)
+class GeneratedNode:
+    """A node in the generated form, read back (:func:`read_generated_glb`).
+
+    mesh : BaseMesh
+        The base mesh with its axis (and axes) as the node records them.
+    generate : Generate
+        The recipe (its bands, lift, leaning, anchor and share recovered from the generator's numbers).
+    reach : float
+        The distance around a point within which a viewer makes tiles.
+    uniforms : dict
+        The generator's numbers the node holds (checked against the recipe).
+    maps : GroundMaps
+        The height and density maps the node holds (None where it has none)."""
+
+    mesh: object
+    generate: Generate
+    reach: float
+    uniforms: dict
+    maps: GroundMaps
+
+
+_NO_BAND = 3.0e38
+
+
+def _close(a, b) -> bool:
+    return isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) and abs(a - b) <= 1e-6 * max(1.0, abs(b))
+
+
+def _pair(v, test=lambda x: isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)) -> bool:
+    return isinstance(v, list) and len(v) == 2 and all(test(x) for x in v)
+
+
+def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, where: str,
+                         max_slots: int | None = None) -> tuple[Generate, float]:
+    """The generated form's ``generate`` object held to the same rules as the npm plugin's (js/src/limits.js,
+    ``checkUniforms``): the recipe by :class:`Generate` and its bounds, the slots within reach, and every one of
+    the generator's numbers -- what follows from the recipe equal to it, the rest finite and in range, a map's
+    size its accessor's.  Returns ``(recipe, reach)`` (the recipe's own keys only); a GltfError naming the field."""
+    if not isinstance(spec, dict):
+        raise GltfError(f"{where}: generate: expected an object (recipe, uniforms)")
+    r = spec.get("recipe")
+    keys = ("rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "tint", "tint_color", "reach", "extent")
+    if not isinstance(r, dict) or any(k not in keys for k in r):
+        raise GltfError(f"{where}: generate recipe: expected an object of {', '.join(keys[:-1])}, found {str(r)[:80]}")
+    kw = {k: r[k] for k in keys[:10] if k in r and r[k] is not None}
+    for k in ("scale", "tint_color", "bend"):
+        if isinstance(kw.get(k), list):
+            kw[k] = tuple(kw[k])
+    try:
+        gen = Generate(**kw)
+        reach = r.get("reach", 3.0 * gen.tile)
+        if not (isinstance(reach, (int, float)) and not isinstance(reach, bool) and math.isfinite(reach) and reach > 0):
+            raise ParamError(f"generate: reach: expected a finite number > 0, found {reach!r}")
+        check_reach(gen, reach)
+    except (ParamError, TypeError) as exc:
+        raise GltfError(f"{where}: generate recipe: {str(exc).removeprefix('generate: ')}") from None
+    u = spec.get("uniforms")
+    if not isinstance(u, dict):
+        raise GltfError(f"{where}: generate uniforms: expected generate.glsl's numbers (seed, m, cell, ...), found {str(u)[:80]}")
+
+    def off(key, expected):
+        raise GltfError(f"{where}: generate uniforms: {key}: expected {expected}, found {str(u.get(key))[:80]}")
+
+    m, cell = tile_size(gen)
+    E = world_edge(gen)
+    bends = gen.bend if isinstance(gen.bend, tuple) else (gen.bend,)
+    s0, s1 = gen.scale if gen.scale is not None else (1.0, 1.0)
+    num = lambda x: isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)  # noqa: E731
+    if u.get("seed") != gen.seed or isinstance(u.get("seed"), bool):
+        off("seed", f"the recipe's seed {gen.seed}")
+    if u.get("m") != m or isinstance(u.get("m"), bool) or not isinstance(u.get("m"), int):
+        off("m", f"the recipe's {m} cells a side")
+    if not _close(u.get("cell"), cell):
+        off("cell", f"the recipe's cell side {cell}")
+    if not _close(u.get("jitter"), 1.0 - gen.min_distance / cell):
+        off("jitter", f"1 - min_distance / cell = {1.0 - gen.min_distance / cell}")
+    if not (num(u.get("bend")) and abs(u["bend"]) <= bends[0] * axis_length * (1 + 1e-6) + 1e-30):
+        off("bend", f"the recipe's bend times the axis length, {bends[0] * axis_length}")
+    if not (_pair(u.get("scale")) and _close(u["scale"][0], s0) and _close(u["scale"][1], s1)):
+        off("scale", f"the recipe's scale [{s0}, {s1}]")
+    for key, want in (("twist", gen.twist), ("taper", gen.taper), ("tint", gen.tint or 0.0)):
+        if not _close(u.get(key), want):
+            off(key, f"the recipe's {key} {want}")
+    tc = u.get("tint_color")
+    if not (isinstance(tc, list) and len(tc) == 3 and all(_close(x, y) for x, y in zip(tc, gen.tint_color))):
+        off("tint_color", f"the recipe's tint_color {list(gen.tint_color)}")
+    if not num(u.get("anchor_y")):
+        off("anchor_y", "a finite number")
+    w = u.get("anchor_w")
+    if not (isinstance(w, list) and len(w) == 4 and all(num(x) and 0 <= x <= 1 for x in w)):
+        off("anchor_w", "four weights in [0, 1]")
+    if not (num(u.get("anchor_w4")) and 0 <= u["anchor_w4"] <= 1):
+        off("anchor_w4", "a weight in [0, 1]")
+    if not _pair(u.get("anchor_xz")):
+        off("anchor_xz", "two finite numbers")
+    for has, key, size, lo, inv in (("has_heights", "heights", "h_size", "h_lo", "h_inv"),
+                                     ("has_density", "density", "d_size", "d_lo", "d_inv")):
+        if not isinstance(u.get(has), bool):
+            off(has, "true or false")
+        shape = map_shapes.get(key)
+        if u[has] != (shape is not None):
+            off(has, f"true: the node has a {key} map" if shape else f"false: the node has no {key} map")
+        sz = u.get(size)
+        if not (_pair(sz, lambda x: isinstance(x, int) and not isinstance(x, bool)) and
+                (list(sz) == [shape[0], shape[1]] if shape else list(sz) == [0, 0])):
+            off(size, f"the {key} map's [cols, rows] = [{shape[0]}, {shape[1]}]" if shape else "[0, 0]: no map")
+        if not _pair(u.get(lo)):
+            off(lo, "two finite numbers")
+        if not _pair(u.get(inv), lambda x: num(x) and x > 0):
+            off(inv, "two finite numbers > 0")
+    if not isinstance(u.get("d_wrap"), bool):
+        off("d_wrap", "true or false")
+    if not (_pair(u.get("altitude"), lambda x: num(x) and abs(x) <= _NO_BAND) and u["altitude"][0] <= u["altitude"][1]):
+        off("altitude", "[lo, hi] with lo <= hi")
+    if not (_pair(u.get("slope_tan2"), lambda x: num(x) and 0 <= x <= _NO_BAND) and u["slope_tan2"][0] <= u["slope_tan2"][1]):
+        off("slope_tan2", "[lo, hi] with 0 <= lo <= hi")
+    if not (_pair(u.get("choice"), lambda x: num(x) and 0 <= x <= 1) and u["choice"][0] <= u["choice"][1]):
+        off("choice", "[lo, hi] within [0, 1]")
+    if not (_pair(u.get("lift"), lambda x: num(x) and abs(x) <= E) and u["lift"][0] <= u["lift"][1]):
+        off("lift", f"[lo, hi] within the world's edge +-{E:.6g}")
+    if not (num(u.get("align")) and 0 <= u["align"] <= 1):
+        off("align", "a fraction in [0, 1]")
+    try:
+        if max_slots is None:
+            check_slots(gen, reach_tiles(gen, reach), "reach", None if axes < 2 else _Axes(axes))
+        elif reach_tiles(gen, reach) * m * m * axes > max_slots:
+            raise ParamError(f"generate: reach: expected at most {max_slots} slots")
+    except ParamError as exc:
+        raise GltfError(f"{where}: {exc}") from None
+    return gen, float(reach)
+
+
+class _Axes:
+    """Stands for a mesh of ``count`` axes where only the count is known (check_slots)."""
+
+    def __init__(self, count: int):
+        self.tree = type("Tree", (), {"count": count})()
+
+
+def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
+    """A generated layer's node of a GLB written by ``export --generated`` (or any file in the generated
+    form), read as its recipe: :class:`GeneratedNode` (the mesh, the recipe, the reach, the generator's
+    numbers and the ground maps), every field checked as the npm plugin checks it before anything is made.
+    A GltfError naming the node and the field when the node is not in the generated form or is off."""
+    from pathlib import Path
+
+    from .glb import load_glb, read_accessor
+    from .gltf_read import BEND_EXTENSION, INSTANCING
+
+    where = str(Path(path))
+    gltf = load_glb(path)
+    blob = gltf.binary_blob() or b""
+    nodes = [nd for nd in gltf.nodes if (nd.extensions or {}).get(INSTANCING) and nd.mesh is not None and
+             isinstance((nd.extensions or {}).get(BEND_EXTENSION), dict) and "generate" in nd.extensions[BEND_EXTENSION]]
+    if node is not None:
+        nodes = [nd for nd in nodes if nd.name == node]
+    if len(nodes) != 1:
+        raise GltfError(f"{where}: expected one generated node{f' {node!r}' if node else ''} ({BEND_EXTENSION} generate), "
+                        f"found {len(nodes)}" + (" (name one with node=)" if len(nodes) > 1 else ""))
+    nd = nodes[0]
+    mesh, _fallback = _read_fallback(path, nd.name)
+    spec = nd.extensions[BEND_EXTENSION]["generate"]
+    at = f"{where}: node {nd.name or '0'} {BEND_EXTENSION}"
+    grids = {}
+    for key in ("heights", "density", "children"):
+        m = spec.get(key) if isinstance(spec, dict) else None
+        if m is None:
+            continue
+        if not (isinstance(m, dict) and all(isinstance(m.get(k), int) and not isinstance(m.get(k), bool) and m[k] > 0
+                                            for k in ("cols", "rows")) and m["cols"] * m["rows"] <= MAX_MAP_TEXELS):
+            raise GltfError(f"{at}: generate {key}: expected {{accessor, cols, rows}} of at most {MAX_MAP_TEXELS} numbers, "
+                            f"found {str(m)[:80]}")
+        data = read_accessor(gltf, blob, m.get("accessor"), f"generate {key}", at)
+        if data.size != m["cols"] * m["rows"]:
+            raise GltfError(f"{at}: generate {key}: expected a FLOAT SCALAR accessor of {m['cols']} x {m['rows']}")
+        grids[key] = data.reshape(m["rows"], m["cols"]).astype(np.float32)
+    tree = getattr(mesh, "tree", None)
+    axes = tree.count if tree is not None else 1
+    shapes = {k: (g.shape[1], g.shape[0]) for k, g in grids.items() if k != "children"}
+    gen, reach = check_generated_form(spec, float(mesh.axis.length), axes, shapes, at)
+    u = spec["uniforms"]
+    f32 = np.float32
+    maps = GroundMaps(heights=grids.get("heights"), h_lo=np.array(u["h_lo"], f32), h_inv=np.array(u["h_inv"], f32),
+                      density=grids.get("density"), d_lo=np.array(u["d_lo"], f32), d_inv=np.array(u["d_inv"], f32),
+                      d_wrap=bool(u["d_wrap"]))
+    alt = None if u["altitude"] == [-_NO_BAND, _NO_BAND] else tuple(u["altitude"])
+    slope = None if u["slope_tan2"] == [0.0, _NO_BAND] else tuple(
+        math.degrees(math.atan(math.sqrt(min(x, 1e300)))) for x in u["slope_tan2"])
+    anchor = next((a for a in ("bottom", "center", "origin")
+                   if np.allclose(anchor_point(mesh, a, 1)[[0, 2]], u["anchor_xz"], atol=1e-6 * mesh.axis.length)
+                   and abs(anchor_point(mesh, a, 1)[1] - u["anchor_y"]) <= 1e-6 * mesh.axis.length), None)
+    if anchor is None:
+        raise GltfError(f"{at}: generate uniforms: anchor_y, anchor_xz: expected the base mesh's bottom, center or origin")
+    gen = dataclasses.replace(gen, altitude=alt, slope=slope, choice=tuple(u["choice"]),
+                              lift=None if u["lift"] == [0.0, 0.0] else tuple(u["lift"]), align_to_normal=float(u["align"]),
+                              anchor=anchor)
+    return GeneratedNode(mesh, gen, reach, u, maps)
+
+
+def _read_fallback(path, name):
+    from .gltf_read import read_instanced_glb
+
+    return read_instanced_glb(path, node=name, fallback=True)

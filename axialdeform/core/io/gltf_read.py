@@ -49,7 +49,7 @@ from .glb import (
 __all__ = ["read_instanced_glb", "read_extras"]
 
 
-def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
+def read_instanced_glb(path: str | os.PathLike, node: str | None = None, *, fallback: bool = False):
     """Read a GLB written by :func:`export_instanced` back (or, with ``node``,
     the instanced node of that name: a layer of :func:`export_scene`'s
     instanced layout).
@@ -63,6 +63,11 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
         ``_AXIAL_D12/_AXIAL_D34/_AXIAL_D5``, position from ``TRANSLATION``,
         angles from ``_AXIAL_ANGLES`` (or, if a file lacks it, from the
         ``ROTATION`` quaternion: same rotation, angles possibly different).
+
+    A node in the generated form (``AXIALDEFORM_bend`` ``generate``: a generated layer written as its
+    recipe) is a :class:`GltfError` saying so -- its instances are the recipe's, read it with
+    :func:`~axialdeform.core.io.gltf_generate.read_generated_glb` -- unless ``fallback`` asks for the
+    small plain fallback it also carries.
 
     Raises :class:`GltfError` for a file without an instanced node, and
     :class:`MeshMismatchError` if the recorded fingerprint does not match
@@ -83,6 +88,12 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None):
         raise GltfError(f"{where}: expected exactly one node with {INSTANCING}, found {len(nodes)}"
                         + (f" ({', '.join(repr(nd.name) for nd in nodes)}: name one with node=)" if nodes else ""))
     node = nodes[0]
+    gen = ((node.extensions or {}).get(BEND_EXTENSION) or {}).get("generate") if isinstance(
+        (node.extensions or {}).get(BEND_EXTENSION), dict) else None
+    if gen is not None and not fallback:
+        raise GltfError(f"{where}: node {node.name or '0'} is a generated layer ({BEND_EXTENSION} generate): its instances "
+                        "are made from its recipe, not listed; read it with read_generated_glb, or its small "
+                        "fallback with fallback=True (export --instanced writes the instances)")
     attrs = node.extensions[INSTANCING].get("attributes", {})
     missing = [k for k in ("_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5") if k not in attrs]
     if missing or ("_AXIAL_ANGLES" not in attrs and "ROTATION" not in attrs):

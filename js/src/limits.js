@@ -1,0 +1,99 @@
+// limits.js -- what a generated layer's recipe may ask for, checked from the recipe alone before an array
+// is allocated or a pass dispatched (docs/generate.md, "Bounds"): the same bounds as
+// axialdeform.core.generate (tests/app/test_generate_limits.py holds the numbers equal), so the Python
+// library and this module give one verdict for one file.
+
+import { AxialError } from './adp.js';
+
+/** The most cells a tile may have (m^2). */
+export const MAX_TILE_SLOTS = 1 << 20;
+/** The most slots a generated mesh holds (the tiles within reach; a tree's slots count each axis); the
+ * option `maxSlots` of AxialGeneratedMesh and AxialGLTFPlugin raises (or lowers) it. */
+export const MAX_SLOTS = 1 << 22;
+/** The most numbers a ground map (a height or density map) or a child-axis table may hold (4096^2). */
+export const MAX_MAP_TEXELS = 1 << 24;
+/** The largest bend amplitude and scale, in axis lengths. */
+export const MAX_BEND = 100;
+/** The world ends WORLD_CELLS cells from the origin along x and z (float32 keeps the grid to c / 128). */
+export const WORLD_CELLS = 1 << 16;
+
+const num = (v) => typeof v === 'number' && Number.isFinite(v);
+const json = (v) => { try { return String(JSON.stringify(v)).slice(0, 80); } catch { return String(v).slice(0, 80); } };
+function bad(field, expected, value) {
+  throw new AxialError(`generate: ${field}: expected ${expected}, found ${json(value)}`);
+}
+
+/** The world's edge E = WORLD_CELLS c (world units) of a recipe whose cell side is `cell`. */
+export const worldEdge = (cell) => WORLD_CELLS * cell;
+
+/** The bounds of a recipe already checked for types (checkRecipe): its tile's cells, bend, scale, reach. */
+export function checkRecipeBounds(r, m, cell) {
+  if (!(r.tile * Math.sqrt(r.rate) < 4 * Math.sqrt(MAX_TILE_SLOTS)) || m * m > MAX_TILE_SLOTS) {
+    const blame = r.rate * 32 * 32 <= MAX_TILE_SLOTS ? 'tile' : 'rate';
+    bad(blame, `a tile of at most ${MAX_TILE_SLOTS} cells (rate x tile^2 = ${(r.rate * r.tile * r.tile).toPrecision(6)}): a smaller tile or a lower rate`, r[blame]);
+  }
+  for (const b of Array.isArray(r.bend) ? r.bend : [r.bend]) if (b > MAX_BEND) bad('bend', `at most ${MAX_BEND} (axis lengths)`, r.bend);
+  if (r.scale !== null && r.scale[1] > MAX_BEND) bad('scale', `[lo, hi] with hi at most ${MAX_BEND}`, r.scale);
+  const E = worldEdge(cell);
+  if (r.reach !== undefined && !(num(r.reach) && r.reach > 0 && r.reach <= 2 * E)) {
+    bad('reach', `a distance > 0 and at most the world's width ${(2 * E).toPrecision(6)}`, r.reach);
+  }
+}
+
+/** The slots `tiles` tiles of m^2 cells hold, each of `axes` axes, or an AxialError above `maxSlots`. */
+export function checkSlots(tiles, m, axes = 1, maxSlots = MAX_SLOTS, what = 'reach') {
+  const slots = tiles * m * m;
+  if (!(Number.isInteger(maxSlots) && maxSlots >= 1)) throw new AxialError(`maxSlots: expected a whole number >= 1, found ${json(maxSlots)}`);
+  if (slots * axes > maxSlots) {
+    throw new AxialError(`generate: ${what}: ${tiles} tiles of ${m * m} cells = ${slots}${axes > 1 ? ` x ${axes} axes` : ''} slots; `
+      + `expected at most ${maxSlots} (a smaller reach, a lower rate, or raise the option maxSlots)`);
+  }
+  return slots;
+}
+
+const pair = (v, test = num) => Array.isArray(v) && v.length === 2 && v.every(test);
+const close = (a, b) => Math.abs(a - b) <= 1e-6 * Math.max(1, Math.abs(b));
+
+/**
+ * The generated form's `uniforms` (generate.glsl's numbers, axialdeform.core.generate.recipe_uniforms)
+ * held to its recipe `r` (checked), the node's axis length and its maps' shapes ({heights, density}:
+ * {cols, rows} or undefined): what follows from the recipe must equal it, the rest be finite and in range.
+ * Returns nothing; throws an AxialError naming the first uniform that is off.
+ */
+export function checkUniforms(u, r, axisLength, maps, m, cell) {
+  const off = (key, expected) => { throw new AxialError(`generate uniforms: ${key}: expected ${expected}, found ${json(u[key])}`); };
+  const E = worldEdge(cell), bends = Array.isArray(r.bend) ? r.bend : [r.bend];
+  const [s0, s1] = r.scale || [1, 1];
+  if (u.seed !== r.seed) off('seed', `the recipe's seed ${r.seed}`);
+  if (u.m !== m) off('m', `the recipe's ${m} cells a side`);
+  if (!(num(u.cell) && close(u.cell, cell))) off('cell', `the recipe's cell side ${cell}`);
+  if (!(num(u.jitter) && close(u.jitter, 1 - r.min_distance / cell))) off('jitter', `1 - min_distance / cell = ${1 - r.min_distance / cell}`);
+  if (!(num(u.bend) && Math.abs(u.bend) <= bends[0] * axisLength * (1 + 1e-6) + 1e-30)) off('bend', `the recipe's bend times the axis length, ${bends[0] * axisLength}`);
+  if (!(pair(u.scale) && close(u.scale[0], s0) && close(u.scale[1], s1))) off('scale', `the recipe's scale [${s0}, ${s1}]`);
+  if (!(num(u.twist) && close(u.twist, r.twist))) off('twist', `the recipe's twist ${r.twist}`);
+  if (!(num(u.taper) && close(u.taper, r.taper))) off('taper', `the recipe's taper ${r.taper}`);
+  if (!(num(u.tint) && close(u.tint, r.tint || 0))) off('tint', `the recipe's tint ${r.tint || 0}`);
+  if (!(Array.isArray(u.tint_color) && u.tint_color.length === 3 && u.tint_color.every((x, i) => num(x) && close(x, r.tint_color[i])))) {
+    off('tint_color', `the recipe's tint_color ${json(r.tint_color)}`);
+  }
+  if (!num(u.anchor_y)) off('anchor_y', 'a finite number');
+  if (!(Array.isArray(u.anchor_w) && u.anchor_w.length === 4 && u.anchor_w.every((x) => num(x) && x >= 0 && x <= 1))) off('anchor_w', 'four weights in [0, 1]');
+  if (!(num(u.anchor_w4) && u.anchor_w4 >= 0 && u.anchor_w4 <= 1)) off('anchor_w4', 'a weight in [0, 1]');
+  if (!pair(u.anchor_xz)) off('anchor_xz', 'two finite numbers');
+  for (const [has, key, size, lo, inv] of [['has_heights', 'heights', 'h_size', 'h_lo', 'h_inv'], ['has_density', 'density', 'd_size', 'd_lo', 'd_inv']]) {
+    if (typeof u[has] !== 'boolean') off(has, 'true or false');
+    const map = maps[key];
+    if (u[has] !== Boolean(map)) off(has, map ? `true: the node has a ${key} map` : `false: the node has no ${key} map`);
+    if (!pair(u[size], Number.isInteger) || (map ? u[size][0] !== map.cols || u[size][1] !== map.rows : u[size].some((x) => x !== 0))) {
+      off(size, map ? `the ${key} map's [cols, rows] = [${map.cols}, ${map.rows}]` : '[0, 0]: no map');
+    }
+    if (!pair(u[lo])) off(lo, 'two finite numbers');
+    if (!pair(u[inv], (x) => num(x) && x > 0)) off(inv, 'two finite numbers > 0');
+  }
+  if (typeof u.d_wrap !== 'boolean') off('d_wrap', 'true or false');
+  if (!(pair(u.altitude, (x) => typeof x === 'number' && Math.abs(x) <= 3.0e38) && u.altitude[0] <= u.altitude[1])) off('altitude', '[lo, hi] with lo <= hi');
+  if (!(pair(u.slope_tan2, (x) => typeof x === 'number' && x >= 0 && x <= 3.0e38) && u.slope_tan2[0] <= u.slope_tan2[1])) off('slope_tan2', '[lo, hi] with 0 <= lo <= hi');
+  if (!(pair(u.choice, (x) => num(x) && x >= 0 && x <= 1) && u.choice[0] <= u.choice[1])) off('choice', '[lo, hi] within [0, 1]');
+  if (!(pair(u.lift, (x) => num(x) && Math.abs(x) <= E) && u.lift[0] <= u.lift[1])) off('lift', `[lo, hi] within the world's edge +-${E.toPrecision(6)}`);
+  if (!(num(u.align) && u.align >= 0 && u.align <= 1)) off('align', 'a fraction in [0, 1]');
+}
