@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .axis import ControlAxis
+from .axis import ControlAxis, stable_bytes
 from .errors import MeshError, ParamError
 from .record import MAX_RECORD_AXES
 
@@ -120,8 +120,22 @@ class AxisTree:
 
     @property
     def digest(self) -> bytes:
-        """16 bytes identifying the tree (frames, lo, L, parents, vertex axes):
-        parameter files record it."""
+        """16 bytes identifying the tree (frames, lo, L, parents, vertex axes): parameter files record it.
+        The computed numbers are hashed as :func:`~axialdeform.core.axis.stable_bytes` rounds them (to 1e-9;
+        ``lo`` and ``L`` relative to the root's ``L``), so a file written on one machine
+        reads on every other whatever BLAS kernel computed the frames."""
+        h = hashlib.sha256()
+        scale = float(self.axes[0].length) or 1.0
+        for a in self.axes:
+            h.update(stable_bytes(a.matrix))
+            h.update(stable_bytes(np.array([a.lo, a.length]) / scale))
+        h.update(np.asarray(self.parents, dtype="<i4").tobytes())
+        h.update(self.vertex_axis.astype("<i4").tobytes())
+        return h.digest()[:16]
+
+    @property
+    def legacy_digest(self) -> bytes:
+        """The digest files written before 0.2 record (the float64 bits): still read."""
         h = hashlib.sha256()
         for a in self.axes:
             h.update(np.asarray(a.matrix, dtype="<f8").tobytes())

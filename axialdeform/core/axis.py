@@ -28,6 +28,19 @@ import numpy as np
 
 from .errors import ArgumentError, MeshError
 
+#: a digest hashes numbers as whole multiples of this (of a unit vector, or of a length relative to the
+#: mesh's axis length): far above float64 noise, far below any change that matters
+DIGEST_STEP = 1e-9
+
+
+def stable_bytes(values) -> bytes:
+    """``values`` (any shape of numbers of order 1: unit vectors, lengths relative to L) rounded to whole
+    multiples of :data:`DIGEST_STEP`, as little-endian int64: what a digest hashes, so that numbers
+    computed a last bit differently on another machine (another BLAS kernel, another numpy) give the same
+    digest."""
+    flat = np.asarray(values, dtype=np.float64).ravel()
+    return np.round(flat / DIGEST_STEP).astype("<i8").tobytes()
+
 __all__ = ["ControlAxis", "AXIS_NAMES", "PERPENDICULAR", "FRAME_NAMES", "axis_frame_matrix"]
 
 AXIS_NAMES = ("x", "y", "z")
@@ -228,8 +241,17 @@ class ControlAxis:
 
     @property
     def frame_digest(self) -> bytes:
-        """16 bytes identifying the frame (SHA-256 of its float64 rows); all
-        zero for an aligned axis (files record it, ``docs/parameter-files.md``)."""
+        """16 bytes identifying the frame: SHA-256 of its rows rounded to 1e-9
+        (:func:`stable_bytes`: the same on every machine, where the float64 rows' last bits depend on the
+        BLAS kernel that computed them); all zero for an aligned axis (files record it,
+        ``docs/parameter-files.md``)."""
+        if self.frame is None:
+            return bytes(16)
+        return hashlib.sha256(stable_bytes(self.frame)).digest()[:16]
+
+    @property
+    def legacy_frame_digest(self) -> bytes:
+        """The digest files written before 0.2 record (SHA-256 of the float64 rows' bits): still read."""
         if self.frame is None:
             return bytes(16)
         return hashlib.sha256(np.asarray(self.frame, dtype="<f8").tobytes()).digest()[:16]

@@ -124,7 +124,10 @@ class AxisRecord:
     def matches(self, source) -> bool:
         """Whether ``source`` (a mesh, or a :class:`ControlAxis`) has the axis recorded."""
         other = AxisRecord.of(source)
-        return (self.index == other.index and self.frame_digest == other.frame_digest and self.axes == other.axes
+        tree = getattr(source, "tree", None)
+        axis = getattr(source, "axis", source)
+        legacy = tree.legacy_digest if tree is not None else getattr(axis, "legacy_frame_digest", other.frame_digest)
+        return (self.index == other.index and self.frame_digest in (other.frame_digest, legacy) and self.axes == other.axes
                 and bool(np.isclose(self.lo, other.lo)) and bool(np.isclose(self.length, other.length)))
 
     def describe(self) -> str:
