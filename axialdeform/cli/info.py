@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..core.errors import AxialDeformError
+from ..core.errors import BRIEF_NAMES, AxialDeformError
 from ..core.io.mesh import BUNDLED_MESHES, MESH_SUFFIXES
 from ..core.io.params import (
     ParamFile,
@@ -33,7 +33,9 @@ def add_parser(sub) -> None:
 def _mesh_info(args) -> None:
     mesh = load_base(args, args.params, textures=False)
     print(f"mesh:      {mesh.name} ({mesh.vertex_count} vertices, {len(mesh.faces)} triangles)")
-    print(f"parts:     {len(mesh.parts)}: " + ", ".join(f"{p.name!r} ({p.count} triangles)" for p in mesh.parts))
+    shown = ", ".join(f"{str(p.name)[:40]!r} ({p.count} triangles)" for p in mesh.parts[:BRIEF_NAMES])
+    more = f", ... ({len(mesh.parts)} in all)" if len(mesh.parts) > BRIEF_NAMES else ""
+    print(f"parts:     {len(mesh.parts)}: {shown}{more}")
     print(f"axis:      {mesh.axis.describe()}")
     tree = mesh.tree
     if tree is not None:

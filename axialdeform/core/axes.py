@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .axis import ControlAxis, stable_bytes
-from .errors import MeshError, ParamError
+from .errors import MeshError, ParamError, brief_names
 from .record import MAX_RECORD_AXES
 
 #: the most axes one mesh may carry: a record's most (core/record.py)
@@ -380,27 +380,28 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
         raise MeshError(f"{mesh.name}: axes: expected 'parts', per-vertex axes or a list of "
                         "{'part', 'parent', 'axis'} entries, found " + repr(spec)[:80])
     verts = _part_vertices(mesh)
-    order, parents, frames, anchors = [], [], [], []
+    order, parents, frames, anchors, index_of = [], [], [], [], {}
     for i, entry in enumerate(spec):
         if not isinstance(entry, dict) or "part" not in entry or set(entry) - {"part", "parent", "axis", "anchor"}:
             raise MeshError(f"{mesh.name}: axes entry {i + 1}: expected a table with 'part' and optional "
                             f"'parent', 'axis' and 'anchor', found {entry!r}")
         part = entry["part"]
         if part not in verts:
-            raise MeshError(f"{mesh.name}: axes entry {i + 1}: no part {part!r}; expected one of "
-                            + ", ".join(repr(n) for n in verts))
-        if part in order:
+            raise MeshError(f"{mesh.name}: axes entry {i + 1}: no part {str(part)[:40]!r}; expected one of "
+                            + brief_names(verts))
+        if part in index_of:
             raise MeshError(f"{mesh.name}: axes entry {i + 1}: part {part!r} has an axis already")
         parent = entry.get("parent")
         if (parent is None) != (i == 0):
             raise MeshError(f"{mesh.name}: axes entry {i + 1} ({part}): expected " +
                             ("no parent for the root (the first entry)" if i == 0 else
                              "a parent (only the first entry, the root, has none)"))
-        if parent is not None and parent not in order:
+        if parent is not None and parent not in index_of:
             raise MeshError(f"{mesh.name}: axes entry {i + 1} ({part}): parent {parent!r} is not an earlier entry; "
                             "expected a parent listed before its children")
+        index_of[part] = len(order)
         order.append(part)
-        parents.append(-1 if parent is None else order.index(parent))
+        parents.append(-1 if parent is None else index_of[parent])
         frames.append(entry.get("axis", frame))
         anchor = entry.get("anchor")
         if anchor is not None and (isinstance(anchor, bool) or not isinstance(anchor, (int, float)) or not 0 <= anchor <= 1
@@ -408,9 +409,9 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
             raise MeshError(f"{mesh.name}: axes entry {i + 1} ({part}): anchor: expected t in 0..1 on the part's own "
                             f"axis where it meets its parent (a child only), found {anchor!r:.40}")
         anchors.append(anchor)
-    missing = [n for n in verts if n not in order]
+    missing = [n for n in verts if n not in index_of]
     if missing:
-        raise MeshError(f"{mesh.name}: axes: part(s) {', '.join(repr(n) for n in missing)} have no axis; "
+        raise MeshError(f"{mesh.name}: axes: part(s) {brief_names(missing)} have no axis; "
                         "expected an entry for every part")
     va = np.full(mesh.vertex_count, -1, dtype=np.int32)
     for i, part in reversed(list(enumerate(order))):  # the earlier axis wins a shared vertex
@@ -517,7 +518,7 @@ def tree_from_parts(mesh, frame="auto", up: int = 1) -> AxisTree:
     doubtful = [f"{n!r} -> {q!r} ({d:.3g} outside it, {d / max(axes[n].length, 1e-12):.0%} of its length)"
                 for n, (q, d) in gaps.items() if n not in ground and d > DOUBTFUL_GAP * axes[n].length]
     if ground:
-        warnings.warn(f"{mesh.name}: axes='parts': {', '.join(repr(n) for n in ground)} look like ground or water "
+        warnings.warn(f"{mesh.name}: axes='parts': {brief_names(ground)} look like ground or water "
                       "(flat and wide), not a tree's part; leave them out with parts= / --parts", AssetWarning,
                       stacklevel=3)
     if doubtful:

@@ -20,7 +20,19 @@ __all__ = [
     "ScatterError",
     "TooFewError",
     "SceneError",
+    "brief_names",
 ]
+
+#: the most names a message lists before it says how many more there are
+BRIEF_NAMES = 8
+
+
+def brief_names(names, limit: int = BRIEF_NAMES) -> str:
+    """``names`` for a one-line message: the first ``limit`` quoted (each cut to 40 characters), then
+    ``... (N in all)`` -- a list of 10 000 names is summarized, not printed."""
+    names = list(names)
+    shown = ", ".join(repr(str(n)[:40]) for n in names[:limit])
+    return shown + (f", ... ({len(names)} in all)" if len(names) > limit else "")
 
 
 class AxialDeformError(Exception):

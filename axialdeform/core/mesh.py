@@ -19,7 +19,7 @@ import numpy as np
 
 from .arrays import as_array
 from .axis import ControlAxis
-from .errors import MeshError
+from .errors import MeshError, brief_names
 from .material import Part
 
 __all__ = ['BaseMesh', 'area_weighted_normals', "check_float32_range", "anchor_point"]
@@ -166,12 +166,13 @@ class BaseMesh:
         names : iterable of str
         """
         names = [names] if isinstance(names, str) else list(names)
-        have = [p.name for p in self.parts]
+        have = {p.name for p in self.parts}
+        wanted = set(names)
         unknown = [n for n in names if n not in have]
         if unknown or not names:
-            raise MeshError(f"{self.name}: parts: no part {', '.join(repr(n) for n in unknown) or '(none given)'}; "
-                            f"expected some of {', '.join(repr(n) for n in have)}")
-        keep = [p for p in self.parts if p.name in set(names)]
+            raise MeshError(f"{self.name}: parts: no part {brief_names(unknown) or '(none given)'}; "
+                            f"expected some of {brief_names(p.name for p in self.parts)}")
+        keep = [p for p in self.parts if p.name in wanted]
         faces = np.concatenate([self.faces[p.start:p.start + p.count] for p in keep])
         used = np.zeros(self.vertex_count, dtype=bool)
         used[faces.ravel()] = True
@@ -253,7 +254,7 @@ class BaseMesh:
         for p in self.parts:
             if p.name == name:
                 return p
-        raise MeshError(f"{self.name}: no part {name!r}; expected one of {', '.join(repr(p.name) for p in self.parts)}")
+        raise MeshError(f"{self.name}: no part {str(name)[:40]!r}; expected one of {brief_names(p.name for p in self.parts)}")
 
     @property
     def part_names(self) -> tuple:

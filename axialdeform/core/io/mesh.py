@@ -400,18 +400,27 @@ def _obj_objects(merged, split):
     if len(nodes) < 2:
         return merged
     verts = np.asarray(merged.vertices)
+    firsts = [np.asarray(split.geometry[split.graph[n][1]].vertices) for n in nodes]
+    # where each object's first vertex occurs in the merged mesh: one sort of every row (not a scan an object)
+    heads = np.array([g[0] if len(g) else np.full(3, np.nan) for g in firsts], dtype=verts.dtype).reshape(-1, 3)
+    _, ids = np.unique(np.concatenate([verts, heads]) + 0.0, axis=0, return_inverse=True)
+    ids = ids.ravel()
+    vid, hid = ids[:len(verts)], ids[len(verts):]
+    order = np.argsort(vid, kind="stable")
+    sorted_ids = vid[order]
+    lo, hi = np.searchsorted(sorted_ids, hid, "left"), np.searchsorted(sorted_ids, hid, "right")
 
-    def first_index(node):
-        g = split.geometry[split.graph[node][1]]
-        gv = np.asarray(g.vertices)
+    def first_index(k):
+        gv = firsts[k]
         if not len(gv):
             return -1
-        for o in np.flatnonzero((verts == gv[0]).all(axis=1)):  # where its vertices sit in the merged mesh
+        for o in order[lo[k]:hi[k]]:  # where its vertices sit in the merged mesh
             if o + len(gv) <= len(verts) and np.array_equal(verts[o:o + len(gv)], gv):
                 return int(o)
         return -1
 
-    nodes.sort(key=first_index)
+    place = [first_index(k) for k in range(len(nodes))]
+    nodes = [nodes[k] for k in sorted(range(len(nodes)), key=place.__getitem__)]
     geoms = [split.geometry[split.graph[n][1]] for n in nodes]
     offsets = np.cumsum([0] + [len(g.vertices) for g in geoms])[:-1]
     v = np.concatenate([np.asarray(g.vertices) for g in geoms])
