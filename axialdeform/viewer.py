@@ -108,7 +108,8 @@ class _ViewerMixin:
         seed = s.get("seed")
         self.seed = None if seed is None else int(seed)  # None: the parameters came from elsewhere (a file)
         self.on_screenshot = s.get("on_screenshot")
-        self.bend = float(s.get("bend", Variation.bend))
+        bend = s.get("bend", Variation.bend)  # one amplitude, or one a level of a hierarchy
+        self.bend = tuple(float(b) for b in bend) if isinstance(bend, (tuple, list)) else float(bend)
         self.up = s.get("up", "y")
         self.mode = s.get("mode", "solid")
         if self.mode not in MODES:

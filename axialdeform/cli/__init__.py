@@ -14,6 +14,7 @@ import argparse
 import errno
 import importlib
 import os
+import re
 import sys
 
 from ..core.errors import AxialDeformError
@@ -81,9 +82,31 @@ def one_line(text) -> str:
     return str(text).translate(_CONTROL)
 
 
+#: options whose value is a list of numbers (X,Y,Z; DX,DZ; R,G,B): a value that starts with a minus is
+#: still their value (``--eye -2,8,12``), not an option of its own as argparse would take it
+VECTOR_OPTIONS = frozenset({"--eye", "--target", "--walk", "--wind-dir", "--tint-color", "--bend", "--yaw", "--tilt"})
+_NEGATIVE_LIST = re.compile(r"-(\d|\.\d)[0-9.eE+-]*(,[-+]?[0-9.eE+-]+)*")
+
+
+def join_vector_values(argv) -> list:
+    """``argv`` with ``--eye -2,8,12`` written ``--eye=-2,8,12`` (every option of :data:`VECTOR_OPTIONS`
+    followed by a value that starts with a minus and is numbers and commas)."""
+    out, i = [], 0
+    argv = list(argv)
+    while i < len(argv):
+        a = argv[i]
+        if a in VECTOR_OPTIONS and i + 1 < len(argv) and _NEGATIVE_LIST.fullmatch(str(argv[i + 1])):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
 def main(argv=None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_vector_values(sys.argv[1:] if argv is None else argv))
     import warnings
 
     from ..core.material import AssetWarning

@@ -118,7 +118,7 @@ def load_base(args, source, *, textures: bool = True):
 
 def add_mesh_and_params(p) -> None:
     """The MESH and PARAMS positional arguments of the commands that read both (and ``--axis``)."""
-    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard', or a scene file (.toml, then no PARAMS)")
+    p.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard' / 'tree', or a scene file (.toml, then no PARAMS)")
     p.add_argument("params", nargs="?", help="parameter file (.adp binary, .txt/.csv/.dat text); required unless MESH is a scene file")
     add_axis(p)
 

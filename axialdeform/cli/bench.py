@@ -23,7 +23,7 @@ def add_parser(sub) -> None:
         "thesis's numbers beside ours, plots, and the measurements as JSON. The full run takes about 16 minutes "
         "on a 2-core machine with a software rasterizer; --quick takes under a minute. Ctrl-C keeps what was "
         "measured so far."))
-    b.add_argument("--mesh", default="stone", help="base mesh file, or 'stone' / 'leaf' / 'leafcard' (default: %(default)s)")
+    b.add_argument("--mesh", default="stone", help="base mesh file, or 'stone' / 'leaf' / 'leafcard' / 'tree' (default: %(default)s)")
     b.add_argument("--counts", default=None, help="comma-separated instance counts (default: 100,1000,10000,100000)")
     b.add_argument("--modes", default=",".join(BENCH_MODES), help="comma-separated subset of solid,wireframe (default: %(default)s)")
     b.add_argument("--methods", default=",".join(METHODS), help="comma-separated subset of the methods (default: %(default)s)")

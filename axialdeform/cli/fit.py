@@ -18,7 +18,7 @@ def add_parser(sub) -> None:
         "Fit the 16 numbers of each variant of BASE: VARIANTS are mesh files with BASE's vertices in the same "
         "order, or ONE folder whose mesh files, sorted by name, are instances 0, 1, 2, ... The output is binary "
         "for .adp, text for .txt/.csv/.dat. Exit 2 if a fit's largest vertex distance exceeds --max-residual."))
-    f.add_argument("base", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
+    f.add_argument("base", help="base mesh file, or 'stone' / 'leaf' / 'leafcard' / 'tree'")
     add_axis(f)
     f.add_argument("variants", nargs="+", help="variant mesh files, or one folder of them")
     f.add_argument("-o", "--output", required=True, help="parameter file to write (required, no default)")

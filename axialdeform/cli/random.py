@@ -17,9 +17,9 @@ from ._common import AXES, add_axis, add_overwrite, add_variation_args, load_bas
 
 def add_parser(sub) -> None:
     r = sub.add_parser("random", help="write random parameters for a mesh", description=(
-        "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf' / 'leafcard'); "
+        "Write COUNT random parameter records for MESH (a file, or 'stone' / 'leaf' / 'leafcard' / 'tree'); "
         "the output is binary for .adp, text for .txt/.csv/.dat."))
-    r.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
+    r.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard' / 'tree'")
     add_axis(r)
     r.add_argument("-n", "--count", type=int, required=True, help=(
         "number of instances (required, no default); at most 2147483647 and what the output's disk holds: "

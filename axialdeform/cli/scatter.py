@@ -39,7 +39,7 @@ def add_parser(subparsers) -> None:
         "along +z, top row at the smallest z; black none, white full). Writes a parameter file (16 numbers per "
         "instance, 19 with --scale)."))
     s.add_argument("surface", metavar="SURFACE", help="terrain: a mesh file, or a grey height-map image")
-    s.add_argument("mesh", metavar="MESH", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
+    s.add_argument("mesh", metavar="MESH", help="base mesh file, or 'stone' / 'leaf' / 'leafcard' / 'tree'")
     add_axis(s)
     s.add_argument("-n", "--count", type=int, required=True, help="how many instances (required)")
     s.add_argument("-o", "--output", required=True, help="parameter file (.adp binary; .txt/.csv/.dat text; required)")

@@ -78,11 +78,43 @@ def render(scene, args, wind=None, options=None) -> None:
     check_triangles(scene, args, args.mode, fast)
     if wind is not None:
         scene.wind = wind
+    _camera_args(scene, args, parse_size(args.size))
     image = render_image(scene, size=parse_size(args.size), modes=args.mode, look=scene.look.replace(fast=fast),
                          time=scene_time(scene, args), options=options)
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
           f"{image.shape[1]}x{image.shape[0]})")
+
+
+def _camera_args(scene, args, size) -> None:
+    """``--eye``, ``--target`` and ``--fov`` put in the scene's camera where given (the scene's own framing
+    fills the rest), checked as for a mesh and parameters."""
+    import dataclasses
+
+    import numpy as np
+
+    from ..core.camera import UP_VECTORS
+    from ..gl.scene import scene_camera
+
+    eye, target, fov = (getattr(args, k, None) for k in ("eye", "target", "fov"))
+    if eye is None and target is None and fov is None:
+        return
+    if fov is not None and not 0.0 < fov < 180.0:
+        raise AxialDeformError(f"--fov: expected degrees between 0 and 180, found {fov:g}")
+    spec = scene.camera if fov is None else dataclasses.replace(scene.camera, fov=float(fov))
+    scene.camera = spec
+    if eye is None and target is None:
+        return
+    cam = scene_camera(scene, size[0] / size[1])
+    eye = np.asarray(eye if eye is not None else cam.eye, dtype=np.float64)
+    target = np.asarray(target if target is not None else cam.target, dtype=np.float64)
+    forward = target - eye
+    if not np.linalg.norm(forward) > 0:
+        raise AxialDeformError(f"--eye / --target: expected two different points, found both {tuple(eye)}")
+    if np.linalg.norm(np.cross(forward, UP_VECTORS[scene.up])) <= 1e-9 * np.linalg.norm(forward):
+        raise AxialDeformError(f"--eye / --target: the view direction {tuple(forward)} is parallel to the up axis "
+                               f"{scene.up}; expected a direction that is not straight up or down")
+    scene.camera = dataclasses.replace(spec, eye=tuple(map(float, eye)), target=tuple(map(float, target)))
 
 
 def bake(scene, args, progress, wind=None) -> None:

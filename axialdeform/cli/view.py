@@ -19,6 +19,7 @@ from ._common import (
     add_max_triangles,
     add_mesh_mismatch,
     add_overwrite,
+    bend_levels,
     check_triangles,
     cull_options,
     drawn_triangles,
@@ -30,16 +31,18 @@ from .random import RANDOM_BYTES_EACH
 
 def add_parser(sub) -> None:
     v = sub.add_parser("view", help="look at instances in an interactive window", description=(
-        "Open MESH (a file, or 'stone' / 'leaf' / 'leafcard') deformed by PARAMS (or by random parameters) in a window: "
+        "Open MESH (a file, or 'stone' / 'leaf' / 'leafcard' / 'tree') deformed by PARAMS (or by random parameters) in a window: "
         "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
         "UP/DOWN bend amplitude, G ground, V wind, R reset camera, S screenshot, ESC quit."))
-    v.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard'")
+    v.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard' / 'tree'")
     add_axis(v)
     v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
     v.add_argument("-n", "--count", type=int, default=1000, help="random instances when no PARAMS (default: %(default)s)")
     v.add_argument("--seed", type=int, default=None,
                    help="seed of the random parameters when no PARAMS (default: 0; with PARAMS: none, the file's)")
-    v.add_argument("--bend", type=float, default=Variation.bend, help="offset amplitude for N, fraction of L (default: %(default)s)")
+    v.add_argument("--bend", type=bend_levels, default=Variation.bend, metavar="B[,B...]",
+                   help="offset amplitude for N, fraction of L; a mesh of several axes takes one a level of its hierarchy "
+                        "(trunk,branches,...; the last for deeper levels), as random and scatter do (default: %(default)s)")
     v.add_argument("--mode", choices=MODES, default="solid", help="how to draw at the start (default: %(default)s)")
     v.add_argument("--up", choices=AXES, default="y", help="world up axis (default: %(default)s)")
     v.add_argument("--size", default="960x720", help="WIDTHxHEIGHT (default: %(default)s)")

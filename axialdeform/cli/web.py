@@ -24,7 +24,7 @@ def add_parser(subparsers) -> None:
         "OUT a folder (index.html + files, for a static server) or OUT.html (one self-contained file that "
         "works opened from disk). --serve serves the folder on 127.0.0.1 and prints the URL. "
         "The page: drag to orbit, W toggles wireframe; ?t=SECONDS freezes the wind's clock, ?size=WxH fixes the canvas."))
-    w.add_argument("mesh", nargs="?", help="base mesh file, 'stone' / 'leaf' / 'leafcard' / 'leafcard', or a scene file .toml "
+    w.add_argument("mesh", nargs="?", help="base mesh file, 'stone' / 'leaf' / 'leafcard' / 'tree' / 'tree', or a scene file .toml "
                    "(default: none: serve an exported page)")
     add_axis(w)
     w.add_argument("params", nargs="?", help="parameter file, .adp or text (default: none: serve an exported page)")
@@ -73,9 +73,17 @@ def run(args) -> None:
                                fixed_size=args.size is not None, time=time, allow_outside=args.allow_outside)
         page = write_page(out, web, inputs=scene.sources, overwrite=args.overwrite)
         layers = [layer for layer in web.config["layers"] if not layer["terrain"]]
-        print(f"wrote {page} ({len(layers)} layers{', a terrain' if len(layers) < len(web.config['layers']) else ''}, "
-              f"{web.count} instances, "
-              f"{'float32' if args.float32 else 'quantized'} parameters)")
+        made = [layer for layer in layers if layer.get("generate")]
+        listed = sum(layer["instances"] for layer in layers if not layer.get("generate"))
+        what = []
+        if len(made) < len(layers):
+            what.append(f"{listed} instances in parameter files, {'float32' if args.float32 else 'quantized'}")
+        if made:  # a recipe: the page makes the tiles within reach of its camera, not render's extent
+            what.append(f"{len(made)} generated layer{'s' if len(made) > 1 else ''} as recipes: the page makes "
+                        f"{sum(layer['instances'] for layer in made)} instances within reach of its camera at the start "
+                        "(render draws the extent)")
+        print(f"wrote {page} ({len(layers)} layers{', a terrain' if len(layers) < len(web.config['layers']) else ''}; "
+              + "; ".join(what) + ")")
     elif (args.mesh is None) != (args.params is None):
         raise AxialDeformError("web: expected both MESH and PARAMS, a scene file .toml, or neither (with --serve)")
     elif args.mesh is not None:
