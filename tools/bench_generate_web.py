@@ -65,7 +65,7 @@ def main(argv=None) -> int:
         for f in ("generated.html", "generated-webgpu.html"):
             shutil.copy(ROOT / "examples" / "web" / f, site / f)
         shutil.copy(ROOT / "axialdeform" / "meshes" / "stone.obj", site / "stone.obj")
-        server, _ = make_server(site, port=0)
+        server, _ = make_server(site, port=0, follow=(ROOT / "js",))
         url = f"http://127.0.0.1:{server.server_address[1]}/"
         threading.Thread(target=server.serve_forever, daemon=True).start()
         try:

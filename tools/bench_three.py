@@ -100,7 +100,7 @@ def main(argv=None) -> int:
         folder = Path(tmp) / "site"
         folder.mkdir()
         site(folder, counts, a.spacing)
-        server, _ = make_server(folder, 0)
+        server, _ = make_server(folder, 0, follow=(ROOT / "js",))
         threading.Thread(target=server.serve_forever, daemon=True).start()
         url = f"http://127.0.0.1:{server.server_address[1]}/bench.html"
         try:

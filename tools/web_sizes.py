@@ -162,7 +162,7 @@ def peer(args, size) -> None:
 
         from playwright.sync_api import sync_playwright
 
-        server, _ = make_server(work, 0)
+        server, _ = make_server(work, 0, follow=(ROOT / "js",))
         threading.Thread(target=server.serve_forever, daemon=True).start()
         base_url = f"http://127.0.0.1:{server.server_address[1]}/"
         links = {"loopback": None, f"{args.mbit:g} Mbit/s": args.mbit}
@@ -245,7 +245,7 @@ def main() -> None:
 
         from playwright.sync_api import sync_playwright
 
-        server, _ = make_server(work, 0)
+        server, _ = make_server(work, 0, follow=(ROOT / "js",))
         threading.Thread(target=server.serve_forever, daemon=True).start()
         url = f"http://127.0.0.1:{server.server_address[1]}/site/index.html"
         times, inner = [], []

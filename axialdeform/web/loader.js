@@ -5,7 +5,7 @@
 //
 // sources = {three, orbit, gltf, bgu, app, module: {'adp.js': text, ...}}: the text of each module.
 /** The module's files, each after the files it imports. */
-export const MODULE_ORDER = ['record.js', 'adp.js', 'glsl.js', 'bend.js', 'shader.js', 'wind.js', 'feedback.js', 'bake.js', 'raycast.js', 'mesh.js', 'tiles.js', 'generate.js', 'gltf.js', 'index.js', 'helpers.js'];
+export const MODULE_ORDER = ['record.js', 'adp.js', 'glsl.js', 'bend.js', 'shader.js', 'wind.js', 'feedback.js', 'bake.js', 'raycast.js', 'mesh.js', 'limits.js', 'tiles.js', 'generate.js', 'gltf.js', 'index.js', 'helpers.js'];
 
 export async function loadModules(sources) {
   const urls = [];

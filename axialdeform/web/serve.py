@@ -8,8 +8,10 @@
   the same browser cannot reach the server through a host name of its own (DNS rebinding);
 - ``files`` given (the page's files, :func:`~axialdeform.web.files.page_files`): those paths alone;
   else any regular file of the folder that is not a dotfile and not under a dot-folder;
-- a path that resolves outside the folder (``..``, a symlink out) is refused, and so is a path with a
-  NUL or backslash; a folder is never listed (``/`` is its ``index.html`` when that is served);
+- a path that resolves outside the folder (``..``, a symlink out) is refused -- unless it resolves into
+  one of the folders ``follow`` names, given by the caller (a test site's ``node_modules`` links) -- and
+  so is a path with a NUL or backslash; a folder is never listed (``/`` is its ``index.html`` when
+  that is served);
 - only GET and HEAD.
 
 Everything else is a 404 (or 403 for a foreign host) with a one-line body.
@@ -46,6 +48,7 @@ class _PageHandler(SimpleHTTPRequestHandler):
     extensions_map = {**SimpleHTTPRequestHandler.extensions_map, **_TYPES}
     folder: Path = Path(".")
     files: frozenset | None = None
+    follow: tuple = ()
 
     def log_message(self, format, *args):  # quiet: the CLI prints the URL only
         pass
@@ -81,7 +84,7 @@ class _PageHandler(SimpleHTTPRequestHandler):
         except (OSError, RuntimeError):
             self._refuse(404, "not found")
             return None
-        if not real.is_relative_to(root) or not real.is_file():
+        if not any(real.is_relative_to(r) for r in (root, *self.follow)) or not real.is_file():
             self._refuse(404, "not found")
             return None
         return real
@@ -122,7 +125,7 @@ class _PageHandler(SimpleHTTPRequestHandler):
     do_PUT = do_DELETE = do_PATCH = do_OPTIONS = do_POST
 
 
-def make_server(folder: str | os.PathLike, port: int = 8000, *, files=None):
+def make_server(folder: str | os.PathLike, port: int = 8000, *, files=None, follow=()):
     """An HTTP server for ``folder`` on 127.0.0.1 (not started), answering only what the module's
     docstring lists.
 
@@ -136,6 +139,9 @@ def make_server(folder: str | os.PathLike, port: int = 8000, *, files=None):
         The folder's relative paths (``/``-separated) to serve, and no others (``axialdeform web --serve``
         gives the page's own: :func:`~axialdeform.web.files.page_files`); None: every regular,
         non-hidden file inside the folder.
+    follow : iterable of paths
+        Folders outside ``folder`` that its symlinks may lead into (none by default: a symlink out of the
+        folder is refused).
 
     Returns ``(server, busy)``: when ``port`` is taken the operating system picks a free one and ``busy``
     is True.  Call ``server.serve_forever()``; ``server.server_address[1]`` is the port."""
@@ -143,7 +149,8 @@ def make_server(folder: str | os.PathLike, port: int = 8000, *, files=None):
     if not folder.is_dir():
         raise AxialDeformError(f"{folder}: no such folder to serve")
     handler = functools.partial(type("PageHandler", (_PageHandler,), {
-        "folder": folder.resolve(), "files": None if files is None else frozenset(str(f) for f in files)}))
+        "folder": folder.resolve(), "files": None if files is None else frozenset(str(f) for f in files),
+        "follow": tuple(Path(f).resolve() for f in follow)}))
     try:
         number = operator.index(port)
     except TypeError:

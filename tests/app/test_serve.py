@@ -114,3 +114,21 @@ def test_page_files_of_a_folder_that_is_no_page(tmp_path):
     (tmp_path / "scene.json").write_text('{"layers": 3}')
     with pytest.raises(AxialDeformError, match="not a page's scene.json"):
         page_files(tmp_path)
+
+
+def test_links_into_a_folder_the_caller_names_are_followed(tmp_path):
+    (tmp_path / "site").mkdir()
+    (tmp_path / "lib").mkdir()
+    (tmp_path / "lib" / "mod.js").write_text("export {};")
+    (tmp_path / "secret.txt").write_text("outside")
+    os.symlink(tmp_path / "lib", tmp_path / "site" / "node_modules")
+    os.symlink(tmp_path / "secret.txt", tmp_path / "site" / "s.txt")
+    server, _ = make_server(tmp_path / "site", 0, follow=(tmp_path / "lib",))
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        assert get(server, "/node_modules/mod.js") == (200, b"export {};")
+        assert get(server, "/s.txt")[0] == 404
+    finally:
+        server.shutdown()
+        server.server_close()

@@ -83,7 +83,7 @@ def make_site(folder: Path, modules: bool = True) -> Path:
 
 class Server:
     def __init__(self, folder):
-        self.server, _ = make_server(folder, 0)
+        self.server, _ = make_server(folder, 0, follow=(ROOT / "js",))  # the sites link node_modules there
         self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
         self.thread.start()
         self.url = f"http://127.0.0.1:{self.server.server_address[1]}/"

@@ -1112,3 +1112,13 @@ def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
         assert errors == []
     finally:
         page.close()
+
+
+def test_the_single_file_loader_knows_every_module_file():
+    """loader.js links the npm module's files of a single-file page in MODULE_ORDER: it must name every one
+    the page ships (a file missing there leaves the page waiting on an import that never resolves)."""
+    from axialdeform.web.sources import MODULE_FILES
+
+    text = (ROOT / "axialdeform" / "web" / "loader.js").read_text()
+    order = re.search(r"MODULE_ORDER = \[([^\]]*)\]", text).group(1)
+    assert sorted(re.findall(r"'([^']+)'", order)) == sorted(MODULE_FILES)
