@@ -17,6 +17,7 @@ from ..core.io.mesh import mesh_source_path
 from ..core.io.params import BINARY_SUFFIXES, write_params
 from ..core.io.safeio import check_output_path
 from ..core.scatter import ANCHORS, scatter
+from ..core.surface import IMAGE_SUFFIXES, load_surface
 from ._common import add_axis, add_overwrite, add_variation_args, load_base, variation_args
 
 __all__ = ["add_parser", "run"]
@@ -56,6 +57,9 @@ def add_parser(subparsers) -> None:
                    help="height-map SURFACE: height of a white pixel (default: %(default)s)")
     s.add_argument("--extent", type=_extent, default=None, metavar="W[,D]",
                    help="height-map SURFACE: size along x (and z); default one unit per pixel")
+    s.add_argument("--resample", action="store_true",
+                   help="height-map SURFACE larger than the pixel bound (AXIALDEFORM_MAX_HEIGHTMAP_PIXELS, 2048x2048 by "
+                        "default): read it at the largest resolution within it (default: refuse)")
     s.add_argument("--allow-fewer", action="store_true", help="exit 0 when fewer than N fit (default: exit 2)")
     s.add_argument("--quantize", action="store_true", help="write the compact quantized form, binary only (default: float32)")
     add_overwrite(s)
@@ -71,8 +75,11 @@ def run(args) -> int | None:
     check_output_path(args.output, (args.surface, mesh_source_path(args.mesh), args.density), "parameter file")
     mesh = load_base(args, args.mesh, textures=False)
     check_output_path(args.output, mesh.sources, "parameter file", overwrite=args.overwrite)  # the files the mesh names too
+    surface = args.surface
+    if args.resample and Path(surface).suffix.lower() in IMAGE_SUFFIXES:
+        surface = load_surface(surface, up=args.up, height_scale=args.height_scale, extent=args.extent, resample=True)
     try:
-        params = scatter(args.surface, mesh, args.count, seed=args.seed, allow_fewer=args.allow_fewer,
+        params = scatter(surface, mesh, args.count, seed=args.seed, allow_fewer=args.allow_fewer,
                          min_distance=args.min_distance, density=args.density, align_to_normal=args.align_to_normal,
                          anchor=args.anchor, up=args.up, height_scale=args.height_scale, extent=args.extent,
                          **variation)

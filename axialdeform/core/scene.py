@@ -247,7 +247,7 @@ def build_scene(recipe: SceneRecipe, scene_type: type = Scene, *, scale_counts: 
     if recipe.terrain is not None:
         t = recipe.terrain
         with t.src.wrap(t.kind, "terrain", 0):
-            surface = load_surface(t.file, up=scene.up, height_scale=t.height_scale, extent=t.extent)
+            surface = load_surface(t.file, up=scene.up, height_scale=t.height_scale, extent=t.extent, resample=t.resample)
         # the drawing copy: float32 positions and normals; the uint32 faces are the surface's own (shared); a
         # height map's wireframe edges are the grid's (made when drawn, without a search)
         v, f = surface.vertices, surface.faces

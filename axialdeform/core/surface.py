@@ -19,7 +19,7 @@ from .errors import MeshError, ScatterError
 from .io import safeio
 from .io.mesh import load_mesh
 from .io.safeio import format_gb, open_regular
-from .material import AssetWarning
+from .material import AssetWarning, max_texture_pixels
 
 __all__ = ["Surface", "load_surface", "surface_from_heights", "load_density", "density_at", "sample_faces",
            "face_areas", "IMAGE_SUFFIXES", "SURFACE_BYTES_PER_PIXEL", "DENSITY_BYTES_PER_PIXEL"]
@@ -195,7 +195,29 @@ SURFACE_BYTES_PER_PIXEL = 260
 DENSITY_BYTES_PER_PIXEL = 32
 
 
-def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_PIXEL) -> np.ndarray:
+#: the largest height map (a SURFACE image, a scene's [terrain] heightmap), in pixels: 2048 x 2048, at most
+#: about 1.1 GB at SURFACE_BYTES_PER_PIXEL; ``AXIALDEFORM_MAX_HEIGHTMAP_PIXELS`` raises (or lowers) it, and
+#: ``resample`` (``[terrain] resample = true``, ``--resample``) reads a larger one at a lower resolution
+MAX_HEIGHTMAP_PIXELS = 2048 * 2048
+#: the largest density map, in pixels: 4096 x 4096 (about 540 MB at DENSITY_BYTES_PER_PIXEL; the glTF
+#: generated form's maps have the same bound); ``AXIALDEFORM_MAX_DENSITY_PIXELS`` raises (or lowers) it
+MAX_DENSITY_PIXELS = 4096 * 4096
+
+
+def pixel_limit(kind: str) -> int:
+    """The pixel bound of a ``"heightmap"`` or ``"density"`` image (its constant, or the environment variable)."""
+    name, default = {"heightmap": ("AXIALDEFORM_MAX_HEIGHTMAP_PIXELS", MAX_HEIGHTMAP_PIXELS),
+                     "density": ("AXIALDEFORM_MAX_DENSITY_PIXELS", MAX_DENSITY_PIXELS)}[kind]
+    raw = os.environ.get(name, "").strip()
+    if not raw:
+        return default
+    if not raw.isdigit() or int(raw) < 4:
+        raise ScatterError(f"{name}: expected a whole number of pixels >= 4, found {raw[:40]!r}")
+    return int(raw)
+
+
+def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_PIXEL, *, kind: str = "density",
+               resample: bool = False) -> np.ndarray:
     """A grey image as float64 in [0, 1], shape (rows, cols).
 
     The file must be a regular file (a FIFO or a device is refused without
@@ -212,14 +234,28 @@ def _read_grey(path: Path, what: str, bytes_per_pixel: int = DENSITY_BYTES_PER_P
                 warnings.simplefilter("error", Image.DecompressionBombWarning)
                 with Image.open(fh) as img:
                     cols, rows = img.size
+                    limit = pixel_limit(kind)
+                    env = "AXIALDEFORM_MAX_HEIGHTMAP_PIXELS" if kind == "heightmap" else "AXIALDEFORM_MAX_DENSITY_PIXELS"
+                    if cols * rows > limit and not (resample and cols * rows <= max_texture_pixels()):
+                        hint = (" or let it be read at a lower resolution ([terrain] resample = true, --resample)"
+                                if kind == "heightmap" else "")
+                        raise ScatterError(f"{what} {path}: an image of {cols}x{rows} pixels; expected at most {limit} "
+                                           f"pixels (raise {env}{hint})")
                     budget = int(0.8 * safeio.memory_available())
-                    if cols * rows * bytes_per_pixel > budget:
+                    if min(cols * rows, limit) * bytes_per_pixel + cols * rows * 4 > budget:
                         raise ScatterError(
                             f"{what} {path}: an image of {cols}x{rows} pixels needs about "
                             f"{format_gb(cols * rows * bytes_per_pixel)}; expected at most {budget // bytes_per_pixel} pixels "
                             f"(what {format_gb(budget)} of available memory holds)")
                     img.load()
-                    if img.mode in ("I;16", "I;16B", "I;16L", "I"):
+                    if cols * rows > limit:  # resample: the largest size within the limit, the same aspect
+                        f = math.sqrt(limit / (cols * rows))
+                        size = (max(2, int(cols * f)), max(2, int(rows * f)))
+                        div = 65535.0 if img.mode in ("I;16", "I;16B", "I;16L", "I") else 1.0 if img.mode == "F" else 255.0
+                        src = img if img.mode in ("I;16", "I;16B", "I;16L", "I", "F", "L") else img.convert("L")
+                        small = src.convert("F").resize(size, Image.Resampling.BOX)
+                        grey = np.asarray(small, dtype=np.float64) / div
+                    elif img.mode in ("I;16", "I;16B", "I;16L", "I"):
                         grey = np.asarray(img, dtype=np.float64) / 65535.0
                     elif img.mode == "F":
                         grey = np.asarray(img, dtype=np.float64)
@@ -321,9 +357,11 @@ def _make_surface(vertices, faces, u: int, name: str, grid=None) -> Surface:
     return Surface(vertices=vertices, faces=faces, up=u, name=name, weights=weights, grid=grid)
 
 
-def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=None) -> Surface:
+def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=None, resample: bool = False) -> Surface:
     """A :class:`Surface` from a mesh file, a height-map image, a ``trimesh.Trimesh``,
-    a :class:`~axialdeform.core.mesh.BaseMesh` or a 2-D height array."""
+    a :class:`~axialdeform.core.mesh.BaseMesh` or a 2-D height array.  A height-map image has at most
+    :func:`pixel_limit` ``("heightmap")`` pixels (checked before decoding); ``resample`` reads a larger one at
+    the largest resolution within it."""
     import trimesh
 
     u = _up_index(up)
@@ -336,7 +374,8 @@ def load_surface(source, *, up: str = "y", height_scale: float = 1.0, extent=Non
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)
         if path.suffix.lower() in IMAGE_SUFFIXES:
-            return surface_from_heights(_read_grey(path, "SURFACE", SURFACE_BYTES_PER_PIXEL), up=up, height_scale=height_scale,
+            grey = _read_grey(path, "SURFACE", SURFACE_BYTES_PER_PIXEL, kind="heightmap", resample=resample)
+            return surface_from_heights(grey, up=up, height_scale=height_scale,
                                         extent=extent, name=f"SURFACE {path}")
 
         try:
@@ -353,7 +392,7 @@ def load_density(source, name: str = "<array>") -> np.ndarray:
     """A density map: (rows, cols) float64 in [0, 1] from an image path or an array."""
     if isinstance(source, (str, os.PathLike)):
         name = str(source)
-        grey = _read_grey(Path(source), "density")
+        grey = _read_grey(Path(source), "density", kind="density")
     else:
         grey = _grid(source, name)
     if grey.size == 0:

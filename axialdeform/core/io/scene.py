@@ -35,7 +35,7 @@ __all__ = ["parse_scene", "SceneRecipe", "LayerRecipe", "ScatterRecipe", "Genera
 _TOP = {"up", "include", "terrain", "camera", "light", "wind", "layer", "background"}
 
 
-_TERRAIN = {"mesh", "heightmap", "height_scale", "extent", "color"}
+_TERRAIN = {"mesh", "heightmap", "height_scale", "extent", "color", "resample"}
 
 
 _CAMERA = {"elevation", "azimuth", "fov", "eye", "target"}
@@ -98,6 +98,7 @@ class TerrainRecipe:
     file: Path
     height_scale: float = 1.0
     extent: list | None = None
+    resample: bool = False  # a height map larger than the pixel bound read at a lower resolution
 
 
 @dataclass
@@ -309,7 +310,10 @@ def _read_terrain(src, terrain, scene) -> TerrainRecipe | None:
         extent = _numbers(src, extent, "extent", "terrain", 0, (1, 2), positive=True)
     if "color" in terrain:
         scene.terrain_color = tuple(_numbers(src, terrain["color"], "color", "terrain", 0, (3,)))
-    return TerrainRecipe(src, key, file, hs, extent)
+    resample = terrain.get("resample", False)
+    if not isinstance(resample, bool):
+        raise src.error(f"expected true or false, found {resample!r:.40}", "resample", "terrain", 0)
+    return TerrainRecipe(src, key, file, hs, extent, resample)
 
 
 def _read_layers(src, data, scene, stack) -> None:
