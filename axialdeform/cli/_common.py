@@ -147,8 +147,8 @@ def load(args, what: str = "output", allow_folder: bool = False):
     # the files the mesh names too (its material library, textures, buffers): never replaced
     check_output_path(args.output, mesh.sources, what, allow_folder=allow_folder)
     params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
-    if args.command in ("render", "view", "web"):  # a picture: every number must survive the projection
-        check_drawable(params, str(args.params))
+    if args.command in ("render", "view", "web", "bake", "export"):  # a picture, or vertices and a glTF others draw:
+        check_drawable(params, str(args.params))  # every number must survive the projection (one line, no warning first)
     # the inputs' own errors first; then an output that exists is replaced only with --overwrite
     check_output_path(args.output, (), what, allow_folder=allow_folder, overwrite=args.overwrite)
     warn_ranges(args, mesh, params)

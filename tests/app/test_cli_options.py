@@ -72,3 +72,12 @@ def test_web_says_what_a_generated_layer_is(tmp_path):
     r = cli("web", "s.toml", "-o", "page", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "generated layer as recipes" in r.stdout and "quantized" not in r.stdout and "render draws the extent" in r.stdout
+
+
+def test_float32_max_numbers_get_one_line_from_every_command(tmp_path):
+    (tmp_path / "big.txt").write_text(("3.4028235e38 " * 16 + "\n") * 2)
+    for command in (["render", "stone", "big.txt", "-o", "b.png"], ["export", "stone", "big.txt", "-o", "b.glb"],
+                    ["bake", "stone", "big.txt", "-o", "b.npz"], ["web", "stone", "big.txt", "-o", "b.html"]):
+        r = cli(*command, cwd=tmp_path)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, (command, r.stderr)
+        assert "d1u" in r.stderr and "big.txt" in r.stderr
