@@ -1,6 +1,7 @@
 """Fuzzing of the glTF extension ``AXIALDEFORM_bend`` (both readers) and of tree specs.
 
     python3 tools/fuzz_specs.py --target extension --cases 400 --seed 31 [--node]
+    python3 tools/fuzz_specs.py --target generated --cases 400 --seed 31 [--node]
     python3 tools/fuzz_specs.py --target trees --cases 400 --seed 31
 
 ``extension``: instanced GLBs written by ``export --instanced`` (16 numbers,
@@ -15,6 +16,13 @@ Python's ``read_instanced_glb`` (a forked child, memory capped) and, with
 ``GLTFLoader`` (``tools/fuzz_plugin.mjs``); Python's side checks, as
 ``render`` does, that every number can be drawn (``check_drawable``), since
 the plugin loads a file to draw it.
+
+``generated``: GLBs in the generated form (``export --generated`` of a field of stones and of trees of
+ten axes) whose ``generate`` object -- the recipe, the generator's numbers, the maps' shapes -- is
+corrupted, the recipe's sizes most often (rate, tile, reach: the files that froze the plugin or asked
+for 10^15 slots).  Python reads the recipe (``read_generated_glb``) and makes the tiles within reach of
+the origin; the plugin loads the file (its generated mesh sized by the recipe).  A checkout from before
+``read_generated_glb`` reads the node's fallback, as it did.
 
 ``trees``: ``--axes`` TOML files (the bundled tree's, with entries deleted,
 swapped, repeated, parents unknown or cyclic, frames degenerate or
@@ -358,6 +366,151 @@ def fuzz_extension(cases: int, seed: int, node: bool, node_src: Path, bases: Pat
     return status
 
 
+# ----------------------------------------------------------------------------- the generated form
+GENERATED_SCENES = {
+    "stones": """[[layer]]
+name = "stones"
+mesh = "stone"
+[layer.generate]
+rate = 1.0
+tile = 8.0
+min_distance = 0.3
+seed = 4
+scale = [0.5, 1.0]
+tint = 0.3
+lift = [0.0, 0.1]
+extent = [-8, -8, 8, 8]
+reach = 24.0
+""",
+    "trees": f"""[[layer]]
+name = "trees"
+mesh = "tree"
+axes = "{TREE_AXES.as_posix()}"
+[layer.generate]
+rate = 0.05
+tile = 16.0
+min_distance = 2.0
+bend = [0.03, 0.25]
+extent = [-16, -16, 16, 16]
+reach = 40.0
+""",
+}
+#: what a hostile generated form asks for: the sizes that froze or exhausted the plugin before, and types
+GENERATED_HOSTILE = [0, -1, 1e-6, 1e-3, 0.5, 1e5, 2000, 400, 1e9, 1e12, 1e30, 1e308, INF, "-" + INF, "abc", None,
+                     True, [], [-5, 0], [3e38, 3.4e38], [0, 7], 2**33, 4000, 100000]
+
+
+def make_generated_bases(folder: Path) -> list[Path]:
+    """GLBs in the generated form as ``export --generated`` writes them: stones (scaled, tinted, lifted), a
+    tree of ten axes."""
+    from axialdeform.core.io.gltf import export_scene
+    from axialdeform.core.scene import load_scene
+
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for name, text in GENERATED_SCENES.items():
+        path = folder / f"gen-{name}.glb"
+        if not path.exists():
+            (folder / f"{name}.toml").write_text(text)
+            export_scene(path, load_scene(folder / f"{name}.toml"), layout="generated")
+        out.append(path)
+    return out
+
+
+def mutate_generated(doc: dict, rng: np.random.Generator) -> tuple[dict, str]:
+    """1 to 3 corruptions of the node's ``generate`` object (its recipe, the generator's numbers, the maps'
+    shapes), or of the recipe's sizes alone (rate, tile, reach: the unbounded-work cases)."""
+    node = next(n for n in doc["nodes"] if "AXIALDEFORM_bend" in n.get("extensions", {}))
+    gen = node["extensions"]["AXIALDEFORM_bend"]["generate"]
+    said = []
+    for _ in range(int(rng.integers(1, 4))):
+        if rng.random() < 0.4:  # a size of the recipe
+            path = ("recipe", _pick(rng, ["rate", "tile", "reach", "min_distance", "bend", "scale"]))
+        else:
+            path = _pick(rng, [p for p in _paths(gen) if p])
+        if rng.random() < 0.15 and len(path) > 1:
+            try:
+                _set(gen, path, None, delete=True)
+            except (KeyError, IndexError, TypeError):
+                continue
+            said.append(f"delete {'/'.join(map(str, path))}")
+        else:
+            value = _pick(rng, GENERATED_HOSTILE)
+            try:
+                _set(gen, path, value)
+            except (KeyError, IndexError, TypeError):
+                continue
+            said.append(f"{'/'.join(map(str, path))}={value!r:.30}")
+    return doc, "; ".join(said)
+
+
+def read_generated(path: str) -> tuple[str, str]:
+    """What a viewer does with a generated node: read its recipe and make the tiles within its reach of the
+    origin (the Python library: ``read_generated_glb``, then ``generate_tiles``); a checkout without it reads
+    the node as ``read_instanced_glb`` did (its fallback)."""
+    from axialdeform.core.params import check_drawable
+
+    try:
+        from axialdeform.core.io.gltf_generate import read_generated_glb
+    except ImportError:  # before: the node read as its fallback instances
+        from axialdeform.core.io.gltf import read_instanced_glb
+
+        mesh, params = read_instanced_glb(path)
+        check_drawable(params, path)
+        return _finite_deform(mesh, params)
+    from axialdeform.core.generate import generate_tiles, tiles_around
+
+    node = read_generated_glb(path)
+    params = generate_tiles(node.generate, node.mesh, tiles_around(node.generate, 0.0, 0.0, node.reach), node.maps)
+    check_drawable(params, path)
+    return _finite_deform(node.mesh, params) if len(params) else ("ok", "no instance within reach")
+
+
+def fuzz_generated(cases: int, seed: int, node: bool, node_src: Path, keep: Path | None) -> int:
+    rng = np.random.default_rng(seed)
+    work = Path(tempfile.mkdtemp(prefix="fuzz-gen-")) if keep is None else keep
+    work.mkdir(parents=True, exist_ok=True)
+    bases = make_generated_bases(work / "bases")
+    originals = [split_glb(p.read_bytes()) for p in bases]
+    files, about = [], {}
+    for k in range(cases):
+        b = int(rng.integers(len(originals)))
+        doc, said = mutate_generated(json.loads(json.dumps(originals[b][0])), rng)
+        path = work / f"gen{k:05d}-{bases[b].stem}.glb"
+        path.write_bytes(join_glb(doc, originals[b][1]))
+        files.append(path)
+        about[path.name] = said
+    _preload()
+    counts, failures, python = Counter(), [], {}
+    t0 = time.monotonic()
+    for path in files:
+        verdict, detail = forked(read_generated, str(path))
+        python[path.name] = (verdict, detail)
+        counts[verdict] += 1
+        if verdict not in ("ok", "refused"):
+            failures.append(("python", verdict, path.name, about[path.name], detail))
+    print(f"fuzz generated form, Python: {cases} files (seed {seed}) in {time.monotonic() - t0:.0f} s: "
+          + ", ".join(f"{v} {counts[v]}" for v in ("ok", "refused", "crash", "garbage", "hang", "memory")))
+    if node:
+        t0 = time.monotonic()
+        js = read_node(files, node_src)
+        jc = Counter(v for v, _ in js.values())
+        differ = 0
+        for path in files:
+            a, (b, detail) = python[path.name][0], js.get(path.name, ["hang", "no verdict"])
+            if b not in ("ok", "refused"):
+                failures.append(("node", b, path.name, about[path.name], detail))
+            if (a == "ok") != (b == "ok"):
+                differ += 1
+                failures.append(("disagree", f"python {a}, node {b}", path.name, about[path.name],
+                                 python[path.name][1] if a != "ok" else detail))
+        print(f"fuzz generated form, npm AxialGLTFPlugin: {len(files)} files in {time.monotonic() - t0:.0f} s: "
+              + ", ".join(f"{v} {jc[v]}" for v in ("ok", "refused", "crash", "garbage", "hang", "memory"))
+              + f"; the two readers differ on {differ}")
+    _report(failures)
+    return 1 if failures else 0
+
+
 # ----------------------------------------------------------------------------- trees
 def _toml_value(v) -> str:
     if isinstance(v, bool):
@@ -514,7 +667,7 @@ def _report(failures) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--target", choices=("extension", "trees", "all"), default="all")
+    ap.add_argument("--target", choices=("extension", "generated", "trees", "all"), default="all")
     ap.add_argument("--cases", type=int, default=300, help="files or specs per target (default: %(default)s)")
     ap.add_argument("--seed", type=int, default=31)
     ap.add_argument("--node", action="store_true", help="also feed every GLB to the npm module's plugin (needs node)")
@@ -527,6 +680,9 @@ def main(argv=None) -> int:
     if args.target in ("extension", "all"):
         status |= fuzz_extension(args.cases, args.seed, args.node, args.node_src.resolve(), args.bases,
                                  None if args.keep is None else args.keep / "extension")
+    if args.target in ("generated", "all"):
+        status |= fuzz_generated(args.cases, args.seed, args.node, args.node_src.resolve(),
+                                 None if args.keep is None else args.keep / "generated")
     if args.target in ("trees", "all"):
         status |= fuzz_trees(args.cases, args.seed, None if args.keep is None else args.keep / "trees")
     return status
