@@ -24,7 +24,8 @@ export fit demo view bench scatter web`` and scene files given to
 child (``run_isolated``: stdout/stderr captured at the descriptor level, its
 own peak RSS from ``wait4`` after resetting the high-water mark through
 ``/proc/self/clear_refs``), with fuzzed inputs: mutated parameter files,
-generated meshes, hypothesis-generated TOML scene files with hostile fields,
+generated meshes, hypothesis-generated TOML scene files with hostile fields (generated layers'
+recipes asking for unbounded work or numbers past the drawable bound, parts lists of 20 000 names),
 height and density maps (a decompression bomb among them), outputs that are
 inputs, FIFOs, symlinks to ``/dev/null``, folders of stale files, absurd
 ``-n``, ``--size`` and ``--port``, ``view --headless``, a tiny ``bench``,
@@ -422,6 +423,25 @@ def _scene_strategy():
         return r
 
     @st.composite
+    def generate(draw):
+        """A [layer.generate] recipe: sizes that asked for unbounded work (1e12 rate, 1e9 reach, a tile of 1e10),
+        numbers past the drawable bound, a world far from the origin, wrong types."""
+        g = {"rate": draw(st.sampled_from([1.0, 0.1, 3.0, 1e12, 4e6, 1e-300, 0, -1, "x"])),
+             "extent": draw(st.sampled_from([[-8, -8, 8, 8], [-1e300, 0, 1, 1], [1e7, 1e7, 1.00001e7, 1.00001e7],
+                                             [0, 0, 1, 1], [1, 1, 0, 0], "x", [-8, -8, 8]]))}
+        for key, s in (("tile", st.sampled_from([8.0, 16.0, 1e10, 1e-6, 1e5, 0.5])),
+                       ("reach", st.sampled_from([24.0, 2000.0, 1e9, 1e308, -1])),
+                       ("bend", st.sampled_from([0.1, 1e30, [0.03, 1e30], [0.03, 0.2], -1])),
+                       ("lift", st.sampled_from([[0.0, 0.1], [3e38, 3.4e38], [1, 0]])),
+                       ("scale", st.sampled_from([[0.5, 1.0], [1.0, 1e30], [-5, 0]])),
+                       ("min_distance", num([0.3, 0.0])), ("seed", st.sampled_from([0, 1, 2**33, -1])),
+                       ("density", image), ("altitude", st.sampled_from([[0.0, 2.0], [1e30, -1e30]])),
+                       ("weights", st.sampled_from([[1e308, 1e308], [1, 2], [0, 0], [-1, 1]]))):
+            if draw(st.integers(0, 2)) == 0:
+                g[key] = draw(s)
+        return g
+
+    @st.composite
     def layer(draw):
         d = {"mesh": draw(mesh_file)}
         if draw(st.integers(0, 6)) == 0:
@@ -432,11 +452,17 @@ def _scene_strategy():
             d["color"] = draw(vec3([0.4, 0.5, 0.3]))
         if draw(st.integers(0, 3)) == 0:
             d["wind"] = draw(st.sampled_from([True, False, "yes"]))
-        which = draw(st.integers(0, 5))
+        which = draw(st.integers(0, 7))
         if which <= 2:
             d["params"] = draw(params_file)
-        if which >= 2:
+        if 2 <= which <= 5:
             d["scatter"] = draw(scatter())
+        if which >= 6:  # a generated layer (one mesh, or several by weights)
+            d["generate"] = draw(generate())
+            if "weights" in d["generate"]:
+                d["mesh"] = ["stone", "leaf"]
+        if draw(st.integers(0, 6)) == 0:  # a parts list: a few names, or thousands the mesh lacks
+            d["parts"] = [f"q{i}" for i in range(draw(st.sampled_from([1, 3, 20_000])))]
         return d
 
     @st.composite
@@ -492,10 +518,11 @@ def _scene_strategy():
                 lines += [f"[{k}]"] + [f"{kk} = {_value(vv)}" for kk, vv in v.items()]
         for lay in top.get("layer", []):
             lines.append("[[layer]]")
-            lines += [f"{k} = {_value(v)}" for k, v in lay.items() if k != "scatter"]
-            if "scatter" in lay:
-                lines.append("[layer.scatter]")
-                lines += [f"{k} = {_value(v)}" for k, v in lay["scatter"].items()]
+            lines += [f"{k} = {_value(v)}" for k, v in lay.items() if k not in ("scatter", "generate")]
+            for table in ("scatter", "generate"):
+                if table in lay:
+                    lines.append(f"[layer.{table}]")
+                    lines += [f"{k} = {_value(v)}" for k, v in lay[table].items()]
         return "\n".join(lines) + "\n"
 
     return scene()
