@@ -158,7 +158,7 @@ class Generate:
         cells = self.tile * math.sqrt(self.rate)
         if not cells < 4 * math.sqrt(MAX_TILE_SLOTS) or max(1, round(cells)) ** 2 > MAX_TILE_SLOTS:
             blame = "tile" if self.rate * 32.0 ** 2 <= MAX_TILE_SLOTS else "rate"  # a tile of 32 would hold the rate
-            bad(blame, f"a tile of at most {MAX_TILE_SLOTS} cells (rate x tile^2 = {self.rate * self.tile ** 2:.6g}): "
+            bad(blame, f"a tile of at most {MAX_TILE_SLOTS} cells (rate x tile^2 = {self.rate * self.tile * self.tile:.6g}): "
                 "a smaller tile or a lower rate", getattr(self, blame))
         cell = tile_size(self)[1]
         if self.min_distance >= cell:

@@ -10,7 +10,7 @@ import { AxialInstancedMesh } from './mesh.js';
 import { plainArray } from './feedback.js';
 import { ATTRIBUTES } from './record.js';
 import { TileGenerator, TileAttributes, GENERATED_FLOATS } from './tiles.js';
-import { MAX_SLOTS, checkRecipeBounds, checkSlots, worldEdge } from './limits.js';
+import { MAX_SLOTS, checkAnchor, checkRecipeBounds, checkSlots, worldEdge } from './limits.js';
 
 export { TileGenerator, GENERATED_FLOATS, worldEdge };
 const NO_BAND = 3.0e38;
@@ -209,6 +209,7 @@ export function generatedBase(geometry, recipe, options, who) {
   const spec = options.axis || autoAxis(positions);
   const axes = spec.axes ? spec.axes.count : 1; // a mesh of several axes: 10 more numbers a child axis
   checkSlots(maxTiles(r.tile, r.reach), tileSize(r)[0], axes, options.maxSlots ?? MAX_SLOTS); // before any array
+  if (options.uniforms) checkAnchor(options.uniforms, positions, (spec.axis || spec).length);
   const record = { count: 0, numbersPerInstance: recipeWidth(r) + 10 * (axes - 1), axes, data: new Float32Array(0) };
   return { r, positions, record, options: { ...options, axis: spec, capacity: 1 } };
 }

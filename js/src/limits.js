@@ -51,6 +51,7 @@ export function checkSlots(tiles, m, axes = 1, maxSlots = MAX_SLOTS, what = 'rea
   return slots;
 }
 
+const F32_MAX = 3.4028234663852886e38;
 const pair = (v, test = num) => Array.isArray(v) && v.length === 2 && v.every(test);
 const close = (a, b) => Math.abs(a - b) <= 1e-6 * Math.max(1, Math.abs(b));
 
@@ -87,8 +88,8 @@ export function checkUniforms(u, r, axisLength, maps, m, cell) {
     if (!pair(u[size], Number.isInteger) || (map ? u[size][0] !== map.cols || u[size][1] !== map.rows : u[size].some((x) => x !== 0))) {
       off(size, map ? `the ${key} map's [cols, rows] = [${map.cols}, ${map.rows}]` : '[0, 0]: no map');
     }
-    if (!pair(u[lo])) off(lo, 'two finite numbers');
-    if (!pair(u[inv], (x) => num(x) && x > 0)) off(inv, 'two finite numbers > 0');
+    if (!pair(u[lo], (x) => num(x) && Math.abs(x) <= 2 * E)) off(lo, `two numbers within the world, +-${(2 * E).toPrecision(6)}`);
+    if (!pair(u[inv], (x) => num(x) && x > 0 && x <= F32_MAX)) off(inv, 'two float32 numbers > 0');
   }
   if (typeof u.d_wrap !== 'boolean') off('d_wrap', 'true or false');
   if (!(pair(u.altitude, (x) => typeof x === 'number' && Math.abs(x) <= 3.0e38) && u.altitude[0] <= u.altitude[1])) off('altitude', '[lo, hi] with lo <= hi');
@@ -96,4 +97,21 @@ export function checkUniforms(u, r, axisLength, maps, m, cell) {
   if (!(pair(u.choice, (x) => num(x) && x >= 0 && x <= 1) && u.choice[0] <= u.choice[1])) off('choice', '[lo, hi] within [0, 1]');
   if (!(pair(u.lift, (x) => num(x) && Math.abs(x) <= E) && u.lift[0] <= u.lift[1])) off('lift', `[lo, hi] within the world's edge +-${E.toPrecision(6)}`);
   if (!(num(u.align) && u.align >= 0 && u.align <= 1)) off('align', 'a fraction in [0, 1]');
+}
+
+/** The generator's anchor (`anchor_y`, `anchor_xz`) must be one of the base mesh's three anchor points
+ * (axialdeform.core.mesh.anchor_point: its bounding box's bottom face centre, its centre, its origin) to
+ * 1e-6 of the axis length: what the Python reader holds it to (`positions`: Float32Array of 3 n). */
+export function checkAnchor(u, positions, axisLength) {
+  const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < positions.length; i++) {
+    const c = i % 3;
+    if (positions[i] < lo[c]) lo[c] = positions[i];
+    if (positions[i] > hi[c]) hi[c] = positions[i];
+  }
+  const mid = [0, 1, 2].map((c) => Math.fround(lo[c] + hi[c]) / 2), tol = 1e-6 * axisLength;
+  const fits = (p) => Math.abs(p[0] - u.anchor_xz[0]) <= tol && Math.abs(p[1] - u.anchor_y) <= tol && Math.abs(p[2] - u.anchor_xz[1]) <= tol;
+  if (![[mid[0], lo[1], mid[2]], mid, [0, 0, 0]].some(fits)) {
+    throw new AxialError('generate uniforms: anchor_y, anchor_xz: expected the base mesh\'s bottom, center or origin');
+  }
 }

@@ -99,6 +99,7 @@ class GeneratedNode:
 
 
 _NO_BAND = 3.0e38
+_F32_MAX = 3.4028234663852886e38
 
 
 def _close(a, b) -> bool:
@@ -121,7 +122,7 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
     keys = ("rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "tint", "tint_color", "reach", "extent")
     if not isinstance(r, dict) or any(k not in keys for k in r):
         raise GltfError(f"{where}: generate recipe: expected an object of {', '.join(keys[:-1])}, found {str(r)[:80]}")
-    kw = {k: r[k] for k in keys[:10] if k in r and r[k] is not None}
+    kw = {k: r[k] for k in keys[:10] if k in r}  # null is a value (refused where the field needs one), as in JS
     for k in ("scale", "tint_color", "bend"):
         if isinstance(kw.get(k), list):
             kw[k] = tuple(kw[k])
@@ -183,10 +184,10 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
         if not (_pair(sz, lambda x: isinstance(x, int) and not isinstance(x, bool)) and
                 (list(sz) == [shape[0], shape[1]] if shape else list(sz) == [0, 0])):
             off(size, f"the {key} map's [cols, rows] = [{shape[0]}, {shape[1]}]" if shape else "[0, 0]: no map")
-        if not _pair(u.get(lo)):
-            off(lo, "two finite numbers")
-        if not _pair(u.get(inv), lambda x: num(x) and x > 0):
-            off(inv, "two finite numbers > 0")
+        if not _pair(u.get(lo), lambda x: num(x) and abs(x) <= 2 * E):
+            off(lo, f"two numbers within the world, +-{2 * E:.6g}")
+        if not _pair(u.get(inv), lambda x: num(x) and 0 < x <= _F32_MAX):
+            off(inv, "two float32 numbers > 0")
     if not isinstance(u.get("d_wrap"), bool):
         off("d_wrap", "true or false")
     if not (_pair(u.get("altitude"), lambda x: num(x) and abs(x) <= _NO_BAND) and u["altitude"][0] <= u["altitude"][1]):
@@ -265,9 +266,10 @@ def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
     alt = None if u["altitude"] == [-_NO_BAND, _NO_BAND] else tuple(u["altitude"])
     slope = None if u["slope_tan2"] == [0.0, _NO_BAND] else tuple(
         math.degrees(math.atan(math.sqrt(min(x, 1e300)))) for x in u["slope_tan2"])
-    anchor = next((a for a in ("bottom", "center", "origin")
-                   if np.allclose(anchor_point(mesh, a, 1)[[0, 2]], u["anchor_xz"], atol=1e-6 * mesh.axis.length)
-                   and abs(anchor_point(mesh, a, 1)[1] - u["anchor_y"]) <= 1e-6 * mesh.axis.length), None)
+    tol = 1e-6 * float(mesh.axis.length)
+    want = np.array([u["anchor_xz"][0], u["anchor_y"], u["anchor_xz"][1]], np.float64)
+    anchor = next((a for a in ("bottom", "center", "origin") if np.all(np.abs(anchor_point(mesh, a, 1) - want) <= tol)),
+                  None)
     if anchor is None:
         raise GltfError(f"{at}: generate uniforms: anchor_y, anchor_xz: expected the base mesh's bottom, center or origin")
     gen = dataclasses.replace(gen, altitude=alt, slope=slope, choice=tuple(u["choice"]),
