@@ -81,3 +81,13 @@ def test_float32_max_numbers_get_one_line_from_every_command(tmp_path):
         r = cli(*command, cwd=tmp_path)
         assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, (command, r.stderr)
         assert "d1u" in r.stderr and "big.txt" in r.stderr
+
+
+def test_a_walk_stops_at_the_worlds_edge_and_a_huge_wind_is_refused(tmp_path):
+    (tmp_path / "s.toml").write_text(SCENE)
+    r = cli("view", "s.toml", "--headless", "--frames", "2", "--size", "32x24", "--walk", "1e30,0", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr  # before: an AttributeError
+    held = int(r.stdout.split(" instances")[0].rsplit(" ", 1)[1].replace(",", ""))
+    assert held > 0  # at the edge (x = 65 536 cells) the tiles within reach are still made
+    r = cli("render", "s.toml", "-o", "w.png", "--size", "32x24", "--wind", "1e308", cwd=tmp_path)
+    assert r.returncode == 2 and "wind strength: expected at most 100" in r.stderr and len(r.stderr.splitlines()) == 1
