@@ -386,7 +386,7 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
             raise MeshError(f"{mesh.name}: axes entry {i + 1}: expected a table with 'part' and optional "
                             f"'parent', 'axis' and 'anchor', found {entry!r}")
         part = entry["part"]
-        if part not in verts:
+        if not isinstance(part, str) or part not in verts:
             raise MeshError(f"{mesh.name}: axes entry {i + 1}: no part {str(part)[:40]!r}; expected one of "
                             + brief_names(verts))
         if part in index_of:
@@ -396,7 +396,7 @@ def tree_from_spec(mesh, spec, frame="auto") -> AxisTree:
             raise MeshError(f"{mesh.name}: axes entry {i + 1} ({part}): expected " +
                             ("no parent for the root (the first entry)" if i == 0 else
                              "a parent (only the first entry, the root, has none)"))
-        if parent is not None and parent not in index_of:
+        if parent is not None and (not isinstance(parent, str) or parent not in index_of):
             raise MeshError(f"{mesh.name}: axes entry {i + 1} ({part}): parent {parent!r} is not an earlier entry; "
                             "expected a parent listed before its children")
         index_of[part] = len(order)

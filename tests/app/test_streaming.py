@@ -319,7 +319,7 @@ def test_bake_npz_refuses_a_disk_too_small_and_names_a_bad_instance(tmp_path, mo
     P.write_params(f, values)
     assert main(["bake", "stone", str(f), "-o", str(out)]) == 2
     err = capsys.readouterr().err
-    assert f"{f}: instance 700, positions" in err and not out.exists()
+    assert f"{f}: instance 700, field" in err and not out.exists()
 
 
 @pytest.mark.slow
