@@ -583,6 +583,45 @@ def test_the_gltf_generated_form_is_generated_by_the_plugin(browser, three_site,
     assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
 
 
+def test_a_hostile_generated_form_is_refused_in_chromium_and_the_tab_lives(browser, three_site):
+    """A few-KB GLB whose generated form asks for 10^12 a square unit, a reach of 10^9 or tiles of 10^-3
+    over a reach of 24 (before: drawn as something else, the loader frozen, the tab out of memory): three's
+    GLTFLoader with AxialGLTFPlugin rejects it with an AxialError naming the field, at once, and the page
+    still answers (what node's verdicts in tests/app/test_generated_form_bounds.py say, in the browser)."""
+    import pygltflib
+
+    folder, url = three_site
+    (folder / "host.toml").write_text(GLTF_SCENE)
+    good = folder / "host.glb"
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "export", str(folder / "host.toml"), "--generated",
+                        "-o", str(good)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    for key, changes in (("rate", {"rate": 1e12, "min_distance": 0.0}), ("reach", {"reach": 1e9}),
+                         ("reach", {"tile": 1e-3, "min_distance": 0.0, "reach": 24.0})):
+        g = pygltflib.GLTF2().load(str(good))
+        node = next(n for n in g.nodes if n.extensions and "AXIALDEFORM_bend" in n.extensions)
+        gen = node.extensions["AXIALDEFORM_bend"]["generate"]
+        gen["recipe"].update(changes)
+        if key == "reach":  # a consistent file, but for what it asks for
+            m, cell = tile_size(Generate(rate=gen["recipe"]["rate"], tile=gen["recipe"]["tile"]))
+            gen["uniforms"].update(m=m, cell=cell, jitter=1.0 - gen["recipe"]["min_distance"] / cell)
+        name = f"hostile-{key}-{len(changes)}.glb"
+        g.save_binary(str(folder / name))
+        page = browser.new_page(viewport={"width": 320, "height": 240})
+        errors = []
+        page.on("pageerror", lambda e, errors=errors: errors.append(str(e)))
+        try:
+            page.goto(url + f"gltf.html?file={name}")
+            for _ in range(300):  # up to 30 s: the refusal comes at once
+                if errors:
+                    break
+                page.wait_for_timeout(100)
+            assert errors and ("generate recipe: " + key in errors[0] or "generate: " + key in errors[0]), (name, errors)
+            assert page.evaluate("window.app === undefined && 1 + 1") == 2  # nothing drawn, the tab answers
+        finally:
+            page.close()
+
+
 @pytest.mark.slow
 def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site):
     """A generated layer of ten axes in the glTF generated form (its child-axis table an accessor): the
