@@ -278,7 +278,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
       this.setTime(this._time || 0);
       if (this._baked) unbake(this); // swaying instances bend every frame
     }
-    this._windGrow = windReach(this._wind, this.axis.axes ? this.axis.axes.length : [this.axis.length]);
+    this._windGrow = windReach(this._wind, this.axis.axes?.length ?? [this.axis.length], this.axis.axes?.parents);
     this.boundingSphere = null;
     this.computeBoundingSphere();
     if (on !== Boolean(this.defines.AXIAL_WIND)) {

@@ -43,7 +43,15 @@ export function windCycles(wind, t, target) {
 }
 
 /** How far the wind can move a vertex: a tip by at most strength L (1 + gustiness), every axis of a
- * tree by its own L (`lengths`). */
-export function windReach(wind, lengths) {
-  return wind ? wind.strength * (1 + wind.gustiness) * lengths.reduce((t, x) => t + x, 0) : 0;
+ * tree by its own L (`lengths`); a vertex moves by its own chain only (axis, parent, ..., root), so a
+ * tree's reach is its longest chain's (axialdeform.core.bounds.wind_reach); without `parents`, the sum. */
+export function windReach(wind, lengths, parents = null) {
+  if (!wind) return 0;
+  let most = lengths.reduce((t, x) => t + x, 0);
+  if (parents && parents.length === lengths.length) {
+    const chain = [];
+    for (let k = 0; k < lengths.length; k++) chain.push(lengths[k] + (k > 0 ? chain[parents[k]] : 0));
+    most = Math.max(...chain);
+  }
+  return wind.strength * (1 + wind.gustiness) * most;
 }
