@@ -397,7 +397,7 @@ reach = 40.0
 }
 #: what a hostile generated form asks for: the sizes that froze or exhausted the plugin before, and types
 GENERATED_HOSTILE = [0, -1, 1e-6, 1e-3, 0.5, 1e5, 2000, 400, 1e9, 1e12, 1e30, 1e308, INF, "-" + INF, "abc", None,
-                     True, [], [-5, 0], [3e38, 3.4e38], [0, 7], 2**33, 4000, 100000]
+                     True, [], [-5, 0], [3e38, 3.4e38], [0, 7], 2**33, 4000, 100000, 4.0, 16.0, 26.0, 1.0]
 
 
 def make_generated_bases(folder: Path) -> list[Path]:

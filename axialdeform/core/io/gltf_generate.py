@@ -102,6 +102,18 @@ _NO_BAND = 3.0e38
 _F32_MAX = 3.4028234663852886e38
 
 
+def _whole(x):
+    """``x`` as an int when it is a whole number as JSON gives it (``16`` or ``16.0``: JavaScript's
+    ``Number.isInteger`` says yes to both), else None."""
+    if isinstance(x, bool):
+        return None
+    if isinstance(x, int):
+        return x
+    if isinstance(x, float) and math.isfinite(x) and x.is_integer():
+        return int(x)
+    return None
+
+
 def _close(a, b) -> bool:
     return isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) and abs(a - b) <= 1e-6 * max(1.0, abs(b))
 
@@ -126,6 +138,8 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
     for k in ("scale", "tint_color", "bend"):
         if isinstance(kw.get(k), list):
             kw[k] = tuple(kw[k])
+    if _whole(kw.get("seed")) is not None:  # 4 or 4.0: JSON's whole numbers, as JavaScript reads them
+        kw["seed"] = _whole(kw["seed"])
     try:
         gen = Generate(**kw)
         reach = r.get("reach", 3.0 * gen.tile)
@@ -146,9 +160,9 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
     bends = gen.bend if isinstance(gen.bend, tuple) else (gen.bend,)
     s0, s1 = gen.scale if gen.scale is not None else (1.0, 1.0)
     num = lambda x: isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)  # noqa: E731
-    if u.get("seed") != gen.seed or isinstance(u.get("seed"), bool):
+    if _whole(u.get("seed")) != gen.seed:
         off("seed", f"the recipe's seed {gen.seed}")
-    if u.get("m") != m or isinstance(u.get("m"), bool) or not isinstance(u.get("m"), int):
+    if _whole(u.get("m")) != m:
         off("m", f"the recipe's {m} cells a side")
     if not _close(u.get("cell"), cell):
         off("cell", f"the recipe's cell side {cell}")
@@ -181,8 +195,8 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
         if u[has] != (shape is not None):
             off(has, f"true: the node has a {key} map" if shape else f"false: the node has no {key} map")
         sz = u.get(size)
-        if not (_pair(sz, lambda x: isinstance(x, int) and not isinstance(x, bool)) and
-                (list(sz) == [shape[0], shape[1]] if shape else list(sz) == [0, 0])):
+        if not (_pair(sz, lambda x: _whole(x) is not None) and
+                ([_whole(x) for x in sz] == [shape[0], shape[1]] if shape else [_whole(x) for x in sz] == [0, 0])):
             off(size, f"the {key} map's [cols, rows] = [{shape[0]}, {shape[1]}]" if shape else "[0, 0]: no map")
         if not _pair(u.get(lo), lambda x: num(x) and abs(x) <= 2 * E):
             off(lo, f"two numbers within the world, +-{2 * E:.6g}")
@@ -246,8 +260,10 @@ def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
         m = spec.get(key) if isinstance(spec, dict) else None
         if m is None:
             continue
-        if not (isinstance(m, dict) and all(isinstance(m.get(k), int) and not isinstance(m.get(k), bool) and m[k] > 0
-                                            for k in ("cols", "rows")) and m["cols"] * m["rows"] <= MAX_MAP_TEXELS):
+        if isinstance(m, dict):
+            m = {**m, **{k: _whole(m.get(k)) for k in ("cols", "rows")}}
+        if not (isinstance(m, dict) and all(isinstance(m.get(k), int) and m[k] > 0 for k in ("cols", "rows"))
+                and m["cols"] * m["rows"] <= MAX_MAP_TEXELS):
             raise GltfError(f"{at}: generate {key}: expected {{accessor, cols, rows}} of at most {MAX_MAP_TEXELS} numbers, "
                             f"found {str(m)[:80]}")
         data = read_accessor(gltf, blob, m.get("accessor"), f"generate {key}", at)
