@@ -244,13 +244,12 @@ def slot_limit() -> int:
     return value
 
 
-def check_slots(recipe: Generate, tiles: int, what: str, mesh=None) -> int:
+def check_slots(recipe: Generate, tiles: int, what: str, axes: int = 1) -> int:
     """The slots ``tiles`` tiles of ``recipe`` hold (``tiles m^2``), or a :class:`ParamError` when that is
     above :func:`slot_limit` (``what``: what asked for them, named in the message) -- checked before any
-    array is made.  A mesh of K axes counts its child axes: each slot holds K axes' numbers."""
+    array is made.  A mesh of ``axes`` axes (``BaseMesh.axis_count``) counts each: a slot holds every axis's numbers."""
     m = tile_size(recipe)[0]
     slots = int(tiles) * m * m
-    axes = getattr(getattr(mesh, "tree", None), "count", 1) or 1
     limit = slot_limit()
     if slots * axes > limit:
         more = f" x {axes} axes" if axes > 1 else ""
@@ -462,7 +461,7 @@ def reach_tiles(recipe: Generate, reach: float) -> int:
     return k * k
 
 
-def check_reach(recipe: Generate, reach: float, mesh=None) -> int:
+def check_reach(recipe: Generate, reach: float, axes: int = 1) -> int:
     """The slots the tiles within ``reach`` may hold, or a ParamError naming ``reach`` when it is not finite
     and > 0, reaches past the world (2 E), or asks for more slots than :func:`slot_limit`."""
     reach = float(reach)
@@ -470,7 +469,7 @@ def check_reach(recipe: Generate, reach: float, mesh=None) -> int:
     if not (math.isfinite(reach) and 0 < reach <= 2 * E):
         raise ParamError(f"generate: reach: expected a distance > 0 and at most the world's width {2 * E:.6g}, "
                          f"found {reach!r}")
-    return check_slots(recipe, reach_tiles(recipe, reach), "reach", mesh)
+    return check_slots(recipe, reach_tiles(recipe, reach), "reach", axes)
 
 
 def check_extent(recipe: Generate, extent) -> tuple:
@@ -490,8 +489,9 @@ def check_extent(recipe: Generate, extent) -> tuple:
     return x0, z0, x1, z1
 
 
-def tiles_in(recipe: Generate, extent) -> np.ndarray:
-    """(k, 2) ints: the tiles that meet the ground ``extent`` (x0, z0, x1, z1) within the world's edge."""
+def tiles_in(recipe: Generate, extent, axes: int = 1) -> np.ndarray:
+    """(k, 2) ints: the tiles that meet the ground ``extent`` (x0, z0, x1, z1) within the world's edge; a
+    ParamError naming ``extent`` when they hold more slots (of ``axes`` axes each) than :func:`slot_limit`."""
     x0, z0, x1, z1 = check_extent(recipe, extent)
     T = recipe.tile
     first, last = _world_tiles(recipe)
@@ -499,7 +499,7 @@ def tiles_in(recipe: Generate, extent) -> np.ndarray:
     lo_z, hi_z = max(first, math.floor(z0 / T)), min(last, math.floor(z1 / T))
     if hi_x < lo_x or hi_z < lo_z:
         return np.zeros((0, 2), np.int64)
-    check_slots(recipe, (hi_x - lo_x + 1) * (hi_z - lo_z + 1), "the extent")
+    check_slots(recipe, (hi_x - lo_x + 1) * (hi_z - lo_z + 1), "the extent", axes)
     tx, tz = np.meshgrid(np.arange(lo_x, hi_x + 1), np.arange(lo_z, hi_z + 1), indexing="ij")
     return np.stack([tx.ravel(), tz.ravel()], 1)
 
@@ -508,10 +508,8 @@ def generate_extent(recipe: Generate, mesh, extent, maps: GroundMaps | None = No
     """The instances standing in the ground ``extent`` (x0, z0, x1, z1; x0 <= px < x1, z0 <= pz < z1):
     the tiles that meet it, materialized (what ``render``, ``bake``, ``export`` and ``fit`` draw and write)."""
     x0, z0, x1, z1 = check_extent(recipe, extent)
-    tiles = tiles_in(recipe, extent)
-    check_slots(recipe, len(tiles), "the extent", mesh)
-    p = generate_tiles(recipe, mesh, tiles, maps)
-    axes = getattr(getattr(mesh, "tree", None), "count", 1) or 1
+    axes = mesh.axis_count
+    p = generate_tiles(recipe, mesh, tiles_in(recipe, extent, axes), maps)
     px, pz = p[:, 10 * axes], p[:, 10 * axes + 2]  # the position follows every axis's offsets
     inside = (px >= x0) & (px < x1) & (pz >= z0) & (pz < z1)
     return p[inside]

@@ -287,7 +287,7 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
         with src.wrap("generate", "layer", nth):
             density = load_density(gen.density) if gen.density is not None else None
             gen = replace(gen, maps=GroundMaps.of(scene.terrain, density, gen.extent))
-            check_reach(gen.generate, gen.reach, mesh)  # a tree's slots hold every axis: bounded before any is made
+            check_reach(gen.generate, gen.reach, mesh.axis_count)  # a tree's slots hold every axis: bounded before any is made
             params = generate_extent(gen.generate, mesh, gen.extent, gen.maps)
             check_drawable(params, "the generated instances")  # what a parameter file is held to
         recipe = replace(recipe, generate=gen)

@@ -76,7 +76,7 @@ def test_a_tree_counts_its_axes():
     reach = (n - 1) * 8.0  # (2 reach / 16 + 1)^2 tiles of 256 slots: fits as one axis, not as K
     assert check_reach(g, reach) * k > MAX_SLOTS
     with pytest.raises(ParamError, match=rf"x {k} axes slots"):
-        check_reach(g, reach, mesh)
+        check_reach(g, reach, mesh.axis_count)
 
 
 def test_the_world_ends_where_float32_keeps_the_grid():

@@ -17,10 +17,8 @@ from ..generate import (
     Generate,
     GroundMaps,
     check_reach,
-    check_slots,
     children_table,
     generate_tiles,
-    reach_tiles,
     recipe_json,
     recipe_uniforms,
     tile_size,
@@ -122,8 +120,7 @@ def _pair(v, test=lambda x: isinstance(x, (int, float)) and not isinstance(x, bo
     return isinstance(v, list) and len(v) == 2 and all(test(x) for x in v)
 
 
-def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, where: str,
-                         max_slots: int | None = None) -> tuple[Generate, float]:
+def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, where: str) -> tuple[Generate, float]:
     """The generated form's ``generate`` object held to the same rules as the npm plugin's (js/src/limits.js,
     ``checkUniforms``): the recipe by :class:`Generate` and its bounds, the slots within reach, and every one of
     the generator's numbers -- what follows from the recipe equal to it, the rest finite and in range, a map's
@@ -145,7 +142,7 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
         reach = r.get("reach", 3.0 * gen.tile)
         if not (isinstance(reach, (int, float)) and not isinstance(reach, bool) and math.isfinite(reach) and reach > 0):
             raise ParamError(f"generate: reach: expected a finite number > 0, found {reach!r}")
-        check_reach(gen, reach)
+        check_reach(gen, reach, axes)  # its range and its slots, each of a tree's axes counted
     except (ParamError, TypeError) as exc:
         raise GltfError(f"{where}: generate recipe: {str(exc).removeprefix('generate: ')}") from None
     u = spec.get("uniforms")
@@ -214,21 +211,7 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
         off("lift", f"[lo, hi] within the world's edge +-{E:.6g}")
     if not (num(u.get("align")) and 0 <= u["align"] <= 1):
         off("align", "a fraction in [0, 1]")
-    try:
-        if max_slots is None:
-            check_slots(gen, reach_tiles(gen, reach), "reach", None if axes < 2 else _Axes(axes))
-        elif reach_tiles(gen, reach) * m * m * axes > max_slots:
-            raise ParamError(f"generate: reach: expected at most {max_slots} slots")
-    except ParamError as exc:
-        raise GltfError(f"{where}: {exc}") from None
     return gen, float(reach)
-
-
-class _Axes:
-    """Stands for a mesh of ``count`` axes where only the count is known (check_slots)."""
-
-    def __init__(self, count: int):
-        self.tree = type("Tree", (), {"count": count})()
 
 
 def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
@@ -270,10 +253,8 @@ def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
         if data.size != m["cols"] * m["rows"]:
             raise GltfError(f"{at}: generate {key}: expected a FLOAT SCALAR accessor of {m['cols']} x {m['rows']}")
         grids[key] = data.reshape(m["rows"], m["cols"]).astype(np.float32)
-    tree = getattr(mesh, "tree", None)
-    axes = tree.count if tree is not None else 1
     shapes = {k: (g.shape[1], g.shape[0]) for k, g in grids.items() if k != "children"}
-    gen, reach = check_generated_form(spec, float(mesh.axis.length), axes, shapes, at)
+    gen, reach = check_generated_form(spec, float(mesh.axis.length), mesh.axis_count, shapes, at)
     u = spec["uniforms"]
     f32 = np.float32
     maps = GroundMaps(heights=grids.get("heights"), h_lo=np.array(u["h_lo"], f32), h_inv=np.array(u["h_inv"], f32),
