@@ -155,9 +155,16 @@ def _folder_files(scene: WebScene) -> dict:
         "scene.json": json.dumps(scene.config, ensure_ascii=False, indent=1).encode("utf-8"),
         **scene.files,
     }
-    for rel in list(VENDOR_FILES.values()) + ["LICENSE", "VERSION"]:
+    for rel in _VENDORED:
         files["three/" + rel] = vendor_file(rel)
     return files
+
+
+#: three.js's files a folder page carries (under ``three/``)
+_VENDORED = (*VENDOR_FILES.values(), "LICENSE", "VERSION")
+#: the files of every folder page, whatever its scene (its layers' files come from its scene.json)
+_PAGE_FILES = frozenset({"index.html", "app.js", "scene.json", *(MODULE_DIR + n for n in MODULE_FILES),
+                         *("three/" + r for r in _VENDORED)})
 
 
 def write_folder(out: str | os.PathLike, scene: WebScene, *, inputs=(), overwrite: bool = False) -> Path:
@@ -272,6 +279,4 @@ def page_files(folder: str | os.PathLike) -> frozenset:
                                "expected a folder written by 'axialdeform web'") from None
     if not all(isinstance(n, str) for n in names):
         raise AxialDeformError(f"{path}: layers: expected file names (strings)")
-    fixed = {"index.html", "app.js", "scene.json", *(MODULE_DIR + n for n in MODULE_FILES),
-             *("three/" + r for r in [*VENDOR_FILES.values(), "LICENSE", "VERSION"])}
-    return frozenset(fixed | names)
+    return _PAGE_FILES | names

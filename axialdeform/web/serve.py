@@ -20,7 +20,6 @@ Everything else is a 404 (or 403 for a foreign host) with a one-line body.
 from __future__ import annotations
 
 import errno
-import functools
 import operator
 import os
 import posixpath
@@ -148,9 +147,9 @@ def make_server(folder: str | os.PathLike, port: int = 8000, *, files=None, foll
     folder = Path(folder)
     if not folder.is_dir():
         raise AxialDeformError(f"{folder}: no such folder to serve")
-    handler = functools.partial(type("PageHandler", (_PageHandler,), {
+    handler = type("PageHandler", (_PageHandler,), {
         "folder": folder.resolve(), "files": None if files is None else frozenset(str(f) for f in files),
-        "follow": tuple(Path(f).resolve() for f in follow)}))
+        "follow": tuple(Path(f).resolve() for f in follow)})
     try:
         number = operator.index(port)
     except TypeError:
