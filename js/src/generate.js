@@ -12,7 +12,7 @@ import { ATTRIBUTES } from './record.js';
 import { TileGenerator, TileAttributes, GENERATED_FLOATS } from './tiles.js';
 import { MAX_SLOTS, checkAnchor, checkRecipeBounds, checkSlots, worldEdge } from './limits.js';
 
-export { TileGenerator, GENERATED_FLOATS, worldEdge };
+export { TileGenerator, GENERATED_FLOATS };
 const NO_BAND = 3.0e38;
 const _eye = new THREE.Vector3();
 const BINOMIAL = [1, 4, 6, 4, 1];

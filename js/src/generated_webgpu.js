@@ -14,7 +14,8 @@ import { AxialError, AXES_ROW, texelRows } from './adp.js';
 import { AxialInstancedMesh } from './webgpu_mesh.js';
 import { unbake } from './bake.js';
 import { ATTRIBUTES } from './record.js';
-import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, tileSize, worldEdge, GENERATED_FLOATS } from './generate.js';
+import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, tileSize, GENERATED_FLOATS } from './generate.js';
+import { worldEdge } from './limits.js';
 import { recipeNodes, axialGenerate, axialGenerateChild, axialGenKey } from './generate_nodes.js';
 import { axialRotation } from './nodes.js';
 
