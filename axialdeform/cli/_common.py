@@ -35,6 +35,30 @@ def angle_range(text: str) -> tuple[float, float]:
     return (parts[0], parts[1])
 
 
+def view_args(args, auto, up: str):
+    """``(eye, target, fov, camera)``: ``--eye``, ``--target`` and ``--fov`` where given, else those of the
+    automatic framing ``camera = auto(fov)`` (a callable of the fov, returning a
+    :class:`~axialdeform.core.camera.Camera`), checked: the fov in (0, 180) degrees, two different points, a
+    view not along the ``up`` axis."""
+    import numpy as np
+
+    from ..core.camera import FOVY, UP_VECTORS
+
+    fov = FOVY if args.fov is None else float(args.fov)
+    if not 0.0 < fov < 180.0:
+        raise ArgumentError(f"--fov: expected degrees between 0 and 180, found {args.fov:g}")
+    cam = auto(fov)
+    eye = np.asarray(args.eye if args.eye is not None else cam.eye, dtype=np.float64)
+    target = np.asarray(args.target if args.target is not None else cam.target, dtype=np.float64)
+    forward = target - eye
+    if not np.linalg.norm(forward) > 0:
+        raise ArgumentError(f"--eye / --target: expected two different points, found both {tuple(map(float, eye))}")
+    if np.linalg.norm(np.cross(forward, UP_VECTORS[up])) <= 1e-9 * np.linalg.norm(forward):
+        raise ArgumentError(f"--eye / --target: the view direction {tuple(map(float, forward))} is parallel to the up "
+                               f"axis {up}; expected a direction that is not straight up or down (or use --up)")
+    return eye, target, fov, cam
+
+
 def vec3(text: str) -> tuple[float, float, float]:
     """``X,Y,Z`` (three finite numbers)."""
     try:

@@ -7,7 +7,6 @@ import time
 import numpy as np
 
 from ..core.bounds import instance_bounds
-from ..core.errors import AxialDeformError
 from ..core.io.image import save_png
 from ..core.look import Look
 from ..gl.context import Offscreen, create_context
@@ -27,6 +26,7 @@ from ._common import (
     format_stats,
     load,
     vec3,
+    view_args,
     wind_arg,
 )
 
@@ -64,23 +64,13 @@ def camera_from_args(mesh, params, size, args):
     """The automatic camera, with ``--eye``, ``--target`` and ``--fov`` put in
     where given (near and far planes then enclose every instance)."""
 
-    from ..core.camera import FOVY, UP_VECTORS, Camera, frame_instances
+    from ..core.camera import UP_VECTORS, Camera, frame_instances
 
-    fov = FOVY if args.fov is None else float(args.fov)
-    if not 0.0 < fov < 180.0:
-        raise AxialDeformError(f"--fov: expected degrees between 0 and 180, found {args.fov:g}")
-    cam = frame_instances(mesh, params, size[0] / size[1], up=args.up, fovy=fov)
+    eye, target, fov, cam = view_args(args, lambda fov: frame_instances(mesh, params, size[0] / size[1], up=args.up,
+                                                                       fovy=fov), args.up)
     if args.eye is None and args.target is None:
         return cam
-    eye = np.asarray(args.eye if args.eye is not None else cam.eye, dtype=np.float64)
-    target = np.asarray(args.target if args.target is not None else cam.target, dtype=np.float64)
-    forward = target - eye
-    if not np.linalg.norm(forward) > 0:
-        raise AxialDeformError(f"--eye / --target: expected two different points, found both {tuple(eye)}")
     up = np.asarray(UP_VECTORS[args.up], dtype=np.float64)
-    if np.linalg.norm(np.cross(forward, up)) <= 1e-9 * np.linalg.norm(forward):
-        raise AxialDeformError(f"--eye / --target: the view direction {tuple(forward)} is parallel to the up "
-                               f"axis {args.up}; expected a direction that is not straight up or down (or use --up)")
     centers, radii = instance_bounds(mesh, params)  # a sphere around each instance
     reach = np.linalg.norm(centers - eye, axis=1) + radii if len(centers) else np.ones(1)
     far = float(reach.max()) * 1.05 + 1e-6

@@ -14,7 +14,7 @@ from ..core.io.image import save_png
 from ..core.io.safeio import check_disk_space, check_output_path
 from ..core.scene import is_scene_file, load_scene
 from ..gl.bake import bake_pieces
-from ._common import check_baked_triangles
+from ._common import check_baked_triangles, view_args
 from ._common import check_triangles as check
 
 __all__ = ["scene_of", "render", "bake", "export", "scene_time"]
@@ -88,33 +88,17 @@ def render(scene, args, wind=None, options=None) -> None:
 
 def _camera_args(scene, args, size) -> None:
     """``--eye``, ``--target`` and ``--fov`` put in the scene's camera where given (the scene's own framing
-    fills the rest), checked as for a mesh and parameters."""
+    fills the rest), checked as for a mesh and parameters (:func:`._common.view_args`)."""
     import dataclasses
 
-    import numpy as np
-
-    from ..core.camera import UP_VECTORS
     from ..gl.scene import scene_camera
 
-    eye, target, fov = (getattr(args, k, None) for k in ("eye", "target", "fov"))
-    if eye is None and target is None and fov is None:
+    if args.eye is None and args.target is None and args.fov is None:
         return
-    if fov is not None and not 0.0 < fov < 180.0:
-        raise AxialDeformError(f"--fov: expected degrees between 0 and 180, found {fov:g}")
-    spec = scene.camera if fov is None else dataclasses.replace(scene.camera, fov=float(fov))
-    scene.camera = spec
-    if eye is None and target is None:
-        return
-    cam = scene_camera(scene, size[0] / size[1])
-    eye = np.asarray(eye if eye is not None else cam.eye, dtype=np.float64)
-    target = np.asarray(target if target is not None else cam.target, dtype=np.float64)
-    forward = target - eye
-    if not np.linalg.norm(forward) > 0:
-        raise AxialDeformError(f"--eye / --target: expected two different points, found both {tuple(eye)}")
-    if np.linalg.norm(np.cross(forward, UP_VECTORS[scene.up])) <= 1e-9 * np.linalg.norm(forward):
-        raise AxialDeformError(f"--eye / --target: the view direction {tuple(forward)} is parallel to the up axis "
-                               f"{scene.up}; expected a direction that is not straight up or down")
-    scene.camera = dataclasses.replace(spec, eye=tuple(map(float, eye)), target=tuple(map(float, target)))
+    with_fov = lambda fov: dataclasses.replace(scene, camera=dataclasses.replace(scene.camera, fov=fov))  # noqa: E731
+    eye, target, fov, _ = view_args(args, lambda fov: scene_camera(with_fov(fov), size[0] / size[1]), scene.up)
+    scene.camera = dataclasses.replace(scene.camera, fov=fov, **({} if args.eye is None and args.target is None else
+                                       {"eye": tuple(map(float, eye)), "target": tuple(map(float, target))}))
 
 
 def bake(scene, args, progress, wind=None) -> None:

@@ -24,7 +24,7 @@ def add_parser(subparsers) -> None:
         "OUT a folder (index.html + files, for a static server) or OUT.html (one self-contained file that "
         "works opened from disk). --serve serves the folder on 127.0.0.1 and prints the URL. "
         "The page: drag to orbit, W toggles wireframe; ?t=SECONDS freezes the wind's clock, ?size=WxH fixes the canvas."))
-    w.add_argument("mesh", nargs="?", help="base mesh file, 'stone' / 'leaf' / 'leafcard' / 'tree' / 'tree', or a scene file .toml "
+    w.add_argument("mesh", nargs="?", help="base mesh file, 'stone' / 'leaf' / 'leafcard' / 'tree', or a scene file .toml "
                    "(default: none: serve an exported page)")
     add_axis(w)
     w.add_argument("params", nargs="?", help="parameter file, .adp or text (default: none: serve an exported page)")
