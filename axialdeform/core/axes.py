@@ -124,22 +124,19 @@ class AxisTree:
         The computed numbers are hashed as :func:`~axialdeform.core.axis.stable_bytes` rounds them (to 1e-9;
         ``lo`` and ``L`` relative to the root's ``L``), so a file written on one machine
         reads on every other whatever BLAS kernel computed the frames."""
-        h = hashlib.sha256()
         scale = float(self.axes[0].length) or 1.0
-        for a in self.axes:
-            h.update(stable_bytes(a.matrix))
-            h.update(stable_bytes(np.array([a.lo, a.length]) / scale))
-        h.update(np.asarray(self.parents, dtype="<i4").tobytes())
-        h.update(self.vertex_axis.astype("<i4").tobytes())
-        return h.digest()[:16]
+        return self._digest(lambda a: stable_bytes(a.matrix) + stable_bytes(np.array([a.lo, a.length]) / scale))
 
     @property
     def legacy_digest(self) -> bytes:
         """The digest files written before 0.2 record (the float64 bits): still read."""
+        return self._digest(lambda a: np.asarray(a.matrix, dtype="<f8").tobytes()
+                            + np.asarray([a.lo, a.length], dtype="<f8").tobytes())
+
+    def _digest(self, axis_bytes) -> bytes:
         h = hashlib.sha256()
         for a in self.axes:
-            h.update(np.asarray(a.matrix, dtype="<f8").tobytes())
-            h.update(np.asarray([a.lo, a.length], dtype="<f8").tobytes())
+            h.update(axis_bytes(a))
         h.update(np.asarray(self.parents, dtype="<i4").tobytes())
         h.update(self.vertex_axis.astype("<i4").tobytes())
         return h.digest()[:16]
