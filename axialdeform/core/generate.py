@@ -48,7 +48,8 @@ from .record import EXTENDED_WIDTH, TINTED_WIDTH, WIDTH, join_record
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
-           "tiles_in", "check_extent", "check_reach", "reach_tiles", "generate_extent", "anchor_weights", "recipe_uniforms", "GroundMaps",
+           "tiles_in", "check_extent", "check_extent_slots", "check_reach", "reach_tiles", "generate_extent",
+           "anchor_weights", "recipe_uniforms", "GroundMaps",
            "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table",
            "child_bound", "tile_spheres", "world_edge", "slot_limit", "check_slots", "MAX_TILE_SLOTS", "MAX_SLOTS",
            "MAX_BEND", "WORLD_CELLS"]
@@ -489,17 +490,29 @@ def check_extent(recipe: Generate, extent) -> tuple:
     return x0, z0, x1, z1
 
 
-def tiles_in(recipe: Generate, extent, axes: int = 1) -> np.ndarray:
-    """(k, 2) ints: the tiles that meet the ground ``extent`` (x0, z0, x1, z1) within the world's edge; a
-    ParamError naming ``extent`` when they hold more slots (of ``axes`` axes each) than :func:`slot_limit`."""
+def _extent_span(recipe: Generate, extent) -> tuple[int, int, int, int]:
+    """``(lo_x, hi_x, lo_z, hi_z)``: the tile indices that meet ``extent`` within the world (checked)."""
     x0, z0, x1, z1 = check_extent(recipe, extent)
     T = recipe.tile
     first, last = _world_tiles(recipe)
-    lo_x, hi_x = max(first, math.floor(x0 / T)), min(last, math.floor(x1 / T))
-    lo_z, hi_z = max(first, math.floor(z0 / T)), min(last, math.floor(z1 / T))
+    return (max(first, math.floor(x0 / T)), min(last, math.floor(x1 / T)),
+            max(first, math.floor(z0 / T)), min(last, math.floor(z1 / T)))
+
+
+def check_extent_slots(recipe: Generate, extent, axes: int = 1) -> int:
+    """The slots the tiles meeting ``extent`` hold (each of ``axes`` axes), or a ParamError naming ``extent``
+    when that is above :func:`slot_limit` -- counted, no tile made."""
+    lo_x, hi_x, lo_z, hi_z = _extent_span(recipe, extent)
+    return check_slots(recipe, max(0, hi_x - lo_x + 1) * max(0, hi_z - lo_z + 1), "the extent", axes)
+
+
+def tiles_in(recipe: Generate, extent, axes: int = 1) -> np.ndarray:
+    """(k, 2) ints: the tiles that meet the ground ``extent`` (x0, z0, x1, z1) within the world's edge; a
+    ParamError naming ``extent`` when they hold more slots (of ``axes`` axes each) than :func:`slot_limit`."""
+    check_extent_slots(recipe, extent, axes)
+    lo_x, hi_x, lo_z, hi_z = _extent_span(recipe, extent)
     if hi_x < lo_x or hi_z < lo_z:
         return np.zeros((0, 2), np.int64)
-    check_slots(recipe, (hi_x - lo_x + 1) * (hi_z - lo_z + 1), "the extent", axes)
     tx, tz = np.meshgrid(np.arange(lo_x, hi_x + 1), np.arange(lo_z, hi_z + 1), indexing="ij")
     return np.stack([tx.ravel(), tz.ravel()], 1)
 

@@ -442,7 +442,7 @@ def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
 
 def _generate_layer(src, recipe, nth) -> GenerateRecipe:
     """``[layer.generate]``, checked: every key's type here, the recipe's own rules by Generate."""
-    from ..generate import Generate, check_extent, check_reach, tiles_in
+    from ..generate import Generate, check_extent, check_extent_slots, check_reach
 
     if not isinstance(recipe, dict):
         raise src.error("expected a table [layer.generate]", "generate", "layer", nth)
@@ -478,7 +478,7 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
         extent = check_extent(gen, extent)
         reach = reach if reach is not None else 3.0 * gen.tile
         check_reach(gen, reach)
-        tiles_in(gen, extent)  # its slots bounded (a tree's axes counted when the scene is built)
+        check_extent_slots(gen, extent)  # counted, not made (a tree's axes counted when the scene is built)
     except ParamError as exc:  # "generate: FIELD: what was expected": the field's own line
         _, field, said = (str(exc).split(": ", 2) + ["", ""])[:3]
         field = {"the extent": "extent", "the tiles within reach": "reach"}.get(field, field)
