@@ -37,6 +37,21 @@ def validate_gltf(*paths) -> list:
     return reports if isinstance(reports, list) else [reports]
 
 
+@pytest.fixture(scope="session")
+def validate():
+    """``validate(*paths) -> [report, ...]``: the Khronos validator's JSON reports (validate_gltf)."""
+    return validate_gltf
+
+
+def assert_valid_gltf(report, allowed_infos=()) -> None:
+    """A validator report with no error, no warning and no info outside ``allowed_infos``."""
+    issues = report["issues"]
+    messages = [(m["code"], m["severity"], m.get("pointer")) for m in issues["messages"]]
+    assert issues["numErrors"] == 0, messages
+    assert issues["numWarnings"] == 0, messages
+    assert {code for code, _sev, _ptr in messages} <= set(allowed_infos), messages
+
+
 def data_mesh(rel: str) -> Path:
     """A test mesh from ``tests/data/meshes`` (in the repository); a missing one is a failure, not a skip."""
     path = DATA / rel

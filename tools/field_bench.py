@@ -1,4 +1,4 @@
-"""The field scene of issue 14: frame time with culling off / on / on + LOD
+"""The field scene: frame time with culling off / on / on + LOD
 and each picture's difference to the full render, alternated in one process.
 
     .venv/bin/python tools/field_bench.py                 # 1 000 000 stones, 800x600

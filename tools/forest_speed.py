@@ -1,4 +1,4 @@
-"""The forest's cost, measured in one run (issue 22, item 6).
+"""The forest's cost, measured in one run.
 
     python tools/forest_speed.py [--trees 2000] [--rounds 15] [--size 800x600]
 

@@ -2,7 +2,7 @@
 
     python3 tools/fuzz_params.py --seconds 60 [--seed 1] [--target params|meshes|commands|all]
 
-``params`` (the default, as before issue 16):
+``params`` (the default, the first fuzzer):
 
 Mutates valid parameter files (float32 binary, quantized binary, text) --
 bit flips, byte overwrites, truncation, splices of two files, inserted and
@@ -799,7 +799,7 @@ def _command_case(rng: np.random.Generator, tmp, mesh_texts: list, scene_texts: 
                 output(pick(".adp", ".txt")), "--bend", pick(0.1, 1e30, -1, 0)]
         if big_case:
             argv[3] = str(int(rng.integers(100_000, 400_000)))  # a big output
-        if rng.random() < 0.2:  # issue 32's options: a sag toward the world's down
+        if rng.random() < 0.2:  # the tree options: a sag toward the world's down
             argv += ["--droop", pick("0.2", "-1", "nan", "1e30", "0")]
     elif command == "render":
         argv = ["render", mesh, params, "-o", output(".png"), "--size", size, "--mode",

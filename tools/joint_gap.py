@@ -10,7 +10,7 @@ which move the parent with it: that does not open the joint).  Over ``-n`` rando
 with every child level bent by ``--bend`` (a fraction of the child's length), the tool prints the
 median and the largest of that motion in units of ``r``, for the offsets drawn as before (``d₁ =
 0``) and as now (clamped at the anchor, ``core.axes.child_offsets``), from the same random
-numbers.  The goal (issue 32): median at most 0.25 ``r`` at a bend of 0.3.
+numbers.  The goal: median at most 0.25 ``r`` at a bend of 0.3.
 """
 
 from __future__ import annotations

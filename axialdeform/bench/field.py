@@ -1,4 +1,4 @@
-"""The bench's "field" scene (issue 14): a million stones on a plane seen
+"""The bench's "field" scene: a million stones on a plane seen
 from a walker's eye height -- most of them outside the view or far away.
 
 Five ways to draw the same frame, timed alternately in ONE process (A B C D

@@ -325,7 +325,7 @@ def wind_arg(args):
         raise ParamError(str(exc).replace("wind direction", "--wind-dir")) from None
 
 
-# ---------------------------------------------------------------- culling and LOD (issue 14)
+# ---------------------------------------------------------------- culling and LOD
 def add_cull_arguments(p) -> None:
     """``--no-cull``, ``--lod``, ``--lod-error PX`` (render and view)."""
     p.add_argument("--no-cull", action="store_true", help="draw every instance (no per-instance frustum culling; "
@@ -357,7 +357,7 @@ def format_stats(stats: dict, frame_s: float | None = None) -> str:
     return text
 
 
-# ---------------------------------------------------------------- bounded time for huge jobs (issue 16)
+# ---------------------------------------------------------------- bounded time for huge jobs
 #: The CLI's per-frame budget of drawn primitives (``--max-triangles``):
 #: instances x triangles of the drawn parts, summed over layers and panels,
 #: wireframe weighted by :func:`mode_weight`.  A frame of 10**8 triangles of

@@ -76,3 +76,21 @@ def test_the_products_names_have_numpydoc_sections():
             if takes and "Parameters\n----------" not in doc and "Attributes\n----------" not in doc:
                 missing.append(name)
     assert missing == [], missing
+
+
+#: a citation of the project's tracker ("issue 16", "Issue #32"): the docs and the code say what a change is
+TRACKER = re.compile(r"\b[Ii]ssues? ?#?\d+\b")
+
+
+def test_docs_and_sources_cite_no_tracker():
+    """The docs, README files, sources, shaders, tools and examples say what they mean, not which ticket
+    brought it: a reader of the repository has no tracker."""
+    folders = ("docs", "axialdeform", "glsl", "js/src", "js/test", "tools", "examples")
+    files = [ROOT / "README.md", ROOT / "js" / "README.md"]
+    files += [p for f in folders for p in (ROOT / f).rglob("*")
+              if p.suffix in (".md", ".py", ".js", ".mjs", ".glsl", ".vert", ".frag", ".geom", ".comp", ".toml", ".html")
+              and "node_modules" not in p.parts and "vendor" not in p.parts]
+    found = [f"{p.relative_to(ROOT)}:{n}" for p in files
+             for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1) if TRACKER.search(line)]
+    assert found == []
+    assert TRACKER.search("the goal (issue 32): median") and TRACKER.search("see Issue #7")  # it can fail

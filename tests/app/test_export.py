@@ -8,9 +8,6 @@ failure, not a skip.
 
 from __future__ import annotations
 
-import json
-import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -23,37 +20,10 @@ from axialdeform.cli import main
 from axialdeform.core.io import gltf as export
 from axialdeform.core.params import ANGLES
 
-from conftest import data_mesh
+from conftest import assert_valid_gltf, data_mesh
 
 VALIDATOR = Path(__file__).resolve().parents[1] / "gltf-validator"
 INSTALL = "npm ci --prefix tests/gltf-validator"
-
-
-@pytest.fixture(scope="session")
-def validate():
-    """``validate(*paths) -> [report, ...]``: the Khronos validator's JSON reports."""
-    node = shutil.which("node")
-    if node is None:
-        pytest.fail(f"node is not installed; the glTF tests need node >= 18 and the validator ({INSTALL})")
-    if not (VALIDATOR / "node_modules" / "gltf-validator" / "package.json").exists():
-        pytest.fail(f"the Khronos glTF validator is not installed; run `{INSTALL}`")
-
-    def run(*paths):
-        proc = subprocess.run([node, str(VALIDATOR / "validate.js"), *map(str, paths)],
-                              capture_output=True, text=True, timeout=300)
-        assert proc.returncode == 0, f"validator failed: {proc.stderr}"
-        reports = json.loads(proc.stdout)
-        return reports if len(paths) > 1 else [reports]
-
-    return run
-
-
-def _assert_valid(report, allowed_infos=()):
-    issues = report["issues"]
-    messages = [(m["code"], m["severity"], m.get("pointer")) for m in issues["messages"]]
-    assert issues["numErrors"] == 0, messages
-    assert issues["numWarnings"] == 0, messages
-    assert {code for code, _sev, _ptr in messages} <= set(allowed_infos), messages
 
 
 @pytest.fixture(scope="module")
@@ -78,9 +48,9 @@ def test_validator_reports_zero_errors(scenes, validate):
         if "instanced" in path.name:
             # the validator does not know EXT_mesh_gpu_instancing: it says so (info) and
             # sees the per-instance accessors as unused (info); no errors, no warnings
-            _assert_valid(report, {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"})
+            assert_valid_gltf(report, {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"})
         else:
-            _assert_valid(report)
+            assert_valid_gltf(report)
 
 
 def test_validator_catches_errors(validate):
@@ -195,7 +165,7 @@ def test_gpu_baked_export_is_valid(ctx, stone, tmp_path, validate):
     positions, normals = ad.bake(stone, params, "gpu", ctx=ctx)
     path = export.export_baked(tmp_path / "gpu.glb", stone, params, positions=positions, normals=normals)
     (report,) = validate(path)
-    _assert_valid(report)
+    assert_valid_gltf(report)
     scene = trimesh.load(str(path), process=False)
     assert sum(len(g.vertices) for g in scene.geometry.values()) == 5 * stone.vertex_count
 
@@ -209,8 +179,8 @@ def test_cli_export(tmp_path, validate, capsys):
     assert main(["export", "leaf", str(params_file), "-o", str(tmp_path / "b2.glb"), "--baked"]) == 0
     assert "4 instances, instanced" in capsys.readouterr().out
     reports = validate(baked, inst)
-    _assert_valid(reports[0])
-    _assert_valid(reports[1], {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"})
+    assert_valid_gltf(reports[0])
+    assert_valid_gltf(reports[1], {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"})
     assert len(trimesh.load(str(baked)).geometry) == 4
     _m, back = export.read_instanced_glb(inst)
     assert np.array_equal(back, ad.read_params(params_file))
@@ -242,8 +212,8 @@ def test_extended_instances_export_scale_and_twist_taper(tmp_path, validate):
     inst = export.export_instanced(tmp_path / "ext-instanced.glb", mesh, params)
     baked = export.export_baked(tmp_path / "ext-baked.glb", mesh, params)
     r_inst, r_baked = validate(inst, baked)
-    _assert_valid(r_inst, {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"})
-    _assert_valid(r_baked)
+    assert_valid_gltf(r_inst, {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"})
+    assert_valid_gltf(r_baked)
     gltf = pygltflib.GLTF2.load_binary(str(inst))
     attrs = gltf.nodes[0].extensions[export.INSTANCING]["attributes"]
     assert {"SCALE", "_AXIAL_TWIST_TAPER"} <= set(attrs)

@@ -325,7 +325,8 @@ def test_cli_fit_memory_is_bounded_by_the_input(tmp_path):
     import os
 
     import trimesh
-    from test_streaming import _peak_rss_mb  # the child-process measurement (os.wait4, fixed mmap threshold)
+
+    from helpers.memory import peak_rss_mb  # the child-process measurement (os.wait4, fixed mmap threshold)
 
     sys.path.insert(0, str(ROOT_DIR / "tools"))
     from big_mesh import torus
@@ -334,6 +335,6 @@ def test_cli_fit_memory_is_bounded_by_the_input(tmp_path):
     trimesh.Trimesh(*torus(1_000_000), process=False).export(big)
     size_mb = os.path.getsize(big) / 2**20
     assert size_mb > 15
-    peak = _peak_rss_mb(["fit", big, big, "-o", tmp_path / "p.adp"])
+    peak = peak_rss_mb(["fit", big, big, "-o", tmp_path / "p.adp"])
     assert peak < 3 * size_mb + 500, (peak, size_mb)
     assert ad.read_params(tmp_path / "p.adp").shape == (1, 16)

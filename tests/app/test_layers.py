@@ -15,33 +15,12 @@ from pathlib import Path
 
 import pytest
 
+from helpers.modules import PACKAGE, imported_modules, package_modules
+
 ROOT = Path(__file__).resolve().parents[2]
-PACKAGE = ROOT / "axialdeform"
 APPLICATION = ("cli", "bench", "viewer", "web", "widget")
 GL_LIBRARIES = ("moderngl", "moderngl_window", "glcontext")
 CLI_LIBRARIES = ("argparse", "tqdm")
-
-
-def imported_modules(tree: ast.AST, module: str, is_package: bool) -> set[str]:
-    """Absolute names of everything ``module`` imports (``from . import x`` resolved)."""
-    names = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            names.update(alias.name for alias in node.names)
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                parts = module.split(".")
-                base = parts if is_package else parts[:-1]
-                base = base[: len(base) - (node.level - 1)]
-                prefix = ".".join(base + ([node.module] if node.module else []))
-            else:
-                prefix = node.module or ""
-            names.add(prefix)
-            names.update(f"{prefix}.{alias.name}" for alias in node.names)  # `from .. import gl`
-        elif isinstance(node, ast.Call) and getattr(node.func, "id", None) == "__import__" and node.args:
-            if isinstance(node.args[0], ast.Constant):
-                names.add(str(node.args[0].value))
-    return names
 
 
 def calls_print(tree: ast.AST) -> list[int]:
@@ -75,16 +54,6 @@ def violations(source: str, module: str, is_package: bool = False) -> list[str]:
         for line in calls_print(tree):
             found.append(f"{module}:{line}: print( outside cli/")
     return found
-
-
-def package_modules():
-    for path in sorted(PACKAGE.rglob("*.py")):
-        rel = path.relative_to(ROOT).with_suffix("")
-        parts = list(rel.parts)
-        is_package = parts[-1] == "__init__"
-        if is_package:
-            parts = parts[:-1]
-        yield path, ".".join(parts), is_package
 
 
 def test_the_package_has_the_three_layers():

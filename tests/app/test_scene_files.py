@@ -8,11 +8,12 @@ import textwrap
 import numpy as np
 import pytest
 from PIL import Image
-from test_export import _assert_valid, validate  # noqa: F401  (the validator fixture)
 
 import axialdeform as ad
 from axialdeform.cli import main
 from axialdeform.core.scene import load_scene
+
+from conftest import assert_valid_gltf
 
 LANDSCAPE = __import__("pathlib").Path(__file__).resolve().parents[2] / "examples" / "landscape" / "landscape.toml"
 
@@ -159,7 +160,7 @@ def test_cli_render_bake_export_accept_a_scene(small, tmp_path, capsys, validate
     glb = tmp_path / "scene.glb"
     assert main(["export", str(small), "-o", str(glb)]) == 0
     (report,) = validate(glb)
-    _assert_valid(report, allowed_infos=("BUFFER_VIEW_TARGET_MISSING",))
+    assert_valid_gltf(report, allowed_infos=("BUFFER_VIEW_TARGET_MISSING",))
     import trimesh
 
     loaded = trimesh.load(glb)

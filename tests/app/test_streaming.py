@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import subprocess
 import sys
 import tracemalloc
 from pathlib import Path
@@ -29,6 +27,8 @@ from axialdeform.core.errors import MeshError, ParamError
 from axialdeform.core.io import params as P
 from axialdeform.core.quantize import quantization_error_bound
 from axialdeform.core.variation import iter_random_params
+
+from helpers.memory import peak_rss_mb
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -119,36 +119,13 @@ def test_random_count_maximum_is_gl_not_memory(tmp_path, capsys):
     assert "expected 0 or more instances" in capsys.readouterr().err
 
 
-# a small Python process runs the CLI and reports its child's peak: the CLI is then
-# forked from that small process, not from pytest (a vfork child's peak RSS counts
-# its parent's pages until exec, so measured straight from pytest it would include
-# everything this test process holds)
-_MEASURE = ("import os, subprocess, sys\n"
-            "p = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL)\n"
-            "_, status, usage = os.wait4(p.pid, 0)\n"
-            "print(usage.ru_maxrss)\n"
-            "sys.exit(os.waitstatus_to_exitcode(status))\n")
-
-
-def _peak_rss_mb(args) -> float:
-    """Peak resident memory (MB) of the CLI in a child process (that process
-    alone: ``os.wait4`` in a small parent of its own, see ``_MEASURE``).
-    glibc's mmap threshold is fixed at 1 MB, so freed pieces go back to the
-    system at once and the peak is what is in use, not heap fragmentation."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "MALLOC_MMAP_THRESHOLD_": str(1 << 20)}
-    done = subprocess.run([sys.executable, "-c", _MEASURE, sys.executable, "-m", "axialdeform", *map(str, args)],
-                          capture_output=True, text=True, env=env)
-    assert done.returncode == 0, done.stderr
-    return int(done.stdout.split()[-1]) / 1024
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("extra", [[], ["--quantize"]], ids=["float32", "quantized"])
 def test_random_memory_does_not_grow_with_the_count(tmp_path, extra):
     """-n 1 200 000 peaks where -n 300 000 does (both several pieces): before,
     the whole array and its copies (about 700 B an instance: +600 MB here)."""
-    small = _peak_rss_mb(["random", "stone", "-n", 300_000, "--twist", "1", "-o", tmp_path / "a.adp", *extra])
-    big = _peak_rss_mb(["random", "stone", "-n", 1_200_000, "--twist", "1", "-o", tmp_path / "b.adp", *extra])
+    small = peak_rss_mb(["random", "stone", "-n", 300_000, "--twist", "1", "-o", tmp_path / "a.adp", *extra])
+    big = peak_rss_mb(["random", "stone", "-n", 1_200_000, "--twist", "1", "-o", tmp_path / "b.adp", *extra])
     assert big - small < 40, (small, big)
     assert (tmp_path / "b.adp").stat().st_size == P.param_file_bytes("b.adp", 1_200_000, 19, quantize=bool(extra))
 
@@ -331,7 +308,7 @@ def test_bake_npz_memory_does_not_grow_with_the_count(tmp_path):
     for n in (10_000, 40_000):
         params = tmp_path / f"p{n}.adp"
         P.write_params(params, ad.random_params(ad.load_mesh("stone"), n, 2))
-        peaks.append(_peak_rss_mb(["bake", "stone", params, "-o", tmp_path / f"b{n}.npz"]))
+        peaks.append(peak_rss_mb(["bake", "stone", params, "-o", tmp_path / f"b{n}.npz"]))
         with np.load(tmp_path / f"b{n}.npz") as z:
             assert z["normals"].shape == (n, 58, 3)
     assert peaks[1] - peaks[0] < 30, peaks
@@ -366,7 +343,7 @@ def test_scene_export_baked_streams_its_layers(tmp_path):
     mesh = ad.load_mesh(tmp_path / "torus.ply")
     ad.write_params(tmp_path / "p.adp", ad.random_params(mesh, 30, seed=1), mesh)
     (tmp_path / "s.toml").write_text('[[layer]]\nname = "tori"\nmesh = "torus.ply"\nparams = "p.adp"\n')
-    peak = _peak_rss_mb(["export", tmp_path / "s.toml", "--baked", "-o", tmp_path / "s.glb"])
+    peak = peak_rss_mb(["export", tmp_path / "s.toml", "--baked", "-o", tmp_path / "s.glb"])
     out_mb = (tmp_path / "s.glb").stat().st_size / 2**20
     assert out_mb > 150
     assert peak < 2.2 * out_mb + 250, (peak, out_mb)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import ast
 
-from test_layers import PACKAGE, imported_modules, package_modules
+from helpers.modules import PACKAGE, imported_modules, package_modules
 
 #: the most imports inside functions, as a share of all imports
 MAX_FUNCTION_LEVEL_SHARE = 0.10
@@ -145,3 +145,19 @@ def test_no_source_file_is_too_long_to_read():
             [*((p, 600) for p in PACKAGE.rglob("*.py")), *((p, 400) for p in js.glob("*.js") if p.name != "glsl.js")]
             if (n := len(p.read_text(encoding="utf-8").splitlines())) > limit]
     assert long == [], long
+
+
+def test_no_test_module_imports_another():
+    """Helpers the tests share live in tests/conftest.py and tests/helpers/, never in a test module another
+    imports (importing one runs its module-level set-up and ties the suites together)."""
+    tests = PACKAGE.parent / "tests"
+    modules = {p.stem for p in tests.rglob("test_*.py")}
+    found = []
+    for path in sorted(tests.rglob("*.py")):
+        for name in imported_modules(ast.parse(path.read_text(encoding="utf-8")), path.stem, False):
+            if name.split(".")[0] in modules:
+                found.append(f"{path.relative_to(tests)} imports {name}")
+    assert found == []
+    # and the rule can fail: a test module's import is seen, inside a function too
+    names = imported_modules(ast.parse("def f():\n    from test_three import make_site\n"), "x", False)
+    assert "test_three" in {n.split(".")[0] for n in names}

@@ -8,11 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from PIL import Image
-from test_streaming import _peak_rss_mb
 
 import axialdeform as ad
 
 from conftest import data_mesh
+from helpers.memory import peak_rss_mb
 
 
 def test_textures_false_keeps_the_mesh_and_decodes_nothing():
@@ -45,9 +45,9 @@ def _big_textured_obj(folder, side: int = 6000):
 def test_random_of_a_big_texture_costs_no_texture_memory(tmp_path):
     textured, plain = _big_textured_obj(tmp_path)
     decoded_mb = 6000 * 6000 * 4 / 2**20  # what decoding the texture as RGBA holds (137 MB)
-    base = _peak_rss_mb(["random", plain, "-n", "1000", "-o", tmp_path / "plain.adp"])
-    peak = _peak_rss_mb(["random", textured, "-n", "1000", "-o", tmp_path / "tex.adp"])
+    base = peak_rss_mb(["random", plain, "-n", "1000", "-o", tmp_path / "plain.adp"])
+    peak = peak_rss_mb(["random", textured, "-n", "1000", "-o", tmp_path / "tex.adp"])
     assert peak - base < decoded_mb / 3, (base, peak)
     # a command that draws does decode it (the measurement can see the texture)
-    drawn = _peak_rss_mb(["render", textured, tmp_path / "tex.adp", "--size", "64x48", "-o", tmp_path / "t.png"])
+    drawn = peak_rss_mb(["render", textured, tmp_path / "tex.adp", "--size", "64x48", "-o", tmp_path / "t.png"])
     assert drawn - base > decoded_mb / 2, (base, drawn)

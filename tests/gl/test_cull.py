@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
-import pyrr
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
-from test_render import meshes_for_all_axes
 
 import axialdeform as ad
 from axialdeform.core.bounds import base_radius, frustum_planes, instance_bounds, instance_boxes, lod_choice, spheres_visible
@@ -16,25 +14,12 @@ from axialdeform.core.lod import build_lod_levels
 from axialdeform.gl.context import Offscreen
 
 from conftest import make_mesh
-
-BACKGROUND = (0.93, 0.94, 0.96)
+from helpers.gl_scenes import BACKGROUND, draw, look, meshes_for_all_axes
 
 
 def field(mesh, n=3000, seed=4):
     """Stones scattered on a disc (y up), radius about 30 L."""
     return ad.random_params(mesh, n, seed=seed, bend=0.15, placement="disc", spacing=1.0 * mesh.axis.length)
-
-
-def look(eye, target, fovy=60.0, aspect=4 / 3, near=0.05, far=400.0):
-    view = pyrr.matrix44.create_look_at(np.asarray(eye, float), np.asarray(target, float), (0, 1, 0), dtype=np.float32)
-    return view, pyrr.matrix44.create_perspective_projection(fovy, aspect, near, far, dtype=np.float32)
-
-
-def draw(ctx, renderer, view, proj, mode="solid", size=(160, 120)):
-    with Offscreen(ctx, size, samples=4) as target:
-        target.use(BACKGROUND)
-        renderer.render(view, proj, mode)
-        return target.read()
 
 
 # ------------------------------------------------------------------ bounds

@@ -9,7 +9,6 @@ import warnings
 import numpy as np
 import pytest
 import trimesh
-from test_cull import draw, look
 
 import axialdeform as ad
 from axialdeform.core.lod import MIN_LOD_TRIANGLES, build_lod_levels
@@ -17,6 +16,7 @@ from axialdeform.core.material import Material, Part, compute_tangents
 from axialdeform.core.mesh import area_weighted_normals
 
 from conftest import data_mesh
+from helpers.gl_scenes import draw, look
 
 
 def leaf_uv(positions):

@@ -5,28 +5,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import trimesh
 from scipy import ndimage
 
 import axialdeform as ad
 from axialdeform.gl.context import Offscreen
 
-from conftest import data_mesh
-
-
-def z_axis_ply_off_origin(tmp_path, stone):
-    """The stone turned so its long axis is z, moved off the origin, saved as PLY with normals."""
-    perm = [1, 2, 0]  # x -> z
-    tm = stone.to_trimesh(stone.positions[:, perm] * 3.0 + [5.0, -40.0, 12.5], stone.normals[:, perm])
-    path = tmp_path / "stone_z.ply"
-    path.write_bytes(trimesh.exchange.ply.export_ply(tm, vertex_normal=True))
-    return path
-
-
-def meshes_for_all_axes(tmp_path, stone, leaf):
-    z = ad.load_mesh(z_axis_ply_off_origin(tmp_path, stone))
-    assert z.normals_from_file and z.axis.name == "z"
-    return {"x": stone, "y": leaf, "z": z, "rock": ad.load_mesh(data_mesh("base/rock_caustics.obj"))}
+from helpers.gl_scenes import meshes_for_all_axes
 
 
 def test_gpu_capture_equals_cpu_reference(ctx, tmp_path, stone, leaf):

@@ -13,62 +13,18 @@ from urllib.parse import quote
 
 import numpy as np
 import pytest
-from test_three import Server, example_picture, make_site
-from test_three import _mask as three_mask
-from test_three import iou as three_iou
-from test_web import SIZE, SKY, Visit, _widget_page, _widget_state, iou
 
 import axialdeform as ad
 from axialdeform.core.generate import Generate, generate_tiles, recipe_uniforms, tile_size, tiles_around
 
-ROOT = Path(__file__).resolve().parents[2]
-LANDSCAPE = ROOT / "examples" / "landscape"
-GRASS = LANDSCAPE / "grass.obj"
+from helpers.browser import SIZE, SKY, Visit, iou, widget_page, widget_state
+from helpers.generated_scenes import GLTF_SCENE, HILLS, LANDSCAPE, TREES, close
+from helpers.three_site import Server, example_picture, make_site
+from helpers.three_site import iou as three_iou
+from helpers.three_site import mask as three_mask
 
-HILLS = """
-background = [0.80, 0.87, 0.95]
-[terrain]
-heightmap = "terrain.png"
-height_scale = 6.0
-extent = [40.0, 30.0]
-color = [0.42, 0.40, 0.30]
-[camera]
-elevation = 28.0
-azimuth = 25.0
-fov = 30.0
-[[layer]]
-name = "stones"
-mesh = "stone"
-color = [0.58, 0.55, 0.5]
-[layer.generate]
-rate = 1.2
-tile = 8.0
-min_distance = 0.4
-seed = 4
-bend = 0.15
-scale = [0.2, 0.45]
-density = "stone_density.png"
-altitude = [0.0, 2.5]
-align_to_normal = 0.8
-anchor = "center"
-extent = [-20, -15, 20, 15]
-reach = 40.0
-[[layer]]
-name = "grass"
-mesh = "grass.obj"
-[layer.generate]
-rate = 3.0
-tile = 8.0
-min_distance = 0.2
-seed = 2
-bend = 0.25
-slope = [0, 25]
-altitude = [1.5, 6]
-tint = 0.5
-tint_color = [0.4, 0.7, 0.25]
-extent = [-20, -15, 20, 15]
-reach = 40.0
-"""
+ROOT = Path(__file__).resolve().parents[2]
+GRASS = LANDSCAPE / "grass.obj"
 
 SCENE = """
 background = [0.80, 0.87, 0.95]
@@ -107,37 +63,6 @@ reach = {reach}
 """
 
 
-TREES = """
-background = [0.80, 0.87, 0.95]
-[camera]
-elevation = 20
-azimuth = 30
-[[layer]]
-name = "trees"
-mesh = "tree"
-axes = "tree-axes.toml"
-[layer.generate]
-rate = 0.02
-tile = 16.0
-min_distance = 3.0
-seed = 5
-bend = [0.03, 0.25]
-scale = [0.8, 1.2]
-extent = [-24, -24, 24, 24]
-reach = 30.0
-[[layer]]
-name = "ground"
-mesh = ["stone", "grass.obj"]
-[layer.generate]
-rate = 0.5
-tile = 16.0
-seed = 6
-weights = [1, 3]
-extent = [-24, -24, 24, 24]
-reach = 30.0
-"""
-
-
 def _scene(folder: Path, name: str, rate=0.3, extent="[-12, -12, 12, 12]", reach=20.0, elevation=18) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "grass.obj").write_bytes(GRASS.read_bytes())
@@ -151,13 +76,6 @@ def _web(scene: Path, out: Path):
                         f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     return r
-
-
-def _close(got, want) -> float:
-    """The largest difference of two record arrays, relative to max(1, |want|)."""
-    got, want = np.asarray(got, np.float64), np.asarray(want, np.float64)
-    assert got.shape == want.shape, (got.shape, want.shape)
-    return float((np.abs(got - want) / np.maximum(1.0, np.abs(want))).max()) if want.size else 0.0
 
 
 def test_a_generated_page_carries_the_recipe_and_no_instance_file(tmp_path):
@@ -220,7 +138,7 @@ def _check_records(layers: list, scene: Path) -> int:
         got = np.asarray(g["data"], np.float32).reshape(-1, g["width"])
         if recipe.maps.heights is None and recipe.maps.density is None and recipe.generate.choice == (0, 1):  # all kept
             assert got.shape[0] == len(want_tiles) * tile_size(recipe.generate)[0] ** 2
-        assert _close(got, want) <= 1e-6, (g["name"], _close(got, want))
+        assert close(got, want) <= 1e-6, (g["name"], close(got, want))
         total += got.shape[0]
     return total
 
@@ -329,9 +247,9 @@ def test_the_notebook_widget_generates_a_scene_files_layers(browser, generated_s
 
     w = SceneWidget(ad.Scene.load(generated_site["walk"]), size=SIZE)
     assert w.params_adp == b"" and not [n for n in w.files if n.endswith(".adp")]
-    state = _widget_state(w)
+    state = widget_state(w)
     state["files"] = {n: {"b64": base64.b64encode(b).decode()} for n, b in w.files.items()}
-    page, errors = _widget_page(browser, tmp_path, state, w._esm)
+    page, errors = widget_page(browser, tmp_path, state, w._esm)
     try:
         status = page.evaluate("window.widgetStatus")
         assert status == {"ready": True, "instances": w.config["instances"]} and status["instances"] > 1000, status
@@ -453,7 +371,7 @@ def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(brow
     assert got["tiles"] == tiles.tolist()
     want = generate_tiles(recipe, mesh, tiles)
     records = np.asarray(got["data"], np.float32).reshape(-1, got["width"])
-    assert _close(records, want) <= 1e-6, _close(records, want)
+    assert close(records, want) <= 1e-6, close(records, want)
     # every slot of the tiles drawn, the kept ones counted on the GPU; the bound three sorts by (found from
     # the recipe before any record is read back) holds every instance
     assert got["slots"] == len(tiles) * tile_size(recipe)[0] ** 2 and got["kept"] == len(want)
@@ -494,7 +412,7 @@ def test_the_generated_mesh_draws_from_the_gpu_with_three_r187(browser, tmp_path
     mesh = ad.load_mesh(folder / "stone.obj")
     recipe = Generate(**{k: v for k, v in RECIPE.items() if k != "reach"})
     want = generate_tiles(recipe, mesh, got["tiles"])
-    assert got["kept"] == len(want) and _close(np.asarray(got["data"], np.float32).reshape(-1, got["width"]), want) <= 1e-6
+    assert got["kept"] == len(want) and close(np.asarray(got["data"], np.float32).reshape(-1, got["width"]), want) <= 1e-6
     look, camera = ad.Look(ground=False, shadow=False), ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
     ref = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera)
     assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
@@ -524,22 +442,6 @@ def test_the_modules_generated_mesh_sways_as_render_sways_a_generated_layer(brow
     still = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera)
     assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
     assert three_iou(shot, by_index) < three_iou(shot, ref) - 0.02 and three_iou(still, ref) < 0.93
-
-
-GLTF_SCENE = """
-[[layer]]
-name = "stones"
-mesh = "stone.obj"
-[layer.generate]
-rate = 0.5
-tile = 4.0
-min_distance = 0.6
-seed = 8
-bend = 0.15
-scale = [0.5, 0.9]
-extent = [-4, -4, 4, 4]
-reach = 7.0
-"""
 
 
 @pytest.mark.slow
@@ -575,7 +477,7 @@ def test_the_gltf_generated_form_is_generated_by_the_plugin(browser, three_site,
     assert sorted(got["tiles"]) == sorted(tiles_around(recipe.generate, x, z, recipe.reach).tolist())
     want = generate_tiles(recipe.generate, layer.mesh, got["tiles"], recipe.maps)
     records = np.asarray(got["data"], np.float32).reshape(-1, got["width"])
-    assert _close(records, want) <= 1e-6
+    assert close(records, want) <= 1e-6
     look = ad.Look(ground=False, shadow=False)
     camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
     ref = ad.render_image(layer.mesh, want, size=(480, 360), look=look, camera=camera)
@@ -663,7 +565,7 @@ def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site)
     x, _, z = got["eye"]
     assert sorted(got["tiles"]) == sorted(tiles_around(layer.generate.generate, x, z, layer.generate.reach).tolist())
     want = generate_tiles(layer.generate.generate, layer.mesh, got["tiles"], layer.generate.maps)
-    assert _close(np.asarray(got["data"], np.float32).reshape(-1, got["width"]), want) <= 1e-6
+    assert close(np.asarray(got["data"], np.float32).reshape(-1, got["width"]), want) <= 1e-6
     # the texels the GPU drew for the draw (not read back by records()): every kept slot's child axes, the
     # Python library's, in the texture's layout (three texels an axis: d1 d2 | d3 d4 | d5 0 0)
     from axialdeform.core.generate import generate_tile
@@ -676,4 +578,4 @@ def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site)
     drawn = texels[:first * 9].reshape(first, 9, 12)[:, :, :10]
     children = records[:first, 10:100].reshape(first, 9, 10)
     assert kept[:first].sum() > 5
-    assert _close(drawn[kept[:first]].reshape(-1, 10), children[kept[:first]].reshape(-1, 10)) <= 1e-6
+    assert close(drawn[kept[:first]].reshape(-1, 10), children[kept[:first]].reshape(-1, 10)) <= 1e-6

@@ -35,8 +35,9 @@ from axialdeform.web import (
     write_page,
 )
 
+from helpers.browser import SIZE, SKY, Visit, iou, mask, widget_page, widget_state
+
 ROOT = Path(__file__).resolve().parents[2]
-SIZE = (400, 300)
 
 
 # ------------------------------------------------------------------ no browser
@@ -190,31 +191,6 @@ def test_serve_on_a_busy_port_picks_another(tmp_path):
 
 
 # ------------------------------------------------------------------ browser
-class Visit:
-    """One page in the browser with its console errors collected."""
-
-    def __init__(self, browser, url, size=SIZE):
-        self.page = browser.new_page(viewport={"width": size[0], "height": size[1] + 40})
-        self.errors = []
-        self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
-        self.page.on("pageerror", lambda e: self.errors.append(str(e)))
-        self.page.goto(url)
-        self.page.wait_for_function("window.axialdeform && window.axialdeform.ready !== undefined", timeout=120_000)
-        self.state = self.page.evaluate("window.axialdeform")
-
-    def silhouette(self) -> np.ndarray:
-        from io import BytesIO
-
-        from PIL import Image
-
-        box = self.page.locator(".axd-stage").bounding_box()
-        png = self.page.screenshot(clip=box)  # no "stable element" wait: the status line keeps changing
-        return np.asarray(Image.open(BytesIO(png)).convert("RGB"))
-
-    def close(self):
-        self.page.close()
-
-
 def assert_page_draws(browser, url, render: np.ndarray, instances: int) -> None:
     """The page at ``url`` is ready with ``instances`` and draws what
     ``render`` drew: silhouette IoU >= 0.95 and a mean colour difference
@@ -228,16 +204,6 @@ def assert_page_draws(browser, url, render: np.ndarray, instances: int) -> None:
         assert v.errors == []
     finally:
         v.close()
-
-
-def _mask(image: np.ndarray, background) -> np.ndarray:
-    bg = np.asarray(background) * 255.0
-    return np.abs(image.astype(np.float64) - bg).max(axis=2) > 12
-
-
-def iou(a: np.ndarray, b: np.ndarray, background) -> float:
-    ma, mb = _mask(a, background), _mask(b, background)
-    return float((ma & mb).sum() / max((ma | mb).sum(), 1))
 
 
 @pytest.fixture(scope="module")
@@ -343,45 +309,6 @@ def test_bad_parameter_file_shows_why_and_draws_nothing(browser, served, scene_f
         v.close()
 
 
-def _widget_state(w) -> dict:
-    """A widget's synced state as ``_widget_page`` takes it (bytes as base64)."""
-    state = {k: getattr(w, k) for k in ("config", "mesh_glb", "params_adp", "_sources")}
-    return {k: ({"b64": base64.b64encode(v).decode()} if isinstance(v, bytes) else v) for k, v in state.items()}
-
-
-def _widget_page(browser, tmp_path, state: dict, esm: str):
-    """The widget's ESM run in Chromium against a minimal anywidget model
-    (get/set/on/off/save_changes over the synced state; bytes arrive as
-    DataView, as ipywidgets delivers them).  ``state``: name -> value, or
-    {"b64": ...} for bytes.  Returns (page, console errors)."""
-    harness = tmp_path / "widget harness ü.html"
-    harness.write_text("""<!doctype html><meta charset="utf-8"><link rel="icon" href="data:,"><body><div id="out"></div>
-<script type="module">
-const state = JSON.parse(document.getElementById('state').textContent);
-const dv = (b64) => { const s = atob(b64); const a = new Uint8Array(s.length);
-  for (let i = 0; i < s.length; i++) a[i] = s.charCodeAt(i); return new DataView(a.buffer); };
-const data = {}; for (const [k, v] of Object.entries(state)) data[k] = v && v.b64 !== undefined ? dv(v.b64)
-  : k === 'files' ? Object.fromEntries(Object.entries(v).map(([n, x]) => [n, dv(x.b64)])) : v;
-const listeners = {};
-const model = { get: (k) => data[k], set: (k, v) => { data[k] = v; (listeners['change:' + k] || []).forEach((f) => f()); },
-  on: (e, f) => { (listeners[e] = listeners[e] || []).push(f); },
-  off: (e, f) => { listeners[e] = (listeners[e] || []).filter((g) => g !== f); },
-  save_changes: () => { window.widgetStatus = data.status; } };
-window.widgetModel = model; window.toDataView = dv;
-const esm = await import(URL.createObjectURL(new Blob([document.getElementById('esm').textContent], {type: 'text/javascript'})));
-window.cleanup = await esm.default.render({ model, el: document.getElementById('out') });
-</script>
-<script type="application/json" id="state">""" + json.dumps(state).replace("</", "<\\/") + """</script>
-<script type="text/plain" id="esm">""" + esm.replace("</script", "<\\/script") + """</script>""", encoding="utf-8")
-    page = browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1] + 40})
-    errors = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.goto(harness.as_uri())
-    page.wait_for_function("window.widgetStatus !== undefined", timeout=120_000)
-    return page, errors
-
-
 #: what a notebook does when the kernel sets SceneWidget.params_adp (the widget harness's model)
 PUSH_PARAMS = ("(b64) => { window.widgetStatus = undefined; "
                "window.widgetModel.set('params_adp', window.toDataView(b64)); }")
@@ -409,8 +336,8 @@ def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
 
     mesh = ad.load_mesh("stone")
     w = SceneWidget(mesh, ad.random_params(mesh, 300, seed=2), size=SIZE)
-    state = _widget_state(w)
-    page, errors = _widget_page(browser, tmp_path, state, w._esm)
+    state = widget_state(w)
+    page, errors = widget_page(browser, tmp_path, state, w._esm)
     try:
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 300}
         clip = page.locator(".axd-stage").bounding_box()
@@ -448,9 +375,9 @@ def test_widget_takes_a_scene_file(browser, tmp_path):
     assert [layer["name"] for layer in w.config["layers"]][0] == "terrain" and len(w.files) == 2 * len(w.config["layers"])
     with pytest.raises(ad.AxialDeformError, match="several layers"):
         w.set_params(scene.layers[0].params)
-    state = _widget_state(w)
+    state = widget_state(w)
     state["files"] = {n: {"b64": base64.b64encode(b).decode()} for n, b in w.files.items()}
-    page, errors = _widget_page(browser, tmp_path, state, w._esm)
+    page, errors = widget_page(browser, tmp_path, state, w._esm)
     try:
         status = page.evaluate("window.widgetStatus")
         assert status == {"ready": True, "instances": scene.count}, status
@@ -460,7 +387,7 @@ def test_widget_takes_a_scene_file(browser, tmp_path):
 
         shot = np.asarray(Image.open(BytesIO(page.screenshot(clip=page.locator(".axd-stage").bounding_box())))
                           .convert("RGB"))
-        assert _mask(shot, scene.background).mean() > 0.2  # the terrain and layers fill the picture
+        assert mask(shot, scene.background).mean() > 0.2  # the terrain and layers fill the picture
         assert errors == []
     finally:
         page.close()
@@ -492,7 +419,7 @@ def test_widget_in_an_executed_notebook(browser, tmp_path):
         assert buf["encoding"] == "base64"
         state[buf["path"][0]] = {"b64": buf["data"]}
     assert len(base64.b64decode(state["params_adp"]["b64"])) == 96 + 128 + 32 * 50 + 4
-    page, errors = _widget_page(browser, tmp_path, state, state["_esm"])
+    page, errors = widget_page(browser, tmp_path, state, state["_esm"])
     try:
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 50}
         assert page.locator("canvas").count() == 1 and errors == []
@@ -579,7 +506,7 @@ def test_tinted_instances_match_render(browser, tmp_path, mesh_name, quantize):
     look = ad.Look(ground=False, shadow=False)
     render = ad.render_image(ad.Scene.single(mesh, back), size=SIZE, look=look)
     plain = ad.render_image(ad.Scene.single(mesh, params[:, :19]), size=SIZE, look=look)
-    covered = _mask(render, BACKGROUND)
+    covered = mask(render, BACKGROUND)
     assert np.abs(plain.astype(np.float64) - render)[covered].mean() > 10.0  # the tint shows at all
     assert_page_draws(browser, out.as_uri(), render, 300)
 
@@ -597,7 +524,6 @@ def test_folder_page_from_disk_says_it_needs_a_server(browser, scene_files):
 
 # ------------------------------------------------------------------ scene files, materials, wind, wireframe, window
 LANDSCAPE = ROOT / "examples" / "landscape"
-SKY = (0.80, 0.87, 0.95)
 
 
 def _shot_of(browser, url, size=SIZE, viewport=None):
@@ -606,7 +532,7 @@ def _shot_of(browser, url, size=SIZE, viewport=None):
 
 
 def _mean_covered(image: np.ndarray, background) -> np.ndarray:
-    return image[_mask(image, background)].astype(np.float64).mean(axis=0)
+    return image[mask(image, background)].astype(np.float64).mean(axis=0)
 
 
 def test_page_shader_includes_wind_glsl_verbatim():
@@ -882,7 +808,7 @@ def test_wind_moves_without_a_fixed_time(browser, scene_pages):
 
 def line_share(image: np.ndarray) -> float:
     """The share of the covered pixels that are (near) the wireframe's line colour."""
-    covered = _mask(image, BACKGROUND)
+    covered = mask(image, BACKGROUND)
     line = np.asarray([0.12, 0.14, 0.18]) * 255
     near = np.abs(image.astype(np.float64) - line).max(axis=2) < 60
     return float((near & covered).sum() / max(covered.sum(), 1))
@@ -937,7 +863,7 @@ def test_canvas_fills_the_window_and_follows_resizes(browser, scene_files, tmp_p
         v.page.wait_for_function("window.axialdeformView.info().width === 700")
         info = v.page.evaluate("window.axialdeformView.info()")
         assert (info["width"], info["height"]) == (700, 300) and abs(info["aspect"] - 700 / 300) < 1e-9
-        assert _mask(v.silhouette(), BACKGROUND).sum() > 1000  # still drawn after the resize
+        assert mask(v.silhouette(), BACKGROUND).sum() > 1000  # still drawn after the resize
         fovy = json.loads(out.read_text(encoding="utf-8").split('id="axd-config">', 1)[1].split("</script>", 1)[0]
                           .replace("<\\/", "</"))["camera"]["fovy"]
         assert info["fov"] == fovy  # wider than the export (4:3): the exported camera as it is
@@ -945,7 +871,7 @@ def test_canvas_fills_the_window_and_follows_resizes(browser, scene_files, tmp_p
         v.page.wait_for_function("window.axialdeformView.info().width === 300")
         v.page.wait_for_timeout(300)
         assert v.page.evaluate("window.axialdeformView.info().fov") > fovy
-        covered = _mask(v.silhouette(), BACKGROUND)[:-80]  # the status line floats over the bottom rows
+        covered = mask(v.silhouette(), BACKGROUND)[:-80]  # the status line floats over the bottom rows
         assert covered.sum() > 1000 and not covered[:, 0].any() and not covered[:, -1].any()  # nothing cut off
         assert v.errors == []
     finally:
@@ -1098,8 +1024,8 @@ def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
     params = ad.random_params(mesh, 40, seed=2, bend=(0.05, 0.4), placement="disc", spacing=3.0)
     w = SceneWidget(mesh, params, size=SIZE)
     assert w.config["layers"][0]["mesh"]["axes"]["count"] == 10
-    state = _widget_state(w)
-    page, errors = _widget_page(browser, tmp_path, state, w._esm)
+    state = widget_state(w)
+    page, errors = widget_page(browser, tmp_path, state, w._esm)
     try:
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
         clip = page.locator(".axd-stage").bounding_box()

@@ -19,13 +19,14 @@ from urllib.parse import quote
 import numpy as np
 import pytest
 from PIL import Image
-from test_generated_web import GLTF_SCENE, HILLS, LANDSCAPE, TREES, _close
-from test_three import JS, MORE, ROOT, SIZE, Server, _mask, iou, make_site, render_reference
 
 import axialdeform as ad
 from axialdeform.core.generate import Generate, children_table, generate_tiles, recipe_json, recipe_uniforms, tile_size, tiles_around
 from axialdeform.core.io.gltf import bend_extension
 from axialdeform.core.wind import apply_wind
+
+from helpers.generated_scenes import GLTF_SCENE, HILLS, LANDSCAPE, TREES, close
+from helpers.three_site import JS, MORE, ROOT, SIZE, Server, iou, make_site, mask, render_reference
 
 pytestmark = pytest.mark.slow
 
@@ -175,7 +176,7 @@ def test_the_tint_colours_each_instance_under_webgpu(webgpu_browser, site, backe
         shots.append(png(out["png"]))
     tinted, plain = shots
     assert iou(tinted, plain) > 0.99
-    both = _mask(tinted) & _mask(plain)
+    both = mask(tinted) & mask(plain)
     diff = np.abs(tinted.astype(np.float64) - plain)[both].mean()
     assert diff > 2, diff  # measured 3.9 (mean over the leaves; 0 where the tint were lost)
 
@@ -391,7 +392,7 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
         want = generate_tiles(recipe, mesh, tiles, maps)
         records = np.asarray(got["data"], np.float32).reshape(-1, got["width"])
         assert got["slots"] == len(tiles) * tile_size(recipe)[0] ** 2 and got["kept"] == got["counted"] == len(want), name
-        assert len(want) > 10 and _close(records, want) <= 1e-6, (name, _close(records, want))
+        assert len(want) > 10 and close(records, want) <= 1e-6, (name, close(records, want))
         assert got["cpu"] == got["width"]  # drawing needed no CPU copy of the records: one row
         # the ray hits the instance it was aimed at (across a tree's trunk: that tree or one in front of it)
         assert got["hit"] is not None, name
@@ -408,7 +409,7 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
             ref = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera, wind=wind, time=case["time"],
                                   position_ids=True)
             Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-generated-{version}-{name}.png")
-            assert _mask(ref).sum() > 0.05 * ref.size / 3
+            assert mask(ref).sum() > 0.05 * ref.size / 3
             assert iou(shot, ref) >= 0.95, (name, iou(shot, ref))
             if wind is not None:  # the wind moved them visibly, by those phases: the comparison can fail
                 still = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera)
@@ -461,7 +462,7 @@ def test_the_gltf_generated_form_is_generated_under_webgpu(webgpu_browser, site)
     ref = ad.render_image(layer.mesh, want, size=SIZE, look=look, camera=camera)
     shot = png(out["png"])
     Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / "webgpu-generated-gltf.png")
-    assert _mask(ref).sum() > 0.05 * ref.size / 3
+    assert mask(ref).sum() > 0.05 * ref.size / 3
     assert iou(shot, ref) >= 0.95, iou(shot, ref)
     assert errors == []
 

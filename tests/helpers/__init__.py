@@ -1,0 +1,1 @@
+"""Helpers the tests share (sites, pages, pictures, scenes); no tests here."""
