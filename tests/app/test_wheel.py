@@ -91,5 +91,5 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
     # every file of the npm module's WebGL entry (js/src; the page and the widget draw with WebGLRenderer),
     # from the wheel's axialdeform/three: all but axialdeform-three/webgpu's own files
     webgpu_only = {"webgpu.js", "webgpu_mesh.js", "nodes.js", "cull.js", "compute.js", "generated_webgpu.js",
-                   "generate_nodes.js"}
+                   "generate_nodes.js", "glsl_nodes.js", "tsl_runtime.js"}
     assert sizes["module"] == len({p.name for p in (ROOT / "js" / "src").glob("*.js")} - webgpu_only), sizes
