@@ -38,6 +38,23 @@ AxialInstance axial_instance(vec4 d12, vec4 d34, vec2 d5, vec3 position, vec3 an
     return AxialInstance(d12, d34, d5, position, angles, 1.0, 0.0, 0.0);
 }
 
+// (cos x, sin x) to float32 rounding on every GPU -- the builtins' precision is each implementation's (WGSL's
+// need only be within 2^-11: SwiftShader's are ~1e-4 off, which would bend a twisted instance by 1e-4 L).
+// Reduction by pi/2 (two constants), Taylor polynomials on [-pi/4, pi/4], the quadrant applied exactly
+// (axialdeform.core.generate_ground.cos_sin_f32, operation for operation).  The one sine and cosine of
+// every program: the bend's twist, the rotation, the wind and the generator.
+vec2 axial_cos_sin(float x) {
+    float q = floor(x * 0.6366197723675814 + 0.5);
+    float r = (x - q * 1.5707963705062866) - q * -4.371139000186243e-8;
+    float r2 = r * r;
+    float s = r * (r2 * (r2 * (r2 * (r2 * (1.0 / 362880.0) - 1.0 / 5040.0) + 1.0 / 120.0) - 1.0 / 6.0) + 1.0);
+    float c = r2 * (r2 * (r2 * (r2 * (r2 * (-1.0 / 3628800.0) + 1.0 / 40320.0) - 1.0 / 720.0) + 1.0 / 24.0) - 0.5) + 1.0;
+    float m = q - 4.0 * floor(q * 0.25);
+    bool odd = m == 1.0 || m == 3.0;
+    float cs = odd ? s : c, sn = odd ? c : s;
+    return vec2((m == 1.0 || m == 2.0) ? -cs : cs, m >= 1.5 ? -sn : sn);
+}
+
 // E: place a 2-component offset into the two coordinates across the axis.
 vec3 axial_embed(vec2 w, int axis) {
     if (axis == 0) return vec3(0.0, w.x, w.y);
@@ -70,8 +87,7 @@ vec2 axial_slope(float t, AxialInstance inst) {
 // theta and the turned rw = Rot(theta) w; exactly no change for tw = tp = 0.
 void axial_turn(float t, vec2 w, AxialInstance inst, out float k, out vec2 cs, out vec2 rw) {
     k = 1.0 - inst.taper * t;
-    float theta = inst.twist * t;
-    cs = vec2(cos(theta), sin(theta));
+    cs = axial_cos_sin(inst.twist * t);
     rw = vec2(cs.x * w.x - cs.y * w.y, cs.y * w.x + cs.x * w.y);
 }
 
@@ -118,7 +134,8 @@ void axial_bend(vec3 v, vec3 n, int axis, float lo, float len, AxialInstance ins
 
 // R = Rz(rz) * Ry(ry) * Rx(rx), column-vector convention.
 mat3 axial_rotation(vec3 r) {
-    vec3 c = cos(r), s = sin(r);
+    vec2 x = axial_cos_sin(r.x), y = axial_cos_sin(r.y), z = axial_cos_sin(r.z);
+    vec3 c = vec3(x.x, y.x, z.x), s = vec3(x.y, y.y, z.y);
     // GLSL mat3(...) takes columns
     return mat3(
         c.z * c.y,                     s.z * c.y,                     -s.y,
@@ -206,10 +223,14 @@ void axial_world(vec3 v, vec3 n, mat3 frame, float lo, float len, vec2 center, A
     axial_place(bent_v, bent_n, inst, w_out, wn_out);
 }
 
+// The model-space part of axial_world_tangent for a framed axis (before R; not normalised).
+vec3 axial_bend_tangent(vec3 v, vec3 tangent, mat3 frame, float lo, float len, vec2 center, AxialInstance inst) {
+    return transpose(frame) * axial_bend_tangent(frame * v, frame * tangent, 0, lo, len, center, inst);
+}
+
 vec3 axial_world_tangent(vec3 v, vec3 tangent, mat3 frame, float lo, float len, vec2 center,
                          AxialInstance inst) {
-    vec3 bent = transpose(frame) * axial_bend_tangent(frame * v, frame * tangent, 0, lo, len, center, inst);
-    return normalize(axial_rotation(inst.angles) * bent);
+    return normalize(axial_rotation(inst.angles) * axial_bend_tangent(v, tangent, frame, lo, len, center, inst));
 }
 
 // The 16-number form of axial_world_tangent (no twist/taper: the axis line does not matter).
@@ -244,6 +265,33 @@ vec3 axial_cofactor(mat3 j, vec3 n) {
     return n.x * cross(j[1], j[2]) + n.y * cross(j[2], j[0]) + n.z * cross(j[0], j[1]);
 }
 
+// A tree's twist and taper, about axis 0's axis line (frame f0, lo0, len0; `center` as in axial_bend),
+// before the displacements: adds the turn of the cross-section to `moved` and sets `jac` to its Jacobian.
+void axial_tree_turn(vec3 v, mat3 f0, float lo0, float len0, vec2 center, AxialInstance inst,
+                     inout vec3 moved, inout mat3 jac) {
+    vec3 l = f0 * v;
+    float raw = (l.x - lo0) / len0;
+    float t = clamp(raw, 0.0, 1.0);
+    float k;
+    vec2 cs, rw, w = l.yz - center;
+    axial_turn(t, w, inst, k, cs, rw);
+    moved += transpose(f0) * vec3(0.0, k * rw - w);
+    vec2 g = (raw >= -AXIAL_T_SLACK && raw <= 1.0 + AXIAL_T_SLACK)
+           ? axial_turn_rate(vec2(0.0), k, rw, inst) / len0 : vec2(0.0);
+    mat3 jl = mat3(vec3(1.0, g), vec3(0.0, k * cs.x, k * cs.y), vec3(0.0, -k * cs.y, k * cs.x));  // columns
+    jac = transpose(f0) * jl * f0;
+}
+
+// A child axis's offsets as the wind moves them: `wind`, the push per unit of axis length in the model frame
+// (axial_wind_push with len 1), moves axis (frame, len) by len times its part across the axis on the control
+// polygon of (t - a)^2 / max(a^2, (1 - a)^2), a the anchor (its joint stays; a = 0: c = (0, 0, 1/6, 1/2, 1)).
+void axial_anchor_wind(mat3 frame, float len, float a, vec3 wind, inout vec4 d12, inout vec4 d34, inout vec2 d5) {
+    vec2 u = len * (frame * wind).yz / max(a * a, (1.0 - a) * (1.0 - a));
+    d12 += vec4(u * (a * a), u * (a * a - 0.5 * a));
+    d34 += vec4(u * (1.0 / 6.0 - a + a * a), u * (0.5 - 1.5 * a + a * a));
+    d5 += u * ((1.0 - a) * (1.0 - a));
+}
+
 #ifdef AXIAL_AXES
 // The texture of the child axes' offsets: instance id's axis k (1..K-1) is the three texels from
 // (id (K-1) + k - 1) 3 on, rows AXIAL_AXES_ROW texels wide (RGBA32F):
@@ -272,18 +320,7 @@ void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[
     mat3 jac = mat3(1.0);
 #ifndef AXIAL_NO_BEND
     if (inst.twist != 0.0 || inst.taper != 0.0) {  // about axis 0's axis line, before the displacements
-        mat3 f0 = frames[0];
-        vec3 l = f0 * v;
-        float raw = (l.x - los[0]) / lens[0];
-        float t = clamp(raw, 0.0, 1.0);
-        float k;
-        vec2 cs, rw, w = l.yz - center;
-        axial_turn(t, w, inst, k, cs, rw);
-        moved += transpose(f0) * vec3(0.0, k * rw - w);
-        vec2 g = (raw >= -AXIAL_T_SLACK && raw <= 1.0 + AXIAL_T_SLACK)
-               ? axial_turn_rate(vec2(0.0), k, rw, inst) / lens[0] : vec2(0.0);
-        mat3 jl = mat3(vec3(1.0, g), vec3(0.0, k * cs.x, k * cs.y), vec3(0.0, -k * cs.y, k * cs.x));  // columns
-        jac = transpose(f0) * jl * f0;
+        axial_tree_turn(v, frames[0], los[0], lens[0], center, inst, moved, jac);
     }
     vec3 disp = vec3(0.0);
     int j = b;
@@ -293,11 +330,7 @@ void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[
         vec2 d5 = inst.d5;
         if (j > 0) {
             axial_child_offsets(children, id, j, d12, d34, d5);
-            float a = anchors[j];
-            vec2 u = lens[j] * (frames[j] * wind).yz / max(a * a, (1.0 - a) * (1.0 - a));
-            d12 += vec4(u * (a * a), u * (a * a - 0.5 * a));
-            d34 += vec4(u * (1.0 / 6.0 - a + a * a), u * (0.5 - 1.5 * a + a * a));
-            d5 += u * ((1.0 - a) * (1.0 - a));
+            axial_anchor_wind(frames[j], lens[j], anchors[j], wind, d12, d34, d5);
         }
         axial_axis_add(v, frames[j], los[j], lens[j], d12, d34, d5, disp, jac);
         j = parents[j];

@@ -45,21 +45,6 @@ struct AxialRecipe {
     vec2 anchor_xz;  // the anchor's x, z on the base mesh (with anchor_y: the point that rests on the ground)
 };
 
-// cos and sin of x to float32 rounding on every GPU (the builtins' precision is the implementation's):
-// reduction by pi/2 (two constants), Taylor polynomials on [-pi/4, pi/4], the quadrant applied exactly
-// (axialCosSin of js/src/nodes.js; axialdeform.core.generate._cos_sin, operation for operation).
-vec2 axial_gen_cos_sin(float x) {
-    float q = floor(x * 0.6366197723675814 + 0.5);
-    float r = (x - q * 1.5707963705062866) - q * -4.371139000186243e-8;
-    float r2 = r * r;
-    float s = r * (r2 * (r2 * (r2 * (r2 * (1.0 / 362880.0) - 1.0 / 5040.0) + 1.0 / 120.0) - 1.0 / 6.0) + 1.0);
-    float c = r2 * (r2 * (r2 * (r2 * (r2 * (-1.0 / 3628800.0) + 1.0 / 40320.0) - 1.0 / 720.0) + 1.0 / 24.0) - 0.5) + 1.0;
-    float m = q - 4.0 * floor(q * 0.25);
-    bool odd = m == 1.0 || m == 3.0;
-    float cs = odd ? s : c, sn = odd ? c : s;
-    return vec2((m == 1.0 || m == 2.0) ? -cs : cs, m >= 1.5 ? -sn : sn);
-}
-
 // atan2(y, x) to a few float32 ulps on every GPU (Cephes' atanf: reduction to [0, tan(pi/8)], its polynomial).
 float axial_gen_atan2(float y, float x) {
     float ax = abs(x), ay = abs(y);
@@ -83,8 +68,8 @@ vec3 axial_gen_lean(AxialRecipe r, float ry, vec2 grad, out float ay) {
     vec3 n = vec3(-grad.x, 1.0, -grad.y) * inv;
     float sn = sqrt(n.x * n.x + n.z * n.z);
     vec3 k = sn > 1e-12 ? vec3(n.z, 0.0, -n.x) / sn : vec3(0.0);
-    vec2 ta = axial_gen_cos_sin(axial_gen_atan2(sn, n.y) * r.align);
-    vec2 ty = axial_gen_cos_sin(ry);
+    vec2 ta = axial_cos_sin(axial_gen_atan2(sn, n.y) * r.align);
+    vec2 ty = axial_cos_sin(ry);
     // Rt = I + sin K + (1 - cos) K^2 (Rodrigues), K the cross-product matrix of k (k.y = 0)
     float c1 = 1.0 - ta.x;
     mat3 rt = mat3(1.0 - c1 * k.z * k.z, ta.y * k.z, c1 * k.x * k.z,       // column 0

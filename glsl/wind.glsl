@@ -39,8 +39,8 @@ float axial_wind_phase(uint id) {
 vec3 axial_wind_push(AxialInstance inst, uint id, float len, vec3 dir, float strength,
                      float gust, vec2 cycles, float wavenumber) {
     float ph = axial_wind_phase(id) - dot(inst.position, dir) * wavenumber;
-    float wave = 0.6 * sin(6.283185307179586 * (cycles.x + ph))
-               + 0.4 * sin(6.283185307179586 * (cycles.y + 1.7 * ph));
+    float wave = 0.6 * axial_cos_sin(6.283185307179586 * (cycles.x + ph)).y
+               + 0.4 * axial_cos_sin(6.283185307179586 * (cycles.y + 1.7 * ph)).y;
     float amp = strength * len * (1.0 + gust * wave);
     return amp * (transpose(axial_rotation(inst.angles)) * dir);  // world -> the instance's model frame
 }

@@ -22,7 +22,9 @@ const GENERATE_INCLUDES = ['axial.glsl', 'wind.glsl', 'generate.glsl'];
 const target = join(here, 'src', 'glsl.js');
 const nodesTarget = join(here, 'src', 'glsl_nodes.js');
 // the GLSL functions the node materials and compute passes call (and, emitted with them, what they call)
-export const NODE_FUNCTIONS = ['axial_generate', 'axial_generate_child', 'axial_gen_key'];
+export const NODE_FUNCTIONS = ['axial_bend', 'axial_bend_tangent', 'axial_place', 'axial_rotation', 'axial_wind', 'axial_wind_push',
+  'axial_position_id', 'axial_tree_turn', 'axial_anchor_wind', 'axial_axis_add', 'axial_cofactor', 'axial_cos_sin', 'axial_curve',
+  'axial_slope', 'axial_generate', 'axial_generate_child', 'axial_gen_key'];
 
 /** src/glsl_nodes.js from the texts of glsl/axial.glsl, wind.glsl and generate.glsl. */
 export function generateNodes(text, wind, gen) {

@@ -346,7 +346,7 @@ class Emitter {
   jsName(f) {
     const all = this.funcs.get(f.name);
     if (all.length === 1) return camel(f.name);
-    return camel(f.name) + '_' + f.params.map((p) => ABBREV[p.type] || p.type).join('');
+    return camel(f.name) + '_' + f.params.map((p) => ABBREV[p.type] || p.type.replace(/[a-z]+/g, '')).join('');
   }
 
   tsl(name) { this.used.add(name); return name; }

@@ -84,7 +84,7 @@ def ground_height(g, xz: np.ndarray):
 
 
 def cos_sin_f32(x):
-    """(cos x, sin x) in float32 as axial_gen_cos_sin of glsl/generate.glsl computes them."""
+    """(cos x, sin x) in float32 as axial_cos_sin of glsl/axial.glsl computes them."""
     f32 = np.float32
     x = np.asarray(x, f32)
     q = np.floor(x * f32(0.6366197723675814) + f32(0.5))

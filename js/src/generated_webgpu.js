@@ -1,6 +1,6 @@
 // generated_webgpu.js -- generated layers under three's WebGPURenderer (axialdeform-three/webgpu): the
 // WebGL module's AxialGeneratedMesh (generate.js) for node materials.  A tile's instances are made by a
-// compute pass of generate_nodes.js -- the port of glsl/generate.glsl the tests hold to the Python
+// compute pass of glsl/generate.glsl as generated node functions (generate_nodes.js) -- what the tests hold to the Python
 // library -- straight into a storage buffer the materials' positionNode reads (webgpu_mesh.js's layout:
 // d12, d34, (d5, tw, tp), (angles, 0), the instance matrix's columns, the tint); a tree's child-axis
 // offsets into a second one.  No record reaches the CPU to draw and none is uploaded: per tile set, the

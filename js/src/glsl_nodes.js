@@ -3,22 +3,18 @@
 // The GLSL functions as three.js node functions (TSL): each call is inlined into the caller's graph; an
 // `out` parameter is a node variable the caller passes, a mat3 three column vectors, a struct an object.
 
-import { If, abs, all, bool, clamp, dot, float, floor, int, inverseSqrt, ivec2, min, select, sqrt, uint, vec2, vec3, vec4 } from 'three/tsl';
-import { matMul, matVar, texelFetch } from './tsl_runtime.js';
+import { If, abs, all, bool, clamp, cross, dot, float, floatBitsToUint, floor, int, inverseSqrt, ivec2, max, min, normalize, select, sqrt, uint, vec2, vec3, vec4 } from 'three/tsl';
+import { matAdd, matAssign, matMul, matOuter, matTranspose, matVar, matVec, structVar, texelFetch } from './tsl_runtime.js';
 
-/** glsl: axial_wind_hash.
- * PCG hash of an instance index (integer maths: bit-exact on every GPU and in numpy). */
-export function axialWindHash(i) {
-  const h = uint(i.mul(uint(747796405)).add(uint(2891336453))).toVar();
-  h.assign(h.shiftRight(h.shiftRight(uint(28)).add(uint(4))).bitXor(h).mul(uint(277803737)));
-  return h.shiftRight(uint(22)).bitXor(h);
-}
+export const AXIAL_T_SLACK = 1e-4;
 
-/** glsl: axial_gen_cos_sin.
- * cos and sin of x to float32 rounding on every GPU (the builtins' precision is the implementation's):
- * reduction by pi/2 (two constants), Taylor polynomials on [-pi/4, pi/4], the quadrant applied exactly
- * (axialCosSin of js/src/nodes.js; axialdeform.core.generate._cos_sin, operation for operation). */
-export function axialGenCosSin(x) {
+/** glsl: axial_cos_sin.
+ * (cos x, sin x) to float32 rounding on every GPU -- the builtins' precision is each implementation's (WGSL's
+ * need only be within 2^-11: SwiftShader's are ~1e-4 off, which would bend a twisted instance by 1e-4 L).
+ * Reduction by pi/2 (two constants), Taylor polynomials on [-pi/4, pi/4], the quadrant applied exactly
+ * (axialdeform.core.generate_ground.cos_sin_f32, operation for operation).  The one sine and cosine of
+ * every program: the bend's twist, the rotation, the wind and the generator. */
+export function axialCosSin(x) {
   const q = float(floor(x.mul(float(0.6366197723675814)).add(float(0.5)))).toVar();
   const r = float(x.sub(q.mul(float(1.5707963705062866))).sub(q.mul(float((-4.371139000186243e-8))))).toVar();
   const r2 = float(r.mul(r)).toVar();
@@ -29,6 +25,287 @@ export function axialGenCosSin(x) {
   const cs = float(select(odd, s, c)).toVar();
   const sn = float(select(odd, c, s)).toVar();
   return vec2(select(m.equal(float(1.0)).or(m.equal(float(2.0))), cs.negate(), cs), select(m.greaterThanEqual(float(1.5)), sn.negate(), sn));
+}
+
+/** glsl: axial_embed.
+ * E: place a 2-component offset into the two coordinates across the axis. */
+export function axialEmbed(w, axis) {
+  const _result = vec3(0).toVar();
+  If(axis.equal(int(0)), () => {
+    _result.assign(vec3(float(0.0), w.x, w.y));
+  }).Else(() => {
+    If(axis.equal(int(1)), () => {
+      _result.assign(vec3(w.x, float(0.0), w.y));
+    }).Else(() => {
+      _result.assign(vec3(w.x, w.y, float(0.0)));
+    });
+  });
+  return _result;
+}
+
+/** glsl: axial_curve.
+ * The displacement D(t) = sum B4_i(t) d_{i+1}: degree-4 Bernstein weights of the five offsets. */
+export function axialCurve(t, d12, d34, d5) {
+  const s = float(float(1.0).sub(t)).toVar();
+  const d1 = vec2(d12.xy).toVar();
+  const d2 = vec2(d12.zw).toVar();
+  const d3 = vec2(d34.xy).toVar();
+  const d4 = vec2(d34.zw).toVar();
+  return s.mul(s).mul(s).mul(s).mul(d1).add(float(4.0).mul(t).mul(s).mul(s).mul(s).mul(d2)).add(float(6.0).mul(t).mul(t).mul(s).mul(s).mul(d3)).add(float(4.0).mul(t).mul(t).mul(t).mul(s).mul(d4)).add(t.mul(t).mul(t).mul(t).mul(d5));
+}
+
+/** glsl: axial_slope.
+ * The slope D'(t) of the displacement: degree-3 Bernstein weights of the offsets' differences. */
+export function axialSlope_fv4v4v2(t, d12, d34, d5) {
+  const s = float(float(1.0).sub(t)).toVar();
+  const d1 = vec2(d12.xy).toVar();
+  const d2 = vec2(d12.zw).toVar();
+  const d3 = vec2(d34.xy).toVar();
+  const d4 = vec2(d34.zw).toVar();
+  return float(4.0).mul(s.mul(s).mul(s).mul(d2.sub(d1)).add(float(3.0).mul(t).mul(s).mul(s).mul(d3.sub(d2))).add(float(3.0).mul(t).mul(t).mul(s).mul(d4.sub(d3))).add(t.mul(t).mul(t).mul(d5.sub(d4))));
+}
+
+/** glsl: axial_slope. */
+export function axialSlope_fAI(t, inst) {
+  return axialSlope_fv4v4v2(t, inst.d12, inst.d34, inst.d5);
+}
+
+/** glsl: axial_turn.
+ * The twist and taper of the cross-section at t: w (the two coordinates across the axis minus the
+ * axis line's centre) turns by theta = tw t and shrinks by k = 1 - tp t.  Gives k, (cos, sin) of
+ * theta and the turned rw = Rot(theta) w; exactly no change for tw = tp = 0. */
+export function axialTurn(t, w, inst, k, cs, rw) {
+  k.assign(float(1.0).sub(inst.taper.mul(t)));
+  cs.assign(axialCosSin(inst.twist.mul(t)));
+  rw.assign(vec2(cs.x.mul(w.x).sub(cs.y.mul(w.y)), cs.y.mul(w.x).add(cs.x.mul(w.y))));
+}
+
+/** glsl: axial_turn_rate.
+ * g = dV''_across/dt of the turned cross-section: D'(t) + k tw Rot(w turned by 90 degrees) - tp Rot w
+ * (without D'(t) where `slope` is zero). */
+export function axialTurnRate(slope, k, rw, inst) {
+  return slope.add(k.mul(inst.twist).mul(vec2(rw.y.negate(), rw.x)).sub(inst.taper.mul(rw)));
+}
+
+/** glsl: axial_across.
+ * The two coordinates across the axis (the inverse of axial_embed). */
+export function axialAcross_v3i(v, axis) {
+  const _result = vec2(0).toVar();
+  If(axis.equal(int(0)), () => {
+    _result.assign(v.yz);
+  }).Else(() => {
+    If(axis.equal(int(1)), () => {
+      _result.assign(v.xz);
+    }).Else(() => {
+      _result.assign(v.xy);
+    });
+  });
+  return _result;
+}
+
+/** glsl: axial_bend.
+ * Bend one model-space vertex and its unit normal along the instance's
+ * 4th-degree Bezier control axis, twisting and tapering the cross-section
+ * about the axis line through `center` (the bounding-box centre of the base
+ * mesh in the two other coordinates, in offset component order). */
+export function axialBend_v3v3iffv2AIv3v3(v, n, axis, lo, len, center, inst, v_out, n_out) {
+  const t = float(clamp(v.element(axis).sub(lo).div(len), float(0.0), float(1.0))).toVar();
+  const disp = vec2(axialCurve(t, inst.d12, inst.d34, inst.d5)).toVar();
+  const slope = vec2(axialSlope_fAI(t, inst)).toVar();
+  const k = float(0).toVar();
+  const cs = vec2(0).toVar();
+  const rw = vec2(0).toVar();
+  const w = vec2(axialAcross_v3i(v, axis).sub(center)).toVar();
+  axialTurn(t, w, inst, k, cs, rw);
+  v_out.assign(v.add(axialEmbed(k.mul(rw).sub(w), axis)).add(axialEmbed(disp, axis)));
+  const nw = vec2(axialAcross_v3i(n, axis)).toVar();
+  const g = vec2(axialTurnRate(slope, k, rw, inst)).toVar();
+  n_out.assign(axialEmbed(vec2(cs.x.mul(nw.x).sub(cs.y.mul(nw.y)), cs.y.mul(nw.x).add(cs.x.mul(nw.y))), axis));
+  {
+    const _v0 = float(k.mul(n.element(axis))).toVar();
+    n_out.assign(vec3(select(axis.equal(int(0)), _v0, n_out.x), select(axis.equal(int(1)), _v0, n_out.y), select(axis.equal(int(2)), _v0, n_out.z)));
+  }
+  {
+    const _v1 = float(n_out.element(axis).sub(dot(axialEmbed(g, axis), n_out).div(len))).toVar();
+    n_out.assign(vec3(select(axis.equal(int(0)), _v1, n_out.x), select(axis.equal(int(1)), _v1, n_out.y), select(axis.equal(int(2)), _v1, n_out.z)));
+  }
+  n_out.assign(normalize(n_out));
+}
+
+/** glsl: axial_bend.
+ * The 16-number form (no axis line needed: without twist and taper it does not matter). */
+export function axialBend_v3v3iffAIv3v3(v, n, axis, lo, len, inst, v_out, n_out) {
+  axialBend_v3v3iffv2AIv3v3(v, n, axis, lo, len, vec2(float(0.0)), inst, v_out, n_out);
+}
+
+/** glsl: axial_rotation.
+ * R = Rz(rz) * Ry(ry) * Rx(rx), column-vector convention. */
+export function axialRotation(r) {
+  const x = vec2(axialCosSin(r.x)).toVar();
+  const y = vec2(axialCosSin(r.y)).toVar();
+  const z = vec2(axialCosSin(r.z)).toVar();
+  const c = vec3(vec3(x.x, y.x, z.x)).toVar();
+  const s = vec3(vec3(x.y, y.y, z.y)).toVar();
+  return [vec3(c.z.mul(c.y), s.z.mul(c.y), s.y.negate()), vec3(c.z.mul(s.y).mul(s.x).sub(s.z.mul(c.x)), s.z.mul(s.y).mul(s.x).add(c.z.mul(c.x)), c.y.mul(s.x)), vec3(c.z.mul(s.y).mul(c.x).add(s.z.mul(s.x)), s.z.mul(s.y).mul(c.x).sub(c.z.mul(s.x)), c.y.mul(c.x))];
+}
+
+/** glsl: axial_place.
+ * The rigid part: a bent model-space vertex and normal placed in the world, W = R (s V'') + p. */
+export function axialPlace(bent_v, bent_n, inst, w_out, wn_out) {
+  const rot = matVar(axialRotation(inst.angles));
+  w_out.assign(matVec(rot, inst.scale.mul(bent_v)).add(inst.position));
+  wn_out.assign(matVec(rot, bent_n));
+}
+
+/** glsl: axial_bend_tangent.
+ * A surface tangent (normal mapping) through the same map: a tangent is a
+ * differential of the position, so it transforms by the Jacobian J = dV''/dV
+ * of the extended bend (the normal above by cof(J)):
+ *   across = k Rot(theta) T_across + g T_a / len,  along = T_a,
+ *   g = D'(t) + k tw Rot(w rotated by 90 degrees) - tp Rot w  (as in axial_bend),
+ * then by R (the uniform scale s drops out after normalising).  Returns the unit
+ * world tangent.  Wind moves the control points, so a wind-moved instance
+ * (axial_wind) gives its tangent here too.
+ * The model-space part of axial_world_tangent (before R; not normalised). */
+export function axialBendTangent_v3v3iffv2AI(v, tangent, axis, lo, len, center, inst) {
+  const bent = vec3(tangent).toVar();
+  const t = float(clamp(v.element(axis).sub(lo).div(len), float(0.0), float(1.0))).toVar();
+  const k = float(0).toVar();
+  const cs = vec2(0).toVar();
+  const rw = vec2(0).toVar();
+  axialTurn(t, axialAcross_v3i(v, axis).sub(center), inst, k, cs, rw);
+  const g = vec2(axialTurnRate(axialSlope_fAI(t, inst), k, rw, inst)).toVar();
+  const tw = vec2(axialAcross_v3i(tangent, axis)).toVar();
+  bent.assign(axialEmbed(k.mul(vec2(cs.x.mul(tw.x).sub(cs.y.mul(tw.y)), cs.y.mul(tw.x).add(cs.x.mul(tw.y)))).add(g.mul(tangent.element(axis).div(len))), axis));
+  {
+    const _v2 = float(tangent.element(axis)).toVar();
+    bent.assign(vec3(select(axis.equal(int(0)), _v2, bent.x), select(axis.equal(int(1)), _v2, bent.y), select(axis.equal(int(2)), _v2, bent.z)));
+  }
+  return bent;
+}
+
+/** glsl: axial_across.
+ * The two coordinates across a framed axis (e_u . v, e_v . v). */
+export function axialAcross_v3m3(v, frame) {
+  return matVec(frame, v).yz;
+}
+
+/** glsl: axial_bend. */
+export function axialBend_v3v3m3ffv2AIv3v3(v, n, frame, lo, len, center, inst, v_out, n_out) {
+  const l = vec3(matVec(frame, v)).toVar();
+  const lv = vec3(0).toVar();
+  const ln = vec3(0).toVar();
+  axialBend_v3v3iffv2AIv3v3(l, matVec(frame, n), int(0), lo, len, center, inst, lv, ln);
+  v_out.assign(v.add(matVec(matTranspose(frame), lv.sub(l))));
+  n_out.assign(matVec(matTranspose(frame), ln));
+}
+
+/** glsl: axial_bend_tangent.
+ * The model-space part of axial_world_tangent for a framed axis (before R; not normalised). */
+export function axialBendTangent_v3v3m3ffv2AI(v, tangent, frame, lo, len, center, inst) {
+  return matVec(matTranspose(frame), axialBendTangent_v3v3iffv2AI(matVec(frame, v), matVec(frame, tangent), int(0), lo, len, center, inst));
+}
+
+/** glsl: axial_axis_add.
+ * Add axis (frame, lo, len)'s displacement of model-space v, and its Jacobian term, to disp and jac. */
+export function axialAxisAdd(v, frame, lo, len, d12, d34, d5, disp, jac) {
+  const raw = float(matVec(frame, v).x.sub(lo).div(len)).toVar();
+  const t = float(clamp(raw, float(0.0), float(1.0))).toVar();
+  const back = matVar(matTranspose(frame));
+  disp.addAssign(matVec(back, vec3(float(0.0), axialCurve(t, d12, d34, d5))));
+  If(raw.greaterThanEqual(float((-AXIAL_T_SLACK))).and(raw.lessThanEqual(float((1.0 + AXIAL_T_SLACK)))), () => {
+    matAssign(jac, matAdd(jac, matOuter(matVec(back, vec3(float(0.0), axialSlope_fv4v4v2(t, d12, d34, d5).div(len))), back[0])));
+  });
+}
+
+/** glsl: axial_cofactor.
+ * cof(J) n: the columns of cof(J) are the cross products of pairs of J's columns. */
+export function axialCofactor(j, n) {
+  return n.x.mul(cross(j[1], j[2])).add(n.y.mul(cross(j[2], j[0]))).add(n.z.mul(cross(j[0], j[1])));
+}
+
+/** glsl: axial_tree_turn.
+ * A tree's twist and taper, about axis 0's axis line (frame f0, lo0, len0; `center` as in axial_bend),
+ * before the displacements: adds the turn of the cross-section to `moved` and sets `jac` to its Jacobian. */
+export function axialTreeTurn(v, f0, lo0, len0, center, inst, moved, jac) {
+  const l = vec3(matVec(f0, v)).toVar();
+  const raw = float(l.x.sub(lo0).div(len0)).toVar();
+  const t = float(clamp(raw, float(0.0), float(1.0))).toVar();
+  const k = float(0).toVar();
+  const cs = vec2(0).toVar();
+  const rw = vec2(0).toVar();
+  const w = vec2(l.yz.sub(center)).toVar();
+  axialTurn(t, w, inst, k, cs, rw);
+  moved.addAssign(matVec(matTranspose(f0), vec3(float(0.0), k.mul(rw).sub(w))));
+  const g = vec2(select(raw.greaterThanEqual(float((-AXIAL_T_SLACK))).and(raw.lessThanEqual(float((1.0 + AXIAL_T_SLACK)))), axialTurnRate(vec2(float(0.0)), k, rw, inst).div(len0), vec2(float(0.0)))).toVar();
+  const jl = matVar([vec3(float(1.0), g), vec3(float(0.0), k.mul(cs.x), k.mul(cs.y)), vec3(float(0.0), k.negate().mul(cs.y), k.mul(cs.x))]);
+  matAssign(jac, matMul(matMul(matTranspose(f0), jl), f0));
+}
+
+/** glsl: axial_anchor_wind.
+ * A child axis's offsets as the wind moves them: `wind`, the push per unit of axis length in the model frame
+ * (axial_wind_push with len 1), moves axis (frame, len) by len times its part across the axis on the control
+ * polygon of (t - a)^2 / max(a^2, (1 - a)^2), a the anchor (its joint stays; a = 0: c = (0, 0, 1/6, 1/2, 1)). */
+export function axialAnchorWind(frame, len, a, wind, d12, d34, d5) {
+  const u = vec2(len.mul(matVec(frame, wind).yz).div(max(a.mul(a), float(1.0).sub(a).mul(float(1.0).sub(a))))).toVar();
+  d12.addAssign(vec4(u.mul(a.mul(a)), u.mul(a.mul(a).sub(float(0.5).mul(a)))));
+  d34.addAssign(vec4(u.mul(float((1.0 / 6.0)).sub(a).add(a.mul(a))), u.mul(float(0.5).sub(float(1.5).mul(a)).add(a.mul(a)))));
+  d5.addAssign(u.mul(float(1.0).sub(a).mul(float(1.0).sub(a))));
+}
+
+/** glsl: axial_wind_hash.
+ * PCG hash of an instance index (integer maths: bit-exact on every GPU and in numpy). */
+export function axialWindHash(i) {
+  const h = uint(i.mul(uint(747796405)).add(uint(2891336453))).toVar();
+  h.assign(h.shiftRight(h.shiftRight(uint(28)).add(uint(4))).bitXor(h).mul(uint(277803737)));
+  return h.shiftRight(uint(22)).bitXor(h);
+}
+
+/** glsl: axial_position_id.
+ * A generated instance's lasting identity (docs/generate.md), from where it stands: the float32 bits of
+ * its x and z hashed.  Its index changes as tiles come and go; this does not, so neither do its wind
+ * phase and shade (AXIAL_POSITION_IDS in scene.vert). */
+export function axialPositionId(p) {
+  return axialWindHash(floatBitsToUint(p.x).bitXor(axialWindHash(floatBitsToUint(p.z))));
+}
+
+/** glsl: axial_wind_phase.
+ * The instance's phase in [0, 1): 24 bits of the hash, exact in float32. */
+export function axialWindPhase(id) {
+  return float(axialWindHash(id).shiftRight(uint(8))).mul(float((1.0 / 16777216.0)));
+}
+
+/** glsl: axial_wind_push.
+ * dir: unit wind direction (world); strength: tip displacement in units of L;
+ * gust: gustiness (0 = steady lean); cycles: see above; wavenumber: 1 / gust wavelength (world units).
+ * The wind's push on instance `inst` (index `id`) at this moment, in the instance's model
+ * frame (model units): amp * (R^T dir).  Only its part across the axis bends (axial_wind). */
+export function axialWindPush(inst, id, len, dir, strength, gust, cycles, wavenumber) {
+  const ph = float(axialWindPhase(id).sub(dot(inst.position, dir).mul(wavenumber))).toVar();
+  const wave = float(float(0.6).mul(axialCosSin(float(6.283185307179586).mul(cycles.x.add(ph))).y).add(float(0.4).mul(axialCosSin(float(6.283185307179586).mul(cycles.y.add(float(1.7).mul(ph)))).y))).toVar();
+  const amp = float(strength.mul(len).mul(float(1.0).add(gust.mul(wave)))).toVar();
+  return amp.mul(matVec(matTranspose(axialRotation(inst.angles)), dir));
+}
+
+/** glsl: axial_wind_move.
+ * The control points moved by u (across the axis): d_k += c_k u, c = (0, 0, 1/6, 1/2, 1). */
+export function axialWindMove(inst, u) {
+  inst = structVar(inst);
+  inst.d34.addAssign(vec4(u.mul(float((1.0 / 6.0))), u.mul(float(0.5))));
+  inst.d5.addAssign(u);
+  return inst;
+}
+
+/** glsl: axial_wind.
+ * The instance `inst` (index `id`) as the wind at this moment bends it. */
+export function axialWind_AIuifv3ffv2f(inst, id, axis, len, dir, strength, gust, cycles, wavenumber) {
+  return axialWindMove(inst, axialAcross_v3i(axialWindPush(inst, id, len, dir, strength, gust, cycles, wavenumber), axis));
+}
+
+/** glsl: axial_wind.
+ * The same for a chosen axis frame (frame * v = local coordinates). */
+export function axialWind_AIum3fv3ffv2f(inst, id, frame, len, dir, strength, gust, cycles, wavenumber) {
+  return axialWindMove(inst, axialAcross_v3m3(axialWindPush(inst, id, len, dir, strength, gust, cycles, wavenumber), frame));
 }
 
 /** glsl: axial_gen_atan2.
@@ -69,8 +346,8 @@ export function axialGenLean(r, ry, grad, ay) {
   const n = vec3(vec3(grad.x.negate(), float(1.0), grad.y.negate()).mul(inv)).toVar();
   const sn = float(sqrt(n.x.mul(n.x).add(n.z.mul(n.z)))).toVar();
   const k = vec3(select(sn.greaterThan(float(1e-12)), vec3(n.z, float(0.0), n.x.negate()).div(sn), vec3(float(0.0)))).toVar();
-  const ta = vec2(axialGenCosSin(axialGenAtan2(sn, n.y).mul(r.align))).toVar();
-  const ty = vec2(axialGenCosSin(ry)).toVar();
+  const ta = vec2(axialCosSin(axialGenAtan2(sn, n.y).mul(r.align))).toVar();
+  const ty = vec2(axialCosSin(ry)).toVar();
   const c1 = float(float(1.0).sub(ta.x)).toVar();
   const rt = matVar([vec3(float(1.0).sub(c1.mul(k.z).mul(k.z)), ta.y.mul(k.z), c1.mul(k.x).mul(k.z)), vec3(ta.y.negate().mul(k.z), float(1.0).sub(c1.mul(k.x.mul(k.x).add(k.z.mul(k.z)))), ta.y.mul(k.x)), vec3(c1.mul(k.x).mul(k.z), ta.y.negate().mul(k.x), float(1.0).sub(c1.mul(k.x).mul(k.x)))]);
   const ryM = matVar([vec3(ty.x, float(0.0), ty.y.negate()), vec3(float(0.0), float(1.0), float(0.0)), vec3(ty.y, float(0.0), ty.x)]);
@@ -139,12 +416,12 @@ export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, positi
   const cx = float(float(tile.x.mul(r.m).add(i.mod(r.m)))).toVar();
   const cz = float(float(tile.y.mul(r.m).add(i.div(r.m)))).toVar();
   {
-    const _v0 = float(cx.add(float(0.5)).add(r.jitter.mul(u[0].sub(float(0.5)))).mul(r.cell)).toVar();
-    position.assign(vec3(_v0, position.y, position.z));
+    const _v3 = float(cx.add(float(0.5)).add(r.jitter.mul(u[0].sub(float(0.5)))).mul(r.cell)).toVar();
+    position.assign(vec3(_v3, position.y, position.z));
   }
   {
-    const _v1 = float(cz.add(float(0.5)).add(r.jitter.mul(u[1].sub(float(0.5)))).mul(r.cell)).toVar();
-    position.assign(vec3(position.x, position.y, _v1));
+    const _v4 = float(cz.add(float(0.5)).add(r.jitter.mul(u[1].sub(float(0.5)))).mul(r.cell)).toVar();
+    position.assign(vec3(position.x, position.y, _v4));
   }
   angles.assign(vec3(float(0.0), float(6.283185307179586).mul(u[2]), float(0.0)));
   const d = Array.from({ length: 5 }, () => vec2(0).toVar());
@@ -175,8 +452,8 @@ export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, positi
     angles.assign(axialGenLean(r, angles.y, grad, ay));
   });
   {
-    const _v2 = float(h.sub(ay.mul(s)).add(r.lift.x.add(r.lift.y.sub(r.lift.x).mul(u[21])))).toVar();
-    position.assign(vec3(position.x, _v2, position.z));
+    const _v5 = float(h.sub(ay.mul(s)).add(r.lift.x.add(r.lift.y.sub(r.lift.x).mul(u[21])))).toVar();
+    position.assign(vec3(position.x, _v5, position.z));
   }
 }
 

@@ -55,9 +55,9 @@ export function matAssign(m, value) {
   m.forEach((c, k) => c.assign(value[k]));
 }
 
-/** A struct variable: every node field a variable (its static booleans stay as they are). */
+/** A struct variable: every node field a variable (static booleans and other JavaScript values stay as they are). */
 export function structVar(s) {
-  return Object.fromEntries(Object.entries(s).map(([k, v]) => [k, typeof v === 'boolean' || typeof v === 'function' ? v : v.toVar()]));
+  return Object.fromEntries(Object.entries(s).map(([k, v]) => [k, v && v.isNode ? v.toVar() : v]));
 }
 
 /** texelFetch(tex, at, 0): a texture's texel, or -- `tex` a function of the texel -- a storage buffer's. */

@@ -37,7 +37,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
 
 /**
  * A generated layer under WebGPURenderer's WebGPU backend: its tiles' instances made by a compute pass of
- * the port of glsl/generate.glsl into the storage buffer the materials read.
+ * glsl/generate.glsl as generated node functions, into the storage buffer the materials read.
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
   constructor(geometry: BufferGeometry, material: Material | Material[], recipe: GenerateRecipe,
@@ -66,7 +66,7 @@ export class AxialGLTFPlugin extends WebGLAxialGLTFPlugin {
   constructor(parser: import('three/addons/loaders/GLTFLoader.js').GLTFParser, options?: { maxSlots?: number });
 }
 
-/** The bend as three.js node functions (the port of glsl/axial.glsl and glsl/wind.glsl). */
+/** The bend as three.js node functions (glsl/axial.glsl and glsl/wind.glsl, generated at build). */
 export const nodes: Record<string, (...args: any[]) => any>;
-/** A generated layer's instance as three.js node functions (the port of glsl/generate.glsl). */
+/** A generated layer's instance as three.js node functions (glsl/generate.glsl, generated at build). */
 export const generateNodes: Record<string, (...args: any[]) => any>;

@@ -5,12 +5,12 @@
 //
 // The same classes as 'axialdeform-three' (the record, the bounds, the wind, the tint, trees of
 // several axes, a chosen frame, generated layers), but the bend is a node function on position and
-// normal (nodes.js, the port of glsl/axial.glsl) set as the material's positionNode, so three's shadow
+// normal (glsl/axial.glsl as node functions, generated into glsl_nodes.js) set as the material's positionNode, so three's shadow
 // passes bend too; classic materials are turned into their node twins as WebGPURenderer itself does.
 // Bending on the GPU for bake and raycasting is a compute pass (WebGPU compute; transform feedback
 // under the WebGL 2 backend, three's choice) running the same node functions, read back
 // asynchronously (webgpu_mesh.js, compute.js).  A generated layer's instances are made by a compute
-// pass of generate_nodes.js, the port of glsl/generate.glsl (generated_webgpu.js: WebGPU backend).
+// pass of glsl/generate.glsl as generated node functions (generate_nodes.js) (generated_webgpu.js: WebGPU backend).
 
 import { AxialError, parseADP } from './adp.js';
 import { AxialGLTFPlugin as WebGLAxialGLTFPlugin, EXTENSION } from './gltf.js';

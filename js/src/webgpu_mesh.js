@@ -1,6 +1,6 @@
 // webgpu_mesh.js -- axialdeform-three/webgpu's AxialInstancedMesh (webgpu.js, the entry, documents it):
 // the same class as 'axialdeform-three''s, but the bend is a node function on position and normal
-// (nodes.js, the port of glsl/axial.glsl) set as the material's positionNode, so three's shadow passes
+// (nodes.js: glsl/axial.glsl as generated node functions) set as the material's positionNode, so three's shadow passes
 // bend too; bake and raycasting bend by a compute pass (compute.js) read back asynchronously.
 
 import * as THREE from 'three/webgpu';

@@ -3,8 +3,8 @@ Vulkan here) and its WebGL 2 fallback, with the oldest three the entry supports 
 place every instance wrong and r182 to r183 lose the shadows of updated instances, three bugs
 fixed since) and the latest release the tests pin (r187).
 
-The bend there is a hand-written port of glsl/axial.glsl and glsl/wind.glsl to three's node
-functions (js/src/nodes.js): these tests hold it to ``axialdeform.deform`` on every feature, draw
+The bend there is glsl/axial.glsl and glsl/wind.glsl as three's node functions, generated at build
+(js/src/glsl_nodes.js by js/build.mjs): these tests hold it to ``axialdeform.deform`` on every feature, draw
 what ``render`` draws, cast bent shadows, bake and raycast, and refuse in words what they cannot bend."""
 
 from __future__ import annotations
@@ -325,7 +325,7 @@ def test_the_webgpu_example_draws_what_render_draws(webgpu_browser, site, backen
     assert errors == []
 
 
-# ---- generated layers: the compute port of glsl/generate.glsl (generate_nodes.js) ----
+# ---- generated layers: glsl/generate.glsl as node functions, by a compute pass (generate_nodes.js) ----
 
 GEN_STONES = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2],
               "twist": 0.5, "tint": 0.3}
@@ -374,7 +374,7 @@ def generated_cases(tmp_path):
 
 @pytest.mark.parametrize("version", VERSIONS)
 def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser, site, version, tmp_path):
-    """axialdeform-three/webgpu's AxialGeneratedMesh: its compute pass (generate_nodes.js, WebGPU backend)
+    """axialdeform-three/webgpu's AxialGeneratedMesh: its compute pass (the generated axial_generate, WebGPU backend)
     makes the Python library's records for the tiles around a point -- flat ground, a height map with
     density, bands and leaning, a tree of ten axes --, counts the kept ones on the GPU, draws them as
     render does (silhouette IoU >= 0.95), and a ray straight down hits the first one."""

@@ -1,0 +1,67 @@
+// node --test: the node functions are GENERATED from glsl/ (build.mjs, glsl_tsl.mjs), and a change of a
+// formula in glsl/ that is not built again is caught: `build.mjs --check` run on a copy with an edited GLSL.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFileSync, mkdtempSync, mkdirSync, copyFileSync, writeFileSync, rmSync } from 'node:fs';
+import { join } from 'node:path';
+import { tmpdir } from 'node:os';
+import { spawnSync } from 'node:child_process';
+import { fileURLToPath } from 'node:url';
+import { emitTsl, GlslError } from '../glsl_tsl.mjs';
+import { generateNodes } from '../build.mjs';
+
+const js = fileURLToPath(new URL('..', import.meta.url));
+const glsl = join(js, '..', 'glsl');
+const read = (name) => readFileSync(join(glsl, name), 'utf8');
+
+test('src/glsl_nodes.js is what glsl/ gives', () => {
+  const want = generateNodes(read('axial.glsl'), read('wind.glsl'), read('generate.glsl'));
+  assert.equal(readFileSync(join(js, 'src', 'glsl_nodes.js'), 'utf8'), want);
+});
+
+test('build.mjs --check fails on a copy whose glsl/ changed a formula, and passes once built', () => {
+  const root = mkdtempSync(join(tmpdir(), 'axd-drift-'));
+  try {
+    mkdirSync(join(root, 'js', 'src'), { recursive: true });
+    mkdirSync(join(root, 'glsl'));
+    for (const f of ['build.mjs', 'glsl_tsl.mjs']) copyFileSync(join(js, f), join(root, 'js', f));
+    for (const f of ['glsl.js', 'glsl_nodes.js']) copyFileSync(join(js, 'src', f), join(root, 'js', 'src', f));
+    for (const f of ['axial.glsl', 'wind.glsl', 'generate.glsl', 'generate.vert', 'generate_children.vert',
+      'generate_axes.vert', 'generate_axes.frag']) copyFileSync(join(glsl, f), join(root, 'glsl', f));
+    const check = () => spawnSync(process.execPath, [join(root, 'js', 'build.mjs'), '--check'], { encoding: 'utf8' });
+    assert.equal(check().status, 0, check().stderr);
+    const curve = read('axial.glsl');
+    const edited = curve.replace('(4.0 * t * s * s * s) * d2', '(4.5 * t * s * s * s) * d2');
+    assert.notEqual(edited, curve, 'the formula to edit is in axial.glsl');
+    writeFileSync(join(root, 'glsl', 'axial.glsl'), edited);
+    const stale = check();
+    assert.equal(stale.status, 1);
+    assert.match(stale.stderr, /glsl_nodes\.js differs/);
+    const built = spawnSync(process.execPath, [join(root, 'js', 'build.mjs')], { encoding: 'utf8' });
+    assert.equal(built.status, 0, built.stderr);
+    assert.equal(check().status, 0);
+    assert.match(readFileSync(join(root, 'js', 'src', 'glsl_nodes.js'), 'utf8'), /float\(4\.5\)\.mul\(t\)/);
+  } finally {
+    rmSync(root, { recursive: true, force: true });
+  }
+});
+
+const emit = (text, only) => emitTsl([{ name: 'x.glsl', text }], { only });
+
+test('an out parameter is the caller\'s variable; early returns become one result; static conditions choose in JavaScript', () => {
+  const out = emit(`
+struct S { float a; bool on; };
+float f(float x) { if (x > 1.0) return 2.0; return x; }
+void g(S s, float x, out float y) { if (s.on) y = f(x); else y = -x; }
+void h(float x, out float z) { float w; g(S(1.0, true), x, w); z = w; }`, ['h']);
+  assert.match(out, /export function g\(s, x, y\) \{\n {2}if \(s\.on\) \{\n {4}y\.assign\(f\(x\)\);/);
+  assert.match(out, /const _result = float\(0\)\.toVar\(\);\n {2}If\(x\.greaterThan\(float\(1\.0\)\), \(\) => \{\n {4}_result\.assign\(float\(2\.0\)\);\n {2}\}\)\.Else/);
+  assert.match(out, /const w = float\(0\)\.toVar\(\);\n {2}g\(\{ a: float\(1\.0\), on: true \}, x, w\);\n {2}z\.assign\(w\);/);
+});
+
+test('what the emitter does not take is refused with the file and line', () => {
+  assert.throws(() => emit('float f(float x) {\n  return sin(x);\n}'), (e) => e instanceof GlslError && /x\.glsl:2: sin\(\)/.test(e.message));
+  assert.throws(() => emit('float f(int i) {\n  float a[3];\n  return a[i];\n}'), /x\.glsl:3: an array indexed by a node/);
+  assert.throws(() => emit('void f(float x) {\n  x = g(x);\n}'), /x\.glsl:2: g\(\) is neither/);
+  assert.throws(() => emit('#define N 3\nfloat f() { return 1.0; }'), /x\.glsl:1: #define is not in the subset/);
+});
