@@ -5,6 +5,7 @@
 #include "wind.glsl"
 #include "generate.glsl"
 
+// ---- written by js/build.mjs from AxialRecipe (glsl/generate.glsl): edit the struct, then `npm run build` in js/ ----
 uniform uint u_seed;
 uniform int u_m;
 uniform float u_cell;
@@ -14,7 +15,6 @@ uniform vec2 u_scale;
 uniform float u_twist;
 uniform float u_taper;
 uniform float u_anchor_y;
-uniform vec2 u_lift;
 uniform vec4 u_anchor_w;
 uniform float u_anchor_w4;
 uniform float u_tint;
@@ -31,19 +31,22 @@ uniform bool u_d_wrap;
 uniform vec2 u_altitude;
 uniform vec2 u_slope_tan2;
 uniform vec2 u_choice;
+uniform vec2 u_lift;
 uniform float u_align;
 uniform vec2 u_anchor_xz;
-uniform sampler2D u_heights;  // unit 0
-uniform sampler2D u_density;  // unit 1
-uniform ivec2 u_tile;
 
 // the recipe from the uniforms above
 AxialRecipe axial_gen_recipe() {
-    return AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale, u_twist, u_taper, u_anchor_y,
-                       u_anchor_w, u_anchor_w4, u_tint, u_tint_color, u_has_heights, u_h_lo, u_h_inv,
-                       u_h_size, u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
-                       u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz);
+    return AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale,
+                       u_twist, u_taper, u_anchor_y, u_anchor_w, u_anchor_w4, u_tint,
+                       u_tint_color, u_has_heights, u_h_lo, u_h_inv, u_h_size, u_has_density,
+                       u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude, u_slope_tan2,
+                       u_choice, u_lift, u_align, u_anchor_xz);
 }
+// ---- end of what js/build.mjs writes ----
+uniform sampler2D u_heights;  // unit 0
+uniform sampler2D u_density;  // unit 1
+uniform ivec2 u_tile;
 
 #ifndef AXIAL_COMPUTE
 out vec4 g_d12;

@@ -7,7 +7,7 @@
 import { readFileSync, writeFileSync, existsSync, renameSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { emitTsl } from './glsl_tsl.mjs';
+import { emitTsl, structFields } from './glsl_tsl.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const source = join(here, '..', 'glsl', 'axial.glsl');
@@ -25,6 +25,23 @@ const nodesTarget = join(here, 'src', 'glsl_nodes.js');
 export const NODE_FUNCTIONS = ['axial_bend', 'axial_bend_tangent', 'axial_place', 'axial_rotation', 'axial_wind', 'axial_wind_push',
   'axial_position_id', 'axial_tree_turn', 'axial_anchor_wind', 'axial_axis_add', 'axial_cofactor', 'axial_cos_sin', 'axial_curve',
   'axial_slope', 'axial_generate', 'axial_generate_child', 'axial_gen_key'];
+
+// generate.vert's uniforms of the recipe and the AxialRecipe made of them: written from the struct, between
+// these lines (the struct in glsl/generate.glsl is the one declaration of a recipe's numbers)
+const BEGIN = '// ---- written by js/build.mjs from AxialRecipe (glsl/generate.glsl): edit the struct, then `npm run build` in js/ ----';
+const END = '// ---- end of what js/build.mjs writes ----';
+
+/** generate.vert with its recipe section written from AxialRecipe's fields ([[name, type], ...]). */
+export function withRecipeUniforms(vert, fields) {
+  const section = [BEGIN, ...fields.map(([name, type]) => `uniform ${type} u_${name};`), '',
+    '// the recipe from the uniforms above', 'AxialRecipe axial_gen_recipe() {',
+    `    return AxialRecipe(${Array.from({ length: Math.ceil(fields.length / 6) }, (_, k) => fields.slice(6 * k, 6 * k + 6)
+      .map(([name]) => `u_${name}`).join(', ')).join(',\n                       ')});`,
+    '}', END].join('\n');
+  const start = vert.indexOf(BEGIN), end = vert.indexOf(END);
+  if (start < 0 || end < start) throw new Error(`${generateMain}: no section "${BEGIN}" ... "${END}" to write the recipe's uniforms into`);
+  return vert.slice(0, start) + section + vert.slice(end + END.length);
+}
 
 /** src/glsl_nodes.js from the texts of glsl/axial.glsl, wind.glsl and generate.glsl. */
 export function generateNodes(text, wind, gen) {
@@ -59,6 +76,8 @@ export function generate(text, wind, gen, genMain, childMain, axesVert, axesFrag
       '(axial_place) and several axes (axial_tree_world, with AXIAL_AXES defined).'], text],
     ['WIND_GLSL', ['The text of glsl/wind.glsl (after AXIAL_GLSL): the wind moves control points (axial_wind).'], wind],
     ['GENERATE_GLSL', ['The text of glsl/generate.glsl (after WIND_GLSL): a generated layer\'s instance (axial_generate).'], gen],
+    ['RECIPE_FIELDS', ['AxialRecipe\'s fields (glsl/generate.glsl), [name, GLSL type] in order: generate.vert\'s uniforms u_<name>,',
+      'the node uniforms of WebGPU (generate_nodes.js) and what tiles.js sets.'], structFields(gen, 'AxialRecipe', generateSource)],
     ['GENERATE_VERT', ['glsl/generate.vert without its includes (AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL go before it): the',
       'transform-feedback pass that writes a tile\'s records.'], main],
     ['GENERATE_CHILDREN_VERT', ['glsl/generate_children.vert without its includes: a mesh of several axes\' child offsets, six axes a pass.'], children],
@@ -76,13 +95,15 @@ if (process.argv[1] === fileURLToPath(import.meta.url)) {
     console.error(`build.mjs: ${source} not found (run it in the axialdeform repository)`);
     process.exit(2);
   }
+  const vert = withRecipeUniforms(readFileSync(generateMain, 'utf8'),
+    structFields(readFileSync(generateSource, 'utf8'), 'AxialRecipe', generateSource));
   const want = generate(readFileSync(source, 'utf8'), readFileSync(windSource, 'utf8'),
-    readFileSync(generateSource, 'utf8'), readFileSync(generateMain, 'utf8'), readFileSync(childrenMain, 'utf8'),
+    readFileSync(generateSource, 'utf8'), vert, readFileSync(childrenMain, 'utf8'),
     readFileSync(axesMain, 'utf8'), readFileSync(axesFrag, 'utf8'));
   const nodes = generateNodes(readFileSync(source, 'utf8'), readFileSync(windSource, 'utf8'), readFileSync(generateSource, 'utf8'));
   if (process.argv.includes('--check')) {
     let stale = false;
-    for (const [file, text] of [[target, want], [nodesTarget, nodes]]) {
+    for (const [file, text] of [[generateMain, vert], [target, want], [nodesTarget, nodes]]) {
       const have = existsSync(file) ? readFileSync(file, 'utf8') : '';
       if (have !== text) {
         console.error(`build.mjs --check: ${file} differs from what glsl/ gives; run \`npm run build\` in js/`);
@@ -91,7 +112,8 @@ if (process.argv[1] === fileURLToPath(import.meta.url)) {
     }
     process.exit(stale ? 1 : 0);
   }
-  for (const [file, text] of [[target, want], [nodesTarget, nodes]]) {
+  for (const [file, text] of [[generateMain, vert], [target, want], [nodesTarget, nodes]]) {
+    if (existsSync(file) && readFileSync(file, 'utf8') === text) continue;
     writeFileSync(file + '.tmp', text);
     renameSync(file + '.tmp', file);
   }

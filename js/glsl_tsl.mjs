@@ -851,4 +851,18 @@ export function emitTsl(sources, { defines = {}, only = null, header = [], runti
   ].join('\n');
 }
 
+/**
+ * The fields of struct `name` in a GLSL text: [[field, type], ...] in their order.
+ * @param {string} text the GLSL source
+ * @param {string} name the struct
+ * @param {string} where the file (for errors)
+ */
+export function structFields(text, name, where = name) {
+  const parser = new Parser(tokenize(preprocess(text, {}, where), where), where);
+  const items = parser.program();
+  const s = items.find((x) => x.kind === 'struct' && x.name === name);
+  if (!s) throw new GlslError(`${where}: no struct ${name}`);
+  return s.fields.map((f) => [f.name, f.type]);
+}
+
 export { GlslError };

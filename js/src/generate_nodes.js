@@ -11,22 +11,21 @@
 import { float, vec2, vec3, vec4, ivec2, uniform } from 'three/tsl';
 import { Vector2, Vector3, Vector4 } from 'three/webgpu';
 import * as glsl from './glsl_nodes.js';
+import { RECIPE_FIELDS } from './glsl.js';
+
+const VECTORS = { vec2: Vector2, vec3: Vector3, vec4: Vector4 };
 
 /** generate.glsl's AxialRecipe from generatorUniforms (generate.js's recipeUniforms, or the Python
- * library's): every number a uniform node, the booleans has_heights, has_density, d_wrap plain (they
- * choose the code). */
+ * library's), field by field as the struct declares them (RECIPE_FIELDS): every number a uniform node,
+ * the booleans (has_heights, has_density, d_wrap) plain: they choose the code. */
 export function recipeNodes(u) {
-  const v2 = (a) => uniform(new Vector2(a[0], a[1]));
-  return {
-    seed: uniform(u.seed, 'uint'), m: uniform(u.m, 'int'), cell: uniform(u.cell), jitter: uniform(u.jitter),
-    bend: uniform(u.bend), scale: v2(u.scale), twist: uniform(u.twist), taper: uniform(u.taper),
-    anchor_y: uniform(u.anchor_y), anchor_w: uniform(new Vector4(...u.anchor_w)), anchor_w4: uniform(u.anchor_w4),
-    tint: uniform(u.tint), tint_color: uniform(new Vector3(...u.tint_color)), h_lo: v2(u.h_lo), h_inv: v2(u.h_inv),
-    h_size: ivec2(v2(u.h_size)), d_lo: v2(u.d_lo), d_inv: v2(u.d_inv), d_size: ivec2(v2(u.d_size)), altitude: v2(u.altitude),
-    slope_tan2: v2(u.slope_tan2), choice: v2(u.choice), lift: v2(u.lift), align: uniform(u.align),
-    anchor_xz: v2(u.anchor_xz),
-    has_heights: Boolean(u.has_heights), has_density: Boolean(u.has_density), d_wrap: Boolean(u.d_wrap),
-  };
+  return Object.fromEntries(RECIPE_FIELDS.map(([name, type]) => {
+    const v = u[name];
+    if (type === 'bool') return [name, Boolean(v)];
+    if (type === 'ivec2') return [name, ivec2(uniform(new Vector2(v[0], v[1])))];
+    if (VECTORS[type]) return [name, uniform(new VECTORS[type](...v))];
+    return [name, type === 'float' ? uniform(v) : uniform(v, type)];
+  }));
 }
 
 /** The tile's key (axial_gen_key). */

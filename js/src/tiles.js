@@ -10,7 +10,7 @@
 
 import * as THREE from 'three';
 import { AxialError, AXES_ROW } from './adp.js';
-import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT, GENERATE_CHILDREN_VERT, GENERATE_AXES_VERT,
+import { RECIPE_FIELDS, AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT, GENERATE_CHILDREN_VERT, GENERATE_AXES_VERT,
   GENERATE_AXES_FRAG } from './glsl.js';
 import { refuseWebGPU, feedbackLink } from './feedback.js';
 
@@ -20,6 +20,8 @@ export const GENERATED_FLOATS = 23;
 const VARYINGS = ['g_d12', 'g_d34', 'g_d5_px_py', 'g_pz_angles', 'g_extra', 'g_tint'];
 const CHILD_VARYINGS = Array.from({ length: 15 }, (_, k) => `c_${k}`);
 const HEAD = '#version 300 es\nprecision highp float;\nprecision highp int;\n';
+// the gl.uniform* suffix of a recipe field's GLSL type (its base: f, i, ui)
+const UNIFORM_KIND = { float: 'f', vec2: 'f', vec3: 'f', vec4: 'f', int: 'i', ivec2: 'i', uint: 'ui' };
 
 /**
  * glsl/generate.glsl in a WebGL 2 context by transform feedback: `make(tiles)` writes each tile's m^2
@@ -70,15 +72,11 @@ export class TileGenerator {
   setUniforms(p) {
     const gl = this.gl, u = this.uniforms;
     const at = (name) => gl.getUniformLocation(p, name);
-    gl.uniform1ui(at('u_seed'), u.seed);
-    gl.uniform1i(at('u_m'), u.m);
-    for (const k of ['cell', 'jitter', 'bend', 'twist', 'taper', 'anchor_y', 'anchor_w4', 'tint', 'align']) gl.uniform1f(at(`u_${k}`), u[k]);
-    gl.uniform2f(at('u_scale'), u.scale[0], u.scale[1]);
-    gl.uniform4f(at('u_anchor_w'), ...u.anchor_w);
-    gl.uniform3f(at('u_tint_color'), ...u.tint_color);
-    for (const k of ['has_heights', 'has_density', 'd_wrap']) gl.uniform1i(at(`u_${k}`), u[k] ? 1 : 0);
-    for (const k of ['h_lo', 'h_inv', 'd_lo', 'd_inv', 'altitude', 'slope_tan2', 'choice', 'lift', 'anchor_xz']) gl.uniform2f(at(`u_${k}`), u[k][0], u[k][1]);
-    for (const k of ['h_size', 'd_size']) gl.uniform2i(at(`u_${k}`), u[k][0], u[k][1]);
+    for (const [name, type] of RECIPE_FIELDS) { // generate.glsl's AxialRecipe: generate.vert's u_<name>
+      const v = u[name], where = at(`u_${name}`);
+      if (type === 'bool') gl.uniform1i(where, v ? 1 : 0);
+      else gl[`uniform${Array.isArray(v) ? v.length : 1}${UNIFORM_KIND[type]}v`](where, Array.isArray(v) ? v : [v]);
+    }
     gl.uniform1i(at('u_children_n'), this.childCount);
     this.textures.forEach((t, unit) => {
       gl.activeTexture(gl.TEXTURE0 + unit);

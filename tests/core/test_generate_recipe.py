@@ -231,3 +231,20 @@ def test_anchor_and_lift_place_the_instance_as_scatter_does():
     lifted = generate_tile(Generate(rate=2.0, tile=8.0, seed=4, bend=0.2, lift=(0.5, 1.5)), STONE, 0, 0)[0]
     up = lifted[:, 11] - bottom[:, 11]
     assert (up >= 0.5 - 1e-6).all() and (up <= 1.5 + 1e-6).all() and np.ptp(up) > 0.5
+
+
+def test_the_recipe_struct_is_the_one_list_of_a_recipes_numbers(stone):
+    """glsl/generate.glsl's AxialRecipe declares a recipe's numbers once: generate.vert's uniforms, the npm
+    module's table (RECIPE_FIELDS) and WebGPU's uniform nodes are written from it by js/build.mjs, and the
+    numbers the Python library computes (recipe_uniforms) are exactly its fields."""
+    import re
+
+    from axialdeform.core.generate import recipe_uniforms
+
+    glsl = Path(__file__).resolve().parents[2] / "glsl"
+    body = re.search(r"struct AxialRecipe \{(.*?)\};", (glsl / "generate.glsl").read_text(), re.S).group(1)
+    fields = re.findall(r"^\s*\w+\s+(\w+);", body, re.M)
+    assert len(fields) >= 28
+    assert list(recipe_uniforms(Generate(rate=1.0, tile=4.0), stone)) == fields
+    vert = (glsl / "generate.vert").read_text()
+    assert [m for m in re.findall(r"^uniform \w+ u_(\w+);", vert, re.M) if m in fields] == fields
