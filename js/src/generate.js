@@ -279,6 +279,18 @@ export function adoptGenerated(mesh, base, options, drawsOn, childTexture) {
  * slots drawn are kept (the rest collapse to a point).
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
+  // what adoptGenerated (generate.js) and update set, declared for the type check
+  /** @type {any} the checked recipe */ recipe;
+  /** @type {any} generate.glsl's numbers (RECIPE_FIELDS) */ generatorUniforms;
+  /** @type {any} the ground maps */ maps;
+  /** @type {number[][]} the tiles held, nearest first */ tiles;
+  /** @type {string | null} the tiles held, as one key */ _key;
+  /** @type {any} the renderer and camera of the last draw (autoUpdate) */ _drawnBy;
+  /** @type {boolean} */ autoUpdate;
+  /** @type {any} the last make's slots */ _slots;
+  /** @type {any} */ timing;
+  /** @type {number} */ kept;
+
   constructor(geometry, material, recipe, options = {}) {
     const base = generatedBase(geometry, recipe, options, 'AxialGeneratedMesh');
     super(geometry, material, base.record, base.options);
@@ -306,10 +318,10 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     if (children && !this._gpu.drawsTexels) this._uploadTexels(tiles, n, children);
     Object.assign(this, { tiles, _key: key, _slots: slots, _materialized: false, count: n, boundingSphere: null, boundingBox: null });
     const kept = this._gpu.kept(slots, n);
-    this.kept = kept !== null ? kept : this._rows(false).n;
+    this.kept = kept !== null ? kept : this._slotRecords(false).n;
     /** The last tiles' cost: the GPU passes and the one pixel of the count read back. */
     this.timing = { instances: this.kept, slots: n, generateMs: performance.now() - t0 };
-    this.dispatchEvent({ type: 'paramschange', first: 0, count: n });
+    this.dispatchEvent(/** @type {any} */ ({ type: 'paramschange', first: 0, count: n }));
     return true;
   }
 
@@ -338,7 +350,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   }
 
   /** The slots read back as records (slotRows). */
-  _rows(compact) {
+  _slotRecords(compact) {
     const gen = this._generator;
     if (!this._slots) return { rows: new Float32Array(0), kept: new Uint8Array(0), n: 0 };
     return slotRows(gen.read(this._slots), this.layout.axes > 1 ? gen.runChildren(this.tiles) : null, this.layout, compact);
@@ -347,7 +359,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   /** The kept instances' records (Float32Array, rows of numbersPerInstance), as the Python library's
    * generate_tiles gives them for `tiles`: read back from the GPU (tools and tests; drawing needs none). */
   records() {
-    return this._rows(true).rows;
+    return this._slotRecords(true).rows;
   }
 
   /** The records on the CPU, one a slot (what raycasting, bake and the bounds read), read back once a tile set
@@ -355,7 +367,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   _materialize() {
     if (this._materialized || !this._slots) return;
     this._materialized = true;
-    const { rows, kept } = this._rows(false), n = kept.length;
+    const { rows, kept } = this._slotRecords(false), n = kept.length;
     if (this._radii.length < n) {
       this.data = new Float32Array(n * this.layout.numbersPerInstance);
       this._radii = new Float32Array(n);

@@ -43,6 +43,19 @@ function mapTexture(m, key) {
  * `recordsAsync()` reads the kept records back; raycastAsync and bakeAsync read the tile set back once.
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
+  // what adoptGenerated (generate.js) and update set, declared for the type check
+  /** @type {any} the checked recipe */ recipe;
+  /** @type {any} generate.glsl's numbers (RECIPE_FIELDS) */ generatorUniforms;
+  /** @type {any} the ground maps */ maps;
+  /** @type {number[][]} the tiles held, nearest first */ tiles;
+  /** @type {string | null} the tiles held, as one key */ _key;
+  /** @type {any} the renderer and camera of the last draw (autoUpdate) */ _drawnBy;
+  /** @type {boolean} */ autoUpdate;
+  /** @type {any} the last make's slots */ _slots;
+  /** @type {any} */ timing;
+  /** @type {number} */ kept;
+  /** @type {any} the renderer whose compute passes made the tiles */ _madeBy;
+
   constructor(geometry, material, recipe, options = {}) {
     const base = generatedBase(geometry, recipe, options, 'AxialGeneratedMesh');
     super(geometry, material, base.record, base.options);
@@ -213,7 +226,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     });
     /** The last tiles' cost on the CPU (the dispatch; the GPU runs on). */
     this.timing = { slots: n, generateMs: performance.now() - t0 };
-    this.dispatchEvent({ type: 'paramschange', first: 0, count: n });
+    this.dispatchEvent(/** @type {any} */ ({ type: 'paramschange', first: 0, count: n }));
     return true;
   }
 

@@ -74,8 +74,10 @@ export class AxialGLTFPlugin {
     this.parser = parser;
     this.options = options;
     this.name = EXTENSION;
-    this.Mesh = AxialInstancedMesh; // axialdeform-three/webgpu's plugin makes its node-material meshes
-    this.Generated = AxialGeneratedMesh; // and its generated ones
+    /** @type {any} axialdeform-three/webgpu's plugin makes its node-material meshes */
+    this.Mesh = AxialInstancedMesh;
+    /** @type {any} and its generated ones */
+    this.Generated = AxialGeneratedMesh;
   }
 
   /** Before GLTFLoader reads anything of the file: every node's AXIALDEFORM_bend and the instance

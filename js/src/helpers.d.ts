@@ -2,7 +2,7 @@
 // columns, the parser's checks, the axis and bounds maths, the shader patch, the glTF plugin's steps).
 import * as THREE from 'three';
 import type { AxialInstancedMesh, AxisSpec, AxesSpec, BendExtension, InstanceRecord, RecordLayout, ResolvedAxis,
-  Rows3 } from './index.js';
+  Rows3, GenerateRecipe, GeneratorUniforms, GroundMaps } from './index.js';
 
 export function crc32(bytes: Uint8Array): number;
 export function hex(bytes: Uint8Array): string;
@@ -43,3 +43,30 @@ export const ATTRIBUTES: ReadonlyArray<{ name: string; start: number; size: numb
 /** The wind's defaults and second harmonic (generated from axialdeform.core.wind). */
 export const WIND: Readonly<{ gustiness: number; frequency: number; wavelength: number; harmonic: number }>;
 export const FRAME_TOLERANCE: number;
+
+// generated layers' parts: the recipe's checks and numbers, the tiles, the WebGL 2 generator
+/** A recipe checked as the Python library checks it, its defaults filled in. */
+export function checkRecipe(recipe: GenerateRecipe): Required<GenerateRecipe>;
+/** generate.glsl's numbers from a recipe, the base mesh's positions and its resolved axis. */
+export function recipeUniforms(recipe: Required<GenerateRecipe>, positions: Float32Array,
+  axis: { frame: Rows3; lo: number; length: number }): GeneratorUniforms;
+/** The tiles any point of which lies within `reach` of (x, z), nearest first. */
+/** `edge`: the world's edge (no tile beyond it; default none). */
+export function tilesAround(tile: number, x: number, z: number, reach: number, edge?: number): [number, number][];
+
+/** A GL buffer of slots the generator left on the GPU. */
+export interface GeneratedSlots { buffer: WebGLBuffer; bytes: number }
+
+/** glsl/generate.glsl by WebGL 2 transform feedback: make(tiles) -> a GL buffer of 23 float32 an instance
+ * (the 22-number record, then kept), tile after tile, left on the GPU; run(tiles) reads it back. */
+export class TileGenerator {
+  constructor(renderer: THREE.WebGLRenderer, uniforms: GeneratorUniforms, maps?: GroundMaps);
+  readonly count: number;
+  make(tiles: [number, number][]): GeneratedSlots;
+  read(slots: GeneratedSlots): Float32Array;
+  run(tiles: [number, number][]): Float32Array;
+  dispose(): void;
+}
+
+/** AxialRecipe's fields (glsl/generate.glsl), [name, GLSL type] in order. */
+export const RECIPE_FIELDS: ReadonlyArray<readonly [string, string]>;

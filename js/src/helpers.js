@@ -7,3 +7,5 @@ export { RECORD, WIDTHS, ATTRIBUTES, WIND, FRAME_TOLERANCE } from './record.js';
 export { alignedFrame, resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 export { injectBend } from './shader.js';
 export { fromInstancedMesh, recordFromInstancedMesh, checkBendExtension } from './gltf.js';
+export { TileGenerator, checkRecipe, recipeUniforms, tilesAround } from './generate.js';
+export { RECIPE_FIELDS } from './glsl.js';

@@ -190,29 +190,6 @@ export interface GroundMap { data: Float32Array; cols: number; rows: number }
 /** The ground maps the uniforms place: the terrain's heights, the density map. */
 export interface GroundMaps { heights?: GroundMap; density?: GroundMap }
 
-/** A recipe checked as the Python library checks it, its defaults filled in. */
-export function checkRecipe(recipe: GenerateRecipe): Required<GenerateRecipe>;
-/** generate.glsl's numbers from a recipe, the base mesh's positions and its resolved axis. */
-export function recipeUniforms(recipe: Required<GenerateRecipe>, positions: Float32Array,
-  axis: { frame: Rows3; lo: number; length: number }): GeneratorUniforms;
-/** The tiles any point of which lies within `reach` of (x, z), nearest first. */
-/** `edge`: the world's edge (no tile beyond it; default none). */
-export function tilesAround(tile: number, x: number, z: number, reach: number, edge?: number): [number, number][];
-
-/** A GL buffer of slots the generator left on the GPU. */
-export interface GeneratedSlots { buffer: WebGLBuffer; bytes: number }
-
-/** glsl/generate.glsl by WebGL 2 transform feedback: make(tiles) -> a GL buffer of 23 float32 an instance
- * (the 22-number record, then kept), tile after tile, left on the GPU; run(tiles) reads it back. */
-export class TileGenerator {
-  constructor(renderer: THREE.WebGLRenderer, uniforms: GeneratorUniforms, maps?: GroundMaps);
-  readonly count: number;
-  make(tiles: [number, number][]): GeneratedSlots;
-  read(slots: GeneratedSlots): Float32Array;
-  run(tiles: [number, number][]): Float32Array;
-  dispose(): void;
-}
-
 export interface AxialGeneratedMeshOptions extends AxialInstancedMeshOptions {
   /** generate.glsl's numbers as the Python library gave them (default: recipeUniforms). */
   uniforms?: GeneratorUniforms;

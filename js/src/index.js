@@ -5,5 +5,5 @@
 export { AxialError, parseADP } from './adp.js';
 export { AxialInstancedMesh } from './mesh.js';
 export { AxialGLTFPlugin, EXTENSION } from './gltf.js';
-export { AxialGeneratedMesh, TileGenerator, checkRecipe, recipeUniforms, tilesAround } from './generate.js';
+export { AxialGeneratedMesh } from './generate.js';
 export { AXIAL_GLSL, WIND_GLSL } from './glsl.js';

@@ -30,7 +30,20 @@ const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
  * The material(s) are cloned and given the bend; shadows (customDepthMaterial,
  * customDistanceMaterial) and raycasting use the bent shape.
  */
+/** @typedef {[number, number, number, number, number, number, number, number, number]} Nine a Matrix3's numbers */
+
 export class AxialInstancedMesh extends THREE.InstancedMesh {
+  /** @type {any} bake.js's drawn mesh and its release while baked, else null */
+  _baked = null;
+  /** @type {any} raycast.js's probe mesh, made at the first raycast */
+  _rayMesh = null;
+  /** @type {any} a generated mesh's CPU copies of the attributes it draws from GPU-written ones */
+  _cpuAttributes = null;
+  /** @type {any} a generated WebGPU mesh's child offsets: a function of a texel's index */
+  _childTexels = null;
+  /** @type {any} a generated WebGPU mesh's instances, as the compute pass wrote them: {instances, stride} */
+  _storage = null;
+
   constructor(geometry, material, record, options = {}) {
     if (!geometry || !geometry.isBufferGeometry) throw new AxialError('AxialInstancedMesh: expected a THREE.BufferGeometry');
     if (!record || !Number.isInteger(record.count) || !record.data) {
@@ -79,7 +92,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     if (this.layout.tint !== null) this.instanceColor = new THREE.InstancedBufferAttribute(new Float32Array(capacity * 3), 3);
     const ax = this.axis;
     this.axialUniforms = {
-      axialFrame: { value: new THREE.Matrix3().set(...ax.frame.flat()) }, // set() takes rows: frame * v = F v
+      axialFrame: { value: new THREE.Matrix3().set(.../** @type {Nine} */ (ax.frame.flat())) }, // set() takes rows: frame * v = F v
       axialLo: { value: ax.lo }, axialLen: { value: ax.length },
       axialCenter: { value: new THREE.Vector2(ax.center[0], ax.center[1]) },
     };
@@ -87,7 +100,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     if (ax.axes) {
       this.defines.AXIAL_AXES = String(ax.axes.count);
       Object.assign(this.axialUniforms, {
-        axialFrames: { value: ax.axes.frames.map((f) => new THREE.Matrix3().set(...f.flat())) },
+        axialFrames: { value: ax.axes.frames.map((f) => new THREE.Matrix3().set(.../** @type {Nine} */ (f.flat()))) },
         axialLos: { value: Float32Array.from(ax.axes.lo) },
         axialLens: { value: Float32Array.from(ax.axes.length) },
         // each child axis's joint (t on its own axis): the wind leaves it; files without them: 0
@@ -178,7 +191,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     this.boundingSphere = null;
     this.boundingBox = null;
     this.computeBoundingSphere();
-    this.dispatchEvent({ type: 'paramschange', first: 0, count: n });
+    this.dispatchEvent(/** @type {any} */ ({ type: 'paramschange', first: 0, count: n }));
     return this;
   }
 
@@ -200,7 +213,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
         this.boundingSphere.union(this.getInstanceBoundingSphere(i, _s));
       }
     }
-    this.dispatchEvent({ type: 'paramschange', first: start, count: n });
+    this.dispatchEvent(/** @type {any} */ ({ type: 'paramschange', first: start, count: n }));
     return this;
   }
 

@@ -198,7 +198,7 @@ const OUTPUTS = [
 /** A GL buffer of three's as an instanced attribute (three's GLBufferAttribute, flagged instanced as
  * @three.ez/instanced-mesh's GLInstancedBufferAttribute does: WebGLBindingStates then sets its divisor). */
 function instanced(buffer, size, capacity) {
-  const attr = new THREE.GLBufferAttribute(buffer, 0x1406 /* FLOAT */, size, 4, capacity);
+  const attr = /** @type {any} */ (new THREE.GLBufferAttribute(buffer, 0x1406 /* FLOAT */, size, 4, capacity));
   attr.isInstancedBufferAttribute = true;
   attr.meshPerAttribute = 1;
   return attr;

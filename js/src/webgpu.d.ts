@@ -4,7 +4,7 @@ import type { Material } from 'three';
 import type { AxialInstancedMesh as WebGLAxialInstancedMesh, AxialGLTFPlugin as WebGLAxialGLTFPlugin, GenerateRecipe,
   GeneratorUniforms, AxialGeneratedMeshOptions } from './index';
 
-export { AxialError, parseADP, EXTENSION, checkRecipe, recipeUniforms, tilesAround } from './index';
+export { AxialError, parseADP, EXTENSION } from './index';
 
 /** What bendAsync reads back: 4 numbers a vertex (x, y, z, w), instance after instance, in the mesh's space. */
 export interface AxialBent {

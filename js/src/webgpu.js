@@ -18,7 +18,6 @@ import { AxialInstancedMesh } from './webgpu_mesh.js';
 import { AxialGeneratedMesh } from './generated_webgpu.js';
 
 export { AxialError, parseADP, EXTENSION, AxialInstancedMesh, AxialGeneratedMesh };
-export { checkRecipe, recipeUniforms, tilesAround } from './generate.js';
 export * as nodes from './nodes.js';
 export * as generateNodes from './generate_nodes.js';
 

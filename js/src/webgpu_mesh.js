@@ -36,6 +36,9 @@ const MIN_REVISION = 184;
  * material's positionNode (with the exact normal and tangent), so shadows are bent too.
  */
 export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
+  /** @type {any} GPU culling and levels of detail (cull.js), or null */
+  _culling = null;
+
   constructor(geometry, material, record, options = {}) {
     if (!(Number(THREE.REVISION) >= MIN_REVISION)) {
       throw new AxialError(`AxialInstancedMesh (axialdeform-three/webgpu): three r${THREE.REVISION} is older than r${MIN_REVISION}, `
@@ -156,7 +159,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
     // the positionNode in some versions (r187) and after it in others (r171): three instances an
     // InstancedMesh by its matrices only when they are an InstancedBufferAttribute, so they are a
     // plain one here over the same array (the bounds, raycasting and the compute pass read it)
-    if (this.instanceMatrix.isInstancedBufferAttribute) {
+    if (/** @type {any} */ (this.instanceMatrix).isInstancedBufferAttribute) {
       this.instanceMatrix = new THREE.BufferAttribute(this.instanceMatrix.array, 16).setUsage(THREE.DynamicDrawUsage);
     }
     const node = Fn(() => {
@@ -223,6 +226,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
    * with the first level nearer than its distance (none beyond the last).  A compute pass a frame tests
    * every instance's bend-aware bounding sphere against the frustum and writes indirect draw
    * arguments: the CPU's work a frame does not grow with the count (cull.js).
+   * @param {boolean | {levels: {geometry: any, distance: number}[]}} [options]
    */
   setGPUCulling(options = true) {
     if (this._culling) {
@@ -296,7 +300,9 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
     return true;
   }
 
-  bake() {
+  /** @param {any} [renderer] @returns {boolean} */
+  // eslint-disable-next-line no-unused-vars
+  bake(renderer) {
     throw new AxialError('bake: under WebGPURenderer the GPU is read back asynchronously: await mesh.bakeAsync(renderer)');
   }
 

@@ -525,6 +525,25 @@ def test_the_type_declarations_compile():
     assert r.returncode == 0, r.stdout + r.stderr
 
 
+def test_the_sources_type_check_and_every_entry_is_typed_and_small():
+    """tsc --checkJs over js/src (js/tsconfig.json; three's node entries as any, their types being newer than
+    the devDependency's), every sub-path of the package has its declarations, and the main entry exports at
+    most 8 names (helpers on their own typed sub-path)."""
+    node = shutil.which("node")
+    tsc = JS / "node_modules" / "typescript" / "bin" / "tsc"
+    r = subprocess.run([node, str(tsc), "-p", "tsconfig.json"], cwd=JS, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    exports = json.loads((JS / "package.json").read_text())["exports"]
+    for path, entry in exports.items():
+        assert isinstance(entry, dict) and (JS / entry["types"]).is_file() and (JS / entry["import"]).is_file(), path
+    names = re.findall(r"export \{([^}]*)\}", (JS / "src" / "index.js").read_text())
+    main = [n.strip() for group in names for n in group.split(",") if n.strip()]
+    assert 5 <= len(main) <= 8, main
+    declared = (JS / "src" / "index.d.ts").read_text()
+    for name in main:
+        assert re.search(rf"export (class|function|const|interface) {name}\b", declared), name
+
+
 README_JS = re.findall(r"^```js\n(.*?)^```", (ROOT / "README.md").read_text(encoding="utf-8"), re.S | re.M)
 
 

@@ -2,7 +2,9 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import { AxialGLTFPlugin, AxialInstancedMesh, parseADP, AxialError, type ADPRecord } from 'axialdeform-three';
-import { recordLayout, WIND } from 'axialdeform-three/helpers';
+import { recordLayout, WIND, checkRecipe, tilesAround } from 'axialdeform-three/helpers';
+import { crc32, fieldName } from 'axialdeform-three/adp';
+import { AXIAL_GLSL, RECIPE_FIELDS } from 'axialdeform-three/glsl';
 import { AxialInstancedMesh as WebGPUAxialInstancedMesh, AxialGeneratedMesh as WebGPUAxialGeneratedMesh,
   type AxialBent } from 'axialdeform-three/webgpu';
 
@@ -14,7 +16,9 @@ export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry)
   const stones = new AxialInstancedMesh(geometry, new THREE.MeshStandardMaterial(), record, { capacity: 2 * record.count });
   stones.setParams(record.data.subarray(0, record.numbersPerInstance), { first: 3 });
   stones.updateParams(record.data.subarray(0, record.numbersPerInstance), 1);
-  const n: number = stones.count + stones.layout.numbersPerInstance + recordLayout(16).level + WIND.frequency;
+  const n: number = stones.count + stones.layout.numbersPerInstance + recordLayout(16).level + WIND.frequency
+    + crc32(new Uint8Array(4)) + fieldName(0).length + AXIAL_GLSL.length + RECIPE_FIELDS.length
+    + tilesAround(checkRecipe({ rate: 1, tile: 8, reach: 20 }).tile, 0, 0, 20).length;
   const hits = new THREE.Raycaster().intersectObject(stones);
   if (hits.length && hits[0].instanceId !== undefined && n > 0) stones.dispose();
   try { parseADP(new Uint8Array(4)); } catch (e) { if (e instanceof AxialError) console.log(e.message); }
