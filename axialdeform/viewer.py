@@ -41,7 +41,7 @@ import numpy as np
 
 from .core.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
-from .core.generate import tile_spheres, tiles_around, world_edge
+from .core.generate import extent_box, tile_size, tile_spheres, tiles_around, world_edge
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
 from .core.options import RenderOptions
@@ -104,6 +104,8 @@ class _ViewerMixin:
         s = self.scene
         self.mesh = s["mesh"]
         self.base = np.array(s["params"], dtype=np.float32)
+        #: generated layers (core/generate.py) are made tile by tile around the camera's target
+        self.generate = s.get("generate")
         self.animate = s.get("animate")
         seed = s.get("seed")
         self.seed = None if seed is None else int(seed)  # None: the parameters came from elsewhere (a file)
@@ -120,7 +122,9 @@ class _ViewerMixin:
         self.show_ground = self.look.draws_ground
         self.wind = s.get("wind")  # the Wind the V key switches on and off
         # levels of detail part by part, carrying UVs, colours and tangents (core/lod.py)
-        lod = s.get("lod", len(self.base) >= LOD_AUTO_COUNT)
+        held = len(self.base) if self.generate is None else (  # a generated layer: the slots within its reach
+            len(tiles_around(self.generate.generate, 0.0, 0.0, self.generate.reach)) * tile_size(self.generate.generate)[0] ** 2)
+        lod = s.get("lod", held >= LOD_AUTO_COUNT)
         self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, parts=s.get("parts"), wind=self.wind,
                                       culling=s.get("culling", True), lod=lod, lod_error=s.get("lod_error", 1.0),
                                       position_ids=s.get("generate") is not None)
@@ -138,8 +142,9 @@ class _ViewerMixin:
         self.layers = []
         if s.get("extra") is not None:
 
-            self.extra = SceneRenderer(self.ctx, s["extra"])
-            self.layers = [(layer, r, np.array(layer.params, dtype=np.float32)) for layer, r in self.extra.layers()]
+            self.extra = SceneRenderer(self.ctx, s["extra"], generated_empty=True)  # the GPU makes their tiles
+            self.layers = [(layer, r, layer.empty() if getattr(layer, "generate", None) is not None
+                            else np.array(layer.params, dtype=np.float32)) for layer, r in self.extra.layers()]
             scene = s["extra"]
             #: a scene's wind, on or off for every layer at once (V)
             self.scene_wind_on = self.renderer.wind is not None or (
@@ -163,8 +168,6 @@ class _ViewerMixin:
         self.reset_camera()
         #: (dx, dz) world units the camera's target moves a frame (a walk), or None
         self.walk = None if s.get("walk") is None else np.asarray(s["walk"], dtype=np.float64).reshape(2)
-        #: generated layers (core/generate.py) are made tile by tile around the camera's target
-        self.generate = s.get("generate")
         self._tiles = {}  # key -> the tiles held (a frozenset)
         self._gpu = {}  # key -> GeneratedTiles: the GPU makes the instances straight into the layer's renderer
         self._spheres = {}  # key -> (k, 4) the held tiles' bounds (shadows, the ground)
@@ -173,7 +176,14 @@ class _ViewerMixin:
 
     # ------------------------------------------------------------ camera
     def reset_camera(self) -> None:
-        """Frame every instance (azimuth 35 deg, elevation 30 deg)."""
+        """Frame every instance (azimuth 35 deg, elevation 30 deg); a generated layer of its own: its extent,
+        from the recipe alone (its instances are made on the GPU, around the camera)."""
+        if self.generate is not None:
+            g = self.generate
+            corners = extent_box(g.generate, self.mesh, g.extent, g.maps)
+            spheres = np.column_stack([corners, np.zeros(len(corners))])
+            self.orbit = OrbitCamera.framing_spheres(spheres, self._aspect(), up=self.up, azimuth=35.0, elevation=30.0)
+            return
         self.orbit = OrbitCamera.framing(self.mesh, self.base, self._aspect(), up=self.up, azimuth=35.0, elevation=30.0)
 
     @property
@@ -469,7 +479,9 @@ class Viewer:
         if not scene.layers:
             raise AxialDeformError(f"{scene.path}: the scene has no layer; expected at least one [[layer]]")
         first = scene.layers[0]
-        mesh, params, up = first.mesh, first.params, scene.up
+        # a generated layer of its own: none made here; the GPU makes the tiles around the camera (_page_tiles)
+        mesh, up = first.mesh, scene.up
+        params = first.empty() if first.generate is not None else first.params
         wind = wind if wind is not None else (scene.wind if first.wind else None)
         if wind is not None:
             scene.wind = wind

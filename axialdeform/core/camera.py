@@ -15,7 +15,7 @@ import numpy as np
 import pyrr
 
 from .arrays import as_array
-from .bounds import outline_points, scene_box
+from .bounds import outline_points, scene_box, sphere_box
 from .errors import ArgumentError
 
 __all__ = ["Camera", "CameraSpec", "FOVY", "AZIMUTH", "ELEVATION", "camera_for_points", "OrbitCamera",
@@ -314,6 +314,17 @@ class OrbitCamera:
         """The orbit that starts where :func:`frame_instances` puts the camera."""
         cam = frame_instances(mesh, params, aspect, up, fovy, azimuth, elevation, margin)
         lo, hi = scene_box(mesh, params)
+        return cls(cam.target, float(np.linalg.norm(cam.eye - cam.target)), azimuth, elevation, up, fovy,
+                   float(np.linalg.norm(hi - lo)) / 2 + 1e-6)
+
+    @classmethod
+    def framing_spheres(cls, spheres, aspect: float, *, up: str = "y", fovy: float = FOVY, azimuth: float = AZIMUTH,
+                        elevation: float = ELEVATION, margin: float = 0.03) -> OrbitCamera:
+        """The orbit that frames ``spheres`` ((n, 4) x, y, z, r): instances known only by their bounds (a
+        generated layer's, made on the GPU)."""
+        spheres = np.asarray(spheres, dtype=np.float64).reshape(-1, 4)
+        cam = camera_for_points(spheres[:, :3], spheres[:, 3], aspect, up, fovy, azimuth, elevation, margin)
+        lo, hi = sphere_box(spheres[:, :3], spheres[:, 3])
         return cls(cam.target, float(np.linalg.norm(cam.eye - cam.target)), azimuth, elevation, up, fovy,
                    float(np.linalg.norm(hi - lo)) / 2 + 1e-6)
 

@@ -51,7 +51,7 @@ __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile"
            "tiles_in", "check_extent", "check_extent_slots", "check_reach", "reach_tiles", "generate_extent",
            "anchor_weights", "recipe_uniforms", "GroundMaps",
            "GENERATED_NUMBERS", "GENERATED_FLOATS", "recipe_json", "children_table",
-           "child_bound", "tile_spheres", "world_edge", "slot_limit", "check_slots", "MAX_TILE_SLOTS", "MAX_SLOTS",
+           "child_bound", "tile_spheres", "extent_box", "world_edge", "slot_limit", "check_slots", "MAX_TILE_SLOTS", "MAX_SLOTS",
            "MAX_BEND", "WORLD_CELLS"]
 
 GENERATED_NUMBERS = 22  # u_0 .. u_21 an instance
@@ -541,16 +541,9 @@ def child_bound(recipe: Generate, mesh) -> float:
     return float(child_reach(tree, worst)[0])
 
 
-def tile_spheres(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) -> np.ndarray:
-    """``(k, 4)`` float64 ``x, y, z, r``: a sphere holding every instance tile ``tiles[k]`` can make, found
-    from the recipe alone (no instance made): what a view frames, shadows and stands a ground under when
-    the instances live on the GPU.  An instance's vertices lie within ``s (|v| + 2 sqrt 2 bend L + the
-    child axes' bound)`` of its position (``|v|``: the base mesh's farthest vertex from its origin;
-    ``d_q - D(t_a)``: at most twice ``bend L`` a component); its position lies in its tile, at the ground's
-    height range (the height map's lowest and highest; 0 flat) minus the anchor's height times ``s``, plus the lift."""
-    tiles = np.asarray(tiles, dtype=np.float64).reshape(-1, 2)
+def _reach(recipe: Generate, mesh, maps: GroundMaps | None) -> tuple[float, float, float]:
+    """``(y_lo, y_hi, r)``: the heights an instance's position can take and how far its vertices lie from it."""
     g = maps if maps is not None else GroundMaps()
-    T = float(recipe.tile)
     s_hi = max(recipe.scale) if recipe.scale is not None else 1.0
     s_lo = min(recipe.scale) if recipe.scale is not None else 1.0
     far = float(np.sqrt((np.asarray(mesh.positions, np.float64) ** 2).sum(axis=1)).max())
@@ -559,9 +552,40 @@ def tile_spheres(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) 
     lift = recipe.lift or (0.0, 0.0)
     ay = float(anchor_point(mesh, recipe.anchor, 1)[1])
     ys = [h - ay * s + f for h in (h_lo, h_hi) for s in (s_lo, s_hi) for f in lift]
-    y_lo, y_hi = min(ys), max(ys)
-    radius = math.hypot(T / math.sqrt(2.0), (y_hi - y_lo) / 2.0) + s_hi * local
+    return min(ys), max(ys), s_hi * local
+
+
+def tile_spheres(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) -> np.ndarray:
+    """``(k, 4)`` float64 ``x, y, z, r``: a sphere holding every instance tile ``tiles[k]`` can make, found
+    from the recipe alone (no instance made): what a view frames, shadows and stands a ground under when
+    the instances live on the GPU.  An instance's vertices lie within ``s (|v| + 2 sqrt 2 bend L + the
+    child axes' bound)`` of its position (``|v|``: the base mesh's farthest vertex from its origin;
+    ``d_q - D(t_a)``: at most twice ``bend L`` a component); its position lies in its tile, at the ground's
+    height range (the height map's lowest and highest; 0 flat) minus the anchor's height times ``s``, plus the lift."""
+    tiles = np.asarray(tiles, dtype=np.float64).reshape(-1, 2)
+    T = float(recipe.tile)
+    y_lo, y_hi, local = _reach(recipe, mesh, maps)
+    radius = math.hypot(T / math.sqrt(2.0), (y_hi - y_lo) / 2.0) + local
     out = np.empty((len(tiles), 4))
     out[:, 0], out[:, 2] = (tiles[:, 0] + 0.5) * T, (tiles[:, 1] + 0.5) * T
     out[:, 1], out[:, 3] = (y_lo + y_hi) / 2.0, radius
     return out
+
+
+def extent_box(recipe: Generate, mesh, extent, maps: GroundMaps | None = None) -> np.ndarray:
+    """``(8, 3)`` float64: the corners of the box a generated layer shows over the ground ``extent`` (x0, z0,
+    x1, z1), from the recipe alone -- what frames a layer whose instances are made on the GPU (the page's,
+    the viewer's) or not at all yet.  Across: the extent widened by half the unbent base mesh's farthest
+    vertex from its up axis (instances turn about it; one standing at the edge is half outside on average);
+    along up: the heights its positions stand at (:func:`tile_spheres`'s) plus the mesh's lowest and highest
+    vertex; both at the recipe's mean scale.  Like the instances' outline it stands for, it is a frame, not a
+    bound: a bent or large instance at the very edge may reach a little past it."""
+    x0, z0, x1, z1 = (float(v) for v in extent)
+    y_lo, y_hi, _ = _reach(recipe, mesh, maps)
+    scale = float(np.mean(recipe.scale)) if recipe.scale is not None else 1.0
+    v = np.asarray(mesh.positions, np.float64)
+    across = 0.5 * scale * float(np.hypot(v[:, 0], v[:, 2]).max())
+    down, up = scale * float(v[:, 1].min()), scale * float(v[:, 1].max())
+    xs, ys, zs = np.meshgrid([x0 - across, x1 + across], [min(y_lo + down, y_lo), max(y_hi + up, y_hi)],
+                             [z0 - across, z1 + across], indexing="ij")
+    return np.column_stack([xs.ravel(), ys.ravel(), zs.ravel()])

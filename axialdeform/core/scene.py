@@ -70,7 +70,7 @@ import numpy as np
 
 from .camera import CameraSpec
 from .errors import ArgumentError, SceneError
-from .generate import GroundMaps, check_reach, generate_extent
+from .generate import GroundMaps, check_extent_slots, check_reach, generate_extent
 from .io.mesh import load_mesh, with_axes
 from .io.params import read_params
 from .io.scene import LayerRecipe, SceneRecipe, parse_scene
@@ -101,6 +101,39 @@ class Layer:
     lift: np.ndarray | None = None  # (n,) float32: height a scatter recipe's ``lift`` added along up
     parts: tuple | None = None  # names of the mesh's parts to draw (None: all)
     generate: object = None  # a generated layer's GenerateRecipe (its params: the extent materialized)
+
+
+@dataclass
+class GeneratedLayer(Layer):
+    """A generated layer (``generate``: its recipe, extent and ground maps): ``params``, the instances of its
+    extent, are made by numpy the first time they are asked for (``render``, ``export``, ``info``, a user's
+    code); the viewer makes the tiles around its camera on the GPU and never asks (:attr:`made` stays False)."""
+
+    make: object = field(default=None, repr=False, compare=False)  # () -> (n, width) float32
+
+    @property
+    def params(self) -> np.ndarray:
+        if self._records is None:
+            self._records = self.make()
+        return self._records
+
+    @params.setter
+    def params(self, value) -> None:
+        self._records = value if isinstance(value, np.ndarray) else None
+
+    @property
+    def made(self) -> bool:
+        """Whether ``params`` were made (or given)."""
+        return self._records is not None
+
+    @property
+    def width(self) -> int:
+        """Numbers an instance: the recipe's record and 10 a child axis."""
+        return self.generate.generate.width + 10 * (self.mesh.axis_count - 1)
+
+    def empty(self) -> np.ndarray:
+        """``(0, width)`` float32: what a renderer the GPU fills starts from."""
+        return np.zeros((0, self.width), np.float32)
 
 
 @dataclass
@@ -288,9 +321,16 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
             density = load_density(gen.density) if gen.density is not None else None
             gen = replace(gen, maps=GroundMaps.of(scene.terrain, density, gen.extent))
             check_reach(gen.generate, gen.reach, mesh.axis_count)  # a tree's slots hold every axis: bounded before any is made
-            params = generate_extent(gen.generate, mesh, gen.extent, gen.maps)
-            check_drawable(params, "the generated instances")  # what a parameter file is held to
-        recipe = replace(recipe, generate=gen)
+            check_extent_slots(gen.generate, gen.extent, mesh.axis_count)
+
+        def make(gen=gen, mesh=mesh):  # the extent's instances, made when first asked for (GeneratedLayer)
+            with src.wrap("generate", "layer", nth):
+                made = generate_extent(gen.generate, mesh, gen.extent, gen.maps)
+                check_drawable(made, "the generated instances")  # what a parameter file is held to
+            return made
+
+        return GeneratedLayer(name=recipe.name, mesh=mesh, params=None, color=recipe.color, wind=recipe.wind,
+                              generate=gen, make=make)
     else:
         params, lift = _scatter(recipe, mesh, scene, surface, scale_counts)
     return scene.layer_type(name=recipe.name, mesh=mesh, params=params, color=recipe.color, wind=recipe.wind,

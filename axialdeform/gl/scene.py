@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.bounds import instance_bounds, outline_points
+from ..core.bounds import instance_bounds, outline_points, wind_reach
 from ..core.camera import UP_VECTORS, Camera, camera_for_points
 from ..core.errors import SceneError
+from ..core.generate import extent_box
 from ..core.record import WIDTH
 from .renderer import AxialRenderer
 
@@ -36,6 +37,14 @@ def scene_camera(scene, aspect: float, *, margin: float = 0.03) -> Camera:
 
     points, radii = [], []
     for layer in scene.layers:
+        g = getattr(layer, "generate", None)
+        if g is not None:  # a generated layer: its extent, from the recipe alone (no instance made for a frame)
+            corners = extent_box(g.generate, layer.mesh, g.extent, g.maps)
+            s_hi = max(g.generate.scale) if g.generate.scale is not None else 1.0
+            sway = s_hi * wind_reach(layer.mesh, scene.wind) if layer.wind and scene.wind is not None else 0.0
+            points.append(corners)
+            radii.append(np.full(len(corners), sway))
+            continue
         if not len(layer.params):
             continue
         if layer.wind and scene.wind is not None:  # a sphere per instance: it holds the instance at any time
@@ -60,10 +69,13 @@ class SceneRenderer:
     meshes too, one draw per level and part); the terrain, ONE instance, is
     always drawn whole.  position_ids : every layer's wind phases and shades hash where its
     instances stand (a generated layer's always do: :class:`~axialdeform.core.options.RenderOptions`).
+    generated_empty : a generated layer's renderer starts empty, for the GPU to make its tiles into
+    (:class:`~axialdeform.gl.generated.GeneratedTiles`, the viewer's); otherwise it draws the layer's
+    extent, made by numpy when first asked for.
     """
 
     def __init__(self, ctx, scene, *, culling: bool = True, lod: bool = False, lod_error: float = 1.0,
-                 renderer: AxialRenderer | None = None, position_ids: bool = False):
+                 renderer: AxialRenderer | None = None, position_ids: bool = False, generated_empty: bool = False):
         self.ctx = ctx
         self.scene = scene
         self.renderers = []
@@ -79,8 +91,10 @@ class SceneRenderer:
                 self.renderers.append((AxialRenderer(ctx, scene.terrain, TERRAIN_INSTANCE, cull_back_faces=False),
                                        scene.terrain_color, False))
             for layer in scene.layers:
+                generated = getattr(layer, "generate", None) is not None
+                params = layer.empty() if generated and generated_empty else layer.params
                 r = renderer if renderer is not None and len(scene.layers) == 1 else AxialRenderer(
-                    ctx, layer.mesh, layer.params, culling=culling, lod=lod, lod_error=lod_error, parts=layer.parts,
+                    ctx, layer.mesh, params, culling=culling, lod=lod, lod_error=lod_error, parts=layer.parts,
                     position_ids=position_ids or getattr(layer, "generate", None) is not None)
                 self.renderers.append((r, layer.color, layer.wind))
         except BaseException:

@@ -407,11 +407,12 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
     generated_layers = []  # (config entry, recipe)
     for item in scene.layers:
         generated = getattr(item, "generate", None)
-        if len(item.params) == 0 and generated is None:
+        if generated is None and len(item.params) == 0:
             continue
-        if generated is not None:
+        if generated is not None:  # the page makes its instances on the GPU: none made here
             generated_layers.append((len(layers), (generated, item.mesh)))
-        layers.append(_layer(item.name, item.mesh, as_params(item.params, axes=item.mesh.axis_count), files=files,
+        params = item.empty() if generated is not None else as_params(item.params, axes=item.mesh.axis_count)
+        layers.append(_layer(item.name, item.mesh, params, files=files,
                              glb_file=f"layer-{item.name}.glb",
                              params_file=None if generated is not None else f"layer-{item.name}.adp",
                              quantize=quantize, color=item.color, wind=item.wind and wind is not None,

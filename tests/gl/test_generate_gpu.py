@@ -394,3 +394,42 @@ def recipe_cells(recipe) -> int:
     from axialdeform.core.generate import tile_size
 
     return tile_size(recipe)[0] ** 2
+
+
+def test_view_and_the_page_make_no_generated_extent_on_the_cpu(ctx, monkeypatch):
+    """One computation a layer: loading a scene makes no generated instance (a layer's ``params`` are made
+    when first asked for), the viewer makes every tile on the GPU and frames the recipe's extent, and the
+    page writer makes no extent; render draws the extent, made by numpy then, framed the same way (the
+    frame comes from the recipe, so it is the same before and after the instances exist)."""
+    import axialdeform.core.generate as core_generate
+    import axialdeform.core.scene as core_scene
+    from axialdeform.gl.scene import scene_camera
+    from axialdeform.viewer import Viewer
+    from axialdeform.web import build_scene_file
+
+    def refuse(*_a, **_k):
+        raise AssertionError("a generated extent was made on the CPU")
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "generated" / "walk.toml"
+    with monkeypatch.context() as m:
+        m.setattr(core_scene, "generate_extent", refuse)
+        scene = ad.Scene.load(path)
+        assert [layer.made for layer in scene.layers] == [False, False, False]
+        before = scene_camera(scene, 4 / 3)
+        page = build_scene_file(scene, allow_outside=True)
+        assert page.config["instances"] > 1000  # the tiles around the camera at the start (none beyond)
+        m.setattr(core_generate, "generate_tile", refuse)  # and the viewer no tile either
+        v = Viewer.create(scene, headless=True, size=(96, 72))
+        try:
+            v.step(1)
+            held = v.renderer.count + sum(r.count for _, r, _ in v.layers)
+        finally:
+            v.release()
+            v.wnd.destroy()
+        assert held > 1000 and not any(layer.made for layer in scene.layers)
+    ctx.__enter__()
+    image = ad.render_image(scene, size=(96, 72), ctx=ctx)
+    assert all(layer.made for layer in scene.layers) and len(scene.layers[1].params) > 1000
+    after = scene_camera(scene, 4 / 3)
+    assert np.allclose(before.eye, after.eye) and np.allclose(before.target, after.target)
+    assert (np.abs(image.astype(int) - image[0, 0]).max(axis=2) > 30).mean() > 0.1  # the layers are drawn
