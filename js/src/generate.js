@@ -1,8 +1,7 @@
-// generate.js -- generated layers in three.js (docs/generate.md): instances made on the GPU from a
-// recipe, tile by tile around a point, by glsl/generate.glsl -- the very GLSL the Python library runs
-// (axialdeform.gl.generate), here by WebGL 2 transform feedback (tiles.js), drawn from the buffers the
-// GPU wrote; 0 bytes an instance travel and none is read back to draw.  The recipe's checks, its
-// uniforms and the tiles around a point: the numpy reference axialdeform.core.generate's conventions.
+// generate.js -- generated layers in three.js (docs/generate.md): instances made on the GPU from a recipe, tile by
+// tile around a point, by glsl/generate.glsl (the GLSL the Python library runs) by WebGL 2 transform feedback
+// (tiles.js), drawn from the buffers the GPU wrote; none is read back to draw.  The recipe's checks, its
+// uniforms and the tiles around a point follow axialdeform.core.generate's conventions.
 
 import * as THREE from 'three';
 import { AxialError, AXES_ROW, texelRows } from './adp.js';
@@ -17,9 +16,7 @@ const NO_BAND = 3.0e38;
 const _eye = new THREE.Vector3();
 const BINOMIAL = [1, 4, 6, 4, 1];
 
-function bad(field, expected, value) {
-  throw new AxialError(`generate: ${field}: expected ${expected}, found ${JSON.stringify(value)}`);
-}
+const bad = (field, expected, value) => { throw new AxialError(`generate: ${field}: expected ${expected}, found ${JSON.stringify(value)}`); };
 const num = (v) => typeof v === 'number' && Number.isFinite(v);
 
 /** Python's round(): half to even (m must be the Python library's for the same recipe). */
@@ -269,27 +266,18 @@ export function adoptGenerated(mesh, base, options, drawsOn, childTexture) {
  * from `recipe` (checkRecipe) in the tiles within `recipe.reach` of a point.  Call
  * `update(renderer, point)` before rendering (e.g. with OrbitControls' target): it makes the tiles
  * when the set within reach changes and lets far ones go, so the instances held stay bounded.
- * options: AxialInstancedMesh's, and `axis` (default: the mesh's longest extent, as axialdeform's),
- * `uniforms` (generate.glsl's numbers as the Python library gave them; default: recipeUniforms, the
- * flat ground), `maps` (the ground maps those uniforms place: TileGenerator's) and `autoUpdate` (make
- * the tiles around the camera's position by itself, without calling update: what the glTF plugin's
- * meshes do; they are drawn from the second frame on, the first telling it the renderer and camera).
- * Its frustum culling is off: its tiles are around the camera.  `tiles`: the tiles held ([[tx, tz],
- * ...], nearest first), their instances in that order, m^2 each; `kept`: how many of the `count`
- * slots drawn are kept (the rest collapse to a point).
+ * options: AxialInstancedMesh's, and `axis` (default: the mesh's longest extent, as axialdeform's), `uniforms`
+ * (generate.glsl's numbers as the Python library gave them; default: recipeUniforms, the flat ground), `maps`
+ * (the ground maps those uniforms place: TileGenerator's) and `autoUpdate` (make the tiles around the camera's
+ * position by itself, without calling update: what the glTF plugin's meshes do; they are drawn from the second
+ * frame on, the first telling it the renderer and camera).  Its frustum culling is off: its tiles are around
+ * the camera.  `tiles`: the tiles held ([[tx, tz], ...], nearest first), their instances in that order, m^2
+ * each; `kept`: how many of the `count` slots drawn are kept (the rest collapse to a point).
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
-  // what adoptGenerated (generate.js) and update set, declared for the type check
-  /** @type {any} the checked recipe */ recipe;
-  /** @type {any} generate.glsl's numbers (RECIPE_FIELDS) */ generatorUniforms;
-  /** @type {any} the ground maps */ maps;
-  /** @type {number[][]} the tiles held, nearest first */ tiles;
-  /** @type {string | null} the tiles held, as one key */ _key;
-  /** @type {any} the renderer and camera of the last draw (autoUpdate) */ _drawnBy;
-  /** @type {boolean} */ autoUpdate;
-  /** @type {any} the last make's slots */ _slots;
-  /** @type {any} */ timing;
-  /** @type {number} */ kept;
+  /** @type {any} */ recipe; /** @type {any} */ generatorUniforms; /** @type {any} */ maps; /** @type {any} */ tiles;
+  /** @type {any} */ _key; /** @type {any} */ _drawnBy; /** @type {any} */ _slots; /** @type {any} */ timing;
+  /** @type {boolean} */ autoUpdate; /** @type {number} */ kept; // set by adoptGenerated and update
 
   constructor(geometry, material, recipe, options = {}) {
     const base = generatedBase(geometry, recipe, options, 'AxialGeneratedMesh');

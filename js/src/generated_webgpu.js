@@ -43,18 +43,9 @@ function mapTexture(m, key) {
  * `recordsAsync()` reads the kept records back; raycastAsync and bakeAsync read the tile set back once.
  */
 export class AxialGeneratedMesh extends AxialInstancedMesh {
-  // what adoptGenerated (generate.js) and update set, declared for the type check
-  /** @type {any} the checked recipe */ recipe;
-  /** @type {any} generate.glsl's numbers (RECIPE_FIELDS) */ generatorUniforms;
-  /** @type {any} the ground maps */ maps;
-  /** @type {number[][]} the tiles held, nearest first */ tiles;
-  /** @type {string | null} the tiles held, as one key */ _key;
-  /** @type {any} the renderer and camera of the last draw (autoUpdate) */ _drawnBy;
-  /** @type {boolean} */ autoUpdate;
-  /** @type {any} the last make's slots */ _slots;
-  /** @type {any} */ timing;
-  /** @type {number} */ kept;
-  /** @type {any} the renderer whose compute passes made the tiles */ _madeBy;
+  /** @type {any} */ recipe; /** @type {any} */ generatorUniforms; /** @type {any} */ maps; /** @type {any} */ tiles;
+  /** @type {any} */ _key; /** @type {any} */ _drawnBy; /** @type {any} */ _slots; /** @type {any} */ timing;
+  /** @type {boolean} */ autoUpdate; /** @type {number} */ kept; /** @type {any} */ _madeBy; // set by adoptGenerated, update
 
   constructor(geometry, material, recipe, options = {}) {
     const base = generatedBase(geometry, recipe, options, 'AxialGeneratedMesh');

@@ -1,9 +1,7 @@
-// mesh.js -- AxialInstancedMesh: a THREE.InstancedMesh whose instances are bent, each along its own
-// Bézier control axis, by glsl/axial.glsl injected into the user's own material (shader.js), so
-// maps, lights, shadows, fog and tone mapping stay three.js's.  The rigid part of every instance
-// (rotation, scale, position) is its instanceMatrix; the bend's numbers are instanced attributes
-// (record.js's ATTRIBUTES).  The wind: wind.js; the GPU pass that bake and raycast share:
-// feedback.js, bake.js, raycast.js.
+// mesh.js -- AxialInstancedMesh: a THREE.InstancedMesh whose instances are bent, each along its own Bézier
+// control axis, by glsl/axial.glsl injected into the user's own material (shader.js), so maps, lights, shadows,
+// fog and tone mapping stay three.js's.  The rigid part of every instance is its instanceMatrix; the bend's
+// numbers are instanced attributes (record.js's ATTRIBUTES).  Wind: wind.js; bake, raycast: feedback.js.
 
 import * as THREE from 'three';
 import { AxialError, recordLayout, childTexels, texelRows, column, fieldName, AXES_ROW } from './adp.js';
@@ -26,24 +24,12 @@ const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
  * (a chosen frame, several axes: the GLB's AXIALDEFORM_bend or extras.axialdeform); options.capacity:
  * room for more instances than the record has (setParams may grow count up to it); options.ownShader:
  * the materials bend themselves (a ShaderMaterial including AXIAL_GLSL that reads this mesh's
- * attributes axialD12, axialD34, axialD5, axialTwistTaper, axialAngles, axialAxis, instanceMatrix).
- * The material(s) are cloned and given the bend; shadows (customDepthMaterial,
- * customDistanceMaterial) and raycasting use the bent shape.
+ * attributes axialD12, axialD34, axialD5, axialTwistTaper, axialAngles, axialAxis, instanceMatrix).  The
+ * material(s) are cloned and given the bend; shadows and raycasting use the bent shape.
  */
-/** @typedef {[number, number, number, number, number, number, number, number, number]} Nine a Matrix3's numbers */
-
 export class AxialInstancedMesh extends THREE.InstancedMesh {
-  /** @type {any} bake.js's drawn mesh and its release while baked, else null */
-  _baked = null;
-  /** @type {any} raycast.js's probe mesh, made at the first raycast */
-  _rayMesh = null;
-  /** @type {any} a generated mesh's CPU copies of the attributes it draws from GPU-written ones */
-  _cpuAttributes = null;
-  /** @type {any} a generated WebGPU mesh's child offsets: a function of a texel's index */
-  _childTexels = null;
-  /** @type {any} a generated WebGPU mesh's instances, as the compute pass wrote them: {instances, stride} */
-  _storage = null;
-
+  /** @type {any} */ _baked = null; /** @type {any} */ _rayMesh = null; /** @type {any} */ _cpuAttributes = null; // set later
+  /** @type {any} */ _childTexels = null; /** @type {any} */ _storage = null; // (bake.js, raycast.js, generated meshes)
   constructor(geometry, material, record, options = {}) {
     if (!geometry || !geometry.isBufferGeometry) throw new AxialError('AxialInstancedMesh: expected a THREE.BufferGeometry');
     if (!record || !Number.isInteger(record.count) || !record.data) {
@@ -92,7 +78,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     if (this.layout.tint !== null) this.instanceColor = new THREE.InstancedBufferAttribute(new Float32Array(capacity * 3), 3);
     const ax = this.axis;
     this.axialUniforms = {
-      axialFrame: { value: new THREE.Matrix3().set(.../** @type {Nine} */ (ax.frame.flat())) }, // set() takes rows: frame * v = F v
+      axialFrame: { value: new THREE.Matrix3().fromArray(ax.frame.flat()).transpose() }, // rows: frame * v = F v
       axialLo: { value: ax.lo }, axialLen: { value: ax.length },
       axialCenter: { value: new THREE.Vector2(ax.center[0], ax.center[1]) },
     };
@@ -100,7 +86,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     if (ax.axes) {
       this.defines.AXIAL_AXES = String(ax.axes.count);
       Object.assign(this.axialUniforms, {
-        axialFrames: { value: ax.axes.frames.map((f) => new THREE.Matrix3().set(.../** @type {Nine} */ (f.flat()))) },
+        axialFrames: { value: ax.axes.frames.map((f) => new THREE.Matrix3().fromArray(f.flat()).transpose()) },
         axialLos: { value: Float32Array.from(ax.axes.lo) },
         axialLens: { value: Float32Array.from(ax.axes.length) },
         // each child axis's joint (t on its own axis): the wind leaves it; files without them: 0
