@@ -71,7 +71,7 @@ class Camera:
         return pyrr.matrix44.create_look_at(self.eye, self.target, self.up, dtype=np.float32)
 
     def projection(self, aspect: float) -> np.ndarray:
-        """(4, 4) float32 projection matrix (pyrr layout)."""
+        """(4, 4) float32 projection matrix (pyrr layout) for a picture of width / height ``aspect``."""
         return pyrr.matrix44.create_perspective_projection(self.fovy, aspect, self.near, self.far, dtype=np.float32)
 
     def enclosing_square(self, center, normal, half_side: float, aspect: float) -> Camera:

@@ -479,6 +479,8 @@ def fit_params(mesh, variants, *, max_residual: float = DEFAULT_MAX_RESIDUAL, ma
     max_residual : float
         Limit on the largest vertex distance, fraction of L (flags only;
         call :meth:`FitResult.check` to raise).
+    max_iterations : int
+        The most Levenberg-Marquardt rounds a variant takes.
     progress : tqdm-like, optional
         ``update(k)`` after each batch of k variants.
     extended : bool

@@ -64,6 +64,13 @@ class BaseMesh:
     grid : (rows, cols) or None
         A height map's grid (its wireframe edges are made from it,
         :func:`grid_edges`), else None.
+    axis_frame : {"auto", "aligned", "oriented"} or (3, 3) rows
+        How the control axis is chosen (:meth:`with_axis` sets it); ``_axis`` holds the one found.
+    tree : AxisTree or None
+        Several axes in a hierarchy (:func:`~axialdeform.core.io.mesh.with_axes`), else None.
+    sources : tuple of Path
+        Every file the mesh was read from (its own, a material library, textures, buffers): what an
+        output must never replace; empty for a mesh made in memory.
     """
 
     positions: np.ndarray
@@ -88,7 +95,8 @@ class BaseMesh:
     @classmethod
     def from_arrays(cls, vertices, faces, normals=None, *, name: str = "<arrays>") -> BaseMesh:
         """A mesh from arrays: ``vertices : (n, 3) float``, ``faces : (m, 3) int``
-        and optional unit ``normals : (n, 3) float`` (else area-weighted ones)."""
+        and optional unit ``normals : (n, 3) float`` (else area-weighted ones); ``name`` names it in
+        messages."""
 
         vertices = as_array(vertices, (None, 3), f"{name}: vertices", error=MeshError)
         faces = as_array(faces, (None, 3), f"{name}: faces", np.int64, error=MeshError)

@@ -117,7 +117,7 @@ class RenderOptions:
             raise ArgumentError(f"time: expected a finite number of seconds, found {self.time!r}")
 
     def replace(self, **changes) -> RenderOptions:
-        """A copy with some fields changed (checked again)."""
+        """A copy with the fields in ``changes`` changed (checked again)."""
         return replace(self, **changes)
 
     @classmethod

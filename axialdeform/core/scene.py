@@ -162,6 +162,11 @@ class Scene:
         How it looks: the file's ``[light]`` and ``background`` (default :data:`DEFAULT_LOOK`).
     wind : Wind or None
         What layers with ``wind = True`` sway in.
+    terrain_color : (float, float, float)
+        The terrain's linear RGB colour.
+    sources : list of Path
+        Every file the scene was read from (the scene file, includes, meshes, parameters, images):
+        what an output must never replace.
     """
 
     #: the class of the layers (what a scene file's reader makes)
@@ -251,7 +256,7 @@ class Scene:
 
     @classmethod
     def load(cls, path: str | os.PathLike, *, scale_counts: float = 1.0) -> Scene:
-        """A scene file (TOML, see :mod:`axialdeform.core.scene`); errors are
+        """The scene file at ``path`` (TOML, see :mod:`axialdeform.core.scene`); errors are
         :class:`SceneError` naming the file, the line and the key.
         ``scale_counts`` multiplies every scatter recipe's ``count`` (0.1: a quick preview)."""
         return load_scene(path, scale_counts=scale_counts)

@@ -110,7 +110,8 @@ class Wind:
 
     @classmethod
     def parse(cls, text: str, direction=(1.0, 0.0, 0.0), name: str = "--wind") -> Wind:
-        """``STRENGTH[,GUSTINESS[,FREQUENCY[,WAVELENGTH]]]`` (the CLI's ``--wind``)."""
+        """A wind from ``text``, ``STRENGTH[,GUSTINESS[,FREQUENCY[,WAVELENGTH]]]`` (the CLI's ``--wind``),
+        blowing along ``direction``; errors name the option ``name``."""
         parts = [p for p in str(text).split(",")]
         keys = ("strength", "gustiness", "frequency", "wavelength")
         if not 1 <= len(parts) <= 4:

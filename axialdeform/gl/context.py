@@ -330,6 +330,7 @@ class Offscreen:
         check_alive(self.ctx, "this Offscreen target")
 
     def use(self, background=BACKGROUND) -> None:
+        """Draw into this target from now on, cleared to ``background`` (linear RGB) and the far depth."""
         self._check()
         self.fbo.use()
         self.ctx.viewport = (0, 0) + self.size

@@ -246,8 +246,8 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
             self._axes.bind()
 
     def set_params(self, params) -> None:
-        """Replace all parameters; the buffer is reallocated only if the count grows past its capacity.
-        A mesh of K axes takes ``(n, 10·K + 6)`` (``+ 3`` extended, ``+ 6`` tinted)."""
+        """Replace all parameters with ``params`` (n, 16|19|22) float32; the buffer is reallocated only if the
+        count grows past its capacity.  A mesh of K axes takes ``(n, 10·K + 6)`` (``+ 3`` extended, ``+ 6`` tinted)."""
         self._check()
         params, children = self._split_axes(params)
         self.instances.set(params)
@@ -304,8 +304,8 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         return self.instances.buffer, buffer, None if self._axes is None else self._axes.texture
 
     def gpu_written(self, count: int, *, tint: bool = False, child_reach: float = 0.0) -> None:
-        """``count`` instances are in :meth:`gpu_targets`' buffers (with their tints, with child axes that move
-        a vertex at most ``child_reach`` model units: culling's bound)."""
+        """``count`` instances are in :meth:`gpu_targets`' buffers (``tint``: with their tints; with child axes
+        that move a vertex at most ``child_reach`` model units: culling's bound)."""
         self.instances.count = int(count)
         self._tint_count = int(count) if tint else None
         self._tint_from_record = bool(tint)
@@ -511,7 +511,8 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
 
         With ``view`` and ``projection`` a mirroring camera (a reflection
         pass: the two matrices together turn handedness) swaps which winding
-        faces the camera, as three.js does for mirrored objects."""
+        faces the camera, as three.js does for mirrored objects.  ``enabled`` False leaves the state as
+        it is (a caller that culls nothing)."""
         if not self.cull_back_faces or not enabled:
             yield
             return

@@ -94,3 +94,44 @@ def test_docs_and_sources_cite_no_tracker():
              for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1) if TRACKER.search(line)]
     assert found == []
     assert TRACKER.search("the goal (issue 32): median") and TRACKER.search("see Issue #7")  # it can fail
+
+
+def _public_callables():
+    """``(label, function, its docs)`` of every name of ``axialdeform`` and every public method of its classes."""
+    import inspect
+
+    import axialdeform as ad
+
+    for name in ad.__all__:
+        obj = getattr(ad, name)
+        if inspect.isclass(obj):
+            yield name, obj.__init__ if "__init__" in vars(obj) else None, (obj.__doc__ or "") + (obj.__init__.__doc__ or "")
+            for attr, value in vars(obj).items():
+                fn = value.__func__ if isinstance(value, (classmethod, staticmethod)) else value
+                if not attr.startswith("_") and inspect.isfunction(fn):
+                    yield f"{name}.{attr}", fn, fn.__doc__ or ""
+        elif callable(obj):
+            yield name, obj, obj.__doc__ or ""
+
+
+def test_every_public_callable_documents_every_parameter():
+    """The API's own reference: each parameter of every public function and method (and of a class's
+    constructor, its dataclass fields included) is named in its docstring."""
+    import inspect
+
+    missing = []
+    for label, fn, doc in _public_callables():
+        if fn is None:
+            continue
+        try:
+            params = inspect.signature(fn).parameters.values()
+        except (TypeError, ValueError):
+            continue
+        for p in params:
+            name = p.name.lstrip("_")
+            if p.name in ("self", "cls") or p.kind == p.VAR_POSITIONAL:
+                continue
+            if not re.search(rf"\b{re.escape(name)}\b", doc):
+                missing.append(f"{label}: {p.name}")
+    assert missing == []
+    assert any(label == "render_image" for label, _, _ in _public_callables())  # it looks where it should
