@@ -44,7 +44,7 @@ from .deform import bernstein
 from .errors import ParamError
 from .generate_ground import GroundMaps, ground_height, lean_angles
 from .mesh import anchor_point
-from .record import EXTENDED_WIDTH, TINTED_WIDTH, WIDTH, join_record
+from .record import EXTENDED_WIDTH, SCALE, TAPER, TINT, TINTED_WIDTH, TWIST, WIDTH, join_record
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
@@ -301,11 +301,11 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     if recipe.extended:
         lo, hi = recipe.scale if recipe.scale is not None else (1.0, 1.0)
         s = f32(lo) + (f32(hi) - f32(lo)) * u[:, 13]
-        out[:, 16] = s
-        out[:, 17] = f32(recipe.twist) * (f32(2.0) * u[:, 14] - f32(1.0))
-        out[:, 18] = f32(recipe.taper) * u[:, 15]
+        out[:, SCALE] = s
+        out[:, TWIST] = f32(recipe.twist) * (f32(2.0) * u[:, 14] - f32(1.0))
+        out[:, TAPER] = f32(recipe.taper) * u[:, 15]
     if recipe.tint is not None:
-        out[:, 19:22] = np.asarray(recipe.tint_color, f32) * (f32(1.0) - f32(recipe.tint) * u[:, 17:20])
+        out[:, TINT] = np.asarray(recipe.tint_color, f32) * (f32(1.0) - f32(recipe.tint) * u[:, 17:20])
     g = maps if maps is not None else GroundMaps()
     rec = recipe_uniforms(recipe, mesh, g)
     h = np.zeros(n, f32)

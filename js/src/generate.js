@@ -7,7 +7,7 @@ import * as THREE from 'three';
 import { AxialError, AXES_ROW, texelRows } from './adp.js';
 import { AxialInstancedMesh } from './mesh.js';
 import { plainArray } from './feedback.js';
-import { ATTRIBUTES } from './record.js';
+import { ATTRIBUTES, WIDTHS } from './record.js';
 import { TileGenerator, TileAttributes, GENERATED_FLOATS } from './tiles.js';
 import { MAX_SLOTS, checkAnchor, checkRecipeBounds, checkSlots, worldEdge } from './limits.js';
 
@@ -69,10 +69,9 @@ export function checkRecipe(recipe) {
   return r;
 }
 
-/** Numbers a record: 22 with a tint, 19 with a scale, twist or taper, else 16. */
+/** Numbers a record (record.js's levels): tinted with a tint, extended with a scale, twist or taper. */
 export function recipeWidth(recipe) {
-  if (recipe.tint !== null) return 22;
-  return recipe.scale !== null || recipe.twist > 0 || recipe.taper > 0 ? 19 : 16;
+  return WIDTHS[recipe.tint !== null ? 2 : recipe.scale !== null || recipe.twist > 0 || recipe.taper > 0 ? 1 : 0];
 }
 
 /** The axis axialdeform gives a mesh by default: its longest bounding-box extent (ties: x, y, z). */

@@ -7,6 +7,8 @@
 import * as THREE from 'three';
 import { AxialError, checkNumbers } from './adp.js';
 import { FRAME_TOLERANCE, GLTF_INSTANCE_TYPES, MAX_AXES, WIDTHS } from './record.js';
+
+const [WIDTH, EXTENDED_WIDTH, TINTED_WIDTH] = WIDTHS; // 16, 19, 22 numbers: record.js's levels
 import { AxialInstancedMesh } from './mesh.js';
 import { AxialGeneratedMesh, checkRecipe, maxTiles, tileSize } from './generate.js';
 import { MAX_MAP_TEXELS, MAX_SLOTS, checkSlots, checkUniforms } from './limits.js';
@@ -59,7 +61,8 @@ function checkAttributes(ext, names, where) {
   const missing = need.filter((a) => !names.includes(a));
   if (!names.includes('_AXIAL_ANGLES') && !names.includes('ROTATION')) missing.push('_AXIAL_ANGLES (or ROTATION)');
   if (missing.length) throw new AxialError(`${where}: ${EXTENSION} needs the instance attributes ${missing.join(', ')}`);
-  const held = names.includes('_COLOR_0') ? 22 : names.includes('SCALE') || names.includes('_AXIAL_TWIST_TAPER') ? 19 : 16;
+  const held = names.includes('_COLOR_0') ? TINTED_WIDTH
+    : names.includes('SCALE') || names.includes('_AXIAL_TWIST_TAPER') ? EXTENDED_WIDTH : WIDTH;
   if (held !== base) {
     throw new AxialError(`${where}: ${EXTENSION}: numbersPerInstance: ${ext.numbersPerInstance}, but the instance attributes hold ${held + 10 * (k - 1)} numbers an instance`);
   }
@@ -188,7 +191,7 @@ export function recordFromInstancedMesh(mesh, ext, where = 'node', raw = null) {
   const base = f - 10 * (k - 1);
   const need = ['_AXIAL_D12', '_AXIAL_D34', '_AXIAL_D5'];
   if (!raw) need.push('_AXIAL_ANGLES');
-  if (base >= 19 && !raw) need.push('_AXIAL_TWIST_TAPER');
+  if (base >= EXTENDED_WIDTH && !raw) need.push('_AXIAL_TWIST_TAPER');
   for (let j = 1; j < k; j++) need.push(`_AXIAL_A${j}_D12`, `_AXIAL_A${j}_D34`, `_AXIAL_A${j}_D5`);
   const missing = need.filter((a) => !g.getAttribute(a));
   if (missing.length) throw new AxialError(`${where}: ${EXTENSION} needs the instance attributes ${missing.join(', ')}`);
@@ -216,7 +219,7 @@ export function recordFromInstancedMesh(mesh, ext, where = 'node', raw = null) {
     const t = raw.TRANSLATION, s = raw.SCALE;
     for (let i = 0; i < n; i++) {
       for (let c = 0; c < 3; c++) data[i * f + rest + c] = t ? t.getComponent(i, c) : 0;
-      if (base < 19) continue;
+      if (base < EXTENDED_WIDTH) continue;
       const x = s ? s.getComponent(i, 0) : 1;
       if (s && !(s.getComponent(i, 1) === x && s.getComponent(i, 2) === x)) {
         throw new AxialError(`${where}: SCALE: expected a uniform scale (VEC3 with three equal components) per instance`);
@@ -226,12 +229,12 @@ export function recordFromInstancedMesh(mesh, ext, where = 'node', raw = null) {
   } else {
     for (let i = 0; i < n; i++) { // position: TRANSLATION, the matrix's last column; s: the first column's length
       data[i * f + rest] = m[16 * i + 12]; data[i * f + rest + 1] = m[16 * i + 13]; data[i * f + rest + 2] = m[16 * i + 14];
-      if (base >= 19) data[i * f + rest + 6] = Math.hypot(m[16 * i], m[16 * i + 1], m[16 * i + 2]);
+      if (base >= EXTENDED_WIDTH) data[i * f + rest + 6] = Math.hypot(m[16 * i], m[16 * i + 1], m[16 * i + 2]);
     }
   }
-  if (base >= 19 && g.getAttribute('_AXIAL_TWIST_TAPER')) copy('_AXIAL_TWIST_TAPER', 2, rest + 7);
-  if (base >= 22) {
-    if (!mesh.instanceColor) throw new AxialError(`${where}: 22 numbers an instance need _COLOR_0 (the tint)`);
+  if (base >= EXTENDED_WIDTH && g.getAttribute('_AXIAL_TWIST_TAPER')) copy('_AXIAL_TWIST_TAPER', 2, rest + 7);
+  if (base >= TINTED_WIDTH) {
+    if (!mesh.instanceColor) throw new AxialError(`${where}: ${TINTED_WIDTH} numbers an instance need _COLOR_0 (the tint)`);
     for (let i = 0; i < n; i++) for (let c = 0; c < 3; c++) data[i * f + rest + 9 + c] = mesh.instanceColor.array[3 * i + c];
   }
   checkNumbers(data, f, k, where); // finite, a scale > 0, a taper < 1, a tint in 0..1: as every reader checks

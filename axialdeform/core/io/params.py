@@ -16,6 +16,7 @@ from ..errors import MeshMismatchError, ParamError, ParamFileError
 from ..params import as_params
 from ..quantize import quant_levels, quant_range, quant_steps
 from ..record import (  # the record's columns and slices: one home
+    WIDTH,
     Instances,
     describe_widths,
     is_record_width,
@@ -207,7 +208,7 @@ def write_param_chunks(
     path: str | os.PathLike,
     pieces,
     count: int,
-    width: int = 16,
+    width: int = WIDTH,
     mesh=None,
     *,
     quantize: bool = False,
