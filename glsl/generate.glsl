@@ -10,7 +10,7 @@
 //   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24,  key = H(H(H(uint tx) ^ uint tz) ^ seed);
 //   the ground: a height map (triangles as the terrain mesh's) or y = 0; kept: inside the height map,
 //   u16 < the density map's nearest pixel, the height in the altitude band, tan^2 of the slope in its band,
-//   u20 in this mesh's share (a layer of several meshes).
+//   u20 in this mesh's share (a layer of several meshes); the tint tint_color (1 - tint (u17 + hue ((u17, u18, u19) - u17))).
 
 struct AxialRecipe {
     uint seed;
@@ -26,6 +26,7 @@ struct AxialRecipe {
     float anchor_w4; // B4_4(t_a)
     float tint;      // 0: none; else tint_color (1 - tint u_{17+c})
     vec3 tint_color;
+    float tint_hue;  // how far each channel's u goes its own way (0: one u, tint_color's hue kept)
     // the ground's height map (its texture: world heights, texel (col, row)); has_heights false: y = 0
     bool has_heights;
     vec2 h_lo;       // the grid's first vertex (x0, z0)
@@ -142,7 +143,8 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
     d5 = d[4] - at;
     float s = r.scale.x + (r.scale.y - r.scale.x) * u[13];
     extra = vec3(s, r.twist * (2.0 * u[14] - 1.0), r.taper * u[15]);
-    tint = r.tint_color * (1.0 - r.tint * vec3(u[17], u[18], u[19]));
+    vec3 ut = vec3(u[17], u[18], u[19]);
+    tint = r.tint_color * (1.0 - r.tint * (u[17] + r.tint_hue * (ut - u[17])));
     float h = 0.0;
     vec2 grad = vec2(0.0);
     bool inside = true;

@@ -19,6 +19,7 @@ uniform vec4 u_anchor_w;
 uniform float u_anchor_w4;
 uniform float u_tint;
 uniform vec3 u_tint_color;
+uniform float u_tint_hue;
 uniform bool u_has_heights;
 uniform vec2 u_h_lo;
 uniform vec2 u_h_inv;
@@ -39,9 +40,9 @@ uniform vec2 u_anchor_xz;
 AxialRecipe axial_gen_recipe() {
     return AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale,
                        u_twist, u_taper, u_anchor_y, u_anchor_w, u_anchor_w4, u_tint,
-                       u_tint_color, u_has_heights, u_h_lo, u_h_inv, u_h_size, u_has_density,
-                       u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude, u_slope_tan2,
-                       u_choice, u_lift, u_align, u_anchor_xz);
+                       u_tint_color, u_tint_hue, u_has_heights, u_h_lo, u_h_inv, u_h_size,
+                       u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
+                       u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz);
 }
 // ---- end of what js/build.mjs writes ----
 uniform sampler2D u_heights;  // unit 0

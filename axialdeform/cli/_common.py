@@ -241,6 +241,12 @@ def extension_args(args) -> dict:
         if len(color) != 3 or not all(math.isfinite(c) and 0 <= c <= 1 for c in color):
             raise ParamError(f"--tint-color: expected R,G,B linear RGB numbers in 0..1, found {args.tint_color!r}")
         out["tint_color"] = color
+    if getattr(args, "tint_hue", None) is not None:
+        if "tint" not in out:
+            raise ParamError("--tint-hue: only meaningful with --tint AMOUNT (tinted instances)")
+        if not (math.isfinite(args.tint_hue) and 0 <= args.tint_hue <= 1):
+            raise ParamError(f"--tint-hue: expected an amount between 0 and 1, found {args.tint_hue!r}")
+        out["tint_hue"] = args.tint_hue
     return out
 
 
@@ -253,8 +259,8 @@ _VARIATION_HELP = {
     "scale": ("MIN:MAX", "extended instances: uniform scale s drawn in MIN..MAX, 0 < MIN <= MAX (default: none, 16 numbers)"),
     "twist": ("MAX", "extended instances: twist tw drawn in -MAX..MAX radians over the axis (default: none)"),
     "taper": ("MAX", "extended instances: taper tp drawn between 0 and MAX < 1 (default: none)"),
-    "tint": ("AMOUNT", "tinted instances (22 numbers): each one's colour is --tint-color times 1 - AMOUNT*u, u drawn per "
-                       "channel in 0..1; AMOUNT in 0..1 (default: none)"),
+    "tint": ("AMOUNT", "tinted instances (22 numbers): each one's colour is --tint-color times 1 - AMOUNT*u, u drawn "
+                       "in 0..1 (shades of --tint-color); AMOUNT in 0..1 (default: none)"),
     "droop": ("F", "a sag toward the world's down by F of an axis's length at its far end, beside the isotropic --bend: "
                    "every child axis (leaf, frond) clamped at its joint; one axis (blade, leaf card) from its base "
                    "(default: {})"),
@@ -283,6 +289,9 @@ def add_variation_args(parser, names=tuple(_VARIATION_HELP)) -> None:
         if name == "tint":
             parser.add_argument("--tint-color", metavar="R,G,B", default=None, help=(
                 "with --tint: the brightest tint, linear RGB in 0..1 (default: 1,1,1, the mesh's own colours)"))
+            parser.add_argument("--tint-hue", type=float, metavar="H", default=None, help=(
+                "with --tint: how far each channel's u goes its own way, 0..1 (default: 0, one u: the tint "
+                "keeps --tint-color's hue; 1: the hue varies too)"))
 
 
 def variation_args(args) -> dict:

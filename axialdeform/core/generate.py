@@ -45,6 +45,7 @@ from .errors import ParamError
 from .generate_ground import GroundMaps, ground_height, lean_angles
 from .mesh import anchor_point
 from .record import EXTENDED_WIDTH, SCALE, TAPER, TINT, TINTED_WIDTH, TWIST, WIDTH, join_record
+from .variation import tint_of
 from .wind import wind_hash
 
 __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile", "generate_tiles", "tiles_around",
@@ -95,9 +96,12 @@ class Generate:
     twist, taper : float
         Twist in [-twist, twist] radians, taper in [0, taper] (< 1).
     tint : float or None
-        Each instance's colour ``tint_color (1 - tint u)``, ``u`` drawn per channel (22 numbers), 0..1.
+        Each instance's colour ``tint_color (1 - tint u)`` (22 numbers), 0..1: shades of ``tint_color``
+        (:func:`~axialdeform.core.variation.tint_of`).
     tint_color : (3,) float
         Linear RGB in 0..1: the brightest tint.
+    tint_hue : float
+        0..1: how far each channel's ``u`` goes its own way (0, the default: one ``u``, the hue kept).
     altitude : (2,) float or None
         Kept only where the ground's height lies in [lo, hi] (a height map's world units).
     slope : (2,) float or None
@@ -130,6 +134,7 @@ class Generate:
     anchor: str = "bottom"
     lift: tuple | None = None
     align_to_normal: float = 0.0
+    tint_hue: float = 0.0
 
     def __post_init__(self) -> None:
         def bad(field, expected, value):
@@ -180,6 +185,9 @@ class Generate:
                 isinstance(x, (int, float)) and not isinstance(x, bool) and 0 <= x <= 1 for x in c)):
             bad("tint_color", "three linear RGB numbers in [0, 1]", c)
         object.__setattr__(self, "tint_color", tuple(float(x) for x in c))
+        if not (isinstance(self.tint_hue, (int, float)) and not isinstance(self.tint_hue, bool) and 0 <= self.tint_hue <= 1):
+            bad("tint_hue", "an amount in [0, 1]", self.tint_hue)
+        object.__setattr__(self, "tint_hue", float(self.tint_hue))
         a = self.align_to_normal
         if not (isinstance(a, (int, float)) and not isinstance(a, bool) and 0 <= a <= 1):
             bad("align_to_normal", "a fraction in [0, 1]", a)
@@ -305,7 +313,7 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
         out[:, TWIST] = f32(recipe.twist) * (f32(2.0) * u[:, 14] - f32(1.0))
         out[:, TAPER] = f32(recipe.taper) * u[:, 15]
     if recipe.tint is not None:
-        out[:, TINT] = np.asarray(recipe.tint_color, f32) * (f32(1.0) - f32(recipe.tint) * u[:, 17:20])
+        out[:, TINT] = tint_of(u[:, 17:20], recipe.tint, recipe.tint_color, recipe.tint_hue, f32)
     g = maps if maps is not None else GroundMaps()
     rec = recipe_uniforms(recipe, mesh, g)
     h = np.zeros(n, f32)
@@ -393,6 +401,7 @@ def recipe_uniforms(recipe: Generate, mesh, maps: GroundMaps | None = None) -> d
             "taper": float(recipe.taper), "anchor_y": float(anchor_point(mesh, recipe.anchor, 1)[1]),
             "anchor_w": [float(x) for x in w[:4]],
             "anchor_w4": float(w[4]), "tint": float(recipe.tint or 0.0), "tint_color": fl(recipe.tint_color),
+            "tint_hue": float(recipe.tint_hue),
             "has_heights": g.heights is not None, "h_lo": fl(g.h_lo), "h_inv": fl(g.h_inv),
             "h_size": [0, 0] if g.heights is None else [int(g.heights.shape[1]), int(g.heights.shape[0])],
             "has_density": g.density is not None, "d_lo": fl(g.d_lo), "d_inv": fl(g.d_inv),
@@ -407,8 +416,8 @@ def recipe_json(recipe: Generate, reach: float) -> dict:
     as a scene file's ``[layer.generate]`` spells them, and the ``reach``."""
     return {"rate": recipe.rate, "tile": recipe.tile, "min_distance": recipe.min_distance, "seed": recipe.seed,
             "bend": list(recipe.bend) if isinstance(recipe.bend, tuple) else recipe.bend,
-            "scale": None if recipe.scale is None else list(recipe.scale), "twist": recipe.twist,
-            "taper": recipe.taper, "tint": recipe.tint, "tint_color": list(recipe.tint_color), "reach": float(reach)}
+            "scale": None if recipe.scale is None else list(recipe.scale), "twist": recipe.twist, "taper": recipe.taper,
+            "tint": recipe.tint, "tint_color": list(recipe.tint_color), "tint_hue": recipe.tint_hue, "reach": float(reach)}
 
 
 def generate_tiles(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) -> np.ndarray:

@@ -66,7 +66,7 @@ from .record import (
 )
 from .surface import density_at, load_density, load_surface
 from .transforms import angles_from_matrices, matrices_from_rotation_vectors
-from .variation import Variation
+from .variation import Variation, tint_of
 
 __all__ = ["scatter", "Placement", "ANCHORS", "poisson_greedy"]
 
@@ -319,7 +319,7 @@ def _instances(base, points, normals, u: int, rng, placement: Placement, variati
         out[:, TWIST] = abs(variation.twist or 0.0) * (2.0 * u_extra[:, 0] - 1.0)
         out[:, TAPER] = (variation.taper or 0.0) * u_extra[:, 1]
     if variation.tint is not None:
-        out[:, TINT] = np.asarray(variation.tint_color) * (1.0 - variation.tint * rng.random((k, 3)))
+        out[:, TINT] = tint_of(rng.random((k, 3)), variation.tint, variation.tint_color, variation.tint_hue)
     if tree is not None:  # several axes: every child axis its level's amplitude, clamped at its anchor (joints stay closed)
         offsets = child_offsets(tree, bend, children)
         if variation.droop:

@@ -34,7 +34,7 @@ from .record import (
     join_record,
 )
 
-__all__ = ["Variation", "random_params", "iter_random_params", "PLACEMENTS", "uniforms"]
+__all__ = ["Variation", "random_params", "iter_random_params", "PLACEMENTS", "uniforms", "tint_of", "check_tint_hue"]
 
 PLACEMENTS = ("grid", "box", "disc")
 
@@ -60,6 +60,25 @@ def _range(value, name: str) -> tuple[float, float]:
         raise ParamError(f"{name}: expected a finite range (min, max) with min <= max, found {value!r}")
     return lo, hi
 
+
+
+def check_tint_hue(value, name: str = "tint_hue") -> float:
+    """``value`` as a float in 0..1, or a ParamError naming ``name``."""
+    hue = _number(value, name)
+    if not (math.isfinite(hue) and 0 <= hue <= 1):
+        raise ParamError(f"{name}: expected an amount between 0 and 1, found {value!r}")
+    return hue
+
+
+def tint_of(u, amount: float, color, hue: float = 0.0, dtype=np.float64) -> np.ndarray:
+    """Tints ``(n, 3)`` from ``u`` (n, 3) uniform in 0..1: ``color (1 - amount (u_r + hue (u - u_r)))``.
+
+    ``hue`` 0: the first column's ``u`` for every channel (shades of ``color``, its hue kept); 1: each
+    channel its own ``u``.  ``dtype`` the arithmetic's (float32: as ``glsl/generate.glsl`` computes it)."""
+    f = np.dtype(dtype).type
+    u = np.asarray(u, dtype)
+    mixed = u[:, :1] + f(hue) * (u - u[:, :1])
+    return np.asarray(color, dtype) * (f(1.0) - f(amount) * mixed)
 
 @dataclass(frozen=True)
 class Variation:
@@ -90,7 +109,10 @@ class Variation:
         ``tp`` uniform between 0 and ``taper`` (< 1).
     tint : float or None
         An amount in 0..1: each instance's tint is ``tint_color`` times ``1 - tint·u``, ``u`` uniform
-        in 0..1 per channel.
+        in 0..1 (:func:`tint_of`): lighter and darker shades of ``tint_color``.
+    tint_hue : float
+        How far each colour channel's ``u`` goes its own way, 0..1: 0 (default) one ``u`` for the three
+        channels, so the tint keeps ``tint_color``'s hue; 1 one ``u`` each (the hue varies too).
     tint_color : (float, float, float)
         Linear RGB in 0..1, the brightest tint (white: the mesh's own colours).
     droop : float
@@ -114,6 +136,7 @@ class Variation:
     tint: float | None = None
     tint_color: tuple = (1.0, 1.0, 1.0)
     droop: float = 0.0
+    tint_hue: float = 0.0
 
     def __post_init__(self):
         put = object.__setattr__
@@ -146,6 +169,7 @@ class Variation:
                                                          and (color <= 1).all()):
             raise ParamError(f"tint_color: expected three linear RGB numbers in 0..1, found {self.tint_color!r}")
         put(self, "tint_color", tuple(float(c) for c in color))
+        put(self, "tint_hue", check_tint_hue(self.tint_hue))
         droop = _number(self.droop, "droop")
         if not (math.isfinite(droop) and droop >= 0):
             raise ParamError(f"droop: expected a fraction of an axis's length >= 0, found {self.droop!r}")
@@ -349,7 +373,7 @@ def _rows(spec: _Spec, start: int, stop: int) -> np.ndarray:
         # then 3 a row for the tint, after the extended numbers of every instance
         amount, color = var.tint, var.tint_color
         u_tint = _stream(spec.seed, 19 * n + 3 * start, 3 * m).reshape(m, 3)
-        out[:, TINT] = np.asarray(color) * (1.0 - amount * u_tint)
+        out[:, TINT] = tint_of(u_tint, amount, color, var.tint_hue)
     if spec.tree is not None:
         # several axes: 10 numbers per child axis, after the tint block of every instance
         k = spec.tree.count - 1

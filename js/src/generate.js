@@ -41,12 +41,10 @@ export function tileSize(recipe) {
 export function checkRecipe(recipe) {
   if (!recipe || typeof recipe !== 'object') throw new AxialError('generate: expected a recipe object {rate, tile, ...}');
   const r = { tile: 16, min_distance: 0, seed: 0, bend: 0.1, scale: null, twist: 0, taper: 0, tint: null,
-    tint_color: [1, 1, 1], ...recipe };
+    tint_color: [1, 1, 1], tint_hue: 0, ...recipe };
+  const keys = ['rate', 'tile', 'min_distance', 'seed', 'bend', 'scale', 'twist', 'taper', 'tint', 'tint_color', 'tint_hue', 'reach'];
   for (const k of Object.keys(r)) {
-    if (!['rate', 'tile', 'min_distance', 'seed', 'bend', 'scale', 'twist', 'taper', 'tint', 'tint_color', 'reach',
-      'extent'].includes(k)) {
-      throw new AxialError(`generate: ${k}: not a key of a recipe (rate, tile, min_distance, seed, bend, scale, twist, taper, tint, tint_color, reach)`);
-    }
+    if (![...keys, 'extent'].includes(k)) throw new AxialError(`generate: ${k}: not a key of a recipe (${keys.join(', ')})`);
   }
   for (const k of ['rate', 'tile']) if (!(num(r[k]) && r[k] > 0)) bad(k, 'a finite number > 0', r[k]);
   if (!(Number.isInteger(r.seed) && r.seed >= 0 && r.seed < 2 ** 32)) bad('seed', 'an integer 0 .. 4294967295', r.seed);
@@ -63,6 +61,7 @@ export function checkRecipe(recipe) {
   if (!(Array.isArray(r.tint_color) && r.tint_color.length === 3 && r.tint_color.every((x) => num(x) && x >= 0 && x <= 1))) {
     bad('tint_color', 'three linear RGB numbers in [0, 1]', r.tint_color);
   }
+  if (!(num(r.tint_hue) && r.tint_hue >= 0 && r.tint_hue <= 1)) bad('tint_hue', 'an amount in [0, 1]', r.tint_hue);
   if (r.reach === undefined) r.reach = 3 * r.tile;
   if (!(num(r.reach) && r.reach > 0)) bad('reach', 'a finite number > 0', r.reach);
   checkRecipeBounds(r, ...tileSize(r));
@@ -110,7 +109,7 @@ export function recipeUniforms(recipe, positions, axis) {
   const bend = Array.isArray(recipe.bend) ? recipe.bend[0] : recipe.bend;
   return { seed: recipe.seed, m, cell, jitter: 1 - recipe.min_distance / cell, bend: bend * axis.length,
     scale: [s0, s1], twist: recipe.twist, taper: recipe.taper, anchor_y: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4],
-    tint: recipe.tint || 0, tint_color: recipe.tint_color.slice(),
+    tint: recipe.tint || 0, tint_color: recipe.tint_color.slice(), tint_hue: recipe.tint_hue || 0,
     // no ground maps: the flat ground y = 0, no density map, no bands (the Python library's maps come
     // with its uniforms: AxialGeneratedMesh's options.uniforms and options.maps)
     has_heights: false, h_lo: [0, 0], h_inv: [1, 1], h_size: [0, 0], has_density: false, d_lo: [0, 0], d_inv: [1, 1],

@@ -434,7 +434,8 @@ export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, positi
   d5.assign(d[4].sub(at));
   const s = float(r.scale.x.add(r.scale.y.sub(r.scale.x).mul(u[13]))).toVar();
   extra.assign(vec3(s, r.twist.mul(float(2.0).mul(u[14]).sub(float(1.0))), r.taper.mul(u[15])));
-  tint.assign(r.tint_color.mul(float(1.0).sub(r.tint.mul(vec3(u[17], u[18], u[19])))));
+  const ut = vec3(vec3(u[17], u[18], u[19])).toVar();
+  tint.assign(r.tint_color.mul(float(1.0).sub(r.tint.mul(u[17].add(r.tint_hue.mul(ut.sub(u[17])))))));
   const h = float(0.0).toVar();
   const grad = vec2(vec2(float(0.0))).toVar();
   const inside = bool(true).toVar();

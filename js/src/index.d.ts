@@ -167,9 +167,11 @@ export interface GenerateRecipe {
   scale?: [number, number] | null;
   twist?: number;
   taper?: number;
-  /** Each instance's colour tint_color (1 - tint u), u per channel (22 numbers); default none. */
+  /** Each instance's colour tint_color (1 - tint u), shades of tint_color (22 numbers); default none. */
   tint?: number | null;
   tint_color?: [number, number, number];
+  /** How far each channel's u goes its own way, 0..1 (default 0: the tint keeps tint_color's hue). */
+  tint_hue?: number;
   /** The tiles within this distance of the point are made (default 3 tiles). */
   reach?: number;
 }
@@ -178,7 +180,7 @@ export interface GenerateRecipe {
 export interface GeneratorUniforms {
   seed: number; m: number; cell: number; jitter: number; bend: number; scale: [number, number];
   twist: number; taper: number; anchor_y: number; anchor_w: [number, number, number, number]; anchor_w4: number;
-  tint: number; tint_color: [number, number, number];
+  tint: number; tint_color: [number, number, number]; tint_hue: number;
   has_heights: boolean; h_lo: [number, number]; h_inv: [number, number]; h_size: [number, number];
   has_density: boolean; d_lo: [number, number]; d_inv: [number, number]; d_size: [number, number]; d_wrap: boolean;
   altitude: [number, number]; slope_tan2: [number, number]; choice: [number, number]; lift: [number, number];

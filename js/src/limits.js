@@ -77,6 +77,7 @@ export function checkUniforms(u, r, axisLength, maps, m, cell) {
   if (!(Array.isArray(u.tint_color) && u.tint_color.length === 3 && u.tint_color.every((x, i) => num(x) && close(x, r.tint_color[i])))) {
     off('tint_color', `the recipe's tint_color ${json(r.tint_color)}`);
   }
+  if (!(num(u.tint_hue) && close(u.tint_hue, r.tint_hue || 0))) off('tint_hue', `the recipe's tint_hue ${r.tint_hue || 0}`);
   if (!num(u.anchor_y)) off('anchor_y', 'a finite number');
   if (!(Array.isArray(u.anchor_w) && u.anchor_w.length === 4 && u.anchor_w.every((x) => num(x) && x >= 0 && x <= 1))) off('anchor_w', 'four weights in [0, 1]');
   if (!(num(u.anchor_w4) && u.anchor_w4 >= 0 && u.anchor_w4 <= 1)) off('anchor_w4', 'a weight in [0, 1]');

@@ -119,3 +119,30 @@ def test_the_geometry_ignores_the_tint(stone, tinted):
     b = ad.deform(stone.axis, stone.positions, stone.normals, tinted[:, :19])
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
     assert np.array_equal(ad.core.instance_bounds(stone, tinted)[0], ad.core.instance_bounds(stone, tinted[:, :19])[0])
+
+
+def test_a_tint_keeps_its_hue_unless_asked_to_vary_it():
+    """``tint`` makes shades of ``tint_color`` (one u an instance: the channels keep their ratios, no stone
+    turns pink or mint); ``tint_hue`` lets each channel's u go its own way, in random_params, scatter and a
+    generated layer alike, and anything but an amount in 0..1 is refused in words."""
+    from axialdeform.core.errors import ParamError
+    from axialdeform.core.generate import Generate, generate_tile
+
+    stone = ad.load_mesh("stone")
+    color = np.array([0.9, 0.6, 0.3])
+    shades = ad.random_params(stone, 200, seed=3, tint=0.6, tint_color=tuple(color))[:, R.TINT] / color
+    assert np.ptp(shades, axis=1).max() < 1e-6 and np.ptp(shades[:, 0]) > 0.3  # one factor each, varied
+    hues = ad.random_params(stone, 200, seed=3, tint=0.6, tint_color=tuple(color), tint_hue=1.0)[:, R.TINT] / color
+    assert np.ptp(hues, axis=1).mean() > 0.1
+    half = ad.random_params(stone, 200, seed=3, tint=0.6, tint_color=tuple(color), tint_hue=0.5)[:, R.TINT] / color
+    assert 0.3 < np.ptp(half, axis=1).mean() / np.ptp(hues, axis=1).mean() < 0.7
+    surface = np.zeros((16, 16))
+    scattered = ad.scatter(surface, stone, 50, ad.Variation(tint=0.6, tint_color=tuple(color)), seed=2)[:, R.TINT] / color
+    assert np.ptp(scattered, axis=1).max() < 1e-6
+    rec, kept = generate_tile(Generate(rate=2.0, tile=8.0, tint=0.6, tint_color=tuple(color)), stone, 0, 0)
+    assert np.ptp(rec[kept][:, R.TINT] / color.astype(np.float32), axis=1).max() < 1e-6
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ParamError, match="tint_hue"):
+            ad.Variation(tint=0.5, tint_hue=bad)
+        with pytest.raises(ParamError, match="tint_hue"):
+            Generate(rate=1.0, tint=0.5, tint_hue=bad)

@@ -87,7 +87,7 @@ def test_the_gpu_keeps_and_places_as_numpy_on_the_ground_maps(ctx, flat, compute
     terrain, density = _hills()
     if flat:
         recipe = Generate(rate=3.0, tile=8.0, min_distance=0.2, seed=9, bend=0.1, tint=0.4, tint_color=(0.9, 0.8, 0.7),
-                          choice=(0.25, 0.9))
+                          tint_hue=0.5, choice=(0.25, 0.9))
         maps = GroundMaps.of(None, density, extent=(-10, -10, 10, 10))
     else:
         recipe = Generate(rate=3.0, tile=8.0, min_distance=0.2, seed=9, bend=0.1, altitude=(1.0, 5.0), slope=(0.0, 35.0),

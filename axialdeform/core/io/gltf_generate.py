@@ -128,10 +128,11 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
     if not isinstance(spec, dict):
         raise GltfError(f"{where}: generate: expected an object (recipe, uniforms)")
     r = spec.get("recipe")
-    keys = ("rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "tint", "tint_color", "reach", "extent")
+    keys = ("rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "tint", "tint_color", "tint_hue", "reach",
+            "extent")
     if not isinstance(r, dict) or any(k not in keys for k in r):
         raise GltfError(f"{where}: generate recipe: expected an object of {', '.join(keys[:-1])}, found {str(r)[:80]}")
-    kw = {k: r[k] for k in keys[:10] if k in r}  # null is a value (refused where the field needs one), as in JS
+    kw = {k: r[k] for k in keys[:11] if k in r}  # null is a value (refused where the field needs one), as in JS
     for k in ("scale", "tint_color", "bend"):
         if isinstance(kw.get(k), list):
             kw[k] = tuple(kw[k])
@@ -169,7 +170,7 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
         off("bend", f"the recipe's bend times the axis length, {bends[0] * axis_length}")
     if not (_pair(u.get("scale")) and _close(u["scale"][0], s0) and _close(u["scale"][1], s1)):
         off("scale", f"the recipe's scale [{s0}, {s1}]")
-    for key, want in (("twist", gen.twist), ("taper", gen.taper), ("tint", gen.tint or 0.0)):
+    for key, want in (("twist", gen.twist), ("taper", gen.taper), ("tint", gen.tint or 0.0), ("tint_hue", gen.tint_hue)):
         if not _close(u.get(key), want):
             off(key, f"the recipe's {key} {want}")
     tc = u.get("tint_color")

@@ -51,7 +51,7 @@ _LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter",
 
 
 _GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent", "reach", "density",
-             "altitude", "slope", "tint", "tint_color", "weights", "anchor", "lift", "align_to_normal"}
+             "altitude", "slope", "tint", "tint_color", "tint_hue", "weights", "anchor", "lift", "align_to_normal"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "droop", "seed",
@@ -453,7 +453,7 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
         raise src.error("a generate recipe needs an extent [x0, z0, x1, z1]: the ground the commands make",
                         "generate", "layer", nth)
     kwargs = {}
-    for key in ("rate", "tile", "min_distance", "twist", "taper", "tint", "align_to_normal"):
+    for key in ("rate", "tile", "min_distance", "twist", "taper", "tint", "tint_hue", "align_to_normal"):
         if key in recipe:
             kwargs[key] = float(_numbers(src, recipe[key], key, "layer", nth, (1,))[0])
     if "bend" in recipe:  # one amplitude, or one per level of a mesh of several axes
