@@ -20,6 +20,9 @@
 //   V'' = V + F^T (bend(F V) - F V),  n'' = F^T bendnormal(F n);  lo, len, center are local.
 // Defining AXIAL_NO_BEND before the include keeps only the rigid part
 // (rotation + position): the "all the same" method of the benchmark.
+// What a program's instances do not use is left out of its build, the same numbers without the work:
+// AXIAL_NO_TURN (16-number records: no twist or taper), and without AXIAL_WIND a tree's child axes take
+// no wind (axial_tree_world's `wind` is zero then).
 
 // One instance: the 16 numbers, then the extension's 3 (1, 0, 0 for a 16-number instance).
 struct AxialInstance {
@@ -85,16 +88,28 @@ vec2 axial_slope(float t, AxialInstance inst) {
 // The twist and taper of the cross-section at t: w (the two coordinates across the axis minus the
 // axis line's centre) turns by theta = tw t and shrinks by k = 1 - tp t.  Gives k, (cos, sin) of
 // theta and the turned rw = Rot(theta) w; exactly no change for tw = tp = 0.
+// AXIAL_NO_TURN (a program whose instances are all 16-number records): the turn is left out of the build,
+// the same numbers (k = 1, cs = (1, 0), rw = w are what tw = tp = 0 give) without the vertex work.
 void axial_turn(float t, vec2 w, AxialInstance inst, out float k, out vec2 cs, out vec2 rw) {
+#ifdef AXIAL_NO_TURN
+    k = 1.0;
+    cs = vec2(1.0, 0.0);
+    rw = w;
+#else
     k = 1.0 - inst.taper * t;
     cs = axial_cos_sin(inst.twist * t);
     rw = vec2(cs.x * w.x - cs.y * w.y, cs.y * w.x + cs.x * w.y);
+#endif
 }
 
 // g = dV''_across/dt of the turned cross-section: D'(t) + k tw Rot(w turned by 90 degrees) - tp Rot w
 // (without D'(t) where `slope` is zero).
 vec2 axial_turn_rate(vec2 slope, float k, vec2 rw, AxialInstance inst) {
+#ifdef AXIAL_NO_TURN
+    return slope;
+#else
     return slope + ((k * inst.twist) * vec2(-rw.y, rw.x) - inst.taper * rw);
+#endif
 }
 
 // The two coordinates across the axis (the inverse of axial_embed).
@@ -319,9 +334,11 @@ void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[
     vec3 moved = v;
     mat3 jac = mat3(1.0);
 #ifndef AXIAL_NO_BEND
+#ifndef AXIAL_NO_TURN
     if (inst.twist != 0.0 || inst.taper != 0.0) {  // about axis 0's axis line, before the displacements
         axial_tree_turn(v, frames[0], los[0], lens[0], center, inst, moved, jac);
     }
+#endif
     vec3 disp = vec3(0.0);
     int j = b;
     for (int guard = 0; guard < AXIAL_AXES; ++guard) {
@@ -330,7 +347,9 @@ void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[
         vec2 d5 = inst.d5;
         if (j > 0) {
             axial_child_offsets(children, id, j, d12, d34, d5);
+#ifdef AXIAL_WIND
             axial_anchor_wind(frames[j], lens[j], anchors[j], wind, d12, d34, d5);
+#endif
         }
         axial_axis_add(v, frames[j], los[j], lens[j], d12, d34, d5, disp, jac);
         j = parents[j];

@@ -1,6 +1,11 @@
 // scene.vert -- one instanced draw of the base mesh, every instance bent by
 // its own control axis.  Also the capture program (transform feedback of
 // v_world and v_normal): what is drawn is exactly what is captured.
+// What the instances of this build do not use is left out of it (the same picture, less vertex work):
+// 16-number records have no twist or taper; AXIAL_WIND (defined only while a wind blows) keeps the wind
+#if !defined(AXIAL_EXTENDED) && !defined(AXIAL_THREE)
+#define AXIAL_NO_TURN 1
+#endif
 #include "axial.glsl"
 // the wind: moves control points from uniforms alone (no per-frame upload)
 #include "wind.glsl"
@@ -157,6 +162,7 @@ void main() {
 #ifdef AXIAL_AXES
     vec3 push = vec3(0.0);  // the wind's push per unit of axis length: every child axis's
 #endif
+#ifdef AXIAL_WIND
     if (u_wind_strength != 0.0) {
 #ifdef AXIAL_AXES
         push = axial_wind_push(inst, AXIAL_PHASE_ID, 1.0, u_wind_dir,
@@ -165,6 +171,7 @@ void main() {
         inst = axial_wind(inst, AXIAL_PHASE_ID, AXIAL_AXIS, u_len, u_wind_dir,
                           u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
     }
+#endif
 #ifdef AXIAL_AXES
     mat3 jac;
     axial_tree_world(in_position, in_normal, int(in_axis + 0.5), u_axes_frame, u_axes_lo, u_axes_len,

@@ -175,7 +175,7 @@ def run_field(count: int = 1_000_000, size=(800, 600), frames: int = 3, *, ctx=N
                 full_r = renderers["full"]
                 for name in ("full",) + tuple(m for _, m in _PASS_METHODS):
                     _frame(ctx, renderers[name], target, tv, tp)
-                passes = {m: renderers[m]._culled[(False, False)][0] for _, m in _PASS_METHODS}
+                passes = {m: renderers[m]._cull_passes[False] for _, m in _PASS_METHODS}
                 t_full, t_cull, t_pass = [], {m: [] for m in passes}, {m: [] for m in passes}
                 av_frames = frames if all_visible_frames is None else int(all_visible_frames)
                 out["all_visible_frames"] = av_frames

@@ -52,10 +52,13 @@ class Capture:
         v = self.lod_levels[level].vertex_count
         per_instance = max(lv.vertex_count for lv in self.lod_levels) * 24  # room for any level
         chunk = max(1, min(count, _CAPTURE_BYTES // per_instance))
-        if self._capture is None or self._capture[2].capacity < chunk:
+        wind = self.wind if wind is _KEEP else wind
+        windy = self._windy(wind)  # the still build leaves the wind out (glsl/scene.vert, AXIAL_WIND)
+        if self._capture is None or self._capture[2].capacity < chunk or self._capture_windy != windy:
             self._release_capture()
-            prog = build_program(self.ctx, "scene.vert", defines=dict(self._defines),
+            prog = build_program(self.ctx, "scene.vert", defines=self._variant_defines(windy=windy),
                                  varyings=("v_world", "v_normal"))
+            self._capture_windy = windy
             self._set_axis_uniforms(prog)
             scratch = InstanceBuffer(self.ctx, capacity=chunk, quantized=self.quantized, extended=self.extended)
             vao = self.ctx.vertex_array(prog, [self.mesh_buffers.content(prog), scratch.content(prog)])
@@ -71,7 +74,7 @@ class Capture:
             self._capture_levels[level] = self.ctx.vertex_array(
                 prog, [self._level_buffers[level].content(prog), scratch.content(prog)])
         vao = self._capture_levels[level]
-        self._set_wind_uniforms(prog, self.wind if wind is _KEEP else wind, self.time if time is None else float(time))
+        self._set_wind_uniforms(prog, wind, self.time if time is None else float(time))
         out = np.empty((count, v, 6), dtype=np.float32)
         previous = self.ctx.fbo
         fbo.use()

@@ -188,11 +188,12 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
             self.release()
             raise
         self._capture = None  # (program, vao, scratch instances, output) built on first capture
+        self._capture_windy = False  # whether the capture program is the windy build
         self._tint = None  # (program, triangles vao, edges vao, buffer) built by the first set_tint
         self._tint_count = None  # colours in the tint buffer; None: tint off
         self._tint_from_record = False  # the tint came with tinted (n, 22) parameters, not from set_tint
         self._cull_passes = {}  # tinted -> CullPass
-        self._culled = {}  # (tinted, shadowed) -> (CullPass, draw program, [(triangles vao, edges vao) per level])
+        self._culled = {}  # (tinted, shadowed, windy) -> (CullPass, draw program, [(triangles vao, edges vao) per level])
         #: bounding-sphere radius about ``mesh.axis.center`` covering every LOD level
         self.bound_radius = base_radius(mesh, *[level.positions for level in self.lod_levels[1:]])
         self._set_axis_uniforms(self.program)
@@ -402,11 +403,12 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         if time is not None:
             self.time = float(time)
         shadowed = shadow is not None and (mode != "wireframe" or hidden_line == "fill")
+        windy = self._windy(self.wind)
         n = self.count
         state = None
         if (self.culling_enabled or self.lod) and n:
             try:
-                state = self._culled_state(tinted, shadowed)
+                state = self._culled_state(tinted, shadowed, windy)
             except ShaderError as exc:  # a driver that cannot build the pass: plain drawing, same picture
                 import warnings
 
@@ -415,7 +417,7 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         if state is not None:
             cull, prog, vaos = state
         else:
-            prog, vao_triangles, edges = self._variant(tinted, shadowed)
+            prog, vao_triangles, edges = self._variant(tinted, shadowed, windy)
         set_camera_uniforms(prog, view, projection)
         self._set_wind_uniforms(prog, self.wind, self.time)
         set_uniforms(prog, {
@@ -471,15 +473,16 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         self._check()
         self._bind_axes()
         state = None
+        windy = self._windy(self.wind)
         if self.culling_enabled and self.count:
             try:
-                state = self._culled_state(False, False)
+                state = self._culled_state(False, False, windy)
             except ShaderError as exc:
                 import warnings
 
                 warnings.warn(f"culling pass unavailable, drawing every caster: {exc}", RuntimeWarning, stacklevel=2)
                 self.culling_enabled = False
-        prog, vao, _ = self._variant(False, False) if state is None else (state[1], None, None)
+        prog, vao, _ = self._variant(False, False, windy) if state is None else (state[1], None, None)
         with shadow.target(clear):
             if self.count == 0:
                 return

@@ -38,10 +38,10 @@ class ShaderVariants:
         self._objects.append(vao)
         return vao
 
-    def _edges_vao(self, tinted: bool, shadowed: bool = False):
-        """The vertex array of the edges (plain, tinted and/or shadow-receiving), built on first use."""
-        if shadowed:
-            entry = self._variants[(tinted, True)]
+    def _edges_vao(self, tinted: bool, shadowed: bool = False, windy: bool = False):
+        """The vertex array of the edges (plain, tinted, shadow-receiving and/or windy), built on first use."""
+        if shadowed or windy:
+            entry = self._variants[(tinted, shadowed, windy)]
             if entry[2] is None:
                 entry[2] = self._vertex_array(entry[0], self._edge_buffer, extra=entry[3])
             return entry[2]
@@ -55,22 +55,21 @@ class ShaderVariants:
         return self._vao_edges
 
     # ------------------------------------------------------------ drawing
-    def _variant(self, tinted: bool, shadowed: bool):
+    def _variant(self, tinted: bool, shadowed: bool, windy: bool = False):
         """(program, triangles vao, a function that returns the edges vao) of the
-        plain, tinted and/or shadow-receiving program (edges: built on first use)."""
+        plain, tinted, shadow-receiving and/or windy program (edges: built on first use)."""
         def edges():
-            return self._edges_vao(tinted, shadowed)
+            return self._edges_vao(tinted, shadowed, windy)
 
-        if not shadowed:
+        if not (shadowed or windy):
             if tinted:
                 return self._tint[0], self._tint[1], edges
             return self.program, self._vao_triangles, edges
-        key = (tinted, shadowed)
+        key = (tinted, shadowed, windy)
         if key not in self._variants:
-            defines = {**self._defines, "AXIAL_SHADOW": 1}
+            defines = self._variant_defines(tinted=tinted, shadowed=shadowed, windy=windy)
             extra = []
             if tinted:
-                defines["AXIAL_TINT"] = 1
                 extra = [(self._tint[3], "3f/i", "i_tint")]
             prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
             self._objects.append(prog)
@@ -79,10 +78,17 @@ class ShaderVariants:
         entry = self._variants[key]
         return entry[0], entry[1], edges
 
-    def _culled_state(self, tinted: bool, shadowed: bool = False):
+    def _variant_defines(self, *, tinted=False, shadowed=False, windy=False, culled=False) -> dict:
+        """The defines of one build of ``scene.vert``/``scene.frag``: the mesh's (:attr:`_defines`) and what this draw
+        uses -- a tint, a shadow map, the wind (``AXIAL_WIND``: left out of the still builds, which then do none of its
+        vertex work), the culling pass's output."""
+        flags = {"AXIAL_TINT": tinted, "AXIAL_SHADOW": shadowed, "AXIAL_WIND": windy, "AXIAL_CULLED": culled}
+        return {**self._defines, **{name: 1 for name, on in flags.items() if on}}
+
+    def _culled_state(self, tinted: bool, shadowed: bool = False, windy: bool = False):
         """The cull pass (one per tint state) and the draw program/VAOs reading
-        its output (one per tint/shadow variant), built on first use."""
-        state = self._culled.get((tinted, shadowed))
+        its output (one per tint/shadow/wind variant), built on first use."""
+        state = self._culled.get((tinted, shadowed, windy))
         if state is None:
             cull = self._cull_passes.get(tinted)
             if cull is None:
@@ -101,15 +107,14 @@ class ShaderVariants:
                     cull = CullPass(self.ctx, self.instances, self._defines, tint=tint, indirect=False)
                 self._cull_passes[tinted] = cull
                 self._objects.append(cull)
-            defines = {**self._defines, "AXIAL_CULLED": 1, **({"AXIAL_TINT": 1} if tinted else {}),
-                       **({"AXIAL_SHADOW": 1} if shadowed else {})}
+            defines = self._variant_defines(tinted=tinted, shadowed=shadowed, windy=windy, culled=True)
             prog = build_program(self.ctx, "scene.vert", "scene.frag", defines=defines)
             self._objects.append(prog)
             self._set_axis_uniforms(prog)
             vaos = []
             for level in range(len(self._level_buffers)):  # edges: built by the first wireframe draw (lazy edges)
                 vaos.append([self._culled_vao(prog, level, self._level_buffers[level].triangles), None])
-            state = self._culled[(tinted, shadowed)] = (cull, prog, vaos)
+            state = self._culled[(tinted, shadowed, windy)] = (cull, prog, vaos)
         return state
 
     def _culled_vao(self, prog, level: int, index_buffer):
@@ -148,13 +153,19 @@ class ShaderVariants:
             set_axes_uniforms(program, self.mesh.tree)
         self._set_quant_uniforms(program)
 
-    def _set_wind_uniforms(self, program, wind, time) -> None:
-        """The wind's uniforms (strength 0: still); no buffer is written."""
-        if "u_wind_strength" not in program:  # the linker removed it: no bend (AXIAL_NO_BEND)
-            return
+    @staticmethod
+    def _windy(wind) -> bool:
+        """Whether ``wind`` blows (a :class:`Wind` of strength != 0): the draw then needs an ``AXIAL_WIND`` build."""
         if wind is not None and not isinstance(wind, Wind):
             raise ParamError(f"wind: expected an axialdeform.Wind or None, found {type(wind).__name__}")
-        if wind is None or wind.strength == 0:
+        return wind is not None and wind.strength != 0
+
+    def _set_wind_uniforms(self, program, wind, time) -> None:
+        """The wind's uniforms (strength 0: still); no buffer is written."""
+        windy = self._windy(wind)
+        if "u_wind_strength" not in program:  # a still build (no AXIAL_WIND), or no bend (AXIAL_NO_BEND)
+            return
+        if not windy:
             program["u_wind_strength"].value = 0.0
             return
         set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),

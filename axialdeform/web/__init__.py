@@ -97,7 +97,8 @@ LEVEL_VARIANTS = (("", {}), ("_extended", {"AXIAL_EXTENDED": 1}), ("_tinted", {"
 #: record level; ``_material``: a mesh with UVs, colours, parts or materials)
 #: (AXIAL_THREE: the instances are the npm module's AxialInstancedMesh, whose attributes are float32
 #: -- a quantized file is decoded by its parser -- and whose rigid part is instanceMatrix)
-SHADER_VARIANTS = {f"float{suffix}": {"AXIAL_THREE": 1, **defines} for suffix, defines in LEVEL_VARIANTS}
+#: (AXIAL_WIND: the page's wind is a uniform switch, ``axialWindStrength`` 0 when still)
+SHADER_VARIANTS = {f"float{suffix}": {"AXIAL_THREE": 1, "AXIAL_WIND": 1, **defines} for suffix, defines in LEVEL_VARIANTS}
 SHADER_VARIANTS.update({f"{k}_material": {**v, "AXIAL_MATERIAL": 1} for k, v in list(SHADER_VARIANTS.items())})
 #: ``_framed``: a mesh with a chosen axis frame (``u_frame`` instead of ``u_axis``)
 SHADER_VARIANTS.update({f"{k}_framed": {**v, "AXIAL_FRAME": 1} for k, v in list(SHADER_VARIANTS.items())})

@@ -73,7 +73,9 @@ export function axialSlope_fAI(t, inst) {
 /** glsl: axial_turn.
  * The twist and taper of the cross-section at t: w (the two coordinates across the axis minus the
  * axis line's centre) turns by theta = tw t and shrinks by k = 1 - tp t.  Gives k, (cos, sin) of
- * theta and the turned rw = Rot(theta) w; exactly no change for tw = tp = 0. */
+ * theta and the turned rw = Rot(theta) w; exactly no change for tw = tp = 0.
+ * AXIAL_NO_TURN (a program whose instances are all 16-number records): the turn is left out of the build,
+ * the same numbers (k = 1, cs = (1, 0), rw = w are what tw = tp = 0 give) without the vertex work. */
 export function axialTurn(t, w, inst, k, cs, rw) {
   k.assign(float(1.0).sub(inst.taper.mul(t)));
   cs.assign(axialCosSin(inst.twist.mul(t)));

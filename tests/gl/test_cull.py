@@ -65,7 +65,7 @@ def test_gpu_culling_agrees_with_the_numpy_spheres(ctx, stone, kind, indirect):
     view, proj = look((2.0, 1.7, -3.0), (30.0, 0.0, 20.0))
     with ad.AxialRenderer(ctx, stone, params, wind=wind, quantized=kind == "quantized", indirect=indirect) as r:
         draw(ctx, r, view, proj)
-        cull = r._culled[(False, False)][0]
+        cull = r._cull_passes[False]
         assert cull.indirect == indirect and r.stats["indirect"] == indirect
         kept, rec_bytes = r.stats["visible"], r.instances.record_bytes
         rec = np.frombuffer(cull.buffer.read(size=kept * cull.out_bytes), np.uint8).reshape(kept, cull.out_bytes)
@@ -278,7 +278,7 @@ def test_culled_picture_equals_unculled_extended_and_windy(ctx, stone, quantized
                 b = draw(ctx, culled, view, proj)
                 assert np.array_equal(a, b), (name, t, int((a != b).any(axis=2).sum()))
                 assert culled.stats["visible"] < len(params)
-        cull = culled._culled[(False, False)][0]
+        cull = culled._cull_passes[False]
         assert cull.out_bytes == (40 if quantized else 76) + 4
 
 

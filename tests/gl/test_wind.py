@@ -187,3 +187,31 @@ def test_renderer_refuses_a_wind_that_is_not_a_wind(ctx, leaf):
     with AxialRenderer(ctx, leaf, blades(leaf, n=3)) as r:
         with pytest.raises(ad.core.ParamError, match="wind: expected an axialdeform.Wind"):
             r.capture(wind=0.3)
+
+
+@pytest.mark.parametrize("culling", [True, False])
+def test_a_still_draw_builds_the_wind_out(ctx, leaf, culling):
+    """The still build of scene.vert has no wind in it (AXIAL_WIND undefined: the linker drops its uniforms); a wind
+    that blows draws with the windy build, and the still picture comes back exactly when it stops (None, or a
+    strength of 0)."""
+    import pyrr
+
+    view = pyrr.matrix44.create_look_at((6.0, 4.0, 6.0), (0.0, 0.5, 0.0), (0.0, 1.0, 0.0), dtype=np.float32)
+    proj = pyrr.matrix44.create_perspective_projection(40.0, 1.0, 0.1, 100.0, dtype=np.float32)
+    with ad.Offscreen(ctx, (96, 96), samples=0) as target, AxialRenderer(ctx, leaf, blades(leaf, n=80),
+                                                                          culling=culling) as r:
+        def frame(wind):
+            r.wind = wind
+            target.use()
+            r.render(view, proj, time=1.3)
+            return target.read().copy()
+
+        still = frame(None)
+        assert "u_wind_strength" not in r.program and "u_wind_dir" not in r.program
+        windy = frame(WIND)
+        assert np.abs(windy.astype(int) - still).max() > 0
+        builds = [o for o in r._objects if isinstance(o, moderngl.Program) and "u_wind_strength" in o]
+        assert builds, "no windy build was made for the wind"
+        np.testing.assert_array_equal(frame(None), still)
+        np.testing.assert_array_equal(frame(Wind(strength=0.0)), still)
+        np.testing.assert_array_equal(r.capture(wind=None)[0], r.capture(wind=Wind(strength=0.0))[0])
