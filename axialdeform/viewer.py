@@ -33,7 +33,8 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from dataclasses import fields as dataclass_fields
 from pathlib import Path
 
 import moderngl_window as mglw
@@ -44,7 +45,7 @@ from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamErr
 from .core.generate import extent_box, tile_size, tile_spheres, tiles_around, world_edge
 from .core.io.image import save_png
 from .core.look import DEFAULT_LOOK
-from .core.options import RenderOptions
+from .core.options import RenderOptions, warn_field_keywords
 from .core.params import as_params
 from .core.scene import Scene
 from .core.variation import Variation, random_params
@@ -58,7 +59,7 @@ from .gl.renderer import MODES, AxialRenderer
 from .gl.scene import SceneRenderer
 from .gl.shadow import ShadowMap
 
-__all__ = ["Viewer", "KEY_ACTIONS"]
+__all__ = ["Viewer", "ViewerSettings", "KEY_ACTIONS"]
 
 _log = logging.getLogger(__name__)
 
@@ -125,9 +126,9 @@ class _ViewerMixin:
         held = len(self.base) if self.generate is None else (  # a generated layer: the slots within its reach
             len(tiles_around(self.generate.generate, 0.0, 0.0, self.generate.reach)) * tile_size(self.generate.generate)[0] ** 2)
         lod = s.get("lod", held >= LOD_AUTO_COUNT)
-        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, parts=s.get("parts"), wind=self.wind,
-                                      culling=s.get("culling", True), lod=lod, lod_error=s.get("lod_error", 1.0),
-                                      position_ids=s.get("generate") is not None)
+        options = RenderOptions(parts=s.get("parts"), wind=self.wind, culling=s.get("culling", True), lod=lod,
+                                lod_error=s.get("lod_error", 1.0), position_ids=s.get("generate") is not None)
+        self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, options)
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
         self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
@@ -268,14 +269,14 @@ class _ViewerMixin:
         self.seed = int(seed)
         self._rounds += 1  # generated layers: another seed of their recipe, the tiles made again (_upload)
         if self.generate is None:
-            fresh = random_params(self.mesh, len(self.base), seed=self.seed, bend=self.bend)
+            fresh = random_params(self.mesh, len(self.base), seed=self.seed, variation=Variation(bend=self.bend))
             cols = _offsets(self.mesh)
             self.base[:, cols] = fresh[:, cols]
         for k, (layer, _, base) in enumerate(self.layers):  # each other layer: its own seed, derived from the seed
             if len(base) and getattr(layer, "generate", None) is None:
                 cols = _offsets(layer.mesh)
                 base[:, cols] = random_params(layer.mesh, len(base), seed=self.seed + 7919 * (k + 1),
-                                              bend=self.bend)[:, cols]
+                                              variation=Variation(bend=self.bend))[:, cols]
         self._upload(self.base)
 
     def set_bend_scale(self, scale: float) -> None:
@@ -423,8 +424,42 @@ class _ViewerMixin:
             self.extra.release()
 
 
-#: the viewer's own settings beside :class:`RenderOptions`' fields (:meth:`Viewer.create`)
-_VIEWER_SETTINGS = ("animate", "tint", "seed", "bend", "mode", "on_screenshot", "extra", "walk")
+@dataclass(frozen=True)
+class ViewerSettings:
+    """The viewer's own settings (:meth:`Viewer.create`), beside what is drawn (:class:`RenderOptions`) and how
+    it looks (:class:`~axialdeform.Look`).
+
+    Attributes
+    ----------
+    animate : callable or None
+        ``f(t_seconds) -> (n, 16)``, called every frame.
+    tint : (n, 3) float or None
+        Linear RGB per instance.
+    seed : int or None
+        The seed ``params`` were made with, shown in the title; None: not known, ``N`` then starts at 0.
+    bend : float
+        What ``N`` regenerates offsets with, a fraction of L (default :attr:`Variation.bend`).
+    mode : {"solid", "flat", "wireframe"}
+        The first drawing mode.
+    on_screenshot : callable or None
+        ``f(path)``, called after the S key wrote a screenshot.
+    extra : Scene or None
+        A loaded scene drawn too, every frame, in the same mode.
+    walk : (dx, dz) or None
+        Walk the camera by this much a frame (a generated layer's tiles follow it).
+    """
+
+    animate: object = None
+    tint: object = None
+    seed: int | None = None
+    bend: object = Variation.bend
+    mode: str = "solid"
+    on_screenshot: object = None
+    extra: object = None
+    walk: object = None
+
+
+_VIEWER_SETTINGS = tuple(f.name for f in dataclass_fields(ViewerSettings))
 
 
 class Viewer:
@@ -432,7 +467,7 @@ class Viewer:
 
     @staticmethod
     def create(scene, params=None, *, headless: bool = False, size=(960, 720), look=None,
-               options: RenderOptions | None = None, **fields):
+               options: RenderOptions | None = None, settings: ViewerSettings | None = None, **fields):
         """A ready viewer (a moderngl-window ``WindowConfig``) with its window.
 
         Parameters
@@ -454,26 +489,28 @@ class Viewer:
         options : RenderOptions, optional
             ``up``, ``parts`` (names of the mesh's parts to draw), ``wind`` (animated on the GPU;
             ``V`` toggles it), ``culling``, ``lod``, ``lod_error`` (:class:`axialdeform.RenderOptions`;
-            ``lod`` not given: on from :data:`LOD_AUTO_COUNT` instances, so a million can be
+            ``lod=None``, the default: on from :data:`LOD_AUTO_COUNT` instances, so a million can be
             flown through, unless the mesh has parts or appearance).
+        settings : ViewerSettings, optional
+            The viewer's own: ``animate``, ``tint``, ``seed``, ``bend`` (what ``N`` regenerates offsets
+            with), the first ``mode``, ``on_screenshot``, ``extra`` (a scene drawn too) and ``walk``
+            (:class:`ViewerSettings`).
         **fields
-            Fields of :class:`RenderOptions`, or the viewer's own settings: ``animate``
-            (``f(t_seconds) -> (n, 16)`` called every frame), ``tint`` ((n, 3) linear RGB per
-            instance), ``seed`` (the seed ``params`` were made with, shown in the title; None: not
-            known, ``N`` then starts at 0), ``bend`` (what ``N`` regenerates offsets with, a fraction
-            of L; default :attr:`Variation.bend`), ``mode`` (the first drawing mode),
-            ``on_screenshot`` (``f(path)`` called after the S key wrote a screenshot) and ``extra``
-            (a loaded scene drawn too, every frame, in the same mode).
+            Deprecated (still working for one release, with a DeprecationWarning): fields of
+            :class:`ViewerSettings` or of :class:`RenderOptions` as keywords.
         """
 
         own = {k: fields.pop(k) for k in list(fields) if k in _VIEWER_SETTINGS}
-        animate, tint, seed, extra, walk = (own.get(k) for k in ("animate", "tint", "seed", "extra", "walk"))
-        bend, mode, on_screenshot = own.get("bend", Variation.bend), own.get("mode", "solid"), own.get("on_screenshot")
-        lod_given = "lod" in fields or (options is not None and options.lod)
+        warn_field_keywords("Viewer.create", own, "settings", "viewer.ViewerSettings")
+        if settings is not None and not isinstance(settings, ViewerSettings):
+            raise ArgumentError(f"settings: expected an axialdeform.viewer.ViewerSettings, found {type(settings).__name__}")
+        s = replace(settings or ViewerSettings(), **own)
+        animate, tint, seed, extra, walk = s.animate, s.tint, s.seed, s.extra, s.walk
+        bend, mode, on_screenshot = s.bend, s.mode, s.on_screenshot
         old_keywords = pop_look_keywords(fields)
         opts = RenderOptions.of(options, fields, "Viewer.create", ("up", "parts", "wind", "culling", "lod", "lod_error"))
         up, parts, wind, culling, lod_error = opts.up, opts.parts, opts.wind, opts.culling, opts.lod_error
-        lod = opts.lod if lod_given else None
+        lod = opts.lod  # None: on from LOD_AUTO_COUNT instances
         # the one mesh-or-scene check; the first layer is the viewer's own, the others and the terrain are drawn too
         scene = Scene.of(scene, params, up=up, wind=wind, parts=parts)
         if not scene.layers:

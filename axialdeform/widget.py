@@ -20,9 +20,10 @@ import traitlets
 
 from .core.errors import AxialDeformError
 from .core.io.params import encode_binary
+from .core.options import RenderOptions
 from .core.params import as_params
 from .core.scene import Scene
-from .web import MODULE_FILES, VENDOR_FILES, build_scene, build_scene_file, module_source, page_source, vendor_file
+from .web import MODULE_FILES, VENDOR_FILES, PageOptions, build_scene, build_scene_file, module_source, page_source, vendor_file
 
 __all__ = ["SceneWidget"]
 
@@ -71,14 +72,15 @@ class SceneWidget(anywidget.AnyWidget):
         scene = Scene.of(scene, params, up=up)  # the one mesh-or-scene check
         if scene.path is not None or len(scene.layers) != 1 or scene.terrain is not None:
             self._mesh = None  # several layers: set_params has no one mesh to act on
-            web = build_scene_file(scene, size=size, quantize=quantize, look=look)
+            web = build_scene_file(scene, page=PageOptions(size=size, quantize=quantize), look=look)
             first = web.config["layers"][0]
             super().__init__(config=web.config, mesh_glb=web.files[first["mesh"]["file"]],
                              params_adp=web.files.get(first.get("params_file"), b""), files=dict(web.files), _sources=sources,
                              status={}, **kwargs)
             return
         self._mesh, params = scene.layers[0].mesh, scene.layers[0].params
-        web = build_scene(self._mesh, params, size=size, up=up, quantize=quantize, all_shaders=True, look=look)
+        web = build_scene(self._mesh, params, page=PageOptions(size=size, quantize=quantize, all_shaders=True),
+                          options=RenderOptions(up=up), look=look)
         super().__init__(config=web.config, mesh_glb=web.glb, params_adp=web.adp, files={}, _sources=sources,
                          status={}, **kwargs)
 

@@ -27,7 +27,7 @@ def river_bank(mesh, count, seed):
     Bend and orientation come from ``random_params``; the positions are
     replaced by a jittered strip, 2 stones along the river for 1 up the bank.
     """
-    params = ad.random_params(mesh, count, seed=seed, bend=0.14, tilt=(-0.2, 0.2))
+    params = ad.random_params(mesh, count, seed=seed, variation=ad.Variation(bend=0.14, tilt=(-0.2, 0.2)))
     rng = np.random.default_rng(seed)
     spacing = 0.8 * mesh.axis.length                 # world units between neighbours
     cols = int(np.ceil(np.sqrt(2 * count)))
@@ -70,9 +70,9 @@ def main():
     mesh = ad.load_mesh("stone")
     params = river_bank(mesh, count, args.seed)
     if args.window:
-        from axialdeform.viewer import Viewer
+        from axialdeform.viewer import Viewer, ViewerSettings
 
-        Viewer.open(mesh, params, seed=args.seed)
+        Viewer.open(mesh, params, settings=ViewerSettings(seed=args.seed))
         return
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)

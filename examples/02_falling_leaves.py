@@ -104,9 +104,9 @@ def main():
     mesh = ad.load_mesh("leafcard")  # a textured card with an alpha cut-out (tools/make_leaf_card.py)
     leaves = FallingLeaves(count, args.seed, size=16.0 * (count / 1000) ** (1 / 3))
     if args.window:
-        from axialdeform.viewer import Viewer
+        from axialdeform.viewer import Viewer, ViewerSettings
 
-        Viewer.open(mesh, leaves.at(0.0), animate=leaves.at, tint=leaves.colours(args.seed), seed=args.seed)
+        Viewer.open(mesh, leaves.at(0.0), settings=ViewerSettings(animate=leaves.at, tint=leaves.colours(args.seed), seed=args.seed))
         return
 
     out = Path(args.output)

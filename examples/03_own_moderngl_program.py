@@ -77,7 +77,7 @@ def main():
     count, (w, h) = (200, (320, 240)) if args.quick else (args.count, parse_size(args.size))
 
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, count, seed=3, bend=0.25, placement="disc")   # (count, 16) float32
+    params = ad.random_params(mesh, count, seed=3, variation=ad.Variation(bend=0.25), placement="disc")   # (count, 16) float32
 
     ctx = moderngl.create_standalone_context(backend="egl")    # or your window's context
     ctx.includes["axial.glsl"] = ad.deformation_glsl()

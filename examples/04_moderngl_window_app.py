@@ -41,10 +41,10 @@ class Meadow(mglw.WindowConfig):
         self.mesh = ad.load_mesh("leafcard")  # textured card, alpha cut-out (tools/make_leaf_card.py)
         n = self.count
         # 19 numbers a blade: the 16, then size 0.7..1.3, a twist up to 0.6 rad, a taper up to 0.5
-        self.params = ad.random_params(self.mesh, n, seed=5, bend=0.05, placement="disc", spacing=0.6,
-                                       tilt=(-0.15, 0.15), scale=(0.7, 1.3), twist=0.6, taper=0.5)
+        blades = ad.Variation(bend=0.05, tilt=(-0.15, 0.15), scale=(0.7, 1.3), twist=0.6, taper=0.5)
+        self.params = ad.random_params(self.mesh, n, seed=5, variation=blades, placement="disc", spacing=0.6)
         self.xz = self.params[:, [10, 12]].astype(np.float64)
-        self.renderer = ad.AxialRenderer(self.ctx, self.mesh, self.params, wind=WIND)
+        self.renderer = ad.AxialRenderer(self.ctx, self.mesh, self.params, options=ad.RenderOptions(wind=WIND))
         self.shadow = ad.gl.ShadowMap(self.ctx, 2048)
         self.ground = ad.gl.GroundPlane(self.ctx, color=(0.30, 0.26, 0.16)).fit(self.mesh, self.params, sink=0.0)
         self.ground.center[1] = 0.0

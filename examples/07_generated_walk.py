@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 import axialdeform as ad
-from axialdeform.viewer import Viewer
+from axialdeform.viewer import Viewer, ViewerSettings
 
 SCENE = Path(__file__).resolve().parent / "generated" / "walk.toml"
 
@@ -40,7 +40,7 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     size, frames = ((320, 240), 20) if args.quick else ((800, 600), 60)
     stride = 600.0 / frames  # the walk: 600 units along x, 360 along z, whatever the frame count
-    viewer = Viewer.create(ad.Scene.load(SCENE), headless=True, size=size, walk=(stride, 0.6 * stride))
+    viewer = Viewer.create(ad.Scene.load(SCENE), headless=True, size=size, settings=ViewerSettings(walk=(stride, 0.6 * stride)))
     try:
         viewer.step(1)
         viewer.save_screenshot(out / "07_generated_walk.png")

@@ -50,8 +50,8 @@ def main(argv=None) -> int:
             "transform feedback": TileGenerator(ctx, recipe, stone, compute=False)}
     out = ctx.buffer(reserve=n * GENERATED_FLOATS * 4)
     params = generate_tiles(recipe, stone, tiles)
-    renderer = AxialRenderer(ctx, stone, params, culling=False, lod=False)
-    held = AxialRenderer(ctx, stone, params[:0], culling=False, lod=False, extended=True)
+    renderer = AxialRenderer(ctx, stone, params, options=ad.RenderOptions(culling=False, lod=False))
+    held = AxialRenderer(ctx, stone, params[:0], options=ad.RenderOptions(culling=False, lod=False, extended=True))
     into = GeneratedTiles(held, recipe, stone)
     target = ctx.simple_framebuffer((640, 480))
     cam = frame_instances(stone, params, 640 / 480)

@@ -56,7 +56,7 @@ def site(folder: Path, counts, spacing: float) -> None:
     (folder / "favicon.ico").write_bytes(b"")
     stone = ad.load_mesh("stone")
     for n in counts:
-        params = ad.random_params(stone, n, seed=1, bend=0.15, spacing=spacing)
+        params = ad.random_params(stone, n, seed=1, variation=ad.Variation(bend=0.15), spacing=spacing)
         ad.write_params(folder / f"stones-{n}.adp", params, stone)
 
 

@@ -31,12 +31,12 @@ def main() -> None:
     size = parse_size(args.size)
     ctx = ad.create_context()
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, args.count, seed=2003, bend=0.12, spacing=1.15 * mesh.axis.length)
+    params = ad.random_params(mesh, args.count, seed=2003, variation=ad.Variation(bend=0.12), spacing=1.15 * mesh.axis.length)
     cam = frame_instances(mesh, params, size[0] / size[1])
     view, proj = cam.view(), cam.projection(size[0] / size[1])
     with ad.Offscreen(ctx, size, samples=0) as target, \
-            ad.AxialRenderer(ctx, mesh, params, cull_back_faces=True) as culled, \
-            ad.AxialRenderer(ctx, mesh, params, cull_back_faces=False) as two_sided:
+            ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(cull_back_faces=True)) as culled, \
+            ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(cull_back_faces=False)) as two_sided:
         times, pictures = alternate(ctx, target, {True: culled, False: two_sided}, view, proj, args.rounds)
     ratios = np.array(times[True]) / np.array(times[False])
     differ = (np.abs(pictures[True].astype(int) - pictures[False]).max(axis=2) > 2).mean()

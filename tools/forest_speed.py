@@ -57,7 +57,7 @@ def main(argv=None) -> int:
         view, proj = cam.view(), cam.projection(w / h)
         target = ad.Offscreen(ctx, (w, h), samples=0)
         with AxialRenderer(ctx, tree, params) as many, AxialRenderer(ctx, one_axis, standard) as one, \
-                AxialRenderer(ctx, one_axis, standard, bend=False) as rigid:
+                AxialRenderer(ctx, one_axis, standard, options=ad.RenderOptions(bend=False)) as rigid:
             times, _ = alternate(ctx, target, {f"tree, {k} axes": many, "tree, 1 axis": one, "no bend": rigid},
                                  view, proj, args.rounds)
         target.release()

@@ -130,13 +130,13 @@ def make_bases(folder: Path) -> list[Path]:
     """Instanced GLBs as ``export --instanced`` writes them: 16, 19 numbers, a ten-axis tree."""
     from axialdeform.core.io.gltf import export_glb
     from axialdeform.core.io.mesh import load_mesh
-    from axialdeform.core.variation import random_params
+    from axialdeform.core.variation import Variation, random_params
 
     folder.mkdir(parents=True, exist_ok=True)
     stone, tree = load_mesh("stone"), load_mesh("tree", axes=str(TREE_AXES))
     out = []
     for name, mesh, params in (("stone16", stone, random_params(stone, 6, seed=1)),
-                               ("stone19", stone, random_params(stone, 6, seed=2, twist=0.3)),
+                               ("stone19", stone, random_params(stone, 6, seed=2, variation=Variation(twist=0.3))),
                                ("tree", tree, random_params(tree, 4, seed=3))):
         path = folder / f"{name}.glb"
         if not path.exists():

@@ -30,13 +30,14 @@ def cases():
     stone = ad.load_mesh("stone")
     tree = ad.load_mesh("tree", axes=str(Path(__file__).resolve().parents[1] / "examples" / "forest" / "tree-axes.toml"))
     turned = stone.with_axis("oriented")
-    yield "stone16", stone, ad.random_params(stone, 3, seed=1, bend=0.12), False
-    yield "stone16q", stone, ad.random_params(stone, 3, seed=2, bend=0.12), True
-    yield "stone19", stone, ad.random_params(stone, 3, seed=3, bend=0.1, scale=(0.5, 1.5), twist=1.2, taper=0.5), False
-    yield "stone22", stone, ad.random_params(stone, 2, seed=4, bend=0.1, scale=(0.8, 1.2), twist=0.5, taper=0.3,
-                                             tint=0.4), True
-    yield "framed", turned, ad.random_params(turned, 3, seed=5, bend=0.1, twist=0.7, taper=0.2), False
-    yield "tree", tree, ad.random_params(tree, 2, seed=6, twist=0.3, taper=0.2), False
+    yield "stone16", stone, ad.random_params(stone, 3, seed=1, variation=ad.Variation(bend=0.12)), False
+    yield "stone16q", stone, ad.random_params(stone, 3, seed=2, variation=ad.Variation(bend=0.12)), True
+    yield "stone19", stone, ad.random_params(stone, 3, seed=3, variation=ad.Variation(bend=0.1, scale=(0.5, 1.5), twist=1.2,
+                                                                                      taper=0.5)), False
+    yield "stone22", stone, ad.random_params(stone, 2, seed=4, variation=ad.Variation(bend=0.1, scale=(0.8, 1.2), twist=0.5, taper=0.3,
+                                                                                      tint=0.4)), True
+    yield "framed", turned, ad.random_params(turned, 3, seed=5, variation=ad.Variation(bend=0.1, twist=0.7, taper=0.2)), False
+    yield "tree", tree, ad.random_params(tree, 2, seed=6, variation=ad.Variation(twist=0.3, taper=0.2)), False
 
 
 def placements(params) -> np.ndarray:

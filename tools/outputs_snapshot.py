@@ -25,16 +25,16 @@ look = ad.Look()
 jobs = []
 stone, leaf, card = ad.load_mesh("stone"), ad.load_mesh("leaf"), ad.load_mesh("leafcard")
 alpha = ad.load_mesh(shared)
-p16 = ad.random_params(stone, 300, seed=1, bend=0.15)
-p19 = ad.random_params(leaf, 200, seed=2, bend=0.2, scale=(0.5, 1.5), twist=1.0, taper=0.5)
-p22 = ad.random_params(card, 100, seed=3, tint=0.5)
-pa = ad.random_params(alpha, 5, seed=4, bend=0.1, scale=(0.8, 1.2))
+p16 = ad.random_params(stone, 300, seed=1, variation=ad.Variation(bend=0.15))
+p19 = ad.random_params(leaf, 200, seed=2, variation=ad.Variation(bend=0.2, scale=(0.5, 1.5), twist=1.0, taper=0.5))
+p22 = ad.random_params(card, 100, seed=3, variation=ad.Variation(tint=0.5))
+pa = ad.random_params(alpha, 5, seed=4, variation=ad.Variation(bend=0.1, scale=(0.8, 1.2)))
 wind = ad.Wind(direction=(1, 0, 0.3), strength=0.2, gustiness=0.5)
 pics = {
   "stone": ad.render_image(stone, p16, (320, 240)),
   "stone_wire": ad.render_image(stone, p16, (320, 240), modes="wireframe"),
   "leaf19": ad.render_image(leaf, p19, (320, 240)),
-  "leaf19_wind": ad.render_image(leaf, p19, (320, 240), wind=wind, time=2.5),
+  "leaf19_wind": ad.render_image(leaf, p19, (320, 240), options=ad.RenderOptions(wind=wind, time=2.5)),
   "card22": ad.render_image(card, p22, (320, 240)),
   "alpha": ad.render_image(alpha, pa, (320, 240)),
   "landscape": ad.render_image(ad.Scene.load(str(Path(__file__).resolve().parents[1] / "examples" / "landscape" / "landscape.toml"),
@@ -48,5 +48,5 @@ for name, mesh, p in (("s16", stone, p16), ("l19", leaf, p19), ("c22", card, p22
     ad.write_params(f"{out}/{name}.txt", p, mesh)
     ad.export_glb(f"{out}/{name}_i.glb", mesh, p[:20], "instanced")
     ad.export_glb(f"{out}/{name}_b.glb", mesh, p[:20])
-pos, nrm = ad.bake(leaf, p19, "cpu", wind=wind, time=1.0)
+pos, nrm = ad.bake(leaf, p19, "cpu", options=ad.RenderOptions(wind=wind, time=1.0))
 np.save(f"{out}/bake.npy", np.concatenate([pos, nrm]))

@@ -36,7 +36,7 @@ def main(argv=None) -> int:
         for name in args.meshes:
             mesh = ad.load_mesh(name)
             L = mesh.axis.length
-            base = ad.random_params(mesh, args.instances, 7, bend=0.1)
+            base = ad.random_params(mesh, args.instances, 7, variation=ad.Variation(bend=0.1))
             direction = np.array([1.0, 0.6, 0.8]) / np.linalg.norm([1.0, 0.6, 0.8])
             for k in (1, 10, 100, 1e3, 1e4, 1e5, 1e6):
                 p = base.astype(np.float64).copy()

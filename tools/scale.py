@@ -68,7 +68,7 @@ def main(argv=None) -> int:
     try:
         for quantized in (False, True):
             t0 = time.perf_counter()
-            with ad.AxialRenderer(ctx, mesh, params, quantized=quantized) as r, \
+            with ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(quantized=quantized)) as r, \
                     ad.Offscreen(ctx, (w, h), samples=0) as target:
                 created = time.perf_counter() - t0
                 times = []

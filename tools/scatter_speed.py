@@ -40,8 +40,8 @@ def main() -> None:
     times = []
     for i in range(args.repeat):
         t0 = time.perf_counter()
-        params = ad.scatter(surface, mesh, args.count, min_distance=args.min_distance, seed=i, anchor="origin",
-                            align_to_normal=0.5, scale=(0.8, 1.2))
+        placement = ad.core.Placement(min_distance=args.min_distance, anchor="origin", align_to_normal=0.5)
+        params = ad.scatter(surface, mesh, args.count, placement=placement, seed=i, variation=ad.Variation(scale=(0.8, 1.2)))
         times.append(time.perf_counter() - t0)
         print(f"run {i}: {times[-1]:.3f} s ({len(params)} instances)")
     p3 = params[:, 10:13].astype(np.float64)

@@ -12,7 +12,7 @@ from axialdeform.viewer import Viewer
 stone = ad.load_mesh("stone")
 params = ad.random_params(stone, 1_000_000, seed=0)
 for lod in (True, False):
-    v = Viewer.create(stone, params, headless=True, size=(960, 720), lod=lod)
+    v = Viewer.create(stone, params, headless=True, size=(960, 720), options=ad.RenderOptions(lod=lod))
     try:
         for name, zoom in (("framed", 1.0), ("zoomed in x0.02", 0.02)):
             v.reset_camera()

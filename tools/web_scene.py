@@ -34,17 +34,18 @@ def main() -> None:
     from PIL import Image
     from playwright.sync_api import sync_playwright
 
+    from axialdeform.core.options import RenderOptions
     from axialdeform.core.scene import load_scene
     from axialdeform.gl.image import parse_size, render_image
-    from axialdeform.web import build_scene_file, write_page
+    from axialdeform.web import PageOptions, build_scene_file, write_page
 
     w, h = parse_size(args.size)
     scene = load_scene(args.scene)
-    web = build_scene_file(scene, size=(w, h), fixed_size=False)
+    web = build_scene_file(scene, page=PageOptions(size=(w, h), fixed_size=False))
     work = Path(tempfile.mkdtemp(prefix="axd-web-scene-"))
     try:
         page_path = write_page(work / "scene.html", web)
-        render = render_image(scene, size=(w, h), time=args.time if scene.wind is not None else 0.0)
+        render = render_image(scene, size=(w, h), options=RenderOptions(time=args.time if scene.wind is not None else 0.0))
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=shutil.which("chromium"),
                                          args=["--use-angle=swiftshade", "--enable-unsafe-swiftshader", "--no-sandbox"])

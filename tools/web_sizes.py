@@ -31,7 +31,7 @@ from pathlib import Path
 import axialdeform as ad
 from axialdeform.core.io.gltf import encode_baked
 from axialdeform.gl.image import parse_size
-from axialdeform.web import build_scene, make_server, scene_bytes, single_file_html, write_page
+from axialdeform.web import PageOptions, build_scene, make_server, scene_bytes, single_file_html, write_page
 
 ROOT = Path(__file__).resolve().parents[1]
 JS = ROOT / "js"
@@ -122,8 +122,8 @@ def peer(args, size) -> None:
     if not (three.is_dir() and gltfpack.is_file()):
         raise SystemExit("web_sizes.py --peer: run `npm ci --prefix js` first (three and gltfpack)")
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, args.count, seed=2003, bend=0.12, placement="disc")
-    cam = build_scene(mesh, params, size=size).config["camera"]
+    params = ad.random_params(mesh, args.count, seed=2003, variation=ad.Variation(bend=0.12), placement="disc")
+    cam = build_scene(mesh, params, page=PageOptions(size=size)).config["camera"]
     work = Path(tempfile.mkdtemp(prefix="axd-peer-"))
     try:
         # the module bending every frame, the module baking once after its first frame, the peer
@@ -142,7 +142,7 @@ def peer(args, size) -> None:
             (sites[name] / "mesh.glb").write_bytes(encode_base_mesh(mesh))
             (sites[name] / "params.adp").write_bytes(encode_binary(params, axis=mesh, mesh_fingerprint=mesh.fingerprint,
                                                                   quantize=True))
-        write_page(work / "page", build_scene(mesh, params, size=size))  # `axialdeform web`'s page, for its first frame
+        write_page(work / "page", build_scene(mesh, params, page=PageOptions(size=size)))  # `axialdeform web`'s page, for its first frame
         baked = work / "baked.glb"
         baked.write_bytes(encode_baked(mesh, params))
         subprocess.run(["node", str(gltfpack), "-i", str(baked), "-o", str(sites["peer"] / "stones.glb"), "-cc"],
@@ -222,14 +222,14 @@ def main() -> None:
         peer(args, size)
         return
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, args.count, seed=2003, bend=0.12, placement="disc")
-    scene = build_scene(mesh, params, size=size)
+    params = ad.random_params(mesh, args.count, seed=2003, variation=ad.Variation(bend=0.12), placement="disc")
+    scene = build_scene(mesh, params, page=PageOptions(size=size))
     work = Path(tempfile.mkdtemp(prefix="axd-web-"))
     try:
         write_page(work / "site", scene)
         b = scene_bytes(work / "site")
         single = len(single_file_html(scene).encode("utf-8"))
-        scene32 = build_scene(mesh, params, size=size, quantize=False)
+        scene32 = build_scene(mesh, params, page=PageOptions(size=size, quantize=False))
         baked = len(encode_baked(mesh, params))
         page_total = b["page"] + b["mesh"] + b["params"]
         print(f"{args.count} stones, {mesh.vertex_count} vertices each")

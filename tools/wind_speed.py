@@ -63,8 +63,8 @@ def main() -> None:
     ctx = ad.create_context()
     mesh = ad.load_mesh("leaf")
     extra = {} if args.plain else dict(scale=(0.7, 1.3), twist=0.6, taper=0.5)
-    params = ad.random_params(mesh, args.count, seed=5, bend=0.05, placement="disc", spacing=0.6,
-                              tilt=(-0.15, 0.15), **extra)
+    params = ad.random_params(mesh, args.count, seed=5, variation=ad.Variation(bend=0.05, tilt=(-0.15, 0.15)), placement="disc",
+                              spacing=0.6, **extra)
     wind = ad.Wind(direction=(1.0, 0.0, 0.3), strength=0.22, gustiness=0.7, frequency=0.35, wavelength=6.0)
     cam = frame_instances(mesh, params, size[0] / size[1], elevation=25.0)
     view, proj = cam.view(), cam.projection(size[0] / size[1])

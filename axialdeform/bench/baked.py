@@ -10,6 +10,7 @@ import moderngl
 import numpy as np
 
 from ..core.errors import AxialDeformError
+from ..core.options import RenderOptions
 from ..gl.buffers import MeshBuffers
 from ..gl.context import draw_in_batches
 from ..gl.renderer import MODE_INDEX, MODES, AxialRenderer
@@ -41,8 +42,8 @@ class BakedMeshes:
         self.mode = mode
         self._items = []  # (MeshBuffers, vao, index count)
         self._released = False
-        self.renderer = AxialRenderer(ctx, like, np.zeros((0, 16), np.float32), bend=False,
-                                      cull_back_faces=cull_back_faces)
+        self.renderer = AxialRenderer(ctx, like, np.zeros((0, 16), np.float32),
+                                      RenderOptions(bend=False, cull_back_faces=cull_back_faces))
         self.cull_back_faces = self.renderer.cull_back_faces
 
     def __len__(self) -> int:

@@ -21,6 +21,7 @@ import numpy as np
 from ..core.io.image import save_png
 from ..core.io.mesh import load_mesh
 from ..core.io.params import read_params
+from ..core.options import RenderOptions
 from ..core.variation import random_params
 from ..gl.context import Offscreen, create_context
 from ..gl.renderer import AxialRenderer
@@ -106,7 +107,7 @@ def _setup_same(ctx, spec, view, proj, mode, moderngl, stamps):
     # the placement is computed, not read: the thesis's "all the same" reads one mesh only
     params = random_params(mesh, spec["count"], spec["seed"], **scene_kwargs(mesh, spec["scene"]))
     stamps["read"] = time.time()
-    r = AxialRenderer(ctx, mesh, params, bend=False)
+    r = AxialRenderer(ctx, mesh, params, options=RenderOptions(bend=False))
     return (lambda: r.render(view, proj, mode)), {"cull_back_faces": r.cull_back_faces}
 
 
@@ -115,7 +116,7 @@ def _setup_axial(ctx, spec, view, proj, mode, moderngl, stamps):
     params = read_params(spec["params"], mesh)
     stamps["read"] = time.time()
     # the quantized method keeps its 32 bytes an instance on the GPU too
-    r = AxialRenderer(ctx, mesh, params, quantized=spec["method"] == "axial-quantized")
+    r = AxialRenderer(ctx, mesh, params, options=RenderOptions(quantized=spec["method"] == "axial-quantized"))
     return (lambda: r.render(view, proj, mode)), {"gpu_quantized": r.quantized, "cull_back_faces": r.cull_back_faces}
 
 

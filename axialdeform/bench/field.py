@@ -35,8 +35,9 @@ import numpy as np
 from ..core.camera import Camera, frame_instances
 from ..core.io.mesh import load_mesh
 from ..core.look import BACKGROUND
+from ..core.options import RenderOptions
 from ..core.record import POSITION
-from ..core.variation import random_params
+from ..core.variation import Variation, random_params
 from ..gl.context import Offscreen, create_context
 from ..gl.cull import CullQuery
 from ..gl.renderer import AxialRenderer
@@ -54,7 +55,7 @@ _PASS_METHODS = (("", "cull"), ("query_", "cull (query)"))
 def field_params(mesh, count: int, seed: int = 14):
     """``count`` stones on a square grid on the ground (y up), 1.1 L apart."""
 
-    return random_params(mesh, count, seed=seed, bend=0.12, placement="grid", tilt=(-0.15, 0.15))
+    return random_params(mesh, count, seed=seed, variation=Variation(bend=0.12, tilt=(-0.15, 0.15)), placement="grid")
 
 
 #: walker views: (eye x, eye z as fractions of the field's half width, heading in degrees from +x)
@@ -136,7 +137,7 @@ def run_field(count: int = 1_000_000, size=(800, 600), frames: int = 3, *, ctx=N
            "mesh": str(mesh.name), "renderer": ctx.info.get("GL_RENDERER", "?"), "gl_version": ctx.version_code}
     try:
         params = field_params(mesh, count, seed)
-        renderers = {name: AxialRenderer(ctx, mesh, params, lod_error=lod_error, **kw) for name, kw in METHODS.items()}
+        renderers = {name: AxialRenderer(ctx, mesh, params, RenderOptions(lod_error=lod_error, **kw)) for name, kw in METHODS.items()}
         try:
             with Offscreen(ctx, (w, h), samples=samples) as target:
                 out["views"] = {}

@@ -18,7 +18,7 @@ from ..core.errors import AxialDeformError
 from ..core.io.bake import write_mesh_folder
 from ..core.io.mesh import BUNDLED_MESHES, bundled_mesh_path
 from ..core.io.params import write_params
-from ..core.variation import random_params
+from ..core.variation import Variation, random_params
 
 METHODS = ("same", "loaded", "axial", "axial-quantized")
 COUNTS = (100, 1000, 10000, 100000)
@@ -33,7 +33,7 @@ SEPARATE_FRAMES = 3
 
 def scene_kwargs(mesh, scene: dict) -> dict:
     """``random_params`` keyword arguments of a scene setting."""
-    kw = {"bend": scene["bend"], "placement": scene["placement"]}
+    kw = {"variation": Variation(bend=scene["bend"]), "placement": scene["placement"]}
     if "spacing_factor" in scene:
         kw["spacing"] = scene["spacing_factor"] * mesh.axis.length
     return kw

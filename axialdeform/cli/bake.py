@@ -9,6 +9,7 @@ from ..core.errors import ArgumentError
 from ..core.io.bake import check_bake_folder, write_mesh_folder, write_npz_pieces
 from ..core.io.mesh import mesh_source_path
 from ..core.io.safeio import check_disk_space
+from ..core.options import RenderOptions
 from ..core.wind import apply_wind
 from ..gl.bake import ENGINES, bake, bake_pieces
 from . import scenes
@@ -62,7 +63,7 @@ def run(args) -> None:
     check_bake_folder(out, args.overwrite, inputs)  # refuse stale files, or an input to replace, before the work
     with progress_bar(len(params), f"deforming ({args.engine})") as bar:
         positions, normals = bake(mesh, params, args.engine, progress=bar, source=args.params,
-                                  wind=wind, time=args.time or 0.0)
+                                  options=RenderOptions(wind=wind, time=args.time or 0.0))
     with progress_bar(len(positions), "writing meshes") as bar:
         bent = params
         if wind is not None:  # the tangents of a glb bend with the same wind-moved control points
@@ -95,7 +96,7 @@ def _bake_npz_in_pieces(args, out: Path, mesh, params, wind) -> None:
     check_disk_space(out, 3 * array + (1 << 16), f"bake of {n} instances x {v} vertices (the .npz and, while "
                      "it is written, a spooled copy of the normals)", ArgumentError)
     with progress_bar(n, f"deforming ({args.engine})") as bar:
-        pieces = bake_pieces(mesh, params, args.engine, progress=bar, wind=wind, time=args.time or 0.0,
+        pieces = bake_pieces(mesh, params, args.engine, progress=bar, options=RenderOptions(wind=wind, time=args.time or 0.0),
                              source=args.params)
         try:
             write_npz_pieces(out, pieces, n, v)

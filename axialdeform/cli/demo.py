@@ -8,7 +8,7 @@ from ..core.io.image import save_png
 from ..core.io.mesh import load_mesh, mesh_source_path
 from ..core.io.safeio import check_count, check_output_path
 from ..core.look import Look
-from ..core.variation import random_params
+from ..core.variation import Variation, random_params
 from ._common import add_max_triangles, add_overwrite, check_triangles
 
 DEMO_COUNT = 2500
@@ -42,8 +42,8 @@ def run(args) -> None:
     mesh = load_mesh("stone")
     check_triangles([(f"stone x -n {args.count}", args.count, len(mesh.faces))], ("solid", "wireframe"),
                     args.max_triangles, args.fast)  # both panels, before the parameters are made
-    params = random_params(mesh, args.count, seed=args.seed, bend=0.14, placement="disc",
-                           spacing=0.9 * mesh.axis.length, tilt=(-0.2, 0.2))
+    params = random_params(mesh, args.count, seed=args.seed, variation=Variation(bend=0.14, tilt=(-0.2, 0.2)), placement="disc",
+                           spacing=0.9 * mesh.axis.length)
     size = parse_size(args.size)
     camera = frame_instances(mesh, params, size[0] / size[1], elevation=30.0, azimuth=20.0)
     image = render_image(mesh, params, size, ("solid", "wireframe"), camera=camera, look=Look(fast=args.fast))

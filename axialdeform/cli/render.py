@@ -9,6 +9,7 @@ import numpy as np
 from ..core.bounds import instance_bounds
 from ..core.io.image import save_png
 from ..core.look import Look
+from ..core.options import RenderOptions
 from ..gl.context import Offscreen, create_context
 from ..gl.renderer import MODES, AxialRenderer
 from . import scenes
@@ -87,15 +88,16 @@ def run(args) -> None:
         return scenes.render(scene, args, wind_arg(args) if args.wind is not None else None, options)
     wind = wind_arg(args)
     wind_options = {"wind": wind, "time": args.time} if wind is not None else {}
+    drawn = RenderOptions(up=args.up, parts=args.part, **wind_options)
     mesh, params = load(args, "PNG")
     check_triangles([(f"{args.mesh} x {args.params}", len(params), drawn_triangles(mesh, args.part))],
                     args.mode, args.max_triangles, args.fast, 2 if args.stats else 1)  # before the camera, context
     camera = camera_from_args(mesh, params, size, args)
     ctx = create_context()
     try:
-        with AxialRenderer(ctx, mesh, params, parts=args.part, **options) as r:
-            image = render_image(mesh, params, size, args.mode, ctx=ctx, camera=camera, up=args.up, renderer=r,
-                                 look=Look(fast=args.fast), parts=args.part, **wind_options)
+        with AxialRenderer(ctx, mesh, params, RenderOptions(parts=args.part, **options)) as r:
+            image = render_image(mesh, params, size, args.mode, ctx=ctx, camera=camera, options=drawn.replace(renderer=r),
+                                 look=Look(fast=args.fast))
             if args.stats:
                 print(format_stats(r.stats, _time_frame(ctx, r, camera, size, args.mode)))
     finally:

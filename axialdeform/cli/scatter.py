@@ -16,8 +16,9 @@ from ..core.errors import ParamFileError, TooFewError
 from ..core.io.mesh import mesh_source_path
 from ..core.io.params import BINARY_SUFFIXES, write_params
 from ..core.io.safeio import check_output_path
-from ..core.scatter import ANCHORS, scatter
+from ..core.scatter import ANCHORS, Placement, scatter
 from ..core.surface import IMAGE_SUFFIXES, load_surface
+from ..core.variation import Variation
 from ._common import add_axis, add_overwrite, add_variation_args, load_base, variation_args
 
 __all__ = ["add_parser", "run"]
@@ -79,10 +80,10 @@ def run(args) -> int | None:
     if args.resample and Path(surface).suffix.lower() in IMAGE_SUFFIXES:
         surface = load_surface(surface, up=args.up, height_scale=args.height_scale, extent=args.extent, resample=True)
     try:
-        params = scatter(surface, mesh, args.count, seed=args.seed, allow_fewer=args.allow_fewer,
-                         min_distance=args.min_distance, density=args.density, align_to_normal=args.align_to_normal,
-                         anchor=args.anchor, up=args.up, height_scale=args.height_scale, extent=args.extent,
-                         **variation)
+        placement = Placement(min_distance=args.min_distance, density=args.density, align_to_normal=args.align_to_normal,
+                              anchor=args.anchor, up=args.up, height_scale=args.height_scale, extent=args.extent)
+        params = scatter(surface, mesh, args.count, Variation(**variation), placement, seed=args.seed,
+                         allow_fewer=args.allow_fewer)
         short = None
     except TooFewError as exc:
         params, short = exc.params, exc

@@ -12,6 +12,7 @@ from ..core.io.bake import write_npz_layers
 from ..core.io.gltf import export_scene
 from ..core.io.image import save_png
 from ..core.io.safeio import check_disk_space, check_output_path
+from ..core.options import RenderOptions
 from ..core.scene import is_scene_file, load_scene
 from ..gl.bake import bake_pieces
 from ._common import check_baked_triangles, view_args
@@ -80,7 +81,7 @@ def render(scene, args, wind=None, options=None) -> None:
         scene.wind = wind
     _camera_args(scene, args, parse_size(args.size))
     image = render_image(scene, size=parse_size(args.size), modes=args.mode, look=scene.look.replace(fast=fast),
-                         time=scene_time(scene, args), options=options)
+                         options=RenderOptions(time=scene_time(scene, args), **(options or {})))
     save_png(args.output, image)
     print(f"wrote {args.output} ({len(scene.layers)} layers, {scene.count} instances, {args.mode}, "
           f"{image.shape[1]}x{image.shape[0]})")
@@ -121,8 +122,8 @@ def bake(scene, args, progress, wind=None) -> None:
                      "copy of a layer's normals)", ArgumentError)
     with progress(scene.count, f"{len(scene.layers)} layers ({args.engine})") as bar:
         pieces = [bake_pieces(layer.mesh, layer.params, args.engine, progress=bar,
-                              wind=scene.wind if layer.wind else None, time=t, source=f"{scene.path}: {layer.name}",
-                              position_ids=layer.generate is not None)
+                              options=RenderOptions(wind=scene.wind if layer.wind else None, time=t,
+                                                    position_ids=layer.generate is not None), source=f"{scene.path}: {layer.name}")
                   for layer in scene.layers]
         try:
             write_npz_layers(out, [(f"_{layer.name}", p, len(layer.params), layer.mesh.vertex_count)

@@ -8,6 +8,7 @@ from ..core.errors import AxialDeformError
 from ..core.io.params import read_params
 from ..core.io.safeio import check_count, check_output_path
 from ..core.look import Look
+from ..core.options import RenderOptions
 from ..core.params import check_drawable
 from ..core.variation import Variation, random_params
 from ..gl.renderer import MODES
@@ -71,7 +72,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> None:
     from ..gl.image import parse_size
-    from ..viewer import Viewer
+    from ..viewer import Viewer, ViewerSettings
 
     wind = wind_arg(args)
     options = cull_options(args)
@@ -105,7 +106,7 @@ def run(args) -> None:
         check_triangles([(f"{args.mesh} x -n {args.count}", args.count, drawn_triangles(mesh, args.part))],
                         args.mode, args.max_triangles, args.fast, frames)  # before the parameters are made
         seed = 0 if args.seed is None else args.seed
-        params = random_params(mesh, args.count, seed=seed, bend=args.bend, up=args.up)
+        params = random_params(mesh, args.count, seed=seed, variation=Variation(bend=args.bend), up=args.up)
     if args.screenshot:  # never an input, nor a file that exists without --overwrite
         sources = scene.sources if scene is not None else (*mesh.sources, args.params)
         check_output_path(args.screenshot, sources, "screenshot", overwrite=args.overwrite)
@@ -117,11 +118,12 @@ def run(args) -> None:
             walk = []
         if len(walk) != 2 or not all(math.isfinite(x) for x in walk):
             raise AxialDeformError(f"--walk: expected DX,DZ (two finite numbers), found {args.walk!r}")
-    viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), seed=seed, walk=walk,
-                           bend=args.bend, mode=args.mode, up=args.up,
-                           look=(scene.look if scene is not None else Look()).replace(ground=not args.no_ground, fast=args.fast),
-                           on_screenshot=lambda path: print(f"wrote {path}"), wind=wind, extra=extra,
-                           parts=args.part, **options)
+    options = RenderOptions(up=args.up, wind=wind, parts=args.part, **options)
+    settings = ViewerSettings(seed=seed, walk=walk, bend=args.bend, mode=args.mode, extra=extra,
+                              on_screenshot=lambda path: print(f"wrote {path}"))
+    look = (scene.look if scene is not None else Look()).replace(ground=not args.no_ground, fast=args.fast)
+    viewer = Viewer.create(mesh, params, headless=args.headless, size=parse_size(args.size), look=look, options=options,
+                           settings=settings)
     if not args.headless:
         import moderngl_window as mglw
 

@@ -8,9 +8,10 @@ from urllib.parse import quote
 
 from ..core.errors import AxialDeformError
 from ..core.io.params import read_params
+from ..core.options import RenderOptions
 from ..core.params import check_drawable
 from ..core.scene import is_scene_file
-from ..web import build_scene, build_scene_file, make_server, page_files, write_page
+from ..web import PageOptions, build_scene, build_scene_file, make_server, page_files, write_page
 from ._common import add_axis, add_overwrite, add_wind_args, load_base, wind_arg
 from .scenes import scene_of, scene_time
 
@@ -69,8 +70,8 @@ def run(args) -> None:
             scene_time(scene, args)  # refuses a time without a wind
         if args.up != "y":
             raise AxialDeformError(f"--up: a scene file ({args.mesh}) names its own up axis; expected no --up")
-        web = build_scene_file(scene, size=size, mode=args.mode, quantize=not args.float32,
-                               fixed_size=args.size is not None, time=time, allow_outside=args.allow_outside)
+        page = PageOptions(size=size, mode=args.mode, quantize=not args.float32, fixed_size=args.size is not None)
+        web = build_scene_file(scene, page, options=RenderOptions(time=time), allow_outside=args.allow_outside)
         page = write_page(out, web, inputs=scene.sources, overwrite=args.overwrite)
         layers = [layer for layer in web.config["layers"] if not layer["terrain"]]
         made = [layer for layer in layers if layer.get("generate")]
@@ -91,8 +92,8 @@ def run(args) -> None:
         mesh = load_base(args, args.mesh)
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
         check_drawable(params, str(args.params))  # a picture: every number must survive the projection
-        scene = build_scene(mesh, params, size=size, up=args.up, mode=args.mode, quantize=not args.float32,
-                            fixed_size=args.size is not None, wind=wind_arg(args), time=time)
+        page = PageOptions(size=size, mode=args.mode, quantize=not args.float32, fixed_size=args.size is not None)
+        scene = build_scene(mesh, params, page, options=RenderOptions(up=args.up, wind=wind_arg(args), time=time))
         page = write_page(out, scene, inputs=(*mesh.sources, args.params), overwrite=args.overwrite)
         print(f"wrote {page} ({len(params)} instances, {'float32' if args.float32 else 'quantized'} parameters)")
     elif not args.serve:

@@ -2,20 +2,21 @@
 defaults are written here and nowhere else.
 
 :class:`~axialdeform.gl.renderer.AxialRenderer`, :func:`axialdeform.render_image` and the viewer
-take one (``options=``), or its fields as keywords (``culling=False``), so that their own
-signatures stay short.  How the picture looks is the other value, :class:`~axialdeform.Look`.
-Pure data: no GL here.
+take one (``options=``), so that their own signatures stay short; its fields as keywords
+(``culling=False``) still work for one release, with a DeprecationWarning.  How the picture
+looks is the other value, :class:`~axialdeform.Look`.  Pure data: no GL here.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, fields, replace
 
 from .axis import AXIS_NAMES
 from .errors import ArgumentError
 
-__all__ = ["RenderOptions", "RENDERER_FIELDS"]
+__all__ = ["RenderOptions", "RENDERER_FIELDS", "warn_field_keywords"]
 
 
 @dataclass(frozen=True)
@@ -44,12 +45,13 @@ class RenderOptions:
         sphere reaches the view, and the draw reads those.  On by default: it
         cannot change the picture (an instance is dropped only when every one
         of its vertices lies outside one frustum plane).
-    lod : bool
+    lod : bool or None
         Draw each instance with one of up to four levels of detail of the
         base mesh (:func:`axialdeform.core.lod.build_lod_levels`), the
         coarsest whose geometric error projects to at most ``lod_error``
         pixels; one instanced draw per level and part (plain switches, no
-        dithering).  Changes pixels, so off by default.  Every part is
+        dithering).  Changes pixels, so ``None`` (the default) is off, except in the
+        viewer, where it is on from :data:`~axialdeform.viewer.LOD_AUTO_COUNT` instances.  Every part is
         simplified on its own and keeps its material; UVs, vertex colours,
         normals and tangents are carried to the simplified vertices.
     lod_error : float
@@ -97,7 +99,7 @@ class RenderOptions:
     time: float | None = None
     renderer: object = None
     culling: bool = True
-    lod: bool = False
+    lod: bool | None = None
     lod_error: float = 1.0
     indirect: bool | None = None
     quantized: bool = False
@@ -122,11 +124,12 @@ class RenderOptions:
 
     @classmethod
     def of(cls, options=None, changes: dict | None = None, where: str = "options",
-           allowed: tuple[str, ...] | None = None) -> RenderOptions:
+           allowed: tuple[str, ...] | None = None, *, stacklevel: int = 2) -> RenderOptions:
         """``options`` (a RenderOptions, a dict of its fields, or None) with ``changes`` applied: the
         one way a function that takes ``options=`` and its fields as keywords reads them.  A keyword
         that is no field, or a field that ``where`` does not use (not in ``allowed``) set to other
-        than its default, is an :class:`ArgumentError` naming it."""
+        than its default, is an :class:`ArgumentError` naming it.  Fields given as keywords still work
+        for one release, with a DeprecationWarning (``stacklevel``: the caller's frame)."""
         if options is None:
             base = cls()
         elif isinstance(options, dict):
@@ -141,6 +144,7 @@ class RenderOptions:
         if unknown:
             raise TypeError(f"{where}() got an unexpected keyword argument {unknown[0]!r}")
         out = replace(base, **changes) if changes else base
+        warn_field_keywords(where, changes, "options", "RenderOptions", stacklevel=stacklevel + 1)
         if allowed is not None:
             default = cls()
             for name in names:
@@ -155,3 +159,24 @@ class RenderOptions:
 #: ``renderer`` belong to a picture)
 RENDERER_FIELDS = ("parts", "wind", "culling", "lod", "lod_error", "indirect", "quantized", "cull_back_faces",
                    "bend", "extended", "position_ids")
+
+
+def warn_field_keywords(where: str, changes: dict | None, parameter: str, value: str, *, stacklevel: int = 2) -> None:
+    """The DeprecationWarning of fields of a value object given to ``where`` as keywords (``bend=0.1``) instead of
+    the object (``variation=axialdeform.Variation(bend=0.1)``); nothing when ``changes`` is empty.
+
+    Parameters
+    ----------
+    where : str
+        The public callable, as its users write it (``"random_params"``).
+    changes : dict or None
+        The keywords given.
+    parameter, value : str
+        The parameter that takes the value object, and its class's name.
+    stacklevel : int
+        Frames between this function and the user's call (2: called by the public callable itself).
+    """
+    if changes:
+        names = ", ".join(f"{k}=..." for k in changes)
+        warnings.warn(f"{where}({names}): fields as keywords are deprecated and go in a later release; pass "
+                      f"{parameter}=axialdeform.{value}({names}) instead", DeprecationWarning, stacklevel=stacklevel + 1)

@@ -51,6 +51,7 @@ from .deform import bernstein
 from .errors import ScatterError, TooFewError
 from .io.mesh import load_mesh
 from .mesh import BaseMesh, anchor_point
+from .options import warn_field_keywords
 from .record import (
     ANGLES,
     EXTENDED_WIDTH,
@@ -187,7 +188,8 @@ def scatter(surface, mesh, n: int, variation: Variation | None = None, placement
     allow_fewer : bool
         When fewer than ``n`` fit, return them instead of raising.
     **fields
-        Fields of :class:`Variation` or of :class:`Placement` (``bend=0.1, min_distance=0.5``).
+        Deprecated (still working for one release, with a DeprecationWarning): fields of
+        :class:`Variation` or of :class:`Placement` (``bend=0.1, min_distance=0.5``).
 
     Returns
     -------
@@ -201,7 +203,8 @@ def scatter(surface, mesh, n: int, variation: Variation | None = None, placement
     for key in set(fields) & set(_SURFACE_DECIDES):
         raise ScatterError(f"{key}: scatter stands instances on the surface (tilted by align_to_normal); "
                            f"expected no {key}")
-    variation = Variation.of(variation, fields, ScatterError)
+    variation = Variation.of(variation, fields, ScatterError, where="scatter")
+    warn_field_keywords("scatter", place_fields, "placement", "core.Placement")
     placement = replace(placement or Placement(), **place_fields)
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
         raise ScatterError(f"count: expected a whole number >= 0, found {n!r}")

@@ -77,8 +77,9 @@ from .io.scene import LayerRecipe, SceneRecipe, parse_scene
 from .look import DEFAULT_LOOK, Look
 from .mesh import BaseMesh, area_weighted_normals
 from .params import as_params, check_drawable
-from .scatter import scatter
+from .scatter import Placement, scatter
 from .surface import load_density, load_surface
+from .variation import Variation
 
 __all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
 
@@ -353,7 +354,9 @@ def _scatter(recipe: LayerRecipe, mesh, scene: Scene, surface, scale_counts: flo
         with src.wrap("surface", "layer", nth):
             surface = load_surface(sc.surface, up=scene.up)
     with src.wrap("scatter", "layer", nth):
-        params = scatter(surface, mesh, count, up=scene.up, **options)
+        place = {k: options.pop(k) for k in list(options) if k in Placement.__dataclass_fields__}
+        variation = Variation(**{k: options.pop(k) for k in list(options) if k in Variation.__dataclass_fields__})
+        params = scatter(surface, mesh, count, variation, Placement(up=scene.up, **place), **options)  # seed, allow_fewer
     lo, hi = sc.lift
     if not (lo or hi):
         return params, None

@@ -20,6 +20,7 @@ import numpy as np
 from .axes import child_offsets, droop_offsets, level_bends, sag_offsets
 from .axis import AXIS_NAMES
 from .errors import ParamError
+from .options import warn_field_keywords
 from .params import as_params
 from .record import (
     ANGLES,
@@ -190,10 +191,12 @@ class Variation:
         return replace(self, **fields)
 
     @classmethod
-    def of(cls, variation: Variation | None = None, fields: dict | None = None, error: type = ParamError) -> Variation:
+    def of(cls, variation: Variation | None = None, fields: dict | None = None, error: type = ParamError, *,
+           where: str = "", stacklevel: int = 2) -> Variation:
         """``variation`` (default: the default variation) with ``fields`` changed: the one way a function
         that takes ``variation=`` and its fields as keywords reads them.  A keyword that is no field is
-        ``error``, naming it."""
+        ``error``, naming it.  ``where``: the public callable whose keywords ``fields`` are -- they still
+        work for one release, with a DeprecationWarning (``stacklevel``: the caller's frame)."""
         base = cls() if variation is None else variation
         if not isinstance(base, cls):
             raise error(f"variation: expected an axialdeform.Variation, found {type(base).__name__}")
@@ -204,6 +207,8 @@ class Variation:
                         f"({', '.join(f.name for f in dataclass_fields(cls))})")
         if not fields:
             return base
+        if where:
+            warn_field_keywords(where, fields, "variation", "Variation", stacklevel=stacklevel + 1)
         try:
             return replace(base, **fields)
         except ParamError as exc:
@@ -226,7 +231,7 @@ class _Spec:
 
 
 def _spec(mesh, count: int, seed: int, variation: Variation | None, fields: dict, placement: str = "grid",
-          spacing: float | None = None, up: str = "y") -> _Spec:
+          spacing: float | None = None, up: str = "y", where: str = "random_params") -> _Spec:
     """The checked options of :func:`random_params`."""
     if not isinstance(count, (int, np.integer)) or count < 0:
         raise ParamError(f"count: expected a non-negative integer, found {count!r}")
@@ -234,7 +239,7 @@ def _spec(mesh, count: int, seed: int, variation: Variation | None, fields: dict
         raise ParamError(f"placement: expected one of {', '.join(PLACEMENTS)}, found {placement!r}")
     if up not in AXIS_NAMES:
         raise ParamError(f"up: expected one of x, y, z, found {up!r}")
-    variation = Variation.of(variation, fields)
+    variation = Variation.of(variation, fields, where=where, stacklevel=3)
     length = mesh.axis.length
     spacing = 1.1 * length if spacing is None else float(spacing)
     if not (math.isfinite(spacing) and spacing > 0):
@@ -268,7 +273,9 @@ def random_params(mesh, count: int, seed: int = 0, variation: Variation | None =
     up : {"x", "y", "z"}
         The world up axis; the ground plane is across it.
     **fields
-        Fields of :class:`Variation` that replace ``variation``'s (``bend=0.1, twist=0.5``).
+        Deprecated (still working for one release, with a DeprecationWarning): fields of
+        :class:`Variation` that replace ``variation``'s (``bend=0.1, twist=0.5``); write
+        ``variation=Variation(bend=0.1, twist=0.5)``.
 
     Returns
     -------
@@ -296,7 +303,7 @@ def iter_random_params(mesh, count: int, seed: int = 0, variation: Variation | N
     arrays: concatenated they are exactly ``random_params(mesh, count, seed,
     ...)``, bit for bit, but memory holds one piece at a time (each piece
     starts the random stream where it is, PCG64's ``advance``)."""
-    spec = _spec(mesh, count, seed, variation, fields, placement, spacing, up)  # said before the first piece
+    spec = _spec(mesh, count, seed, variation, fields, placement, spacing, up, "iter_random_params")  # said before the first piece
     if not isinstance(chunk, (int, np.integer)) or chunk < 1:
         raise ParamError(f"chunk: expected a number of instances >= 1, found {chunk!r}")
     chunk = int(chunk)

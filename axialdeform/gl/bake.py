@@ -44,7 +44,8 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
         Its ``wind`` (an :class:`axialdeform.Wind`) taken at its ``time`` seconds, and its
         ``position_ids`` (the wind's phases hash where the instances stand: a generated layer's).
     **fields
-        ``wind=``, ``time=`` and ``position_ids=`` as keywords.
+        Deprecated (still working for one release, with a DeprecationWarning): ``wind=``, ``time=``
+        and ``position_ids=`` as keywords.
 
     Returns
     -------
@@ -63,7 +64,7 @@ def bake(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, source: 
     own = ctx is None
     ctx = create_context() if own else ctx
     try:
-        with AxialRenderer(ctx, mesh, params, wind=wind, position_ids=position_ids) as r:
+        with AxialRenderer(ctx, mesh, params, options=RenderOptions(wind=wind, position_ids=position_ids)) as r:
             positions, normals = r.capture(progress=progress, time=time, check_finite=False)
     finally:
         if own:
@@ -95,7 +96,7 @@ def bake_pieces(mesh, params, engine: str = "cpu", *, ctx=None, progress=None, s
     own = ctx is None
     ctx = create_context() if own else ctx
     try:
-        with AxialRenderer(ctx, mesh, params, wind=wind, position_ids=position_ids) as r:
+        with AxialRenderer(ctx, mesh, params, options=RenderOptions(wind=wind, position_ids=position_ids)) as r:
             for a in range(0, r.count, step):
                 m = min(step, r.count - a)
                 positions, normals = r.capture(a, m, progress=progress, time=time, check_finite=False)

@@ -103,8 +103,8 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
         layer's ``culling``, ``lod``, ``lod_error`` and ``position_ids`` (a scene's generated
         layers have them whatever it says).
     **fields
-        Fields of :class:`RenderOptions` that replace ``options``'
-        (``up="z", time=1.5``).  The old keywords ``fast``, ``ground``,
+        Deprecated (still working for one release, with a DeprecationWarning):
+        fields of :class:`RenderOptions` that replace ``options``' (``up="z", time=1.5``).  The old keywords ``fast``, ``ground``,
         ``shadow``, ``samples``, ``background``, ``hidden_line``,
         ``light_dir``, ``ambient`` and ``line_color`` still work for one
         release, with a DeprecationWarning: they are fields of ``look``.

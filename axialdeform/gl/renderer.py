@@ -63,12 +63,13 @@ class AxialRenderer(ShaderVariants, Drawing, Capture):
         twist, taper after the 16), or (n, 22): tinted instances (their
         tint colours them, as :meth:`set_tint` does).
     options : RenderOptions, optional
-        How to draw (:class:`~axialdeform.core.options.RenderOptions`); its fields below may also be
-        given as keywords (``AxialRenderer(ctx, mesh, params, culling=False)``).
+        How to draw (:class:`~axialdeform.core.options.RenderOptions`:
+        ``AxialRenderer(ctx, mesh, params, RenderOptions(culling=False))``).
     capacity : int, optional
         Instances to reserve room for (``set_params`` up to it never reallocates).
     **fields
-        Fields of :class:`RenderOptions` that replace ``options``': ``bend``,
+        Deprecated (they still work for one release, with a DeprecationWarning): fields of
+        :class:`RenderOptions` that replace ``options``': ``bend``,
         ``quantized``, ``cull_back_faces``, ``parts``, ``extended``, ``wind``, ``culling``,
         ``lod``, ``lod_error``, ``indirect``, ``position_ids`` (what each does: its docstring).
 

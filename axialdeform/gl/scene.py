@@ -10,6 +10,7 @@ from ..core.bounds import instance_bounds, outline_points, wind_reach
 from ..core.camera import UP_VECTORS, Camera, camera_for_points
 from ..core.errors import SceneError
 from ..core.generate import extent_box
+from ..core.options import RenderOptions
 from ..core.record import WIDTH
 from .renderer import AxialRenderer
 
@@ -88,14 +89,14 @@ class SceneRenderer:
             if scene.terrain is not None:
                 # no back-face culling: a height map is never a closed volume, and finding out
                 # (BaseMesh.is_volume sorts every directed edge) costs ~100 bytes a face
-                self.renderers.append((AxialRenderer(ctx, scene.terrain, TERRAIN_INSTANCE, cull_back_faces=False),
+                self.renderers.append((AxialRenderer(ctx, scene.terrain, TERRAIN_INSTANCE, options=RenderOptions(cull_back_faces=False)),
                                        scene.terrain_color, False))
             for layer in scene.layers:
                 generated = getattr(layer, "generate", None) is not None
                 params = layer.empty() if generated and generated_empty else layer.params
                 r = renderer if renderer is not None and len(scene.layers) == 1 else AxialRenderer(
-                    ctx, layer.mesh, params, culling=culling, lod=lod, lod_error=lod_error, parts=layer.parts,
-                    position_ids=position_ids or getattr(layer, "generate", None) is not None)
+                    ctx, layer.mesh, params, RenderOptions(culling=culling, lod=lod, lod_error=lod_error, parts=layer.parts,
+                                                           position_ids=position_ids or getattr(layer, "generate", None) is not None))
                 self.renderers.append((r, layer.color, layer.wind))
         except BaseException:
             self.release()

@@ -36,7 +36,7 @@ from ..core.io.mesh import mesh_source_path
 from ..core.io.params import encode_binary
 from ..core.look import DEFAULT_LOOK
 from ..core.material import default_color
-from ..core.options import RenderOptions
+from ..core.options import RenderOptions, warn_field_keywords
 from ..core.params import as_params
 from ..core.record import WIDTHS, level_of, tree_shape
 from ..core.scene import Scene
@@ -308,7 +308,8 @@ def _page_options(page, options, fields: dict, where: str):
     """``page`` and ``options`` with ``fields`` (of either) applied."""
     page = page or PageOptions()
     own = {k: fields.pop(k) for k in list(fields) if k in PageOptions.__dataclass_fields__}
-    return replace(page, **own), RenderOptions.of(options, fields, where, ("up", "wind", "time"))
+    warn_field_keywords(where, own, "page", "web.PageOptions", stacklevel=3)
+    return replace(page, **own), RenderOptions.of(options, fields, where, ("up", "wind", "time"), stacklevel=3)
 
 
 def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, options: RenderOptions | None = None,
@@ -331,7 +332,8 @@ def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, opt
         A parameter file written as given instead of encoding ``params`` (tests use it to ship a
         corrupt file).
     **fields
-        Fields of :class:`PageOptions` or :class:`RenderOptions` (``size=(640, 480), up="z"``).
+        Deprecated (still working for one release, with a DeprecationWarning): fields of
+        :class:`PageOptions` or :class:`RenderOptions` (``size=(640, 480), up="z"``).
 
     Returns
     -------

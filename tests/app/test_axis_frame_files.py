@@ -83,7 +83,7 @@ def test_a_bad_axis_is_one_line_and_exit_2(tmp_path, capsys, value, words):
 def test_scene_files_name_each_layers_axis(tmp_path, capsys, diag_obj):
     turn = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
     rod = ad.load_mesh(diag_obj, axis="oriented")
-    ad.write_params(tmp_path / "rods.adp", ad.random_params(rod, 9, seed=3, bend=0.2, spacing=4.0), rod)
+    ad.write_params(tmp_path / "rods.adp", ad.random_params(rod, 9, seed=3, variation=ad.Variation(bend=0.2), spacing=4.0), rod)
     stone = ad.load_mesh("stone", axis=turn)
     ad.write_params(tmp_path / "stones.adp", ad.random_params(stone, 9, seed=4, spacing=3.0), stone)
     body = f"""

@@ -53,7 +53,7 @@ def test_random_info_convert_render_bake(tmp_path, capsys):
 @pytest.mark.parametrize("fmt", ["obj", "ply", "glb"])
 def test_bake_to_a_folder_of_meshes(tmp_path, fmt):
     stone = ad.load_mesh("stone")
-    values = ad.random_params(stone, 5, seed=1, bend=0.2)
+    values = ad.random_params(stone, 5, seed=1, variation=ad.Variation(bend=0.2))
     ad.write_params(tmp_path / "p.txt", values)
     assert main(["bake", "stone", str(tmp_path / "p.txt"), "-o", str(tmp_path / "out"), "--format", fmt]) == 0
     files = sorted((tmp_path / "out").iterdir())

@@ -198,11 +198,11 @@ def test_forest_picture_and_wind(run_example):
 # ---------------------------------------------------------------- the viewer
 @pytest.fixture(scope="module")
 def viewer():
-    from axialdeform.viewer import Viewer
+    from axialdeform.viewer import Viewer, ViewerSettings
 
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, 60, seed=2, bend=0.1)
-    v = Viewer.create(mesh, params, headless=True, size=(160, 120), seed=2, bend=0.1)
+    params = ad.random_params(mesh, 60, seed=2, variation=ad.Variation(bend=0.1))
+    v = Viewer.create(mesh, params, headless=True, size=(160, 120), settings=ViewerSettings(seed=2, bend=0.1))
     yield v
     v.release()
     v.wnd.destroy()
@@ -298,13 +298,13 @@ def test_view_command_errors_are_one_line(tmp_path):
 def test_viewer_animates_the_leaves_in_place():
     import importlib.util
 
-    from axialdeform.viewer import Viewer
+    from axialdeform.viewer import Viewer, ViewerSettings
 
     spec = importlib.util.spec_from_file_location("falling_leaves", EXAMPLES_DIR / "02_falling_leaves.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     leaves = module.FallingLeaves(80)
-    v = Viewer.create(ad.load_mesh("leaf"), leaves.at(0.0), animate=leaves.at, tint=leaves.colours(),
+    v = Viewer.create(ad.load_mesh("leaf"), leaves.at(0.0), settings=ViewerSettings(animate=leaves.at, tint=leaves.colours()),
                       headless=True, size=(120, 90))
     try:
         v.step(2)
@@ -313,7 +313,7 @@ def test_viewer_animates_the_leaves_in_place():
         assert np.abs(a.astype(int) - v.screenshot()).mean() > 0.1
         assert v.renderer.instances.reallocations == 0
         with pytest.raises(ad.core.ParamError):
-            Viewer.create(ad.load_mesh("leaf"), leaves.at(0.0)[:5], animate=leaves.at, headless=True)
+            Viewer.create(ad.load_mesh("leaf"), leaves.at(0.0)[:5], settings=ViewerSettings(animate=leaves.at), headless=True)
     finally:
         v.release()
         v.wnd.destroy()
@@ -321,11 +321,11 @@ def test_viewer_animates_the_leaves_in_place():
 
 def test_viewer_draws_trees_and_new_seeds_bend_every_axis():
     from axialdeform.core.axes import TREE_AXES
-    from axialdeform.viewer import Viewer
+    from axialdeform.viewer import Viewer, ViewerSettings
 
     tree = ad.load_mesh("tree", axes=TREE_AXES)
-    params = ad.random_params(tree, 12, seed=2, bend=(0.05, 0.3), spacing=3.0)
-    v = Viewer.create(tree, params, headless=True, size=(160, 120), seed=2, bend=0.3)
+    params = ad.random_params(tree, 12, seed=2, variation=ad.Variation(bend=(0.05, 0.3)), spacing=3.0)
+    v = Viewer.create(tree, params, headless=True, size=(160, 120), settings=ViewerSettings(seed=2, bend=0.3))
     try:
         v.step()
         first = v.screenshot()

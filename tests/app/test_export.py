@@ -33,7 +33,7 @@ def scenes(tmp_path_factory):
     out = {}
     for name in ("stone", "leaf"):
         mesh = ad.load_mesh(name)
-        params = ad.random_params(mesh, 9, seed=5, bend=0.1)
+        params = ad.random_params(mesh, 9, seed=5, variation=ad.Variation(bend=0.1))
         out[name] = (mesh, params,
                      export.export_baked(folder / f"{name}-baked.glb", mesh, params),
                      export.export_instanced(folder / f"{name}-instanced.glb", mesh, params))
@@ -205,7 +205,7 @@ def test_extended_instances_export_scale_and_twist_taper(tmp_path, validate):
     from axialdeform.core.params import extend_params
 
     mesh = ad.load_mesh("leaf")
-    params = extend_params(ad.random_params(mesh, 7, seed=2, bend=0.1))
+    params = extend_params(ad.random_params(mesh, 7, seed=2, variation=ad.Variation(bend=0.1)))
     params[:, 16] = np.linspace(0.5, 2.0, 7)
     params[:, 17] = np.linspace(-1.0, 1.5, 7)
     params[:, 18] = np.linspace(-0.3, 0.7, 7)

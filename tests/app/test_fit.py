@@ -47,7 +47,7 @@ def case(request):
 def _variants(mesh, count=12, seed=7, **kw):
     kw.setdefault("bend", 0.12)
     kw.setdefault("tilt", (-1.4, 1.4))
-    params = ad.random_params(mesh, count, seed=seed, **kw)
+    params = ad.random_params(mesh, count, seed=seed, variation=ad.Variation(**kw))
     positions, _ = ad.bake(mesh, params, "cpu")
     return params, positions
 
@@ -78,7 +78,7 @@ def test_fit_reproduces_every_variant(case):
 
 
 def test_fit_large_rotations_and_gimbal_lock(stone):
-    params = ad.random_params(stone, 8, seed=11, bend=0.1, yaw=(-np.pi, np.pi), tilt=(-np.pi, np.pi))
+    params = ad.random_params(stone, 8, seed=11, variation=ad.Variation(bend=0.1, yaw=(-np.pi, np.pi), tilt=(-np.pi, np.pi)))
     params[0, ANGLES] = (0.3, np.pi / 2, -0.7)  # gimbal lock: rx and rz turn about one axis
     params[1, ANGLES] = (-1.0, -np.pi / 2, 2.0)
     params[2, ANGLES] = (np.pi, 0.0, np.pi)

@@ -40,7 +40,8 @@ def run(*args, cwd=None):
 def test_origin_anchor_puts_every_instance_on_the_terrain_and_keeps_the_spacing(terrain, stone):
     path, tm, size = terrain
     d = 0.6
-    params = ad.scatter(path, stone, 300, min_distance=d, anchor="origin", up="z", seed=3, bend=0.2)
+    params = ad.scatter(path, stone, 300, placement=ad.core.Placement(min_distance=d, anchor="origin", up="z"), seed=3,
+                        variation=ad.Variation(bend=0.2))
     assert params.shape == (300, 16) and params.dtype == np.float32
     p = params[:, 10:13].astype(np.float64)
     _, dist, face = trimesh.proximity.closest_point(tm, p)
@@ -67,7 +68,8 @@ def test_half_black_density_map_is_honoured(terrain, stone, tmp_path):
     img = np.full((16, 32), 255, dtype=np.uint8)
     img[:, :16] = 0  # left half (smaller x) black
     Image.fromarray(img).save(tmp_path / "half.png")
-    params = ad.scatter(path, stone, 400, min_distance=0.3, density=tmp_path / "half.png", anchor="origin", up="z", seed=1)
+    params = ad.scatter(path, stone, 400, placement=ad.core.Placement(min_distance=0.3, density=tmp_path / "half.png", anchor="origin",
+                                                                 up="z"), seed=1)
     x = params[:, 10].astype(np.float64)
     mid = (tm.bounds[0, 0] + tm.bounds[1, 0]) / 2
     assert len(params) == 400
@@ -80,7 +82,7 @@ def test_density_rows_run_along_z_top_row_at_smallest_z(stone):
     heights = np.zeros((20, 30))
     dens = np.ones((10, 10))
     dens[:5] = 0  # top half of the image black: the smaller z
-    params = ad.scatter(heights, stone, 200, density=dens, anchor="origin", extent=(30.0, 20.0), seed=2)
+    params = ad.scatter(heights, stone, 200, placement=ad.core.Placement(density=dens, anchor="origin", extent=(30.0, 20.0)), seed=2)
     z = params[:, 12]
     assert z.min() >= 0.0 - 1e-6 and z.max() > 5.0
     assert np.abs(params[:, 11]).max() == 0.0  # flat map at height 0
@@ -105,7 +107,7 @@ def test_same_seed_same_bytes_other_seed_other_bytes(terrain, tmp_path):
 def test_align_to_normal_turns_the_up_axis_onto_the_normal(terrain, stone):
     path, tm, _ = terrain
     for f in (0.0, 0.5, 1.0):
-        params = ad.scatter(path, stone, 100, anchor="origin", up="z", align_to_normal=f, seed=4)
+        params = ad.scatter(path, stone, 100, placement=ad.core.Placement(anchor="origin", up="z", align_to_normal=f), seed=4)
         up = ad.core.rotation_matrices(params[:, 13:16])[:, :, 2]  # R · e_z
         _, _, face = trimesh.proximity.closest_point(tm, params[:, 10:13].astype(np.float64))
         normal = tm.face_normals[face]
@@ -122,7 +124,8 @@ def test_align_to_normal_turns_the_up_axis_onto_the_normal(terrain, stone):
 @pytest.mark.parametrize("anchor", ["bottom", "center"])
 def test_the_bent_scaled_instance_stands_on_its_anchor(terrain, leaf, anchor):
     path, tm, size = terrain
-    params = ad.scatter(path, leaf, 50, anchor=anchor, up="z", bend=0.3, scale=(0.5, 2.0), align_to_normal=0.6, seed=9)
+    params = ad.scatter(path, leaf, 50, placement=ad.core.Placement(anchor=anchor, up="z", align_to_normal=0.6),
+                        variation=ad.Variation(bend=0.3, scale=(0.5, 2.0)), seed=9)
     lo, hi = leaf.positions.min(axis=0), leaf.positions.max(axis=0)
     a = (lo + hi) / 2
     if anchor == "bottom":
@@ -140,7 +143,8 @@ def test_height_map_image_surface(tmp_path, stone):
     Image.fromarray(grey).save(tmp_path / "hm.png")
     surf = load_surface(tmp_path / "hm.png", height_scale=5.0, extent=(40.0,))
     assert np.allclose(surf.mesh.extents[[0, 2]], [40.0, 40.0 * 29 / 39])
-    params = ad.scatter(tmp_path / "hm.png", stone, 200, height_scale=5.0, extent=40.0, anchor="origin", min_distance=1.0)
+    params = ad.scatter(tmp_path / "hm.png", stone, 200, placement=ad.core.Placement(height_scale=5.0, extent=40.0, anchor="origin",
+                                                                                min_distance=1.0))
     _, dist, _ = trimesh.proximity.closest_point(surf.mesh, params[:, 10:13].astype(np.float64))
     assert dist.max() <= 1e-4 * 40
     # a bright pixel is high: the vertex under pixel (row 0, col 39) is at the +x, -z corner
@@ -163,7 +167,7 @@ def test_too_few_writes_what_fits_and_exits_2_unless_allowed(terrain, tmp_path):
     assert res.returncode == 0, res.stderr
     assert (tmp_path / "g.adp").read_bytes() == (tmp_path / "f.adp").read_bytes()
     with pytest.raises(ad.core.TooFewError) as info:
-        ad.scatter(path, "stone", 100000, min_distance=1.0, up="z")
+        ad.scatter(path, "stone", 100000, placement=ad.core.Placement(min_distance=1.0, up="z"))
     assert len(info.value.params) == len(got)
 
 
@@ -198,7 +202,7 @@ def test_speed_sized_run_is_vectorized_and_correct():
     X, Z = np.meshgrid(x, x)
     surf = surface_from_heights(0.5 + 0.3 * np.sin(5 * X) * np.cos(4 * Z), height_scale=10, extent=100.0)
     assert len(surf.mesh.faces) == 20000
-    params = ad.scatter(surf, "stone", 5000, min_distance=0.8, anchor="origin", seed=1)
+    params = ad.scatter(surf, "stone", 5000, placement=ad.core.Placement(min_distance=0.8, anchor="origin"), seed=1)
     p = params[:, 10:13].astype(np.float64)
     assert cKDTree(p).query(p, k=2)[0][:, 1].min() >= 0.8 * (1 - 1e-6)
 
@@ -212,9 +216,9 @@ def test_density_white_only_where_nothing_faces_up_is_an_error(stone):
     right = np.zeros((4, 4))
     right[:, 2:] = 1.0
     with pytest.raises(ad.core.ScatterError, match="density: no candidate"):
-        ad.scatter(surface, stone, 10, density=right)
+        ad.scatter(surface, stone, 10, placement=ad.core.Placement(density=right))
     left = 1.0 - right
-    params = ad.scatter(surface, stone, 10, density=left, anchor="origin")
+    params = ad.scatter(surface, stone, 10, placement=ad.core.Placement(density=left, anchor="origin"))
     assert (params[:, 10] <= 0).all()
 
 

@@ -72,8 +72,11 @@ def test_a_scene_loads_with_paths_relative_to_its_file(small, monkeypatch, tmp_p
     assert isinstance(scene.wind, ad.core.wind.Wind) and scene.wind.strength == 0.2
     assert scene.camera == ad.core.CameraSpec(elevation=40.0)
     # the scatter layer is exactly axialdeform.scatter on the terrain
-    expected = ad.scatter(small.parent / "hm.png", "leaf", 40, min_distance=0.8, anchor="origin", scale=(0.5, 1.0),
-                          seed=5, height_scale=3.0, extent=[20.0])
+    expected = ad.scatter(small.parent / "hm.png", "leaf", 40, placement=ad.core.Placement(min_distance=0.8, anchor="origin",
+                                                                                           height_scale=3.0,
+                                                                                      extent=[20.0]), variation=ad.Variation(scale=(0.5,
+                                                                                                                                    1.0)),
+                          seed=5)
     assert np.array_equal(scene.layers[1].params, expected)
     assert np.array_equal(scene.layers[0].params, ad.read_params(small.parent / "stones.adp"))
 
@@ -153,7 +156,7 @@ def test_cli_render_bake_export_accept_a_scene(small, tmp_path, capsys, validate
     scene = load_scene(small)
     for layer in scene.layers:
         still, _ = ad.deform(layer.mesh.axis, layer.mesh.positions, layer.mesh.normals, layer.params)
-        expected, _ = ad.bake(layer.mesh, layer.params, "cpu", wind=scene.wind if layer.wind else None, time=0.0)
+        expected, _ = ad.bake(layer.mesh, layer.params, "cpu", options=ad.RenderOptions(wind=scene.wind if layer.wind else None, time=0.0))
         assert np.array_equal(baked[f"positions_{layer.name}"], expected)
         # the [wind] reaches the layers with wind = true only
         assert np.array_equal(expected, still) == (not layer.wind)
@@ -272,10 +275,11 @@ def test_export_a_scene_instanced(small, tmp_path, capsys, validate):  # noqa: F
 @pytest.mark.slow
 def test_viewer_keys_act_on_every_layer_of_a_scene(small):
     """N (new shapes), UP/DOWN (bend) and V (wind) reach every layer, not only the first."""
-    from axialdeform.viewer import Viewer
+    from axialdeform.viewer import Viewer, ViewerSettings
 
     scene = ad.Scene.load(small)
-    v = Viewer.create(scene, headless=True, size=(96, 72), seed=4, look=ad.Look(fast=True))  # N: seed 5 (the file: 1)
+    v = Viewer.create(scene, headless=True, size=(96, 72), settings=ViewerSettings(seed=4),
+                      look=ad.Look(fast=True))  # N: seed 5 (the file: 1)
     try:
         (leaves, renderer, base), = v.layers
         assert leaves.name == "leaves" and "12 instances + 40 in 1 more layer" in v.status()

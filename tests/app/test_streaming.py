@@ -40,12 +40,12 @@ ROOT = Path(__file__).resolve().parents[2]
 @pytest.mark.parametrize("extra", [{}, {"scale": (0.5, 2.0), "twist": 1.0, "taper": 0.3}])
 def test_pieces_are_the_whole_array_bit_for_bit(placement, extra):
     leaf = ad.load_mesh("leaf")
-    whole = ad.random_params(leaf, 1001, 7, placement=placement, up="z", **extra)
+    whole = ad.random_params(leaf, 1001, 7, ad.Variation(**extra), placement=placement, up="z")
     for chunk in (1, 97, 1000, 1001, 5000):
-        pieces = list(iter_random_params(leaf, 1001, 7, chunk=chunk, placement=placement, up="z", **extra))
+        pieces = list(iter_random_params(leaf, 1001, 7, ad.Variation(**extra), chunk=chunk, placement=placement, up="z"))
         assert max(len(p) for p in pieces) <= chunk
         assert np.concatenate(pieces).tobytes() == whole.tobytes()
-    assert list(iter_random_params(leaf, 0, 7, **extra)) == []
+    assert list(iter_random_params(leaf, 0, 7, ad.Variation(**extra))) == []
 
 
 def test_iter_random_params_refuses_bad_options_at_once():
@@ -81,7 +81,7 @@ def test_random_in_pieces_writes_the_same_file_as_before(tmp_path, monkeypatch, 
     # and the same as the in-memory encoder of the whole array
     stone = ad.load_mesh("stone")
     kw = {"scale": (0.5, 2.0), "twist": 1.0, "taper": 0.3} if args[-6:] == EXT else {}
-    whole = ad.random_params(stone, 1000, 5, **kw)
+    whole = ad.random_params(stone, 1000, 5, ad.Variation(**kw))
     if name.endswith(".adp"):
         assert data == P.encode_binary(whole, axis=stone.axis, mesh_fingerprint=stone.fingerprint,
                                        quantize="--quantize" in args)
@@ -268,7 +268,7 @@ def test_bake_cpu_pieces_are_the_whole_bake(tmp_path):
     from axialdeform.core.io.bake import write_npz_pieces
 
     stone = ad.load_mesh("stone")
-    params = ad.random_params(stone, 503, 3, bend=0.2)
+    params = ad.random_params(stone, 503, 3, variation=ad.Variation(bend=0.2))
     wind = ad.Wind(strength=0.2)  # its phase follows the instance index: the pieces must know where they start
     positions, normals = bake_cpu(stone, params, wind=wind, time=0.7)
     pieces = bake_cpu_pieces(stone, params, wind=wind, time=0.7, piece_bytes=50_000)  # 35 instances a piece
@@ -319,10 +319,10 @@ def test_gpu_bake_pieces_are_the_whole_capture(gl, tmp_path):
     from axialdeform.gl.bake import bake, bake_pieces
 
     stone = ad.load_mesh("stone")
-    params = ad.random_params(stone, 301, 4, bend=0.2)
+    params = ad.random_params(stone, 301, 4, variation=ad.Variation(bend=0.2))
     wind = ad.Wind(strength=0.2)
-    positions, normals = bake(stone, params, "gpu", ctx=gl, wind=wind, time=0.4)
-    pieces = bake_pieces(stone, params, "gpu", ctx=gl, wind=wind, time=0.4, piece_bytes=20_000)  # 14 a piece
+    positions, normals = bake(stone, params, "gpu", ctx=gl, options=ad.RenderOptions(wind=wind, time=0.4))
+    pieces = bake_pieces(stone, params, "gpu", ctx=gl, options=ad.RenderOptions(wind=wind, time=0.4), piece_bytes=20_000)  # 14 a piece
     write_npz_pieces(tmp_path / "g.npz", pieces, 301, stone.vertex_count)
     with np.load(tmp_path / "g.npz") as z:
         assert z["positions"].tobytes() == positions.tobytes() and z["normals"].tobytes() == normals.tobytes()
@@ -358,7 +358,7 @@ def test_baked_obj_files_hold_every_float32(tmp_path):
     from axialdeform.core.bake import instance_name
 
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, 3, seed=2, bend=0.2)
+    params = ad.random_params(mesh, 3, seed=2, variation=ad.Variation(bend=0.2))
     ad.write_params(tmp_path / "p.adp", params, mesh)
     assert main(["bake", "stone", str(tmp_path / "p.adp"), "-o", str(tmp_path / "objs"), "--format", "obj"]) == 0
     pos, nrm = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)

@@ -43,7 +43,7 @@ def test_random_tint_info_render(tmp_path, capsys):
 @pytest.mark.parametrize("rel", [None, "assets/AlphaBlendModeTest.glb"])
 def test_both_gltf_layouts_carry_the_tint(tmp_path, rel):
     mesh = ad.load_mesh("stone" if rel is None else data_mesh(rel))
-    params = ad.random_params(mesh, 6, seed=2, tint=0.7, tint_color=(0.8, 0.9, 1.0))
+    params = ad.random_params(mesh, 6, seed=2, variation=ad.Variation(tint=0.7, tint_color=(0.8, 0.9, 1.0)))
     inst, baked = tmp_path / "i.glb", tmp_path / "b.glb"
     ad.core.export_instanced(inst, mesh, params)
     ad.core.export_baked(baked, mesh, params)
@@ -71,7 +71,7 @@ def test_both_gltf_layouts_carry_the_tint(tmp_path, rel):
 
 def test_scene_export_of_a_tinted_layer(tmp_path, capsys):
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, 8, seed=3, tint=0.5)
+    params = ad.random_params(mesh, 8, seed=3, variation=ad.Variation(tint=0.5))
     ad.write_params(tmp_path / "stones.adp", params, mesh)
     (tmp_path / "s.toml").write_text('[[layer]]\nmesh = "stone"\nparams = "stones.adp"\ncolor = [0.5, 0.5, 0.5]\n')
     for layout in ("--baked", "--instanced"):

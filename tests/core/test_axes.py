@@ -60,8 +60,8 @@ def test_one_axis_through_the_tree_code_is_the_plain_path():
     one = dataclasses.replace(stone, tree=AxisTree((stone.axis,), (-1,), np.zeros(stone.vertex_count, np.int32)),
                               _axis=None)
     for extended in (False, True):
-        p = ad.random_params(stone, 9, seed=2, bend=0.2, **({"scale": (0.5, 2), "twist": 1, "taper": 0.5}
-                                                            if extended else {}))
+        turn = {"scale": (0.5, 2), "twist": 1, "taper": 0.5} if extended else {}
+        p = ad.random_params(stone, 9, seed=2, variation=ad.Variation(bend=0.2, **turn))
         a, b = ad.deform(one, p), ad.deform(stone, p)
         np.testing.assert_allclose(a[0], b[0], atol=1e-6 * stone.axis.length)
         np.testing.assert_allclose(a[1], b[1], atol=1e-6)
@@ -74,7 +74,7 @@ def test_zero_offsets_give_the_mesh(tree):
 
 
 def test_a_trunk_only_bend_moves_every_vertex_as_the_trunks_field(tree):
-    p = ad.random_params(tree, 6, seed=3, bend=(0.2, 0.0))
+    p = ad.random_params(tree, 6, seed=3, variation=ad.Variation(bend=(0.2, 0.0)))
     assert not p[:, 10:10 * tree.axis_count].any()
     pos, _ = ad.deform(tree, p)
     standard, _ = split_record(p, tree.axis_count)
@@ -93,7 +93,7 @@ def test_joints_stay_closed():
     keys = {tuple(np.round(v, 6)) for v, c in zip(mesh.positions[first], counts) if c == 2}
     pairs = [np.flatnonzero((np.round(mesh.positions, 6) == k).all(axis=1)) for k in keys]
     assert len(pairs) >= 6 and all(len(q) == 2 and tree.vertex_axis[q[0]] != tree.vertex_axis[q[1]] for q in pairs)
-    p = ad.random_params(mesh, 20, seed=4, bend=(0.1, 0.3), scale=(0.5, 1.5), twist=0.8, taper=0.4)
+    p = ad.random_params(mesh, 20, seed=4, variation=ad.Variation(bend=(0.1, 0.3), scale=(0.5, 1.5), twist=0.8, taper=0.4))
     pos, _ = ad.deform(mesh, p)
     gap = max(np.abs(pos[:, q[0]] - pos[:, q[1]]).max() for q in pairs)
     assert gap <= 1e-5 * mesh.axis.length, gap
@@ -130,7 +130,7 @@ def test_tree_normals_are_exact(tree):
 
 
 def test_random_trees_keep_roots_and_the_trunk_stream(tree):
-    p = ad.random_params(tree, 50, seed=7, bend=(0.05, 0.2, 0.3))
+    p = ad.random_params(tree, 50, seed=7, variation=ad.Variation(bend=(0.05, 0.2, 0.3)))
     assert p.shape == (50, tree_width(10))
     standard, children = split_record(p, 10)
     # every child's bend vanishes where it meets its parent, value and slope (a clamped joint)
@@ -146,13 +146,13 @@ def test_random_trees_keep_roots_and_the_trunk_stream(tree):
     amp = np.abs(d).max(axis=(0, 2, 3)) / lengths
     assert (amp[:6] <= 0.2 * np.sqrt(5) + 1e-6).all() and (amp[:6] > 0.1).all() and (amp[6:] > amp[:6].max()).all()
     # the trunk's numbers are the plain mesh's for the same seed and options
-    plain = ad.random_params(ad.load_mesh("tree"), 50, seed=7, bend=0.05)
+    plain = ad.random_params(ad.load_mesh("tree"), 50, seed=7, variation=ad.Variation(bend=0.05))
     assert np.array_equal(standard, plain)
     assert np.array_equal(join_record(standard, children), p)
 
 
 def test_tree_files_round_trip_and_refuse_another_tree(tree, tmp_path):
-    p = ad.random_params(tree, 30, seed=1, bend=(0.05, 0.2), scale=(0.8, 1.2))
+    p = ad.random_params(tree, 30, seed=1, variation=ad.Variation(bend=(0.05, 0.2), scale=(0.8, 1.2)))
     for name, quantize in (("t.adp", False), ("q.adp", True), ("t.txt", False)):
         path = tmp_path / name
         ad.write_params(path, p, tree, quantize=quantize)
@@ -195,9 +195,9 @@ def test_bad_trees_and_records_are_refused(tree):
 def test_bounds_hold_every_tree_vertex(tree):
     from axialdeform.core.bounds import instance_bounds, instance_boxes
 
-    p = ad.random_params(tree, 40, seed=9, bend=(0.1, 0.3), scale=(0.5, 2.0), twist=1.0, taper=0.5)
+    p = ad.random_params(tree, 40, seed=9, variation=ad.Variation(bend=(0.1, 0.3), scale=(0.5, 2.0), twist=1.0, taper=0.5))
     wind = ad.Wind(direction=(1, 0, 0), strength=0.3, gustiness=0.5)
-    pos = ad.bake(tree, p, "cpu", wind=wind, time=2.0)[0]
+    pos = ad.bake(tree, p, "cpu", options=ad.RenderOptions(wind=wind, time=2.0))[0]
     c, r = instance_bounds(tree, p, wind=wind)
     assert (np.linalg.norm(pos - c[:, None], axis=-1) <= r[:, None] * (1 + 1e-6)).all()
     lo, hi = instance_boxes(tree, p)
@@ -208,15 +208,15 @@ def test_bounds_hold_every_tree_vertex(tree):
 def test_random_trees_in_pieces_are_the_whole(tree):
     from axialdeform.core.variation import iter_random_params
 
-    whole = ad.random_params(tree, 70, seed=11, bend=(0.05, 0.2), tint=0.3)
-    pieces = np.concatenate(list(iter_random_params(tree, 70, 11, chunk=16, bend=(0.05, 0.2), tint=0.3)))
+    whole = ad.random_params(tree, 70, seed=11, variation=ad.Variation(bend=(0.05, 0.2), tint=0.3))
+    pieces = np.concatenate(list(iter_random_params(tree, 70, 11, chunk=16, variation=ad.Variation(bend=(0.05, 0.2), tint=0.3))))
     assert whole.shape == (70, tree_width(10, 2)) and np.array_equal(whole, pieces)
 
 
 def test_fit_recovers_trees(tree):
     """The 10·K + 6 (+ 3) numbers back from baked trees: the shapes they give
     match the targets to float32 rounding."""
-    p = ad.random_params(tree, 12, seed=3, bend=(0.05, 0.2, 0.25), tilt=(-0.5, 0.5))
+    p = ad.random_params(tree, 12, seed=3, variation=ad.Variation(bend=(0.05, 0.2, 0.25), tilt=(-0.5, 0.5)))
     shapes = ad.deform(tree, p)[0]
     fit = ad.fit_params(tree, shapes)
     assert fit.params.shape == (12, 106)
@@ -224,8 +224,8 @@ def test_fit_recovers_trees(tree):
     assert np.abs(back - shapes).max() <= 1e-5 * tree.axis.length
     assert fit.max.max() <= 1e-5
     # the extended numbers too: scale, twist and taper about the trunk's axis line
-    p = ad.random_params(tree, 6, seed=4, bend=(0.05, 0.2, 0.25), tilt=(-0.5, 0.5), scale=(0.6, 1.5), twist=0.6,
-                         taper=0.4)
+    p = ad.random_params(tree, 6, seed=4, variation=ad.Variation(bend=(0.05, 0.2, 0.25), tilt=(-0.5, 0.5), scale=(0.6, 1.5), twist=0.6,
+                                                                 taper=0.4))
     shapes = ad.deform(tree, p)[0]
     fit = ad.fit_params(tree, shapes, extended=True)
     assert fit.params.shape == (6, 109)

@@ -146,16 +146,16 @@ def test_world_transform_and_normals():
 
 
 def test_deform_chunks_equal_one_pass(stone):
-    params = ad.random_params(stone, 300, seed=5, bend=0.2)
+    params = ad.random_params(stone, 300, seed=5, variation=ad.Variation(bend=0.2))
     a = deform(stone.axis, stone.positions, stone.normals, params)
     b = deform(stone.axis, stone.positions, stone.normals, params, chunk_vertices=58 * 7)
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
 
 
 def test_random_params_are_reproducible_and_canonical(stone):
-    a = ad.random_params(stone, 500, seed=42, bend=0.1, placement="disc")
-    b = ad.random_params(stone, 500, seed=42, bend=0.1, placement="disc")
-    c = ad.random_params(stone, 500, seed=43, bend=0.1, placement="disc")
+    a = ad.random_params(stone, 500, seed=42, variation=ad.Variation(bend=0.1), placement="disc")
+    b = ad.random_params(stone, 500, seed=42, variation=ad.Variation(bend=0.1), placement="disc")
+    c = ad.random_params(stone, 500, seed=43, variation=ad.Variation(bend=0.1), placement="disc")
     assert np.array_equal(a, b) and not np.array_equal(a, c)
     offsets = a[:, :10].reshape(-1, 5, 2)
     assert np.abs(offsets.mean(axis=1)).max() < 1e-6  # canonical: zero mean
@@ -169,7 +169,7 @@ def test_random_params_are_reproducible_and_canonical(stone):
 @pytest.mark.parametrize("placement", ["grid", "box", "disc"])
 @pytest.mark.parametrize("up", ["x", "y", "z"])
 def test_random_params_placement(stone, placement, up):
-    p = ad.random_params(stone, 400, seed=1, placement=placement, up=up, spacing=3.0, tilt=0.0)
+    p = ad.random_params(stone, 400, seed=1, placement=placement, up=up, spacing=3.0, variation=ad.Variation(tilt=0.0))
     k = "xyz".index(up)
     pos = p[:, 10:13]
     if placement != "box":
@@ -186,4 +186,4 @@ def test_random_params_rejects_bad_arguments(stone):
     with pytest.raises(ad.core.ParamError, match="count"):
         ad.random_params(stone, -1)
     with pytest.raises(ad.core.ParamError, match="bend"):
-        ad.random_params(stone, 3, bend=float("nan"))
+        ad.random_params(stone, 3, variation=ad.Variation(bend=float("nan")))

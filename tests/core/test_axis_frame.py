@@ -40,7 +40,7 @@ def turned(mesh, q):
 
 
 def params_for(mesh, n=7, seed=1, extended=False):
-    p = ad.random_params(mesh, n, seed=seed, bend=0.2)
+    p = ad.random_params(mesh, n, seed=seed, variation=ad.Variation(bend=0.2))
     p[:, 10:16] = 0.0  # at the origin, unturned: the bend alone
     if extended:
         rng = np.random.default_rng(seed)
@@ -55,7 +55,7 @@ def test_auto_and_the_same_forced_axis_are_bit_identical(name):
     forced = ad.load_mesh(name, axis="xyz"[mesh.axis.index])
     also = ad.load_mesh(name, axis=np.eye(3)[[mesh.axis.index, *mesh.axis.perpendicular]])  # its permutation matrix
     assert not forced.axis.framed and not also.axis.framed and forced.axis == mesh.axis == also.axis
-    p = ad.random_params(mesh, 20, seed=3, bend=0.2)
+    p = ad.random_params(mesh, 20, seed=3, variation=ad.Variation(bend=0.2))
     ref = ad.deform(mesh, p)
     for other in (forced, also):
         got = ad.deform(other, p)
@@ -66,7 +66,7 @@ def test_auto_and_the_same_forced_axis_are_bit_identical(name):
 def test_forced_axis_differs_from_auto(stone):
     z = ad.load_mesh("stone", axis="z")
     assert stone.axis.index == 0 and z.axis.index == 2 and z.axis.lo == float(stone.positions[:, 2].min())
-    p = ad.random_params(stone, 5, seed=1, bend=0.2)
+    p = ad.random_params(stone, 5, seed=1, variation=ad.Variation(bend=0.2))
     assert not np.allclose(ad.deform(z, p)[0], ad.deform(stone, p)[0])
 
 
@@ -134,7 +134,7 @@ def test_framed_normals_are_the_exact_ones(rod):
 
 def test_bounds_hold_every_framed_vertex(rod):
     diag = ad.load_mesh(turned(rod, rotation()), axis="oriented")
-    p = ad.random_params(diag, 40, seed=9, bend=0.3)
+    p = ad.random_params(diag, 40, seed=9, variation=ad.Variation(bend=0.3))
     lo, hi = instance_boxes(diag, p)
     pos = ad.deform(diag, p)[0]
     tol = 1e-5 * diag.axis.length
@@ -205,7 +205,7 @@ def test_wind_pushes_across_a_framed_axis(rod):
 @pytest.mark.parametrize("extended", [False, True])
 def test_fit_recovers_the_shapes_of_a_framed_mesh(rod, extended):
     diag = ad.load_mesh(turned(rod, rotation()), axis="oriented")
-    p = ad.random_params(diag, 6, seed=8, bend=0.15)
+    p = ad.random_params(diag, 6, seed=8, variation=ad.Variation(bend=0.15))
     if extended:
         p = np.hstack([p, np.tile(np.float32([1.1, 0.3, 0.2]), (6, 1))]).astype(np.float32)
     shapes = ad.deform(diag, p)[0]

@@ -9,7 +9,7 @@ from axialdeform.core.bounds import box_corners, instance_bounds, scene_box
 
 
 def test_spheres_hold_every_deformed_vertex(stone):
-    params = ad.random_params(stone, 40, seed=5, bend=0.3)
+    params = ad.random_params(stone, 40, seed=5, variation=ad.Variation(bend=0.3))
     centers, radii = instance_bounds(stone, params)
     assert centers.shape == (40, 3) and radii.shape == (40,)
     world, _ = ad.deform(stone.axis, stone.positions, stone.normals, params)
@@ -19,7 +19,7 @@ def test_spheres_hold_every_deformed_vertex(stone):
 
 
 def test_scene_box_holds_the_spheres_and_is_tight(stone):
-    params = ad.random_params(stone, 25, seed=2, bend=0.2)
+    params = ad.random_params(stone, 25, seed=2, variation=ad.Variation(bend=0.2))
     centers, radii = instance_bounds(stone, params)
     lo, hi = scene_box(stone, params)
     assert lo.shape == hi.shape == (3,)
@@ -55,7 +55,7 @@ def test_callers_use_the_one_home(stone, monkeypatch):
 def test_outline_points_by_budget(stone):
     from axialdeform.core.bounds import outline_points
 
-    params = ad.random_params(stone, 30, seed=8, bend=0.3)
+    params = ad.random_params(stone, 30, seed=8, variation=ad.Variation(bend=0.3))
     world, _ = ad.deform(stone.axis, stone.positions, stone.normals, params)
     exact, r = outline_points(stone, params)  # 30 x 58 vertices: all of them
     assert exact.shape == (30 * stone.vertex_count, 3) and not r.any()

@@ -14,7 +14,7 @@ from axialdeform.core.quantize import quantization_error_bound
 
 @pytest.fixture
 def values(stone):
-    return ad.random_params(stone, 257, seed=9, bend=0.15, placement="disc")
+    return ad.random_params(stone, 257, seed=9, variation=ad.Variation(bend=0.15), placement="disc")
 
 
 def test_text_round_trip_is_lossless(tmp_path, values, stone):

@@ -78,7 +78,7 @@ def test_a_crossing_leafs_joint_stays_closed(palm):
     assert max(medians_now) <= 0.25, rows
     assert np.median(medians_before) > 2 * np.median(medians_now), rows
     # the variation itself: every child's curve is zero, with zero slope, at its anchor
-    p = ad.random_params(mesh, 30, seed=2, bend=(0.05, 0.3))
+    p = ad.random_params(mesh, 30, seed=2, variation=ad.Variation(bend=(0.05, 0.3)))
     children = np.asarray(p)[:, 10:10 * tree.count].reshape(30, tree.count - 1, 5, 2).astype(np.float64)
     b, db = bernstein4(np.array(tree.anchors[1:]))
     assert np.abs(np.einsum("ji,njic->njc", b, children)).max() < 1e-6 * mesh.axis.length
@@ -121,7 +121,7 @@ def test_the_command_line_picks_parts_and_says_the_tree(palm, tmp_path):
 
 def test_a_scene_layer_keeps_only_its_parts(palm, tmp_path):
     mesh = ad.load_mesh(palm, parts=PALM, axes="parts", axis="oriented")
-    ad.write_params(tmp_path / "palms.adp", ad.random_params(mesh, 5, seed=1, bend=(0.05, 0.3)), mesh)
+    ad.write_params(tmp_path / "palms.adp", ad.random_params(mesh, 5, seed=1, variation=ad.Variation(bend=(0.05, 0.3))), mesh)
     names = ", ".join(f'"{n}"' for n in PALM)
     (tmp_path / "s.toml").write_text(f'[[layer]]\nname = "palms"\nmesh = "{palm.as_posix()}"\nparts = [{names}]\n'
                                      'axes = "parts"\naxis = "oriented"\nparams = "palms.adp"\n', encoding="utf-8")
@@ -139,7 +139,7 @@ def test_the_gpu_bends_an_anchored_palm_as_the_cpu_does(ctx, palm):
     from axialdeform.gl.renderer import AxialRenderer
 
     mesh = ad.load_mesh(palm, parts=PALM, axes="parts", axis="oriented")
-    p = ad.random_params(mesh, 24, seed=3, bend=(0.05, 0.3), placement="disc", spacing=4.0)
+    p = ad.random_params(mesh, 24, seed=3, variation=ad.Variation(bend=(0.05, 0.3)), placement="disc", spacing=4.0)
     with AxialRenderer(ctx, mesh, p) as r:
         gpu = r.capture()
     cpu = ad.deform(mesh, p)
@@ -152,8 +152,8 @@ def test_fronds_droop_toward_the_worlds_down(palm):
     """droop= (--droop, a scatter recipe's droop): every child axis sags toward the world's down
     beside the isotropic bend, clamped at its joint; the trunk and the other numbers stay."""
     mesh = ad.load_mesh(palm, parts=PALM, axes="parts", axis="oriented")
-    plain = ad.random_params(mesh, 40, seed=1, bend=(0.03, 0.05), placement="disc", spacing=5.0)
-    droop = ad.random_params(mesh, 40, seed=1, bend=(0.03, 0.05), droop=0.3, placement="disc", spacing=5.0)
+    plain = ad.random_params(mesh, 40, seed=1, variation=ad.Variation(bend=(0.03, 0.05)), placement="disc", spacing=5.0)
+    droop = ad.random_params(mesh, 40, seed=1, variation=ad.Variation(bend=(0.03, 0.05), droop=0.3), placement="disc", spacing=5.0)
     k = mesh.axis_count
     assert np.array_equal(np.asarray(plain)[:, :10], np.asarray(droop)[:, :10])  # the trunk's own bend
     a, _ = ad.deform(mesh, plain)
@@ -180,7 +180,7 @@ def test_the_wind_leaves_the_joints_where_they_are(ctx, palm, tmp_path):
 
     mesh = ad.load_mesh(palm, parts=PALM, axes="parts", axis="oriented")
     tree = mesh.tree
-    p = ad.random_params(mesh, 16, seed=5, bend=(0.05, 0.3), placement="disc", spacing=4.0)
+    p = ad.random_params(mesh, 16, seed=5, variation=ad.Variation(bend=(0.05, 0.3)), placement="disc", spacing=4.0)
     wind = ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.5)
     pushed = tree_wind_offsets(wind, tree, p, time=0.7)  # (n, K, 5, 2)
     b, db = bernstein4(np.array(tree.anchors[1:]))
@@ -188,7 +188,7 @@ def test_the_wind_leaves_the_joints_where_they_are(ctx, palm, tmp_path):
     assert np.abs(np.einsum("ji,njic->njc", db, pushed[:, 1:])).max() < 1e-9
     assert np.abs(pushed[:, 1:]).max() > 0.05 * tree.axes[1].length  # and it does push
     assert np.array_equal(sag_weights(0.0), [0.0, 0.0, 1 / 6, 0.5, 1.0])  # root-anchored: the wind as before
-    with AxialRenderer(ctx, mesh, p, wind=wind) as r:
+    with AxialRenderer(ctx, mesh, p, options=ad.RenderOptions(wind=wind)) as r:
         gpu = r.capture(time=0.7)
     cpu = ad.deform(mesh, ad.core.wind.apply_wind(wind, tree, p, 0.7))
     reach = max(1.0, float(np.abs(np.asarray(p)[:, 10 * tree.count:10 * tree.count + 3]).max()) / mesh.axis.length)
@@ -202,8 +202,8 @@ def test_a_single_axis_droops_too():
     """droop on a mesh of one axis (a blade, a leaf, a stone lying along x): its far end sags toward
     the world's down; random_params keeps the offsets' zero mean, scatter keeps the point it stands on."""
     stone = ad.load_mesh("stone")  # its axis lies along x: the down direction is across it
-    flat = ad.random_params(stone, 100, seed=1, bend=0.0, tilt=(0.0, 0.0))
-    sag = ad.random_params(stone, 100, seed=1, bend=0.0, tilt=(0.0, 0.0), droop=0.3)
+    flat = ad.random_params(stone, 100, seed=1, variation=ad.Variation(bend=0.0, tilt=(0.0, 0.0)))
+    sag = ad.random_params(stone, 100, seed=1, variation=ad.Variation(bend=0.0, tilt=(0.0, 0.0), droop=0.3))
     a, _ = ad.deform(stone, flat)
     b, _ = ad.deform(stone, sag)
     t = stone.axis.parameter(stone.positions)
@@ -213,8 +213,9 @@ def test_a_single_axis_droops_too():
     assert np.abs(offsets.mean(axis=1)).max() < 1e-6  # canonical, as random_params' offsets always are
     ground = trimesh.creation.box(extents=[20.0, 0.1, 20.0])
     ground.apply_translation([0.0, -0.05, 0.0])
-    still = ad.scatter(ground, stone, 30, seed=2, bend=0.0, min_distance=2.0)
-    drooped = ad.scatter(ground, stone, 30, seed=2, bend=0.0, droop=0.3, min_distance=2.0)
+    still = ad.scatter(ground, stone, 30, seed=2, variation=ad.Variation(bend=0.0), placement=ad.core.Placement(min_distance=2.0))
+    drooped = ad.scatter(ground, stone, 30, seed=2, variation=ad.Variation(bend=0.0, droop=0.3),
+                         placement=ad.core.Placement(min_distance=2.0))
     c, _ = ad.deform(stone, still)
     d, _ = ad.deform(stone, drooped)
     assert np.allclose(np.asarray(still)[:, 10:], np.asarray(drooped)[:, 10:])  # the same places and turns

@@ -22,8 +22,8 @@ from axialdeform.core.quantize import quantization_error_bound
 
 @pytest.fixture(scope="module")
 def tinted(stone):
-    return ad.random_params(stone, 40, seed=3, scale=(0.5, 1.5), twist=0.8, taper=0.3, tint=0.7,
-                            tint_color=(0.9, 0.6, 0.3))
+    variation = ad.Variation(scale=(0.5, 1.5), twist=0.8, taper=0.3, tint=0.7, tint_color=(0.9, 0.6, 0.3))
+    return ad.random_params(stone, 40, seed=3, variation=variation)
 
 
 def test_the_field_comes_from_the_table(tinted):
@@ -32,7 +32,7 @@ def test_the_field_comes_from_the_table(tinted):
     assert R.WIDTHS == (16, 19, 22) and R.TINT == slice(19, 22)
     assert tinted.shape == (40, 22) and is_extended(tinted) and is_tinted(tinted)
     assert np.shares_memory(tinted.tint, tinted) and tinted.tint.shape == (40, 3)
-    assert "tint" in dir(tinted) and "tint" not in dir(ad.random_params(ad.load_mesh("stone"), 2, scale=1.0))
+    assert "tint" in dir(tinted) and "tint" not in dir(ad.random_params(ad.load_mesh("stone"), 2, variation=ad.Variation(scale=1.0)))
     with pytest.raises(AttributeError, match=r"only tinted \(n, 22\) instances"):
         _ = R.Instances.of(extend_params(tinted)).tint
     z = R.Instances.zeros(3, tinted=True)
@@ -42,20 +42,20 @@ def test_the_field_comes_from_the_table(tinted):
 def test_random_tint_keeps_every_other_number(stone, tinted):
     """The tint is drawn after the other numbers of the stream: the first 19
     are those of the same call without it, and pieces give the same rows."""
-    same = ad.random_params(stone, 40, seed=3, scale=(0.5, 1.5), twist=0.8, taper=0.3)
+    same = ad.random_params(stone, 40, seed=3, variation=ad.Variation(scale=(0.5, 1.5), twist=0.8, taper=0.3))
     assert np.array_equal(tinted[:, :19], same)
     assert (tinted.tint >= 0.9 * np.float32([0.9, 0.6, 0.3]) * 0.3 - 1e-6).all()
     assert (tinted.tint <= np.float32([0.9, 0.6, 0.3])).all() and tinted.tint.std(axis=0).min() > 0.01
     from axialdeform.core.variation import iter_random_params
 
-    pieces = list(iter_random_params(stone, 40, seed=3, chunk=7, scale=(0.5, 1.5), twist=0.8, taper=0.3, tint=0.7,
-                                     tint_color=(0.9, 0.6, 0.3)))
+    pieces = list(iter_random_params(stone, 40, seed=3, chunk=7, variation=ad.Variation(scale=(0.5, 1.5), twist=0.8, taper=0.3, tint=0.7,
+                                                                                        tint_color=(0.9, 0.6, 0.3))))
     assert np.array_equal(np.concatenate(pieces), tinted)
     for bad in (1.5, -0.1, "x"):
         with pytest.raises(ad.core.ParamError, match="tint"):
-            ad.random_params(stone, 2, tint=bad)
+            ad.random_params(stone, 2, variation=ad.Variation(tint=bad))
     with pytest.raises(ad.core.ParamError, match="tint_color"):
-        ad.random_params(stone, 2, tint=0.2, tint_color=(1, 2, 0))
+        ad.random_params(stone, 2, variation=ad.Variation(tint=0.2, tint_color=(1, 2, 0)))
 
 
 @pytest.mark.parametrize("form", ["text", "float32", "quantized"])
@@ -130,11 +130,11 @@ def test_a_tint_keeps_its_hue_unless_asked_to_vary_it():
 
     stone = ad.load_mesh("stone")
     color = np.array([0.9, 0.6, 0.3])
-    shades = ad.random_params(stone, 200, seed=3, tint=0.6, tint_color=tuple(color))[:, R.TINT] / color
+    shades = ad.random_params(stone, 200, seed=3, variation=ad.Variation(tint=0.6, tint_color=tuple(color)))[:, R.TINT] / color
     assert np.ptp(shades, axis=1).max() < 1e-6 and np.ptp(shades[:, 0]) > 0.3  # one factor each, varied
-    hues = ad.random_params(stone, 200, seed=3, tint=0.6, tint_color=tuple(color), tint_hue=1.0)[:, R.TINT] / color
+    hues = ad.random_params(stone, 200, seed=3, variation=ad.Variation(tint=0.6, tint_color=tuple(color), tint_hue=1.0))[:, R.TINT] / color
     assert np.ptp(hues, axis=1).mean() > 0.1
-    half = ad.random_params(stone, 200, seed=3, tint=0.6, tint_color=tuple(color), tint_hue=0.5)[:, R.TINT] / color
+    half = ad.random_params(stone, 200, seed=3, variation=ad.Variation(tint=0.6, tint_color=tuple(color), tint_hue=0.5))[:, R.TINT] / color
     assert 0.3 < np.ptp(half, axis=1).mean() / np.ptp(hues, axis=1).mean() < 0.7
     surface = np.zeros((16, 16))
     scattered = ad.scatter(surface, stone, 50, ad.Variation(tint=0.6, tint_color=tuple(color)), seed=2)[:, R.TINT] / color

@@ -43,7 +43,7 @@ def test_the_bend_is_written_once(monkeypatch):
 
     monkeypatch.setattr(fit, "displace", spy)
     stone = ad.load_mesh("stone")
-    params = ad.random_params(stone, 2, seed=3, bend=0.1)
+    params = ad.random_params(stone, 2, seed=3, variation=ad.Variation(bend=0.1))
     targets, _ = ad.deform(stone.axis, stone.positions, stone.normals, params)
     result = fit.fit_params(stone, targets)
     assert calls and np.abs(result.params[:, :10] - params[:, :10]).max() < 1e-4 * stone.axis.length

@@ -71,7 +71,7 @@ def test_identity_where_nothing_was_split(stone):
 
 def test_fit_takes_variants_in_file_order_and_loaded_order(tmp_path):
     mesh = ad.load_mesh(data_mesh("base/rock_caustics.obj"))
-    params = ad.random_params(mesh, 3, seed=6, bend=0.15)
+    params = ad.random_params(mesh, 3, seed=6, variation=ad.Variation(bend=0.15))
     world, _ = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
     # the file's own order: scatter back through source_index (split copies agree)
     file_order = np.zeros((3, mesh.source_count, 3), dtype=np.float32)
@@ -88,7 +88,7 @@ def test_fit_files_written_by_a_tool_without_the_seams(tmp_path):
     base_path = tmp_path / "seam.obj"
     base_path.write_text(SEAM_OBJ)
     mesh = ad.load_mesh(base_path)
-    params = ad.random_params(mesh, 2, seed=2, bend=0.1)
+    params = ad.random_params(mesh, 2, seed=2, variation=ad.Variation(bend=0.1))
     world, _ = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
     paths = []
     for k in range(2):  # as a DCC tool writes it: the 6 file vertices, no UVs

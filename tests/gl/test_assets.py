@@ -146,7 +146,7 @@ def test_tangents_follow_the_uv_frame():
 
 def test_gpu_capture_equals_cpu_for_every_part(ctx):
     mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
-    params = ad.random_params(mesh, 40, seed=3, bend=0.2)
+    params = ad.random_params(mesh, 40, seed=3, variation=ad.Variation(bend=0.2))
     cpu_pos, cpu_nrm = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
     with ad.AxialRenderer(ctx, mesh, params) as r:
         pos, nrm = r.capture()
@@ -172,7 +172,7 @@ def test_gpu_tangents_bend_by_the_jacobian(ctx, form):
     mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     extended = form != "16"
     extra = dict(scale=(0.7, 1.3), twist=0.8, taper=0.5) if extended else {}
-    params = ad.random_params(mesh, 16, seed=5, bend=0.3, **extra)
+    params = ad.random_params(mesh, 16, seed=5, variation=ad.Variation(bend=0.3, **extra))
     assert params.shape[1] == (19 if extended else 16)
     defines = {"AXIAL_MATERIAL": 1, **({"AXIAL_EXTENDED": 1} if extended else {}),
                **({"AXIAL_WIND": 1} if "wind" in form else {})}  # the windy build (still builds leave it out)
@@ -298,15 +298,15 @@ def test_one_instanced_draw_per_part_and_part_choice(ctx, monkeypatch):
     assert sorted(v for _, v in calls) == sorted(p.count * 3 for p in mesh.parts)
     assert all(n == 30 for n, _ in calls)
     calls.clear()
-    bed = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, parts=["Bed"], look=ad.Look(fast=True))
+    bed = ad.render_image(mesh, params, (96, 72), "solid", ctx=ctx, options=ad.RenderOptions(parts=["Bed"]), look=ad.Look(fast=True))
     assert calls == [(30, mesh.part("Bed").count * 3)]
     assert not np.array_equal(full, bed)
     with pytest.raises(MeshError, match="no part 'Nope'"):
-        ad.AxialRenderer(ctx, mesh, params, parts=["Nope"])
+        ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(parts=["Nope"]))
 
 
 def test_shadows_darken_the_ground_and_hidden_lines_hide(ctx, stone):
-    params = ad.random_params(stone, 60, seed=4, bend=0.1, spacing=2.0 * stone.axis.length)
+    params = ad.random_params(stone, 60, seed=4, variation=ad.Variation(bend=0.1), spacing=2.0 * stone.axis.length)
     with_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, look=ad.Look(samples=0))
     # the ground without shadows
     no_shadow = ad.render_image(stone, params, (160, 120), "solid", ctx=ctx, look=ad.Look(samples=0, shadow=False))
@@ -402,7 +402,7 @@ def test_bundled_leaf_card():
 
 def test_flat_and_wireframe_work_for_textured_parts(ctx):
     mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
-    params = ad.random_params(mesh, 6, seed=4, bend=0.1)
+    params = ad.random_params(mesh, 6, seed=4, variation=ad.Variation(bend=0.1))
     img = ad.render_image(mesh, params, (128, 96), ("solid", "flat", "wireframe"), ctx=ctx,
                           look=ad.Look(ground=False, background=(0, 0, 0)))
     panels = [img[:, i * 128:(i + 1) * 128].astype(int).sum(axis=2) > 30 for i in range(3)]
@@ -430,7 +430,7 @@ def test_normal_map_changes_the_shading(ctx):
     plain, bumpy = with_normal_map(None), with_normal_map(stripes)
     params = np.zeros((1, 16), np.float32)
     cam = ad.frame_instances(mesh, params, 4 / 3, elevation=10.0, azimuth=90.0, margin=-0.3)
-    kw = dict(ctx=ctx, camera=cam, look=ad.Look(fast=True), parts=["Bed"])
+    kw = dict(ctx=ctx, camera=cam, look=ad.Look(fast=True), options=ad.RenderOptions(parts=["Bed"]))
     a = ad.render_image(bumpy, params, (160, 120), "solid", **kw).astype(int)
     b = ad.render_image(plain, params, (160, 120), "solid", **kw).astype(int)
     differ = (np.abs(a - b).sum(axis=2) > 6).mean()
@@ -496,16 +496,16 @@ def test_parts_draw_from_the_culled_instances(ctx, indirect):
     mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     assert len(mesh.parts) > 1
     n, length = 40, mesh.axis.length
-    params = ad.random_params(mesh, n, seed=2, bend=0.2)
+    params = ad.random_params(mesh, n, seed=2, variation=ad.Variation(bend=0.2))
     params[:, 10:13] = 0.0
     params[:, 10] = np.arange(n) * 2.0 * length  # a row along x
     cam = ad.Camera(eye=(2.0 * length, 0.5 * length, 6.0 * length), target=(2.0 * length, 0.5 * length, 0.0),
                     fovy=35.0, near=0.01 * length, far=100.0 * length)
-    with ad.AxialRenderer(ctx, mesh, params, indirect=indirect) as culled, \
-            ad.AxialRenderer(ctx, mesh, params, culling=False) as full:
+    with ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(indirect=indirect)) as culled, \
+            ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(culling=False)) as full:
         for mode in ("solid", "wireframe"):
-            a = ad.render_image(mesh, params, (96, 64), mode, ctx=ctx, camera=cam, renderer=full)
-            b = ad.render_image(mesh, params, (96, 64), mode, ctx=ctx, camera=cam, renderer=culled)
+            a = ad.render_image(mesh, params, (96, 64), mode, ctx=ctx, camera=cam, options=ad.RenderOptions(renderer=full))
+            b = ad.render_image(mesh, params, (96, 64), mode, ctx=ctx, camera=cam, options=ad.RenderOptions(renderer=culled))
             assert full.stats["visible"] == n and not full.stats["culling"]
             assert culled.stats["culling"] and 0 < culled.stats["visible"] < n // 4, culled.stats
             assert culled.stats["indirect"] == indirect
@@ -519,7 +519,7 @@ def test_lod_of_a_mesh_with_parts_is_drawn_not_refused(ctx):
     all too small to simplify, so it keeps one level and says so."""
     mesh = ad.load_mesh(data_mesh(ALPHA_TEST))
     with pytest.warns(UserWarning, match="too few to simplify"):
-        with ad.AxialRenderer(ctx, mesh, ad.random_params(mesh, 4, seed=1), lod=True) as r:
+        with ad.AxialRenderer(ctx, mesh, ad.random_params(mesh, 4, seed=1), options=ad.RenderOptions(lod=True)) as r:
             assert r.lod and len(r.lod_levels) == 1
     assert ctx.error == "GL_NO_ERROR"
 
@@ -792,7 +792,7 @@ def test_textures_pass_through_export_as_the_model_ships_them(tmp_path):
 
     source = data_mesh(ALPHA_TEST)
     mesh = ad.load_mesh(source)
-    params = ad.random_params(mesh, 3, seed=2, bend=0.1)
+    params = ad.random_params(mesh, 3, seed=2, variation=ad.Variation(bend=0.1))
     pos, nrm = ad.bake(mesh, params)
     files = write_mesh_folder(tmp_path / "out", mesh, (pos, nrm), "glb", params=params)
 

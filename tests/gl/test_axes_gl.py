@@ -40,7 +40,7 @@ def comb(k: int, seed: int = 0):
 
 def _params(mesh, n=40, seed=1, extended=False):
     options = {"scale": (0.6, 1.4), "twist": 0.8, "taper": 0.4} if extended else {}
-    return ad.random_params(mesh, n, seed=seed, bend=(0.1, 0.3, 0.3), placement="disc", spacing=3.0, **options)
+    return ad.random_params(mesh, n, seed=seed, variation=ad.Variation(bend=(0.1, 0.3, 0.3), **options), placement="disc", spacing=3.0)
 
 
 def _check_capture(ctx, mesh, p, **kw):
@@ -65,7 +65,7 @@ def test_gpu_equals_cpu_for_every_axis_count(ctx, k):
 def test_quantized_trees_equal_the_cpu(ctx):
     mesh = ad.load_mesh("tree", axes=TREE_AXES)
     p = _params(mesh, n=60, extended=True)
-    with AxialRenderer(ctx, mesh, p, quantized=True) as r:
+    with AxialRenderer(ctx, mesh, p, options=ad.RenderOptions(quantized=True)) as r:
         gpu = r.capture()
         standard = r.instances.read()
         children = r._axes.read()
@@ -81,10 +81,10 @@ def test_wind_sways_every_axis_on_gpu_as_on_cpu(ctx):
     mesh = ad.load_mesh("tree", axes=TREE_AXES)
     p = _params(mesh, n=30)
     wind = ad.Wind(direction=(1.0, 0.0, 0.3), strength=0.15, gustiness=0.6, frequency=0.5)
-    with AxialRenderer(ctx, mesh, p, wind=wind) as r:
+    with AxialRenderer(ctx, mesh, p, options=ad.RenderOptions(wind=wind)) as r:
         gpu = r.capture(time=4.0)
         still = r.capture(wind=None)
-    cpu = ad.bake(mesh, p, "cpu", wind=wind, time=4.0)
+    cpu = ad.bake(mesh, p, "cpu", options=ad.RenderOptions(wind=wind, time=4.0))
     L = mesh.axis.length
     assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * L * 3
     moved = np.linalg.norm(gpu[0] - still[0], axis=-1)  # the tips of the branches move most
@@ -107,13 +107,13 @@ def test_update_params_reaches_the_child_axes(ctx):
 def test_culling_a_forest_never_changes_its_picture(ctx):
     mesh = ad.load_mesh("tree", axes=TREE_AXES)
     # branches swung far (2 L_j): a tree whose trunk is out of view reaches into it by its branches alone
-    p = ad.random_params(mesh, 300, seed=3, bend=(0.05, 2.0, 2.0), placement="disc", spacing=2.0)
+    p = ad.random_params(mesh, 300, seed=3, variation=ad.Variation(bend=(0.05, 2.0, 2.0)), placement="disc", spacing=2.0)
     look = ad.Look(ground=False, shadow=False)
     camera = ad.Camera(eye=(6.0, 3.0, 5.0), target=(0.0, 1.5, 0.0), fovy=45.0)  # inside the forest
     view, proj = camera.view(), camera.projection(240 / 160)
     target = ad.Offscreen(ctx, (240, 160))
     try:
-        with AxialRenderer(ctx, mesh, p, culling=True) as r:
+        with AxialRenderer(ctx, mesh, p, options=ad.RenderOptions(culling=True)) as r:
             target.use(look.background)
             r.render(view, proj, look=look)
             culled = target.read()
@@ -144,7 +144,7 @@ def test_levels_of_detail_of_a_tree_keep_each_vertex_on_its_axis(ctx):
 
     mesh = ad.load_mesh("tree", axes=TREE_AXES)
     p = _params(mesh, n=20)
-    with AxialRenderer(ctx, mesh, p, lod=True) as r:
+    with AxialRenderer(ctx, mesh, p, options=ad.RenderOptions(lod=True)) as r:
         levels = r.lod_levels
         assert len(levels) >= 3
         for level in range(1, len(levels)):

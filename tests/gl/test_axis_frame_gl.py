@@ -28,7 +28,7 @@ def diag():
 
 
 def _params(mesh, extended):
-    p = ad.random_params(mesh, 60, seed=5, bend=0.2, spacing=2.0)
+    p = ad.random_params(mesh, 60, seed=5, variation=ad.Variation(bend=0.2), spacing=2.0)
     if extended:
         rng = np.random.default_rng(1)
         extra = np.stack([rng.uniform(0.5, 1.5, 60), rng.uniform(-1, 1, 60), rng.uniform(-0.5, 0.6, 60)], axis=1)
@@ -41,7 +41,7 @@ def _params(mesh, extended):
 def test_gpu_equals_cpu_on_a_framed_axis(ctx, diag, extended, quantized):
     assert diag.axis.framed
     p = _params(diag, extended)
-    with AxialRenderer(ctx, diag, p, quantized=quantized) as r:
+    with AxialRenderer(ctx, diag, p, options=ad.RenderOptions(quantized=quantized)) as r:
         assert "u_frame" in r.program and "u_axis" not in r.program
         gpu_pos, gpu_nrm = r.capture()
         used = r.instances.read()  # the numbers on the GPU (quantized: decoded)
@@ -55,10 +55,10 @@ def test_gpu_equals_cpu_on_a_framed_axis(ctx, diag, extended, quantized):
 def test_gpu_wind_equals_cpu_on_a_framed_axis(ctx, diag):
     wind = ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.6, frequency=0.5)
     p = _params(diag, False)
-    with AxialRenderer(ctx, diag, p, wind=wind) as r:
+    with AxialRenderer(ctx, diag, p, options=ad.RenderOptions(wind=wind)) as r:
         gpu = r.capture(time=3.5)
         still = r.capture(wind=None)
-    cpu = ad.bake(diag, p, "cpu", wind=wind, time=3.5)
+    cpu = ad.bake(diag, p, "cpu", options=ad.RenderOptions(wind=wind, time=3.5))
     L = diag.axis.length
     reach = max(1.0, float(np.abs(p[:, 10:13]).max()) / L)
     assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * L * reach
@@ -71,7 +71,7 @@ def test_framed_tangents_on_the_gpu_equal_the_cpu(ctx):
     deform_tangents stays unit and in the bent surface (⟂ to n)."""
     mesh = ad.load_mesh(data_mesh("assets/AlphaBlendModeTest.glb"), axis=rotation(0.2, 0.1, 0.05))
     assert mesh.axis.framed and mesh.tangents is not None
-    p = ad.random_params(mesh, 8, seed=2, bend=0.2)
+    p = ad.random_params(mesh, 8, seed=2, variation=ad.Variation(bend=0.2))
     tan = deform_tangents(mesh.axis, mesh.positions, mesh.tangents, p)
     _, nrm = ad.deform(mesh, p)
     assert np.abs(np.linalg.norm(tan, axis=-1) - 1).max() < 1e-5

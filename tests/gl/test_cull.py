@@ -19,7 +19,7 @@ from helpers.gl_scenes import BACKGROUND, draw, look, meshes_for_all_axes
 
 def field(mesh, n=3000, seed=4):
     """Stones scattered on a disc (y up), radius about 30 L."""
-    return ad.random_params(mesh, n, seed=seed, bend=0.15, placement="disc", spacing=1.0 * mesh.axis.length)
+    return ad.random_params(mesh, n, seed=seed, variation=ad.Variation(bend=0.15), placement="disc", spacing=1.0 * mesh.axis.length)
 
 
 # ------------------------------------------------------------------ bounds
@@ -34,8 +34,8 @@ def test_bounds_hold_every_gpu_vertex_and_are_tight(ctx, tmp_path, stone, leaf):
     rng = np.random.default_rng(14)
     for name, mesh in meshes_for_all_axes(tmp_path, stone, leaf).items():
         for _ in range(3):
-            params = ad.random_params(mesh, 400, seed=int(rng.integers(1 << 30)), bend=float(rng.uniform(0.02, 0.4)),
-                                      placement="disc", tilt=(-3, 3))
+            variation = ad.Variation(bend=float(rng.uniform(0.02, 0.4)), tilt=(-3, 3))
+            params = ad.random_params(mesh, 400, seed=int(rng.integers(1 << 30)), variation=variation, placement="disc")
             with ad.AxialRenderer(ctx, mesh, params) as r:
                 world, _ = r.capture()
             centers, radii = instance_bounds(mesh, params)
@@ -63,7 +63,7 @@ def test_gpu_culling_agrees_with_the_numpy_spheres(ctx, stone, kind, indirect):
     params = extended_field(stone, 3000) if kind.startswith("extended") else field(stone)
     wind = Wind(direction=(1.0, 0.0, 0.2), strength=0.5, gustiness=0.9) if kind.endswith("wind") else None
     view, proj = look((2.0, 1.7, -3.0), (30.0, 0.0, 20.0))
-    with ad.AxialRenderer(ctx, stone, params, wind=wind, quantized=kind == "quantized", indirect=indirect) as r:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(wind=wind, quantized=kind == "quantized", indirect=indirect)) as r:
         draw(ctx, r, view, proj)
         cull = r._cull_passes[False]
         assert cull.indirect == indirect and r.stats["indirect"] == indirect
@@ -109,8 +109,8 @@ CAMERAS = {
 def test_culled_picture_equals_unculled_pixel_for_pixel(ctx, stone, variant, indirect):
     params = field(stone)
     quantized = variant == "quantized"
-    with ad.AxialRenderer(ctx, stone, params, quantized=quantized, indirect=indirect) as culled, \
-            ad.AxialRenderer(ctx, stone, params, quantized=quantized, culling=False) as full:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(quantized=quantized, indirect=indirect)) as culled, \
+            ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(quantized=quantized, culling=False)) as full:
         if variant == "tinted":
             tint = np.random.default_rng(1).uniform(0, 1, (len(params), 3))
             culled.set_tint(tint)
@@ -146,7 +146,7 @@ def test_capture_is_of_every_instance_with_culling_on(ctx, stone):
 def test_culling_off_draws_everything_and_stats_count_vertices(ctx, stone):
     params = field(stone, 200)
     view, proj = look((0.0, 1.7, 34.0), (0.0, 1.7, 80.0))
-    with ad.AxialRenderer(ctx, stone, params, culling=False) as r:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(culling=False)) as r:
         draw(ctx, r, view, proj)
         assert r.stats == {"submitted": 200, "visible": 200, "levels": [200], "vertices": 200 * stone.vertex_count,
                            "culling": False, "lod": False, "indirect": False}
@@ -174,10 +174,10 @@ def test_lod_gpu_vertices_use_the_base_axis(ctx, stone):
     would not show it, so compare silhouettes)."""
     levels = build_lod_levels(stone)
     coarse = levels[-1]
-    params = ad.random_params(stone, 1, seed=3, bend=0.3)
+    params = ad.random_params(stone, 1, seed=3, variation=ad.Variation(bend=0.3))
     params[0, 10:13] = (0.0, 0.0, -6.0)
     view, proj = look((0.0, 0.0, 0.0), (0.0, 0.0, -6.0), fovy=30, aspect=1)
-    with ad.AxialRenderer(ctx, stone, params, lod=True, lod_error=1e6) as r:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(lod=True, lod_error=1e6)) as r:
         img = draw(ctx, r, view, proj, size=(96, 96))
         assert r.stats["levels"][-1] == 1 and r.stats["vertices"] == coarse.vertex_count
     world, _ = ad.deform(stone.axis, coarse.positions, coarse.normals, params)
@@ -185,7 +185,7 @@ def test_lod_gpu_vertices_use_the_base_axis(ctx, stone):
     rigid = params.copy()
     rigid[:, :10] = 0
     rigid[:, 13:16] = 0
-    with ad.AxialRenderer(ctx, ref_mesh, rigid, cull_back_faces=stone.is_volume) as ref:
+    with ad.AxialRenderer(ctx, ref_mesh, rigid, options=ad.RenderOptions(cull_back_faces=stone.is_volume)) as ref:
         expected = draw(ctx, ref, view, proj, size=(96, 96))
     bg = np.round(np.array(BACKGROUND) * 255)
     mask_a, mask_b = (img != bg).any(axis=2), (expected != bg).any(axis=2)
@@ -198,8 +198,8 @@ def test_lod_picks_levels_by_screen_error_and_stays_close(ctx, stone, kind):
     params = extended_field(stone, 3000) if kind.startswith("extended") else field(stone)
     quantized = kind.endswith("quantized")
     view, proj = look((1.0, 1.7, 0.5), (25.0, 0.2, 12.0))
-    with ad.AxialRenderer(ctx, stone, params, quantized=quantized) as full, \
-            ad.AxialRenderer(ctx, stone, params, lod=True, quantized=quantized) as lod:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(quantized=quantized)) as full, \
+            ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(lod=True, quantized=quantized)) as lod:
         a = draw(ctx, full, view, proj, size=(320, 240))
         b = draw(ctx, lod, view, proj, size=(320, 240))
         levels = lod.stats["levels"]
@@ -220,17 +220,17 @@ def test_lod_picks_levels_by_screen_error_and_stays_close(ctx, stone, kind):
 def test_lod_bad_input(ctx, stone):
     for bad in (0, -1, float("nan"), "x"):
         with pytest.raises(ad.core.ParamError, match="lod_error: expected a number of pixels > 0"):
-            ad.AxialRenderer(ctx, stone, field(stone, 3), lod=True, lod_error=bad)
+            ad.AxialRenderer(ctx, stone, field(stone, 3), options=ad.RenderOptions(lod=True, lod_error=bad))
     tetra = make_mesh([(0, 0, 0), (2, 0, 0), (0.6, 0.8, 0), (0.6, 0.3, 0.7)], [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)])
     with pytest.warns(UserWarning, match="too few to simplify"):
-        with ad.AxialRenderer(ctx, tetra, ad.random_params(tetra, 3), lod=True) as r:
+        with ad.AxialRenderer(ctx, tetra, ad.random_params(tetra, 3), options=ad.RenderOptions(lod=True)) as r:
             assert len(r.lod_levels) == 1
 
 
 # ------------------------------------------------------------------ extended instances and wind
 def extended_field(mesh, n=2000, seed=6):
-    return ad.random_params(mesh, n, seed=seed, bend=0.2, placement="disc", spacing=1.0 * mesh.axis.length,
-                            scale=(0.5, 1.8), twist=2.5, taper=0.8, tilt=(-3, 3))
+    return ad.random_params(mesh, n, seed=seed, variation=ad.Variation(bend=0.2, scale=(0.5, 1.8), twist=2.5, taper=0.8, tilt=(-3, 3)),
+                            placement="disc", spacing=1.0 * mesh.axis.length)
 
 
 def test_bounds_cover_scale_twist_taper_and_wind(ctx, tmp_path, stone, leaf):
@@ -267,8 +267,8 @@ def test_culled_picture_equals_unculled_extended_and_windy(ctx, stone, quantized
 
     params = extended_field(stone, 3000)
     wind = Wind(direction=(0.3, 0.0, 1.0), strength=0.4, gustiness=0.8, frequency=1.0, wavelength=6.0)
-    with ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind, indirect=indirect) as culled, \
-            ad.AxialRenderer(ctx, stone, params, quantized=quantized, wind=wind, culling=False) as full:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(quantized=quantized, wind=wind, indirect=indirect)) as culled, \
+            ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(quantized=quantized, wind=wind, culling=False)) as full:
         assert culled.extended and culled._culled == {}
         for name in ("inside the field", "at its edge, looking in", "at its edge, looking away"):
             view, proj = look(*CAMERAS[name])
@@ -320,7 +320,7 @@ def test_viewer_draws_a_field_with_culling_and_lod(ctx):
 
     stone = ad.load_mesh("stone")
     params = ad.random_params(stone, 2000, seed=2)
-    v = Viewer.create(stone, params, headless=True, size=(160, 120), lod=True, lod_error=2.0)
+    v = Viewer.create(stone, params, headless=True, size=(160, 120), options=ad.RenderOptions(lod=True, lod_error=2.0))
     try:
         assert v.renderer.culling_enabled and v.renderer.lod and len(v.renderer.lod_levels) >= 2
         v.orbit.zoom(0.3)  # zoom into the field: most instances leave the view
@@ -339,7 +339,8 @@ def test_culling_follows_set_params_and_set_tint(ctx, stone):
     culled picture still equals the unculled one."""
     small, big = field(stone, 100, seed=1), field(stone, 1500, seed=2)
     view, proj = look((1.0, 1.7, 0.5), (25.0, 0.2, 12.0))
-    with ad.AxialRenderer(ctx, stone, small) as culled, ad.AxialRenderer(ctx, stone, small, culling=False) as full:
+    with ad.AxialRenderer(ctx, stone, small) as culled, ad.AxialRenderer(ctx, stone, small,
+                                                                         options=ad.RenderOptions(culling=False)) as full:
         assert np.array_equal(draw(ctx, full, view, proj), draw(ctx, culled, view, proj))
         for r in (culled, full):
             r.set_params(big)
@@ -393,9 +394,9 @@ def test_indirect_and_query_paths_agree_with_lod(ctx, stone, variant):
     params = extended_field(stone, 3000) if variant == "extended" else field(stone)
     quantized = "quantized" in variant
     kw = dict(quantized=quantized, lod=True, lod_error=2.0)
-    with ad.AxialRenderer(ctx, stone, params, indirect=True, **kw) as ind, \
-            ad.AxialRenderer(ctx, stone, params, indirect=False, **kw) as query, \
-            ad.AxialRenderer(ctx, stone, params, culling=False, **kw) as uncull:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(indirect=True), **kw) as ind, \
+            ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(indirect=False), **kw) as query, \
+            ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(culling=False), **kw) as uncull:
         if "tinted" in variant:
             tint = np.random.default_rng(5).uniform(0, 1, (len(params), 3))
             for r in (ind, query, uncull):
@@ -435,8 +436,8 @@ def test_an_indirect_frame_never_waits_for_the_count(ctx, stone, monkeypatch):
         reads.append(self)
         return original_read(self, *args, **kwargs)
 
-    with ad.AxialRenderer(ctx, stone, params, indirect=True) as r, \
-            ad.AxialRenderer(ctx, stone, params, indirect=False) as ref, ad.gl.ShadowMap(ctx, 256) as shadow:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(indirect=True)) as r, \
+            ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(indirect=False)) as ref, ad.gl.ShadowMap(ctx, 256) as shadow:
         expected = draw(ctx, ref, view, proj)
         with Offscreen(ctx, (160, 120), samples=4) as target:
             monkeypatch.setattr(moderngl.Buffer, "read", counting_read)
@@ -485,7 +486,7 @@ def test_indirect_pass_on_a_two_dimensional_grid_of_work_groups(ctx, stone, monk
 
     params = field(stone)  # 3000 instances: 24 blocks of 128 -> a 5 x 5 grid
     view, proj = look(*CAMERAS["at its edge, looking in"])
-    with ad.AxialRenderer(ctx, stone, params, indirect=True) as r:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(indirect=True)) as r:
         expected = draw(ctx, r, view, proj)
         counts = r.stats["levels"]
         records = _compacted(r._cull_passes[False], counts)
@@ -506,8 +507,8 @@ def test_shadow_pass_culls_casters_to_the_light_volume(ctx, stone, indirect):
     only the casters that reach the light's view volume and writes the same
     depth map as drawing every instance."""
     params = field(stone)
-    with ad.AxialRenderer(ctx, stone, params, indirect=indirect) as culled, \
-            ad.AxialRenderer(ctx, stone, params, culling=False) as full, \
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(indirect=indirect)) as culled, \
+            ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(culling=False)) as full, \
             ad.gl.ShadowMap(ctx, 512) as shadow:
         maps = []
         corner = params[(params[:, 10] > 0.5 * EDGE) & (params[:, 12] > 0.3 * EDGE)]
@@ -555,7 +556,7 @@ def test_a_compute_pass_that_does_not_build_falls_back_to_the_query_path(ctx, st
 
     params = field(stone, 300)
     view, proj = look(*CAMERAS["inside the field"])
-    with ad.AxialRenderer(ctx, stone, params, culling=False) as full:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(culling=False)) as full:
         expected = draw(ctx, full, view, proj)
 
     def broken(*args, **kwargs):

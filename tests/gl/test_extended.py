@@ -39,7 +39,7 @@ def real_meshes():
 
 
 def extended(mesh, n=12, seed=5):
-    p = ad.random_params(mesh, n, seed=seed, bend=0.1)
+    p = ad.random_params(mesh, n, seed=seed, variation=ad.Variation(bend=0.1))
     rng = np.random.default_rng(seed)
     e = extend_params(p)
     e[:, 16] = rng.uniform(0.4, 2.5, n)
@@ -152,7 +152,7 @@ def test_gpu_capture_equals_cpu_on_real_meshes(ctx, real_meshes, quantized):
     for name, mesh in real_meshes.items():
         L = mesh.axis.length
         params = extended(mesh, n=10)
-        with AxialRenderer(ctx, mesh, params, quantized=quantized) as r:
+        with AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(quantized=quantized)) as r:
             assert r.extended and r.instances.record_bytes == (40 if quantized else 76)
             gpu = r.capture()
             on_gpu = r.instances.read()
@@ -169,9 +169,9 @@ def test_gpu_capture_equals_cpu_on_real_meshes(ctx, real_meshes, quantized):
 def test_identity_extension_is_bitwise_the_16_number_result_gpu(ctx, real_meshes, quantized):
     mesh = real_meshes["bunny-y"]
     p = ad.random_params(mesh, 6, seed=4)
-    with AxialRenderer(ctx, mesh, p, quantized=quantized) as r:
+    with AxialRenderer(ctx, mesh, p, options=ad.RenderOptions(quantized=quantized)) as r:
         a = r.capture()
-    with AxialRenderer(ctx, mesh, extend_params(p), quantized=quantized) as r:
+    with AxialRenderer(ctx, mesh, extend_params(p), options=ad.RenderOptions(quantized=quantized)) as r:
         b = r.capture()
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[1], b[1])
@@ -179,7 +179,7 @@ def test_identity_extension_is_bitwise_the_16_number_result_gpu(ctx, real_meshes
 
 def test_renderer_widths(ctx, stone):
     p = ad.random_params(stone, 3, seed=1)
-    with AxialRenderer(ctx, stone, p, extended=True) as r:  # 16 numbers into an extended renderer
+    with AxialRenderer(ctx, stone, p, options=ad.RenderOptions(extended=True)) as r:  # 16 numbers into an extended renderer
         got = r.instances.read()
         assert got.shape == (3, 19)
         np.testing.assert_array_equal(got[:, 16:], [[1, 0, 0]] * 3)

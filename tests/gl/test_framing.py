@@ -23,7 +23,7 @@ def _extent(image):
                                                ("stone", 3000, (200, 150))])  # 3000: framed by spheres
 def test_automatic_framing_fills_80_percent_and_cuts_nothing(ctx, name, count, size):
     mesh = ad.load_mesh(name)
-    params = ad.random_params(mesh, count, seed=4, bend=0.15)
+    params = ad.random_params(mesh, count, seed=4, variation=ad.Variation(bend=0.15))
     image = ad.render_image(mesh, params, size, ctx=ctx, look=ad.Look(ground=False))  # what differs from the background: instances
     width, height, touches = _extent(image)
     assert max(width, height) >= 0.8, (width, height)
@@ -31,7 +31,7 @@ def test_automatic_framing_fills_80_percent_and_cuts_nothing(ctx, name, count, s
 
 
 def test_projected_outline_is_centred_and_inside(stone):
-    params = ad.random_params(stone, 300, seed=9, bend=0.2)
+    params = ad.random_params(stone, 300, seed=9, variation=ad.Variation(bend=0.2))
     cam = frame_instances(stone, params, 4 / 3)
     world, _ = ad.deform(stone.axis, stone.positions, stone.normals, params)
     p = np.c_[world.reshape(-1, 3), np.ones(world.shape[0] * world.shape[1])].astype(np.float32)

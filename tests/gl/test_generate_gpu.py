@@ -262,7 +262,7 @@ def test_a_quantized_renderer_cannot_take_gpu_made_instances(ctx):
     from axialdeform.gl.renderer import AxialRenderer
 
     stone = ad.load_mesh("stone")
-    renderer = AxialRenderer(ctx, stone, np.zeros((4, 16), np.float32), quantized=True)
+    renderer = AxialRenderer(ctx, stone, np.zeros((4, 16), np.float32), options=ad.RenderOptions(quantized=True))
     try:
         with pytest.raises(AxialDeformError, match="quantized=False"):
             renderer.gpu_targets(10)
@@ -277,10 +277,10 @@ def test_view_draws_the_gpus_records_and_makes_none_on_the_cpu(monkeypatch):
     them again on the GPU, as numpy makes them with seed + 7919 and offsets x 1.25."""
     import axialdeform.core.generate as core_generate
     from axialdeform.core.record import split_record
-    from axialdeform.viewer import Viewer
+    from axialdeform.viewer import Viewer, ViewerSettings
 
     scene = ad.Scene.load(Path(__file__).resolve().parents[2] / "examples" / "generated" / "walk.toml")
-    v = Viewer.create(scene, headless=True, size=(96, 72), walk=(30.0, 18.0))
+    v = Viewer.create(scene, headless=True, size=(96, 72), settings=ViewerSettings(walk=(30.0, 18.0)))
 
     def refuse(*_a, **_k):
         raise AssertionError("a tile was made on the CPU")
@@ -346,7 +346,7 @@ def test_a_generated_instance_keeps_its_sway_and_shade_when_its_tiles_are_made_a
     stone = ad.load_mesh("stone")
     recipe = Generate(rate=1.0, tile=4.0, min_distance=0.3, seed=12, bend=0.1)
     wind = ad.Wind(direction=(1.0, 0.0, 0.3), strength=0.3, gustiness=0.7)
-    renderer = AxialRenderer(ctx, stone, np.zeros((0, 16), np.float32), wind=wind, position_ids=True)
+    renderer = AxialRenderer(ctx, stone, np.zeros((0, 16), np.float32), options=ad.RenderOptions(wind=wind, position_ids=True))
     gen = GeneratedTiles(renderer, recipe, stone)
     try:
         bent = []
@@ -372,7 +372,7 @@ def test_a_generated_instance_keeps_its_sway_and_shade_when_its_tiles_are_made_a
     camera = Camera(eye=(4.0, 6.0, 9.0), target=(4.0, 0.0, 2.0), fovy=40.0, near=0.1, far=100.0)
     pictures = {}
     for ids in (True, False):
-        renderer = AxialRenderer(ctx, stone, np.zeros((0, 16), np.float32), position_ids=ids)
+        renderer = AxialRenderer(ctx, stone, np.zeros((0, 16), np.float32), options=ad.RenderOptions(position_ids=ids))
         gen = GeneratedTiles(renderer, recipe, stone)
         target = ctx.simple_framebuffer((160, 120))
         try:

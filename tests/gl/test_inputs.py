@@ -105,7 +105,7 @@ def test_update_params_error_names_set_params(ctx, stone):
     with ad.AxialRenderer(ctx, stone, params) as r:
         with pytest.raises(ad.core.ParamError, match=r"^update_params: .*set_params\(\)"):
             r.update_params(params, start=2)
-    with ad.AxialRenderer(ctx, stone, params, quantized=True) as r:
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(quantized=True)) as r:
         big = params[:1].copy()
         big[0, 10] += 1000.0
         with pytest.raises(ad.core.ParamError, match=r"set_params\(\)"):

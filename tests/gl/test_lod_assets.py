@@ -130,7 +130,7 @@ def test_a_mesh_without_a_large_enough_part_keeps_one_level():
 
 def meadow(mesh, n=1500, seed=4):
     """``n`` instances scattered on a disc (y up) of radius about 30 L."""
-    return ad.random_params(mesh, n, seed=seed, bend=0.15, placement="disc", spacing=1.4 * mesh.axis.length)
+    return ad.random_params(mesh, n, seed=seed, variation=ad.Variation(bend=0.15), placement="disc", spacing=1.4 * mesh.axis.length)
 
 
 MEADOW_VIEW = look((1.0, 1.7, 0.5), (25.0, 0.2, 12.0))
@@ -142,7 +142,7 @@ def test_lod_draws_textured_multi_part_meshes_close_to_the_full_picture(ctx, mak
     mesh = make()
     params = meadow(mesh)
     view, proj = MEADOW_VIEW
-    with ad.AxialRenderer(ctx, mesh, params) as full, ad.AxialRenderer(ctx, mesh, params, lod=True) as lod:
+    with ad.AxialRenderer(ctx, mesh, params) as full, ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(lod=True)) as lod:
         assert len(lod.lod_levels) >= 3
         a = draw(ctx, full, view, proj, size=(320, 240)).astype(int)
         b = draw(ctx, lod, view, proj, size=(320, 240)).astype(int)
@@ -163,7 +163,7 @@ def test_lod_draws_textured_multi_part_meshes_close_to_the_full_picture(ctx, mak
         assert sum(lod.stats["levels"][1:]) > 0 and not np.array_equal(wa, wb)
         assert np.abs(wa.astype(int) - wb).mean() / 255 < 0.05
     if len(mesh.parts) > 1:
-        with ad.AxialRenderer(ctx, mesh, params, lod=True, parts="stone") as one:
+        with ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(lod=True, parts="stone")) as one:
             for mode in ("solid", "wireframe"):
                 img = draw(ctx, one, view, proj, mode=mode, size=(160, 120)).astype(int)
                 assert sum(one.stats["levels"][1:]) > 0
@@ -175,9 +175,9 @@ def test_lod_draws_textured_multi_part_meshes_close_to_the_full_picture(ctx, mak
 @pytest.mark.parametrize("make", [fine_leafcard, two_part_mesh])
 def test_gpu_capture_of_every_level_equals_the_cpu_reference(ctx, make):
     mesh = make()
-    params = ad.random_params(mesh, 12, seed=7, bend=0.25)
+    params = ad.random_params(mesh, 12, seed=7, variation=ad.Variation(bend=0.25))
     tol = 1e-5 * mesh.axis.length
-    with ad.AxialRenderer(ctx, mesh, params, lod=True) as r:
+    with ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(lod=True)) as r:
         assert len(r.lod_levels) >= 3
         for k, level in enumerate(r.lod_levels):
             pos, nrm = r.capture(level=k)
@@ -196,7 +196,7 @@ def test_lod_of_a_mesh_too_small_draws_one_level(ctx):
     view, proj = MEADOW_VIEW
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        with ad.AxialRenderer(ctx, mesh, params, lod=True) as lod, ad.AxialRenderer(ctx, mesh, params) as full:
+        with ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(lod=True)) as lod, ad.AxialRenderer(ctx, mesh, params) as full:
             assert len(lod.lod_levels) == 1
             assert np.array_equal(draw(ctx, lod, view, proj), draw(ctx, full, view, proj))
     assert any("too few to simplify" in str(w.message) for w in caught)
@@ -222,7 +222,7 @@ def test_scene_and_viewer_draw_lod_of_a_two_part_textured_layer(ctx):
     with SceneRenderer(ctx, scene, lod=True) as sr:
         r = sr.layer("leaves")
         assert r.lod and len(r.lod_levels) >= 3 and [p.name for p in r.lod_levels[-1].parts] == ["leaf", "stone"]
-    v = Viewer.create(mesh, params, headless=True, size=(160, 120), lod=True)
+    v = Viewer.create(mesh, params, headless=True, size=(160, 120), options=ad.RenderOptions(lod=True))
     try:
         v.orbit.zoom(0.3)
         v.step(1)
@@ -283,7 +283,7 @@ def test_one_instanced_draw_per_level_and_part(ctx, monkeypatch, indirect):
         indirect_calls.append((int(command[1]), int(command[0]), int(command[2])))
         return result
 
-    with ad.AxialRenderer(ctx, mesh, params, lod=True, indirect=indirect) as r:
+    with ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(lod=True, indirect=indirect)) as r:
         # whole draws (a multisampled frame on llvmpipe is otherwise drawn in slices: tests/gl/test_render.py)
         monkeypatch.setattr(ctx, "_axialdeform_flush", None, raising=False)
         monkeypatch.setattr(moderngl.VertexArray, "render", spy)

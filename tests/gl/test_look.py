@@ -49,7 +49,7 @@ def test_scene_files_map_onto_the_look(tmp_path):
 def test_the_ground_reaches_the_edges_of_the_picture(ctx, stone):
     """Near and far enclose the ground plane: no straight cut where the picture's
     bottom (and, below the horizon, its sides) would show the background."""
-    params = ad.random_params(stone, 300, seed=2003, bend=0.14, placement="disc", spacing=0.9 * stone.axis.length)
+    params = ad.random_params(stone, 300, seed=2003, variation=ad.Variation(bend=0.14), placement="disc", spacing=0.9 * stone.axis.length)
     cam = ad.frame_instances(stone, params, 160 / 120, elevation=30.0, azimuth=20.0)  # the demo's camera
     img = ad.render_image(stone, params, (160, 120), ctx=ctx, camera=cam, look=ad.Look(samples=0)).astype(int)
     bg = np.round(np.array(ad.Look().background) * 255)

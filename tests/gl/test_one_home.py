@@ -38,7 +38,7 @@ def test_core_bake_needs_no_gl_and_the_gpu_engine_lives_in_gl(stone, ctx):
     from axialdeform.gl import bake as gl_bake
 
     assert ad.bake is gl_bake.bake  # (that core imports no GL: tests/app/test_layers.py)
-    params = ad.random_params(stone, 4, seed=2, bend=0.2)
+    params = ad.random_params(stone, 4, seed=2, variation=ad.Variation(bend=0.2))
     cpu, _ = bake_mod.bake_cpu(stone, params)
     gpu, _ = ad.bake(stone, params, "gpu", ctx=ctx)
     assert np.abs(gpu - cpu).max() < 1e-5 * stone.axis.length
@@ -52,7 +52,7 @@ def test_quantization_has_one_home(stone, tmp_path):
     file decodes to dequantize_params(quantize_params(values))."""
     from axialdeform.core import quantize
 
-    values = ad.random_params(stone, 50, seed=3, bend=0.2)
+    values = ad.random_params(stone, 50, seed=3, variation=ad.Variation(bend=0.2))
     lo, step, q = quantize.quantize_params(values)
     assert np.array_equal(quantize.quantize_with_table(values, lo, step), q)
     outside = values[:2].copy()

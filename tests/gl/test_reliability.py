@@ -157,7 +157,7 @@ def test_1000_renderers_leave_nothing_behind(ctx):
 
     def cycle(i):
         with ad.Offscreen(counting, (8, 8), samples=0) as target:
-            r = ad.AxialRenderer(counting, mesh, params, quantized=bool(i % 2))
+            r = ad.AxialRenderer(counting, mesh, params, options=ad.RenderOptions(quantized=bool(i % 2)))
             target.use()
             r.render(view, proj, ("solid", "flat", "wireframe")[i % 3])
             if i % 50 == 0:
@@ -248,7 +248,7 @@ def test_million_instances_one_draw_call(ctx, quantized):
     view = pyrr.matrix44.create_look_at((570.0, 450, 670), (150.0, 150, 150), (0, 1, 0))
     proj = pyrr.matrix44.create_perspective_projection(45, 1, 1, 3000)
     # culling=False: the plain path draws every instance in ONE call (tests/gl/test_cull.py covers the culled draw)
-    with ad.AxialRenderer(ctx, mesh, params, quantized=quantized, culling=False) as r, \
+    with ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(quantized=quantized, culling=False)) as r, \
             ad.Offscreen(ctx, (96, 96), samples=0) as target:
         assert r.count == n
         assert r.instances.buffer.size == n * (32 if quantized else 64)
@@ -267,7 +267,7 @@ def test_quantized_gpu_capture_matches_cpu_of_dequantized(ctx, stone, leaf):
         lo, step, q = quantize_params(params)
         expected = dequantize_params(lo, step, q)
         cpu_pos, cpu_nrm = deform(mesh.axis, mesh.positions, mesh.normals, expected)
-        with ad.AxialRenderer(ctx, mesh, params, quantized=True) as r:
+        with ad.AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(quantized=True)) as r:
             assert np.array_equal(r.instances.read(), expected)
             pos, nrm = r.capture()
             L = mesh.axis.length

@@ -16,7 +16,7 @@ from helpers.gl_scenes import meshes_for_all_axes
 def test_gpu_capture_equals_cpu_reference(ctx, tmp_path, stone, leaf):
     for name, mesh in meshes_for_all_axes(tmp_path, stone, leaf).items():
         L = mesh.axis.length
-        params = ad.random_params(mesh, 1200, seed=11, bend=0.2, placement="disc", tilt=(-3, 3))
+        params = ad.random_params(mesh, 1200, seed=11, variation=ad.Variation(bend=0.2, tilt=(-3, 3)), placement="disc")
         with ad.AxialRenderer(ctx, mesh, params) as r:
             gpu_pos, gpu_nrm = r.capture()
         cpu_pos, cpu_nrm = ad.deform(mesh.axis, mesh.positions, mesh.normals, params)
@@ -31,7 +31,7 @@ def test_gpu_capture_equals_cpu_reference(ctx, tmp_path, stone, leaf):
 def test_capture_in_chunks_and_slices(ctx, stone, monkeypatch):
     import axialdeform.gl.capture as R
 
-    params = ad.random_params(stone, 100, seed=2, bend=0.3)
+    params = ad.random_params(stone, 100, seed=2, variation=ad.Variation(bend=0.3))
     monkeypatch.setattr(R, "_CAPTURE_BYTES", 58 * 24 * 7)  # 7 instances per pass
     with ad.AxialRenderer(ctx, stone, params) as r:
         pos, nrm = r.capture(start=13, count=40)
@@ -40,8 +40,8 @@ def test_capture_in_chunks_and_slices(ctx, stone, monkeypatch):
 
 
 def test_no_bend_program_is_rigid(ctx, stone):
-    params = ad.random_params(stone, 50, seed=3, bend=0.3)
-    with ad.AxialRenderer(ctx, stone, params, bend=False) as r:
+    params = ad.random_params(stone, 50, seed=3, variation=ad.Variation(bend=0.3))
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(bend=False)) as r:
         pos, _ = r.capture()
     rigid = params.copy()
     rigid[:, :10] = 0
@@ -85,11 +85,11 @@ def test_one_draw_call_draws_every_instance(ctx, stone, monkeypatch):
 
 
 def test_same_parameters_give_identical_pixels(ctx, stone):
-    params = ad.random_params(stone, 1500, seed=4, bend=0.15)
+    params = ad.random_params(stone, 1500, seed=4, variation=ad.Variation(bend=0.15))
     a = ad.render_image(stone, params, (320, 240), ("solid", "flat", "wireframe"), ctx=ctx)
     b = ad.render_image(stone, params, (320, 240), ("solid", "flat", "wireframe"), ctx=ctx)
     assert np.array_equal(a, b)
-    other = ad.render_image(stone, ad.random_params(stone, 1500, seed=5, bend=0.15), (320, 240), "solid", ctx=ctx)
+    other = ad.render_image(stone, ad.random_params(stone, 1500, seed=5, variation=ad.Variation(bend=0.15)), (320, 240), "solid", ctx=ctx)
     assert not np.array_equal(a[:, :320], other)
 
 
@@ -98,7 +98,7 @@ def _mask(img, background):
 
 
 def test_solid_and_wireframe_cover_the_same_silhouette(ctx, stone):
-    params = ad.random_params(stone, 60, seed=8, bend=0.25, spacing=2.5 * stone.axis.length)
+    params = ad.random_params(stone, 60, seed=8, variation=ad.Variation(bend=0.25), spacing=2.5 * stone.axis.length)
     # a black background: every lit stone pixel and every line differs from it
     img = ad.render_image(stone, params, (480, 360), ("solid", "wireframe"), ctx=ctx,
                           look=ad.Look(samples=0, background=(0, 0, 0), line_color=(1, 1, 1), fast=True))
@@ -118,7 +118,7 @@ def test_solid_and_wireframe_cover_the_same_silhouette(ctx, stone):
 
 
 def test_flat_and_solid_differ_only_in_shading(ctx, stone):
-    params = ad.random_params(stone, 40, seed=8, bend=0.25, spacing=2.5 * stone.axis.length)
+    params = ad.random_params(stone, 40, seed=8, variation=ad.Variation(bend=0.25), spacing=2.5 * stone.axis.length)
     img = ad.render_image(stone, params, (320, 240), ("solid", "flat"), ctx=ctx, look=ad.Look(samples=0, fast=True))
     bg = img[0, 0].astype(int)
     solid, flat = _mask(img[:, :320], bg), _mask(img[:, 320:], bg)
@@ -127,10 +127,10 @@ def test_flat_and_solid_differ_only_in_shading(ctx, stone):
 
 
 def test_parameter_updates_write_in_place(ctx, stone):
-    params = ad.random_params(stone, 500, seed=1, bend=0.1)
+    params = ad.random_params(stone, 500, seed=1, variation=ad.Variation(bend=0.1))
     with ad.AxialRenderer(ctx, stone, params) as r:
         glo = r.instances.buffer.glo
-        new = ad.random_params(stone, 500, seed=2, bend=0.1)
+        new = ad.random_params(stone, 500, seed=2, variation=ad.Variation(bend=0.1))
         r.set_params(new)
         r.update_params(params[100:150], start=100)
         expected = new.copy()
@@ -200,12 +200,12 @@ def test_back_faces_are_culled_only_where_nothing_changes(ctx, stone, leaf):
     draw leaves CULL_FACE off for whatever is drawn next."""
     from axialdeform.core.camera import frame_instances
 
-    stones = ad.random_params(stone, 300, seed=3, bend=0.2)
-    leaves = ad.random_params(leaf, 300, seed=3, bend=0.2)
+    stones = ad.random_params(stone, 300, seed=3, variation=ad.Variation(bend=0.2))
+    leaves = ad.random_params(leaf, 300, seed=3, variation=ad.Variation(bend=0.2))
     cam = frame_instances(stone, stones, 320 / 240)
     view, proj = cam.view(), cam.projection(320 / 240)
     with ad.AxialRenderer(ctx, stone, stones) as auto, \
-            ad.AxialRenderer(ctx, stone, stones, cull_back_faces=False) as two_sided:
+            ad.AxialRenderer(ctx, stone, stones, options=ad.RenderOptions(cull_back_faces=False)) as two_sided:
         assert auto.cull_back_faces and not two_sided.cull_back_faces
         a, b = _picture(ctx, [auto], view, proj), _picture(ctx, [two_sided], view, proj)
         assert (np.abs(a - b).max(axis=2) > 2).sum() <= 3  # silhouettes may differ by a pixel's rounding
@@ -218,7 +218,7 @@ def test_back_faces_are_culled_only_where_nothing_changes(ctx, stone, leaf):
     lcam = frame_instances(leaf, leaves, 320 / 240)
     lview, lproj = lcam.view(), lcam.projection(320 / 240)
     with ad.AxialRenderer(ctx, leaf, leaves) as auto, \
-            ad.AxialRenderer(ctx, leaf, leaves, cull_back_faces=True) as culled, \
+            ad.AxialRenderer(ctx, leaf, leaves, options=ad.RenderOptions(cull_back_faces=True)) as culled, \
             ad.AxialRenderer(ctx, stone, stones) as stone_r:
         assert not auto.cull_back_faces
         two = _picture(ctx, [auto], lview, lproj)
@@ -271,7 +271,7 @@ def test_big_draws_are_sliced_with_the_same_picture(ctx, stone, monkeypatch):
     pos, faces = torus(2000)
     ring = ad.load_mesh(tm.Trimesh(pos, faces, process=False))
     for mesh, n, size in ((stone, 400, (200, 150)), (ring, 6, (120, 90))):
-        params = ad.random_params(mesh, n, seed=6, bend=0.2)
+        params = ad.random_params(mesh, n, seed=6, variation=ad.Variation(bend=0.2))
         monkeypatch.setattr(ctx, "_axialdeform_flush", None, raising=False)
         assert flush_interval(ctx) is None
         whole = ad.render_image(mesh, params, size, modes, ctx=ctx)
@@ -374,7 +374,7 @@ def test_a_height_maps_wireframe_in_blocks_is_the_whole_edge_list(ctx, monkeypat
     surf = surface_from_heights(rng.random((70, 90)), height_scale=8.0, extent=(40, 30))
     mesh = BaseMesh(surf.vertices, area_weighted_normals(surf.vertices, surf.faces), surf.faces, name="map",
                     grid=surf.grid)
-    params = ad.random_params(mesh, 3, seed=1, bend=0.02, spacing=50)
+    params = ad.random_params(mesh, 3, seed=1, variation=ad.Variation(bend=0.02), spacing=50)
     cam = ad.Camera(eye=(60.0, 45.0, 70.0), target=(0.0, 0.0, 0.0), fovy=60.0)
     view, proj = cam.view(), cam.projection(4 / 3)
 
@@ -382,7 +382,7 @@ def test_a_height_maps_wireframe_in_blocks_is_the_whole_edge_list(ctx, monkeypat
         out = []
         for hidden in ("fill", True, False):
             look = ad.Look(ground=False, shadow=False, hidden_line=hidden)
-            with AxialRenderer(ctx, mesh, params, culling=culling) as r, ad.Offscreen(ctx, (160, 120)) as t:
+            with AxialRenderer(ctx, mesh, params, options=ad.RenderOptions(culling=culling)) as r, ad.Offscreen(ctx, (160, 120)) as t:
                 t.use((0.9, 0.9, 0.9))
                 r.render(view, proj, "wireframe", look=look)
                 out.append(t.read())

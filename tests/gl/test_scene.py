@@ -38,7 +38,7 @@ def test_tint_colours_each_instance_in_one_draw(ctx, stone):
 
 
 def test_tint_keeps_the_capture_path(ctx, stone):
-    params = ad.random_params(stone, 50, seed=1, bend=0.1)
+    params = ad.random_params(stone, 50, seed=1, variation=ad.Variation(bend=0.1))
     with ad.AxialRenderer(ctx, stone, params) as r:
         r.set_tint(np.full((50, 3), 0.5))
         gpu, _ = r.capture()

@@ -35,9 +35,9 @@ def test_the_tint_program_declares_the_tables_input(ctx):
 
 @pytest.mark.parametrize("quantized", [False, True])
 def test_a_tinted_record_draws_as_set_tint_does(ctx, stone, quantized):
-    params = ad.random_params(stone, 30, seed=2, scale=(0.8, 1.2), tint=0.9, tint_color=(1.0, 0.3, 0.1))
-    with ad.AxialRenderer(ctx, stone, params, quantized=quantized) as from_record, \
-            ad.AxialRenderer(ctx, stone, params[:, :19], quantized=quantized) as by_hand:
+    params = ad.random_params(stone, 30, seed=2, variation=ad.Variation(scale=(0.8, 1.2), tint=0.9, tint_color=(1.0, 0.3, 0.1)))
+    with ad.AxialRenderer(ctx, stone, params, options=ad.RenderOptions(quantized=quantized)) as from_record, \
+            ad.AxialRenderer(ctx, stone, params[:, :19], options=ad.RenderOptions(quantized=quantized)) as by_hand:
         by_hand.set_tint(params.tint)
         a, b = _draw(ctx, from_record, stone, params), _draw(ctx, by_hand, stone, params)
         assert np.array_equal(a, b)
@@ -66,7 +66,7 @@ def test_update_params_updates_the_tint_in_place(ctx, stone):
 
 
 def test_render_image_of_a_tinted_file(ctx, tmp_path, stone):
-    params = ad.random_params(stone, 20, seed=5, tint=0.8, tint_color=(0.2, 0.9, 0.2))
+    params = ad.random_params(stone, 20, seed=5, variation=ad.Variation(tint=0.8, tint_color=(0.2, 0.9, 0.2)))
     path = tmp_path / "green.adp"
     ad.write_params(path, params, stone)
     look = ad.Look(ground=False, shadow=False)

@@ -76,7 +76,7 @@ def test_wind_moves_tips_never_bases(leaf):
 
 
 def test_wind_follows_direction_in_each_instance_frame(leaf):
-    p = ad.random_params(leaf, 20, seed=1, bend=0.0, tilt=(0, 0), yaw=(0, 0))  # upright blades, no turn
+    p = ad.random_params(leaf, 20, seed=1, variation=ad.Variation(bend=0.0, tilt=(0, 0), yaw=(0, 0)))  # upright blades, no turn
     steady = Wind(direction=(0.0, 0.0, 2.0), strength=0.2, gustiness=0.0)
     off = wind_offsets(steady, leaf.axis, p, 5.0)
     # axis y: offsets are (x, z); a wind along +z pushes every tip by 0.2 L along z
@@ -88,11 +88,11 @@ def test_gpu_wind_equals_cpu(ctx, leaf, monkeypatch, quantized):
     p = blades(leaf, n=200)
     # small capture chunks: the per-instance phase must follow the instance's index across chunks
     monkeypatch.setattr(capture_module, "_CAPTURE_BYTES", leaf.vertex_count * 24 * 37)
-    with AxialRenderer(ctx, leaf, p, quantized=quantized, wind=WIND) as r:
+    with AxialRenderer(ctx, leaf, p, options=ad.RenderOptions(quantized=quantized, wind=WIND)) as r:
         gpu = r.capture(time=7.25)
         still = r.capture(wind=None)
         on_gpu = r.instances.read()
-    cpu = ad.bake(leaf, on_gpu, "cpu", wind=WIND, time=7.25)
+    cpu = ad.bake(leaf, on_gpu, "cpu", options=ad.RenderOptions(wind=WIND, time=7.25))
     L = leaf.axis.length
     reach = max(1.0, float(np.abs(p[:, 10:13]).max()) / L)
     assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * L * reach
@@ -150,7 +150,7 @@ def test_viewer_animates_the_wind_and_v_toggles_it(leaf):
     from axialdeform.viewer import Viewer
 
     p = blades(leaf, n=150)
-    v = Viewer.create(leaf, p, headless=True, size=(160, 120), wind=WIND)
+    v = Viewer.create(leaf, p, headless=True, size=(160, 120), options=ad.RenderOptions(wind=WIND))
     try:
         assert v.renderer.extended and v.renderer.wind is WIND
         v.step(2)
@@ -176,7 +176,7 @@ def test_instance_bounds_hold_the_windy_instances(leaf):
     p = blades(leaf, n=80)
     centers, radii = instance_bounds(leaf, p, wind=WIND)
     for time in (0.0, 0.9, 2.7, 13.1):
-        pos = ad.bake(leaf, p, "cpu", wind=WIND, time=time)[0]
+        pos = ad.bake(leaf, p, "cpu", options=ad.RenderOptions(wind=WIND, time=time))[0]
         dist = np.linalg.norm(pos - centers[:, None], axis=-1).max(axis=1)
         assert (dist <= radii * (1 + 1e-6)).all()
     still_centers, still_radii = instance_bounds(leaf, p)
@@ -199,7 +199,7 @@ def test_a_still_draw_builds_the_wind_out(ctx, leaf, culling):
     view = pyrr.matrix44.create_look_at((6.0, 4.0, 6.0), (0.0, 0.5, 0.0), (0.0, 1.0, 0.0), dtype=np.float32)
     proj = pyrr.matrix44.create_perspective_projection(40.0, 1.0, 0.1, 100.0, dtype=np.float32)
     with ad.Offscreen(ctx, (96, 96), samples=0) as target, AxialRenderer(ctx, leaf, blades(leaf, n=80),
-                                                                          culling=culling) as r:
+                                                                          options=ad.RenderOptions(culling=culling)) as r:
         def frame(wind):
             r.wind = wind
             target.use()

@@ -437,8 +437,9 @@ def test_the_modules_generated_mesh_sways_as_render_sways_a_generated_layer(brow
                 frequency=wind["frequency"], wavelength=wind["wavelength"])
     look, camera = ad.Look(ground=False, shadow=False), ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
     # a generated layer's instances: their phases hash where they stand
-    ref = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera, wind=w, time=1.3, position_ids=True)
-    by_index = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera, wind=w, time=1.3)
+    ref = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera, options=ad.RenderOptions(wind=w, time=1.3,
+                                                                                                          position_ids=True))
+    by_index = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera, options=ad.RenderOptions(wind=w, time=1.3))
     still = ad.render_image(mesh, want, size=(480, 360), look=look, camera=camera)
     assert three_iou(shot, ref) >= 0.95, three_iou(shot, ref)
     assert three_iou(shot, by_index) < three_iou(shot, ref) - 0.02 and three_iou(still, ref) < 0.93

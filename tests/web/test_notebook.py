@@ -163,7 +163,7 @@ def test_widget_in_jupyterlab(tmp_path, playwright_driver):
     root.mkdir()
     mesh = ad.load_mesh("stone")
     adp = root / "stones ä.adp"
-    ad.write_params(adp, ad.random_params(mesh, 1200, seed=7, bend=0.12, placement="disc"), mesh)
+    ad.write_params(adp, ad.random_params(mesh, 1200, seed=7, variation=ad.Variation(bend=0.12), placement="disc"), mesh)
     # axialdeform render's picture of the same file at the same size: its function, with antialiasing
     # like the widget's canvas but without render's ground and shadow (the widget draws neither);
     # `render --fast` also drops the antialiasing, which thins these 8-pixel stones (IoU about 0.84)

@@ -234,7 +234,7 @@ def test_a_palm_whose_fronds_cross_the_crown_sways_in_three_as_render_draws_it(b
     pick = {"parts": PALM, "axes": "parts", "axis": "oriented"}
     mesh = ad.load_mesh(palm, **pick)
     assert min(mesh.tree.anchors[1:]) > 0.2  # the joints are where the fronds cross the crown
-    params = ad.random_params(mesh, 9, seed=2, bend=(0.05, 0.3), placement="disc", spacing=1.6)
+    params = ad.random_params(mesh, 9, seed=2, variation=ad.Variation(bend=(0.05, 0.3)), placement="disc", spacing=1.6)
     params[:, 10 * mesh.axis_count + 1] -= 2.5  # the crowns in the examples' view (the camera looks at the origin)
     ad.write_params(folder / "palms.adp", params, mesh)
     ad.export_glb(folder / "palms.glb", mesh, params, "instanced")
@@ -245,7 +245,7 @@ def test_a_palm_whose_fronds_cross_the_crown_sways_in_three_as_render_draws_it(b
                    frequency=WIND["frequency"], wavelength=WIND["wavelength"])
     look = ad.Look(ground=False, shadow=False)
     camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
-    ref = ad.render_image(mesh, params, size=SIZE, look=look, camera=camera, wind=wind, time=1.3)
+    ref = ad.render_image(mesh, params, size=SIZE, look=look, camera=camera, options=ad.RenderOptions(wind=wind, time=1.3))
     still = ad.render_image(mesh, params, size=SIZE, look=look, camera=camera)
     Image.fromarray(np.concatenate([shot, ref, still], 1)).save(folder / "wind-palms.png")
     assert errors == []

@@ -25,6 +25,7 @@ from axialdeform.web import (
     PARAMS_FILE,
     THREE_VERSION,
     VENDOR_FILES,
+    PageOptions,
     build_scene,
     embedded_file,
     make_server,
@@ -60,15 +61,15 @@ def test_page_shaders_hold_the_package_deformation_verbatim():
 
 def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     params = ad.random_params(stone, 50, seed=4)
-    scene = build_scene(stone, params, size=SIZE)
+    scene = build_scene(stone, params, page=PageOptions(size=SIZE))
     index = write_page(tmp_path / "site", scene)
     config = json.loads((tmp_path / "site" / "scene.json").read_text(encoding="utf-8"))
     # the build these parameters need (a quantized file is decoded to float32 by the module's parser)
     assert config["shaders"] == {"float": page_shaders()["float"]}
-    assert build_scene(stone, params, quantize=False).config["shaders"] == {"float": page_shaders()["float"]}
-    assert set(build_scene(stone, params, all_shaders=True).config["shaders"]) == {
+    assert build_scene(stone, params, page=PageOptions(quantize=False)).config["shaders"] == {"float": page_shaders()["float"]}
+    assert set(build_scene(stone, params, page=PageOptions(all_shaders=True)).config["shaders"]) == {
         "float", "float_extended", "float_tinted"}
-    assert set(build_scene(ad.load_mesh("leafcard"), params, all_shaders=True).config["shaders"]) == {
+    assert set(build_scene(ad.load_mesh("leafcard"), params, page=PageOptions(all_shaders=True)).config["shaders"]) == {
         "float_material", "float_extended_material", "float_tinted_material"}
     assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["float"]["vertex"]
     adp = (tmp_path / "site" / PARAMS_FILE).read_bytes()
@@ -106,8 +107,8 @@ def test_the_page_parser_reads_every_record_level(tmp_path, stone, quantize):
     assert node, "node is needed for the page's parser tests"
     files = []
     for level, width in enumerate(R.WIDTHS):
-        params = ad.random_params(stone, 5, seed=level, **({"scale": 1.0} if level == 1 else {}),
-                                  **({"tint": 0.5} if level == 2 else {}))
+        params = ad.random_params(stone, 5, seed=level, variation=ad.Variation(**({"scale": 1.0} if level == 1 else {}),
+                                                                               **({"tint": 0.5} if level == 2 else {})))
         assert params.shape[1] == width
         path = tmp_path / f"l{level}.adp"
         path.write_bytes(encode_binary(params, quantize=quantize))
@@ -139,9 +140,11 @@ def test_the_page_parser_reads_every_record_level(tmp_path, stone, quantize):
 
 def test_build_scene_refuses_bad_options(stone):
     params = ad.random_params(stone, 3, seed=1)
-    for kwargs, words in (({"size": (0, 10)}, "size"), ({"mode": "hidden"}, "mode"), ({"up": "w"}, "up")):
+    for make, words in ((lambda: PageOptions(size=(0, 10)), "size"), (lambda: PageOptions(mode="hidden"), "mode"),
+                        (lambda: ad.RenderOptions(up="w"), "up")):
         with pytest.raises(ad.AxialDeformError, match=words):
-            build_scene(stone, params, **kwargs)
+            value = make()
+            build_scene(stone, params, **({"page": value} if isinstance(value, PageOptions) else {"options": value}))
 
 
 def test_vendored_three_is_the_pinned_version():
@@ -212,7 +215,7 @@ def scene_files(tmp_path_factory):
     base = tmp_path_factory.mktemp("web") / "my scènes ü"
     base.mkdir()
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, 1500, seed=7, bend=0.12, placement="disc")
+    params = ad.random_params(mesh, 1500, seed=7, variation=ad.Variation(bend=0.12), placement="disc")
     adp = base / "stones ä.adp"
     ad.write_params(adp, params, mesh)
     for out in ("site ö", "scène.html"):
@@ -428,7 +431,7 @@ def test_widget_in_an_executed_notebook(browser, tmp_path):
 
 
 def test_scene_bytes_counts_what_a_browser_downloads(tmp_path, stone):
-    scene = build_scene(stone, ad.random_params(stone, 100, seed=1), size=SIZE)
+    scene = build_scene(stone, ad.random_params(stone, 100, seed=1), page=PageOptions(size=SIZE))
     write_page(tmp_path / "s", scene)
     b = scene_bytes(tmp_path / "s")
     assert b["params"] == 96 + 128 + 32 * 100 + 4
@@ -441,7 +444,7 @@ def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
     from axialdeform.core.io.image import save_png
 
     mesh = ad.load_mesh("leaf")
-    params = ad.random_params(mesh, 600, seed=5, bend=0.15, up="z", placement="disc")
+    params = ad.random_params(mesh, 600, seed=5, variation=ad.Variation(bend=0.15), up="z", placement="disc")
     adp = tmp_path / "leaves.adp"
     ad.write_params(adp, params, mesh)
     out = tmp_path / "leaves.html"
@@ -449,7 +452,7 @@ def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
                         "--mode", "flat", "--up", "z", "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[10] == 0
-    render = ad.render_image(mesh, params, SIZE, "flat", up="z", look=ad.Look(ground=False, shadow=False))
+    render = ad.render_image(mesh, params, SIZE, "flat", options=ad.RenderOptions(up="z"), look=ad.Look(ground=False, shadow=False))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.state["instances"] == 600, v.state
@@ -470,7 +473,7 @@ def _page_of_a_file(tmp_path, mesh, params, quantize: bool, version: int):
     ad.write_params(adp, params, mesh)
     back = ad.read_params(adp, mesh)
     out = tmp_path / "page.html"
-    write_page(out, build_scene(mesh, back, size=SIZE, quantize=quantize))
+    write_page(out, build_scene(mesh, back, page=PageOptions(size=SIZE, quantize=quantize)))
     assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == version
     return out, back
 
@@ -480,7 +483,7 @@ def _page_of_a_file(tmp_path, mesh, params, quantize: bool, version: int):
 def test_extended_instances_match_render(browser, tmp_path, quantize):
     """19-number instances (scale, twist, taper; .adp version 2) in the page."""
     mesh = ad.load_mesh("stone")
-    params = ad.random_params(mesh, 700, seed=8, bend=0.12, placement="disc", scale=0.5, twist=1.2, taper=0.4)
+    params = ad.random_params(mesh, 700, seed=8, variation=ad.Variation(bend=0.12, scale=0.5, twist=1.2, taper=0.4), placement="disc")
     assert params.shape == (700, 19)
     out, back = _page_of_a_file(tmp_path, mesh, params, quantize, version=2)
     render = ad.render_image(mesh, back, SIZE, look=ad.Look(ground=False, shadow=False))
@@ -500,7 +503,7 @@ def test_tinted_instances_match_render(browser, tmp_path, mesh_name, quantize):
     each instance by its own tint, pixel for pixel as render does, and the
     tint shows (the same instances untinted differ)."""
     mesh = ad.load_mesh(mesh_name)
-    params = ad.random_params(mesh, 300, seed=9, placement="disc", tint=0.9, tint_color=(1.0, 0.45, 0.2))
+    params = ad.random_params(mesh, 300, seed=9, placement="disc", variation=ad.Variation(tint=0.9, tint_color=(1.0, 0.45, 0.2)))
     assert params.shape == (300, 22)
     out, back = _page_of_a_file(tmp_path, mesh, params, quantize, version=3)
     look = ad.Look(ground=False, shadow=False)
@@ -556,8 +559,8 @@ def scene_pages(tmp_path_factory):
     base = tmp_path_factory.mktemp("scenes") / "scène files"
     base.mkdir()
     stone, leaf = ad.load_mesh("stone"), ad.load_mesh("leaf")
-    ad.write_params(base / "stones.adp", ad.random_params(stone, 300, seed=3, bend=0.1, placement="disc"), stone)
-    ad.write_params(base / "leaves.adp", ad.random_params(leaf, 400, seed=4, bend=0.1, placement="disc"), leaf)
+    ad.write_params(base / "stones.adp", ad.random_params(stone, 300, seed=3, variation=ad.Variation(bend=0.1), placement="disc"), stone)
+    ad.write_params(base / "leaves.adp", ad.random_params(leaf, 400, seed=4, variation=ad.Variation(bend=0.1), placement="disc"), leaf)
     _write(base / "windy.toml", """
 background = [0.80, 0.87, 0.95]
 [light]
@@ -625,7 +628,8 @@ seed = 5
         # render's picture of the scene file, with the scene's look less what the page does not
         # draw (a ground plane under a scene without terrain, shadows)
         scene = ad.Scene.load(base / f"{name}.toml")
-        renders[key] = ad.render_image(scene, size=SIZE, time=t, look=scene.look.replace(ground=False, shadow=False))
+        renders[key] = ad.render_image(scene, size=SIZE, options=ad.RenderOptions(time=t), look=scene.look.replace(ground=False,
+                                                                                                                   shadow=False))
     server, _ = make_server(base, 0)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
@@ -637,7 +641,7 @@ seed = 5
 def test_scene_page_config_has_every_layer_terrain_light_and_wind(tmp_path):
     from axialdeform.core.scene import load_scene
     from axialdeform.gl.scene import scene_camera
-    from axialdeform.web import build_scene_file
+    from axialdeform.web import PageOptions, build_scene_file
 
     mesh = ad.load_mesh("stone")
     ad.write_params(tmp_path / "s.adp", ad.random_params(mesh, 20, seed=1), mesh)
@@ -668,7 +672,7 @@ params = "s.adp"
         load_scene(path)
     path.write_text(path.read_text().replace('mesh = "leafcard"\nparams = "s.adp"', 'mesh = "stone"\nparams = "s.adp"'))
     scene = load_scene(path)
-    web = build_scene_file(scene, size=SIZE)
+    web = build_scene_file(scene, page=PageOptions(size=SIZE))
     cfg = web.config
     assert [layer["name"] for layer in cfg["layers"]] == ["terrain", "a", "b"]
     assert [layer["terrain"] for layer in cfg["layers"]] == [True, False, False]
@@ -743,7 +747,7 @@ def test_textured_cutout_page_draws_the_texture(browser, tmp_path):
     """The bundled leafcard (a textured quad, MASK cut-out, double-sided):
     same silhouette as render and the texture's colours, not the plain grey."""
     mesh = ad.load_mesh("leafcard")
-    params = ad.random_params(mesh, 200, seed=5, bend=0.15, placement="disc")
+    params = ad.random_params(mesh, 200, seed=5, variation=ad.Variation(bend=0.15), placement="disc")
     adp = tmp_path / "cards.adp"
     ad.write_params(adp, params, mesh)
     out = tmp_path / "cards.html"
@@ -836,7 +840,7 @@ def test_wireframe_key_and_mode(browser, scene_files, tmp_path):
         v.close()
     mesh = scene_files["mesh"]
     out = tmp_path / "wire.html"
-    write_page(out, build_scene(mesh, scene_files["params"], size=SIZE, mode="wireframe"))
+    write_page(out, build_scene(mesh, scene_files["params"], page=PageOptions(size=SIZE, mode="wireframe")))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.page.evaluate("window.axialdeformView.wireframe") is True
@@ -902,9 +906,9 @@ def test_parts_alpha_modes_and_vertex_colours_match_render(browser, tmp_path, re
 
     mesh = ad.load_mesh(data_mesh(rel))
     assert mesh.has_appearance
-    params = ad.random_params(mesh, 30, seed=1, bend=0.1, placement="disc")
+    params = ad.random_params(mesh, 30, seed=1, variation=ad.Variation(bend=0.1), placement="disc")
     out = tmp_path / "parts.html"
-    scene = build_scene(mesh, params, size=SIZE)
+    scene = build_scene(mesh, params, page=PageOptions(size=SIZE))
     assert len(scene.config["layers"][0]["parts"]) == len([p for p in mesh.parts if p.count])
     write_page(out, scene)
     render = ad.render_image(mesh, params, SIZE, look=ad.Look(ground=False, shadow=False))
@@ -935,7 +939,7 @@ def test_mesh_page_with_wind_and_a_frozen_time_matches_render(browser, tmp_path)
     """``web MESH PARAMS --wind ... --time T``: the page's clock stays at T (no
     query needed), the picture is render's with the same wind at T."""
     mesh = ad.load_mesh("leaf")
-    params = ad.random_params(mesh, 400, seed=6, bend=0.1, placement="disc")
+    params = ad.random_params(mesh, 400, seed=6, variation=ad.Variation(bend=0.1), placement="disc")
     adp = tmp_path / "leaves.adp"
     ad.write_params(adp, params, mesh)
     cmd = [sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "--size", f"{SIZE[0]}x{SIZE[1]}"]
@@ -946,7 +950,7 @@ def test_mesh_page_with_wind_and_a_frozen_time_matches_render(browser, tmp_path)
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     wind = ad.Wind(direction=(1, 0, 0.3), strength=0.8, gustiness=0.8, frequency=0.4)
-    at = ad.render_image(mesh, params, SIZE, wind=wind, time=2.0, look=ad.Look(ground=False, shadow=False))
+    at = ad.render_image(mesh, params, SIZE, options=ad.RenderOptions(wind=wind, time=2.0), look=ad.Look(ground=False, shadow=False))
     still = ad.render_image(mesh, params, SIZE, look=ad.Look(ground=False, shadow=False))
     v = Visit(browser, out.as_uri())
     try:
@@ -972,7 +976,7 @@ def test_page_of_a_framed_mesh_shows_what_render_shows(browser, tmp_path):
     cap.export(obj)
     mesh = ad.load_mesh(obj, axis="oriented")
     assert mesh.axis.framed
-    params = ad.random_params(mesh, 40, seed=3, bend=0.25, placement="disc")
+    params = ad.random_params(mesh, 40, seed=3, variation=ad.Variation(bend=0.25), placement="disc")
     adp = tmp_path / "rods.adp"
     ad.write_params(adp, params, mesh)
     out = tmp_path / "rods.html"
@@ -994,10 +998,10 @@ def test_page_of_trees_shows_what_render_shows(browser, tmp_path, quantize):
     from axialdeform.core.axes import TREE_AXES
 
     mesh = ad.load_mesh("tree", axes=TREE_AXES)
-    params = ad.random_params(mesh, 60, seed=4, bend=(0.05, 0.5, 0.5), placement="disc", spacing=3.0,
-                              scale=(0.8, 1.2))
+    params = ad.random_params(mesh, 60, seed=4, variation=ad.Variation(bend=(0.05, 0.5, 0.5), scale=(0.8, 1.2)), placement="disc",
+                              spacing=3.0)
     out = tmp_path / "trees.html"
-    write_page(out, build_scene(mesh, params, size=SIZE, quantize=quantize))
+    write_page(out, build_scene(mesh, params, page=PageOptions(size=SIZE, quantize=quantize)))
     look = ad.Look(ground=False, shadow=False)
     used = params
     if quantize:  # what the page holds: the quantized file's numbers
@@ -1021,7 +1025,7 @@ def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
     from axialdeform.widget import SceneWidget
 
     mesh = ad.load_mesh("tree", axes=TREE_AXES)
-    params = ad.random_params(mesh, 40, seed=2, bend=(0.05, 0.4), placement="disc", spacing=3.0)
+    params = ad.random_params(mesh, 40, seed=2, variation=ad.Variation(bend=(0.05, 0.4)), placement="disc", spacing=3.0)
     w = SceneWidget(mesh, params, size=SIZE)
     assert w.config["layers"][0]["mesh"]["axes"]["count"] == 10
     state = widget_state(w)
@@ -1030,7 +1034,7 @@ def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
         assert page.evaluate("window.widgetStatus") == {"ready": True, "instances": 40}
         clip = page.locator(".axd-stage").bounding_box()
         before = page.screenshot(clip=clip)
-        again = ad.random_params(mesh, 40, seed=3, bend=(0.05, 0.4), placement="disc", spacing=3.0)
+        again = ad.random_params(mesh, 40, seed=3, variation=ad.Variation(bend=(0.05, 0.4)), placement="disc", spacing=3.0)
         w.set_params(again)
         assert decode_binary(w.params_adp).values.shape == (40, 106)
         assert _push_params(page, w.params_adp) == {"ready": True, "instances": 40}

@@ -92,11 +92,11 @@ def bend_cases():
                    frequency=WIND["frequency"], wavelength=WIND["wavelength"])
     out = []
     for name, mesh, params, windy, t in [
-        ("stones", stone, ad.random_params(stone, 40, seed=3, bend=0.15), False, 0.0),
-        ("framed", framed, ad.random_params(framed, 30, seed=4, bend=0.15, twist=0.8, taper=0.3, scale=(0.7, 1.3)),
+        ("stones", stone, ad.random_params(stone, 40, seed=3, variation=ad.Variation(bend=0.15)), False, 0.0),
+        ("framed", framed, ad.random_params(framed, 30, seed=4, variation=ad.Variation(bend=0.15, twist=0.8, taper=0.3, scale=(0.7, 1.3))),
          False, 0.0),
-        ("leaves", leaf, ad.random_params(leaf, 40, seed=5, bend=0.15, tint=0.3), True, 1.3),
-        ("trees", tree, ad.random_params(tree, 9, seed=2, bend=0.1, twist=0.3, spacing=3), True, 0.7),
+        ("leaves", leaf, ad.random_params(leaf, 40, seed=5, variation=ad.Variation(bend=0.15, tint=0.3)), True, 1.3),
+        ("trees", tree, ad.random_params(tree, 9, seed=2, variation=ad.Variation(bend=0.1, twist=0.3), spacing=3), True, 0.7),
     ]:
         moved = apply_wind(wind, getattr(mesh, "tree", None) or mesh.axis, params, t) if windy else params
         pos, nrm = ad.deform(mesh, moved)
@@ -406,14 +406,15 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
             wind = ad.Wind(direction=tuple(WIND["direction"]), strength=WIND["strength"], gustiness=WIND["gustiness"],
                            frequency=WIND["frequency"], wavelength=WIND["wavelength"]) if case["wind"] else None
             # a generated layer's instances, as render draws them: their wind phases hash where they stand
-            ref = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera, wind=wind, time=case["time"],
-                                  position_ids=True)
+            ref = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera, options=ad.RenderOptions(wind=wind, time=case["time"],
+                                                                                                            position_ids=True))
             Image.fromarray(np.concatenate([shot, ref], 1)).save(folder / f"webgpu-generated-{version}-{name}.png")
             assert mask(ref).sum() > 0.05 * ref.size / 3
             assert iou(shot, ref) >= 0.95, (name, iou(shot, ref))
             if wind is not None:  # the wind moved them visibly, by those phases: the comparison can fail
                 still = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera)
-                by_index = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera, wind=wind, time=case["time"])
+                by_index = ad.render_image(mesh, want, size=SIZE, look=look, camera=camera, options=ad.RenderOptions(wind=wind,
+                                                                                                                     time=case["time"]))
                 assert iou(still, ref) < 0.93 and iou(shot, by_index) < iou(shot, ref) - 0.02, \
                     (iou(still, ref), iou(shot, by_index), iou(shot, ref))
 
