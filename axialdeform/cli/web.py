@@ -8,6 +8,7 @@ from urllib.parse import quote
 
 from ..core.errors import AxialDeformError
 from ..core.io.params import read_params
+from ..core.look import DEFAULT_LOOK
 from ..core.options import RenderOptions
 from ..core.params import check_drawable
 from ..core.scene import is_scene_file
@@ -35,6 +36,8 @@ def add_parser(subparsers) -> None:
     w.add_argument("--up", choices=("x", "y", "z"), default="y", help="world up axis (default: %(default)s)")
     w.add_argument("--mode", choices=("solid", "flat", "wireframe"), default="solid",
                    help="how to draw at first; W on the page toggles wireframe (default: %(default)s)")
+    w.add_argument("--no-ground", action="store_true",
+                   help="draw no ground plane (default: render's, under a scene without a terrain)")
     w.add_argument("--float32", action="store_true",
                    help="ship the float32 records instead of the quantized form (default: quantized)")
     w.add_argument("--ignore-mesh-mismatch", action="store_true",
@@ -71,7 +74,8 @@ def run(args) -> None:
         if args.up != "y":
             raise AxialDeformError(f"--up: a scene file ({args.mesh}) names its own up axis; expected no --up")
         page = PageOptions(size=size, mode=args.mode, quantize=not args.float32, fixed_size=args.size is not None)
-        web = build_scene_file(scene, page, options=RenderOptions(time=time), allow_outside=args.allow_outside)
+        look = scene.look.replace(ground=False) if args.no_ground else None
+        web = build_scene_file(scene, page, look=look, options=RenderOptions(time=time), allow_outside=args.allow_outside)
         page = write_page(out, web, inputs=scene.sources, overwrite=args.overwrite)
         layers = [layer for layer in web.config["layers"] if not layer["terrain"]]
         made = [layer for layer in layers if layer.get("generate")]
@@ -93,7 +97,8 @@ def run(args) -> None:
         params = read_params(args.params, mesh, allow_mesh_mismatch=args.ignore_mesh_mismatch)
         check_drawable(params, str(args.params))  # a picture: every number must survive the projection
         page = PageOptions(size=size, mode=args.mode, quantize=not args.float32, fixed_size=args.size is not None)
-        scene = build_scene(mesh, params, page, options=RenderOptions(up=args.up, wind=wind_arg(args), time=time))
+        look = DEFAULT_LOOK.replace(ground=False) if args.no_ground else None
+        scene = build_scene(mesh, params, page, look=look, options=RenderOptions(up=args.up, wind=wind_arg(args), time=time))
         page = write_page(out, scene, inputs=(*mesh.sources, args.params), overwrite=args.overwrite)
         print(f"wrote {page} ({len(params)} instances, {'float32' if args.float32 else 'quantized'} parameters)")
     elif not args.serve:

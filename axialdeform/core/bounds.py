@@ -25,8 +25,8 @@ from .record import (
 from .transforms import rotation_matrices
 
 __all__ = [
-    "wind_reach", "child_reach", "instance_bounds", "scene_box", "sphere_box", "box_corners", "outline_points",
-    "base_radius", "instance_boxes", "frustum_planes", "spheres_visible", "lod_choice",
+    "wind_reach", "child_reach", "instance_bounds", "scene_box", "sphere_box", "stack_spheres", "ground_square",
+    "box_corners", "outline_points", "base_radius", "instance_boxes", "frustum_planes", "spheres_visible", "lod_choice",
 ]
 
 
@@ -102,6 +102,52 @@ def sphere_box(centers, radii) -> tuple[np.ndarray, np.ndarray]:
     if len(centers) == 0:
         return np.full(3, -1.0), np.full(3, 1.0)
     return (centers - radii[:, None]).min(axis=0), (centers + radii[:, None]).max(axis=0)
+
+
+def stack_spheres(spheres) -> tuple[np.ndarray, np.ndarray]:
+    """``[(centers (n, 3), radii (n,) or a number), ...]`` as one ``centers : (N, 3)``, ``radii : (N,)`` float64."""
+    parts = [(np.asarray(c, np.float64).reshape(-1, 3), np.asarray(r, np.float64)) for c, r in spheres]
+    if not parts:
+        return np.zeros((0, 3)), np.zeros(0)
+    return (np.concatenate([c for c, _ in parts]),
+            np.concatenate([np.broadcast_to(r, (len(c),)) for c, r in parts]))
+
+
+def ground_square(centers, radii, up: int = 1, *, margin: float = 1.6, sink: float = 0.35,
+                  height: float | None = None) -> tuple[np.ndarray, float]:
+    """Where a ground plane under spheres lies: the square centred under them and ``margin`` times as wide as
+    they spread, ``sink`` times their typical radius above their lowest point (so instances rest in it rather
+    than float over it), or at ``height`` along up where the scene knows it (generated layers stand on 0).
+
+    Parameters
+    ----------
+    centers : (n, 3) float
+    radii : (n,) float
+    up : {0, 1, 2}
+        The world up axis (the plane is across it).
+    margin, sink : float
+        How much wider than the spheres' spread, and how far above their lowest point (in median radii).
+    height : float, optional
+        The plane's height along up.
+
+    Returns
+    -------
+    center : (3,) float64
+    radius : float
+        Half the side of the fitted square (what render draws reaches further: ``GroundPlane.EXTENT`` times).
+    """
+    centers = np.asarray(centers, dtype=np.float64).reshape(-1, 3)
+    radii = np.broadcast_to(np.asarray(radii, dtype=np.float64), (len(centers),))
+    lo, hi = sphere_box(centers, radii)
+    center = (lo + hi) / 2
+    others = [i for i in range(3) if i != up]
+    middle = float(np.median(radii)) if len(radii) else 0.0
+    radius = float(margin * np.linalg.norm((hi - lo)[others]) / 2 + middle)
+    if height is not None:
+        center[up] = height
+    elif len(centers):
+        center[up] = np.percentile(centers[:, up] - radii, 5) + sink * middle
+    return center, radius
 
 
 def box_corners(lo, hi) -> np.ndarray:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..core.arrays import as_array
 from ..core.axis import AXIS_NAMES
-from ..core.bounds import instance_bounds, sphere_box
+from ..core.bounds import ground_square, instance_bounds
 from ..core.errors import ArgumentError, AxialDeformError
 from ..core.look import DEFAULT_LOOK, Look
 from .context import require_framebuffer
@@ -100,17 +100,10 @@ class GroundPlane:
                     height: float | None = None) -> GroundPlane:
         """:meth:`fit` under spheres (``centers`` (n, 3), ``radii`` (n,)): the instances' bounds, or generated
         tiles' (:func:`~axialdeform.core.generate.tile_spheres`) whose instances live on the GPU."""
-        centers = np.asarray(centers, dtype=np.float64).reshape(-1, 3)
-        radii = np.broadcast_to(np.asarray(radii, dtype=np.float64), (len(centers),))
-        if not len(centers):
+        if not len(np.asarray(centers).reshape(-1, 3)):
             return self
-        a = AXIS_NAMES.index(self.up)
-        lo, hi = sphere_box(centers, radii)  # the scene's box
-        center = (lo + hi) / 2
-        others = [i for i in range(3) if i != a]
-        self.radius = float(margin * np.linalg.norm((hi - lo)[others]) / 2 + np.median(radii))
-        center[a] = np.percentile(centers[:, a] - radii, 5) + sink * float(np.median(radii)) if height is None else height
-        self.center = center
+        self.center, self.radius = ground_square(centers, radii, AXIS_NAMES.index(self.up), margin=margin, sink=sink,
+                                                 height=height)
         return self
 
     def render(self, view, projection, *, look: Look | None = None, shadow=None) -> None:

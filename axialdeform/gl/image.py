@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 
+from ..core.bounds import stack_spheres
 from ..core.camera import UP_VECTORS, Camera
 from ..core.errors import ArgumentError
 from ..core.look import DEFAULT_LOOK, Look
@@ -16,7 +17,7 @@ from .context import Offscreen, check_image_size, create_context
 from .frame import Frame
 from .ground import GroundPlane
 from .renderer import MODES
-from .scene import TERRAIN_INSTANCE, SceneRenderer, scene_camera
+from .scene import TERRAIN_INSTANCE, SceneRenderer, ground_spheres, scene_camera
 from .shadow import ShadowMap
 
 __all__ = ["render_image", "parse_size", "look_from_keywords", "pop_look_keywords"]
@@ -138,7 +139,9 @@ def render_image(scene, params=None, size=(800, 600), modes="solid", *, look: Lo
             plane = shadow = None
             try:
                 if look.draws_ground and scene.terrain is None:
-                    plane = GroundPlane(ctx, up=scene.up).fit_layers(layers, height=scene.ground_height)
+                    # the page's and the widget's rule too (gl/scene.py)
+                    plane = GroundPlane(ctx, up=scene.up).fit_spheres(*stack_spheres(ground_spheres(scene)),
+                                                                      height=scene.ground_height)
                 cam = camera or scene_camera(scene, w / h)
                 if plane is not None:  # near and far enclose everything drawn: the ground reaches the edges
                     cam = cam.enclosing_square(plane.center, UP_VECTORS[scene.up], plane.drawn_radius, w / h)

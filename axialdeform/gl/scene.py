@@ -9,12 +9,12 @@ import numpy as np
 from ..core.bounds import instance_bounds, outline_points, wind_reach
 from ..core.camera import UP_VECTORS, Camera, camera_for_points
 from ..core.errors import SceneError
-from ..core.generate import extent_box
+from ..core.generate import extent_box, tile_spheres, tiles_in
 from ..core.options import RenderOptions
 from ..core.record import WIDTH
 from .renderer import AxialRenderer
 
-__all__ = ["SceneRenderer", "scene_camera", "TERRAIN_INSTANCE"]
+__all__ = ["SceneRenderer", "scene_camera", "ground_spheres", "TERRAIN_INSTANCE"]
 
 TERRAIN_INSTANCE = np.zeros((1, WIDTH), dtype=np.float32)
 
@@ -59,6 +59,22 @@ def scene_camera(scene, aspect: float, *, margin: float = 0.03) -> Camera:
         points.append(scene.terrain.positions)
         radii.append(np.broadcast_to(0.0, (len(scene.terrain.positions),)))
     return camera_for_points(points, radii, aspect, scene.up, fov, cam.azimuth, cam.elevation, margin)
+
+
+def ground_spheres(scene) -> list:
+    """THE spheres a ground plane is fitted under (:func:`~axialdeform.core.bounds.ground_square`), in render, the
+    page and the widget alike: ``[(centers (n, 3), radii (n,)), ...]``, each listed layer's instance bounds and each
+    generated layer's tiles over its extent (:func:`~axialdeform.core.generate.tile_spheres`: from the recipe
+    alone, no instance made)."""
+    out = []
+    for layer in scene.layers:
+        g = getattr(layer, "generate", None)
+        if g is not None:
+            s = tile_spheres(g.generate, layer.mesh, tiles_in(g.generate, g.extent, layer.mesh.axis_count), g.maps)
+            out.append((s[:, :3], s[:, 3]))
+        elif len(layer.params):
+            out.append(instance_bounds(layer.mesh, layer.params))
+    return out
 
 
 class SceneRenderer:

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.bounds import instance_bounds
 from ..core.errors import AxialDeformError
 from ..core.generate import children_table, generate_tiles, recipe_json, recipe_uniforms, tiles_around
 from ..core.io.gltf import encode_base_mesh
@@ -111,11 +112,16 @@ def page_shaders(keys=None) -> dict:
     ``{"float": {"vertex", "fragment"}, "float_extended": ..., "float_tinted": ...}``
     and the same three with ``_material`` (``AXIAL_MATERIAL``: textures, vertex
     colours, alpha modes), and each of those with ``_framed`` (``AXIAL_FRAME``: a
-    chosen axis frame); ``keys``: only those builds."""
+    chosen axis frame); ``keys``: only those builds, and ``"ground"`` among them: render's ground plane
+    (``glsl/ground.vert`` / ``ground.frag``)."""
 
-    return {variant: {stage: to_glsl_es(assemble(name, defines).source)
-                      for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
-            for variant, defines in SHADER_VARIANTS.items() if keys is None or variant in keys}
+    out = {variant: {stage: to_glsl_es(assemble(name, defines).source)
+                     for stage, name in (("vertex", "scene.vert"), ("fragment", "scene.frag"))}
+           for variant, defines in SHADER_VARIANTS.items() if keys is None or variant in keys}
+    if keys is not None and "ground" in keys:
+        out["ground"] = {stage: to_glsl_es(assemble(name).source) for stage, name in (("vertex", "ground.vert"),
+                                                                                       ("fragment", "ground.frag"))}
+    return out
 
 
 def shader_key(quantize: bool, fields: int, material: bool, framed: bool = False) -> str:
@@ -206,6 +212,29 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
     }
 
 
+def _ground(look, up: str, spheres, cam, aspect: float, height: float | None = None):
+    """``(the page's ground plane, the camera)``: the plane render draws under a scene without a terrain
+    (:class:`~axialdeform.gl.ground.GroundPlane`: fitted under ``spheres``, ``[(centers (n, 3), radii (n,)), ...]``,
+    drawn :attr:`~axialdeform.gl.ground.GroundPlane.EXTENT` times as wide, fading into the background), its
+    uniforms as ``glsl/ground.vert`` and ``ground.frag`` take them, and the camera with its near and far planes
+    widened to hold it, as render's; ``(None, cam)`` where the look draws no ground."""
+    from ..core.axis import AXIS_NAMES
+    from ..core.bounds import ground_square, stack_spheres
+    from ..core.camera import UP_VECTORS
+    from ..gl.ground import GROUND_COLOR, GroundPlane
+
+    centers, radii = stack_spheres(spheres)
+    if not look.draws_ground or not len(centers):
+        return None, cam
+    a = AXIS_NAMES.index(up)
+    center, radius = ground_square(centers, radii, a, height=height)
+    drawn = GroundPlane.EXTENT * radius
+    axis_u, axis_v = (np.eye(3)[i] for i in range(3) if i != a)
+    ground = {"center": center.tolist(), "radius": float(drawn), "axis_u": axis_u.tolist(), "axis_v": axis_v.tolist(),
+              "color": list(GROUND_COLOR), "cell": 0.0}
+    return ground, cam.enclosing_square(center, UP_VECTORS[up], drawn, aspect)
+
+
 def _check_view(size, up: str, mode: str) -> tuple:
     from ..core.camera import UP_VECTORS
 
@@ -220,7 +249,7 @@ def _check_view(size, up: str, mode: str) -> tuple:
 
 
 def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shaders,
-            time=None) -> dict:
+            time=None, ground=None) -> dict:
     from ..core.camera import UP_VECTORS
 
     return {
@@ -240,7 +269,9 @@ def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shade
         "wind": _wind_config(wind),
         "time": None if time is None else float(time),  # seconds: the wind's clock frozen there (None: it runs)
         "three": three_version(),
-        "shaders": shaders,
+        "shaders": {**shaders, **(page_shaders(["ground"]) if ground is not None else {})},
+        # render's ground plane under a scene without a terrain (glsl/ground.vert, ground.frag), or None
+        "ground": ground,
         # the shader build's suffix for each record width (LEVEL_VARIANTS): the page picks a file's build by it
         "shader_suffix": {str(w): LEVEL_VARIANTS[level_of(w)][0] for w in WIDTHS},
     }
@@ -354,12 +385,14 @@ def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, opt
     w, h = _check_view(page.size, up, mode)
     params = as_params(params, axes=mesh.axis_count)
     cam = scene_camera(Scene.single(mesh, params, up=up, wind=wind), w / h)
+    look = look or DEFAULT_LOOK
+    ground, cam = _ground(look, up, [instance_bounds(mesh, params)], cam, w / h)
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
                    quantize=page.quantize, adp=adp, wind=wind is not None)
     config = _config(title=page.title or f"{len(params)} × {mesh.name}", layers=[layer], size=(w, h),
-                     fixed_size=page.fixed_size, mode=mode, cam=cam, look=look or DEFAULT_LOOK, up=up, wind=wind,
-                     shaders=_shaders([layer], page.all_shaders), time=_time(wind, time))
+                     fixed_size=page.fixed_size, mode=mode, cam=cam, look=look, up=up, wind=wind,
+                     shaders=_shaders([layer], page.all_shaders), time=_time(wind, time), ground=ground)
     return WebScene(config, files)
 
 
@@ -393,6 +426,7 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
 
     from ..gl.scene import (  # the GL layer (pyrr) only when a page is built
         TERRAIN_INSTANCE,
+        ground_spheres,
         scene_camera,
     )
 
@@ -427,8 +461,12 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
     for k, (recipe, mesh) in generated_layers:  # what the page holds at the start: the tiles within reach of the target
         tiles = tiles_around(recipe.generate, float(cam.target[0]), float(cam.target[2]), recipe.reach)
         layers[k]["instances"] = int(len(generate_tiles(recipe.generate, mesh, tiles, recipe.maps)))
+    look = look or scene.look
+    ground = None
+    if scene.terrain is None:  # render's ground plane (gl/scene.py's ground_spheres: no instance made)
+        ground, cam = _ground(look, scene.up, ground_spheres(scene), cam, w / h, scene.ground_height)
     config = _config(title=page.title or Path(scene.path).stem, layers=layers, size=(w, h),
                      fixed_size=page.fixed_size, mode=mode,
-                     cam=cam, look=look or scene.look, up=scene.up, wind=wind,
-                     shaders=_shaders(layers, False), time=_time(wind, time))
+                     cam=cam, look=look, up=scene.up, wind=wind,
+                     shaders=_shaders(layers, False), time=_time(wind, time), ground=ground)
     return WebScene(config, files)

@@ -129,7 +129,7 @@ export function mount(root, lib, scene, options = {}) {
   toggle.textContent = 'wireframe (W)';
   toggle.setAttribute('aria-pressed', 'false');
 
-  let renderer = null, controls = null, camera = null, world = null;
+  let renderer = null, controls = null, camera = null, world = null, ground = null;
   let disposed = false;
   const layers = []; // {cfg, geometry, materials, mesh, fingerprint, variant, uniforms, count}
   const state = { count: 0, frames: 0, wireframe: cfg.mode === 'wireframe' };
@@ -160,6 +160,28 @@ export function mount(root, lib, scene, options = {}) {
     statusText.textContent = 'nothing drawn';
     if (renderer) renderer.domElement.style.visibility = 'hidden';
     return text;
+  }
+
+  function groundMesh(g) { // render's ground plane (glsl/ground.vert, .frag): a square's 4 corners from gl_VertexID
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.Float32BufferAttribute(new Float32Array(12), 3)); // unread: the count
+    geometry.setIndex([0, 1, 2, 2, 1, 3]); // the triangle strip render draws
+    const body = (src) => src.replace(/^#version 300 es\n/, '');
+    const material = new THREE.RawShaderMaterial({
+      glslVersion: THREE.GLSL3, vertexShader: body(cfg.shaders.ground.vertex), fragmentShader: body(cfg.shaders.ground.fragment),
+      side: THREE.DoubleSide,
+      uniforms: { // GroundPlane.render's
+        u_view: shared.u_view, u_proj: shared.u_proj, u_eye: shared.u_eye, u_light_dir: shared.u_light_dir,
+        u_light_color: shared.u_light_color, u_sky_color: shared.u_sky_color, u_bounce_color: shared.u_bounce_color,
+        u_up: shared.u_up, u_ambient: shared.u_ambient, u_center: { value: v3(g.center) }, u_axis_u: { value: v3(g.axis_u) },
+        u_axis_v: { value: v3(g.axis_v) }, u_radius: { value: g.radius }, u_color: { value: v3(g.color) },
+        u_background: { value: v3(cfg.look.background) }, u_cell: { value: g.cell },
+      },
+    });
+    const mesh = new THREE.Mesh(geometry, material);
+    mesh.frustumCulled = false; // its corners come from gl_VertexID, not the position attribute
+    mesh.renderOrder = -1;
+    return mesh;
   }
 
   function variant(layer, p) { // the record's level (its numbers but the child axes') picks the build
@@ -398,6 +420,7 @@ export function mount(root, lib, scene, options = {}) {
     shared.u_proj.value = camera.projectionMatrix;
     shared.u_eye.value = camera.position;
     world = new THREE.Scene();
+    if (cfg.ground) world.add(ground = groundMesh(cfg.ground)); // render's, under a scene without a terrain
     for (const layer of layers) world.add(layer.mesh);
 
     let frames = 0, since = performance.now(), fps = 0;
@@ -506,6 +529,7 @@ export function mount(root, lib, scene, options = {}) {
       if (layers.resizer) layers.resizer.disconnect();
       if (renderer) { renderer.setAnimationLoop(null); renderer.dispose(); }
       if (controls) controls.dispose();
+      if (ground) { ground.geometry.dispose(); ground.material.dispose(); }
       for (const l of layers) {
         if (l.mesh) l.mesh.dispose(); // its geometry's buffers, the materials, the offsets texture
         if (l.geometry) l.geometry.dispose();

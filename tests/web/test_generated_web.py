@@ -220,11 +220,14 @@ def test_the_page_draws_the_gpus_records_and_reads_none_back(browser, generated_
 @pytest.mark.slow
 @pytest.mark.parametrize("kind", ["folder", "single file"])
 def test_the_generated_page_shows_what_render_shows(browser, generated_site, kind):
-    """One tile, and the scene's extent that tile: the page's picture is render's."""
+    """One tile, and the scene's extent that tile: the page's picture is render's, its ground plane too (a scene
+    without a terrain stands on render's ground, not over the sky colour)."""
     url = (generated_site["url"] + "one/index.html" if kind == "folder"
            else (generated_site["base"] / "one.html").as_uri())
     scene = ad.Scene.load(generated_site["one"])
-    render = ad.render_image(scene, size=SIZE, look=scene.look.replace(ground=False, shadow=False))
+    render = ad.render_image(scene, size=SIZE, look=scene.look.replace(shadow=False))
+    sky = np.asarray(SKY) * 255
+    assert np.abs(render[-SIZE[1] // 4:].astype(np.float64) - sky).max(axis=2).min() > 12  # render's ground, not the sky
     v = Visit(browser, url)
     try:
         assert v.state["ready"] is True, v.state

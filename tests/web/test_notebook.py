@@ -170,8 +170,8 @@ def test_widget_in_jupyterlab(tmp_path, playwright_driver):
     render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))
     _notebook(root / "scène.ipynb", [
         "import axialdeform as ad\nfrom axialdeform.widget import SceneWidget\n"
-        f"m = ad.load_mesh('stone')\nw = SceneWidget(m, ad.read_params({adp.name!r}, m), size={SIZE!r})\nw",
-        "w.set_params(ad.random_params(m, 150, seed=8, bend=0.12, placement='disc'))\nw.config['instances']",
+        f"m = ad.load_mesh('stone')\nw = SceneWidget(m, ad.read_params({adp.name!r}, m), size={SIZE!r}, look=ad.Look(ground=False))\nw",
+        "w.set_params(ad.random_params(m, 150, seed=8, variation=ad.Variation(bend=0.12), placement='disc'))\nw.config['instances']",
         "w.status",
         "w",  # a second view of the same widget
     ])

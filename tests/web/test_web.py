@@ -64,19 +64,30 @@ def test_exported_page_carries_the_shaders_params_and_camera(tmp_path, stone):
     scene = build_scene(stone, params, page=PageOptions(size=SIZE))
     index = write_page(tmp_path / "site", scene)
     config = json.loads((tmp_path / "site" / "scene.json").read_text(encoding="utf-8"))
-    # the build these parameters need (a quantized file is decoded to float32 by the module's parser)
-    assert config["shaders"] == {"float": page_shaders()["float"]}
-    assert build_scene(stone, params, page=PageOptions(quantize=False)).config["shaders"] == {"float": page_shaders()["float"]}
-    assert set(build_scene(stone, params, page=PageOptions(all_shaders=True)).config["shaders"]) == {
+    # the build these parameters need (a quantized file is decoded to float32 by the module's parser), and
+    # render's ground plane (glsl/ground.vert, ground.frag) where the look draws one
+    assert config["shaders"] == {"float": page_shaders()["float"], "ground": page_shaders(["ground"])["ground"]}
+    flat = ad.Look(ground=False)
+    assert build_scene(stone, params, page=PageOptions(quantize=False), look=flat).config["shaders"] == {
+        "float": page_shaders()["float"]}
+    assert set(build_scene(stone, params, page=PageOptions(all_shaders=True), look=flat).config["shaders"]) == {
         "float", "float_extended", "float_tinted"}
-    assert set(build_scene(ad.load_mesh("leafcard"), params, page=PageOptions(all_shaders=True)).config["shaders"]) == {
+    assert set(build_scene(ad.load_mesh("leafcard"), params, page=PageOptions(all_shaders=True), look=flat).config["shaders"]) == {
         "float_material", "float_extended_material", "float_tinted_material"}
+    # the ground render fits under these instances (GroundPlane.fit), drawn GroundPlane.EXTENT times as wide
+    from axialdeform.core.bounds import ground_square, instance_bounds
+    from axialdeform.gl.ground import GroundPlane
+
+    center, radius = ground_square(*instance_bounds(stone, params))
+    assert np.allclose(config["ground"]["center"], center) and config["ground"]["radius"] == GroundPlane.EXTENT * radius
+    assert build_scene(stone, params, look=flat).config["ground"] is None
     assert ad.deformation_glsl().rstrip("\n") in config["shaders"]["float"]["vertex"]
     adp = (tmp_path / "site" / PARAMS_FILE).read_bytes()
     assert adp == encode_binary(params, axis=stone.axis, mesh_fingerprint=stone.fingerprint, quantize=True)
     cam = ad.frame_instances(stone, params, SIZE[0] / SIZE[1])
     assert np.allclose(config["camera"]["eye"], cam.eye) and np.allclose(config["camera"]["target"], cam.target)
-    assert config["camera"]["near"] == cam.near and config["camera"]["far"] == cam.far
+    # near and far widened (never narrowed) to hold the ground, as render's (Camera.enclosing_square)
+    assert config["camera"]["near"] <= cam.near and config["camera"]["far"] >= cam.far
     assert config["layers"][0]["mesh"]["fingerprint"] == stone.fingerprint.hex()
     assert config["fixed_size"] is True and config["wind"] is None
     assert "<script type=\"importmap\">" in index.read_text(encoding="utf-8")
@@ -219,7 +230,7 @@ def scene_files(tmp_path_factory):
     adp = base / "stones ä.adp"
     ad.write_params(adp, params, mesh)
     for out in ("site ö", "scène.html"):
-        r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "stone", str(adp), "-o", str(base / out),
+        r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "--no-ground", "stone", str(adp), "-o", str(base / out),
                             "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
     # the page: no ground, no shadow
@@ -338,7 +349,7 @@ def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
     from axialdeform.widget import SceneWidget
 
     mesh = ad.load_mesh("stone")
-    w = SceneWidget(mesh, ad.random_params(mesh, 300, seed=2), size=SIZE)
+    w = SceneWidget(mesh, ad.random_params(mesh, 300, seed=2), size=SIZE, look=ad.Look(ground=False))
     state = widget_state(w)
     page, errors = widget_page(browser, tmp_path, state, w._esm)
     try:
@@ -374,7 +385,7 @@ def test_widget_takes_a_scene_file(browser, tmp_path):
     scene = ad.Scene.load(ROOT / "examples" / "landscape" / "landscape.toml")
     for layer in scene.layers:  # a lighter scene, the same layers
         layer.params = layer.params[:200]
-    w = SceneWidget(scene, size=SIZE)
+    w = SceneWidget(scene, size=SIZE, look=scene.look.replace(ground=False))
     assert [layer["name"] for layer in w.config["layers"]][0] == "terrain" and len(w.files) == 2 * len(w.config["layers"])
     with pytest.raises(ad.AxialDeformError, match="several layers"):
         w.set_params(scene.layers[0].params)
@@ -410,7 +421,7 @@ def test_widget_in_an_executed_notebook(browser, tmp_path):
     nb.cells = [
         nbformat.v4.new_code_cell("import axialdeform as ad\nfrom axialdeform.widget import SceneWidget\n"
                                   "m = ad.load_mesh('stone')\n"
-                                  f"w = SceneWidget(m, ad.random_params(m, 200, seed=3), size={SIZE!r})\nw"),
+                                  f"w = SceneWidget(m, ad.random_params(m, 200, seed=3), size={SIZE!r}, look=ad.Look(ground=False))\nw"),
         nbformat.v4.new_code_cell("w.set_params(ad.random_params(m, 50, seed=4)); w.config['instances']"),
     ]
     NotebookClient(nb, timeout=180, kernel_name="python3", store_widget_state=True).execute()
@@ -448,7 +459,7 @@ def test_float32_leaves_flat_z_up_match_render(browser, tmp_path):
     adp = tmp_path / "leaves.adp"
     ad.write_params(adp, params, mesh)
     out = tmp_path / "leaves.html"
-    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "-o", str(out), "--float32",
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "--no-ground", "leaf", str(adp), "-o", str(out), "--float32",
                         "--mode", "flat", "--up", "z", "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[10] == 0
@@ -473,7 +484,7 @@ def _page_of_a_file(tmp_path, mesh, params, quantize: bool, version: int):
     ad.write_params(adp, params, mesh)
     back = ad.read_params(adp, mesh)
     out = tmp_path / "page.html"
-    write_page(out, build_scene(mesh, back, page=PageOptions(size=SIZE, quantize=quantize)))
+    write_page(out, build_scene(mesh, back, page=PageOptions(size=SIZE, quantize=quantize), look=ad.Look(ground=False)))
     assert int.from_bytes(embedded_file(out.read_text(encoding="utf-8"), PARAMS_FILE)[8:10], "little") == version
     return out, back
 
@@ -620,7 +631,7 @@ seed = 5
     size = f"{SIZE[0]}x{SIZE[1]}"
     for name in ("windy", "land"):
         for out in (f"{name} site", f"{name}.html"):
-            r = subprocess.run(cmd + ["web", str(base / f"{name}.toml"), "-o", str(base / out), "--size", size],
+            r = subprocess.run(cmd + ["web", "--no-ground", str(base / f"{name}.toml"), "-o", str(base / out), "--size", size],
                                capture_output=True, text=True)
             assert r.returncode == 0 and "2 layers" in r.stdout, r.stderr
     renders = {}
@@ -751,7 +762,7 @@ def test_textured_cutout_page_draws_the_texture(browser, tmp_path):
     adp = tmp_path / "cards.adp"
     ad.write_params(adp, params, mesh)
     out = tmp_path / "cards.html"
-    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "leafcard", str(adp), "-o", str(out),
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "--no-ground", "leafcard", str(adp), "-o", str(out),
                         "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     render = ad.render_image(mesh, ad.read_params(adp, mesh), SIZE, look=ad.Look(ground=False, shadow=False))
@@ -840,7 +851,7 @@ def test_wireframe_key_and_mode(browser, scene_files, tmp_path):
         v.close()
     mesh = scene_files["mesh"]
     out = tmp_path / "wire.html"
-    write_page(out, build_scene(mesh, scene_files["params"], page=PageOptions(size=SIZE, mode="wireframe")))
+    write_page(out, build_scene(mesh, scene_files["params"], page=PageOptions(size=SIZE, mode="wireframe"), look=ad.Look(ground=False)))
     v = Visit(browser, out.as_uri())
     try:
         assert v.state["ready"] is True and v.page.evaluate("window.axialdeformView.wireframe") is True
@@ -853,7 +864,7 @@ def test_wireframe_key_and_mode(browser, scene_files, tmp_path):
 @pytest.mark.slow
 def test_canvas_fills_the_window_and_follows_resizes(browser, scene_files, tmp_path):
     out = tmp_path / "full.html"
-    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "stone",
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "--no-ground", "stone",
                         str(scene_files["base"] / "stones ä.adp"), "-o", str(out)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert json.loads(out.read_text(encoding="utf-8").split('id="axd-config">', 1)[1].split("</script>", 1)[0]
@@ -908,7 +919,7 @@ def test_parts_alpha_modes_and_vertex_colours_match_render(browser, tmp_path, re
     assert mesh.has_appearance
     params = ad.random_params(mesh, 30, seed=1, variation=ad.Variation(bend=0.1), placement="disc")
     out = tmp_path / "parts.html"
-    scene = build_scene(mesh, params, page=PageOptions(size=SIZE))
+    scene = build_scene(mesh, params, page=PageOptions(size=SIZE), look=ad.Look(ground=False))
     assert len(scene.config["layers"][0]["parts"]) == len([p for p in mesh.parts if p.count])
     write_page(out, scene)
     render = ad.render_image(mesh, params, SIZE, look=ad.Look(ground=False, shadow=False))
@@ -942,7 +953,7 @@ def test_mesh_page_with_wind_and_a_frozen_time_matches_render(browser, tmp_path)
     params = ad.random_params(mesh, 400, seed=6, variation=ad.Variation(bend=0.1), placement="disc")
     adp = tmp_path / "leaves.adp"
     ad.write_params(adp, params, mesh)
-    cmd = [sys.executable, "-m", "axialdeform", "web", "leaf", str(adp), "--size", f"{SIZE[0]}x{SIZE[1]}"]
+    cmd = [sys.executable, "-m", "axialdeform", "web", "--no-ground", "leaf", str(adp), "--size", f"{SIZE[0]}x{SIZE[1]}"]
     r = subprocess.run(cmd + ["-o", str(tmp_path / "x.html"), "--time", "2"], capture_output=True, text=True)
     assert r.returncode == 2 and "--time" in r.stderr and "Traceback" not in r.stderr  # no wind to move
     out = tmp_path / "windy leaves.html"
@@ -980,7 +991,7 @@ def test_page_of_a_framed_mesh_shows_what_render_shows(browser, tmp_path):
     adp = tmp_path / "rods.adp"
     ad.write_params(adp, params, mesh)
     out = tmp_path / "rods.html"
-    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", str(obj), str(adp), "--axis", "oriented",
+    r = subprocess.run([sys.executable, "-m", "axialdeform", "web", "--no-ground", str(obj), str(adp), "--axis", "oriented",
                         "-o", str(out), "--size", f"{SIZE[0]}x{SIZE[1]}"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     look = ad.Look(ground=False, shadow=False)
@@ -1001,7 +1012,7 @@ def test_page_of_trees_shows_what_render_shows(browser, tmp_path, quantize):
     params = ad.random_params(mesh, 60, seed=4, variation=ad.Variation(bend=(0.05, 0.5, 0.5), scale=(0.8, 1.2)), placement="disc",
                               spacing=3.0)
     out = tmp_path / "trees.html"
-    write_page(out, build_scene(mesh, params, page=PageOptions(size=SIZE, quantize=quantize)))
+    write_page(out, build_scene(mesh, params, page=PageOptions(size=SIZE, quantize=quantize), look=ad.Look(ground=False)))
     look = ad.Look(ground=False, shadow=False)
     used = params
     if quantize:  # what the page holds: the quantized file's numbers
@@ -1026,7 +1037,7 @@ def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
 
     mesh = ad.load_mesh("tree", axes=TREE_AXES)
     params = ad.random_params(mesh, 40, seed=2, variation=ad.Variation(bend=(0.05, 0.4)), placement="disc", spacing=3.0)
-    w = SceneWidget(mesh, params, size=SIZE)
+    w = SceneWidget(mesh, params, size=SIZE, look=ad.Look(ground=False))
     assert w.config["layers"][0]["mesh"]["axes"]["count"] == 10
     state = widget_state(w)
     page, errors = widget_page(browser, tmp_path, state, w._esm)
