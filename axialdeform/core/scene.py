@@ -77,9 +77,8 @@ from .io.scene import LayerRecipe, SceneRecipe, parse_scene
 from .look import DEFAULT_LOOK, Look
 from .mesh import BaseMesh, area_weighted_normals
 from .params import as_params, check_drawable
-from .scatter import Placement, scatter
+from .scatter import scatter
 from .surface import load_density, load_surface
-from .variation import Variation
 
 __all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
 
@@ -347,20 +346,18 @@ def _scatter(recipe: LayerRecipe, mesh, scene: Scene, surface, scale_counts: flo
     """A scatter recipe's instances (and the heights its ``lift`` added, or None)."""
     src, nth, sc = recipe.src, recipe.nth, recipe.scatter
     count = max(1, int(round(sc.count * scale_counts))) if sc.count else 0
-    options = dict(sc.options)
-    if "min_distance" in options and scale_counts < 1:
-        options["min_distance"] /= math.sqrt(scale_counts)  # a preview keeps the look: fewer, further apart
+    placement = replace(sc.placement, up=scene.up)
+    if placement.min_distance and scale_counts < 1:  # a preview keeps the look: fewer, further apart
+        placement = replace(placement, min_distance=placement.min_distance / math.sqrt(scale_counts))
     if sc.surface is not None:
         with src.wrap("surface", "layer", nth):
             surface = load_surface(sc.surface, up=scene.up)
     with src.wrap("scatter", "layer", nth):
-        place = {k: options.pop(k) for k in list(options) if k in Placement.__dataclass_fields__}
-        variation = Variation(**{k: options.pop(k) for k in list(options) if k in Variation.__dataclass_fields__})
-        params = scatter(surface, mesh, count, variation, Placement(up=scene.up, **place), **options)  # seed, allow_fewer
+        params = scatter(surface, mesh, count, sc.variation, placement, seed=sc.seed, allow_fewer=sc.allow_fewer)
     lo, hi = sc.lift
     if not (lo or hi):
         return params, None
-    rng = np.random.Generator(np.random.PCG64(int(options.get("seed", 0)) + 7919))
+    rng = np.random.Generator(np.random.PCG64(int(sc.seed) + 7919))
     up_i = "xyz".index(scene.up)
     params = params.copy()
     added = (lo + (hi - lo) * rng.random(len(params))).astype(np.float32)

@@ -216,7 +216,7 @@ def test_scene_and_viewer_draw_lod_of_a_two_part_textured_layer(ctx):
     scene = Scene(path=Path("meadow.toml"), layers=[Layer("leaves", mesh, params)],
                   camera={"eye": [1.0, 1.7, 0.5], "target": [25.0, 0.2, 12.0], "fov": 60.0})
     full = ad.render_image(scene, size=(160, 120), ctx=ctx, look=ad.Look(samples=0)).astype(int)
-    lod = ad.render_image(scene, size=(160, 120), ctx=ctx, look=ad.Look(samples=0), options={"lod": True}).astype(int)
+    lod = ad.render_image(scene, size=(160, 120), ctx=ctx, look=ad.Look(samples=0), options=ad.RenderOptions(lod=True)).astype(int)
     # mean pixel error measured 1.2e-3 (160 x 120, no multisampling: aliased edges)
     assert not np.array_equal(full, lod) and np.abs(full - lod).mean() / 255 < 5e-3
     with SceneRenderer(ctx, scene, lod=True) as sr:

@@ -129,6 +129,7 @@ def render_reference(folder: Path, what, **kw) -> np.ndarray:
     base = ad.load_mesh(mesh, **({axis[0].lstrip("-"): str(axis[1])} if axis else {}))
     look = ad.Look(ground=False, shadow=False)
     camera = ad.Camera(eye=(7, 5, 7), target=(0, 0, 0), fovy=40.0, near=0.1, far=100.0)
-    image = ad.render_image(base, ad.read_params(params, mesh=base), size=SIZE, look=look, camera=camera, **kw)
+    image = ad.render_image(base, ad.read_params(params, mesh=base), size=SIZE, look=look, camera=camera,
+                           options=ad.RenderOptions(**kw))
     Image.fromarray(image).save(folder / "reference.png")
     return image

@@ -22,7 +22,8 @@ import numpy as np
 from ..camera import CameraSpec
 from ..errors import AxialDeformError, ParamError, SceneError
 from ..look import Look
-from ..scatter import ANCHORS
+from ..scatter import ANCHORS, Placement
+from ..variation import Variation
 from ..wind import Wind
 from . import safeio
 from .mesh import BUNDLED_MESHES, mesh_source_path
@@ -103,12 +104,15 @@ class TerrainRecipe:
 
 @dataclass
 class ScatterRecipe:
-    """``[layer.scatter]``: :func:`axialdeform.scatter`'s arguments, checked."""
+    """``[layer.scatter]``: :func:`axialdeform.scatter`'s arguments, checked -- its value objects, built here."""
 
     count: int
-    options: dict  # min_distance, align_to_normal, bend, scale, anchor, seed, allow_fewer, density (a Path)
+    variation: Variation  # bend, droop, scale
+    placement: Placement  # min_distance, align_to_normal, anchor, density (a Path); the scene's up is set when drawn
     surface: Path | None  # its own surface (None: the scene's terrain)
     lift: tuple = (0.0, 0.0)
+    seed: int = 0
+    allow_fewer: bool = False
 
 
 @dataclass
@@ -521,4 +525,11 @@ def _scatter_layer(src, recipe, nth, scene) -> ScatterRecipe:
     if surface is None and scene.terrain is None:
         raise src.error("a scatter recipe needs a [terrain] in the scene or a 'surface' key", "scatter", "layer", nth)
     lift = _numbers(src, recipe.get("lift", [0.0, 0.0]), "lift", "layer", nth, (1, 2))
-    return ScatterRecipe(count, kwargs, surface, (lift[0], lift[-1]))
+    # the value objects scatter takes, built here (each field's check names this file, line and key)
+    values = {}
+    for kind in (Variation, Placement):
+        own = {k: kwargs[k] for k in kind.__dataclass_fields__ if k in kwargs}
+        with src.wrap(next(iter(own), "scatter"), "layer", nth):
+            values[kind] = kind(**own)
+    return ScatterRecipe(count, values[Variation], values[Placement], surface, (lift[0], lift[-1]),
+                         seed=kwargs.get("seed", 0), allow_fewer=kwargs.get("allow_fewer", False))
