@@ -2,8 +2,9 @@
 // its own control axis.  Also the capture program (transform feedback of
 // v_world and v_normal): what is drawn is exactly what is captured.
 // What the instances of this build do not use is left out of it (the same picture, less vertex work):
-// 16-number records have no twist or taper; AXIAL_WIND (defined only while a wind blows) keeps the wind
-#if !defined(AXIAL_EXTENDED) && !defined(AXIAL_THREE)
+// 16-number records have no twist or taper (the page picks its build by the record's width too); AXIAL_WIND
+// (defined only while a wind blows; the page's builds always: its wind is a uniform switch) keeps the wind
+#ifndef AXIAL_EXTENDED
 #define AXIAL_NO_TURN 1
 #endif
 #include "axial.glsl"
