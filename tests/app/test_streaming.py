@@ -314,19 +314,19 @@ def test_bake_npz_memory_does_not_grow_with_the_count(tmp_path):
     assert peaks[1] - peaks[0] < 30, peaks
 
 
-def test_gpu_bake_pieces_are_the_whole_capture(gl, tmp_path):
+def test_gpu_bake_pieces_are_the_whole_capture(ctx, tmp_path):
     from axialdeform.core.io.bake import write_npz_pieces
     from axialdeform.gl.bake import bake, bake_pieces
 
     stone = ad.load_mesh("stone")
     params = ad.random_params(stone, 301, 4, variation=ad.Variation(bend=0.2))
     wind = ad.Wind(strength=0.2)
-    positions, normals = bake(stone, params, "gpu", ctx=gl, options=ad.RenderOptions(wind=wind, time=0.4))
-    pieces = bake_pieces(stone, params, "gpu", ctx=gl, options=ad.RenderOptions(wind=wind, time=0.4), piece_bytes=20_000)  # 14 a piece
+    positions, normals = bake(stone, params, "gpu", ctx=ctx, options=ad.RenderOptions(wind=wind, time=0.4))
+    pieces = bake_pieces(stone, params, "gpu", ctx=ctx, options=ad.RenderOptions(wind=wind, time=0.4), piece_bytes=20_000)  # 14 a piece
     write_npz_pieces(tmp_path / "g.npz", pieces, 301, stone.vertex_count)
     with np.load(tmp_path / "g.npz") as z:
         assert z["positions"].tobytes() == positions.tobytes() and z["normals"].tobytes() == normals.tobytes()
-    assert gl.error == "GL_NO_ERROR"
+    assert ctx.error == "GL_NO_ERROR"
 
 
 @pytest.mark.slow
