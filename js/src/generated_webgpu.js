@@ -215,6 +215,8 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
       if (this._key === made) this.kept = kept;
       return kept;
     });
+    // a renderer disposed before the read resolved rejects it: said to whoever awaits `counted`, never an uncaught error
+    this.counted.catch(() => {});
     /** The last tiles' cost on the CPU (the dispatch; the GPU runs on). */
     this.timing = { slots: n, generateMs: performance.now() - t0 };
     this.dispatchEvent(/** @type {any} */ ({ type: 'paramschange', first: 0, count: n }));
