@@ -40,6 +40,7 @@ from pathlib import Path
 import moderngl_window as mglw
 import numpy as np
 
+from .core.bounds import instance_bounds, stack_spheres
 from .core.camera import UP_VECTORS, OrbitCamera
 from .core.errors import ArgumentError, AxialDeformError, ContextError, ParamError
 from .core.generate import extent_box, tile_size, tile_spheres, tiles_around, world_edge
@@ -56,7 +57,7 @@ from .gl.generated import GeneratedTiles
 from .gl.ground import GroundPlane
 from .gl.image import look_from_keywords, pop_look_keywords
 from .gl.renderer import MODES, AxialRenderer
-from .gl.scene import SceneRenderer
+from .gl.scene import SceneRenderer, ground_spheres
 from .gl.shadow import ShadowMap
 
 __all__ = ["Viewer", "ViewerSettings", "KEY_ACTIONS"]
@@ -131,7 +132,13 @@ class _ViewerMixin:
         self.renderer = AxialRenderer(self.ctx, self.mesh, self.base, options)
         if s.get("tint") is not None:
             self.renderer.set_tint(s["tint"])
-        self.ground = GroundPlane(self.ctx, up=self.up).fit(self.mesh, self.base)
+        # render's ground rule (gl/scene.py ground_spheres): under the viewer's own instances and the scene's other
+        # layers; a generated layer of its own refits it to the tiles it holds (_page_tiles)
+        spheres = ([instance_bounds(self.mesh, self.base)] if len(self.base) else []) + (
+            ground_spheres(s["extra"]) if s.get("extra") is not None else [])
+        self.ground = GroundPlane(self.ctx, up=self.up)
+        if spheres:
+            self.ground.fit_spheres(*stack_spheres(spheres))
         self.fast = self.look.fast
         self.shadow = None
         if self.look.draws_shadow:  # shadows from the key light, redrawn each frame (one instanced draw per part)

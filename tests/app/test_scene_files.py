@@ -305,3 +305,30 @@ def test_viewer_keys_act_on_every_layer_of_a_scene(small):
     finally:
         v.release()
         v.wnd.destroy()
+
+
+def test_the_viewer_stands_a_scene_on_renders_ground(tmp_path):
+    """The viewer fits its ground plane by render's rule (gl/scene.py ground_spheres): under every layer of a
+    scene, not only its first."""
+    from axialdeform.core.bounds import ground_square, stack_spheres
+    from axialdeform.gl.scene import ground_spheres
+    from axialdeform.viewer import Viewer
+
+    stone = ad.load_mesh("stone")
+    near = ad.random_params(stone, 20, seed=1, placement="disc")
+    far = ad.random_params(stone, 20, seed=2, placement="disc")
+    far.position[:, 0] += 40.0  # the second layer stands well beside the first
+    ad.write_params(tmp_path / "near.adp", near, stone)
+    ad.write_params(tmp_path / "far.adp", far, stone)
+    (tmp_path / "two.toml").write_text('[[layer]]\nname = "near"\nmesh = "stone"\nparams = "near.adp"\n'
+                                       '[[layer]]\nname = "far"\nmesh = "stone"\nparams = "far.adp"\n')
+    scene = ad.Scene.load(tmp_path / "two.toml")
+    center, radius = ground_square(*stack_spheres(ground_spheres(scene)))
+    assert center[0] > 15.0  # between the two layers: a ground under the first alone would not be
+    v = Viewer.create(scene, headless=True, size=(64, 48), look=ad.Look(fast=True))
+    try:
+        np.testing.assert_allclose(v.ground.center, center)
+        assert v.ground.radius == pytest.approx(radius)
+    finally:
+        v.release()
+        v.wnd.destroy()
