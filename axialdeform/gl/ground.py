@@ -17,7 +17,7 @@ import numpy as np
 
 from ..core.arrays import as_array
 from ..core.axis import AXIS_NAMES
-from ..core.bounds import ground_square, instance_bounds
+from ..core.bounds import ground_square, instance_bounds, stack_spheres
 from ..core.errors import ArgumentError, AxialDeformError
 from ..core.look import DEFAULT_LOOK, Look
 from .context import require_framebuffer
@@ -89,11 +89,7 @@ class GroundPlane:
     def fit_layers(self, layers, *, margin: float = 1.6, sink: float = 0.35, height: float | None = None) -> GroundPlane:
         """:meth:`fit` under several ``[(mesh, params), ...]`` (a scene's layers); ``height``: the plane's
         height along up where the scene knows it (generated layers stand on 0), else fitted."""
-        bounds = [instance_bounds(mesh, params) for mesh, params in layers]
-        bounds = [(c, np.broadcast_to(r, (len(c),))) for c, r in bounds if len(c)]
-        if not bounds:
-            return self
-        return self.fit_spheres(np.concatenate([c for c, _ in bounds]), np.concatenate([r for _, r in bounds]),
+        return self.fit_spheres(*stack_spheres(instance_bounds(mesh, params) for mesh, params in layers),
                                 margin=margin, sink=sink, height=height)
 
     def fit_spheres(self, centers, radii, *, margin: float = 1.6, sink: float = 0.35,

@@ -162,11 +162,13 @@ export function mount(root, lib, scene, options = {}) {
     return text;
   }
 
+  // three.js writes the version line itself (glslVersion), then its own defines
+  const body = (src) => src.replace(/^#version 300 es\n/, '');
+
   function groundMesh(g) { // render's ground plane (glsl/ground.vert, .frag): a square's 4 corners from gl_VertexID
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.Float32BufferAttribute(new Float32Array(12), 3)); // unread: the count
     geometry.setIndex([0, 1, 2, 2, 1, 3]); // the triangle strip render draws
-    const body = (src) => src.replace(/^#version 300 es\n/, '');
     const material = new THREE.RawShaderMaterial({
       glslVersion: THREE.GLSL3, vertexShader: body(cfg.shaders.ground.vertex), fragmentShader: body(cfg.shaders.ground.fragment),
       side: THREE.DoubleSide,
@@ -191,8 +193,6 @@ export function mount(root, lib, scene, options = {}) {
 
   function makeMaterials(layer, key) {
     const sh = cfg.shaders[key];
-    // three.js writes the version line itself (glslVersion), then its own defines
-    const body = (src) => src.replace(/^#version 300 es\n/, '');
     const lc = layer.cfg;
     return lc.parts.map((part, i) => {
       const tex = layer.textures[i] || {};
