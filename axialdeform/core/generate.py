@@ -44,6 +44,7 @@ from .deform import bernstein
 from .errors import ParamError
 from .generate_ground import GroundMaps, ground_height, lean_angles
 from .mesh import anchor_point
+from .recipe import KINDS, RECIPE, REQUIRED, check_value, passed_through
 from .record import EXTENDED_WIDTH, SCALE, TAPER, TINT, TINTED_WIDTH, TWIST, WIDTH, join_record
 from .variation import tint_of
 from .wind import wind_hash
@@ -73,91 +74,32 @@ MAX_BEND = 100.0
 WORLD_CELLS = 1 << 16
 
 
-@dataclass(frozen=True)
+def _from_the_table(cls):
+    """Generate's fields from :data:`~axialdeform.core.recipe.RECIPE`: one a key, its default; its docstring's
+    attributes the keys' lines."""
+    cls.__annotations__ = {key.name: "object" for key in RECIPE}
+    for key in RECIPE:
+        if key.default is not REQUIRED:
+            setattr(cls, key.name, key.default)
+    cls.__doc__ += "\n    Attributes\n    ----------\n" + "".join(
+        f"    {key.name} : {KINDS[key.kind].expected}{' or None' if key.optional else ''}\n        {key.doc[0].upper()}{key.doc[1:]}"
+        f"{'' if key.default in (None, REQUIRED) else f' (default {key.default!r})'}.\n" for key in RECIPE)
+    return dataclass(frozen=True)(cls)
+
+
+@_from_the_table
 class Generate:
-    """A generated layer's recipe (a scene file's ``[layer.generate]``).
-
-    Attributes
-    ----------
-    rate : float
-        Instances per square unit of ground (before the density map), > 0.
-    tile : float
-        The side of a tile (world units), > 0.
-    min_distance : float
-        The guaranteed distance between any two instances, 0 <= min_distance < 1 / sqrt(rate).
-    seed : int
-        0 .. 2^32 - 1.
-    bend : float or tuple of float
-        Offsets in [-bend L, bend L] (L: the base mesh's axis length), >= 0; a mesh of several axes
-        takes one amplitude per level of its hierarchy (trunk, branches, ...; the last for any deeper
-        level), each axis's own L.
-    scale : (2,) float or None
-        A uniform scale drawn in [lo, hi] (> 0); None: 1.
-    twist, taper : float
-        Twist in [-twist, twist] radians, taper in [0, taper] (< 1).
-    tint : float or None
-        Each instance's colour ``tint_color (1 - tint u)`` (22 numbers), 0..1: shades of ``tint_color``
-        (:func:`~axialdeform.core.variation.tint_of`).
-    tint_color : (3,) float
-        Linear RGB in 0..1: the brightest tint.
-    tint_hue : float
-        0..1: how far each channel's ``u`` goes its own way (0, the default: one ``u``, the hue kept).
-    altitude : (2,) float or None
-        Kept only where the ground's height lies in [lo, hi] (a height map's world units).
-    slope : (2,) float or None
-        Kept only where the ground's slope lies in [lo, hi] degrees (0: level).
-    choice : (2,) float
-        Kept only where ``lo <= u20 < hi``: this mesh's share of a layer of several meshes (weights).
-    align_to_normal : float
-        On a height map, each instance leans toward the ground's normal by this fraction of the angle
-        between up and the normal (``[layer.scatter]``'s), in [0, 1].
-    anchor : {"bottom", "center", "origin"}
-        The base mesh's point that stands on the ground (as ``[layer.scatter]``'s): its bounding box's
-        lowest face's centre, its centre (half sunk: a stone in a river bed), its origin.
-    lift : (2,) float or None
-        An extra height in [lo, hi] world units (``[layer.scatter]``'s): leaves above the ground.
+    """A generated layer's recipe (a scene file's ``[layer.generate]``): one field a key of
+    :data:`~axialdeform.core.recipe.RECIPE`, checked by its kind, then against each other (the tile's cells,
+    ``min_distance`` below the cell side, the largest bend and scale, the lift within the world's edge).
     """
-
-    rate: float
-    tile: float = 16.0
-    min_distance: float = 0.0
-    seed: int = 0
-    bend: float = 0.1
-    scale: tuple | None = None
-    twist: float = 0.0
-    taper: float = 0.0
-    tint: float | None = None
-    tint_color: tuple = (1.0, 1.0, 1.0)
-    altitude: tuple | None = None
-    slope: tuple | None = None
-    choice: tuple = (0.0, 1.0)
-    anchor: str = "bottom"
-    lift: tuple | None = None
-    align_to_normal: float = 0.0
-    tint_hue: float = 0.0
 
     def __post_init__(self) -> None:
         def bad(field, expected, value):
             raise ParamError(f"generate: {field}: expected {expected}, found {value!r}")
 
-        for name in ("rate", "tile"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
-                bad(name, "a finite number > 0", v)
-        if not (isinstance(self.seed, int) and not isinstance(self.seed, bool) and 0 <= self.seed < 2**32):
-            bad("seed", "an integer 0 .. 4294967295", self.seed)
-        if isinstance(self.bend, (tuple, list)):
-            if not self.bend or not all(isinstance(b, (int, float)) and not isinstance(b, bool) and math.isfinite(b)
-                                        and b >= 0 for b in self.bend):
-                bad("bend", "a finite number >= 0, or one per level of the hierarchy", self.bend)
-            object.__setattr__(self, "bend", tuple(float(b) for b in self.bend) if len(self.bend) > 1
-                               else float(self.bend[0]))
-        for name in ("min_distance", "twist", "taper") + (() if isinstance(self.bend, tuple) else ("bend",)):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
-                bad(name, "a finite number >= 0", v)
-        if self.taper >= 1:
-            bad("taper", "a number in [0, 1)", self.taper)
+        for key in RECIPE:
+            object.__setattr__(self, key.name, check_value(key, getattr(self, key.name)))
         for b in (self.bend if isinstance(self.bend, tuple) else (self.bend,)):
             if b > MAX_BEND:
                 bad("bend", f"at most {MAX_BEND:g} (axis lengths)", self.bend)
@@ -170,38 +112,6 @@ class Generate:
         if self.min_distance >= cell:
             bad("min_distance", f"less than the cell side 1/sqrt(rate) = {cell:.6g} (the rate leaves no more room)",
                 self.min_distance)
-        if self.scale is not None:
-            s = self.scale
-            if not (isinstance(s, (tuple, list)) and len(s) == 2 and all(isinstance(x, (int, float)) and
-                                                                     not isinstance(x, bool) and math.isfinite(x) and x > 0
-                                                                     for x in s) and s[0] <= s[1]):
-                bad("scale", "[lo, hi] with 0 < lo <= hi", s)
-            object.__setattr__(self, "scale", (float(s[0]), float(s[1])))
-        if self.tint is not None and not (isinstance(self.tint, (int, float)) and not isinstance(self.tint, bool)
-                                          and 0 <= self.tint <= 1):
-            bad("tint", "an amount in [0, 1]", self.tint)
-        c = self.tint_color
-        if not (isinstance(c, (tuple, list)) and len(c) == 3 and all(
-                isinstance(x, (int, float)) and not isinstance(x, bool) and 0 <= x <= 1 for x in c)):
-            bad("tint_color", "three linear RGB numbers in [0, 1]", c)
-        object.__setattr__(self, "tint_color", tuple(float(x) for x in c))
-        if not (isinstance(self.tint_hue, (int, float)) and not isinstance(self.tint_hue, bool) and 0 <= self.tint_hue <= 1):
-            bad("tint_hue", "an amount in [0, 1]", self.tint_hue)
-        object.__setattr__(self, "tint_hue", float(self.tint_hue))
-        a = self.align_to_normal
-        if not (isinstance(a, (int, float)) and not isinstance(a, bool) and 0 <= a <= 1):
-            bad("align_to_normal", "a fraction in [0, 1]", a)
-        if self.anchor not in ("bottom", "center", "origin"):
-            bad("anchor", "one of bottom, center, origin", self.anchor)
-        for name, top in (("altitude", math.inf), ("slope", 90.0), ("lift", math.inf)):
-            v = getattr(self, name)
-            if v is None:
-                continue
-            if not (isinstance(v, (tuple, list)) and len(v) == 2 and all(
-                    isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)
-                    and v[0] <= v[1] and (name != "slope" or 0 <= v[0] <= v[1] <= top)):
-                bad(name, "[lo, hi] with lo <= hi" + (" in degrees, 0..90" if name == "slope" else ""), v)
-            object.__setattr__(self, name, (float(v[0]), float(v[1])))
         if self.lift is not None and max(abs(x) for x in self.lift) > world_edge(self):
             bad("lift", f"heights within the world's edge, +-{world_edge(self):.6g} (WORLD_CELLS cells)", self.lift)
         if self.scale is not None and self.scale[1] > MAX_BEND:
@@ -390,34 +300,32 @@ def recipe_uniforms(recipe: Generate, mesh, maps: GroundMaps | None = None) -> d
     ``slope_tan2``: tan^2 of the slope's bounds) -- what the desktop generator and the page's are given
     (JSON-able; the maps' pixels travel beside them)."""
     m, cell = tile_size(recipe)
-    lo, hi = recipe.scale if recipe.scale is not None else (1.0, 1.0)
     w = anchor_weights(mesh, recipe.anchor)
     g = maps if maps is not None else GroundMaps()
     fl = lambda a: [float(x) for x in a]  # noqa: E731
     alt = recipe.altitude if recipe.altitude is not None else (-3.0e38, 3.0e38)
     slope = [math.tan(math.radians(a)) ** 2 for a in recipe.slope] if recipe.slope is not None else [0.0, 3.0e38]
-    return {"seed": int(recipe.seed), "m": int(m), "cell": float(cell), "jitter": 1.0 - recipe.min_distance / cell,
-            "bend": float(recipe.level_bend(0) * mesh.axis.length), "scale": [float(lo), float(hi)], "twist": float(recipe.twist),
-            "taper": float(recipe.taper), "anchor_y": float(anchor_point(mesh, recipe.anchor, 1)[1]),
-            "anchor_w": [float(x) for x in w[:4]],
-            "anchor_w4": float(w[4]), "tint": float(recipe.tint or 0.0), "tint_color": fl(recipe.tint_color),
-            "tint_hue": float(recipe.tint_hue),
+    return {**passed_through(recipe), "m": int(m), "cell": float(cell), "jitter": 1.0 - recipe.min_distance / cell,
+            "bend": float(recipe.level_bend(0) * mesh.axis.length), "anchor_y": float(anchor_point(mesh, recipe.anchor, 1)[1]),
+            "anchor_w": [float(x) for x in w[:4]], "anchor_w4": float(w[4]),
             "has_heights": g.heights is not None, "h_lo": fl(g.h_lo), "h_inv": fl(g.h_inv),
             "h_size": [0, 0] if g.heights is None else [int(g.heights.shape[1]), int(g.heights.shape[0])],
             "has_density": g.density is not None, "d_lo": fl(g.d_lo), "d_inv": fl(g.d_inv),
             "d_size": [0, 0] if g.density is None else [int(g.density.shape[1]), int(g.density.shape[0])],
             "d_wrap": bool(g.d_wrap), "altitude": fl(alt), "slope_tan2": [min(x, 3.0e38) for x in slope],
-            "choice": fl(recipe.choice), "lift": fl(recipe.lift or (0.0, 0.0)),
-            "align": float(recipe.align_to_normal), "anchor_xz": fl(anchor_point(mesh, recipe.anchor, 1)[[0, 2]])}
+            "anchor_xz": fl(anchor_point(mesh, recipe.anchor, 1)[[0, 2]])}
 
 
 def recipe_json(recipe: Generate, reach: float) -> dict:
-    """The recipe as the page, the notebook widget and the glTF generated form carry it (JSON): its keys
-    as a scene file's ``[layer.generate]`` spells them, and the ``reach``."""
-    return {"rate": recipe.rate, "tile": recipe.tile, "min_distance": recipe.min_distance, "seed": recipe.seed,
-            "bend": list(recipe.bend) if isinstance(recipe.bend, tuple) else recipe.bend,
-            "scale": None if recipe.scale is None else list(recipe.scale), "twist": recipe.twist, "taper": recipe.taper,
-            "tint": recipe.tint, "tint_color": list(recipe.tint_color), "tint_hue": recipe.tint_hue, "reach": float(reach)}
+    """The recipe as the page, the notebook widget and the glTF generated form carry it (JSON): the keys
+    :data:`~axialdeform.core.recipe.RECIPE` marks ``json``, as a scene file's ``[layer.generate]`` spells them,
+    and the ``reach``."""
+    out = {}
+    for key in RECIPE:
+        if key.json:
+            v = getattr(recipe, key.name)
+            out[key.name] = list(v) if isinstance(v, tuple) else v
+    return {**out, "reach": float(reach)}
 
 
 def generate_tiles(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) -> np.ndarray:

@@ -52,6 +52,7 @@ from .errors import ScatterError, TooFewError
 from .io.mesh import load_mesh
 from .mesh import BaseMesh, anchor_point
 from .options import warn_field_keywords
+from .recipe import ANCHORS
 from .record import (
     ANGLES,
     EXTENDED_WIDTH,
@@ -71,7 +72,6 @@ from .variation import Variation, tint_of
 
 __all__ = ["scatter", "Placement", "ANCHORS", "poisson_greedy"]
 
-ANCHORS = ("bottom", "center", "origin")
 #: most candidates drawn in one round (bounds memory: about 200 bytes each)
 MAX_CANDIDATES = 4_000_000
 #: most instances one call places (76 bytes each as 19 float32)

@@ -7,9 +7,11 @@ import * as THREE from 'three';
 import { AxialError, AXES_ROW, texelRows } from './adp.js';
 import { AxialInstancedMesh } from './mesh.js';
 import { plainArray } from './feedback.js';
-import { ATTRIBUTES, WIDTHS } from './record.js';
+import { ATTRIBUTES, WIDTHS, RECIPE, RECIPE_KINDS } from './record.js';
 import { TileGenerator, TileAttributes, GENERATED_FLOATS } from './tiles.js';
-import { MAX_SLOTS, checkAnchor, checkRecipeBounds, checkSlots, worldEdge } from './limits.js';
+import { MAX_SLOTS, accepts, checkAnchor, checkRecipeBounds, checkSlots, optionalNumbers, passedThrough, worldEdge } from './limits.js';
+
+const JSON_KEYS = RECIPE.filter((k) => k.json);
 
 export { TileGenerator, GENERATED_FLOATS };
 const NO_BAND = 3.0e38;
@@ -34,34 +36,22 @@ export function tileSize(recipe) {
 }
 
 /**
- * A recipe checked as axialdeform.core.generate.Generate checks it (a scene file's [layer.generate]):
- * {rate, tile = 16, min_distance = 0, seed = 0, bend = 0.1, scale = null ([lo, hi]), twist = 0,
- * taper = 0, reach = 3 tile}.  Returns a new object with the defaults filled in.
+ * A recipe checked as axialdeform.core.generate.Generate checks it (a scene file's [layer.generate]): the keys
+ * record.js's RECIPE marks json, each by its kind, with their defaults, and reach (default 3 tiles).
+ * Returns a new object with the defaults filled in.
  */
 export function checkRecipe(recipe) {
   if (!recipe || typeof recipe !== 'object') throw new AxialError('generate: expected a recipe object {rate, tile, ...}');
-  const r = { tile: 16, min_distance: 0, seed: 0, bend: 0.1, scale: null, twist: 0, taper: 0, tint: null,
-    tint_color: [1, 1, 1], tint_hue: 0, ...recipe };
-  const keys = ['rate', 'tile', 'min_distance', 'seed', 'bend', 'scale', 'twist', 'taper', 'tint', 'tint_color', 'tint_hue', 'reach'];
+  const r = { ...Object.fromEntries(JSON_KEYS.filter((k) => !k.required).map((k) => [k.name, structuredClone(k.default)])), ...recipe };
+  const keys = [...JSON_KEYS.map((k) => k.name), 'reach'];
   for (const k of Object.keys(r)) {
     if (![...keys, 'extent'].includes(k)) throw new AxialError(`generate: ${k}: not a key of a recipe (${keys.join(', ')})`);
   }
-  for (const k of ['rate', 'tile']) if (!(num(r[k]) && r[k] > 0)) bad(k, 'a finite number > 0', r[k]);
-  if (!(Number.isInteger(r.seed) && r.seed >= 0 && r.seed < 2 ** 32)) bad('seed', 'an integer 0 .. 4294967295', r.seed);
-  for (const k of ['min_distance', 'twist', 'taper']) if (!(num(r[k]) && r[k] >= 0)) bad(k, 'a finite number >= 0', r[k]);
-  // one amplitude, or one per level of a mesh of several axes (the generator's own numbers hold them)
-  const bends = Array.isArray(r.bend) ? r.bend : [r.bend];
-  if (!bends.length || !bends.every((b) => num(b) && b >= 0)) bad('bend', 'a finite number >= 0, or one per level', r.bend);
-  if (r.taper >= 1) bad('taper', 'a number in [0, 1)', r.taper);
+  for (const k of JSON_KEYS) {
+    if (!(k.default === null && r[k.name] === null) && !accepts(k.kind, r[k.name])) bad(k.name, RECIPE_KINDS[k.kind].expected, r[k.name]);
+  }
   const cell = tileSize(r)[1];
   if (r.min_distance >= cell) bad('min_distance', `less than the cell side 1/sqrt(rate) = ${cell.toPrecision(6)}`, r.min_distance);
-  if (r.scale !== null && !(Array.isArray(r.scale) && r.scale.length === 2 && r.scale.every((x) => num(x) && x > 0) &&
-    r.scale[0] <= r.scale[1])) bad('scale', '[lo, hi] with 0 < lo <= hi', r.scale);
-  if (r.tint !== null && !(num(r.tint) && r.tint >= 0 && r.tint <= 1)) bad('tint', 'an amount in [0, 1]', r.tint);
-  if (!(Array.isArray(r.tint_color) && r.tint_color.length === 3 && r.tint_color.every((x) => num(x) && x >= 0 && x <= 1))) {
-    bad('tint_color', 'three linear RGB numbers in [0, 1]', r.tint_color);
-  }
-  if (!(num(r.tint_hue) && r.tint_hue >= 0 && r.tint_hue <= 1)) bad('tint_hue', 'an amount in [0, 1]', r.tint_hue);
   if (r.reach === undefined) r.reach = 3 * r.tile;
   if (!(num(r.reach) && r.reach > 0)) bad('reach', 'a finite number > 0', r.reach);
   checkRecipeBounds(r, ...tileSize(r));
@@ -105,16 +95,13 @@ export function recipeUniforms(recipe, positions, axis) {
   const along = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
   const t = Math.min(1, Math.max(0, (along - axis.lo) / axis.length));
   const w = BINOMIAL.map((b, i) => Math.fround(b * t ** i * (1 - t) ** (4 - i)));
-  const [s0, s1] = recipe.scale || [1, 1];
   const bend = Array.isArray(recipe.bend) ? recipe.bend[0] : recipe.bend;
-  return { seed: recipe.seed, m, cell, jitter: 1 - recipe.min_distance / cell, bend: bend * axis.length,
-    scale: [s0, s1], twist: recipe.twist, taper: recipe.taper, anchor_y: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4],
-    tint: recipe.tint || 0, tint_color: recipe.tint_color.slice(), tint_hue: recipe.tint_hue || 0,
+  return { ...passedThrough(recipe), m, cell, jitter: 1 - recipe.min_distance / cell, bend: bend * axis.length,
+    anchor_y: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4],
     // no ground maps: the flat ground y = 0, no density map, no bands (the Python library's maps come
     // with its uniforms: AxialGeneratedMesh's options.uniforms and options.maps)
     has_heights: false, h_lo: [0, 0], h_inv: [1, 1], h_size: [0, 0], has_density: false, d_lo: [0, 0], d_inv: [1, 1],
-    d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND], choice: [0, 1],
-    lift: [0, 0], align: 0, anchor_xz: [a[0], a[2]] };
+    d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND], anchor_xz: [a[0], a[2]] };
 }
 
 /** [[tx, tz], ...]: the tiles any point of which lies within `reach` of (x, z), nearest first
@@ -229,7 +216,7 @@ export function adoptGenerated(mesh, base, options, drawsOn, childTexture) {
   mesh.isAxialGeneratedMesh = true;
   mesh.type = 'AxialGeneratedMesh';
   mesh.recipe = r;
-  mesh.generatorUniforms = options.uniforms || recipeUniforms(r, positions, mesh.axis);
+  mesh.generatorUniforms = options.uniforms ? { ...optionalNumbers(), ...options.uniforms } : recipeUniforms(r, positions, mesh.axis);
   mesh.maps = options.maps || {};
   if (axes > 1 && !(mesh.maps.children && mesh.maps.children.rows === axes - 1 && mesh.maps.children.cols === 26)) {
     throw new AxialError(`${who}: a mesh of ${axes} axes needs options.maps.children (${axes - 1} rows of 26: each `

@@ -11,7 +11,7 @@ import { FRAME_TOLERANCE, GLTF_INSTANCE_TYPES, MAX_AXES, WIDTHS } from './record
 const [WIDTH, EXTENDED_WIDTH, TINTED_WIDTH] = WIDTHS; // 16, 19, 22 numbers: record.js's levels
 import { AxialInstancedMesh } from './mesh.js';
 import { AxialGeneratedMesh, checkRecipe, maxTiles, tileSize } from './generate.js';
-import { MAX_MAP_TEXELS, MAX_SLOTS, checkSlots, checkUniforms } from './limits.js';
+import { MAX_MAP_TEXELS, MAX_SLOTS, checkSlots, checkUniforms, optionalNumbers } from './limits.js';
 
 /** The extension's name. */
 export const EXTENSION = 'AXIALDEFORM_bend';
@@ -333,7 +333,7 @@ function checkGenerated(gen, at, k, axisLength, maxSlots) {
   } catch (err) {
     throw new AxialError(`${at}: generate recipe: ${err.message.replace(/^generate: /, '')}`);
   }
-  const u = gen.uniforms;
+  const u = gen.uniforms && typeof gen.uniforms === 'object' && !Array.isArray(gen.uniforms) ? { ...optionalNumbers(), ...gen.uniforms } : gen.uniforms;
   if (!u || typeof u !== 'object' || Array.isArray(u)) {
     throw new AxialError(`${at}: generate uniforms: expected generate.glsl's numbers (seed, m, cell, ...), found ${brief(u)}`);
   }

@@ -153,38 +153,67 @@ export const WIND_GLSL: string;
 
 /** A generated layer's recipe (a scene file's [layer.generate]; docs/generate.md). */
 export interface GenerateRecipe {
-  /** Instances per square unit of ground. */
+  // GenerateRecipe: ---- written by tools/make_tables.py from axialdeform/core/recipe.py: edit the table, then rerun it ----
+  /** Instances per square unit of ground (before the density map). */
   rate: number;
-  /** The side of a tile (world units; default 16). */
+  /** The side of a tile (world units); default 16. */
   tile?: number;
-  /** The guaranteed distance between any two instances (< 1/sqrt(rate); default 0). */
+  /** The guaranteed distance between any two instances (< 1/sqrt(rate)); default 0. */
   min_distance?: number;
-  /** 0 .. 2^32 - 1 (default 0). */
+  /** The seed of every random number; default 0. */
   seed?: number;
-  /** Offsets in [-bend L, bend L] (default 0.1); a mesh of several axes: one per level. */
+  /** Offsets in [-bend L, bend L]; a mesh of several axes: one amplitude per level of its hierarchy, the last for any deeper level; default 0.1. */
   bend?: number | number[];
-  /** A uniform scale in [lo, hi] (default none). */
+  /** A uniform scale drawn in [lo, hi] (19 numbers an instance). */
   scale?: [number, number] | null;
+  /** A twist drawn in [-twist, twist] radians; default 0. */
   twist?: number;
+  /** A taper drawn in [0, taper]; default 0. */
   taper?: number;
-  /** Each instance's colour tint_color (1 - tint u), shades of tint_color (22 numbers); default none. */
+  /** Each instance's colour tint_color (1 - tint u): shades of tint_color (22 numbers). */
   tint?: number | null;
+  /** Linear RGB: the brightest tint; default [1, 1, 1]. */
   tint_color?: [number, number, number];
-  /** How far each channel's u goes its own way, 0..1 (default 0: the tint keeps tint_color's hue). */
+  /** How far each colour channel's u goes its own way (0: one u, the tint keeps tint_color's hue; 1: one u each); default 0. */
   tint_hue?: number;
+  // GenerateRecipe: ---- end of what tools/make_tables.py writes ----
   /** The tiles within this distance of the point are made (default 3 tiles). */
   reach?: number;
 }
 
 /** generate.glsl's AxialRecipe numbers (axialdeform.core.generate.recipe_uniforms). */
 export interface GeneratorUniforms {
-  seed: number; m: number; cell: number; jitter: number; bend: number; scale: [number, number];
-  twist: number; taper: number; anchor_y: number; anchor_w: [number, number, number, number]; anchor_w4: number;
-  tint: number; tint_color: [number, number, number]; tint_hue: number;
-  has_heights: boolean; h_lo: [number, number]; h_inv: [number, number]; h_size: [number, number];
-  has_density: boolean; d_lo: [number, number]; d_inv: [number, number]; d_size: [number, number]; d_wrap: boolean;
-  altitude: [number, number]; slope_tan2: [number, number]; choice: [number, number]; lift: [number, number];
-  align: number; anchor_xz: [number, number];
+  // GeneratorUniforms: ---- written by tools/make_tables.py from axialdeform/core/recipe.py: edit the table, then rerun it ----
+  seed: number;
+  m: number;
+  cell: number;
+  jitter: number;
+  bend: number;
+  scale: [number, number];
+  twist: number;
+  taper: number;
+  anchor_y: number;
+  anchor_w: [number, number, number, number];
+  anchor_w4: number;
+  tint: number;
+  tint_color: [number, number, number];
+  tint_hue: number;
+  has_heights: boolean;
+  h_lo: [number, number];
+  h_inv: [number, number];
+  h_size: [number, number];
+  has_density: boolean;
+  d_lo: [number, number];
+  d_inv: [number, number];
+  d_size: [number, number];
+  d_wrap: boolean;
+  altitude: [number, number];
+  slope_tan2: [number, number];
+  choice: [number, number];
+  lift: [number, number];
+  align: number;
+  anchor_xz: [number, number];
+  // GeneratorUniforms: ---- end of what tools/make_tables.py writes ----
 }
 
 /** A ground map's pixels: float32, row after row. */

@@ -4,6 +4,7 @@
 // library and this module give one verdict for one file.
 
 import { AxialError } from './adp.js';
+import { RECIPE, RECIPE_KINDS } from './record.js';
 
 /** The most cells a tile may have (m^2). */
 export const MAX_TILE_SLOTS = 1 << 20;
@@ -21,6 +22,44 @@ const num = (v) => typeof v === 'number' && Number.isFinite(v);
 const json = (v) => { try { return String(JSON.stringify(v)).slice(0, 80); } catch { return String(v).slice(0, 80); } };
 function bad(field, expected, value) {
   throw new AxialError(`generate: ${field}: expected ${expected}, found ${json(value)}`);
+}
+
+const numbers = (v, n) => Array.isArray(v) && v.length === n && v.every(num);
+
+/** Whether `v` is a value of recipe-key kind `kind` (record.js's RECIPE_KINDS): the rule of
+ * axialdeform.core.recipe.accepts, kind by kind. */
+export function accepts(kind, v) {
+  switch (kind) {
+    case 'positive': return num(v) && v > 0;
+    case 'nonnegative': return num(v) && v >= 0;
+    case 'below_one': return num(v) && v >= 0 && v < 1;
+    case 'amount': return num(v) && v >= 0 && v <= 1;
+    case 'seed': return Number.isInteger(v) && v >= 0 && v < 2 ** 32;
+    case 'levels': { const b = Array.isArray(v) ? v : [v]; return b.length > 0 && b.every((x) => num(x) && x >= 0); }
+    case 'rgb': return numbers(v, 3) && v.every((x) => x >= 0 && x <= 1);
+    case 'anchor': return RECIPE_KINDS.anchor.words.includes(v);
+    default: break;
+  }
+  const pair = numbers(v, 2) && v[0] <= v[1];
+  if (kind === 'scale') return pair && v[0] > 0;
+  if (kind === 'degrees') return pair && v[0] >= 0 && v[1] <= 90;
+  if (kind === 'share') return pair && v[0] >= 0 && v[1] <= 1;
+  return pair; // span
+}
+
+/** The generator's numbers a generated form may leave out (keys its first version did not carry), at their
+ * values when the key is not given (axialdeform.core.recipe.optional_numbers). */
+export function optionalNumbers() {
+  return Object.fromEntries(RECIPE.filter((k) => k.uniform && !k.requiredJson).map((k) => [k.uniform, structuredClone(k.uniformDefault)]));
+}
+
+/** The generator's numbers recipe `r` (checked) passes into unchanged (axialdeform.core.recipe.passed_through):
+ * a key the JSON form carries, its value (or its number's default when null); any other, its default. */
+export function passedThrough(r) {
+  return Object.fromEntries(RECIPE.filter((k) => k.uniform).map((k) => {
+    const v = k.json && r[k.name] !== null && r[k.name] !== undefined ? r[k.name] : k.uniformDefault;
+    return [k.uniform, structuredClone(v)];
+  }));
 }
 
 /** The world's edge E = WORLD_CELLS c (world units) of a recipe whose cell side is `cell`. */
@@ -64,20 +103,22 @@ const close = (a, b) => Math.abs(a - b) <= 1e-6 * Math.max(1, Math.abs(b));
 export function checkUniforms(u, r, axisLength, maps, m, cell) {
   const off = (key, expected) => { throw new AxialError(`generate uniforms: ${key}: expected ${expected}, found ${json(u[key])}`); };
   const E = worldEdge(cell), bends = Array.isArray(r.bend) ? r.bend : [r.bend];
-  const [s0, s1] = r.scale || [1, 1];
-  if (u.seed !== r.seed) off('seed', `the recipe's seed ${r.seed}`);
+  const want = passedThrough(r);
+  for (const k of RECIPE) { // the numbers a key goes into unchanged: its value, or (not in the JSON form) its kind's range
+    if (!k.uniform) continue;
+    const have = u[k.uniform], w = want[k.uniform];
+    if (k.json) {
+      const same = RECIPE_KINDS[k.kind].shape === 'whole' ? have === w : Array.isArray(w)
+        ? Array.isArray(have) && have.length === w.length && have.every((x, i) => num(x) && close(x, w[i])) : num(have) && close(have, w);
+      if (!same) off(k.uniform, `the recipe's ${k.name} ${json(w)}`);
+    } else if (!accepts(k.kind, have)) {
+      off(k.uniform, RECIPE_KINDS[k.kind].expected);
+    }
+  }
   if (u.m !== m) off('m', `the recipe's ${m} cells a side`);
   if (!(num(u.cell) && close(u.cell, cell))) off('cell', `the recipe's cell side ${cell}`);
   if (!(num(u.jitter) && close(u.jitter, 1 - r.min_distance / cell))) off('jitter', `1 - min_distance / cell = ${1 - r.min_distance / cell}`);
   if (!(num(u.bend) && Math.abs(u.bend) <= bends[0] * axisLength * (1 + 1e-6) + 1e-30)) off('bend', `the recipe's bend times the axis length, ${bends[0] * axisLength}`);
-  if (!(pair(u.scale) && close(u.scale[0], s0) && close(u.scale[1], s1))) off('scale', `the recipe's scale [${s0}, ${s1}]`);
-  if (!(num(u.twist) && close(u.twist, r.twist))) off('twist', `the recipe's twist ${r.twist}`);
-  if (!(num(u.taper) && close(u.taper, r.taper))) off('taper', `the recipe's taper ${r.taper}`);
-  if (!(num(u.tint) && close(u.tint, r.tint || 0))) off('tint', `the recipe's tint ${r.tint || 0}`);
-  if (!(Array.isArray(u.tint_color) && u.tint_color.length === 3 && u.tint_color.every((x, i) => num(x) && close(x, r.tint_color[i])))) {
-    off('tint_color', `the recipe's tint_color ${json(r.tint_color)}`);
-  }
-  if (!(num(u.tint_hue) && close(u.tint_hue, r.tint_hue || 0))) off('tint_hue', `the recipe's tint_hue ${r.tint_hue || 0}`);
   if (!num(u.anchor_y)) off('anchor_y', 'a finite number');
   if (!(Array.isArray(u.anchor_w) && u.anchor_w.length === 4 && u.anchor_w.every((x) => num(x) && x >= 0 && x <= 1))) off('anchor_w', 'four weights in [0, 1]');
   if (!(num(u.anchor_w4) && u.anchor_w4 >= 0 && u.anchor_w4 <= 1)) off('anchor_w4', 'a weight in [0, 1]');
@@ -95,9 +136,7 @@ export function checkUniforms(u, r, axisLength, maps, m, cell) {
   if (typeof u.d_wrap !== 'boolean') off('d_wrap', 'true or false');
   if (!(pair(u.altitude, (x) => typeof x === 'number' && Math.abs(x) <= 3.0e38) && u.altitude[0] <= u.altitude[1])) off('altitude', '[lo, hi] with lo <= hi');
   if (!(pair(u.slope_tan2, (x) => typeof x === 'number' && x >= 0 && x <= 3.0e38) && u.slope_tan2[0] <= u.slope_tan2[1])) off('slope_tan2', '[lo, hi] with 0 <= lo <= hi');
-  if (!(pair(u.choice, (x) => num(x) && x >= 0 && x <= 1) && u.choice[0] <= u.choice[1])) off('choice', '[lo, hi] within [0, 1]');
-  if (!(pair(u.lift, (x) => num(x) && Math.abs(x) <= E) && u.lift[0] <= u.lift[1])) off('lift', `[lo, hi] within the world's edge +-${E.toPrecision(6)}`);
-  if (!(num(u.align) && u.align >= 0 && u.align <= 1)) off('align', 'a fraction in [0, 1]');
+  if (Math.max(...u.lift.map(Math.abs)) > E) off('lift', `[lo, hi] within the world's edge +-${E.toPrecision(6)}`);
 }
 
 /** The generator's anchor (`anchor_y`, `anchor_xz`) must be one of the base mesh's three anchor points

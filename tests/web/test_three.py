@@ -112,15 +112,6 @@ def test_the_modules_record_columns_are_the_record_tables():
             assert R.OFFSETS == slice(0, 10)  # axis 0's offsets first; child axis j's at 10 j
 
 
-def test_the_modules_record_is_what_the_python_record_generates(tmp_path):
-    """js/src/record.js (the record's fields, the instanced attributes, the wind's defaults) is what
-    tools/make_js_record.py writes from core/record.py and core/wind.py."""
-    out = tmp_path / "record.js"
-    subprocess.run([sys.executable, str(ROOT / "tools" / "make_js_record.py"), str(out)], check=True,
-                   capture_output=True)
-    assert out.read_text() == (JS / "src" / "record.js").read_text(), "rerun tools/make_js_record.py"
-
-
 def test_fixtures_are_what_the_library_writes(tmp_path):
     cmd = [sys.executable, str(ROOT / "tools" / "make_js_fixtures.py"), str(tmp_path)]
     subprocess.run(cmd, check=True, capture_output=True)

@@ -26,6 +26,7 @@ from ..generate import (
     world_edge,
 )
 from ..mesh import anchor_point
+from ..recipe import ANCHORS, KINDS, RECIPE, accepts, from_numbers, optional_numbers, recipe_key
 from .glb import FLOAT
 
 __all__ = ["generated_form", "check_generated", "FALLBACK_TILES", "GeneratedNode", "check_generated_form",
@@ -128,16 +129,15 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
     if not isinstance(spec, dict):
         raise GltfError(f"{where}: generate: expected an object (recipe, uniforms)")
     r = spec.get("recipe")
-    keys = ("rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "tint", "tint_color", "tint_hue", "reach",
-            "extent")
-    if not isinstance(r, dict) or any(k not in keys for k in r):
-        raise GltfError(f"{where}: generate recipe: expected an object of {', '.join(keys[:-1])}, found {str(r)[:80]}")
-    kw = {k: r[k] for k in keys[:11] if k in r}  # null is a value (refused where the field needs one), as in JS
-    for k in ("scale", "tint_color", "bend"):
-        if isinstance(kw.get(k), list):
-            kw[k] = tuple(kw[k])
-    if _whole(kw.get("seed")) is not None:  # 4 or 4.0: JSON's whole numbers, as JavaScript reads them
-        kw["seed"] = _whole(kw["seed"])
+    keys = tuple(key.name for key in RECIPE if key.json)
+    if not isinstance(r, dict) or any(k not in keys + ("reach", "extent") for k in r):
+        raise GltfError(f"{where}: generate recipe: expected an object of {', '.join(keys + ('reach',))}, found {str(r)[:80]}")
+    kw = {k: r[k] for k in keys if k in r}  # null is a value (refused where the field needs one), as in JS
+    for k, v in kw.items():
+        if isinstance(v, list):
+            kw[k] = tuple(v)
+        elif KINDS[recipe_key(k).kind].shape == "whole" and _whole(v) is not None:  # 4 or 4.0: JSON's whole numbers
+            kw[k] = _whole(v)
     try:
         gen = Generate(**kw)
         reach = r.get("reach", 3.0 * gen.tile)
@@ -147,6 +147,7 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
     except (ParamError, TypeError) as exc:
         raise GltfError(f"{where}: generate recipe: {str(exc).removeprefix('generate: ')}") from None
     u = spec.get("uniforms")
+    u = {**optional_numbers(), **u} if isinstance(u, dict) else u  # what the form's first version lacks: its default
     if not isinstance(u, dict):
         raise GltfError(f"{where}: generate uniforms: expected generate.glsl's numbers (seed, m, cell, ...), found {str(u)[:80]}")
 
@@ -156,10 +157,21 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
     m, cell = tile_size(gen)
     E = world_edge(gen)
     bends = gen.bend if isinstance(gen.bend, tuple) else (gen.bend,)
-    s0, s1 = gen.scale if gen.scale is not None else (1.0, 1.0)
     num = lambda x: isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)  # noqa: E731
-    if _whole(u.get("seed")) != gen.seed:
-        off("seed", f"the recipe's seed {gen.seed}")
+    for key in RECIPE:  # the numbers a key goes into unchanged: its value, or (not in the JSON form) its kind's range
+        if key.uniform is None:
+            continue
+        have = u.get(key.uniform)
+        if key.json:
+            want = getattr(gen, key.name)
+            want = key.uniform_default if want is None else want
+            same = (_whole(have) == want if KINDS[key.kind].shape == "whole" else
+                    isinstance(have, list) and len(have) == len(want) and all(_close(x, y) for x, y in zip(have, want))
+                    if isinstance(want, tuple) else _close(have, want))
+            if not same:
+                off(key.uniform, f"the recipe's {key.name} {list(want) if isinstance(want, tuple) else want}")
+        elif not accepts(key.kind, tuple(have) if isinstance(have, list) else have):
+            off(key.uniform, KINDS[key.kind].expected)
     if _whole(u.get("m")) != m:
         off("m", f"the recipe's {m} cells a side")
     if not _close(u.get("cell"), cell):
@@ -168,14 +180,6 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
         off("jitter", f"1 - min_distance / cell = {1.0 - gen.min_distance / cell}")
     if not (num(u.get("bend")) and abs(u["bend"]) <= bends[0] * axis_length * (1 + 1e-6) + 1e-30):
         off("bend", f"the recipe's bend times the axis length, {bends[0] * axis_length}")
-    if not (_pair(u.get("scale")) and _close(u["scale"][0], s0) and _close(u["scale"][1], s1)):
-        off("scale", f"the recipe's scale [{s0}, {s1}]")
-    for key, want in (("twist", gen.twist), ("taper", gen.taper), ("tint", gen.tint or 0.0), ("tint_hue", gen.tint_hue)):
-        if not _close(u.get(key), want):
-            off(key, f"the recipe's {key} {want}")
-    tc = u.get("tint_color")
-    if not (isinstance(tc, list) and len(tc) == 3 and all(_close(x, y) for x, y in zip(tc, gen.tint_color))):
-        off("tint_color", f"the recipe's tint_color {list(gen.tint_color)}")
     if not num(u.get("anchor_y")):
         off("anchor_y", "a finite number")
     w = u.get("anchor_w")
@@ -206,12 +210,8 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
         off("altitude", "[lo, hi] with lo <= hi")
     if not (_pair(u.get("slope_tan2"), lambda x: num(x) and 0 <= x <= _NO_BAND) and u["slope_tan2"][0] <= u["slope_tan2"][1]):
         off("slope_tan2", "[lo, hi] with 0 <= lo <= hi")
-    if not (_pair(u.get("choice"), lambda x: num(x) and 0 <= x <= 1) and u["choice"][0] <= u["choice"][1]):
-        off("choice", "[lo, hi] within [0, 1]")
-    if not (_pair(u.get("lift"), lambda x: num(x) and abs(x) <= E) and u["lift"][0] <= u["lift"][1]):
+    if max(abs(x) for x in u["lift"]) > E:
         off("lift", f"[lo, hi] within the world's edge +-{E:.6g}")
-    if not (num(u.get("align")) and 0 <= u["align"] <= 1):
-        off("align", "a fraction in [0, 1]")
     return gen, float(reach)
 
 
@@ -256,7 +256,7 @@ def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
         grids[key] = data.reshape(m["rows"], m["cols"]).astype(np.float32)
     shapes = {k: (g.shape[1], g.shape[0]) for k, g in grids.items() if k != "children"}
     gen, reach = check_generated_form(spec, float(mesh.axis.length), mesh.axis_count, shapes, at)
-    u = spec["uniforms"]
+    u = {**optional_numbers(), **spec["uniforms"]}
     f32 = np.float32
     maps = GroundMaps(heights=grids.get("heights"), h_lo=np.array(u["h_lo"], f32), h_inv=np.array(u["h_inv"], f32),
                       density=grids.get("density"), d_lo=np.array(u["d_lo"], f32), d_inv=np.array(u["d_inv"], f32),
@@ -266,13 +266,11 @@ def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
         math.degrees(math.atan(math.sqrt(min(x, 1e300)))) for x in u["slope_tan2"])
     tol = 1e-6 * float(mesh.axis.length)
     want = np.array([u["anchor_xz"][0], u["anchor_y"], u["anchor_xz"][1]], np.float64)
-    anchor = next((a for a in ("bottom", "center", "origin") if np.all(np.abs(anchor_point(mesh, a, 1) - want) <= tol)),
+    anchor = next((a for a in ANCHORS if np.all(np.abs(anchor_point(mesh, a, 1) - want) <= tol)),
                   None)
     if anchor is None:
         raise GltfError(f"{at}: generate uniforms: anchor_y, anchor_xz: expected the base mesh's bottom, center or origin")
-    gen = dataclasses.replace(gen, altitude=alt, slope=slope, choice=tuple(u["choice"]),
-                              lift=None if u["lift"] == [0.0, 0.0] else tuple(u["lift"]), align_to_normal=float(u["align"]),
-                              anchor=anchor)
+    gen = dataclasses.replace(gen, altitude=alt, slope=slope, anchor=anchor, **from_numbers(u))
     return GeneratedNode(mesh, gen, reach, u, maps)
 
 

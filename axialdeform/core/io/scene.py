@@ -22,6 +22,7 @@ import numpy as np
 from ..camera import CameraSpec
 from ..errors import AxialDeformError, ParamError, SceneError
 from ..look import Look
+from ..recipe import KINDS, RECIPE
 from ..scatter import ANCHORS, Placement
 from ..variation import Variation
 from ..wind import Wind
@@ -51,8 +52,8 @@ _WIND = {"direction", "strength", "gustiness", "frequency", "wavelength"}
 _LAYER = {"name", "mesh", "parts", "axis", "axes", "color", "params", "scatter", "generate", "wind"}
 
 
-_GENERATE = {"rate", "tile", "min_distance", "seed", "bend", "scale", "twist", "taper", "extent", "reach", "density",
-             "altitude", "slope", "tint", "tint_color", "tint_hue", "weights", "anchor", "lift", "align_to_normal"}
+# a recipe's keys (core/recipe.py's table) and the layer's own: where it is made, how far, its maps, its meshes' shares
+_GENERATE = {key.name for key in RECIPE if key.in_file} | {"extent", "reach", "density", "weights"}
 
 
 _SCATTER = {"count", "min_distance", "density", "align_to_normal", "anchor", "scale", "bend", "droop", "seed",
@@ -456,25 +457,8 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
     if "extent" not in recipe:
         raise src.error("a generate recipe needs an extent [x0, z0, x1, z1]: the ground the commands make",
                         "generate", "layer", nth)
-    kwargs = {}
-    for key in ("rate", "tile", "min_distance", "twist", "taper", "tint", "tint_hue", "align_to_normal"):
-        if key in recipe:
-            kwargs[key] = float(_numbers(src, recipe[key], key, "layer", nth, (1,))[0])
-    if "bend" in recipe:  # one amplitude, or one per level of a mesh of several axes
-        bends = _numbers(src, recipe["bend"], "bend", "layer", nth, tuple(range(1, 17)))
-        kwargs["bend"] = bends[0] if len(bends) == 1 else tuple(bends)
-    if "anchor" in recipe:
-        kwargs["anchor"] = recipe["anchor"]  # Generate names what it expects
-    for key, n in (("altitude", 2), ("slope", 2), ("tint_color", 3), ("lift", 2)):
-        if key in recipe:
-            kwargs[key] = tuple(float(x) for x in _numbers(src, recipe[key], key, "layer", nth, (n,)))
+    kwargs = {key.name: _recipe_value(src, key, recipe[key.name], nth) for key in RECIPE if key.in_file and key.name in recipe}
     density = _existing(src, recipe["density"], "density", "layer", nth) if "density" in recipe else None
-    if "scale" in recipe:
-        kwargs["scale"] = tuple(float(x) for x in _numbers(src, recipe["scale"], "scale", "layer", nth, (2,), positive=True))
-    if "seed" in recipe:
-        if not isinstance(recipe["seed"], int) or isinstance(recipe["seed"], bool):
-            raise src.error(f"expected a whole number, found {recipe['seed']!r}", "seed", "layer", nth)
-        kwargs["seed"] = recipe["seed"]
     extent = tuple(float(x) for x in _numbers(src, recipe["extent"], "extent", "layer", nth, (4,)))
     reach = float(_numbers(src, recipe["reach"], "reach", "layer", nth, (1,), positive=True)[0]) if "reach" in recipe else None
     try:
@@ -490,6 +474,20 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
             raise src.error(str(exc), "generate", "layer", nth) from None
         raise src.error(said, field, "layer", nth) from None
     return GenerateRecipe(gen, extent, reach, density)
+
+
+def _recipe_value(src, key, value, nth):
+    """A recipe key's value as its kind spells it in a file (core/recipe.py): its type here, its range by Generate."""
+    shape = KINDS[key.kind].shape
+    if shape == "word":
+        return value
+    if shape == "whole":
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise src.error(f"expected a whole number, found {value!r}", key.name, "layer", nth)
+        return value
+    counts = {"number": (1,), "levels": tuple(range(1, 17)), "pair": (2,), "rgb": (3,)}[shape]
+    numbers = _numbers(src, value, key.name, "layer", nth, counts, positive=key.kind == "scale")
+    return numbers[0] if shape == "number" or (shape == "levels" and len(numbers) == 1) else tuple(numbers)
 
 
 def _scatter_layer(src, recipe, nth, scene) -> ScatterRecipe:
