@@ -44,6 +44,7 @@ struct AxialRecipe {
     vec2 lift;       // an extra height lo + (hi - lo) u21 (world units)
     float align;     // align_to_normal: the turn toward the ground's normal, a fraction of its angle
     vec2 anchor_xz;  // the anchor's x, z on the base mesh (with anchor_y: the point that rests on the ground)
+    vec2 yaw;        // the turn about up lo + (hi - lo) u2 (radians)
 };
 
 // atan2(y, x) to a few float32 ulps on every GPU (Cephes' atanf: reduction to [0, tan(pi/8)], its polynomial).
@@ -133,7 +134,7 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
     float cx = float(tile.x * r.m + i % r.m), cz = float(tile.y * r.m + i / r.m);
     position.x = (cx + 0.5 + r.jitter * (u[0] - 0.5)) * r.cell;
     position.z = (cz + 0.5 + r.jitter * (u[1] - 0.5)) * r.cell;
-    angles = vec3(0.0, 6.283185307179586 * u[2], 0.0);
+    angles = vec3(0.0, r.yaw.x + (r.yaw.y - r.yaw.x) * u[2], 0.0);
     vec2 d[5];
     for (int q = 0; q < 5; ++q) d[q] = vec2(r.bend * (2.0 * u[3 + 2 * q] - 1.0), r.bend * (2.0 * u[4 + 2 * q] - 1.0));
     // every control point shifted by D(t_a): the anchor stays where it is put

@@ -35,6 +35,7 @@ uniform vec2 u_choice;
 uniform vec2 u_lift;
 uniform float u_align;
 uniform vec2 u_anchor_xz;
+uniform vec2 u_yaw;
 
 // the recipe from the uniforms above
 AxialRecipe axial_gen_recipe() {
@@ -42,7 +43,7 @@ AxialRecipe axial_gen_recipe() {
                        u_twist, u_taper, u_anchor_y, u_anchor_w, u_anchor_w4, u_tint,
                        u_tint_color, u_tint_hue, u_has_heights, u_h_lo, u_h_inv, u_h_size,
                        u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
-                       u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz);
+                       u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz, u_yaw);
 }
 // ---- end of what js/build.mjs writes ----
 uniform sampler2D u_heights;  // unit 0

@@ -20,8 +20,9 @@ Randomness: ``u_k`` (``k = 0 .. 21``; room for 32) is 24 bits of the PCG hash of
     key = H(H(H(uint tx) ^ uint tz) ^ seed);   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24
 
 (integer maths: bit-exact on every GPU and in numpy).  Then, in float32 as the shader computes them:
-a turn about up ``ry = 2 pi u2``; offsets ``d_q = bend L (2 u_{3+q} - 1)`` for the ten numbers, every
-control point then shifted by ``-D(t_a)``, ``t_a`` the anchor's place on the axis, so it stays put;
+a turn about up ``ry = yaw_lo + (yaw_hi - yaw_lo) u2`` (``yaw`` default [0, 2 pi]); offsets
+``d_q = bend L (2 u_{3+q} - 1)`` for the ten numbers, every control point then shifted by ``-D(t_a)``,
+``t_a`` the anchor's place on the axis, so it stays put;
 ``s = lo + (hi - lo) u13``, ``tw = twist (2 u14 - 1)``, ``tp = taper u15`` (19 numbers when any of
 scale, twist, taper is given), the tint from ``u17 .. u19`` (22 numbers); ``py`` = the ground's height
 (0: a flat world; a height map: its triangles) minus the anchor's height times ``s``, plus the lift
@@ -209,7 +210,7 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     out = np.zeros((n, recipe.width), f32)
     out[:, 10] = (cx + f32(0.5) + j * (u[:, 0] - f32(0.5))) * cell
     out[:, 12] = (cz + f32(0.5) + j * (u[:, 1] - f32(0.5))) * cell
-    out[:, 14] = f32(2.0 * math.pi) * u[:, 2]
+    out[:, 14] = f32(recipe.yaw[0]) + (f32(recipe.yaw[1]) - f32(recipe.yaw[0])) * u[:, 2]
     amp = f32(recipe.level_bend(0) * mesh.axis.length)
     d = (amp * (f32(2.0) * u[:, 3:13] - f32(1.0))).reshape(n, 5, 2)
     w = anchor_weights(mesh, recipe.anchor)

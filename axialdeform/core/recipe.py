@@ -151,6 +151,7 @@ RECIPE = (
               uniform="align"),
     RecipeKey("tint_hue", "amount", 0.0, "how far each colour channel's u goes its own way (0: one u, the tint keeps "
               "tint_color's hue; 1: one u each)", True, uniform="tint_hue"),
+    RecipeKey("yaw", "span", (0.0, 2.0 * math.pi), "the turn about up drawn in [lo, hi] radians", True, uniform="yaw"),
 )
 
 _BY_NAME = {k.name: k for k in RECIPE}
@@ -241,4 +242,5 @@ def from_numbers(u: dict) -> dict:
 def optional_numbers() -> dict:
     """The numbers a generated form may leave out (keys its first version did not carry), at their values
     when the key is not given: what a reader fills in before it checks a file."""
-    return {key.uniform: key.uniform_default for key in RECIPE if key.uniform is not None and not key.required_json}
+    return {key.uniform: list(v) if isinstance(v, tuple) else v for key in RECIPE
+            if key.uniform is not None and not key.required_json for v in (key.uniform_default,)}

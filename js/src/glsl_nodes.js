@@ -425,7 +425,7 @@ export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, positi
     const _v4 = float(cz.add(float(0.5)).add(r.jitter.mul(u[1].sub(float(0.5)))).mul(r.cell)).toVar();
     position.assign(vec3(position.x, position.y, _v4));
   }
-  angles.assign(vec3(float(0.0), float(6.283185307179586).mul(u[2]), float(0.0)));
+  angles.assign(vec3(float(0.0), r.yaw.x.add(r.yaw.y.sub(r.yaw.x).mul(u[2])), float(0.0)));
   const d = Array.from({ length: 5 }, () => vec2(0).toVar());
   for (let q = 0; q < 5; q++) {
     d[q].assign(vec2(r.bend.mul(float(2.0).mul(u[(3 + (2 * q))]).sub(float(1.0))), r.bend.mul(float(2.0).mul(u[(4 + (2 * q))]).sub(float(1.0)))));

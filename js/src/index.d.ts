@@ -176,6 +176,8 @@ export interface GenerateRecipe {
   tint_color?: [number, number, number];
   /** How far each colour channel's u goes its own way (0: one u, the tint keeps tint_color's hue; 1: one u each); default 0. */
   tint_hue?: number;
+  /** The turn about up drawn in [lo, hi] radians; default [0, 6.283185307179586]. */
+  yaw?: [number, number];
   // GenerateRecipe: ---- end of what tools/make_tables.py writes ----
   /** The tiles within this distance of the point are made (default 3 tiles). */
   reach?: number;
@@ -213,6 +215,7 @@ export interface GeneratorUniforms {
   lift: [number, number];
   align: number;
   anchor_xz: [number, number];
+  yaw: [number, number];
   // GeneratorUniforms: ---- end of what tools/make_tables.py writes ----
 }
 

@@ -32,6 +32,7 @@ min_distance = 0.3
 seed = 4
 scale = [0.5, 1.0]
 lift = [0.0, 0.1]
+yaw = [0.1, 1.2]
 extent = [-8, -8, 8, 8]
 reach = 24.0
 """
@@ -43,7 +44,9 @@ HOSTILE = [("recipe", "rate", 1e12), ("recipe", "tile", 1e5), ("recipe", "reach"
            ("uniforms", "jitter", 1e30), ("uniforms", "scale", [-5.0, 0.0]), ("uniforms", "cell", "abc"),
            ("uniforms", "m", 100000), ("uniforms", "lift", [3e38, 3.4e38]), ("uniforms", "has_heights", True),
            ("uniforms", "h_size", [4000, 4000]), ("uniforms", "bend", 1e30), ("uniforms", "seed", 5),
-           ("uniforms", "tint", 0.5), ("uniforms", "choice", [0.0, 7.0]), ("uniforms", "align", -1.0)]
+           ("uniforms", "tint", 0.5), ("uniforms", "choice", [0.0, 7.0]), ("uniforms", "align", -1.0),
+           ("recipe", "yaw", [1.0, 0.0]), ("uniforms", "yaw", [0.1, 1.3])]
+OK = ("good", "whole", "older")
 
 
 @pytest.fixture(scope="module")
@@ -63,6 +66,12 @@ def files(tmp_path_factory):
     gen["uniforms"].update(seed=float(gen["uniforms"]["seed"]), m=float(gen["uniforms"]["m"]))
     g.save_binary(str(folder / "whole.glb"))
     out["whole"] = folder / "whole.glb"
+    # a file of the form's first version: no yaw in the recipe or the numbers (a key added since: its default)
+    g = pygltflib.GLTF2().load(str(glb))
+    gen = next(n for n in g.nodes if n.extensions and "AXIALDEFORM_bend" in n.extensions).extensions["AXIALDEFORM_bend"]["generate"]
+    del gen["recipe"]["yaw"], gen["uniforms"]["yaw"]
+    g.save_binary(str(folder / "older.glb"))
+    out["older"] = folder / "older.glb"
     for i, (where, key, value) in enumerate(HOSTILE):
         g = pygltflib.GLTF2().load(str(glb))
         node = next(n for n in g.nodes if n.extensions and "AXIALDEFORM_bend" in n.extensions)
@@ -98,8 +107,10 @@ def test_python_reads_the_generated_node_as_its_recipe(files):
 def test_python_refuses_every_hostile_file_in_one_line(files):
     _, out = files
     assert read_generated_glb(out["whole"]).generate == read_generated_glb(out["good"]).generate
+    assert read_generated_glb(out["good"]).generate.yaw == (0.1, 1.2)
+    assert read_generated_glb(out["older"]).generate.yaw == (0.0, 2.0 * np.pi)
     for key, path in out.items():
-        if key in ("good", "whole"):
+        if key in OK:
             continue
         with pytest.raises(GltfError) as info:
             read_generated_glb(path)
@@ -117,7 +128,7 @@ def test_the_plugin_gives_the_same_verdicts(files):
     assert len(verdicts) == len(out)
     for key, path in out.items():
         v = verdicts[path.name]
-        if key in ("good", "whole"):
+        if key in OK:
             assert v["verdict"] == "ok", v
         else:
             assert v["verdict"] == "refused" and "generate" in v["detail"], (key, v)

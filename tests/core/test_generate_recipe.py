@@ -11,7 +11,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import axialdeform as ad
-from axialdeform.core.errors import AxialDeformError
+from axialdeform.core.errors import AxialDeformError, ParamError
 from axialdeform.core.generate import Generate, anchor_weights, generate_tile, generate_tiles, tile_size, tiles_around
 
 STONE = ad.load_mesh("stone")
@@ -249,3 +249,18 @@ def test_the_recipe_struct_is_the_one_list_of_a_recipes_numbers(stone):
     assert len(set(fields)) == len(fields)
     vert = (glsl / "generate.vert").read_text()
     assert [m for m in re.findall(r"^uniform \w+ u_(\w+);", vert, re.M) if m in fields] == fields
+
+
+def test_yaw_draws_the_turn_in_its_range_and_its_default_is_the_whole_turn(stone):
+    """``yaw = [lo, hi]``: ry = lo + (hi - lo) u2; the default [0, 2 pi] gives the records of a recipe without it
+    bit for bit (f32(0) + f32(2 pi) u2 == f32(2 pi) u2)."""
+    base = Generate(rate=2.0, tile=8.0, seed=3, bend=0.1)
+    p, _ = generate_tile(base, stone, 1, -2)
+    q, _ = generate_tile(Generate(rate=2.0, tile=8.0, seed=3, bend=0.1, yaw=(0.25, 0.75)), stone, 1, -2)
+    assert (p[:, 14] >= 0).all() and p[:, 14].max() > 6.0
+    assert (q[:, 14] >= 0.25).all() and (q[:, 14] <= 0.75).all() and np.ptp(q[:, 14]) > 0.4
+    u2 = p[:, 14] / np.float32(2.0 * np.pi)
+    assert np.allclose(q[:, 14], np.float32(0.25) + np.float32(0.5) * u2, atol=1e-6)
+    assert np.array_equal(np.delete(p, 14, axis=1), np.delete(q, 14, axis=1))
+    with pytest.raises(ParamError, match=r"generate: yaw: expected \[lo, hi\] with lo <= hi"):
+        Generate(rate=1.0, yaw=(1.0, 0.0))

@@ -58,6 +58,7 @@ min_distance = 0.2
 seed = 2
 bend = 0.25
 twist = 0.6
+yaw = [-0.5, 0.5]
 extent = {extent}
 reach = {reach}
 """
@@ -314,7 +315,8 @@ def test_a_generated_page_of_trees_bends_every_level_as_python(browser, generate
         v.close()
 
 
-RECIPE = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2], "reach": 5.0}
+RECIPE = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2], "yaw": [0.5, 2.0],
+          "reach": 5.0}
 
 
 @pytest.fixture(scope="module")

@@ -328,7 +328,7 @@ def test_the_webgpu_example_draws_what_render_draws(webgpu_browser, site, backen
 # ---- generated layers: glsl/generate.glsl as node functions, by a compute pass (generate_nodes.js) ----
 
 GEN_STONES = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2],
-              "twist": 0.5, "tint": 0.3}
+              "twist": 0.5, "tint": 0.3, "yaw": [-1.0, 0.5]}
 
 
 def _gen_case(name, mesh, recipe, reach, maps=None, point=(0.0, 0.0), uniforms=True, picture=False, wind=None):
