@@ -328,7 +328,7 @@ def test_the_webgpu_example_draws_what_render_draws(webgpu_browser, site, backen
 # ---- generated layers: glsl/generate.glsl as node functions, by a compute pass (generate_nodes.js) ----
 
 GEN_STONES = {"rate": 1.0, "tile": 4.0, "min_distance": 0.4, "seed": 5, "bend": 0.15, "scale": [0.6, 1.2],
-              "twist": 0.5, "tint": 0.3, "yaw": [-1.0, 0.5]}
+              "twist": 0.5, "tint": 0.3}
 
 
 def _gen_case(name, mesh, recipe, reach, maps=None, point=(0.0, 0.0), uniforms=True, picture=False, wind=None):
@@ -354,7 +354,7 @@ def generated_cases(tmp_path):
     stones and grass on a height map (density map, altitude and slope bands, leaning with the ground); a
     tree of ten axes (every level its bend, the joints closed)."""
     stone = ad.load_mesh("stone")
-    flat = Generate(**GEN_STONES)
+    flat = Generate(**{**GEN_STONES, "yaw": [-1.0, 0.5]})  # the module's own numbers: yaw among them
     sparse = Generate(**{**GEN_STONES, "rate": 0.25, "scale": [1.0, 1.4]})  # each its own silhouette
     out = [(_gen_case("stones", stone, flat, 5.0, uniforms=False, picture=True), stone, flat, None),
            (_gen_case("stones in the wind", stone, sparse, 8.0, uniforms=False, picture=True, wind=WIND), stone, sparse,
