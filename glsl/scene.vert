@@ -28,11 +28,13 @@ uniform mat4 u_proj;
 #define u_axes_anchor axialAnchors
 #define u_axes_parent axialParents
 #define u_axes_offsets axialChildren
-#define u_wind_strength axialWindStrength
+// wind names: ---- written by tools/make_tables.py from axialdeform/core/wind.py: edit the table, then rerun it ----
 #define u_wind_dir axialWindDir
+#define u_wind_strength axialWindStrength
 #define u_wind_gust axialWindGust
 #define u_wind_cycles axialWindCycles
 #define u_wind_wavenumber axialWindWavenumber
+// wind names: ---- end of what tools/make_tables.py writes ----
 #endif
 #ifdef AXIAL_FRAME
 uniform mat3 u_frame;       // a chosen axis frame: u_frame * v = local coordinates (axis first)
@@ -44,12 +46,15 @@ uniform int u_axis;         // control axis of the base mesh: 0 x, 1 y, 2 z
 uniform float u_lo;         // min coordinate along the axis
 uniform float u_len;        // L = max - min along the axis
 uniform vec2 u_center;      // the axis line: bounding-box centre across the axis (twist/taper turn about it)
-// wind (docs/wind.md); u_wind_strength == 0 is the still scene
-uniform float u_wind_strength;   // tip displacement, in units of L
+// wind (docs/wind.md); u_wind_strength == 0 is the still scene; AXIAL_WIND_ARGS: them, as wind.glsl's functions take them
+// wind uniforms: ---- written by tools/make_tables.py from axialdeform/core/wind.py: edit the table, then rerun it ----
 uniform vec3 u_wind_dir;         // unit direction, world
+uniform float u_wind_strength;   // tip displacement, in units of L; 0: still
 uniform float u_wind_gust;       // gustiness
 uniform vec2 u_wind_cycles;      // (fract(f T), fract(2.31 f T)), computed on the CPU
 uniform float u_wind_wavenumber; // 1 / gust wavelength (world units), 0: no travelling fronts
+#define AXIAL_WIND_ARGS u_wind_dir, u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber
+// wind uniforms: ---- end of what tools/make_tables.py writes ----
 uniform int u_instance_base;     // index of the first instance drawn (capture works in chunks)
 
 #ifdef AXIAL_THREE
@@ -166,11 +171,9 @@ void main() {
 #ifdef AXIAL_WIND
     if (u_wind_strength != 0.0) {
 #ifdef AXIAL_AXES
-        push = axial_wind_push(inst, AXIAL_PHASE_ID, 1.0, u_wind_dir,
-                               u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
+        push = axial_wind_push(inst, AXIAL_PHASE_ID, 1.0, AXIAL_WIND_ARGS);
 #endif
-        inst = axial_wind(inst, AXIAL_PHASE_ID, AXIAL_AXIS, u_len, u_wind_dir,
-                          u_wind_strength, u_wind_gust, u_wind_cycles, u_wind_wavenumber);
+        inst = axial_wind(inst, AXIAL_PHASE_ID, AXIAL_AXIS, u_len, AXIAL_WIND_ARGS);
     }
 #endif
 #ifdef AXIAL_AXES

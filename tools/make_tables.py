@@ -6,7 +6,9 @@
 * ``js/src/index.d.ts``: the recipe's type ``GenerateRecipe`` (``core.recipe``) and the generator's numbers'
   ``GeneratorUniforms`` (``glsl/generate.glsl``'s ``AxialRecipe``), between marker lines;
 * the ``AXIALDEFORM_bend`` extension's JSON schema: the generated form's recipe and numbers;
-* ``docs/generate.md``: the table of a recipe's keys, between marker lines.
+* ``docs/generate.md``: the table of a recipe's keys, between marker lines;
+* ``glsl/scene.vert``: the wind's uniforms (``core.wind.WIND_UNIFORMS``): their declarations, the page's names
+  of them and the arguments ``glsl/wind.glsl``'s functions take, between marker lines.
 
 The tests run ``--check`` (exit 1 when a file is not what the tables give).  Rerun after changing a table:
 
@@ -26,7 +28,7 @@ from axialdeform.core import record as R
 from axialdeform.core.axis import FRAME_TOLERANCE
 from axialdeform.core.params import DRAWABLE_MAGNITUDE
 from axialdeform.core.recipe import KINDS, RECIPE, REQUIRED
-from axialdeform.core.wind import SECOND_HARMONIC, Wind
+from axialdeform.core.wind import SECOND_HARMONIC, WIND_UNIFORMS, Wind
 
 ROOT = Path(__file__).resolve().parents[1]
 RECORD_JS = Path("js/src/record.js")
@@ -34,7 +36,8 @@ INDEX_DTS = Path("js/src/index.d.ts")
 SCHEMA = Path("docs/gltf/AXIALDEFORM_bend/schema/node.AXIALDEFORM_bend.schema.json")
 GENERATE_MD = Path("docs/generate.md")
 GENERATE_GLSL = Path("glsl/generate.glsl")
-BEGIN = "---- written by tools/make_tables.py from axialdeform/core/recipe.py: edit the table, then rerun it ----"
+SCENE_VERT = Path("glsl/scene.vert")
+BEGIN = "---- written by tools/make_tables.py from axialdeform/{}: edit the table, then rerun it ----"
 END = "---- end of what tools/make_tables.py writes ----"
 
 
@@ -56,6 +59,7 @@ def record_js() -> str:
     recipe = [{"name": k.name, "kind": k.kind, "default": None if k.default is REQUIRED else k.default,
                "required": k.default is REQUIRED, "json": k.json, "requiredJson": k.required_json, "uniform": k.uniform,
                "uniformDefault": None if k.uniform is None else k.uniform_default} for k in RECIPE]
+    wind_uniforms = [{"name": n, "type": t, "glsl": f"u_wind_{n}", "three": three_wind(n)} for n, t, _ in WIND_UNIFORMS]
     kinds = {name: {"expected": kind.expected, "shape": kind.shape, "words": list(kind.words)} for name, kind in KINDS.items()}
     dump = lambda x: json.dumps(x, separators=(", ", ": "))  # noqa: E731 - one line a value
     return (
@@ -87,7 +91,10 @@ def record_js() -> str:
         " * AxialRecipe number it goes into unchanged (uniform) and that number when the key is not given. */\n"
         f"export const RECIPE = Object.freeze({dump(recipe)});\n\n"
         "/** What each kind of recipe key expects (limits.js's accepts tests it by the Python library's rule). */\n"
-        f"export const RECIPE_KINDS = Object.freeze({dump(kinds)});\n"
+        f"export const RECIPE_KINDS = Object.freeze({dump(kinds)});\n\n"
+        "/** The wind's uniforms (axialdeform.core.wind.WIND_UNIFORMS), in the order glsl/wind.glsl's functions take\n"
+        " * them: name, GLSL type, their names in glsl/ and in this module. */\n"
+        f"export const WIND_UNIFORMS = Object.freeze({dump(wind_uniforms)});\n"
     )
 
 
@@ -134,10 +141,10 @@ def dts_sections(struct: list) -> dict:
     return {"GenerateRecipe": keys, "GeneratorUniforms": numbers}
 
 
-def with_sections(text: str, where: str, sections: dict, comment: str = "//") -> str:
+def with_sections(text: str, where: str, sections: dict, comment: str = "//", source: str = "core/recipe.py") -> str:
     """``text`` with each section (name: lines) written between its marker lines."""
     for name, lines in sections.items():
-        begin, end = f"{comment} {name}: {BEGIN}", f"{comment} {name}: {END}"
+        begin, end = f"{comment} {name}: {BEGIN.format(source)}", f"{comment} {name}: {END}"
         a, b = text.find(begin), text.find(end)
         if a < 0 or b < a:
             raise SystemExit(f"make_tables.py: {where}: no lines '{begin}' ... '{end}' to write {name} between")
@@ -145,6 +152,20 @@ def with_sections(text: str, where: str, sections: dict, comment: str = "//") ->
         indent_end = text.rfind("\n", 0, b) + 1
         text = text[:start] + "".join(line + "\n" for line in lines) + text[indent_end:]
     return text
+
+
+def three_wind(name: str) -> str:
+    """``dir`` -> ``axialWindDir``: a wind uniform's name in the npm module and the page."""
+    return "axialWind" + name[0].upper() + name[1:]
+
+
+def wind_sections() -> dict:
+    """glsl/scene.vert's written sections: the page's names of the wind's uniforms, their declarations and the
+    arguments wind.glsl's functions take."""
+    width = max(len(f"uniform {t} u_wind_{n};") for n, t, _ in WIND_UNIFORMS)
+    return {"wind names": [f"#define u_wind_{n} {three_wind(n)}" for n, _, _ in WIND_UNIFORMS],
+            "wind uniforms": [f"{f'uniform {t} u_wind_{n};':<{width}} // {what}" for n, t, what in WIND_UNIFORMS] +
+            ["#define AXIAL_WIND_ARGS " + ", ".join(f"u_wind_{n}" for n, _, _ in WIND_UNIFORMS)]}
 
 
 def _kind_schema(kind: str) -> dict:
@@ -215,7 +236,9 @@ def outputs(root: Path) -> dict:
             INDEX_DTS: with_sections((root / INDEX_DTS).read_text(encoding="utf-8"), str(INDEX_DTS), dts_sections(struct)),
             SCHEMA: schema((root / SCHEMA).read_text(encoding="utf-8"), struct),
             GENERATE_MD: with_sections((root / GENERATE_MD).read_text(encoding="utf-8"), str(GENERATE_MD),
-                                       {"recipe keys": docs_table()}, "<!--")}
+                                       {"recipe keys": docs_table()}, "<!--"),
+            SCENE_VERT: with_sections((root / SCENE_VERT).read_text(encoding="utf-8"), str(SCENE_VERT), wind_sections(),
+                                      source="core/wind.py")}
 
 
 def main(argv=None) -> int:

@@ -34,7 +34,8 @@ from .params import as_params, check_tree_params
 from .record import ANGLES, OFFSETS, POSITION, split_record
 from .transforms import rotation_matrices
 
-__all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase", "position_ids", "wind_offsets", "apply_wind",
+__all__ = ["Wind", "WIND_WEIGHTS", "WIND_UNIFORMS",
+           "SECOND_HARMONIC", "wind_hash", "wind_phase", "position_ids", "wind_offsets", "apply_wind",
            "wind_wave",
            "tree_wind_offsets"]
 
@@ -42,6 +43,15 @@ __all__ = ["Wind", "WIND_WEIGHTS", "SECOND_HARMONIC", "wind_hash", "wind_phase",
 WIND_WEIGHTS = sag_weights(0.0)
 #: frequency ratio of the second sine of the gust wave
 SECOND_HARMONIC = 2.31
+
+#: the wind's uniforms, in the order glsl/wind.glsl's functions take them: (name, GLSL type, what).  Spelled
+#: ``u_wind_<name>`` in glsl/ and ``axialWind<Name>`` in the npm module and the page; tools/make_tables.py writes
+#: their declarations (glsl/scene.vert) and the module's table (js/src/record.js's WIND_UNIFORMS) from this one
+WIND_UNIFORMS = (("dir", "vec3", "unit direction, world"),
+                 ("strength", "float", "tip displacement, in units of L; 0: still"),
+                 ("gust", "float", "gustiness"),
+                 ("cycles", "vec2", "(fract(f T), fract(2.31 f T)), computed on the CPU"),
+                 ("wavenumber", "float", "1 / gust wavelength (world units), 0: no travelling fronts"))
 
 
 #: the most a wind may displace a tip, in axis lengths (``strength``, ``gustiness``): more draws nothing a
@@ -107,6 +117,12 @@ class Wind:
         if not math.isfinite(time):
             raise ParamError(f"time: expected a finite number of seconds, found {time!r}")
         return np.array([(self.frequency * time) % 1.0, (SECOND_HARMONIC * self.frequency * time) % 1.0])
+
+    def uniforms(self, time: float) -> dict:
+        """``{u_wind_<name>: value}``: every one of :data:`WIND_UNIFORMS` at ``time`` seconds, as a program is given them."""
+        values = {"dir": tuple(self.unit_direction), "strength": float(self.strength), "gust": float(self.gustiness),
+                  "cycles": tuple(self.cycles(time)), "wavenumber": float(self.wavenumber)}
+        return {f"u_wind_{name}": values[name] for name, _type, _what in WIND_UNIFORMS}
 
     @classmethod
     def parse(cls, text: str, direction=(1.0, 0.0, 0.0), name: str = "--wind") -> Wind:

@@ -168,9 +168,7 @@ class ShaderVariants:
         if not windy:
             program["u_wind_strength"].value = 0.0
             return
-        set_uniforms(program, {"u_wind_strength": float(wind.strength), "u_wind_dir": tuple(wind.unit_direction),
-                               "u_wind_gust": float(wind.gustiness), "u_wind_cycles": tuple(wind.cycles(time)),
-                               "u_wind_wavenumber": float(wind.wavenumber)})
+        set_uniforms(program, wind.uniforms(time))
 
     def _set_quant_uniforms(self, program) -> None:
         """The per-column decode table of a quantized instance buffer (no-op otherwise)."""

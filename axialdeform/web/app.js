@@ -15,7 +15,7 @@
 // header) and its AxialInstancedMesh holds every layer's instances (attributes, instanceMatrix, a
 // tree's offsets texture, bounds for three's culling); the page's own shaders draw them
 import { parseADP, AxialError, AxialInstancedMesh, AxialGeneratedMesh } from 'axialdeform-three';
-import { hex } from 'axialdeform-three/helpers';
+import { hex, stillWindUniforms } from 'axialdeform-three/helpers';
 
 /** The page's errors (a message shown as it is): the module's AxialError. */
 export const SceneError = AxialError;
@@ -148,10 +148,7 @@ export function mount(root, lib, scene, options = {}) {
     u_ambient: { value: cfg.look.ambient }, u_instance_base: { value: 0 },
   };
   // a layer without wind: the module's wind uniforms, still (a windy layer's are its mesh's, setWind)
-  const still = {
-    axialWindStrength: { value: 0 }, axialWindDir: { value: new THREE.Vector3(1, 0, 0) }, axialWindGust: { value: 0 },
-    axialWindCycles: { value: new THREE.Vector2() }, axialWindWavenumber: { value: 0 },
-  };
+  const still = stillWindUniforms();
 
   function showError(err) {
     const text = err instanceof SceneError ? err.message : `error: ${err && err.message ? err.message : err}`;

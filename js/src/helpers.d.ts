@@ -43,6 +43,15 @@ export const ATTRIBUTES: ReadonlyArray<{ name: string; start: number; size: numb
 /** The wind's defaults and second harmonic (generated from axialdeform.core.wind). */
 export const WIND: Readonly<{ gustiness: number; frequency: number; wavelength: number; harmonic: number }>;
 export const FRAME_TOLERANCE: number;
+/** The wind's uniforms (axialdeform.core.wind.WIND_UNIFORMS), in the order glsl/wind.glsl's functions take them. */
+export const WIND_UNIFORMS: ReadonlyArray<{ name: string; type: 'float' | 'vec2' | 'vec3'; glsl: string; three: string }>;
+/** A generated layer's recipe keys (axialdeform.core.recipe.RECIPE). */
+export const RECIPE: ReadonlyArray<{ name: string; kind: string; default: unknown; required: boolean; json: boolean;
+  requiredJson: boolean; uniform: string | null; uniformDefault: unknown }>;
+/** What each kind of recipe key expects. */
+export const RECIPE_KINDS: Readonly<Record<string, { expected: string; shape: string; words: string[] }>>;
+/** The wind's uniforms, still (strength 0): {axialWindDir: {value}, ...}. */
+export function stillWindUniforms(): Record<string, { value: unknown }>;
 
 // generated layers' parts: the recipe's checks and numbers, the tiles, the WebGL 2 generator
 /** A recipe checked as the Python library checks it, its defaults filled in. */

@@ -3,7 +3,8 @@
 // maths, the shader patch, the wind, and the glTF plugin's steps -- for tools and tests.
 export { crc32, dequantize, recordLayout, column, childTexels, texelRows, hex, NUMBERS_OF_VERSION, HEADER_BYTES,
   MAX_AXES, AXES_ROW } from './adp.js';
-export { RECORD, WIDTHS, ATTRIBUTES, WIND, FRAME_TOLERANCE } from './record.js';
+export { RECORD, WIDTHS, ATTRIBUTES, WIND, WIND_UNIFORMS, FRAME_TOLERANCE, RECIPE, RECIPE_KINDS } from './record.js';
+export { stillWindUniforms } from './wind.js';
 export { alignedFrame, resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 export { injectBend } from './shader.js';
 export { fromInstancedMesh, recordFromInstancedMesh, checkBendExtension } from './gltf.js';

@@ -8,7 +8,7 @@ import { AxialError, recordLayout, childTexels, texelRows, column, fieldName, AX
 import { ATTRIBUTES, DRAWABLE_MAGNITUDE } from './record.js';
 import { resolveAxis, instanceMatrices, bentRadii } from './bend.js';
 import { injectBend } from './shader.js';
-import { checkWind, setWindUniforms, windCycles, windReach } from './wind.js';
+import { checkWind, setWindClock, setWindUniforms, windReach } from './wind.js';
 import { feedback, refuseWebGPU, refuseNodeMaterial, UNBENT_DRAW } from './feedback.js';
 import { bake, unbake } from './bake.js';
 import { raycast } from './raycast.js';
@@ -291,7 +291,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
   setTime(t) {
     if (!Number.isFinite(t)) throw new AxialError(`setTime: expected a finite number of seconds, found ${t}`);
     this._time = t;
-    if (this._wind) windCycles(this._wind, t, this.axialUniforms.axialWindCycles.value);
+    if (this._wind) setWindClock(this.axialUniforms, this._wind, t);
     return this;
   }
 

@@ -11,6 +11,7 @@
 
 import { If, Loop, float, int, uint, vec2, vec3, vec4, normalize, textureLoad, ivec2 } from 'three/tsl';
 import * as glsl from './glsl_nodes.js';
+import { WIND_UNIFORMS } from './record.js';
 import { matDiagonal, matTranspose, matVar, matVec } from './tsl_runtime.js';
 
 export { axialCosSin, axialCurve, axialRotation, axialWindHash, axialPositionId } from './glsl_nodes.js';
@@ -48,16 +49,18 @@ export function axialPlace(bentV, bentN, inst) {
   return { ...out, rot: glsl.axialRotation(inst.angles) };
 }
 
+/** The wind's uniforms `w` ({dir, strength, ...}) as wind.glsl's functions take them (record.js's WIND_UNIFORMS). */
+const windArgs = (w) => WIND_UNIFORMS.map((u) => w[u.name]);
+
 /** The wind's push on instance `inst` (index id) in its model frame (axial_wind_push); w: the wind's
  * uniforms {dir, strength, gust, cycles, wavenumber}. */
 export function axialWindPush(inst, id, len, w) {
-  return glsl.axialWindPush(inst, uint(id), float(len), w.dir, w.strength, w.gust, w.cycles, w.wavenumber);
+  return glsl.axialWindPush(inst, uint(id), float(len), ...windArgs(w));
 }
 
 /** The instance as the wind bends it along frame f (axial_wind): d3 += u/6, d4 += u/2, d5 += u. */
 export function axialWind(inst, id, f, len, w) {
-  const moved = glsl.axialWind_AIum3fv3ffv2f(inst, uint(id), axialFrameMatrix(f), len, w.dir, w.strength, w.gust,
-    w.cycles, w.wavenumber);
+  const moved = glsl.axialWind_AIum3fv3ffv2f(inst, uint(id), axialFrameMatrix(f), len, ...windArgs(w));
   return { ...inst, ...moved };
 }
 

@@ -4,6 +4,10 @@
 
 import { AxialError } from './adp.js';
 import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
+import { WIND_UNIFORMS } from './record.js';
+
+// the wind's uniforms as glsl/wind.glsl's functions take them (record.js's table, from axialdeform.core.wind)
+const WIND_ARGS = WIND_UNIFORMS.map((w) => w.three).join(', ');
 
 /** The uniforms and attributes the bend reads (attribute form; the feedback pass makes them `in`). */
 export const UNIFORMS = `
@@ -31,11 +35,7 @@ uniform sampler2D axialChildren;
 attribute float axialAxis;
 #endif
 #ifdef AXIAL_WIND
-uniform vec3 axialWindDir;
-uniform float axialWindStrength;
-uniform float axialWindGust;
-uniform vec2 axialWindCycles;
-uniform float axialWindWavenumber;
+${WIND_UNIFORMS.map((w) => `uniform ${w.type} ${w.three};`).join('\n')}
 attribute vec3 axialAngles;
 #endif
 attribute vec4 axialD12;
@@ -58,11 +58,9 @@ export const BEND = `
       axialPlaced.position = instanceMatrix[3].xyz;
       axialPlaced.angles = axialAngles;
 #ifdef AXIAL_AXES
-      axialPush = axial_wind_push(axialPlaced, AXIAL_PHASE_ID, 1.0, axialWindDir, axialWindStrength,
-                                  axialWindGust, axialWindCycles, axialWindWavenumber);
+      axialPush = axial_wind_push(axialPlaced, AXIAL_PHASE_ID, 1.0, ${WIND_ARGS});
 #endif
-      axialInst = axial_wind(axialPlaced, AXIAL_PHASE_ID, axialFrame, axialLen, axialWindDir, axialWindStrength,
-                             axialWindGust, axialWindCycles, axialWindWavenumber);
+      axialInst = axial_wind(axialPlaced, AXIAL_PHASE_ID, axialFrame, axialLen, ${WIND_ARGS});
       axialInst.position = vec3(0.0);  // the rigid part stays instanceMatrix's
       axialInst.angles = vec3(0.0);
     }

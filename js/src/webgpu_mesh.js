@@ -9,6 +9,7 @@ import {
   tangentLocal, instanceIndex, varyingProperty, reference, uniform, int, uint, float, normalize,
 } from 'three/tsl';
 import { AxialError } from './adp.js';
+import { WIND_UNIFORMS } from './record.js';
 import { AxialInstancedMesh as WebGLAxialInstancedMesh } from './mesh.js';
 import { attachBake, unbake } from './bake.js';
 import { rayCandidates, intersectBent } from './raycast.js';
@@ -111,10 +112,8 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
   }
 
   _windNodes() {
-    const w = this.axialUniforms;
-    return { dir: reference('value', 'vec3', w.axialWindDir), strength: reference('value', 'float', w.axialWindStrength),
-      gust: reference('value', 'float', w.axialWindGust), cycles: reference('value', 'vec2', w.axialWindCycles),
-      wavenumber: reference('value', 'float', w.axialWindWavenumber) };
+    const u = this.axialUniforms; // {dir, strength, gust, cycles, wavenumber}: record.js's WIND_UNIFORMS
+    return Object.fromEntries(WIND_UNIFORMS.map((w) => [w.name, reference('value', w.type, u[w.three])]));
   }
 
   /**

@@ -4,7 +4,7 @@
 
 import * as THREE from 'three';
 import { AxialError } from './adp.js';
-import { WIND } from './record.js';
+import { WIND, WIND_UNIFORMS } from './record.js';
 
 /** {strength, gustiness, frequency, wavelength} of a user's wind ({direction, strength, ...}), each
  * checked, the defaults filled in; null for no wind (none, or strength 0). */
@@ -21,19 +21,29 @@ export function checkWind(wind) {
     wavelength: num(wind.wavelength ?? WIND.wavelength, 'wavelength') };
 }
 
-/** Set the wind's uniforms in `uniforms` (made where missing: the same objects from then on). */
+const VALUE = { float: () => 0, vec2: () => new THREE.Vector2(), vec3: () => new THREE.Vector3(1, 0, 0) };
+
+/** The wind's uniforms ({axialWindDir: {value}, ...}: record.js's WIND_UNIFORMS), still (strength 0). */
+export function stillWindUniforms() {
+  return Object.fromEntries(WIND_UNIFORMS.map((w) => [w.three, { value: VALUE[w.type]() }]));
+}
+
+/** Set the wind's uniforms in `uniforms` (made where missing: the same objects from then on); the cycles are
+ * the clock's (windCycles). */
 export function setWindUniforms(uniforms, wind) {
-  const u = uniforms;
-  Object.assign(u, {
-    axialWindDir: u.axialWindDir || { value: new THREE.Vector3() },
-    axialWindStrength: u.axialWindStrength || { value: 0 }, axialWindGust: u.axialWindGust || { value: 0 },
-    axialWindCycles: u.axialWindCycles || { value: new THREE.Vector2() },
-    axialWindWavenumber: u.axialWindWavenumber || { value: 0 },
-  });
-  u.axialWindDir.value.fromArray(wind.direction);
-  u.axialWindStrength.value = wind.strength;
-  u.axialWindGust.value = wind.gustiness;
-  u.axialWindWavenumber.value = wind.wavelength > 0 ? 1 / wind.wavelength : 0;
+  const values = { dir: wind.direction, strength: wind.strength, gust: wind.gustiness,
+    wavenumber: wind.wavelength > 0 ? 1 / wind.wavelength : 0 };
+  for (const w of WIND_UNIFORMS) {
+    const u = (uniforms[w.three] ||= { value: VALUE[w.type]() });
+    if (w.name in values) u.value = typeof u.value === 'number' ? values[w.name] : u.value.fromArray(values[w.name]);
+  }
+}
+
+const CYCLES = WIND_UNIFORMS.find((w) => w.name === 'cycles').three;
+
+/** The wind's clock at `t` seconds set in `uniforms` (its cycles uniform). */
+export function setWindClock(uniforms, wind, t) {
+  windCycles(wind, t, uniforms[CYCLES].value);
 }
 
 /** The wind's clock at `t` seconds: (frac(f t), frac(harmonic f t)), as axialdeform.core.wind. */

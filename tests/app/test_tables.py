@@ -1,5 +1,6 @@
-"""One table, one generator: the recipe's keys (core/recipe.py) and the record (core/record.py) are written
-into the JavaScript module, its types, the glTF extension's schema and the docs by tools/make_tables.py,
+"""One table, one generator: the recipe's keys (core/recipe.py), the record (core/record.py) and the wind's
+uniforms (core/wind.py) are written into the JavaScript module, its types, the glTF extension's schema, the
+docs and glsl/scene.vert's declarations by tools/make_tables.py,
 whose --check fails when a written file drifts; the two readers test a key's kind by one rule."""
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from axialdeform.core.generate import Generate, recipe_json
 ROOT = Path(__file__).resolve().parents[2]
 TOOL = ROOT / "tools" / "make_tables.py"
 WRITTEN = ("js/src/record.js", "js/src/index.d.ts", "docs/gltf/AXIALDEFORM_bend/schema/node.AXIALDEFORM_bend.schema.json",
-           "docs/generate.md")
+           "docs/generate.md", "glsl/scene.vert")
 
 
 def _tool():
@@ -49,9 +50,12 @@ def test_check_fails_on_drift_and_a_run_writes_them_back(tmp_path):
     dts.write_text(dts.read_text().replace("  tint_hue?: number;\n", ""))
     schema = tmp_path / WRITTEN[2]
     schema.write_text(schema.read_text().replace('"exclusiveMaximum": 1', '"maximum": 1'))
+    vert = tmp_path / "glsl/scene.vert"
+    vert.write_text(vert.read_text().replace("uniform float u_wind_gust;", "uniform float u_wind_gusts;"))
     done = _run("--check", "--root", str(tmp_path))
     assert done.returncode == 1
-    assert "index.d.ts" in done.stderr and "schema.json" in done.stderr and "record.js" not in done.stderr
+    assert "index.d.ts" in done.stderr and "schema.json" in done.stderr and "scene.vert" in done.stderr
+    assert "record.js" not in done.stderr
     assert _run("--root", str(tmp_path)).returncode == 0
     assert _run("--check", "--root", str(tmp_path)).returncode == 0
     for rel in WRITTEN:
@@ -114,3 +118,17 @@ def test_a_key_is_refused_by_its_kind():
     with pytest.raises(ParamError, match="generate: anchor: expected one of bottom, center, origin"):
         Generate(rate=1.0, anchor="top")
     assert Generate(rate=1.0, bend=[0.2]).bend == 0.2 and Generate(rate=1.0, bend=[0.2, 0.1]).bend == (0.2, 0.1)
+
+
+def test_the_wind_uniforms_are_the_table(ctx):
+    """What a windy program is given is core.wind's table: every name declared, and nothing else of the wind."""
+    import axialdeform as ad
+    from axialdeform.core.wind import WIND_UNIFORMS, Wind
+    from axialdeform.gl.shaders import build_program
+
+    program = build_program(ctx, "scene.vert", "scene.frag", defines={"AXIAL_WIND": "1"})
+    assert list(Wind(strength=0.2).uniforms(1.5)) == [f"u_wind_{n}" for n, _, _ in WIND_UNIFORMS]
+    for name in Wind(strength=0.2).uniforms(1.5):
+        assert name in program, name
+    assert ad.Wind(strength=0.2, wavelength=4.0).uniforms(0.0)["u_wind_wavenumber"] == 0.25
+    program.release()
