@@ -337,6 +337,18 @@ def test_the_bent_instance_casts_a_bent_shadow(checks):
 
 
 @pytest.mark.slow
+def test_an_alpha_tested_material_casts_a_cut_shadow(checks):
+    """A leaf card's shadow is its leaf, not its card: the bent depth materials take the material's map and
+    alpha test, as three's own do (a checkered alpha map casts about half the shadow)."""
+    page, errors = checks
+    out = page.evaluate("window.checks.cutShadows()")
+    assert out["whole"] > 200
+    assert 0.25 * out["whole"] < out["cut"] < 0.8 * out["whole"], out
+    assert out["differ"] > 0.15 * out["cut"], out  # and cut where the BENT stone stands (its flat twin's differs)
+    assert errors == []
+
+
+@pytest.mark.slow
 def test_standard_physical_lambert_basic_keep_maps_lights_fog_and_tone_mapping(checks):
     page, errors = checks
     out = page.evaluate("window.checks.materials()")
