@@ -5,7 +5,8 @@
 // runs only on the GPU, in glsl/axial.glsl (src/glsl.js): drawing, baking and
 // raycasting all use it; docs/method.md states the conventions.
 
-import { AxialError } from './adp.js';
+import { AxialError, fieldName } from './adp.js';
+import { DRAWABLE_MAGNITUDE } from './record.js';
 
 /** The rows e_a, e_u, e_v of the aligned axis x (0), y (1) or z (2): offsets go to the two other
  * coordinates in increasing order. */
@@ -129,3 +130,30 @@ export function bentRadii(positions, axis, data, layout, count, first = 0, out =
   return { center: c, radius, grow };
 }
 
+/** `data` as the checked rows of `mesh` (an AxialInstancedMesh): a Float32Array of whole rows, finite, drawable,
+ * fitting its capacity from `first`. */
+export function checkRows(mesh, data, first, where) {
+  let rows = data;
+  const L = mesh.layout, f = L.numbersPerInstance;
+  if (rows && rows.data && Number.isInteger(rows.count)) {
+    if (rows.numbersPerInstance !== f) {
+      throw new AxialError(`${rows.name || 'record'}: ${rows.numbersPerInstance} numbers an instance, but this mesh was made for ${f}`);
+    }
+    rows = rows.data.subarray(0, rows.count * f);
+  }
+  if (!(rows instanceof Float32Array) || rows.length % f !== 0) {
+    throw new AxialError(`${where}: expected a Float32Array of rows of ${f} numbers`);
+  }
+  const n = rows.length / f;
+  if (!Number.isInteger(first) || first < 0 || first + n > mesh.capacity) {
+    throw new AxialError(`${where}: instances ${first} to ${first + n - 1} do not fit a capacity of ${mesh.capacity}`);
+  }
+  const placed = 10 * L.axes + 3; // every axis's offsets, then the position: what the picture projects
+  for (let i = 0; i < rows.length; i++) {
+    if (!Number.isFinite(rows[i])) throw new AxialError(`${where}: instance ${first + Math.floor(i / f)}, number ${i % f}: not finite`);
+    if (i % f < placed && Math.abs(rows[i]) > DRAWABLE_MAGNITUDE) {
+      throw new AxialError(`${where}: instance ${first + Math.floor(i / f)}, field ${fieldName(i % f, L.axes)} = ${rows[i]}; expected at most ${DRAWABLE_MAGNITUDE} in magnitude to draw it (float32 cannot project it)`);
+    }
+  }
+  return rows;
+}

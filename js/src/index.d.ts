@@ -125,6 +125,9 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
   getInstanceBoundingBox(index: number, target?: THREE.Box3): THREE.Box3;
   /** The wind of glsl/wind.glsl (null: none); setTime moves its clock. */
   setWind(wind: WindSpec | null): this;
+  /** Cull each instance by its bend-aware bounding sphere before every draw (the camera's and each shadow
+   * map's) under `renderer`; null: draw them all. */
+  setInstanceCulling(renderer: THREE.WebGLRenderer | null): this;
   setTime(seconds: number): this;
   /** Bend once on the GPU (transform feedback) and draw plain geometry; false where it keeps bending. */
   bake(renderer: THREE.WebGLRenderer): boolean;

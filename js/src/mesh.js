@@ -4,14 +4,15 @@
 // numbers are instanced attributes (record.js's ATTRIBUTES).  Wind: wind.js; bake, raycast: feedback.js.
 
 import * as THREE from 'three';
-import { AxialError, recordLayout, childTexels, texelRows, column, fieldName, AXES_ROW } from './adp.js';
-import { ATTRIBUTES, DRAWABLE_MAGNITUDE } from './record.js';
-import { resolveAxis, instanceMatrices, bentRadii } from './bend.js';
+import { AxialError, recordLayout, childTexels, texelRows, column, AXES_ROW } from './adp.js';
+import { ATTRIBUTES } from './record.js';
+import { resolveAxis, instanceMatrices, bentRadii, checkRows } from './bend.js';
 import { injectBend } from './shader.js';
 import { checkWind, setWindClock, setWindUniforms, windReach } from './wind.js';
 import { feedback, refuseWebGPU, refuseNodeMaterial, UNBENT_DRAW } from './feedback.js';
 import { bake, unbake } from './bake.js';
 import { raycast } from './raycast.js';
+import { setInstanceCulling, cullingHooks } from './instance_cull.js';
 
 // scratch objects of the bounds (no allocation per instance)
 const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
@@ -30,6 +31,7 @@ const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
 export class AxialInstancedMesh extends THREE.InstancedMesh {
   /** @type {any} */ _baked = null; /** @type {any} */ _rayMesh = null; /** @type {any} */ _cpuAttributes = null; // set later
   /** @type {any} */ _childTexels = null; /** @type {any} */ _storage = null; // (bake.js, raycast.js, generated meshes)
+  /** @type {any} */ _culling = null; // instance_cull.js
   constructor(geometry, material, record, options = {}) {
     if (!geometry || !geometry.isBufferGeometry) throw new AxialError('AxialInstancedMesh: expected a THREE.BufferGeometry');
     if (!record || !Number.isInteger(record.count) || !record.data) {
@@ -121,9 +123,11 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     const hook = (renderer, ...rest) => {
       this._checkRenderer(renderer);
       this._renderer = renderer;
+      if (this._culling && !this._baked) this._culling.before(rest[1]); // the instances in this camera's view
       if (userHook) userHook.call(this, renderer, ...rest);
     };
     Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
+    cullingHooks(this);
   }
 
   /** The bent materials of three's shadow passes (customDepthMaterial, customDistanceMaterial). */
@@ -157,7 +161,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     };
     const key = material.customProgramCacheKey.bind(material);
     m.customProgramCacheKey = () => `axialdeform:${defines.AXIAL_AXES || 1}:${defines.AXIAL_WIND ? 'wind' : ''}:`
-      + `${defines.AXIAL_POSITION_IDS ? 'position-ids' : ''}:${key()}`;
+      + `${defines.AXIAL_POSITION_IDS ? 'position-ids' : ''}:${defines.AXIAL_CULLED ? 'culled' : ''}:${key()}`;
     m.needsUpdate = true;
     return m;
   }
@@ -170,7 +174,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    */
   setParams(data, options = undefined) {
     if (options && options.first !== undefined) return this.updateParams(data, options.first);
-    const rows = this._rows(data, 0, 'setParams');
+    const rows = checkRows(this, data, 0, 'setParams');
     const n = rows.length / this.layout.numbersPerInstance;
     this._write(rows, 0);
     this.count = n;
@@ -187,7 +191,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    * (the mesh's box and sphere grow to hold them; they do not shrink until setParams).
    */
   updateParams(rows, start = 0) {
-    rows = this._rows(rows, start, 'updateParams');
+    rows = checkRows(this, rows, start, 'updateParams');
     const n = rows.length / this.layout.numbersPerInstance;
     this._write(rows, start);
     this.count = Math.max(this.count, start + n);
@@ -201,33 +205,6 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     }
     this.dispatchEvent(/** @type {any} */ ({ type: 'paramschange', first: start, count: n }));
     return this;
-  }
-
-  /** `data` as checked rows (a Float32Array of whole rows, finite, fitting the capacity from `first`). */
-  _rows(data, first, where) {
-    let rows = data;
-    const L = this.layout, f = L.numbersPerInstance;
-    if (rows && rows.data && Number.isInteger(rows.count)) {
-      if (rows.numbersPerInstance !== f) {
-        throw new AxialError(`${rows.name || 'record'}: ${rows.numbersPerInstance} numbers an instance, but this mesh was made for ${f}`);
-      }
-      rows = rows.data.subarray(0, rows.count * f);
-    }
-    if (!(rows instanceof Float32Array) || rows.length % f !== 0) {
-      throw new AxialError(`${where}: expected a Float32Array of rows of ${f} numbers`);
-    }
-    const n = rows.length / f;
-    if (!Number.isInteger(first) || first < 0 || first + n > this.capacity) {
-      throw new AxialError(`${where}: instances ${first} to ${first + n - 1} do not fit a capacity of ${this.capacity}`);
-    }
-    const placed = 10 * L.axes + 3; // every axis's offsets, then the position: what the picture projects
-    for (let i = 0; i < rows.length; i++) {
-      if (!Number.isFinite(rows[i])) throw new AxialError(`${where}: instance ${first + Math.floor(i / f)}, number ${i % f}: not finite`);
-      if (i % f < placed && Math.abs(rows[i]) > DRAWABLE_MAGNITUDE) {
-        throw new AxialError(`${where}: instance ${first + Math.floor(i / f)}, field ${fieldName(i % f, L.axes)} = ${rows[i]}; expected at most ${DRAWABLE_MAGNITUDE} in magnitude to draw it (float32 cannot project it)`);
-      }
-    }
-    return rows;
   }
 
   /** Write checked rows into instances first ..: the record, the attributes (uploaded as a range),
@@ -260,6 +237,14 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     }
     const pos = this.geometry.getAttribute('position').array;
     this._center = bentRadii(pos, this.axis, this.data, L, n, first, this._radii, this._grow).center;
+    if (this._culling) this._culling.fill(first, n);
+  }
+
+  /** Cull each instance by its bend-aware sphere before every draw under `renderer` (a WebGLRenderer), so a
+   * camera draws only the instances it sees (instance_cull.js); null: draw them all again. */
+  setInstanceCulling(renderer) {
+    setInstanceCulling(this, renderer);
+    return this;
   }
 
   /**
@@ -385,6 +370,7 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
    * the user's geometry and materials stay theirs. */
   dispose() {
     unbake(this);
+    if (this._culling) this._culling.dispose();
     if (this._programs) Object.values(this._programs).forEach(({ gl, program }) => gl.deleteProgram(program));
     this._programs = null;
     this.geometry.dispose();

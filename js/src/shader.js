@@ -6,11 +6,49 @@ import { AxialError } from './adp.js';
 import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
 import { WIND_UNIFORMS } from './record.js';
 
+/** Per-instance culling's instance texture (instance_cull.js): texels an instance (the bend's numbers, the
+ * matrix's three rows, the tint) and texels a row. */
+export const CULL_TEXELS = 8;
+export const CULL_WIDTH = 4096;
+
 // the wind's uniforms as glsl/wind.glsl's functions take them (record.js's table, from axialdeform.core.wind)
 const WIND_ARGS = WIND_UNIFORMS.map((w) => w.three).join(', ');
 
 /** The uniforms and attributes the bend reads (attribute form; the feedback pass makes them `in`). */
 export const UNIFORMS = `
+#ifdef AXIAL_CULLED
+// per-instance culling (instance_cull.js): the instances drawn are ids into the instance texture, 8 texels
+// each -- the bend's numbers, the matrix's rows, the tint -- read once a vertex into what three's chunks and
+// the bend read (instanceMatrix, instanceColor, the attributes below)
+uniform highp sampler2D axialInstances;
+attribute float axialIndex;
+int axialInstanceId;
+vec4 axialD12, axialD34;
+vec2 axialD5, axialTwistTaper;
+vec3 axialAngles;
+mat4 axialInstanceMatrix;
+#define instanceMatrix axialInstanceMatrix
+#ifdef USE_INSTANCING_COLOR
+vec3 axialInstanceColor;
+#define instanceColor axialInstanceColor
+#endif
+#define AXIAL_ID axialInstanceId
+void axial_fetch_instance() {
+  axialInstanceId = int(axialIndex + 0.5);
+  int x = (axialInstanceId % ${CULL_WIDTH / CULL_TEXELS}) * ${CULL_TEXELS}, y = axialInstanceId / ${CULL_WIDTH / CULL_TEXELS};
+  axialD12 = texelFetch(axialInstances, ivec2(x, y), 0);
+  axialD34 = texelFetch(axialInstances, ivec2(x + 1, y), 0);
+  vec4 t = texelFetch(axialInstances, ivec2(x + 2, y), 0);
+  axialD5 = t.xy;
+  axialTwistTaper = t.zw;
+  axialAngles = texelFetch(axialInstances, ivec2(x + 3, y), 0).xyz;
+  axialInstanceMatrix = transpose(mat4(texelFetch(axialInstances, ivec2(x + 4, y), 0), texelFetch(axialInstances, ivec2(x + 5, y), 0),
+                                       texelFetch(axialInstances, ivec2(x + 6, y), 0), vec4(0.0, 0.0, 0.0, 1.0)));
+#ifdef USE_INSTANCING_COLOR
+  axialInstanceColor = texelFetch(axialInstances, ivec2(x + 7, y), 0).xyz;
+#endif
+}
+#endif
 #ifndef AXIAL_ID
 #define AXIAL_ID gl_InstanceID
 #endif
@@ -36,17 +74,24 @@ attribute float axialAxis;
 #endif
 #ifdef AXIAL_WIND
 ${WIND_UNIFORMS.map((w) => `uniform ${w.type} ${w.three};`).join('\n')}
+#ifndef AXIAL_CULLED
 attribute vec3 axialAngles;
 #endif
+#endif
+#ifndef AXIAL_CULLED
 attribute vec4 axialD12;
 attribute vec4 axialD34;
 attribute vec2 axialD5;
 attribute vec2 axialTwistTaper;
+#endif
 `;
 
 // the bend of this vertex, before three's chunks: model space, the instance's rigid part
 // is instanceMatrix (three applies it in project_vertex, worldpos_vertex, defaultnormal_vertex)
 export const BEND = `
+#ifdef AXIAL_CULLED
+  axial_fetch_instance();
+#endif
   vec3 axialV, axialN, axialT = vec3(1.0, 0.0, 0.0);
   {
     AxialInstance axialInst = AxialInstance(axialD12, axialD34, axialD5, vec3(0.0), vec3(0.0), 1.0,

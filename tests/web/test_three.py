@@ -349,6 +349,25 @@ def test_an_alpha_tested_material_casts_a_cut_shadow(checks):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("wind", [False, True], ids=["still", "wind"])
+def test_per_instance_culling_draws_what_drawing_all_draws(checks, wind):
+    """setInstanceCulling under WebGLRenderer: the camera draws only the instances it sees (their bend-aware
+    spheres), the picture is the one of drawing them all -- the wind's phases by instance id, and the shadows of
+    stones out of view, culled for the sun's own frustum -- and the mesh still holds every instance."""
+    page, errors = checks
+    out = page.evaluate(f"window.checks.culling({'true' if wind else 'false'})")
+    all_, culled = (np.array(out[k], np.int16).reshape(-1, 4)[:, :3] for k in ("all", "culled"))
+    lit = all_.max(axis=1) > 40
+    assert lit.mean() > 0.3
+    assert np.abs(all_ - culled).max() <= 2, np.abs(all_ - culled).max()
+    assert 0.2 * out["total"] < out["drawn"] < 0.65 * out["total"] and out["count"] == out["total"], (out["drawn"], out["count"])
+    # the stones beyond the view do cast into it: leaving them out changes the picture
+    fewer = np.array(page.evaluate(f"window.checks.culling({'true' if wind else 'false'}, true)")["culled"], np.int16)
+    assert np.abs(fewer.reshape(-1, 4)[:, :3] - culled).max() > 40
+    assert errors == []
+
+
+@pytest.mark.slow
 def test_standard_physical_lambert_basic_keep_maps_lights_fog_and_tone_mapping(checks):
     page, errors = checks
     out = page.evaluate("window.checks.materials()")
