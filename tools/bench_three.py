@@ -8,7 +8,10 @@ camera walking through the field, three ways (tools/bench_three.html, three r187
 * ``addon``: ``@three.ez/instanced-mesh``'s ``InstancedMesh2`` with its BVH frustum culling
   (``WebGLRenderer``: the add-on has no WebGPU path), unbent;
 * ``axial``: ``axialdeform-three/webgpu``'s ``AxialInstancedMesh`` under ``WebGPURenderer``
-  (WebGPU backend) with GPU culling (``setGPUCulling``), every instance bent.
+  (WebGPU backend) with GPU culling (``setGPUCulling``), every instance bent;
+* ``axial-webgl-cull``: ``axialdeform-three``'s ``AxialInstancedMesh`` under ``WebGLRenderer`` with
+  per-instance culling (``setInstanceCulling``), every instance bent -- the add-on's backend;
+  ``axial-webgl-unbent``: the same with every offset zero (the bend's own vertex work, same culling).
 
 Per mode and count, each run in a page of its own, the modes alternating over ``--repeats`` runs:
 the first frame (from making the mesh to the GPU done), the median CPU ms of the ``render`` call,
@@ -39,7 +42,7 @@ JS = ROOT / "js"
 ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox", "--enable-unsafe-webgpu",
         "--use-webgpu-adapter=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
         "--enable-precise-memory-info"]
-MODES = ("plain", "addon", "axial", "one", "axial-webgl", "plain-webgpu", "axial-nocull")
+MODES = ("plain", "addon", "axial", "one", "axial-webgl", "plain-webgpu", "axial-nocull", "axial-webgl-cull", "axial-webgl-unbent")
 
 
 def site(folder: Path, counts, spacing: float) -> None:

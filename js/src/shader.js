@@ -25,7 +25,7 @@ attribute float axialIndex;
 int axialInstanceId;
 vec4 axialD12, axialD34;
 vec2 axialD5, axialTwistTaper;
-vec3 axialAngles;
+vec3 axialAngles; // the wind's only
 mat4 axialInstanceMatrix;
 #define instanceMatrix axialInstanceMatrix
 #ifdef USE_INSTANCING_COLOR
@@ -41,7 +41,9 @@ void axial_fetch_instance() {
   vec4 t = texelFetch(axialInstances, ivec2(x + 2, y), 0);
   axialD5 = t.xy;
   axialTwistTaper = t.zw;
+#ifdef AXIAL_WIND
   axialAngles = texelFetch(axialInstances, ivec2(x + 3, y), 0).xyz;
+#endif
   axialInstanceMatrix = transpose(mat4(texelFetch(axialInstances, ivec2(x + 4, y), 0), texelFetch(axialInstances, ivec2(x + 5, y), 0),
                                        texelFetch(axialInstances, ivec2(x + 6, y), 0), vec4(0.0, 0.0, 0.0, 1.0)));
 #ifdef USE_INSTANCING_COLOR
