@@ -368,6 +368,19 @@ def test_per_instance_culling_draws_what_drawing_all_draws(checks, wind):
 
 
 @pytest.mark.slow
+def test_culling_draws_exactly_the_instances_whose_sphere_meets_the_frustum(checks):
+    """The blocks only skip work: for cameras looking every way, the ids drawn are those whose bend-aware sphere
+    (grown by the wind) three's own Frustum finds inside, neither more nor fewer (the mesh moved off the origin)."""
+    page, errors = checks
+    sets = page.evaluate("window.checks.cullSets()")
+    sizes = [len(brute) for _, brute in sets]
+    assert min(sizes) < 5000 and max(sizes) > 50, sizes
+    for culled, brute in sets:
+        assert culled == brute
+    assert errors == []
+
+
+@pytest.mark.slow
 def test_standard_physical_lambert_basic_keep_maps_lights_fog_and_tone_mapping(checks):
     page, errors = checks
     out = page.evaluate("window.checks.materials()")
