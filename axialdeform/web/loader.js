@@ -3,9 +3,8 @@
 // imports between them ('three', '../utils/BufferGeometryUtils.js') are pointed
 // at those URLs.  The folder page imports the same files through an import map.
 //
-// sources = {three, orbit, gltf, bgu, app, module: {'adp.js': text, ...}}: the text of each module.
-/** The module's files, each after the files it imports. */
-export const MODULE_ORDER = ['record.js', 'adp.js', 'glsl.js', 'bend.js', 'shader.js', 'wind.js', 'feedback.js', 'bake.js', 'raycast.js', 'mesh.js', 'limits.js', 'tiles.js', 'generate.js', 'gltf.js', 'index.js', 'helpers.js'];
+// sources = {three, orbit, gltf, bgu, app, module: {'record.js': text, ...}}: the text of each module, the
+// module's files in the order of their imports.
 
 export async function loadModules(sources) {
   const urls = [];
@@ -19,10 +18,11 @@ export async function loadModules(sources) {
   const bgu = url(fromThree(sources.bgu));
   const gltf = url(fromThree(sources.gltf).replace(/(['"])\.\.\/utils\/BufferGeometryUtils\.js\1/g, `'${bgu}'`));
   const orbit = url(fromThree(sources.orbit));
-  // the npm module axialdeform-three (js/src), file by file in the order of their imports: each
-  // file's './name.js' and 'three' imports pointed at the URLs made before it
+  // the npm module axialdeform-three (js/src), file by file in the order the page gives them (Python's
+  // MODULE_FILES: each after the files it imports): each file's './name.js' and 'three' imports pointed
+  // at the URLs made before it
   const mod = {};
-  for (const name of MODULE_ORDER) {
+  for (const name of Object.keys(sources.module)) {
     let text = fromThree(sources.module[name]);
     for (const [dep, u] of Object.entries(mod)) text = text.replace(new RegExp(`(['"])\\./${dep}\\1`, 'g'), `'${u}'`);
     mod[name] = url(text);

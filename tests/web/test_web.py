@@ -1055,11 +1055,13 @@ def test_widget_draws_trees_and_takes_new_tree_numbers(browser, tmp_path):
         page.close()
 
 
-def test_the_single_file_loader_knows_every_module_file():
-    """loader.js links the npm module's files of a single-file page in MODULE_ORDER: it must name every one
-    the page ships (a file missing there leaves the page waiting on an import that never resolves)."""
+def test_the_module_files_come_each_after_what_it_imports():
+    """The single-file page and the widget link the npm module's files in MODULE_FILES' order (loader.js): each
+    file's imports of the module must be shipped and come before it (else the page waits on an import that
+    never resolves)."""
     from axialdeform.web.sources import MODULE_FILES
 
-    text = (ROOT / "axialdeform" / "web" / "loader.js").read_text()
-    order = re.search(r"MODULE_ORDER = \[([^\]]*)\]", text).group(1)
-    assert sorted(re.findall(r"'([^']+)'", order)) == sorted(MODULE_FILES)
+    for k, name in enumerate(MODULE_FILES):
+        text = (ROOT / "js" / "src" / name).read_text()
+        for dep in re.findall(r"""from\s*['"]\./([\w.]+)['"]""", text):
+            assert dep in MODULE_FILES[:k], (name, dep)
