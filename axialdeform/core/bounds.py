@@ -25,6 +25,7 @@ from .record import (
 from .transforms import rotation_matrices
 
 __all__ = [
+    "light_box",
     "wind_reach", "child_reach", "instance_bounds", "scene_box", "sphere_box", "stack_spheres", "ground_square",
     "box_corners", "outline_points", "base_radius", "instance_boxes", "frustum_planes", "spheres_visible", "lod_choice",
 ]
@@ -148,6 +149,28 @@ def ground_square(centers, radii, up: int = 1, *, margin: float = 1.6, sink: flo
     elif len(centers):
         center[up] = np.percentile(centers[:, up] - radii, 5) + sink * middle
     return center, radius
+
+
+def light_box(spheres, light_dir, size: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """The key light's shadow camera over ``spheres`` ((k, 4) ``x, y, z, r``): ``(view, projection, offset)``,
+    pyrr-layout (4, 4) float32 matrices of an orthographic camera looking along ``-light_dir`` at a box around
+    every sphere, and the normal offset of a lookup (about two texels of a ``size`` map, world units) -- render's
+    shadow map (:class:`~axialdeform.gl.shadow.ShadowMap`) and the page's alike."""
+    import pyrr
+
+    spheres = np.asarray(spheres, dtype=np.float64).reshape(-1, 4)
+    light = np.asarray(light_dir, dtype=np.float64)
+    light = light / max(np.linalg.norm(light), 1e-12)
+    lo = (spheres[:, :3] - spheres[:, 3:]).min(axis=0)
+    hi = (spheres[:, :3] + spheres[:, 3:]).max(axis=0)
+    center = (lo + hi) / 2
+    radius = float(np.linalg.norm(hi - lo) / 2) or 1.0
+    helper = (0.0, 1.0, 0.0) if abs(light[1]) < 0.95 else (1.0, 0.0, 0.0)
+    eye = center + light * radius * 2.0
+    view = pyrr.matrix44.create_look_at(eye, center, helper, dtype=np.float32)
+    projection = pyrr.matrix44.create_orthogonal_projection(-radius, radius, -radius, radius, radius * 0.5, radius * 3.5,
+                                                            dtype=np.float32)
+    return view, projection, 2.0 * (2.0 * radius / size)
 
 
 def box_corners(lo, hi) -> np.ndarray:

@@ -19,18 +19,19 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 import numpy as np
-import pyrr
 
-from ..core.bounds import instance_bounds
+from ..core.bounds import instance_bounds, light_box
 from ..core.errors import AxialDeformError
 from ..core.look import LIGHT_DIR
 from .context import bind_framebuffer, release_framebuffer
 from .uniforms import set_uniforms
 
-__all__ = ["ShadowMap", "SHADOW_UNIT"]
+__all__ = ["ShadowMap", "SHADOW_UNIT", "SHADOW_SIZE"]
 
 #: texture unit of the shadow map (the material textures use 1 and 2)
 SHADOW_UNIT = 3
+#: the side of a shadow map (texels), render's and the page's
+SHADOW_SIZE = 2048
 
 
 class ShadowMap:
@@ -42,7 +43,7 @@ class ShadowMap:
         pyrr-layout matrices of the light camera (set by :meth:`fit`).
     """
 
-    def __init__(self, ctx, size: int = 2048):
+    def __init__(self, ctx, size: int = SHADOW_SIZE):
         self.ctx = ctx
         limit = int(ctx.info.get("GL_MAX_TEXTURE_SIZE", 2048))
         self.size = int(max(16, min(int(size), limit)))
@@ -78,19 +79,7 @@ class ShadowMap:
             spheres = np.vstack([spheres, np.asarray(extra, dtype=np.float64).reshape(-1, 4)])
         if len(spheres) == 0:
             return self
-        light = np.asarray(light_dir, dtype=np.float64)
-        light = light / max(np.linalg.norm(light), 1e-12)
-        lo = (spheres[:, :3] - spheres[:, 3:]).min(axis=0)
-        hi = (spheres[:, :3] + spheres[:, 3:]).max(axis=0)
-        center = (lo + hi) / 2
-        radius = float(np.linalg.norm(hi - lo) / 2) or 1.0
-        helper = (0.0, 1.0, 0.0) if abs(light[1]) < 0.95 else (1.0, 0.0, 0.0)
-        eye = center + light * radius * 2.0
-        self.view = pyrr.matrix44.create_look_at(eye, center, helper, dtype=np.float32)
-        self.projection = pyrr.matrix44.create_orthogonal_projection(
-            -radius, radius, -radius, radius, radius * 0.5, radius * 3.5, dtype=np.float32)
-        # normal offset: about two shadow texels in world units
-        self.offset = 2.0 * (2.0 * radius / self.size)
+        self.view, self.projection, self.offset = light_box(spheres, light_dir, self.size)
         return self
 
     @property

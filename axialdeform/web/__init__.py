@@ -77,7 +77,7 @@ __all__ = [
     "MODULE_FILES", "VENDOR_FILES",
 ]
 
-GLSL_ES_HEADER = "#version 300 es\nprecision highp float;\nprecision highp int;"
+GLSL_ES_HEADER = "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler2DShadow;"
 
 
 def to_glsl_es(source: str) -> str:
@@ -235,6 +235,26 @@ def _ground(look, up: str, spheres, cam, aspect: float, height: float | None = N
     return ground, cam.enclosing_square(center, UP_VECTORS[up], drawn, aspect)
 
 
+def _shadow(look, spheres, ground) -> dict | None:
+    """The page's shadow map: render's (:class:`~axialdeform.gl.shadow.ShadowMap`, fitted by
+    :func:`~axialdeform.core.bounds.light_box` over ``spheres``, ``[(centers, radii), ...]``, and the ground's
+    centre part), its light matrices in GLSL's column order; None where render draws none (the look, or no
+    ground plane: a terrain's scene)."""
+    from ..core.bounds import light_box, stack_spheres
+    from ..gl.ground import GroundPlane
+    from ..gl.shadow import SHADOW_SIZE
+
+    centers, radii = stack_spheres(spheres)
+    if ground is None or not look.draws_shadow or not len(centers):
+        return None
+    near = np.array([[*ground["center"], 0.5 * ground["radius"] / GroundPlane.EXTENT]])  # its centre part receives them
+    view, projection, offset = light_box(np.vstack([np.hstack([centers, radii[:, None]]), near]), look.light_dir, SHADOW_SIZE)
+    matrix = (np.asarray(view, np.float64) @ np.asarray(projection, np.float64)).astype(np.float32)
+    flat = lambda m: [float(x) for x in np.asarray(m, np.float32).reshape(-1)]  # noqa: E731 - pyrr's rows: GLSL's columns
+    return {"view": flat(view), "projection": flat(projection), "matrix": flat(matrix), "offset": float(offset),
+            "size": SHADOW_SIZE}
+
+
 def _check_view(size, up: str, mode: str) -> tuple:
     from ..core.camera import UP_VECTORS
 
@@ -249,7 +269,7 @@ def _check_view(size, up: str, mode: str) -> tuple:
 
 
 def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shaders,
-            time=None, ground=None) -> dict:
+            time=None, ground=None, shadow=None) -> dict:
     from ..core.camera import UP_VECTORS
 
     return {
@@ -272,6 +292,8 @@ def _config(*, title, layers, size, fixed_size, mode, cam, look, up, wind, shade
         "shaders": {**shaders, **(page_shaders(["ground"]) if ground is not None else {})},
         # render's ground plane under a scene without a terrain (glsl/ground.vert, ground.frag), or None
         "ground": ground,
+        # render's shadow map (the key light's camera over the instances and the ground's centre), or None
+        "shadow": shadow,
         # the shader build's suffix for each record width (LEVEL_VARIANTS): the page picks a file's build by it
         "shader_suffix": {str(w): LEVEL_VARIANTS[level_of(w)][0] for w in WIDTHS},
     }
@@ -387,12 +409,13 @@ def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, opt
     cam = scene_camera(Scene.single(mesh, params, up=up, wind=wind), w / h)
     look = look or DEFAULT_LOOK
     ground, cam = _ground(look, up, [instance_bounds(mesh, params)], cam, w / h)
+    shadow = _shadow(look, [instance_bounds(mesh, params)], ground)
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
                    quantize=page.quantize, adp=adp, wind=wind is not None)
     config = _config(title=page.title or f"{len(params)} × {mesh.name}", layers=[layer], size=(w, h),
                      fixed_size=page.fixed_size, mode=mode, cam=cam, look=look, up=up, wind=wind,
-                     shaders=_shaders([layer], page.all_shaders), time=_time(wind, time), ground=ground)
+                     shaders=_shaders([layer], page.all_shaders), time=_time(wind, time), ground=ground, shadow=shadow)
     return WebScene(config, files)
 
 
@@ -462,11 +485,12 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
         tiles = tiles_around(recipe.generate, float(cam.target[0]), float(cam.target[2]), recipe.reach)
         layers[k]["instances"] = int(len(generate_tiles(recipe.generate, mesh, tiles, recipe.maps)))
     look = look or scene.look
-    ground = None
+    ground = shadow = None
     if scene.terrain is None:  # render's ground plane (gl/scene.py's ground_spheres: no instance made)
         ground, cam = _ground(look, scene.up, ground_spheres(scene), cam, w / h, scene.ground_height)
+        shadow = _shadow(look, ground_spheres(scene), ground)
     config = _config(title=page.title or Path(scene.path).stem, layers=layers, size=(w, h),
                      fixed_size=page.fixed_size, mode=mode,
                      cam=cam, look=look, up=scene.up, wind=wind,
-                     shaders=_shaders(layers, False), time=_time(wind, time), ground=ground)
+                     shaders=_shaders(layers, False), time=_time(wind, time), ground=ground, shadow=shadow)
     return WebScene(config, files)

@@ -149,6 +149,54 @@ export function mount(root, lib, scene, options = {}) {
   };
   // a layer without wind: the module's wind uniforms, still (a windy layer's are its mesh's, setWind)
   const still = stillWindUniforms();
+  // render's shadow map (cfg.shadow: the key light's camera over the instances and the ground's centre), drawn
+  // a frame before the picture, so the wind bends the shadows too; glsl/shadow.glsl samples it (AXIAL_SHADOW)
+  const shadow = cfg.shadow ? shadowMap(cfg.shadow) : null;
+  const shadowDefines = shadow ? { AXIAL_SHADOW: 1 } : {};
+
+  function shadowMap(s) {
+    const depthTarget = (n) => {
+      const t = new THREE.WebGLRenderTarget(n, n);
+      t.depthTexture = new THREE.DepthTexture(n, n);
+      t.depthTexture.compareFunction = THREE.LessEqualCompare; // sampler2DShadow: hardware comparison
+      return t;
+    };
+    const cam = new THREE.Camera(); // the light's: its matrices as render's ShadowMap has them
+    cam.matrixAutoUpdate = false;
+    cam.matrixWorldAutoUpdate = false;
+    cam.matrixWorldInverse.fromArray(s.view);
+    cam.matrixWorld.copy(cam.matrixWorldInverse).invert();
+    cam.projectionMatrix.fromArray(s.projection);
+    cam.projectionMatrixInverse.copy(cam.projectionMatrix).invert();
+    const target = depthTarget(s.size);
+    return { target, idle: depthTarget(1), cam, uniforms: { u_shadow_map: { value: target.depthTexture },
+      u_light_matrix: { value: new THREE.Matrix4().fromArray(s.matrix) }, u_shadow_offset: { value: s.offset },
+      u_shadow_texel: { value: 1 / s.size } } };
+  }
+
+  function drawShadow() { // the instances' depth from the light, as render's shadow pass draws it (u_mode 0, solid)
+    const keep = [shared.u_view.value, shared.u_proj.value, shared.u_mode.value];
+    shared.u_view.value = shadow.cam.matrixWorldInverse;
+    shared.u_proj.value = shadow.cam.projectionMatrix;
+    shared.u_mode.value = 0;
+    shadow.uniforms.u_shadow_map.value = shadow.idle.depthTexture; // not the map being drawn (a feedback loop)
+    const lines = layers.flatMap((l) => l.materials || []).filter((m) => m.wireframe);
+    lines.forEach((m) => { m.wireframe = false; });
+    if (ground) ground.visible = false;
+    if (!shadow.made) { // three makes a target's depth texture when it is first drawn into: the idle one too
+      renderer.setRenderTarget(shadow.idle);
+      renderer.clear();
+      shadow.made = true;
+    }
+    renderer.setRenderTarget(shadow.target);
+    renderer.clear();
+    renderer.render(world, shadow.cam);
+    renderer.setRenderTarget(null);
+    if (ground) ground.visible = true;
+    lines.forEach((m) => { m.wireframe = true; });
+    shadow.uniforms.u_shadow_map.value = shadow.target.depthTexture;
+    [shared.u_view.value, shared.u_proj.value, shared.u_mode.value] = keep;
+  }
 
   function showError(err) {
     const text = err instanceof SceneError ? err.message : `error: ${err && err.message ? err.message : err}`;
@@ -169,7 +217,9 @@ export function mount(root, lib, scene, options = {}) {
     const material = new THREE.RawShaderMaterial({
       glslVersion: THREE.GLSL3, vertexShader: body(cfg.shaders.ground.vertex), fragmentShader: body(cfg.shaders.ground.fragment),
       side: THREE.DoubleSide,
+      defines: shadowDefines,
       uniforms: { // GroundPlane.render's
+        ...(shadow ? shadow.uniforms : {}),
         u_view: shared.u_view, u_proj: shared.u_proj, u_eye: shared.u_eye, u_light_dir: shared.u_light_dir,
         u_light_color: shared.u_light_color, u_sky_color: shared.u_sky_color, u_bounce_color: shared.u_bounce_color,
         u_up: shared.u_up, u_ambient: shared.u_ambient, u_center: { value: v3(g.center) }, u_axis_u: { value: v3(g.axis_u) },
@@ -198,7 +248,8 @@ export function mount(root, lib, scene, options = {}) {
         glslVersion: THREE.GLSL3,
         // a generated layer's wind phases and shades hash where its instances stand (their slots change
         // as tiles come and go): AXIAL_POSITION_IDS, as the Python library draws it
-        defines: { ...(lc.mesh.axes ? { AXIAL_AXES: lc.mesh.axes.count } : {}), ...(lc.generate ? { AXIAL_POSITION_IDS: 1 } : {}) },
+        defines: { ...(lc.mesh.axes ? { AXIAL_AXES: lc.mesh.axes.count } : {}), ...(lc.generate ? { AXIAL_POSITION_IDS: 1 } : {}),
+          ...shadowDefines },
         vertexShader: body(sh.vertex),
         fragmentShader: body(sh.fragment),
         side: lc.cull_back_faces && !part.double_sided ? THREE.FrontSide : THREE.DoubleSide,
@@ -206,7 +257,7 @@ export function mount(root, lib, scene, options = {}) {
         depthWrite: !blend,
         wireframe: state.wireframe,
         uniforms: {
-          ...shared, ...layer.uniforms,
+          ...shared, ...layer.uniforms, ...(shadow ? shadow.uniforms : {}),
           // the part's material, as axialdeform.gl.material.GpuMaterials.bind sets it
           u_base_color: { value: new THREE.Vector4().fromArray(part.base_color) },
           u_has_texture: { value: Boolean(part.texture && tex.map) }, u_texture: { value: tex.map || null },
@@ -445,6 +496,7 @@ export function mount(root, lib, scene, options = {}) {
         const t = frozen !== undefined ? frozen : (performance.now() - t0) / 1000;
         for (const l of layers) if (l.mesh && l.cfg.wind) l.mesh.setTime(t); // the module's clock: its uniforms
       }
+      if (shadow) drawShadow();
       renderer.render(world, camera);
       frames += 1;
       state.frames += 1;
@@ -527,6 +579,7 @@ export function mount(root, lib, scene, options = {}) {
       if (renderer) { renderer.setAnimationLoop(null); renderer.dispose(); }
       if (controls) controls.dispose();
       if (ground) { ground.geometry.dispose(); ground.material.dispose(); }
+      if (shadow) { shadow.target.dispose(); shadow.idle.dispose(); }
       for (const l of layers) {
         if (l.mesh) l.mesh.dispose(); // its geometry's buffers, the materials, the offsets texture
         if (l.geometry) l.geometry.dispose();

@@ -1065,3 +1065,37 @@ def test_the_module_files_come_each_after_what_it_imports():
         text = (ROOT / "js" / "src" / name).read_text()
         for dep in re.findall(r"""from\s*['"]\./([\w.]+)['"]""", text):
             assert dep in MODULE_FILES[:k], (name, dep)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", ["solid", "wireframe"])
+def test_the_page_draws_renders_shadows(browser, tmp_path, mode):
+    """The default look: the page stands the stones on render's ground AND casts render's key-light shadows (the
+    same light camera, core.bounds.light_box; glsl/shadow.glsl), so the page is render's picture, shadows and all
+    -- which differs visibly from render's picture without them.  (In wireframe the page's lines are three's, not
+    render's hidden lines: there the shadows on the ground are compared.)"""
+    mesh = ad.load_mesh("stone")
+    params = ad.random_params(mesh, 40, seed=5, variation=ad.Variation(bend=0.2), placement="disc")
+    out = tmp_path / "shadows.html"
+    scene = build_scene(mesh, params, page=PageOptions(size=SIZE, mode=mode))
+    assert scene.config["shadow"] is not None and scene.config["ground"] is not None
+    write_page(out, scene)
+    ref = ad.render_image(mesh, params, SIZE, mode).astype(np.float64)
+    unshadowed = ad.render_image(mesh, params, SIZE, mode, look=ad.Look(shadow=False)).astype(np.float64)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True, v.state
+        shot = v.silhouette().astype(np.float64)
+        from PIL import Image
+
+        Image.fromarray(np.concatenate([shot, ref, unshadowed], 1).astype(np.uint8)).save(tmp_path / "shadows.png")
+        colours, counts = np.unique(unshadowed.reshape(-1, 3), axis=0, return_counts=True)
+        bare = np.abs(unshadowed - colours[counts.argmax()]).max(axis=2) <= 12  # the ground, no stone on it
+        shadowed = (np.abs(ref - unshadowed).max(axis=2) > 24) & bare  # where render's shadows fall on it
+        assert shadowed.mean() > 0.01
+        assert np.abs(shot - ref)[shadowed].mean() < 0.35 * np.abs(unshadowed - ref)[shadowed].mean()
+        if mode == "solid":
+            assert np.abs(shot - ref).mean() < 3.0
+        assert v.errors == []
+    finally:
+        v.close()
