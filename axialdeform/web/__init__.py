@@ -237,17 +237,17 @@ def _ground(look, up: str, spheres, cam, aspect: float, height: float | None = N
 
 def _shadow(look, spheres, ground) -> dict | None:
     """The page's shadow map: render's (:class:`~axialdeform.gl.shadow.ShadowMap`, fitted by
-    :func:`~axialdeform.core.bounds.light_box` over ``spheres``, ``[(centers, radii), ...]``, and the ground's
-    centre part), its light matrices in GLSL's column order; None where render draws none (the look, or no
-    ground plane: a terrain's scene)."""
+    :func:`~axialdeform.core.bounds.light_box` over ``spheres``, ``[(centers, radii), ...]``: the layers' and a
+    terrain's, and the ground plane's centre part), its light matrices in GLSL's column order; None where the look
+    draws none, or where nothing receives them (no ground plane and no terrain: the ``spheres`` say which)."""
     from ..core.bounds import light_box, stack_spheres
     from ..gl.ground import GroundPlane
     from ..gl.shadow import SHADOW_SIZE
 
     centers, radii = stack_spheres(spheres)
-    if ground is None or not look.draws_shadow or not len(centers):
+    if not look.draws_shadow or not len(centers):
         return None
-    near = np.array([[*ground["center"], 0.5 * ground["radius"] / GroundPlane.EXTENT]])  # its centre part receives them
+    near = np.zeros((0, 4)) if ground is None else np.array([[*ground["center"], 0.5 * ground["radius"] / GroundPlane.EXTENT]])
     view, projection, offset = light_box(np.vstack([np.hstack([centers, radii[:, None]]), near]), look.light_dir, SHADOW_SIZE)
     matrix = (np.asarray(view, np.float64) @ np.asarray(projection, np.float64)).astype(np.float32)
     flat = lambda m: [float(x) for x in np.asarray(m, np.float32).reshape(-1)]  # noqa: E731 - pyrr's rows: GLSL's columns
@@ -409,7 +409,7 @@ def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, opt
     cam = scene_camera(Scene.single(mesh, params, up=up, wind=wind), w / h)
     look = look or DEFAULT_LOOK
     ground, cam = _ground(look, up, [instance_bounds(mesh, params)], cam, w / h)
-    shadow = _shadow(look, [instance_bounds(mesh, params)], ground)
+    shadow = _shadow(look, [instance_bounds(mesh, params)], ground) if ground is not None else None
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
                    quantize=page.quantize, adp=adp, wind=wind is not None)
@@ -488,7 +488,9 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
     ground = shadow = None
     if scene.terrain is None:  # render's ground plane (gl/scene.py's ground_spheres: no instance made)
         ground, cam = _ground(look, scene.up, ground_spheres(scene), cam, w / h, scene.ground_height)
-        shadow = _shadow(look, ground_spheres(scene), ground)
+        shadow = _shadow(look, ground_spheres(scene), ground) if ground is not None else None
+    else:  # render's terrain casts and receives them
+        shadow = _shadow(look, [*ground_spheres(scene), instance_bounds(scene.terrain, TERRAIN_INSTANCE)], None)
     config = _config(title=page.title or Path(scene.path).stem, layers=layers, size=(w, h),
                      fixed_size=page.fixed_size, mode=mode,
                      cam=cam, look=look, up=scene.up, wind=wind,

@@ -636,11 +636,14 @@ seed = 5
             assert r.returncode == 0 and "2 layers" in r.stdout, r.stderr
     renders = {}
     for key, name, t in (("windy 1.5", "windy", 1.5), ("windy 0", "windy", 0.0), ("land", "land", None)):
-        # render's picture of the scene file, with the scene's look less what the page does not
-        # draw (a ground plane under a scene without terrain, shadows)
+        # render's picture of the scene file, with the scene's look less what the page does not draw: the
+        # ground plane (--no-ground), and shadows where nothing receives them (no ground, no terrain); the
+        # landscape's terrain casts and receives them in both
         scene = ad.Scene.load(base / f"{name}.toml")
-        renders[key] = ad.render_image(scene, size=SIZE, options=ad.RenderOptions(time=t), look=scene.look.replace(ground=False,
-                                                                                                                   shadow=False))
+        look = scene.look.replace(ground=False, shadow=scene.terrain is not None)
+        renders[key] = ad.render_image(scene, size=SIZE, options=ad.RenderOptions(time=t), look=look)
+    land = ad.Scene.load(base / "land.toml")
+    renders["land, no shadow"] = ad.render_image(land, size=SIZE, look=land.look.replace(ground=False, shadow=False))
     server, _ = make_server(base, 0)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
@@ -748,6 +751,9 @@ def test_scene_page_shows_what_render_shows(browser, scene_pages, kind):
         render = scene_pages["render"]["land"]
         assert iou(shot, render, SKY) >= 0.95
         assert np.abs(shot.astype(np.float64) - render).mean() < 3.0  # the same colours, pixel by pixel
+        # and the same shadows on the terrain: nearer render's than render's picture without them
+        bare = scene_pages["render"]["land, no shadow"]
+        assert np.abs(shot.astype(np.float64) - render).mean() < 0.5 * np.abs(shot.astype(np.float64) - bare).mean()
         assert v.errors == []
     finally:
         v.close()
