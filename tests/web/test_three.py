@@ -192,20 +192,23 @@ WIND = {"direction": [1, 0, 0.3], "strength": 0.35, "gustiness": 0.6, "frequency
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("culled", [False, True], ids=["all drawn", "culled"])
 @pytest.mark.parametrize("name,mesh,opts", [("stones", "stone", []), MORE[0]], ids=["stones", "trees"])
-def test_the_wind_at_a_time_sways_as_render_draws_it(browser, site, name, mesh, opts):
-    """setWind + setTime (glsl/wind.glsl in three's materials) against render_image(wind=, time=)."""
+def test_the_wind_at_a_time_sways_as_render_draws_it(browser, site, name, mesh, opts, culled):
+    """setWind + setTime (glsl/wind.glsl in three's materials) against render_image(wind=, time=); with
+    setInstanceCulling too (each drawn instance's numbers, wind phase and a tree's child axes by its own id)."""
     import json
 
     folder, url = site
+    cull = ".setInstanceCulling(window.app.renderer)" if culled else ""
     sway = ("window.app.gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh) o.setWind(" + json.dumps(WIND) +
-            ").setTime(1.3); });")
+            f").setTime(1.3){cull}; }});")
     shot, errors = example_picture(browser, url + f"gltf.html?file={name}.glb", sway)
     wind = ad.Wind(direction=tuple(WIND["direction"]), strength=WIND["strength"], gustiness=WIND["gustiness"],
                    frequency=WIND["frequency"], wavelength=WIND["wavelength"])
     ref = render_reference(folder, [mesh, folder / f"{name}.adp", *opts[:2]], wind=wind, time=1.3)
     still = render_reference(folder, [mesh, folder / f"{name}.adp", *opts[:2]])
-    Image.fromarray(np.concatenate([shot, ref, still], 1)).save(folder / f"wind-{name}.png")
+    Image.fromarray(np.concatenate([shot, ref, still], 1)).save(folder / f"wind-{name}{'-culled' if culled else ''}.png")
     assert errors == []
     assert iou(shot, ref) >= 0.97, iou(shot, ref)
     assert iou(still, ref) < 0.93  # the wind moved them visibly: the test can fail
