@@ -126,7 +126,10 @@ def test_ctrl_c_keeps_what_was_measured(tmp_path):
     folder) holds the report and JSON of the cases finished before it."""
     proc = subprocess.Popen([sys.executable, "-m", "axialdeform", "bench", "--quick", "--counts", "20,40", "--no-leaf",
                              "--no-throughput", "--no-progress", "--cache", str(tmp_path / "cache")],
-                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            # Ctrl-C as a terminal gives it, even where this run was started with SIGINT ignored
+                            # (a background job of a shell without job control): Python then installs no handler
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     out = tmp_path / "axialdeform-bench"
     # the second method's picture exists once its child has drawn: the first case is finished by then
     marker = out / "frames" / "loaded-20-solid.png"
