@@ -25,8 +25,8 @@ class InstanceCulling {
     this.texture = new THREE.DataTexture(new Float32Array(WIDTH * rows * 4), WIDTH, rows, THREE.RGBAFormat, THREE.FloatType);
     this.texture.minFilter = this.texture.magFilter = THREE.NearestFilter;
     this.ids = new Float32Array(cap);
-    this.spheres = new Float32Array(4 * cap); // centre (mesh space), radius, then the scale the wind's reach grows by
-    this.scales = new Float32Array(cap);
+    this.spheres = new Float32Array(4 * cap); // each instance's centre (mesh space) and radius without the wind
+    this.scales = new Float32Array(cap); // and its scale: the wind's reach grows its radius by it
     this.buffer = gl.createBuffer();
     gl.bindBuffer(gl.ARRAY_BUFFER, this.buffer);
     gl.bufferData(gl.ARRAY_BUFFER, this.ids.byteLength, gl.DYNAMIC_DRAW);
@@ -59,10 +59,9 @@ class InstanceCulling {
       tex.set(a.axialAngles.array.subarray(3 * i, 3 * i + 3), o + 12);
       for (let r = 0; r < 3; r++) for (let c = 0; c < 4; c++) tex[o + 16 + 4 * r + c] = M[16 * i + 4 * c + r]; // rows of M
       if (color) tex.set(color.subarray(3 * i, 3 * i + 3), o + 28);
-      const m = _m.fromArray(M, 16 * i), s = m.getMaxScaleOnAxis();
-      _s.center.fromArray(mesh._center).applyMatrix4(m);
-      this.spheres.set([_s.center.x, _s.center.y, _s.center.z, mesh._radii[i] * s], 4 * i);
-      this.scales[i] = s;
+      this.scales[i] = mesh._stillSphere(i, _s);
+      _s.center.toArray(this.spheres, 4 * i);
+      this.spheres[4 * i + 3] = _s.radius;
     }
     this.texture.needsUpdate = true;
     if (first === 0 && n === mesh.count) this.sorted = -1; // all of them: sort again

@@ -286,10 +286,17 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
 
   /** The sphere (this mesh's space) of instance i bent and placed. */
   getInstanceBoundingSphere(i, target = new THREE.Sphere()) {
-    const m = _m.fromArray(this.instanceMatrix.array, 16 * i);
-    target.center.fromArray(this._center).applyMatrix4(m);
-    target.radius = (this._radii[i] + (this._windGrow || 0)) * m.getMaxScaleOnAxis();
+    const scale = this._stillSphere(i, target);
+    target.radius += (this._windGrow || 0) * scale;
     return target;
+  }
+
+  /** Instance i's sphere without the wind into `target`; returns the instance's scale (the wind's reach grows by it). */
+  _stillSphere(i, target) {
+    const m = _m.fromArray(this.instanceMatrix.array, 16 * i), scale = m.getMaxScaleOnAxis();
+    target.center.fromArray(this._center).applyMatrix4(m);
+    target.radius = this._radii[i] * scale;
+    return scale;
   }
 
   /** The box (this mesh's space) of instance i bent and placed: the base box grown by how far the

@@ -121,11 +121,12 @@ def _pair(v, test=lambda x: isinstance(x, (int, float)) and not isinstance(x, bo
     return isinstance(v, list) and len(v) == 2 and all(test(x) for x in v)
 
 
-def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, where: str) -> tuple[Generate, float]:
+def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, where: str) -> tuple[Generate, float, dict]:
     """The generated form's ``generate`` object held to the same rules as the npm plugin's (js/src/limits.js,
     ``checkUniforms``): the recipe by :class:`Generate` and its bounds, the slots within reach, and every one of
     the generator's numbers -- what follows from the recipe equal to it, the rest finite and in range, a map's
-    size its accessor's.  Returns ``(recipe, reach)`` (the recipe's own keys only); a GltfError naming the field."""
+    size its accessor's.  Returns ``(recipe, reach, numbers)``: the recipe's own keys only, and the generator's
+    numbers with those the form's first version lacked at their defaults; a GltfError naming the field."""
     if not isinstance(spec, dict):
         raise GltfError(f"{where}: generate: expected an object (recipe, uniforms)")
     r = spec.get("recipe")
@@ -212,7 +213,7 @@ def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, 
         off("slope_tan2", "[lo, hi] with 0 <= lo <= hi")
     if max(abs(x) for x in u["lift"]) > E:
         off("lift", f"[lo, hi] within the world's edge +-{E:.6g}")
-    return gen, float(reach)
+    return gen, float(reach), u
 
 
 def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
@@ -255,8 +256,7 @@ def read_generated_glb(path, node: str | None = None) -> GeneratedNode:
             raise GltfError(f"{at}: generate {key}: expected a FLOAT SCALAR accessor of {m['cols']} x {m['rows']}")
         grids[key] = data.reshape(m["rows"], m["cols"]).astype(np.float32)
     shapes = {k: (g.shape[1], g.shape[0]) for k, g in grids.items() if k != "children"}
-    gen, reach = check_generated_form(spec, float(mesh.axis.length), mesh.axis_count, shapes, at)
-    u = {**optional_numbers(), **spec["uniforms"]}
+    gen, reach, u = check_generated_form(spec, float(mesh.axis.length), mesh.axis_count, shapes, at)
     f32 = np.float32
     maps = GroundMaps(heights=grids.get("heights"), h_lo=np.array(u["h_lo"], f32), h_inv=np.array(u["h_inv"], f32),
                       density=grids.get("density"), d_lo=np.array(u["d_lo"], f32), d_inv=np.array(u["d_inv"], f32),
