@@ -110,9 +110,11 @@ def add_axis(p) -> None:
     p.add_argument("--axis", type=axis_frame, default="auto", metavar="FRAME",
                    help="the mesh's axis frame: auto (longest extent, default), x, y, z, oriented (minimum-volume "
                         "oriented box, for a model lying diagonally) or nine numbers, the rows e_a,e_u,e_v")
-    p.add_argument("--axes", metavar="parts|FILE.toml",
-                   help="several axes in a hierarchy (a tree): 'parts' (one axis per part) or a TOML file of "
-                        "[[axis]] part/parent/axis tables; --axis is then the frame of each axis naming none (default: one axis)")
+    p.add_argument("--axes", metavar="skeleton|parts|auto|FILE.toml",
+                   help="several axes in a hierarchy (a tree): 'skeleton' (from the model's own shape: a branch an "
+                        "axis), 'parts' (one axis per part), 'auto' (parts when the parts are the limbs, else skeleton) "
+                        "or a TOML file of [[axis]] part/parent/axis tables; --axis is then the frame of each axis "
+                        "naming none (default: one axis)")
     p.add_argument("--parts", type=part_list, metavar="A,B,...",
                    help="keep only these parts of the mesh file (its scenery left out) for everything: the axes, "
                         "bounds, framing, spacing, export; give it again wherever the parameters are used "

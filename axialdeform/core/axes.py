@@ -39,8 +39,11 @@ from .record import MAX_RECORD_AXES
 
 #: the most axes one mesh may carry: a record's most (core/record.py)
 MAX_AXES = MAX_RECORD_AXES
+#: the rules a mesh's axes may be found by, by name (``axes="parts"``, ...): one axis per part, the
+#: curve skeleton (core/skeleton.py), or whichever of the two fits the model (``BaseMesh.with_axes``)
+AXES_RULES = ("parts", "skeleton", "auto")
 
-__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "check_parents", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
+__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "AXES_RULES", "check_parents", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
            "axes_of", "level_bends", "child_offsets"]
 
 

@@ -213,6 +213,11 @@ class BaseMesh:
 
         * ``"parts"`` -- one axis per part, the root the largest part, each
           other part's parent the axis nearest its root end;
+        * ``"skeleton"`` -- the axes from the model's own shape, a curve skeleton cut into
+          branches (:func:`~axialdeform.core.skeleton.skeleton_tree`; cached by the mesh's
+          fingerprint);
+        * ``"auto"`` -- ``"parts"`` when the mesh's parts are its limbs (two or more parts, and no
+          part branches: the skeleton puts each part on one axis), else ``"skeleton"``;
         * a list of ``{"part": NAME, "parent": NAME, "axis": FRAME}`` (the root
           first, without a parent; a parent before its children);
         * ``{"vertex_axis": (v,) int, "parents": [-1, ...], "frames": [...]}``
@@ -221,17 +226,18 @@ class BaseMesh:
 
         ``axis``: the frame rule of every axis without its own (``"auto"``, ...).
         """
-        from .axes import AxisTree, tree_from_parts, tree_from_spec, tree_from_vertices
+        from .axes import AXES_RULES, AxisTree, tree_from_parts, tree_from_spec, tree_from_vertices
+        from .skeleton import shape_tree
 
         if axes is None or (isinstance(axes, int) and axes == 1):
             return self.with_axis(axis)
         if isinstance(axes, AxisTree):
             tree = axes
         elif isinstance(axes, str):
-            if axes != "parts":
-                raise MeshError(f"{self.name}: axes: expected 'parts', a list of {{part, parent, axis}} entries or "
-                                f"per-vertex axes, found {axes!r}")
-            tree = tree_from_parts(self, axis)
+            if axes not in AXES_RULES:
+                raise MeshError(f"{self.name}: axes: expected one of {', '.join(map(repr, AXES_RULES))}, a list of "
+                                f"{{part, parent, axis}} entries or per-vertex axes, found {axes!r:.80}")
+            tree = tree_from_parts(self, axis) if axes == "parts" else shape_tree(self, axes, axis)
         elif isinstance(axes, dict):
             if set(axes) - {"vertex_axis", "parents", "frames", "names"} or not {"vertex_axis", "parents"} <= set(axes):
                 raise MeshError(f"{self.name}: axes: expected keys vertex_axis and parents (and optional frames, "

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..axes import AXES_RULES
 from ..errors import AxialDeformError, MeshError
 from ..material import AssetWarning, compute_tangents, gather_parts, texture_decoding
 from ..mesh import BaseMesh, area_weighted_normals, check_float32_range
@@ -94,9 +95,9 @@ def read_axes_file(path) -> list:
 
 
 def axes_argument(value):
-    """``axes=`` as a user gives it: None, ``"parts"``, a path to a TOML axes
-    file (:func:`read_axes_file`), or what :meth:`BaseMesh.with_axes` takes."""
-    if isinstance(value, (str, os.PathLike)) and str(value) != "parts":
+    """``axes=`` as a user gives it: None, a rule (``"parts"``, ``"skeleton"``, ``"auto"``), a path to a TOML
+    axes file (:func:`read_axes_file`), or what :meth:`BaseMesh.with_axes` takes."""
+    if isinstance(value, (str, os.PathLike)) and str(value) not in AXES_RULES:
         return read_axes_file(value)
     return value
 
@@ -131,7 +132,8 @@ def load_mesh(source, *, textures: bool = True, axis="auto", axes=None, parts=No
         minimum-volume oriented bounding box, for a model lying diagonally) or a 3×3 orthogonal
         matrix whose rows are ``e_a, e_u, e_v``.
     axes : optional
-        Several axes in a hierarchy (a tree's trunk and branches): ``"parts"``, a list of
+        Several axes in a hierarchy (a tree's trunk and branches): ``"skeleton"`` (from the model's
+        own shape), ``"parts"`` (one axis per part), ``"auto"`` (whichever fits), a list of
         ``{"part", "parent", "axis"}``, a TOML file of them (:func:`read_axes_file`) or per-vertex
         axes (:meth:`BaseMesh.with_axes`); ``axis`` is then the frame rule of each axis that names
         none.

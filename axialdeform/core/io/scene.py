@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..axes import AXES_RULES
 from ..camera import CameraSpec
 from ..errors import AxialDeformError, ParamError, SceneError
 from ..look import Look
@@ -417,12 +418,12 @@ def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
     else:
         mesh = _existing(src, mesh_value, "mesh", "layer", nth)
     axes = None
-    if "axes" in layer:  # several axes: "parts", a TOML file of [[axis]] tables, or an inline array of tables
+    if "axes" in layer:  # several axes: a rule ("skeleton", "parts", "auto"), a TOML file of [[axis]] tables, or tables
         axes = layer["axes"]
-        if isinstance(axes, str) and axes != "parts":
+        if isinstance(axes, str) and axes not in AXES_RULES:
             axes = _existing(src, axes, "axes", "layer", nth)
-        elif not (axes == "parts" or isinstance(axes, list)):
-            raise src.error(f"expected 'parts', a file name or an array of {{part, parent, axis}} tables, "
+        elif not (axes in AXES_RULES or isinstance(axes, list)):
+            raise src.error(f"expected 'skeleton', 'parts', 'auto', a file name or an array of {{part, parent, axis}} tables, "
                             f"found {axes!r}", "axes", "layer", nth)
     color = tuple(_numbers(src, layer["color"], "color", "layer", nth, (3,))) if "color" in layer else None
     wind = layer.get("wind", False)

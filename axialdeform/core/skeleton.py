@@ -1,0 +1,490 @@
+"""Axes from the model's own shape: a curve skeleton cut into a hierarchy of axes (``axes="skeleton"``).
+
+A model bends at every branch only if it has an axis per branch.  A tree from an asset pack has its
+wood as ONE piece (trunk, limbs and branches welded together) and its crown as a few blobs; this
+module finds the branches from the shape itself (``docs/method.md``, "Axes from the shape"):
+
+1. **Pieces.** The mesh is welded by position (vertices split for UVs or flat normals become one)
+   and cut into connected pieces.  A piece is a *limb* when it is long against its thickness (its
+   skeleton's longest path at least :data:`LIMB_RATIO` times the median distance of its vertices
+   from the skeleton) and at least ``min_branch`` of the model's size; every other piece (a crown
+   blob, a leaf card, a bark mark, a pine's tier of needles) is *carried*.
+2. **Skeleton.** Each limb gets a curve skeleton: the local-separator skeleton of
+   ``pygel3d.graph.LS_skeleton`` (Bærentzen & Rotenberg 2021) of the piece's edge graph, the piece
+   simplified first to at most :data:`SKELETON_TRIANGLES` triangles (``fast_simplification``).
+3. **Chains.** The root piece is the limb that starts lowest along ``up`` (what grows from the
+   ground, as ``axes="parts"`` finds the trunk); its skeleton's root is its lowest end.  From the
+   root every fork continues into the child whose subtree reaches furthest (the trunk runs on
+   into its longest limb) and starts a new chain for each other child.  Every other limb piece
+   hangs, at its end nearest the chains already made, on the chain it grows from: the nearest,
+   the one nearer the root among those about as near (:data:`~axialdeform.core.axes.TIE`).
+4. **Pruning.** A chain shorter than ``min_branch`` times its root chain (its length from where it
+   leaves its parent, less the parent's radius there) is no branch: its vertices go to its parent.
+   At most ``max_axes`` chains stay, the longest (a child is never longer than its parent's rest).
+5. **Binding.** Each vertex of a limb goes to the nearest chain of its own piece (the distance to
+   the chain's polyline); a carried piece goes whole to the chain it sits on (the one its vertices
+   come nearest, the one nearer the root among those about as near).  Vertices at one position get
+   one axis, so split vertices move together.
+6. **Axes.** Each chain is one axis of the hierarchy (``core.axes``): its frame's ``e_a`` runs from
+   where it leaves its parent to its tip, ``e_u`` the model's up made perpendicular to it; ``lo``
+   and ``L`` from its vertices as for every axis; its anchor the point where it leaves its parent.
+   Random variation and the wind clamp a child's bend there (value and slope zero), so the surface
+   through a joint stays whole: the boundary between two axes' vertices lies where the child's
+   own bend vanishes to second order.
+
+Pure numpy and scipy here; ``pygel3d`` and ``fast_simplification`` are imported where used.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree
+from .axis import ControlAxis
+from .errors import MeshError
+
+__all__ = ["skeleton_tree", "shape_tree", "MIN_BRANCH", "LIMB_RATIO", "SKELETON_TRIANGLES", "SKELETON_VERSION"]
+
+#: the default shortest branch, a fraction of its root chain's length (the trunk's, for a tree)
+MIN_BRANCH = 0.1
+#: a piece is a limb (it gets a skeleton and axes) when its skeleton's longest path is at least this many
+#: times the median distance of its vertices from the skeleton; a blob, a leaf card or a disc is carried whole
+LIMB_RATIO = 3.0
+#: a piece other than the trunk's is a limb only if its longest spread is at least this many times its second
+#: (a frond, a separate branch); a crown blob, a pine's tier or a willow's curtain is not
+ELONGATION = 2.0
+#: a piece with more triangles is simplified to this many before its skeleton is computed
+SKELETON_TRIANGLES = 6000
+#: bumped whenever a rule here changes what a mesh gets (a cached tree of another version is not used)
+SKELETON_VERSION = 1
+#: a chain binding fewer vertices than this goes to its parent
+MIN_VERTICES = 4
+
+
+@dataclass
+class Chain:
+    """One branch of the skeleton: ``points`` (m, 3) from where it leaves its parent to its tip."""
+
+    points: np.ndarray
+    parent: int  # -1: a root
+    piece: int
+    depth: int = 0
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum())
+
+
+@contextlib.contextmanager
+def _quiet_stdout():
+    """pygel3d's C++ prints its progress on file descriptor 1: keep it off the caller's output."""
+    try:
+        sys.stdout.flush()
+        fd = os.dup(1)
+    except (OSError, ValueError):  # no real descriptor 1 (an embedding host): nothing to hide
+        yield
+        return
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+            try:
+                yield
+            finally:
+                os.dup2(fd, 1)
+    finally:
+        os.close(fd)
+
+
+def weld(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertices at one position made one: ``(points (w, 3) float64, faces (f, 3) int64 of them without
+    degenerate ones, inverse (v,) int64: each vertex's welded point)``."""
+    points, inverse = np.unique(np.asarray(positions, dtype=np.float32), axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    welded = inverse[np.asarray(faces, dtype=np.int64)]
+    ok = (welded[:, 0] != welded[:, 1]) & (welded[:, 1] != welded[:, 2]) & (welded[:, 0] != welded[:, 2])
+    return points.astype(np.float64), welded[ok], inverse
+
+
+def pieces(count: int, faces: np.ndarray) -> np.ndarray:
+    """(count,) int: the connected piece of each welded point (points no triangle uses: their own)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    a, b = np.concatenate([faces[:, 0], faces[:, 1], faces[:, 2]]), np.concatenate([faces[:, 1], faces[:, 2], faces[:, 0]])
+    graph = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(count, count))
+    return connected_components(graph, directed=False)[1]
+
+
+def curve_skeleton(points: np.ndarray, faces: np.ndarray, name: str = "<mesh>") -> tuple[np.ndarray, np.ndarray]:
+    """The curve skeleton of one piece: ``(nodes (n, 3) float64, edges (e, 2) int64)`` (pygel3d's
+    local-separator skeleton of the piece's edge graph; above :data:`SKELETON_TRIANGLES` triangles the
+    piece is simplified first)."""
+    used = np.unique(faces)
+    local = np.searchsorted(used, faces)
+    pts = points[used]
+    if len(local) > SKELETON_TRIANGLES:
+        import fast_simplification
+
+        pts, local = fast_simplification.simplify(pts.astype(np.float32), local.astype(np.int32),
+                                                  target_count=SKELETON_TRIANGLES)
+        pts, local = np.asarray(pts, dtype=np.float64), np.asarray(local, dtype=np.int64)
+    try:
+        from pygel3d import graph, hmesh
+    except ImportError as exc:  # pragma: no cover - a dependency
+        raise MeshError(f"{name}: axes='skeleton' needs pygel3d (pip install pygel3d): {exc}") from None
+    try:
+        with _quiet_stdout():
+            manifold = hmesh.Manifold.from_triangles(pts, local)
+            skeleton = graph.LS_skeleton(graph.from_mesh(manifold), sampling=False)
+        ids = list(skeleton.nodes())
+        nodes = np.asarray(skeleton.positions(), dtype=np.float64)[ids]
+        index = {n: i for i, n in enumerate(ids)}
+        edges = np.array([(index[n], index[m]) for n in ids for m in skeleton.neighbors(n) if m > n and m in index],
+                         dtype=np.int64).reshape(-1, 2)
+    except Exception as exc:  # noqa: BLE001  pygel3d's own failures, in words
+        raise MeshError(f"{name}: axes='skeleton': no curve skeleton for a piece of {len(faces)} triangles "
+                        f"({type(exc).__name__}: {str(exc)[:120]})") from None
+    if not len(nodes):
+        return pts.mean(axis=0, keepdims=True), np.zeros((0, 2), dtype=np.int64)
+    return nodes, edges
+
+
+def _tree_of(nodes: np.ndarray, edges: np.ndarray, root: int) -> tuple[np.ndarray, np.ndarray]:
+    """The skeleton as a tree from ``root``: ``(order (n,) breadth first, parent (n,) -1 at the root)`` over
+    the shortest spanning tree of its edges (a skeleton with a loop -- a handle -- is cut where it is longest)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import breadth_first_order, minimum_spanning_tree
+
+    n = len(nodes)
+    w = np.linalg.norm(nodes[edges[:, 0]] - nodes[edges[:, 1]], axis=1) + 1e-12
+    mst = minimum_spanning_tree(coo_matrix((w, (edges[:, 0], edges[:, 1])), shape=(n, n)))
+    order, parent = breadth_first_order(mst, root, directed=False)
+    parent = np.where(parent < 0, -1, parent)
+    return order, parent
+
+
+def _chains_of(nodes, edges, root: int, piece: int, parent_chain: int, start, depth: int) -> list[Chain]:
+    """A piece's skeleton cut into chains from ``root``: at each fork the chain goes on into the child
+    whose subtree reaches furthest; each other child starts a chain."""
+    order, parent = _tree_of(nodes, edges, root)
+    n = len(nodes)
+    step = np.zeros(n)
+    has = parent >= 0
+    step[has] = np.linalg.norm(nodes[has] - nodes[parent[has]], axis=1)
+    reach = np.zeros(n)  # the longest way from a node down to a tip of its subtree
+    for v in order[::-1]:  # the skeleton's nodes (a few hundred), not the mesh's vertices
+        p = parent[v]
+        if p >= 0:
+            reach[p] = max(reach[p], reach[v] + step[v])
+    children: dict = {}
+    for v in order[1:]:
+        children.setdefault(int(parent[v]), []).append(int(v))
+    chains: list[Chain] = []
+    todo = [(root, parent_chain, None if start is None else np.asarray(start, dtype=np.float64), depth)]
+    while todo:
+        v, up_chain, first, level = todo.pop(0)
+        path = [first] if first is not None and not np.allclose(first, nodes[v]) else []
+        me = len(chains)
+        while True:
+            path.append(nodes[v])
+            kids = sorted(children.get(v, []), key=lambda c: (-(reach[c] + step[c]), c))
+            if not kids:
+                break
+            for other in kids[1:]:
+                todo.append((other, me, nodes[v], level + 1))
+            v = kids[0]
+        chains.append(Chain(np.asarray(path), up_chain, piece, level))
+    return chains
+
+
+def _distance_to_chains(points: np.ndarray, chains: list[Chain], which) -> np.ndarray:
+    """(p, len(which)): each point's distance from each chain's polyline."""
+    out = np.full((len(points), len(which)), np.inf)
+    for j, c in enumerate(which):
+        seg = chains[c].points
+        if len(seg) == 1:
+            out[:, j] = np.linalg.norm(points - seg[0], axis=1)
+            continue
+        a, b = seg[:-1], seg[1:]
+        ab = b - a
+        den = np.maximum((ab * ab).sum(axis=1), 1e-300)
+        for lo in range(0, len(points), 4096):  # a few MB at a time
+            p = points[lo:lo + 4096, None, :]
+            t = np.clip(((p - a) * ab).sum(axis=2) / den, 0.0, 1.0)
+            d = np.linalg.norm(p - (a + t[..., None] * ab), axis=2)
+            out[lo:lo + 4096, j] = d.min(axis=1)
+    return out
+
+
+def _hang(points: np.ndarray, chains: list[Chain], candidates, size: float, tolerance: float = TIE,
+          radii=None) -> int:
+    """The chain a piece sits on: the one its points come nearest (less the chain's radius, when given),
+    the shallower among those within ``tolerance × size`` of the nearest."""
+    d = _distance_to_chains(points, chains, candidates).min(axis=0)
+    if radii is not None:
+        d = np.maximum(d - np.asarray([radii[c] for c in candidates]), 0.0)
+    near = d.min() + tolerance * size
+    return min((c for c, dc in zip(candidates, d) if dc <= near), key=lambda c: (chains[c].depth, d[candidates.index(c)], c))
+
+
+def _frame(points: np.ndarray, up: int) -> np.ndarray:
+    """Rows ``e_a`` (first point to last), ``e_u`` (the model's up made perpendicular), ``e_v = e_a × e_u``."""
+    e_a = points[-1] - points[0]
+    if not np.linalg.norm(e_a) > 0:
+        e_a = np.eye(3)[up]
+    e_a = e_a / np.linalg.norm(e_a)
+    for guess in (np.eye(3)[up], np.eye(3)[(up + 1) % 3]):
+        e_u = guess - (guess @ e_a) * e_a
+        if np.linalg.norm(e_u) > 1e-3:
+            break
+    e_u = e_u / np.linalg.norm(e_u)
+    e_v = np.cross(e_a, e_u)
+    frame = np.vstack([e_a, e_u, e_v / np.linalg.norm(e_v)])
+    u, _, vt = np.linalg.svd(frame)  # exactly orthonormal
+    return u @ vt
+
+
+def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes: int = MAX_AXES) -> AxisTree:
+    """The axes of ``mesh`` from its own shape (the module's rules 1-6).
+
+    Parameters
+    ----------
+    mesh : BaseMesh
+    min_branch : float
+        The shortest branch, a fraction of its root chain's length (default :data:`MIN_BRANCH`).
+    up : int
+        The model's up coordinate (1: y, glTF's up).
+    max_axes : int
+        At most this many axes (1 to :data:`~axialdeform.core.axes.MAX_AXES`).
+
+    Returns
+    -------
+    AxisTree
+        Names ``trunk``, ``branch1``, ...; ``describe()`` says the hierarchy.
+    """
+    if not (isinstance(min_branch, (int, float)) and not isinstance(min_branch, bool) and 0 < min_branch < 1):
+        raise MeshError(f"{mesh.name}: axes='skeleton': min_branch: expected a fraction of the trunk in (0, 1), "
+                        f"found {min_branch!r:.40}")
+    if not (isinstance(max_axes, int) and 1 <= max_axes <= MAX_AXES):
+        raise MeshError(f"{mesh.name}: axes='skeleton': max_axes: expected 1 to {MAX_AXES}, found {max_axes!r:.40}")
+    points, faces, inverse = weld(mesh.positions, mesh.faces)
+    label = pieces(len(points), faces)
+    face_piece = label[faces[:, 0]]
+    size = float(np.ptp(points, axis=0).max()) or 1.0
+    ids = np.unique(face_piece)
+    across = [i for i in range(3) if i != up]
+    candidates = []
+    for p in ids:  # the pieces (tens), not the vertices
+        pts = points[label == p]
+        extent = np.ptp(pts, axis=0)
+        if extent.max() >= min_branch * size and np.count_nonzero(face_piece == p) >= 8:
+            candidates.append(p)
+    if not candidates:  # nothing long enough to be a branch: the largest piece is the one axis
+        candidates = [int(np.argmax(np.bincount(face_piece)))]
+    grounded = [p for p in candidates if np.ptp(points[label == p][:, up]) >= 0.2 * np.ptp(points[label == p][:, across],
+                                                                                            axis=0).max()] or candidates
+    # the trunk's piece: the one that starts lowest (what grows from the ground), never flat ground or water
+    root = min(grounded, key=lambda p: (float(points[label == p][:, up].min()), float(points[label == p].sum())))
+    skeletons, limbs = {root: curve_skeleton(points, faces[face_piece == root], mesh.name)}, [root]
+    for p in candidates:
+        if p != root and _elongated(points[label == p]):
+            nodes, edges = skeletons[p] = curve_skeleton(points, faces[face_piece == p], mesh.name)
+            far = nodes[_longest_path(nodes, edges)]
+            thick = float(np.median(_distance_to_chains(points[label == p], [Chain(far, -1, p)], [0])))
+            if _path_length(far) >= LIMB_RATIO * max(thick, 1e-12 * size):
+                limbs.append(p)
+    chains: list[Chain] = []
+    nodes, edges = skeletons[root]
+    ends = _ends(nodes, edges)
+    start = min(ends, key=lambda v: (nodes[v, up], v))
+    chains += _chains_of(nodes, edges, start, root, -1, None, 0)
+    rest = [p for p in limbs if p != root]
+    surface, owner = np.zeros((0, 3)), np.zeros(0, dtype=np.int64)  # the surface made so far, and each point's chain
+
+    def add_surface(p, first):
+        nonlocal surface, owner
+        mine = points[label == p]
+        own = list(range(first, len(chains)))
+        surface = np.vstack([surface, mine])
+        owner = np.concatenate([owner, np.asarray(own)[np.argmin(_distance_to_chains(mine, chains, own), axis=1)]])
+
+    add_surface(root, 0)
+    while rest:  # nearest first: a piece hangs on what is already made
+        gaps = {}
+        for p in rest:  # each end's distance from the surface of each chain
+            nodes, edges = skeletons[p]
+            ends = _ends(nodes, edges)
+            d = np.linalg.norm(nodes[ends][:, None, :] - surface[None], axis=2)
+            gap = np.full((len(ends), len(chains)), np.inf)
+            for c in np.unique(owner):
+                gap[:, c] = d[:, owner == c].min(axis=1)
+            gaps[p] = (ends, gap)
+        p = min(rest, key=lambda q: (float(gaps[q][1].min()), float(skeletons[q][0].sum())))
+        nodes, edges = skeletons[p]
+        ends, gap = gaps[p]
+        length = _path_length(nodes[_longest_path(nodes, edges)]) or size
+        # it grows from the shallowest chain its ends come about as near as the nearest: a frond from the trunk,
+        # not from the frond it crosses
+        near = np.argwhere(gap <= gap.min() + DOUBTFUL_GAP * length)
+        e, on = min(((int(i), int(c)) for i, c in near), key=lambda ic: (chains[ic[1]].depth, gap[ic], ic[1], ic[0]))
+        end = ends[e]
+        first = len(chains)
+        chains += _chains_of(nodes, edges, end, p, on, _foot(nodes[end], chains[on].points), chains[on].depth + 1)
+        add_surface(p, first)
+        rest.remove(p)
+    keep = _prune(chains, points, label, min_branch, max_axes)
+    limb_point = np.isin(label, limbs)
+    while True:  # a chain that holds (almost) no vertex of its own is no axis: its vertices go to the chains near them
+        welded_axis = _bind(points, label, chains, keep, limbs)
+        counts = np.bincount(welded_axis[limb_point], minlength=len(keep))
+        empty = {keep[k] for k in range(1, len(keep)) if counts[k] < MIN_VERTICES}
+        if not empty:
+            break
+        keep = [c for c in keep if c not in empty]
+    parents = tuple([-1] + [keep.index(_kept_parent(chains, c, keep)) for c in keep[1:]])
+    names = tuple(["trunk"] + [f"branch{i}" for i in range(1, len(keep))])
+    axes, anchors = [], [0.0]
+    for i, c in enumerate(keep):  # each axis's box from its limb's points only: a carried crown rides on it
+        own = points[limb_point & (welded_axis == i)]
+        axis = ControlAxis.from_positions(own, name=f"{mesh.name}: axis {names[i]}", frame=_frame(chains[c].points, up))
+        axes.append(axis)
+        if i:
+            at = float(np.asarray(axis.matrix)[0] @ chains[c].points[0])
+            anchors.append(float(np.clip((at - axis.lo) / axis.length, 0.0, 1.0)))
+    return AxisTree(tuple(axes), parents, welded_axis[inverse].astype(np.int32), names, tuple(anchors))
+
+
+def _radius(chain: Chain, surface: np.ndarray) -> float:
+    """A chain's thickness: the median distance of its piece's surface points nearest it (a limb's radius)."""
+    d = _distance_to_chains(surface, [chain], [0])[:, 0]
+    return float(np.median(np.sort(d)[:max(8, len(d) // 8)]))
+
+
+def _elongated(points: np.ndarray) -> bool:
+    """True when the points spread at least :data:`ELONGATION` times as far along their main direction as
+    across it (singular values of the centred points)."""
+    sv = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    return len(sv) > 1 and sv[0] >= ELONGATION * sv[1]
+
+
+def _ends(nodes, edges) -> list[int]:
+    if not len(edges):
+        return [0]
+    deg = np.bincount(edges.ravel(), minlength=len(nodes))
+    ends = [int(v) for v in np.flatnonzero(deg == 1)]
+    return ends or [int(np.argmin(deg))]
+
+
+def _path_length(points) -> float:
+    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum()) if len(points) > 1 else 0.0
+
+
+def _longest_path(nodes, edges) -> np.ndarray:
+    """The node indices of the skeleton's longest path (twice the furthest node)."""
+    if not len(edges):
+        return np.array([0])
+    far = 0
+    for _ in range(2):
+        order, parent = _tree_of(nodes, edges, far)
+        dist = np.zeros(len(nodes))
+        for v in order[1:]:
+            dist[v] = dist[parent[v]] + np.linalg.norm(nodes[v] - nodes[parent[v]])
+        far = int(np.argmax(dist))
+    path = [far]
+    while parent[path[-1]] >= 0:
+        path.append(int(parent[path[-1]]))
+    return np.array(path)
+
+
+def _foot(point, polyline) -> np.ndarray:
+    """The point of ``polyline`` nearest ``point``."""
+    if len(polyline) == 1:
+        return polyline[0].copy()
+    a, b = polyline[:-1], polyline[1:]
+    ab = b - a
+    t = np.clip(((point - a) * ab).sum(axis=1) / np.maximum((ab * ab).sum(axis=1), 1e-300), 0.0, 1.0)
+    q = a + t[:, None] * ab
+    return q[int(np.argmin(np.linalg.norm(q - point, axis=1)))]
+
+
+def _kept_parent(chains, c, keep) -> int:
+    """The nearest ancestor of chain ``c`` that is an axis."""
+    p = chains[c].parent
+    while p >= 0 and p not in keep:
+        p = chains[p].parent
+    return max(p, 0)
+
+
+def _prune(chains, points, label, min_branch, max_axes) -> list[int]:
+    """The chains that are branches -- long enough against their piece's root chain, less their parent's
+    radius where they leave it (a piece's root chain always is one) -- at most ``max_axes`` of them, the
+    longest, parents first."""
+    root_length = {}
+    for c in chains:
+        if c.parent < 0 or c.piece != chains[c.parent].piece:
+            root_length[c.piece] = max(root_length.get(c.piece, 0.0), c.length)
+    keep = []
+    for i, c in enumerate(chains):  # a parent comes before its children
+        if c.parent >= 0 and c.piece == chains[c.parent].piece:
+            if c.parent not in keep:
+                continue
+            surface = points[label == c.piece]
+            radius = float(np.linalg.norm(surface - c.points[0], axis=1).min())
+            if c.length - radius < min_branch * root_length[c.piece]:
+                continue
+        keep.append(i)
+    if len(keep) > max_axes:
+        ranked = sorted(keep, key=lambda i: (-chains[i].length, i))[:max_axes]
+        keep = [i for i in keep if i in ranked]
+        keep = [i for i in keep if _line_in(chains, i, keep)]
+    return keep
+
+
+def _line_in(chains, i, keep) -> bool:
+    """True when every ancestor of chain ``i`` in its own piece is in ``keep``."""
+    p = chains[i].parent
+    while p >= 0 and chains[p].piece == chains[i].piece:
+        if p not in keep:
+            return False
+        p = chains[p].parent
+    return True
+
+
+def _bind(points, label, chains, keep, limbs) -> np.ndarray:
+    """(w,) int: each welded point's axis (an index into ``keep``): a limb's point the nearest axis of its
+    own piece, a carried piece whole the axis it sits on."""
+    out = np.zeros(len(points), dtype=np.int64)
+    index = {c: i for i, c in enumerate(keep)}
+    for p in np.unique(label):
+        mine = np.flatnonzero(label == p)
+        own = [c for c in keep if chains[c].piece == p] if p in limbs else []
+        if own:
+            d = _distance_to_chains(points[mine], chains, own)
+            out[mine] = np.asarray([index[c] for c in own])[np.argmin(d, axis=1)]
+        else:
+            extent = max(float(np.ptp(points[mine], axis=0).max()), 1e-12)
+            out[mine] = index[_hang(points[mine], chains, keep, extent)]
+    return out
+
+
+def shape_tree(mesh, rule: str = "skeleton", frame="auto", up: int = 1) -> AxisTree:
+    """``axes="skeleton"`` or ``axes="auto"`` (``BaseMesh.with_axes``): :func:`skeleton_tree` with its
+    defaults, cached by the mesh's fingerprint (``core.io.axes_cache``); for ``"auto"``, ``axes="parts"``
+    (each axis ``frame``) instead when the mesh's parts are its limbs: two or more parts, and no part
+    branches (the skeleton puts all of each part on one axis)."""
+    from .axes import tree_from_parts
+    from .io.axes_cache import cached_tree
+
+    key = f"skeleton{SKELETON_VERSION}-{MIN_BRANCH:g}-{up}"
+    tree = cached_tree(mesh, key, lambda: skeleton_tree(mesh, up=up))
+    if rule == "auto":
+        parts = [np.unique(mesh.faces[p.start:p.start + p.count]) for p in mesh.parts if p.count]
+        owners = [np.unique(tree.vertex_axis[v]) for v in parts]
+        if len(parts) >= 2 and all(len(o) == 1 for o in owners):
+            return tree_from_parts(mesh, frame, up)
+    return tree
