@@ -9,17 +9,19 @@ module finds the branches from the shape itself (``docs/method.md``, "Axes from 
    skeleton's longest path at least :data:`LIMB_RATIO` times the median distance of its vertices
    from the skeleton) and at least ``min_branch`` of the model's size; every other piece (a crown
    blob, a leaf card, a bark mark, a pine's tier of needles) is *carried*.
-2. **Skeleton.** Each limb gets a curve skeleton: the local-separator skeleton of
-   ``pygel3d.graph.LS_skeleton`` (Bærentzen & Rotenberg 2021) of the piece's edge graph, the piece
-   simplified first to at most :data:`SKELETON_TRIANGLES` triangles (``fast_simplification``).
+2. **Skeleton.** Each limb gets a curve skeleton: ``skeletor.skeletonize.by_wavefront`` (rings of
+   a wave spreading over the surface from its ends, each ring's centre a node), the piece's edges
+   split first to at most its size over :data:`EDGE_STEPS` (a low-poly trunk of two rings has no
+   rings to find), then simplified to at most :data:`SKELETON_TRIANGLES` triangles.
 3. **Chains.** The root piece is the limb that starts lowest along ``up`` (what grows from the
    ground, as ``axes="parts"`` finds the trunk); its skeleton's root is its lowest end.  From the
    root every fork continues into the child whose subtree reaches furthest (the trunk runs on
    into its longest limb) and starts a new chain for each other child.  Every other limb piece
    hangs, at its end nearest the chains already made, on the chain it grows from: the nearest,
    the one nearer the root among those about as near (:data:`~axialdeform.core.axes.TIE`).
-4. **Pruning.** A chain shorter than ``min_branch`` times its root chain (its length from where it
-   leaves its parent, less the parent's radius there) is no branch: its vertices go to its parent.
+4. **Pruning.** A chain whose tip stands less than ``min_branch`` times the trunk away from its
+   parent's chain (less the parent's radius where it leaves it) is no branch -- a spur, or a twin
+   running beside its parent (a leaf's two faces) --: its vertices go to its parent.
    At most ``max_axes`` chains stay, the longest (a child is never longer than its parent's rest).
 5. **Binding.** Each vertex of a limb goes to the nearest chain of its own piece (the distance to
    the chain's polyline); a carried piece goes whole to the chain it sits on (the one its vertices
@@ -32,14 +34,12 @@ module finds the branches from the shape itself (``docs/method.md``, "Axes from 
    through a joint stays whole: the boundary between two axes' vertices lies where the child's
    own bend vanishes to second order.
 
-Pure numpy and scipy here; ``pygel3d`` and ``fast_simplification`` are imported where used.
+Pure numpy and scipy here; ``skeletor``, ``trimesh`` and ``fast_simplification`` are imported where used.
 """
 
 from __future__ import annotations
 
-import contextlib
-import os
-import sys
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,7 +50,7 @@ from .errors import MeshError
 
 __all__ = ["skeleton_tree", "shape_tree", "MIN_BRANCH", "LIMB_RATIO", "SKELETON_TRIANGLES", "SKELETON_VERSION"]
 
-#: the default shortest branch, a fraction of its root chain's length (the trunk's, for a tree)
+#: the default shortest branch, a fraction of the trunk's chain (the root piece's first chain)
 MIN_BRANCH = 0.1
 #: a piece is a limb (it gets a skeleton and axes) when its skeleton's longest path is at least this many
 #: times the median distance of its vertices from the skeleton; a blob, a leaf card or a disc is carried whole
@@ -58,8 +58,10 @@ LIMB_RATIO = 3.0
 #: a piece other than the trunk's is a limb only if its longest spread is at least this many times its second
 #: (a frond, a separate branch); a crown blob, a pine's tier or a willow's curtain is not
 ELONGATION = 2.0
-#: a piece with more triangles is simplified to this many before its skeleton is computed
-SKELETON_TRIANGLES = 6000
+#: before its skeleton, a piece's edges are split to at most its size over this many
+EDGE_STEPS = 40
+#: a piece with more triangles (after the split) is simplified to this many before its skeleton is computed
+SKELETON_TRIANGLES = 50000
 #: bumped whenever a rule here changes what a mesh gets (a cached tree of another version is not used)
 SKELETON_VERSION = 1
 #: a chain binding fewer vertices than this goes to its parent
@@ -78,26 +80,6 @@ class Chain:
     @property
     def length(self) -> float:
         return float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum())
-
-
-@contextlib.contextmanager
-def _quiet_stdout():
-    """pygel3d's C++ prints its progress on file descriptor 1: keep it off the caller's output."""
-    try:
-        sys.stdout.flush()
-        fd = os.dup(1)
-    except (OSError, ValueError):  # no real descriptor 1 (an embedding host): nothing to hide
-        yield
-        return
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
-            try:
-                yield
-            finally:
-                os.dup2(fd, 1)
-    finally:
-        os.close(fd)
 
 
 def weld(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -121,12 +103,19 @@ def pieces(count: int, faces: np.ndarray) -> np.ndarray:
 
 
 def curve_skeleton(points: np.ndarray, faces: np.ndarray, name: str = "<mesh>") -> tuple[np.ndarray, np.ndarray]:
-    """The curve skeleton of one piece: ``(nodes (n, 3) float64, edges (e, 2) int64)`` (pygel3d's
-    local-separator skeleton of the piece's edge graph; above :data:`SKELETON_TRIANGLES` triangles the
-    piece is simplified first)."""
+    """The curve skeleton of one piece: ``(nodes (n, 3) float64, edges (e, 2) int64)`` (skeletor's
+    wavefront skeleton of the piece, its edges split to its size over :data:`EDGE_STEPS` first and,
+    above :data:`SKELETON_TRIANGLES` triangles, simplified)."""
     used = np.unique(faces)
     local = np.searchsorted(used, faces)
     pts = points[used]
+    # long thin triangles (a low-poly trunk of two rings) leave the edge graph too coarse to find the
+    # branches: edges are split to a fraction of the piece's size first (trimesh), then simplified back
+    step = float(np.ptp(pts, axis=0).max()) / EDGE_STEPS
+    if step > 0:
+        import trimesh
+
+        pts, local = trimesh.remesh.subdivide_to_size(pts, local, max_edge=step, max_iter=8)
     if len(local) > SKELETON_TRIANGLES:
         import fast_simplification
 
@@ -134,21 +123,21 @@ def curve_skeleton(points: np.ndarray, faces: np.ndarray, name: str = "<mesh>") 
                                                   target_count=SKELETON_TRIANGLES)
         pts, local = np.asarray(pts, dtype=np.float64), np.asarray(local, dtype=np.int64)
     try:
-        from pygel3d import graph, hmesh
+        import skeletor
+        import trimesh
     except ImportError as exc:  # pragma: no cover - a dependency
-        raise MeshError(f"{name}: axes='skeleton' needs pygel3d (pip install pygel3d): {exc}") from None
+        raise MeshError(f"{name}: axes='skeleton' needs skeletor (pip install skeletor): {exc}") from None
     try:
-        with _quiet_stdout():
-            manifold = hmesh.Manifold.from_triangles(pts, local)
-            skeleton = graph.LS_skeleton(graph.from_mesh(manifold), sampling=False)
-        ids = list(skeleton.nodes())
-        nodes = np.asarray(skeleton.positions(), dtype=np.float64)[ids]
-        index = {n: i for i, n in enumerate(ids)}
-        edges = np.array([(index[n], index[m]) for n in ids for m in skeleton.neighbors(n) if m > n and m in index],
-                         dtype=np.int64).reshape(-1, 2)
-    except Exception as exc:  # noqa: BLE001  pygel3d's own failures, in words
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            found = skeletor.skeletonize.by_wavefront(trimesh.Trimesh(pts, local, process=False), waves=1, step_size=1,
+                                                      progress=False)
+        nodes = np.asarray(found.vertices, dtype=np.float64)
+        edges = np.asarray(found.edges, dtype=np.int64).reshape(-1, 2)
+    except Exception as exc:  # noqa: BLE001  skeletor's own failures, in words
         raise MeshError(f"{name}: axes='skeleton': no curve skeleton for a piece of {len(faces)} triangles "
                         f"({type(exc).__name__}: {str(exc)[:120]})") from None
+    edges = edges[edges[:, 0] != edges[:, 1]]
     if not len(nodes):
         return pts.mean(axis=0, keepdims=True), np.zeros((0, 2), dtype=np.int64)
     return nodes, edges
@@ -256,7 +245,7 @@ def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes
     ----------
     mesh : BaseMesh
     min_branch : float
-        The shortest branch, a fraction of its root chain's length (default :data:`MIN_BRANCH`).
+        The shortest branch, a fraction of the trunk's chain (default :data:`MIN_BRANCH`).
     up : int
         The model's up coordinate (1: y, glTF's up).
     max_axes : int
@@ -337,6 +326,7 @@ def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes
         chains += _chains_of(nodes, edges, end, p, on, _foot(nodes[end], chains[on].points), chains[on].depth + 1)
         add_surface(p, first)
         rest.remove(p)
+    _leave(chains, points, label)
     keep = _prune(chains, points, label, min_branch, max_axes)
     limb_point = np.isin(label, limbs)
     while True:  # a chain that holds (almost) no vertex of its own is no axis: its vertices go to the chains near them
@@ -412,6 +402,25 @@ def _foot(point, polyline) -> np.ndarray:
     return q[int(np.argmin(np.linalg.norm(q - point, axis=1)))]
 
 
+def _leave(chains, points, label) -> None:
+    """Each child chain starts where it leaves its parent: its first points still inside the parent (nearer
+    the parent's chain than the parent's radius: a skeleton's fork sits a little up or down the trunk) are
+    cut off and replaced by their foot on the parent's chain."""
+    radii: dict = {}
+    for c in chains:
+        if c.parent < 0 or len(c.points) < 2:
+            continue
+        parent = chains[c.parent]
+        if c.parent not in radii:
+            radii[c.parent] = _radius(parent, points[label == parent.piece])
+        d = _distance_to_chains(c.points, chains, [c.parent])[:, 0]
+        outside = np.flatnonzero(d > radii[c.parent])
+        if not len(outside):
+            continue
+        first = int(outside[0])
+        c.points = np.vstack([_foot(c.points[first], parent.points)[None], c.points[first:]])
+
+
 def _kept_parent(chains, c, keep) -> int:
     """The nearest ancestor of chain ``c`` that is an axis."""
     p = chains[c].parent
@@ -421,13 +430,10 @@ def _kept_parent(chains, c, keep) -> int:
 
 
 def _prune(chains, points, label, min_branch, max_axes) -> list[int]:
-    """The chains that are branches -- long enough against their piece's root chain, less their parent's
-    radius where they leave it (a piece's root chain always is one) -- at most ``max_axes`` of them, the
-    longest, parents first."""
-    root_length = {}
-    for c in chains:
-        if c.parent < 0 or c.piece != chains[c.parent].piece:
-            root_length[c.piece] = max(root_length.get(c.piece, 0.0), c.length)
+    """The chains that are branches -- reaching at least ``min_branch`` of the trunk (the first chain) away
+    from their parent's chain, less the parent's radius where they leave it (a piece's first chain always is
+    one) -- at most ``max_axes`` of them, the longest, parents first."""
+    shortest = min_branch * chains[0].length
     keep = []
     for i, c in enumerate(chains):  # a parent comes before its children
         if c.parent >= 0 and c.piece == chains[c.parent].piece:
@@ -435,7 +441,8 @@ def _prune(chains, points, label, min_branch, max_axes) -> list[int]:
                 continue
             surface = points[label == c.piece]
             radius = float(np.linalg.norm(surface - c.points[0], axis=1).min())
-            if c.length - radius < min_branch * root_length[c.piece]:
+            reach = float(_distance_to_chains(c.points, chains, [c.parent]).max())
+            if reach - radius < shortest:  # a spur, or a twin running beside its parent (a leaf's two faces)
                 continue
         keep.append(i)
     if len(keep) > max_axes:
@@ -465,6 +472,11 @@ def _bind(points, label, chains, keep, limbs) -> np.ndarray:
         own = [c for c in keep if chains[c].piece == p] if p in limbs else []
         if own:
             d = _distance_to_chains(points[mine], chains, own)
+            for j, c in enumerate(own):  # a branch holds nothing behind where it leaves its parent: the
+                ch = chains[c]           # boundary lies at its anchor, where its own bend vanishes
+                if ch.parent >= 0 and chains[ch.parent].piece == p and len(ch.points) > 1:
+                    behind = (points[mine] - ch.points[0]) @ (ch.points[1] - ch.points[0]) <= 0
+                    d[behind, j] = np.inf
             out[mine] = np.asarray([index[c] for c in own])[np.argmin(d, axis=1)]
         else:
             extent = max(float(np.ptp(points[mine], axis=0).max()), 1e-12)

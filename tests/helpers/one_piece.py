@@ -1,0 +1,51 @@
+"""A tree whose wood is ONE welded piece (trunk and branches unioned, as an asset pack's wood comes),
+made at test time with manifold3d: the axes="skeleton" tests' model, with the branches it must find."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import axialdeform as ad
+
+#: (turn about the trunk in radians, height on the trunk, length) of each branch
+BRANCHES = ((0.0, 0.9, 1.0), (2.1, 1.2, 0.9), (4.2, 1.5, 0.8), (1.0, 1.75, 0.7))
+TRUNK = ((0.0, 0.0, 0.0), (0.0, 2.6, 0.0), 0.12)
+
+
+def branch_tips() -> np.ndarray:
+    """(4, 3): where each branch ends."""
+    tips = []
+    for turn, height, length in BRANCHES:
+        d = np.array([np.cos(turn) * 0.8, 0.6, np.sin(turn) * 0.8])
+        tips.append(np.array([0.0, height, 0.0]) + length * d / np.linalg.norm(d))
+    return np.array(tips)
+
+
+def _limb(a, b, radius: float, step: float):
+    import manifold3d as mf
+
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    d = b - a
+    length = float(np.linalg.norm(d))
+    z = d / length
+    axis = np.cross([0.0, 0.0, 1.0], z)
+    if np.linalg.norm(axis) < 1e-9:
+        turn = np.eye(3)
+    else:
+        axis /= np.linalg.norm(axis)
+        k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+        angle = np.arccos(np.clip(z[2], -1.0, 1.0))
+        turn = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+    tube = mf.Manifold.cylinder(length, radius, radius, 16).refine_to_length(step)
+    return tube.transform(np.hstack([turn, a[:, None]])) + mf.Manifold.sphere(radius, 16).refine_to_length(step).translate(tuple(b))
+
+
+def one_piece_tree(step: float = 0.05) -> ad.BaseMesh:
+    """The trunk and :data:`BRANCHES` as one closed, welded surface (about 7 000 triangles)."""
+    a, b, r = TRUNK
+    wood = _limb(a, b, r, step)
+    for (turn, height, length), tip in zip(BRANCHES, branch_tips()):
+        wood = wood + _limb((0.0, height, 0.0), tip, 0.05, step)
+    m = wood.to_mesh()
+    positions = np.asarray(m.vert_properties, dtype=np.float32)[:, :3]
+    return ad.BaseMesh.from_arrays(positions, np.asarray(m.tri_verts, dtype=np.uint32), name="one-piece tree")
