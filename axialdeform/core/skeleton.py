@@ -64,8 +64,12 @@ EDGE_STEPS = 40
 SKELETON_TRIANGLES = 50000
 #: bumped whenever a rule here changes what a mesh gets (a cached tree of another version is not used)
 SKELETON_VERSION = 1
+#: near where it leaves its parent (within :data:`CROTCH` times the parent's radius), a branch holds only the
+#: points within this many times its own radius of its chain (the surface in a fork's crotch stays the trunk's)
+BAND = 1.5
+CROTCH = 3.0
 #: a chain binding fewer vertices than this goes to its parent
-MIN_VERTICES = 4
+MIN_VERTICES = 8
 
 
 @dataclass
@@ -472,12 +476,15 @@ def _bind(points, label, chains, keep, limbs) -> np.ndarray:
         own = [c for c in keep if chains[c].piece == p] if p in limbs else []
         if own:
             d = _distance_to_chains(points[mine], chains, own)
-            for j, c in enumerate(own):  # a branch holds nothing behind where it leaves its parent: the
-                ch = chains[c]           # boundary lies at its anchor, where its own bend vanishes
-                if ch.parent >= 0 and chains[ch.parent].piece == p and len(ch.points) > 1:
+            near = d.copy()
+            for j, c in enumerate(own):  # a branch holds nothing behind where it leaves its parent (the boundary
+                ch = chains[c]           # lies at its anchor, where its own bend vanishes), nor what lies further
+                if ch.parent >= 0 and chains[ch.parent].piece == p and len(ch.points) > 1:  # than twice its radius
                     behind = (points[mine] - ch.points[0]) @ (ch.points[1] - ch.points[0]) <= 0
-                    d[behind, j] = np.inf
-            out[mine] = np.asarray([index[c] for c in own])[np.argmin(d, axis=1)]
+                    crotch = np.linalg.norm(points[mine] - ch.points[0], axis=1) < CROTCH * _radius(chains[ch.parent], points[mine])
+                    near[behind | (crotch & (d[:, j] > BAND * _radius(ch, points[mine]))), j] = np.inf
+            pick = np.where(np.isfinite(near).any(axis=1), np.argmin(near, axis=1), np.argmin(d, axis=1))
+            out[mine] = np.asarray([index[c] for c in own])[pick]
         else:
             extent = max(float(np.ptp(points[mine], axis=0).max()), 1e-12)
             out[mine] = index[_hang(points[mine], chains, keep, extent)]

@@ -266,3 +266,26 @@ def test_baked_outputs_have_a_triangle_budget(tmp_path, capsys):
         assert not (tmp_path / argv[4].split("/")[-1]).exists()  # nothing written
         assert main(argv + ["--max-triangles", "5600"]) == 0
     assert main(["export", "stone", str(adp), "-o", str(tmp_path / "i.glb"), "--instanced", "--max-triangles", "1"]) == 0
+
+
+def test_info_prints_the_axes_found_from_the_shape(tmp_path, monkeypatch):
+    """``info MESH --axes skeleton`` prints the tree the skeleton gives a one-piece wood; an unknown rule
+    reads as a file that is not there: exit 2, one line, no traceback."""
+    import subprocess
+    import sys
+
+    from helpers.one_piece import one_piece_tree
+
+    path = tmp_path / "wood.obj"
+    mesh = one_piece_tree()
+    with open(path, "w") as f:
+        f.writelines(f"v {x:.7g} {y:.7g} {z:.7g}\n" for x, y, z in mesh.positions)
+        f.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in mesh.faces)
+    env = {**__import__("os").environ, "AXIALDEFORM_CACHE": str(tmp_path / "cache")}
+    out = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), "--axes", "skeleton"],
+                         capture_output=True, text=True, env=env)
+    assert out.returncode == 0, out.stderr
+    assert "5 axes (trunk, branch1 <- trunk" in out.stdout
+    bad = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), "--axes", "bones"],
+                         capture_output=True, text=True, env=env)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr and "bones" in bad.stderr

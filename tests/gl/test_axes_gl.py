@@ -177,3 +177,14 @@ def test_more_trees_than_the_offsets_texture_holds_is_said_in_words(ctx, monkeyp
         AxialRenderer(ctx, mesh, p, capacity=700).release()
     with AxialRenderer(ctx, mesh, p, capacity=682) as r:
         assert r.count == 10
+
+
+def test_gpu_equals_cpu_for_axes_from_the_shape(ctx, tmp_path, monkeypatch):
+    """axes="skeleton" on a one-piece wood (tests/helpers/one_piece.py): one draw bends every branch as
+    the CPU reference does."""
+    from helpers.one_piece import one_piece_tree
+
+    monkeypatch.setenv("AXIALDEFORM_CACHE", str(tmp_path))
+    mesh = one_piece_tree().with_axes("skeleton")
+    assert mesh.axis_count == 5
+    _check_capture(ctx, mesh, _params(mesh, n=12))

@@ -44,7 +44,7 @@ def one_piece_tree(step: float = 0.05) -> ad.BaseMesh:
     """The trunk and :data:`BRANCHES` as one closed, welded surface (about 7 000 triangles)."""
     a, b, r = TRUNK
     wood = _limb(a, b, r, step)
-    for (turn, height, length), tip in zip(BRANCHES, branch_tips()):
+    for (_turn, height, _length), tip in zip(BRANCHES, branch_tips()):
         wood = wood + _limb((0.0, height, 0.0), tip, 0.05, step)
     m = wood.to_mesh()
     positions = np.asarray(m.vert_properties, dtype=np.float32)[:, :3]

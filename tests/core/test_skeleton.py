@@ -1,0 +1,136 @@
+"""axes="skeleton" and axes="auto": a model's axes from its own shape (core/skeleton.py), on a tree whose
+wood is one welded piece (tests/helpers/one_piece.py): the branches found, a surface that stays whole at
+a bend of 0.3 a level, the same tree whatever the order of the file, the cache, the rule "auto", errors."""
+
+import numpy as np
+import pytest
+
+import axialdeform as ad
+from axialdeform.core import skeleton
+from axialdeform.core.errors import MeshError
+
+from helpers.one_piece import branch_tips, one_piece_tree
+
+
+@pytest.fixture(autouse=True)
+def _own_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("AXIALDEFORM_CACHE", str(tmp_path / "cache"))
+
+
+@pytest.fixture(scope="module")
+def wood():
+    return one_piece_tree()
+
+
+def _seams(mesh, bend=0.3, n=40, seed=2):
+    """Max stretch of an edge whose ends belong to two axes, max of one inside an axis, and the largest
+    distance between bent vertices that share a rest position (in units of the trunk's L)."""
+    tree = mesh.tree
+    params = ad.random_params(mesh, n, seed=seed, variation=ad.Variation(bend=(bend,) * 3))
+    pos, _ = ad.deform(mesh, params)
+    e = mesh.edges.astype(np.int64)
+    rest = np.linalg.norm(mesh.positions[e[:, 0]] - mesh.positions[e[:, 1]], axis=1)
+    e, rest = e[rest > 0], rest[rest > 0]
+    stretch = np.linalg.norm(pos[:, e[:, 0]] - pos[:, e[:, 1]], axis=2) / rest
+    cross = tree.vertex_axis[e[:, 0]] != tree.vertex_axis[e[:, 1]]
+    _, first, inverse = np.unique(mesh.positions, axis=0, return_index=True, return_inverse=True)
+    spread = float(np.abs(pos - pos[:, first[inverse.ravel()]]).max()) / tree.axes[0].length
+    return float(stretch[:, cross].max()), float(stretch[:, ~cross].max()), spread, int(cross.sum())
+
+
+def test_a_one_piece_tree_gets_an_axis_per_branch(wood):
+    mesh = wood.with_axes("skeleton")
+    tree = mesh.tree
+    assert tree.count == 5, tree.describe()
+    assert tree.names[0] == "trunk" and all(p == 0 for p in tree.parents[1:])
+    tips = [int(tree.vertex_axis[np.argmin(np.linalg.norm(mesh.positions - t, axis=1))]) for t in branch_tips()]
+    assert sorted(tips) == [1, 2, 3, 4]  # each branch's tip on its own child axis
+    foot = mesh.positions[mesh.positions[:, 1] < 0.3]
+    assert set(tree.vertex_axis[mesh.positions[:, 1] < 0.3]) == {0} and len(foot)  # the trunk's foot is the root's
+    assert all(t < 0.1 for t in tree.anchors[1:])  # each branch anchored where it leaves the trunk
+
+
+def test_the_seams_of_one_piece_add_no_stretch_at_a_bend_of_0_3(wood):
+    cross, inner, spread, count = _seams(wood.with_axes("skeleton"))
+    assert count > 50
+    assert cross <= 1.1 * inner, (cross, inner)
+    assert spread == 0.0
+
+
+def test_vertices_split_for_flat_shading_stay_together(wood):
+    faces = wood.faces
+    split = ad.BaseMesh.from_arrays(wood.positions[faces.ravel()], np.arange(faces.size, dtype=np.uint32).reshape(-1, 3),
+                                    name="split")
+    mesh = split.with_axes("skeleton")
+    assert mesh.tree.count == 5
+    cross, inner, spread, _ = _seams(mesh)
+    assert spread <= 1e-3 and cross <= 1.1 * inner
+
+
+def test_the_tree_does_not_depend_on_the_order_of_the_file(wood):
+    rng = np.random.default_rng(4)
+    order = rng.permutation(wood.vertex_count)
+    back = np.argsort(order)
+    shuffled = ad.BaseMesh.from_arrays(wood.positions[order], back[wood.faces][rng.permutation(len(wood.faces))].astype(np.uint32),
+                                       name="shuffled")
+    a, b = wood.with_axes("skeleton").tree, shuffled.with_axes("skeleton").tree
+    assert a.describe() == b.describe()
+    assert np.array_equal(a.vertex_axis[order], b.vertex_axis)
+    for x, y in zip(a.axes, b.axes):
+        assert np.allclose(x.matrix, y.matrix, atol=1e-9) and abs(x.length - y.length) < 1e-9
+
+
+def test_the_skeleton_is_kept_by_the_mesh_fingerprint(wood, monkeypatch, tmp_path):
+    first = wood.with_axes("skeleton").tree
+    files = list((tmp_path / "cache").iterdir())
+    assert len(files) == 1 and files[0].name.startswith(wood.fingerprint.hex()[:32])
+
+    def no_second_time(*a, **k):
+        raise AssertionError("computed again")
+
+    monkeypatch.setattr(skeleton, "skeleton_tree", no_second_time)
+    again = wood.with_axes("skeleton").tree
+    assert again.digest == first.digest and again.describe() == first.describe()
+    files[0].write_bytes(b"not a cache file")  # a damaged cache file is computed again, never an error
+    monkeypatch.undo()
+    monkeypatch.setenv("AXIALDEFORM_CACHE", str(tmp_path / "cache"))
+    assert wood.with_axes("skeleton").tree.digest == first.digest
+    assert files[0].read_bytes()[:2] == b"PK"  # and written anew
+
+
+def test_no_cache_is_kept_when_it_is_off(wood, monkeypatch, tmp_path):
+    monkeypatch.setenv("AXIALDEFORM_CACHE", "off")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert wood.with_axes("skeleton").tree.count == 5
+    assert not (tmp_path / "cache").exists() and not (tmp_path / "xdg").exists()
+
+
+def test_auto_keeps_the_parts_when_they_are_the_limbs_and_finds_the_branches_when_not(wood):
+    tree = ad.load_mesh("tree", axes="auto").tree
+    assert tree.count == 10 and tree.names == ad.load_mesh("tree", axes="parts").tree.names
+    assert wood.with_axes("auto").tree.describe() == wood.with_axes("skeleton").tree.describe()
+
+
+def test_random_variation_wind_and_bounds_follow_the_skeleton(wood):
+    mesh = wood.with_axes("skeleton")
+    params = ad.random_params(mesh, 8, seed=1, variation=ad.Variation(bend=(0.05, 0.3), droop=0.2))
+    assert params.shape == (8, 10 * 5 + 6)
+    pos, normals = ad.deform(mesh, params)
+    assert np.isfinite(pos).all() and np.allclose(np.linalg.norm(normals, axis=2), 1.0, atol=1e-5)
+
+
+def test_wrong_rules_and_settings_are_said_in_words(wood):
+    with pytest.raises(MeshError, match="'parts', 'skeleton', 'auto'"):
+        wood.with_axes("bones")
+    with pytest.raises(MeshError, match="min_branch"):
+        skeleton.skeleton_tree(wood, min_branch=1.5)
+    with pytest.raises(MeshError, match="max_axes"):
+        skeleton.skeleton_tree(wood, max_axes=0)
+
+
+def test_max_axes_keeps_the_longest_branches(wood):
+    tree = skeleton.skeleton_tree(wood, max_axes=3)
+    assert tree.count == 3
+    tips = branch_tips()
+    kept = {int(tree.vertex_axis[np.argmin(np.linalg.norm(wood.positions - t, axis=1))]) for t in tips[:2]}
+    assert kept == {1, 2}  # the two longest branches (1.0 and 0.9 long)
