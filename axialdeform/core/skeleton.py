@@ -42,9 +42,13 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 
+import fast_simplification
 import numpy as np
+import trimesh
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
-from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree
+from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree, tree_from_parts
 from .axis import ControlAxis
 from .errors import MeshError
 
@@ -98,9 +102,6 @@ def weld(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 def pieces(count: int, faces: np.ndarray) -> np.ndarray:
     """(count,) int: the connected piece of each welded point (points no triangle uses: their own)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     a, b = np.concatenate([faces[:, 0], faces[:, 1], faces[:, 2]]), np.concatenate([faces[:, 1], faces[:, 2], faces[:, 0]])
     graph = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(count, count))
     return connected_components(graph, directed=False)[1]
@@ -117,18 +118,13 @@ def curve_skeleton(points: np.ndarray, faces: np.ndarray, name: str = "<mesh>") 
     # branches: edges are split to a fraction of the piece's size first (trimesh), then simplified back
     step = float(np.ptp(pts, axis=0).max()) / EDGE_STEPS
     if step > 0:
-        import trimesh
-
         pts, local = trimesh.remesh.subdivide_to_size(pts, local, max_edge=step, max_iter=8)
     if len(local) > SKELETON_TRIANGLES:
-        import fast_simplification
-
         pts, local = fast_simplification.simplify(pts.astype(np.float32), local.astype(np.int32),
                                                   target_count=SKELETON_TRIANGLES)
         pts, local = np.asarray(pts, dtype=np.float64), np.asarray(local, dtype=np.int64)
     try:
-        import skeletor
-        import trimesh
+        import skeletor  # pandas, igraph and more: only when a skeleton is asked for
     except ImportError as exc:  # pragma: no cover - a dependency
         raise MeshError(f"{name}: axes='skeleton' needs skeletor (pip install skeletor): {exc}") from None
     try:
@@ -150,9 +146,6 @@ def curve_skeleton(points: np.ndarray, faces: np.ndarray, name: str = "<mesh>") 
 def _tree_of(nodes: np.ndarray, edges: np.ndarray, root: int) -> tuple[np.ndarray, np.ndarray]:
     """The skeleton as a tree from ``root``: ``(order (n,) breadth first, parent (n,) -1 at the root)`` over
     the shortest spanning tree of its edges (a skeleton with a loop -- a handle -- is cut where it is longest)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import breadth_first_order, minimum_spanning_tree
-
     n = len(nodes)
     w = np.linalg.norm(nodes[edges[:, 0]] - nodes[edges[:, 1]], axis=1) + 1e-12
     mst = minimum_spanning_tree(coo_matrix((w, (edges[:, 0], edges[:, 1])), shape=(n, n)))
@@ -496,8 +489,7 @@ def shape_tree(mesh, rule: str = "skeleton", frame="auto", up: int = 1) -> AxisT
     defaults, cached by the mesh's fingerprint (``core.io.axes_cache``); for ``"auto"``, ``axes="parts"``
     (each axis ``frame``) instead when the mesh's parts are its limbs: two or more parts, and no part
     branches (the skeleton puts all of each part on one axis)."""
-    from .axes import tree_from_parts
-    from .io.axes_cache import cached_tree
+    from .io.axes_cache import cached_tree  # core.io reads meshes: imported once core.mesh is
 
     key = f"skeleton{SKELETON_VERSION}-{MIN_BRANCH:g}-{up}"
     tree = cached_tree(mesh, key, lambda: skeleton_tree(mesh, up=up))
