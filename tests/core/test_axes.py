@@ -179,7 +179,7 @@ def test_bad_trees_and_records_are_refused(tree):
         mesh.with_axes([{"part": "trunk"}, {"part": "branch1", "parent": "trunk"}])
     with pytest.raises(MeshError, match="is not an earlier entry"):
         mesh.with_axes([{"part": "trunk"}, {"part": "twig1", "parent": "branch1"}] + TREE_AXES[1:7] + TREE_AXES[8:])
-    with pytest.raises(MeshError, match="expected 'parts'"):
+    with pytest.raises(MeshError, match="expected one of 'parts', 'skeleton', 'auto'"):
         mesh.with_axes("limbs")
     with pytest.raises(ParamError, match=r"for a mesh of 10 axes \(10·K \+ 6 numbers an instance\)"):
         ad.deform(tree, np.zeros((1, 16), np.float32))
