@@ -154,9 +154,10 @@ def _tree_of(nodes: np.ndarray, edges: np.ndarray, root: int) -> tuple[np.ndarra
     return order, parent
 
 
-def _chains_of(nodes, edges, root: int, piece: int, parent_chain: int, start, depth: int) -> list[Chain]:
+def _chains_of(nodes, edges, root: int, piece: int, parent_chain: int, start, depth: int, base: int = 0) -> list[Chain]:
     """A piece's skeleton cut into chains from ``root``: at each fork the chain goes on into the child
-    whose subtree reaches furthest; each other child starts a chain."""
+    whose subtree reaches furthest; each other child starts a chain.  ``base``: the index the first chain will
+    have in the caller's list (the parents of the others count from it)."""
     order, parent = _tree_of(nodes, edges, root)
     n = len(nodes)
     step = np.zeros(n)
@@ -175,7 +176,7 @@ def _chains_of(nodes, edges, root: int, piece: int, parent_chain: int, start, de
     while todo:
         v, up_chain, first, level = todo.pop(0)
         path = [first] if first is not None and not np.allclose(first, nodes[v]) else []
-        me = len(chains)
+        me = base + len(chains)
         while True:
             path.append(nodes[v])
             kids = sorted(children.get(v, []), key=lambda c: (-(reach[c] + step[c]), c))
@@ -320,7 +321,8 @@ def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes
         e, on = min(((int(i), int(c)) for i, c in near), key=lambda ic: (chains[ic[1]].depth, gap[ic], ic[1], ic[0]))
         end = ends[e]
         first = len(chains)
-        chains += _chains_of(nodes, edges, end, p, on, _foot(nodes[end], chains[on].points), chains[on].depth + 1)
+        chains += _chains_of(nodes, edges, end, p, on, _foot(nodes[end], chains[on].points), chains[on].depth + 1,
+                             len(chains))
         add_surface(p, first)
         rest.remove(p)
     _leave(chains, points, label)

@@ -134,3 +134,17 @@ def test_max_axes_keeps_the_longest_branches(wood):
     tips = branch_tips()
     kept = {int(tree.vertex_axis[np.argmin(np.linalg.norm(wood.positions - t, axis=1))]) for t in tips[:2]}
     assert kept == {1, 2}  # the two longest branches (1.0 and 0.9 long)
+
+
+def test_a_second_limb_piece_keeps_its_own_branches_on_its_own_axes(wood):
+    """Two woods side by side (two pieces): the second hangs on the first by one axis, and each of its other
+    axes hangs on an axis of its own piece (not on the first wood's trunk)."""
+    two = ad.BaseMesh.from_arrays(np.vstack([wood.positions, wood.positions + np.float32([1.8, 0.3, 0.0])]),
+                                  np.vstack([wood.faces, wood.faces + wood.vertex_count]).astype(np.uint32), name="two")
+    tree = two.with_axes("skeleton").tree
+    assert tree.count == 10, tree.describe()
+    second = np.arange(two.vertex_count) >= wood.vertex_count
+    piece_of = [bool(second[tree.vertex_axis == k].all()) for k in range(tree.count)]
+    assert piece_of.count(True) == 5
+    crossing = [k for k in range(1, tree.count) if piece_of[k] != piece_of[tree.parents[k]]]
+    assert len(crossing) == 1  # only the second wood's first axis hangs on the first wood
