@@ -39,6 +39,60 @@ def radius(axis, positions: np.ndarray) -> float:
     return float(np.median(np.linalg.norm(local[:, 1:] - line[1:], axis=1)))
 
 
+def axis_distance(mesh, ids: np.ndarray) -> np.ndarray:
+    """(len(ids),): each vertex's distance from its own axis's line -- the LOCAL radius of the part there."""
+    tree = mesh.tree
+    out = np.empty(len(ids))
+    for k in np.unique(tree.vertex_axis[ids]):
+        mine = tree.vertex_axis[ids] == k
+        m = np.asarray(tree.axes[k].matrix, dtype=np.float64)
+        local = mesh.positions[ids[mine]].astype(np.float64) @ m.T
+        line = np.asarray(tree.axes[k].center, dtype=np.float64) @ m.T
+        out[mine] = np.linalg.norm(local[:, 1:] - line[1:], axis=1)
+    return out
+
+
+#: two pieces touch where a vertex of one lies within this fraction of the other's local radius of it
+TOUCH = 0.25
+
+
+def contact_gaps(mesh, bend: float, count: int, seed: int, wind=None, time: float = 0.7) -> dict:
+    """Where two pieces of the mesh touch (welded by position; a vertex of one within :data:`TOUCH` of the
+    other's local radius of a vertex of the other), how far apart the bent pair moves, in units of that
+    local radius: ``{"pairs", "median", "p95", "max"}`` over ``count`` instances bent by ``bend`` on every
+    level (and pushed by ``wind`` at ``time``)."""
+    from scipy.spatial import cKDTree
+
+    from axialdeform.core.skeleton import pieces, weld
+    from axialdeform.core.wind import apply_wind
+
+    points, faces, inverse = weld(mesh.positions, mesh.faces)
+    piece = pieces(len(points), faces)[inverse]
+    out = {"pairs": 0, "median": 0.0, "p95": 0.0, "max": 0.0}
+    near = cKDTree(mesh.positions.astype(np.float64))
+    pairs = []
+    for a in range(mesh.vertex_count):  # a tool, not a hot path: the pairs of a few thousand vertices
+        for b in near.query_ball_point(mesh.positions[a], r=float(0.05 * mesh.axis.length)):
+            if piece[b] != piece[a]:
+                pairs.append((a, b))
+    if not pairs:
+        return out
+    pairs = np.array(pairs)
+    rest = np.linalg.norm(mesh.positions[pairs[:, 0]] - mesh.positions[pairs[:, 1]], axis=1)
+    local = axis_distance(mesh, pairs[:, 1])
+    touch = (rest <= TOUCH * local) & (local > 0)
+    pairs, rest, local = pairs[touch], rest[touch], local[touch]
+    if not len(pairs):
+        return out
+    params = ad.random_params(mesh, count, seed=seed, variation=ad.Variation(bend=(bend,) * mesh.tree.depth.max(initial=0) + (bend,)))
+    if wind is not None:
+        params = apply_wind(wind, mesh.tree, params, time)
+    bent, _ = ad.deform(mesh, params)
+    gap = np.abs(np.linalg.norm(bent[:, pairs[:, 0]] - bent[:, pairs[:, 1]], axis=2) - rest) / local
+    return {"pairs": int(len(pairs)), "median": float(np.median(gap)), "p95": float(np.percentile(gap, 95)),
+            "max": float(gap.max())}
+
+
 def joint_figures(mesh, bend: float, count: int, seed: int) -> list[dict]:
     tree = mesh.tree
     rng = np.random.default_rng(seed)
@@ -78,6 +132,10 @@ def main(argv=None) -> int:
     kwargs = {"parts": args.parts.split(",")} if args.parts else {}
     mesh = ad.load_mesh(args.mesh, axes=args.axes, axis=args.axis, **kwargs)
     print(f"{args.mesh}: {mesh.tree.describe()}")
+    for label, wind in (("still", None), ("in the wind", ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.5))):
+        c = contact_gaps(mesh, args.bend, args.n, args.seed, wind)
+        print(f"where pieces touch ({label}): {c['pairs']} vertex pairs, gap median {c['median']:.3f}, 95th percentile "
+              f"{c['p95']:.3f}, largest {c['max']:.3f} (x the local radius)")
     rows = joint_figures(mesh, args.bend, args.n, args.seed)
     print("| child axis | anchor t | parent radius | joint vertices | before: median / max (x r) | "
           "now: median / max (x r) |\n|---|---|---|---|---|---|")

@@ -476,7 +476,10 @@ def tree_from_parts(mesh, frame="auto", up: int = 1) -> AxisTree:
     width = {n: float(np.ptp(points[n][:, across], axis=0).max()) for n in names}
     ground = [n for n in names if height[n] < GROUND_FLATNESS * width[n]]
     candidates = [n for n in names if n not in ground] or names
-    root = min(candidates, key=lambda n: (float(points[n][:, up].min()), names.index(n)))
+    # ties go by where a part is (its lowest point, its centre), never by its place in the file
+    place = {n: (float(points[n][:, up].min()), *np.round(points[n].mean(axis=0), 9).tolist(), len(points[n]))
+             for n in names}
+    root = min(candidates, key=lambda n: place[n])
     def to_segment(pts, q) -> np.ndarray:  # each point's distance from q's axis segment
         a0, a1 = ends[q]
         ab = a1 - a0
@@ -507,7 +510,7 @@ def tree_from_parts(mesh, frame="auto", up: int = 1) -> AxisTree:
             dist = {q: g[0] for q, g in gaps_to.items()}
             near = min(dist.values())
             q = min((q for q in order if dist[q] <= near + TIE * length), key=lambda q: (depth[q], gaps_to[q][1]))
-            key = (dist[q] / length, names.index(n))
+            key = (dist[q] / length, place[n])
             if best is None or key < best[0]:
                 best = (key, n, q, dist[q])
         _, n, q, d = best

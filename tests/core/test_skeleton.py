@@ -148,3 +148,23 @@ def test_a_second_limb_piece_keeps_its_own_branches_on_its_own_axes(wood):
     assert piece_of.count(True) == 5
     crossing = [k for k in range(1, tree.count) if piece_of[k] != piece_of[tree.parents[k]]]
     assert len(crossing) == 1  # only the second wood's first axis hangs on the first wood
+
+
+def test_the_parts_heuristic_does_not_depend_on_the_order_of_the_parts(tmp_path):
+    """The bundled tree's ten parts written in the reverse order: the same trunk, the same parent for every part."""
+    import trimesh
+
+    from axialdeform.core.io.mesh import bundled_mesh_path
+
+    scene = trimesh.load(bundled_mesh_path("tree"), force="scene")
+    names = list(scene.geometry)
+    again = trimesh.Scene()
+    for name in reversed(names):
+        again.add_geometry(scene.geometry[name], geom_name=name, node_name=name)
+    again.export(str(tmp_path / "reversed.glb"))
+    a = ad.load_mesh("tree", axes="parts").tree
+    b = ad.load_mesh(tmp_path / "reversed.glb", axes="parts").tree
+    assert ad.load_mesh(tmp_path / "reversed.glb").part_names == tuple(reversed(ad.load_mesh("tree").part_names))
+    assert b.names[0] == a.names[0] == "trunk"
+    assert {n: a.names[p] for n, p in zip(a.names[1:], a.parents[1:])} == {n: b.names[p] for n, p in zip(b.names[1:], b.parents[1:])}
+    assert a.names == b.names  # the axes in the same order: nearest first, by where the parts are
