@@ -168,3 +168,17 @@ def test_the_parts_heuristic_does_not_depend_on_the_order_of_the_parts(tmp_path)
     assert b.names[0] == a.names[0] == "trunk"
     assert {n: a.names[p] for n, p in zip(a.names[1:], a.parents[1:])} == {n: b.names[p] for n, p in zip(b.names[1:], b.parents[1:])}
     assert a.names == b.names  # the axes in the same order: nearest first, by where the parts are
+
+
+def test_an_export_carries_the_axes_found_from_the_shape(wood, tmp_path):
+    """The instanced GLB (AXIALDEFORM_bend) carries the skeleton's axes: read back, the same tree bends the
+    same way, without computing a skeleton again."""
+    from axialdeform.core.io.gltf import export_glb, read_instanced_glb
+
+    mesh = wood.with_axes("skeleton")
+    p = ad.random_params(mesh, 6, seed=4, variation=ad.Variation(bend=(0.05, 0.3)), placement="disc", spacing=3.0)
+    path = export_glb(tmp_path / "woods.glb", mesh, p, "instanced")
+    back, params = read_instanced_glb(path)
+    assert back.tree.count == 5 and np.array_equal(back.tree.vertex_axis, mesh.tree.vertex_axis)
+    assert np.allclose(back.tree.anchors, mesh.tree.anchors)
+    assert np.abs(ad.deform(back, params)[0] - ad.deform(mesh, p)[0]).max() < 1e-5 * mesh.axis.length
