@@ -39,8 +39,11 @@ Pure numpy and scipy here; ``skeletor``, ``trimesh`` and ``fast_simplification``
 
 from __future__ import annotations
 
+import hashlib
 import warnings
 from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
 
 import fast_simplification
 import numpy as np
@@ -66,7 +69,8 @@ ELONGATION = 2.0
 EDGE_STEPS = 40
 #: a piece with more triangles (after the split) is simplified to this many before its skeleton is computed
 SKELETON_TRIANGLES = 50000
-#: bumped whenever a rule here changes what a mesh gets (a cached tree of another version is not used)
+#: bumped whenever a rule here changes what a mesh gets (a cached tree of another version is not used); the
+#: cache key also holds a hash of this file and of skeletor's version, so no edit here reads a stale tree
 SKELETON_VERSION = 1
 #: near where it leaves its parent (within :data:`CROTCH` times the parent's radius), a branch holds only the
 #: points within this many times its own radius of its chain (the surface in a fork's crotch stays the trunk's)
@@ -486,6 +490,17 @@ def _bind(points, label, chains, keep, limbs) -> np.ndarray:
     return out
 
 
+def _rules_hash() -> str:
+    try:
+        skeletor_version = version("skeletor")
+    except PackageNotFoundError:  # pragma: no cover - a dependency
+        skeletor_version = "?"
+    return hashlib.sha256(Path(__file__).read_bytes() + skeletor_version.encode()).hexdigest()[:8]
+
+
+_RULES = _rules_hash()
+
+
 def shape_tree(mesh, rule: str = "skeleton", frame="auto", up: int = 1) -> AxisTree:
     """``axes="skeleton"`` or ``axes="auto"`` (``BaseMesh.with_axes``): :func:`skeleton_tree` with its
     defaults, cached by the mesh's fingerprint (``core.io.axes_cache``); for ``"auto"``, ``axes="parts"``
@@ -493,7 +508,7 @@ def shape_tree(mesh, rule: str = "skeleton", frame="auto", up: int = 1) -> AxisT
     branches (the skeleton puts all of each part on one axis)."""
     from .io.axes_cache import cached_tree  # core.io reads meshes: imported once core.mesh is
 
-    key = f"skeleton{SKELETON_VERSION}-{MIN_BRANCH:g}-{up}"
+    key = f"skeleton{SKELETON_VERSION}-{_RULES}-{MIN_BRANCH:g}-{up}"
     tree = cached_tree(mesh, key, lambda: skeleton_tree(mesh, up=up))
     if rule == "auto":
         parts = [np.unique(mesh.faces[p.start:p.start + p.count]) for p in mesh.parts if p.count]
