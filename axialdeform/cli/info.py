@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from ..core.errors import BRIEF_NAMES, AxialDeformError
-from ..core.io.mesh import BUNDLED_MESHES, MESH_SUFFIXES
+from ..core.io.mesh import BUNDLED_MESHES, MESH_SUFFIXES, write_axes_file
 from ..core.io.params import (
     ParamFile,
     decode_binary,
@@ -14,9 +14,11 @@ from ..core.io.params import (
     read_binary_header,
     read_param_bytes,
 )
+from ..core.io.safeio import check_output_path
 from ..core.record import describe_record
 from ..core.scene import Scene, is_scene_file
-from ._common import add_axis, load_base
+from ..core.skeleton import skeleton_branches
+from ._common import add_axis, add_overwrite, load_base
 
 
 def add_parser(sub) -> None:
@@ -27,10 +29,18 @@ def add_parser(sub) -> None:
     i.add_argument("params", metavar="FILE", help="parameter file (.adp binary, .txt/.csv/.dat text), a mesh file "
                    f"({', '.join(MESH_SUFFIXES)}) or bundled name, or a scene file (.toml)")
     add_axis(i)
+    i.add_argument("--save-axes", metavar="FILE.toml", help="with --axes skeleton: write the branches found as an axes "
+                   "file of [[branch]] tables, to edit by hand and give again as --axes FILE.toml")
+    add_overwrite(i)
     i.set_defaults(handler=run)
 
 
 def _mesh_info(args) -> None:
+    if args.save_axes:  # said before any work
+        if args.axes != "skeleton":
+            raise AxialDeformError(f"--save-axes: writes the branches of a skeleton; give --axes skeleton, found --axes "
+                                   f"{args.axes}")
+        check_output_path(args.save_axes, [args.params], "--save-axes", overwrite=args.overwrite)
     mesh = load_base(args, args.params, textures=False)
     print(f"mesh:      {mesh.name} ({mesh.vertex_count} vertices, {len(mesh.faces)} triangles)")
     shown = ", ".join(f"{str(p.name)[:40]!r} ({p.count} triangles)" for p in mesh.parts[:BRIEF_NAMES])
@@ -41,6 +51,10 @@ def _mesh_info(args) -> None:
     if tree is not None:
         print(f"axes:      {tree.describe()}")
     print(f"mesh:      sha256 {mesh.fingerprint.hex()}")
+    if args.save_axes:
+        branches = skeleton_branches(mesh.with_axes(None))
+        write_axes_file(args.save_axes, branches, mesh.name)
+        print(f"wrote {args.save_axes} ({len(branches)} branches)")
 
 
 def _scene_info(args) -> None:

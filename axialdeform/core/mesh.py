@@ -220,6 +220,8 @@ class BaseMesh:
           part branches: the skeleton puts each part on one axis), else ``"skeleton"``;
         * a list of ``{"part": NAME, "parent": NAME, "axis": FRAME}`` (the root
           first, without a parent; a parent before its children);
+        * ``{"branches": [{"name", "parent", "points"}, ...]}`` -- the branches of a skeleton (an axes
+          file of ``[[branch]]`` tables, :func:`~axialdeform.core.skeleton.tree_from_branches`);
         * ``{"vertex_axis": (v,) int, "parents": [-1, ...], "frames": [...]}``
           -- per-vertex axis indices and a parent list;
         * None or 1 -- one axis again.
@@ -227,7 +229,7 @@ class BaseMesh:
         ``axis``: the frame rule of every axis without its own (``"auto"``, ...).
         """
         from .axes import AXES_RULES, AxisTree, tree_from_parts, tree_from_spec, tree_from_vertices
-        from .skeleton import shape_tree
+        from .skeleton import shape_tree, tree_from_branches
 
         if axes is None or (isinstance(axes, int) and axes == 1):
             return self.with_axis(axis)
@@ -238,6 +240,8 @@ class BaseMesh:
                 raise MeshError(f"{self.name}: axes: expected one of {', '.join(map(repr, AXES_RULES))}, a list of "
                                 f"{{part, parent, axis}} entries or per-vertex axes, found {axes!r:.80}")
             tree = tree_from_parts(self, axis) if axes == "parts" else shape_tree(self, axes, axis)
+        elif isinstance(axes, dict) and set(axes) == {"branches"}:  # an axes file of [[branch]] tables
+            tree = tree_from_branches(self, axes["branches"])
         elif isinstance(axes, dict):
             if set(axes) - {"vertex_axis", "parents", "frames", "names"} or not {"vertex_axis", "parents"} <= set(axes):
                 raise MeshError(f"{self.name}: axes: expected keys vertex_axis and parents (and optional frames, "

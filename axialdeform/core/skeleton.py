@@ -50,12 +50,14 @@ import numpy as np
 import trimesh
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
+from scipy.spatial import cKDTree
 
 from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree, tree_from_parts
 from .axis import ControlAxis
 from .errors import MeshError
 
-__all__ = ["skeleton_tree", "shape_tree", "MIN_BRANCH", "LIMB_RATIO", "SKELETON_TRIANGLES", "SKELETON_VERSION"]
+__all__ = ["skeleton_tree", "skeleton_branches", "tree_from_branches", "shape_tree", "MIN_BRANCH", "LIMB_RATIO",
+           "SKELETON_TRIANGLES", "SKELETON_VERSION"]
 
 #: the default shortest branch, a fraction of the trunk's chain (the root piece's first chain)
 MIN_BRANCH = 0.1
@@ -240,8 +242,10 @@ def _frame(points: np.ndarray, up: int) -> np.ndarray:
     return u @ vt
 
 
-def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes: int = MAX_AXES) -> AxisTree:
-    """The axes of ``mesh`` from its own shape (the module's rules 1-6).
+def skeleton_branches(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes: int = MAX_AXES) -> list[dict]:
+    """The branches of ``mesh``'s skeleton (the module's rules 1-5): ``[{"name", "parent", "points"}]``, the
+    trunk first (no parent), a parent before its children, ``points`` (m, 3) float64 from where a branch
+    leaves its parent to its tip -- what an axes file of branches holds (:func:`tree_from_branches`).
 
     Parameters
     ----------
@@ -255,8 +259,8 @@ def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes
 
     Returns
     -------
-    AxisTree
-        Names ``trunk``, ``branch1``, ...; ``describe()`` says the hierarchy.
+    list of dict
+        Names ``trunk``, ``branch1``, ...
     """
     if not (isinstance(min_branch, (int, float)) and not isinstance(min_branch, bool) and 0 < min_branch < 1):
         raise MeshError(f"{mesh.name}: axes='skeleton': min_branch: expected a fraction of the trunk in (0, 1), "
@@ -339,17 +343,74 @@ def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes
         if not empty:
             break
         keep = [c for c in keep if c not in empty]
-    parents = tuple([-1] + [keep.index(_kept_parent(chains, c, keep)) for c in keep[1:]])
-    names = tuple(["trunk"] + [f"branch{i}" for i in range(1, len(keep))])
+    names = ["trunk"] + [f"branch{i}" for i in range(1, len(keep))]
+    return [{"name": names[i], "parent": None if i == 0 else names[keep.index(_kept_parent(chains, c, keep))],
+             "points": chains[c].points.copy()} for i, c in enumerate(keep)]
+
+
+def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes: int = MAX_AXES) -> AxisTree:
+    """The axes of ``mesh`` from its own shape: :func:`tree_from_branches` of :func:`skeleton_branches`
+    (the parameters are its).  Names ``trunk``, ``branch1``, ...; ``describe()`` says the hierarchy."""
+    return tree_from_branches(mesh, skeleton_branches(mesh, min_branch=min_branch, up=up, max_axes=max_axes), up=up)
+
+
+def tree_from_branches(mesh, branches, up: int = 1) -> AxisTree:
+    """The axes of ``mesh`` from its branches (rule 6 on rule 5's binding): ``branches`` as
+    :func:`skeleton_branches` gives them or an axes file of ``[[branch]]`` tables holds them (edited by
+    hand: a branch moved or left out).  Each branch belongs to the piece its points lie nearest; a piece
+    holding none is carried whole by the branch it sits on."""
+    points, faces, inverse = weld(mesh.positions, mesh.faces)
+    label = pieces(len(points), faces)
+    chains = _check_branches(mesh, branches, points, label)
+    keep = list(range(len(chains)))
+    limbs = sorted({c.piece for c in chains})
+    limb_point = np.isin(label, limbs)
+    welded_axis = _bind(points, label, chains, keep, limbs)
+    names = tuple(str(b["name"]) for b in branches)
+    parents = tuple(c.parent for c in chains)
     axes, anchors = [], [0.0]
-    for i, c in enumerate(keep):  # each axis's box from its limb's points only: a carried crown rides on it
+    for i, c in enumerate(chains):  # each axis's box from its limb's points only: a carried crown rides on it
         own = points[limb_point & (welded_axis == i)]
-        axis = ControlAxis.from_positions(own, name=f"{mesh.name}: axis {names[i]}", frame=_frame(chains[c].points, up))
+        if not len(own):
+            raise MeshError(f"{mesh.name}: axes: branch {names[i]!r} holds no vertex; expected every branch to run "
+                            "inside the mesh, nearest some of its vertices")
+        axis = ControlAxis.from_positions(own, name=f"{mesh.name}: axis {names[i]}", frame=_frame(c.points, up))
         axes.append(axis)
         if i:
-            at = float(np.asarray(axis.matrix)[0] @ chains[c].points[0])
+            at = float(np.asarray(axis.matrix)[0] @ c.points[0])
             anchors.append(float(np.clip((at - axis.lo) / axis.length, 0.0, 1.0)))
     return AxisTree(tuple(axes), parents, welded_axis[inverse].astype(np.int32), names, tuple(anchors))
+
+
+def _check_branches(mesh, branches, points, label) -> list[Chain]:
+    """``branches`` as chains, each in the piece its points lie nearest; a branch list that is not one is a
+    :class:`MeshError` naming the branch and what was expected."""
+    if isinstance(branches, (str, bytes)) or not hasattr(branches, "__len__") or not 1 <= len(branches) <= MAX_AXES:
+        raise MeshError(f"{mesh.name}: axes: expected 1 to {MAX_AXES} branches, found {branches!r:.80}")
+    nearest = cKDTree(points)
+    chains, index = [], {}
+    for i, b in enumerate(branches):
+        where = f"{mesh.name}: axes: branch {i + 1}"
+        if not isinstance(b, dict) or not {"name", "points"} <= set(b) or set(b) - {"name", "parent", "points"}:
+            raise MeshError(f"{where}: expected name, points and (except the first) parent, found {b!r:.80}")
+        name, parent = b["name"], b.get("parent")
+        if not isinstance(name, str) or not name or name in index:
+            raise MeshError(f"{where}: name: expected a name no other branch has, found {name!r:.40}")
+        if (parent is None) != (i == 0) or (parent is not None and parent not in index):
+            raise MeshError(f"{where} ({name}): parent: expected " + ("none for the trunk (the first branch)" if i == 0
+                            else f"the name of an earlier branch, found {parent!r:.40}"))
+        try:
+            pts = np.asarray(b["points"], dtype=np.float64)
+        except (TypeError, ValueError):
+            pts = np.zeros((0, 0))
+        if pts.ndim != 2 or pts.shape[1:] != (3,) or len(pts) < 2 or not np.isfinite(pts).all():
+            raise MeshError(f"{where} ({name}): points: expected two or more points of three finite numbers, "
+                            f"found {b['points']!r:.80}")
+        piece = int(np.bincount(label[nearest.query(pts)[1]]).argmax())  # where most of its points lie nearest
+        up_chain = -1 if parent is None else index[parent]
+        index[name] = len(chains)
+        chains.append(Chain(pts, up_chain, piece, 0 if up_chain < 0 else chains[up_chain].depth + 1))
+    return chains
 
 
 def _radius(chain: Chain, surface: np.ndarray) -> float:

@@ -289,3 +289,13 @@ def test_info_prints_the_axes_found_from_the_shape(tmp_path, monkeypatch):
     bad = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), "--axes", "bones"],
                          capture_output=True, text=True, env=env)
     assert bad.returncode == 2 and "Traceback" not in bad.stderr and "bones" in bad.stderr
+    saved = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), "--axes", "skeleton", "--save-axes",
+                            str(tmp_path / "wood.toml")], capture_output=True, text=True, env=env)
+    assert saved.returncode == 0 and "wrote" in saved.stdout and "[[branch]]" in (tmp_path / "wood.toml").read_text()
+    again = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), "--axes", str(tmp_path / "wood.toml")],
+                           capture_output=True, text=True, env=env)
+    assert again.returncode == 0 and "5 axes (trunk, branch1 <- trunk" in again.stdout
+    for args in (["--axes", "parts"], ["--axes", "skeleton"]):  # a skeleton's branches only; never over a file
+        refused = subprocess.run([sys.executable, "-m", "axialdeform", "info", str(path), *args, "--save-axes",
+                                  str(tmp_path / "wood.toml")], capture_output=True, text=True, env=env)
+        assert refused.returncode == 2 and "--save-axes" in refused.stderr and "Traceback" not in refused.stderr

@@ -182,3 +182,29 @@ def test_an_export_carries_the_axes_found_from_the_shape(wood, tmp_path):
     assert back.tree.count == 5 and np.array_equal(back.tree.vertex_axis, mesh.tree.vertex_axis)
     assert np.allclose(back.tree.anchors, mesh.tree.anchors)
     assert np.abs(ad.deform(back, params)[0] - ad.deform(mesh, p)[0]).max() < 1e-5 * mesh.axis.length
+
+
+def test_the_branches_can_be_saved_edited_and_loaded_again(wood, tmp_path):
+    """An axes file of [[branch]] tables: written from the skeleton, read back it gives the same tree (the same
+    digest, so parameter files fit); a branch left out gives its vertices to the branches near it; a file that
+    is not one is refused naming the file and the branch."""
+    from axialdeform.core.io.mesh import with_axes, write_axes_file
+
+    branches = skeleton.skeleton_branches(wood)
+    path = write_axes_file(tmp_path / "wood.toml", branches, wood.name)
+    found = wood.with_axes("skeleton").tree
+    again = with_axes(wood, path).tree
+    assert again.digest == found.digest and again.describe() == found.describe()
+    text = path.read_text()
+    cut = text.index('[[branch]]\nname = "branch4"')
+    path.write_text(text[:cut])
+    fewer = with_axes(wood, path).tree
+    assert fewer.count == 4 and fewer.names == found.names[:4]
+    tip = branch_tips()[[int(found.vertex_axis[np.argmin(np.linalg.norm(wood.positions - t, axis=1))]) for t in branch_tips()].index(4)]
+    assert fewer.vertex_axis[np.argmin(np.linalg.norm(wood.positions - tip, axis=1))] == 0  # to the trunk it grows from
+    path.write_text(text.replace('parent = "trunk"', 'parent = "stem"', 1))
+    with pytest.raises(MeshError, match=r"wood.toml: .*branch 2 \(branch1\): parent: expected the name of an earlier branch"):
+        with_axes(wood, path)
+    path.write_text('[[branch]]\nname = "trunk"\npoints = [[0, 0]]\n')
+    with pytest.raises(MeshError, match=r"wood.toml: .*branch 1 \(trunk\): points: expected two or more points"):
+        with_axes(wood, path)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import json
 import os
 import re
 import warnings
@@ -19,6 +20,7 @@ from ..errors import AxialDeformError, MeshError
 from ..material import AssetWarning, compute_tangents, gather_parts, texture_decoding
 from ..mesh import BaseMesh, area_weighted_normals, check_float32_range
 from . import safeio
+from .atomic import atomic_write_text
 from .gltf import gltf_attributes
 from .resolver import (
     SafeResolver,
@@ -30,7 +32,8 @@ from .resolver import (
 )
 from .safeio import read_regular
 
-__all__ = ['BUNDLED_MESHES', 'MESH_SUFFIXES', 'bundled_mesh_path', 'load_mesh', 'mesh_source_path', 'with_axes']
+__all__ = ['BUNDLED_MESHES', 'MESH_SUFFIXES', 'bundled_mesh_path', 'load_mesh', 'mesh_source_path', 'with_axes',
+           'write_axes_file']
 
 
 #: Names of the meshes shipped in the wheel (``axialdeform/meshes/NAME.obj``,
@@ -64,7 +67,8 @@ def read_axes_file(path) -> list:
     """A hierarchy of axes from a small TOML file: ``[[axis]]`` tables with
     ``part``, ``parent`` (none for the root, the first) and ``axis`` (a frame:
     ``"auto"``, ``"x"``, ``"y"``, ``"z"``, ``"oriented"`` or three rows of three
-    numbers).  Returns the list :meth:`BaseMesh.with_axes` takes; a file that is
+    numbers); or ``[[branch]]`` tables (``name``, ``parent``, ``points``: a skeleton's branches,
+    :func:`write_axes_file`).  Returns what :meth:`BaseMesh.with_axes` takes; a file that is
     not one is a :class:`MeshError` naming the file and the entry."""
     import tomllib
 
@@ -74,9 +78,12 @@ def read_axes_file(path) -> list:
         doc = tomllib.loads(data.decode("utf-8"))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise MeshError(f"{path}: not a TOML axes file: {exc}") from None
+    if set(doc) == {"branch"} and isinstance(doc["branch"], list):  # the branches of a skeleton (write_axes_file)
+        return {"branches": doc["branch"]}
     entries = doc.get("axis")
     if set(doc) != {"axis"} or not isinstance(entries, list) or not entries:
-        raise MeshError(f"{path}: expected [[axis]] tables (part, parent, axis) and nothing else, found keys "
+        raise MeshError(f"{path}: expected [[axis]] tables (part, parent, axis) or [[branch]] tables (name, parent, "
+                        "points) and nothing else, found keys "
                         f"{', '.join(doc) or 'none'}")
     out = []
     for i, entry in enumerate(entries, 1):
@@ -92,6 +99,25 @@ def read_axes_file(path) -> list:
                                 f"(three rows), found {entry['axis']!r:.80}") from None
         out.append(entry)
     return out
+
+
+def write_axes_file(path, branches, mesh_name: str = "") -> Path:
+    """The branches of a skeleton (:func:`~axialdeform.core.skeleton.skeleton_branches`) as an axes file
+    of ``[[branch]]`` tables, to edit by hand and load again (``axes="FILE.toml"``); written atomically."""
+    lines = [f"# the axes of {mesh_name or 'a mesh'} from its own shape (axialdeform info MESH --axes skeleton "
+             "--save-axes):", "# one [[branch]] a branch, its points from where it leaves its parent to its tip. "
+             "Move a point,", "# leave a branch out (its vertices go to the branches near them), then load it: "
+             "--axes THIS.toml", ""]
+    for b in branches:
+        lines.append("[[branch]]")
+        lines.append(f'name = {json.dumps(str(b["name"]))}')  # a TOML basic string is a JSON string
+        if b.get("parent") is not None:
+            lines.append(f'parent = {json.dumps(str(b["parent"]))}')
+        pts = ", ".join("[" + ", ".join(repr(float(x)) for x in p) + "]" for p in np.asarray(b["points"], dtype=np.float64))
+        lines += [f"points = [{pts}]", ""]
+    path = Path(path)
+    atomic_write_text(path, "\n".join(lines))
+    return path
 
 
 def axes_argument(value):
