@@ -22,11 +22,13 @@ def wood():
     return one_piece_tree()
 
 
-def _seams(mesh, bend=0.3, n=40, seed=2):
+def _seams(mesh, bend=0.3, n=40, seed=2, wind=None):
     """Max stretch of an edge whose ends belong to two axes, max of one inside an axis, and the largest
     distance between bent vertices that share a rest position (in units of the trunk's L)."""
     tree = mesh.tree
     params = ad.random_params(mesh, n, seed=seed, variation=ad.Variation(bend=(bend,) * 3))
+    if wind is not None:
+        params = ad.core.wind.apply_wind(wind, tree, params, 1.1)
     pos, _ = ad.deform(mesh, params)
     e = mesh.edges.astype(np.int64)
     rest = np.linalg.norm(mesh.positions[e[:, 0]] - mesh.positions[e[:, 1]], axis=1)
@@ -117,6 +119,13 @@ def test_random_variation_wind_and_bounds_follow_the_skeleton(wood):
     assert params.shape == (8, 10 * 5 + 6)
     pos, normals = ad.deform(mesh, params)
     assert np.isfinite(pos).all() and np.allclose(np.linalg.norm(normals, axis=2), 1.0, atol=1e-5)
+    fitted = ad.fit_params(mesh, pos)  # the numbers come back from the bent meshes
+    assert np.abs(ad.deform(mesh, fitted.params)[0] - pos).max() < 1e-5 * mesh.axis.length
+    wind = ad.Wind(direction=(1.0, 0.0, 0.3), strength=0.3, gustiness=0.5)
+    swayed, _ = ad.deform(mesh, ad.core.wind.apply_wind(wind, mesh.tree, params, 1.1))
+    assert np.abs(swayed - pos).max() > 0.05 * mesh.axis.length  # the wind moves the branches
+    cross, inner, spread, _ = _seams(mesh, wind=wind)  # the seams hold in the wind (clamped at the anchors too)
+    assert cross <= 1.1 * inner and spread == 0.0
 
 
 def test_wrong_rules_and_settings_are_said_in_words(wood):
