@@ -30,7 +30,7 @@ def add_parser(sub) -> None:
                    f"({', '.join(MESH_SUFFIXES)}) or bundled name, or a scene file (.toml)")
     add_axis(i)
     i.add_argument("--save-axes", metavar="FILE.toml", help="with --axes skeleton: write the branches found as an axes "
-                   "file of [[branch]] tables, to edit by hand and give again as --axes FILE.toml")
+                   "file of [[branch]] tables, to edit by hand and give again as --axes FILE.toml (default: none written)")
     add_overwrite(i)
     i.set_defaults(handler=run)
 
