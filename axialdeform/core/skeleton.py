@@ -5,36 +5,46 @@ wood as ONE piece (trunk, limbs and branches welded together) and its crown as a
 module finds the branches from the shape itself (``docs/method.md``, "Axes from the shape"):
 
 1. **Pieces.** The mesh is welded by position (vertices split for UVs or flat normals become one)
-   and cut into connected pieces.  A piece is a *limb* when it is long against its thickness (its
-   skeleton's longest path at least :data:`LIMB_RATIO` times the median distance of its vertices
-   from the skeleton) and at least ``min_branch`` of the model's size; every other piece (a crown
-   blob, a leaf card, a bark mark, a pine's tier of needles) is *carried*.
+   and cut into connected pieces.  The trunk's piece is the one at least ``min_branch`` of the
+   model's size that starts lowest along ``up`` (what grows from the ground, as ``axes="parts"``
+   finds the trunk; never flat ground).  Another piece is a *limb* when it spreads at least
+   :data:`ELONGATION` times as far along its main direction as across (a frond, a separate
+   branch) and its skeleton's longest path is at least :data:`LIMB_RATIO` times the median
+   distance of its vertices from it; every other piece (a crown blob, a leaf card, a bark mark, a
+   pine's tier of needles, a willow's curtain) is *carried*.
 2. **Skeleton.** Each limb gets a curve skeleton: ``skeletor.skeletonize.by_wavefront`` (rings of
    a wave spreading over the surface from its ends, each ring's centre a node), the piece's edges
    split first to at most its size over :data:`EDGE_STEPS` (a low-poly trunk of two rings has no
    rings to find), then simplified to at most :data:`SKELETON_TRIANGLES` triangles.
-3. **Chains.** The root piece is the limb that starts lowest along ``up`` (what grows from the
-   ground, as ``axes="parts"`` finds the trunk); its skeleton's root is its lowest end.  From the
-   root every fork continues into the child whose subtree reaches furthest (the trunk runs on
-   into its longest limb) and starts a new chain for each other child.  Every other limb piece
-   hangs, at its end nearest the chains already made, on the chain it grows from: the nearest,
-   the one nearer the root among those about as near (:data:`~axialdeform.core.axes.TIE`).
-4. **Pruning.** A chain whose tip stands less than ``min_branch`` times the trunk away from its
-   parent's chain (less the parent's radius where it leaves it) is no branch -- a spur, or a twin
-   running beside its parent (a leaf's two faces) --: its vertices go to its parent.
-   At most ``max_axes`` chains stay, the longest (a child is never longer than its parent's rest).
+3. **Chains.** The trunk's skeleton starts at its lowest end.  Every fork continues into the child
+   whose subtree reaches furthest (the trunk runs on into its longest limb) and starts a new chain
+   for each other child.  Every other limb piece, nearest first, hangs at the end nearest what is
+   made on the shallowest chain its ends come about as near as the nearest (within
+   :data:`~axialdeform.core.axes.DOUBTFUL_GAP` of its length, measured to the chains' surfaces: a
+   frond on the trunk, not on the frond it crosses).  A chain's first points still inside its
+   parent are replaced by their foot on the parent's chain: it starts where it leaves its parent.
+4. **Pruning.** A chain whose tip stands less than ``min_branch`` times the trunk's chain away from
+   its parent's chain (less the parent's radius where it leaves it) is no branch -- a spur, or a
+   twin running beside its parent (a leaf's two faces) --: its vertices go to the chains near
+   them.  At most ``max_axes`` chains stay, the longest; a chain holding fewer than
+   :data:`MIN_VERTICES` vertices goes too.
 5. **Binding.** Each vertex of a limb goes to the nearest chain of its own piece (the distance to
-   the chain's polyline); a carried piece goes whole to the chain it sits on (the one its vertices
-   come nearest, the one nearer the root among those about as near).  Vertices at one position get
-   one axis, so split vertices move together.
+   the chain's polyline), except that a branch holds nothing behind where it leaves its parent
+   and, within :data:`CROTCH` parent radii of there, nothing further than :data:`BAND` of its own
+   radii (the crotch of a fork stays the trunk's); a carried piece goes whole to the chain it sits
+   on (the one its vertices come nearest, the one nearer the root among those about as near).
+   Vertices at one position get one axis, so split vertices move together.
 6. **Axes.** Each chain is one axis of the hierarchy (``core.axes``): its frame's ``e_a`` runs from
    where it leaves its parent to its tip, ``e_u`` the model's up made perpendicular to it; ``lo``
-   and ``L`` from its vertices as for every axis; its anchor the point where it leaves its parent.
-   Random variation and the wind clamp a child's bend there (value and slope zero), so the surface
-   through a joint stays whole: the boundary between two axes' vertices lies where the child's
-   own bend vanishes to second order.
+   and ``L`` from its limb's vertices only (a carried crown rides on it, clamped beyond its ends,
+   without lengthening it); its anchor the point where it leaves its parent.  Random variation
+   and the wind clamp a child's bend there (value and slope zero), so the surface through a joint
+   stays whole: the boundary between two axes' vertices lies where the child's own bend vanishes
+   to second order.
 
-Pure numpy and scipy here; ``skeletor``, ``trimesh`` and ``fast_simplification`` are imported where used.
+Rules 1-5 give the branches (:func:`skeleton_branches`, what an axes file of ``[[branch]]`` tables
+holds); rules 5-6 make the tree from them (:func:`tree_from_branches`).  Pure numpy, scipy and trimesh
+here; ``skeletor`` (it brings pandas and igraph) is imported only when a skeleton is asked for.
 """
 
 from __future__ import annotations
