@@ -88,6 +88,8 @@ SKELETON_VERSION = 1
 #: points within this many times its own radius of its chain (the surface in a fork's crotch stays the trunk's)
 BAND = 1.5
 CROTCH = 3.0
+#: a carried piece rides the branch with the most surface within this fraction of the piece's size of it
+TOUCHING = 0.05
 #: a chain binding fewer vertices than this goes to its parent
 MIN_VERTICES = 8
 
@@ -555,9 +557,15 @@ def _bind(points, label, chains, keep, limbs) -> np.ndarray:
                     near[behind | (crotch & (d[:, j] > BAND * _radius(ch, points[mine]))), j] = np.inf
             pick = np.where(np.isfinite(near).any(axis=1), np.argmin(near, axis=1), np.argmin(d, axis=1))
             out[mine] = np.asarray([index[c] for c in own])[pick]
-        else:
-            extent = max(float(np.ptp(points[mine], axis=0).max()), 1e-12)
-            out[mine] = index[_hang(points[mine], chains, keep, extent)]
+    limb = np.isin(label, limbs)
+    for p in np.unique(label):  # then each carried piece, whole, on the branch whose surface touches it most
+        mine = np.flatnonzero(label == p)
+        if p in limbs and any(chains[c].piece == p for c in keep):
+            continue
+        extent = max(float(np.ptp(points[mine], axis=0).max()), 1e-12)
+        near = cKDTree(points[mine]).query(points[limb], distance_upper_bound=TOUCHING * extent)[0]
+        touching = np.bincount(out[limb][np.isfinite(near)], minlength=len(keep))
+        out[mine] = int(np.argmax(touching)) if touching.any() else index[_hang(points[mine], chains, keep, extent)]
     return out
 
 

@@ -217,3 +217,22 @@ def test_the_branches_can_be_saved_edited_and_loaded_again(wood, tmp_path):
     path.write_text('[[branch]]\nname = "trunk"\npoints = [[0, 0]]\n')
     with pytest.raises(MeshError, match=r"wood.toml: .*branch 1 \(trunk\): points: expected two or more points"):
         with_axes(wood, path)
+
+
+def test_crowns_and_bark_marks_stay_on_what_they_sit_on():
+    """Separate pieces (a crown blob on each branch tip, bark plates on the trunk) ride the branch they
+    touch: where two pieces touch, the gap a bend of 0.3 a level opens is at most 0.1 of the local radius
+    at the median and 0.5 at the 95th percentile, still and in the wind (tools/joint_gap.py)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
+    import joint_gap
+
+    from helpers.one_piece import crowned_tree
+
+    mesh = crowned_tree().with_axes("skeleton")
+    assert mesh.tree.count == 5
+    for wind in (None, ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.5)):
+        gaps = joint_gap.contact_gaps(mesh, 0.3, 40, 1, wind)
+        assert gaps["pairs"] > 100 and gaps["median"] <= 0.1 and gaps["p95"] <= 0.5 and gaps["max"] <= 1.0, gaps

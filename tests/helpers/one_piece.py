@@ -49,3 +49,28 @@ def one_piece_tree(step: float = 0.05) -> ad.BaseMesh:
     m = wood.to_mesh()
     positions = np.asarray(m.vert_properties, dtype=np.float32)[:, :3]
     return ad.BaseMesh.from_arrays(positions, np.asarray(m.tri_verts, dtype=np.uint32), name="one-piece tree")
+
+
+def crowned_tree(step: float = 0.05) -> ad.BaseMesh:
+    """:func:`one_piece_tree` with a crown blob (a sphere of radius 0.3) on each branch, the branch's tip just
+    inside it, as an asset pack models crowns, and eight bark marks (small plates just off the trunk's surface)."""
+    import trimesh
+
+    wood = one_piece_tree(step)
+    pieces = []
+    a = np.array(TRUNK[0])
+    for (_turn, height, _length), tip in zip(BRANCHES, branch_tips()):
+        d = tip - np.array([a[0], height, a[2]])
+        blob = trimesh.creation.icosphere(subdivisions=3, radius=0.3)
+        blob.apply_translation(tip + 0.25 * d / np.linalg.norm(d))  # the branch ends just inside it
+        pieces.append(blob)
+    for k in range(8):
+        turn, height = 2 * np.pi * k / 8, 0.3 + 0.2 * k
+        plate = trimesh.creation.box(extents=[0.01, 0.08, 0.05])
+        plate.apply_translation([0.125, height, 0.0])
+        plate.apply_transform(trimesh.transformations.rotation_matrix(turn, [0, 1, 0]))
+        pieces.append(plate)
+    extra = trimesh.util.concatenate(pieces)
+    positions = np.vstack([wood.positions, np.asarray(extra.vertices, dtype=np.float32)])
+    faces = np.vstack([wood.faces, np.asarray(extra.faces) + wood.vertex_count]).astype(np.uint32)
+    return ad.BaseMesh.from_arrays(positions, faces, name="crowned tree")
