@@ -31,8 +31,9 @@ module finds the branches from the shape itself (``docs/method.md``, "Axes from 
 5. **Binding.** Each vertex of a limb goes to the nearest chain of its own piece (the distance to
    the chain's polyline), except that a branch holds nothing behind where it leaves its parent
    and, within :data:`CROTCH` parent radii of there, nothing further than :data:`BAND` of its own
-   radii (the crotch of a fork stays the trunk's); a carried piece goes whole to the chain it sits
-   on (the one its vertices come nearest, the one nearer the root among those about as near).
+   radii (the crotch of a fork stays the trunk's); a carried piece goes whole to the branch with
+   the most surface within :data:`TOUCHING` of the piece's size of it (else the one its vertices
+   come nearest, the one nearer the root among those about as near).
    Vertices at one position get one axis, so split vertices move together.
 6. **Axes.** Each chain is one axis of the hierarchy (``core.axes``): its frame's ``e_a`` runs from
    where it leaves its parent to its tip, ``e_u`` the model's up made perpendicular to it; ``lo``
