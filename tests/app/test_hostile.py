@@ -325,6 +325,29 @@ def test_every_edge_case_mesh_loads_or_raises_mesh_error():
     assert outcomes["gltf/BoxInterleaved.glb"] == "loaded"
 
 
+def test_every_edge_case_mesh_gets_axes_from_its_shape_or_a_mesh_error(tmp_path, monkeypatch):
+    """axes="skeleton" and "auto" on every mesh that loads (flat planes, single triangles, soups, open
+    shells, CAD parts, many bodies): a tree of 1 to 64 axes that bends, or a MeshError in words."""
+    monkeypatch.setenv("AXIALDEFORM_CACHE", str(tmp_path))
+    tried = 0
+    for path in _data_files():
+        try:
+            mesh = ad.load_mesh(path)
+        except ad.core.AxialDeformError:
+            continue
+        for rule in ("skeleton", "auto"):
+            try:
+                bent = mesh.with_axes(rule)
+            except ad.core.MeshError as exc:
+                assert str(exc) and "Traceback" not in str(exc)
+                continue
+            assert 1 <= bent.axis_count <= 64
+            tried += 1
+            pos, _ = ad.deform(bent, ad.random_params(bent, 2, seed=1, variation=ad.Variation(bend=(0.1, 0.3))))
+            assert np.isfinite(pos).all(), path
+    assert tried >= 60
+
+
 def _obj(tmp_path, name, verts, faces, extra=""):
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in verts]
     lines += ["f " + " ".join(str(i + 1) for i in f) for f in faces]
