@@ -236,3 +236,22 @@ def test_crowns_and_bark_marks_stay_on_what_they_sit_on():
     for wind in (None, ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.5)):
         gaps = joint_gap.contact_gaps(mesh, 0.3, 40, 1, wind)
         assert gaps["pairs"] > 100 and gaps["median"] <= 0.1 and gaps["p95"] <= 0.5 and gaps["max"] <= 1.0, gaps
+
+
+def test_a_scene_layer_takes_axes_from_the_shape(wood, tmp_path):
+    """``axes = "skeleton"`` in a scene file's layer: the scattered trees bend at every branch."""
+    path = tmp_path / "wood.obj"
+    with open(path, "w") as f:
+        f.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in wood.positions.astype(float).tolist())
+        f.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in wood.faces)
+    (tmp_path / "ground.obj").write_text("v -10 0 -10\nv 10 0 -10\nv 10 0 10\nv -10 0 10\nf 1 3 2\nf 1 4 3\n")
+    terrain = '[terrain]\nmesh = "ground.obj"\n'
+    (tmp_path / "s.toml").write_text(terrain + '[[layer]]\nname = "woods"\nmesh = "wood.obj"\naxes = "skeleton"\n'
+                                     '[layer.scatter]\ncount = 12\nseed = 3\nbend = [0.04, 0.3]\n', encoding="utf-8")
+    scene = ad.Scene.load(tmp_path / "s.toml")
+    layer = scene.layers[0]
+    assert layer.mesh.axis_count == 5 and layer.params.shape == (12, 10 * 5 + 6)
+    (tmp_path / "t.toml").write_text(terrain + '[[layer]]\nname = "woods"\nmesh = "wood.obj"\naxes = 3\n'
+                                     '[layer.scatter]\ncount = 12\n', encoding="utf-8")
+    with pytest.raises(ad.core.SceneError, match="expected 'skeleton', 'parts', 'auto'"):
+        ad.Scene.load(tmp_path / "t.toml")
