@@ -1105,3 +1105,23 @@ def test_the_page_draws_renders_shadows(browser, tmp_path, mode):
         assert v.errors == []
     finally:
         v.close()
+
+
+@pytest.mark.slow
+def test_page_of_one_piece_woods_shows_what_render_shows(browser, tmp_path, monkeypatch):
+    """axes="skeleton" on a one-piece wood (tests/helpers/one_piece.py): the page bends every branch the
+    skeleton found, as render does."""
+    from helpers.one_piece import one_piece_tree
+
+    monkeypatch.setenv("AXIALDEFORM_CACHE", str(tmp_path / "cache"))
+    mesh = one_piece_tree().with_axes("skeleton")
+    k = mesh.axis_count
+    params = ad.random_params(mesh, 30, seed=4, variation=ad.Variation(bend=(0.05, 0.5)), placement="disc", spacing=3.0)
+    out = tmp_path / "woods.html"
+    write_page(out, build_scene(mesh, params, page=PageOptions(size=SIZE, quantize=False), look=ad.Look(ground=False)))
+    look = ad.Look(ground=False, shadow=False)
+    render = ad.render_image(mesh, params, SIZE, look=look)
+    straight = params.copy()
+    straight[:, 10:10 * k] = 0  # the branches unbent: the page must bend them to match
+    assert iou(render, ad.render_image(mesh, straight, SIZE, look=look), BACKGROUND) < 0.9
+    assert_page_draws(browser, out.as_uri(), render, 30)
