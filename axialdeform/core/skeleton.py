@@ -312,26 +312,25 @@ def skeleton_branches(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_
     start = min(ends, key=lambda v: (nodes[v, up], v))
     chains += _chains_of(nodes, edges, start, root, -1, None, 0)
     rest = [p for p in limbs if p != root]
-    surface, owner = np.zeros((0, 3)), np.zeros(0, dtype=np.int64)  # the surface made so far, and each point's chain
+    # each waiting piece's ends against each chain's surface: a (ends, chains) table that grows by the columns of
+    # each piece hung (every surface point is compared with every end once, not once a round)
+    gaps = {p: (_ends(*skeletons[p]), np.zeros((len(_ends(*skeletons[p])), 0))) for p in rest}
 
     def add_surface(p, first):
-        nonlocal surface, owner
         mine = points[label == p]
         own = list(range(first, len(chains)))
-        surface = np.vstack([surface, mine])
-        owner = np.concatenate([owner, np.asarray(own)[np.argmin(_distance_to_chains(mine, chains, own), axis=1)]])
+        owner = np.asarray(own)[np.argmin(_distance_to_chains(mine, chains, own), axis=1)]
+        for q in rest:
+            ends, gap = gaps[q]
+            d = np.linalg.norm(skeletons[q][0][ends][:, None, :] - mine[None], axis=2)
+            cols = np.full((len(ends), len(own)), np.inf)
+            for j, c in enumerate(own):
+                if (owner == c).any():
+                    cols[:, j] = d[:, owner == c].min(axis=1)
+            gaps[q] = (ends, np.hstack([gap, cols]))
 
     add_surface(root, 0)
     while rest:  # nearest first: a piece hangs on what is already made
-        gaps = {}
-        for p in rest:  # each end's distance from the surface of each chain
-            nodes, edges = skeletons[p]
-            ends = _ends(nodes, edges)
-            d = np.linalg.norm(nodes[ends][:, None, :] - surface[None], axis=2)
-            gap = np.full((len(ends), len(chains)), np.inf)
-            for c in np.unique(owner):
-                gap[:, c] = d[:, owner == c].min(axis=1)
-            gaps[p] = (ends, gap)
         p = min(rest, key=lambda q: (float(gaps[q][1].min()), float(skeletons[q][0].sum())))
         nodes, edges = skeletons[p]
         ends, gap = gaps[p]
@@ -344,8 +343,8 @@ def skeleton_branches(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_
         first = len(chains)
         chains += _chains_of(nodes, edges, end, p, on, _foot(nodes[end], chains[on].points), chains[on].depth + 1,
                              len(chains))
-        add_surface(p, first)
         rest.remove(p)
+        add_surface(p, first)
     _leave(chains, points, label)
     keep = _prune(chains, points, label, min_branch, max_axes)
     limb_point = np.isin(label, limbs)
