@@ -22,7 +22,7 @@ from .axis import ControlAxis
 from .errors import MeshError, brief_names
 from .material import Part
 
-__all__ = ['BaseMesh', 'area_weighted_normals', "check_float32_range", "anchor_point"]
+__all__ = ['BaseMesh', 'area_weighted_normals', "check_float32_range", "anchor_point", "position_ids"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -318,7 +318,7 @@ class BaseMesh:
         Only then can back faces be culled without changing the picture;
         :class:`~axialdeform.gl.renderer.AxialRenderer` does that by default.
         """
-        ids = _position_ids(self.positions)
+        ids = position_ids(self.positions)
         f = ids[self.faces]
         if ((f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 2] == f[:, 0])).any():
             return False
@@ -423,7 +423,7 @@ def unique_edges(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     return out
 
 
-def _position_ids(positions: np.ndarray) -> np.ndarray:
+def position_ids(positions: np.ndarray) -> np.ndarray:
     """(n,) int64: one id per distinct position (equal rows share it), the
     same grouping as ``np.unique(positions, axis=0, return_inverse=True)``
     but by one lexsort, many times faster on millions of vertices."""

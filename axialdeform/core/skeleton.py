@@ -66,6 +66,7 @@ from scipy.spatial import cKDTree
 from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree, tree_from_parts
 from .axis import ControlAxis
 from .errors import MeshError
+from .mesh import position_ids
 
 __all__ = ["skeleton_tree", "skeleton_branches", "tree_from_branches", "shape_tree", "MIN_BRANCH", "LIMB_RATIO",
            "SKELETON_TRIANGLES", "SKELETON_VERSION"]
@@ -106,17 +107,19 @@ class Chain:
 
     @property
     def length(self) -> float:
-        return float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum())
+        return _path_length(self.points)
 
 
 def weld(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Vertices at one position made one: ``(points (w, 3) float64, faces (f, 3) int64 of them without
-    degenerate ones, inverse (v,) int64: each vertex's welded point)``."""
-    points, inverse = np.unique(np.asarray(positions, dtype=np.float32), axis=0, return_inverse=True)
-    inverse = inverse.reshape(-1)
+    """Vertices at one position made one (:func:`~axialdeform.core.mesh.position_ids`): ``(points (w, 3)
+    float64, faces (f, 3) int64 of them without degenerate ones, inverse (v,) int64: each vertex's welded
+    point)``."""
+    inverse = position_ids(positions)
+    points = np.empty((int(inverse.max(initial=-1)) + 1, 3), dtype=np.float64)
+    points[inverse] = positions
     welded = inverse[np.asarray(faces, dtype=np.int64)]
     ok = (welded[:, 0] != welded[:, 1]) & (welded[:, 1] != welded[:, 2]) & (welded[:, 0] != welded[:, 2])
-    return points.astype(np.float64), welded[ok], inverse
+    return points, welded[ok], inverse
 
 
 def pieces(count: int, faces: np.ndarray) -> np.ndarray:
@@ -227,14 +230,11 @@ def _distance_to_chains(points: np.ndarray, chains: list[Chain], which) -> np.nd
     return out
 
 
-def _hang(points: np.ndarray, chains: list[Chain], candidates, size: float, tolerance: float = TIE,
-          radii=None) -> int:
-    """The chain a piece sits on: the one its points come nearest (less the chain's radius, when given),
-    the shallower among those within ``tolerance × size`` of the nearest."""
+def _hang(points: np.ndarray, chains: list[Chain], candidates, size: float) -> int:
+    """The chain a piece sits on: the one its points come nearest, the shallower among those within
+    :data:`~axialdeform.core.axes.TIE` of ``size`` of the nearest."""
     d = _distance_to_chains(points, chains, candidates).min(axis=0)
-    if radii is not None:
-        d = np.maximum(d - np.asarray([radii[c] for c in candidates]), 0.0)
-    near = d.min() + tolerance * size
+    near = d.min() + TIE * size
     return min((c for c, dc in zip(candidates, d) if dc <= near), key=lambda c: (chains[c].depth, d[candidates.index(c)], c))
 
 
@@ -280,7 +280,7 @@ def skeleton_branches(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_
                         f"found {min_branch!r:.40}")
     if not (isinstance(max_axes, int) and 1 <= max_axes <= MAX_AXES):
         raise MeshError(f"{mesh.name}: axes='skeleton': max_axes: expected 1 to {MAX_AXES}, found {max_axes!r:.40}")
-    points, faces, inverse = weld(mesh.positions, mesh.faces)
+    points, faces, _ = weld(mesh.positions, mesh.faces)
     label = pieces(len(points), faces)
     face_piece = label[faces[:, 0]]
     size = float(np.ptp(points, axis=0).max()) or 1.0
