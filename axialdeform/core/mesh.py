@@ -17,12 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .arrays import as_array
+from .arrays import as_array, position_ids
 from .axis import ControlAxis
 from .errors import MeshError, brief_names
 from .material import Part
 
-__all__ = ['BaseMesh', 'area_weighted_normals', "check_float32_range", "anchor_point", "position_ids"]
+__all__ = ['BaseMesh', 'area_weighted_normals', "check_float32_range", "anchor_point"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -421,23 +421,6 @@ def unique_edges(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     out[:, 0] = key // n
     out[:, 1] = key % n
     return out
-
-
-def position_ids(positions: np.ndarray) -> np.ndarray:
-    """(n,) int64: one id per distinct position (equal rows share it), the
-    same grouping as ``np.unique(positions, axis=0, return_inverse=True)``
-    but by one lexsort, many times faster on millions of vertices."""
-    p = np.asarray(positions)
-    if len(p) == 0:
-        return np.zeros(0, dtype=np.int64)
-    order = np.lexsort((p[:, 2], p[:, 1], p[:, 0]))
-    q = p[order]
-    new = np.empty(len(p), dtype=bool)
-    new[0] = True
-    new[1:] = (q[1:] != q[:-1]).any(axis=1)
-    ids = np.empty(len(p), dtype=np.int64)
-    ids[order] = np.cumsum(new) - 1
-    return ids
 
 
 def check_float32_range(positions: np.ndarray, name: str) -> None:

@@ -63,10 +63,10 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
+from .arrays import position_ids
 from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree, tree_from_parts
 from .axis import ControlAxis
 from .errors import MeshError
-from .mesh import position_ids
 
 __all__ = ["skeleton_tree", "skeleton_branches", "tree_from_branches", "shape_tree", "MIN_BRANCH", "LIMB_RATIO",
            "SKELETON_TRIANGLES", "SKELETON_VERSION"]
@@ -111,7 +111,7 @@ class Chain:
 
 
 def weld(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Vertices at one position made one (:func:`~axialdeform.core.mesh.position_ids`): ``(points (w, 3)
+    """Vertices at one position made one (:func:`~axialdeform.core.arrays.position_ids`): ``(points (w, 3)
     float64, faces (f, 3) int64 of them without degenerate ones, inverse (v,) int64: each vertex's welded
     point)``."""
     inverse = position_ids(positions)
