@@ -23,8 +23,8 @@ from ..core.io.safeio import quiet_numpy
 __all__ = ["main", "build_parser", "COMMANDS", "PLUGINS"]
 
 #: the built-in sub-commands, in the order ``--help`` lists them (module ``axialdeform.cli.<name>``)
-COMMANDS: tuple[str, ...] = ("demo", "random", "scatter", "render", "bake", "info", "convert", "export", "fit", "view", "bench",
-                             "web")
+COMMANDS: tuple[str, ...] = ("demo", "random", "scatter", "render", "bake", "info", "convert", "export", "fit", "learn", "view",
+                             "bench", "web")
 
 #: further modules that add sub-commands (the plugin hook): each defines
 #: ``add_parser(subparsers)`` and ``run(args)`` like the built-in ones

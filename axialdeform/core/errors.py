@@ -9,6 +9,7 @@ __all__ = [
     "ArgumentError",
     "MeshError",
     "ParamError",
+    "ExampleError",
     "ParamFileError",
     "MeshMismatchError",
     "ShaderError",
@@ -104,6 +105,11 @@ class TooFewError(ScatterError):
     def __init__(self, message: str, params=None) -> None:
         super().__init__(message)
         self.params = params
+
+
+class ExampleError(AxialDeformError, ValueError):
+    """An example to learn scenery from that cannot be used (``axialdeform learn``); the message names the
+    file, the row or node, the column and what was expected."""
 
 
 class SceneError(AxialDeformError, ValueError):

@@ -70,7 +70,7 @@ import numpy as np
 
 from .camera import CameraSpec
 from .errors import ArgumentError, SceneError
-from .generate import GroundMaps, check_extent_slots, check_reach, generate_extent
+from .generate import GroundMaps, check_extent, check_extent_slots, check_reach, generate_extent
 from .io.mesh import load_mesh, with_axes
 from .io.params import read_params
 from .io.scene import LayerRecipe, SceneRecipe, parse_scene
@@ -323,6 +323,9 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
             raise src.error("altitude and slope bands need the scene's height-map terrain ([terrain] heightmap)",
                             "altitude" if gen.generate.altitude is not None else "slope", "layer", nth)
         with src.wrap("generate", "layer", nth):
+            if gen.extent is None:  # no extent on a height map: the layer covers the terrain
+                g = np.asarray(scene.terrain.positions, np.float64)
+                gen = replace(gen, extent=check_extent(gen.generate, (g[:, 0].min(), g[:, 2].min(), g[:, 0].max(), g[:, 2].max())))
             density = load_density(gen.density) if gen.density is not None else None
             gen = replace(gen, maps=GroundMaps.of(scene.terrain, density, gen.extent))
             check_reach(gen.generate, gen.reach, mesh.axis_count)  # a tree's slots hold every axis: bounded before any is made

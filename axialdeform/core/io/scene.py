@@ -440,14 +440,15 @@ def _read_layer(src, layer, nth, scene, default_name) -> LayerRecipe:
     if "params" in layer:
         recipe.params = _existing(src, layer["params"], "params", "layer", nth)
     elif "generate" in layer:
-        recipe.generate = _generate_layer(src, layer["generate"], nth)
+        recipe.generate = _generate_layer(src, layer["generate"], nth, scene)
     else:
         recipe.scatter = _scatter_layer(src, layer["scatter"], nth, scene)
     return recipe
 
 
-def _generate_layer(src, recipe, nth) -> GenerateRecipe:
-    """``[layer.generate]``, checked: every key's type here, the recipe's own rules by Generate."""
+def _generate_layer(src, recipe, nth, scene) -> GenerateRecipe:
+    """``[layer.generate]``, checked: every key's type here, the recipe's own rules by Generate.  Without an
+    ``extent`` on a height-map terrain the layer covers the terrain (its extent set when the scene is built)."""
     from ..generate import Generate, check_extent, check_extent_slots, check_reach
 
     if not isinstance(recipe, dict):
@@ -455,19 +456,21 @@ def _generate_layer(src, recipe, nth) -> GenerateRecipe:
     _check_keys(src, recipe, _GENERATE, f"layer {nth + 1} generate", "layer", nth)
     if "rate" not in recipe:
         raise src.error("a generate recipe needs a rate (instances per square unit of ground)", "generate", "layer", nth)
-    if "extent" not in recipe:
-        raise src.error("a generate recipe needs an extent [x0, z0, x1, z1]: the ground the commands make",
-                        "generate", "layer", nth)
+    covers = "extent" not in recipe and scene.terrain is not None and scene.terrain.kind == "heightmap"
+    if "extent" not in recipe and not covers:
+        raise src.error("a generate recipe needs an extent [x0, z0, x1, z1]: the ground the commands make (on a "
+                        "height-map terrain it covers the terrain)", "generate", "layer", nth)
     kwargs = {key.name: _recipe_value(src, key, recipe[key.name], nth) for key in RECIPE if key.in_file and key.name in recipe}
     density = _existing(src, recipe["density"], "density", "layer", nth) if "density" in recipe else None
-    extent = tuple(float(x) for x in _numbers(src, recipe["extent"], "extent", "layer", nth, (4,)))
+    extent = None if covers else tuple(float(x) for x in _numbers(src, recipe["extent"], "extent", "layer", nth, (4,)))
     reach = float(_numbers(src, recipe["reach"], "reach", "layer", nth, (1,), positive=True)[0]) if "reach" in recipe else None
     try:
         gen = Generate(**kwargs)
-        extent = check_extent(gen, extent)
+        extent = None if covers else check_extent(gen, extent)
         reach = reach if reach is not None else 3.0 * gen.tile
         check_reach(gen, reach)
-        check_extent_slots(gen, extent)  # counted, not made (a tree's axes counted when the scene is built)
+        if not covers:
+            check_extent_slots(gen, extent)  # counted, not made (a tree's axes counted when the scene is built)
     except ParamError as exc:  # "generate: FIELD: what was expected": the field's own line
         _, field, said = (str(exc).split(": ", 2) + ["", ""])[:3]
         field = {"the extent": "extent", "the tiles within reach": "reach"}.get(field, field)

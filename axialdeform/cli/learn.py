@@ -1,0 +1,78 @@
+"""``axialdeform learn``: a generated layer learned from an example of placed objects (docs/learn.md)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from ..core.errors import ArgumentError
+from ..core.ground_features import FEATURES
+from ..core.io.example import learn_layer, learned_paths, read_terrain, write_learned
+from ..core.io.safeio import check_output_path
+from ._common import add_overwrite
+
+
+def _window(text: str) -> tuple:
+    try:
+        w = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        w = ()
+    if len(w) != 4 or not all(math.isfinite(v) for v in w) or not (w[2] > w[0] and w[3] > w[1]):
+        raise ArgumentError(f"--window: expected x0,z0,x1,z1 with x1 > x0 and z1 > z0, found {text!r}")
+    return w
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("learn", help="learn a generated layer from an example of placed objects", description=(
+        "Learn where objects stand (their intensity as a function of the ground's altitude, slope, curvature, "
+        "aspect and distance to water; their spacing; their sizes) from EXAMPLE, and write a scene file whose "
+        "generated layers (one a kind) grow the same kind of scenery on the terrain -- or, with --apply-to, on "
+        "another terrain. EXAMPLE: a CSV table (header x,z[,size][,kind]), a parameter file, a glTF scene of "
+        "placed objects, or a scene file's layer (--layer)."))
+    p.add_argument("example", help="the example: .csv, .adp/.txt, .glb/.gltf or a scene .toml (with --layer)")
+    p.add_argument("--terrain", help="a scene file whose height-map terrain the example stands on (default: none, "
+                                     "flat ground without features)")
+    p.add_argument("-o", "--output", required=True, help="the scene file to write (required, no default); the "
+                                                         "density maps are written beside it")
+    p.add_argument("--apply-to", help="a scene file with another height-map terrain to fill with the learned "
+                                      "scenery (default: the example's own terrain)")
+    p.add_argument("--mesh", default="tree", help="the mesh of each learned layer: a bundled name or a file "
+                                                  "(default: %(default)s)")
+    p.add_argument("--window", type=_window, help="the ground the example covers, x0,z0,x1,z1 (default: the "
+                                                  "objects' bounding box grown by half a mean spacing)")
+    p.add_argument("--layer", help="the layer of a scene-file example, or the node of a glTF example (default: "
+                                   "none; a glTF example's first instanced node)")
+    p.add_argument("--mask", help="a grey image of the water over the example's terrain, white = water (default: "
+                                  "none, no 'water' feature)")
+    p.add_argument("--apply-mask", help="the water of --apply-to's terrain (default: none)")
+    p.add_argument("--features", type=lambda t: tuple(f.strip() for f in t.split(",") if f.strip()),
+                   help=f"the ground's features the intensity may depend on, comma-separated (default: all of "
+                        f"{', '.join(FEATURES[:-1])}, and water with --mask)")
+    p.add_argument("--size", type=float, default=1.0, help="the scale of an object of the example's median size "
+                                                           "(default: %(default)g)")
+    p.add_argument("--seed", type=int, default=0, help="the seed of the simulations and the layers (default: %(default)s)")
+    add_overwrite(p)
+    p.set_defaults(handler=run)
+
+
+def run(args) -> None:
+    """``axialdeform learn EXAMPLE --terrain SCENE.toml -o OUT.toml``."""
+    learned = learn_layer(args.example, args.terrain, window=args.window, layer=args.layer, mask=args.mask,
+                          features=args.features, seed=args.seed)
+    target, mask = (args.apply_to, args.apply_mask) if args.apply_to else (args.terrain, args.mask)
+    inputs = [args.example, args.terrain, args.apply_to, args.mask, args.apply_mask]
+    for scene in (args.terrain, args.apply_to):
+        if scene:
+            inputs.append(read_terrain(scene)[0]["heightmap"])
+    for path in learned_paths(args.output, learned):
+        check_output_path(path, [p for p in inputs if p], "learned scene", overwrite=args.overwrite)
+    written = write_learned(args.output, learned, target, mesh=args.mesh, mask=mask, seed=args.seed,
+                            size=args.size)
+    for lay in learned:
+        s = lay.spacing
+        feats = ", ".join(f"{n} {c:+.4g}" for n, c in zip(lay.intensity.names, lay.intensity.coef[1:])) or "none"
+        print(f"{lay.kind or 'layer'}: {lay.count} objects; log rate {lay.intensity.coef[0]:.4g}, features: {feats}; "
+              f"spacing {s.pattern}, hard core {s.hard_core:.4g}"
+              + (f", clumps {s.cluster[0]:.4g} a square unit, radius {s.cluster[1]:.4g}" if s.cluster else ""))
+    print(f"wrote {Path(written[-1])} and {len(written) - 1} density map(s)")
+

@@ -1,0 +1,323 @@
+"""Examples to learn scenery from (``axialdeform learn``, docs/learn.md) and the scene file a learned layer is
+written as.
+
+:func:`read_example` reads what users have:
+
+* a **CSV table** of objects (a survey): a header row, columns ``x`` and ``z`` (world units on the terrain),
+  optional ``size`` (any unit) and ``kind`` (a word: one layer a kind); other columns are ignored;
+* a **parameter file** (``.adp``, ``.txt``): each instance's position, its scale (19 numbers and more) as
+  its size, its turn about up;
+* a **glTF scene** (``.glb``, ``.gltf``): the instances of ``EXT_mesh_gpu_instancing`` nodes (this
+  library's export, with ``AXIALDEFORM_bend``, or any other's), or else one object a node that has a mesh
+  (as editors export a hand-placed patch): its place, its scale (the mean of the three) and its turn.
+
+The window (the ground the example covers) is given, or the objects' bounding box grown by half a mean
+spacing on each side.  :func:`write_learned_scene` writes a scene file: the terrain's table and one generated
+layer a learned kind, each with its density map (a 16-bit PNG) beside the file, every file atomically.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import AxialDeformError, ExampleError
+from ..learn import Example
+from ..record import ANGLES, POSITION, SCALE
+from .atomic import atomic_path, atomic_write_text
+from .safeio import open_regular
+
+__all__ = ["read_example", "write_learned_scene", "read_terrain", "learn_layer", "write_learned", "learned_paths", "MAX_EXAMPLE_BYTES"]
+
+#: the largest example file read (bytes)
+MAX_EXAMPLE_BYTES = 1 << 30
+
+
+def _window(xz: np.ndarray, window, name: str) -> tuple:
+    if window is not None:
+        x0, z0, x1, z1 = (float(v) for v in window)
+        if not (x1 > x0 and z1 > z0) or not all(math.isfinite(v) for v in (x0, z0, x1, z1)):
+            raise ExampleError(f"{name}: window: expected [x0, z0, x1, z1] with x1 > x0 and z1 > z0, found {list(window)}")
+        out = (xz[:, 0] < x0) | (xz[:, 0] > x1) | (xz[:, 1] < z0) | (xz[:, 1] > z1)
+        if out.any():
+            i = int(np.argmax(out))
+            raise ExampleError(f"{name}: object {i + 1} at ({xz[i, 0]:g}, {xz[i, 1]:g}): expected inside the window "
+                               f"[{x0:g}, {z0:g}, {x1:g}, {z1:g}]")
+        return x0, z0, x1, z1
+    lo, hi = xz.min(axis=0), xz.max(axis=0)
+    span = hi - lo
+    if len(xz) < 3 or not (span > 0).all():
+        raise ExampleError(f"{name}: expected at least 3 objects spread over x and z to find the ground they cover "
+                           "(or give a window)")
+    pad = 0.5 * math.sqrt(span[0] * span[1] / len(xz))
+    return float(lo[0] - pad), float(lo[1] - pad), float(hi[0] + pad), float(hi[1] + pad)
+
+
+def _number(text: str, name: str, row: int, column: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = math.nan
+    if not math.isfinite(v):
+        raise ExampleError(f"{name}: row {row}: column '{column}': expected a finite number, found {text!r:.40}")
+    return v
+
+
+def _read_csv(path: Path) -> dict:
+    name = str(path)
+    with open_regular(path, "a CSV table", ExampleError) as (fh, size):
+        if size > MAX_EXAMPLE_BYTES:
+            raise ExampleError(f"{name}: a file of {size} bytes; expected at most {MAX_EXAMPLE_BYTES}")
+        try:
+            text = fh.read().decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise ExampleError(f"{name}: not UTF-8 text at byte {exc.start}; expected a CSV table") from None
+    try:
+        rows = list(csv.reader(io.StringIO(text)))
+    except csv.Error as exc:
+        raise ExampleError(f"{name}: not a CSV table ({exc})") from None
+    rows = [r for r in rows if any(c.strip() for c in r)]
+    if not rows:
+        raise ExampleError(f"{name}: empty; expected a header row with columns x and z, then one row an object")
+    header = [c.strip().lower() for c in rows[0]]
+    missing = [c for c in ("x", "z") if c not in header]
+    if missing:
+        raise ExampleError(f"{name}: header: expected columns x and z (and optional size, kind), found {rows[0]!r:.80}")
+    col = {c: header.index(c) for c in ("x", "z", "size", "kind") if c in header}
+    xz, size, kind = [], [], []
+    for n, r in enumerate(rows[1:], start=2):
+        if len(r) < len(header):
+            raise ExampleError(f"{name}: row {n}: expected {len(header)} columns as the header, found {len(r)}")
+        xz.append((_number(r[col["x"]], name, n, "x"), _number(r[col["z"]], name, n, "z")))
+        if "size" in col:
+            s = _number(r[col["size"]], name, n, "size")
+            if s <= 0:
+                raise ExampleError(f"{name}: row {n}: column 'size': expected a number > 0, found {r[col['size']]!r:.40}")
+            size.append(s)
+        if "kind" in col:
+            k = r[col["kind"]].strip()
+            if not k:
+                raise ExampleError(f"{name}: row {n}: column 'kind': expected a word, found nothing")
+            kind.append(k)
+    if not xz:
+        raise ExampleError(f"{name}: no rows after the header; expected one row an object")
+    return {"xz": np.array(xz, np.float64), "size": np.array(size) if size else None,
+            "kind": np.array(kind, dtype=object) if kind else None}
+
+
+def _read_records(params: np.ndarray) -> dict:
+    params = np.asarray(params, np.float64)
+    size = params[:, SCALE] if params.shape[1] > SCALE else None
+    return {"xz": params[:, POSITION][:, [0, 2]], "size": size, "yaw": params[:, ANGLES][:, 1]}
+
+
+def _read_gltf(path: Path, layer: str | None) -> dict:
+    from .gltf_read import read_instanced_glb
+
+    try:
+        return _read_records(read_instanced_glb(path, layer, fallback=False)[1])
+    except AxialDeformError:
+        pass
+    import trimesh
+
+    try:
+        scene = trimesh.load(str(path), force="scene")
+    except Exception as exc:  # noqa: BLE001 - any reader failure on a hostile file
+        raise ExampleError(f"{path}: could not read the glTF scene ({type(exc).__name__}: {exc})") from None
+    xz, size, yaw = [], [], []
+    for node in scene.graph.nodes_geometry:
+        m, _ = scene.graph.get(node)
+        m = np.asarray(m, np.float64)
+        s = np.linalg.norm(m[:3, :3], axis=0)
+        xz.append((m[0, 3], m[2, 3]))
+        size.append(float(s.mean()))
+        yaw.append(math.atan2(m[0, 2] / s[2], m[2, 2] / s[2]))
+    if not xz:
+        raise ExampleError(f"{path}: no placed objects; expected EXT_mesh_gpu_instancing nodes or nodes with a mesh")
+    return {"xz": np.array(xz), "size": np.array(size), "yaw": np.array(yaw)}
+
+
+def read_example(source, window=None, *, layer: str | None = None) -> Example:
+    """An :class:`~axialdeform.core.learn.Example` from a CSV table, a parameter file, a glTF scene, a scene
+    file's layer (``layer``: its name; the layer's instances as drawn), or an (n, 16+) parameter array.
+
+    window : (x0, z0, x1, z1) or None
+        The ground the example covers (None: the objects' bounding box grown by half a mean spacing).
+    """
+    if not isinstance(source, (str, os.PathLike)):
+        data, name = _read_records(source), "<params>"
+    else:
+        path, name = Path(source), str(source)
+        suffix = path.suffix.lower()
+        if suffix == ".csv":
+            data = _read_csv(path)
+        elif suffix in (".glb", ".gltf"):
+            data = _read_gltf(path, layer)
+        elif suffix == ".toml":
+            from ..scene import load_scene
+
+            scene = load_scene(path)
+            names = [lay.name for lay in scene.layers]
+            if layer not in names:
+                raise ExampleError(f"{name}: layer: expected one of {', '.join(names) or 'none'} (--layer NAME), found {layer!r}")
+            data = _read_records(scene.layers[names.index(layer)].params)
+        else:
+            from .params import read_params
+
+            data = _read_records(read_params(path, allow_mesh_mismatch=True))
+    xz = data["xz"]
+    if len(xz) == 0:
+        raise ExampleError(f"{name}: no objects; expected at least one")
+    if not np.isfinite(xz).all():
+        raise ExampleError(f"{name}: a position is not finite")
+    return Example(xz, _window(xz, window, name), data.get("size"), data.get("kind"), data.get("yaw"), name)
+
+
+def _toml(v) -> str:
+    if isinstance(v, str):
+        return json.dumps(v)  # a TOML basic string is a JSON string
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml(x) for x in v) + "]"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return repr(float(v)) if isinstance(v, float) else str(v)
+
+
+def _write_density(path: Path, grey: np.ndarray) -> None:
+    from PIL import Image
+
+    with atomic_path(path, suffix=".png") as tmp:
+        Image.fromarray(np.round(np.clip(grey, 0, 1) * 65535).astype(np.uint16)).save(tmp, format="PNG")
+
+
+def write_learned_scene(path, terrain: dict | None, layers: list, header: str = "") -> list[Path]:
+    """A scene file at ``path``: ``up = "y"``, a ``[terrain]`` table of ``terrain``'s keys (paths as given), and a
+    generated layer a dict of ``layers`` (``name``, ``mesh``, ``generate``: the recipe's keys, ``density``: a
+    (rows, cols) grey map written as ``PATH-NAME-density.png`` beside it).  Every file written atomically, the
+    density maps first; returns the paths written."""
+    path = Path(path)
+    written = []
+    lines = [f"# {line}" for line in header.splitlines()] + ["", 'up = "y"', ""]
+    if terrain:
+        lines.append("[terrain]")
+        lines += [f"{k} = {_toml(v)}" for k, v in terrain.items()]
+        lines.append("")
+    for lay in layers:
+        density = path.with_name(f"{path.stem}-{lay['name']}-density.png")
+        _write_density(density, lay["density"])
+        written.append(density)
+        lines += ["[[layer]]", f"name = {_toml(lay['name'])}", f"mesh = {_toml(lay['mesh'])}"]
+        lines += [f"# {c}" for c in lay.get("comments", ())]
+        lines.append("[layer.generate]")
+        lines += [f"{k} = {_toml(v)}" for k, v in lay["generate"].items()]
+        lines += [f"density = {_toml(density.name)}", ""]
+    atomic_write_text(path, "\n".join(lines))
+    written.append(path)
+    return written
+
+
+def read_terrain(scene_file, mask=None) -> tuple[dict, object, object]:
+    """The height-map terrain of a scene file: its ``[terrain]`` keys (the height map's path absolute), its
+    :class:`~axialdeform.core.generate_ground.GroundMaps` and its
+    :class:`~axialdeform.core.ground_features.GroundFeatures` (with ``mask``, an image path of the water over
+    the same ground, the distance to it)."""
+    from ..generate_ground import GroundMaps
+    from ..ground_features import GroundFeatures
+    from ..surface import load_density, load_surface
+    from .scene import parse_scene
+
+    recipe = parse_scene(scene_file)
+    t = recipe.terrain
+    if t is None or t.kind != "heightmap":
+        raise ExampleError(f"{scene_file}: terrain: expected a [terrain] with a heightmap (the ground's features "
+                           f"come from its heights), found {'none' if t is None else 'a mesh'}")
+    with t.src.wrap(t.kind, "terrain", 0):
+        surface = load_surface(t.file, up="y", height_scale=t.height_scale, extent=t.extent, resample=t.resample)
+    table = {"heightmap": str(Path(t.file).resolve()), "height_scale": float(t.height_scale)}
+    if t.extent is not None:
+        table["extent"] = [float(e) for e in t.extent]
+    if recipe.terrain_color is not None:
+        table["color"] = [float(c) for c in recipe.terrain_color]
+    if t.resample:
+        table["resample"] = True
+    maps = GroundMaps.of(surface)
+    return table, maps, GroundFeatures.of(maps, None if mask is None else load_density(mask))
+
+
+def learn_layer(example, terrain=None, *, window=None, layer: str | None = None, mask=None, features=None,
+                seed: int = 0) -> list:
+    """Learn generated layers from ``example`` (what :func:`read_example` reads, or an
+    :class:`~axialdeform.core.learn.Example`) standing on ``terrain`` (a scene file with a height-map
+    terrain; None: flat ground, no features): one :class:`~axialdeform.core.learn.LearnedLayer` a kind.
+
+    features : sequence of str or None
+        The ground's features the intensity may depend on (default all:
+        :data:`~axialdeform.core.ground_features.FEATURES`; ``water`` needs ``mask``).
+    """
+    from ..ground_features import FEATURES
+    from ..learn import learn_layers
+
+    ex = example if isinstance(example, Example) else read_example(example, window, layer=layer)
+    ground = read_terrain(terrain, mask)[2] if terrain is not None else None
+    for f in features or ():
+        if f not in FEATURES or (ground is not None and f not in ground.names):
+            raise ExampleError(f"features: {f!r}: expected some of {', '.join(ground.names if ground else FEATURES)}"
+                               f"{' (water needs a mask)' if f == 'water' else ''}")
+    return learn_layers(ex, ground, list(features) if features else None, seed)
+
+
+def _layer_name(layer) -> str:
+    return "".join(c if c.isalnum() or c in "-_" else "_" for c in str(layer.kind or "learned"))
+
+
+def learned_paths(out, learned: list) -> list[Path]:
+    """The files :func:`write_learned` writes for ``learned`` at ``out``: a density map a layer, then ``out``."""
+    out = Path(out)
+    return [out.with_name(f"{out.stem}-{_layer_name(lay)}-density.png") for lay in learned] + [out]
+
+
+def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None, seed: int = 0, extent=None,
+                  size: float = 1.0) -> list[Path]:
+    """The scene file ``out`` of ``learned`` (:func:`learn_layer`) over ``terrain`` (a scene file: the example's
+    own, or another one, ``mask`` its water), one generated layer a kind with ``mesh``; on flat ground
+    (``terrain`` None) over ``extent`` (default: the example's window); ``size``: the scale of an object of the
+    example's median size.  Returns the paths written."""
+    if not (math.isfinite(size) and size > 0):
+        raise ExampleError(f"size: expected a number > 0, found {size!r}")
+    from ..learn import layer_recipe
+
+    table, ground = None, None
+    if terrain is not None:
+        table, _maps, ground = read_terrain(terrain, mask)
+        extent = ground.bounds
+    elif extent is None:
+        extent = learned[0].window
+    for lay in learned:
+        missing = [f for f in lay.intensity.names if ground is None or f not in ground.names]
+        if missing:
+            raise ExampleError(f"{terrain or 'flat ground'}: expected the feature {missing[0]} the layer "
+                               f"{lay.kind or 'learned'} depends on{' (give its mask)' if missing[0] == 'water' else ''}")
+    layers = []
+    for k, lay in enumerate(learned):
+        keys, density = layer_recipe(lay, ground, extent)
+        keys["seed"] = seed + k
+        if "scale" in keys:
+            keys["scale"] = [size * v for v in keys["scale"]]
+        elif size != 1.0:
+            keys["scale"] = [size, size]
+        if terrain is None:
+            keys["extent"] = list(extent)
+        s = lay.spacing
+        notes = [f"learned from {lay.count} objects: log rate = {lay.intensity.coef[0]:.6g}"
+                 + "".join(f" + {c:.6g} {n}" for n, c in zip(lay.intensity.names, lay.intensity.coef[1:])),
+                 f"spacing: {s.pattern}, hard core {s.hard_core:.6g}"
+                 + (f", clumps: {s.cluster[0]:.6g} a square unit, radius {s.cluster[1]:.6g}" if s.cluster else "")]
+        name = _layer_name(lay)
+        layers.append({"name": name, "mesh": mesh, "generate": keys, "density": density, "comments": notes})
+    return write_learned_scene(out, table, layers, "a scene learned by axialdeform learn (docs/learn.md)")

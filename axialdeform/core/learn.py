@@ -1,0 +1,388 @@
+"""Scenery by example: a generated layer learned from objects placed on a ground (docs/learn.md).
+
+An *example* is where objects stand (``xz`` on a terrain, optional sizes and kinds) inside a window of
+ground.  :func:`learn_layers` fits, per kind:
+
+* **the intensity**, log-linear in the ground's features (:mod:`~axialdeform.core.ground_features`):
+  ``log lambda(x) = b0 + sum_k b_k f_k(x)``, the maximum-likelihood fit of an inhomogeneous Poisson process by
+  Berman-Turner quadrature (a grid of dummy points over the window; Newton's method on the standardized
+  features).  A feature stays only while it is significant (|b / se| >= 2, dropped weakest first), so a
+  pattern that ignores the slope does not learn a slope from noise;
+* **the spacing**: the hard core (the smallest distance between two objects), and whether the objects stand
+  in clumps or apart: Diggle's global test of the inhomogeneous L-function against 19 Poisson patterns of the
+  fitted intensity (maximum absolute deviation over r in [0.5, 5] mean spacings).  Clumps are fitted as a
+  Matern cluster process (parents ``kappa`` a square unit, children uniform in a disc of radius ``R``) by
+  minimum contrast on ``K(r)^(1/4)``;
+* **the marks**: the sizes as scales (median 1), the turn about up and the record's scale, where the example
+  has them.
+
+:func:`layer_recipe` turns a learned layer into a generated layer's recipe over a ground -- the same ground or
+ANOTHER one (the learned relation to slope, altitude and water applied there): a rate and a density map of
+``lambda / max lambda``.  Pure numpy and scipy: no GL here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ParamError
+
+__all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function",
+           "learn_layers", "layer_recipe", "matern_cluster_k", "SIGNIFICANT", "SIMULATIONS"]
+
+#: a feature's coefficient stays while |b / se| is at least this
+SIGNIFICANT = 2.0
+#: Poisson patterns Diggle's test compares the example with (rank 1 of 20: the 5 % level)
+SIMULATIONS = 19
+#: the spacings (in mean spacings 1 / sqrt(lambda)) the L-function is compared over
+SPAN = (0.5, 5.0)
+
+
+@dataclass(frozen=True, eq=False)
+class Example:
+    """Objects standing on a ground.
+
+    Attributes
+    ----------
+    xz : (n, 2) float64
+        Where each object stands (world units).
+    window : (4,) float
+        The ground the example covers, (x0, z0, x1, z1).
+    size : (n,) float64 or None
+        Each object's size (any unit: a trunk's diameter, a record's scale).
+    kind : (n,) str or None
+        Each object's kind (a species): one layer a kind.
+    yaw : (n,) float64 or None
+        Each object's turn about up (radians), where the example has it.
+    source : str
+        Where it came from (error messages).
+    """
+
+    xz: np.ndarray
+    window: tuple
+    size: np.ndarray | None = None
+    kind: np.ndarray | None = None
+    yaw: np.ndarray | None = None
+    source: str = "<example>"
+
+    @property
+    def area(self) -> float:
+        x0, z0, x1, z1 = self.window
+        return (x1 - x0) * (z1 - z0)
+
+    def subset(self, keep: np.ndarray) -> Example:
+        """The objects where ``keep`` (n,) bool is True, in the same window."""
+        pick = (lambda a: None if a is None else a[keep])
+        return Example(self.xz[keep], self.window, pick(self.size), pick(self.kind), pick(self.yaw), self.source)
+
+
+@dataclass(frozen=True, eq=False)
+class Intensity:
+    """``lambda(x) = exp(b0 + sum_k b_k f_k(x))`` objects a square unit.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The features it depends on (none: a constant intensity).
+    coef : (k + 1,) float64
+        ``b0`` then one coefficient a feature, in the features' own units.
+    z : (k,) float64
+        Each coefficient over its standard error (the Wald statistic, on standardized features).
+    """
+
+    names: tuple
+    coef: np.ndarray
+    z: np.ndarray
+
+    def rate(self, feats: np.ndarray) -> np.ndarray:
+        """``lambda`` at points of features ``feats`` : (n, k) (columns as :attr:`names`)."""
+        feats = np.asarray(feats, np.float64).reshape(-1, len(self.names))
+        return np.exp(self.coef[0] + feats @ self.coef[1:])
+
+    def rate_at(self, ground, xz: np.ndarray) -> np.ndarray:
+        """``lambda`` at points ``xz`` (n, 2) of ``ground`` (a GroundFeatures; None: a constant intensity)."""
+        xz = np.asarray(xz, np.float64).reshape(-1, 2)
+        if not self.names:
+            return np.full(len(xz), math.exp(self.coef[0]))
+        return self.rate(ground.at(xz, self.names))
+
+
+@dataclass(frozen=True)
+class Spacing:
+    """How the objects stand with respect to each other.
+
+    Attributes
+    ----------
+    hard_core : float
+        The smallest distance between two objects (world units).
+    pattern : str
+        ``"poisson"``, ``"cluster"`` (clumps) or ``"regular"`` (apart): Diggle's test at the 5 % level.
+    cluster : tuple or None
+        A cluster pattern's ``(kappa, radius)``: parents a square unit, the radius of a clump.
+    """
+
+    hard_core: float
+    pattern: str
+    cluster: tuple | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class LearnedLayer:
+    """One kind of object learned from an example.
+
+    Attributes
+    ----------
+    kind : str or None
+        The kind (None: the example has one).
+    count : int
+        How many objects of it the example has.
+    intensity : Intensity
+    spacing : Spacing
+    scale : (2,) float or None
+        The sizes as scales, median 1: [5th, 95th percentile] (None: no sizes).
+    yaw : (2,) float
+        The turn about up, [lo, hi] radians ([0, 2 pi] without turns).
+    window : (4,) float
+        The example's ground (x0, z0, x1, z1).
+    """
+
+    kind: str | None
+    count: int
+    intensity: Intensity
+    spacing: Spacing
+    scale: tuple | None
+    yaw: tuple
+    window: tuple = (0.0, 0.0, 1.0, 1.0)
+
+
+def _quadrature(example: Example, cells: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Berman-Turner quadrature: the points (data then dummy), their weights, and 1 for data."""
+    x0, z0, x1, z1 = example.window
+    nx = max(8, int(round(cells * math.sqrt((x1 - x0) / (z1 - z0)))))
+    nz = max(8, int(round(cells * cells / nx)))
+    gx, gz = np.meshgrid((np.arange(nx) + 0.5) / nx * (x1 - x0) + x0, (np.arange(nz) + 0.5) / nz * (z1 - z0) + z0)
+    dummy = np.stack([gx.ravel(), gz.ravel()], axis=1)
+    pts = np.concatenate([example.xz, dummy])
+    cx = np.clip(((pts[:, 0] - x0) / (x1 - x0) * nx).astype(np.int64), 0, nx - 1)
+    cz = np.clip(((pts[:, 1] - z0) / (z1 - z0) * nz).astype(np.int64), 0, nz - 1)
+    cell = cz * nx + cx
+    count = np.bincount(cell, minlength=nx * nz)
+    w = example.area / (nx * nz) / count[cell]
+    is_data = np.zeros(len(pts))
+    is_data[:len(example.xz)] = 1.0
+    return pts, w, is_data
+
+
+def _newton(x: np.ndarray, w: np.ndarray, y: np.ndarray, start: float) -> tuple[np.ndarray, np.ndarray]:
+    """The Poisson log-likelihood ``sum y x.b - sum w exp(x.b)`` maximized: b and the inverse Fisher matrix."""
+    b = np.zeros(x.shape[1])
+    b[0] = start
+    for _ in range(100):
+        mu = w * np.exp(np.clip(x @ b, -700, 700))
+        grad = x.T @ (y - mu)
+        fisher = (x * mu[:, None]).T @ x + 1e-9 * np.eye(len(b))
+        step = np.linalg.solve(fisher, grad)
+        ll = y @ (x @ b) - mu.sum()
+        t = 1.0
+        while t > 1e-6:  # halve the step until the likelihood grows
+            nb = b + t * step
+            if y @ (x @ nb) - (w * np.exp(np.clip(x @ nb, -700, 700))).sum() >= ll - 1e-12:
+                break
+            t /= 2
+        b = b + t * step
+        if np.abs(t * step).max() < 1e-10:
+            break
+    mu = w * np.exp(np.clip(x @ b, -700, 700))
+    return b, np.linalg.pinv((x * mu[:, None]).T @ x)
+
+
+def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, significant: float = SIGNIFICANT) -> Intensity:
+    """The log-linear intensity of ``example`` over ``ground``'s features ``names`` (default: all of them; none
+    without a ground), its insignificant features dropped (``|b / se| < significant``)."""
+    n = len(example.xz)
+    if n == 0:
+        raise ParamError(f"{example.source}: expected at least one object to learn from, found none")
+    all_names = list(() if ground is None else (names or ground.names))
+    cells = cells or int(min(250, max(48, math.sqrt(4 * n))))
+    pts, w, y = _quadrature(example, cells)
+    feats = ground.at(pts, all_names) if all_names else np.zeros((len(pts), 0))
+    mean, sd = feats[n:].mean(axis=0), feats[n:].std(axis=0)
+    keep = [i for i in range(len(all_names)) if sd[i] > 1e-12]  # a feature constant over the window says nothing
+    while True:
+        x = np.concatenate([np.ones((len(pts), 1)), (feats[:, keep] - mean[keep]) / sd[keep]], axis=1)
+        b, cov = _newton(x, w, y, math.log(n / example.area))
+        z = b[1:] / np.sqrt(np.maximum(np.diag(cov)[1:], 1e-300))
+        if not keep or np.abs(z).min() >= significant:
+            break
+        keep.pop(int(np.argmin(np.abs(z))))
+    coef = np.concatenate([[b[0] - np.sum(b[1:] * mean[keep] / sd[keep])], b[1:] / sd[keep]])
+    return Intensity(tuple(all_names[i] for i in keep), coef, z)
+
+
+def _border(xz: np.ndarray, window) -> np.ndarray:
+    x0, z0, x1, z1 = window
+    return np.minimum.reduce([xz[:, 0] - x0, x1 - xz[:, 0], xz[:, 1] - z0, z1 - xz[:, 1]])
+
+
+def l_function(xz: np.ndarray, window, r: np.ndarray, rate: np.ndarray | None = None) -> np.ndarray:
+    """The (inhomogeneous) L-function ``sqrt(K(r) / pi)`` of points ``xz`` (n, 2) in ``window`` at distances ``r``
+    (m,), border-corrected: ``K(r) = sum_{i: b_i >= r} sum_{j != i, d_ij <= r} 1 / (lambda_i lambda_j) /
+    sum_{i: b_i >= r} 1 / lambda_i`` (``b_i``: the distance to the window's edge; ``rate``: lambda at each point,
+    default ``n / area``).  NaN where no point lies ``r`` inside the edge."""
+    from scipy.spatial import cKDTree
+
+    xz = np.asarray(xz, np.float64)
+    x0, z0, x1, z1 = window
+    lam = np.full(len(xz), len(xz) / ((x1 - x0) * (z1 - z0))) if rate is None else np.asarray(rate, np.float64)
+    b = _border(xz, window)
+    pairs = cKDTree(xz).query_pairs(float(np.max(r)), output_type="ndarray")
+    i, j = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
+    d = np.linalg.norm(xz[i] - xz[j], axis=1)
+    w = 1.0 / (lam[i] * lam[j])
+    out = np.full(len(r), np.nan)
+    for k, rk in enumerate(np.asarray(r, np.float64)):  # one distance at a time (tens), every pair at once
+        inner = b >= rk
+        norm = np.sum(1.0 / lam[inner])
+        if norm > 0:
+            out[k] = math.sqrt(np.sum(w[(d <= rk) & inner[i]]) / norm / math.pi)
+    return out
+
+
+def matern_cluster_k(r: np.ndarray, kappa: float, radius: float) -> np.ndarray:
+    """Ripley's K of a Matern cluster process: parents ``kappa`` a square unit, children uniform in a disc of
+    ``radius``: ``pi r^2 + h(r / 2R) / kappa`` (Stoyan, Kendall and Mecke)."""
+    z = np.clip(np.asarray(r, np.float64) / (2.0 * radius), 0.0, 1.0)
+    h = 2.0 + ((8 * z * z - 4) * np.arccos(z) - 2 * np.arcsin(z) + 4 * z * np.sqrt((1 - z * z) ** 3)
+               - 6 * z * np.sqrt(1 - z * z)) / math.pi
+    return math.pi * np.asarray(r) ** 2 + h / kappa
+
+
+def simulate(intensity: Intensity, ground, window, rng: np.random.Generator, top: float) -> np.ndarray:
+    """A Poisson pattern of ``intensity`` in ``window`` (thinning from ``top`` >= its largest value): (k, 2)."""
+    x0, z0, x1, z1 = window
+    n = rng.poisson(top * (x1 - x0) * (z1 - z0))
+    xz = np.stack([rng.uniform(x0, x1, n), rng.uniform(z0, z1, n)], axis=1)
+    return xz[rng.uniform(0, top, n) < intensity.rate_at(ground, xz)]
+
+
+def _largest_rate(intensity: Intensity, ground, window) -> float:
+    x0, z0, x1, z1 = window
+    gx, gz = np.meshgrid(np.linspace(x0, x1, 200), np.linspace(z0, z1, 200))
+    return 1.05 * float(intensity.rate_at(ground, np.stack([gx.ravel(), gz.ravel()], axis=1)).max())
+
+
+def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int = 0) -> Spacing:
+    """The hard core, and clumps or not: Diggle's test (:data:`SIMULATIONS` Poisson patterns of ``intensity``);
+    clumps fitted as a Matern cluster process by minimum contrast."""
+    from scipy.optimize import minimize
+    from scipy.spatial import cKDTree
+
+    xz, n = example.xz, len(example.xz)
+    if n < 2:
+        return Spacing(0.0, "poisson")
+    hard = float(cKDTree(xz).query(xz, k=2)[0][:, 1].min())
+    x0, z0, x1, z1 = example.window
+    spacing = math.sqrt(example.area / n)
+    r = np.linspace(SPAN[0], SPAN[1], 30) * spacing
+    r = r[r <= min(x1 - x0, z1 - z0) / 4]
+    if n < 10 or len(r) < 3:
+        return Spacing(hard, "poisson")
+    observed = l_function(xz, example.window, r, intensity.rate_at(ground, xz))
+    rng = np.random.default_rng(seed)
+    top = _largest_rate(intensity, ground, example.window)
+    sims = []
+    for _ in range(SIMULATIONS):  # 19 patterns, each one vectorized
+        p = simulate(intensity, ground, example.window, rng, top)
+        sims.append(l_function(p, example.window, r, intensity.rate_at(ground, p)) if len(p) > 1 else np.full(len(r), np.nan))
+    sims = np.array(sims)
+    mean = np.nanmean(np.vstack([sims, observed]), axis=0)
+    dev = lambda l: np.nanmax(np.abs(l - mean))  # noqa: E731
+    if dev(observed) <= max(dev(s) for s in sims):
+        return Spacing(hard, "poisson")
+    at = int(np.nanargmax(np.abs(observed - mean)))
+    if observed[at] < mean[at]:
+        return Spacing(hard, "regular")
+    k_obs = math.pi * observed ** 2
+    ok = np.isfinite(k_obs)
+    lam = n / example.area
+
+    def contrast(p):
+        kappa, radius = math.exp(p[0]), math.exp(p[1])
+        return float(np.sum((k_obs[ok] ** 0.25 - matern_cluster_k(r[ok], kappa, radius) ** 0.25) ** 2))
+
+    best = min((minimize(contrast, [math.log(lam / c), math.log(f * spacing)], method="Nelder-Mead")
+                for c in (3.0, 10.0, 30.0) for f in (0.5, 1.0, 2.0)), key=lambda res: res.fun)
+    kappa, radius = math.exp(best.x[0]), math.exp(best.x[1])
+    return Spacing(hard, "cluster", (kappa, radius))
+
+
+def _marks(example: Example) -> tuple[tuple | None, tuple]:
+    scale = None
+    if example.size is not None and len(example.size):
+        s = example.size / np.median(example.size)
+        lo, hi = np.quantile(s, [0.05, 0.95])
+        scale = (float(lo), float(max(hi, lo)))
+    yaw = (0.0, 2.0 * math.pi)
+    if example.yaw is not None and len(example.yaw) > 1:
+        a = np.mod(example.yaw, 2.0 * math.pi)
+        if np.ptp(a) < math.pi:  # turned one way, within half a turn: that range
+            yaw = (float(a.min()), float(a.max()))
+    return scale, yaw
+
+
+def learn_layers(example: Example, ground=None, names=None, seed: int = 0) -> list[LearnedLayer]:
+    """One :class:`LearnedLayer` a kind of ``example`` (in the order kinds first appear), over ``ground`` (a
+    :class:`~axialdeform.core.ground_features.GroundFeatures`, None: a flat ground with no features) and its
+    features ``names`` (default all)."""
+    if ground is not None:
+        gx0, gz0, gx1, gz1 = ground.bounds
+        x0, z0, x1, z1 = example.window
+        tol = 1e-5 * max(gx1 - gx0, gz1 - gz0)  # the terrain's corners are float32
+        if x0 < gx0 - tol or z0 < gz0 - tol or x1 > gx1 + tol or z1 > gz1 + tol:
+            raise ParamError(f"{example.source}: window: expected the example's ground [{x0:g}, {z0:g}, {x1:g}, {z1:g}] "
+                             f"within the terrain's [{gx0:g}, {gz0:g}, {gx1:g}, {gz1:g}]")
+    kinds = [None] if example.kind is None else list(dict.fromkeys(example.kind.tolist()))
+    out = []
+    for kind in kinds:
+        part = example if kind is None else example.subset(example.kind == kind)
+        intensity = fit_intensity(part, ground, names)
+        spacing = fit_spacing(part, intensity, ground, seed)
+        if spacing.pattern == "cluster":  # clumps make counts vary more than Poisson's: a feature must stand out more
+            inflate = math.sqrt(1.0 + len(part.xz) / part.area / spacing.cluster[0])
+            intensity = fit_intensity(part, ground, names, significant=SIGNIFICANT * inflate)
+            spacing = fit_spacing(part, intensity, ground, seed)
+        scale, yaw = _marks(part)
+        out.append(LearnedLayer(kind, len(part.xz), intensity, spacing, scale, yaw, example.window))
+    return out
+
+
+#: the rate a learned layer's grid draws, over its largest intensity (thinned back by the density map), so
+#: the jittered grid's own regularity stays below the example's spacing
+OVERSAMPLE = 4.0
+
+
+def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: float = OVERSAMPLE) -> tuple[dict, np.ndarray]:
+    """A generated layer's recipe keys for ``layer`` over ``extent`` (x0, z0, x1, z1) of ``ground`` (the same
+    ground it was learned on, or another: its features), and its density map, (rows, cols) in [0, 1] over
+    ``extent`` (default the ground's grid, or 256 x 256 on flat ground): ``lambda / rate`` at each pixel's
+    centre, where ``rate = oversample * max lambda`` (fewer where the hard core needs larger cells)."""
+    x0, z0, x1, z1 = extent
+    if shape is None:
+        shape = ground.grids["altitude"].shape if ground is not None else (256, 256)
+    rows, cols = shape
+    gx, gz = np.meshgrid(x0 + (np.arange(cols) + 0.5) * (x1 - x0) / cols, z0 + (np.arange(rows) + 0.5) * (z1 - z0) / rows)
+    lam = layer.intensity.rate_at(ground, np.stack([gx.ravel(), gz.ravel()], axis=1)).reshape(rows, cols)
+    top = float(lam.max())
+    rate = oversample * top
+    hard = layer.spacing.hard_core
+    if hard > 0:
+        rate = max(top, min(rate, (0.9 / hard) ** 2))  # cells of at least hard / 0.9, never fewer than the rate
+    min_distance = min(hard, 0.9 / math.sqrt(rate))
+    tile = 32.0 / math.sqrt(rate)
+    keys = {"rate": float(rate), "tile": float(tile), "min_distance": float(min_distance), "yaw": list(layer.yaw)}
+    if layer.scale is not None:
+        keys["scale"] = list(layer.scale)
+    return keys, np.clip(lam / rate, 0.0, 1.0)
