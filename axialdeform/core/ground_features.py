@@ -9,8 +9,9 @@ each point of the ground
 * ``eastness``, ``northness``: the downhill direction's x and z (its aspect as two numbers, 0 where level);
 * ``water``: the distance (world units) to the nearest pixel of a mask (a river, a lake), when one is given.
 
-Every feature is computed on the height map's grid (central differences, ``numpy.gradient``) and read at a
-point by bilinear interpolation of that grid (``scipy.ndimage.map_coordinates``), so the same point on the
+Every feature is computed on the height map's grid (central differences, ``numpy.gradient``; the slope, the
+curvature and the aspect of the heights smoothed by a Gaussian of one grid step, so an 8-bit height map's
+terraces do not stripe them) and read at a point by bilinear interpolation of that grid (``scipy.ndimage.map_coordinates``), so the same point on the
 same terrain always has the same features, and a second terrain has features of the same meaning.  Pure
 numpy and scipy: no GL here.
 """
@@ -60,7 +61,7 @@ class GroundFeatures:
         if min(h.shape) < 3:
             raise ParamError(f"learn: terrain: expected a height map of at least 3x3 vertices, found {h.shape[1]}x{h.shape[0]}")
         step = 1.0 / np.asarray(maps.h_inv, np.float64)
-        gz, gx = np.gradient(h, step[1], step[0])
+        gz, gx = np.gradient(ndimage.gaussian_filter(h, 1.0, mode="nearest"), step[1], step[0])
         grad = np.hypot(gx, gz)
         lap = np.gradient(gx, step[0], axis=1) + np.gradient(gz, step[1], axis=0)
         safe = np.where(grad > 1e-12, grad, 1.0)

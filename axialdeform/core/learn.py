@@ -305,7 +305,9 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     at = int(np.nanargmax(np.abs(observed - mean)))
     if observed[at] < mean[at]:
         return Spacing(hard, "regular")
-    k_obs = math.pi * observed ** 2
+    r = np.linspace(0.05, SPAN[1], 60) * spacing  # the clumps' own scale too
+    r = r[r <= min(x1 - x0, z1 - z0) / 4]
+    k_obs = math.pi * l_function(xz, example.window, r, intensity.rate_at(ground, xz)) ** 2
     ok = np.isfinite(k_obs)
     lam = n / example.area
 

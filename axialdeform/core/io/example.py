@@ -265,6 +265,10 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
 
     ex = example if isinstance(example, Example) else read_example(example, window, layer=layer)
     ground = read_terrain(terrain, mask)[2] if terrain is not None else None
+    if ground is not None and window is None and not isinstance(example, Example):  # the grown box, on the terrain
+        g, w = ground.bounds, ex.window
+        ex = Example(ex.xz, (max(w[0], g[0]), max(w[1], g[1]), min(w[2], g[2]), min(w[3], g[3])), ex.size, ex.kind,
+                     ex.yaw, ex.source)
     for f in features or ():
         if f not in FEATURES or (ground is not None and f not in ground.names):
             raise ExampleError(f"features: {f!r}: expected some of {', '.join(ground.names if ground else FEATURES)}"

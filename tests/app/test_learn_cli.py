@@ -1,0 +1,147 @@
+"""``axialdeform learn``: an example in the files users have becomes a scene file that grows the same kind of
+scenery, on its own terrain and on another; bad input is one line and exit status 2."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import tomllib
+
+import numpy as np
+import pytest
+
+import axialdeform as ad
+from axialdeform.core.record import POSITION
+from helpers import processes as P
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "axialdeform", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+def _survey(path, xz, size=None, kind=None):
+    cols = ["x", "z"] + (["size"] if size is not None else []) + (["kind"] if kind is not None else [])
+    rows = [",".join(cols)]
+    for i, (x, z) in enumerate(xz):
+        rows.append(",".join([f"{x:.4f}", f"{z:.4f}"] + ([f"{size[i]:.4f}"] if size is not None else [])
+                             + ([kind[i]] if kind is not None else [])))
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def survey(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("survey")
+    scene = P.write_terrain(folder)
+    _, g = P.ground()
+    rng = np.random.default_rng(7)
+    xz = P.inhomogeneous(rng, g, {"slope": 0.12}, 0.02)
+    kind = np.where(rng.uniform(size=len(xz)) < 0.25, "birch", "oak")
+    size = rng.lognormal(0, 0.25, len(xz))
+    return folder, scene, _survey(folder / "plot.csv", xz, size, kind), xz, kind
+
+
+def test_learn_writes_a_scene_that_grows_each_kind_as_often(survey, tmp_path):
+    folder, scene, csv, xz, kind = survey
+    out = tmp_path / "learned.toml"
+    res = run("learn", csv, "--terrain", scene, "-o", out, "--size", "0.5", "--window=-100,-60,100,60")
+    assert res.returncode == 0, res.stderr
+    assert "oak:" in res.stdout and "birch:" in res.stdout
+    data = tomllib.loads(out.read_text())
+    assert [lay["name"] for lay in data["layer"]] == ["oak", "birch"]
+    assert "extent" not in data["layer"][0]["generate"]  # a generated layer covers its height map
+    built = ad.Scene.load(out)
+    for lay in built.layers:
+        n = int((kind == lay.name).sum())
+        assert len(lay.params) == pytest.approx(n, rel=0.12), lay.name
+        p = lay.params[:, POSITION]
+        assert p[:, 0].min() >= -100 and p[:, 0].max() <= 100 and p[:, 2].min() >= -60 and p[:, 2].max() <= 60
+    assert (tmp_path / "learned-oak-density.png").is_file()
+
+
+def test_apply_to_another_terrain(survey, tmp_path):
+    folder, scene, csv, xz, kind = survey
+    other = P.write_terrain(tmp_path, P.hills(phase=0.4), "other")
+    out = tmp_path / "there.toml"
+    res = run("learn", csv, "--terrain", scene, "--apply-to", other, "-o", out, "--features", "slope")
+    assert res.returncode == 0, res.stderr
+    data = tomllib.loads(out.read_text())
+    assert data["terrain"]["heightmap"].endswith("other.png")
+    built = ad.Scene.load(out)
+    _, g_b = P.ground(P.hills(phase=0.4))
+    slope = g_b.at(built.layers[0].params[:, POSITION][:, [0, 2]].astype(float), ["slope"])[:, 0]
+    cut = np.median(g_b.grids["slope"])
+    assert (slope > cut).sum() > 1.5 * (slope <= cut).sum()  # steeper ground, more trees: as in the example
+
+
+def test_learn_from_a_parameter_file_a_gltf_scene_and_a_scene_layer(tmp_path):
+    import trimesh
+
+    stone = ad.load_mesh("stone")
+    rng = np.random.default_rng(3)
+    params = ad.random_params(stone, 400, seed=2)
+    params[:, POSITION] = np.stack([rng.uniform(0, 40, 400), np.zeros(400), rng.uniform(0, 30, 400)], 1)
+    ad.write_params(tmp_path / "p.adp", params, stone)
+    ad.export_glb(tmp_path / "instanced.glb", stone, params, "instanced")
+    editor = trimesh.Scene()  # one node an object, as an editor exports a hand-placed patch
+    for i, (x, _, z) in enumerate(params[:, POSITION]):
+        editor.add_geometry(trimesh.creation.box((0.3, 0.3, 0.3)), node_name=f"rock{i}",
+                            transform=trimesh.transformations.translation_matrix((x, 0.0, z)))
+    editor.export(tmp_path / "editor.glb")
+    (tmp_path / "scene.toml").write_text('[[layer]]\nname = "rocks"\nmesh = "stone"\nparams = "p.adp"\n')
+    for src, extra in (("p.adp", ()), ("instanced.glb", ()), ("editor.glb", ()), ("scene.toml", ("--layer", "rocks"))):
+        out = tmp_path / f"{src}.toml"
+        res = run("learn", tmp_path / src, "-o", out, "--window", "0,0,40,30", "--mesh", "stone", *extra)
+        assert res.returncode == 0, (src, res.stderr)
+        assert "layer: 400 objects" in res.stdout, (src, res.stdout)
+        gen = tomllib.loads(out.read_text())["layer"][0]["generate"]
+        assert gen["extent"] == [0.0, 0.0, 40.0, 30.0]
+        assert len(ad.Scene.load(out).layers[0].params) == pytest.approx(400, rel=0.15)
+    res = run("learn", tmp_path / "scene.toml", "-o", tmp_path / "x.toml", "--layer", "trees")
+    assert res.returncode == 2 and "layer: expected one of rocks (--layer NAME), found 'trees'" in res.stderr
+
+
+@pytest.mark.parametrize("rows, message", [
+    ("x,z\n1,2\n3,abc\n", r"plot\.csv: row 3: column 'z': expected a finite number, found 'abc'"),
+    ("a,b\n1,2\n", r"plot\.csv: header: expected columns x and z"),
+    ("x,z,size\n1,2,0\n", r"plot\.csv: row 2: column 'size': expected a number > 0"),
+    ("x,z\n", r"plot\.csv: no rows after the header"),
+    ("x,z\n1,nan\n", r"row 2: column 'z': expected a finite number"),
+])
+def test_bad_examples_are_one_line_and_exit_2(tmp_path, rows, message):
+    (tmp_path / "plot.csv").write_text(rows)
+    res = run("learn", tmp_path / "plot.csv", "-o", tmp_path / "o.toml")
+    assert res.returncode == 2 and "Traceback" not in res.stderr, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and re.search(message, res.stderr), res.stderr
+    assert not (tmp_path / "o.toml").exists()
+
+
+def test_outputs_and_terrains_are_checked_before_anything_is_written(survey, tmp_path):
+    folder, scene, csv, xz, kind = survey
+    (tmp_path / "o.toml").write_text("keep")
+    res = run("learn", csv, "--terrain", scene, "-o", tmp_path / "o.toml")
+    assert res.returncode == 2 and "exists; refusing to replace it" in res.stderr
+    assert (tmp_path / "o.toml").read_text() == "keep" and not list(tmp_path.glob("*.png"))
+    res = run("learn", csv, "--terrain", scene, "-o", csv, "--overwrite")
+    assert res.returncode == 2 and "is the input file" in res.stderr
+    flat = tmp_path / "flat.toml"
+    flat.write_text('[camera]\nfov = 30.0\n')
+    res = run("learn", csv, "--terrain", flat, "-o", tmp_path / "x.toml")
+    assert res.returncode == 2 and "terrain: expected a [terrain] with a heightmap" in res.stderr
+    res = run("learn", csv, "--terrain", scene, "-o", tmp_path / "x.toml", "--features", "water")
+    assert res.returncode == 2 and "water needs a mask" in res.stderr
+
+
+def test_a_generated_layer_without_extent_covers_its_height_map_and_needs_one_on_flat_ground(tmp_path):
+    scene = P.write_terrain(tmp_path)
+    text = scene.read_text() + '[[layer]]\nname = "s"\nmesh = "stone"\n[layer.generate]\nrate = 0.01\ntile = 40.0\n'
+    scene.write_text(text)
+    p = ad.Scene.load(scene).layers[0].params[:, POSITION]
+    assert p[:, 0].min() < -90 and p[:, 0].max() > 90 and p[:, 2].min() < -50 and p[:, 2].max() > 50
+    flat = tmp_path / "flat.toml"
+    flat.write_text('[[layer]]\nname = "s"\nmesh = "stone"\n[layer.generate]\nrate = 0.01\n')
+    from axialdeform.core import SceneError
+
+    with pytest.raises(SceneError, match=r"needs an extent .*\(on a height-map terrain it covers the terrain\)"):
+        ad.Scene.load(flat)

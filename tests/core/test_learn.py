@@ -1,0 +1,137 @@
+"""Scenery by example (axialdeform.core.learn): patterns with known answers are learned back, and a learned
+layer generates the example's intensity, on its own ground and on another."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from axialdeform.core import learn as L
+from axialdeform.core.errors import ParamError
+from axialdeform.core.generate import Generate, generate_extent
+from axialdeform.core.generate_ground import GroundMaps
+from axialdeform.core.ground_features import GroundFeatures
+from axialdeform.core.record import POSITION
+from helpers import processes as P
+
+
+@pytest.fixture(scope="module")
+def hills():
+    return P.ground()
+
+
+def test_an_inhomogeneous_poisson_pattern_gives_back_its_coefficients(hills):
+    _, g = hills
+    rng = np.random.default_rng(0)
+    xz = P.inhomogeneous(rng, g, {"slope": 0.05, "altitude": -0.08}, 0.3)
+    lay = L.learn_layers(L.Example(xz, P.window()), g, ["slope", "altitude"])[0]
+    coef = dict(zip(lay.intensity.names, lay.intensity.coef[1:]))
+    assert coef["slope"] == pytest.approx(0.05, rel=0.1)
+    assert coef["altitude"] == pytest.approx(-0.08, rel=0.1)
+    assert lay.intensity.coef[0] == pytest.approx(math.log(0.3), abs=0.1)
+    assert lay.spacing.pattern == "poisson"
+
+
+def test_a_poisson_pattern_learns_no_feature_and_its_rate(hills):
+    _, g = hills
+    rng = np.random.default_rng(1)
+    xz = rng.uniform([-100, -60], [100, 60], (rng.poisson(0.1 * 200 * 120), 2))
+    lay = L.learn_layers(L.Example(xz, P.window()), g)[0]
+    assert lay.intensity.names == ()
+    assert math.exp(lay.intensity.coef[0]) == pytest.approx(len(xz) / (200 * 120), rel=1e-6)
+    assert lay.spacing.pattern == "poisson"
+
+
+def test_a_hard_core_pattern_is_regular_with_its_distance():
+    # the generator's own jittered grid: nothing closer than min_distance, and more regular than Poisson
+    rec = Generate(rate=0.5, tile=16.0, min_distance=0.9, bend=0.0)
+    params = generate_extent(rec, _Mesh(), (-40, -40, 40, 40))
+    xz = params[:, POSITION][:, [0, 2]].astype(np.float64)
+    lay = L.learn_layers(L.Example(xz, (-40, -40, 40, 40)))[0]
+    assert lay.spacing.pattern == "regular"
+    assert 0.9 - 1e-4 <= lay.spacing.hard_core <= 0.9 * 1.1 + 0.2
+
+
+def test_a_cluster_pattern_is_found_and_its_clumps_measured(hills):
+    _, g = hills
+    rng = np.random.default_rng(2)
+    xz = P.matern_cluster(rng, 0.02, 3.0, 10)
+    lay = L.learn_layers(L.Example(xz, P.window()), g)[0]
+    assert lay.spacing.pattern == "cluster"
+    kappa, radius = lay.spacing.cluster
+    assert radius == pytest.approx(3.0, rel=0.15)
+    assert kappa == pytest.approx(0.02, rel=0.3)  # minimum contrast on one pattern of ~500 clumps
+
+
+def test_the_l_function_of_a_poisson_pattern_is_r():
+    rng = np.random.default_rng(3)
+    xz = rng.uniform(0, 100, (4000, 2))
+    r = np.array([1.0, 2.0, 4.0])
+    assert L.l_function(xz, (0, 0, 100, 100), r) == pytest.approx(r, rel=0.05)
+
+
+def test_a_learned_layer_generates_the_example_s_intensity(hills):
+    maps, g = hills
+    rng = np.random.default_rng(4)
+    xz = P.inhomogeneous(rng, g, {"slope": 0.12, "altitude": -0.1}, 0.4)
+    lay = L.learn_layers(L.Example(xz, P.window()), g)[0]
+    keys, density = L.layer_recipe(lay, g, g.bounds)
+    made = _generated(keys, density, maps)
+    assert len(made) == pytest.approx(len(xz), rel=0.1)
+    for name in ("slope", "altitude"):  # per quartile of the feature over the ground
+        edges = np.quantile(g.grids[name], [0, 0.25, 0.5, 0.75, 1])
+        a, b = (np.histogram(g.at(p, [name])[:, 0], edges)[0] for p in (xz, made))
+        assert b == pytest.approx(a, rel=0.15), name
+
+
+def test_the_relation_applies_to_another_terrain(hills):
+    _, g = hills
+    rng = np.random.default_rng(5)
+    xz = P.inhomogeneous(rng, g, {"slope": 0.15}, 0.2)
+    lay = L.learn_layers(L.Example(xz, P.window()), g, ["slope"])[0]
+    maps_b, g_b = P.ground(P.hills(phase=0.37) ** 2)  # other hills
+    keys, density = L.layer_recipe(lay, g_b, g_b.bounds)
+    made = _generated(keys, density, maps_b)
+    steep = g_b.at(made, ["slope"])[:, 0]
+    # the rate on B's steep half over its flat half is the learned exp(b (mean slope difference))
+    cut = np.median(g_b.grids["slope"])
+    ratio = (steep > cut).sum() / (steep <= cut).sum()
+    s = g_b.grids["slope"].ravel()
+    expect = np.exp(lay.intensity.coef[1] * s[s > cut]).sum() / np.exp(lay.intensity.coef[1] * s[s <= cut]).sum()
+    assert lay.intensity.names == ("slope",)
+    assert ratio == pytest.approx(expect, rel=0.15)
+
+
+def test_an_example_beyond_the_terrain_is_refused(hills):
+    _, g = hills
+    with pytest.raises(ParamError, match="window: expected the example's ground .* within the terrain's"):
+        L.learn_layers(L.Example(np.zeros((5, 2)), (-500, 0, 1, 1), source="ex.csv"), g)
+
+
+def test_features_are_read_where_the_ground_is():
+    h = np.add.outer(np.zeros(11), np.arange(11.0))  # heights rise along x by 1 a step of 1
+    g = GroundFeatures.of(GroundMaps(heights=h.astype(np.float32), h_lo=np.zeros(2, np.float32),
+                                     h_inv=np.ones(2, np.float32)))
+    f = g.at(np.array([[5.0, 5.0]]), ["altitude", "slope", "eastness", "northness"])[0]
+    assert f == pytest.approx([5.0, 45.0, -1.0, 0.0], abs=1e-6)
+
+
+def _Mesh():
+    import axialdeform as ad
+
+    return ad.load_mesh("stone")
+
+
+def _generated(keys: dict, density: np.ndarray, maps: GroundMaps) -> np.ndarray:
+    from dataclasses import replace
+
+    rec = Generate(**{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items()}, bend=0.0)
+    x0, z0 = maps.h_lo.astype(np.float64)
+    rows, cols = maps.heights.shape
+    x1, z1 = x0 + (cols - 1) / maps.h_inv[0], z0 + (rows - 1) / maps.h_inv[1]
+    g = replace(maps, density=density.astype(np.float32), d_lo=maps.h_lo,
+                d_inv=np.array([density.shape[1] / (x1 - x0), density.shape[0] / (z1 - z0)], np.float32))
+    params = generate_extent(rec, _Mesh(), (x0, z0, x1, z1), g)
+    return params[:, POSITION][:, [0, 2]].astype(np.float64)
