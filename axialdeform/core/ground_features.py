@@ -11,8 +11,9 @@ each point of the ground
 
 Every feature is computed on the height map's grid (central differences, ``numpy.gradient``; the slope, the
 curvature and the aspect of the heights smoothed by a Gaussian of one grid step, so an 8-bit height map's
-terraces do not stripe them) and read at a point by bilinear interpolation of that grid (``scipy.ndimage.map_coordinates``), so the same point on the
-same terrain always has the same features, and a second terrain has features of the same meaning.  Pure
+terraces do not stripe them) and read at a point by bilinear interpolation of that grid
+(``scipy.ndimage.map_coordinates``), so the same point on the same terrain always has the same features, and
+a second terrain has features of the same meaning.  Pure
 numpy and scipy: no GL here.
 """
 
@@ -21,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import ndimage
 
 from .errors import ParamError
 
@@ -53,8 +55,6 @@ class GroundFeatures:
         """The features of ``maps``' height map (a :class:`~axialdeform.core.generate_ground.GroundMaps` with
         heights), and with ``mask`` ((rows, cols) bool or grey, over the same ground, True/white = water) the
         distance to it."""
-        from scipy import ndimage
-
         if maps is None or maps.heights is None:
             raise ParamError("learn: terrain: expected a height-map terrain (the ground's features come from its heights)")
         h = np.asarray(maps.heights, np.float64)
@@ -95,8 +95,6 @@ class GroundFeatures:
     def at(self, xz: np.ndarray, names=None) -> np.ndarray:
         """The features ``names`` (default all) at points ``xz`` : (n, 2), as (n, k) float64 (clamped to the
         grid beyond its edge)."""
-        from scipy import ndimage
-
         xz = np.asarray(xz, np.float64).reshape(-1, 2)
         g = (xz - self.lo) / self.step
         rows, cols = self.grids["altitude"].shape

@@ -27,6 +27,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import minimize
+from scipy.spatial import cKDTree
 
 from .errors import ParamError
 
@@ -75,8 +77,8 @@ class Example:
 
     def subset(self, keep: np.ndarray) -> Example:
         """The objects where ``keep`` (n,) bool is True, in the same window."""
-        pick = (lambda a: None if a is None else a[keep])
-        return Example(self.xz[keep], self.window, pick(self.size), pick(self.kind), pick(self.yaw), self.source)
+        size, kind, yaw = (None if a is None else a[keep] for a in (self.size, self.kind, self.yaw))
+        return Example(self.xz[keep], self.window, size, kind, yaw, self.source)
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,8 +234,6 @@ def l_function(xz: np.ndarray, window, r: np.ndarray, rate: np.ndarray | None = 
     (m,), border-corrected: ``K(r) = sum_{i: b_i >= r} sum_{j != i, d_ij <= r} 1 / (lambda_i lambda_j) /
     sum_{i: b_i >= r} 1 / lambda_i`` (``b_i``: the distance to the window's edge; ``rate``: lambda at each point,
     default ``n / area``).  NaN where no point lies ``r`` inside the edge."""
-    from scipy.spatial import cKDTree
-
     xz = np.asarray(xz, np.float64)
     x0, z0, x1, z1 = window
     lam = np.full(len(xz), len(xz) / ((x1 - x0) * (z1 - z0))) if rate is None else np.asarray(rate, np.float64)
@@ -277,9 +277,6 @@ def _largest_rate(intensity: Intensity, ground, window) -> float:
 def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int = 0) -> Spacing:
     """The hard core, and clumps or not: Diggle's test (:data:`SIMULATIONS` Poisson patterns of ``intensity``);
     clumps fitted as a Matern cluster process by minimum contrast."""
-    from scipy.optimize import minimize
-    from scipy.spatial import cKDTree
-
     xz, n = example.xz, len(example.xz)
     if n < 2:
         return Spacing(0.0, "poisson")
@@ -299,8 +296,8 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
         sims.append(l_function(p, example.window, r, intensity.rate_at(ground, p)) if len(p) > 1 else np.full(len(r), np.nan))
     sims = np.array(sims)
     mean = np.nanmean(np.vstack([sims, observed]), axis=0)
-    dev = lambda l: np.nanmax(np.abs(l - mean))  # noqa: E731
-    if dev(observed) <= max(dev(s) for s in sims):
+    dev = np.nanmax(np.abs(np.vstack([sims, observed]) - mean), axis=1)  # the 19, then the example
+    if dev[-1] <= dev[:-1].max():
         return Spacing(hard, "poisson")
     at = int(np.nanargmax(np.abs(observed - mean)))
     if observed[at] < mean[at]:

@@ -6,13 +6,14 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
-import tomllib
 
 import numpy as np
 import pytest
+import tomllib
 
 import axialdeform as ad
 from axialdeform.core.record import POSITION
+
 from helpers import processes as P
 
 

@@ -14,6 +14,7 @@ from axialdeform.core.generate import Generate, generate_extent
 from axialdeform.core.generate_ground import GroundMaps
 from axialdeform.core.ground_features import GroundFeatures
 from axialdeform.core.record import POSITION
+
 from helpers import processes as P
 
 

@@ -26,12 +26,21 @@ import os
 from pathlib import Path
 
 import numpy as np
+import trimesh
+from PIL import Image
 
 from ..errors import AxialDeformError, ExampleError
-from ..learn import Example
+from ..generate_ground import GroundMaps
+from ..ground_features import FEATURES, GroundFeatures
+from ..learn import Example, layer_recipe, learn_layers
 from ..record import ANGLES, POSITION, SCALE
+from ..scene import load_scene
+from ..surface import load_density, load_surface
 from .atomic import atomic_path, atomic_write_text
+from .gltf_read import read_instanced_glb
+from .params import read_params
 from .safeio import open_regular
+from .scene import parse_scene
 
 __all__ = ["read_example", "write_learned_scene", "read_terrain", "learn_layer", "write_learned", "learned_paths", "MAX_EXAMPLE_BYTES"]
 
@@ -118,14 +127,10 @@ def _read_records(params: np.ndarray) -> dict:
 
 
 def _read_gltf(path: Path, layer: str | None) -> dict:
-    from .gltf_read import read_instanced_glb
-
     try:
         return _read_records(read_instanced_glb(path, layer, fallback=False)[1])
     except AxialDeformError:
         pass
-    import trimesh
-
     try:
         scene = trimesh.load(str(path), force="scene")
     except Exception as exc:  # noqa: BLE001 - any reader failure on a hostile file
@@ -160,16 +165,12 @@ def read_example(source, window=None, *, layer: str | None = None) -> Example:
         elif suffix in (".glb", ".gltf"):
             data = _read_gltf(path, layer)
         elif suffix == ".toml":
-            from ..scene import load_scene
-
             scene = load_scene(path)
             names = [lay.name for lay in scene.layers]
             if layer not in names:
                 raise ExampleError(f"{name}: layer: expected one of {', '.join(names) or 'none'} (--layer NAME), found {layer!r}")
             data = _read_records(scene.layers[names.index(layer)].params)
         else:
-            from .params import read_params
-
             data = _read_records(read_params(path, allow_mesh_mismatch=True))
     xz = data["xz"]
     if len(xz) == 0:
@@ -190,8 +191,6 @@ def _toml(v) -> str:
 
 
 def _write_density(path: Path, grey: np.ndarray) -> None:
-    from PIL import Image
-
     with atomic_path(path, suffix=".png") as tmp:
         Image.fromarray(np.round(np.clip(grey, 0, 1) * 65535).astype(np.uint16)).save(tmp, format="PNG")
 
@@ -227,11 +226,6 @@ def read_terrain(scene_file, mask=None) -> tuple[dict, object, object]:
     :class:`~axialdeform.core.generate_ground.GroundMaps` and its
     :class:`~axialdeform.core.ground_features.GroundFeatures` (with ``mask``, an image path of the water over
     the same ground, the distance to it)."""
-    from ..generate_ground import GroundMaps
-    from ..ground_features import GroundFeatures
-    from ..surface import load_density, load_surface
-    from .scene import parse_scene
-
     recipe = parse_scene(scene_file)
     t = recipe.terrain
     if t is None or t.kind != "heightmap":
@@ -260,8 +254,6 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
         The ground's features the intensity may depend on (default all:
         :data:`~axialdeform.core.ground_features.FEATURES`; ``water`` needs ``mask``).
     """
-    from ..ground_features import FEATURES
-    from ..learn import learn_layers
 
     ex = example if isinstance(example, Example) else read_example(example, window, layer=layer)
     ground = read_terrain(terrain, mask)[2] if terrain is not None else None
@@ -294,7 +286,6 @@ def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None,
     example's median size.  Returns the paths written."""
     if not (math.isfinite(size) and size > 0):
         raise ExampleError(f"size: expected a number > 0, found {size!r}")
-    from ..learn import layer_recipe
 
     table, ground = None, None
     if terrain is not None:
