@@ -39,6 +39,8 @@ _NAMES = {
     "render_image": "gl.image", "save_png": "core.io.image", "deformation_glsl": "gl.shaders",
     # out again
     "export_glb": "core.io.gltf", "fit_params": "core.fit",
+    # scenery by example
+    "learn_layer": "core.io.example",
 }
 
 #: the old top-level names and their homes now

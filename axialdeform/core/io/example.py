@@ -246,15 +246,33 @@ def read_terrain(scene_file, mask=None) -> tuple[dict, object, object]:
 
 def learn_layer(example, terrain=None, *, window=None, layer: str | None = None, mask=None, features=None,
                 seed: int = 0) -> list:
-    """Learn generated layers from ``example`` (what :func:`read_example` reads, or an
-    :class:`~axialdeform.core.learn.Example`) standing on ``terrain`` (a scene file with a height-map
-    terrain; None: flat ground, no features): one :class:`~axialdeform.core.learn.LearnedLayer` a kind.
+    """Learn generated layers from an example of objects standing on a ground: one
+    :class:`~axialdeform.core.learn.LearnedLayer` a kind (docs/learn.md).
 
+    Parameters
+    ----------
+    example : str, PathLike, (n, 16+) array or Example
+        What :func:`read_example` reads (a CSV table, a parameter file, a glTF scene, a scene file with
+        ``layer``), or an :class:`~axialdeform.core.learn.Example`.
+    terrain : str, PathLike or None
+        A scene file with a height-map terrain the example stands on (None: flat ground, no features).
+    window : (x0, z0, x1, z1) or None
+        The ground the example covers (None: the objects' bounding box grown by half a mean spacing, cut to
+        the terrain).
+    layer : str or None
+        The layer of a scene-file example, or the node of a glTF one.
+    mask : str, PathLike or None
+        A grey image of the water over the terrain (white = water): the feature ``water``.
     features : sequence of str or None
         The ground's features the intensity may depend on (default all:
         :data:`~axialdeform.core.ground_features.FEATURES`; ``water`` needs ``mask``).
-    """
+    seed : int
+        The seed of the simulations of Diggle's test.
 
+    Returns
+    -------
+    list of LearnedLayer
+    """
     ex = example if isinstance(example, Example) else read_example(example, window, layer=layer)
     ground = read_terrain(terrain, mask)[2] if terrain is not None else None
     if ground is not None and window is None and not isinstance(example, Example):  # the grown box, on the terrain

@@ -1,0 +1,190 @@
+"""Learn scenery from public surveyed forest plots and compare what the learned layer grows with the survey
+(docs/learn.md, "Measured").
+
+The plots are spatstat.data's (GPL >= 2; the surveys' own sources are cited in docs/learn.md): ``bei`` (3 604
+trees of Beilschmiedia pendula on 1000 x 500 m of Barro Colorado Island, with the plot's elevation on a 5 m
+grid) and ``longleaf`` (584 longleaf pines on 200 x 200 m in Georgia, with trunk diameters).  They come from
+Debian's package ``r-cran-spatstat.data`` (``apt-get download r-cran-spatstat.data``; nothing is installed)
+and are read with ``rdata`` from the package index (``pip install rdata``); neither is a dependency of
+axialdeform.
+
+    python3 tools/learn_survey.py --deb r-cran-spatstat.data_*.deb [--out DIR] [--sims 39]
+
+For each plot: learn on the whole plot, generate the learned layer over the same ground (``--sims`` seeds,
+numpy), and compare: the total count, the count per quartile of each ground feature, the example's L-function
+against the envelope of the generated patterns for r in [0.5, 5] mean spacings, the sizes' KS distance; then
+learn on the west half and compare on the east half.
+"""
+
+from __future__ import annotations
+
+import argparse
+import bz2
+import gzip
+import lzma
+import math
+import subprocess
+import sys
+import tempfile
+import warnings
+import zlib
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+from scipy.stats import ks_2samp
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import axialdeform as ad  # noqa: E402
+from axialdeform.core.io.example import read_terrain, write_learned  # noqa: E402
+from axialdeform.core.learn import Example, l_function, learn_layers  # noqa: E402
+from axialdeform.core.record import POSITION, SCALE  # noqa: E402
+
+
+def _plots(deb: Path, folder: Path) -> dict:
+    import rdata
+
+    subprocess.run(["dpkg-deb", "-x", str(deb), str(folder / "deb")], check=True)
+    base = next((folder / "deb").rglob("spatstat.data/data/Rdata.rdx")).with_suffix("")
+    index = rdata.conversion.convert(rdata.parser.parse_data(gzip.decompress(base.with_suffix(".rdx").read_bytes())))
+    blob = base.with_suffix(".rdb").read_bytes()
+
+    def obj(name):
+        off, n = (int(v) for v in index["variables"][name])
+        raw = blob[off:off + n]
+        kind = {b"Z": zlib.decompress, b"X": lzma.decompress, b"2": bz2.decompress}.get(raw[4:5])
+        body = kind(raw[5:]) if kind else zlib.decompress(raw[4:])  # R's lazy-load: a length, [a type], the data
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return rdata.conversion.convert(rdata.parser.parse_data(body))
+
+    return {"bei": obj("bei"), "elev": obj("bei.extra")["elev"], "longleaf": obj("longleaf")}
+
+
+def _survey(path: Path, x, z, size=None) -> Path:
+    cols = "x,z" + (",size" if size is not None else "")
+    rows = [cols] + [f"{a:.3f},{b:.3f}" + (f",{s:.3f}" if size is not None else "") for a, b, s in
+                     zip(x, z, size if size is not None else [None] * len(x))]
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def _terrain(folder: Path, elev: dict) -> Path:
+    v = np.asarray(elev["v"], np.float64)  # rows: y (north), cols: x
+    lo, hi = v.min(), v.max()
+    Image.fromarray(np.round((v - lo) / (hi - lo) * 65535).astype(np.uint16)).save(folder / "bei_elev.png")
+    w = float(elev["xcol"][-1] - elev["xcol"][0])
+    d = float(elev["yrow"][-1] - elev["yrow"][0])
+    (folder / "bei.toml").write_text(f'[terrain]\nheightmap = "bei_elev.png"\nheight_scale = {hi - lo}\n'
+                                     f'extent = [{w}, {d}]\n')
+    return folder / "bei.toml"
+
+
+def _generated(out: Path, learned, terrain, seed: int, size: float) -> tuple[np.ndarray, np.ndarray | None]:
+    write_learned(out, learned, terrain, mesh="stone", seed=seed, size=size)
+    params = ad.Scene.load(out).layers[0].params
+    return params[:, POSITION][:, [0, 2]].astype(np.float64), (params[:, SCALE] if params.shape[1] > SCALE else None)
+
+
+def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Example | None = None) -> dict:
+    """Learn on ``ex``, generate ``sims`` times over its terrain, compare with ``test`` (default ``ex``)."""
+    test = test or ex
+    ground = read_terrain(terrain)[2] if terrain else None
+    learned = learn_layers(ex, ground)
+    lay = learned[0]
+    w = test.window
+    inside = lambda p: p[(p[:, 0] >= w[0]) & (p[:, 0] <= w[2]) & (p[:, 1] >= w[1]) & (p[:, 1] <= w[3])]  # noqa: E731
+    made, scales = [], None
+    for s in range(sims):
+        xz, sc = _generated(folder / f"{name}-{s}.toml", learned, terrain, s, 1.0)
+        made.append(inside(xz))
+        scales = sc if scales is None else scales
+    counts = np.array([len(m) for m in made])
+    row = {"plot": name, "objects": len(test.xz), "generated (median)": float(np.median(counts)),
+           "total ratio": float(np.median(counts) / len(test.xz)), "features": lay.intensity.names,
+           "pattern": lay.spacing.pattern}
+    worst = 0.0
+    if ground is not None:
+        for f in ground.names:
+            edges = np.quantile(ground.at(_grid(w), [f])[:, 0], [0, 0.25, 0.5, 0.75, 1])
+            a = np.histogram(ground.at(test.xz, [f])[:, 0], edges)[0]
+            b = np.median([np.histogram(ground.at(m, [f])[:, 0], edges)[0] for m in made], axis=0)
+            worst = max(worst, float(np.max(np.abs(b / np.maximum(a, 1) - 1))))
+        row["worst quartile"] = worst
+    spacing = math.sqrt((w[2] - w[0]) * (w[3] - w[1]) / len(test.xz))
+    r = np.linspace(0.5, 5.0, 19) * spacing
+    r = r[r <= min(w[2] - w[0], w[3] - w[1]) / 4]
+    rate = lambda p: lay.intensity.rate_at(ground, p)  # noqa: E731
+    obs = l_function(test.xz, w, r, rate(test.xz))
+    env = np.array([l_function(m, w, r, rate(m)) for m in made])
+    row["L inside envelope"] = f"{int(np.sum((obs >= env.min(0)) & (obs <= env.max(0))))}/{len(r)}"
+    if test.size is not None and scales is not None:
+        row["size KS"] = float(ks_2samp(test.size / np.median(ex.size), scales).statistic)
+    return row
+
+
+def _grid(w, n=200):
+    gx, gz = np.meshgrid(np.linspace(w[0], w[2], n), np.linspace(w[1], w[3], n))
+    return np.stack([gx.ravel(), gz.ravel()], 1)
+
+
+def _picture(path: Path, ex: Example, terrain: Path, folder: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ground = read_terrain(terrain)[2]
+    learned = learn_layers(ex, ground)
+    made, _ = _generated(folder / "picture.toml", learned, terrain, 0, 1.0)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 3.6), constrained_layout=True)
+    for ax, pts, title in ((axes[0], ex.xz, f"bei: the survey ({len(ex.xz)} trees)"),
+                           (axes[1], made, f"learned and generated ({len(made)})")):
+        ax.imshow(ground.grids["altitude"], origin="lower", extent=ground.bounds[0::2] + ground.bounds[1::2], cmap="terrain")
+        ax.scatter(pts[:, 0], pts[:, 1], s=1.5, c="k")
+        ax.set_title(title)
+        ax.set_aspect("equal")
+    fig.savefig(path, dpi=90)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--deb", required=True, help="Debian's r-cran-spatstat.data .deb (required, no default)")
+    p.add_argument("--out", help="a folder for the plots' files (default: a temporary folder)")
+    p.add_argument("--picture", help="a PNG of the bei survey beside one generated pattern (default: none)")
+    p.add_argument("--sims", type=int, default=39, help="generated patterns a comparison (default: %(default)s)")
+    args = p.parse_args(argv)
+    folder = Path(args.out or tempfile.mkdtemp())
+    folder.mkdir(parents=True, exist_ok=True)
+    data = _plots(Path(args.deb), folder)
+    bei_scene = _terrain(folder, data["elev"])
+    b = data["bei"]
+    bei = _survey(folder / "bei.csv", np.asarray(b["x"]) - 500.0, np.asarray(b["y"]) - 250.0)
+    ll = data["longleaf"]
+    longleaf = _survey(folder / "longleaf.csv", ll["x"], ll["y"], ll["marks"])
+    rows = []
+    ex = ad.learn_layer  # noqa: F841 - the public name reads the same files
+    from axialdeform.core.io.example import read_example
+
+    e_bei = read_example(bei, (-500, -250, 500, 250))
+    e_ll = read_example(longleaf, (0, 0, 200, 200))
+    rows.append(compare("bei", e_bei, bei_scene, folder, args.sims))
+    rows.append(compare("longleaf", e_ll, None, folder, args.sims))
+    west = e_bei.subset(e_bei.xz[:, 0] < 0)
+    west = Example(west.xz, (-500, -250, 0, 250), source="bei west")
+    east = e_bei.subset(e_bei.xz[:, 0] >= 0)
+    east = Example(east.xz, (0, -250, 500, 250), source="bei east")
+    rows.append(compare("bei: west learned, east compared", west, bei_scene, folder, args.sims, east))
+    if args.picture:
+        _picture(Path(args.picture), e_bei, bei_scene, folder)
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    print("| " + " | ".join(keys) + " |")
+    print("|" + "---|" * len(keys))
+    for r in rows:
+        print("| " + " | ".join(f"{r[k]:.3g}" if isinstance(r.get(k), float) else str(r.get(k, "")) for k in keys) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
