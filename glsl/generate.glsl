@@ -5,7 +5,8 @@
 // Include after "axial.glsl" and "wind.glsl" (axial_wind_hash, the PCG hash).  Declares no inputs:
 // callers pass the recipe.  Conventions (docs/generate.md):
 //   tile (tx, tz) covers [tx T, (tx+1) T) x [tz T, (tz+1) T); m x m cells of side c = T / m;
-//   instance i stands in cell (i mod m, i div m), jittered by j = 1 - min_distance / c;
+//   instance i stands in cell (i mod m, i div m), jittered by j = 1 - min_distance / c; or, in clumps, in a disc
+//   of radius R around the parent of its s x s cells;
 //   offsets d = bend L (2 u - 1), every control point minus D(t_a) (t_a: the anchor on the axis);
 //   u_k = (H(key ^ (32 i + k)) >> 8) / 2^24,  key = H(H(H(uint tx) ^ uint tz) ^ seed);
 //   the ground: a height map (triangles as the terrain mesh's) or y = 0; kept: inside the height map,
@@ -45,6 +46,8 @@ struct AxialRecipe {
     float align;     // align_to_normal: the turn toward the ground's normal, a fraction of its angle
     vec2 anchor_xz;  // the anchor's x, z on the base mesh (with anchor_y: the point that rests on the ground)
     vec2 yaw;        // the turn about up lo + (hi - lo) u2 (radians)
+    float clump_cells;  // clumps: 8 parents to every s x s cells (s = clump_cells; 1 and no radius: none)
+    float clump_radius; // clumps: each instance uniform in a disc of this radius around its parent
 };
 
 // atan2(y, x) to a few float32 ulps on every GPU (Cephes' atanf: reduction to [0, tan(pi/8)], its polynomial).
@@ -129,11 +132,24 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
                     out vec2 d5, out vec3 position, out vec3 angles, out vec3 extra, out vec3 tint, out float kept) {
     uint key = axial_gen_key(r.seed, tile);
     uint ui = uint(i);
-    float u[22];
-    for (int k = 0; k < 22; ++k) u[k] = axial_gen_u(key, ui, uint(k));
+    float u[25];
+    for (int k = 0; k < 25; ++k) u[k] = axial_gen_u(key, ui, uint(k));
     float cx = float(tile.x * r.m + i % r.m), cz = float(tile.y * r.m + i / r.m);
     position.x = (cx + 0.5 + r.jitter * (u[0] - 0.5)) * r.cell;
     position.z = (cz + 0.5 + r.jitter * (u[1] - 0.5)) * r.cell;
+    if (r.clump_cells > 1.0 || r.clump_radius > 0.0) {
+        // a clump: one of the 8 parents (q = floor(8 u24)) of the s x s cells (p = floor((c + 1/2) / s)), each
+        // anywhere in them from a hash of its own; the instance uniform in a disc of radius R around it:
+        // R sqrt(u22) (cos, sin)(2 pi u23)
+        vec2 pc = floor((vec2(cx, cz) + 0.5) / r.clump_cells);
+        uint pkey = axial_gen_key(r.seed ^ 2654435769u, ivec2(pc));
+        uint q = uint(min(floor(u[24] * 8.0), 7.0));
+        vec2 parent = (pc + vec2(axial_gen_u(pkey, q, 0u), axial_gen_u(pkey, q, 1u))) * (r.clump_cells * r.cell);
+        vec2 cs = axial_cos_sin(6.283185307179586 * u[23]);
+        float rho = r.clump_radius * sqrt(u[22]);
+        position.x = parent.x + rho * cs.x;
+        position.z = parent.y + rho * cs.y;
+    }
     angles = vec3(0.0, r.yaw.x + (r.yaw.y - r.yaw.x) * u[2], 0.0);
     vec2 d[5];
     for (int q = 0; q < 5; ++q) d[q] = vec2(r.bend * (2.0 * u[3 + 2 * q] - 1.0), r.bend * (2.0 * u[4 + 2 * q] - 1.0));

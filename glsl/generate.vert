@@ -36,6 +36,8 @@ uniform vec2 u_lift;
 uniform float u_align;
 uniform vec2 u_anchor_xz;
 uniform vec2 u_yaw;
+uniform float u_clump_cells;
+uniform float u_clump_radius;
 
 // the recipe from the uniforms above
 AxialRecipe axial_gen_recipe() {
@@ -43,7 +45,8 @@ AxialRecipe axial_gen_recipe() {
                        u_twist, u_taper, u_anchor_y, u_anchor_w, u_anchor_w4, u_tint,
                        u_tint_color, u_tint_hue, u_has_heights, u_h_lo, u_h_inv, u_h_size,
                        u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
-                       u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz, u_yaw);
+                       u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz, u_yaw,
+                       u_clump_cells, u_clump_radius);
 }
 // ---- end of what js/build.mjs writes ----
 uniform sampler2D u_heights;  // unit 0

@@ -175,6 +175,7 @@ def _kind_schema(kind: str) -> dict:
             "below_one": {"type": "number", "minimum": 0, "exclusiveMaximum": 1},
             "amount": {"type": "number", "minimum": 0, "maximum": 1},
             "seed": {"type": "integer", "minimum": 0, "maximum": 4294967295},
+            "count": {"type": "integer", "minimum": 1, "maximum": 64},
             "levels": {"oneOf": [{"type": "number", "minimum": 0},
                                  {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1, "maxItems": 16}]},
             "scale": pair({"type": "number", "exclusiveMinimum": 0}), "span": pair(num),

@@ -43,7 +43,7 @@ from .axes import anchor_projection
 from .bounds import child_reach
 from .deform import bernstein
 from .errors import ParamError
-from .generate_ground import GroundMaps, ground_height, lean_angles
+from .generate_ground import GroundMaps, cos_sin_f32, ground_height, lean_angles
 from .mesh import anchor_point
 from .recipe import KINDS, RECIPE, REQUIRED, check_value, passed_through
 from .record import EXTENDED_WIDTH, SCALE, TAPER, TINT, TINTED_WIDTH, TWIST, WIDTH, join_record
@@ -57,7 +57,8 @@ __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile"
            "child_bound", "tile_spheres", "extent_box", "world_edge", "slot_limit", "check_slots", "MAX_TILE_SLOTS", "MAX_SLOTS",
            "MAX_BEND", "WORLD_CELLS"]
 
-GENERATED_NUMBERS = 22  # u_0 .. u_21 an instance
+GENERATED_NUMBERS = 25  # u_0 .. u_24 an instance
+CLUMP_PARENTS = 8  # parents an s x s block of cells holds (a layer in clumps)
 GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
 
@@ -115,6 +116,11 @@ class Generate:
                 self.min_distance)
         if self.lift is not None and max(abs(x) for x in self.lift) > world_edge(self):
             bad("lift", f"heights within the world's edge, +-{world_edge(self):.6g} (WORLD_CELLS cells)", self.lift)
+        if self.clumped and self.min_distance > 0:
+            bad("min_distance", "0 with clumps (clump_cells, clump_radius: instances of a clump stand anywhere in it)",
+                self.min_distance)
+        if self.clump_radius > world_edge(self):
+            bad("clump_radius", f"at most the world's edge, {world_edge(self):.6g}", self.clump_radius)
         if self.scale is not None and self.scale[1] > MAX_BEND:
             bad("scale", f"[lo, hi] with hi at most {MAX_BEND:g}", self.scale)
 
@@ -131,6 +137,17 @@ class Generate:
         """The bend amplitude of a hierarchy's level ``depth`` (0: axis 0; the last one beyond)."""
         b = self.bend if isinstance(self.bend, tuple) else (self.bend,)
         return b[min(depth, len(b) - 1)]
+
+    @property
+    def spread(self) -> float:
+        """How far beyond its cell an instance can stand (world units): 0, or in clumps the parent's cells and the
+        clump's radius, ``clump_cells c + clump_radius``."""
+        return self.clump_cells * tile_size(self)[1] + self.clump_radius if self.clumped else 0.0
+
+    @property
+    def clumped(self) -> bool:
+        """Whether instances stand in clumps (``clump_cells`` > 1 or ``clump_radius`` > 0)."""
+        return self.clump_cells > 1 or self.clump_radius > 0
 
     @property
     def needs_heights(self) -> bool:
@@ -210,6 +227,19 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     out = np.zeros((n, recipe.width), f32)
     out[:, 10] = (cx + f32(0.5) + j * (u[:, 0] - f32(0.5))) * cell
     out[:, 12] = (cz + f32(0.5) + j * (u[:, 1] - f32(0.5))) * cell
+    if recipe.clumped:  # one of the 8 parents of its s x s cells, anywhere in them; the instance in a disc around it
+        s_c = f32(recipe.clump_cells)
+        px = np.floor((cx + f32(0.5)) / s_c).astype(f32)
+        pz = np.floor((cz + f32(0.5)) / s_c).astype(f32)
+        pkey = tile_hash_key(recipe.seed ^ 0x9E3779B9, px.astype(np.int64), pz.astype(np.int64))
+        q = np.minimum(np.floor(u[:, 24] * f32(CLUMP_PARENTS)), f32(CLUMP_PARENTS - 1)).astype(np.uint32)
+        ids_q = q[:, None] * np.uint32(HASH_STRIDE) + np.arange(2, dtype=np.uint32)
+        pu = (wind_hash(ids_q ^ pkey[:, None]) >> np.uint32(8)).astype(f32) * f32(1.0 / 16777216.0)
+        span = s_c * cell
+        cs = cos_sin_f32(f32(2.0 * math.pi) * u[:, 23])
+        rho = f32(recipe.clump_radius) * np.sqrt(u[:, 22])
+        out[:, 10] = (px + pu[:, 0]) * span + rho * cs[0]
+        out[:, 12] = (pz + pu[:, 1]) * span + rho * cs[1]
     out[:, 14] = f32(recipe.yaw[0]) + (f32(recipe.yaw[1]) - f32(recipe.yaw[0])) * u[:, 2]
     amp = f32(recipe.level_bend(0) * mesh.axis.length)
     d = (amp * (f32(2.0) * u[:, 3:13] - f32(1.0))).reshape(n, 5, 2)
@@ -479,11 +509,12 @@ def tile_spheres(recipe: Generate, mesh, tiles, maps: GroundMaps | None = None) 
     the instances live on the GPU.  An instance's vertices lie within ``s (|v| + 2 sqrt 2 bend L + the
     child axes' bound)`` of its position (``|v|``: the base mesh's farthest vertex from its origin;
     ``d_q - D(t_a)``: at most twice ``bend L`` a component); its position lies in its tile, at the ground's
-    height range (the height map's lowest and highest; 0 flat) minus the anchor's height times ``s``, plus the lift."""
+    height range (the height map's lowest and highest; 0 flat) minus the anchor's height times ``s``, plus the lift;
+    in clumps up to ``Generate.spread`` beyond its tile."""
     tiles = np.asarray(tiles, dtype=np.float64).reshape(-1, 2)
     T = float(recipe.tile)
     y_lo, y_hi, local = _reach(recipe, mesh, maps)
-    radius = math.hypot(T / math.sqrt(2.0), (y_hi - y_lo) / 2.0) + local
+    radius = math.hypot(T / math.sqrt(2.0) + recipe.spread, (y_hi - y_lo) / 2.0) + local
     out = np.empty((len(tiles), 4))
     out[:, 0], out[:, 2] = (tiles[:, 0] + 0.5) * T, (tiles[:, 1] + 0.5) * T
     out[:, 1], out[:, 3] = (y_lo + y_hi) / 2.0, radius
@@ -502,7 +533,7 @@ def extent_box(recipe: Generate, mesh, extent, maps: GroundMaps | None = None) -
     y_lo, y_hi, _ = _reach(recipe, mesh, maps)
     scale = float(np.mean(recipe.scale)) if recipe.scale is not None else 1.0
     v = np.asarray(mesh.positions, np.float64)
-    across = 0.5 * scale * float(np.hypot(v[:, 0], v[:, 2]).max())
+    across = 0.5 * scale * float(np.hypot(v[:, 0], v[:, 2]).max()) + recipe.spread
     down, up = scale * float(v[:, 1].min()), scale * float(v[:, 1].max())
     xs, ys, zs = np.meshgrid([x0 - across, x1 + across], [min(y_lo + down, y_lo), max(y_hi + up, y_hi)],
                              [z0 - across, z1 + across], indexing="ij")

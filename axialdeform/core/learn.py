@@ -31,6 +31,7 @@ from scipy.optimize import minimize
 from scipy.spatial import cKDTree
 
 from .errors import ParamError
+from .generate import CLUMP_PARENTS
 
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function",
            "learn_layers", "layer_recipe", "matern_cluster_k", "SIGNIFICANT", "SIMULATIONS"]
@@ -93,15 +94,22 @@ class Intensity:
         ``b0`` then one coefficient a feature, in the features' own units.
     z : (k,) float64
         Each coefficient over its standard error (the Wald statistic, on standardized features).
+    lo, hi : (k,) float64 or None
+        Each feature's range over the example's ground: a ground beyond it (another terrain) is read as its
+        nearest end, so the fit is never extrapolated.
     """
 
     names: tuple
     coef: np.ndarray
     z: np.ndarray
+    lo: np.ndarray | None = None
+    hi: np.ndarray | None = None
 
     def rate(self, feats: np.ndarray) -> np.ndarray:
         """``lambda`` at points of features ``feats`` : (n, k) (columns as :attr:`names`)."""
         feats = np.asarray(feats, np.float64).reshape(-1, len(self.names))
+        if self.lo is not None:
+            feats = np.clip(feats, self.lo, self.hi)
         return np.exp(self.coef[0] + feats @ self.coef[1:])
 
     def rate_at(self, ground, xz: np.ndarray) -> np.ndarray:
@@ -221,7 +229,8 @@ def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, sig
             break
         keep.pop(int(np.argmin(np.abs(z))))
     coef = np.concatenate([[b[0] - np.sum(b[1:] * mean[keep] / sd[keep])], b[1:] / sd[keep]])
-    return Intensity(tuple(all_names[i] for i in keep), coef, z)
+    seen = feats[:, keep]
+    return Intensity(tuple(all_names[i] for i in keep), coef, z, seen.min(axis=0), seen.max(axis=0))
 
 
 def _border(xz: np.ndarray, window) -> np.ndarray:
@@ -367,7 +376,9 @@ def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: fl
     """A generated layer's recipe keys for ``layer`` over ``extent`` (x0, z0, x1, z1) of ``ground`` (the same
     ground it was learned on, or another: its features), and its density map, (rows, cols) in [0, 1] over
     ``extent`` (default the ground's grid, or 256 x 256 on flat ground): ``lambda / rate`` at each pixel's
-    centre, where ``rate = oversample * max lambda`` (fewer where the hard core needs larger cells)."""
+    centre, where ``rate = oversample * max lambda`` (fewer where the hard core needs larger cells); in clumps
+    8 parents (``CLUMP_PARENTS``) to every ``s x s`` cells of area ``8 / kappa``,
+    ``s = ceil(sqrt(oversample max lambda 8 / kappa))`` (2 .. 64), so ``rate = s^2 kappa / 8``."""
     x0, z0, x1, z1 = extent
     if shape is None:
         shape = ground.grids["altitude"].shape if ground is not None else (256, 256)
@@ -375,13 +386,21 @@ def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: fl
     gx, gz = np.meshgrid(x0 + (np.arange(cols) + 0.5) * (x1 - x0) / cols, z0 + (np.arange(rows) + 0.5) * (z1 - z0) / rows)
     lam = layer.intensity.rate_at(ground, np.stack([gx.ravel(), gz.ravel()], axis=1)).reshape(rows, cols)
     top = float(lam.max())
-    rate = oversample * top
-    hard = layer.spacing.hard_core
-    if hard > 0:
-        rate = max(top, min(rate, (0.9 / hard) ** 2))  # cells of at least hard / 0.9, never fewer than the rate
-    min_distance = min(hard, 0.9 / math.sqrt(rate))
-    tile = 32.0 / math.sqrt(rate)
-    keys = {"rate": float(rate), "tile": float(tile), "min_distance": float(min_distance), "yaw": list(layer.yaw)}
+    if layer.spacing.cluster is not None:  # clumps: 8 parents every s x s cells, kappa a square unit
+        kappa, radius = layer.spacing.cluster
+        block = CLUMP_PARENTS / kappa  # the area of s x s cells
+        s = int(min(64, max(2, math.ceil(math.sqrt(oversample * top * block)))))
+        cell = math.sqrt(block) / s
+        rate, min_distance, tile = 1.0 / cell ** 2, 0.0, cell * s * math.ceil(32 / s)
+        clumps = {"clump_cells": s, "clump_radius": float(radius)}
+    else:
+        rate = oversample * top
+        hard = layer.spacing.hard_core
+        if hard > 0:
+            rate = max(top, min(rate, (0.9 / hard) ** 2))  # cells of at least hard / 0.9, never fewer than the rate
+        min_distance = min(hard, 0.9 / math.sqrt(rate))
+        tile, clumps = 32.0 / math.sqrt(rate), {}
+    keys = {"rate": float(rate), "tile": float(tile), "min_distance": float(min_distance), "yaw": list(layer.yaw), **clumps}
     if layer.scale is not None:
         keys["scale"] = list(layer.scale)
     return keys, np.clip(lam / rate, 0.0, 1.0)

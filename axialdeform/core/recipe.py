@@ -66,6 +66,7 @@ KINDS = {
     "below_one": Kind("a number in [0, 1)", "number"),
     "amount": Kind("an amount in [0, 1]", "number"),
     "seed": Kind("an integer 0 .. 4294967295", "whole"),
+    "count": Kind("a whole number 1 .. 64", "whole"),
     "levels": Kind("a finite number >= 0, or one per level of the hierarchy", "levels"),
     "scale": Kind("[lo, hi] with 0 < lo <= hi", "pair"),
     "span": Kind("[lo, hi] with lo <= hi", "pair"),
@@ -152,6 +153,10 @@ RECIPE = (
     RecipeKey("tint_hue", "amount", 0.0, "how far each colour channel's u goes its own way (0: one u, the tint keeps "
               "tint_color's hue; 1: one u each)", True, uniform="tint_hue"),
     RecipeKey("yaw", "span", (0.0, 2.0 * math.pi), "the turn about up drawn in [lo, hi] radians", True, uniform="yaw"),
+    RecipeKey("clump_cells", "count", 1, "clumps: 8 parents to every clump_cells x clump_cells cells, anywhere in them; "
+              "each instance picks one (1 and clump_radius 0: no clumps)", True, uniform="clump_cells"),
+    RecipeKey("clump_radius", "nonnegative", 0.0, "clumps: each instance uniform in a disc of this radius around its "
+              "parent (world units; no min_distance then)", True, uniform="clump_radius"),
 )
 
 _BY_NAME = {k.name: k for k in RECIPE}
@@ -182,6 +187,8 @@ def accepts(kind: str, v) -> bool:
         return _number(v) and 0 <= v <= 1
     if kind == "seed":
         return isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 2 ** 32
+    if kind == "count":
+        return isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= 64
     if kind == "levels":
         bends = v if isinstance(v, (tuple, list)) else (v,)
         return 0 < len(bends) and all(_number(b) and b >= 0 for b in bends)

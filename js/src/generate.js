@@ -175,8 +175,9 @@ export function recipeBounds(mesh) {
   }
   const s = Math.max(...u.scale), reach = s * (mesh._far + 2 * Math.SQRT2 * Math.abs(u.bend) + mesh._kids + Math.abs(u.anchor_y));
   const [h0, h1] = mesh._ground;
-  mesh.boundingBox = new THREE.Box3(new THREE.Vector3(Math.min(...xs) * T - reach, h0 + u.lift[0] - reach, Math.min(...zs) * T - reach),
-    new THREE.Vector3((Math.max(...xs) + 1) * T + reach, h1 + u.lift[1] + reach, (Math.max(...zs) + 1) * T + reach));
+  const across = reach + ((u.clump_cells ?? 1) > 1 || (u.clump_radius ?? 0) > 0 ? u.clump_cells * u.cell + u.clump_radius : 0); // clumps
+  mesh.boundingBox = new THREE.Box3(new THREE.Vector3(Math.min(...xs) * T - across, h0 + u.lift[0] - reach, Math.min(...zs) * T - across),
+    new THREE.Vector3((Math.max(...xs) + 1) * T + across, h1 + u.lift[1] + reach, (Math.max(...zs) + 1) * T + across));
   mesh.boundingSphere = mesh.boundingBox.getBoundingSphere(mesh.boundingSphere || new THREE.Sphere());
 }
 

@@ -181,6 +181,10 @@ export interface GenerateRecipe {
   tint_hue?: number;
   /** The turn about up drawn in [lo, hi] radians; default [0, 6.283185307179586]. */
   yaw?: [number, number];
+  /** Clumps: 8 parents to every clump_cells x clump_cells cells, anywhere in them; each instance picks one (1 and clump_radius 0: no clumps); default 1. */
+  clump_cells?: number;
+  /** Clumps: each instance uniform in a disc of this radius around its parent (world units; no min_distance then); default 0. */
+  clump_radius?: number;
   // GenerateRecipe: ---- end of what tools/make_tables.py writes ----
   /** The tiles within this distance of the point are made (default 3 tiles). */
   reach?: number;
@@ -219,6 +223,8 @@ export interface GeneratorUniforms {
   align: number;
   anchor_xz: [number, number];
   yaw: [number, number];
+  clump_cells: number;
+  clump_radius: number;
   // GeneratorUniforms: ---- end of what tools/make_tables.py writes ----
 }
 

@@ -66,6 +66,22 @@ def test_a_cluster_pattern_is_found_and_its_clumps_measured(hills):
     assert kappa == pytest.approx(0.02, rel=0.3)  # minimum contrast on one pattern of ~500 clumps
 
 
+def test_a_learned_cluster_layer_grows_clumps_of_the_same_size(hills):
+    maps, g = hills
+    xz = P.matern_cluster(np.random.default_rng(2), 0.02, 3.0, 10)
+    lay = L.learn_layers(L.Example(xz, P.window()), g)[0]
+    keys, density = L.layer_recipe(lay, g, g.bounds)
+    assert keys["clump_cells"] >= 2 and keys["clump_radius"] == pytest.approx(lay.spacing.cluster[1])
+    made = _generated(keys, density, maps)
+    assert len(made) == pytest.approx(len(xz), rel=0.1)
+    again = L.learn_layers(L.Example(made, P.window()), g)[0]
+    assert again.spacing.pattern == "cluster"
+    assert again.spacing.cluster[1] == pytest.approx(lay.spacing.cluster[1], rel=0.2)
+    assert again.spacing.cluster[0] == pytest.approx(lay.spacing.cluster[0], rel=0.5)  # kappa: minimum contrast is loose
+    r = np.linspace(1.0, 10.0, 10)  # the L-functions agree where the clumps show
+    assert L.l_function(made, P.window(), r) == pytest.approx(L.l_function(xz, P.window(), r), rel=0.1)
+
+
 def test_the_l_function_of_a_poisson_pattern_is_r():
     rng = np.random.default_rng(3)
     xz = rng.uniform(0, 100, (4000, 2))

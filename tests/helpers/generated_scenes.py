@@ -106,3 +106,18 @@ def close(got, want) -> float:
     got, want = np.asarray(got, np.float64), np.asarray(want, np.float64)
     assert got.shape == want.shape, (got.shape, want.shape)
     return float((np.abs(got - want) / np.maximum(1.0, np.abs(want))).max()) if want.size else 0.0
+
+
+def learned_clumps(folder: Path, hills: Path) -> Path:
+    """A scene learned (``learn``'s library calls) from a clumped survey on ``hills``' terrain: stones in clumps."""
+    from axialdeform.core.io.example import learn_layer, write_learned
+    from axialdeform.core.learn import Example
+
+    from .processes import matern_cluster_in
+
+    xz = matern_cluster_in(np.random.default_rng(5), (-20.0, -15.0, 20.0, 15.0), 0.25, 1.0, 8.0)
+    layers = learn_layer(Example(xz, (-20.0, -15.0, 20.0, 15.0)), hills)
+    assert layers[0].spacing.pattern == "cluster", layers[0].spacing
+    out = folder / "learned.toml"
+    write_learned(out, layers, hills, mesh="stone", size=0.2)
+    return out

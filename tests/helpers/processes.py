@@ -61,7 +61,12 @@ def inhomogeneous(rng, feats: GroundFeatures, coef: dict, base: float) -> np.nda
 def matern_cluster(rng, kappa: float, radius: float, mu: float) -> np.ndarray:
     """A Matern cluster pattern over window(): parents ``kappa`` a square unit (beyond the window by ``radius``
     too), Poisson(mu) children uniform in a disc of ``radius``."""
-    x0, z0, x1, z1 = window()
+    return matern_cluster_in(rng, window(), kappa, radius, mu)
+
+
+def matern_cluster_in(rng, box, kappa: float, radius: float, mu: float) -> np.ndarray:
+    """A Matern cluster pattern over ``box`` (x0, z0, x1, z1)."""
+    x0, z0, x1, z1 = box
     n = rng.poisson(kappa * (x1 - x0 + 2 * radius) * (z1 - z0 + 2 * radius))
     parents = np.stack([rng.uniform(x0 - radius, x1 + radius, n), rng.uniform(z0 - radius, z1 + radius, n)], 1)
     k = rng.poisson(mu, n)

@@ -18,7 +18,7 @@ import axialdeform as ad
 from axialdeform.core.generate import Generate, generate_tiles, recipe_uniforms, tile_size, tiles_around
 
 from helpers.browser import SIZE, SKY, Visit, iou, widget_page, widget_state
-from helpers.generated_scenes import GLTF_SCENE, HILLS, LANDSCAPE, TREES, close
+from helpers.generated_scenes import GLTF_SCENE, HILLS, LANDSCAPE, TREES, close, learned_clumps
 from helpers.three_site import Server, example_picture, make_site
 from helpers.three_site import iou as three_iou
 from helpers.three_site import mask as three_mask
@@ -114,12 +114,14 @@ def generated_site(tmp_path_factory):
     hills = base / "hills.toml"
     hills.write_text(HILLS, encoding="utf-8")
     _web(hills, base / "hills")
+    learned = learned_clumps(base, hills)
+    _web(learned, base / "learned")
     one = _scene(base, "one", rate=0.5, extent="[0, 0, 8, 8]", reach=2.0, elevation=30)
     _web(walk, base / "walk")
     _web(one, base / "one")
     _web(one, base / "one.html")
     server = Server(base)
-    yield {"base": base, "url": server.url, "walk": walk, "one": one, "hills": hills, "trees": trees}
+    yield {"base": base, "url": server.url, "walk": walk, "one": one, "hills": hills, "trees": trees, "learned": learned}
     server.close()
 
 
@@ -289,6 +291,21 @@ def test_a_generated_page_on_a_height_map_keeps_and_tints_as_python_and_render(b
         # and the instances alone (thin blades: their edges' antialiasing differs)
         assert b.mean() > 0.03 and (a & b).sum() / (a | b).sum() >= 0.85, (b.mean(), (a & b).sum() / (a | b).sum())
         assert np.abs(shot.astype(np.float64) - render).mean() < 3.0
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_a_learned_layer_in_clumps_is_the_python_records_on_the_page(browser, generated_site):
+    """A layer learned from a clumped survey (clump_cells, clump_radius, its density map): the page makes the
+    Python library's records."""
+    v = Visit(browser, generated_site["url"] + "learned/index.html")
+    try:
+        assert v.state["ready"] is True, v.state
+        layers = v.page.evaluate("window.axialdeformView.generated()")
+        assert ad.Scene.load(generated_site["learned"]).layers[0].generate.generate.clumped
+        assert _check_records(layers, generated_site["learned"]) > 100
         assert v.errors == []
     finally:
         v.close()
