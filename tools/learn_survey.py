@@ -102,7 +102,7 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
         scales = sc if scales is None else scales
     counts = np.array([len(m) for m in made])
     row = {"plot": name, "objects": len(test.xz), "generated (median)": float(np.median(counts)),
-           "total ratio": float(np.median(counts) / len(test.xz)), "features": lay.intensity.names,
+           "total ratio": float(np.median(counts) / len(test.xz)), "terms": " ".join(lay.intensity.labels) or "none",
            "pattern": lay.spacing.pattern}
     worst = 0.0
     if ground is not None:

@@ -70,7 +70,7 @@ def run(args) -> None:
                             size=args.size)
     for lay in learned:
         s = lay.spacing
-        feats = ", ".join(f"{n} {c:+.4g}" for n, c in zip(lay.intensity.names, lay.intensity.coef[1:])) or "none"
+        feats = ", ".join(f"{n} {c:+.4g}" for n, c in zip(lay.intensity.labels, lay.intensity.coef[1:])) or "none"
         print(f"{lay.kind or 'layer'}: {lay.count} objects; log rate {lay.intensity.coef[0]:.4g}, features: {feats}; "
               f"spacing {s.pattern}, hard core {s.hard_core:.4g}"
               + (f", clumps {s.cluster[0]:.4g} a square unit, radius {s.cluster[1]:.4g}" if s.cluster else ""))

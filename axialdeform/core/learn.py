@@ -13,8 +13,8 @@ ground.  :func:`learn_layers` fits, per kind:
   fitted intensity (maximum absolute deviation over r in [0.5, 5] mean spacings).  Clumps are fitted as a
   Matern cluster process (parents ``kappa`` a square unit, children uniform in a disc of radius ``R``) by
   minimum contrast on ``K(r)^(1/4)``;
-* **the marks**: the sizes as scales (median 1), the turn about up and the record's scale, where the example
-  has them.
+* **the marks**: the sizes as scales (median 1: the uniform range nearest their quantile function, by least
+  squares), the turn about up, where the example has them.
 
 :func:`layer_recipe` turns a learned layer into a generated layer's recipe over a ground -- the same ground or
 ANOTHER one (the learned relation to slope, altitude and water applied there): a rate and a density map of
@@ -36,7 +36,8 @@ from .generate import CLUMP_PARENTS
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function",
            "learn_layers", "layer_recipe", "matern_cluster_k", "SIGNIFICANT", "SIMULATIONS"]
 
-#: a feature's coefficient stays while |b / se| is at least this
+#: a term's coefficient stays while |b / se| is at least this, or sqrt(log n) where that is more (the
+#: Bayesian information criterion's price of a term, n objects)
 SIGNIFICANT = 2.0
 #: Poisson patterns Diggle's test compares the example with (rank 1 of 20: the 5 % level)
 SIMULATIONS = 19
@@ -84,33 +85,49 @@ class Example:
 
 @dataclass(frozen=True, eq=False)
 class Intensity:
-    """``lambda(x) = exp(b0 + sum_k b_k f_k(x))`` objects a square unit.
+    """``lambda(x) = exp(b0 + sum_k b_k t_k(x))`` objects a square unit, each term ``t_k`` a ground feature
+    ``f`` or a hinge of it, ``max(0, f - knot)``: piecewise linear in each feature.
 
     Attributes
     ----------
     names : tuple of str
-        The features it depends on (none: a constant intensity).
+        The feature of each term (none: a constant intensity).
     coef : (k + 1,) float64
-        ``b0`` then one coefficient a feature, in the features' own units.
+        ``b0`` then one coefficient a term, in the features' own units.
     z : (k,) float64
-        Each coefficient over its standard error (the Wald statistic, on standardized features).
+        Each coefficient over its standard error (the Wald statistic, on standardized terms).
+    knots : (k,) float64 or None
+        Each term's knot (NaN: the feature itself).
     lo, hi : (k,) float64 or None
-        Each feature's range over the example's ground: a ground beyond it (another terrain) is read as its
-        nearest end, so the fit is never extrapolated.
+        Each term's feature's range over the example's ground: a ground beyond it (another terrain) is read
+        as its nearest end, so the fit is never extrapolated.
     """
 
     names: tuple
     coef: np.ndarray
     z: np.ndarray
+    knots: np.ndarray | None = None
     lo: np.ndarray | None = None
     hi: np.ndarray | None = None
 
-    def rate(self, feats: np.ndarray) -> np.ndarray:
-        """``lambda`` at points of features ``feats`` : (n, k) (columns as :attr:`names`)."""
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """Each term in words: ``slope``, or ``slope>4.25`` for ``max(0, slope - 4.25)``."""
+        knots = self.knots if self.knots is not None else np.full(len(self.names), np.nan)
+        return tuple(n if np.isnan(k) else f"{n}>{k:.4g}" for n, k in zip(self.names, knots))
+
+    def terms(self, feats: np.ndarray) -> np.ndarray:
+        """The terms ``t_k`` of features ``feats`` : (n, k) (a column a term, as :attr:`names`)."""
         feats = np.asarray(feats, np.float64).reshape(-1, len(self.names))
         if self.lo is not None:
             feats = np.clip(feats, self.lo, self.hi)
-        return np.exp(self.coef[0] + feats @ self.coef[1:])
+        if self.knots is None:
+            return feats
+        return np.where(np.isnan(self.knots), feats, np.maximum(0.0, feats - np.nan_to_num(self.knots)))
+
+    def rate(self, feats: np.ndarray) -> np.ndarray:
+        """``lambda`` at points of features ``feats`` : (n, k) (a column a term, as :attr:`names`)."""
+        return np.exp(self.coef[0] + self.terms(feats) @ self.coef[1:])
 
     def rate_at(self, ground, xz: np.ndarray) -> np.ndarray:
         """``lambda`` at points ``xz`` (n, 2) of ``ground`` (a GroundFeatures; None: a constant intensity)."""
@@ -152,7 +169,7 @@ class LearnedLayer:
     intensity : Intensity
     spacing : Spacing
     scale : (2,) float or None
-        The sizes as scales, median 1: [5th, 95th percentile] (None: no sizes).
+        The sizes as scales, median 1: the uniform [lo, hi] nearest their quantile function (None: no sizes).
     yaw : (2,) float
         The turn about up, [lo, hi] radians ([0, 2 pi] without turns).
     window : (4,) float
@@ -209,18 +226,39 @@ def _newton(x: np.ndarray, w: np.ndarray, y: np.ndarray, start: float) -> tuple[
     return b, np.linalg.pinv((x * mu[:, None]).T @ x)
 
 
+#: the knots of each feature's hinges: these quantiles of it over the example's ground
+KNOTS = (0.25, 0.5, 0.75)
+
+
 def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, significant: float = SIGNIFICANT) -> Intensity:
-    """The log-linear intensity of ``example`` over ``ground``'s features ``names`` (default: all of them; none
-    without a ground), its insignificant features dropped (``|b / se| < significant``)."""
+    """The intensity of ``example`` over ``ground``'s features ``names`` (default: all of them; none without a
+    ground): log-linear in each feature and its hinges at the quartiles (:data:`KNOTS`) of the feature over
+    the example's ground, the terms that are not significant dropped (``|b / se| <`` the larger of
+    ``significant`` and its share of ``sqrt(log n)``, the Bayesian information criterion's price of a term)."""
     n = len(example.xz)
     if n == 0:
         raise ParamError(f"{example.source}: expected at least one object to learn from, found none")
-    all_names = list(() if ground is None else (names or ground.names))
+    base = list(() if ground is None else (names or ground.names))
     cells = cells or int(min(250, max(48, math.sqrt(4 * n))))
+    significant = max(significant, math.sqrt(math.log(max(n, 2))) * significant / SIGNIFICANT)
     pts, w, y = _quadrature(example, cells)
-    feats = ground.at(pts, all_names) if all_names else np.zeros((len(pts), 0))
+    raw = ground.at(pts, base) if base else np.zeros((len(pts), 0))
+    term_names, knots, cols = [], [], []
+    for i, name in enumerate(base):
+        f = raw[:, i]
+        if f[n:].std() <= 1e-12:
+            continue  # a feature constant over the window says nothing
+        term_names.append(name)
+        knots.append(np.nan)
+        cols.append(f)
+        for q in np.unique(np.quantile(f[n:], KNOTS)):
+            if f[n:].min() < q < f[n:].max():
+                term_names.append(name)
+                knots.append(float(q))
+                cols.append(np.maximum(0.0, f - q))
+    feats = np.stack(cols, axis=1) if cols else np.zeros((len(pts), 0))
     mean, sd = feats[n:].mean(axis=0), feats[n:].std(axis=0)
-    keep = [i for i in range(len(all_names)) if sd[i] > 1e-12]  # a feature constant over the window says nothing
+    keep = [i for i in range(feats.shape[1]) if sd[i] > 1e-12]
     while True:
         x = np.concatenate([np.ones((len(pts), 1)), (feats[:, keep] - mean[keep]) / sd[keep]], axis=1)
         b, cov = _newton(x, w, y, math.log(n / example.area))
@@ -229,8 +267,9 @@ def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, sig
             break
         keep.pop(int(np.argmin(np.abs(z))))
     coef = np.concatenate([[b[0] - np.sum(b[1:] * mean[keep] / sd[keep])], b[1:] / sd[keep]])
-    seen = feats[:, keep]
-    return Intensity(tuple(all_names[i] for i in keep), coef, z, seen.min(axis=0), seen.max(axis=0))
+    seen = raw[n:][:, [base.index(term_names[i]) for i in keep]] if keep else np.zeros((0, 0))
+    return Intensity(tuple(term_names[i] for i in keep), coef, z, np.array([knots[i] for i in keep]),
+                     seen.min(axis=0) if keep else None, seen.max(axis=0) if keep else None)
 
 
 def _border(xz: np.ndarray, window) -> np.ndarray:
@@ -330,9 +369,11 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
 def _marks(example: Example) -> tuple[tuple | None, tuple]:
     scale = None
     if example.size is not None and len(example.size):
-        s = example.size / np.median(example.size)
-        lo, hi = np.quantile(s, [0.05, 0.95])
-        scale = (float(lo), float(max(hi, lo)))
+        s = np.sort(example.size / np.median(example.size))
+        v = (np.arange(len(s)) + 0.5) / len(s)  # the uniform [lo, hi] nearest the sizes' quantile function
+        slope, lo = np.polyfit(v, s, 1) if len(s) > 1 else (0.0, s[0])
+        lo = float(max(lo, 0.5 * s[0]))
+        scale = (lo, float(max(lo + slope, lo)))
     yaw = (0.0, 2.0 * math.pi)
     if example.yaw is not None and len(example.yaw) > 1:
         a = np.mod(example.yaw, 2.0 * math.pi)

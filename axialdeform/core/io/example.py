@@ -328,7 +328,7 @@ def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None,
             keys["extent"] = list(extent)
         s = lay.spacing
         notes = [f"learned from {lay.count} objects: log rate = {lay.intensity.coef[0]:.6g}"
-                 + "".join(f" + {c:.6g} {n}" for n, c in zip(lay.intensity.names, lay.intensity.coef[1:])),
+                 + "".join(f" + {c:.6g} {n}" for n, c in zip(lay.intensity.labels, lay.intensity.coef[1:])),
                  f"spacing: {s.pattern}, hard core {s.hard_core:.6g}"
                  + (f", clumps: {s.cluster[0]:.6g} a square unit, radius {s.cluster[1]:.6g}" if s.cluster else "")]
         name = _layer_name(lay)
