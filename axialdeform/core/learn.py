@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 from scipy.spatial import cKDTree
+from scipy.stats import norm
 
 from .errors import ParamError
 from .generate import CLUMP_PARENTS
@@ -36,8 +37,7 @@ from .generate import CLUMP_PARENTS
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function",
            "learn_layers", "layer_recipe", "matern_cluster_k", "SIGNIFICANT", "SIMULATIONS"]
 
-#: a term's coefficient stays while |b / se| is at least this, or sqrt(log n) where that is more (the
-#: Bayesian information criterion's price of a term, n objects)
+#: a term's coefficient stays while |b / se| is at least this
 SIGNIFICANT = 2.0
 #: Poisson patterns Diggle's test compares the example with (rank 1 of 20: the 5 % level)
 SIMULATIONS = 19
@@ -204,43 +204,51 @@ def _quadrature(example: Example, cells: int) -> tuple[np.ndarray, np.ndarray, n
 
 
 def _newton(x: np.ndarray, w: np.ndarray, y: np.ndarray, start: float) -> tuple[np.ndarray, np.ndarray]:
-    """The Poisson log-likelihood ``sum y x.b - sum w exp(x.b)`` maximized: b and the inverse Fisher matrix."""
+    """The Poisson log-likelihood ``sum y x.b - sum w exp(x.b)``, less a ridge ``RIDGE |b|^2 / 2`` on the
+    standardized terms (not the intercept), maximized: b and the inverse of its Hessian."""
     b = np.zeros(x.shape[1])
     b[0] = start
+    ridge = np.full(len(b), RIDGE)
+    ridge[0] = 0.0  # the intercept is free
+
+    def loglik(c):
+        return y @ (x @ c) - (w * np.exp(np.clip(x @ c, -700, 700))).sum() - 0.5 * ridge @ (c * c)
+
     for _ in range(100):
         mu = w * np.exp(np.clip(x @ b, -700, 700))
-        grad = x.T @ (y - mu)
-        fisher = (x * mu[:, None]).T @ x + 1e-9 * np.eye(len(b))
+        grad = x.T @ (y - mu) - ridge * b
+        fisher = (x * mu[:, None]).T @ x + np.diag(ridge) + 1e-9 * np.eye(len(b))
         step = np.linalg.solve(fisher, grad)
-        ll = y @ (x @ b) - mu.sum()
+        ll = loglik(b)
         t = 1.0
         while t > 1e-6:  # halve the step until the likelihood grows
-            nb = b + t * step
-            if y @ (x @ nb) - (w * np.exp(np.clip(x @ nb, -700, 700))).sum() >= ll - 1e-12:
+            if loglik(b + t * step) >= ll - 1e-12:
                 break
             t /= 2
         b = b + t * step
         if np.abs(t * step).max() < 1e-10:
             break
     mu = w * np.exp(np.clip(x @ b, -700, 700))
-    return b, np.linalg.pinv((x * mu[:, None]).T @ x)
+    return b, np.linalg.pinv((x * mu[:, None]).T @ x + np.diag(ridge))
 
 
-#: the knots of each feature's hinges: these quantiles of it over the example's ground
-KNOTS = (0.25, 0.5, 0.75)
+#: the ridge on a standardized term's coefficient: it keeps near-collinear hinges from running away, and is
+#: negligible beside the likelihood of a pattern of more than a few objects
+RIDGE = 1.0
+#: the knots of each feature's hinges: its octiles over the example's ground
+KNOTS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
 
 
 def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, significant: float = SIGNIFICANT) -> Intensity:
     """The intensity of ``example`` over ``ground``'s features ``names`` (default: all of them; none without a
-    ground): log-linear in each feature and its hinges at the quartiles (:data:`KNOTS`) of the feature over
-    the example's ground, the terms that are not significant dropped (``|b / se| <`` the larger of
-    ``significant`` and its share of ``sqrt(log n)``, the Bayesian information criterion's price of a term)."""
+    ground): log-linear in each feature and its hinges at the octiles (:data:`KNOTS`) of the feature over
+    the example's ground, the terms that are not significant dropped: ``|b / se| <`` the larger of
+    ``significant`` and the normal quantile of a 5 % chance over all the features (Bonferroni)."""
     n = len(example.xz)
     if n == 0:
         raise ParamError(f"{example.source}: expected at least one object to learn from, found none")
     base = list(() if ground is None else (names or ground.names))
     cells = cells or int(min(250, max(48, math.sqrt(4 * n))))
-    significant = max(significant, math.sqrt(math.log(max(n, 2))) * significant / SIGNIFICANT)
     pts, w, y = _quadrature(example, cells)
     raw = ground.at(pts, base) if base else np.zeros((len(pts), 0))
     term_names, knots, cols = [], [], []
@@ -251,12 +259,15 @@ def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, sig
         term_names.append(name)
         knots.append(np.nan)
         cols.append(f)
-        for q in np.unique(np.quantile(f[n:], KNOTS)):
-            if f[n:].min() < q < f[n:].max():
+        lo, hi = f[n:].min(), f[n:].max()
+        for q in np.unique(np.quantile(f[n:], KNOTS)):  # not within 2 % of either end
+            if lo + 0.02 * (hi - lo) < q < hi - 0.02 * (hi - lo):
                 term_names.append(name)
                 knots.append(float(q))
                 cols.append(np.maximum(0.0, f - q))
     feats = np.stack(cols, axis=1) if cols else np.zeros((len(pts), 0))
+    if cols:  # a 5 % chance over all the features, not each (Bonferroni; a feature's hinges go together)
+        significant = max(significant, float(norm.isf(0.025 / len(set(term_names)))) * significant / SIGNIFICANT)
     mean, sd = feats[n:].mean(axis=0), feats[n:].std(axis=0)
     keep = [i for i in range(feats.shape[1]) if sd[i] > 1e-12]
     while True:
