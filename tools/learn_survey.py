@@ -104,14 +104,16 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     row = {"plot": name, "objects": len(test.xz), "generated (median)": float(np.median(counts)),
            "total ratio": float(np.median(counts) / len(test.xz)), "terms": " ".join(lay.intensity.labels) or "none",
            "pattern": lay.spacing.pattern}
-    worst = 0.0
+    worst, where = 0.0, ""
     if ground is not None:
         for f in ground.names:
             edges = np.quantile(ground.at(_grid(w), [f])[:, 0], [0, 0.25, 0.5, 0.75, 1])
             a = np.histogram(ground.at(test.xz, [f])[:, 0], edges)[0]
             b = np.median([np.histogram(ground.at(m, [f])[:, 0], edges)[0] for m in made], axis=0)
-            worst = max(worst, float(np.max(np.abs(b / np.maximum(a, 1) - 1))))
-        row["worst quartile"] = worst
+            off = np.abs(b / np.maximum(a, 1) - 1)
+            if off.max() > worst:
+                worst, where = float(off.max()), f"{f} Q{int(np.argmax(off)) + 1}"
+        row["worst quartile"] = f"{worst:.3f} ({where})"
     spacing = math.sqrt((w[2] - w[0]) * (w[3] - w[1]) / len(test.xz))
     r = np.linspace(0.5, 5.0, 19) * spacing
     r = r[r <= min(w[2] - w[0], w[3] - w[1]) / 4]
