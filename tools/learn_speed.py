@@ -25,6 +25,7 @@ import axialdeform as ad  # noqa: E402
 from axialdeform.core import learn as L  # noqa: E402
 from axialdeform.core.generate import Generate  # noqa: E402
 from axialdeform.gl.generate import TileGenerator  # noqa: E402
+
 from helpers import processes as P  # noqa: E402
 
 
