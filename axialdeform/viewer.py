@@ -59,6 +59,7 @@ from .gl.image import look_from_keywords, pop_look_keywords
 from .gl.renderer import MODES, AxialRenderer
 from .gl.scene import SceneRenderer, ground_spheres
 from .gl.shadow import ShadowMap
+from .viewer_brush import Brush, Stroke
 
 __all__ = ["Viewer", "ViewerSettings", "KEY_ACTIONS"]
 
@@ -68,10 +69,12 @@ _log = logging.getLogger(__name__)
 KEY_ACTIONS = {
     "NUMBER_1": "solid", "NUMBER_2": "flat", "NUMBER_3": "wireframe", "W": "next mode",
     "N": "new seed", "UP": "more bend", "EQUAL": "more bend", "DOWN": "less bend", "MINUS": "less bend",
-    "G": "ground", "R": "reset camera", "S": "screenshot", "V": "wind",
+    "G": "ground", "R": "reset camera", "S": "screenshot", "V": "wind", "B": "brush", "E": "erase",
+    "LEFT_BRACKET": "smaller brush", "RIGHT_BRACKET": "larger brush", "M": "save masks",
 }
 #: single characters accepted by ``on_key_event`` in place of a window's key code
-_CHAR_KEYS = {"1": "NUMBER_1", "2": "NUMBER_2", "3": "NUMBER_3", "+": "EQUAL", "-": "MINUS"}
+_CHAR_KEYS = {"1": "NUMBER_1", "2": "NUMBER_2", "3": "NUMBER_3", "+": "EQUAL", "-": "MINUS", "[": "LEFT_BRACKET",
+              "]": "RIGHT_BRACKET"}
 #: the viewer draws levels of detail by default from this many instances on
 LOD_AUTO_COUNT = 100_000
 
@@ -180,6 +183,8 @@ class _ViewerMixin:
         self._gpu = {}  # key -> GeneratedTiles: the GPU makes the instances straight into the layer's renderer
         self._spheres = {}  # key -> (k, 4) the held tiles' bounds (shadows, the ground)
         self._rounds = 0  # N pressed: generated layers take seed + 7919 rounds
+        #: painting where generated layers grow (B; viewer_brush.py)
+        self.brush = Brush(self, s.get("scene_file"), s.get("first_name", ""), getattr(s.get("extra"), "terrain", None))
         self._update_title(force=True)
 
     # ------------------------------------------------------------ camera
@@ -215,8 +220,12 @@ class _ViewerMixin:
         return self.orbit.matrices(self._aspect())
 
     def on_mouse_drag_event(self, x, y, dx, dy):
-        """Orbit: 0.3 degrees per pixel."""
-        self.orbit.orbit(-0.3 * dx, 0.3 * dy)
+        """Orbit: 0.3 degrees per pixel; with the brush on (B), paint the first generated layer under the cursor."""
+        at = self.brush.at(x, y) if self.brush.on and self.brush.layers() else None
+        if at is not None:
+            self.brush.stroke(Stroke(next(iter(self.brush.layers())), *at, self.brush.radius, self.brush.erase))
+        elif not self.brush.on:
+            self.orbit.orbit(-0.3 * dx, 0.3 * dy)
 
     def on_mouse_scroll_event(self, x_offset, y_offset):
         """Zoom: 10 % per scroll step."""
@@ -255,6 +264,15 @@ class _ViewerMixin:
 
                     self.wind = Wind()
                 self.renderer.wind = None if self.renderer.wind is not None else self.wind
+        elif what == "brush":
+            self.brush.on = not self.brush.on
+        elif what == "erase":
+            self.brush.erase = not self.brush.erase
+        elif what in ("smaller brush", "larger brush"):
+            self.brush.radius *= 0.8 if what == "smaller brush" else 1.25
+        elif what == "save masks":
+            for path in self.brush.save():
+                _log.info("wrote %s", path)
         elif what == "reset camera":
             self.reset_camera()
         elif what == "screenshot":
@@ -540,7 +558,8 @@ class Viewer:
             raise ParamError("animate(t) must return as many instances as params")
         scene = dict(mesh=mesh, params=params, animate=animate, tint=tint, seed=seed, bend=bend, mode=mode,
                      up=up, look=look, on_screenshot=on_screenshot, parts=parts, wind=wind, extra=extra,
-                     culling=culling, lod_error=lod_error, walk=walk, generate=first.generate)
+                     culling=culling, lod_error=lod_error, walk=walk, generate=first.generate, scene_file=scene.path,
+                     first_name=first.name)
         if lod is not None:
             scene["lod"] = bool(lod)
         app = type("AxialViewer", (_ViewerMixin, mglw.WindowConfig), {"scene": scene, "samples": look.msaa})

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+import argparse
 import math
 from pathlib import Path
 
-from ..core.errors import ArgumentError
 from ..core.ground_features import FEATURES
 from ..core.io.example import learn_layer, learned_paths, read_terrain, write_learned
 from ..core.io.safeio import check_output_path
@@ -18,7 +18,7 @@ def _window(text: str) -> tuple:
     except ValueError:
         w = ()
     if len(w) != 4 or not all(math.isfinite(v) for v in w) or not (w[2] > w[0] and w[3] > w[1]):
-        raise ArgumentError(f"--window: expected x0,z0,x1,z1 with x1 > x0 and z1 > z0, found {text!r}")
+        raise argparse.ArgumentTypeError(f"expected x0,z0,x1,z1 with x1 > x0 and z1 > z0, found {text!r}")
     return w
 
 

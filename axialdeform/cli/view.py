@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import argparse
 import math
+from pathlib import Path
 
+from ..core.brush import Stroke, mask_path
 from ..core.errors import AxialDeformError
 from ..core.io.params import read_params
 from ..core.io.safeio import check_count, check_output_path
@@ -34,7 +37,8 @@ def add_parser(sub) -> None:
     v = sub.add_parser("view", help="look at instances in an interactive window", description=(
         "Open MESH (a file, or 'stone' / 'leaf' / 'leafcard' / 'tree') deformed by PARAMS (or by random parameters) in a window: "
         "drag to orbit, scroll to zoom; keys 1/2/3 solid/flat/wireframe, W next mode, N new seed, "
-        "UP/DOWN bend amplitude, G ground, V wind, R reset camera, S screenshot, ESC quit."))
+        "UP/DOWN bend amplitude, G ground, V wind, R reset camera, S screenshot, ESC quit; B brush (a drag paints "
+        "where a scene's first generated layer grows), E paint/erase, [ ] its radius, M save the masks."))
     v.add_argument("mesh", help="base mesh file, or 'stone' / 'leaf' / 'leafcard' / 'tree'")
     add_axis(v)
     v.add_argument("params", nargs="?", help="parameter file (default: random parameters)")
@@ -63,11 +67,27 @@ def add_parser(sub) -> None:
     v.add_argument("--walk", metavar="DX,DZ", default=None,
                    help="move the camera's target DX, DZ world units a frame (a walk; a scene's generated "
                         "layers are made tile by tile around it) (default: still)")
+    v.add_argument("--paint", action="append", type=_stroke, metavar="LAYER:X,Z,R[:erase]",
+                   help="paint (or erase) a disc of radius R at X, Z where a scene's generated LAYER grows, before the "
+                        "frames (repeatable); with --headless the masks are then saved beside the scene file "
+                        "(SCENE-LAYER-mask.png), which the scene reads again when loaded (default: none)")
     v.add_argument("--no-lod", action="store_true", help="no levels of detail (default: on from 100 000 instances)")
     add_max_triangles(v)
     add_overwrite(v)
     v.set_defaults(handler=run, time=None)
 
+
+
+def _stroke(text: str) -> Stroke:
+    layer, _, rest = text.partition(":")
+    where, _, mode = rest.partition(":")
+    try:
+        x, z, r = (float(v) for v in where.split(","))
+        if not layer or mode not in ("", "erase"):
+            raise ValueError(text)
+        return Stroke(layer, x, z, r, mode == "erase")
+    except ValueError:  # a ParamError too: a radius <= 0
+        raise argparse.ArgumentTypeError(f"expected LAYER:X,Z,R[:erase] with R > 0, found {text!r}") from None
 
 
 def run(args) -> None:
@@ -110,6 +130,11 @@ def run(args) -> None:
     if args.screenshot:  # never an input, nor a file that exists without --overwrite
         sources = scene.sources if scene is not None else (*mesh.sources, args.params)
         check_output_path(args.screenshot, sources, "screenshot", overwrite=args.overwrite)
+    if args.paint and scene is None:
+        raise AxialDeformError("--paint: expected a scene file with generated layers (view SCENE.toml --paint ...)")
+    for stroke in args.paint or ():  # a mask replaces only the mask it was read from: never another input
+        masks = {mask_path(scene.path, layer.name) for layer in scene.layers}
+        check_output_path(mask_path(scene.path, stroke.layer), [s for s in scene.sources if Path(s) not in masks], "mask")
     walk = None
     if args.walk is not None:
         try:
@@ -129,11 +154,15 @@ def run(args) -> None:
 
         mglw.run_window_config_instance(viewer)
         return
+    for stroke in args.paint or ():
+        viewer.brush.stroke(stroke)
     try:
         viewer.step(args.frames)
         if args.screenshot:
             viewer.save_screenshot(args.screenshot)
         print(viewer.status() + (f" - wrote {args.screenshot}" if args.screenshot else ""))
+        for path in viewer.brush.save() if args.paint else ():
+            print(f"wrote {path} (the mask of its layer: read again whenever the scene is loaded)")
     finally:
         viewer.release()
         viewer.wnd.destroy()

@@ -68,6 +68,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from .brush import fold, mask_path
 from .camera import CameraSpec
 from .errors import ArgumentError, SceneError
 from .generate import GroundMaps, check_extent, check_extent_slots, check_reach, generate_extent
@@ -78,7 +79,7 @@ from .look import DEFAULT_LOOK, Look
 from .mesh import BaseMesh, area_weighted_normals
 from .params import as_params, check_drawable
 from .scatter import scatter
-from .surface import load_density, load_surface
+from .surface import load_density, load_mask, load_surface
 
 __all__ = ['Scene', 'Layer', 'load_scene', 'is_scene_file', 'SCENE_SUFFIXES']
 
@@ -293,7 +294,8 @@ def build_scene(recipe: SceneRecipe, scene_type: type = Scene, *, scale_counts: 
     for layer in recipe.layers:
         scene.layers.append(_build_layer(layer, scene, surface, scale_counts))
     # every file the scene read: the scene files, meshes and what they name, parameters, images
-    scene.sources = list(dict.fromkeys([*recipe.sources, *(s for layer in scene.layers for s in layer.mesh.sources)]))
+    masks = [lay.generate.mask for lay in scene.layers if getattr(lay, "generate", None) is not None and lay.generate.mask]
+    scene.sources = list(dict.fromkeys([*recipe.sources, *(s for layer in scene.layers for s in layer.mesh.sources), *masks]))
     return scene
 
 
@@ -327,6 +329,10 @@ def _build_layer(recipe: LayerRecipe, scene: Scene, surface, scale_counts: float
                 g = np.asarray(scene.terrain.positions, np.float64)
                 gen = replace(gen, extent=check_extent(gen.generate, (g[:, 0].min(), g[:, 2].min(), g[:, 0].max(), g[:, 2].max())))
             density = load_density(gen.density) if gen.density is not None else None
+            painted = mask_path(scene.path, recipe.name) if scene.path is not None else None
+            if painted is not None and painted.is_file():  # the brush's mask, read again (core/brush.py)
+                density = fold(density, load_mask(painted))
+                gen = replace(gen, mask=painted)
             gen = replace(gen, maps=GroundMaps.of(scene.terrain, density, gen.extent))
             check_reach(gen.generate, gen.reach, mesh.axis_count)  # a tree's slots hold every axis: bounded before any is made
             check_extent_slots(gen.generate, gen.extent, mesh.axis_count)

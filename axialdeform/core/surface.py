@@ -404,6 +404,15 @@ def load_density(source, name: str = "<array>") -> np.ndarray:
     return grey
 
 
+def load_mask(path) -> np.ndarray:
+    """A generated layer's painted mask (:mod:`~axialdeform.core.brush`): (rows, cols) float32 grey levels in
+    [0, 1] from an image path; unlike a density map it may be all black (everything erased)."""
+    grey = _read_grey(Path(path), "mask", kind="density")
+    if grey.size == 0:
+        raise ScatterError(f"mask {path}: the image has no pixels; expected a grey image")
+    return grey.astype(np.float32)
+
+
 def density_at(grey: np.ndarray, points: np.ndarray, surface: Surface) -> np.ndarray:
     """Nearest-pixel grey level under each point: (k, 3) -> (k,)."""
     rows, cols = grey.shape

@@ -87,6 +87,17 @@ class TileGenerator:
         self._fbo = ctx.framebuffer(self._color)
         self._released = False
 
+    def set_density(self, maps: GroundMaps, mesh) -> None:
+        """The density map of ``maps`` from now on (a painted mask, :mod:`~axialdeform.core.brush`): its texture
+        and its numbers; the tiles made next read it."""
+        values = recipe_uniforms(self.recipe, mesh, maps)
+        for name in ("has_density", "d_lo", "d_inv", "d_size", "d_wrap"):
+            self._set("u_" + name, tuple(values[name]) if isinstance(values[name], list) else values[name])
+        grid = np.zeros((1, 1), np.float32) if maps.density is None else np.ascontiguousarray(maps.density, np.float32)
+        self._textures[1].release()
+        self._textures[1] = self.ctx.texture((grid.shape[1], grid.shape[0]), 1, grid.tobytes(), dtype="f4")
+        self._textures[1].filter = (moderngl.NEAREST, moderngl.NEAREST)
+
     def _set(self, name: str, value) -> None:
         """A uniform of the slots' program(s) (both, where there is a compute shader)."""
         for prog in self._programs:

@@ -120,6 +120,8 @@ def test_bad_examples_are_one_line_and_exit_2(tmp_path, rows, message):
 
 def test_outputs_and_terrains_are_checked_before_anything_is_written(survey, tmp_path):
     folder, scene, csv, xz, kind = survey
+    res = run("learn", csv, "-o", tmp_path / "w.toml", "--window", "0,0,-1,1")
+    assert res.returncode == 2 and "argument --window: expected x0,z0,x1,z1 with x1 > x0" in res.stderr, res.stderr
     (tmp_path / "o.toml").write_text("keep")
     res = run("learn", csv, "--terrain", scene, "-o", tmp_path / "o.toml")
     assert res.returncode == 2 and "exists; refusing to replace it" in res.stderr

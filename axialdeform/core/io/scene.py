@@ -128,6 +128,7 @@ class GenerateRecipe:
     reach: float = 0.0
     density: Path | None = None  # the density map's image (the scene builds the ground maps)
     maps: object = None  # GroundMaps: the terrain's heights and the density map (made by the scene)
+    mask: Path | None = None  # the painted mask beside the scene file, when there is one (core.brush)
 
 
 @dataclass
