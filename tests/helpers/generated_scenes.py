@@ -6,6 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
+
+from axialdeform.core.brush import Stroke, mask_path, new_mask, paint
 
 ROOT = Path(__file__).resolve().parents[2]
 LANDSCAPE = ROOT / "examples" / "landscape"
@@ -109,7 +112,8 @@ def close(got, want) -> float:
 
 
 def learned_clumps(folder: Path, hills: Path) -> Path:
-    """A scene learned (``learn``'s library calls) from a clumped survey on ``hills``' terrain: stones in clumps."""
+    """A scene learned (``learn``'s library calls) from a clumped survey on ``hills``' terrain: stones in clumps,
+    with a clearing painted into its mask."""
     from axialdeform.core.io.example import learn_layer, write_learned
     from axialdeform.core.learn import Example
 
@@ -120,4 +124,7 @@ def learned_clumps(folder: Path, hills: Path) -> Path:
     assert layers[0].spacing.pattern == "cluster", layers[0].spacing
     out = folder / "learned.toml"
     write_learned(out, layers, hills, mesh="stone", size=0.2)
+    mask = new_mask()  # a clearing painted with the brush: the mask beside the scene file
+    paint(mask, (-20.0, -15.0, 20.0, 15.0), Stroke("learned", 0.0, 0.0, 4.0, erase=True))
+    Image.fromarray((mask * 65535).astype(np.uint16)).save(mask_path(out, "learned"))
     return out

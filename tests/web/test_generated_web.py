@@ -298,14 +298,17 @@ def test_a_generated_page_on_a_height_map_keeps_and_tints_as_python_and_render(b
 
 @pytest.mark.slow
 def test_a_learned_layer_in_clumps_is_the_python_records_on_the_page(browser, generated_site):
-    """A layer learned from a clumped survey (clump_cells, clump_radius, its density map): the page makes the
-    Python library's records."""
+    """A layer learned from a clumped survey (clump_cells, clump_radius, its density map) with a clearing painted
+    into its mask: the page makes the Python library's records, and none in the clearing."""
     v = Visit(browser, generated_site["url"] + "learned/index.html")
     try:
         assert v.state["ready"] is True, v.state
         layers = v.page.evaluate("window.axialdeformView.generated()")
-        assert ad.Scene.load(generated_site["learned"]).layers[0].generate.generate.clumped
+        scene = ad.Scene.load(generated_site["learned"])
+        assert scene.layers[0].generate.generate.clumped and scene.layers[0].generate.mask is not None
         assert _check_records(layers, generated_site["learned"]) > 100
+        p = np.concatenate([np.asarray(g["data"], np.float32).reshape(-1, g["width"]) for g in layers])[:, [10, 12]]
+        assert not (np.hypot(p[:, 0], p[:, 1]) < 3.9).any()  # the painted clearing
         assert v.errors == []
     finally:
         v.close()
