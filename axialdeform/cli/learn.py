@@ -40,8 +40,7 @@ def add_parser(sub) -> None:
                                                   "(default: %(default)s)")
     p.add_argument("--window", type=_window, help="the ground the example covers, x0,z0,x1,z1 (default: the "
                                                   "objects' bounding box grown by half a mean spacing)")
-    p.add_argument("--layer", help="the layer of a scene-file example, or the node of a glTF example (default: "
-                                   "none; a glTF example's first instanced node)")
+    p.add_argument("--layer", help="the layer of a scene-file example (required there; default: none)")
     p.add_argument("--mask", help="a grey image of the water over the example's terrain, white = water (default: "
                                   "none, no 'water' feature)")
     p.add_argument("--apply-mask", help="the water of --apply-to's terrain (default: none)")

@@ -90,8 +90,10 @@ def test_learn_from_a_parameter_file_a_gltf_scene_and_a_scene_layer(tmp_path):
         editor.add_geometry(trimesh.creation.box((0.3, 0.3, 0.3)), node_name=f"rock{i}",
                             transform=trimesh.transformations.translation_matrix((x, 0.0, z)))
     editor.export(tmp_path / "editor.glb")
+    _foreign_instanced(tmp_path / "foreign.glb", params[:, POSITION])
     (tmp_path / "scene.toml").write_text('[[layer]]\nname = "rocks"\nmesh = "stone"\nparams = "p.adp"\n')
-    for src, extra in (("p.adp", ()), ("instanced.glb", ()), ("editor.glb", ()), ("scene.toml", ("--layer", "rocks"))):
+    for src, extra in (("p.adp", ()), ("instanced.glb", ()), ("editor.glb", ()), ("foreign.glb", ()),
+                       ("scene.toml", ("--layer", "rocks"))):
         out = tmp_path / f"{src}.toml"
         res = run("learn", tmp_path / src, "-o", out, "--window", "0,0,40,30", "--mesh", "stone", *extra)
         assert res.returncode == 0, (src, res.stderr)
@@ -101,6 +103,27 @@ def test_learn_from_a_parameter_file_a_gltf_scene_and_a_scene_layer(tmp_path):
         assert len(ad.Scene.load(out).layers[0].params) == pytest.approx(400, rel=0.15)
     res = run("learn", tmp_path / "scene.toml", "-o", tmp_path / "x.toml", "--layer", "trees")
     assert res.returncode == 2 and "layer: expected one of rocks (--layer NAME), found 'trees'" in res.stderr
+
+
+def _foreign_instanced(path, positions):
+    """A GLB of one triangle instanced by EXT_mesh_gpu_instancing with TRANSLATION alone, under a parent node
+    that moves it up 2 (as other tools write them)."""
+    import pygltflib
+
+    tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
+    t = np.asarray(positions, np.float32).tobytes()
+    g = pygltflib.GLTF2(
+        scene=0, scenes=[pygltflib.Scene(nodes=[0])],
+        nodes=[pygltflib.Node(translation=[0.0, 2.0, 0.0], children=[1]),
+               pygltflib.Node(mesh=0, extensions={"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 1}}})],
+        meshes=[pygltflib.Mesh(primitives=[pygltflib.Primitive(attributes=pygltflib.Attributes(POSITION=0))])],
+        accessors=[pygltflib.Accessor(bufferView=0, componentType=5126, count=3, type="VEC3", min=[0, 0, 0], max=[1, 1, 0]),
+                   pygltflib.Accessor(bufferView=1, componentType=5126, count=len(positions), type="VEC3")],
+        bufferViews=[pygltflib.BufferView(buffer=0, byteOffset=0, byteLength=len(tri)),
+                     pygltflib.BufferView(buffer=0, byteOffset=len(tri), byteLength=len(t))],
+        buffers=[pygltflib.Buffer(byteLength=len(tri) + len(t))], extensionsUsed=["EXT_mesh_gpu_instancing"])
+    g.set_binary_blob(tri + t)
+    g.save(str(path))
 
 
 @pytest.mark.parametrize("rows, message", [

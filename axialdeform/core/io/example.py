@@ -7,9 +7,10 @@ written as.
   optional ``size`` (any unit) and ``kind`` (a word: one layer a kind); other columns are ignored;
 * a **parameter file** (``.adp``, ``.txt``): each instance's position, its scale (19 numbers and more) as
   its size, its turn about up;
-* a **glTF scene** (``.glb``, ``.gltf``): the instances of ``EXT_mesh_gpu_instancing`` nodes (this
-  library's export, with ``AXIALDEFORM_bend``, or any other's), or else one object a node that has a mesh
-  (as editors export a hand-placed patch): its place, its scale (the mean of the three) and its turn.
+* a **glTF scene**: in a ``.glb``, the instances of every ``EXT_mesh_gpu_instancing`` node (this library's
+  export, with ``AXIALDEFORM_bend``, or any other's) and every other node that has a mesh (as editors
+  export a hand-placed patch), each with its world matrix; a text ``.gltf``: one object a node that has a
+  mesh (trimesh's scene graph). Each object's place, its scale (the mean of the three) and its turn.
 
 The window (the ground the example covers) is given, or the objects' bounding box grown by half a mean
 spacing on each side.  :func:`write_learned_scene` writes a scene file: the terrain's table and one generated
@@ -29,15 +30,16 @@ import numpy as np
 import trimesh
 from PIL import Image
 
-from ..errors import AxialDeformError, ExampleError
+from ..errors import ExampleError
 from ..generate_ground import GroundMaps
 from ..ground_features import FEATURES, GroundFeatures
 from ..learn import Example, layer_recipe, learn_layers
 from ..record import ANGLES, POSITION, SCALE
 from ..scene import load_scene
 from ..surface import load_density, load_surface
+from ..transforms import matrices_from_quaternions
 from .atomic import atomic_path, atomic_write_text
-from .gltf_read import read_instanced_glb
+from .glb import load_glb, read_accessor
 from .params import read_params
 from .safeio import open_regular
 from .scene import parse_scene
@@ -126,26 +128,75 @@ def _read_records(params: np.ndarray) -> dict:
     return {"xz": params[:, POSITION][:, [0, 2]], "size": size, "yaw": params[:, ANGLES][:, 1]}
 
 
-def _read_gltf(path: Path, layer: str | None) -> dict:
-    try:
-        return _read_records(read_instanced_glb(path, layer, fallback=False)[1])
-    except AxialDeformError:
-        pass
+def _trs(t, r, s) -> np.ndarray:
+    """(n, 4, 4) matrices (column vectors) of translations (n, 3), quaternions (n, 4, xyzw) and scales (n, 3)."""
+    m = np.zeros((len(t), 4, 4))
+    m[:, :3, :3] = matrices_from_quaternions(r) * np.asarray(s, np.float64)[:, None, :]
+    m[:, :3, 3], m[:, 3, 3] = t, 1.0
+    return m
+
+
+def _node_matrix(node) -> np.ndarray:
+    if node.matrix is not None and len(node.matrix) == 16:
+        return np.asarray(node.matrix, np.float64).reshape(4, 4).T  # glTF stores it column after column
+    return _trs([node.translation or (0, 0, 0)], [node.rotation or (0, 0, 0, 1)], [node.scale or (1, 1, 1)])[0]
+
+
+def _read_glb(path: Path) -> dict:
+    """Every placed object of a GLB: the instances of each ``EXT_mesh_gpu_instancing`` node (their TRS composed
+    with the node's world matrix) and every other node that has a mesh (its world matrix)."""
+    where = str(path)
+    gltf = load_glb(path)
+    blob = gltf.binary_blob() or b""
+    world, mats = {}, []
+    roots = gltf.scenes[gltf.scene or 0].nodes if gltf.scenes else range(len(gltf.nodes))
+    stack = [(int(i), np.eye(4)) for i in roots or ()]
+    while stack:  # the node tree, parents first (a node seen twice is a cycle: refused)
+        i, parent = stack.pop()
+        if not 0 <= i < len(gltf.nodes) or i in world:
+            raise ExampleError(f"{where}: node {i}: expected each node once in the scene's tree")
+        node = gltf.nodes[i]
+        world[i] = m = parent @ _node_matrix(node)
+        stack += [(int(c), m) for c in node.children or ()]
+        inst = (node.extensions or {}).get("EXT_mesh_gpu_instancing")
+        if node.mesh is None:
+            continue
+        if isinstance(inst, dict) and isinstance(inst.get("attributes"), dict):
+            attrs = inst["attributes"]
+            read = {k: read_accessor(gltf, blob, attrs[k], k, f"{where}: node {node.name or i}") for k in
+                    ("TRANSLATION", "ROTATION", "SCALE") if k in attrs}
+            n = max((len(v) for v in read.values()), default=0)
+            t = read.get("TRANSLATION", np.zeros((n, 3)))
+            r = read.get("ROTATION", np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)))
+            sc = read.get("SCALE", np.ones((n, 3)))
+            if not (len(t) == len(r) == len(sc) == n):
+                raise ExampleError(f"{where}: node {node.name or i}: EXT_mesh_gpu_instancing: expected its attributes "
+                                   "to have one value an instance each")
+            mats.append(m[None] @ _trs(t, r, sc))
+        else:
+            mats.append(m[None])
+    if not mats:
+        raise ExampleError(f"{where}: no placed objects; expected EXT_mesh_gpu_instancing nodes or nodes with a mesh")
+    return _placed(np.concatenate(mats))
+
+
+def _placed(m: np.ndarray) -> dict:
+    """Where objects of world matrices ``m`` (n, 4, 4) stand, their size (the mean scale) and turn about up."""
+    s = np.linalg.norm(m[:, :3, :3], axis=1)  # each column's length: the scale along x, y, z
+    z = m[:, :3, 2] / np.where(s[:, 2:3] > 0, s[:, 2:3], 1.0)  # where the object's +z points
+    return {"xz": m[:, [0, 2], 3], "size": s.mean(axis=1), "yaw": np.arctan2(z[:, 0], z[:, 2])}
+
+
+def _read_gltf(path: Path) -> dict:
+    """A text glTF (``.gltf``): one object a node that has a mesh, through trimesh's scene graph."""
     try:
         scene = trimesh.load(str(path), force="scene")
     except Exception as exc:  # noqa: BLE001 - any reader failure on a hostile file
         raise ExampleError(f"{path}: could not read the glTF scene ({type(exc).__name__}: {exc})") from None
-    xz, size, yaw = [], [], []
-    for node in scene.graph.nodes_geometry:
-        m, _ = scene.graph.get(node)
-        m = np.asarray(m, np.float64)
-        s = np.linalg.norm(m[:3, :3], axis=0)
-        xz.append((m[0, 3], m[2, 3]))
-        size.append(float(s.mean()))
-        yaw.append(math.atan2(m[0, 2] / s[2], m[2, 2] / s[2]))
-    if not xz:
-        raise ExampleError(f"{path}: no placed objects; expected EXT_mesh_gpu_instancing nodes or nodes with a mesh")
-    return {"xz": np.array(xz), "size": np.array(size), "yaw": np.array(yaw)}
+    mats = [np.asarray(scene.graph.get(node)[0], np.float64) for node in scene.graph.nodes_geometry]
+    if not mats:
+        raise ExampleError(f"{path}: no placed objects; expected nodes with a mesh")
+    return _placed(np.stack(mats))
 
 
 def read_example(source, window=None, *, layer: str | None = None) -> Example:
@@ -162,8 +213,10 @@ def read_example(source, window=None, *, layer: str | None = None) -> Example:
         suffix = path.suffix.lower()
         if suffix == ".csv":
             data = _read_csv(path)
-        elif suffix in (".glb", ".gltf"):
-            data = _read_gltf(path, layer)
+        elif suffix == ".glb":
+            data = _read_glb(path)
+        elif suffix == ".gltf":
+            data = _read_gltf(path)
         elif suffix == ".toml":
             scene = load_scene(path)
             names = [lay.name for lay in scene.layers]
@@ -260,7 +313,7 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
         The ground the example covers (None: the objects' bounding box grown by half a mean spacing, cut to
         the terrain).
     layer : str or None
-        The layer of a scene-file example, or the node of a glTF one.
+        The layer of a scene-file example.
     mask : str, PathLike or None
         A grey image of the water over the terrain (white = water): the feature ``water``.
     features : sequence of str or None
