@@ -3,11 +3,12 @@
 An *example* is where objects stand (``xz`` on a terrain, optional sizes and kinds) inside a window of
 ground.  :func:`learn_layers` fits, per kind:
 
-* **the intensity**, log-linear in the ground's features (:mod:`~axialdeform.core.ground_features`):
-  ``log lambda(x) = b0 + sum_k b_k f_k(x)``, the maximum-likelihood fit of an inhomogeneous Poisson process by
+* **the intensity**, piecewise linear on a log scale in each of the ground's features
+  (:mod:`~axialdeform.core.ground_features`): ``log lambda(x) = b0 + sum_k b_k t_k(x)``, each term a feature or
+  a hinge of it at one of its octiles; the maximum-likelihood fit of an inhomogeneous Poisson process by
   Berman-Turner quadrature (a grid of dummy points over the window; Newton's method on the standardized
-  features).  A feature stays only while it is significant (|b / se| >= 2, dropped weakest first), so a
-  pattern that ignores the slope does not learn a slope from noise;
+  terms, a small ridge).  A term stays only while it is significant (Bonferroni over the features; dropped
+  weakest first), so a pattern that ignores the slope does not learn a slope from noise;
 * **the spacing**: the hard core (the smallest distance between two objects), and whether the objects stand
   in clumps or apart: Diggle's global test of the inhomogeneous L-function against 19 Poisson patterns of the
   fitted intensity (maximum absolute deviation over r in [0.5, 5] mean spacings).  Clumps are fitted as a
@@ -18,7 +19,7 @@ ground.  :func:`learn_layers` fits, per kind:
 
 :func:`layer_recipe` turns a learned layer into a generated layer's recipe over a ground -- the same ground or
 ANOTHER one (the learned relation to slope, altitude and water applied there): a rate and a density map of
-``lambda / max lambda``.  Pure numpy and scipy: no GL here.
+``lambda / rate``, and clumps where the example has them.  Pure numpy and scipy: no GL here.
 """
 
 from __future__ import annotations
@@ -39,6 +40,8 @@ __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "
 
 #: a term's coefficient stays while |b / se| is at least this
 SIGNIFICANT = 2.0
+#: the most kinds one example may have (one generated layer each)
+MAX_KINDS = 64
 #: Poisson patterns Diggle's test compares the example with (rank 1 of 20: the 5 % level)
 SIMULATIONS = 19
 #: the spacings (in mean spacings 1 / sqrt(lambda)) the L-function is compared over
@@ -405,6 +408,8 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0) -> li
             raise ParamError(f"{example.source}: window: expected the example's ground [{x0:g}, {z0:g}, {x1:g}, {z1:g}] "
                              f"within the terrain's [{gx0:g}, {gz0:g}, {gx1:g}, {gz1:g}]")
     kinds = [None] if example.kind is None else list(dict.fromkeys(example.kind.tolist()))
+    if len(kinds) > MAX_KINDS:
+        raise ParamError(f"{example.source}: kind: expected at most {MAX_KINDS} kinds (one layer each), found {len(kinds)}")
     out = []
     for kind in kinds:
         part = example if kind is None else example.subset(example.kind == kind)

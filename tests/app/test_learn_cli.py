@@ -171,3 +171,31 @@ def test_a_generated_layer_without_extent_covers_its_height_map_and_needs_one_on
 
     with pytest.raises(SceneError, match=r"needs an extent .*\(on a height-map terrain it covers the terrain\)"):
         ad.Scene.load(flat)
+
+
+def test_hostile_examples_are_refused_in_one_line(tmp_path):
+    rows = "x,z,kind\n" + "".join(f"{i % 10},{i // 10},k{i}\n" for i in range(100))  # 100 kinds
+    (tmp_path / "many.csv").write_text(rows)
+    res = run("learn", tmp_path / "many.csv", "-o", tmp_path / "o.toml")
+    assert res.returncode == 2 and "kind: expected at most 64 kinds (one layer each), found 100" in res.stderr, res.stderr
+    import pygltflib
+
+    g = pygltflib.GLTF2(scene=0, scenes=[pygltflib.Scene(nodes=[0])], nodes=[pygltflib.Node(children=[0])])
+    g.save(str(tmp_path / "loop.glb"))  # a node its own child
+    res = run("learn", tmp_path / "loop.glb", "-o", tmp_path / "o.toml")
+    assert res.returncode == 2 and "node 0: expected each node once in the scene's tree" in res.stderr, res.stderr
+    g = pygltflib.GLTF2(scene=5, scenes=[pygltflib.Scene(nodes=[0])], nodes=[pygltflib.Node(mesh=0)])  # no scene 5
+    g.save(str(tmp_path / "odd.glb"))
+    res = run("learn", tmp_path / "odd.glb", "-o", tmp_path / "o.toml")
+    assert res.returncode == 2 and "not a glTF scene of placed objects this reader understands" in res.stderr, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and not (tmp_path / "o.toml").exists()
+
+
+def test_kinds_that_read_alike_get_layers_of_their_own(tmp_path):
+    rng = np.random.default_rng(1)
+    xz = rng.uniform(0, 20, (300, 2))
+    _survey(tmp_path / "two.csv", xz, kind=np.where(np.arange(300) % 2, "red oak", "red_oak"))
+    res = run("learn", tmp_path / "two.csv", "-o", tmp_path / "o.toml", "--window", "0,0,20,20")
+    assert res.returncode == 0, res.stderr
+    names = [lay["name"] for lay in tomllib.loads((tmp_path / "o.toml").read_text())["layer"]]
+    assert names == ["red_oak-0", "red_oak-1"] and len(list(tmp_path.glob("o-*-density.png"))) == 2

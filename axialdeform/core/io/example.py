@@ -145,8 +145,17 @@ def _node_matrix(node) -> np.ndarray:
 def _read_glb(path: Path) -> dict:
     """Every placed object of a GLB: the instances of each ``EXT_mesh_gpu_instancing`` node (their TRS composed
     with the node's world matrix) and every other node that has a mesh (its world matrix)."""
-    where = str(path)
     gltf = load_glb(path)
+    try:
+        return _placed_in(gltf, str(path))
+    except (TypeError, ValueError, IndexError, KeyError, AttributeError) as exc:  # a hostile file's odd JSON
+        if isinstance(exc, ExampleError):
+            raise
+        raise ExampleError(f"{path}: not a glTF scene of placed objects this reader understands ({type(exc).__name__}: "
+                           f"{str(exc)[:80]})") from None
+
+
+def _placed_in(gltf, where: str) -> dict:
     blob = gltf.binary_blob() or b""
     world, mats = {}, []
     roots = gltf.scenes[gltf.scene or 0].nodes if gltf.scenes else range(len(gltf.nodes))
@@ -339,14 +348,18 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
     return learn_layers(ex, ground, list(features) if features else None, seed)
 
 
-def _layer_name(layer) -> str:
-    return "".join(c if c.isalnum() or c in "-_" else "_" for c in str(layer.kind or "learned"))
+def _layer_name(layer, k: int, learned: list) -> str:
+    """A kind as a layer's name (and file name): letters, digits, - and _; the kind's index added where two
+    kinds would read the same."""
+    clean = lambda lay: "".join(c if c.isalnum() or c in "-_" else "_" for c in str(lay.kind or "learned"))  # noqa: E731
+    name = clean(layer)
+    return name if [clean(lay) for lay in learned].count(name) == 1 else f"{name}-{k}"
 
 
 def learned_paths(out, learned: list) -> list[Path]:
     """The files :func:`write_learned` writes for ``learned`` at ``out``: a density map a layer, then ``out``."""
     out = Path(out)
-    return [out.with_name(f"{out.stem}-{_layer_name(lay)}-density.png") for lay in learned] + [out]
+    return [out.with_name(f"{out.stem}-{_layer_name(lay, k, learned)}-density.png") for k, lay in enumerate(learned)] + [out]
 
 
 def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None, seed: int = 0, extent=None,
@@ -384,6 +397,6 @@ def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None,
                  + "".join(f" + {c:.6g} {n}" for n, c in zip(lay.intensity.labels, lay.intensity.coef[1:])),
                  f"spacing: {s.pattern}, hard core {s.hard_core:.6g}"
                  + (f", clumps: {s.cluster[0]:.6g} a square unit, radius {s.cluster[1]:.6g}" if s.cluster else "")]
-        name = _layer_name(lay)
+        name = _layer_name(lay, k, learned)
         layers.append({"name": name, "mesh": mesh, "generate": keys, "density": density, "comments": notes})
     return write_learned_scene(out, table, layers, "a scene learned by axialdeform learn (docs/learn.md)")
