@@ -26,6 +26,7 @@ EXAMPLES = {
     "05_landscape.py": ("05_landscape.png", "05_landscape.gif"),
     "06_forest.py": ("06_forest.png", "06_forest_close.png", "06_forest.gif"),
     "07_generated_walk.py": ("07_generated_walk.png", "07_generated_walk_far.png"),
+    "08_learned_forest.py": ("08_learned_forest.png", "08_survey.csv"),
 }
 BACKGROUND = np.array([0.93, 0.94, 0.96]) * 255  # render_image's default clear colour
 
@@ -358,3 +359,16 @@ def test_the_generated_walk_does_not_end_and_holds_the_same_count(run_example):
         # many separate things on the ground (the ground's colour: the commonest, the median pixel)
         assert blobs(foreground(lower, np.median(lower.reshape(-1, 3), axis=0))) > 40, f
 
+
+
+@pytest.mark.slow
+def test_the_learned_forest_stands_in_clumps_on_the_landscape(run_example):
+    """The survey is learned as clumps thicker on steep ground, and the landscape grows trees from it."""
+    out, stdout = run_example("08_learned_forest.py")
+    assert "cluster" in stdout and "slope" in stdout, stdout
+    scene = ad.Scene.load(out / "08_learned_forest.toml")
+    gen = scene.layers[0].generate.generate
+    assert gen.clumped and len(scene.layers[0].params) > 100
+    img = load(out / "08_learned_forest.png")
+    green = (img[:, :, 1].astype(int) - img[:, :, 0] > 20) & (img[:, :, 1].astype(int) - img[:, :, 2] > 20)
+    assert green.mean() > 0.05, green.mean()  # the crowns
