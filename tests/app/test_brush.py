@@ -96,3 +96,29 @@ def test_a_bad_stroke_is_one_line_and_exit_2(tmp_path, paint_arg, message):
     assert res.returncode == 2 and "Traceback" not in res.stderr, res.stderr
     assert len(res.stderr.strip().splitlines()) == 1 and re.search(message, res.stderr), res.stderr
     assert not mask_path(tmp_path / "s.toml", "stones").exists()
+
+
+@pytest.mark.slow
+def test_the_brush_finds_the_ground_under_a_pixel(tmp_path):
+    """The window's brush paints where the cursor points: the ground point it finds projects back to the pixel."""
+    from axialdeform.core.generate_ground import ground_height
+    from axialdeform.viewer import Viewer
+
+    (tmp_path / "terrain.png").write_bytes((ROOT / "examples" / "landscape" / "terrain.png").read_bytes())
+    (tmp_path / "s.toml").write_text(SCENE)
+    v = Viewer.create(ad.Scene.load(tmp_path / "s.toml"), headless=True, size=(320, 240))
+    try:
+        v.step(1)
+        view, proj = v.matrices()
+        for px in ((160, 120), (60, 200), (250, 80)):
+            x, z = v.brush.at(*px)
+            h = ground_height(v.generate.maps, np.array([[x, z]], np.float32))[0][0]
+            c = np.array([x, h, z, 1.0]) @ (np.asarray(view, np.float64) @ np.asarray(proj, np.float64))
+            assert ((c[0] / c[3] + 1) / 2 * 320, (1 - c[1] / c[3]) / 2 * 240) == pytest.approx(px, abs=0.5)
+        assert v.brush.at(160, 0) is None or v.brush.at(160, 0) != v.brush.at(160, 120)
+        assert v.brush.stroke(Stroke("stones", *v.brush.at(160, 120), 3.0, erase=True))
+        assert "" not in v._tiles  # made again on the next frame
+        v.step(1)
+    finally:
+        v.release()
+        v.wnd.destroy()
