@@ -7,8 +7,9 @@ import math
 from pathlib import Path
 
 from ..core.ground_features import FEATURES
-from ..core.io.example import learn_layer, learned_paths, read_terrain, write_learned
+from ..core.io.example import learn_layer, learned_paths, write_learned
 from ..core.io.safeio import check_output_path
+from ..core.io.scene import parse_scene
 from ._common import add_overwrite
 
 
@@ -60,18 +61,14 @@ def run(args) -> None:
                           features=args.features, seed=args.seed)
     target, mask = (args.apply_to, args.apply_mask) if args.apply_to else (args.terrain, args.mask)
     inputs = [args.example, args.terrain, args.apply_to, args.mask, args.apply_mask]
-    for scene in (args.terrain, args.apply_to):
-        if scene:
-            inputs.append(read_terrain(scene)[0]["heightmap"])
+    for scene in (args.terrain, args.apply_to):  # and the height maps they name (parsed, not read)
+        terrain = parse_scene(scene).terrain if scene else None
+        if terrain is not None:
+            inputs.append(terrain.file)
     for path in learned_paths(args.output, learned):
         check_output_path(path, [p for p in inputs if p], "learned scene", overwrite=args.overwrite)
     written = write_learned(args.output, learned, target, mesh=args.mesh, mask=mask, seed=args.seed,
                             size=args.size)
     for lay in learned:
-        s = lay.spacing
-        feats = ", ".join(f"{n} {c:+.4g}" for n, c in zip(lay.intensity.labels, lay.intensity.coef[1:])) or "none"
-        print(f"{lay.kind or 'layer'}: {lay.count} objects; log rate {lay.intensity.coef[0]:.4g}, features: {feats}; "
-              f"spacing {s.pattern}, hard core {s.hard_core:.4g}"
-              + (f", clumps {s.cluster[0]:.4g} a square unit, radius {s.cluster[1]:.4g}" if s.cluster else ""))
+        print(f"{lay.kind or 'layer'}: {lay.describe()}")
     print(f"wrote {Path(written[-1])} and {len(written) - 1} density map(s)")
-

@@ -187,6 +187,14 @@ class LearnedLayer:
     yaw: tuple
     window: tuple = (0.0, 0.0, 1.0, 1.0)
 
+    def describe(self, digits: int = 4) -> str:
+        """What was learned, in words: ``learned from N objects: log rate = ...; spacing: ...``."""
+        terms = "".join(f" + {c:.{digits}g} {n}" for n, c in zip(self.intensity.labels, self.intensity.coef[1:]))
+        s = self.spacing
+        clumps = f", clumps: {s.cluster[0]:.{digits}g} a square unit, radius {s.cluster[1]:.{digits}g}" if s.cluster else ""
+        return (f"learned from {self.count} objects: log rate = {self.intensity.coef[0]:.{digits}g}{terms}; "
+                f"spacing: {s.pattern}, hard core {s.hard_core:.{digits}g}{clumps}")
+
 
 def _quadrature(example: Example, cells: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Berman-Turner quadrature: the points (data then dummy), their weights, and 1 for data."""

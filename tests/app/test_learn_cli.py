@@ -97,7 +97,7 @@ def test_learn_from_a_parameter_file_a_gltf_scene_and_a_scene_layer(tmp_path):
         out = tmp_path / f"{src}.toml"
         res = run("learn", tmp_path / src, "-o", out, "--window", "0,0,40,30", "--mesh", "stone", *extra)
         assert res.returncode == 0, (src, res.stderr)
-        assert "layer: 400 objects" in res.stdout, (src, res.stdout)
+        assert "layer: learned from 400 objects" in res.stdout, (src, res.stdout)
         gen = tomllib.loads(out.read_text())["layer"][0]["generate"]
         assert gen["extent"] == [0.0, 0.0, 40.0, 30.0]
         assert len(ad.Scene.load(out).layers[0].params) == pytest.approx(400, rel=0.15)

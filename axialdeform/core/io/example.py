@@ -348,18 +348,17 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
     return learn_layers(ex, ground, list(features) if features else None, seed)
 
 
-def _layer_name(layer, k: int, learned: list) -> str:
-    """A kind as a layer's name (and file name): letters, digits, - and _; the kind's index added where two
+def _layer_names(learned: list) -> list[str]:
+    """Each kind as a layer's name (and file name): letters, digits, - and _; the kind's index added where two
     kinds would read the same."""
-    clean = lambda lay: "".join(c if c.isalnum() or c in "-_" else "_" for c in str(lay.kind or "learned"))  # noqa: E731
-    name = clean(layer)
-    return name if [clean(lay) for lay in learned].count(name) == 1 else f"{name}-{k}"
+    names = ["".join(c if c.isalnum() or c in "-_" else "_" for c in str(lay.kind or "learned")) for lay in learned]
+    return [n if names.count(n) == 1 else f"{n}-{k}" for k, n in enumerate(names)]
 
 
 def learned_paths(out, learned: list) -> list[Path]:
     """The files :func:`write_learned` writes for ``learned`` at ``out``: a density map a layer, then ``out``."""
     out = Path(out)
-    return [out.with_name(f"{out.stem}-{_layer_name(lay, k, learned)}-density.png") for k, lay in enumerate(learned)] + [out]
+    return [out.with_name(f"{out.stem}-{name}-density.png") for name in _layer_names(learned)] + [out]
 
 
 def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None, seed: int = 0, extent=None,
@@ -382,7 +381,7 @@ def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None,
         if missing:
             raise ExampleError(f"{terrain or 'flat ground'}: expected the feature {missing[0]} the layer "
                                f"{lay.kind or 'learned'} depends on{' (give its mask)' if missing[0] == 'water' else ''}")
-    layers = []
+    layers, names = [], _layer_names(learned)
     for k, lay in enumerate(learned):
         keys, density = layer_recipe(lay, ground, extent)
         keys["seed"] = seed + k
@@ -392,11 +391,7 @@ def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None,
             keys["scale"] = [size, size]
         if terrain is None:
             keys["extent"] = list(extent)
-        s = lay.spacing
-        notes = [f"learned from {lay.count} objects: log rate = {lay.intensity.coef[0]:.6g}"
-                 + "".join(f" + {c:.6g} {n}" for n, c in zip(lay.intensity.labels, lay.intensity.coef[1:])),
-                 f"spacing: {s.pattern}, hard core {s.hard_core:.6g}"
-                 + (f", clumps: {s.cluster[0]:.6g} a square unit, radius {s.cluster[1]:.6g}" if s.cluster else "")]
-        name = _layer_name(lay, k, learned)
+        notes = lay.describe(6).split("; ", 1)
+        name = names[k]
         layers.append({"name": name, "mesh": mesh, "generate": keys, "density": density, "comments": notes})
     return write_learned_scene(out, table, layers, "a scene learned by axialdeform learn (docs/learn.md)")
