@@ -37,7 +37,7 @@ from scipy.stats import ks_2samp
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import axialdeform as ad  # noqa: E402
-from axialdeform.core.io.example import read_terrain, write_learned  # noqa: E402
+from axialdeform.core.io.example import read_example, read_terrain, write_learned  # noqa: E402
 from axialdeform.core.learn import Example, l_function, learn_layers  # noqa: E402
 from axialdeform.core.record import POSITION, SCALE  # noqa: E402
 
@@ -166,9 +166,6 @@ def main(argv=None) -> int:
     ll = data["longleaf"]
     longleaf = _survey(folder / "longleaf.csv", ll["x"], ll["y"], ll["marks"])
     rows = []
-    ex = ad.learn_layer  # noqa: F841 - the public name reads the same files
-    from axialdeform.core.io.example import read_example
-
     e_bei = read_example(bei, (-500, -250, 500, 250))
     e_ll = read_example(longleaf, (0, 0, 200, 200))
     rows.append(compare("bei", e_bei, bei_scene, folder, args.sims))

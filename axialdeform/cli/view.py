@@ -132,9 +132,11 @@ def run(args) -> None:
         check_output_path(args.screenshot, sources, "screenshot", overwrite=args.overwrite)
     if args.paint and scene is None:
         raise AxialDeformError("--paint: expected a scene file with generated layers (view SCENE.toml --paint ...)")
-    for stroke in args.paint or ():  # a mask replaces only the mask it was read from: never another input
+    if args.paint:  # a mask replaces only the mask it was read from: never another input
         masks = {mask_path(scene.path, layer.name) for layer in scene.layers}
-        check_output_path(mask_path(scene.path, stroke.layer), [s for s in scene.sources if Path(s) not in masks], "mask")
+        others = [s for s in scene.sources if Path(s) not in masks]
+        for layer in {stroke.layer for stroke in args.paint}:
+            check_output_path(mask_path(scene.path, layer), others, "mask")
     walk = None
     if args.walk is not None:
         try:
