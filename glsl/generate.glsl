@@ -132,8 +132,8 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
                     out vec2 d5, out vec3 position, out vec3 angles, out vec3 extra, out vec3 tint, out float kept) {
     uint key = axial_gen_key(r.seed, tile);
     uint ui = uint(i);
-    float u[25];
-    for (int k = 0; k < 25; ++k) u[k] = axial_gen_u(key, ui, uint(k));
+    float u[22];  // u22 .. u24: only a layer in clumps draws them (below)
+    for (int k = 0; k < 22; ++k) u[k] = axial_gen_u(key, ui, uint(k));
     float cx = float(tile.x * r.m + i % r.m), cz = float(tile.y * r.m + i / r.m);
     position.x = (cx + 0.5 + r.jitter * (u[0] - 0.5)) * r.cell;
     position.z = (cz + 0.5 + r.jitter * (u[1] - 0.5)) * r.cell;
@@ -143,10 +143,10 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
         // R sqrt(u22) (cos, sin)(2 pi u23)
         vec2 pc = floor((vec2(cx, cz) + 0.5) / r.clump_cells);
         uint pkey = axial_gen_key(r.seed ^ 2654435769u, ivec2(pc));
-        uint q = uint(min(floor(u[24] * 8.0), 7.0));
+        uint q = uint(min(floor(axial_gen_u(key, ui, 24u) * 8.0), 7.0));
         vec2 parent = (pc + vec2(axial_gen_u(pkey, q, 0u), axial_gen_u(pkey, q, 1u))) * (r.clump_cells * r.cell);
-        vec2 cs = axial_cos_sin(6.283185307179586 * u[23]);
-        float rho = r.clump_radius * sqrt(u[22]);
+        vec2 cs = axial_cos_sin(6.283185307179586 * axial_gen_u(key, ui, 23u));
+        float rho = r.clump_radius * sqrt(axial_gen_u(key, ui, 22u));
         position.x = parent.x + rho * cs.x;
         position.z = parent.y + rho * cs.y;
     }

@@ -411,8 +411,8 @@ export function axialGenU(key, i, k) {
 export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, position, angles, extra, tint, kept) {
   const key = uint(axialGenKey(r.seed, tile)).toVar();
   const ui = uint(uint(i)).toVar();
-  const u = Array.from({ length: 25 }, () => float(0).toVar());
-  for (let k = 0; k < 25; k++) {
+  const u = Array.from({ length: 22 }, () => float(0).toVar());
+  for (let k = 0; k < 22; k++) {
     u[k].assign(axialGenU(key, ui, uint((k >>> 0))));
   }
   const cx = float(float(tile.x.mul(r.m).add(i.mod(r.m)))).toVar();
@@ -428,10 +428,10 @@ export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, positi
   If(r.clump_cells.greaterThan(float(1.0)).or(r.clump_radius.greaterThan(float(0.0))), () => {
     const pc = vec2(floor(vec2(cx, cz).add(float(0.5)).div(r.clump_cells))).toVar();
     const pkey = uint(axialGenKey(r.seed.bitXor(uint(2654435769)), ivec2(pc))).toVar();
-    const q = uint(uint(min(floor(u[24].mul(float(8.0))), float(7.0)))).toVar();
+    const q = uint(uint(min(floor(axialGenU(key, ui, uint(24)).mul(float(8.0))), float(7.0)))).toVar();
     const parent = vec2(pc.add(vec2(axialGenU(pkey, q, uint(0)), axialGenU(pkey, q, uint(1)))).mul(r.clump_cells.mul(r.cell))).toVar();
-    const cs = vec2(axialCosSin(float(6.283185307179586).mul(u[23]))).toVar();
-    const rho = float(r.clump_radius.mul(sqrt(u[22]))).toVar();
+    const cs = vec2(axialCosSin(float(6.283185307179586).mul(axialGenU(key, ui, uint(23))))).toVar();
+    const rho = float(r.clump_radius.mul(sqrt(axialGenU(key, ui, uint(22))))).toVar();
     {
       const _v5 = float(parent.x.add(rho.mul(cs.x))).toVar();
       position.assign(vec3(_v5, position.y, position.z));
