@@ -1,0 +1,336 @@
+"""One layer of instances as Blender data: a base mesh object, a point cloud of instances whose
+points carry each instance's numbers as named attributes, and the Geometry Nodes modifier that
+bends them (:mod:`.nodes`).  And back: the records of such an object, exactly as stored.
+
+A layer is described by plain arrays (:class:`LayerData`), so this module needs numpy and bpy only;
+reading files is :mod:`.read`'s (the axialdeform library).  Coordinates stay the file's (glTF: +Y
+up); the instance object turns them upright for Blender (+Z up) by its own transform, the turn
+Blender's glTF importer makes.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+
+from .nodes import GROUP_PREFIX, build_group
+
+__all__ = ["LayerData", "add_layer", "layer_records", "is_layer", "LAYER_KEY", "UP_TO_Z_UP", "base_arrays", "T_SLACK"]
+
+#: the custom property that marks an instance object and holds its axes (JSON)
+LAYER_KEY = "axialdeform"
+#: a scene's up to Blender's +Z, the instance object's transform (y: glTF's, the turn Blender's glTF importer makes)
+UP_TO_Z_UP = {
+    "y": ((1.0, 0.0, 0.0, 0.0), (0.0, 0.0, -1.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)),
+    "z": ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0)),
+    "x": ((0.0, 0.0, -1.0, 0.0), (0.0, 1.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)),
+}
+#: axialdeform's T_SLACK: beyond it an ancestor axis's t is clamped and its slope drops out
+T_SLACK = 1e-4
+#: Blender shows every instance bent in the viewport up to this many (above it, rigid until asked)
+VIEWPORT_BEND_LIMIT = 20_000
+
+
+@dataclass
+class LayerData:
+    """What one layer is, as plain arrays.
+
+    positions, normals : (v, 3) float32 — the base mesh (file coordinates).
+    faces : (f, 3) int.
+    frames : (K, 3, 3) float — each axis's rows ``e_a, e_u, e_v``; lo, length : (K,) float.
+    parents : (K,) int (-1 for the root); anchors : (K,) float; line : (2,) axis 0's axis line.
+    vertex_axis : (v,) int — each vertex's axis.
+    params : (n, 10·K + 6 [+3 [+3]]) float32 — the records.
+    uvs : (v, 2) float32 or None (glTF convention, v down); color : RGBA or None.
+    """
+
+    name: str
+    positions: np.ndarray
+    normals: np.ndarray
+    faces: np.ndarray
+    frames: np.ndarray
+    lo: np.ndarray
+    length: np.ndarray
+    parents: tuple
+    anchors: tuple
+    line: tuple
+    vertex_axis: np.ndarray
+    params: np.ndarray
+    uvs: np.ndarray | None = None
+    color: tuple | None = None
+    names: tuple = ()
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def count(self) -> int:
+        return len(self.frames)
+
+    @property
+    def level(self) -> int:
+        """0: 16-number records, 1: + scale, twist, taper, 2: + tint."""
+        return (self.params.shape[1] - 10 * self.count - 6) // 3
+
+    def axes_json(self) -> dict:
+        return {"count": self.count, "names": list(self.names) or [f"axis{k}" for k in range(self.count)],
+                "parents": [int(p) for p in self.parents], "frames": np.asarray(self.frames, float).tolist(),
+                "lo": [float(x) for x in self.lo], "length": [float(x) for x in self.length],
+                "anchors": [float(a) for a in self.anchors], "line": [float(x) for x in self.line],
+                "width": int(self.params.shape[1]), **self.extra}
+
+
+def _depths(parents) -> np.ndarray:
+    d = np.zeros(len(parents), dtype=int)
+    for k in range(1, len(parents)):
+        d[k] = d[parents[k]] + 1
+    return d
+
+
+def _bernstein(t: np.ndarray, degree: int) -> np.ndarray:
+    i = np.arange(degree + 1)
+    binom = np.array([1.0, 4.0, 6.0, 4.0, 1.0] if degree == 4 else [1.0, 3.0, 3.0, 1.0])
+    return binom * t[:, None] ** i * (1.0 - t[:, None]) ** (degree - i)
+
+
+def _levels(data: LayerData):
+    """Each depth's axes and, per vertex, the weights of the axis of its chain at that depth."""
+    p = np.asarray(data.positions, dtype=np.float64)
+    depth = _depths(data.parents)
+    level_axes = [[int(k) for k in np.flatnonzero(depth == m)] for m in range(int(depth.max()) + 1)]
+    chain = np.eye(data.count, dtype=bool)
+    for k in range(1, data.count):
+        chain[k] |= chain[data.parents[k]]
+    own = chain[np.asarray(data.vertex_axis, dtype=int)]  # (v, K)
+    attrs = {}
+    for m, axes in enumerate(level_axes):
+        pick = np.full(len(p), -1)
+        for item, k in enumerate(axes):
+            pick[own[:, k]] = item
+        b4, s3 = np.zeros((len(p), 5)), np.zeros((len(p), 4))
+        eas, eus, evs = (np.zeros((len(p), 3)) for _ in range(3))
+        for item, k in enumerate(axes):
+            sel = pick == item
+            f = np.asarray(data.frames[k], dtype=np.float64)
+            raw = (p[sel] @ f[0] - data.lo[k]) / data.length[k]
+            t = np.clip(raw, 0.0, 1.0)
+            inside = ((raw >= -T_SLACK) & (raw <= 1 + T_SLACK)) if data.count > 1 else np.ones(len(raw), bool)
+            b4[sel] = _bernstein(t, 4)
+            s3[sel] = 4.0 * _bernstein(t, 3) * (inside / data.length[k])[:, None]
+            eas[sel], eus[sel], evs[sel] = f[0], f[1], f[2]
+        for i in range(5):
+            attrs[f"axial_m{m}_b{i}"] = ("FLOAT", b4[:, i])
+        for i in range(4):
+            attrs[f"axial_m{m}_s{i}"] = ("FLOAT", s3[:, i])
+        if m > 0:
+            attrs[f"axial_m{m}_item"] = ("INT", np.maximum(pick, 0))
+            attrs[f"axial_m{m}_ea"] = ("FLOAT_VECTOR", eas)
+            attrs[f"axial_m{m}_eu"] = ("FLOAT_VECTOR", eus)
+            attrs[f"axial_m{m}_ev"] = ("FLOAT_VECTOR", evs)
+    f0 = np.asarray(data.frames[0], dtype=np.float64)
+    local = p @ f0.T
+    raw = (local[:, 0] - data.lo[0]) / data.length[0]
+    inside = ((raw >= -T_SLACK) & (raw <= 1 + T_SLACK)) if data.count > 1 else np.ones(len(raw), bool)
+    w = np.zeros((len(p), 3))
+    w[:, :2] = local[:, 1:] - np.asarray(data.line, dtype=np.float64)
+    attrs["axial_turn_t"] = ("FLOAT", np.clip(raw, 0.0, 1.0))
+    attrs["axial_turn_w"] = ("FLOAT_VECTOR", w)
+    attrs["axial_turn_in"] = ("FLOAT", inside / data.length[0])
+    attrs["axial_rest_normal"] = ("FLOAT_VECTOR", np.asarray(data.normals, dtype=np.float64))
+    attrs["axial_axis"] = ("INT", np.asarray(data.vertex_axis, dtype=int))
+    return level_axes, attrs
+
+
+_FOREACH = {"FLOAT": ("value", 1), "INT": ("value", 1), "FLOAT_VECTOR": ("vector", 3), "FLOAT2": ("vector", 2),
+            "FLOAT_COLOR": ("color", 4)}
+
+
+def _store(mesh, name: str, kind: str, values) -> None:
+    attr = mesh.attributes.new(name, kind, "POINT")
+    key, width = _FOREACH[kind]
+    arr = np.ascontiguousarray(values, dtype=np.int32 if kind == "INT" else np.float32)
+    attr.data.foreach_set(key, arr.reshape(-1) if width > 1 or arr.ndim == 1 else arr[:, 0])
+
+
+def _read(mesh, name: str, kind: str, count: int) -> np.ndarray:
+    key, width = _FOREACH[kind]
+    out = np.empty(count * width, dtype=np.int32 if kind == "INT" else np.float32)
+    mesh.attributes[name].data.foreach_get(key, out)
+    return out.reshape(count, width) if width > 1 else out
+
+
+def instance_attributes(params: np.ndarray, count: int) -> dict:
+    """The point attributes of a layer's records: (name, kind, values)."""
+    v = np.asarray(params, dtype=np.float32)
+    n, k = len(v), count
+    out = {}
+    for j in range(k):
+        for i in range(5):
+            name = f"axial_d{i + 1}" if j == 0 else f"axial_a{j}_d{i + 1}"
+            out[name] = ("FLOAT2", v[:, 10 * j + 2 * i:10 * j + 2 * i + 2])
+    rest = v[:, 10 * k:]
+    out["axial_angles"] = ("FLOAT_VECTOR", rest[:, 3:6])
+    if rest.shape[1] >= 9:
+        out["axial_scale"] = ("FLOAT", rest[:, 6])
+        out["axial_twist"] = ("FLOAT", rest[:, 7])
+        out["axial_taper"] = ("FLOAT", rest[:, 8])
+    if rest.shape[1] >= 12:
+        out["axial_tint"] = ("FLOAT_COLOR", np.concatenate([rest[:, 9:12], np.ones((n, 1), np.float32)], axis=1))
+    return out
+
+
+def _base_object(data: LayerData, collection):
+    mesh = bpy.data.meshes.new(f"{data.name} base")
+    pos = np.asarray(data.positions, dtype=np.float32)
+    faces = np.asarray(data.faces, dtype=np.int32)
+    mesh.vertices.add(len(pos))
+    mesh.vertices.foreach_set("co", pos.reshape(-1))
+    mesh.loops.add(faces.size)
+    mesh.loops.foreach_set("vertex_index", faces.reshape(-1))
+    mesh.polygons.add(len(faces))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, faces.size, 3, dtype=np.int32))
+    mesh.update(calc_edges=True)
+    mesh.polygons.foreach_set("use_smooth", np.ones(len(faces), dtype=bool))
+    if data.uvs is not None:
+        uv = np.asarray(data.uvs, dtype=np.float32)[faces.reshape(-1)].copy()
+        uv[:, 1] = 1.0 - uv[:, 1]  # glTF's v runs down, Blender's up
+        mesh.uv_layers.new(name="UVMap").data.foreach_set("uv", uv.reshape(-1))
+    level_axes, attrs = _levels(data)
+    if data.uvs is not None:  # as the file had them (the UV layer's are flipped)
+        attrs["axial_uv"] = ("FLOAT2", np.asarray(data.uvs, dtype=np.float32))
+    for name, (kind, values) in attrs.items():
+        _store(mesh, name, kind, values)
+    obj = bpy.data.objects.new(f"{data.name} base", mesh)
+    collection.objects.link(obj)
+    obj.hide_render = True
+    obj.hide_viewport = True
+    return obj, level_axes
+
+
+def _material(data: LayerData):
+    mat = bpy.data.materials.new(f"{data.name} look")
+    mat.use_nodes = True
+    tree = mat.node_tree
+    bsdf = next(nd for nd in tree.nodes if nd.type == "BSDF_PRINCIPLED")
+    color = tuple(data.color or (0.8, 0.8, 0.8, 1.0))
+    bsdf.inputs["Base Color"].default_value = color[:3] + (1.0,) if len(color) >= 3 else color
+    if data.level >= 2:  # the tint multiplies the base colour
+        tint = tree.nodes.new("ShaderNodeAttribute")
+        tint.attribute_name = "axial_tint"
+        mix = tree.nodes.new("ShaderNodeMix")
+        mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+        mix.inputs["Factor"].default_value = 1.0
+        mix.inputs[6].default_value = bsdf.inputs["Base Color"].default_value
+        tree.links.new(tint.outputs["Color"], mix.inputs[7])
+        tree.links.new(mix.outputs[2], bsdf.inputs["Base Color"])
+    return mat
+
+
+def add_layer(data: LayerData, collection=None, base_collection=None):
+    """Make one layer's objects and return its instance object (one object, however many instances).
+
+    The base mesh goes to ``base_collection`` (hidden; made if None), the instance object to
+    ``collection`` (the scene's if None).
+    """
+    scene = bpy.context.scene
+    collection = collection or scene.collection
+    if base_collection is None:
+        base_collection = bpy.data.collections.get("axialdeform bases") or bpy.data.collections.new("axialdeform bases")
+        if base_collection.name not in scene.collection.children:
+            scene.collection.children.link(base_collection)
+        base_collection.hide_render = True
+    base, level_axes = _base_object(data, base_collection)
+    params = np.asarray(data.params, dtype=np.float32)
+    points = bpy.data.meshes.new(f"{data.name} instances")
+    points.vertices.add(len(params))
+    points.vertices.foreach_set("co", params[:, 10 * data.count:10 * data.count + 3].reshape(-1))
+    for name, (kind, values) in instance_attributes(params, data.count).items():
+        _store(points, name, kind, values)
+    points.materials.append(_material(data))
+    obj = bpy.data.objects.new(data.name, points)
+    collection.objects.link(obj)
+    obj[LAYER_KEY] = json.dumps(data.axes_json())
+    obj.matrix_world = UP_TO_Z_UP[data.extra.get("up", "y")]
+    plan = {"frames": np.asarray(data.frames, float).tolist(), "levels": len(level_axes), "level_axes": level_axes,
+            "extended": data.level >= 1, "tinted": data.level >= 2}
+    group = build_group(f"{GROUP_PREFIX} {data.name}", plan)
+    mod = obj.modifiers.new("axialdeform", "NODES")
+    mod.node_group = group
+    ident = {item.name: item.identifier for item in group.interface.items_tree if getattr(item, "in_out", "") == "INPUT"}
+    mod[ident["Base"]] = base
+    mod[ident["Bend in Viewport"]] = len(params) <= VIEWPORT_BEND_LIMIT
+    set_material = group.nodes.new("GeometryNodeSetMaterial")
+    set_material.inputs["Material"].default_value = points.materials[0]
+    out = next(nd for nd in group.nodes if nd.bl_idname == "NodeGroupOutput")
+    last = out.inputs[0].links[0].from_socket
+    group.links.new(last, set_material.inputs["Geometry"])
+    group.links.new(set_material.outputs[0], out.inputs[0])
+    return obj
+
+
+def is_layer(obj) -> bool:
+    return obj is not None and obj.type == "MESH" and LAYER_KEY in obj.keys()
+
+
+def layer_records(obj) -> np.ndarray:
+    """The records of an instance object, float32 exactly as its attributes hold them:
+    ``(n, 10·K + 6 [+3 [+3]])`` (instances moved, deleted or edited in the spreadsheet included)."""
+    info = json.loads(obj[LAYER_KEY])
+    mesh = obj.data
+    n, k, width = len(mesh.vertices), int(info["count"]), int(info["width"])
+    out = np.zeros((n, width), dtype=np.float32)
+    pos = np.empty(n * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", pos)
+    for j in range(k):
+        for i in range(5):
+            name = f"axial_d{i + 1}" if j == 0 else f"axial_a{j}_d{i + 1}"
+            out[:, 10 * j + 2 * i:10 * j + 2 * i + 2] = _read(mesh, name, "FLOAT2", n)
+    r = 10 * k
+    out[:, r:r + 3] = pos.reshape(n, 3)
+    out[:, r + 3:r + 6] = _read(mesh, "axial_angles", "FLOAT_VECTOR", n)
+    if width >= r + 9:
+        out[:, r + 6] = _read(mesh, "axial_scale", "FLOAT", n)
+        out[:, r + 7] = _read(mesh, "axial_twist", "FLOAT", n)
+        out[:, r + 8] = _read(mesh, "axial_taper", "FLOAT", n)
+    if width >= r + 12:
+        out[:, r + 9:r + 12] = _read(mesh, "axial_tint", "FLOAT_COLOR", n)[:, :3]
+    return out
+
+
+def base_arrays(obj) -> dict:
+    """The base mesh of an instance object as the file gave it: positions, normals, faces, uvs, vertex_axis."""
+    mod = next(m for m in obj.modifiers if m.type == "NODES" and m.node_group is not None)
+    ident = {item.name: item.identifier for item in mod.node_group.interface.items_tree
+             if getattr(item, "in_out", "") == "INPUT"}
+    mesh = mod[ident["Base"]].data
+    v, f = len(mesh.vertices), len(mesh.polygons)
+    pos = np.empty(v * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", pos)
+    loops = np.empty(f * 3, dtype=np.int32)
+    mesh.polygons.foreach_get("vertices", loops)
+    return {"positions": pos.reshape(v, 3), "normals": _read(mesh, "axial_rest_normal", "FLOAT_VECTOR", v),
+            "faces": loops.reshape(f, 3), "vertex_axis": _read(mesh, "axial_axis", "INT", v),
+            "uvs": _read(mesh, "axial_uv", "FLOAT2", v) if "axial_uv" in mesh.attributes else None}
+
+
+def set_records(obj, params) -> None:
+    """Replace an instance object's records (same number of axes and width; the count may change)."""
+    info = json.loads(obj[LAYER_KEY])
+    params = np.asarray(params, dtype=np.float32)
+    k, width = int(info["count"]), int(info["width"])
+    if params.ndim != 2 or params.shape[1] != width:
+        raise ValueError(f"{obj.name}: expected records of {width} numbers, found shape {params.shape}")
+    mesh = obj.data
+    if len(mesh.vertices) != len(params):
+        mesh.clear_geometry()
+        mesh.vertices.add(len(params))
+    mesh.vertices.foreach_set("co", params[:, 10 * k:10 * k + 3].reshape(-1))
+    for name, (kind, values) in instance_attributes(params, k).items():
+        if name in mesh.attributes and len(mesh.vertices) == len(params):
+            key, w = _FOREACH[kind]
+            arr = np.ascontiguousarray(values, dtype=np.float32)
+            mesh.attributes[name].data.foreach_set(key, arr.reshape(-1))
+        else:
+            _store(mesh, name, kind, values)
+    mesh.update()

@@ -1,0 +1,100 @@
+"""Files to layers and layers to files, through the axialdeform library (its readers and writers:
+one reading of every format, the library's checks and errors).
+
+``layers_from_file`` reads a GLB (each ``EXT_mesh_gpu_instancing`` node, with ``AXIALDEFORM_bend``), a
+mesh with a parameter file, or a scene file (each layer; a generated layer's instances made by the
+library's generator); ``write_glb`` writes instance objects back as the library's instanced GLB.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .layers import UP_TO_Z_UP, LayerData
+
+__all__ = ["layers_from_file", "layer_data", "base_mesh", "write_glb"]
+
+
+
+def layer_data(name: str, mesh, params, color=None, up: str = "y") -> LayerData:
+    """A :class:`LayerData` of an axialdeform ``BaseMesh`` and its records."""
+    tree = getattr(mesh, "tree", None)
+    if tree is not None:
+        axes = tree.axes
+        parents, anchors, names = tuple(tree.parents), tuple(tree.anchors), tuple(tree.names)
+        vertex_axis = np.asarray(tree.vertex_axis, dtype=int)
+    else:
+        axes, parents, anchors, names = [mesh.axis], (-1,), (0.0,), ()
+        vertex_axis = np.zeros(mesh.vertex_count, dtype=int)
+    if color is None and mesh.parts:
+        color = tuple(float(c) for c in mesh.parts[0].material.base_color)
+    elif color is not None:
+        color = tuple(float(c) for c in color) + (1.0,) * (4 - len(color))
+    axis0 = axes[0]
+    return LayerData(
+        name=name, positions=np.asarray(mesh.positions, np.float32), normals=np.asarray(mesh.normals, np.float32),
+        faces=np.asarray(mesh.faces, np.int64), frames=np.stack([a.matrix for a in axes]),
+        lo=np.array([a.lo for a in axes]), length=np.array([a.length for a in axes]), parents=parents,
+        anchors=anchors, line=tuple(axis0.line), vertex_axis=vertex_axis, params=np.asarray(params, np.float32),
+        uvs=None if mesh.uvs is None else np.asarray(mesh.uvs, np.float32), color=color, names=names,
+        extra={"up": up, "axis_kind": "frame" if axis0.framed else "xyz"[axis0.index]})
+
+
+def layers_from_file(path, mesh_path=None) -> list:
+    """Every layer of ``path`` as a :class:`LayerData`: a ``.glb`` (each instanced node), a scene file
+    (``.toml``: each layer), or a parameter file (``.adp``/text, with ``mesh_path``)."""
+    from axialdeform.core.io.glb import INSTANCING, load_glb
+    from axialdeform.core.io.gltf_read import read_instanced_glb
+    from axialdeform.core.scene import is_scene_file, load_scene
+
+    path = Path(path)
+    if path.suffix.lower() in (".glb", ".gltf"):
+        gltf = load_glb(path)
+        up = ((gltf.scenes[gltf.scene or 0].extras or {}).get("axialdeform", {}) or {}).get("up", "y") \
+            if gltf.scenes else "y"
+        named = [nd.name for nd in gltf.nodes if (nd.extensions or {}).get(INSTANCING) and nd.mesh is not None]
+        out = []
+        for node in named:
+            mesh, params = read_instanced_glb(path, node if len(named) > 1 else None)
+            out.append(layer_data(node or path.stem, mesh, params, up=up if up in UP_TO_Z_UP else "y"))
+        return out
+    if is_scene_file(path):
+        scene = load_scene(path)
+        return [layer_data(layer.name, layer.mesh, layer.params, layer.color, scene.up)
+                for layer in scene.layers if len(layer.params)]
+    from axialdeform.core.io.mesh import load_mesh
+    from axialdeform.core.io.params import read_params
+
+    if mesh_path is None:
+        raise ValueError(f"{path}: a parameter file needs its base mesh (mesh_path)")
+    mesh = load_mesh(mesh_path)
+    return [layer_data(path.stem, mesh, read_params(path, mesh))]
+
+
+def base_mesh(info: dict, positions, normals, faces, uvs=None, vertex_axis=None):
+    """The axialdeform ``BaseMesh`` an instance object was made from (its axes as recorded)."""
+    from axialdeform.core.axes import tree_from_vertices
+    from axialdeform.core.mesh import BaseMesh
+
+    mesh = BaseMesh(np.asarray(positions, np.float32), np.asarray(normals, np.float32), np.asarray(faces),
+                    name=info.get("name", "blender"), uvs=uvs)
+    kind = info.get("axis_kind", "frame")
+    if int(info["count"]) == 1:
+        return mesh.with_axis(kind if kind in ("x", "y", "z") else np.asarray(info["frames"][0]))
+    tree = tree_from_vertices(mesh, np.asarray(vertex_axis, dtype=np.int64), list(info["parents"]),
+                              frames=[np.asarray(f) for f in info["frames"]], names=list(info["names"]),
+                              root_children=False, anchors=info.get("anchors"))
+    return mesh.with_axes(tree)
+
+
+def write_glb(path, layers, up: str = "y"):
+    """Write ``[(name, BaseMesh, params, color)]`` as the library's instanced GLB (one node a layer,
+    ``AXIALDEFORM_bend``), atomically."""
+    from axialdeform.core.io.gltf import export_scene
+    from axialdeform.core.scene import Layer, Scene
+
+    scene = Scene(path=None, up=up, layers=[Layer(name, mesh, params, color=color) for name, mesh, params, color
+                                            in layers])
+    return export_scene(path, scene, layout="instanced")
