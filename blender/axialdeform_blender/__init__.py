@@ -18,7 +18,7 @@ import bpy
 from bpy.props import BoolProperty, FloatVectorProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
-# from .gltf_hooks import glTF2ExportUserExtension  # noqa: F401  (Blender's glTF exporter looks for it here)
+from .gltf_hooks import glTF2ExportUserExtension  # noqa: F401  (Blender's glTF exporter looks for it here)
 from .layers import LAYER_KEY, add_layer, base_arrays, is_layer, layer_records, set_records
 
 bl_info = {  # for Blender before extensions (the manifest is the extension's)

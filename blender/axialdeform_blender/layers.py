@@ -18,10 +18,12 @@ import numpy as np
 
 from .nodes import GROUP_PREFIX, build_group
 
-__all__ = ["LayerData", "add_layer", "layer_records", "is_layer", "LAYER_KEY", "UP_TO_Z_UP", "base_arrays", "T_SLACK"]
+__all__ = ["LayerData", "add_layer", "layer_records", "is_layer", "LAYER_KEY", "BASE_KEY", "UP_TO_Z_UP", "base_arrays", "T_SLACK"]
 
 #: the custom property that marks an instance object and holds its axes (JSON)
 LAYER_KEY = "axialdeform"
+#: the custom property that marks a layer's (hidden) base mesh object
+BASE_KEY = "axialdeform_base"
 #: a scene's up to Blender's +Z, the instance object's transform (y: glTF's, the turn Blender's glTF importer makes)
 UP_TO_Z_UP = {
     "y": ((1.0, 0.0, 0.0, 0.0), (0.0, 0.0, -1.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)),
@@ -78,7 +80,8 @@ class LayerData:
                 "parents": [int(p) for p in self.parents], "frames": np.asarray(self.frames, float).tolist(),
                 "lo": [float(x) for x in self.lo], "length": [float(x) for x in self.length],
                 "anchors": [float(a) for a in self.anchors], "line": [float(x) for x in self.line],
-                "width": int(self.params.shape[1]), **self.extra}
+                "width": int(self.params.shape[1]), "color": None if self.color is None else list(self.color),
+                **self.extra}
 
 
 def _depths(parents) -> np.ndarray:
@@ -205,6 +208,7 @@ def _base_object(data: LayerData, collection):
     collection.objects.link(obj)
     obj.hide_render = True
     obj.hide_viewport = True
+    obj[BASE_KEY] = data.name
     return obj, level_axes
 
 
