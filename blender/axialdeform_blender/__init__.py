@@ -19,7 +19,7 @@ from bpy.props import BoolProperty, FloatVectorProperty, IntProperty, StringProp
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from .gltf_hooks import glTF2ExportUserExtension  # noqa: F401  (Blender's glTF exporter looks for it here)
-from .layers import LAYER_KEY, add_layer, base_arrays, is_layer, layer_records, set_records
+from .layers import LAYER_KEY, add_layer, add_terrain, base_arrays, is_layer, layer_records, set_records
 
 bl_info = {  # for Blender before extensions (the manifest is the extension's)
     "name": "axialdeform", "author": "axialdeform developers", "version": (0, 1, 0), "blender": (4, 2, 0),
@@ -43,15 +43,18 @@ class IMPORT_SCENE_OT_axialdeform(bpy.types.Operator, ImportHelper):
                               default="", subtype="FILE_PATH")
 
     def execute(self, context):
-        from .read import layers_from_file
+        from .read import layers_from_file, terrain_from_file
 
         start = time.perf_counter()
         try:
             layers = layers_from_file(self.filepath, self.mesh_path or None)
+            terrain = terrain_from_file(self.filepath)
         except Exception as exc:  # the library's errors name the file and the field
             self.report({"ERROR"}, _library_error(exc))
             return {"CANCELLED"}
         objects = [add_layer(data) for data in layers]
+        if terrain is not None:
+            add_terrain(*terrain)
         for obj in context.selected_objects:
             obj.select_set(False)
         for obj in objects:

@@ -18,7 +18,7 @@ import numpy as np
 
 from .nodes import GROUP_PREFIX, build_group
 
-__all__ = ["LayerData", "add_layer", "layer_records", "is_layer", "LAYER_KEY", "BASE_KEY", "UP_TO_Z_UP", "base_arrays", "T_SLACK"]
+__all__ = ["LayerData", "add_layer", "add_terrain", "layer_records", "is_layer", "LAYER_KEY", "BASE_KEY", "UP_TO_Z_UP", "base_arrays", "T_SLACK"]
 
 #: the custom property that marks an instance object and holds its axes (JSON)
 LAYER_KEY = "axialdeform"
@@ -47,6 +47,8 @@ class LayerData:
     vertex_axis : (v,) int — each vertex's axis.
     params : (n, 10·K + 6 [+3 [+3]]) float32 — the records.
     uvs : (v, 2) float32 or None (glTF convention, v down); color : RGBA or None.
+    wind_weights : (K, 5) float — the control polygon each axis is pushed along by the wind
+    (``sag_weights`` of its anchor); phases : (n,) float32 — each instance's wind phase.
     """
 
     name: str
@@ -65,6 +67,8 @@ class LayerData:
     color: tuple | None = None
     names: tuple = ()
     extra: dict = field(default_factory=dict)
+    wind_weights: np.ndarray | None = None
+    phases: np.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -122,6 +126,15 @@ def _levels(data: LayerData):
             b4[sel] = _bernstein(t, 4)
             s3[sel] = 4.0 * _bernstein(t, 3) * (inside / data.length[k])[:, None]
             eas[sel], eus[sel], evs[sel] = f[0], f[1], f[2]
+        wb, ws = np.zeros(len(p)), np.zeros(len(p))
+        if data.wind_weights is not None:  # the wind's push on each axis, a multiple of its part across the axis
+            for item, k in enumerate(axes):
+                sel = pick == item
+                c = np.asarray(data.wind_weights[k], dtype=np.float64) * data.length[k]
+                wb[sel] = b4[sel] @ c
+                ws[sel] = s3[sel] @ (c[1:] - c[:-1])
+        attrs[f"axial_m{m}_wb"] = ("FLOAT", wb)
+        attrs[f"axial_m{m}_ws"] = ("FLOAT", ws)
         for i in range(5):
             attrs[f"axial_m{m}_b{i}"] = ("FLOAT", b4[:, i])
         for i in range(4):
@@ -251,6 +264,8 @@ def add_layer(data: LayerData, collection=None, base_collection=None):
     points.vertices.foreach_set("co", params[:, 10 * data.count:10 * data.count + 3].reshape(-1))
     for name, (kind, values) in instance_attributes(params, data.count).items():
         _store(points, name, kind, values)
+    phases = np.zeros(len(params)) if data.phases is None else data.phases
+    _store(points, "axial_wind_phase", "FLOAT", phases)
     points.materials.append(_material(data))
     obj = bpy.data.objects.new(data.name, points)
     collection.objects.link(obj)
@@ -264,12 +279,33 @@ def add_layer(data: LayerData, collection=None, base_collection=None):
     ident = {item.name: item.identifier for item in group.interface.items_tree if getattr(item, "in_out", "") == "INPUT"}
     mod[ident["Base"]] = base
     mod[ident["Bend in Viewport"]] = len(params) <= VIEWPORT_BEND_LIMIT
+    wind = data.extra.get("wind")
+    if wind:  # the scene's wind; the scene's time is its clock
+        for name, key in (("Wind Direction", "direction"), ("Wind Strength", "strength"), ("Gustiness", "gustiness"),
+                          ("Frequency", "frequency"), ("Wavelength", "wavelength")):
+            mod[ident[name]] = wind[key]
     set_material = group.nodes.new("GeometryNodeSetMaterial")
     set_material.inputs["Material"].default_value = points.materials[0]
     out = next(nd for nd in group.nodes if nd.bl_idname == "NodeGroupOutput")
     last = out.inputs[0].links[0].from_socket
     group.links.new(last, set_material.inputs["Geometry"])
     group.links.new(set_material.outputs[0], out.inputs[0])
+    return obj
+
+
+def add_terrain(positions, faces, color, up: str = "y", collection=None):
+    """A scene's terrain as a plain mesh object (stood up as the layers are)."""
+    mesh = bpy.data.meshes.new("terrain")
+    mesh.from_pydata(np.asarray(positions, np.float64).tolist(), [], np.asarray(faces).tolist())
+    mesh.update()
+    mat = bpy.data.materials.new("terrain")
+    mat.use_nodes = True
+    bsdf = next(nd for nd in mat.node_tree.nodes if nd.type == "BSDF_PRINCIPLED")
+    bsdf.inputs["Base Color"].default_value = tuple(color)[:3] + (1.0,)
+    mesh.materials.append(mat)
+    obj = bpy.data.objects.new("terrain", mesh)
+    (collection or bpy.context.scene.collection).objects.link(obj)
+    obj.matrix_world = UP_TO_Z_UP[up]
     return obj
 
 
@@ -337,4 +373,6 @@ def set_records(obj, params) -> None:
             mesh.attributes[name].data.foreach_set(key, arr.reshape(-1))
         else:
             _store(mesh, name, kind, values)
+    if "axial_wind_phase" not in mesh.attributes:
+        _store(mesh, "axial_wind_phase", "FLOAT", np.zeros(len(params)))
     mesh.update()

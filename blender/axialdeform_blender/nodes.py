@@ -148,8 +148,27 @@ def _sum(terms):
     return total
 
 
-def _bend(g: Graph, plan: dict):
-    """Model-space ``s·V''`` and the unit normal ``normalize(cof(J)·n)`` of every realized vertex."""
+def _wind_push(g: Graph, group_in):
+    """The wind's push per unit of axis length in each instance's model frame at the scene's time
+    (``glsl/wind.glsl``'s ``axial_wind_push`` with ``len`` 1): ``strength (1 + gust wave) Rᵀ dir``."""
+    direction = g.vector("NORMALIZE", Field(g, group_in.outputs["Wind Direction"], True))
+    seconds = Field(g, g.node("GeometryNodeInputSceneTime").outputs["Seconds"], False)
+    cycles = Field(g, group_in.outputs["Frequency"], False) * seconds
+    c1 = g.math("FRACT", cycles)
+    c2 = g.math("FRACT", cycles * 2.31)
+    wavenumber = g.op("DIVIDE", 1.0, Field(g, group_in.outputs["Wavelength"], False))  # 0 for 0: no fronts
+    ph = g.attribute("axial_wind_phase") - g.vector("DOT_PRODUCT", g.attribute("axial_position", "FLOAT_VECTOR"),
+                                                    direction) * wavenumber
+    tau = 6.283185307179586
+    wave = 0.6 * g.math("SINE", (c1 + ph) * tau) + 0.4 * g.math("SINE", (c2 + ph * 1.7) * tau)
+    amp = Field(g, group_in.outputs["Wind Strength"], False) * (
+        1.0 + Field(g, group_in.outputs["Gustiness"], False) * wave)
+    return _rotate(g, direction, g.attribute("axial_angles", "FLOAT_VECTOR"), invert=True) * amp
+
+
+def _bend(g: Graph, plan: dict, push):
+    """Model-space ``s·V''`` and the unit normal ``normalize(cof(J)·n)`` of every realized vertex
+    (``push``: the wind's, :func:`_wind_push`)."""
     v = g.attribute("axial_rest_position", "FLOAT_VECTOR")
     n = g.attribute("axial_rest_normal", "FLOAT_VECTOR")
     f0 = plan["frames"][0]
@@ -197,8 +216,13 @@ def _bend(g: Graph, plan: dict):
         sl = _sum([(offsets[i + 1] - offsets[i]) * slopes[i] for i in range(4)])
         dx, dy, _ = d.xyz()
         sx, sy, _ = sl.xyz()
-        disp.append(g.op("MULTIPLY", eu, dx) + g.op("MULTIPLY", ev, dy))
-        across = g.op("MULTIPLY", eu, sx) + g.op("MULTIPLY", ev, sy)
+        # the wind: the push's part across this axis, on the axis's control polygon of its anchor
+        ea_vec = ea if isinstance(ea, Field) else tuple(ea)
+        cross = push - g.op("MULTIPLY", ea_vec, g.vector("DOT_PRODUCT", push, ea_vec))
+        disp.append(g.op("MULTIPLY", eu, dx) + g.op("MULTIPLY", ev, dy)
+                    + cross * g.attribute(f"axial_m{level}_wb"))
+        across = (g.op("MULTIPLY", eu, sx) + g.op("MULTIPLY", ev, sy)
+                  + cross * g.attribute(f"axial_m{level}_ws"))
         ea_xyz = ea if isinstance(ea, tuple) else ea.xyz()
         cols = [cols[m] + across * ea_xyz[m] for m in range(3)]
     moved = moved + _sum(disp)
@@ -211,9 +235,9 @@ def _bend(g: Graph, plan: dict):
     return moved, normal
 
 
-def _rotate(g: Graph, vec, euler):
-    """``R·vec`` with ``R = Rz(rz)·Ry(ry)·Rx(rx)`` (Blender's Euler XYZ)."""
-    node = g.node("ShaderNodeVectorRotate", rotation_type="EULER_XYZ")
+def _rotate(g: Graph, vec, euler, invert: bool = False):
+    """``R·vec`` with ``R = Rz(rz)·Ry(ry)·Rx(rx)`` (Blender's Euler XYZ); ``invert``: ``Rᵀ·vec``."""
+    node = g.node("ShaderNodeVectorRotate", rotation_type="EULER_XYZ", invert=invert)
     g.link(node.inputs["Vector"], vec)
     g.link(node.inputs["Rotation"], euler)
     return Field(g, node.outputs[0], True)
@@ -226,7 +250,10 @@ def build_group(name: str, plan: dict):
         ``frames`` (K, 3, 3) rows ``e_a, e_u, e_v`` of every axis; ``levels`` the depth of the axis tree + 1;
         ``level_axes`` the axes at each depth (their order is ``axial_m{m}_item``'s); ``extended`` whether the
         records have scale, twist and taper; ``tinted`` whether they carry a tint.
-    Inputs: Geometry (the instance points), Base (the base mesh's object), Bend in Viewport (bool).
+    Inputs: Geometry (the instance points), Base (the base mesh's object), Bend in Viewport (bool), and the
+    wind (``docs/wind.md``; the scene's time in seconds is its clock): Wind Direction (the file's
+    coordinates), Wind Strength (tip displacement in axis lengths; 0: still), Gustiness, Frequency (Hz),
+    Wavelength (of the gust fronts; 0: none).
     """
     tree = bpy.data.node_groups.new(name, "GeometryNodeTree")
     face = tree.interface
@@ -234,6 +261,10 @@ def build_group(name: str, plan: dict):
     face.new_socket("Base", in_out="INPUT", socket_type="NodeSocketObject")
     bend_socket = face.new_socket("Bend in Viewport", in_out="INPUT", socket_type="NodeSocketBool")
     bend_socket.default_value = True
+    for name, kind, value in (("Wind Direction", "NodeSocketVector", (1.0, 0.0, 0.0)),
+                              ("Wind Strength", "NodeSocketFloat", 0.0), ("Gustiness", "NodeSocketFloat", 0.6),
+                              ("Frequency", "NodeSocketFloat", 0.5), ("Wavelength", "NodeSocketFloat", 0.0)):
+        face.new_socket(name, in_out="INPUT", socket_type=kind).default_value = value
     face.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
     g = Graph(tree)
     group_in = g.node("NodeGroupInput")
@@ -268,7 +299,7 @@ def build_group(name: str, plan: dict):
     tree.links.new(rest.outputs[0], copies.inputs["Instance"])
     real = g.node("GeometryNodeRealizeInstances")
     tree.links.new(copies.outputs[0], real.inputs["Geometry"])
-    moved, normal = _bend(g, plan)
+    moved, normal = _bend(g, plan, _wind_push(g, group_in))
     world = _rotate(g, moved, angles) + g.attribute("axial_position", "FLOAT_VECTOR")
     place = g.node("GeometryNodeSetPosition")
     tree.links.new(real.outputs[0], place.inputs["Geometry"])

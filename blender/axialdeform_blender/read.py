@@ -14,7 +14,7 @@ import numpy as np
 
 from .layers import UP_TO_Z_UP, LayerData
 
-__all__ = ["layers_from_file", "layer_data", "base_mesh", "write_glb"]
+__all__ = ["layers_from_file", "layer_data", "terrain_from_file", "base_mesh", "write_glb"]
 
 
 
@@ -32,6 +32,9 @@ def layer_data(name: str, mesh, params, color=None, up: str = "y") -> LayerData:
         color = tuple(float(c) for c in mesh.parts[0].material.base_color)
     elif color is not None:
         color = tuple(float(c) for c in color) + (1.0,) * (4 - len(color))
+    from axialdeform.core.axes import sag_weights
+    from axialdeform.core.wind import wind_phase
+
     axis0 = axes[0]
     return LayerData(
         name=name, positions=np.asarray(mesh.positions, np.float32), normals=np.asarray(mesh.normals, np.float32),
@@ -39,7 +42,9 @@ def layer_data(name: str, mesh, params, color=None, up: str = "y") -> LayerData:
         lo=np.array([a.lo for a in axes]), length=np.array([a.length for a in axes]), parents=parents,
         anchors=anchors, line=tuple(axis0.line), vertex_axis=vertex_axis, params=np.asarray(params, np.float32),
         uvs=None if mesh.uvs is None else np.asarray(mesh.uvs, np.float32), color=color, names=names,
-        extra={"up": up, "axis_kind": "frame" if axis0.framed else "xyz"[axis0.index]})
+        extra={"up": up, "axis_kind": "frame" if axis0.framed else "xyz"[axis0.index]},
+        wind_weights=sag_weights(np.asarray(anchors, dtype=np.float64)),
+        phases=wind_phase(np.arange(len(params))).astype(np.float32))
 
 
 def layers_from_file(path, mesh_path=None) -> list:
@@ -62,8 +67,16 @@ def layers_from_file(path, mesh_path=None) -> list:
         return out
     if is_scene_file(path):
         scene = load_scene(path)
-        return [layer_data(layer.name, layer.mesh, layer.params, layer.color, scene.up)
-                for layer in scene.layers if len(layer.params)]
+        out = [layer_data(layer.name, layer.mesh, layer.params, layer.color, scene.up)
+               for layer in scene.layers if len(layer.params)]
+        if scene.wind is not None:  # the scene's wind drives the layers that sway in it
+            for data, layer in zip(out, [x for x in scene.layers if len(x.params)]):
+                if layer.wind:
+                    w = scene.wind
+                    data.extra["wind"] = {"direction": list(w.unit_direction), "strength": w.strength,
+                                          "gustiness": w.gustiness, "frequency": w.frequency,
+                                          "wavelength": w.wavelength}
+        return out
     from axialdeform.core.io.mesh import load_mesh
     from axialdeform.core.io.params import read_params
 
@@ -71,6 +84,19 @@ def layers_from_file(path, mesh_path=None) -> list:
         raise ValueError(f"{path}: a parameter file needs its base mesh (mesh_path)")
     mesh = load_mesh(mesh_path)
     return [layer_data(path.stem, mesh, read_params(path, mesh))]
+
+
+def terrain_from_file(path):
+    """A scene file's terrain as ``(positions, faces, colour, up)``, or None (no terrain, not a scene file)."""
+    from axialdeform.core.scene import is_scene_file, load_scene
+
+    if not is_scene_file(path):
+        return None
+    scene = load_scene(path)
+    if scene.terrain is None:
+        return None
+    return (np.asarray(scene.terrain.positions, np.float32), np.asarray(scene.terrain.faces, np.int64),
+            tuple(scene.terrain_color), scene.up)
 
 
 def base_mesh(info: dict, positions, normals, faces, uvs=None, vertex_axis=None):

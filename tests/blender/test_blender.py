@@ -1,0 +1,138 @@
+"""The Blender add-on (blender/axialdeform_blender), checked in Blender itself: ``bpy`` from the package
+index in its own environment (``.venv-blender``, made by the README's test command: bpy pins a numpy
+the rest of the suite does not use), driven by ``bl_checks.py`` in a subprocess.  Geometry Nodes must
+bend every instance as ``ad.deform`` does, export back exactly, and render what ``render`` draws."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import axialdeform as ad
+from axialdeform.core.io.gltf_read import read_instanced_glb
+from axialdeform.core.wind import apply_wind
+
+ROOT = Path(__file__).resolve().parents[2]
+CHECKS = Path(__file__).with_name("bl_checks.py")
+
+pytestmark = pytest.mark.slow
+
+
+def blender_python() -> str:
+    """The Python with ``bpy``: $AXIALDEFORM_BLENDER_PYTHON, else the README's ``.venv-blender``.  Missing, the
+    tests fail (never skip): the README's test command makes it."""
+    path = os.environ.get("AXIALDEFORM_BLENDER_PYTHON") or str(ROOT / ".venv-blender" / "bin" / "python")
+    if not Path(path).exists():
+        pytest.fail(f"no Python with bpy at {path}: run the README's test command (it makes .venv-blender)")
+    return path
+
+
+def run(*args, timeout=600) -> subprocess.CompletedProcess:
+    proc = subprocess.run([blender_python(), str(CHECKS), *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, cwd=ROOT)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return proc
+
+
+def _length(mesh) -> float:
+    return float(mesh.tree.axes[0].length if getattr(mesh, "tree", None) is not None else mesh.axis.length)
+
+
+def _compare(mesh, params, got, i=0):
+    """Blender's evaluated vertices and corner normals against ad.deform."""
+    pos, nrm = ad.deform(mesh, params)
+    pos, nrm = pos.reshape(-1, 3), nrm.reshape(-1, 3)
+    assert got[f"pos{i}"].shape == pos.shape
+    err = np.abs(got[f"pos{i}"] - pos).max() / _length(mesh)
+    nerr = np.abs(got[f"nrm{i}"] - nrm[got[f"corner{i}"]]).max()
+    return err, nerr
+
+
+CASES = {
+    "stones": lambda: (ad.load_mesh("stone"), dict(bend=0.2)),
+    "framed_extended_tinted": lambda: (ad.load_mesh("leaf", axis="oriented"),
+                                       dict(bend=0.2, twist=0.8, taper=0.3, scale=(0.5, 1.5), tint=0.5)),
+    "tree_anchored": lambda: (ad.load_mesh("tree", axes="parts"), dict(bend=(0.1, 0.3, 0.3), droop=0.3)),
+    "tree_extended_tinted": lambda: (ad.load_mesh("tree", axes="parts"),
+                                     dict(bend=(0.1, 0.3), twist=0.5, taper=0.3, scale=(0.6, 1.4), tint=0.4)),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_geometry_nodes_bend_as_the_library(tmp_path, case):
+    mesh, variation = CASES[case]()
+    params = ad.random_params(mesh, 12, seed=4, variation=ad.Variation(**variation))
+    glb = ad.export_glb(tmp_path / "in.glb", mesh, params, layout="instanced")
+    run("evaluate", glb, "--out", tmp_path / "out.npz")
+    got = np.load(tmp_path / "out.npz")
+    assert int(got["instances0"]) == len(params)  # one object, every instance a point
+    err, nerr = _compare(mesh, params, got)
+    assert err <= 1e-5, f"{case}: vertices {err:.2e} L from ad.deform"
+    assert nerr <= 1e-4, f"{case}: normals {nerr:.2e} from ad.deform"
+
+
+@pytest.mark.parametrize("case", ["stones", "tree_anchored"])
+def test_the_wind_is_an_animated_input(tmp_path, case):
+    mesh, variation = CASES[case]()
+    params = ad.random_params(mesh, 10, seed=2, variation=ad.Variation(**variation))
+    glb = ad.export_glb(tmp_path / "in.glb", mesh, params, layout="instanced")
+    wind = ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.2, gustiness=0.6, frequency=0.5, wavelength=8.0)
+    t = 1.37
+    run("evaluate", glb, "--out", tmp_path / "out.npz", "--time", t, "--wind", "1,0,0.4,0.2,0.6,0.5,8")
+    got = np.load(tmp_path / "out.npz")
+    axes = mesh.tree if getattr(mesh, "tree", None) is not None else mesh.axis
+    moved = apply_wind(wind, axes, params, t)
+    err, nerr = _compare(mesh, moved, got)
+    still, _ = _compare(mesh, params, got)
+    assert still > 100 * 1e-5, "the wind did not move anything"
+    assert err <= 1e-5, f"{case}: vertices in the wind {err:.2e} L from ad.deform of apply_wind"
+    assert nerr <= 1e-4
+
+
+def test_import_edit_export_round_trip(tmp_path):
+    mesh = ad.load_mesh("tree", axes="parts")
+    params = np.asarray(ad.random_params(mesh, 8, seed=9, variation=ad.Variation(bend=(0.1, 0.3), tint=0.3)))
+    glb = ad.export_glb(tmp_path / "in.glb", mesh, params, layout="instanced")
+    run("edit", glb, "--out", tmp_path)
+    k = mesh.axis_count
+    want = params.copy()
+    want[2, 8:10] = np.float32([0.3, -0.2])
+    want[3, 10 * k + 3:10 * k + 6] = np.float32([0.1, 1.2, -0.3])
+    want[0, 10 * k] += np.float32(1.5)
+    want = np.delete(want, 1, axis=0)
+    for name in ("gltf.glb", "ours.glb"):  # Blender's glTF exporter (the hooks) and the add-on's own
+        back_mesh, back = read_instanced_glb(tmp_path / name)
+        assert back_mesh.fingerprint == mesh.fingerprint
+        assert back_mesh.tree.to_json()["parents"] == mesh.tree.to_json()["parents"]
+        np.testing.assert_array_equal(np.asarray(back), want, err_msg=name)
+    report = json.loads(subprocess.run(["node", str(ROOT / "tests/gltf-validator/validate.js"),
+                                        str(tmp_path / "gltf.glb")], capture_output=True, text=True,
+                                       check=True).stdout)
+    assert report["issues"]["numErrors"] == 0 and report["issues"]["numWarnings"] == 0, report["issues"]["messages"]
+    _, varied = read_instanced_glb(tmp_path / "varied.glb")
+    varied = np.asarray(varied)
+    np.testing.assert_array_equal(varied[:, 10 * k:], want[:, 10 * k:])  # where each stands, its look: kept
+    fresh = ad.random_params(mesh, len(want), seed=5, variation=ad.Variation(bend=(0.2, 0.3)))
+    # the library's rules (its random_params in Blender's Python: another numpy, the last float32 bit may differ)
+    np.testing.assert_allclose(varied[:, :10 * k], np.asarray(fresh)[:, :10 * k], rtol=0, atol=1e-6 * _length(mesh))
+    assert np.abs(varied[:, :10 * k] - want[:, :10 * k]).max() > 0.01 * _length(mesh)  # drawn again
+
+
+def test_a_scene_file_imports_layer_by_layer(tmp_path):
+    src = ROOT / "examples" / "landscape" / "landscape.toml"  # a terrain and four layers
+    loaded = ad.Scene.load(src)
+    t = 0.75
+    run("evaluate", src, "--out", tmp_path / "out.npz", "--time", t)
+    got = np.load(tmp_path / "out.npz")
+    layers = sorted((layer for layer in loaded.layers if len(layer.params)), key=lambda layer: layer.name)
+    assert any(layer.wind for layer in layers) and loaded.wind is not None  # the scene's wind comes along
+    for i, layer in enumerate(layers):
+        params = apply_wind(loaded.wind if layer.wind else None, layer.mesh.axis, layer.params, t)
+        err, _ = _compare(layer.mesh, params, got, i)
+        assert err <= 1e-5, f"{src.name} layer {layer.name}: {err:.2e} L"
