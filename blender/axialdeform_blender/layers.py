@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import bpy
 import numpy as np
+from mathutils import Matrix
 
 from .nodes import GROUP_PREFIX, build_group
 
@@ -47,6 +48,10 @@ class LayerData:
     vertex_axis : (v,) int — each vertex's axis.
     params : (n, 10·K + 6 [+3 [+3]]) float32 — the records.
     uvs : (v, 2) float32 or None (glTF convention, v down); color : RGBA or None.
+    colors : (v, 4) float32 or None — linear RGBA vertex colours.
+    parts : list of dict — ``name``, ``start``, ``count`` (faces), ``color`` (linear RGBA), ``texture``
+    ((h, w, 4) uint8 sRGB, first row at the top, or None), ``alpha_mode``, ``alpha_cutoff``, ``default``
+    (the default material: the layer's ``color`` replaces its colour).
     wind_weights : (K, 5) float — the control polygon each axis is pushed along by the wind
     (``sag_weights`` of its anchor); phases : (n,) float32 — each instance's wind phase.
     """
@@ -69,6 +74,8 @@ class LayerData:
     extra: dict = field(default_factory=dict)
     wind_weights: np.ndarray | None = None
     phases: np.ndarray | None = None
+    colors: np.ndarray | None = None
+    parts: list = field(default_factory=list)
 
     @property
     def count(self) -> int:
@@ -212,6 +219,15 @@ def _base_object(data: LayerData, collection):
         uv = np.asarray(data.uvs, dtype=np.float32)[faces.reshape(-1)].copy()
         uv[:, 1] = 1.0 - uv[:, 1]  # glTF's v runs down, Blender's up
         mesh.uv_layers.new(name="UVMap").data.foreach_set("uv", uv.reshape(-1))
+    if data.colors is not None:
+        _store(mesh, "Col", "FLOAT_COLOR", np.asarray(data.colors, dtype=np.float32))
+    parts = data.parts or [{"name": "surface", "start": 0, "count": len(faces), "color": (1.0, 1.0, 1.0, 1.0),
+                            "texture": None, "alpha_mode": "OPAQUE", "alpha_cutoff": 0.5, "default": True}]
+    index = np.zeros(len(faces), dtype=np.int32)
+    for i, part in enumerate(parts):
+        index[part["start"]:part["start"] + part["count"]] = i
+        mesh.materials.append(_material(data, part))
+    mesh.polygons.foreach_set("material_index", index)
     level_axes, attrs = _levels(data)
     if data.uvs is not None:  # as the file had them (the UV layer's are flipped)
         attrs["axial_uv"] = ("FLOAT2", np.asarray(data.uvs, dtype=np.float32))
@@ -225,22 +241,60 @@ def _base_object(data: LayerData, collection):
     return obj, level_axes
 
 
-def _material(data: LayerData):
-    mat = bpy.data.materials.new(f"{data.name} look")
+def _multiply(tree, a, b):
+    """A node multiplying two colour sockets (or a socket and a constant); its output."""
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    mix.inputs["Factor"].default_value = 1.0
+    for socket, value in ((mix.inputs[6], a), (mix.inputs[7], b)):
+        if isinstance(value, tuple):
+            socket.default_value = value
+        else:
+            tree.links.new(value, socket)
+    return mix.outputs[2]
+
+
+def _texture(data: LayerData, part: dict):
+    tex = np.asarray(part["texture"], dtype=np.uint8)
+    h, w = tex.shape[:2]
+    image = bpy.data.images.new(f"{data.name} {part['name']}", w, h, alpha=True)
+    rgba = np.ones((h, w, 4), dtype=np.float32)
+    rgba[..., :tex.shape[2]] = tex[::-1] / 255.0  # Blender's rows run bottom-up
+    image.pixels.foreach_set(rgba.reshape(-1))
+    image.pack()
+    return image
+
+
+def _material(data: LayerData, part: dict):
+    """A part's look: its base colour (the layer's for the default material) times its texture, the vertex
+    colours and each instance's tint (the library's shading multiplies the same)."""
+    mat = bpy.data.materials.new(f"{data.name} {part['name']}")
     mat.use_nodes = True
     tree = mat.node_tree
     bsdf = next(nd for nd in tree.nodes if nd.type == "BSDF_PRINCIPLED")
-    color = tuple(data.color or (0.8, 0.8, 0.8, 1.0))
-    bsdf.inputs["Base Color"].default_value = color[:3] + (1.0,) if len(color) >= 3 else color
+    color = tuple(data.color) if part.get("default") and data.color is not None else tuple(part["color"])
+    color = (color + (1.0,) * 4)[:4]
+    out = None
+    alpha = None
+    if part.get("texture") is not None and data.uvs is not None:
+        node = tree.nodes.new("ShaderNodeTexImage")
+        node.image = _texture(data, part)
+        out, alpha = _multiply(tree, node.outputs["Color"], color), node.outputs["Alpha"]
+    if data.colors is not None:
+        vc = tree.nodes.new("ShaderNodeVertexColor")
+        vc.layer_name = "Col"
+        out = _multiply(tree, vc.outputs["Color"], color if out is None else out)
     if data.level >= 2:  # the tint multiplies the base colour
         tint = tree.nodes.new("ShaderNodeAttribute")
         tint.attribute_name = "axial_tint"
-        mix = tree.nodes.new("ShaderNodeMix")
-        mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
-        mix.inputs["Factor"].default_value = 1.0
-        mix.inputs[6].default_value = bsdf.inputs["Base Color"].default_value
-        tree.links.new(tint.outputs["Color"], mix.inputs[7])
-        tree.links.new(mix.outputs[2], bsdf.inputs["Base Color"])
+        out = _multiply(tree, tint.outputs["Color"], color if out is None else out)
+    if out is None:
+        bsdf.inputs["Base Color"].default_value = color
+    else:
+        tree.links.new(out, bsdf.inputs["Base Color"])
+    bsdf.inputs["Roughness"].default_value = 0.9
+    if part.get("alpha_mode", "OPAQUE") != "OPAQUE" and alpha is not None:
+        tree.links.new(alpha, bsdf.inputs["Alpha"])
     return mat
 
 
@@ -266,11 +320,10 @@ def add_layer(data: LayerData, collection=None, base_collection=None):
         _store(points, name, kind, values)
     phases = np.zeros(len(params)) if data.phases is None else data.phases
     _store(points, "axial_wind_phase", "FLOAT", phases)
-    points.materials.append(_material(data))
     obj = bpy.data.objects.new(data.name, points)
     collection.objects.link(obj)
     obj[LAYER_KEY] = json.dumps(data.axes_json())
-    obj.matrix_world = UP_TO_Z_UP[data.extra.get("up", "y")]
+    obj.matrix_world = Matrix(UP_TO_Z_UP[data.extra.get("up", "y")])  # rows
     plan = {"frames": np.asarray(data.frames, float).tolist(), "levels": len(level_axes), "level_axes": level_axes,
             "extended": data.level >= 1, "tinted": data.level >= 2}
     group = build_group(f"{GROUP_PREFIX} {data.name}", plan)
@@ -284,12 +337,6 @@ def add_layer(data: LayerData, collection=None, base_collection=None):
         for name, key in (("Wind Direction", "direction"), ("Wind Strength", "strength"), ("Gustiness", "gustiness"),
                           ("Frequency", "frequency"), ("Wavelength", "wavelength")):
             mod[ident[name]] = wind[key]
-    set_material = group.nodes.new("GeometryNodeSetMaterial")
-    set_material.inputs["Material"].default_value = points.materials[0]
-    out = next(nd for nd in group.nodes if nd.bl_idname == "NodeGroupOutput")
-    last = out.inputs[0].links[0].from_socket
-    group.links.new(last, set_material.inputs["Geometry"])
-    group.links.new(set_material.outputs[0], out.inputs[0])
     return obj
 
 
@@ -305,7 +352,7 @@ def add_terrain(positions, faces, color, up: str = "y", collection=None):
     mesh.materials.append(mat)
     obj = bpy.data.objects.new("terrain", mesh)
     (collection or bpy.context.scene.collection).objects.link(obj)
-    obj.matrix_world = UP_TO_Z_UP[up]
+    obj.matrix_world = Matrix(UP_TO_Z_UP[up])
     return obj
 
 

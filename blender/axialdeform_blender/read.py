@@ -28,9 +28,7 @@ def layer_data(name: str, mesh, params, color=None, up: str = "y") -> LayerData:
     else:
         axes, parents, anchors, names = [mesh.axis], (-1,), (0.0,), ()
         vertex_axis = np.zeros(mesh.vertex_count, dtype=int)
-    if color is None and mesh.parts:
-        color = tuple(float(c) for c in mesh.parts[0].material.base_color)
-    elif color is not None:
+    if color is not None:  # a scene layer's colour: its mesh's default material takes it
         color = tuple(float(c) for c in color) + (1.0,) * (4 - len(color))
     from axialdeform.core.axes import sag_weights
     from axialdeform.core.wind import wind_phase
@@ -44,7 +42,12 @@ def layer_data(name: str, mesh, params, color=None, up: str = "y") -> LayerData:
         uvs=None if mesh.uvs is None else np.asarray(mesh.uvs, np.float32), color=color, names=names,
         extra={"up": up, "axis_kind": "frame" if axis0.framed else "xyz"[axis0.index]},
         wind_weights=sag_weights(np.asarray(anchors, dtype=np.float64)),
-        phases=wind_phase(np.arange(len(params))).astype(np.float32))
+        phases=wind_phase(np.arange(len(params))).astype(np.float32),
+        colors=None if mesh.colors is None else np.asarray(mesh.colors, np.float32),
+        parts=[{"name": p.name, "start": int(p.start), "count": int(p.count),
+                "color": tuple(float(c) for c in p.material.base_color), "texture": p.material.texture,
+                "alpha_mode": p.material.alpha_mode, "alpha_cutoff": float(p.material.alpha_cutoff),
+                "default": bool(p.material.is_default)} for p in mesh.parts])
 
 
 def layers_from_file(path, mesh_path=None) -> list:

@@ -125,7 +125,7 @@ def render(args):
     scene.collection.objects.link(light)
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
-    scene.cycles.samples = 4
+    scene.cycles.samples = 16
     scene.cycles.use_denoising = False
     scene.render.film_transparent = True
     scene.render.resolution_x, scene.render.resolution_y = w, h

@@ -40,6 +40,14 @@ def run(*args, timeout=600) -> subprocess.CompletedProcess:
     return proc
 
 
+def _glb_json(path) -> dict:
+    import struct
+
+    data = Path(path).read_bytes()
+    (length,) = struct.unpack_from("<I", data, 12)
+    return json.loads(data[20:20 + length])
+
+
 def _length(mesh) -> float:
     return float(mesh.tree.axes[0].length if getattr(mesh, "tree", None) is not None else mesh.axis.length)
 
@@ -111,6 +119,9 @@ def test_import_edit_export_round_trip(tmp_path):
         assert back_mesh.fingerprint == mesh.fingerprint
         assert back_mesh.tree.to_json()["parents"] == mesh.tree.to_json()["parents"]
         np.testing.assert_array_equal(np.asarray(back), want, err_msg=name)
+    doc = _glb_json(tmp_path / "gltf.glb")
+    node = next(nd for nd in doc["nodes"] if "AXIALDEFORM_bend" in nd.get("extensions", {}))
+    assert not {"matrix", "rotation", "translation", "scale"} & set(node), node  # the file's frame: no turn
     report = json.loads(subprocess.run(["node", str(ROOT / "tests/gltf-validator/validate.js"),
                                         str(tmp_path / "gltf.glb")], capture_output=True, text=True,
                                        check=True).stdout)
@@ -136,3 +147,31 @@ def test_a_scene_file_imports_layer_by_layer(tmp_path):
         params = apply_wind(loaded.wind if layer.wind else None, layer.mesh.axis, layer.params, t)
         err, _ = _compare(layer.mesh, params, got, i)
         assert err <= 1e-5, f"{src.name} layer {layer.name}: {err:.2e} L"
+
+
+def test_cycles_draws_what_render_draws(tmp_path):
+    """A Cycles CPU render of a few bent, twisted trees from render's camera: the same silhouette."""
+    from PIL import Image
+
+    mesh = ad.load_mesh("tree", axes="parts")
+    params = ad.random_params(mesh, 4, seed=6, variation=ad.Variation(bend=(0.15, 0.4, 0.4), twist=0.6, scale=(0.8, 1.2)))
+    glb = ad.export_glb(tmp_path / "in.glb", mesh, params, layout="instanced")
+    pos, _ = ad.deform(mesh, params)
+    lo, hi = pos.reshape(-1, 3).min(0), pos.reshape(-1, 3).max(0)
+    center, radius = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
+    eye = center + np.array([0.4, 0.5, 2.2]) * radius
+    size = (200, 150)
+    camera = ad.Camera(eye=tuple(eye), target=tuple(center), fovy=40.0)
+    ours = ad.render_image(mesh, params, size=size, camera=camera,
+                           look=ad.Look(ground=False, shadow=False, background=(1.0, 1.0, 1.0)))
+    contrast = np.abs(ours.astype(int) - 255).max(axis=2)  # against the white background
+    # half coverage, as Cycles' alpha > 0.5: half the contrast of the object's own pixels
+    ours_mask = contrast > 0.5 * np.percentile(contrast[contrast > 12], 90)
+    run("render", glb, "--out", tmp_path / "cycles.png", "--eye=" + ",".join(map(str, eye)),
+        "--target=" + ",".join(map(str, center)), "--fov", 40, "--size", f"{size[0]},{size[1]}")
+    Image.fromarray(ours).save(tmp_path / "render.png")
+    cycles = np.asarray(Image.open(tmp_path / "cycles.png"))
+    theirs_mask = cycles[..., 3] > 127
+    iou = (ours_mask & theirs_mask).sum() / (ours_mask | theirs_mask).sum()
+    assert ours_mask.mean() > 0.05, "render drew almost nothing"
+    assert iou >= 0.9, f"silhouette IoU {iou:.3f}"

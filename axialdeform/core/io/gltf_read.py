@@ -4,6 +4,7 @@ bend (``AXIALDEFORM_bend``, and this library's ``extras``), and the ``extras`` o
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import math
 import os
@@ -11,9 +12,11 @@ import re
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
 from ..axis import PERPENDICULAR, ControlAxis, axis_frame_matrix
 from ..errors import AxialDeformError, GltfError, MeshMismatchError
+from ..material import DEFAULT_MATERIAL, Material, Part
 from ..mesh import BaseMesh, area_weighted_normals
 from ..params import as_params
 from ..record import (
@@ -157,7 +160,9 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None, *, fall
     else:
 
         normals, from_file = area_weighted_normals(positions, faces), False
-    mesh = BaseMesh(positions, normals, faces, name=where, normals_from_file=from_file)
+    uvs, colors, parts = _appearance(gltf, blob, mesh_def, where)
+    mesh = BaseMesh(positions, normals, faces, name=where, normals_from_file=from_file, uvs=uvs, colors=colors,
+                    parts=parts)
     extras = (node.extras or {}).get(EXTRAS_KEY, {})
     if not isinstance(extras, dict):
         extras = {}
@@ -186,6 +191,55 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None, *, fall
         mesh, params = _read_tree(gltf, blob, prim, extras["axes"], cols, mesh, params, where)
         return mesh, params
     return mesh, as_params(params, name=where)
+
+
+def _appearance(gltf, blob, mesh_def, where: str):
+    """``(uvs, colors, parts)`` of an instanced node's mesh: TEXCOORD_0 and COLOR_0 of its vertices (or None),
+    and each primitive as a part (in order: the faces are the primitives' indices one after another) with
+    its material's base colour, texture, alpha mode and sides -- what the writer's ``appearance`` wrote."""
+    prim = mesh_def.primitives[0]
+    uvs = colors = None
+    if prim.attributes.TEXCOORD_0 is not None:
+        uvs = read_accessor(gltf, blob, prim.attributes.TEXCOORD_0, "TEXCOORD_0", where).astype(np.float32)
+    if prim.attributes.COLOR_0 is not None:
+        c = read_accessor(gltf, blob, prim.attributes.COLOR_0, "COLOR_0", where).astype(np.float32)
+        colors = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1) if c.shape[1] == 3 else c
+    parts, start = [], 0
+    for i, q in enumerate(mesh_def.primitives):
+        count = int(gltf.accessors[q.indices].count) // 3
+        material = _material(gltf, blob, q.material, f"{where}: mesh primitive {i}") if q.material is not None \
+            else DEFAULT_MATERIAL
+        name = material.name if q.material is not None and material.name not in {p.name for p in parts} else f"part{i}"
+        parts.append(Part(name, start, count, material))
+        start += count
+    return uvs, colors, tuple(parts)
+
+
+def _material(gltf, blob, index, where: str) -> Material:
+    """The glTF material ``index`` as this library's :class:`Material` (a texture embedded in the GLB decoded)."""
+    if not isinstance(index, int) or not 0 <= index < len(gltf.materials):
+        raise GltfError(f"{where}: material: expected a material index, found {index!r}")
+    m = gltf.materials[index]
+    pbr = m.pbrMetallicRoughness
+    base = pbr.baseColorFactor if pbr is not None and pbr.baseColorFactor is not None else [1.0, 1.0, 1.0, 1.0]
+    texture, sources = None, {}
+    info = pbr.baseColorTexture if pbr is not None else None
+    if info is not None:
+        try:
+            view = gltf.bufferViews[gltf.images[gltf.textures[info.index].source].bufferView]
+            data = blob[(view.byteOffset or 0):(view.byteOffset or 0) + view.byteLength]
+            with Image.open(io.BytesIO(data)) as img:
+                texture = np.asarray(img.convert("RGBA"), dtype=np.uint8)
+            sources["texture"] = (bytes(data), gltf.images[gltf.textures[info.index].source].mimeType or "image/png")
+        except (IndexError, TypeError, AttributeError, OSError, ValueError):
+            raise GltfError(f"{where}: material {index} baseColorTexture: expected an image embedded in the GLB") from None
+    try:
+        return Material(name=m.name or f"material{index}", base_color=base, texture=texture,
+                        texture_name="embedded" if texture is not None else None, alpha_mode=m.alphaMode or "OPAQUE",
+                        alpha_cutoff=0.5 if m.alphaCutoff is None else float(m.alphaCutoff),
+                        double_sided=bool(m.doubleSided), sources=sources)
+    except AxialDeformError as exc:
+        raise GltfError(f"{where}: material {index}: {exc}") from None
 
 
 def _attribute_type(name: str) -> str | None:
