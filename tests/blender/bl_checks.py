@@ -10,8 +10,9 @@ edit IN OUTDIR
     (``gltf.glb``) and the add-on's operator (``ours.glb``), Vary with seed 5 (``varied.glb``).
 render IN OUT.png --eye X,Y,Z --target X,Y,Z --fov DEG --size W,H
     import IN, render it with Cycles on the CPU (transparent film) from that camera (file coordinates).
-install ZIP
-    install the add-on's zip as an extension, enable it, import nothing: prints its operators.
+install ZIP --glb IN --out OUT.glb
+    install the add-on's zip as an extension (into $BLENDER_USER_RESOURCES), enable it, import IN with it and
+    export OUT.glb with Blender's glTF exporter; prints what was installed as JSON.
 """
 
 from __future__ import annotations
@@ -137,14 +138,12 @@ def render(args):
 
 
 def install(args):
-    import addon_utils
-
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.extensions.package_install_files(filepath=args.input, repo="user_default", enable_on_install=True)
     names = [m for m in bpy.context.preferences.addons.keys() if "axialdeform" in m]
-    print(json.dumps({"addons": names, "import": hasattr(bpy.ops.import_scene, "axialdeform"),
-                      "export": hasattr(bpy.ops.export_scene, "axialdeform"),
-                      "loaded": [m.__name__ for m in addon_utils.modules() if "axialdeform" in m.__name__]}))
+    bpy.ops.import_scene.axialdeform(filepath=args.glb)
+    bpy.ops.export_scene.gltf(filepath=args.out, export_format="GLB")
+    print("INSTALLED " + json.dumps({"addons": names, "layers": [o.name for o in _layers()]}))
 
 
 def main():
@@ -153,6 +152,7 @@ def main():
     parser.add_argument("input")
     parser.add_argument("--out", default=None)
     parser.add_argument("--time", type=float, default=None)
+    parser.add_argument("--glb", default=None)
     parser.add_argument("--wind", default=None)
     parser.add_argument("--eye", default="0,1,4")
     parser.add_argument("--target", default="0,0,0")

@@ -33,9 +33,9 @@ def blender_python() -> str:
     return path
 
 
-def run(*args, timeout=600) -> subprocess.CompletedProcess:
+def run(*args, timeout=600, env=None) -> subprocess.CompletedProcess:
     proc = subprocess.run([blender_python(), str(CHECKS), *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout, cwd=ROOT)
+                          timeout=timeout, cwd=ROOT, env=env)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     return proc
 
@@ -175,3 +175,21 @@ def test_cycles_draws_what_render_draws(tmp_path):
     iou = (ours_mask & theirs_mask).sum() / (ours_mask | theirs_mask).sum()
     assert ours_mask.mean() > 0.05, "render drew almost nothing"
     assert iou >= 0.9, f"silhouette IoU {iou:.3f}"
+
+
+def test_the_zip_installs_as_a_blender_extension(tmp_path):
+    """tools/build_blender_addon.py's zip, installed as users install it (an extension, its own module
+    ``bl_ext.user_default.axialdeform_blender``), imports and exports through Blender's glTF exporter."""
+    built = subprocess.run([sys.executable, str(ROOT / "tools" / "build_blender_addon.py"), "-o", str(tmp_path)],
+                           capture_output=True, text=True, check=True).stdout.strip()
+    mesh = ad.load_mesh("stone")
+    params = ad.random_params(mesh, 5, seed=1)
+    glb = ad.export_glb(tmp_path / "in.glb", mesh, params, layout="instanced")
+    env = {**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "user")}
+    proc = run("install", built, "--glb", glb, "--out", tmp_path / "out.glb", env=env)
+    line = next(x for x in proc.stdout.splitlines() if x.startswith("INSTALLED "))
+    report = json.loads(line[len("INSTALLED "):])
+    assert report["addons"] == ["bl_ext.user_default.axialdeform_blender"], report
+    assert len(report["layers"]) == 1
+    _, back = read_instanced_glb(tmp_path / "out.glb")
+    np.testing.assert_array_equal(np.asarray(back), np.asarray(params))
