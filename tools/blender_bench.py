@@ -29,15 +29,17 @@ def main():
                         help="trees (of about 1 000 vertices each; default 10000)")
     parser.add_argument("--repeats", type=int, default=3, help="runs per figure, the median reported (default 3)")
     args = parser.parse_args()
+    # isort: off
     import bpy  # first: it makes addon_utils importable
     import addon_utils
+    # isort: on
 
     import axialdeform as ad
 
     sys.path.insert(0, str(ROOT / "blender"))
     cases = {"stones": (ad.load_mesh("stone"), ad.Variation(bend=0.2, scale=(0.5, 1.5), tint=0.3), args.count),
              "trees (10 axes)": (ad.load_mesh("tree", axes="parts"), ad.Variation(bend=(0.1, 0.3)), args.trees)}
-    print(f"| model | instances | vertices bent | import (s) | viewport, rigid (s) | bent, every vertex (s) |")
+    print("| model | instances | vertices bent | import (s) | viewport, rigid (s) | bent, every vertex (s) |")
     print("|---|---:|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory() as tmp:
         for name, (mesh, variation, count) in cases.items():

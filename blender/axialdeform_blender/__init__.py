@@ -53,6 +53,9 @@ class IMPORT_SCENE_OT_axialdeform(bpy.types.Operator, ImportHelper):
             self.report({"ERROR"}, _library_error(exc))
             return {"CANCELLED"}
         objects = [add_layer(data) for data in layers]
+        for data in layers:
+            if data.extra.get("note"):
+                self.report({"WARNING"}, data.extra["note"])
         if terrain is not None:
             add_terrain(*terrain)
         for obj in context.selected_objects:
@@ -141,6 +144,7 @@ def vary(mesh, params, seed: int, bend, droop: float = 0.0):
     """``params`` with every axis's offsets drawn again by the library's rules (``random_params``), each
     instance's position, rotation, scale, twist, taper and tint kept."""
     import numpy as np
+
     from axialdeform.core.variation import Variation, random_params
 
     k = getattr(mesh, "axis_count", 1)

@@ -19,7 +19,8 @@ from mathutils import Matrix
 
 from .nodes import GROUP_PREFIX, build_group
 
-__all__ = ["LayerData", "add_layer", "add_terrain", "layer_records", "is_layer", "LAYER_KEY", "BASE_KEY", "UP_TO_Z_UP", "base_arrays", "T_SLACK"]
+__all__ = ["LayerData", "add_layer", "add_terrain", "layer_records", "set_records", "is_layer", "base_arrays",
+           "LAYER_KEY", "BASE_KEY", "UP_TO_Z_UP", "T_SLACK"]
 
 #: the custom property that marks an instance object and holds its axes (JSON)
 LAYER_KEY = "axialdeform"

@@ -207,7 +207,7 @@ def _bend(g: Graph, plan: dict, push):
             ev = g.attribute(f"axial_m{level}_ev", "FLOAT_VECTOR")
         offsets = []
         for i in range(1, 6):
-            names = [("axial_d%d" % i) if j == 0 else f"axial_a{j}_d{i}" for j in axes]
+            names = [f"axial_d{i}" if j == 0 else f"axial_a{j}_d{i}" for j in axes]
             fields = [g.attribute(name, "FLOAT_VECTOR") for name in names]
             offsets.append(fields[0] if len(fields) == 1 else g.switch(g.attribute(f"axial_m{level}_item", "INT"), fields))
         weights = [g.attribute(f"axial_m{level}_b{i}") for i in range(5)]

@@ -53,7 +53,7 @@ def layer_data(name: str, mesh, params, color=None, up: str = "y") -> LayerData:
 def layers_from_file(path, mesh_path=None) -> list:
     """Every layer of ``path`` as a :class:`LayerData`: a ``.glb`` (each instanced node), a scene file
     (``.toml``: each layer), or a parameter file (``.adp``/text, with ``mesh_path``)."""
-    from axialdeform.core.io.glb import INSTANCING, load_glb
+    from axialdeform.core.io.glb import BEND_EXTENSION, INSTANCING, load_glb
     from axialdeform.core.io.gltf_read import read_instanced_glb
     from axialdeform.core.scene import is_scene_file, load_scene
 
@@ -62,11 +62,17 @@ def layers_from_file(path, mesh_path=None) -> list:
         gltf = load_glb(path)
         up = ((gltf.scenes[gltf.scene or 0].extras or {}).get("axialdeform", {}) or {}).get("up", "y") \
             if gltf.scenes else "y"
-        named = [nd.name for nd in gltf.nodes if (nd.extensions or {}).get(INSTANCING) and nd.mesh is not None]
+        nodes = [nd for nd in gltf.nodes if (nd.extensions or {}).get(INSTANCING) and nd.mesh is not None]
         out = []
-        for node in named:
-            mesh, params = read_instanced_glb(path, node if len(named) > 1 else None)
-            out.append(layer_data(node or path.stem, mesh, params, up=up if up in UP_TO_Z_UP else "y"))
+        for nd in nodes:
+            generated = isinstance((nd.extensions or {}).get(BEND_EXTENSION), dict) and \
+                "generate" in nd.extensions[BEND_EXTENSION]
+            mesh, params = read_instanced_glb(path, nd.name if len(nodes) > 1 else None, fallback=generated)
+            data = layer_data(nd.name or path.stem, mesh, params, up=up if up in UP_TO_Z_UP else "y")
+            if generated:  # its instances are a recipe's: the file holds a small sample of them
+                data.extra["note"] = (f"{data.name}: a generated layer (its recipe); imported its fallback, "
+                                      f"{len(params)} instances -- import the scene file for all of them")
+            out.append(data)
         return out
     if is_scene_file(path):
         scene = load_scene(path)

@@ -53,7 +53,12 @@ def _set_wind(obj, values):
 def evaluate(args):
     _enable()
     start = time.perf_counter()
-    bpy.ops.import_scene.axialdeform(filepath=args.input)
+    try:
+        result = bpy.ops.import_scene.axialdeform(filepath=args.input)
+    except RuntimeError as exc:  # an operator that reports an error raises in background mode
+        result = {"CANCELLED"}
+        print("ERROR", exc)
+    print("RESULT", sorted(result))
     seconds = time.perf_counter() - start
     out = {"seconds": np.array(seconds)}
     scene = bpy.context.scene

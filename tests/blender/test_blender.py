@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -41,8 +42,6 @@ def run(*args, timeout=600, env=None) -> subprocess.CompletedProcess:
 
 
 def _glb_json(path) -> dict:
-    import struct
-
     data = Path(path).read_bytes()
     (length,) = struct.unpack_from("<I", data, 12)
     return json.loads(data[20:20 + length])
@@ -126,6 +125,12 @@ def test_import_edit_export_round_trip(tmp_path):
                                         str(tmp_path / "gltf.glb")], capture_output=True, text=True,
                                        check=True).stdout)
     assert report["issues"]["numErrors"] == 0 and report["issues"]["numWarnings"] == 0, report["issues"]["messages"]
+    # three.js draws the edited instances: the npm plugin's records of Blender's export
+    lines = subprocess.run(["node", str(Path(__file__).with_name("plugin_records.mjs")), str(tmp_path / "gltf.glb")],
+                           capture_output=True, text=True, check=True).stdout.splitlines()
+    [drawn] = [json.loads(x) for x in lines]
+    assert drawn["count"] == len(want) and drawn["numbersPerInstance"] == want.shape[1]
+    np.testing.assert_array_equal(np.float32(drawn["data"]).reshape(want.shape), want)
     _, varied = read_instanced_glb(tmp_path / "varied.glb")
     varied = np.asarray(varied)
     np.testing.assert_array_equal(varied[:, 10 * k:], want[:, 10 * k:])  # where each stands, its look: kept
@@ -193,3 +198,24 @@ def test_the_zip_installs_as_a_blender_extension(tmp_path):
     assert len(report["layers"]) == 1
     _, back = read_instanced_glb(tmp_path / "out.glb")
     np.testing.assert_array_equal(np.asarray(back), np.asarray(params))
+
+
+def test_a_bad_file_is_refused_in_the_librarys_words(tmp_path):
+    """Import of a broken file: the operator cancels with the library's message (file, field, what was
+    expected), and nothing is added."""
+    mesh = ad.load_mesh("stone")
+    glb = ad.export_glb(tmp_path / "in.glb", mesh, ad.random_params(mesh, 3, seed=1), layout="instanced")
+    data = bytearray(glb.read_bytes())
+    doc = _glb_json(glb)
+    doc["nodes"][0]["extensions"]["AXIALDEFORM_bend"]["axis"]["length"] = -1.0
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    (length,) = struct.unpack_from("<I", data, 12)
+    rest = data[20 + length:]
+    bad = tmp_path / "bad.glb"
+    bad.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(text) + len(rest)) + struct.pack("<I4s", len(text), b"JSON")
+                    + text + rest)
+    proc = run("evaluate", bad, "--out", tmp_path / "out.npz")
+    assert "RESULT ['CANCELLED']" in proc.stdout, proc.stdout[-2000:]
+    assert "bad.glb: node" in proc.stdout + proc.stderr and "length" in proc.stdout + proc.stderr
+    assert not [k for k in np.load(tmp_path / "out.npz").files if k.startswith("pos")]
