@@ -83,7 +83,7 @@ def export_layers(objects):
         info = json.loads(obj[LAYER_KEY])
         arrays = base_arrays(obj)
         mesh = base_mesh(info, arrays["positions"], arrays["normals"], arrays["faces"], arrays["uvs"],
-                         arrays["vertex_axis"])
+                         arrays["vertex_axis"], arrays["colors"], arrays["parts"])
         out.append((obj.name, mesh, layer_records(obj), tuple(info.get("color") or (0.6, 0.6, 0.6))[:3]))
     return out
 

@@ -48,7 +48,7 @@ class LayerData:
     parents : (K,) int (-1 for the root); anchors : (K,) float; line : (2,) axis 0's axis line.
     vertex_axis : (v,) int — each vertex's axis.
     params : (n, 10·K + 6 [+3 [+3]]) float32 — the records.
-    uvs : (v, 2) float32 or None (glTF convention, v down); color : RGBA or None.
+    uvs : (v, 2) float32 or None (``v = 0`` at the image's bottom, as Blender's); color : RGBA or None.
     colors : (v, 4) float32 or None — linear RGBA vertex colours.
     parts : list of dict — ``name``, ``start``, ``count`` (faces), ``color`` (linear RGBA), ``texture``
     ((h, w, 4) uint8 sRGB, first row at the top, or None), ``alpha_mode``, ``alpha_cutoff``, ``default``
@@ -217,8 +217,7 @@ def _base_object(data: LayerData, collection):
     mesh.update(calc_edges=True)
     mesh.polygons.foreach_set("use_smooth", np.ones(len(faces), dtype=bool))
     if data.uvs is not None:
-        uv = np.asarray(data.uvs, dtype=np.float32)[faces.reshape(-1)].copy()
-        uv[:, 1] = 1.0 - uv[:, 1]  # glTF's v runs down, Blender's up
+        uv = np.asarray(data.uvs, dtype=np.float32)[faces.reshape(-1)]  # v = 0 at the bottom, as Blender's
         mesh.uv_layers.new(name="UVMap").data.foreach_set("uv", uv.reshape(-1))
     if data.colors is not None:
         _store(mesh, "Col", "FLOAT_COLOR", np.asarray(data.colors, dtype=np.float32))
@@ -230,7 +229,7 @@ def _base_object(data: LayerData, collection):
         mesh.materials.append(_material(data, part))
     mesh.polygons.foreach_set("material_index", index)
     level_axes, attrs = _levels(data)
-    if data.uvs is not None:  # as the file had them (the UV layer's are flipped)
+    if data.uvs is not None:  # as the library had them, whatever is done to the UV layer
         attrs["axial_uv"] = ("FLOAT2", np.asarray(data.uvs, dtype=np.float32))
     for name, (kind, values) in attrs.items():
         _store(mesh, name, kind, values)
@@ -270,6 +269,9 @@ def _material(data: LayerData, part: dict):
     """A part's look: its base colour (the layer's for the default material) times its texture, the vertex
     colours and each instance's tint (the library's shading multiplies the same)."""
     mat = bpy.data.materials.new(f"{data.name} {part['name']}")
+    mat["axial_part"] = {"name": str(part["name"]), "color": [float(c) for c in part["color"]],
+                         "alpha_mode": str(part.get("alpha_mode", "OPAQUE")),
+                         "alpha_cutoff": float(part.get("alpha_cutoff", 0.5)), "default": bool(part.get("default"))}
     mat.use_nodes = True
     tree = mat.node_tree
     bsdf = next(nd for nd in tree.nodes if nd.type == "BSDF_PRINCIPLED")
@@ -280,6 +282,7 @@ def _material(data: LayerData, part: dict):
     if part.get("texture") is not None and data.uvs is not None:
         node = tree.nodes.new("ShaderNodeTexImage")
         node.image = _texture(data, part)
+        mat["axial_texture"] = node.image.name
         out, alpha = _multiply(tree, node.outputs["Color"], color), node.outputs["Alpha"]
     if data.colors is not None:
         vc = tree.nodes.new("ShaderNodeVertexColor")
@@ -397,7 +400,22 @@ def base_arrays(obj) -> dict:
     mesh.vertices.foreach_get("co", pos)
     loops = np.empty(f * 3, dtype=np.int32)
     mesh.polygons.foreach_get("vertices", loops)
+    index = np.empty(f, dtype=np.int32)
+    mesh.polygons.foreach_get("material_index", index)
+    parts = []
+    for i, mat in enumerate(mesh.materials):  # each part as the library had it: its faces, its material
+        faces = np.flatnonzero(index == i)
+        info = dict(mat["axial_part"]) if mat is not None and "axial_part" in mat else {"name": f"part{i}"}
+        texture = None
+        if mat is not None and "axial_texture" in mat:
+            image = bpy.data.images[mat["axial_texture"]]
+            w, h = image.size
+            px = np.empty(w * h * 4, dtype=np.float32)
+            image.pixels.foreach_get(px)
+            texture = np.round(px.reshape(h, w, 4)[::-1] * 255.0).astype(np.uint8)
+        parts.append({**info, "start": int(faces[0]) if len(faces) else 0, "count": len(faces), "texture": texture})
     return {"positions": pos.reshape(v, 3), "normals": _read(mesh, "axial_rest_normal", "FLOAT_VECTOR", v),
+            "colors": _read(mesh, "Col", "FLOAT_COLOR", v) if "Col" in mesh.attributes else None, "parts": parts,
             "faces": loops.reshape(f, 3), "vertex_axis": _read(mesh, "axial_axis", "INT", v),
             "uvs": _read(mesh, "axial_uv", "FLOAT2", v) if "axial_uv" in mesh.attributes else None}
 

@@ -108,13 +108,19 @@ def terrain_from_file(path):
             tuple(scene.terrain_color), scene.up)
 
 
-def base_mesh(info: dict, positions, normals, faces, uvs=None, vertex_axis=None):
-    """The axialdeform ``BaseMesh`` an instance object was made from (its axes as recorded)."""
+def base_mesh(info: dict, positions, normals, faces, uvs=None, vertex_axis=None, colors=None, parts=()):
+    """The axialdeform ``BaseMesh`` an instance object was made from: its axes as recorded, its appearance
+    (``parts``: :class:`LayerData`'s dicts, the texture's pixels as Blender holds them) as imported."""
     from axialdeform.core.axes import tree_from_vertices
+    from axialdeform.core.material import Material, Part
     from axialdeform.core.mesh import BaseMesh
 
+    looks = tuple(Part(p["name"], p["start"], p["count"], Material(
+        name=p["name"], base_color=p.get("color", (1.0, 1.0, 1.0, 1.0)), texture=p.get("texture"),
+        texture_name=None if p.get("texture") is None else "blender", alpha_mode=p.get("alpha_mode", "OPAQUE"),
+        alpha_cutoff=p.get("alpha_cutoff", 0.5))) for p in parts if p["count"])
     mesh = BaseMesh(np.asarray(positions, np.float32), np.asarray(normals, np.float32), np.asarray(faces),
-                    name=info.get("name", "blender"), uvs=uvs)
+                    name=info.get("name", "blender"), uvs=uvs, colors=colors, parts=looks)
     kind = info.get("axis_kind", "frame")
     if int(info["count"]) == 1:
         return mesh.with_axis(kind if kind in ("x", "y", "z") else np.asarray(info["frames"][0]))

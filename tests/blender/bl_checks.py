@@ -8,6 +8,8 @@ edit IN OUTDIR
     import IN, edit its first layer as an artist would (delete instance 1, move instance 0, a new bend
     for instance 2, a new rotation for instance 3), export with Blender's glTF exporter
     (``gltf.glb``) and the add-on's operator (``ours.glb``), Vary with seed 5 (``varied.glb``).
+through IN OUT.glb
+    import IN and export it again with the add-on's operator, nothing changed.
 render IN OUT.png --eye X,Y,Z --target X,Y,Z --fov DEG --size W,H
     import IN, render it with Cycles on the CPU (transparent film) from that camera (file coordinates).
 install ZIP --glb IN --out OUT.glb
@@ -109,6 +111,12 @@ def edit(args):
     bpy.ops.export_scene.axialdeform(filepath=str(outdir / "varied.glb"))
 
 
+def through(args):
+    _enable()
+    bpy.ops.import_scene.axialdeform(filepath=args.input)
+    bpy.ops.export_scene.axialdeform(filepath=args.out)
+
+
 def render(args):
     from mathutils import Matrix, Vector
 
@@ -153,7 +161,7 @@ def install(args):
 
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("command", choices=("evaluate", "edit", "render", "install"))
+    parser.add_argument("command", choices=("evaluate", "edit", "through", "render", "install"))
     parser.add_argument("input")
     parser.add_argument("--out", default=None)
     parser.add_argument("--time", type=float, default=None)
@@ -164,7 +172,7 @@ def main():
     parser.add_argument("--fov", default="40")
     parser.add_argument("--size", default="160,120")
     args = parser.parse_args()
-    {"evaluate": evaluate, "edit": edit, "render": render, "install": install}[args.command](args)
+    {"evaluate": evaluate, "edit": edit, "through": through, "render": render, "install": install}[args.command](args)
 
 
 if __name__ == "__main__":

@@ -140,6 +140,30 @@ def test_import_edit_export_round_trip(tmp_path):
     assert np.abs(varied[:, :10 * k] - want[:, :10 * k]).max() > 0.01 * _length(mesh)  # drawn again
 
 
+@pytest.mark.parametrize("name", ["leafcard", "tree"])
+def test_the_look_travels_there_and_back(tmp_path, name):
+    """A textured cut-out (leafcard) and a tree of vertex colours and ten parts: their parts, materials,
+    texture pixels, UVs and colours come back from Blender as they went in."""
+    mesh = ad.load_mesh(name, **({"axes": "parts"} if name == "tree" else {}))
+    params = ad.random_params(mesh, 4, seed=3)
+    glb = ad.export_glb(tmp_path / "in.glb", mesh, params, layout="instanced")
+    run("through", glb, "--out", tmp_path / "out.glb")
+    before, _ = read_instanced_glb(glb)
+    after, back = read_instanced_glb(tmp_path / "out.glb")
+    np.testing.assert_array_equal(np.asarray(back), np.asarray(params))
+    assert [(p.name, p.start, p.count) for p in after.parts] == [(p.name, p.start, p.count) for p in before.parts]
+    for a, b in zip(after.parts, before.parts):
+        np.testing.assert_array_equal(a.material.base_color, b.material.base_color)
+        assert a.material.alpha_mode == b.material.alpha_mode
+        assert (a.material.texture is None) == (b.material.texture is None)
+        if b.material.texture is not None:
+            np.testing.assert_array_equal(a.material.texture, b.material.texture)
+    for key in ("uvs", "colors"):
+        assert (getattr(after, key) is None) == (getattr(before, key) is None), key
+        if getattr(before, key) is not None:
+            np.testing.assert_array_equal(getattr(after, key), getattr(before, key))
+
+
 def test_a_scene_file_imports_layer_by_layer(tmp_path):
     src = ROOT / "examples" / "landscape" / "landscape.toml"  # a terrain and four layers
     loaded = ad.Scene.load(src)
@@ -154,12 +178,15 @@ def test_a_scene_file_imports_layer_by_layer(tmp_path):
         assert err <= 1e-5, f"{src.name} layer {layer.name}: {err:.2e} L"
 
 
-def test_cycles_draws_what_render_draws(tmp_path):
-    """A Cycles CPU render of a few bent, twisted trees from render's camera: the same silhouette."""
+@pytest.mark.parametrize("name", ["tree", "leafcard"])
+def test_cycles_draws_what_render_draws(tmp_path, name):
+    """A Cycles CPU render of a few bent, twisted trees (or textured cut-out leaves: the texture's alpha
+    makes the silhouette, so its orientation shows) from render's camera: the same silhouette."""
     from PIL import Image
 
-    mesh = ad.load_mesh("tree", axes="parts")
-    params = ad.random_params(mesh, 4, seed=6, variation=ad.Variation(bend=(0.15, 0.4, 0.4), twist=0.6, scale=(0.8, 1.2)))
+    mesh = ad.load_mesh(name, **({"axes": "parts"} if name == "tree" else {}))
+    bend = (0.15, 0.4, 0.4) if name == "tree" else 0.15
+    params = ad.random_params(mesh, 4, seed=6, variation=ad.Variation(bend=bend, twist=0.6, scale=(0.8, 1.2)))
     glb = ad.export_glb(tmp_path / "in.glb", mesh, params, layout="instanced")
     pos, _ = ad.deform(mesh, params)
     lo, hi = pos.reshape(-1, 3).min(0), pos.reshape(-1, 3).max(0)

@@ -200,7 +200,8 @@ def _appearance(gltf, blob, mesh_def, where: str):
     prim = mesh_def.primitives[0]
     uvs = colors = None
     if prim.attributes.TEXCOORD_0 is not None:
-        uvs = read_accessor(gltf, blob, prim.attributes.TEXCOORD_0, "TEXCOORD_0", where).astype(np.float32)
+        uv = read_accessor(gltf, blob, prim.attributes.TEXCOORD_0, "TEXCOORD_0", where).astype(np.float32)
+        uvs = np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float32)  # BaseMesh's: v = 0 at the bottom
     if prim.attributes.COLOR_0 is not None:
         c = read_accessor(gltf, blob, prim.attributes.COLOR_0, "COLOR_0", where).astype(np.float32)
         colors = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1) if c.shape[1] == 3 else c
