@@ -34,8 +34,9 @@ UP_TO_Z_UP = {
 }
 #: axialdeform's T_SLACK: beyond it an ancestor axis's t is clamped and its slope drops out
 T_SLACK = 1e-4
-#: Blender shows every instance bent in the viewport up to this many (above it, rigid until asked)
-VIEWPORT_BEND_LIMIT = 20_000
+#: the viewport bends a layer of up to this many vertices in all (instances x base-mesh vertices); a larger
+#: one shows its instances rigid until "Bend in Viewport" is ticked (renders and exports always bend)
+VIEWPORT_BEND_LIMIT = 2_000_000
 
 
 @dataclass
@@ -335,7 +336,7 @@ def add_layer(data: LayerData, collection=None, base_collection=None):
     mod.node_group = group
     ident = {item.name: item.identifier for item in group.interface.items_tree if getattr(item, "in_out", "") == "INPUT"}
     mod[ident["Base"]] = base
-    mod[ident["Bend in Viewport"]] = len(params) <= VIEWPORT_BEND_LIMIT
+    mod[ident["Bend in Viewport"]] = len(params) * len(data.positions) <= VIEWPORT_BEND_LIMIT
     wind = data.extra.get("wind")
     if wind:  # the scene's wind; the scene's time is its clock
         for name, key in (("Wind Direction", "direction"), ("Wind Strength", "strength"), ("Gustiness", "gustiness"),

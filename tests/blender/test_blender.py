@@ -80,6 +80,7 @@ def test_geometry_nodes_bend_as_the_library(tmp_path, case):
     got = np.load(tmp_path / "out.npz")
     assert int(got["instances0"]) == len(params)  # one object, every instance a point
     err, nerr = _compare(mesh, params, got)
+    print(f"{case}: vertices {err:.1e} L, normals {nerr:.1e} from ad.deform")
     assert err <= 1e-5, f"{case}: vertices {err:.2e} L from ad.deform"
     assert nerr <= 1e-4, f"{case}: normals {nerr:.2e} from ad.deform"
 
@@ -98,6 +99,7 @@ def test_the_wind_is_an_animated_input(tmp_path, case):
     err, nerr = _compare(mesh, moved, got)
     still, _ = _compare(mesh, params, got)
     assert still > 100 * 1e-5, "the wind did not move anything"
+    print(f"{case} in the wind: vertices {err:.1e} L, normals {nerr:.1e} from ad.deform of apply_wind")
     assert err <= 1e-5, f"{case}: vertices in the wind {err:.2e} L from ad.deform of apply_wind"
     assert nerr <= 1e-4
 
@@ -206,6 +208,7 @@ def test_cycles_draws_what_render_draws(tmp_path, name):
     theirs_mask = cycles[..., 3] > 127
     iou = (ours_mask & theirs_mask).sum() / (ours_mask | theirs_mask).sum()
     assert ours_mask.mean() > 0.05, "render drew almost nothing"
+    print(f"{name}: silhouette IoU {iou:.3f}")
     assert iou >= 0.9, f"silhouette IoU {iou:.3f}"
 
 
