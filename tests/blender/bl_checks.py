@@ -1,7 +1,7 @@
 """What the Blender tests ask of Blender, run by the Python that has ``bpy`` (``.venv-blender``):
 ``python bl_checks.py COMMAND ...``; each command writes what it measured to ``--out``.
 
-evaluate IN OUT.npz [--time T --wind X,Y,Z,STRENGTH,GUST,FREQ,WAVELENGTH]
+evaluate IN OUT.npz [--mesh MESH] [--time T --wind X,Y,Z,STRENGTH,GUST,FREQ,WAVELENGTH]
     import IN with the add-on; every layer's Geometry-Nodes-evaluated vertices, corner normals and
     corner vertices (``pos{i}``, ``nrm{i}``, ``corner{i}``) and the import's seconds.
 edit IN OUTDIR
@@ -56,7 +56,7 @@ def evaluate(args):
     _enable()
     start = time.perf_counter()
     try:
-        result = bpy.ops.import_scene.axialdeform(filepath=args.input)
+        result = bpy.ops.import_scene.axialdeform(filepath=args.input, mesh_path=args.mesh or "")
     except RuntimeError as exc:  # an operator that reports an error raises in background mode
         result = {"CANCELLED"}
         print("ERROR", exc)
@@ -166,6 +166,7 @@ def main():
     parser.add_argument("--out", default=None)
     parser.add_argument("--time", type=float, default=None)
     parser.add_argument("--glb", default=None)
+    parser.add_argument("--mesh", default=None)
     parser.add_argument("--wind", default=None)
     parser.add_argument("--eye", default="0,1,4")
     parser.add_argument("--target", default="0,0,0")

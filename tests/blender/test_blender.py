@@ -166,6 +166,33 @@ def test_the_look_travels_there_and_back(tmp_path, name):
             np.testing.assert_array_equal(getattr(after, key), getattr(before, key))
 
 
+def test_a_mesh_and_its_parameter_file_import(tmp_path):
+    mesh = ad.load_mesh("leaf")
+    params = ad.random_params(mesh, 6, seed=8, variation=ad.Variation(bend=0.2, twist=0.4, scale=(0.8, 1.2)))
+    adp = ad.write_params(tmp_path / "leaves.adp", params, mesh)
+    leaf = ROOT / "axialdeform" / "meshes" / "leaf.obj"
+    run("evaluate", adp, "--mesh", leaf, "--out", tmp_path / "out.npz")
+    err, nerr = _compare(ad.load_mesh(leaf), params, np.load(tmp_path / "out.npz"))
+    assert err <= 1e-5 and nerr <= 1e-4, (err, nerr)
+
+
+def test_an_exported_scene_glb_opens_as_one_object_per_layer(tmp_path):
+    """``export SCENE.toml --instanced``: a GLB of four instanced nodes becomes four objects, each bent as
+    the library bends that layer."""
+    from axialdeform.core.io.gltf import export_scene
+
+    loaded = ad.Scene.load(ROOT / "examples" / "landscape" / "landscape.toml")
+    glb = export_scene(tmp_path / "scene.glb", loaded, layout="instanced")
+    run("evaluate", glb, "--out", tmp_path / "out.npz")
+    got = np.load(tmp_path / "out.npz")
+    layers = sorted((layer for layer in loaded.layers if len(layer.params)), key=lambda layer: layer.name)
+    assert len([k for k in got.files if k.startswith("pos")]) == len(layers) == 4
+    for i, layer in enumerate(layers):
+        assert int(got[f"instances{i}"]) == len(layer.params)
+        err, _ = _compare(layer.mesh, layer.params, got, i)
+        assert err <= 1e-5, f"layer {layer.name}: {err:.2e} L"
+
+
 def test_a_scene_file_imports_layer_by_layer(tmp_path):
     src = ROOT / "examples" / "landscape" / "landscape.toml"  # a terrain and four layers
     loaded = ad.Scene.load(src)
