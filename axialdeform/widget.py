@@ -11,18 +11,27 @@ anywidgets the same way but are not tested here.
 
 ``status`` is what the page reports: ``{"ready": True, "instances": n}`` after
 the first frame, or ``{"ready": False, "error": "..."}``.
+
+A scene file's generated layers can be painted with the page's brush (B, then drag; E erase, M save):
+each saved mask comes back here and is written beside the scene file (``SCENE-LAYER-mask.png``,
+atomically), where the scene finds it when it is loaded again; ``masks_saved`` lists them.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import anywidget
 import traitlets
 
+from .core.brush import mask_path
 from .core.errors import AxialDeformError
+from .core.io.atomic import atomic_path
 from .core.io.params import encode_binary
 from .core.options import RenderOptions
 from .core.params import as_params
 from .core.scene import Scene
+from .core.surface import load_mask
 from .web import MODULE_FILES, VENDOR_FILES, PageOptions, build_scene, build_scene_file, module_source, page_source, vendor_file
 
 __all__ = ["SceneWidget"]
@@ -62,6 +71,8 @@ class SceneWidget(anywidget.AnyWidget):
     files = traitlets.Dict().tag(sync=True)
     _sources = traitlets.Dict().tag(sync=True)
     status = traitlets.Dict().tag(sync=True)
+    #: the masks the brush saved beside the scene file (paths)
+    masks_saved = traitlets.List()
 
     def __init__(self, scene, params=None, *, size=(640, 480), up: str = "y", quantize: bool = True, look=None,
                  **kwargs):
@@ -70,6 +81,8 @@ class SceneWidget(anywidget.AnyWidget):
         sources["module"] = {name: module_source(name) for name in MODULE_FILES}  # axialdeform-three: app.js imports it
         self._quantize = bool(quantize)
         scene = Scene.of(scene, params, up=up)  # the one mesh-or-scene check
+        self._scene_path = scene.path
+        self._generated = [x.name for x in scene.layers if getattr(x, "generate", None) is not None]
         if scene.path is not None or len(scene.layers) != 1 or scene.terrain is not None:
             self._mesh = None  # several layers: set_params has no one mesh to act on
             web = build_scene_file(scene, page=PageOptions(size=size, quantize=quantize), look=look)
@@ -77,12 +90,37 @@ class SceneWidget(anywidget.AnyWidget):
             super().__init__(config=web.config, mesh_glb=web.files[first["mesh"]["file"]],
                              params_adp=web.files.get(first.get("params_file"), b""), files=dict(web.files), _sources=sources,
                              status={}, **kwargs)
+            self.on_msg(self._on_mask)
             return
         self._mesh, params = scene.layers[0].mesh, scene.layers[0].params
         web = build_scene(self._mesh, params, page=PageOptions(size=size, quantize=quantize, all_shaders=True),
                           options=RenderOptions(up=up), look=look)
         super().__init__(config=web.config, mesh_glb=web.glb, params_adp=web.adp, files={}, _sources=sources,
                          status={}, **kwargs)
+        self.on_msg(self._on_mask)
+
+    def _on_mask(self, _widget, content, buffers) -> None:
+        """A mask the page's brush saved (M): checked as an image of grey levels, then written beside the scene
+        file, atomically.  A bad one changes nothing and is reported in ``status``."""
+        if not isinstance(content, dict) or content.get("type") != "mask":
+            return
+        layer = str(content.get("layer", ""))
+        try:
+            if self._scene_path is None:
+                raise AxialDeformError("brush: the masks are saved beside a scene file; this widget shows no scene file")
+            if layer not in self._generated:
+                raise AxialDeformError(f"brush: layer: expected a generated layer ({', '.join(self._generated) or 'none'}), "
+                                       f"found {layer!r}")
+            if len(buffers) != 1:
+                raise AxialDeformError(f"brush: {layer}: expected one PNG with the mask, found {len(buffers)} buffers")
+            path = mask_path(self._scene_path, layer)
+            with atomic_path(path, suffix=".png") as tmp:
+                Path(tmp).write_bytes(bytes(buffers[0]))
+                load_mask(tmp)  # a grey image, or the library's error naming it: nothing replaced
+        except AxialDeformError as exc:
+            self.status = {**self.status, "mask_error": str(exc)}
+            return
+        self.masks_saved = [*self.masks_saved, str(path)]
 
     def set_params(self, params) -> None:
         """Draw ``params`` ((m, 16) float32, any count) instead; the camera stays.

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["GroundMaps", "ground_height", "cos_sin_f32", "atan2_f32", "lean_angles"]
+__all__ = ["GroundMaps", "density_area", "ground_height", "cos_sin_f32", "atan2_f32", "lean_angles"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,13 +52,21 @@ class GroundMaps:
                       h_inv=np.array([(cols - 1) / (x1 - x0), (rows - 1) / (z1 - z0)], f32))
         if density is not None:
             d = np.ascontiguousarray(density, f32)
-            if terrain is not None:
-                area, wrap = (x0, z0, x1, z1), False
-            else:
-                area, wrap = tuple(float(e) for e in extent), True
+            area, wrap = density_area(terrain, extent)
             kw.update(density=d, d_lo=np.array(area[:2], f32), d_wrap=wrap,
                       d_inv=np.array([d.shape[1] / (area[2] - area[0]), d.shape[0] / (area[3] - area[1])], f32))
         return cls(**kw)
+
+
+def density_area(terrain=None, extent=None) -> tuple[tuple, bool]:
+    """The ground a layer's density map (and its painted mask) covers, ``(x0, z0, x1, z1)``, and whether it
+    repeats: a height-map terrain's ground (its corner vertices), or without one the ``extent``, repeated."""
+    if terrain is not None:
+        rows, cols = terrain.grid
+        pts = terrain.positions if hasattr(terrain, "positions") else terrain.vertices  # a BaseMesh or a Surface
+        v = np.asarray(pts, np.float64).reshape(rows, cols, 3)
+        return (float(v[0, 0, 0]), float(v[0, 0, 2]), float(v[0, -1, 0]), float(v[-1, 0, 2])), False
+    return tuple(float(e) for e in extent), True
 
 
 def ground_height(g, xz: np.ndarray):

@@ -30,8 +30,10 @@ from pathlib import Path
 import numpy as np
 
 from ..core.bounds import instance_bounds
+from ..core.brush import mask_path
 from ..core.errors import AxialDeformError
 from ..core.generate import children_table, generate_tiles, recipe_json, recipe_uniforms, tiles_around
+from ..core.generate_ground import density_area
 from ..core.io.gltf import encode_base_mesh
 from ..core.io.mesh import mesh_source_path
 from ..core.io.params import encode_binary
@@ -41,6 +43,7 @@ from ..core.options import RenderOptions, warn_field_keywords
 from ..core.params import as_params
 from ..core.record import WIDTHS, level_of, tree_shape
 from ..core.scene import Scene
+from ..core.surface import load_density, load_mask
 from ..core.wind import SECOND_HARMONIC
 from ..gl.material import ALPHA_MODE_INDEX
 from ..gl.renderer import MODE_INDEX, MODES, unit_vector
@@ -170,6 +173,23 @@ def _generated(recipe, mesh, files: dict, name: str) -> dict:
             grids[key] = {"file": file, "cols": int(grid.shape[1]), "rows": int(grid.shape[0])}
     return {"recipe": recipe_json(g, recipe.reach),
             "uniforms": recipe_uniforms(g, mesh, maps), "maps": grids, "width": int(g.width)}
+
+
+def _brush(recipe, scene, name: str, files: dict) -> dict:
+    """What the page's brush needs of a generated layer (core/brush.py, the npm module's AxialBrush): the
+    ground its density map covers as the library places it, whether the map repeats, the layer's own density
+    map and its saved mask (float32 files, before they were folded into the map the page draws), and the name
+    of the mask's file beside the scene file."""
+    area, wrap = density_area(scene.terrain, recipe.extent)
+    named = mask_path(scene.path, name).name if scene.path is not None else f"{name}-mask.png"
+    out = {"area": [float(a) for a in area], "wrap": bool(wrap), "file": named}
+    for key, grid in (("density", None if recipe.density is None else load_density(recipe.density)),
+                      ("mask", None if recipe.mask is None else load_mask(recipe.mask))):
+        if grid is not None:
+            file = f"layer-{name}-brush-{key}.f32"
+            files[file] = np.ascontiguousarray(grid, "<f4").tobytes()
+            out[key] = {"file": file, "cols": int(grid.shape[1]), "rows": int(grid.shape[0])}
+    return out
 
 
 def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: str | None, quantize: bool,
@@ -477,6 +497,8 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
                              params_file=None if generated is not None else f"layer-{item.name}.adp",
                              quantize=quantize, color=item.color, wind=item.wind and wind is not None,
                              generate=generated))
+        if generated is not None:
+            layers[-1]["generate"]["brush"] = _brush(generated, scene, item.name, files)
     if not layers:
         raise AxialDeformError(f"{scene.path}: the scene has nothing to draw; expected a terrain or a layer with instances")
 

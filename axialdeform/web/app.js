@@ -14,7 +14,7 @@
 // the npm module axialdeform-three (js/src): its parser reads and checks the .adp files (CRC-32,
 // header) and its AxialInstancedMesh holds every layer's instances (attributes, instanceMatrix, a
 // tree's offsets texture, bounds for three's culling); the page's own shaders draw them
-import { parseADP, AxialError, AxialInstancedMesh, AxialGeneratedMesh } from 'axialdeform-three';
+import { parseADP, AxialError, AxialInstancedMesh, AxialGeneratedMesh, AxialBrush } from 'axialdeform-three';
 import { hex, stillWindUniforms } from 'axialdeform-three/helpers';
 
 /** The page's errors (a message shown as it is): the module's AxialError. */
@@ -292,6 +292,7 @@ export function mount(root, lib, scene, options = {}) {
       ? new AxialGeneratedMesh(layer.geometry, materials, gen.recipe, { axis: layer.axisSpec, ownShader: true,
         uniforms: gen.uniforms, maps: layer.maps })
       : new AxialInstancedMesh(layer.geometry, materials, p, { axis: layer.axisSpec, ownShader: true });
+    if (gen && layer.brushGround) layer.brush = new AxialBrush(mesh, layer.brushGround);
     // the module's wind (its bounds grow by the wind's reach, so three culls right)
     if (wind && layer.cfg.wind) {
       mesh.setWind({ direction: wind.direction, strength: wind.strength, gustiness: wind.gustiness,
@@ -357,6 +358,12 @@ export function mount(root, lib, scene, options = {}) {
         }
         layer.maps[key] = { data: new Float32Array(files[m.file].slice(0)), cols: m.cols, rows: m.rows };
       }
+      const b = lc.generate.brush; // the brush's ground, the layer's own density map and its saved mask
+      if (b) {
+        const grid = (m) => (m && files[m.file] && files[m.file].byteLength === 4 * m.cols * m.rows
+          ? { data: new Float32Array(files[m.file].slice(0)), cols: m.cols, rows: m.rows } : null);
+        layer.brushGround = { area: b.area, wrap: b.wrap, density: grid(b.density), mask: grid(b.mask) };
+      }
     }
     const n = position.count;
     const geometry = new THREE.BufferGeometry(); // the base mesh: AxialInstancedMesh adds the instances
@@ -392,9 +399,55 @@ export function mount(root, lib, scene, options = {}) {
     for (const l of layers) for (const m of l.materials || []) { m.wireframe = state.wireframe; m.needsUpdate = true; }
     toggle.setAttribute('aria-pressed', String(state.wireframe));
   }
+  // the brush (docs/learn.md, "Set the range"): B on/off (a drag then paints instead of orbiting), E paint or
+  // erase, [ and ] the radius, L the next generated layer, M save each painted mask (SCENE-LAYER-mask.png)
+  const brush = { on: false, erase: false, radius: 2, at: 0, painted: new Set() };
+  const painters = () => layers.filter((l) => l.brush);
+  const showBrush = () => {
+    const l = painters()[brush.at % Math.max(painters().length, 1)];
+    brushText.textContent = brush.on && l ? ` · brush: ${l.cfg.name}, ${brush.erase ? 'erase' : 'paint'}, r = ${brush.radius.toFixed(2)}` : '';
+  };
+  const paint = (name, x, z, radius = brush.radius, erase = brush.erase) => {
+    const l = painters().find((p) => p.cfg.name === name);
+    if (!l) throw new SceneError(`brush: ${name}: expected a generated layer (${painters().map((p) => p.cfg.name).join(', ') || 'none'})`);
+    const changed = l.brush.stroke(x, z, radius, erase);
+    if (changed) brush.painted.add(l);
+    return changed;
+  };
+  const saveMasks = async () => {
+    for (const l of brush.painted) {
+      const png = await l.brush.png();
+      if (options.onMask) { options.onMask(l.cfg.name, l.cfg.generate.brush.file, png); continue; } // the widget: Python saves it
+      const a = document.createElement('a');
+      a.href = URL.createObjectURL(new Blob([png], { type: 'image/png' }));
+      a.download = l.cfg.generate.brush.file;
+      a.click();
+      setTimeout(() => URL.revokeObjectURL(a.href), 1000);
+    }
+  };
   const onKey = (e) => {
     if (e.repeat || e.ctrlKey || e.metaKey || e.altKey) return;
-    if (e.key === 'w' || e.key === 'W') setWireframe(!state.wireframe);
+    const k = e.key.toLowerCase();
+    if (k === 'w') setWireframe(!state.wireframe);
+    if (!painters().length) return;
+    if (k === 'b') { brush.on = !brush.on; if (controls) controls.enabled = !brush.on; }
+    if (k === 'e') brush.erase = !brush.erase;
+    if (k === '[' || k === ']') brush.radius *= k === ']' ? 1.25 : 0.8;
+    if (k === 'l') brush.at += 1;
+    if (k === 'm') saveMasks().catch(showError);
+    showBrush();
+  };
+  const brushText = el('span', 'axd-status-text', status);
+  const ray = new THREE.Raycaster();
+  const dab = (e) => { // the ground under the pointer: the terrain, or the plane y = 0
+    if (!brush.on || !(e.buttons & 1) || !camera) return;
+    const r = renderer.domElement.getBoundingClientRect();
+    ray.setFromCamera(new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, 1 - ((e.clientY - r.top) / r.height) * 2), camera);
+    const ground = layers.filter((l) => l.cfg.terrain && l.mesh).map((l) => l.mesh);
+    const hit = ground.length ? ray.intersectObjects(ground, false)[0] : null;
+    const at = hit ? hit.point : ray.ray.intersectPlane(new THREE.Plane(new THREE.Vector3(0, 1, 0), 0), new THREE.Vector3());
+    const l = painters()[brush.at % painters().length];
+    if (at && l) paint(l.cfg.name, at.x, at.z);
   };
   toggle.addEventListener('click', () => setWireframe(!state.wireframe));
   const keyTarget = options.windowKeys ? window : stage;
@@ -463,6 +516,8 @@ export function mount(root, lib, scene, options = {}) {
       resizer.observe(stage);
     }
     keyTarget.addEventListener('keydown', onKey);
+    renderer.domElement.addEventListener('pointerdown', dab);
+    renderer.domElement.addEventListener('pointermove', dab);
 
     shared.u_view.value = camera.matrixWorldInverse;
     shared.u_proj.value = camera.projectionMatrix;
@@ -541,6 +596,17 @@ export function mount(root, lib, scene, options = {}) {
         fixed, time: frozen === undefined ? null : frozen };
     },
     setWireframe,
+    /** Paint (or erase) a round dab of generated layer `name`'s mask at (x, z) on the ground (world units);
+     * whether it changed (the layer's tiles are then made again). */
+    paint,
+    /** Generated layer `name`'s mask as an 8-bit grey PNG (Uint8Array): SCENE-LAYER-mask.png. */
+    async mask(name) {
+      const l = painters().find((p) => p.cfg.name === name);
+      if (!l) throw new SceneError(`brush: ${name}: expected a generated layer`);
+      return l.brush.png();
+    },
+    /** Save every painted mask: downloads (the page), or to the widget's Python (options.onMask). */
+    saveMasks,
     /** Frames drawn so far. */
     get frames() { return state.frames; },
     /** Each generated layer's tiles and records now (its name, the tiles nearest the target first,

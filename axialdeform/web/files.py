@@ -68,7 +68,9 @@ async function load() {
   try {
     const config = await (await fetch('scene.json')).json();
     const names = config.layers.flatMap((l) => (l.generate
-      ? [l.mesh.file, ...Object.values(l.generate.maps || {}).map((m) => m.file)] : [l.mesh.file, l.params_file]));
+      ? [l.mesh.file, ...Object.values(l.generate.maps || {}).map((m) => m.file),
+        ...['density', 'mask'].map((k) => l.generate.brush && l.generate.brush[k]).filter(Boolean).map((m) => m.file)]
+      : [l.mesh.file, l.params_file]));
     const files = {};
     await Promise.all(names.map(async (n) => { files[n] = await fetchBytes(n); }));
     return { config, files };
@@ -269,6 +271,8 @@ def page_files(folder: str | os.PathLike) -> frozenset:
             if gen:
                 names.add(layer["mesh"]["file"])
                 names.update(m["file"] for m in (gen.get("maps") or {}).values())
+                brush = gen.get("brush") or {}  # the brush's grids: the layer's own density map, its saved mask
+                names.update(brush[k]["file"] for k in ("density", "mask") if isinstance(brush.get(k), dict))
             else:
                 names.update((layer["mesh"]["file"], layer["params_file"]))
     except OSError as exc:

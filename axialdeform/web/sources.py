@@ -34,7 +34,7 @@ def page_source(name: str) -> str:
 #: the npm module axialdeform-three's files (js/src; the wheel's axialdeform/three), which the page code
 #: imports; the folder page keeps them in MODULE_DIR
 MODULE_FILES = ("record.js", "adp.js", "glsl.js", "bend.js", "shader.js", "wind.js", "feedback.js", "bake.js", "raycast.js",
-                "instance_cull.js", "mesh.js", "limits.js", "tiles.js", "generate.js", "gltf.js", "index.js", "helpers.js")
+                "instance_cull.js", "mesh.js", "limits.js", "tiles.js", "generate.js", "brush.js", "gltf.js", "index.js", "helpers.js")
 MODULE_DIR = "axialdeform-three/"
 
 

@@ -36,9 +36,13 @@ export default {
     const report = (status) => { model.set('status', status); model.save_changes(); };
     // a scene of several layers brings every file by name; one mesh, its GLB and .adp
     const files = model.get('files') || {};
+    // the brush's masks (M) go to Python, which saves each beside the scene file (SceneWidget._on_mask)
+    const onMask = (layer, file, png) => model.send({ type: 'mask', layer, file }, undefined, [png.buffer]);
     const view = app.mount(el, lib, Object.keys(files).length
       ? { config: model.get('config'), files: Object.fromEntries(Object.entries(files).map(([k, v]) => [k, bytesOf(v)])) }
-      : { config: model.get('config'), glb: bytesOf(model.get('mesh_glb')), adp: bytesOf(model.get('params_adp')) });
+      : { config: model.get('config'), glb: bytesOf(model.get('mesh_glb')), adp: bytesOf(model.get('params_adp')) },
+    { onMask });
+    el.axialdeformView = view; // scripts and tests: paint(), mask(), saveMasks()
     view.ready.then((r) => report({ ready: true, instances: r.instances }),
       (e) => report({ ready: false, error: e.message }));
     const onParams = () => view.setParams(bytesOf(model.get('params_adp')), 'parameters')

@@ -302,6 +302,17 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     return true;
   }
 
+  /** A new density map for the recipe ({data: Float32Array, cols, rows}: grey levels in 0..1) and where it lies
+   * ({d_lo, d_inv, d_wrap}, as the Python library's GroundMaps): an AxialBrush's; the tiles are made again on
+   * the next update. */
+  setDensity(grid, placement) {
+    if (!(grid && grid.data instanceof Float32Array && grid.data.length === grid.cols * grid.rows)) bad('setDensity', '{data: Float32Array of cols x rows, cols, rows}', grid && grid.cols);
+    this.maps = { ...this.maps, density: grid };
+    Object.assign(this.generatorUniforms, { has_density: true, d_size: [grid.cols, grid.rows], ...placement, d_wrap: !!placement.d_wrap });
+    if (this._generator) this._generator.setDensity(grid);
+    this._key = null;
+  }
+
   /** The generator and the GPU's attributes for `renderer`; three draws from those (the CPU copies stay
    * for what needs the records there: raycasting, bake, the bounds, read back when asked). */
   _start(renderer) {

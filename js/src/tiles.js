@@ -63,6 +63,16 @@ export class TileGenerator {
     renderer.resetState();
   }
 
+  /** A new density map ({data, cols, rows}; the uniforms that place it are the mesh's, shared). */
+  setDensity(grid) {
+    const gl = this.gl;
+    gl.bindTexture(gl.TEXTURE_2D, this.textures[1]);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.R32F, grid.cols, grid.rows, 0, gl.RED, gl.FLOAT, grid.data);
+    gl.bindTexture(gl.TEXTURE_2D, null);
+    this.renderer.resetState();
+  }
+
   _program(main, varyings) {
     return feedbackLink(this.gl, HEAD + AXIAL_GLSL + WIND_GLSL + GENERATE_GLSL + main, varyings,
       this.gl.INTERLEAVED_ATTRIBS, 'generate');

@@ -314,6 +314,94 @@ def test_a_learned_layer_in_clumps_is_the_python_records_on_the_page(browser, ge
         v.close()
 
 
+PAINT = """(async ([name, strokes]) => {
+  const v = window.axialdeformView;
+  const changed = strokes.map(([x, z, r, erase]) => v.paint(name, x, z, r, erase));
+  const frames = v.frames;  // the tiles are made again on the next frames
+  await new Promise((ok) => { const wait = () => (v.frames >= frames + 2 ? ok() : requestAnimationFrame(wait)); wait(); });
+  return { changed, png: Array.from(await v.mask(name)) };
+})"""
+
+
+def _painted(base: Path, stem: str, png: bytes) -> Path:
+    """A copy of the hills scene file named ``stem`` beside it, with ``png`` as its stones' mask."""
+    from helpers.generated_scenes import HILLS as hills_text
+
+    from axialdeform.core.brush import mask_path
+
+    scene = base / f"{stem}.toml"
+    scene.write_text(hills_text, encoding="utf-8")
+    mask_path(scene, "stones").write_bytes(png)
+    return scene
+
+
+@pytest.mark.slow
+def test_the_page_brush_paints_where_a_layer_grows_and_its_mask_reloads(browser, generated_site):
+    """Scripted strokes on the page (the brush a drag paints with B): a clearing erased in the stones, part of
+    it painted back; the tiles are made again at once, and the page's records are the Python library's for the
+    scene with the page's saved mask (SCENE-LAYER-mask.png, 8-bit grey) beside it; none in what stays erased."""
+    from axialdeform.core.surface import load_mask
+
+    v = Visit(browser, generated_site["url"] + "hills/index.html")
+    try:
+        assert v.state["ready"] is True, v.state
+        x, _, z = v.page.evaluate("window.axialdeformView.generated({records: false})")[0]["target"]
+        before = v.page.evaluate("window.axialdeformView.generated()")
+        got = v.page.evaluate(PAINT, ["stones", [[x, z, 6.0, True], [x + 4.0, z, 1.5, False], [x, z, 6.0, True]]])
+        assert got["changed"] == [True, True, True]
+        layers = v.page.evaluate("window.axialdeformView.generated()")
+        png = bytes(got["png"])
+        assert png[:8] == b"\x89PNG\r\n\x1a\n"
+        scene = _painted(generated_site["base"], "hills_painted", png)
+        mask = load_mask(scene.with_name("hills_painted-stones-mask.png"))
+        assert mask.shape == (512, 512) and set(np.unique(mask)) == {0.0, 1.0}
+        assert _check_records(layers, scene) > 100  # the page's records: the reloaded scene's, the mask folded in
+        stones = np.asarray(layers[0]["data"], np.float32).reshape(-1, layers[0]["width"])
+        was = np.asarray(before[0]["data"], np.float32).reshape(-1, before[0]["width"])
+        near = lambda p: np.hypot(p[:, 10] - x, p[:, 12] - z) < 5.5  # noqa: E731
+        assert near(was).sum() > 10 and near(stones).sum() == 0, (near(was).sum(), near(stones).sum())
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_the_widget_brush_saves_its_mask_beside_the_scene_file(browser, generated_site, tmp_path):
+    """The notebook widget's brush: a painted mask saved (M) comes back to Python, which writes it beside the
+    scene file, where the scene reads it again; a bad one is refused in words and replaces nothing."""
+    import base64
+
+    from axialdeform.widget import SceneWidget
+
+    scene = _painted(generated_site["base"], "hills_widget", b"")
+    scene.with_name("hills_widget-stones-mask.png").unlink()
+    w = SceneWidget(ad.Scene.load(scene), size=SIZE)
+    state = widget_state(w)
+    state["files"] = {n: {"b64": base64.b64encode(b).decode()} for n, b in w.files.items()}
+    page, errors = widget_page(browser, tmp_path, state, w._esm)
+    try:
+        sent = page.evaluate("""(async () => {
+          const view = document.getElementById('out').axialdeformView;
+          await view.ready;
+          const t = view.generated({records: false})[0].target;
+          view.paint('stones', t[0], t[2], 5.0, true);
+          const sent = [];
+          window.widgetModel.send = (content, callbacks, buffers) => sent.push([content, Array.from(new Uint8Array(buffers[0]))]);
+          await view.saveMasks();
+          return sent;
+        })()""")
+        assert len(sent) == 1 and sent[0][0] == {"type": "mask", "layer": "stones", "file": "hills_widget-stones-mask.png"}
+        w._on_mask(w, sent[0][0], [bytes(sent[0][1])])
+        assert w.masks_saved == [str(scene.with_name("hills_widget-stones-mask.png"))]
+        assert ad.Scene.load(scene).layers[0].generate.mask is not None  # read again with the scene
+        w._on_mask(w, {"type": "mask", "layer": "stones"}, [b"not a png"])
+        assert "mask" in w.status.get("mask_error", "") and len(w.masks_saved) == 1
+        assert scene.with_name("hills_widget-stones-mask.png").read_bytes() == bytes(sent[0][1])  # nothing replaced
+        assert errors == []
+    finally:
+        page.close()
+
+
 @pytest.mark.slow
 def test_a_generated_page_of_trees_bends_every_level_as_python(browser, generated_site):
     """A mesh of ten axes: the page makes axis 0's numbers and every child axis's (each level its bend, the
