@@ -6,7 +6,8 @@ whose points carry the instances' numbers, a hidden base mesh and a Geometry Nod
 every instance as the library does.  File > Export > axialdeform (``export_scene.axialdeform``) writes
 them back as the library's instanced GLB, and Blender's own glTF exporter writes ``AXIALDEFORM_bend``
 for them too (:mod:`.gltf_hooks`).  Object > axialdeform: Vary (``object.axialdeform_vary``) draws a
-layer's bends again with a seed and a bend per level.  The numbers: docs/blender.md.
+layer's bends again with a seed and a bend per level; Rotate Instances (``object.axialdeform_rotate``) turns
+the selected instances about an axis through each one's position.  The numbers: docs/blender.md.
 """
 
 from __future__ import annotations
@@ -140,6 +141,54 @@ class OBJECT_OT_axialdeform_vary(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class OBJECT_OT_axialdeform_rotate(bpy.types.Operator):
+    """Turn the selected instances of the active layer (all of them outside Edit Mode) about an axis through each
+    one's own position: its rotation angles become those of the turn after its rotation"""
+
+    bl_idname = "object.axialdeform_rotate"
+    bl_label = "axialdeform: Rotate Instances"
+    bl_options = {"REGISTER", "UNDO"}
+    angle: bpy.props.FloatProperty(name="Angle", default=0.0, subtype="ANGLE")
+    axis: bpy.props.EnumProperty(name="Axis", items=[("X", "X", ""), ("Y", "Y", "up in the file"), ("Z", "Z", "")],
+                                 default="Y", description="In the file's coordinates (glTF: Y is up)")
+
+    @classmethod
+    def poll(cls, context):
+        return is_layer(context.active_object)
+
+    def execute(self, context):
+        obj = context.active_object
+        editing = obj.mode == "EDIT"
+        if editing:
+            bpy.ops.object.mode_set(mode="OBJECT")  # the selection and the attributes as Edit Mode left them
+        rotate_instances(obj, self.angle, self.axis)
+        if editing:
+            bpy.ops.object.mode_set(mode="EDIT")
+        return {"FINISHED"}
+
+
+def rotate_instances(obj, angle: float, axis: str) -> int:
+    """Turn ``obj``'s selected instances (every one when none is selected) by ``angle`` about the file's
+    ``axis``: ``R' = R_axis(angle)·R``, written back as rx, ry, rz (``R = Rz·Ry·Rx``); how many turned."""
+    import numpy as np
+    from axialdeform.core.transforms import angles_from_matrices, rotation_matrices
+
+    mesh = obj.data
+    n = len(mesh.vertices)
+    chosen = np.zeros(n, dtype=bool)
+    mesh.vertices.foreach_get("select", chosen)
+    if not chosen.any():
+        chosen[:] = True
+    angles = np.empty(n * 3, dtype=np.float32)
+    mesh.attributes["axial_angles"].data.foreach_get("vector", angles)
+    angles = angles.reshape(n, 3)
+    turn = rotation_matrices(np.eye(3)[["X", "Y", "Z"].index(axis)][None] * angle)[0]
+    angles[chosen] = angles_from_matrices(turn @ rotation_matrices(angles[chosen].astype(np.float64)))
+    mesh.attributes["axial_angles"].data.foreach_set("vector", angles.reshape(-1))
+    mesh.update()
+    return int(chosen.sum())
+
+
 def vary(mesh, params, seed: int, bend, droop: float = 0.0):
     """``params`` with every axis's offsets drawn again by the library's rules (``random_params``), each
     instance's position, rotation, scale, twist, taper and tint kept."""
@@ -164,9 +213,11 @@ def _menu_export(self, context):
 
 def _menu_object(self, context):
     self.layout.operator(OBJECT_OT_axialdeform_vary.bl_idname)
+    self.layout.operator(OBJECT_OT_axialdeform_rotate.bl_idname)
 
 
-_CLASSES = (IMPORT_SCENE_OT_axialdeform, EXPORT_SCENE_OT_axialdeform, OBJECT_OT_axialdeform_vary)
+_CLASSES = (IMPORT_SCENE_OT_axialdeform, EXPORT_SCENE_OT_axialdeform, OBJECT_OT_axialdeform_vary,
+            OBJECT_OT_axialdeform_rotate)
 
 
 def register():

@@ -71,25 +71,30 @@ class glTF2ExportUserExtension:
         gltf, blob, src = _library_node(blender_object)
         where = f"{blender_object.name} (the library's encoding)"
 
+        carried = {}  # one exporter accessor per accessor of the file: the parts' primitives share POSITION
+
         def carry(index, target=None):
+            if index in carried:
+                return carried[index]
             acc = gltf.accessors[index]
             data = read_accessor(gltf, blob, index, str(index), where)
             kind = acc.componentType
             arr = np.ascontiguousarray(data, dtype=_DTYPES[kind])
             view = self.binary.BinaryData(arr.tobytes(), bufferViewTarget=target)
-            return self.io.Accessor(buffer_view=view, byte_offset=None, component_type=self.components[kind],
-                                    count=int(acc.count), extensions=None, extras=None, max=acc.max, min=acc.min,
-                                    name=None, normalized=None, sparse=None, type=self.types[acc.type])
+            carried[index] = self.io.Accessor(
+                buffer_view=view, byte_offset=None, component_type=self.components[kind], count=int(acc.count),
+                extensions=None, extras=None, max=acc.max, min=acc.min, name=None, normalized=None, sparse=None,
+                type=self.types[acc.type])
+            return carried[index]
 
         mesh = gltf.meshes[src.mesh]
-        material = self._material(gltf, mesh.primitives[0].material)
         primitives = []
-        for prim in mesh.primitives:
+        for prim in mesh.primitives:  # a part each, over the same vertices
             attrs = {name: carry(index, 34962) for name, index in vars(prim.attributes).items()
                      if isinstance(index, int)}
             primitives.append(self.io.MeshPrimitive(attributes=attrs, extensions=None, extras=None,
-                                                    indices=carry(prim.indices, 34963), material=material, mode=4,
-                                                    targets=None))
+                                                    indices=carry(prim.indices, 34963),
+                                                    material=self._material(gltf, prim.material), mode=4, targets=None))
         node.mesh = self.io.Mesh(extensions=None, extras=None, name=f"{blender_object.name} base",
                                  primitives=primitives, weights=None)
         instancing = {"attributes": {name: carry(index) for name, index in

@@ -96,6 +96,11 @@ def edit(args):
     attrs["axial_d5"].data[2].vector = (0.3, -0.2)  # a new bend, typed into the spreadsheet
     attrs["axial_angles"].data[3].vector = (0.1, 1.2, -0.3)  # a new rotation
     me.vertices[0].co.x += 1.5  # moved
+    select = np.zeros(len(me.vertices), dtype=bool)
+    select[5] = True
+    me.vertices.foreach_set("select", select)
+    bpy.context.view_layer.objects.active = obj
+    bpy.ops.object.axialdeform_rotate(angle=0.7, axis="Y")  # turned about the up axis
     bm = bmesh.new()
     bm.from_mesh(me)
     bm.verts.ensure_lookup_table()
