@@ -171,6 +171,7 @@ def rotate_instances(obj, angle: float, axis: str) -> int:
     """Turn ``obj``'s selected instances (every one when none is selected) by ``angle`` about the file's
     ``axis``: ``R' = R_axis(angle)·R``, written back as rx, ry, rz (``R = Rz·Ry·Rx``); how many turned."""
     import numpy as np
+
     from axialdeform.core.transforms import angles_from_matrices, rotation_matrices
 
     mesh = obj.data

@@ -12,6 +12,8 @@ through IN OUT.glb
     import IN and export it again with the add-on's operator, nothing changed.
 render IN OUT.png --eye X,Y,Z --target X,Y,Z --fov DEG --size W,H
     import IN, render it with Cycles on the CPU (transparent film) from that camera (file coordinates).
+block FILE.py
+    run FILE.py (a docs block) with the add-on enabled, in the current folder.
 install ZIP --glb IN --out OUT.glb
     install the add-on's zip as an extension (into $BLENDER_USER_RESOURCES), enable it, import IN with it and
     export OUT.glb with Blender's glTF exporter; prints what was installed as JSON.
@@ -155,6 +157,13 @@ def render(args):
     bpy.ops.render.render(write_still=True)
 
 
+def block(args):
+    _enable()
+    code = Path(args.input).read_text(encoding="utf-8")
+    exec(compile(code, args.input, "exec"), {"__name__": "__main__"})  # noqa: S102  (the docs' own block)
+    print("LAYERS", json.dumps([[o.name, len(o.data.vertices)] for o in _layers()]))
+
+
 def install(args):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.extensions.package_install_files(filepath=args.input, repo="user_default", enable_on_install=True)
@@ -166,7 +175,7 @@ def install(args):
 
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("command", choices=("evaluate", "edit", "through", "render", "install"))
+    parser.add_argument("command", choices=("evaluate", "edit", "through", "render", "block", "install"))
     parser.add_argument("input")
     parser.add_argument("--out", default=None)
     parser.add_argument("--time", type=float, default=None)
@@ -178,7 +187,7 @@ def main():
     parser.add_argument("--fov", default="40")
     parser.add_argument("--size", default="160,120")
     args = parser.parse_args()
-    {"evaluate": evaluate, "edit": edit, "through": through, "render": render, "install": install}[args.command](args)
+    {"evaluate": evaluate, "edit": edit, "through": through, "render": render, "block": block, "install": install}[args.command](args)
 
 
 if __name__ == "__main__":

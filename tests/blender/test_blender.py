@@ -283,3 +283,26 @@ def test_a_bad_file_is_refused_in_the_librarys_words(tmp_path):
     assert "RESULT ['CANCELLED']" in proc.stdout, proc.stdout[-2000:]
     assert "bad.glb: node" in proc.stdout + proc.stderr and "length" in proc.stdout + proc.stderr
     assert not [k for k in np.load(tmp_path / "out.npz").files if k.startswith("pos")]
+
+
+def test_the_docs_blender_block_runs_in_blender(tmp_path):
+    """docs/blender.md's ``python blender`` block, as written, in Blender with the add-on (beside the files it
+    names: the README's commands write stones.adp and stones.glb)."""
+    import re
+
+    [code] = re.findall(r"^```python blender\n(.*?)^```", (ROOT / "docs" / "blender.md").read_text(encoding="utf-8"),
+                        re.S | re.M)
+    for name in ("examples", "axialdeform"):
+        (tmp_path / name).symlink_to(ROOT / name)
+    mesh = ad.load_mesh("stone")
+    params = ad.random_params(mesh, 500, seed=0)
+    ad.write_params(tmp_path / "stones.adp", params, mesh)
+    ad.export_glb(tmp_path / "stones.glb", mesh, params, layout="instanced")
+    (tmp_path / "block.py").write_text(code, encoding="utf-8")
+    proc = subprocess.run([blender_python(), str(CHECKS), "block", "block.py"], capture_output=True, text=True,
+                          timeout=600, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    layers = json.loads(next(x for x in proc.stdout.splitlines() if x.startswith("LAYERS "))[7:])
+    assert sorted(n for _, n in layers) == [500, 500, 2000], layers  # stones twice, the forest's trees
+    _, back = read_instanced_glb(tmp_path / "edited.glb", node="trees")
+    assert len(back) == 2000

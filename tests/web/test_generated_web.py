@@ -325,9 +325,9 @@ PAINT = """(async ([name, strokes]) => {
 
 def _painted(base: Path, stem: str, png: bytes) -> Path:
     """A copy of the hills scene file named ``stem`` beside it, with ``png`` as its stones' mask."""
-    from helpers.generated_scenes import HILLS as hills_text
-
     from axialdeform.core.brush import mask_path
+
+    from helpers.generated_scenes import HILLS as hills_text
 
     scene = base / f"{stem}.toml"
     scene.write_text(hills_text, encoding="utf-8")
