@@ -2,8 +2,8 @@
 points carry each instance's numbers as named attributes, and the Geometry Nodes modifier that
 bends them (:mod:`.nodes`).  And back: the records of such an object, exactly as stored.
 
-A layer is described by plain arrays (:class:`LayerData`), so this module needs numpy and bpy only;
-reading files is :mod:`.read`'s (the axialdeform library).  Coordinates stay the file's (glTF: +Y
+A layer is described by plain arrays (:class:`LayerData`); reading files is :mod:`.read`'s.  The rest
+shape's Bernstein weights are the library's (``axialdeform.core.deform``).  Coordinates stay the file's (glTF: +Y
 up); the instance object turns them upright for Blender (+Z up) by its own transform, the turn
 Blender's glTF importer makes.
 """
@@ -17,10 +17,12 @@ import bpy
 import numpy as np
 from mathutils import Matrix
 
+from axialdeform.core.deform import T_SLACK, bernstein
+
 from .nodes import GROUP_PREFIX, build_group
 
 __all__ = ["LayerData", "add_layer", "add_terrain", "layer_records", "set_records", "is_layer", "base_arrays",
-           "LAYER_KEY", "BASE_KEY", "UP_TO_Z_UP", "T_SLACK"]
+           "LAYER_KEY", "BASE_KEY", "UP_TO_Z_UP"]
 
 #: the custom property that marks an instance object and holds its axes (JSON)
 LAYER_KEY = "axialdeform"
@@ -32,8 +34,6 @@ UP_TO_Z_UP = {
     "z": ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0)),
     "x": ((0.0, 0.0, -1.0, 0.0), (0.0, 1.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)),
 }
-#: axialdeform's T_SLACK: beyond it an ancestor axis's t is clamped and its slope drops out
-T_SLACK = 1e-4
 #: the viewport bends a layer of up to this many vertices in all (instances x base-mesh vertices); a larger
 #: one shows its instances rigid until "Bend in Viewport" is ticked (renders and exports always bend)
 VIEWPORT_BEND_LIMIT = 2_000_000
@@ -104,12 +104,6 @@ def _depths(parents) -> np.ndarray:
     return d
 
 
-def _bernstein(t: np.ndarray, degree: int) -> np.ndarray:
-    i = np.arange(degree + 1)
-    binom = np.array([1.0, 4.0, 6.0, 4.0, 1.0] if degree == 4 else [1.0, 3.0, 3.0, 1.0])
-    return binom * t[:, None] ** i * (1.0 - t[:, None]) ** (degree - i)
-
-
 def _levels(data: LayerData):
     """Each depth's axes and, per vertex, the weights of the axis of its chain at that depth."""
     p = np.asarray(data.positions, dtype=np.float64)
@@ -132,8 +126,8 @@ def _levels(data: LayerData):
             raw = (p[sel] @ f[0] - data.lo[k]) / data.length[k]
             t = np.clip(raw, 0.0, 1.0)
             inside = ((raw >= -T_SLACK) & (raw <= 1 + T_SLACK)) if data.count > 1 else np.ones(len(raw), bool)
-            b4[sel] = _bernstein(t, 4)
-            s3[sel] = 4.0 * _bernstein(t, 3) * (inside / data.length[k])[:, None]
+            b4[sel] = bernstein(t, 4)  # (T_SLACK: beyond it an ancestor's t is clamped and its slope drops out)
+            s3[sel] = 4.0 * bernstein(t, 3) * (inside / data.length[k])[:, None]
             eas[sel], eus[sel], evs[sel] = f[0], f[1], f[2]
         wb, ws = np.zeros(len(p)), np.zeros(len(p))
         if data.wind_weights is not None:  # the wind's push on each axis, a multiple of its part across the axis
