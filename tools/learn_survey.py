@@ -13,7 +13,8 @@ axialdeform.
 For each plot: learn on the whole plot, generate the learned layer over the same ground (``--sims`` seeds,
 numpy), and compare: the total count, the count per quartile of each ground feature, the example's L-function
 against the envelope of the generated patterns for r in [0.5, 5] mean spacings, the sizes' KS distance; then
-learn on the west half and compare on the east half.
+two hold-outs: learn on the west half and compare on the east half, and learn on a random half of the trees and
+compare on the other half.
 """
 
 from __future__ import annotations
@@ -175,6 +176,12 @@ def main(argv=None) -> int:
     east = e_bei.subset(e_bei.xz[:, 0] >= 0)
     east = Example(east.xz, (0, -250, 500, 250), source="bei east")
     rows.append(compare("bei: west learned, east compared", west, bei_scene, folder, args.sims, east))
+    # the other hold-out: a random half of the trees learned, the other half compared (each half the same
+    # ground, half the trees: the learned layer grows half as many)
+    for name, ex, scene in (("bei", e_bei, bei_scene), ("longleaf", e_ll, None)):
+        half = np.random.default_rng(1).random(len(ex.xz)) < 0.5
+        rows.append(compare(f"{name}: a random half learned, the other compared", ex.subset(half), scene, folder,
+                            args.sims, ex.subset(~half)))
     if args.picture:
         _picture(Path(args.picture), e_bei, bei_scene, folder)
     keys = list(dict.fromkeys(k for r in rows for k in r))

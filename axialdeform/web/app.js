@@ -14,8 +14,8 @@
 // the npm module axialdeform-three (js/src): its parser reads and checks the .adp files (CRC-32,
 // header) and its AxialInstancedMesh holds every layer's instances (attributes, instanceMatrix, a
 // tree's offsets texture, bounds for three's culling); the page's own shaders draw them
-import { parseADP, AxialError, AxialInstancedMesh, AxialGeneratedMesh, AxialBrush } from 'axialdeform-three';
-import { hex, stillWindUniforms } from 'axialdeform-three/helpers';
+import { parseADP, AxialError, AxialInstancedMesh, AxialGeneratedMesh } from 'axialdeform-three';
+import { hex, stillWindUniforms, AxialBrush } from 'axialdeform-three/helpers';
 
 /** The page's errors (a message shown as it is): the module's AxialError. */
 export const SceneError = AxialError;

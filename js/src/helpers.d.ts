@@ -2,7 +2,7 @@
 // columns, the parser's checks, the axis and bounds maths, the shader patch, the glTF plugin's steps).
 import * as THREE from 'three';
 import type { AxialInstancedMesh, AxisSpec, AxesSpec, BendExtension, InstanceRecord, RecordLayout, ResolvedAxis,
-  Rows3, GenerateRecipe, GeneratorUniforms, GroundMaps } from './index.js';
+  Rows3, GenerateRecipe, GeneratorUniforms, GroundMaps, AxialGeneratedMesh, DensityGrid } from './index.js';
 
 export function crc32(bytes: Uint8Array): number;
 export function hex(bytes: Uint8Array): string;
@@ -79,3 +79,23 @@ export class TileGenerator {
 
 /** AxialRecipe's fields (glsl/generate.glsl), [name, GLSL type] in order. */
 export const RECIPE_FIELDS: ReadonlyArray<readonly [string, string]>;
+
+/** Pixels a side of a new mask. */
+export const MASK_SIZE: number;
+
+/** A generated layer's brush (the Python library's core/brush.py): paint where it grows, or erase. */
+export class AxialBrush {
+  constructor(mesh: AxialGeneratedMesh, ground: { area: [number, number, number, number]; wrap?: boolean;
+    density?: DensityGrid | null; mask?: DensityGrid | null });
+  readonly mesh: AxialGeneratedMesh;
+  /** The mask painted (1 grows, 0 does not). */
+  readonly mask: DensityGrid;
+  /** Paint (or erase) a round dab on the ground; whether the mask changed (the tiles are then made again). */
+  stroke(x: number, z: number, radius: number, erase?: boolean): boolean;
+  /** The density the generator reads: the density map times the mask, on the mask's grid. */
+  fold(): Float32Array;
+  /** Give the mesh the folded density. */
+  apply(): void;
+  /** The mask as an 8-bit grey PNG: SCENE-LAYER-mask.png beside a scene file. */
+  png(): Promise<Uint8Array>;
+}

@@ -271,23 +271,3 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
 
 /** Grey levels in 0..1, rows of `cols`, the first row at the low z. */
 export interface DensityGrid { data: Float32Array; cols: number; rows: number }
-
-/** Pixels a side of a new mask. */
-export const MASK_SIZE: number;
-
-/** A generated layer's brush (the Python library's core/brush.py): paint where it grows, or erase. */
-export class AxialBrush {
-  constructor(mesh: AxialGeneratedMesh, ground: { area: [number, number, number, number]; wrap?: boolean;
-    density?: DensityGrid | null; mask?: DensityGrid | null });
-  readonly mesh: AxialGeneratedMesh;
-  /** The mask painted (1 grows, 0 does not). */
-  readonly mask: DensityGrid;
-  /** Paint (or erase) a round dab on the ground; whether the mask changed (the tiles are then made again). */
-  stroke(x: number, z: number, radius: number, erase?: boolean): boolean;
-  /** The density the generator reads: the density map times the mask, on the mask's grid. */
-  fold(): Float32Array;
-  /** Give the mesh the folded density. */
-  apply(): void;
-  /** The mask as an 8-bit grey PNG: SCENE-LAYER-mask.png beside a scene file. */
-  png(): Promise<Uint8Array>;
-}

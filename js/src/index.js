@@ -6,5 +6,4 @@ export { AxialError, parseADP } from './adp.js';
 export { AxialInstancedMesh } from './mesh.js';
 export { AxialGLTFPlugin, EXTENSION } from './gltf.js';
 export { AxialGeneratedMesh } from './generate.js';
-export { AxialBrush, MASK_SIZE } from './brush.js';
 export { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
