@@ -105,6 +105,26 @@ def test_learn_from_a_parameter_file_a_gltf_scene_and_a_scene_layer(tmp_path):
     assert res.returncode == 2 and "layer: expected one of rocks (--layer NAME), found 'trees'" in res.stderr
 
 
+def test_a_gltf_scene_of_two_kinds_learns_a_layer_each(tmp_path):
+    """An editor's scene of pines and birches (``Pine.001``, ``Birch.002``, ...: the node names of duplicates):
+    one learned layer a kind, each grown as often as its kind stands in the scene."""
+    import trimesh
+
+    rng = np.random.default_rng(4)
+    editor = trimesh.Scene()
+    for i in range(600):
+        kind = "Pine" if i % 4 else "Birch"  # three pines to a birch
+        x, z = rng.uniform(0, 40), rng.uniform(0, 30)
+        editor.add_geometry(trimesh.creation.box((0.3, 0.3, 0.3)), node_name=f"{kind}.{i:03d}",
+                            transform=trimesh.transformations.translation_matrix((x, 0.0, z)))
+    editor.export(tmp_path / "two.glb")
+    res = run("learn", tmp_path / "two.glb", "-o", tmp_path / "two.toml", "--window", "0,0,40,30", "--mesh", "stone")
+    assert res.returncode == 0, res.stderr
+    layers = {layer.name: len(layer.params) for layer in ad.Scene.load(tmp_path / "two.toml").layers}
+    assert set(layers) == {"Pine", "Birch"}, layers
+    assert layers["Pine"] == pytest.approx(450, rel=0.15) and layers["Birch"] == pytest.approx(150, rel=0.25), layers
+
+
 def _foreign_instanced(path, positions):
     """A GLB of one triangle instanced by EXT_mesh_gpu_instancing with TRANSLATION alone, under a parent node
     that moves it up 2 (as other tools write them)."""

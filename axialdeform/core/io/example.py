@@ -10,7 +10,8 @@ written as.
 * a **glTF scene**: in a ``.glb``, the instances of every ``EXT_mesh_gpu_instancing`` node (this library's
   export, with ``AXIALDEFORM_bend``, or any other's) and every other node that has a mesh (as editors
   export a hand-placed patch), each with its world matrix; a text ``.gltf``: one object a node that has a
-  mesh (trimesh's scene graph). Each object's place, its scale (the mean of the three) and its turn.
+  mesh (trimesh's scene graph). Each object's place, its scale (the mean of the three) and its turn, and its
+  kind from its node's name less a trailing number (``Pine.003``: ``Pine``; one kind: no kinds).
 
 The window (the ground the example covers) is given, or the objects' bounding box grown by half a mean
 spacing on each side.  :func:`write_learned_scene` writes a scene file: the terrain's table and one generated
@@ -24,6 +25,7 @@ import io
 import json
 import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -157,7 +159,7 @@ def _read_glb(path: Path) -> dict:
 
 def _placed_in(gltf, where: str) -> dict:
     blob = gltf.binary_blob() or b""
-    world, mats = {}, []
+    world, mats, names = {}, [], []
     roots = gltf.scenes[gltf.scene or 0].nodes if gltf.scenes else range(len(gltf.nodes))
     stack = [(int(i), np.eye(4)) for i in roots or ()]
     while stack:  # the node tree, parents first (a node seen twice is a cycle: refused)
@@ -184,9 +186,18 @@ def _placed_in(gltf, where: str) -> dict:
             mats.append(m[None] @ _trs(t, r, sc))
         else:
             mats.append(m[None])
+        mesh = gltf.meshes[node.mesh] if isinstance(node.mesh, int) and 0 <= node.mesh < len(gltf.meshes) else None
+        names += [node.name or (mesh.name if mesh is not None else None) or f"mesh{node.mesh}"] * len(mats[-1])
     if not mats:
         raise ExampleError(f"{where}: no placed objects; expected EXT_mesh_gpu_instancing nodes or nodes with a mesh")
-    return _placed(np.concatenate(mats))
+    return {**_placed(np.concatenate(mats)), "kind": _kinds(names)}
+
+
+def _kinds(names: list) -> np.ndarray | None:
+    """Each object's kind from its node's name as editors write duplicates (``Pine.003``, ``rock_12``: the
+    name less a trailing number); None when every object is of one kind."""
+    kinds = np.array([re.sub(r"[._\- ]*\d+$", "", str(n)) or str(n) for n in names], dtype=object)
+    return kinds if len(set(kinds)) > 1 else None
 
 
 def _placed(m: np.ndarray) -> dict:
@@ -202,10 +213,11 @@ def _read_gltf(path: Path) -> dict:
         scene = trimesh.load(str(path), force="scene")
     except Exception as exc:  # noqa: BLE001 - any reader failure on a hostile file
         raise ExampleError(f"{path}: could not read the glTF scene ({type(exc).__name__}: {exc})") from None
-    mats = [np.asarray(scene.graph.get(node)[0], np.float64) for node in scene.graph.nodes_geometry]
+    nodes = list(scene.graph.nodes_geometry)
+    mats = [np.asarray(scene.graph.get(node)[0], np.float64) for node in nodes]
     if not mats:
         raise ExampleError(f"{path}: no placed objects; expected nodes with a mesh")
-    return _placed(np.stack(mats))
+    return {**_placed(np.stack(mats)), "kind": _kinds(nodes)}
 
 
 def read_example(source, window=None, *, layer: str | None = None) -> Example:
