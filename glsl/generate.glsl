@@ -20,6 +20,8 @@ struct AxialRecipe {
     float jitter;    // j = 1 - min_distance / c
     float bend;      // bend L: offsets in [-bend L, bend L]
     vec2 scale;      // lo, hi (1, 1: none)
+    vec3 scale_mid;  // q1, q2, q3: the scale at u13 = 1/4, 1/2, 3/4, piecewise linear between (q1 < 0: uniform)
+    vec4 scale_odd;  // o1, o3, o5, o7: at u13 = 1/8, 3/8, 5/8, 7/8 too (o1 < 0: five knots)
     float twist;     // tw in [-twist, twist]
     float taper;     // tp in [0, taper]
     float anchor_y;  // the anchor's y on the base mesh (bottom: its lowest y): it stands on the ground
@@ -159,6 +161,37 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
     d34 = vec4(d[2] - at, d[3] - at);
     d5 = d[4] - at;
     float s = r.scale.x + (r.scale.y - r.scale.x) * u[13];
+    if (r.scale_mid.x > 0.0) {  // piecewise linear through the knots at u13 = 0, 1/4, .., 1 (or 1/8: nine knots)
+        float q[9];
+        float n = 4.0;
+        q[0] = r.scale.x;
+        q[1] = r.scale_mid.x;
+        q[2] = r.scale_mid.y;
+        q[3] = r.scale_mid.z;
+        q[4] = r.scale.y;
+        for (int j = 5; j < 9; ++j) q[j] = r.scale.y;
+        if (r.scale_odd.x > 0.0) {
+            n = 8.0;
+            q[1] = r.scale_odd.x;
+            q[2] = r.scale_mid.x;
+            q[3] = r.scale_odd.y;
+            q[4] = r.scale_mid.y;
+            q[5] = r.scale_odd.z;
+            q[6] = r.scale_mid.z;
+            q[7] = r.scale_odd.w;
+            q[8] = r.scale.y;
+        }
+        float v = u[13] * n;
+        float k = min(floor(v), n - 1.0);
+        float a = q[0], b = q[1];
+        for (int j = 1; j < 8; ++j) {  // q[k], q[k + 1] (arrays are indexed by constants in every target)
+            if (float(j) == k) {
+                a = q[j];
+                b = q[j + 1];
+            }
+        }
+        s = a + (b - a) * (v - k);
+    }
     extra = vec3(s, r.twist * (2.0 * u[14] - 1.0), r.taper * u[15]);
     vec3 ut = vec3(u[17], u[18], u[19]);
     tint = r.tint_color * (1.0 - r.tint * (u[17] + r.tint_hue * (ut - u[17])));

@@ -12,6 +12,8 @@ uniform float u_cell;
 uniform float u_jitter;
 uniform float u_bend;
 uniform vec2 u_scale;
+uniform vec3 u_scale_mid;
+uniform vec4 u_scale_odd;
 uniform float u_twist;
 uniform float u_taper;
 uniform float u_anchor_y;
@@ -42,11 +44,11 @@ uniform float u_clump_radius;
 // the recipe from the uniforms above
 AxialRecipe axial_gen_recipe() {
     return AxialRecipe(u_seed, u_m, u_cell, u_jitter, u_bend, u_scale,
-                       u_twist, u_taper, u_anchor_y, u_anchor_w, u_anchor_w4, u_tint,
-                       u_tint_color, u_tint_hue, u_has_heights, u_h_lo, u_h_inv, u_h_size,
-                       u_has_density, u_d_lo, u_d_inv, u_d_size, u_d_wrap, u_altitude,
-                       u_slope_tan2, u_choice, u_lift, u_align, u_anchor_xz, u_yaw,
-                       u_clump_cells, u_clump_radius);
+                       u_scale_mid, u_scale_odd, u_twist, u_taper, u_anchor_y, u_anchor_w,
+                       u_anchor_w4, u_tint, u_tint_color, u_tint_hue, u_has_heights, u_h_lo,
+                       u_h_inv, u_h_size, u_has_density, u_d_lo, u_d_inv, u_d_size,
+                       u_d_wrap, u_altitude, u_slope_tan2, u_choice, u_lift, u_align,
+                       u_anchor_xz, u_yaw, u_clump_cells, u_clump_radius);
 }
 // ---- end of what js/build.mjs writes ----
 uniform sampler2D u_heights;  // unit 0

@@ -377,6 +377,8 @@ tile = 8.0
 min_distance = 0.3
 seed = 4
 scale = [0.5, 1.0]
+scale_quartiles = [0.6, 0.7, 0.85]
+scale_octiles = [0.55, 0.65, 0.8, 0.95]
 tint = 0.3
 lift = [0.0, 0.1]
 extent = [-8, -8, 8, 8]
@@ -425,7 +427,8 @@ def mutate_generated(doc: dict, rng: np.random.Generator) -> tuple[dict, str]:
     said = []
     for _ in range(int(rng.integers(1, 4))):
         if rng.random() < 0.4:  # a size of the recipe
-            path = ("recipe", _pick(rng, ["rate", "tile", "reach", "min_distance", "bend", "scale"]))
+            path = ("recipe", _pick(rng, ["rate", "tile", "reach", "min_distance", "bend", "scale", "scale_quartiles",
+                                          "scale_octiles"]))
         else:
             path = _pick(rng, [p for p in _paths(gen) if p])
         if rng.random() < 0.15 and len(path) > 1:

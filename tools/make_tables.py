@@ -107,7 +107,8 @@ def struct_fields(text: str, name: str = "AxialRecipe") -> list[tuple[str, str]]
 
 
 _TS = {"number": "number", "whole": "number", "levels": "number | number[]", "pair": "[number, number]",
-       "rgb": "[number, number, number]"}
+       "rgb": "[number, number, number]", "triple": "[number, number, number]",
+       "quad": "[number, number, number, number]"}
 _GLSL_TS = {"float": "number", "int": "number", "uint": "number", "bool": "boolean", "vec2": "[number, number]",
             "ivec2": "[number, number]", "vec3": "[number, number, number]", "vec4": "[number, number, number, number]"}
 
@@ -182,6 +183,8 @@ def _kind_schema(kind: str) -> dict:
             "degrees": pair({"type": "number", "minimum": 0, "maximum": 90}),
             "share": pair({"type": "number", "minimum": 0, "maximum": 1}),
             "rgb": {"type": "array", "items": {"type": "number", "minimum": 0, "maximum": 1}, "minItems": 3, "maxItems": 3},
+            "quartiles": {"type": "array", "items": {"type": "number", "exclusiveMinimum": 0}, "minItems": 3, "maxItems": 3},
+            "octiles": {"type": "array", "items": {"type": "number", "exclusiveMinimum": 0}, "minItems": 4, "maxItems": 4},
             "anchor": {"enum": list(KINDS["anchor"].words)}}[kind]
 
 

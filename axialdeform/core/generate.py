@@ -23,7 +23,8 @@ Randomness: ``u_k`` (``k = 0 .. 21``; room for 32) is 24 bits of the PCG hash of
 a turn about up ``ry = yaw_lo + (yaw_hi - yaw_lo) u2`` (``yaw`` default [0, 2 pi]); offsets
 ``d_q = bend L (2 u_{3+q} - 1)`` for the ten numbers, every control point then shifted by ``-D(t_a)``,
 ``t_a`` the anchor's place on the axis, so it stays put;
-``s = lo + (hi - lo) u13``, ``tw = twist (2 u14 - 1)``, ``tp = taper u15`` (19 numbers when any of
+``s = lo + (hi - lo) u13`` (with ``scale_quartiles``: piecewise linear through ``[lo, q1, q2, q3, hi]`` at
+``u13 = 0, 1/4, .., 1``; with ``scale_octiles`` too, through nine knots at ``u13 = 0, 1/8, .., 1``), ``tw = twist (2 u14 - 1)``, ``tp = taper u15`` (19 numbers when any of
 scale, twist, taper is given), the tint from ``u17 .. u19`` (22 numbers); ``py`` = the ground's height
 (0: a flat world; a height map: its triangles) minus the anchor's height times ``s``, plus the lift
 (``u21``); kept by the height map, the altitude and slope bands, the density map (``u16``) and the
@@ -123,6 +124,11 @@ class Generate:
             bad("clump_radius", f"at most the world's edge, {world_edge(self):.6g}", self.clump_radius)
         if self.scale is not None and self.scale[1] > MAX_BEND:
             bad("scale", f"[lo, hi] with hi at most {MAX_BEND:g}", self.scale)
+        q, o = self.scale_quartiles, self.scale_octiles
+        if q is not None and (self.scale is None or q[0] < self.scale[0] or q[2] > self.scale[1]):
+            bad("scale_quartiles", "three numbers within scale's [lo, hi] (and a scale beside them)", q)
+        if o is not None and (q is None or not self.scale[0] <= o[0] <= q[0] <= o[1] <= q[1] <= o[2] <= q[2] <= o[3] <= self.scale[1]):
+            bad("scale_octiles", "four numbers between scale_quartiles' (and scale's), beside them", o)
 
     @property
     def extended(self) -> bool:
@@ -250,6 +256,14 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     if recipe.extended:
         lo, hi = recipe.scale if recipe.scale is not None else (1.0, 1.0)
         s = f32(lo) + (f32(hi) - f32(lo)) * u[:, 13]
+        if recipe.scale_quartiles is not None:  # piecewise linear through the knots at u13 = 0, 1/4 (1/8), .., 1
+            q, o = recipe.scale_quartiles, recipe.scale_octiles
+            knots = np.array([lo, *q, hi] if o is None else [lo, o[0], q[0], o[1], q[1], o[2], q[2], o[3], hi], f32)
+            spans = f32(len(knots) - 1)
+            v = u[:, 13] * spans
+            k = np.minimum(np.floor(v), spans - f32(1.0))
+            a, b = knots[k.astype(np.int64)], knots[k.astype(np.int64) + 1]
+            s = a + (b - a) * (v - k)
         out[:, SCALE] = s
         out[:, TWIST] = f32(recipe.twist) * (f32(2.0) * u[:, 14] - f32(1.0))
         out[:, TAPER] = f32(recipe.taper) * u[:, 15]

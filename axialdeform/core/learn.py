@@ -14,8 +14,9 @@ ground.  :func:`learn_layers` fits, per kind:
   fitted intensity (maximum absolute deviation over r in [0.5, 5] mean spacings).  Clumps are fitted as a
   Matern cluster process (parents ``kappa`` a square unit, children uniform in a disc of radius ``R``) by
   minimum contrast on ``K(r)^(1/4)``;
-* **the marks**: the sizes as scales (median 1: the uniform range nearest their quantile function, by least
-  squares), the turn about up, where the example has them.
+* **the marks**: the sizes as scales (median 1: their nine quantiles at 0, 1/8, .., 1, which the generator
+  draws through piecewise linearly: ``scale``, ``scale_quartiles``, ``scale_octiles``), the turn about up, where
+  the example has them.
 
 :func:`layer_recipe` turns a learned layer into a generated layer's recipe over a ground -- the same ground or
 ANOTHER one (the learned relation to slope, altitude and water applied there): a rate and a density map of
@@ -172,11 +173,14 @@ class LearnedLayer:
     intensity : Intensity
     spacing : Spacing
     scale : (2,) float or None
-        The sizes as scales, median 1: the uniform [lo, hi] nearest their quantile function (None: no sizes).
+        The sizes as scales, median 1: the smallest and the largest (None: no sizes).
     yaw : (2,) float
         The turn about up, [lo, hi] radians ([0, 2 pi] without turns).
     window : (4,) float
         The example's ground (x0, z0, x1, z1).
+    scale_quartiles, scale_octiles : (3,) and (4,) float, or None
+        The sizes' quantiles at 1/4, 1/2, 3/4 and at 1/8, 3/8, 5/8, 7/8 as scales: the generator draws a scale
+        piecewise linear through these nine knots with ``scale``'s (the recipe's keys of the same names).
     """
 
     kind: str | None
@@ -186,6 +190,8 @@ class LearnedLayer:
     scale: tuple | None
     yaw: tuple
     window: tuple = (0.0, 0.0, 1.0, 1.0)
+    scale_quartiles: tuple | None = None
+    scale_octiles: tuple | None = None
 
     def describe(self, digits: int = 4) -> str:
         """What was learned, in words: ``learned from N objects: log rate = ...; spacing: ...``."""
@@ -388,20 +394,18 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     return Spacing(hard, "cluster", (kappa, radius))
 
 
-def _marks(example: Example) -> tuple[tuple | None, tuple]:
-    scale = None
+def _marks(example: Example) -> tuple[tuple | None, tuple | None, tuple | None, tuple]:
+    scale = quartiles = octiles = None
     if example.size is not None and len(example.size):
-        s = np.sort(example.size / np.median(example.size))
-        v = (np.arange(len(s)) + 0.5) / len(s)  # the uniform [lo, hi] nearest the sizes' quantile function
-        slope, lo = np.polyfit(v, s, 1) if len(s) > 1 else (0.0, s[0])
-        lo = float(max(lo, 0.5 * s[0]))
-        scale = (lo, float(max(lo + slope, lo)))
+        s = example.size / np.median(example.size)  # median 1; the generator draws through its nine quantiles
+        q = [float(x) for x in np.quantile(s, np.arange(9) / 8)]
+        scale, quartiles, octiles = (q[0], q[8]), (q[2], q[4], q[6]), (q[1], q[3], q[5], q[7])
     yaw = (0.0, 2.0 * math.pi)
     if example.yaw is not None and len(example.yaw) > 1:
         a = np.mod(example.yaw, 2.0 * math.pi)
         if np.ptp(a) < math.pi:  # turned one way, within half a turn: that range
             yaw = (float(a.min()), float(a.max()))
-    return scale, yaw
+    return scale, quartiles, octiles, yaw
 
 
 def learn_layers(example: Example, ground=None, names=None, seed: int = 0) -> list[LearnedLayer]:
@@ -427,8 +431,8 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0) -> li
             inflate = math.sqrt(1.0 + len(part.xz) / part.area / spacing.cluster[0])
             intensity = fit_intensity(part, ground, names, significant=SIGNIFICANT * inflate)
             spacing = fit_spacing(part, intensity, ground, seed)
-        scale, yaw = _marks(part)
-        out.append(LearnedLayer(kind, len(part.xz), intensity, spacing, scale, yaw, example.window))
+        scale, quartiles, octiles, yaw = _marks(part)
+        out.append(LearnedLayer(kind, len(part.xz), intensity, spacing, scale, yaw, example.window, quartiles, octiles))
     return out
 
 
@@ -468,4 +472,7 @@ def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: fl
     keys = {"rate": float(rate), "tile": float(tile), "min_distance": float(min_distance), "yaw": list(layer.yaw), **clumps}
     if layer.scale is not None:
         keys["scale"] = list(layer.scale)
+    if layer.scale_quartiles is not None:
+        keys["scale_quartiles"] = list(layer.scale_quartiles)
+        keys["scale_octiles"] = list(layer.scale_octiles)
     return keys, np.clip(lam / rate, 0.0, 1.0)

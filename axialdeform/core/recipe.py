@@ -45,7 +45,7 @@ class Kind:
         The words of an error message: ``"generate: KEY: expected <expected>, found ..."``.
     shape : str
         How a file spells it: ``"number"``, ``"whole"`` (an integer), ``"levels"`` (one number or 1..16),
-        ``"pair"``, ``"rgb"`` (three numbers) or ``"word"``.
+        ``"pair"``, ``"rgb"`` or ``"triple"`` (three numbers), ``"quad"`` (four) or ``"word"``.
     words : tuple of str
         A ``"word"`` kind's choices.
     """
@@ -69,6 +69,8 @@ KINDS = {
     "count": Kind("a whole number 1 .. 64", "whole"),
     "levels": Kind("a finite number >= 0, or one per level of the hierarchy", "levels"),
     "scale": Kind("[lo, hi] with 0 < lo <= hi", "pair"),
+    "quartiles": Kind("[q1, q2, q3] with 0 < q1 <= q2 <= q3", "triple"),
+    "octiles": Kind("[o1, o3, o5, o7] with 0 < o1 <= o3 <= o5 <= o7", "quad"),
     "span": Kind("[lo, hi] with lo <= hi", "pair"),
     "degrees": Kind("[lo, hi] with lo <= hi in degrees, 0..90", "pair"),
     "share": Kind("[lo, hi] with 0 <= lo <= hi <= 1", "pair"),
@@ -157,6 +159,12 @@ RECIPE = (
               "each instance picks one (1 and clump_radius 0: no clumps)", True, uniform="clump_cells"),
     RecipeKey("clump_radius", "nonnegative", 0.0, "clumps: each instance uniform in a disc of this radius around its "
               "parent (world units; no min_distance then)", True, uniform="clump_radius"),
+    RecipeKey("scale_quartiles", "quartiles", None, "the scale at u13 = 1/4, 1/2, 3/4: drawn piecewise linear through "
+              "[lo, q1, q2, q3, hi] (a learned distribution of sizes; none: uniform in scale's [lo, hi])", True,
+              uniform="scale_mid", absent=(-1.0, -1.0, -1.0)),
+    RecipeKey("scale_octiles", "octiles", None, "with scale_quartiles, the scale at u13 = 1/8, 3/8, 5/8, 7/8 too: "
+              "piecewise linear through nine knots (none: through five)", True, uniform="scale_odd",
+              absent=(-1.0, -1.0, -1.0, -1.0)),
 )
 
 _BY_NAME = {k.name: k for k in RECIPE}
@@ -196,6 +204,9 @@ def accepts(kind: str, v) -> bool:
         return _numbers(v, 3) and all(0 <= x <= 1 for x in v)
     if kind == "anchor":
         return v in KINDS[kind].words
+    if kind in ("quartiles", "octiles"):
+        n = 3 if kind == "quartiles" else 4
+        return _numbers(v, n) and 0 < v[0] and all(a <= b for a, b in zip(v, v[1:]))
     pair = _numbers(v, 2) and v[0] <= v[1]
     if kind == "scale":
         return pair and v[0] > 0
@@ -216,7 +227,7 @@ def check_value(key: RecipeKey, value):
     shape = KINDS[key.kind].shape
     if shape == "levels" and isinstance(value, (tuple, list)):
         return tuple(float(b) for b in value) if len(value) > 1 else float(value[0])
-    if shape in ("pair", "rgb"):
+    if shape in ("pair", "rgb", "triple", "quad"):
         return tuple(float(x) for x in value)
     return value
 

@@ -451,6 +451,40 @@ export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, positi
   d34.assign(vec4(d[2].sub(at), d[3].sub(at)));
   d5.assign(d[4].sub(at));
   const s = float(r.scale.x.add(r.scale.y.sub(r.scale.x).mul(u[13]))).toVar();
+  If(r.scale_mid.x.greaterThan(float(0.0)), () => {
+    const q = Array.from({ length: 9 }, () => float(0).toVar());
+    const n = float(4.0).toVar();
+    q[0].assign(r.scale.x);
+    q[1].assign(r.scale_mid.x);
+    q[2].assign(r.scale_mid.y);
+    q[3].assign(r.scale_mid.z);
+    q[4].assign(r.scale.y);
+    for (let j = 5; j < 9; j++) {
+      q[j].assign(r.scale.y);
+    }
+    If(r.scale_odd.x.greaterThan(float(0.0)), () => {
+      n.assign(float(8.0));
+      q[1].assign(r.scale_odd.x);
+      q[2].assign(r.scale_mid.x);
+      q[3].assign(r.scale_odd.y);
+      q[4].assign(r.scale_mid.y);
+      q[5].assign(r.scale_odd.z);
+      q[6].assign(r.scale_mid.z);
+      q[7].assign(r.scale_odd.w);
+      q[8].assign(r.scale.y);
+    });
+    const v = float(u[13].mul(n)).toVar();
+    const k = float(min(floor(v), n.sub(float(1.0)))).toVar();
+    const a = float(q[0]).toVar();
+    const b = float(q[1]).toVar();
+    for (let j = 1; j < 8; j++) {
+      If(float(j).equal(k), () => {
+        a.assign(q[j]);
+        b.assign(q[(j + 1)]);
+      });
+    }
+    s.assign(a.add(b.sub(a).mul(v.sub(k))));
+  });
   extra.assign(vec3(s, r.twist.mul(float(2.0).mul(u[14]).sub(float(1.0))), r.taper.mul(u[15])));
   const ut = vec3(vec3(u[17], u[18], u[19])).toVar();
   tint.assign(r.tint_color.mul(float(1.0).sub(r.tint.mul(u[17].add(r.tint_hue.mul(ut.sub(u[17])))))));

@@ -185,6 +185,10 @@ export interface GenerateRecipe {
   clump_cells?: number;
   /** Clumps: each instance uniform in a disc of this radius around its parent (world units; no min_distance then); default 0. */
   clump_radius?: number;
+  /** The scale at u13 = 1/4, 1/2, 3/4: drawn piecewise linear through [lo, q1, q2, q3, hi] (a learned distribution of sizes; none: uniform in scale's [lo, hi]). */
+  scale_quartiles?: [number, number, number] | null;
+  /** With scale_quartiles, the scale at u13 = 1/8, 3/8, 5/8, 7/8 too: piecewise linear through nine knots (none: through five). */
+  scale_octiles?: [number, number, number, number] | null;
   // GenerateRecipe: ---- end of what tools/make_tables.py writes ----
   /** The tiles within this distance of the point are made (default 3 tiles). */
   reach?: number;
@@ -199,6 +203,8 @@ export interface GeneratorUniforms {
   jitter: number;
   bend: number;
   scale: [number, number];
+  scale_mid: [number, number, number];
+  scale_odd: [number, number, number, number];
   twist: number;
   taper: number;
   anchor_y: number;

@@ -39,6 +39,7 @@ export function accepts(kind, v) {
     case 'levels': { const b = Array.isArray(v) ? v : [v]; return b.length > 0 && b.every((x) => num(x) && x >= 0); }
     case 'rgb': return numbers(v, 3) && v.every((x) => x >= 0 && x <= 1);
     case 'anchor': return RECIPE_KINDS.anchor.words.includes(v);
+    case 'quartiles': case 'octiles': return numbers(v, kind === 'quartiles' ? 3 : 4) && v[0] > 0 && v.every((x, i) => !i || v[i - 1] <= x);
     default: break;
   }
   const pair = numbers(v, 2) && v[0] <= v[1];
@@ -74,6 +75,10 @@ export function checkRecipeBounds(r, m, cell) {
   }
   for (const b of Array.isArray(r.bend) ? r.bend : [r.bend]) if (b > MAX_BEND) bad('bend', `at most ${MAX_BEND} (axis lengths)`, r.bend);
   if (r.scale !== null && r.scale[1] > MAX_BEND) bad('scale', `[lo, hi] with hi at most ${MAX_BEND}`, r.scale);
+  const q = r.scale_quartiles;
+  if (q && (r.scale === null || q[0] < r.scale[0] || q[2] > r.scale[1])) bad('scale_quartiles', "three numbers within scale's [lo, hi] (and a scale beside them)", q);
+  const o = r.scale_octiles, knots = o && q ? [r.scale[0], o[0], q[0], o[1], q[1], o[2], q[2], o[3], r.scale[1]] : null;
+  if (o && !(knots && knots.every((x, i) => !i || knots[i - 1] <= x))) bad('scale_octiles', "four numbers between scale_quartiles' (and scale's), beside them", o);
   const E = worldEdge(cell);
   if (r.reach !== undefined && !(num(r.reach) && r.reach > 0 && r.reach <= 2 * E)) {
     bad('reach', `a distance > 0 and at most the world's width ${(2 * E).toPrecision(6)}`, r.reach);

@@ -82,6 +82,32 @@ def test_a_learned_cluster_layer_grows_clumps_of_the_same_size(hills):
     assert L.l_function(made, P.window(), r) == pytest.approx(L.l_function(xz, P.window(), r), rel=0.1)
 
 
+@pytest.mark.parametrize("sizes", ["lognormal", "two humps"])
+def test_learned_sizes_are_drawn_as_the_example_has_them(sizes):
+    """Trunk diameters skewed or with two humps (as longleaf's): the generator draws the scales through the
+    sizes' nine quantiles (scale, scale_quartiles, scale_octiles), within KS 0.1 of the example's sizes over
+    their median; a [lo, hi] range alone is far off."""
+    from scipy.stats import ks_2samp
+
+    from axialdeform.core.record import SCALE
+
+    rng = np.random.default_rng(6)
+    n = 3000
+    xz = rng.uniform(-40, 40, (n, 2))
+    size = (rng.lognormal(0.0, 0.6, n) if sizes == "lognormal"
+            else np.where(rng.random(n) < 0.6, rng.normal(5.0, 1.0, n), rng.normal(40.0, 8.0, n)).clip(1.0))
+    lay = L.learn_layers(L.Example(xz, (-40, -40, 40, 40), size))[0]
+    keys, _ = L.layer_recipe(lay, None, (-40, -40, 40, 40))
+    assert len(keys["scale"]) == 2 and len(keys["scale_quartiles"]) == 3 and len(keys["scale_octiles"]) == 4
+    rec = Generate(**{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items()}, bend=0.0)
+    scales = generate_extent(rec, _Mesh(), (-40, -40, 40, 40))[:, SCALE]
+    assert ks_2samp(size / np.median(size), scales).statistic <= 0.1
+    uniform = Generate(**{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items()
+                          if k not in ("scale_quartiles", "scale_octiles")}, bend=0.0)
+    flat = generate_extent(uniform, _Mesh(), (-40, -40, 40, 40))[:, SCALE]  # what a [lo, hi] range alone draws
+    assert ks_2samp(size / np.median(size), flat).statistic > 0.2
+
+
 def test_the_l_function_of_a_poisson_pattern_is_r():
     rng = np.random.default_rng(3)
     xz = rng.uniform(0, 100, (4000, 2))

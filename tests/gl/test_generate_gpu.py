@@ -11,6 +11,7 @@ import pytest
 import axialdeform as ad
 from axialdeform.core import ContextError
 from axialdeform.core.generate import Generate, generate_tile, generate_tiles
+from axialdeform.core.record import SCALE
 from axialdeform.gl.generate import TileGenerator, compute_available, generate_tile_gpu
 
 #: both ways of writing the slots: glsl/generate.comp and glsl/generate.vert by transform feedback
@@ -19,10 +20,13 @@ WAYS = pytest.mark.parametrize("compute", [True, False], ids=["compute", "transf
 RECIPES = [Generate(rate=4.0, tile=8.0, min_distance=0.3, seed=7, bend=0.1),
            Generate(rate=2.5, tile=10.0, min_distance=0.1, seed=4_000_000_000, bend=0.2, scale=(0.7, 1.3),
                     twist=0.5, taper=0.3, yaw=(-2.0, 1.5)),
-           Generate(rate=4.0, tile=8.0, seed=11, bend=0.1, clump_cells=3, clump_radius=1.5)]
+           Generate(rate=4.0, tile=8.0, seed=11, bend=0.1, clump_cells=3, clump_radius=1.5),
+           Generate(rate=4.0, tile=8.0, seed=5, bend=0.1, scale=(0.3, 2.0), scale_quartiles=(0.5, 0.7, 1.1)),
+           Generate(rate=4.0, tile=8.0, seed=6, bend=0.1, scale=(0.3, 2.0), scale_quartiles=(0.5, 0.7, 1.1),
+                    scale_octiles=(0.35, 0.6, 0.9, 1.5))]
 
 
-@pytest.mark.parametrize("recipe", RECIPES, ids=["16 numbers", "19 numbers", "clumps"])
+@pytest.mark.parametrize("recipe", RECIPES, ids=["16 numbers", "19 numbers", "clumps", "scale quartiles", "scale octiles"])
 @WAYS
 def test_the_gpu_makes_the_numpy_records(ctx, recipe, compute):
     stone = ad.load_mesh("stone")
@@ -35,6 +39,11 @@ def test_the_gpu_makes_the_numpy_records(ctx, recipe, compute):
         assert rel.max() <= 1e-6, (tile, rel.max())
     # the hash is exact: the positions' jitter (u0, u1) is the same number on both sides
     assert np.array_equal(gpu[:, [10, 12]], cpu[:, [10, 12]])
+    if recipe.scale_quartiles is not None:  # the scales through the five knots: a quarter of them in each span
+        lo, hi = recipe.scale
+        q = np.quantile(cpu[:, SCALE], [0.25, 0.5, 0.75])  # (and the octiles' between them)
+        assert np.abs(q - recipe.scale_quartiles).max() < 0.05 * (hi - lo), q
+        assert np.array_equal(gpu[:, SCALE], cpu[:, SCALE])
 
 
 @WAYS

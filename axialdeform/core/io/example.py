@@ -399,6 +399,9 @@ def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None,
         keys["seed"] = seed + k
         if "scale" in keys:
             keys["scale"] = [size * v for v in keys["scale"]]
+            for key in ("scale_quartiles", "scale_octiles"):
+                if key in keys:
+                    keys[key] = [size * v for v in keys[key]]
         elif size != 1.0:
             keys["scale"] = [size, size]
         if terrain is None:
