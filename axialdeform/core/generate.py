@@ -27,8 +27,9 @@ a turn about up ``ry = yaw_lo + (yaw_hi - yaw_lo) u2`` (``yaw`` default [0, 2 pi
 ``u13 = 0, 1/4, .., 1``; with ``scale_octiles`` too, through nine knots at ``u13 = 0, 1/8, .., 1``),
 ``tw = twist (2 u14 - 1)``, ``tp = taper u15`` (19 numbers when any of scale, twist, taper is given), the
 tint from ``u17 .. u19`` (22 numbers); ``py`` = the ground's height (0: a flat world; a height map: its
-triangles) minus the anchor's height times ``s``, plus the lift (``u21``); kept by the height map, the altitude and slope bands, the density map (``u16``) and the
-mesh's share (``u20``); a tree's child axes from hash streams of their own (:func:`children_table`).
+triangles) minus the anchor's height times ``s``, plus the lift (``u21``); kept by the height map, the
+altitude and slope bands, the density map (``u16``) and the mesh's share (``u20``); a tree's child axes from
+hash streams of their own (:func:`children_table`).
 docs/generate.md states every formula.
 """
 
