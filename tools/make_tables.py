@@ -27,7 +27,7 @@ from pathlib import Path
 from axialdeform.core import record as R
 from axialdeform.core.axis import FRAME_TOLERANCE
 from axialdeform.core.params import DRAWABLE_MAGNITUDE
-from axialdeform.core.recipe import KINDS, RECIPE, REQUIRED
+from axialdeform.core.recipe import KINDS, RECIPE, REQUIRED, accepts
 from axialdeform.core.wind import SECOND_HARMONIC, WIND_UNIFORMS, Wind
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -200,6 +200,16 @@ def _glsl_schema(glsl: str) -> dict:
     return {"type": "array", "items": item, "minItems": n, "maxItems": n}
 
 
+def _uniform_schema(key) -> dict:
+    """The number a key goes into: its kind's values, or the number's value when the key is none where that
+    is no value of the kind (scale_quartiles' -1: the generator's sign of "uniform")."""
+    s = _kind_schema(key.kind)
+    absent = key.uniform_default
+    if key.optional and not accepts(key.kind, absent):
+        return {"oneOf": [s, {"const": list(absent) if isinstance(absent, tuple) else absent}]}
+    return s
+
+
 def schema(text: str, struct: list) -> str:
     """The extension's schema with the generated form's recipe and numbers written from the tables."""
     doc = json.loads(text)
@@ -215,7 +225,7 @@ def schema(text: str, struct: list) -> str:
     form["recipe"]["properties"] = props
     form["recipe"]["required"] = [k.name for k in RECIPE if k.required_json] + ["reach"]
     passed = {k.uniform: k for k in RECIPE if k.uniform is not None}
-    form["uniforms"]["properties"] = {name: _kind_schema(passed[name].kind) if name in passed else _glsl_schema(glsl)
+    form["uniforms"]["properties"] = {name: _uniform_schema(passed[name]) if name in passed else _glsl_schema(glsl)
                                       for name, glsl in struct}
     form["uniforms"]["required"] = [name for name, _ in struct if name not in passed or passed[name].required_json]
     return json.dumps(doc, indent=4) + "\n"
