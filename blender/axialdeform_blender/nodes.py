@@ -305,7 +305,7 @@ def build_group(name: str, plan: dict):
     tree.links.new(real.outputs[0], place.inputs["Geometry"])
     g.link(place.inputs["Position"], world)
     bent = place
-    if hasattr(bpy.types, "GeometryNodeSetMeshNormal"):  # Blender 5.0: the exact normals as custom normals
+    if hasattr(bpy.types, "GeometryNodeSetMeshNormal"):  # Blender 4.5 and later: the exact normals as custom normals (earlier: its own)
         normals = g.node("GeometryNodeSetMeshNormal", mode="FREE", domain="POINT")
         tree.links.new(place.outputs[0], normals.inputs["Mesh"])
         g.link(normals.inputs["Custom Normal"], _rotate(g, normal, angles))
