@@ -19,7 +19,7 @@ from PIL import Image
 
 from .core.brush import Stroke, fold, mask_path, new_mask, paint
 from .core.errors import ParamError
-from .core.generate_ground import GroundMaps, ground_height
+from .core.generate_ground import GroundMaps, density_area, ground_height
 from .core.io.atomic import atomic_path
 from .core.surface import load_density, load_mask
 
@@ -54,15 +54,6 @@ class Brush:
                 out[layer.name] = (layer.name, layer.generate)
         return out
 
-    def _area(self, gen) -> tuple:
-        """The ground the layer's density map covers: the height map's, or the layer's extent."""
-        g = gen.maps
-        if g is not None and g.heights is not None:
-            rows, cols = g.heights.shape
-            x0, z0 = (float(v) for v in g.h_lo)
-            return x0, z0, x0 + (cols - 1) / float(g.h_inv[0]), z0 + (rows - 1) / float(g.h_inv[1])
-        return tuple(float(v) for v in gen.extent)
-
     def stroke(self, stroke: Stroke) -> bool:
         """Paint ``stroke``; whether the layer's mask changed (its tiles are then made again)."""
         found = self.layers()
@@ -75,7 +66,7 @@ class Brush:
         if mask is None:
             mask = load_mask(gen.mask) if gen.mask is not None else new_mask(self._density[stroke.layer])
             self.masks[stroke.layer] = mask
-        if not paint(mask, self._area(gen), stroke):
+        if not paint(mask, density_area(self.terrain, gen.extent)[0], stroke):  # where GroundMaps places the map
             return False
         maps = GroundMaps.of(self.terrain, fold(self._density[stroke.layer], mask), gen.extent)
         if gen.maps is not None and gen.maps.heights is None:  # a flat ground keeps its repeated map

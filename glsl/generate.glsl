@@ -179,7 +179,6 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
             q[5] = r.scale_odd.z;
             q[6] = r.scale_mid.z;
             q[7] = r.scale_odd.w;
-            q[8] = r.scale.y;
         }
         float v = u[13] * n;
         float k = min(floor(v), n - 1.0);

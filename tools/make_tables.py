@@ -107,7 +107,7 @@ def struct_fields(text: str, name: str = "AxialRecipe") -> list[tuple[str, str]]
 
 
 _TS = {"number": "number", "whole": "number", "levels": "number | number[]", "pair": "[number, number]",
-       "rgb": "[number, number, number]", "triple": "[number, number, number]",
+       "triple": "[number, number, number]",
        "quad": "[number, number, number, number]"}
 _GLSL_TS = {"float": "number", "int": "number", "uint": "number", "bool": "boolean", "vec2": "[number, number]",
             "ivec2": "[number, number]", "vec3": "[number, number, number]", "vec4": "[number, number, number, number]"}

@@ -45,7 +45,7 @@ class Kind:
         The words of an error message: ``"generate: KEY: expected <expected>, found ..."``.
     shape : str
         How a file spells it: ``"number"``, ``"whole"`` (an integer), ``"levels"`` (one number or 1..16),
-        ``"pair"``, ``"rgb"`` or ``"triple"`` (three numbers), ``"quad"`` (four) or ``"word"``.
+        ``"pair"``, ``"triple"`` (three numbers), ``"quad"`` (four) or ``"word"``.
     words : tuple of str
         A ``"word"`` kind's choices.
     """
@@ -74,7 +74,7 @@ KINDS = {
     "span": Kind("[lo, hi] with lo <= hi", "pair"),
     "degrees": Kind("[lo, hi] with lo <= hi in degrees, 0..90", "pair"),
     "share": Kind("[lo, hi] with 0 <= lo <= hi <= 1", "pair"),
-    "rgb": Kind("three linear RGB numbers in [0, 1]", "rgb"),
+    "rgb": Kind("three linear RGB numbers in [0, 1]", "triple"),
     "anchor": Kind("one of " + ", ".join(ANCHORS), "word", ANCHORS),
 }
 
@@ -227,7 +227,7 @@ def check_value(key: RecipeKey, value):
     shape = KINDS[key.kind].shape
     if shape == "levels" and isinstance(value, (tuple, list)):
         return tuple(float(b) for b in value) if len(value) > 1 else float(value[0])
-    if shape in ("pair", "rgb", "triple", "quad"):
+    if shape in ("pair", "triple", "quad"):
         return tuple(float(x) for x in value)
     return value
 

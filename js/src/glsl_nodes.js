@@ -471,7 +471,6 @@ export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, positi
       q[5].assign(r.scale_odd.z);
       q[6].assign(r.scale_mid.z);
       q[7].assign(r.scale_odd.w);
-      q[8].assign(r.scale.y);
     });
     const v = float(u[13].mul(n)).toVar();
     const k = float(min(floor(v), n.sub(float(1.0)))).toVar();

@@ -490,7 +490,7 @@ def _recipe_value(src, key, value, nth):
         if not isinstance(value, int) or isinstance(value, bool):
             raise src.error(f"expected a whole number, found {value!r}", key.name, "layer", nth)
         return value
-    counts = {"number": (1,), "levels": tuple(range(1, 17)), "pair": (2,), "rgb": (3,), "triple": (3,), "quad": (4,)}[shape]
+    counts = {"number": (1,), "levels": tuple(range(1, 17)), "pair": (2,), "triple": (3,), "quad": (4,)}[shape]
     numbers = _numbers(src, value, key.name, "layer", nth, counts, positive=key.kind in ("scale", "quartiles", "octiles"))
     return numbers[0] if shape == "number" or (shape == "levels" and len(numbers) == 1) else tuple(numbers)
 
