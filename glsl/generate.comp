@@ -1,8 +1,9 @@
 // generate.comp -- the generator's slots by a compute shader (GL >= 4.3; axialdeform.gl.generate): one
-// invocation a slot of the tiles in Tiles (m^2 slots a tile, tile after tile) writes the 23 numbers
-// generate.vert's outputs capture, in their order (the 22-number record, then kept), into a storage
+// invocation a slot of the tiles in Tiles (m^2 slots a tile, tile after tile) writes the slot's numbers
+// generate.vert's outputs capture, in their order (slot.glsl: the 22-number record, then kept), into a storage
 // buffer from float u_first on -- the same slots as the transform-feedback pass, all the tiles of a set
 // in one dispatch (the tests hold them to it and to the numpy reference).
+#define AXIAL_SLOT_VALUES 1
 #include "generate.vert"
 
 layout(local_size_x = 64) in;
@@ -22,9 +23,8 @@ void main() {
     float kept;
     axial_generate(axial_gen_recipe(), u_heights, u_density, tiles[t], int(i), d12, d34, d5, position, angles, extra,
                    tint, kept);
-    float v[23] = float[23](d12.x, d12.y, d12.z, d12.w, d34.x, d34.y, d34.z, d34.w, d5.x, d5.y, position.x,
-                            position.y, position.z, angles.x, angles.y, angles.z, extra.x, extra.y, extra.z,
-                            tint.r, tint.g, tint.b, kept);
-    uint o = u_first + 23u * s;
-    for (int k = 0; k < 23; ++k) slots[o + uint(k)] = v[k];
+    float v[AXIAL_SLOT_FLOATS];
+    axial_slot_values(d12, d34, d5, position, angles, extra, tint, kept, v);
+    uint o = u_first + uint(AXIAL_SLOT_FLOATS) * s;
+    for (int k = 0; k < AXIAL_SLOT_FLOATS; ++k) slots[o + uint(k)] = v[k];
 }

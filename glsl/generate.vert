@@ -1,5 +1,5 @@
 // generate.vert -- instance gl_VertexID of a tile by transform feedback (axialdeform.gl.generate):
-// no inputs, the record captured from the outputs.  generate.comp (GL >= 4.3) includes it for its
+// no inputs, the slot (slot.glsl) captured from the outputs.  generate.comp (GL >= 4.3) includes it for its
 // uniforms and axial_gen_recipe (AXIAL_COMPUTE defined: no outputs, no main).
 #include "axial.glsl"
 #include "wind.glsl"
@@ -56,13 +56,11 @@ uniform sampler2D u_density;  // unit 1
 uniform ivec2 u_tile;
 
 #ifndef AXIAL_COMPUTE
-out vec4 g_d12;
-out vec4 g_d34;
-out vec4 g_d5_px_py;
-out vec4 g_pz_angles;
-out vec4 g_extra;   // s, tw, tp, tr
-out vec3 g_tint;    // tg, tb, kept
+#define AXIAL_SLOT_WRITE 1
+#endif
+#include "slot.glsl"
 
+#ifndef AXIAL_COMPUTE
 void main() {
     AxialRecipe r = axial_gen_recipe();
     vec4 d12, d34;
@@ -70,12 +68,7 @@ void main() {
     vec3 position, angles, extra, tint;
     float kept;
     axial_generate(r, u_heights, u_density, u_tile, gl_VertexID, d12, d34, d5, position, angles, extra, tint, kept);
-    g_d12 = d12;
-    g_d34 = d34;
-    g_d5_px_py = vec4(d5, position.xy);
-    g_pz_angles = vec4(position.z, angles);
-    g_extra = vec4(extra, tint.r);
-    g_tint = vec3(tint.gb, kept);
+    axial_slot_write(d12, d34, d5, position, angles, extra, tint, kept);
     gl_Position = vec4(0.0);
 }
 #endif

@@ -48,7 +48,7 @@ from .errors import ParamError
 from .generate_ground import GroundMaps, cos_sin_f32, ground_height, lean_angles
 from .mesh import anchor_point
 from .recipe import KINDS, RECIPE, REQUIRED, check_value, passed_through
-from .record import EXTENDED_WIDTH, SCALE, TAPER, TINT, TINTED_WIDTH, TWIST, WIDTH, join_record
+from .record import EXTENDED_WIDTH, SCALE, SLOT_FLOATS, TAPER, TINT, TINTED_WIDTH, TWIST, WIDTH, join_record
 from .variation import tint_of
 from .wind import wind_hash
 
@@ -61,7 +61,7 @@ __all__ = ["Generate", "tile_size", "tile_hash_key", "uniforms", "generate_tile"
 
 GENERATED_NUMBERS = 25  # u_0 .. u_24 an instance
 CLUMP_PARENTS = 8  # parents an s x s block of cells holds (a layer in clumps)
-GENERATED_FLOATS = 23  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
+GENERATED_FLOATS = SLOT_FLOATS  # what the GPU pass writes an instance: the 22-number record, then kept (1) or dropped (0)
 HASH_STRIDE = 32  # the hash's numbers an instance (room for more fields)
 
 # ---- bounds, checked from the recipe alone before any array is made (docs/generate.md, "Bounds")

@@ -37,7 +37,8 @@ __all__ = [
     "GLTF_EXTENDED_ATTRIBUTES", "GLTF_TINT_ATTRIBUTE", "GLTF_INSTANCE_TYPES", "OFFSETS", "POSITION", "ANGLES", "EXTRA", "SCALE", "TWIST",
     "TAPER", "IDENTITY_EXTRA", "Instances", "gl_layout", "LEVEL_FIELDS", "RECORD_BUFFER_WIDTH", "LEVEL_NAMES",
     "describe_record", "tint_columns", "tree_width", "tree_widths", "split_record", "join_record", "tree_shape",
-    "record_fields", "is_record_width", "MAX_RECORD_AXES",
+    "record_fields", "is_record_width", "MAX_RECORD_AXES", "SlotGroup", "SLOT_COLUMNS", "SLOT_FLOATS", "SLOT_OUTPUTS",
+    "SLOT_GROUPS", "CHILD_AXES_A_PASS", "CHILD_SLOT_VECTORS", "slot_varyings", "slot_layout",
 ]
 
 
@@ -186,6 +187,72 @@ SHADER_INPUTS: tuple[ShaderInput, ...] = (
 )
 #: numbers per instance in the instance buffer: the columns its inputs read
 RECORD_BUFFER_WIDTH: int = max(a.start + a.size for a in SHADER_INPUTS if a.buffer == "record")
+
+
+# ------------------------------------------------------------------ the generator's slot (glsl/generate.glsl)
+@dataclass(frozen=True)
+class SlotGroup:
+    """One vector of the generator's slot as it travels between GL passes (a transform-feedback
+    output ``g_{index}``, a vertex input ``a_{index}``, a compaction varying ``vs_{index}``/``o_{index}``).
+
+    Attributes
+    ----------
+    index : int
+    start, size : int
+        First number of the slot and how many it carries (``vec{size}``, ``float`` for 1).
+    level : int
+        The record level whose columns it carries; ``len(WIDTHS)`` for ``kept``.
+    """
+
+    index: int
+    start: int
+    size: int
+    level: int
+
+    @property
+    def glsl_type(self) -> str:
+        return "float" if self.size == 1 else f"vec{self.size}"
+
+
+#: THE generator's slot: what ``axial_generate`` (glsl/generate.glsl) makes of one cell -- the tinted
+#: record's columns, then ``kept`` (1: kept, 0: dropped by the ground maps and bands)
+SLOT_COLUMNS: tuple[str, ...] = LEVEL_FIELDS[-1] + ("kept",)
+#: numbers a slot
+SLOT_FLOATS: int = len(SLOT_COLUMNS)
+#: ``axial_generate``'s outputs, in slot order: (name, size); the record's are the scene shader's inputs'
+#: names without ``i_`` (``d12``, ..., ``tint``), then ``kept``
+SLOT_OUTPUTS: tuple[tuple[str, int], ...] = tuple((a.name[2:], a.size) for a in SHADER_INPUTS) + (("kept", 1),)
+#: the slot's vectors: each record level's new columns four at a time, then ``kept`` (so a pass that
+#: keeps the record's first 16 or 19 numbers takes whole vectors)
+#: child axes the children's pass writes an instance (10 numbers each): as many as 64 captured
+#: components hold (GL's least MAX_TRANSFORM_FEEDBACK_INTERLEAVED_COMPONENTS)
+CHILD_AXES_A_PASS: int = 64 // 10
+#: its outputs, four numbers each
+CHILD_SLOT_VECTORS: int = -(-10 * CHILD_AXES_A_PASS // 4)
+
+
+def _slot_groups() -> tuple[SlotGroup, ...]:
+    bounds = [0, *WIDTHS, SLOT_FLOATS]
+    groups = []
+    for level, (lo, hi) in enumerate(zip(bounds[:-1], bounds[1:])):
+        for start in range(lo, hi, 4):
+            groups.append(SlotGroup(len(groups), start, min(4, hi - start), level))
+    return tuple(groups)
+
+
+SLOT_GROUPS: tuple[SlotGroup, ...] = _slot_groups()
+assert sum(size for _, size in SLOT_OUTPUTS) == SLOT_FLOATS, "the generator's outputs are the slot"
+assert [a.start for a in SHADER_INPUTS] == [sum(s for _, s in SLOT_OUTPUTS[:k]) for k in range(len(SHADER_INPUTS))]
+
+
+def slot_varyings(prefix: str, levels=None) -> tuple[str, ...]:
+    """The names of the slot's vectors (``g_0``, ...) with ``prefix``, those of ``levels`` only if given."""
+    return tuple(f"{prefix}_{g.index}" for g in SLOT_GROUPS if levels is None or g.level in levels)
+
+
+def slot_layout() -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The moderngl formats and vertex input names of a buffer of slots (``("4f", ...), ("a_0", ...)``)."""
+    return tuple(f"{g.size}f" for g in SLOT_GROUPS), slot_varyings("a")
 
 #: the instanced glTF's attributes (``EXT_mesh_gpu_instancing``) that carry
 #: columns as they are: name -> (accessor type, columns); ``TRANSLATION``,

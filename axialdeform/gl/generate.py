@@ -12,16 +12,15 @@ import numpy as np
 
 from ..core.errors import ContextError
 from ..core.generate import GENERATED_FLOATS, Generate, GroundMaps, children_table, recipe_uniforms, tile_size
-from ..core.record import join_record
+from ..core.record import CHILD_AXES_A_PASS, CHILD_SLOT_VECTORS, join_record, slot_varyings
 from .context import bind_framebuffer, release_framebuffer
 from .shaders import build_compute, build_program
 
 __all__ = ["TileGenerator", "compute_available", "generate_tile_gpu"]
 
-_VARYINGS = ("g_d12", "g_d34", "g_d5_px_py", "g_pz_angles", "g_extra", "g_tint")
-_FLOATS = GENERATED_FLOATS  # 4 + 4 + 4 + 4 + 4 + 3 an instance: the 22-number record, then kept
-_CHILD_VARYINGS = tuple(f"c_{k}" for k in range(15))
-CHILD_AXES_A_PASS = 6  # generate_children.vert: 60 numbers an instance a pass
+_VARYINGS = slot_varyings("g")  # glsl/slot.glsl's outputs: the 22-number record, then kept
+_FLOATS = GENERATED_FLOATS
+_CHILD_VARYINGS = tuple(f"c_{k}" for k in range(CHILD_SLOT_VECTORS))  # CHILD_AXES_A_PASS axes' offsets
 _LOCAL = 64  # generate.comp's invocations a work group
 
 
@@ -32,7 +31,7 @@ def compute_available(ctx) -> bool:
 
 class TileGenerator:
     """The generator program for one recipe and base mesh (and the ground's maps) in ``ctx``;
-    ``run(tile, buffer)`` writes tile ``(tx, tz)``'s ``m^2`` records into ``buffer``: 23 float32 each,
+    ``run(tile, buffer)`` writes tile ``(tx, tz)``'s ``m^2`` slots into ``buffer``: 23 float32 each,
     the 22-number record (the 16, s, tw, tp, the tint) then 1 (kept) or 0 (dropped).
 
     compute : by ``glsl/generate.comp`` (True: GL >= 4.3 required), by transform feedback (False), or

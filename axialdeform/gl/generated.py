@@ -27,7 +27,7 @@ import moderngl
 import numpy as np
 
 from ..core.generate import GENERATED_FLOATS, Generate, GroundMaps, child_bound
-from ..core.record import TINTED_WIDTH
+from ..core.record import TINTED_WIDTH, slot_layout, slot_varyings
 from .axes import ROW
 from .buffers import buffer_content
 from .context import bind_framebuffer, release_framebuffer
@@ -38,10 +38,11 @@ from .shaders import build_program
 __all__ = ["GeneratedTiles"]
 
 _SLOT = GENERATED_FLOATS * 4  # bytes a slot of the scratch buffer
-_RAW = (("4f", "4f", "4f", "4f", "3f", "3f", "1f"), ("a_0", "a_1", "a_2", "a_3", "a_4", "a_tint", "a_kept"))
-#: what each compaction pass writes: its define and its varyings
-_KEEP = {"record": ("AXIAL_KEEP_RECORD", ("o_0", "o_1", "o_2", "o_3", "o_4")),
-         "tint": ("AXIAL_KEEP_TINT", ("o_tint",)), "cell": ("AXIAL_KEEP_CELL", ("o_cell",))}
+_RAW = slot_layout()  # glsl/slot.glsl's vectors as vertex inputs
+#: what each compaction pass writes: its define and its varyings (the record's vectors: the 16 numbers', then
+#: the extended's three)
+_KEEP = {"record": ("AXIAL_KEEP_RECORD", slot_varyings("o", (0, 1))),
+         "tint": ("AXIAL_KEEP_TINT", slot_varyings("o", (2,))), "cell": ("AXIAL_KEEP_CELL", ("o_cell",))}
 
 
 class GeneratedTiles:
@@ -79,7 +80,7 @@ class GeneratedTiles:
             if name == "record" and renderer.extended:
                 defines["AXIAL_EXTENDED"] = 1
             elif name == "record":
-                varyings = varyings[:-1]
+                varyings = slot_varyings("o", (0,))
             prog = build_program(ctx, "generate_keep.vert", geometry="generate_keep.geom", defines=defines,
                                  varyings=varyings)
             if "u_count" in prog:

@@ -13,7 +13,7 @@ import { Fn, If, instanceIndex, storage, uniform, uint, int, ivec2, vec4, atomic
 import { AxialError, AXES_ROW, texelRows } from './adp.js';
 import { AxialInstancedMesh } from './webgpu_mesh.js';
 import { unbake } from './bake.js';
-import { ATTRIBUTES } from './record.js';
+import { ATTRIBUTES, SLOT } from './record.js';
 import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, tileSize, GENERATED_FLOATS } from './generate.js';
 import { worldEdge } from './limits.js';
 import { recipeNodes, axialGenerate, axialGenerateChild, axialGenKey } from './generate_nodes.js';
@@ -161,10 +161,7 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
         const { tile, i } = k.where(slot);
         const g = axialGenerate(k.r, k.maps, tile, i);
         const o = slot.mul(uint(G)).toVar();
-        const values = [g.d12.x, g.d12.y, g.d12.z, g.d12.w, g.d34.x, g.d34.y, g.d34.z, g.d34.w, g.d5.x, g.d5.y,
-          g.position.x, g.position.y, g.position.z, g.angles.x, g.angles.y, g.angles.z, g.extra.x, g.extra.y, g.extra.z,
-          g.tint.x, g.tint.y, g.tint.z, g.kept];
-        values.forEach((v, c) => out.element(o.add(uint(c))).assign(v));
+        SLOT.values.forEach(([name, c], k) => out.element(o.add(uint(k))).assign(c ? g[name][c] : g[name]));
       });
     })().compute(cap);
     return k.slots;

@@ -16,3 +16,6 @@ export const GENERATE_CHILDREN_VERT: string;
 export const GENERATE_AXES_VERT: string;
 /** glsl/generate_axes.frag. */
 export const GENERATE_AXES_FRAG: string;
+/** glsl/slot.glsl (written by the Python library's tools/make_tables.py): the generator's slot as the passes
+ * write and read it, a section a define (AXIAL_SLOT_READ: the inputs a_k and slot_<output>). */
+export const SLOT_GLSL: string;

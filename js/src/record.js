@@ -40,3 +40,8 @@ export const RECIPE_KINDS = Object.freeze({"positive": {"expected": "a finite nu
 /** The wind's uniforms (axialdeform.core.wind.WIND_UNIFORMS), in the order glsl/wind.glsl's functions take
  * them: name, GLSL type, their names in glsl/ and in this module. */
 export const WIND_UNIFORMS = Object.freeze([{"name": "dir", "type": "vec3", "glsl": "u_wind_dir", "three": "axialWindDir"}, {"name": "strength", "type": "float", "glsl": "u_wind_strength", "three": "axialWindStrength"}, {"name": "gust", "type": "float", "glsl": "u_wind_gust", "three": "axialWindGust"}, {"name": "cycles", "type": "vec2", "glsl": "u_wind_cycles", "three": "axialWindCycles"}, {"name": "wavenumber", "type": "float", "glsl": "u_wind_wavenumber", "three": "axialWindWavenumber"}]);
+
+/** The generator's slot (axialdeform.core.record.SLOT_GROUPS; glsl/slot.glsl): its numbers, its vectors as
+ * the GL passes carry them (first number, size), each number's source among axial_generate's outputs
+ * ([output, component], null for a scalar), and the children's pass: axes and vec4 outputs. */
+export const SLOT = Object.freeze({"floats": 23, "groups": [{"start": 0, "size": 4}, {"start": 4, "size": 4}, {"start": 8, "size": 4}, {"start": 12, "size": 4}, {"start": 16, "size": 3}, {"start": 19, "size": 3}, {"start": 22, "size": 1}], "values": [["d12", "x"], ["d12", "y"], ["d12", "z"], ["d12", "w"], ["d34", "x"], ["d34", "y"], ["d34", "z"], ["d34", "w"], ["d5", "x"], ["d5", "y"], ["position", "x"], ["position", "y"], ["position", "z"], ["angles", "x"], ["angles", "y"], ["angles", "z"], ["extra", "x"], ["extra", "y"], ["extra", "z"], ["tint", "x"], ["tint", "y"], ["tint", "z"], ["kept", null]], "childAxes": 6, "childVectors": 15});

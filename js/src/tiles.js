@@ -11,14 +11,15 @@
 import * as THREE from 'three';
 import { AxialError, AXES_ROW } from './adp.js';
 import { RECIPE_FIELDS, AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT, GENERATE_CHILDREN_VERT, GENERATE_AXES_VERT,
-  GENERATE_AXES_FRAG } from './glsl.js';
+  GENERATE_AXES_FRAG, SLOT_GLSL } from './glsl.js';
+import { SLOT as SLOT_TABLE } from './record.js';
 import { refuseWebGPU, feedbackLink } from './feedback.js';
 
-/** Numbers an instance the pass writes: the 22-number record (the 16, s, tw, tp, the tint), then 1 (kept)
- * or 0 (dropped by the ground maps and bands): generate.vert's outputs, in order. */
-export const GENERATED_FLOATS = 23;
-const VARYINGS = ['g_d12', 'g_d34', 'g_d5_px_py', 'g_pz_angles', 'g_extra', 'g_tint'];
-const CHILD_VARYINGS = Array.from({ length: 15 }, (_, k) => `c_${k}`);
+/** Numbers an instance the pass writes (the slot, glsl/slot.glsl): the 22-number record (the 16, s, tw, tp, the
+ * tint), then 1 (kept) or 0 (dropped by the ground maps and bands): generate.vert's outputs, in order. */
+export const GENERATED_FLOATS = SLOT_TABLE.floats;
+const VARYINGS = SLOT_TABLE.groups.map((_, k) => `g_${k}`);
+const CHILD_VARYINGS = Array.from({ length: SLOT_TABLE.childVectors }, (_, k) => `c_${k}`);
 const HEAD = '#version 300 es\nprecision highp float;\nprecision highp int;\n';
 // the gl.uniform* suffix of a recipe field's GLSL type (its base: f, i, ui)
 const UNIFORM_KIND = { float: 'f', vec2: 'f', vec3: 'f', vec4: 'f', int: 'i', ivec2: 'i', uint: 'ui' };
@@ -180,29 +181,21 @@ export class TileGenerator {
   }
 }
 
-// a slot's 23 numbers as the passes below read them (stride 92 bytes)
-const SLOT = `layout(location = 0) in vec4 a_0;   // d1u d1v d2u d2v
-layout(location = 1) in vec4 a_1;   // d3u d3v d4u d4v
-layout(location = 2) in vec4 a_2;   // d5u d5v px py
-layout(location = 3) in vec4 a_3;   // pz rx ry rz
-layout(location = 4) in vec3 a_4;   // s tw tp
-layout(location = 5) in vec3 a_5;   // tr tg tb
-layout(location = 6) in float a_6;  // kept
-`;
-const SLOT_FIELDS = [[4, 0], [4, 16], [4, 32], [4, 48], [3, 64], [3, 76], [1, 88]];
+// a slot's numbers as the passes below read them: the inputs a_k and slot_<output> (slot.glsl)
+const SLOT = `#define AXIAL_SLOT_READ 1\n${SLOT_GLSL}`;
 /** The instanced attributes three draws, each its own GL buffer written from the slots: name, floats an
  * instance, the outputs' code (t_0 .. t_3: vec4 each, or one of `size` floats).  A dropped slot's
  * instanceMatrix is zero but for its 1 at (3, 3): every vertex lands on one point. */
 const OUTPUTS = [
-  { name: 'axialD12', size: 4, code: 't_0 = a_0;' },
-  { name: 'axialD34', size: 4, code: 't_0 = a_1;' },
-  { name: 'axialD5', size: 2, code: 't_0 = a_2.xy;' },
-  { name: 'axialAngles', size: 3, code: 't_0 = a_3.yzw;' },
-  { name: 'axialTwistTaper', size: 2, code: 't_0 = a_4.yz;' },
-  { name: 'instanceColor', size: 3, code: 't_0 = a_5;' },
-  { name: 'instanceMatrix', size: 16, code: `mat3 r = a_6 > 0.5 ? axial_rotation(a_3.yzw) * a_4.x : mat3(0.0);
+  { name: 'axialD12', size: 4, code: 't_0 = slot_d12;' },
+  { name: 'axialD34', size: 4, code: 't_0 = slot_d34;' },
+  { name: 'axialD5', size: 2, code: 't_0 = slot_d5;' },
+  { name: 'axialAngles', size: 3, code: 't_0 = slot_angles;' },
+  { name: 'axialTwistTaper', size: 2, code: 't_0 = slot_extra.yz;' },
+  { name: 'instanceColor', size: 3, code: 't_0 = slot_tint;' },
+  { name: 'instanceMatrix', size: 16, code: `mat3 r = slot_kept > 0.5 ? axial_rotation(slot_angles) * slot_extra.x : mat3(0.0);
     t_0 = vec4(r[0], 0.0); t_1 = vec4(r[1], 0.0); t_2 = vec4(r[2], 0.0);
-    t_3 = a_6 > 0.5 ? vec4(a_2.zw, a_3.x, 1.0) : vec4(0.0, 0.0, 0.0, 1.0);` },
+    t_3 = slot_kept > 0.5 ? vec4(slot_position, 1.0) : vec4(0.0, 0.0, 0.0, 1.0);` },
 ];
 
 /** A GL buffer of three's as an instanced attribute (three's GLBufferAttribute, flagged instanced as
@@ -263,9 +256,9 @@ export class TileAttributes {
     if (this.source === buffer) return;
     this.source = buffer;
     gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
-    SLOT_FIELDS.forEach(([size, offset], at) => {
+    SLOT_TABLE.groups.forEach(({ start, size }, at) => {
       gl.enableVertexAttribArray(at);
-      gl.vertexAttribPointer(at, size, gl.FLOAT, false, 92, offset);
+      gl.vertexAttribPointer(at, size, gl.FLOAT, false, 4 * GENERATED_FLOATS, 4 * start);
     });
     gl.bindBuffer(gl.ARRAY_BUFFER, null);
   }
@@ -330,7 +323,7 @@ export class TileAttributes {
 
   _countPass() {
     const gl = this.gl;
-    this.countProgram = linkDraw(gl, `${HEAD}${SLOT}void main() {\n    gl_Position = a_6 > 0.5 ? vec4(0.0, 0.0, 0.0, 1.0) : vec4(2.0, 2.0, 2.0, 1.0);\n`
+    this.countProgram = linkDraw(gl, `${HEAD}${SLOT}void main() {\n    gl_Position = slot_kept > 0.5 ? vec4(0.0, 0.0, 0.0, 1.0) : vec4(2.0, 2.0, 2.0, 1.0);\n`
       + '    gl_PointSize = 1.0;\n}\n', `${HEAD}out vec4 f_value;\nvoid main() {\n    f_value = vec4(1.0);\n}\n`);
     this.countTexture = gl.createTexture();
     gl.bindTexture(gl.TEXTURE_2D, this.countTexture);

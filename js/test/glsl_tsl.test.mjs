@@ -27,7 +27,7 @@ test('build.mjs --check fails on a copy whose glsl/ changed a formula, and passe
     for (const f of ['build.mjs', 'glsl_tsl.mjs']) copyFileSync(join(js, f), join(root, 'js', f));
     for (const f of ['glsl.js', 'glsl_nodes.js']) copyFileSync(join(js, 'src', f), join(root, 'js', 'src', f));
     for (const f of ['axial.glsl', 'wind.glsl', 'generate.glsl', 'generate.vert', 'generate_children.vert',
-      'generate_axes.vert', 'generate_axes.frag']) copyFileSync(join(glsl, f), join(root, 'glsl', f));
+      'generate_axes.vert', 'generate_axes.frag', 'slot.glsl']) copyFileSync(join(glsl, f), join(root, 'glsl', f));
     const check = () => spawnSync(process.execPath, [join(root, 'js', 'build.mjs'), '--check'], { encoding: 'utf8' });
     assert.equal(check().status, 0, check().stderr);
     const curve = read('axial.glsl');
