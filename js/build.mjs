@@ -1,6 +1,6 @@
-// build.mjs -- writes src/glsl.js, the package's copy of the repository's
+// build.mjs -- writes src/webgl/glsl.js, the package's copy of the repository's
 // glsl/axial.glsl (the one deformation function of every axialdeform program),
-// and src/glsl_nodes.js, the same functions as three.js node functions (TSL, by
+// and src/webgpu/glsl_nodes.js, the same functions as three.js node functions (TSL, by
 // glsl_tsl.mjs), so the module never carries maths of its own.  `node build.mjs
 // --check` exits 1 when either is not what glsl/ gives (the tests run it).
 // `npm pack` runs it first (prepack).
@@ -20,8 +20,8 @@ const axesFrag = join(here, '..', 'glsl', 'generate_axes.frag');
 const slotSource = join(here, '..', 'glsl', 'slot.glsl');
 // generate.vert's includes, in its order: the module puts those texts before its main
 const GENERATE_INCLUDES = ['axial.glsl', 'wind.glsl', 'generate.glsl'];
-const target = join(here, 'src', 'glsl.js');
-const nodesTarget = join(here, 'src', 'glsl_nodes.js');
+const target = join(here, 'src', 'webgl', 'glsl.js');
+const nodesTarget = join(here, 'src', 'webgpu', 'glsl_nodes.js');
 // the GLSL functions the node materials and compute passes call (and, emitted with them, what they call)
 export const NODE_FUNCTIONS = ['axial_bend', 'axial_bend_tangent', 'axial_place', 'axial_rotation', 'axial_wind', 'axial_wind_push',
   'axial_position_id', 'axial_tree_turn', 'axial_anchor_wind', 'axial_axis_add', 'axial_cofactor', 'axial_cos_sin', 'axial_curve',
@@ -44,7 +44,7 @@ export function withRecipeUniforms(vert, fields) {
   return vert.slice(0, start) + section + vert.slice(end + END.length);
 }
 
-/** src/glsl_nodes.js from the texts of glsl/axial.glsl, wind.glsl and generate.glsl. */
+/** src/webgpu/glsl_nodes.js from the texts of glsl/axial.glsl, wind.glsl and generate.glsl. */
 export function generateNodes(text, wind, gen) {
   return emitTsl([{ name: 'glsl/axial.glsl', text }, { name: 'glsl/wind.glsl', text: wind }, { name: 'glsl/generate.glsl', text: gen }], {
     only: NODE_FUNCTIONS,
@@ -81,8 +81,6 @@ export function generate(text, wind, gen, genMain, childMain, axesVert, axesFrag
       '(axial_place) and several axes (axial_tree_world, with AXIAL_AXES defined).'], text],
     ['WIND_GLSL', ['The text of glsl/wind.glsl (after AXIAL_GLSL): the wind moves control points (axial_wind).'], wind],
     ['GENERATE_GLSL', ['The text of glsl/generate.glsl (after WIND_GLSL): a generated layer\'s instance (axial_generate).'], gen],
-    ['RECIPE_FIELDS', ['AxialRecipe\'s fields (glsl/generate.glsl), [name, GLSL type] in order: generate.vert\'s uniforms u_<name>,',
-      'the node uniforms of WebGPU (generate_nodes.js) and what tiles.js sets.'], structFields(gen, 'AxialRecipe', generateSource)],
     ['GENERATE_VERT', ['glsl/generate.vert without its includes (AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL go before it): the',
       'transform-feedback pass that writes a tile\'s records.'], main],
     ['GENERATE_CHILDREN_VERT', ['glsl/generate_children.vert without its includes: a mesh of several axes\' child offsets, six axes a pass.'], children],

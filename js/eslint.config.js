@@ -7,8 +7,8 @@ import globals from 'globals';
 const rules = { 'no-unused-vars': ['error', { argsIgnorePattern: '^_', caughtErrors: 'none' }] };
 
 export default [
-  // generated (js/src/glsl.js from glsl/ by build.mjs) or vendored
-  { ignores: ['**/node_modules/**', 'js/src/glsl.js', 'axialdeform/web/vendor/**'] },
+  // generated (js/src/webgl/glsl.js from glsl/ by build.mjs) or vendored
+  { ignores: ['**/node_modules/**', 'js/src/webgl/glsl.js', 'axialdeform/web/vendor/**'] },
   { files: ['js/**/*.js', 'js/**/*.mjs', 'axialdeform/web/*.js'], ...js.configs.recommended },
   {
     files: ['js/**/*.js', 'js/**/*.mjs'],

@@ -1,6 +1,6 @@
 """Write every declaration the Python library's tables make, in the files that are not Python:
 
-* ``js/src/record.js``: the npm module's copy of the instance record (``axialdeform.core.record``), the
+* ``js/src/core/record.js``: the npm module's copy of the instance record (``axialdeform.core.record``), the
   wind's defaults (``core.wind``), the frame tolerance (``core.axis``) and a generated layer's recipe keys
   and their kinds (``core.recipe``);
 * ``js/src/index.d.ts``: the recipe's type ``GenerateRecipe`` (``core.recipe``) and the generator's numbers'
@@ -33,7 +33,7 @@ from axialdeform.core.recipe import KINDS, RECIPE, REQUIRED, accepts
 from axialdeform.core.wind import SECOND_HARMONIC, WIND_UNIFORMS, Wind
 
 ROOT = Path(__file__).resolve().parents[1]
-RECORD_JS = Path("js/src/record.js")
+RECORD_JS = Path("js/src/core/record.js")
 INDEX_DTS = Path("js/src/index.d.ts")
 SCHEMA = Path("docs/gltf/AXIALDEFORM_bend/schema/node.AXIALDEFORM_bend.schema.json")
 GENERATE_MD = Path("docs/generate.md")
@@ -50,7 +50,7 @@ def three_name(gltf_name: str) -> str:
     return words[0] + "".join(w.capitalize() for w in words[1:])
 
 
-def record_js() -> str:
+def record_js(struct: list) -> str:
     record = [{"name": f.name, "columns": list(f.columns), "start": f.start, "level": f.level} for f in R.RECORD]
     attributes = [{"name": three_name(name), "start": cols[0], "size": len(cols),
                    "level": 1 if name in R.GLTF_EXTENDED_ATTRIBUTES else 0}
@@ -104,7 +104,10 @@ def record_js() -> str:
         "/** The generator's slot (axialdeform.core.record.SLOT_GROUPS; glsl/slot.glsl): its numbers, its vectors as\n"
         " * the GL passes carry them (first number, size), each number's source among axial_generate's outputs\n"
         " * ([output, component], null for a scalar), and the children's pass: axes and vec4 outputs. */\n"
-        f"export const SLOT = Object.freeze({dump(slot)});\n"
+        f"export const SLOT = Object.freeze({dump(slot)});\n\n"
+        "/** AxialRecipe's fields (glsl/generate.glsl), [name, GLSL type] in order: generate.vert's uniforms u_<name>,\n"
+        " * the node uniforms of WebGPU (webgpu/generate_nodes.js) and what webgl/tiles.js sets. */\n"
+        f"export const RECIPE_FIELDS = Object.freeze({dump([list(f) for f in struct])});\n"
     )
 
 
@@ -357,7 +360,7 @@ def docs_table() -> list:
 def outputs(root: Path) -> dict:
     """{path: text}: every file this script writes, as the tables give it."""
     struct = struct_fields((root / GENERATE_GLSL).read_text(encoding="utf-8"))
-    return {RECORD_JS: record_js(),
+    return {RECORD_JS: record_js(struct),
             INDEX_DTS: with_sections((root / INDEX_DTS).read_text(encoding="utf-8"), str(INDEX_DTS), dts_sections(struct)),
             SCHEMA: schema((root / SCHEMA).read_text(encoding="utf-8"), struct),
             GENERATE_MD: with_sections((root / GENERATE_MD).read_text(encoding="utf-8"), str(GENERATE_MD),

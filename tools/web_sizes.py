@@ -147,7 +147,7 @@ def peer(args, size) -> None:
         baked.write_bytes(encode_baked(mesh, params))
         subprocess.run(["node", str(gltfpack), "-i", str(baked), "-o", str(sites["peer"] / "stones.glb"), "-cc"],
                        check=True, capture_output=True)
-        module_js = sum(f.stat().st_size for f in (JS / "src").glob("*.js"))
+        module_js = sum(f.stat().st_size for f in (JS / "src").rglob("*.js") if f.parent.name != "webgpu" and f.name != "webgpu.js")
         data = {"module": [sites["module"] / "mesh.glb", sites["module"] / "params.adp"],
                 "peer": [sites["peer"] / "stones.glb"]}
         print(f"{args.count} stones, {mesh.vertex_count} vertices each; {size[0]}x{size[1]}")

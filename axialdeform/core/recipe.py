@@ -8,7 +8,7 @@ module's ``AxialGeneratedMesh`` and the glTF generated form) and which of ``glsl
 Read from here: :class:`~axialdeform.core.generate.Generate` (its fields, their defaults and their
 checks), the scene file's reader (the keys and their shapes), ``recipe_json`` and ``recipe_uniforms``
 (the keys carried and passed through), the glTF generated form's reader.  Written from here by
-``tools/make_tables.py``: the npm module's ``RECIPE`` and ``RECIPE_KINDS`` (``js/src/record.js``, read by
+``tools/make_tables.py``: the npm module's ``RECIPE`` and ``RECIPE_KINDS`` (``js/src/core/record.js``, read by
 ``checkRecipe``, ``recipeUniforms`` and ``checkUniforms``), its ``GenerateRecipe`` type
 (``js/src/index.d.ts``), the glTF extension's schema and the table of keys in ``docs/generate.md``.  A new
 key is a row here plus its formula (``glsl/generate.glsl`` and ``core/generate.py``).  Pure Python.
@@ -59,7 +59,7 @@ class Kind:
 #: :func:`~axialdeform.core.mesh.anchor_point`)
 ANCHORS = ("bottom", "center", "origin")
 
-#: every kind of key, and what it expects (js/src/limits.js tests each kind by the same rule)
+#: every kind of key, and what it expects (js/src/core/limits.js tests each kind by the same rule)
 KINDS = {
     "positive": Kind("a finite number > 0", "number"),
     "nonnegative": Kind("a finite number >= 0", "number"),

@@ -18,7 +18,7 @@ From these two tables come
   (``params.position`` instead of ``params[:, 10:13]``);
 * the GL buffer formats and attribute names (:func:`gl_layout`);
 * the glTF ``EXT_mesh_gpu_instancing`` attributes (:data:`GLTF_ATTRIBUTES`);
-* the record's columns in JavaScript (the npm module's ``recordLayout``, js/src/adp.js; a test
+* the record's columns in JavaScript (the npm module's ``recordLayout``, js/src/core/adp.js; a test
   compares them with this table).
 
 ``tests/core/test_record.py`` holds the GLSL declarations in ``glsl/`` and

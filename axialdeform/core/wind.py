@@ -46,7 +46,7 @@ SECOND_HARMONIC = 2.31
 
 #: the wind's uniforms, in the order glsl/wind.glsl's functions take them: (name, GLSL type, what).  Spelled
 #: ``u_wind_<name>`` in glsl/ and ``axialWind<Name>`` in the npm module and the page; tools/make_tables.py writes
-#: their declarations (glsl/scene.vert) and the module's table (js/src/record.js's WIND_UNIFORMS) from this one
+#: their declarations (glsl/scene.vert) and the module's table (js/src/core/record.js's WIND_UNIFORMS) from this one
 WIND_UNIFORMS = (("dir", "vec3", "unit direction, world"),
                  ("strength", "float", "tip displacement, in units of L; 0: still"),
                  ("gust", "float", "gustiness"),

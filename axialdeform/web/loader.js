@@ -3,7 +3,7 @@
 // imports between them ('three', '../utils/BufferGeometryUtils.js') are pointed
 // at those URLs.  The folder page imports the same files through an import map.
 //
-// sources = {three, orbit, gltf, bgu, app, module: {'record.js': text, ...}}: the text of each module, the
+// sources = {three, orbit, gltf, bgu, app, module: {'core/record.js': text, ...}}: the text of each module, the
 // module's files in the order of their imports.
 
 export async function loadModules(sources) {
@@ -19,12 +19,17 @@ export async function loadModules(sources) {
   const gltf = url(fromThree(sources.gltf).replace(/(['"])\.\.\/utils\/BufferGeometryUtils\.js\1/g, `'${bgu}'`));
   const orbit = url(fromThree(sources.orbit));
   // the npm module axialdeform-three (js/src), file by file in the order the page gives them (Python's
-  // MODULE_FILES: each after the files it imports): each file's './name.js' and 'three' imports pointed
-  // at the URLs made before it
+  // MODULE_FILES: each after the files it imports; names relative to js/src, 'core/adp.js'): each file's
+  // relative imports ('./mesh.js', '../core/adp.js') and 'three' pointed at the URLs made before it
   const mod = {};
+  const resolve = (from, spec) => {
+    const parts = from.split('/').slice(0, -1);
+    for (const p of spec.split('/')) if (p === '..') parts.pop(); else if (p !== '.') parts.push(p);
+    return parts.join('/');
+  };
   for (const name of Object.keys(sources.module)) {
-    let text = fromThree(sources.module[name]);
-    for (const [dep, u] of Object.entries(mod)) text = text.replace(new RegExp(`(['"])\\./${dep}\\1`, 'g'), `'${u}'`);
+    const text = fromThree(sources.module[name]).replace(/(['"])(\.\.?\/[\w./]+\.js)\1/g,
+      (whole, _q, spec) => (mod[resolve(name, spec)] ? `'${mod[resolve(name, spec)]}'` : whole));
     mod[name] = url(text);
   }
   const app = url(sources.app.replace(/from\s*(['"])axialdeform-three\1/g, `from '${mod['index.js']}'`)

@@ -31,16 +31,19 @@ def page_source(name: str) -> str:
     return _here().joinpath(name).read_text(encoding="utf-8")
 
 
-#: the npm module axialdeform-three's files (js/src; the wheel's axialdeform/three), which the page code
-#: imports; the folder page keeps them in MODULE_DIR
-MODULE_FILES = ("record.js", "adp.js", "glsl.js", "bend.js", "shader.js", "wind.js", "feedback.js", "bake.js", "raycast.js",
-                "instance_cull.js", "mesh.js", "limits.js", "tiles.js", "generate.js", "brush.js", "gltf.js", "index.js", "helpers.js")
+#: the npm module axialdeform-three's files of its WebGL entry (js/src; the wheel's axialdeform/three), which
+#: the page code imports, each after the files it imports; the folder page keeps them in MODULE_DIR
+MODULE_FILES = ("core/record.js", "core/adp.js", "core/bend.js", "core/wind.js", "core/limits.js", "core/baked.js",
+                "core/raycast.js", "core/mesh.js", "core/generate.js", "core/gltf.js", "core/brush.js", "webgl/glsl.js",
+                "webgl/shader.js", "webgl/feedback.js", "webgl/bake.js", "webgl/raycast.js", "webgl/instance_cull.js",
+                "webgl/mesh.js", "webgl/tiles.js", "webgl/generate.js", "webgl/gltf.js", "index.js", "helpers.js")
 MODULE_DIR = "axialdeform-three/"
 
 
 def module_source(name: str) -> str:
-    """The text of one file of the npm module axialdeform-three (``js/src``; the wheel's ``axialdeform/three``)."""
-    return resources.files("axialdeform.three").joinpath(name).read_text(encoding="utf-8")
+    """The text of one file of the npm module axialdeform-three (``js/src``; the wheel's ``axialdeform/three``):
+    ``name`` relative to it (``core/adp.js``)."""
+    return resources.files("axialdeform.three").joinpath(*name.split("/")).read_text(encoding="utf-8")
 
 
 def vendor_file(relative: str) -> bytes:

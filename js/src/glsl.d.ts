@@ -6,8 +6,6 @@ export const AXIAL_GLSL: string;
 export const WIND_GLSL: string;
 /** glsl/generate.glsl (after WIND_GLSL): a generated layer's instance (axial_generate). */
 export const GENERATE_GLSL: string;
-/** AxialRecipe's fields, [name, GLSL type] in order. */
-export const RECIPE_FIELDS: ReadonlyArray<readonly [string, string]>;
 /** glsl/generate.vert without its includes: the transform-feedback pass that writes a tile's records. */
 export const GENERATE_VERT: string;
 /** glsl/generate_children.vert without its includes. */

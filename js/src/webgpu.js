@@ -9,24 +9,22 @@
 // passes bend too; classic materials are turned into their node twins as WebGPURenderer itself does.
 // Bending on the GPU for bake and raycasting is a compute pass (WebGPU compute; transform feedback
 // under the WebGL 2 backend, three's choice) running the same node functions, read back
-// asynchronously (webgpu_mesh.js, compute.js).  A generated layer's instances are made by a compute
-// pass of glsl/generate.glsl as generated node functions (generate_nodes.js) (generated_webgpu.js: WebGPU backend).
+// asynchronously (webgpu/mesh.js, webgpu/compute.js).  A generated layer's instances are made by a compute
+// pass of glsl/generate.glsl as generated node functions (generate_nodes.js) (webgpu/generate.js: WebGPU backend).
 
-import { AxialError, parseADP } from './adp.js';
-import { AxialGLTFPlugin as WebGLAxialGLTFPlugin, EXTENSION } from './gltf.js';
-import { AxialInstancedMesh } from './webgpu_mesh.js';
-import { AxialGeneratedMesh } from './generated_webgpu.js';
+import { AxialError, parseADP } from './core/adp.js';
+import { AxialGLTFPluginBase, EXTENSION } from './core/gltf.js';
+import { AxialInstancedMesh } from './webgpu/mesh.js';
+import { AxialGeneratedMesh } from './webgpu/generate.js';
 
 export { AxialError, parseADP, EXTENSION, AxialInstancedMesh, AxialGeneratedMesh };
-export * as nodes from './nodes.js';
-export * as generateNodes from './generate_nodes.js';
+export * as nodes from './webgpu/nodes.js';
+export * as generateNodes from './webgpu/generate_nodes.js';
 
 /** GLTFLoader plugin (AXIALDEFORM_bend) making axialdeform-three/webgpu's AxialInstancedMesh, and its
- * AxialGeneratedMesh for a node in the generated form. */
-export class AxialGLTFPlugin extends WebGLAxialGLTFPlugin {
+ * AxialGeneratedMesh for a node in the generated form.  Imports no WebGL file of this module. */
+export class AxialGLTFPlugin extends AxialGLTFPluginBase {
   constructor(parser, options = {}) {
-    super(parser, options);
-    this.Mesh = AxialInstancedMesh;
-    this.Generated = AxialGeneratedMesh;
+    super(parser, options, AxialInstancedMesh, AxialGeneratedMesh);
   }
 }

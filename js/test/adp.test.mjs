@@ -3,8 +3,8 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
-import { parseADP, AxialError, crc32, recordLayout, childTexels, texelRows, AXES_ROW } from '../src/adp.js';
-import { resolveAxis, instanceMatrices, bentRadii } from '../src/bend.js';
+import { parseADP, AxialError, crc32, recordLayout, childTexels, texelRows, AXES_ROW } from '../src/core/adp.js';
+import { resolveAxis, instanceMatrices, bentRadii } from '../src/core/bend.js';
 
 const dir = new URL('./fixtures/', import.meta.url);
 const expected = JSON.parse(readFileSync(new URL('expected.json', dir), 'utf8'));

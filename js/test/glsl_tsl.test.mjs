@@ -14,18 +14,18 @@ const js = fileURLToPath(new URL('..', import.meta.url));
 const glsl = join(js, '..', 'glsl');
 const read = (name) => readFileSync(join(glsl, name), 'utf8');
 
-test('src/glsl_nodes.js is what glsl/ gives', () => {
+test('src/webgpu/glsl_nodes.js is what glsl/ gives', () => {
   const want = generateNodes(read('axial.glsl'), read('wind.glsl'), read('generate.glsl'));
-  assert.equal(readFileSync(join(js, 'src', 'glsl_nodes.js'), 'utf8'), want);
+  assert.equal(readFileSync(join(js, 'src', 'webgpu', 'glsl_nodes.js'), 'utf8'), want);
 });
 
 test('build.mjs --check fails on a copy whose glsl/ changed a formula, and passes once built', () => {
   const root = mkdtempSync(join(tmpdir(), 'axd-drift-'));
   try {
-    mkdirSync(join(root, 'js', 'src'), { recursive: true });
+    for (const d of ['webgl', 'webgpu']) mkdirSync(join(root, 'js', 'src', d), { recursive: true });
     mkdirSync(join(root, 'glsl'));
     for (const f of ['build.mjs', 'glsl_tsl.mjs']) copyFileSync(join(js, f), join(root, 'js', f));
-    for (const f of ['glsl.js', 'glsl_nodes.js']) copyFileSync(join(js, 'src', f), join(root, 'js', 'src', f));
+    for (const f of ['webgl/glsl.js', 'webgpu/glsl_nodes.js']) copyFileSync(join(js, 'src', f), join(root, 'js', 'src', f));
     for (const f of ['axial.glsl', 'wind.glsl', 'generate.glsl', 'generate.vert', 'generate_children.vert',
       'generate_axes.vert', 'generate_axes.frag', 'slot.glsl']) copyFileSync(join(glsl, f), join(root, 'glsl', f));
     const check = () => spawnSync(process.execPath, [join(root, 'js', 'build.mjs'), '--check'], { encoding: 'utf8' });
@@ -40,7 +40,7 @@ test('build.mjs --check fails on a copy whose glsl/ changed a formula, and passe
     const built = spawnSync(process.execPath, [join(root, 'js', 'build.mjs')], { encoding: 'utf8' });
     assert.equal(built.status, 0, built.stderr);
     assert.equal(check().status, 0);
-    assert.match(readFileSync(join(root, 'js', 'src', 'glsl_nodes.js'), 'utf8'), /float\(4\.5\)\.mul\(t\)/);
+    assert.match(readFileSync(join(root, 'js', 'src', 'webgpu', 'glsl_nodes.js'), 'utf8'), /float\(4\.5\)\.mul\(t\)/);
   } finally {
     rmSync(root, { recursive: true, force: true });
   }

@@ -1,6 +1,6 @@
 """A GLB of a few KB in the generated form cannot ask for unbounded work: the Python reader and the npm
 plugin (three's GLTFLoader in node) refuse the same files in one line, before anything is allocated,
-and read the same good file (docs/generate.md, "Bounds"; js/src/limits.js)."""
+and read the same good file (docs/generate.md, "Bounds"; js/src/core/limits.js)."""
 
 from __future__ import annotations
 
@@ -83,7 +83,7 @@ def files(tmp_path_factory):
 
 
 def test_the_bounds_are_one_table_in_both_languages():
-    text = (ROOT / "js" / "src" / "limits.js").read_text()
+    text = (ROOT / "js" / "src" / "core" / "limits.js").read_text()
     for name, value in (("MAX_TILE_SLOTS", MAX_TILE_SLOTS), ("MAX_SLOTS", MAX_SLOTS), ("WORLD_CELLS", WORLD_CELLS),
                         ("MAX_BEND", MAX_BEND), ("MAX_MAP_TEXELS", MAX_MAP_TEXELS)):
         line = next(x for x in text.splitlines() if x.startswith(f"export const {name} = "))

@@ -22,7 +22,7 @@ from axialdeform.core.generate import Generate, recipe_json
 
 ROOT = Path(__file__).resolve().parents[2]
 TOOL = ROOT / "tools" / "make_tables.py"
-WRITTEN = ("js/src/record.js", "js/src/index.d.ts", "docs/gltf/AXIALDEFORM_bend/schema/node.AXIALDEFORM_bend.schema.json",
+WRITTEN = ("js/src/core/record.js", "js/src/index.d.ts", "docs/gltf/AXIALDEFORM_bend/schema/node.AXIALDEFORM_bend.schema.json",
            "docs/generate.md", "glsl/scene.vert")
 
 
@@ -70,7 +70,7 @@ def test_a_new_key_in_the_table_reaches_every_written_file(monkeypatch):
     monkeypatch.setattr(tool, "struct_fields", lambda text: [("seed", "uint"), ("wobble", "float")])
     out = tool.outputs(ROOT)
     by = {str(k): v for k, v in out.items()}
-    assert '"name": "wobble", "kind": "amount"' in by["js/src/record.js"]
+    assert '"name": "wobble", "kind": "amount"' in by["js/src/core/record.js"]
     assert "  wobble?: number;" in by["js/src/index.d.ts"] and "  wobble: number;" in by["js/src/index.d.ts"]
     schema = json.loads(by[WRITTEN[2]])["properties"]["generate"]["properties"]
     assert schema["recipe"]["properties"]["wobble"]["maximum"] == 1
@@ -99,8 +99,8 @@ SAMPLES = [0, 0.5, 1, 1.5, -1, 4294967296, 3, True, None, "bottom", "top", math.
 
 @pytest.mark.parametrize("kind", sorted(R.KINDS))
 def test_the_module_tests_each_kind_by_the_python_rule(kind):
-    """js/src/limits.js's accepts gives the verdict of core.recipe.accepts on the same values."""
-    script = ("import { accepts } from './js/src/limits.js';\n"
+    """js/src/core/limits.js's accepts gives the verdict of core.recipe.accepts on the same values."""
+    script = ("import { accepts } from './js/src/core/limits.js';\n"
               f"const values = {json.dumps([v if v != math.inf else 'INF' for v in SAMPLES])}"
               ".map((v) => (v === 'INF' ? Infinity : v));\n"
               f"console.log(JSON.stringify(values.map((v) => accepts({json.dumps(kind)}, v))));\n")

@@ -39,8 +39,9 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
            if p.is_file() and p.suffix != ".pyc" and "__pycache__" not in p.parts]
     assert "axialdeform/web/vendor/three.module.min.js" in web and "axialdeform/web/vendor/LICENSE" in web
     missing += [n for n in web if n not in names]
-    module = [p.name for p in (ROOT / "js" / "src").iterdir() if p.suffix in (".js", ".ts")]
-    assert "glsl.js" in module and "index.d.ts" in module and "mesh.js" in module
+    src = ROOT / "js" / "src"
+    module = [p.relative_to(src).as_posix() for p in src.rglob("*") if p.suffix in (".js", ".ts")]
+    assert "webgl/glsl.js" in module and "index.d.ts" in module and "core/mesh.js" in module and "webgpu/mesh.js" in module
     missing += [f"axialdeform/three/{n}" for n in module if f"axialdeform/three/{n}" not in names]
     assert not missing, f"the wheel lacks {missing}"
 
@@ -89,7 +90,7 @@ def test_wheel_carries_shaders_and_meshes_and_runs(tmp_path):
     sizes = json.loads(wid.stdout.strip().splitlines()[-1])
     assert set(sizes) == {"three", "orbit", "gltf", "bgu", "app", "module"} and sizes["three"] > 600_000, sizes
     # every file of the npm module's WebGL entry (js/src; the page and the widget draw with WebGLRenderer),
-    # from the wheel's axialdeform/three: all but axialdeform-three/webgpu's own files
-    webgpu_only = {"webgpu.js", "webgpu_mesh.js", "nodes.js", "cull.js", "compute.js", "generated_webgpu.js",
-                   "generate_nodes.js", "glsl_nodes.js", "tsl_runtime.js"}
-    assert sizes["module"] == len({p.name for p in (ROOT / "js" / "src").glob("*.js")} - webgpu_only), sizes
+    # from the wheel's axialdeform/three: all but axialdeform-three/webgpu's own (webgpu.js, webgpu/)
+    src = ROOT / "js" / "src"
+    webgl = [p for p in src.rglob("*.js") if p.name != "webgpu.js" and p.parent.name != "webgpu"]
+    assert sizes["module"] == len(webgl), sizes

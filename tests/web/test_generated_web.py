@@ -190,7 +190,7 @@ _GL_TRAFFIC = """(() => {
 @pytest.mark.slow
 def test_the_page_draws_the_gpus_records_and_reads_none_back(browser, generated_site):
     """Walking, the page makes tile sets again and again, and neither reads a record back nor uploads one:
-    the GPU writes the attributes three draws from (js/src/tiles.js); what comes back is one pixel a
+    the GPU writes the attributes three draws from (js/src/webgl/tiles.js); what comes back is one pixel a
     tile set (the count kept) and the page's own first-frame pixel.  Asked for its records, it reads them."""
     page = browser.new_page(viewport={"width": SIZE[0], "height": SIZE[1] + 40})
     errors = []

@@ -133,7 +133,7 @@ def test_the_page_parser_reads_every_record_level(tmp_path, stone, quantize):
     bad = bytearray(files[0][0].read_bytes())
     bad[8:10] = (len(R.WIDTHS) + 1).to_bytes(2, "little")
     (tmp_path / "next.adp").write_bytes(bytes(bad))
-    app = (ROOT / "js" / "src" / "adp.js").as_uri()  # the page's parser: the npm module's (app.js imports it)
+    app = (ROOT / "js" / "src" / "core" / "adp.js").as_uri()  # the page's parser: the npm module's (app.js imports it)
     script = (f"import {{ parseADP as parseAdp }} from '{app}';\nimport {{ readFileSync }} from 'node:fs';\n"
               "const out = [];\n"
               "for (const f of process.argv.slice(1)) {\n"
@@ -1067,9 +1067,11 @@ def test_the_module_files_come_each_after_what_it_imports():
     never resolves)."""
     from axialdeform.web.sources import MODULE_FILES
 
+    src = ROOT / "js" / "src"
     for k, name in enumerate(MODULE_FILES):
-        text = (ROOT / "js" / "src" / name).read_text()
-        for dep in re.findall(r"""from\s*['"]\./([\w.]+)['"]""", text):
+        text = (src / name).read_text()
+        for spec in re.findall(r"""from\s*['"](\.\.?/[\w./]+)['"]""", text):
+            dep = (src / name).parent.joinpath(spec).resolve().relative_to(src.resolve()).as_posix()
             assert dep in MODULE_FILES[:k], (name, dep)
 
 

@@ -4,7 +4,7 @@ place every instance wrong and r182 to r183 lose the shadows of updated instance
 fixed since) and the latest release the tests pin (r187).
 
 The bend there is glsl/axial.glsl and glsl/wind.glsl as three's node functions, generated at build
-(js/src/glsl_nodes.js by js/build.mjs): these tests hold it to ``axialdeform.deform`` on every feature, draw
+(js/src/webgpu/glsl_nodes.js by js/build.mjs): these tests hold it to ``axialdeform.deform`` on every feature, draw
 what ``render`` draws, cast bent shadows, bake and raycast, and refuse in words what they cannot bend."""
 
 from __future__ import annotations

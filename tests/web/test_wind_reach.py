@@ -1,4 +1,4 @@
-"""The npm module's wind reach (js/src/wind.js, windReach) is the Python library's (core/bounds.py,
+"""The npm module's wind reach (js/src/core/wind.js, windReach) is the Python library's (core/bounds.py,
 wind_reach): for a tree, the longest chain of axis lengths a vertex sums (axis, parent, ..., root), not
 the sum of every axis's length (which the module used: a looser bound that disagreed with Python's)."""
 
@@ -24,7 +24,7 @@ def test_the_modules_wind_reach_is_pythons(kind):
     tree = getattr(mesh, "tree", None)
     lengths = [a.length for a in tree.axes] if tree is not None else [mesh.axis.length]
     parents = [int(p) for p in tree.parents] if tree is not None else None
-    script = (f"import {{ windReach }} from '{(ROOT / 'js' / 'src' / 'wind.js').as_uri()}';"
+    script = (f"import {{ windReach }} from '{(ROOT / 'js' / 'src' / 'core' / 'wind.js').as_uri()}';"
               f"console.log(JSON.stringify(windReach({{strength: 0.3, gustiness: 0.5}}, {json.dumps(lengths)}, "
               f"{json.dumps(parents)})));")
     r = subprocess.run(["node", "--input-type=module", "-e", script], capture_output=True, text=True, timeout=60,

@@ -32,7 +32,7 @@ from .glb import FLOAT
 __all__ = ["generated_form", "check_generated", "FALLBACK_TILES", "GeneratedNode", "check_generated_form",
            "read_generated_glb", "MAX_MAP_TEXELS"]
 
-#: the most numbers a ground map or child-axis table of the generated form may hold (4096^2; js/src/limits.js)
+#: the most numbers a ground map or child-axis table of the generated form may hold (4096^2; js/src/core/limits.js)
 MAX_MAP_TEXELS = 1 << 24
 
 #: the most tiles the fallback looks through for instances (nearest the extent's centre first)
@@ -122,7 +122,7 @@ def _pair(v, test=lambda x: isinstance(x, (int, float)) and not isinstance(x, bo
 
 
 def check_generated_form(spec, axis_length: float, axes: int, map_shapes: dict, where: str) -> tuple[Generate, float, dict]:
-    """The generated form's ``generate`` object held to the same rules as the npm plugin's (js/src/limits.js,
+    """The generated form's ``generate`` object held to the same rules as the npm plugin's (js/src/core/limits.js,
     ``checkUniforms``): the recipe by :class:`Generate` and its bounds, the slots within reach, and every one of
     the generator's numbers -- what follows from the recipe equal to it, the rest finite and in range, a map's
     size its accessor's.  Returns ``(recipe, reach, numbers)``: the recipe's own keys only, and the generator's

@@ -2,9 +2,9 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import { AxialGLTFPlugin, AxialInstancedMesh, parseADP, AxialError, type ADPRecord } from 'axialdeform-three';
-import { recordLayout, WIND, checkRecipe, tilesAround } from 'axialdeform-three/helpers';
+import { recordLayout, WIND, checkRecipe, tilesAround, RECIPE_FIELDS } from 'axialdeform-three/helpers';
 import { crc32, fieldName } from 'axialdeform-three/adp';
-import { AXIAL_GLSL, RECIPE_FIELDS } from 'axialdeform-three/glsl';
+import { AXIAL_GLSL } from 'axialdeform-three/glsl';
 import { AxialInstancedMesh as WebGPUAxialInstancedMesh, AxialGeneratedMesh as WebGPUAxialGeneratedMesh,
   type AxialBent } from 'axialdeform-three/webgpu';
 

@@ -2,9 +2,9 @@
 // it, injected into a built-in material's vertex shader (onBeforeCompile) before three's chunks, so
 // maps, lights, shadows, fog and tone mapping stay three.js's.
 
-import { AxialError } from './adp.js';
+import { AxialError } from '../core/adp.js';
 import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
-import { WIND_UNIFORMS } from './record.js';
+import { WIND_UNIFORMS } from '../core/record.js';
 
 /** Per-instance culling's instance texture (instance_cull.js): texels an instance (the bend's numbers, the
  * matrix's three rows, the tint) and texels a row. */

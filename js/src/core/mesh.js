@@ -1,24 +1,24 @@
-// mesh.js -- AxialInstancedMesh: a THREE.InstancedMesh whose instances are bent, each along its own Bézier
-// control axis, by glsl/axial.glsl injected into the user's own material (shader.js), so maps, lights, shadows,
-// fog and tone mapping stay three.js's.  The rigid part of every instance is its instanceMatrix; the bend's
-// numbers are instanced attributes (record.js's ATTRIBUTES).  Wind: wind.js; bake, raycast: feedback.js.
+// core/mesh.js -- AxialMeshCore: what an axialdeform mesh is under any renderer: a THREE.InstancedMesh of
+// one geometry whose instances are each bent along their own Bezier control axis -- the record, its
+// attributes and instance matrices (record.js's ATTRIBUTES), the tint, a tree's child-axis texels, the
+// bend-aware bounds, setParams/updateParams, the wind's state.  How the bend is drawn is the renderer's
+// part: webgl/mesh.js (glsl/axial.glsl injected into classic materials) and webgpu/mesh.js (node
+// functions as the material's positionNode) each subclass it with bendMaterial, their shadow materials,
+// their renderer check, bake and raycast.
 
 import * as THREE from 'three';
 import { AxialError, recordLayout, childTexels, texelRows, column, AXES_ROW } from './adp.js';
 import { ATTRIBUTES } from './record.js';
 import { resolveAxis, instanceMatrices, bentRadii, checkRows } from './bend.js';
-import { injectBend } from './shader.js';
 import { checkWind, setWindClock, setWindUniforms, windReach } from './wind.js';
-import { feedback, refuseWebGPU, refuseNodeMaterial, UNBENT_DRAW } from './feedback.js';
-import { bake, unbake } from './bake.js';
-import { raycast } from './raycast.js';
-import { setInstanceCulling, cullingHooks } from './instance_cull.js';
+import { unbake } from './baked.js';
 
 // scratch objects of the bounds (no allocation per instance)
 const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
 
 /**
- * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers.
+ * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers (the
+ * renderer-agnostic part: use webgl/mesh.js's or webgpu/mesh.js's AxialInstancedMesh).
  *
  * record: parseADP's result, or {count, numbersPerInstance, data (Float32Array), axes?, axis?, lo?,
  * length?}.  options.axis: the mesh's control axis where the record's header does not say it all
@@ -28,10 +28,10 @@ const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
  * attributes axialD12, axialD34, axialD5, axialTwistTaper, axialAngles, axialAxis, instanceMatrix).  The
  * material(s) are cloned and given the bend; shadows and raycasting use the bent shape.
  */
-export class AxialInstancedMesh extends THREE.InstancedMesh {
+export class AxialMeshCore extends THREE.InstancedMesh {
   /** @type {any} */ _baked = null; /** @type {any} */ _rayMesh = null; /** @type {any} */ _cpuAttributes = null; // set later
   /** @type {any} */ _childTexels = null; /** @type {any} */ _storage = null; // (bake.js, raycast.js, generated meshes)
-  /** @type {any} */ _culling = null; // instance_cull.js
+  /** @type {any} */ _culling = null; // each renderer's culling
   constructor(geometry, material, record, options = {}) {
     if (!geometry || !geometry.isBufferGeometry) throw new AxialError('AxialInstancedMesh: expected a THREE.BufferGeometry');
     if (!record || !Number.isInteger(record.count) || !record.data) {
@@ -123,47 +123,31 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     const hook = (renderer, ...rest) => {
       this._checkRenderer(renderer);
       this._renderer = renderer;
-      if (this._culling && !this._baked) this._culling.before(rest[1]); // the instances in this camera's view
+      this._beforeDraw(rest[1]);
       if (userHook) userHook.call(this, renderer, ...rest);
     };
     Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
-    cullingHooks(this);
   }
 
-  /** The bent materials of three's shadow passes (customDepthMaterial, customDistanceMaterial). */
+  /** A camera is about to draw this mesh (the renderer's part: its culling). */
+  // eslint-disable-next-line no-unused-vars
+  _beforeDraw(camera) {}
+
+  /** The bent materials of three's shadow passes (customDepthMaterial, customDistanceMaterial): none here.
+   * @returns {any[]} */
   _makeShadowMaterials() {
-    return [this.bendMaterial(new THREE.MeshDepthMaterial({ depthPacking: THREE.RGBADepthPacking }), false),
-      this.bendMaterial(new THREE.MeshDistanceMaterial(), false)];
+    return [];
   }
 
-  /** Throws where `renderer` cannot draw this mesh bent (WebGPURenderer: axialdeform-three/webgpu). */
-  _checkRenderer(renderer) {
-    refuseWebGPU(renderer, UNBENT_DRAW);
-  }
+  /** Throws where `renderer` cannot draw this mesh bent (each renderer's part says which can). */
+  // eslint-disable-next-line no-unused-vars
+  _checkRenderer(renderer) {}
 
-  /** A clone of `material` (three's built-ins: Basic, Lambert, Phong, Standard, Physical, Toon,
-   * Depth, Distance, ...) whose vertex shader bends this mesh's instances. */
+  /** A clone of `material` that bends this mesh's instances (each renderer's part makes it).
+   * @param {any} material @param {boolean} [clone] @returns {any} */
+  // eslint-disable-next-line no-unused-vars
   bendMaterial(material, clone = true) {
-    if (!material || !material.isMaterial) throw new AxialError('AxialInstancedMesh: expected a THREE.Material');
-    if (material.isNodeMaterial) refuseNodeMaterial(material);
-    if (this._ownShader && clone) return material;
-    if (material.isShaderMaterial) {
-      throw new AxialError('AxialInstancedMesh: a ShaderMaterial has no three.js chunks to bend; include the exported AXIAL_GLSL in it yourself');
-    }
-    const m = clone ? material.clone() : material;
-    const uniforms = this.axialUniforms, defines = this.defines, name = m.name || m.type;
-    const before = material.onBeforeCompile;
-    m.onBeforeCompile = (shader, renderer) => {
-      if (before && before !== THREE.Material.prototype.onBeforeCompile) before.call(m, shader, renderer);
-      Object.assign(shader.uniforms, uniforms); // the same objects: updates need no recompile
-      shader.defines = { ...(shader.defines || {}), ...defines };
-      shader.vertexShader = injectBend(shader.vertexShader, name);
-    };
-    const key = material.customProgramCacheKey.bind(material);
-    m.customProgramCacheKey = () => `axialdeform:${defines.AXIAL_AXES || 1}:${defines.AXIAL_WIND ? 'wind' : ''}:`
-      + `${defines.AXIAL_POSITION_IDS ? 'position-ids' : ''}:${defines.AXIAL_CULLED ? 'culled' : ''}:${key()}`;
-    m.needsUpdate = true;
-    return m;
+    throw new AxialError('AxialMeshCore: use AxialInstancedMesh from axialdeform-three (WebGLRenderer) or axialdeform-three/webgpu');
   }
 
   /**
@@ -237,14 +221,6 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     }
     const pos = this.geometry.getAttribute('position').array;
     this._center = bentRadii(pos, this.axis, this.data, L, n, first, this._radii, this._grow).center;
-    if (this._culling) this._culling.fill(first, n);
-  }
-
-  /** Cull each instance by its bend-aware sphere before every draw under `renderer` (a WebGLRenderer), so a
-   * camera draws only the instances it sees (instance_cull.js); null: draw them all again. */
-  setInstanceCulling(renderer) {
-    setInstanceCulling(this, renderer);
-    return this;
   }
 
   /**
@@ -333,26 +309,6 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     this.computeBoundingSphere();
   }
 
-  /**
-   * three's raycasting, against each instance's bent triangles (intersections carry instanceId).
-   * The instances whose bounding sphere the ray meets are bent on the GPU by the same shader code
-   * (raycast.js), so the mesh must have been drawn (or baked) once.
-   */
-  raycast(raycaster, intersects) {
-    raycast(this, raycaster, intersects);
-  }
-
-  /**
-   * Bend every instance ONCE on the GPU (WebGL 2 transform feedback, the same glsl/axial.glsl) and
-   * draw the result as plain geometry from then on: for instances that do not move, the frames cost
-   * what a baked mesh costs, while the file stays 40 bytes an instance (bake.js).  setParams()
-   * (animation) and setWind() go back to bending every frame; call bake() again when the instances
-   * rest.  Returns true when baked (false: no instances, a wind, an own shader, no WebGL 2).
-   */
-  bake(renderer) {
-    return bake(this, renderer);
-  }
-
   /** Go back to bending every frame (frees the baked geometry). */
   unbake() {
     return unbake(this);
@@ -368,18 +324,10 @@ export class AxialInstancedMesh extends THREE.InstancedMesh {
     this._shadowMaterials.forEach((m) => { m.visible = on; });
   }
 
-  /** One transform-feedback pass over instances `ids` (null: all): feedback.js. */
-  _feedback(renderer, ids, tangent) {
-    return feedback(this, renderer, ids, tangent);
-  }
-
   /** Frees this mesh's GPU buffers, its materials (the clones), shadow materials and texture;
    * the user's geometry and materials stay theirs. */
   dispose() {
     unbake(this);
-    if (this._culling) this._culling.dispose();
-    if (this._programs) Object.values(this._programs).forEach(({ gl, program }) => gl.deleteProgram(program));
-    this._programs = null;
     this.geometry.dispose();
     (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => m.dispose());
     this._shadowMaterials.forEach((m) => m.dispose());

@@ -8,7 +8,7 @@
 
 import * as THREE from 'three/webgpu';
 import { Fn, If, storage, uniform, uniformArray, instanceIndex, uint, int, atomicAdd, atomicStore, dot } from 'three/tsl';
-import { AxialError } from './adp.js';
+import { AxialError } from '../core/adp.js';
 
 const _frustum = new THREE.Frustum(), _m = new THREE.Matrix4(), _inv = new THREE.Matrix4(), _s = new THREE.Sphere();
 

@@ -2,7 +2,7 @@
 // control axis as the shader wants it, each instance's rigid placement (its
 // instanceMatrix, W = R (s V'') + p with R = Rz Ry Rx) and a bounding sphere
 // that holds every bent instance (three's frustum culling).  The bend itself
-// runs only on the GPU, in glsl/axial.glsl (src/glsl.js): drawing, baking and
+// runs only on the GPU, in glsl/axial.glsl (src/webgl/glsl.js): drawing, baking and
 // raycasting all use it; docs/method.md states the conventions.
 
 import { AxialError, fieldName } from './adp.js';

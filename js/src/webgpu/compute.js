@@ -5,7 +5,7 @@
 
 import * as THREE from 'three/webgpu';
 import { Fn, If, instanceIndex, uniform, textureLoad, ivec2, int, vec4, instancedArray } from 'three/tsl';
-import { AxialError } from './adp.js';
+import { AxialError } from '../core/adp.js';
 
 // the first three whose WebGL 2 fallback keeps compute passes apart (before it, a second kernel's
 // transform feedback could write into another's buffers: measured with r171 to r186)

@@ -8,7 +8,7 @@
 // bake() read them (feedback.js).
 
 import * as THREE from 'three';
-import { AxialError } from './adp.js';
+import { AxialError } from '../core/adp.js';
 import { CULL_TEXELS, CULL_WIDTH } from './shader.js';
 
 // an instance's texels: d12, d34, (d5, tw, tp), (angles, -), the matrix's three rows, (tint, -)

@@ -1,4 +1,4 @@
-// tiles.js -- a generated layer's tiles on the GPU in a WebGL 2 context (docs/generate.md).
+// webgl/tiles.js -- a generated layer's tiles on the GPU in a WebGL 2 context (docs/generate.md).
 // TileGenerator runs glsl/generate.glsl -- the very GLSL the Python library runs -- by transform feedback:
 // every tile's m^2 slots (23 float32: the 22-number record, then kept) into one GL buffer.  TileAttributes
 // turns that buffer, still on the GPU, into the instanced attributes three.js draws from (the bend's
@@ -9,15 +9,13 @@
 // back (each kept slot adds 1 to a 1 x 1 float target) where the context can blend float targets.
 
 import * as THREE from 'three';
-import { AxialError, AXES_ROW } from './adp.js';
-import { RECIPE_FIELDS, AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT, GENERATE_CHILDREN_VERT, GENERATE_AXES_VERT,
+import { AxialError, AXES_ROW } from '../core/adp.js';
+import { AXIAL_GLSL, WIND_GLSL, GENERATE_GLSL, GENERATE_VERT, GENERATE_CHILDREN_VERT, GENERATE_AXES_VERT,
   GENERATE_AXES_FRAG, SLOT_GLSL } from './glsl.js';
-import { SLOT as SLOT_TABLE } from './record.js';
+import { SLOT as SLOT_TABLE, RECIPE_FIELDS } from '../core/record.js';
+import { GENERATED_FLOATS } from '../core/generate.js';
 import { refuseWebGPU, feedbackLink } from './feedback.js';
 
-/** Numbers an instance the pass writes (the slot, glsl/slot.glsl): the 22-number record (the 16, s, tw, tp, the
- * tint), then 1 (kept) or 0 (dropped by the ground maps and bands): generate.vert's outputs, in order. */
-export const GENERATED_FLOATS = SLOT_TABLE.floats;
 const VARYINGS = SLOT_TABLE.groups.map((_, k) => `g_${k}`);
 const CHILD_VARYINGS = Array.from({ length: SLOT_TABLE.childVectors }, (_, k) => `c_${k}`);
 const HEAD = '#version 300 es\nprecision highp float;\nprecision highp int;\n';

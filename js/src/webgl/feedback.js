@@ -3,18 +3,11 @@
 // positions, normals (and tangents) captured in GL buffers.  bake() draws from them, raycast()
 // reads them back: there is no CPU copy of the Bézier maths.
 
-import { AxialError } from './adp.js';
+import { AxialError } from '../core/adp.js';
 import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
-import { ATTRIBUTES } from './record.js';
+import { ATTRIBUTES } from '../core/record.js';
 import { UNIFORMS, BEND } from './shader.js';
-
-/** A vertex attribute as a tight float32 array (interleaved, integer or normalized ones unpacked). */
-export function plainArray(attr) {
-  if (!attr.isInterleavedBufferAttribute && attr.array instanceof Float32Array) return attr.array;
-  const out = new Float32Array(attr.count * attr.itemSize);
-  for (let i = 0; i < attr.count; i++) for (let c = 0; c < attr.itemSize; c++) out[i * attr.itemSize + c] = attr.getComponent(i, c);
-  return out;
-}
+import { plainArray } from '../core/baked.js';
 
 
 /**

@@ -1,7 +1,7 @@
-// generated_webgpu.js -- generated layers under three's WebGPURenderer (axialdeform-three/webgpu): the
-// WebGL module's AxialGeneratedMesh (generate.js) for node materials.  A tile's instances are made by a
+// webgpu/generate.js -- generated layers under three's WebGPURenderer (axialdeform-three/webgpu): the
+// WebGL entry's AxialGeneratedMesh for node materials (the recipe, tiles, bounds: core/generate.js).  A tile's instances are made by a
 // compute pass of glsl/generate.glsl as generated node functions (generate_nodes.js) -- what the tests hold to the Python
-// library -- straight into a storage buffer the materials' positionNode reads (webgpu_mesh.js's layout:
+// library -- straight into a storage buffer the materials' positionNode reads (webgpu/mesh.js's layout:
 // d12, d34, (d5, tw, tp), (angles, 0), the instance matrix's columns, the tint); a tree's child-axis
 // offsets into a second one.  No record reaches the CPU to draw and none is uploaded: per tile set, the
 // tiles' coordinates go up and the count of kept instances comes back, asynchronously.  A dropped slot
@@ -10,12 +10,12 @@
 
 import * as THREE from 'three/webgpu';
 import { Fn, If, instanceIndex, storage, uniform, uint, int, ivec2, vec4, atomicAdd, atomicStore } from 'three/tsl';
-import { AxialError, AXES_ROW, texelRows } from './adp.js';
-import { AxialInstancedMesh } from './webgpu_mesh.js';
-import { unbake } from './bake.js';
-import { ATTRIBUTES, SLOT } from './record.js';
-import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, tileSize, GENERATED_FLOATS } from './generate.js';
-import { worldEdge } from './limits.js';
+import { AxialError, AXES_ROW, texelRows } from '../core/adp.js';
+import { AxialInstancedMesh } from './mesh.js';
+import { unbake } from '../core/baked.js';
+import { ATTRIBUTES, SLOT } from '../core/record.js';
+import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, tileSize, GENERATED_FLOATS } from '../core/generate.js';
+import { worldEdge } from '../core/limits.js';
 import { recipeNodes, axialGenerate, axialGenerateChild, axialGenKey } from './generate_nodes.js';
 import { axialRotation } from './nodes.js';
 

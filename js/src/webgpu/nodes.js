@@ -1,6 +1,6 @@
 // nodes.js -- the bend as three.js node functions (TSL), for WebGPURenderer (three/webgpu, both its
 // WebGPU and WebGL 2 backends) and its node materials.  Every formula is glsl/axial.glsl's and
-// glsl/wind.glsl's, GENERATED into src/glsl_nodes.js by build.mjs (glsl_tsl.mjs); this file only calls
+// glsl/wind.glsl's, GENERATED into src/webgpu/glsl_nodes.js by build.mjs (glsl_tsl.mjs); this file only calls
 // them the way the mesh holds its data: a frame as three uniform rows, a tree's axes in a texture, the
 // child offsets in a texture or a storage buffer, the rigid part from three's instanceMatrix when the CPU
 // made it.  The tests hold the result to axialdeform.deform on every feature (tests/web/test_webgpu.py).
@@ -11,7 +11,7 @@
 
 import { If, Loop, float, int, uint, vec2, vec3, vec4, normalize, textureLoad, ivec2 } from 'three/tsl';
 import * as glsl from './glsl_nodes.js';
-import { WIND_UNIFORMS } from './record.js';
+import { WIND_UNIFORMS } from '../core/record.js';
 import { matDiagonal, matTranspose, matVar, matVec } from './tsl_runtime.js';
 
 export { axialCosSin, axialCurve, axialRotation, axialWindHash, axialPositionId } from './glsl_nodes.js';

@@ -1,10 +1,8 @@
-// raycast.js -- three's raycasting against a mesh's bent instances: the instances whose bounding
-// sphere the ray meets are bent on the GPU (WebGL 2: feedback.js; WebGPU: webgpu.js's compute pass)
-// and their triangles tested one by one.
+// core/raycast.js -- three's raycasting against a mesh's bent instances: the instances whose bounding
+// sphere the ray meets are bent on the GPU (WebGL 2: webgl/raycast.js; WebGPU: webgpu/mesh.js's compute
+// pass) and their triangles tested one by one.
 
 import * as THREE from 'three';
-import { AxialError } from './adp.js';
-import { feedback } from './feedback.js';
 
 const _sphere = new THREE.Sphere();
 
@@ -45,26 +43,4 @@ export function intersectBent(mesh, raycaster, intersects, ids, bent, stride = 3
     probe.raycast(raycaster, found);
     for (const hit of found) { hit.instanceId = id; hit.object = mesh; intersects.push(hit); }
   });
-}
-
-/**
- * three's raycasting, against each instance's bent triangles (intersections carry instanceId).
- * The instances whose bounding sphere the ray meets are bent on the GPU by the same shader code
- * (one transform-feedback pass, read back), so the mesh must have been drawn (or baked) once.
- */
-export function raycast(mesh, raycaster, intersects) {
-  const ids = rayCandidates(mesh, raycaster);
-  if (!ids.length) return;
-  if (!mesh._renderer) {
-    throw new AxialError('raycast: the bend runs on the GPU; draw the mesh once (or bake it) before raycasting');
-  }
-  const V = mesh.geometry.getAttribute('position').count;
-  const { gl, outputs } = feedback(mesh, mesh._renderer, ids, false);
-  const bent = new Float32Array(ids.length * V * 3);
-  gl.bindBuffer(gl.ARRAY_BUFFER, outputs[0]);
-  gl.getBufferSubData(gl.ARRAY_BUFFER, 0, bent);
-  gl.bindBuffer(gl.ARRAY_BUFFER, null);
-  outputs.forEach((b) => gl.deleteBuffer(b));
-  mesh._renderer.resetState();
-  intersectBent(mesh, raycaster, intersects, ids, bent);
 }

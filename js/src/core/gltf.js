@@ -1,6 +1,6 @@
-// gltf.js -- AxialGLTFPlugin: GLTFLoader reads the AXIALDEFORM_bend extension
-// (docs/gltf/AXIALDEFORM_bend) and every instanced node that carries it becomes
-// an AxialInstancedMesh with the file's materials:
+// core/gltf.js -- the glTF plugin under any renderer: GLTFLoader reads the AXIALDEFORM_bend extension
+// (docs/gltf/AXIALDEFORM_bend) and every instanced node that carries it becomes a mesh of the renderer's
+// entry (webgl/gltf.js, webgpu.js: AxialGLTFPlugin) with the file's materials:
 //     const loader = new GLTFLoader();
 //     loader.register((parser) => new AxialGLTFPlugin(parser));
 
@@ -9,8 +9,7 @@ import { AxialError, checkNumbers } from './adp.js';
 import { FRAME_TOLERANCE, GLTF_INSTANCE_TYPES, MAX_AXES, WIDTHS } from './record.js';
 
 const [WIDTH, EXTENDED_WIDTH, TINTED_WIDTH] = WIDTHS; // 16, 19, 22 numbers: record.js's levels
-import { AxialInstancedMesh } from './mesh.js';
-import { AxialGeneratedMesh, checkRecipe, maxTiles, tileSize } from './generate.js';
+import { checkRecipe, maxTiles, tileSize } from './generate.js';
 import { MAX_MAP_TEXELS, MAX_SLOTS, checkSlots, checkUniforms, optionalNumbers } from './limits.js';
 
 /** The extension's name. */
@@ -69,18 +68,19 @@ function checkAttributes(ext, names, where) {
 }
 
 
-/** GLTFLoader plugin: EXT_mesh_gpu_instancing nodes with AXIALDEFORM_bend load bent. */
-export class AxialGLTFPlugin {
+/** GLTFLoader plugin: EXT_mesh_gpu_instancing nodes with AXIALDEFORM_bend load bent, as meshes of class
+ * `Mesh` (AxialInstancedMesh of a renderer's entry), generated nodes as `Generated` (its AxialGeneratedMesh). */
+export class AxialGLTFPluginBase {
   /** `options.maxSlots`: the most slots a generated node may hold (limits.js's MAX_SLOTS; a file asking
    * for more is refused in one line before anything is allocated). */
-  constructor(parser, options = {}) {
+  constructor(parser, options, Mesh, Generated) {
     this.parser = parser;
-    this.options = options;
+    this.options = options || {};
     this.name = EXTENSION;
-    /** @type {any} axialdeform-three/webgpu's plugin makes its node-material meshes */
-    this.Mesh = AxialInstancedMesh;
-    /** @type {any} and its generated ones */
-    this.Generated = AxialGeneratedMesh;
+    /** @type {any} the entry's mesh class */
+    this.Mesh = Mesh;
+    /** @type {any} and its generated one */
+    this.Generated = Generated;
   }
 
   /** Before GLTFLoader reads anything of the file: every node's AXIALDEFORM_bend and the instance
@@ -355,7 +355,7 @@ function checkGenerated(gen, at, k, axisLength, maxSlots) {
 /** An AxialGeneratedMesh in place of GLTFLoader's InstancedMesh of a generated node: its recipe, the
  * generator's numbers the file holds, the ground maps; the tiles within reach of the camera, made
  * before it is drawn (autoUpdate). */
-function fromGenerated(mesh, ext, maps, Generated = AxialGeneratedMesh, options = {}) {
+function fromGenerated(mesh, ext, maps, Generated, options = {}) {
   const g = mesh.geometry;
   return adopt(mesh, ext, new Generated(g, mesh.material, ext.generate.recipe, {
     ...options, axis: { axis: ext.axis, axes: ext.axes || null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
@@ -372,8 +372,9 @@ function adopt(mesh, ext, made) {
   return made;
 }
 
-/** An AxialInstancedMesh in place of GLTFLoader's InstancedMesh (same geometry, material, name, transform). */
-export function fromInstancedMesh(mesh, ext, where = 'node', raw = null, Mesh = AxialInstancedMesh) {
+/** A `Mesh` (an entry's AxialInstancedMesh) in place of GLTFLoader's InstancedMesh (same geometry, material,
+ * name, transform). */
+export function fromInstancedMesh(mesh, ext, where, raw, Mesh) {
   checkBendExtension(ext, where);
   const record = recordFromInstancedMesh(mesh, ext, where, raw);
   const g = mesh.geometry;

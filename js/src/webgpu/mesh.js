@@ -1,5 +1,5 @@
-// webgpu_mesh.js -- axialdeform-three/webgpu's AxialInstancedMesh (webgpu.js, the entry, documents it):
-// the same class as 'axialdeform-three''s, but the bend is a node function on position and normal
+// webgpu/mesh.js -- axialdeform-three/webgpu's AxialInstancedMesh (webgpu.js, the entry, documents it):
+// the core mesh (core/mesh.js: record, bounds, wind) as 'axialdeform-three''s, but the bend is a node function on position and normal
 // (nodes.js: glsl/axial.glsl as generated node functions) set as the material's positionNode, so three's shadow passes
 // bend too; bake and raycasting bend by a compute pass (compute.js) read back asynchronously.
 
@@ -8,11 +8,11 @@ import {
   Fn, attribute, instancedDynamicBufferAttribute, positionGeometry, normalGeometry, tangentGeometry, normalLocal,
   tangentLocal, instanceIndex, varyingProperty, reference, uniform, int, uint, float, normalize,
 } from 'three/tsl';
-import { AxialError } from './adp.js';
-import { WIND_UNIFORMS } from './record.js';
-import { AxialInstancedMesh as WebGLAxialInstancedMesh } from './mesh.js';
-import { attachBake, unbake } from './bake.js';
-import { rayCandidates, intersectBent } from './raycast.js';
+import { AxialError } from '../core/adp.js';
+import { WIND_UNIFORMS } from '../core/record.js';
+import { AxialMeshCore } from '../core/mesh.js';
+import { attachBake, unbake } from '../core/baked.js';
+import { rayCandidates, intersectBent } from '../core/raycast.js';
 import { GPUCulling } from './cull.js';
 import { bendAsync, releaseCompute } from './compute.js';
 import {
@@ -36,7 +36,7 @@ const MIN_REVISION = 184;
  * (MeshStandardNodeMaterial, ...) or a classic one (turned into its node twin).  The bend is the
  * material's positionNode (with the exact normal and tangent), so shadows are bent too.
  */
-export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
+export class AxialInstancedMesh extends AxialMeshCore {
   /** @type {any} GPU culling and levels of detail (cull.js), or null */
   _culling = null;
 
@@ -167,7 +167,7 @@ export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
         id = culled.ids.element(instanceIndex.add(uint(culled.level * culled.capacity))).toVar();
         const base = id.mul(uint(culled.stride / 4)).toVar();
         q = (k) => culled.instances.element(base.add(uint(k)));
-      } else if (this._storage) { // the instances a compute pass wrote (generated_webgpu.js), the same layout
+      } else if (this._storage) { // the instances a compute pass wrote (webgpu/generate.js), the same layout
         id = instanceIndex;
         const base = id.mul(uint(this._storage.stride / 4)).toVar(), instances = this._storage.instances;
         q = (k) => instances.element(base.add(uint(k)));
