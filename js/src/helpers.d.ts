@@ -1,7 +1,7 @@
 // Type declarations of axialdeform-three/helpers: the parts the product is built from (the record's
 // columns, the parser's checks, the axis and bounds maths, the shader patch, the glTF plugin's steps).
 import * as THREE from 'three';
-import type { AxialInstancedMesh, AxisSpec, AxesSpec, BendExtension, InstanceRecord, RecordLayout, ResolvedAxis,
+import type { ADPRecord, AxialInstancedMeshOptions, WindSpec, AxialInstancedMesh, AxisSpec, AxesSpec, BendExtension, InstanceRecord, RecordLayout, ResolvedAxis,
   Rows3, GenerateRecipe, GeneratorUniforms, GroundMaps, AxialGeneratedMesh, DensityGrid } from './index.js';
 
 export function crc32(bytes: Uint8Array): number;
@@ -98,4 +98,34 @@ export class AxialBrush {
   apply(): void;
   /** The mask as an 8-bit grey PNG: SCENE-LAYER-mask.png beside a scene file. */
   png(): Promise<Uint8Array>;
+}
+
+/** What every axialdeform mesh is under any renderer (both entries' AxialInstancedMesh subclass it): the record,
+ * its attributes and instance matrices, the bend-aware bounds, setParams/updateParams, the wind's state. */
+export class AxialMeshCore extends THREE.InstancedMesh {
+  constructor(geometry: THREE.BufferGeometry, material: THREE.Material | THREE.Material[],
+    record: ADPRecord | InstanceRecord, options?: AxialInstancedMeshOptions);
+  readonly isAxialInstancedMesh: true;
+  readonly capacity: number;
+  readonly layout: RecordLayout;
+  readonly axis: ResolvedAxis;
+  /** capacity x numbersPerInstance: every instance's numbers (setParams writes here). */
+  readonly data: Float32Array;
+  /** The uniforms the bent materials share (axialFrame, axialLo, axialLen, axialCenter, ...). */
+  readonly axialUniforms: Record<string, THREE.IUniform>;
+  baseGeometry: THREE.BufferGeometry;
+  bendMaterial<M extends THREE.Material>(material: M, clone?: boolean): M;
+  /** Replace the instances (the count may shrink); with {first}: updateParams(data, first). */
+  setParams(data: Float32Array | ADPRecord | InstanceRecord, options?: { first?: number }): this;
+  /** Update instances start .. in place: only that range is uploaded and bounded. */
+  updateParams(rows: Float32Array | ADPRecord | InstanceRecord, start?: number): this;
+  getInstanceBoundingSphere(index: number, target?: THREE.Sphere): THREE.Sphere;
+  getInstanceBoundingBox(index: number, target?: THREE.Box3): THREE.Box3;
+  /** The wind of glsl/wind.glsl (null: none); setTime moves its clock. */
+  setWind(wind: WindSpec | null): this;
+  setTime(seconds: number): this;
+  unbake(): this;
+  readonly baked: boolean;
+  setBendVisible(on: boolean): void;
+  dispose(): this;
 }

@@ -12,3 +12,4 @@ export { fromInstancedMesh } from './webgl/gltf.js';
 export { checkRecipe, recipeUniforms, tilesAround } from './core/generate.js';
 export { TileGenerator } from './webgl/tiles.js';
 export { AxialBrush, MASK_SIZE } from './core/brush.js';
+export { AxialMeshCore } from './core/mesh.js';

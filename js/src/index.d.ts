@@ -1,6 +1,7 @@
 // Type declarations of axialdeform-three (the module is plain ES2020 JavaScript).
 import * as THREE from 'three';
 import type { GLTFLoaderPlugin, GLTFParser, GLTF } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { AxialMeshCore } from './helpers';
 
 /** The error of every check in the package: its message names the file, the field and what was expected. */
 export class AxialError extends Error {}
@@ -103,38 +104,16 @@ export interface AxialInstancedMeshOptions {
   vertexAxis?: ArrayLike<number> | THREE.BufferAttribute;
 }
 
-/** A THREE.InstancedMesh whose instances are each bent along their own Bézier control axis. */
-export class AxialInstancedMesh extends THREE.InstancedMesh {
+/** A THREE.InstancedMesh whose instances are each bent along their own Bézier control axis, under
+ * WebGLRenderer (the bend injected into classic materials; axialdeform-three/webgpu for WebGPURenderer). */
+export class AxialInstancedMesh extends AxialMeshCore {
   constructor(geometry: THREE.BufferGeometry, material: THREE.Material | THREE.Material[],
     record: ADPRecord | InstanceRecord, options?: AxialInstancedMeshOptions);
-  readonly isAxialInstancedMesh: true;
-  readonly capacity: number;
-  readonly layout: RecordLayout;
-  readonly axis: ResolvedAxis;
-  /** capacity x numbersPerInstance: every instance's numbers (setParams writes here). */
-  readonly data: Float32Array;
-  /** The uniforms the bent materials share (axialFrame, axialLo, axialLen, axialCenter, ...). */
-  readonly axialUniforms: Record<string, THREE.IUniform>;
-  baseGeometry: THREE.BufferGeometry;
-  bendMaterial<M extends THREE.Material>(material: M, clone?: boolean): M;
-  /** Replace the instances (the count may shrink); with {first}: updateParams(data, first). */
-  setParams(data: Float32Array | ADPRecord | InstanceRecord, options?: { first?: number }): this;
-  /** Update instances start .. in place: only that range is uploaded and bounded. */
-  updateParams(rows: Float32Array | ADPRecord | InstanceRecord, start?: number): this;
-  getInstanceBoundingSphere(index: number, target?: THREE.Sphere): THREE.Sphere;
-  getInstanceBoundingBox(index: number, target?: THREE.Box3): THREE.Box3;
-  /** The wind of glsl/wind.glsl (null: none); setTime moves its clock. */
-  setWind(wind: WindSpec | null): this;
   /** Cull each instance by its bend-aware bounding sphere before every draw (the camera's and each shadow
    * map's) under `renderer`; null: draw them all. */
   setInstanceCulling(renderer: THREE.WebGLRenderer | null): this;
-  setTime(seconds: number): this;
   /** Bend once on the GPU (transform feedback) and draw plain geometry; false where it keeps bending. */
   bake(renderer: THREE.WebGLRenderer): boolean;
-  unbake(): this;
-  readonly baked: boolean;
-  setBendVisible(on: boolean): void;
-  dispose(): this;
 }
 
 /** GLTFLoader plugin: `loader.register((parser) => new AxialGLTFPlugin(parser))`. */

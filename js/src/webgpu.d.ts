@@ -1,8 +1,9 @@
 // Types of axialdeform-three/webgpu: the module's classes for three's WebGPURenderer (three r184+).
 import type { BufferGeometry, Raycaster, Intersection } from 'three';
 import type { Material } from 'three';
-import type { AxialInstancedMesh as WebGLAxialInstancedMesh, AxialGLTFPlugin as WebGLAxialGLTFPlugin, GenerateRecipe,
-  GeneratorUniforms, AxialGeneratedMeshOptions } from './index';
+import type { AxialGLTFPlugin as WebGLAxialGLTFPlugin, GenerateRecipe, GeneratorUniforms, AxialGeneratedMeshOptions, ADPRecord,
+  InstanceRecord, AxialInstancedMeshOptions } from './index';
+import { AxialMeshCore } from './helpers';
 
 export { AxialError, parseADP, EXTENSION } from './index';
 
@@ -22,7 +23,9 @@ export interface CullingLevel {
 }
 
 /** AxialInstancedMesh for WebGPURenderer: the bend is the node material's positionNode. */
-export class AxialInstancedMesh extends WebGLAxialInstancedMesh {
+export class AxialInstancedMesh extends AxialMeshCore {
+  constructor(geometry: BufferGeometry, material: Material | Material[], record: ADPRecord | InstanceRecord,
+    options?: AxialInstancedMeshOptions);
   /** GPU culling and level of detail on the WebGPU backend (false: off). */
   setGPUCulling(options?: boolean | { levels: CullingLevel[] }): this;
   /** Whether instances are culled on the GPU. */
