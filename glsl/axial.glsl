@@ -307,15 +307,22 @@ void axial_anchor_wind(mat3 frame, float len, float a, vec3 wind, inout vec4 d12
     d5 += u * ((1.0 - a) * (1.0 - a));
 }
 
-#ifdef AXIAL_AXES
 // The texture of the child axes' offsets: instance id's axis k (1..K-1) is the three texels from
 // (id (K-1) + k - 1) 3 on, rows AXIAL_AXES_ROW texels wide (RGBA32F):
 // d1u d1v d2u d2v | d3u d3v d4u d4v | d5u d5v 0 0.
 const int AXIAL_AXES_ROW = 4095;
 
+// the first of instance id's three texels of child axis k (of a mesh of `axes` axes), and where texel i lies
+int axial_child_texel(int id, int k, int axes) {
+    return (id * (axes - 1) + k - 1) * 3;
+}
+ivec2 axial_texel_at(int i) {
+    return ivec2(i % AXIAL_AXES_ROW, i / AXIAL_AXES_ROW);
+}
+
+#ifdef AXIAL_AXES
 void axial_child_offsets(sampler2D tex, int id, int k, out vec4 d12, out vec4 d34, out vec2 d5) {
-    int i = (id * (AXIAL_AXES - 1) + k - 1) * 3;
-    ivec2 at = ivec2(i % AXIAL_AXES_ROW, i / AXIAL_AXES_ROW);
+    ivec2 at = axial_texel_at(axial_child_texel(id, k, AXIAL_AXES));
     d12 = texelFetch(tex, at, 0);
     d34 = texelFetch(tex, at + ivec2(1, 0), 0);
     d5 = texelFetch(tex, at + ivec2(2, 0), 0).xy;

@@ -7,6 +7,7 @@ import { If, abs, all, bool, clamp, cross, dot, float, floatBitsToUint, floor, i
 import { matAdd, matAssign, matMul, matOuter, matTranspose, matVar, matVec, structVar, texelFetch } from './tsl_runtime.js';
 
 export const AXIAL_T_SLACK = 1e-4;
+export const AXIAL_AXES_ROW = 4095;
 
 /** glsl: axial_cos_sin.
  * (cos x, sin x) to float32 rounding on every GPU -- the builtins' precision is each implementation's (WGSL's
@@ -253,6 +254,17 @@ export function axialAnchorWind(frame, len, a, wind, d12, d34, d5) {
   d12.addAssign(vec4(u.mul(a.mul(a)), u.mul(a.mul(a).sub(float(0.5).mul(a)))));
   d34.addAssign(vec4(u.mul(float((1.0 / 6.0)).sub(a).add(a.mul(a))), u.mul(float(0.5).sub(float(1.5).mul(a)).add(a.mul(a)))));
   d5.addAssign(u.mul(float(1.0).sub(a).mul(float(1.0).sub(a))));
+}
+
+/** glsl: axial_child_texel.
+ * the first of instance id's three texels of child axis k (of a mesh of `axes` axes), and where texel i lies */
+export function axialChildTexel(id, k, axes) {
+  return id.mul(axes.sub(int(1))).add(k).sub(int(1)).mul(int(3));
+}
+
+/** glsl: axial_texel_at. */
+export function axialTexelAt(i) {
+  return ivec2(i.mod(int(AXIAL_AXES_ROW)), i.div(int(AXIAL_AXES_ROW)));
 }
 
 /** glsl: axial_wind_hash.

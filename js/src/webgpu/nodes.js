@@ -67,8 +67,6 @@ export function axialWind(inst, id, f, len, w) {
 // ---- several axes (axial_tree_world's walk; its formulas are axial_tree_turn, axial_anchor_wind,
 // axial_axis_add and axial_cofactor) ----
 
-const AXES_ROW = 4095; // AXIAL_AXES_ROW: texels a row of the child offsets' texture
-
 /** Axis j of the axes texture (rows: (e_a, lo), (e_u, len), (e_v, anchor), (parent, 0, 0, 0)). */
 function treeAxis(axesTex, j) {
   const r0 = textureLoad(axesTex, ivec2(0, j)).toVar(), r1 = textureLoad(axesTex, ivec2(1, j)).toVar();
@@ -97,13 +95,13 @@ export function axialTreeWorld(v, n, b, K, axesTex, center, inst, children, id, 
       const ax = treeAxis(axesTex, j);
       const d12 = vec4(inst.d12).toVar(), d34 = vec4(inst.d34).toVar(), d5 = vec2(inst.d5).toVar();
       If(j.greaterThan(int(0)), () => { // axial_child_offsets: texel i on of instance id's axis j
-        const i = id.mul(int(K - 1)).add(j).sub(int(1)).mul(int(3)).toVar();
+        const i = glsl.axialChildTexel(id, j, int(K)).toVar();
         if (typeof children === 'function') { // texel i of a storage buffer (a generated mesh's)
           d12.assign(children(i));
           d34.assign(children(i.add(int(1))));
           d5.assign(children(i.add(int(2))).xy);
         } else {
-          const at = ivec2(i.sub(i.div(int(AXES_ROW)).mul(int(AXES_ROW))), i.div(int(AXES_ROW))).toVar();
+          const at = glsl.axialTexelAt(i).toVar();
           d12.assign(textureLoad(children, at));
           d34.assign(textureLoad(children, at.add(ivec2(1, 0))));
           d5.assign(textureLoad(children, at.add(ivec2(2, 0))).xy);
