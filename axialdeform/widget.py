@@ -32,7 +32,17 @@ from .core.options import RenderOptions
 from .core.params import as_params
 from .core.scene import Scene
 from .core.surface import load_mask
-from .web import MODULE_FILES, VENDOR_FILES, PageOptions, build_scene, build_scene_file, module_source, page_source, vendor_file
+from .web import (
+    MODULE_FILES,
+    VENDOR_FILES,
+    PageOptions,
+    build_scene,
+    build_scene_file,
+    fit_ground_and_shadow,
+    module_source,
+    page_source,
+    vendor_file,
+)
 
 __all__ = ["SceneWidget"]
 
@@ -93,6 +103,7 @@ class SceneWidget(anywidget.AnyWidget):
             self.on_msg(self._on_mask)
             return
         self._mesh, params = scene.layers[0].mesh, scene.layers[0].params
+        self._look, self._up = look, up
         web = build_scene(self._mesh, params, page=PageOptions(size=size, quantize=quantize, all_shaders=True),
                           options=RenderOptions(up=up), look=look)
         super().__init__(config=web.config, mesh_glb=web.glb, params_adp=web.adp, files={}, _sources=sources,
@@ -123,13 +134,15 @@ class SceneWidget(anywidget.AnyWidget):
         self.masks_saved = [*self.masks_saved, str(path)]
 
     def set_params(self, params) -> None:
-        """Draw ``params`` ((m, 16) float32, any count) instead; the camera stays.
-        (A widget of one mesh; a scene's layers are its file's.)"""
+        """Draw ``params`` ((m, 16) float32, any count) instead; the camera stays, the ground and the key light's
+        shadow camera are fitted to them again (as a new page of them would have them).  (A widget of one mesh; a
+        scene's layers are its file's.)"""
         if self._mesh is None:
             raise AxialDeformError("set_params: this widget shows a scene of several layers; expected a widget of "
                                    "one mesh (SceneWidget(mesh, params))")
         params = as_params(params, axes=self._mesh.axis_count)
         adp = encode_binary(params, axis=self._mesh, mesh_fingerprint=self._mesh.fingerprint, quantize=self._quantize)
+        ground, shadow = fit_ground_and_shadow(self._mesh, params, self._look, self._up)
         with self.hold_sync():  # one update message to the front end, not two
             self.params_adp = adp
-            self.config = {**self.config, "instances": int(len(params))}
+            self.config = {**self.config, "instances": int(len(params)), "ground": ground, "shadow": shadow}

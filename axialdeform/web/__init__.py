@@ -77,7 +77,7 @@ __all__ = [
     "THREE_VERSION", "WebScene", "PageOptions", "build_scene", "build_scene_file", "page_shaders", "shader_key", "to_glsl_es",
     "write_folder", "single_file_html", "make_server", "page_files", "scene_bytes", "embedded_file", "write_single_file",
     "write_page", "vendor_file", "page_source", "module_source", "check_page_outputs", "MODULE_DIR",
-    "MODULE_FILES", "VENDOR_FILES",
+    "MODULE_FILES", "VENDOR_FILES", "ground_plane", "fit_ground_and_shadow",
 ]
 
 GLSL_ES_HEADER = "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler2DShadow;"
@@ -234,32 +234,51 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
 
 def _ground(look, up: str, spheres, cam, aspect: float, height: float | None = None):
     """``(the page's ground plane, the camera)``: the plane render draws under a scene without a terrain
-    (:class:`~axialdeform.gl.ground.GroundPlane`: fitted under ``spheres``, ``[(centers (n, 3), radii (n,)), ...]``,
-    drawn :attr:`~axialdeform.gl.ground.GroundPlane.EXTENT` times as wide, fading into the background), its
-    uniforms as ``glsl/ground.vert`` and ``ground.frag`` take them, and the camera with its near and far planes
-    widened to hold it, as render's; ``(None, cam)`` where the look draws no ground."""
+    (:func:`ground_plane`) and the camera with its near and far planes widened to hold it, as render's;
+    ``(None, cam)`` where the look draws no ground."""
+    from ..core.camera import UP_VECTORS
+
+    ground = ground_plane(look, up, spheres, height)
+    if ground is None:
+        return None, cam
+    return ground, cam.enclosing_square(np.asarray(ground["center"]), UP_VECTORS[up], ground["radius"], aspect)
+
+
+def ground_plane(look, up: str, spheres, height: float | None = None) -> dict | None:
+    """The page's ground plane: render's under a scene without a terrain (:class:`~axialdeform.gl.ground.GroundPlane`:
+    fitted under ``spheres``, ``[(centers (n, 3), radii (n,)), ...]``, drawn
+    :attr:`~axialdeform.gl.ground.GroundPlane.EXTENT` times as wide, fading into the background), its uniforms as
+    ``glsl/ground.vert`` and ``ground.frag`` take them; None where the look draws no ground or nothing stands on it."""
     from ..core.axis import AXIS_NAMES
     from ..core.bounds import ground_square, stack_spheres
-    from ..core.camera import UP_VECTORS
     from ..gl.ground import GROUND_COLOR, GroundPlane
 
     centers, radii = stack_spheres(spheres)
     if not look.draws_ground or not len(centers):
-        return None, cam
+        return None
     a = AXIS_NAMES.index(up)
     center, radius = ground_square(centers, radii, a, height=height)
-    drawn = GroundPlane.EXTENT * radius
     axis_u, axis_v = (np.eye(3)[i] for i in range(3) if i != a)
-    ground = {"center": center.tolist(), "radius": float(drawn), "axis_u": axis_u.tolist(), "axis_v": axis_v.tolist(),
-              "color": list(GROUND_COLOR), "cell": 0.0}
-    return ground, cam.enclosing_square(center, UP_VECTORS[up], drawn, aspect)
+    return {"center": center.tolist(), "radius": float(GroundPlane.EXTENT * radius), "axis_u": axis_u.tolist(),
+            "axis_v": axis_v.tolist(), "color": list(GROUND_COLOR), "cell": 0.0}
+
+
+def fit_ground_and_shadow(mesh, params, look=None, up: str = "y") -> tuple[dict | None, dict | None]:
+    """``(ground, shadow)`` of a page of ``mesh`` x ``params``, as :func:`build_scene` puts them in its config
+    (:func:`ground_plane`, and the key light's shadow map over the instances and the ground's centre part): the
+    widget fits them again when its instances change."""
+    look = look or DEFAULT_LOOK
+    spheres = [instance_bounds(mesh, as_params(params, axes=mesh.axis_count))]
+    ground = ground_plane(look, up, spheres)
+    return ground, _shadow(look, spheres, ground)
 
 
 def _shadow(look, spheres, ground) -> dict | None:
     """The page's shadow map: render's (:class:`~axialdeform.gl.shadow.ShadowMap`, fitted by
     :func:`~axialdeform.core.bounds.light_box` over ``spheres``, ``[(centers, radii), ...]``: the layers' and a
     terrain's, and the ground plane's centre part), its light matrices in GLSL's column order; None where the look
-    draws none, or where nothing receives them (no ground plane and no terrain: the ``spheres`` say which)."""
+    draws none or there is nothing to draw.  Without a ground plane or a terrain the instances still shadow each
+    other, as render's do."""
     from ..core.bounds import light_box, stack_spheres
     from ..gl.ground import GroundPlane
     from ..gl.shadow import SHADOW_SIZE
@@ -429,7 +448,7 @@ def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, opt
     cam = scene_camera(Scene.single(mesh, params, up=up, wind=wind), w / h)
     look = look or DEFAULT_LOOK
     ground, cam = _ground(look, up, [instance_bounds(mesh, params)], cam, w / h)
-    shadow = _shadow(look, [instance_bounds(mesh, params)], ground) if ground is not None else None
+    shadow = _shadow(look, [instance_bounds(mesh, params)], ground)  # with no ground, instances shadow each other
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
                    quantize=page.quantize, adp=adp, wind=wind is not None)
@@ -510,7 +529,7 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
     ground = shadow = None
     if scene.terrain is None:  # render's ground plane (gl/scene.py's ground_spheres: no instance made)
         ground, cam = _ground(look, scene.up, ground_spheres(scene), cam, w / h, scene.ground_height)
-        shadow = _shadow(look, ground_spheres(scene), ground) if ground is not None else None
+        shadow = _shadow(look, ground_spheres(scene), ground)
     else:  # render's terrain casts and receives them
         shadow = _shadow(look, [*ground_spheres(scene), instance_bounds(scene.terrain, TERRAIN_INSTANCE)], None)
     config = _config(title=page.title or Path(scene.path).stem, layers=layers, size=(w, h),

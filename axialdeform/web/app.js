@@ -609,6 +609,11 @@ export function mount(root, lib, scene, options = {}) {
     saveMasks,
     /** Frames drawn so far. */
     get frames() { return state.frames; },
+    /** The ground plane's centre and radius and the key light's matrix now (null: none drawn), for tools and tests. */
+    get fitted() {
+      return { ground: ground ? { center: ground.material.uniforms.u_center.value.toArray(), radius: ground.material.uniforms.u_radius.value } : null,
+        light: shadow ? shadow.uniforms.u_light_matrix.value.toArray() : null };
+    },
     /** Each generated layer's tiles and records now (its name, the tiles nearest the target first,
      * numbers an instance, the last tiles' timing, the kept records in the tiles' order, read back from
      * the GPU; not with {records: false}), for tools and tests. */
@@ -617,6 +622,23 @@ export function mount(root, lib, scene, options = {}) {
         name: l.cfg.name, tiles: l.mesh.tiles, width: l.mesh.layout.numbersPerInstance, timing: l.mesh.timing,
         target: controls ? controls.target.toArray() : null,
         data: records ? Array.from(l.mesh.records()) : null })); // read back from the GPU: only when asked
+    },
+    /** The ground plane and the key light's camera fitted again ({ground, shadow} as the config has them: the
+     * widget's Python fits them to new instances); a page drawn without either keeps none. */
+    refit({ ground: g = null, shadow: s = null } = {}) {
+      if (ground && g) {
+        const u = ground.material.uniforms;
+        u.u_center.value.fromArray(g.center); u.u_axis_u.value.fromArray(g.axis_u); u.u_axis_v.value.fromArray(g.axis_v);
+        u.u_radius.value = g.radius;
+      }
+      if (shadow && s) {
+        shadow.cam.matrixWorldInverse.fromArray(s.view);
+        shadow.cam.matrixWorld.copy(shadow.cam.matrixWorldInverse).invert();
+        shadow.cam.projectionMatrix.fromArray(s.projection);
+        shadow.cam.projectionMatrixInverse.copy(shadow.cam.projectionMatrix).invert();
+        shadow.uniforms.u_light_matrix.value.fromArray(s.matrix);
+        shadow.uniforms.u_shadow_offset.value = s.offset;
+      }
     },
     /** Replace the first layer's parameters by another .adp (ArrayBuffer); a
      * bad file keeps nothing wrong on screen: the message says why and nothing is drawn. */

@@ -46,6 +46,7 @@ export default {
     view.ready.then((r) => report({ ready: true, instances: r.instances }),
       (e) => report({ ready: false, error: e.message }));
     const onParams = () => view.setParams(bytesOf(model.get('params_adp')), 'parameters')
+      .then((r) => { view.refit(model.get('config')); return r; })
       .then((r) => report({ ready: true, instances: r ? r.instances : 0 }), (e) => report({ ready: false, error: e.message }));
     model.on('change:params_adp', onParams);
     return () => {

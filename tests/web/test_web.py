@@ -378,6 +378,37 @@ def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
 
 
 @pytest.mark.slow
+def test_widget_fits_its_ground_and_light_to_new_instances(browser, tmp_path):
+    """set_params: the camera stays, but the ground plane and the key light's shadow camera are fitted to the new
+    instances (as a new page of them has them), in Python's config and in the front end."""
+    from axialdeform.web import fit_ground_and_shadow
+    from axialdeform.widget import SceneWidget
+
+    mesh = ad.load_mesh("stone")
+    w = SceneWidget(mesh, ad.random_params(mesh, 30, seed=2, placement="disc"), size=SIZE)
+    first = {"ground": w.config["ground"], "shadow": w.config["shadow"]}
+    assert first["ground"] is not None and first["shadow"] is not None
+    page, errors = widget_page(browser, tmp_path, widget_state(w), w._esm)
+    try:
+        spread = ad.random_params(mesh, 30, seed=3, placement="disc", spacing=4.0)
+        spread.position[:, 0] += 6.0
+        w.set_params(spread)
+        ground, shadow = fit_ground_and_shadow(mesh, spread)
+        assert w.config["ground"] == ground and w.config["shadow"] == shadow
+        assert ground["center"] != first["ground"]["center"] and shadow["matrix"] != first["shadow"]["matrix"]
+        page.evaluate("(c) => { window.widgetModel.get('config').ground = c.ground; window.widgetModel.get('config').shadow = c.shadow; }",
+                      {"ground": ground, "shadow": shadow})  # the synced config, as the kernel sends it with the numbers
+        assert _push_params(page, w.params_adp) == {"ready": True, "instances": 30}
+        fitted = page.evaluate("document.getElementById('out').axialdeformView.fitted")
+        assert np.allclose(fitted["ground"]["center"], ground["center"], atol=1e-5)
+        assert fitted["ground"]["radius"] == pytest.approx(ground["radius"], rel=1e-6)
+        assert np.allclose(fitted["light"], shadow["matrix"], atol=1e-6)
+        assert errors == []
+    finally:
+        page.close()
+
+
+@pytest.mark.slow
 def test_widget_takes_a_scene_file(browser, tmp_path):
     """SceneWidget(SCENE.toml): every layer and the terrain, drawn as the page of the same file draws them."""
     from axialdeform.widget import SceneWidget
@@ -1104,6 +1135,34 @@ def test_the_page_draws_renders_shadows(browser, tmp_path, mode):
         assert np.abs(shot - ref)[shadowed].mean() < 0.35 * np.abs(unshadowed - ref)[shadowed].mean()
         if mode == "solid":
             assert np.abs(shot - ref).mean() < 3.0
+        assert v.errors == []
+    finally:
+        v.close()
+
+
+@pytest.mark.slow
+def test_without_a_ground_the_instances_shadow_each_other_as_in_render(browser, tmp_path):
+    """A look without the ground plane (``web --no-ground``): render still draws the key light's shadows of
+    instances on each other, and so does the page."""
+    mesh = ad.load_mesh("tree")
+    params = ad.random_params(mesh, 30, seed=2, variation=ad.Variation(bend=0.2), placement="disc", spacing=0.6)
+    look = ad.Look(ground=False)
+    scene = build_scene(mesh, params, page=PageOptions(size=SIZE, quantize=False), look=look)
+    assert scene.config["ground"] is None and scene.config["shadow"] is not None
+    out = tmp_path / "no-ground.html"
+    write_page(out, scene)
+    ref = ad.render_image(mesh, params, SIZE, look=look).astype(np.float64)
+    unshadowed = ad.render_image(mesh, params, SIZE, look=ad.Look(ground=False, shadow=False)).astype(np.float64)
+    v = Visit(browser, out.as_uri())
+    try:
+        assert v.state["ready"] is True, v.state
+        shot = v.silhouette().astype(np.float64)
+        from PIL import Image
+
+        Image.fromarray(np.concatenate([shot, ref, unshadowed], 1).astype(np.uint8)).save(tmp_path / "no-ground.png")
+        shadowed = np.abs(ref - unshadowed).max(axis=2) > 24  # where one instance's shadow falls on another
+        assert shadowed.mean() > 0.005
+        assert np.abs(shot - ref)[shadowed].mean() < 0.5 * np.abs(unshadowed - ref)[shadowed].mean()
         assert v.errors == []
     finally:
         v.close()
