@@ -217,7 +217,7 @@ class BaseMesh:
           branches (:func:`~axialdeform.core.skeleton.skeleton_tree`; cached by the mesh's
           fingerprint);
         * ``"auto"`` -- ``"parts"`` when the mesh's parts are its limbs (two or more parts, and no
-          part branches: the skeleton puts each part on one axis), else ``"skeleton"``;
+          part branches: :func:`~axialdeform.core.skeleton.parts_are_limbs`), else ``"skeleton"``;
         * a list of ``{"part": NAME, "parent": NAME, "axis": FRAME}`` (the root
           first, without a parent; a parent before its children);
         * ``{"branches": [{"name", "parent", "points"}, ...]}`` -- the branches of a skeleton (an axes

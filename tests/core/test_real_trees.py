@@ -64,6 +64,19 @@ def test_the_heuristic_finds_the_trunk_and_attaches_every_frond_to_it(palm):
     assert "@ t=0." in clean.describe()  # the fronds' anchors, said
 
 
+def test_auto_keeps_a_palms_crossing_fronds_as_its_parts(palm, tmp_path, monkeypatch):
+    """axes="auto" on a palm whose fronds cross its crown: the whole model's skeleton hangs each frond at the
+    crossing and splits it there, but no frond branches alone -- the parts are the limbs, each frond one axis
+    on the trunk (as axes="parts"), from a cold cache and again from the cache."""
+    monkeypatch.setenv("AXIALDEFORM_CACHE", str(tmp_path / "cache"))
+    mesh = ad.load_mesh(palm, parts=PALM)
+    assert mesh.with_axes("skeleton").tree.count > len(PALM)  # the fronds split where they cross
+    for _ in range(2):
+        tree = mesh.with_axes("auto").tree
+        assert tree.names == mesh.with_axes("parts").tree.names and tree.count == len(PALM)
+        assert all(tree.names[q] == "trunk" for q in tree.parents[1:]), tree.describe()
+
+
 def test_a_crossing_leafs_joint_stays_closed(palm):
     """The fronds' axes cross the trunk's top: the anchor is there (not at t = 0), and at a frond
     bend of 0.3 the frond vertices within twice the trunk's radius of the joint move by their own
