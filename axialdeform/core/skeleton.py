@@ -609,6 +609,11 @@ def parts_are_limbs(mesh, tree: AxisTree, up: int = 1) -> bool:
         own = np.unique(tree.vertex_axis[np.unique(mesh.faces[p.start:p.start + p.count])])
         if len(own) == 1:
             continue
-        if 0 in own or len(skeleton_branches(mesh.with_parts([p.name]), up=up)) > 1:
+        if 0 in own:
+            return False
+        try:
+            if len(skeleton_branches(mesh.with_parts([p.name]), up=up)) > 1:
+                return False
+        except MeshError:  # a part with no skeleton of its own: the whole model's stands
             return False
     return True
