@@ -318,7 +318,8 @@ def tint_columns(values) -> np.ndarray | None:
 
 
 class Instances(np.ndarray):
-    """An ``(n, 16|19|22)`` float32 parameter array with named views.
+    """An ``(n, 16|19|22)`` float32 parameter array with named views (a record of K axes too: 10 more numbers
+    an axis after the first; then ``offsets`` is every axis's, ``(n, K, 5, 2)``).
 
     A plain :class:`numpy.ndarray` in every other way (``params[:, 10:13]`` still works); the views
     share memory with it, so writing to them changes the instances::
@@ -365,13 +366,19 @@ class Instances(np.ndarray):
         f = _BY_NAME.get(name)
         if f is None:
             raise AttributeError(f"{type(self).__name__!s} has no attribute {name!r}")
-        if self.ndim != 2 or self.shape[1] not in WIDTHS:
+        if self.ndim != 2 or not is_record_width(self.shape[1]):
             shapes = describe_widths(tuple(f"(n, {w})" for w in WIDTHS))
-            raise AttributeError(f"{name}: named views need an {shapes} array, found shape {self.shape}")
-        if self.shape[1] < WIDTHS[f.level]:
+            raise AttributeError(f"{name}: named views need an {shapes} array (10 more numbers an axis after the "
+                                 f"first), found shape {self.shape}")
+        k, level = tree_shape(self.shape[1])
+        if level < f.level:
             kind = "extended" if f.level == 1 else "tinted"
-            raise AttributeError(f"{name}: only {kind} (n, {WIDTHS[f.level]}) instances have it; this array is {self.shape}")
-        cols = self[:, f.slice].view(np.ndarray)
+            raise AttributeError(f"{name}: only {kind} ({WIDTHS[f.level] + 10 * (k - 1)} numbers) instances have it; "
+                                 f"this array is {self.shape}")
+        if f.name == "offsets":  # every axis's, axis after axis: (n, 5, 2), or (n, K, 5, 2) with K axes
+            cols = self[:, :10 * k].view(np.ndarray)
+            return cols.reshape(len(self), *f.shape) if k == 1 else cols.reshape(len(self), k, *f.shape)
+        cols = self[:, f.start + 10 * (k - 1):f.stop + 10 * (k - 1)].view(np.ndarray)
         if f.shape == ():
             return cols[:, 0]
         return cols.reshape(len(self), *f.shape)
@@ -384,8 +391,8 @@ class Instances(np.ndarray):
         super().__setattr__(name, value)
 
     def __dir__(self):
-        width = self.shape[-1] if self.ndim == 2 else 0
-        names = [f.name for f in RECORD if width >= WIDTHS[f.level]]
+        level = tree_shape(self.shape[-1])[1] if self.ndim == 2 and is_record_width(self.shape[-1]) else -1
+        names = [f.name for f in RECORD if level >= f.level]
         return sorted(set(super().__dir__()) | set(names))
 
 

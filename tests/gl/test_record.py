@@ -49,6 +49,23 @@ def test_named_views_share_memory_and_write_through(stone):
     assert np.array_equal(np.asarray(p)[:, :8], np.asarray(before)[:, :8])
 
 
+def test_named_views_of_a_record_of_several_axes():
+    """A tree's record (10 more numbers an axis after the first): the same names, each field where the tree
+    puts it (the child axes' offsets after axis 0's), offsets as (n, K, 5, 2); written through."""
+    mesh = ad.load_mesh("tree", axes="parts")
+    k = mesh.axis_count
+    p = ad.random_params(mesh, 5, seed=2, variation=ad.Variation(scale=(0.8, 1.2)))
+    assert p.shape == (5, R.tree_width(k, 1))
+    assert p.offsets.shape == (5, k, 5, 2) and np.array_equal(p.offsets[:, 1].reshape(5, 10), p[:, 10:20])
+    assert np.array_equal(p.position, p[:, 10 * k:10 * k + 3]) and np.array_equal(p.scale, p[:, 10 * k + 6])
+    p.position[:, 1] += 2.0
+    p.rotation = 0.0
+    assert np.all(p[:, 10 * k + 1] == p.position[:, 1]) and not p[:, 10 * k + 3:10 * k + 6].any()
+    assert np.shares_memory(p.offsets, p) and "scale" in dir(p) and "tint" not in dir(p)
+    with pytest.raises(AttributeError, match="tinted"):
+        _ = p.tint
+
+
 def test_extended_views_and_their_errors(stone):
     p = R.Instances.of(ad.core.extend_params(ad.random_params(stone, 4, seed=1)))
     assert p.scale.shape == (4,) and np.all(p.scale == 1.0)
