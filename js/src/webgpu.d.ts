@@ -2,7 +2,7 @@
 import type { BufferGeometry, Raycaster, Intersection } from 'three';
 import type { Material } from 'three';
 import type { AxialGLTFPlugin as WebGLAxialGLTFPlugin, GenerateRecipe, GeneratorUniforms, AxialGeneratedMeshOptions, ADPRecord,
-  InstanceRecord, AxialInstancedMeshOptions } from './index';
+  InstanceRecord, AxialInstancedMeshOptions, DensityGrid } from './index';
 import { AxialMeshCore } from './helpers';
 
 export { AxialError, parseADP, EXTENSION } from './index';
@@ -62,6 +62,8 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
   update(renderer: unknown, point: { x: number; z: number }): boolean;
   /** The kept instances' records, as the Python library's generate_tiles gives them (read back). */
   recordsAsync(renderer?: unknown): Promise<Float32Array>;
+  /** A new density map and where it lies (an AxialBrush's): the tiles are made again at the next update. */
+  setDensity(grid: DensityGrid, placement: { d_lo: [number, number]; d_inv: [number, number]; d_wrap?: boolean }): void;
 }
 
 /** GLTFLoader plugin (AXIALDEFORM_bend) making this entry's AxialInstancedMesh (AxialGeneratedMesh for the generated form). */

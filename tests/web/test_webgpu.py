@@ -22,6 +22,7 @@ from PIL import Image
 
 import axialdeform as ad
 from axialdeform.core.generate import Generate, children_table, generate_tiles, recipe_json, recipe_uniforms, tile_size, tiles_around
+from axialdeform.core.generate_ground import GroundMaps
 from axialdeform.core.io.gltf import bend_extension
 from axialdeform.core.wind import apply_wind
 
@@ -421,6 +422,28 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
                                                                                                                      time=case["time"]))
                 assert iou(still, ref) < 0.93 and iou(shot, by_index) < iou(shot, ref) - 0.02, \
                     (iou(still, ref), iou(shot, by_index), iou(shot, ref))
+
+
+def test_a_painted_density_map_makes_the_python_records_under_webgpu(webgpu_browser, site):
+    """setDensity (what the npm module's AxialBrush calls): the compute passes are made again from the new map and
+    the tiles give the Python library's records for the same map (GroundMaps), fewer than before."""
+    stone = ad.load_mesh("stone")
+    recipe = Generate(**GEN_STONES)
+    grid = np.zeros((8, 8), np.float32)
+    grid[:, 4:] = 1.0  # the east half grows, the west half is cleared
+    grid[2:4, 5:7] = 0.5
+    maps = GroundMaps.of(density=grid, extent=(-8.0, -8.0, 8.0, 8.0))
+    case = _gen_case("stones, painted", stone, recipe, 5.0, uniforms=False)
+    case["paint"] = {"data": grid.ravel().tolist(), "cols": 8, "rows": 8,
+                     "placement": {"d_lo": maps.d_lo.tolist(), "d_inv": maps.d_inv.tolist(), "d_wrap": bool(maps.d_wrap)}}
+    out, errors = run(webgpu_browser, site[1], VERSIONS[-1], "generate", {"gl": False, "cases": [case]})
+    got = out["cases"][0]
+    assert "error" not in got and errors == [], (got.get("error"), errors)
+    tiles = tiles_around(recipe, *case["point"], 5.0)
+    want = generate_tiles(recipe, stone, tiles, maps)
+    records = np.asarray(got["paintedData"], np.float32).reshape(-1, got["width"])
+    assert got["painted"] is True and got["paintedCount"] == len(want) < 0.8 * got["kept"], (got["paintedCount"], got["kept"])
+    assert len(want) > 10 and close(records, want) <= 1e-6, close(records, want)
 
 
 def test_a_generated_mesh_under_the_webgl2_fallback_is_refused_in_words(webgpu_browser, site, tmp_path):

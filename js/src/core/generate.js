@@ -250,3 +250,16 @@ export function adoptGenerated(mesh, base, options, drawsOn, childTexture) {
   };
   Object.defineProperty(mesh, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
 }
+
+/** A generated mesh's new density map `grid` ({data: Float32Array, cols, rows}: grey levels in 0..1) and where it
+ * lies (`placement`: {d_lo, d_inv, d_wrap}, as the Python library's GroundMaps): its maps and the generator's
+ * numbers (an AxialBrush's; each renderer's mesh then gives its generator the map); the tiles are made again on
+ * the next update. */
+export function setDensityOf(mesh, grid, placement) {
+  if (!(grid && grid.data instanceof Float32Array && grid.data.length === grid.cols * grid.rows)) {
+    bad('setDensity', '{data: Float32Array of cols x rows, cols, rows}', grid && grid.cols);
+  }
+  mesh.maps = { ...mesh.maps, density: grid };
+  Object.assign(mesh.generatorUniforms, { has_density: true, d_size: [grid.cols, grid.rows], ...placement, d_wrap: !!placement.d_wrap });
+  mesh._key = null;
+}

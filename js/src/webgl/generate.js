@@ -4,15 +4,13 @@
 // The recipe, its tiles and bounds: core/generate.js.
 
 import * as THREE from 'three';
-import { AxialError } from '../core/adp.js';
 import { ATTRIBUTES } from '../core/record.js';
 import { worldEdge } from '../core/limits.js';
-import { generatedBase, adoptGenerated, tilesAround, tileSize, slotRows, recipeBounds } from '../core/generate.js';
+import { generatedBase, adoptGenerated, tilesAround, tileSize, slotRows, recipeBounds, setDensityOf } from '../core/generate.js';
 import { AxialInstancedMesh } from './mesh.js';
 import { TileGenerator, TileAttributes } from './tiles.js';
 
 const _eye = new THREE.Vector3();
-const bad = (field, expected, value) => { throw new AxialError(`generate: ${field}: expected ${expected}, found ${JSON.stringify(value)}`); };
 
 /**
  * A generated layer as one three.js object: an AxialInstancedMesh whose instances are made on the GPU
@@ -70,11 +68,8 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
    * ({d_lo, d_inv, d_wrap}, as the Python library's GroundMaps): an AxialBrush's; the tiles are made again on
    * the next update. */
   setDensity(grid, placement) {
-    if (!(grid && grid.data instanceof Float32Array && grid.data.length === grid.cols * grid.rows)) bad('setDensity', '{data: Float32Array of cols x rows, cols, rows}', grid && grid.cols);
-    this.maps = { ...this.maps, density: grid };
-    Object.assign(this.generatorUniforms, { has_density: true, d_size: [grid.cols, grid.rows], ...placement, d_wrap: !!placement.d_wrap });
+    setDensityOf(this, grid, placement);
     if (this._generator) this._generator.setDensity(grid);
-    this._key = null;
   }
 
   /** The generator and the GPU's attributes for `renderer`; three draws from those (the CPU copies stay

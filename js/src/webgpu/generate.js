@@ -14,7 +14,8 @@ import { AxialError, AXES_ROW, texelRows } from '../core/adp.js';
 import { AxialInstancedMesh } from './mesh.js';
 import { unbake } from '../core/baked.js';
 import { ATTRIBUTES, SLOT } from '../core/record.js';
-import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, tileSize, GENERATED_FLOATS } from '../core/generate.js';
+import { generatedBase, adoptGenerated, tilesAround, maxTiles, slotRows, recipeBounds, tileSize, GENERATED_FLOATS, setDensityOf }
+  from '../core/generate.js';
 import { worldEdge } from '../core/limits.js';
 import { recipeNodes, axialGenerate, axialGenerateChild, axialGenKey } from './generate_nodes.js';
 import { axialRotation } from './nodes.js';
@@ -290,13 +291,23 @@ export class AxialGeneratedMesh extends AxialInstancedMesh {
     return super.setGPUCulling(false);
   }
 
+  /** A new density map for the recipe and where it lies (the WebGL entry's setDensity; an AxialBrush's): the
+   * compute passes are made again from it at the next update, which makes the tiles again. */
+  setDensity(grid, placement) {
+    setDensityOf(this, grid, placement);
+    this._releaseKernels();
+  }
+
+  _releaseKernels() {
+    if (!this._kernels) return;
+    this._kernels.passes.forEach((p) => p.dispose());
+    if (this._kernels.slots) this._kernels.slots.dispose();
+    this._textures.forEach((t) => t.dispose());
+    this._kernels = null;
+  }
+
   dispose() {
-    if (this._kernels) {
-      this._kernels.passes.forEach((p) => p.dispose());
-      if (this._kernels.slots) this._kernels.slots.dispose();
-      this._textures.forEach((t) => t.dispose());
-      this._kernels = null;
-    }
+    this._releaseKernels();
     return super.dispose();
   }
 }
