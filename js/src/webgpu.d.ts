@@ -6,6 +6,8 @@ import type { AxialGLTFPlugin as WebGLAxialGLTFPlugin, GenerateRecipe, Generator
 import { AxialMeshCore } from './helpers';
 
 export { AxialError, parseADP, EXTENSION } from './index';
+/** The brush of a generated layer's mask (the same as axialdeform-three/helpers'): paints this entry's AxialGeneratedMesh. */
+export { AxialBrush } from './helpers';
 
 /** What bendAsync reads back: 4 numbers a vertex (x, y, z, w), instance after instance, in the mesh's space. */
 export interface AxialBent {

@@ -16,8 +16,9 @@ import { AxialError, parseADP } from './core/adp.js';
 import { AxialGLTFPluginBase, EXTENSION } from './core/gltf.js';
 import { AxialInstancedMesh } from './webgpu/mesh.js';
 import { AxialGeneratedMesh } from './webgpu/generate.js';
+import { AxialBrush } from './core/brush.js';
 
-export { AxialError, parseADP, EXTENSION, AxialInstancedMesh, AxialGeneratedMesh };
+export { AxialError, parseADP, EXTENSION, AxialInstancedMesh, AxialGeneratedMesh, AxialBrush };
 export * as nodes from './webgpu/nodes.js';
 export * as generateNodes from './webgpu/generate_nodes.js';
 

@@ -424,18 +424,22 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
                     (iou(still, ref), iou(shot, by_index), iou(shot, ref))
 
 
-def test_a_painted_density_map_makes_the_python_records_under_webgpu(webgpu_browser, site):
-    """setDensity (what the npm module's AxialBrush calls): the compute passes are made again from the new map and
-    the tiles give the Python library's records for the same map (GroundMaps), fewer than before."""
+def test_the_brush_paints_a_generated_mesh_under_webgpu(webgpu_browser, site):
+    """This entry's AxialBrush on its AxialGeneratedMesh (setDensity): the compute passes are made again from the
+    painted mask and the tiles give the Python library's records for the same strokes (core/brush.py), fewer
+    than before."""
+    from axialdeform.core.brush import Stroke, fold, new_mask, paint
+
     stone = ad.load_mesh("stone")
     recipe = Generate(**GEN_STONES)
-    grid = np.zeros((8, 8), np.float32)
-    grid[:, 4:] = 1.0  # the east half grows, the west half is cleared
-    grid[2:4, 5:7] = 0.5
-    maps = GroundMaps.of(density=grid, extent=(-8.0, -8.0, 8.0, 8.0))
+    area = (-8.0, -8.0, 8.0, 8.0)
+    strokes = [(-2.0, 0.5, 4.0, True), (2.0, -1.0, 1.5, True), (-2.5, 0.0, 1.0, False)]
+    mask = new_mask()
+    for x, z, radius, erase in strokes:
+        paint(mask, area, Stroke("stones", x, z, radius, erase))
+    maps = GroundMaps.of(density=fold(None, mask), extent=area)
     case = _gen_case("stones, painted", stone, recipe, 5.0, uniforms=False)
-    case["paint"] = {"data": grid.ravel().tolist(), "cols": 8, "rows": 8,
-                     "placement": {"d_lo": maps.d_lo.tolist(), "d_inv": maps.d_inv.tolist(), "d_wrap": bool(maps.d_wrap)}}
+    case["paint"] = {"area": list(area), "wrap": bool(maps.d_wrap), "strokes": strokes}
     out, errors = run(webgpu_browser, site[1], VERSIONS[-1], "generate", {"gl": False, "cases": [case]})
     got = out["cases"][0]
     assert "error" not in got and errors == [], (got.get("error"), errors)
