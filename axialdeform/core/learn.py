@@ -202,11 +202,17 @@ class LearnedLayer:
                 f"spacing: {s.pattern}, hard core {s.hard_core:.{digits}g}{clumps}")
 
 
+def _grid_shape(example: Example, cells: int) -> tuple[int, int]:
+    """(rows, cols) of the quadrature's grid of dummy points: about ``cells`` each way, square cells."""
+    x0, z0, x1, z1 = example.window
+    nx = max(8, int(round(cells * math.sqrt((x1 - x0) / (z1 - z0)))))
+    return max(8, int(round(cells * cells / nx))), nx
+
+
 def _quadrature(example: Example, cells: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Berman-Turner quadrature: the points (data then dummy), their weights, and 1 for data."""
     x0, z0, x1, z1 = example.window
-    nx = max(8, int(round(cells * math.sqrt((x1 - x0) / (z1 - z0)))))
-    nz = max(8, int(round(cells * cells / nx)))
+    nz, nx = _grid_shape(example, cells)
     gx, gz = np.meshgrid((np.arange(nx) + 0.5) / nx * (x1 - x0) + x0, (np.arange(nz) + 0.5) / nz * (z1 - z0) + z0)
     dummy = np.stack([gx.ravel(), gz.ravel()], axis=1)
     pts = np.concatenate([example.xz, dummy])
@@ -249,6 +255,32 @@ def _newton(x: np.ndarray, w: np.ndarray, y: np.ndarray, start: float) -> tuple[
     return b, np.linalg.pinv((x * mu[:, None]).T @ x + np.diag(ridge))
 
 
+def matern_cluster_excess(r, kappa: float, radius: float) -> np.ndarray:
+    """``g(r) - 1`` of a Matern cluster process (parents ``kappa`` a square unit, children uniform in a disc of
+    ``radius``): the density of the distance between two points of one disc over ``2 pi r kappa``, zero beyond
+    ``2 radius``; ``1 / (kappa pi radius^2)`` at 0."""
+    z = np.clip(np.asarray(r, np.float64) / (2.0 * radius), 0.0, 1.0)
+    return 2.0 / (math.pi ** 2 * radius ** 2 * kappa) * (np.arccos(z) - z * np.sqrt(1.0 - z * z))
+
+
+def _cluster_excess(x: np.ndarray, rate: np.ndarray, shape: tuple[int, int], cell: tuple[float, float], kappa: float,
+                    radius: float) -> np.ndarray:
+    """``B = int int lambda(u) lambda(v) (g(|u - v|) - 1) x(u) x(v)^T du dv`` over the window, on the quadrature's
+    grid (``x`` and the fitted ``rate`` at its ``shape = (rows, cols)`` cells, row after row, each ``cell`` =
+    (width, depth)), by a convolution with ``g - 1`` (:func:`matern_cluster_excess`; pairs within ``2 radius``,
+    each cell with itself too): what a Matern cluster process adds to the Poisson likelihood's information
+    (Waagepetersen 2007; spatstat's ``vcov.kppm``: the covariance is ``F^-1 (F + B) F^-1``)."""
+    from scipy.signal import fftconvolve
+
+    rows, cols = shape
+    mx, mz = (min(int(math.ceil(2.0 * radius / c)), n) for c, n in zip(cell, (cols, rows)))
+    dz, dx = np.meshgrid(np.arange(-mz, mz + 1) * cell[1], np.arange(-mx, mx + 1) * cell[0], indexing="ij")
+    kernel = matern_cluster_excess(np.hypot(dz, dx), kappa, radius)
+    y = (x * (rate * cell[0] * cell[1])[:, None]).reshape(rows, cols, -1)
+    z = np.stack([fftconvolve(y[:, :, c], kernel, mode="same") for c in range(y.shape[2])], axis=2)
+    return y.reshape(rows * cols, -1).T @ z.reshape(rows * cols, -1)
+
+
 #: the ridge on a standardized term's coefficient: it keeps near-collinear hinges from running away, and is
 #: negligible beside the likelihood of a pattern of more than a few objects
 RIDGE = 1.0
@@ -256,17 +288,22 @@ RIDGE = 1.0
 KNOTS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
 
 
-def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, significant: float = SIGNIFICANT) -> Intensity:
+def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, significant: float = SIGNIFICANT,
+                  cluster: tuple | None = None) -> Intensity:
     """The intensity of ``example`` over ``ground``'s features ``names`` (default: all of them; none without a
     ground): log-linear in each feature and its hinges at the octiles (:data:`KNOTS`) of the feature over
     the example's ground, the terms that are not significant dropped: ``|b / se| <`` the larger of
-    ``significant`` and the normal quantile of a 5 % chance over all the features (Bonferroni)."""
+    ``significant`` and the normal quantile of a 5 % chance over all the features (Bonferroni).  With
+    ``cluster`` ((kappa, radius): a Matern cluster process, :func:`fit_spacing`'s) the standard errors are
+    the cluster process's (:func:`_cluster_cov`), not Poisson's: clumps make counts vary more."""
     n = len(example.xz)
     if n == 0:
         raise ParamError(f"{example.source}: expected at least one object to learn from, found none")
     base = list(() if ground is None else (names or ground.names))
     cells = cells or int(min(250, max(48, math.sqrt(4 * n))))
     pts, w, y = _quadrature(example, cells)
+    shape = _grid_shape(example, cells)
+    cell = ((example.window[2] - example.window[0]) / shape[1], (example.window[3] - example.window[1]) / shape[0])
     raw = ground.at(pts, base) if base else np.zeros((len(pts), 0))
     term_names, knots, cols = [], [], []
     for i, name in enumerate(base):
@@ -287,9 +324,17 @@ def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, sig
         significant = max(significant, float(norm.isf(0.025 / len(set(term_names)))) * significant / SIGNIFICANT)
     mean, sd = feats[n:].mean(axis=0), feats[n:].std(axis=0)
     keep = [i for i in range(feats.shape[1]) if sd[i] > 1e-12]
+    excess = first = None
     while True:
         x = np.concatenate([np.ones((len(pts), 1)), (feats[:, keep] - mean[keep]) / sd[keep]], axis=1)
         b, cov = _newton(x, w, y, math.log(n / example.area))
+        if cluster is not None:  # the clumps' part of the information, once, at the fullest model
+            if excess is None:
+                grid = x[n:]  # the quadrature's dummy points: its grid, row after row
+                excess = _cluster_excess(grid, np.exp(np.clip(grid @ b, -700, 700)), shape, cell, *cluster)
+                first = list(keep)
+            at = [0] + [1 + first.index(k) for k in keep]
+            cov = cov + cov @ excess[np.ix_(at, at)] @ cov
         z = b[1:] / np.sqrt(np.maximum(np.diag(cov)[1:], 1e-300))
         if not keep or np.abs(z).min() >= significant:
             break
@@ -427,9 +472,8 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0) -> li
         part = example if kind is None else example.subset(example.kind == kind)
         intensity = fit_intensity(part, ground, names)
         spacing = fit_spacing(part, intensity, ground, seed)
-        if spacing.pattern == "cluster":  # clumps make counts vary more than Poisson's: a feature must stand out more
-            inflate = math.sqrt(1.0 + len(part.xz) / part.area / spacing.cluster[0])
-            intensity = fit_intensity(part, ground, names, significant=SIGNIFICANT * inflate)
+        if spacing.pattern == "cluster":  # clumps make counts vary more than Poisson's: the cluster process's errors
+            intensity = fit_intensity(part, ground, names, cluster=spacing.cluster)
             spacing = fit_spacing(part, intensity, ground, seed)
         scale, quartiles, octiles, yaw = _marks(part)
         out.append(LearnedLayer(kind, len(part.xz), intensity, spacing, scale, yaw, example.window, quartiles, octiles))

@@ -66,6 +66,26 @@ def test_a_cluster_pattern_is_found_and_its_clumps_measured(hills):
     assert kappa == pytest.approx(0.02, rel=0.3)  # minimum contrast on one pattern of ~500 clumps
 
 
+def test_a_cluster_pattern_s_standard_errors_are_the_spread_of_its_estimates(hills, monkeypatch):
+    """In clumps, a feature's coefficient varies from pattern to pattern more than Poisson's standard error says:
+    the cluster process's (Waagepetersen's sandwich, fit_intensity(cluster=...)) matches the spread over 30
+    Matern patterns with no real effect, Poisson's is far too small -- so learn keeps no feature from noise."""
+    _, g = hills
+    monkeypatch.setattr(L, "KNOTS", ())  # one linear term a feature: its coefficient read as it is
+    rng = np.random.default_rng(7)
+    est, clumped, poisson = [], [], []
+    for _ in range(30):
+        ex = L.Example(P.matern_cluster(rng, 0.01, 3.0, 8), P.window())
+        c = L.fit_intensity(ex, g, ["slope"], significant=0.0, cluster=(0.01, 3.0))
+        p = L.fit_intensity(ex, g, ["slope"], significant=0.0)
+        est.append(c.coef[1])
+        clumped.append(abs(c.coef[1] / c.z[0]))
+        poisson.append(abs(p.coef[1] / p.z[0]))
+    spread = float(np.std(est, ddof=1))
+    assert 0.7 < np.mean(clumped) / spread < 1.4, (np.mean(clumped), spread)
+    assert np.mean(poisson) / spread < 0.6, (np.mean(poisson), spread)
+
+
 def test_a_learned_cluster_layer_grows_clumps_of_the_same_size(hills):
     maps, g = hills
     xz = P.matern_cluster(np.random.default_rng(2), 0.02, 3.0, 10)
