@@ -295,7 +295,7 @@ def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, sig
     the example's ground, the terms that are not significant dropped: ``|b / se| <`` the larger of
     ``significant`` and the normal quantile of a 5 % chance over all the features (Bonferroni).  With
     ``cluster`` ((kappa, radius): a Matern cluster process, :func:`fit_spacing`'s) the standard errors are
-    the cluster process's (:func:`_cluster_cov`), not Poisson's: clumps make counts vary more."""
+    the cluster process's (:func:`_cluster_excess`), not Poisson's: clumps make counts vary more."""
     n = len(example.xz)
     if n == 0:
         raise ParamError(f"{example.source}: expected at least one object to learn from, found none")
