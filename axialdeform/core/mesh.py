@@ -217,7 +217,7 @@ class BaseMesh:
           branches (:func:`~axialdeform.core.skeleton.skeleton_tree`; cached by the mesh's
           fingerprint);
         * ``"auto"`` -- ``"parts"`` when the mesh's parts are its limbs (two or more parts, and no
-          part branches: :func:`~axialdeform.core.skeleton.parts_are_limbs`), else ``"skeleton"``;
+          part branches: :func:`~axialdeform.core.shape_axes.parts_are_limbs`), else ``"skeleton"``;
         * a list of ``{"part": NAME, "parent": NAME, "axis": FRAME}`` (the root
           first, without a parent; a parent before its children);
         * ``{"branches": [{"name", "parent", "points"}, ...]}`` -- the branches of a skeleton (an axes
@@ -229,7 +229,8 @@ class BaseMesh:
         ``axis``: the frame rule of every axis without its own (``"auto"``, ...).
         """
         from .axes import AXES_RULES, AxisTree, tree_from_parts, tree_from_spec, tree_from_vertices
-        from .skeleton import shape_tree, tree_from_branches
+        from .shape_axes import shape_tree
+        from .skeleton import tree_from_branches
 
         if axes is None or (isinstance(axes, int) and axes == 1):
             return self.with_axis(axis)

@@ -222,8 +222,6 @@ SLOT_FLOATS: int = len(SLOT_COLUMNS)
 #: ``axial_generate``'s outputs, in slot order: (name, size); the record's are the scene shader's inputs'
 #: names without ``i_`` (``d12``, ..., ``tint``), then ``kept``
 SLOT_OUTPUTS: tuple[tuple[str, int], ...] = tuple((a.name[2:], a.size) for a in SHADER_INPUTS) + (("kept", 1),)
-#: the slot's vectors: each record level's new columns four at a time, then ``kept`` (so a pass that
-#: keeps the record's first 16 or 19 numbers takes whole vectors)
 #: child axes the children's pass writes an instance (10 numbers each): as many as 64 captured
 #: components hold (GL's least MAX_TRANSFORM_FEEDBACK_INTERLEAVED_COMPONENTS)
 CHILD_AXES_A_PASS: int = 64 // 10
@@ -240,6 +238,8 @@ def _slot_groups() -> tuple[SlotGroup, ...]:
     return tuple(groups)
 
 
+#: the slot's vectors: each record level's new columns four at a time, then ``kept`` (so a pass that
+#: keeps the record's first 16 or 19 numbers takes whole vectors)
 SLOT_GROUPS: tuple[SlotGroup, ...] = _slot_groups()
 assert sum(size for _, size in SLOT_OUTPUTS) == SLOT_FLOATS, "the generator's outputs are the slot"
 assert [a.start for a in SHADER_INPUTS] == [sum(s for _, s in SLOT_OUTPUTS[:k]) for k in range(len(SHADER_INPUTS))]

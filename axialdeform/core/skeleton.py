@@ -64,11 +64,11 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, mini
 from scipy.spatial import cKDTree
 
 from .arrays import position_ids
-from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree, tree_from_parts
+from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree
 from .axis import ControlAxis
 from .errors import MeshError
 
-__all__ = ["skeleton_tree", "skeleton_branches", "tree_from_branches", "shape_tree", "MIN_BRANCH", "LIMB_RATIO",
+__all__ = ["skeleton_tree", "skeleton_branches", "tree_from_branches", "RULES_DIGEST", "MIN_BRANCH", "LIMB_RATIO",
            "SKELETON_TRIANGLES", "SKELETON_VERSION"]
 
 #: the default shortest branch, a fraction of the trunk's chain (the root piece's first chain)
@@ -577,43 +577,5 @@ def _rules_hash() -> str:
     return hashlib.sha256(Path(__file__).read_bytes() + skeletor_version.encode()).hexdigest()[:8]
 
 
-_RULES = _rules_hash()
-
-
-def shape_tree(mesh, rule: str = "skeleton", frame="auto", up: int = 1) -> AxisTree:
-    """``axes="skeleton"`` or ``axes="auto"`` (``BaseMesh.with_axes``): :func:`skeleton_tree` with its
-    defaults, cached by the mesh's fingerprint (``core.io.axes_cache``); for ``"auto"``, ``axes="parts"``
-    (each axis ``frame``) instead when the mesh's parts are its limbs (:func:`parts_are_limbs`)."""
-    from .io.axes_cache import cached_tree  # core.io reads meshes: imported once core.mesh is
-
-    key = f"skeleton{SKELETON_VERSION}-{_RULES}-{MIN_BRANCH:g}-{up}"
-    tree = cached_tree(mesh, key, lambda: skeleton_tree(mesh, up=up))
-    if rule == "auto" and len([p for p in mesh.parts if p.count]) >= 2:
-        if not isinstance(frame, str):  # a frame given as numbers: decided again each time
-            return tree_from_parts(mesh, frame, up) if parts_are_limbs(mesh, tree, up) else tree
-        decided = cached_tree(mesh, f"auto-{frame}-{key}",
-                              lambda: tree_from_parts(mesh, frame, up) if parts_are_limbs(mesh, tree, up) else tree)
-        return decided
-    return tree
-
-
-def parts_are_limbs(mesh, tree: AxisTree, up: int = 1) -> bool:
-    """Whether ``mesh``'s parts (two or more) are its limbs, so that ``axes="auto"`` takes ``"parts"``: no part
-    branches.  A part branches when the whole model's skeleton (``tree``) puts its vertices on several axes and,
-    skeletonized alone, it is more than one branch -- or it holds the trunk and another axis (a one-piece wood).
-    A part the whole skeleton splits only where another part crosses it (a palm's fronds crossing at the crown,
-    hung on the trunk at the crossing) is one branch alone: a limb."""
-    for p in mesh.parts:
-        if not p.count:
-            continue
-        own = np.unique(tree.vertex_axis[np.unique(mesh.faces[p.start:p.start + p.count])])
-        if len(own) == 1:
-            continue
-        if 0 in own:
-            return False
-        try:
-            if len(skeleton_branches(mesh.with_parts([p.name]), up=up)) > 1:
-                return False
-        except MeshError:  # a part with no skeleton of its own: the whole model's stands
-            return False
-    return True
+#: the rules' digest: a tree cached by an earlier version of these rules is not read
+RULES_DIGEST = _rules_hash()

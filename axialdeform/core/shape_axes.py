@@ -1,0 +1,42 @@
+"""Which axes a model gets from its own shape (``axes="skeleton"`` and ``axes="auto"``): the skeleton's
+(:mod:`axialdeform.core.skeleton`), or its parts' when they are its limbs; cached by the mesh's fingerprint."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .axes import AxisTree, tree_from_parts
+from .errors import MeshError
+from .skeleton import MIN_BRANCH, RULES_DIGEST, SKELETON_VERSION, skeleton_branches, skeleton_tree
+
+__all__ = ["shape_tree", "parts_are_limbs"]
+
+
+def shape_tree(mesh, rule: str = "skeleton", frame="auto", up: int = 1) -> AxisTree:
+    """``axes="skeleton"`` or ``axes="auto"`` (``BaseMesh.with_axes``): :func:`skeleton_tree` with its
+    defaults, cached by the mesh's fingerprint (``core.io.axes_cache``); for ``"auto"``, ``axes="parts"``
+    (each axis ``frame``) instead when the mesh's parts are its limbs (:func:`parts_are_limbs`; the choice
+    cached too)."""
+    from .io.axes_cache import cached_tree  # core.io reads meshes: imported once core.mesh is
+
+    key = f"skeleton{SKELETON_VERSION}-{RULES_DIGEST}-{MIN_BRANCH:g}-{up}"
+    tree = cached_tree(mesh, key, lambda: skeleton_tree(mesh, up=up))
+    if rule != "auto" or sum(1 for p in mesh.parts if p.count) < 2:
+        return tree
+    decide = lambda: tree_from_parts(mesh, frame, up) if parts_are_limbs(mesh, tree, up) else tree  # noqa: E731
+    return cached_tree(mesh, f"auto-{frame}-{key}", decide) if isinstance(frame, str) else decide()
+
+
+def parts_are_limbs(mesh, tree: AxisTree, up: int = 1) -> bool:
+    """Whether ``mesh``'s parts are its limbs (``axes="auto"`` takes ``"parts"``): no part branches.  A part branches
+    when the whole model's skeleton ``tree`` puts it on several axes and it holds the trunk's (a one-piece wood)
+    or, skeletonized alone, is more than one branch; a palm's frond hung on the trunk where it crosses the crown,
+    and split there, is one branch alone: a limb."""
+    for p in (p for p in mesh.parts if p.count):
+        own = np.unique(tree.vertex_axis[np.unique(mesh.faces[p.start:p.start + p.count])])
+        try:
+            if len(own) > 1 and (0 in own or len(skeleton_branches(mesh.with_parts([p.name]), up=up)) > 1):
+                return False
+        except MeshError:  # a part with no skeleton of its own: the whole model's stands
+            return False
+    return True
