@@ -373,7 +373,7 @@ class Instances(np.ndarray):
         k, level = tree_shape(self.shape[1])
         if level < f.level:
             kind = "extended" if f.level == 1 else "tinted"
-            raise AttributeError(f"{name}: only {kind} ({WIDTHS[f.level] + 10 * (k - 1)} numbers) instances have it; "
+            raise AttributeError(f"{name}: only {kind} (n, {WIDTHS[f.level] + 10 * (k - 1)}) instances have it; "
                                  f"this array is {self.shape}")
         if f.name == "offsets":  # every axis's, axis after axis: (n, 5, 2), or (n, K, 5, 2) with K axes
             cols = self[:, :10 * k].view(np.ndarray)
