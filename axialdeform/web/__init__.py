@@ -232,16 +232,16 @@ def _layer(name: str, mesh, params, *, files: dict, glb_file: str, params_file: 
     }
 
 
-def _ground(look, up: str, spheres, cam, aspect: float, height: float | None = None):
-    """``(the page's ground plane, the camera)``: the plane render draws under a scene without a terrain
-    (:func:`ground_plane`) and the camera with its near and far planes widened to hold it, as render's;
-    ``(None, cam)`` where the look draws no ground."""
+def _ground_and_shadow(look, up: str, spheres, cam, aspect: float, height: float | None = None):
+    """``(ground, shadow, camera)`` of a page over ``spheres``: the ground plane (:func:`ground_plane`), the key
+    light's shadow map (:func:`_shadow`) and the camera with its near and far planes widened to hold the ground, as
+    render's (``cam`` as it is where the look draws no ground)."""
     from ..core.camera import UP_VECTORS
 
     ground = ground_plane(look, up, spheres, height)
-    if ground is None:
-        return None, cam
-    return ground, cam.enclosing_square(np.asarray(ground["center"]), UP_VECTORS[up], ground["radius"], aspect)
+    if ground is not None:
+        cam = cam.enclosing_square(np.asarray(ground["center"]), UP_VECTORS[up], ground["radius"], aspect)
+    return ground, _shadow(look, spheres, ground), cam
 
 
 def ground_plane(look, up: str, spheres, height: float | None = None) -> dict | None:
@@ -267,8 +267,8 @@ def fit_ground_and_shadow(mesh, params, look=None, up: str = "y") -> tuple[dict 
     """``(ground, shadow)`` of a page of ``mesh`` x ``params``, as :func:`build_scene` puts them in its config
     (:func:`ground_plane`, and the key light's shadow map over the instances and the ground's centre part): the
     widget fits them again when its instances change."""
-    look = look or DEFAULT_LOOK
     spheres = [instance_bounds(mesh, as_params(params, axes=mesh.axis_count))]
+    look = look or DEFAULT_LOOK
     ground = ground_plane(look, up, spheres)
     return ground, _shadow(look, spheres, ground)
 
@@ -447,8 +447,7 @@ def build_scene(mesh, params, page: PageOptions | None = None, *, look=None, opt
     params = as_params(params, axes=mesh.axis_count)
     cam = scene_camera(Scene.single(mesh, params, up=up, wind=wind), w / h)
     look = look or DEFAULT_LOOK
-    ground, cam = _ground(look, up, [instance_bounds(mesh, params)], cam, w / h)
-    shadow = _shadow(look, [instance_bounds(mesh, params)], ground)  # with no ground, instances shadow each other
+    ground, shadow, cam = _ground_and_shadow(look, up, [instance_bounds(mesh, params)], cam, w / h)
     files: dict = {}
     layer = _layer(str(mesh.name), mesh, params, files=files, glb_file=MESH_FILE, params_file=PARAMS_FILE,
                    quantize=page.quantize, adp=adp, wind=wind is not None)
@@ -526,12 +525,11 @@ def build_scene_file(scene, page: PageOptions | None = None, *, look=None, optio
         tiles = tiles_around(recipe.generate, float(cam.target[0]), float(cam.target[2]), recipe.reach)
         layers[k]["instances"] = int(len(generate_tiles(recipe.generate, mesh, tiles, recipe.maps)))
     look = look or scene.look
-    ground = shadow = None
-    if scene.terrain is None:  # render's ground plane (gl/scene.py's ground_spheres: no instance made)
-        ground, cam = _ground(look, scene.up, ground_spheres(scene), cam, w / h, scene.ground_height)
-        shadow = _shadow(look, ground_spheres(scene), ground)
+    spheres = ground_spheres(scene)  # each layer's bounds (gl/scene.py: no instance made)
+    if scene.terrain is None:  # render's ground plane
+        ground, shadow, cam = _ground_and_shadow(look, scene.up, spheres, cam, w / h, scene.ground_height)
     else:  # render's terrain casts and receives them
-        shadow = _shadow(look, [*ground_spheres(scene), instance_bounds(scene.terrain, TERRAIN_INSTANCE)], None)
+        ground, shadow = None, _shadow(look, [*spheres, instance_bounds(scene.terrain, TERRAIN_INSTANCE)], None)
     config = _config(title=page.title or Path(scene.path).stem, layers=layers, size=(w, h),
                      fixed_size=page.fixed_size, mode=mode,
                      cam=cam, look=look, up=scene.up, wind=wind,
