@@ -202,17 +202,12 @@ class LearnedLayer:
                 f"spacing: {s.pattern}, hard core {s.hard_core:.{digits}g}{clumps}")
 
 
-def _grid_shape(example: Example, cells: int) -> tuple[int, int]:
-    """(rows, cols) of the quadrature's grid of dummy points: about ``cells`` each way, square cells."""
+def _quadrature(example: Example, cells: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int]]:
+    """Berman-Turner quadrature: the points (data then dummy: a grid of about ``cells`` square cells each way,
+    row after row), their weights, 1 for data, and the grid's (rows, cols)."""
     x0, z0, x1, z1 = example.window
     nx = max(8, int(round(cells * math.sqrt((x1 - x0) / (z1 - z0)))))
-    return max(8, int(round(cells * cells / nx))), nx
-
-
-def _quadrature(example: Example, cells: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Berman-Turner quadrature: the points (data then dummy), their weights, and 1 for data."""
-    x0, z0, x1, z1 = example.window
-    nz, nx = _grid_shape(example, cells)
+    nz = max(8, int(round(cells * cells / nx)))
     gx, gz = np.meshgrid((np.arange(nx) + 0.5) / nx * (x1 - x0) + x0, (np.arange(nz) + 0.5) / nz * (z1 - z0) + z0)
     dummy = np.stack([gx.ravel(), gz.ravel()], axis=1)
     pts = np.concatenate([example.xz, dummy])
@@ -223,7 +218,7 @@ def _quadrature(example: Example, cells: int) -> tuple[np.ndarray, np.ndarray, n
     w = example.area / (nx * nz) / count[cell]
     is_data = np.zeros(len(pts))
     is_data[:len(example.xz)] = 1.0
-    return pts, w, is_data
+    return pts, w, is_data, (nz, nx)
 
 
 def _newton(x: np.ndarray, w: np.ndarray, y: np.ndarray, start: float) -> tuple[np.ndarray, np.ndarray]:
@@ -301,8 +296,7 @@ def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, sig
         raise ParamError(f"{example.source}: expected at least one object to learn from, found none")
     base = list(() if ground is None else (names or ground.names))
     cells = cells or int(min(250, max(48, math.sqrt(4 * n))))
-    pts, w, y = _quadrature(example, cells)
-    shape = _grid_shape(example, cells)
+    pts, w, y, shape = _quadrature(example, cells)
     cell = ((example.window[2] - example.window[0]) / shape[1], (example.window[3] - example.window[1]) / shape[0])
     raw = ground.at(pts, base) if base else np.zeros((len(pts), 0))
     term_names, knots, cols = [], [], []
