@@ -22,7 +22,7 @@
 // (rotation + position): the "all the same" method of the benchmark.
 // What a program's instances do not use is left out of its build, the same numbers without the work:
 // AXIAL_NO_TURN (16-number records: no twist or taper), and without AXIAL_WIND a tree's child axes take
-// no wind (axial_tree_world's `wind` is zero then).
+// no wind (a program passes AxialTreeWind(false, ...) to axial_tree_world then).
 
 // One instance: the 16 numbers, then the extension's 3 (1, 0, 0 for a 16-number instance).
 struct AxialInstance {
@@ -321,49 +321,81 @@ ivec2 axial_texel_at(int i) {
 }
 
 #ifdef AXIAL_AXES
+// instance id's offsets of child axis k as stored in a texture `tex` of the layout above (what a GL program's
+// axial_tree_offsets reads)
 void axial_child_offsets(sampler2D tex, int id, int k, out vec4 d12, out vec4 d34, out vec2 d5) {
     ivec2 at = axial_texel_at(axial_child_texel(id, k, AXIAL_AXES));
     d12 = texelFetch(tex, at, 0);
     d34 = texelFetch(tex, at + ivec2(1, 0), 0);
     d5 = texelFetch(tex, at + ivec2(2, 0), 0).xy;
 }
+#endif
 
-// The whole map of a K-axis mesh: model-space v (of axis b) and n -> world w_out, wn_out, and the
-// model-space Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and
-// the rigid part; children: the texture above; wind: the wind's push per unit of axis length in
-// the instance's model frame (axial_wind_push with len 1; zero when still), which moves every
-// child axis j by L_j times its part across that axis on the control polygon of
-// (t - a)^2 / max(a^2, (1 - a)^2), a = anchors[j] (its joint stays; a = 0: c = (0, 0, 1/6, 1/2, 1)).
-void axial_tree_world(vec3 v, vec3 n, int b, mat3 frames[AXIAL_AXES], float los[AXIAL_AXES],
-                      float lens[AXIAL_AXES], float anchors[AXIAL_AXES], int parents[AXIAL_AXES], vec2 center,
-                      AxialInstance inst, sampler2D children, int id, vec3 wind, out vec3 w_out, out vec3 wn_out,
-                      out mat3 jac_out) {
+// ---- the walk up a vertex's chain of axes: a program that draws several axes defines AXIAL_TREE_WALK before
+// the include and then the two functions declared here (after it), reading its own storage -- uniform arrays
+// and a texture in GL and WebGL 2, a texture or a storage buffer in the node functions generated from this file.
+#ifdef AXIAL_TREE_WALK
+// Axis j's frame, lo, L, anchor (t of its joint on its own axis) and parent (-1: the root).
+void axial_tree_axis(int j, out mat3 frame, out float lo, out float len, out float anchor, out int parent);
+// Instance id's offsets of child axis k (1..K-1), as stored (before the wind).
+void axial_tree_offsets(int id, int k, out vec4 d12, out vec4 d34, out vec2 d5);
+
+// The wind on a tree's child axes: `push`, the wind's push per unit of axis length in the instance's model
+// frame (axial_wind_push with len 1), moves every child axis j by L_j times its part across that axis on the
+// control polygon of (t - a)^2 / max(a^2, (1 - a)^2), a its anchor (its joint stays; a = 0:
+// c = (0, 0, 1/6, 1/2, 1)).  `on` false (a still program): no wind, and no work for it.
+struct AxialTreeWind {
+    bool on;
+    vec3 push;
+};
+
+// The bend of a K-axis mesh (`axes` = K) in model space: v (of axis b) and n -> v_out, n_out and the
+// Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and the rigid part; id:
+// the instance (its child axes' offsets, axial_tree_offsets).
+void axial_tree_bend(vec3 v, vec3 n, int b, int axes, vec2 center, AxialInstance inst, int id, AxialTreeWind wind,
+                     out vec3 v_out, out vec3 n_out, out mat3 jac_out) {
     vec3 moved = v;
     mat3 jac = mat3(1.0);
 #ifndef AXIAL_NO_BEND
 #ifndef AXIAL_NO_TURN
     if (inst.twist != 0.0 || inst.taper != 0.0) {  // about axis 0's axis line, before the displacements
-        axial_tree_turn(v, frames[0], los[0], lens[0], center, inst, moved, jac);
+        mat3 f0;
+        float lo0, len0, a0;
+        int p0;
+        axial_tree_axis(0, f0, lo0, len0, a0, p0);
+        axial_tree_turn(v, f0, lo0, len0, center, inst, moved, jac);
     }
 #endif
     vec3 disp = vec3(0.0);
     int j = b;
-    for (int guard = 0; guard < AXIAL_AXES; ++guard) {
+    for (int guard = 0; guard < axes; ++guard) {
         if (j < 0) break;
+        mat3 frame;
+        float lo, len, anchor;
+        int parent;
+        axial_tree_axis(j, frame, lo, len, anchor, parent);
         vec4 d12 = inst.d12, d34 = inst.d34;
         vec2 d5 = inst.d5;
         if (j > 0) {
-            axial_child_offsets(children, id, j, d12, d34, d5);
-#ifdef AXIAL_WIND
-            axial_anchor_wind(frames[j], lens[j], anchors[j], wind, d12, d34, d5);
-#endif
+            axial_tree_offsets(id, j, d12, d34, d5);
+            if (wind.on) axial_anchor_wind(frame, len, anchor, wind.push, d12, d34, d5);
         }
-        axial_axis_add(v, frames[j], los[j], lens[j], d12, d34, d5, disp, jac);
-        j = parents[j];
+        axial_axis_add(v, frame, lo, len, d12, d34, d5, disp, jac);
+        j = parent;
     }
     moved += disp;
 #endif
-    axial_place(moved, normalize(axial_cofactor(jac, n)), inst, w_out, wn_out);
+    v_out = moved;
+    n_out = normalize(axial_cofactor(jac, n));
     jac_out = jac;
+}
+
+// The whole map of a K-axis mesh: model-space v (of axis b) and n -> world w_out, wn_out (axial_tree_bend,
+// then axial_place), and the model-space Jacobian jac_out.
+void axial_tree_world(vec3 v, vec3 n, int b, int axes, vec2 center, AxialInstance inst, int id, AxialTreeWind wind,
+                      out vec3 w_out, out vec3 wn_out, out mat3 jac_out) {
+    vec3 bent_v, bent_n;
+    axial_tree_bend(v, n, b, axes, center, inst, id, wind, bent_v, bent_n, jac_out);
+    axial_place(bent_v, bent_n, inst, w_out, wn_out);
 }
 #endif

@@ -7,6 +7,9 @@
 #ifndef AXIAL_EXTENDED
 #define AXIAL_NO_TURN 1
 #endif
+#ifdef AXIAL_AXES
+#define AXIAL_TREE_WALK 1  // several axes: main walks them; the storage below main's declarations
+#endif
 #include "axial.glsl"
 // the wind: moves control points from uniforms alone (no per-frame upload)
 #include "wind.glsl"
@@ -153,6 +156,20 @@ float instance_hash(int i) {
     return float(h) / 4294967295.0;
 }
 
+#ifdef AXIAL_AXES
+// the walk's storage (axial.glsl): the uniform arrays and the offsets' texture above
+void axial_tree_axis(int j, out mat3 frame, out float lo, out float len, out float anchor, out int parent) {
+    frame = u_axes_frame[j];
+    lo = u_axes_lo[j];
+    len = u_axes_len[j];
+    anchor = u_axes_anchor[j];
+    parent = u_axes_parent[j];
+}
+void axial_tree_offsets(int id, int k, out vec4 d12, out vec4 d34, out vec2 d5) {
+    axial_child_offsets(u_axes_offsets, id, k, d12, d34, d5);
+}
+#endif
+
 void main() {
 #ifdef AXIAL_THREE
     // s = |first column of R S| (R orthonormal); 16-number records: s = 1, tw = tp = 0
@@ -178,9 +195,13 @@ void main() {
 #endif
 #ifdef AXIAL_AXES
     mat3 jac;
-    axial_tree_world(in_position, in_normal, int(in_axis + 0.5), u_axes_frame, u_axes_lo, u_axes_len,
-                     u_axes_anchor, u_axes_parent, u_center, inst, u_axes_offsets, AXIAL_INSTANCE_ID + u_instance_base, push,
-                     v_world, v_normal, jac);
+#ifdef AXIAL_WIND
+    AxialTreeWind tree_wind = AxialTreeWind(true, push);
+#else
+    AxialTreeWind tree_wind = AxialTreeWind(false, push);
+#endif
+    axial_tree_world(in_position, in_normal, int(in_axis + 0.5), AXIAL_AXES, u_center, inst,
+                     AXIAL_INSTANCE_ID + u_instance_base, tree_wind, v_world, v_normal, jac);
 #else
     axial_world(in_position, in_normal, AXIAL_AXIS, u_lo, u_len, u_center, inst, v_world, v_normal);
 #endif

@@ -17,6 +17,8 @@
 // - if/else (a static condition chooses in JavaScript, a dynamic one becomes If/Else), for loops with
 //   constant bounds (unrolled in JavaScript) or with a break (a TSL Loop), return anywhere (early
 //   returns become a result variable), the ternary (select), every operator of GLSL on scalars and vectors;
+// - function declarations without a body: hooks, what the program gives the source (its storage); a call to
+//   one is `hooks.<name>(...)`, `hooks` the last parameter of every emitted function that reaches a hook;
 // - #ifdef/#ifndef/#else/#endif with the defines it is given.
 // Static values are literals, `const`s, unrolled loop indices and static struct fields; everything else
 // is a node.  A static that meets a node becomes a node of its own GLSL type (float/int/uint/bool).
@@ -339,6 +341,20 @@ class Emitter {
     }
     this.used = new Set();
     this.tmp = 0;
+    // the functions that call a declared one (a hook), directly or through others: they take `hooks`
+    const protos = items.filter((x) => x.kind === 'proto').map((x) => x.name);
+    const bodies = items.filter((x) => x.kind === 'func');
+    this.hooked = new Set(protos);
+    for (let grew = true; grew;) {
+      grew = false;
+      for (const f of bodies) {
+        if (!this.hooked.has(f.name) && [...calledNames(f.body)].some((n) => this.hooked.has(n))) {
+          this.hooked.add(f.name);
+          grew = true;
+        }
+      }
+    }
+    for (const n of protos) this.hooked.delete(n);
   }
 
   fail(msg, node) { throw new GlslError(`${this.where}:${node?.line ?? '?'}: ${msg}`); }
@@ -512,8 +528,7 @@ class Emitter {
     const exact = fits.filter((f) => f.params.every((p, k) => p.type === vals[k].type));
     const f = exact.length === 1 ? exact[0] : fits.length === 1 ? fits[0] : null;
     if (!f) this.fail(`no single ${name}() takes (${vals.map((v) => v.type).join(', ')})`, e);
-    if (f.kind === 'proto') this.fail(`${name}() is declared, not defined`, e);
-    this.need(f);
+    if (f.kind !== 'proto') this.need(f);
     const code = f.params.map((p, k) => {
       const v = vals[k];
       if (p.qual !== 'in') {
@@ -524,6 +539,9 @@ class Emitter {
       if (p.arr || p.type === 'mat3' || this.structs.has(p.type) || p.type === 'sampler2D') return v.code;
       return this.node(v, p.type);
     });
+    // a declared function is a hook the caller gives (`hooks`, the last parameter of every function reaching one)
+    if (f.kind === 'proto') return { code: `hooks.${camel(name)}(${code.join(', ')})`, type: f.ret, mat: f.ret === 'mat3' };
+    if (this.hooked.has(f.name)) code.push('hooks');
     return { code: `${this.jsName(f)}(${code.join(', ')})`, type: f.ret, mat: f.ret === 'mat3' };
   }
 
@@ -679,7 +697,8 @@ class Emitter {
       return;
     }
     inner.vars.set(k, { js: k, type: 'int' });
-    out.push(`${ind}${this.tsl('Loop')}({ start: ${this.node(from, 'int')}, end: ${this.node(to, 'int')}, type: 'int', condition: '${c.op}' }, ({ i: ${k} }) => {`);
+    const index = mentions(body, k) ? `({ i: ${k} })` : '()';
+    out.push(`${ind}${this.tsl('Loop')}({ start: ${this.node(from, 'int')}, end: ${this.node(to, 'int')}, type: 'int', condition: '${c.op}' }, ${index} => {`);
     this.block(body, inner, out, { ...ctx, depth: ctx.depth + 1, loop: true });
     out.push(`${ind}});`);
   }
@@ -751,7 +770,7 @@ class Emitter {
     this.block(f.body, scope, out, ctx);
     if (early) out.push('  return _result;');
     const doc = f.doc.length ? `/** glsl: ${f.name}.\n${f.doc.map((l) => ` * ${l}`).join('\n')} */\n` : `/** glsl: ${f.name}. */\n`;
-    const params = f.params.map((p) => p.name).join(', ');
+    const params = [...f.params.map((p) => p.name), ...(this.hooked.has(f.name) ? ['hooks'] : [])].join(', ');
     return `${doc}export function ${this.jsName(f)}(${params}) {\n${[...pre, ...out].join('\n')}\n}\n`;
   }
 }
@@ -777,6 +796,29 @@ function hasEarlyReturn(body) {
     return false;
   };
   return body.some((s, k) => walk(s, k === body.length - 1));
+}
+
+/** Whether the statements read or write identifier `name`. */
+function mentions(body, name) {
+  const walk = (e) => {
+    if (!e || typeof e !== 'object') return false;
+    if (Array.isArray(e)) return e.some(walk);
+    if (e.k === 'id' && e.name === name) return true;
+    return Object.values(e).some((v) => v && typeof v === 'object' && walk(v));
+  };
+  return walk(body);
+}
+
+function calledNames(body) {
+  const names = new Set();
+  const walk = (e) => {
+    if (!e || typeof e !== 'object') return;
+    if (Array.isArray(e)) { e.forEach(walk); return; }
+    if (e.k === 'call') names.add(e.name);
+    Object.values(e).forEach((v) => { if (v && typeof v === 'object') walk(v); });
+  };
+  walk(body);
+  return names;
 }
 
 function assignedNames(body) {

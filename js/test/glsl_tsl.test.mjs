@@ -59,6 +59,18 @@ void h(float x, out float z) { float w; g(S(1.0, true), x, w); z = w; }`, ['h'])
   assert.match(out, /const w = float\(0\)\.toVar\(\);\n {2}g\(\{ a: float\(1\.0\), on: true \}, x, w\);\n {2}z\.assign\(w\);/);
 });
 
+test('a declared function is a hook: its callers, and theirs, take the program\'s hooks and pass them on', () => {
+  const out = emit(`
+void storage(int j, out float lo);
+float walk(int b) { float lo; storage(b, lo); return lo; }
+float twice(int b) { return walk(b) + walk(b + 1); }
+float alone(float x) { return x; }`, ['twice', 'alone']);
+  assert.match(out, /export function walk\(b, hooks\) \{\n {2}const lo = float\(0\)\.toVar\(\);\n {2}hooks\.storage\(b, lo\);/);
+  assert.match(out, /export function twice\(b, hooks\) \{\n {2}return walk\(b, hooks\)\.add\(walk\(b\.add\(int\(1\)\), hooks\)\);/);
+  assert.match(out, /export function alone\(x\) \{/);
+  assert.doesNotMatch(out, /function storage/);
+});
+
 test('what the emitter does not take is refused with the file and line', () => {
   assert.throws(() => emit('float f(float x) {\n  return sin(x);\n}'), (e) => e instanceof GlslError && /x\.glsl:2: sin\(\)/.test(e.message));
   assert.throws(() => emit('float f(int i) {\n  float a[3];\n  return a[i];\n}'), /x\.glsl:3: an array indexed by a node/);

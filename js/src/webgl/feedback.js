@@ -6,7 +6,7 @@
 import { AxialError } from '../core/adp.js';
 import { AXIAL_GLSL, WIND_GLSL } from './glsl.js';
 import { ATTRIBUTES } from '../core/record.js';
-import { UNIFORMS, BEND } from './shader.js';
+import { UNIFORMS, BEND, TREE_STORAGE } from './shader.js';
 import { plainArray } from '../core/baked.js';
 
 
@@ -116,14 +116,15 @@ ${axes ? `#define AXIAL_AXES ${axes}` : ''}
 ${wind ? '#define AXIAL_WIND 1' : ''}
 ${mesh.defines.AXIAL_POSITION_IDS ? '#define AXIAL_POSITION_IDS 1' : ''}
 #define AXIAL_ID int(axialId + 0.5)
-${AXIAL_GLSL}
-${WIND_GLSL}
 in vec3 position;
 in vec3 normal;
 in vec4 tangent;
 in mat4 instanceMatrix;
 in float axialId;           // the instance's index (the instances drawn may be a selection)
 ${UNIFORMS.replace(/attribute /g, 'in ')}
+${AXIAL_GLSL}
+${WIND_GLSL}
+${TREE_STORAGE}
 out vec3 axialOutPosition;
 out vec3 axialOutNormal;
 out vec4 axialOutTangent;

@@ -73,6 +73,7 @@ uniform float axialAnchors[AXIAL_AXES];
 uniform int axialParents[AXIAL_AXES];
 uniform sampler2D axialChildren;
 attribute float axialAxis;
+#define AXIAL_TREE_WALK 1
 #endif
 #ifdef AXIAL_WIND
 ${WIND_UNIFORMS.map((w) => `uniform ${w.type} ${w.three};`).join('\n')}
@@ -114,8 +115,13 @@ export const BEND = `
 #endif
 #ifdef AXIAL_AXES
     mat3 axialJac;
-    axial_tree_world(position, normal, int(axialAxis + 0.5), axialFrames, axialLos, axialLens, axialAnchors, axialParents,
-                     axialCenter, axialInst, axialChildren, AXIAL_ID, axialPush, axialV, axialN, axialJac);
+#ifdef AXIAL_WIND
+    AxialTreeWind axialTreeWind = AxialTreeWind(true, axialPush);
+#else
+    AxialTreeWind axialTreeWind = AxialTreeWind(false, axialPush);
+#endif
+    axial_tree_world(position, normal, int(axialAxis + 0.5), AXIAL_AXES, axialCenter, axialInst, AXIAL_ID,
+                     axialTreeWind, axialV, axialN, axialJac);
 #ifdef USE_TANGENT
     axialT = axialJac * tangent.xyz;
 #endif
@@ -129,6 +135,23 @@ export const BEND = `
   }
 `;
 
+// the tree walk's storage (glsl/axial.glsl's axial_tree_axis and axial_tree_offsets): the uniform arrays and
+// the offsets' texture declared above
+export const TREE_STORAGE = `
+#ifdef AXIAL_AXES
+void axial_tree_axis(int j, out mat3 frame, out float lo, out float len, out float anchor, out int parent) {
+  frame = axialFrames[j];
+  lo = axialLos[j];
+  len = axialLens[j];
+  anchor = axialAnchors[j];
+  parent = axialParents[j];
+}
+void axial_tree_offsets(int id, int k, out vec4 d12, out vec4 d34, out vec2 d5) {
+  axial_child_offsets(axialChildren, id, k, d12, d34, d5);
+}
+#endif
+`;
+
 function replaceOnce(text, what, by, where) {
   if (!text.includes(what)) throw new AxialError(`${where}: its vertex shader has no ${what} to bend`);
   return text.replace(what, by);
@@ -136,7 +159,7 @@ function replaceOnce(text, what, by, where) {
 
 /** Inject the bend into a vertex shader of three's built-in materials (the text onBeforeCompile gets). */
 export function injectBend(vertexShader, where = 'material') {
-  let vs = replaceOnce(vertexShader, 'void main() {', `${UNIFORMS}\n${AXIAL_GLSL}\n${WIND_GLSL}\nvoid main() {\n${BEND}`, where);
+  let vs = replaceOnce(vertexShader, 'void main() {', `${UNIFORMS}\n${AXIAL_GLSL}\n${WIND_GLSL}\n${TREE_STORAGE}\nvoid main() {\n${BEND}`, where);
   if (vs.includes('#include <beginnormal_vertex>')) {
     vs = vs.replace('#include <beginnormal_vertex>',
       'vec3 objectNormal = axialN;\n#ifdef USE_TANGENT\n\tvec3 objectTangent = axialT;\n#endif');

@@ -3,8 +3,8 @@
 // The GLSL functions as three.js node functions (TSL): each call is inlined into the caller's graph; an
 // `out` parameter is a node variable the caller passes, a mat3 three column vectors, a struct an object.
 
-import { If, abs, all, bool, clamp, cross, dot, float, floatBitsToUint, floor, int, inverseSqrt, ivec2, max, min, normalize, select, sqrt, uint, vec2, vec3, vec4 } from 'three/tsl';
-import { matAdd, matAssign, matMul, matOuter, matTranspose, matVar, matVec, structVar, texelFetch } from './tsl_runtime.js';
+import { Break, If, Loop, abs, all, bool, clamp, cross, dot, float, floatBitsToUint, floor, int, inverseSqrt, ivec2, max, min, normalize, select, sqrt, uint, vec2, vec3, vec4 } from 'three/tsl';
+import { matAdd, matAssign, matDiagonal, matMul, matOuter, matTranspose, matVar, matVec, structVar, texelFetch } from './tsl_runtime.js';
 
 export const AXIAL_T_SLACK = 1e-4;
 export const AXIAL_AXES_ROW = 4095;
@@ -265,6 +265,52 @@ export function axialChildTexel(id, k, axes) {
 /** glsl: axial_texel_at. */
 export function axialTexelAt(i) {
   return ivec2(i.mod(int(AXIAL_AXES_ROW)), i.div(int(AXIAL_AXES_ROW)));
+}
+
+/** glsl: axial_tree_bend.
+ * The bend of a K-axis mesh (`axes` = K) in model space: v (of axis b) and n -> v_out, n_out and the
+ * Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and the rigid part; id:
+ * the instance (its child axes' offsets, axial_tree_offsets). */
+export function axialTreeBend(v, n, b, axes, center, inst, id, wind, v_out, n_out, jac_out, hooks) {
+  const moved = vec3(v).toVar();
+  const jac = matVar(matDiagonal(float(1.0)));
+  If(inst.twist.notEqual(float(0.0)).or(inst.taper.notEqual(float(0.0))), () => {
+    const f0 = matVar(matDiagonal(float(0)));
+    const lo0 = float(0).toVar();
+    const len0 = float(0).toVar();
+    const a0 = float(0).toVar();
+    const p0 = int(0).toVar();
+    hooks.axialTreeAxis(int(0), f0, lo0, len0, a0, p0);
+    axialTreeTurn(v, f0, lo0, len0, center, inst, moved, jac);
+  });
+  const disp = vec3(vec3(float(0.0))).toVar();
+  const j = int(b).toVar();
+  Loop({ start: int(0), end: axes, type: 'int', condition: '<' }, () => {
+    If(j.lessThan(int(0)), () => {
+      Break();
+    });
+    const frame = matVar(matDiagonal(float(0)));
+    const lo = float(0).toVar();
+    const len = float(0).toVar();
+    const anchor = float(0).toVar();
+    const parent = int(0).toVar();
+    hooks.axialTreeAxis(j, frame, lo, len, anchor, parent);
+    const d12 = vec4(inst.d12).toVar();
+    const d34 = vec4(inst.d34).toVar();
+    const d5 = vec2(inst.d5).toVar();
+    If(j.greaterThan(int(0)), () => {
+      hooks.axialTreeOffsets(id, j, d12, d34, d5);
+      if (wind.on) {
+        axialAnchorWind(frame, len, anchor, wind.push, d12, d34, d5);
+      }
+    });
+    axialAxisAdd(v, frame, lo, len, d12, d34, d5, disp, jac);
+    j.assign(parent);
+  });
+  moved.addAssign(disp);
+  v_out.assign(moved);
+  n_out.assign(normalize(axialCofactor(jac, n)));
+  matAssign(jac_out, jac);
 }
 
 /** glsl: axial_wind_hash.

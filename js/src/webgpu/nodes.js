@@ -9,10 +9,10 @@
 // columns of s R and p, when the CPU made them); a frame is {ea, eu, ev} (its rows: local coordinates
 // F v = (ea.v, eu.v, ev.v), axis first).
 
-import { If, Loop, float, int, uint, vec2, vec3, vec4, normalize, textureLoad, ivec2 } from 'three/tsl';
+import { float, int, uint, vec3, normalize, textureLoad, ivec2 } from 'three/tsl';
 import * as glsl from './glsl_nodes.js';
 import { WIND_UNIFORMS } from '../core/record.js';
-import { matDiagonal, matTranspose, matVar, matVec } from './tsl_runtime.js';
+import { matAssign, matDiagonal, matTranspose, matVar, matVec } from './tsl_runtime.js';
 
 export { axialCosSin, axialCurve, axialRotation, axialWindHash, axialPositionId } from './glsl_nodes.js';
 
@@ -64,56 +64,50 @@ export function axialWind(inst, id, f, len, w) {
   return { ...inst, ...moved };
 }
 
-// ---- several axes (axial_tree_world's walk; its formulas are axial_tree_turn, axial_anchor_wind,
-// axial_axis_add and axial_cofactor) ----
+// ---- several axes: the walk is axial_tree_bend's (generated); here only its storage, the hooks it calls ----
 
-/** Axis j of the axes texture (rows: (e_a, lo), (e_u, len), (e_v, anchor), (parent, 0, 0, 0)). */
-function treeAxis(axesTex, j) {
-  const r0 = textureLoad(axesTex, ivec2(0, j)).toVar(), r1 = textureLoad(axesTex, ivec2(1, j)).toVar();
-  const r2 = textureLoad(axesTex, ivec2(2, j)).toVar(), r3 = textureLoad(axesTex, ivec2(3, j));
-  return { frame: axialFrameMatrix({ ea: r0.xyz, eu: r1.xyz, ev: r2.xyz }), lo: r0.w, len: r1.w, anchor: r2.w,
-    parent: int(r3.x) };
+/** axial_tree_axis and axial_tree_offsets over the mesh's storage: the axes texture (rows (e_a, lo), (e_u, len),
+ * (e_v, anchor), (parent, 0, 0, 0)) and the child offsets' texture or a function of a texel's index (an int
+ * node) giving it (a storage buffer's); K: the axes. */
+function treeStorage(axesTex, children, K) {
+  return {
+    axialTreeAxis(j, frame, lo, len, anchor, parent) {
+      const r0 = textureLoad(axesTex, ivec2(0, j)).toVar(), r1 = textureLoad(axesTex, ivec2(1, j)).toVar();
+      const r2 = textureLoad(axesTex, ivec2(2, j)).toVar(), r3 = textureLoad(axesTex, ivec2(3, j));
+      matAssign(frame, axialFrameMatrix({ ea: r0.xyz, eu: r1.xyz, ev: r2.xyz }));
+      lo.assign(r0.w);
+      len.assign(r1.w);
+      anchor.assign(r2.w);
+      parent.assign(int(r3.x));
+    },
+    axialTreeOffsets(id, k, d12, d34, d5) {
+      const i = glsl.axialChildTexel(id, k, int(K)).toVar();
+      if (typeof children === 'function') {
+        d12.assign(children(i));
+        d34.assign(children(i.add(int(1))));
+        d5.assign(children(i.add(int(2))).xy);
+      } else {
+        const at = glsl.axialTexelAt(i).toVar();
+        d12.assign(textureLoad(children, at));
+        d34.assign(textureLoad(children, at.add(ivec2(1, 0))));
+        d5.assign(textureLoad(children, at.add(ivec2(2, 0))).xy);
+      }
+    },
+  };
 }
 
 /**
- * The whole map of a K-axis mesh (axial_tree_world): model-space v of axis b (an int node) and n ->
- * {v, n, jac (columns)} in the mesh's space.  children: the child offsets' texture (the mesh's
- * axialChildren) or a function of a texel's index (an int node) giving it (a storage buffer's), id: the
- * instance (int node), wind: the push per unit of axis length (a vec3 node) or null.
+ * The bend of a K-axis mesh (axial_tree_bend): model-space v of axis b (an int node) and n -> {v, n, jac
+ * (columns)} in the mesh's space.  children: the child offsets' texture (the mesh's axialChildren) or a
+ * function of a texel's index (an int node) giving it (a storage buffer's), id: the instance (int node),
+ * wind: the push per unit of axis length (a vec3 node) or null.
  */
 export function axialTreeWorld(v, n, b, K, axesTex, center, inst, children, id, wind) {
-  const moved = vec3(v).toVar();
-  const jac = matVar(matDiagonal(float(1)));
-  If(inst.twist.notEqual(0).or(inst.taper.notEqual(0)), () => { // about axis 0's line, before the displacements
-    const a0 = treeAxis(axesTex, int(0));
-    glsl.axialTreeTurn(v, a0.frame, a0.lo, a0.len, center, inst, moved, jac);
-  });
-  const disp = vec3(0).toVar();
-  const j = int(b).toVar();
-  Loop(K, () => {
-    If(j.greaterThanEqual(int(0)), () => {
-      const ax = treeAxis(axesTex, j);
-      const d12 = vec4(inst.d12).toVar(), d34 = vec4(inst.d34).toVar(), d5 = vec2(inst.d5).toVar();
-      If(j.greaterThan(int(0)), () => { // axial_child_offsets: texel i on of instance id's axis j
-        const i = glsl.axialChildTexel(id, j, int(K)).toVar();
-        if (typeof children === 'function') { // texel i of a storage buffer (a generated mesh's)
-          d12.assign(children(i));
-          d34.assign(children(i.add(int(1))));
-          d5.assign(children(i.add(int(2))).xy);
-        } else {
-          const at = glsl.axialTexelAt(i).toVar();
-          d12.assign(textureLoad(children, at));
-          d34.assign(textureLoad(children, at.add(ivec2(1, 0))));
-          d5.assign(textureLoad(children, at.add(ivec2(2, 0))).xy);
-        }
-        if (wind) glsl.axialAnchorWind(ax.frame, ax.len, ax.anchor, wind, d12, d34, d5);
-      });
-      glsl.axialAxisAdd(v, ax.frame, ax.lo, ax.len, d12, d34, d5, disp, jac);
-      j.assign(ax.parent);
-    });
-  });
-  moved.addAssign(disp);
-  return { v: moved, n: normalize(glsl.axialCofactor(jac, n)), jac };
+  const out = { v: vec3(0).toVar(), n: vec3(0).toVar(), jac: matVar(matDiagonal(float(1))) };
+  const treeWind = { on: Boolean(wind), push: wind || vec3(0) };
+  glsl.axialTreeBend(v, n, int(b), int(K), center, inst, int(id), treeWind, out.v, out.n, out.jac,
+    treeStorage(axesTex, children, K));
+  return out;
 }
 
 /** J x for the tree's Jacobian columns (tangents). */
