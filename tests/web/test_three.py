@@ -130,8 +130,10 @@ def test_fixtures_are_what_the_library_writes(tmp_path):
 def _assert_same_adp(got: bytes, want: bytes, where: str) -> None:
     """Two parameter files equal field for field: every byte but the header's ``lo`` and ``L`` (float64s an
     axis frame's arithmetic computes, a last bit differently with other versions of numpy, scipy or BLAS),
-    which agree to 1e-9 relative; the CRC-32 trailer covers them, so it is left out too."""
-    from axialdeform.core.io.adp import _HEADER, HEADER_SIZE
+    which agree to 1e-9 relative, and a float32 file's numbers, which come from that arithmetic too (a tree's
+    child offsets scale with its axes' L): equal to 1e-6 of the largest (the CRC-32 trailer covers them all,
+    so it is left out). A quantized file's numbers are compared byte for byte."""
+    from axialdeform.core.io.adp import _HEADER, ENCODING_FLOAT32, HEADER_SIZE
 
     assert len(got) == len(want), f"{where}: {len(got)} bytes != {len(want)}"
     g, w = _HEADER.unpack_from(got), _HEADER.unpack_from(want)
@@ -140,7 +142,12 @@ def _assert_same_adp(got: bytes, want: bytes, where: str) -> None:
             assert a == pytest.approx(b, rel=1e-9, abs=1e-12), f"{where}: header field {i}: {a} != {b}"
         else:
             assert a == b, f"{where}: header field {i}: {a!r} != {b!r}"
-    assert got[HEADER_SIZE:-4] == want[HEADER_SIZE:-4], f"{where}: the numbers differ"
+    body, wanted = got[HEADER_SIZE:-4], want[HEADER_SIZE:-4]
+    if w[2] == ENCODING_FLOAT32:
+        a, b = np.frombuffer(body, "<f4"), np.frombuffer(wanted, "<f4")
+        assert np.allclose(a, b, rtol=1e-6, atol=1e-6 * float(np.abs(b).max(initial=0.0))), f"{where}: the numbers differ"
+    else:
+        assert body == wanted, f"{where}: the numbers differ"
 
 
 def _assert_same_json(got, want, where: str) -> None:
