@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from ..core.errors import BRIEF_NAMES, AxialDeformError
-from ..core.io.mesh import BUNDLED_MESHES, MESH_SUFFIXES, write_axes_file
+from ..core.io.mesh import BUNDLED_MESHES, MESH_SUFFIXES, load_mesh, write_axes_file
 from ..core.io.params import (
     ParamFile,
     decode_binary,
@@ -17,7 +17,7 @@ from ..core.io.params import (
 from ..core.io.safeio import check_output_path
 from ..core.record import describe_record
 from ..core.scene import Scene, is_scene_file
-from ..core.skeleton import skeleton_branches
+from ..core.shape_axes import skeleton_and_branches
 from ._common import add_axis, add_overwrite, load_base
 
 
@@ -41,7 +41,12 @@ def _mesh_info(args) -> None:
             raise AxialDeformError(f"--save-axes: writes the branches of a skeleton; give --axes skeleton, found --axes "
                                    f"{args.axes}")
         check_output_path(args.save_axes, [args.params], "--save-axes", overwrite=args.overwrite)
-    mesh = load_base(args, args.params, textures=False)
+    if args.save_axes:  # the skeleton computed once: its branches are written, its tree described
+        plain = load_mesh(args.params, textures=False, axis=args.axis, parts=getattr(args, "parts", None))
+        tree, branches = skeleton_and_branches(plain)
+        mesh = plain.with_axes(tree)
+    else:
+        mesh = load_base(args, args.params, textures=False)
     print(f"mesh:      {mesh.name} ({mesh.vertex_count} vertices, {len(mesh.faces)} triangles)")
     shown = ", ".join(f"{str(p.name)[:40]!r} ({p.count} triangles)" for p in mesh.parts[:BRIEF_NAMES])
     more = f", ... ({len(mesh.parts)} in all)" if len(mesh.parts) > BRIEF_NAMES else ""
@@ -52,7 +57,6 @@ def _mesh_info(args) -> None:
         print(f"axes:      {tree.describe()}")
     print(f"mesh:      sha256 {mesh.fingerprint.hex()}")
     if args.save_axes:
-        branches = skeleton_branches(mesh.with_axes(None))
         write_axes_file(args.save_axes, branches, mesh.name)
         print(f"wrote {args.save_axes} ({len(branches)} branches)")
 

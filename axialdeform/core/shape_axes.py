@@ -7,9 +7,9 @@ import numpy as np
 
 from .axes import AxisTree, tree_from_parts
 from .errors import MeshError
-from .skeleton import MIN_BRANCH, RULES_DIGEST, SKELETON_VERSION, skeleton_branches, skeleton_tree
+from .skeleton import MIN_BRANCH, RULES_DIGEST, SKELETON_VERSION, skeleton_branches, skeleton_tree, tree_from_branches
 
-__all__ = ["shape_tree", "parts_are_limbs"]
+__all__ = ["shape_tree", "parts_are_limbs", "skeleton_and_branches"]
 
 
 def shape_tree(mesh, rule: str = "skeleton", frame="auto", up: int = 1) -> AxisTree:
@@ -19,12 +19,27 @@ def shape_tree(mesh, rule: str = "skeleton", frame="auto", up: int = 1) -> AxisT
     cached too)."""
     from .io.axes_cache import cached_tree  # core.io reads meshes: imported once core.mesh is
 
-    key = f"skeleton{SKELETON_VERSION}-{RULES_DIGEST}-{MIN_BRANCH:g}-{up}"
+    key = _skeleton_key(up)
     tree = cached_tree(mesh, key, lambda: skeleton_tree(mesh, up=up))
     if rule != "auto" or sum(1 for p in mesh.parts if p.count) < 2:
         return tree
     decide = lambda: tree_from_parts(mesh, frame, up) if parts_are_limbs(mesh, tree, up) else tree  # noqa: E731
     return cached_tree(mesh, f"auto-{frame}-{key}", decide) if isinstance(frame, str) else decide()
+
+
+def _skeleton_key(up: int) -> str:
+    """The cache key of ``axes="skeleton"``'s tree: the rules' version and digest, the branch threshold, up."""
+    return f"skeleton{SKELETON_VERSION}-{RULES_DIGEST}-{MIN_BRANCH:g}-{up}"
+
+
+def skeleton_and_branches(mesh, up: int = 1) -> tuple[AxisTree, list[dict]]:
+    """``axes="skeleton"``'s tree of ``mesh`` and the branches it is made of (an axes file's, to edit by hand),
+    the skeleton computed once: the tree is :func:`tree_from_branches` of the branches, read from the cache
+    when it holds it and cached as ``axes="skeleton"`` caches it otherwise."""
+    from .io.axes_cache import cached_tree
+
+    branches = skeleton_branches(mesh, up=up)
+    return cached_tree(mesh, _skeleton_key(up), lambda: tree_from_branches(mesh, branches, up=up)), branches
 
 
 def parts_are_limbs(mesh, tree: AxisTree, up: int = 1) -> bool:

@@ -100,6 +100,18 @@ def test_the_skeleton_is_kept_by_the_mesh_fingerprint(wood, monkeypatch, tmp_pat
     assert files[0].read_bytes()[:2] == b"PK"  # and written anew
 
 
+def test_the_branches_to_save_and_the_tree_come_from_one_skeleton(wood, monkeypatch):
+    from axialdeform.core import shape_axes
+
+    monkeypatch.setenv("AXIALDEFORM_CACHE", "off")
+    calls = []
+    real = shape_axes.skeleton_branches
+    monkeypatch.setattr(shape_axes, "skeleton_branches", lambda *a, **k: calls.append(1) or real(*a, **k))
+    tree, branches = shape_axes.skeleton_and_branches(wood)
+    assert len(calls) == 1 and len(branches) == tree.count == 5
+    assert tree.digest == wood.with_axes("skeleton").tree.digest  # what axes="skeleton" gives
+
+
 def test_no_cache_is_kept_when_it_is_off(wood, monkeypatch, tmp_path):
     monkeypatch.setenv("AXIALDEFORM_CACHE", "off")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
