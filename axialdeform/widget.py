@@ -22,8 +22,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import anywidget
+import numpy as np
 import traitlets
 
+from .core.bounds import scene_box
 from .core.brush import mask_path
 from .core.errors import AxialDeformError
 from .core.io.atomic import atomic_path
@@ -135,7 +137,8 @@ class SceneWidget(anywidget.AnyWidget):
 
     def set_params(self, params) -> None:
         """Draw ``params`` ((m, 16) float32, any count) instead; the camera stays, the ground and the key light's
-        shadow camera are fitted to them again (as a new page of them would have them).  (A widget of one mesh; a
+        shadow camera are fitted to them again (as a new page of them would have them), and the camera's near and far
+        planes widen where they would cut them.  (A widget of one mesh; a
         scene's layers are its file's.)"""
         if self._mesh is None:
             raise AxialDeformError("set_params: this widget shows a scene of several layers; expected a widget of "
@@ -143,6 +146,9 @@ class SceneWidget(anywidget.AnyWidget):
         params = as_params(params, axes=self._mesh.axis_count)
         adp = encode_binary(params, axis=self._mesh, mesh_fingerprint=self._mesh.fingerprint, quantize=self._quantize)
         ground, shadow = fit_ground_and_shadow(self._mesh, params, self._look, self._up)
+        lo, hi = scene_box(self._mesh, params)  # the camera's depth range widens to hold them (the page's refit)
+        reach = {"center": ((lo + hi) / 2).tolist(), "radius": float(np.linalg.norm(hi - lo) / 2)}
         with self.hold_sync():  # one update message to the front end, not two
             self.params_adp = adp
-            self.config = {**self.config, "instances": int(len(params)), "ground": ground, "shadow": shadow}
+            self.config = {**self.config, "instances": int(len(params)), "ground": ground, "shadow": shadow,
+                           "reach": reach}

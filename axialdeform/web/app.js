@@ -130,6 +130,15 @@ export function mount(root, lib, scene, options = {}) {
   toggle.setAttribute('aria-pressed', 'false');
 
   let renderer = null, controls = null, camera = null, world = null, ground = null;
+  // depth range while orbiting: near and far keep their distances from the target (`reach`: the scene's
+  // radius about it), so zooming never clips the scene
+  let reach = 0;
+  const fitDepth = () => {
+    const d = camera.position.distanceTo(controls.target);
+    camera.far = d + reach;
+    camera.near = Math.max(d - reach, camera.far * 1e-4);
+    camera.updateProjectionMatrix();
+  };
   let disposed = false;
   const layers = []; // {cfg, geometry, materials, mesh, fingerprint, variant, uniforms, count}
   const state = { count: 0, frames: 0, wireframe: cfg.mode === 'wireframe' };
@@ -490,18 +499,11 @@ export function mount(root, lib, scene, options = {}) {
     camera.position.fromArray(c.eye);
     camera.lookAt(new THREE.Vector3().fromArray(c.target));
     camera.updateMatrixWorld();
-    // depth range while orbiting: the exported near/far keep their distances
-    // from the target (the scene's radius), so zooming never clips the scene
     const d0 = camera.position.distanceTo(new THREE.Vector3().fromArray(c.target));
-    const reach = c.far - d0;
+    reach = c.far - d0;
     controls = new OrbitControls(camera, renderer.domElement);
     controls.target.fromArray(c.target);
-    controls.addEventListener('change', () => {
-      const d = camera.position.distanceTo(controls.target);
-      camera.far = d + reach;
-      camera.near = Math.max(d - reach, camera.far * 1e-4);
-      camera.updateProjectionMatrix();
-    });
+    controls.addEventListener('change', fitDepth);
     controls.update();
     camera.near = c.near; camera.far = c.far; camera.updateProjectionMatrix();
     let resizer = null;
@@ -609,10 +611,12 @@ export function mount(root, lib, scene, options = {}) {
     saveMasks,
     /** Frames drawn so far. */
     get frames() { return state.frames; },
-    /** The ground plane's centre and radius and the key light's matrix now (null: none drawn), for tools and tests. */
+    /** The ground plane's centre and radius, the key light's matrix (null: none drawn) and the camera's depth
+     * range ([near, far], the target) now, for tools and tests. */
     get fitted() {
       return { ground: ground ? { center: ground.material.uniforms.u_center.value.toArray(), radius: ground.material.uniforms.u_radius.value } : null,
-        light: shadow ? shadow.uniforms.u_light_matrix.value.toArray() : null };
+        light: shadow ? shadow.uniforms.u_light_matrix.value.toArray() : null,
+        depth: camera ? [camera.near, camera.far] : null, target: controls ? controls.target.toArray() : null };
     },
     /** Each generated layer's tiles and records now (its name, the tiles nearest the target first,
      * numbers an instance, the last tiles' timing, the kept records in the tiles' order, read back from
@@ -624,8 +628,13 @@ export function mount(root, lib, scene, options = {}) {
         data: records ? Array.from(l.mesh.records()) : null })); // read back from the GPU: only when asked
     },
     /** The ground plane and the key light's camera fitted again ({ground, shadow} as the config has them: the
-     * widget's Python fits them to new instances); a page drawn without either keeps none. */
-    refit({ ground: g = null, shadow: s = null } = {}) {
+     * widget's Python fits them to new instances), and the camera's depth range widened to `reach` ({center,
+     * radius}: the new instances' sphere) where it would cut them; a page drawn without ground or shadow keeps none. */
+    refit({ ground: g = null, shadow: s = null, reach: r = null } = {}) {
+      if (r && controls) { // new instances farther from the target than the depth range holds: it widens
+        const need = controls.target.distanceTo(new THREE.Vector3().fromArray(r.center)) + r.radius;
+        if (need > reach) { reach = need; fitDepth(); }
+      }
       if (ground && g) {
         const u = ground.material.uniforms;
         u.u_center.value.fromArray(g.center); u.u_axis_u.value.fromArray(g.axis_u); u.u_axis_v.value.fromArray(g.axis_v);

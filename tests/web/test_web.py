@@ -380,7 +380,8 @@ def test_widget_renders_and_set_params_updates_it(browser, tmp_path):
 @pytest.mark.slow
 def test_widget_fits_its_ground_and_light_to_new_instances(browser, tmp_path):
     """set_params: the camera stays, but the ground plane and the key light's shadow camera are fitted to the new
-    instances (as a new page of them has them), in Python's config and in the front end."""
+    instances (as a new page of them has them), in Python's config and in the front end; the camera's depth range
+    widens to hold new instances farther than it reached (its far plane cut them)."""
     from axialdeform.web import fit_ground_and_shadow
     from axialdeform.widget import SceneWidget
 
@@ -390,6 +391,8 @@ def test_widget_fits_its_ground_and_light_to_new_instances(browser, tmp_path):
     assert first["ground"] is not None and first["shadow"] is not None
     page, errors = widget_page(browser, tmp_path, widget_state(w), w._esm)
     try:
+        before = page.evaluate("document.getElementById('out').axialdeformView.fitted")
+        depth0 = before["depth"]
         spread = ad.random_params(mesh, 30, seed=3, placement="disc", spacing=4.0)
         spread.position[:, 0] += 6.0
         w.set_params(spread)
@@ -403,6 +406,17 @@ def test_widget_fits_its_ground_and_light_to_new_instances(browser, tmp_path):
         assert np.allclose(fitted["ground"]["center"], ground["center"], atol=1e-5)
         assert fitted["ground"]["radius"] == pytest.approx(ground["radius"], rel=1e-6)
         assert np.allclose(fitted["light"], shadow["matrix"], atol=1e-6)
+        far = ad.random_params(mesh, 30, seed=4, placement="disc")
+        far.position[:, 0] += 3.0 * depth0[1]  # beyond the far plane the first instances gave
+        w.set_params(far)
+        reach = w.config["reach"]
+        page.evaluate("(c) => { Object.assign(window.widgetModel.get('config'), c); }",
+                      {k: w.config[k] for k in ("ground", "shadow", "reach")})
+        assert _push_params(page, w.params_adp) == {"ready": True, "instances": 30}
+        fitted = page.evaluate("document.getElementById('out').axialdeformView.fitted")
+        need = np.linalg.norm(np.subtract(fitted["target"], reach["center"])) + reach["radius"]
+        assert fitted["target"] == pytest.approx(before["target"])  # the camera stays where it was
+        assert fitted["depth"][1] > depth0[1] and fitted["depth"][1] >= need * (1 - 1e-6)
         assert errors == []
     finally:
         page.close()
