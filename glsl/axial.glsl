@@ -349,10 +349,41 @@ struct AxialTreeWind {
     vec3 push;
 };
 
-// The bend of a K-axis mesh (`axes` = K) in model space: v (of axis b) and n -> v_out, n_out and the
-// Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and the rigid part; id:
-// the instance (its child axes' offsets, axial_tree_offsets).
-void axial_tree_bend(vec3 v, vec3 n, int b, int axes, vec2 center, AxialInstance inst, int id, AxialTreeWind wind,
+// A vertex's axes from its code (AxisTree.vertex_code): its own axis b, a second axis b1 and the blend's
+// weight w of b1 (0: none), code = b + 64 b1 + 4096 q, w = q / 2047.
+void axial_tree_code(int code, out int b, out int b1, out float w) {
+    b = code % 64;
+    b1 = (code / 64) % 64;
+    w = float(code / 4096) / 2047.0;
+}
+
+// Add to disp and jac the bend of v by the chain of axis b (b and its ancestors), every axis's offsets
+// weighed by `weight` (the bend is linear in them).
+void axial_tree_chain(vec3 v, int b, float weight, int axes, AxialInstance inst, int id, AxialTreeWind wind,
+                      inout vec3 disp, inout mat3 jac) {
+    int j = b;
+    for (int guard = 0; guard < axes; ++guard) {
+        if (j < 0) break;
+        mat3 frame;
+        float lo, len, anchor;
+        int parent;
+        axial_tree_axis(j, frame, lo, len, anchor, parent);
+        vec4 d12 = inst.d12, d34 = inst.d34;
+        vec2 d5 = inst.d5;
+        if (j > 0) {
+            axial_tree_offsets(id, j, d12, d34, d5);
+            if (wind.on) axial_anchor_wind(frame, len, anchor, wind.push, d12, d34, d5);
+        }
+        axial_axis_add(v, frame, lo, len, weight * d12, weight * d34, weight * d5, disp, jac);
+        j = parent;
+    }
+}
+
+// The bend of a K-axis mesh (`axes` = K) in model space: v (its axes' code, axial_tree_code) and n -> v_out,
+// n_out and the Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and the rigid
+// part; id: the instance (its child axes' offsets, axial_tree_offsets).  A blended vertex moves by (1 - w)
+// times its own chain's bend plus w times b1's.
+void axial_tree_bend(vec3 v, vec3 n, int code, int axes, vec2 center, AxialInstance inst, int id, AxialTreeWind wind,
                      out vec3 v_out, out vec3 n_out, out mat3 jac_out) {
     vec3 moved = v;
     mat3 jac = mat3(1.0);
@@ -367,22 +398,11 @@ void axial_tree_bend(vec3 v, vec3 n, int b, int axes, vec2 center, AxialInstance
     }
 #endif
     vec3 disp = vec3(0.0);
-    int j = b;
-    for (int guard = 0; guard < axes; ++guard) {
-        if (j < 0) break;
-        mat3 frame;
-        float lo, len, anchor;
-        int parent;
-        axial_tree_axis(j, frame, lo, len, anchor, parent);
-        vec4 d12 = inst.d12, d34 = inst.d34;
-        vec2 d5 = inst.d5;
-        if (j > 0) {
-            axial_tree_offsets(id, j, d12, d34, d5);
-            if (wind.on) axial_anchor_wind(frame, len, anchor, wind.push, d12, d34, d5);
-        }
-        axial_axis_add(v, frame, lo, len, d12, d34, d5, disp, jac);
-        j = parent;
-    }
+    int b, b1;
+    float w;
+    axial_tree_code(code, b, b1, w);
+    axial_tree_chain(v, b, 1.0 - w, axes, inst, id, wind, disp, jac);
+    if (w > 0.0) axial_tree_chain(v, b1, w, axes, inst, id, wind, disp, jac);
     moved += disp;
 #endif
     v_out = moved;
@@ -390,12 +410,12 @@ void axial_tree_bend(vec3 v, vec3 n, int b, int axes, vec2 center, AxialInstance
     jac_out = jac;
 }
 
-// The whole map of a K-axis mesh: model-space v (of axis b) and n -> world w_out, wn_out (axial_tree_bend,
+// The whole map of a K-axis mesh: model-space v (its axes' code) and n -> world w_out, wn_out (axial_tree_bend,
 // then axial_place), and the model-space Jacobian jac_out.
-void axial_tree_world(vec3 v, vec3 n, int b, int axes, vec2 center, AxialInstance inst, int id, AxialTreeWind wind,
+void axial_tree_world(vec3 v, vec3 n, int code, int axes, vec2 center, AxialInstance inst, int id, AxialTreeWind wind,
                       out vec3 w_out, out vec3 wn_out, out mat3 jac_out) {
     vec3 bent_v, bent_n;
-    axial_tree_bend(v, n, b, axes, center, inst, id, wind, bent_v, bent_n, jac_out);
+    axial_tree_bend(v, n, code, axes, center, inst, id, wind, bent_v, bent_n, jac_out);
     axial_place(bent_v, bent_n, inst, w_out, wn_out);
 }
 #endif

@@ -56,11 +56,12 @@ def axis_distance(mesh, ids: np.ndarray) -> np.ndarray:
 TOUCH = 0.25
 
 
-def contact_gaps(mesh, bend: float, count: int, seed: int, wind=None, time: float = 0.7) -> dict:
+def contact_gaps(mesh, bend: float, count: int, seed: int, wind=None, time: float = 0.7, pairs_from=None) -> dict:
     """Where two pieces of the mesh touch (welded by position; a vertex of one within :data:`TOUCH` of the
     other's local radius of a vertex of the other), how far apart the bent pair moves, in units of that
     local radius: ``{"pairs", "median", "p95", "max"}`` over ``count`` instances bent by ``bend`` on every
-    level (and pushed by ``wind`` at ``time``)."""
+    level (and pushed by ``wind`` at ``time``).  ``pairs_from``: the mesh whose axes give the local radius (the
+    same mesh bound without blends, so that the pairs and units do not depend on the binding measured)."""
     from scipy.spatial import cKDTree
 
     from axialdeform.core.skeleton import pieces, weld
@@ -79,7 +80,7 @@ def contact_gaps(mesh, bend: float, count: int, seed: int, wind=None, time: floa
         return out
     pairs = np.array(pairs)
     rest = np.linalg.norm(mesh.positions[pairs[:, 0]] - mesh.positions[pairs[:, 1]], axis=1)
-    local = axis_distance(mesh, pairs[:, 1])
+    local = axis_distance(pairs_from or mesh, pairs[:, 1])
     touch = (rest <= TOUCH * local) & (local > 0)
     pairs, rest, local = pairs[touch], rest[touch], local[touch]
     if not len(pairs):
@@ -128,12 +129,28 @@ def main(argv=None) -> int:
     ap.add_argument("--bend", type=float, default=0.3)
     ap.add_argument("-n", type=int, default=200)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--no-blend", action="store_true", help="with --axes skeleton: measure the binding that carries "
+                    "each piece whole on one branch (no AxisTree.blend), on the same pairs")
     args = ap.parse_args(argv)
     kwargs = {"parts": args.parts.split(",")} if args.parts else {}
     mesh = ad.load_mesh(args.mesh, axes=args.axes, axis=args.axis, **kwargs)
+    if mesh.tree is None:
+        print(f"{args.mesh}: one axis ({mesh.axis.describe()}): no joints and no pieces on other axes to measure")
+        return 0
     print(f"{args.mesh}: {mesh.tree.describe()}")
+    # where pieces touch and the parent's local radius there: from each piece bound whole (no blends), so the
+    # pairs and units do not depend on the binding measured
+    whole = None
+    if args.axes == "skeleton":
+        from axialdeform.core.skeleton import skeleton_tree
+
+        plain = ad.load_mesh(args.mesh, axis=args.axis, **kwargs)
+        whole = plain.with_axes(skeleton_tree(plain, blend=False))
+        if args.no_blend:
+            mesh = whole
+            print("measured: each carried piece whole on one branch (--no-blend)")
     for label, wind in (("still", None), ("in the wind", ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.5))):
-        c = contact_gaps(mesh, args.bend, args.n, args.seed, wind)
+        c = contact_gaps(mesh, args.bend, args.n, args.seed, wind, pairs_from=whole)
         print(f"where pieces touch ({label}): {c['pairs']} vertex pairs, gap median {c['median']:.3f}, 95th percentile "
               f"{c['p95']:.3f}, largest {c['max']:.3f} (x the local radius)")
     rows = joint_figures(mesh, args.bend, args.n, args.seed)

@@ -11,6 +11,12 @@ each evaluated at the vertex itself::
     J  = I + Σ_j F_jᵀ E(D_j'(t_j)) ⊗ e_a,j / L_j      (terms with a clamped t_j drop)
     n' = normalize(cof(J) · n)
 
+A vertex may blend two chains (``AxisTree.blend``: a second axis ``b₁(V)`` and its
+weight ``w``): every sum above then weighs axis ``j`` by ``ω_j = (1 - w)·[j ∈ chain(b)]
++ w·[j ∈ chain(b₁)]`` (an ancestor of both counts once, fully).  The GPU receives
+the pair as one number a vertex, ``code = b + 64·b₁ + 4096·q``, ``w = q / 2047``
+(:attr:`AxisTree.vertex_code`; without a blend, ``code = b``; :mod:`~axialdeform.core.blend`).
+
 Scale, twist and taper (the extended form) act on the whole mesh about
 axis 0's axis line before the displacements.  One instance is ``10·K + 6``
 numbers (``+ 3`` extended, ``+ 6`` tinted): axis 0's ten offsets, axis 1's
@@ -34,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .axis import ControlAxis, stable_bytes
+from .blend import check_blend, join_vertex_code
 from .errors import MeshError, ParamError, brief_names
 from .record import MAX_RECORD_AXES
 
@@ -43,9 +50,8 @@ MAX_AXES = MAX_RECORD_AXES
 #: curve skeleton (core/skeleton.py), or whichever of the two fits the model (``BaseMesh.with_axes``)
 AXES_RULES = ("parts", "skeleton", "auto")
 
-__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "AXES_RULES", "check_parents", "tree_from_spec", "tree_from_parts", "tree_from_vertices",
-           "axes_of", "level_bends", "child_offsets"]
-
+__all__ = ["AxisTree", "TREE_AXES", "MAX_AXES", "AXES_RULES", "check_parents", "tree_from_spec", "tree_from_parts",
+           "tree_from_vertices", "axes_of", "level_bends", "child_offsets"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,6 +68,10 @@ class AxisTree:
         The axis ``b(V)`` of each vertex.
     names : tuple of K str
         A name per axis (the part it was made from, or ``axis{k}``).
+    blend : (v, 2) float64 or None
+        Each vertex's second axis ``b₁`` and its weight ``w`` in [0, 1] (held as ``q / 2047``, what the
+        GPU receives): the vertex moves by ``(1 - w)`` times its own chain's bend plus ``w`` times
+        ``b₁``'s (:meth:`weights`).  None: every vertex one chain (``w = 0``).
     anchors : tuple of K float
         Where each child axis meets its parent: ``t_a`` in [0, 1] on the child's
         own axis (``anchors[0]`` is 0 and unused).  By default measured from
@@ -76,6 +86,7 @@ class AxisTree:
     vertex_axis: np.ndarray
     names: tuple = ()
     anchors: tuple = ()
+    blend: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         k = len(self.axes)
@@ -85,6 +96,7 @@ class AxisTree:
             raise MeshError(f"axes: vertex axis indices: expected a (v,) array of 0..{k - 1}")
         object.__setattr__(self, "parents", parents)
         object.__setattr__(self, "vertex_axis", va)
+        object.__setattr__(self, "blend", check_blend(self.blend, len(va), k))
         object.__setattr__(self, "names", tuple(self.names) or tuple(f"axis{i}" for i in range(k)))
         given = tuple(self.anchors) or (None,) * k
         if len(given) != k:
@@ -122,6 +134,23 @@ class AxisTree:
         return c
 
     @property
+    def weights(self) -> np.ndarray:
+        """(v, K) float64: ``ω[v, j]``, how much axis ``j`` moves vertex ``v`` -- 1 on its chain, 0 off it,
+        ``1 - w`` and ``w`` on the two chains a blended vertex mixes (1 where they share an ancestor)."""
+        chain = self.chain.astype(np.float64)
+        if self.blend is None:
+            return chain[self.vertex_axis]
+        w = self.blend[:, 1:2]
+        return (1.0 - w) * chain[self.vertex_axis] + w * chain[self.blend[:, 0].astype(np.int64)]
+
+    @property
+    def vertex_code(self) -> np.ndarray:
+        """(v,) float32: each vertex's axes as the GPU receives them (the attribute ``in_axis``, a GLB's
+        ``_AXIAL_AXIS``): ``b + 64·b₁ + 4096·q``, below 2²³ so that float32 holds it and a shader's
+        ``int(code + 0.5)`` gives it back exactly; ``b`` without a blend."""
+        return join_vertex_code(self.vertex_axis, self.blend).astype(np.float32)
+
+    @property
     def digest(self) -> bytes:
         """16 bytes identifying the tree (frames, lo, L, parents, vertex axes): parameter files record it.
         The computed numbers are hashed as :func:`~axialdeform.core.axis.stable_bytes` rounds them (to 1e-9;
@@ -142,6 +171,8 @@ class AxisTree:
             h.update(axis_bytes(a))
         h.update(np.asarray(self.parents, dtype="<i4").tobytes())
         h.update(self.vertex_axis.astype("<i4").tobytes())
+        if self.blend is not None:  # a tree without blends keeps the digest files already record
+            h.update(self.vertex_code.astype("<f4").tobytes())
         return h.digest()[:16]
 
     def to_json(self) -> dict:
@@ -155,10 +186,12 @@ class AxisTree:
 
     def describe(self) -> str:
         """``K axes (trunk, branch1 <- trunk, frond2 <- trunk @ t=0.35, ...)``: the hierarchy, and
-        each child's anchor where it is not its root end."""
+        each child's anchor where it is not its root end; ``; N vertices blend two axes`` where some do."""
+        blended = 0 if self.blend is None else int(np.count_nonzero(self.blend[:, 1]))
         return f"{self.count} axes (" + ", ".join(
             f"{n}{'' if p < 0 else ' <- ' + self.names[p]}{f' @ t={a:.2f}' if p >= 0 and a >= 0.005 else ''}"
-            for n, p, a in zip(self.names, self.parents, self.anchors)) + ")"
+            for n, p, a in zip(self.names, self.parents, self.anchors)) + ")" + \
+            (f"; {blended} vertices blend two axes" if blended else "")
 
 
 def axes_of(mesh) -> int:
@@ -333,11 +366,12 @@ def check_parents(parents, count: int | None = None, name: str = "") -> tuple[in
 
 
 def tree_from_vertices(mesh, vertex_axis, parents, *, frames=None, names=None, root_children: bool = True,
-                       anchors=None) -> AxisTree:
+                       anchors=None, blend=None) -> AxisTree:
     """A tree from per-vertex axis indices ``vertex_axis`` ((v,) int) and a
     parent list (``parents[0] = -1``); ``frames``: one frame rule per axis
     (``"auto"`` default, ``load_mesh(axis=...)``'s values).  Child axes are
-    turned so that ``t = 0`` is their end nearer the parent's axis segment."""
+    turned so that ``t = 0`` is their end nearer the parent's axis segment.
+    ``blend``: each vertex's second axis and weight (:class:`AxisTree`), or None."""
     va = np.asarray(vertex_axis)
     if va.shape != (mesh.vertex_count,) or not np.issubdtype(va.dtype, np.integer):
         raise MeshError(f"{mesh.name}: axes: expected {mesh.vertex_count} integer vertex axis indices, found "
@@ -362,7 +396,7 @@ def tree_from_vertices(mesh, vertex_axis, parents, *, frames=None, names=None, r
     if len(anchors) != k:
         raise MeshError(f"{mesh.name}: axes: anchors: expected one per axis ({k}), found {len(anchors)}")
     try:
-        return AxisTree(tuple(axes), tuple(int(p) for p in parents), va.astype(np.int32), names, anchors)
+        return AxisTree(tuple(axes), tuple(int(p) for p in parents), va.astype(np.int32), names, anchors, blend)
     except MeshError as exc:
         raise MeshError(f"{mesh.name}: {exc}") from None
 

@@ -330,7 +330,7 @@ def tree_bend(tree, positions, normals, offsets, extra=None, *, center=None):
     nrm = np.asarray(normals, dtype=np.float64)
     offs = np.asarray(offsets, dtype=np.float64)
     n, v = len(offs), len(p)
-    chain = tree.chain[tree.vertex_axis]  # (v, K)
+    weight = tree.weights  # (v, K): 1 on a vertex's chain, 0 off it; a blend's two chains (1 - w, w)
     jac = np.broadcast_to(np.eye(3), (n, v, 3, 3)).copy()
     moved = np.broadcast_to(p, (n, v, 3)).copy()
     root = tree.axes[0]
@@ -357,16 +357,17 @@ def tree_bend(tree, positions, normals, offsets, extra=None, *, center=None):
         jl[..., 2, 1], jl[..., 2, 2] = k * s, k * c
         jac = f0.T @ jl @ f0
     for j, axis in enumerate(tree.axes):
-        idx = np.flatnonzero(chain[:, j])
+        idx = np.flatnonzero(weight[:, j])
         if not len(idx):
             continue
         f = axis.matrix
         raw = (p[idx] @ f[0] - axis.lo) / axis.length
         t = np.clip(raw, 0.0, 1.0)
         disp, slope = axis_offsets(axis, t, offs[:, j])  # (n, |idx|, 2)
-        moved[:, idx] += disp @ f[1:]
+        omega = weight[idx, j][None, :, None]  # the offsets weighed (the bend is linear in them)
+        moved[:, idx] += (disp * omega) @ f[1:]
         inside = ((raw >= -T_SLACK) & (raw <= 1 + T_SLACK)).astype(np.float64)
-        across = (slope * (inside / axis.length)[None, :, None]) @ f[1:]  # (n, |idx|, 3)
+        across = (slope * omega * (inside / axis.length)[None, :, None]) @ f[1:]  # (n, |idx|, 3)
         jac[:, idx] += across[..., :, None] * f[0][None, None, None, :]
     bent = _cofactor_apply(jac, np.broadcast_to(nrm, moved.shape))
     bent /= np.maximum(np.linalg.norm(bent, axis=-1, keepdims=True), 1e-300)

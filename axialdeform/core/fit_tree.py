@@ -27,10 +27,10 @@ class TreeModel:
         self.mesh, self.k = mesh, tree.count
         self.base = mesh.positions.astype(np.float64)
         v, k = len(self.base), self.k
-        chain = tree.chain[tree.vertex_axis]  # (v, K)
+        weight = tree.weights  # (v, K): 1 on a vertex's chain, 0 off it (a blend: its two chains' weights)
         cols = []
         for j, axis in enumerate(tree.axes):
-            w = bernstein(axis.parameter(self.base), 4) * chain[:, j, None]  # (v, 5), 0 off the chain
+            w = bernstein(axis.parameter(self.base), 4) * weight[:, j, None]  # (v, 5), 0 off the chain
             if j == 0:
                 w = w @ CANONICAL  # (v, 4): axis 0's offsets up to a shift (that is p's)
             for e in axis.matrix[1:]:  # the u, then the v component

@@ -91,14 +91,14 @@ class LodLevel:
     colors: np.ndarray | None = None
     tangents: np.ndarray | None = None
     parts: tuple = ()
-    vertex_axis: np.ndarray | None = None  # several axes: each vertex's axis (in_axis)
+    vertex_axis: np.ndarray | None = None  # several axes: each vertex's axis, or its code when blended (in_axis)
 
     @classmethod
     def of(cls, mesh) -> LodLevel:
         """Level 0: the base mesh itself (its arrays, not copies)."""
         tree = getattr(mesh, "tree", None)
         return cls(mesh.positions, mesh.normals, mesh.faces, 0.0, mesh.uvs, mesh.colors, mesh.tangents,
-                   tuple(mesh.parts), None if tree is None else tree.vertex_axis)
+                   tuple(mesh.parts), None if tree is None else tree.vertex_axis if tree.blend is None else tree.vertex_code)
 
     @property
     def vertex_count(self) -> int:
@@ -178,7 +178,9 @@ def _attributes(mesh):
         if value is not None:
             out[key] = value.astype(np.float64)
     tree = getattr(mesh, "tree", None)
-    if tree is not None:  # several axes: each simplified vertex takes the axis of where it lies
+    if tree is not None and tree.blend is not None:  # blended vertices: the code of the nearest corner
+        out["code"] = tree.vertex_code[:, None].astype(np.float64)
+    elif tree is not None:  # several axes: each simplified vertex takes the axis of where it lies
         out["axis"] = tree.vertex_axis[:, None].astype(np.float64)
     return out
 
@@ -234,7 +236,10 @@ def _transfer(positions, faces, attrs, new_positions, mapping):
     out = {}
     for name, values in attrs.items():
         full = np.zeros((len(new_positions), values.shape[1]))
-        full[best_j] = np.einsum("ic,ick->ik", bary, values[corners])
+        if name == "code":  # a blended vertex's axes' code is no quantity to interpolate: the nearest corner's
+            full[best_j] = values[corners[np.arange(len(corners)), np.argmax(bary, axis=1)]]
+        else:
+            full[best_j] = np.einsum("ic,ick->ik", bary, values[corners])
         out[name] = full
     return out
 
@@ -248,6 +253,8 @@ def _finish(attrs, positions, faces):
     out = {"normals": normals.astype(np.float32)}
     if "axis" in attrs:  # interpolated inside one axis's triangles: whole; at a joint: the nearer axis
         out["axis"] = np.rint(attrs["axis"][:, 0]).astype(np.int32)
+    if "code" in attrs:  # blended: each vertex's code (AxisTree.vertex_code), what in_axis takes
+        out["axis"] = attrs["code"][:, 0].astype(np.float32)
     if "uvs" in attrs:
         out["uvs"] = attrs["uvs"].astype(np.float32)
     if "colors" in attrs:

@@ -47,8 +47,11 @@ def parts_are_limbs(mesh, tree: AxisTree, up: int = 1) -> bool:
     when the whole model's skeleton ``tree`` puts it on several axes and it holds the trunk's (a one-piece wood)
     or, skeletonized alone, is more than one branch; a palm's frond hung on the trunk where it crosses the crown,
     and split there, is one branch alone: a limb."""
+    # a carried piece's points blend two axes (AxisTree.blend): they do not make their part a branching one
+    whole = np.ones(len(tree.vertex_axis), bool) if tree.blend is None else tree.blend[:, 1] == 0
     for p in (p for p in mesh.parts if p.count):
-        own = np.unique(tree.vertex_axis[np.unique(mesh.faces[p.start:p.start + p.count])])
+        used = np.unique(mesh.faces[p.start:p.start + p.count])
+        own = np.unique(tree.vertex_axis[used[whole[used]]])
         try:
             if len(own) > 1 and (0 in own or len(skeleton_branches(mesh.with_parts([p.name]), up=up)) > 1):
                 return False

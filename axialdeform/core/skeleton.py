@@ -66,6 +66,7 @@ from scipy.spatial import cKDTree
 from .arrays import position_ids
 from .axes import DOUBTFUL_GAP, MAX_AXES, TIE, AxisTree
 from .axis import ControlAxis
+from .blend import blend_pieces
 from .errors import MeshError
 
 __all__ = ["skeleton_tree", "skeleton_branches", "tree_from_branches", "RULES_DIGEST", "MIN_BRANCH", "LIMB_RATIO",
@@ -360,17 +361,22 @@ def skeleton_branches(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_
              "points": chains[c].points.copy()} for i, c in enumerate(keep)]
 
 
-def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes: int = MAX_AXES) -> AxisTree:
+def skeleton_tree(mesh, *, min_branch: float = MIN_BRANCH, up: int = 1, max_axes: int = MAX_AXES,
+                  blend: bool = True) -> AxisTree:
     """The axes of ``mesh`` from its own shape: :func:`tree_from_branches` of :func:`skeleton_branches`
-    (the parameters are its).  Names ``trunk``, ``branch1``, ...; ``describe()`` says the hierarchy."""
-    return tree_from_branches(mesh, skeleton_branches(mesh, min_branch=min_branch, up=up, max_axes=max_axes), up=up)
+    (the parameters are theirs).  Names ``trunk``, ``branch1``, ...; ``describe()`` says the hierarchy."""
+    return tree_from_branches(mesh, skeleton_branches(mesh, min_branch=min_branch, up=up, max_axes=max_axes), up=up,
+                              blend=blend)
 
 
-def tree_from_branches(mesh, branches, up: int = 1) -> AxisTree:
+def tree_from_branches(mesh, branches, up: int = 1, blend: bool = True) -> AxisTree:
     """The axes of ``mesh`` from its branches (rule 6 on rule 5's binding): ``branches`` as
     :func:`skeleton_branches` gives them or an axes file of ``[[branch]]`` tables holds them (edited by
-    hand: a branch moved or left out).  Each branch belongs to the piece its points lie nearest; a piece
-    holding none is carried whole by the branch it sits on."""
+    hand: a branch moved or left out).  Each branch belongs to the piece its points lie nearest.  A piece
+    holding none is carried: with ``blend`` (the default) each of its points moves with the two branches
+    nearest it, weighed by nearness, and a limb piece of its own moves with what it rests on where it
+    touches it (:func:`~axialdeform.core.blend.blend_pieces`, ``AxisTree.blend``); without, the piece rides
+    whole the branch it sits on."""
     points, faces, inverse = weld(mesh.positions, mesh.faces)
     label = pieces(len(points), faces)
     chains = _check_branches(mesh, branches, points, label)
@@ -378,6 +384,7 @@ def tree_from_branches(mesh, branches, up: int = 1) -> AxisTree:
     limbs = sorted({c.piece for c in chains})
     limb_point = np.isin(label, limbs)
     welded_axis = _bind(points, label, chains, keep, limbs)
+    mixed = blend_pieces(points, label, welded_axis, keep, limbs, chains) if blend else None
     names = tuple(str(b["name"]) for b in branches)
     parents = tuple(c.parent for c in chains)
     axes, anchors = [], [0.0]
@@ -391,7 +398,8 @@ def tree_from_branches(mesh, branches, up: int = 1) -> AxisTree:
         if i:
             at = float(np.asarray(axis.matrix)[0] @ c.points[0])
             anchors.append(float(np.clip((at - axis.lo) / axis.length, 0.0, 1.0)))
-    return AxisTree(tuple(axes), parents, welded_axis[inverse].astype(np.int32), names, tuple(anchors))
+    return AxisTree(tuple(axes), parents, welded_axis[inverse].astype(np.int32), names, tuple(anchors),
+                    None if mixed is None else mixed[inverse])
 
 
 def _check_branches(mesh, branches, points, label) -> list[Chain]:
@@ -574,7 +582,8 @@ def _rules_hash() -> str:
         skeletor_version = version("skeletor")
     except PackageNotFoundError:  # pragma: no cover - a dependency
         skeletor_version = "?"
-    return hashlib.sha256(Path(__file__).read_bytes() + skeletor_version.encode()).hexdigest()[:8]
+    rules = Path(__file__).read_bytes() + Path(__file__).with_name("blend.py").read_bytes()
+    return hashlib.sha256(rules + skeletor_version.encode()).hexdigest()[:8]
 
 
 #: the rules' digest: a tree cached by an earlier version of these rules is not read

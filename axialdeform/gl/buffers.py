@@ -122,7 +122,7 @@ class MeshBuffers:
         # copies: a 4.5 M-triangle terrain would hold ~160 MB more while uploading)
         # several axes: each vertex's axis as a 7th float (in_axis); a LOD level carries its own
         tree = getattr(mesh, "tree", None)
-        axis_ids = tree.vertex_axis if tree is not None else getattr(mesh, "vertex_axis", None)
+        axis_ids = tree.vertex_code if tree is not None else getattr(mesh, "vertex_axis", None)  # blends: b + 64 b1 + 4096 q
         interleaved = np.empty((mesh.vertex_count, 6 if axis_ids is None else 7), dtype="f4")
         interleaved[:, :3] = mesh.positions
         interleaved[:, 3:6] = mesh.normals

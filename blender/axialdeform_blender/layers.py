@@ -17,6 +17,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix
 
+from axialdeform.core.blend import join_vertex_code
 from axialdeform.core.deform import T_SLACK, bernstein
 
 from .nodes import GROUP_PREFIX, build_group
@@ -47,7 +48,8 @@ class LayerData:
     faces : (f, 3) int.
     frames : (K, 3, 3) float — each axis's rows ``e_a, e_u, e_v``; lo, length : (K,) float.
     parents : (K,) int (-1 for the root); anchors : (K,) float; line : (2,) axis 0's axis line.
-    vertex_axis : (v,) int — each vertex's axis.
+    vertex_axis : (v,) int — each vertex's axis; blend : (v, 2) float or None — a second axis and its weight
+    (``AxisTree.blend``: the vertex moves by ``1 - w`` of its own chain's bend and ``w`` of the second's).
     params : (n, 10·K + 6 [+3 [+3]]) float32 — the records.
     uvs : (v, 2) float32 or None (``v = 0`` at the image's bottom, as Blender's); color : RGBA or None.
     colors : (v, 4) float32 or None — linear RGBA vertex colours.
@@ -78,6 +80,7 @@ class LayerData:
     phases: np.ndarray | None = None
     colors: np.ndarray | None = None
     parts: list = field(default_factory=list)
+    blend: np.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -105,19 +108,32 @@ def _depths(parents) -> np.ndarray:
 
 
 def _levels(data: LayerData):
-    """Each depth's axes and, per vertex, the weights of the axis of its chain at that depth."""
+    """Each level's axes and, per vertex, the weights of the axis of its chain at that level: a level a depth of
+    the tree, then (a tree whose vertices blend two chains) a level a depth for the axes of the second chain
+    that are not on the first, each level's weights times the vertex's weight on that axis."""
     p = np.asarray(data.positions, dtype=np.float64)
     depth = _depths(data.parents)
-    level_axes = [[int(k) for k in np.flatnonzero(depth == m)] for m in range(int(depth.max()) + 1)]
     chain = np.eye(data.count, dtype=bool)
     for k in range(1, data.count):
         chain[k] |= chain[data.parents[k]]
     own = chain[np.asarray(data.vertex_axis, dtype=int)]  # (v, K)
+    weight = own.astype(np.float64)
+    levels = [(m, own) for m in range(int(depth.max()) + 1)]
+    if data.blend is not None:  # AxisTree.weights: 1 - w on the own chain, w on the second's, 1 on both
+        w = np.asarray(data.blend[:, 1], dtype=np.float64)[:, None]
+        second = chain[np.asarray(data.blend[:, 0], dtype=int)] & (w > 0)
+        weight = (1.0 - w) * own + w * second
+        only = second & ~own
+        levels += [(m, only) for m in range(1, int(depth.max()) + 1) if np.any(only[:, depth == m])]
+    level_axes = [[int(k) for k in np.flatnonzero(depth == m)] for m, _ in levels]
     attrs = {}
-    for m, axes in enumerate(level_axes):
+    for m, (_, on) in enumerate(levels):
+        axes = level_axes[m]
         pick = np.full(len(p), -1)
+        omega = np.zeros(len(p))
         for item, k in enumerate(axes):
-            pick[own[:, k]] = item
+            pick[on[:, k]] = item
+            omega[on[:, k]] = weight[on[:, k], k]
         b4, s3 = np.zeros((len(p), 5)), np.zeros((len(p), 4))
         eas, eus, evs = (np.zeros((len(p), 3)) for _ in range(3))
         for item, k in enumerate(axes):
@@ -129,6 +145,8 @@ def _levels(data: LayerData):
             b4[sel] = bernstein(t, 4)  # (T_SLACK: beyond it an ancestor's t is clamped and its slope drops out)
             s3[sel] = 4.0 * bernstein(t, 3) * (inside / data.length[k])[:, None]
             eas[sel], eus[sel], evs[sel] = f[0], f[1], f[2]
+        b4 *= omega[:, None]  # the vertex's weight on the axis (1 unless it blends two chains): the bend is linear
+        s3 *= omega[:, None]
         wb, ws = np.zeros(len(p)), np.zeros(len(p))
         if data.wind_weights is not None:  # the wind's push on each axis, a multiple of its part across the axis
             for item, k in enumerate(axes):
@@ -157,7 +175,7 @@ def _levels(data: LayerData):
     attrs["axial_turn_w"] = ("FLOAT_VECTOR", w)
     attrs["axial_turn_in"] = ("FLOAT", inside / data.length[0])
     attrs["axial_rest_normal"] = ("FLOAT_VECTOR", np.asarray(data.normals, dtype=np.float64))
-    attrs["axial_axis"] = ("INT", np.asarray(data.vertex_axis, dtype=int))
+    attrs["axial_axis"] = ("INT", join_vertex_code(data.vertex_axis, data.blend))  # b + 64 b1 + 4096 q (blends)
     return level_axes, attrs
 
 

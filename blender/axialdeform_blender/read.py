@@ -24,10 +24,10 @@ def layer_data(name: str, mesh, params, color=None, up: str = "y") -> LayerData:
     if tree is not None:
         axes = tree.axes
         parents, anchors, names = tuple(tree.parents), tuple(tree.anchors), tuple(tree.names)
-        vertex_axis = np.asarray(tree.vertex_axis, dtype=int)
+        vertex_axis, blend = np.asarray(tree.vertex_axis, dtype=int), tree.blend
     else:
         axes, parents, anchors, names = [mesh.axis], (-1,), (0.0,), ()
-        vertex_axis = np.zeros(mesh.vertex_count, dtype=int)
+        vertex_axis, blend = np.zeros(mesh.vertex_count, dtype=int), None
     if color is not None:  # a scene layer's colour: its mesh's default material takes it
         color = tuple(float(c) for c in color) + (1.0,) * (4 - len(color))
     from axialdeform.core.axes import sag_weights
@@ -38,7 +38,7 @@ def layer_data(name: str, mesh, params, color=None, up: str = "y") -> LayerData:
         name=name, positions=np.asarray(mesh.positions, np.float32), normals=np.asarray(mesh.normals, np.float32),
         faces=np.asarray(mesh.faces, np.int64), frames=np.stack([a.matrix for a in axes]),
         lo=np.array([a.lo for a in axes]), length=np.array([a.length for a in axes]), parents=parents,
-        anchors=anchors, line=tuple(axis0.line), vertex_axis=vertex_axis, params=np.asarray(params, np.float32),
+        anchors=anchors, line=tuple(axis0.line), vertex_axis=vertex_axis, blend=blend, params=np.asarray(params, np.float32),
         uvs=None if mesh.uvs is None else np.asarray(mesh.uvs, np.float32), color=color, names=names,
         extra={"up": up, "axis_kind": "frame" if axis0.framed else "xyz"[axis0.index]},
         wind_weights=sag_weights(np.asarray(anchors, dtype=np.float64)),
@@ -109,9 +109,11 @@ def terrain_from_file(path):
 
 
 def base_mesh(info: dict, positions, normals, faces, uvs=None, vertex_axis=None, colors=None, parts=()):
-    """The axialdeform ``BaseMesh`` an instance object was made from: its axes as recorded, its appearance
-    (``parts``: :class:`LayerData`'s dicts, the texture's pixels as Blender holds them) as imported."""
+    """The axialdeform ``BaseMesh`` an instance object was made from: its axes as recorded (``vertex_axis``: each
+    vertex's code, ``AxisTree.vertex_code``: its axis, or the two it blends), its appearance (``parts``:
+    :class:`LayerData`'s dicts, the texture's pixels as Blender holds them) as imported."""
     from axialdeform.core.axes import tree_from_vertices
+    from axialdeform.core.blend import split_vertex_code
     from axialdeform.core.material import Material, Part
     from axialdeform.core.mesh import BaseMesh
 
@@ -124,9 +126,10 @@ def base_mesh(info: dict, positions, normals, faces, uvs=None, vertex_axis=None,
     kind = info.get("axis_kind", "frame")
     if int(info["count"]) == 1:
         return mesh.with_axis(kind if kind in ("x", "y", "z") else np.asarray(info["frames"][0]))
-    tree = tree_from_vertices(mesh, np.asarray(vertex_axis, dtype=np.int64), list(info["parents"]),
+    axis, blend = split_vertex_code(vertex_axis)
+    tree = tree_from_vertices(mesh, axis.astype(np.int64), list(info["parents"]),
                               frames=[np.asarray(f) for f in info["frames"]], names=list(info["names"]),
-                              root_children=False, anchors=info.get("anchors"))
+                              root_children=False, anchors=info.get("anchors"), blend=blend)
     return mesh.with_axes(tree)
 
 

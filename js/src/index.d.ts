@@ -100,7 +100,8 @@ export interface AxialInstancedMeshOptions {
   capacity?: number;
   /** The materials bend themselves (ShaderMaterials including AXIAL_GLSL): used as given. */
   ownShader?: boolean;
-  /** Each vertex's axis (several axes), if the geometry has no `_axial_axis` attribute. */
+  /** Each vertex's axis (several axes), if the geometry has no `_axial_axis` attribute: a whole number, or for a
+   * vertex blending two axes' chains `b + 64 b1 + 4096 q` (its axis b, a second axis b1, weight q / 2047). */
   vertexAxis?: ArrayLike<number> | THREE.BufferAttribute;
 }
 

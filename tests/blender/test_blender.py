@@ -20,6 +20,8 @@ from axialdeform.core.io.gltf_read import read_instanced_glb
 from axialdeform.core.transforms import angles_from_matrices, rotation_matrices
 from axialdeform.core.wind import apply_wind
 
+from helpers.models import blended
+
 ROOT = Path(__file__).resolve().parents[2]
 CHECKS = Path(__file__).with_name("bl_checks.py")
 
@@ -69,6 +71,8 @@ CASES = {
     "tree_anchored": lambda: (ad.load_mesh("tree", axes="parts"), dict(bend=(0.1, 0.3, 0.3), droop=0.3)),
     "tree_extended_tinted": lambda: (ad.load_mesh("tree", axes="parts"),
                                      dict(bend=(0.1, 0.3), twist=0.5, taper=0.3, scale=(0.6, 1.4), tint=0.4)),
+    # vertices blending two chains (AxisTree.blend): a second level for each depth of the second chain
+    "tree_blended": lambda: (blended(ad.load_mesh("tree", axes="parts")), dict(bend=(0.1, 0.3, 0.3), droop=0.3)),
 }
 
 
@@ -86,7 +90,7 @@ def test_geometry_nodes_bend_as_the_library(tmp_path, case):
     assert nerr <= 1e-4, f"{case}: normals {nerr:.2e} from ad.deform"
 
 
-@pytest.mark.parametrize("case", ["stones", "tree_anchored"])
+@pytest.mark.parametrize("case", ["stones", "tree_anchored", "tree_blended"])
 def test_the_wind_is_an_animated_input(tmp_path, case):
     mesh, variation = CASES[case]()
     params = ad.random_params(mesh, 10, seed=2, variation=ad.Variation(**variation))

@@ -323,3 +323,73 @@ def test_too_many_parts_are_refused_before_any_axis_is_made(tmp_path, monkeypatc
     monkeypatch.setattr(axes_mod, "_axis_of", lambda *a, **k: pytest.fail("an axis was made before the refusal"))
     with pytest.raises(ad.core.MeshError, match="p300.obj: axes='parts': 300 parts, but a mesh has at most 64 axes"):
         mesh.with_axes("parts")
+
+
+def test_a_blended_vertex_moves_by_both_chains_weighed(tree):
+    """AxisTree.blend (docs/method.md, "Blended vertices"): a vertex of axis b blending b1 with weight w moves by
+    (1 - w) of b's chain and w of b1's, an axis on both counting fully; w = 0 is the one-chain map exactly."""
+    from axialdeform.core.blend import BLEND_STEPS, split_vertex_code
+
+    t = tree.tree
+    v = len(t.vertex_axis)
+    twig = t.names.index("twig1")  # twig1 <- branch1 <- trunk; branch4 <- trunk
+    b1 = t.names.index("branch4")
+    w = np.zeros(v)
+    w[t.vertex_axis == twig] = 0.3
+    blend = np.stack([np.full(v, b1), w], axis=1)
+    mixed = dataclasses.replace(tree, _axis=None, tree=AxisTree(t.axes, t.parents, t.vertex_axis, t.names, t.anchors, blend))
+    om = mixed.tree.weights[t.vertex_axis == twig][0]
+    q = round(0.3 * BLEND_STEPS) / BLEND_STEPS
+    assert om[0] == pytest.approx(1.0) and om[twig] == pytest.approx(1 - q) and om[t.names.index("branch1")] == pytest.approx(1 - q)
+    assert om[b1] == pytest.approx(q) and np.count_nonzero(om) == 4
+    p = ad.random_params(tree, 5, seed=2, variation=ad.Variation(bend=(0.1, 0.3, 0.3)))
+    plain, mixed_pos = ad.deform(tree, p)[0], ad.deform(mixed, p)[0]
+    on = t.vertex_axis == twig
+    assert np.array_equal(plain[:, ~on], mixed_pos[:, ~on])  # no blend, the same numbers to the bit
+    # by hand: the twig's chain moved by (1 - q), plus q of branch4's own bend (its chain less the shared trunk)
+    keep_b1 = p.copy()
+    keep_b1[:, 10:10 * t.count] = 0
+    keep_b1[:, 10 * b1:10 * b1 + 10] = p[:, 10 * b1:10 * b1 + 10]
+    only_b1 = ad.deform(dataclasses.replace(tree, _axis=None, tree=AxisTree(t.axes, t.parents, np.full(v, b1), t.names, t.anchors)),
+                        keep_b1)[0] - ad.deform(dataclasses.replace(tree, _axis=None, tree=AxisTree(
+                            t.axes, t.parents, np.zeros(v, int), t.names, t.anchors)), keep_b1)[0]
+    trunk_only = p.copy()
+    trunk_only[:, 10:10 * t.count] = 0
+    base = ad.deform(tree, trunk_only)[0]  # the trunk's bend alone (the same for every vertex's chain)
+    want = base + (1 - q) * (plain - base) + q * only_b1
+    assert np.abs(mixed_pos[:, on] - want[:, on]).max() <= 1e-6 * tree.axis.length  # float32 positions
+    code = mixed.tree.vertex_code
+    assert code.dtype == np.float32 and np.all(code[~on] == t.vertex_axis[~on]) and np.all(code < 2 ** 23)
+    back_axis, back_blend = split_vertex_code(code)
+    assert np.array_equal(back_axis, t.vertex_axis) and np.allclose(back_blend[on, 1], q)
+
+
+def test_bad_blends_and_codes_are_refused_in_words(tree, tmp_path):
+    import pygltflib
+
+    from axialdeform.core import GltfError
+    from axialdeform.core.io.glb import AXIS_ATTRIBUTE
+    from axialdeform.core.io.gltf import read_instanced_glb
+
+    t = tree.tree
+    v = len(t.vertex_axis)
+    for blend, expected in [(np.zeros((v, 3)), "expected a \\(v, 2\\) array"), (np.c_[np.full(v, 10.0), np.full(v, 0.5)],
+                            "second axes of 0..9"), (np.c_[np.zeros(v), np.full(v, 1.5)], "weights in 0..1"),
+                            (np.c_[np.zeros(v), np.full(v, np.nan)], "expected a \\(v, 2\\) array")]:
+        with pytest.raises(MeshError, match=expected):
+            AxisTree(t.axes, t.parents, t.vertex_axis, t.names, t.anchors, blend)
+    glb = tmp_path / "t.glb"
+    ad.export_glb(glb, tree, ad.random_params(tree, 3, seed=1), "instanced")
+    g = pygltflib.GLTF2().load(str(glb))
+    accessor = g.accessors[getattr(g.meshes[0].primitives[0].attributes, AXIS_ATTRIBUTE)]
+    view = g.bufferViews[accessor.bufferView]
+    blob = bytearray(g.binary_blob())
+    start = view.byteOffset + (accessor.byteOffset or 0)
+    for value, expected in [(2.0 ** 23, "below 2\\^23"), (1.5, "one whole axis index"), (10 + 4096.0 * 5, "axis indices: expected"),
+                            (1 + 64 * 12 + 4096.0 * 5, "second axes of 0..9")]:
+        bad = bytearray(blob)
+        bad[start:start + 4] = np.float32(value).tobytes()
+        g.set_binary_blob(bytes(bad))
+        g.save(str(tmp_path / "u.glb"))
+        with pytest.raises(GltfError, match=expected):
+            read_instanced_glb(tmp_path / "u.glb")

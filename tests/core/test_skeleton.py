@@ -250,6 +250,32 @@ def test_crowns_and_bark_marks_stay_on_what_they_sit_on():
         assert gaps["pairs"] > 100 and gaps["median"] <= 0.1 and gaps["p95"] <= 0.5 and gaps["max"] <= 1.0, gaps
 
 
+def test_a_crown_pierced_by_two_branches_stays_on_both():
+    """A crown blob two branches (and the trunk) pierce: bound whole to one branch it opens where the other leaves it (median gap
+    0.13 of the local radius in the wind, over the 0.1 bound); blending the two branches by nearness
+    (AxisTree.blend) keeps both contacts closed -- measured on the same pairs, in the same units."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
+    import joint_gap
+
+    from axialdeform.core.skeleton import skeleton_tree
+
+    from helpers.one_piece import pierced_tree
+
+    mesh = pierced_tree()
+    mixed, whole = mesh.with_axes("skeleton"), mesh.with_axes(skeleton_tree(mesh, blend=False))
+    assert mixed.tree.blend is not None and whole.tree.blend is None and mixed.tree.count == whole.tree.count == 5
+    crown = np.arange(one_piece_tree().vertex_count, mesh.vertex_count)
+    assert len(set(mixed.tree.vertex_axis[crown])) >= 3  # the trunk and both branches hold it where they are nearest
+    assert len(set(whole.tree.vertex_axis[crown])) == 1
+    wind = ad.Wind(direction=(1.0, 0.0, 0.4), strength=0.3, gustiness=0.5)
+    before = joint_gap.contact_gaps(whole, 0.3, 40, 1, wind, pairs_from=whole)
+    after = joint_gap.contact_gaps(mixed, 0.3, 40, 1, wind, pairs_from=whole)
+    assert before["median"] > 0.1 and after["median"] <= 0.1 and after["p95"] <= 0.5, (before, after)
+
+
 def test_a_scene_layer_takes_axes_from_the_shape(wood, tmp_path):
     """``axes = "skeleton"`` in a scene file's layer: the scattered trees bend at every branch."""
     path = tmp_path / "wood.obj"

@@ -17,6 +17,8 @@ from axialdeform.gl.renderer import AxialRenderer
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
 import make_tree  # noqa: E402 - tools/ is not a package
 
+from helpers.models import blended  # noqa: E402
+
 
 def comb(k: int, seed: int = 0):
     """A trunk and k − 1 branches (some on branches: depth up to 3), one axis each."""
@@ -188,3 +190,44 @@ def test_gpu_equals_cpu_for_axes_from_the_shape(ctx, tmp_path, monkeypatch):
     mesh = one_piece_tree().with_axes("skeleton")
     assert mesh.axis_count == 5
     _check_capture(ctx, mesh, _params(mesh, n=12))
+
+
+def test_vertices_blending_two_chains_bend_on_the_gpu_as_on_the_cpu(ctx):
+    """A vertex blending two axes' chains (AxisTree.blend: one float a vertex, b + 64 b1 + 4096 q): the GPU
+    equals the CPU, extended and in the wind; the blend moves the vertices it weighs and no other."""
+    mesh = ad.load_mesh("tree", axes=TREE_AXES)
+    mixed = blended(mesh)
+    for extended in (False, True):
+        gpu = _check_capture(ctx, mixed, _params(mixed, n=20, extended=extended))
+    p = _params(mixed, n=20)
+    plain, _ = ad.deform(mesh, p)
+    moved = np.abs(ad.deform(mixed, p)[0] - plain).max(axis=(0, 2))
+    w = mixed.tree.blend[:, 1]
+    other = mixed.tree.blend[:, 0] != mixed.tree.vertex_axis
+    assert np.all(moved[w == 0] == 0) and np.median(moved[(w > 0.2) & other]) > 1e-3 * mesh.axis.length
+    wind = ad.Wind(direction=(1.0, 0.0, 0.3), strength=0.15, gustiness=0.6, frequency=0.5)
+    with AxialRenderer(ctx, mixed, p, options=ad.RenderOptions(wind=wind)) as r:
+        gpu = r.capture(time=4.0)
+    cpu = ad.bake(mixed, p, "cpu", options=ad.RenderOptions(wind=wind, time=4.0))
+    assert np.abs(gpu[0] - cpu[0]).max() <= 1e-5 * mesh.axis.length * 3
+
+
+def test_a_blended_tree_keeps_its_blends_through_its_code_a_glb_and_its_levels(ctx, tmp_path):
+    from axialdeform.core.blend import split_vertex_code
+
+    mesh = ad.load_mesh("tree", axes=TREE_AXES)
+    mixed = blended(mesh)
+    va, blend = split_vertex_code(mixed.tree.vertex_code)
+    assert np.array_equal(va, mixed.tree.vertex_axis) and np.array_equal(blend[blend[:, 1] > 0], mixed.tree.blend[blend[:, 1] > 0])
+    assert split_vertex_code(mesh.tree.vertex_code)[1] is None  # no blend: the code is the axis
+    p = _params(mixed, n=6)
+    from axialdeform.core.io.gltf_read import read_instanced_glb
+
+    ad.export_glb(tmp_path / "blended.glb", mixed, p, "instanced")
+    back, q = read_instanced_glb(tmp_path / "blended.glb")
+    assert back.tree.blend is not None and np.array_equal(back.tree.vertex_code, mixed.tree.vertex_code)
+    assert np.abs(ad.deform(back, q)[0] - ad.deform(mixed, p)[0]).max() <= 1e-5 * mesh.axis.length
+    with AxialRenderer(ctx, mixed, p, options=ad.RenderOptions(lod=True)) as r:
+        for level in range(1, len(r.lod_levels)):
+            lv = r.lod_levels[level]
+            assert set(np.unique(lv.vertex_axis)) <= set(np.unique(mixed.tree.vertex_code))  # whole codes, none mixed

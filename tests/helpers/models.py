@@ -39,3 +39,19 @@ def palm_file(path: Path, scenery: bool = True) -> Path:
 
 
 PALM = ["trunk", "Wedel-ä", *(f"frond{k}" for k in range(1, 7))]
+
+
+def blended(mesh, seed: int = 3):
+    """``mesh`` (of several axes) with about half its vertices blending their own chain with another axis's at a
+    random weight (``AxisTree.blend``); the same axes otherwise."""
+    import dataclasses
+
+    from axialdeform.core.axes import AxisTree
+
+    rng = np.random.default_rng(seed)
+    t = mesh.tree
+    v = len(t.vertex_axis)
+    blend = np.stack([rng.integers(0, t.count, v), rng.random(v) * (rng.random(v) < 0.5)], axis=1)
+    tree = AxisTree(t.axes, t.parents, t.vertex_axis, t.names, t.anchors, blend)
+    assert tree.blend is not None and tree.digest != t.digest
+    return dataclasses.replace(mesh, _axis=None, tree=tree)

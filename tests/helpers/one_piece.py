@@ -74,3 +74,17 @@ def crowned_tree(step: float = 0.05) -> ad.BaseMesh:
     positions = np.vstack([wood.positions, np.asarray(extra.vertices, dtype=np.float32)])
     faces = np.vstack([wood.faces, np.asarray(extra.faces) + wood.vertex_count]).astype(np.uint32)
     return ad.BaseMesh.from_arrays(positions, faces, name="crowned tree")
+
+
+def pierced_tree(step: float = 0.05) -> ad.BaseMesh:
+    """:func:`one_piece_tree` with one crown blob (a sphere) that the first two branches both pierce: their tips
+    lie inside it, 0.1 from its surface."""
+    import trimesh
+
+    wood = one_piece_tree(step)
+    a, b = branch_tips()[:2]
+    blob = trimesh.creation.icosphere(subdivisions=3, radius=float(np.linalg.norm(a - b)) / 2 + 0.1)
+    blob.apply_translation((a + b) / 2)
+    positions = np.vstack([wood.positions, np.asarray(blob.vertices, dtype=np.float32)])
+    faces = np.vstack([wood.faces, np.asarray(blob.faces) + wood.vertex_count]).astype(np.uint32)
+    return ad.BaseMesh.from_arrays(positions, faces, name="pierced tree")

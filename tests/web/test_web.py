@@ -1184,12 +1184,14 @@ def test_without_a_ground_the_instances_shadow_each_other_as_in_render(browser, 
 
 @pytest.mark.slow
 def test_page_of_one_piece_woods_shows_what_render_shows(browser, tmp_path, monkeypatch):
-    """axes="skeleton" on a one-piece wood (tests/helpers/one_piece.py): the page bends every branch the
-    skeleton found, as render does."""
-    from helpers.one_piece import one_piece_tree
+    """axes="skeleton" on a one-piece wood with crowns and bark marks (tests/helpers/one_piece.py): the page
+    bends every branch the skeleton found, and the carried pieces blending two branches (AxisTree.blend: the
+    GLB's _AXIAL_AXIS code), as render does."""
+    from helpers.one_piece import crowned_tree
 
     monkeypatch.setenv("AXIALDEFORM_CACHE", str(tmp_path / "cache"))
-    mesh = one_piece_tree().with_axes("skeleton")
+    mesh = crowned_tree().with_axes("skeleton")
+    assert mesh.tree.blend is not None
     k = mesh.axis_count
     params = ad.random_params(mesh, 30, seed=4, variation=ad.Variation(bend=(0.05, 0.5)), placement="disc", spacing=3.0)
     out = tmp_path / "woods.html"

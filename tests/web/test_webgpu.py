@@ -27,6 +27,7 @@ from axialdeform.core.io.gltf import bend_extension
 from axialdeform.core.wind import apply_wind
 
 from helpers.generated_scenes import GLTF_SCENE, HILLS, LANDSCAPE, TREES, close
+from helpers.models import blended
 from helpers.three_site import JS, MORE, ROOT, SIZE, Server, iou, make_site, mask, render_reference
 
 pytestmark = pytest.mark.slow
@@ -76,7 +77,7 @@ def _case(name, mesh, params, wind=None, time=0.0):
     ext = bend_extension(mesh, params.shape[1])
     tree = getattr(mesh, "tree", None)
     return {"name": name, "positions": mesh.positions.ravel().tolist(), "normals": mesh.normals.ravel().tolist(),
-            "vertexAxis": tree.vertex_axis.tolist() if tree is not None else None,
+            "vertexAxis": tree.vertex_code.tolist() if tree is not None else None,  # a blend's code: b + 64 b1 + 4096 q
             "axis": {"axis": ext["axis"], "axes": ext.get("axes")}, "count": len(params),
             "numbersPerInstance": params.shape[1], "axes": tree.count if tree is not None else 1,
             "data": np.asarray(params, np.float32).ravel().tolist(), "wind": wind, "time": time}
@@ -84,7 +85,8 @@ def _case(name, mesh, params, wind=None, time=0.0):
 
 def bend_cases():
     """(case for the page, expected positions, normals, L): one aligned axis; a chosen frame with scale,
-    twist and taper; tinted leaves in the wind; a tree of ten anchored axes with twist, in the wind."""
+    twist and taper; tinted leaves in the wind; a tree of ten anchored axes with twist, in the wind; the same
+    tree with half its vertices blending two chains (AxisTree.blend), in the wind."""
     stone = ad.load_mesh("stone")
     framed = ad.load_mesh("stone", axis="oriented")
     leaf = ad.load_mesh("leafcard", axis="auto")
@@ -98,6 +100,8 @@ def bend_cases():
          False, 0.0),
         ("leaves", leaf, ad.random_params(leaf, 40, seed=5, variation=ad.Variation(bend=0.15, tint=0.3)), True, 1.3),
         ("trees", tree, ad.random_params(tree, 9, seed=2, variation=ad.Variation(bend=0.1, twist=0.3), spacing=3), True, 0.7),
+        ("blended trees", blended(tree), ad.random_params(tree, 6, seed=7, variation=ad.Variation(bend=0.2, twist=0.3), spacing=3),
+         True, 0.9),
     ]:
         moved = apply_wind(wind, getattr(mesh, "tree", None) or mesh.axis, params, t) if windy else params
         pos, nrm = ad.deform(mesh, moved)

@@ -37,7 +37,8 @@ def _tree_bytes(tree: AxisTree) -> bytes:
     np.savez(out, frames=np.array([a.matrix for a in tree.axes], dtype=np.float64),
              lo=np.array([a.lo for a in tree.axes]), length=np.array([a.length for a in tree.axes]),
              center=np.array([a.center for a in tree.axes], dtype=np.float64), parents=np.array(tree.parents),
-             anchors=np.array(tree.anchors), names=np.array(tree.names, dtype=str), vertex_axis=tree.vertex_axis)
+             anchors=np.array(tree.anchors), names=np.array(tree.names, dtype=str), vertex_axis=tree.vertex_axis,
+             **({} if tree.blend is None else {"blend": tree.blend}))
     return out.getvalue()
 
 
@@ -54,7 +55,7 @@ def _read_tree(path: Path, vertex_count: int) -> AxisTree | None:
             if va.shape != (vertex_count,):
                 return None
             return AxisTree(axes, tuple(int(p) for p in z["parents"]), va, tuple(str(n) for n in z["names"]),
-                            tuple(float(t) for t in z["anchors"]))
+                            tuple(float(t) for t in z["anchors"]), np.asarray(z["blend"]) if "blend" in z else None)
     except (OSError, ValueError, KeyError, TypeError, IndexError, AxialDeformError, EOFError):
         return None  # not there, or not ours: computed again
 

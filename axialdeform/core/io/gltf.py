@@ -246,12 +246,13 @@ def _base_attributes(b: GlbBuilder, mesh) -> tuple[int, int]:
 
 
 def _vertex_attributes(b: GlbBuilder, mesh) -> dict:
-    """POSITION, NORMAL (and ``_AXIAL_AXIS``, each vertex's axis, for a mesh of several axes)."""
+    """POSITION, NORMAL (and ``_AXIAL_AXIS``, each vertex's axis -- its code when it blends two --, for a mesh
+    of several axes)."""
     pos, nrm = _base_attributes(b, mesh)
     out = {"POSITION": pos, "NORMAL": nrm}
     tree = getattr(mesh, "tree", None)
     if tree is not None:
-        out[AXIS_ATTRIBUTE] = b.accessor(b.view(tree.vertex_axis.astype("<f4"), target=ARRAY_BUFFER), FLOAT,
+        out[AXIS_ATTRIBUTE] = b.accessor(b.view(tree.vertex_code.astype("<f4"), target=ARRAY_BUFFER), FLOAT,
                                          mesh.vertex_count, "SCALAR", name=AXIS_ATTRIBUTE)
     return out
 

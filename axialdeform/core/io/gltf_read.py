@@ -340,6 +340,7 @@ def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
     """The mesh of several axes an instanced node records (extras ``axes``,
     the vertex attribute ``_AXIAL_AXIS``, the instanced ``_AXIAL_A{k}_*``)."""
     from ..axes import tree_from_vertices
+    from ..blend import split_vertex_code
 
     try:
         k = int(record["count"])
@@ -352,8 +353,10 @@ def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
     if index is None:
         raise GltfError(f"{where}: a mesh of {k} axes needs the vertex attribute {AXIS_ATTRIBUTE}; found none")
     va = read_accessor(gltf, blob, index, AXIS_ATTRIBUTE, where).reshape(-1)
-    if len(va) != mesh.vertex_count or not np.array_equal(va, np.round(va)):
-        raise GltfError(f"{where}: {AXIS_ATTRIBUTE}: expected one whole axis index per vertex ({mesh.vertex_count})")
+    if len(va) != mesh.vertex_count or not np.array_equal(va, np.round(va)) or (len(va) and not 0 <= va.min() <= va.max() < 2 ** 23):
+        raise GltfError(f"{where}: {AXIS_ATTRIBUTE}: expected one whole axis index (or a blend's code, b + 64 b1 + 4096 q, "
+                        f"below 2^23) per vertex ({mesh.vertex_count})")
+    va, blend = split_vertex_code(va)
     n = len(params)
     children = np.zeros((n, k - 1, 10), dtype=np.float32)
     for j in range(1, k):
@@ -368,7 +371,7 @@ def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
                         f"found {anchors!r:.80}")
     try:
         tree = tree_from_vertices(mesh, va.astype(np.int64), parents, frames=[np.asarray(f) for f in frames],
-                                  names=names, root_children=False, anchors=anchors)
+                                  names=names, root_children=False, anchors=anchors, blend=blend)
         mesh = mesh.with_axes(tree)
     except AxialDeformError as exc:
         raise GltfError(f"{where}: extras axes: {exc}") from None

@@ -267,23 +267,19 @@ export function axialTexelAt(i) {
   return ivec2(i.mod(int(AXIAL_AXES_ROW)), i.div(int(AXIAL_AXES_ROW)));
 }
 
-/** glsl: axial_tree_bend.
- * The bend of a K-axis mesh (`axes` = K) in model space: v (of axis b) and n -> v_out, n_out and the
- * Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and the rigid part; id:
- * the instance (its child axes' offsets, axial_tree_offsets). */
-export function axialTreeBend(v, n, b, axes, center, inst, id, wind, v_out, n_out, jac_out, hooks) {
-  const moved = vec3(v).toVar();
-  const jac = matVar(matDiagonal(float(1.0)));
-  If(inst.twist.notEqual(float(0.0)).or(inst.taper.notEqual(float(0.0))), () => {
-    const f0 = matVar(matDiagonal(float(0)));
-    const lo0 = float(0).toVar();
-    const len0 = float(0).toVar();
-    const a0 = float(0).toVar();
-    const p0 = int(0).toVar();
-    hooks.axialTreeAxis(int(0), f0, lo0, len0, a0, p0);
-    axialTreeTurn(v, f0, lo0, len0, center, inst, moved, jac);
-  });
-  const disp = vec3(vec3(float(0.0))).toVar();
+/** glsl: axial_tree_code.
+ * A vertex's axes from its code (AxisTree.vertex_code): its own axis b, a second axis b1 and the blend's
+ * weight w of b1 (0: none), code = b + 64 b1 + 4096 q, w = q / 2047. */
+export function axialTreeCode(code, b, b1, w) {
+  b.assign(code.mod(int(64)));
+  b1.assign(code.div(int(64)).mod(int(64)));
+  w.assign(float(code.div(int(4096))).div(float(2047.0)));
+}
+
+/** glsl: axial_tree_chain.
+ * Add to disp and jac the bend of v by the chain of axis b (b and its ancestors), every axis's offsets
+ * weighed by `weight` (the bend is linear in them). */
+export function axialTreeChain(v, b, weight, axes, inst, id, wind, disp, jac, hooks) {
   const j = int(b).toVar();
   Loop({ start: int(0), end: axes, type: 'int', condition: '<' }, () => {
     If(j.lessThan(int(0)), () => {
@@ -304,8 +300,36 @@ export function axialTreeBend(v, n, b, axes, center, inst, id, wind, v_out, n_ou
         axialAnchorWind(frame, len, anchor, wind.push, d12, d34, d5);
       }
     });
-    axialAxisAdd(v, frame, lo, len, d12, d34, d5, disp, jac);
+    axialAxisAdd(v, frame, lo, len, weight.mul(d12), weight.mul(d34), weight.mul(d5), disp, jac);
     j.assign(parent);
+  });
+}
+
+/** glsl: axial_tree_bend.
+ * The bend of a K-axis mesh (`axes` = K) in model space: v (its axes' code, axial_tree_code) and n -> v_out,
+ * n_out and the Jacobian jac_out (for tangents).  inst: axis 0's offsets (wind already applied) and the rigid
+ * part; id: the instance (its child axes' offsets, axial_tree_offsets).  A blended vertex moves by (1 - w)
+ * times its own chain's bend plus w times b1's. */
+export function axialTreeBend(v, n, code, axes, center, inst, id, wind, v_out, n_out, jac_out, hooks) {
+  const moved = vec3(v).toVar();
+  const jac = matVar(matDiagonal(float(1.0)));
+  If(inst.twist.notEqual(float(0.0)).or(inst.taper.notEqual(float(0.0))), () => {
+    const f0 = matVar(matDiagonal(float(0)));
+    const lo0 = float(0).toVar();
+    const len0 = float(0).toVar();
+    const a0 = float(0).toVar();
+    const p0 = int(0).toVar();
+    hooks.axialTreeAxis(int(0), f0, lo0, len0, a0, p0);
+    axialTreeTurn(v, f0, lo0, len0, center, inst, moved, jac);
+  });
+  const disp = vec3(vec3(float(0.0))).toVar();
+  const b = int(0).toVar();
+  const b1 = int(0).toVar();
+  const w = float(0).toVar();
+  axialTreeCode(code, b, b1, w);
+  axialTreeChain(v, b, float(1.0).sub(w), axes, inst, id, wind, disp, jac, hooks);
+  If(w.greaterThan(float(0.0)), () => {
+    axialTreeChain(v, b1, w, axes, inst, id, wind, disp, jac, hooks);
   });
   moved.addAssign(disp);
   v_out.assign(moved);
