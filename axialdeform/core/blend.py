@@ -8,11 +8,12 @@ crown a branch was found in) moves with what it rests on where it touches it.  n
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
 from scipy.spatial import cKDTree
 
 from .errors import MeshError
 
-__all__ = ["BLEND_STEPS", "CONTACT", "check_blend", "join_vertex_code", "split_vertex_code", "blend_pieces"]
+__all__ = ["BLEND_STEPS", "CONTACT", "SMOOTHING", "check_blend", "join_vertex_code", "split_vertex_code", "blend_pieces"]
 
 #: a blend's weight is q / BLEND_STEPS, q a whole number: the GPU's vertex code holds 11 bits of it
 BLEND_STEPS = 2047
@@ -58,19 +59,45 @@ def split_vertex_code(code) -> tuple[np.ndarray, np.ndarray | None]:
     return b.astype(np.int32), np.stack([b1, q / BLEND_STEPS], axis=1).astype(np.float64)
 
 
+#: how many times a carried point's weights are averaged with its neighbours' (half each time): enough that an
+#: edge of a crown held by several branches stretches no more than the edges inside one axis do
+SMOOTHING = 6
+
+
+def _smooth(weight, faces, carried) -> np.ndarray:
+    """``weight`` (w, H) averaged :data:`SMOOTHING` times, half its own and half its neighbours' mean, over the
+    edges of ``faces`` between points both ``carried``."""
+    f = np.asarray(faces, dtype=np.int64)
+    e = np.vstack([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    e = np.vstack([e, e[:, ::-1]])
+    e = e[carried[e[:, 0]] & carried[e[:, 1]]]
+    n = len(weight)
+    adjacency = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    has = degree > 0
+    for _ in range(SMOOTHING):
+        around = adjacency @ weight
+        weight = np.where(has[:, None], 0.5 * weight + 0.5 * around / np.maximum(degree, 1.0)[:, None], weight)
+    return weight
+
+
 #: a limb piece of its own that lies against another (a crown a branch runs in, resting on the wood) moves with
 #: the other within this fraction of its size of it (fully where they touch)
 CONTACT = 0.25
 
 
-def blend_pieces(points, label, axis, keep, limbs, chains) -> np.ndarray | None:
+def blend_pieces(points, faces, label, axis, keep, limbs, chains) -> np.ndarray | None:
     """(w, 2) float64 or None: each welded point's second axis and weight (``AxisTree.blend``) for the carried
     pieces (crowns, bark marks, a curtain of leaves); ``axis`` (each point's first axis) is set to the nearest
-    branch in place; ``points`` (w, 3), ``label`` each point's piece, ``keep`` the chains kept, ``limbs`` the
-    pieces chains run in, ``chains`` the skeleton's (``.piece``).  A point at distances ``d_a <= d_b`` from the surfaces of the two branches
-    nearest it moves by ``d_b / (d_a + d_b)`` of ``a``'s chain and ``d_a / (d_a + d_b)`` of ``b``'s: on a
-    branch, with it alone; halfway between two, with both alike.  One function of where a point is, so two
-    pieces that touch move alike where they touch, and a crown pierced by several branches stays on each."""
+    branch in place.  ``points`` (w, 3); ``label`` each point's piece; ``keep`` the chains kept; ``limbs`` the
+    pieces chains run in; ``chains`` the skeleton's (``.piece``).
+
+    A point at distances ``d_a <= d_b`` from the surfaces of the two branches nearest it starts with
+    ``d_b / (d_a + d_b)`` of ``a``'s chain and ``d_a / (d_a + d_b)`` of ``b``'s (on a branch, with it alone;
+    halfway between two, with both alike); every holder's weight is then averaged with the point's
+    neighbours' :data:`SMOOTHING` times over the piece's edges (``faces``, welded), so that no edge spans a
+    sudden change of the branches that hold it, and the two largest are kept, renormalized.
+    """
     limb = np.isin(label, limbs)
     carried = ~limb
     for p in limbs:  # a limb piece no branch runs in is carried too
@@ -85,10 +112,15 @@ def blend_pieces(points, label, axis, keep, limbs, chains) -> np.ndarray | None:
         d = np.stack([cKDTree(points[limb & (axis == j)]).query(points[mine])[0] for j in holders], axis=1)
         order = np.argsort(d, axis=1, kind="stable")[:, :2]
         da, db = np.take_along_axis(d, order, axis=1).T
-        total = da + db
-        w = np.where(total > 0, da / np.where(total > 0, total, 1.0), 0.5)
-        axis[mine] = np.asarray(holders)[order[:, 0]]
-        out[mine] = np.stack([np.asarray(holders)[order[:, 1]], w], axis=1)
+        w = np.where(da + db > 0, da / np.where(da + db > 0, da + db, 1.0), 0.5)  # 0 on a, 1/2 halfway
+        weight = np.zeros((len(points), len(holders)))  # every holder's weight at every carried point
+        weight[mine, order[:, 0]] = 1.0 - w
+        weight[mine, order[:, 1]] += w
+        weight = _smooth(weight, faces, carried)
+        top = np.argsort(-weight[mine], axis=1, kind="stable")[:, :2]
+        wa, wb = np.take_along_axis(weight[mine], top, axis=1).T
+        axis[mine] = np.asarray(holders)[top[:, 0]]
+        out[mine] = np.stack([np.asarray(holders)[top[:, 1]], wb / np.maximum(wa + wb, 1e-300)], axis=1)
     # a limb piece of its own (a crown a branch was found in) where it lies against another limb piece: each
     # point within CONTACT of the piece's size of the other's surface moves with it, fully where they touch
     for p in limbs:

@@ -384,7 +384,7 @@ def tree_from_branches(mesh, branches, up: int = 1, blend: bool = True) -> AxisT
     limbs = sorted({c.piece for c in chains})
     limb_point = np.isin(label, limbs)
     welded_axis = _bind(points, label, chains, keep, limbs)
-    mixed = blend_pieces(points, label, welded_axis, keep, limbs, chains) if blend else None
+    mixed = blend_pieces(points, faces, label, welded_axis, keep, limbs, chains) if blend else None
     names = tuple(str(b["name"]) for b in branches)
     parents = tuple(c.parent for c in chains)
     axes, anchors = [], [0.0]
