@@ -192,9 +192,15 @@ def test_bad_trees_and_records_are_refused(tree):
         ad.deform(tree, bad)
 
 
-def test_bounds_hold_every_tree_vertex(tree):
+@pytest.mark.parametrize("blend", [False, True])
+def test_bounds_hold_every_tree_vertex(tree, blend):
+    """The culling spheres (still and in the wind) and boxes hold every bent vertex; a vertex blending two chains
+    moves by a weighed mean of the two, so the bounds of the chains hold it too."""
     from axialdeform.core.bounds import instance_bounds, instance_boxes
 
+    from helpers.models import blended
+
+    tree = blended(tree) if blend else tree
     p = ad.random_params(tree, 40, seed=9, variation=ad.Variation(bend=(0.1, 0.3), scale=(0.5, 2.0), twist=1.0, taper=0.5))
     wind = ad.Wind(direction=(1, 0, 0), strength=0.3, gustiness=0.5)
     pos = ad.bake(tree, p, "cpu", options=ad.RenderOptions(wind=wind, time=2.0))[0]
@@ -231,6 +237,19 @@ def test_fit_recovers_trees(tree):
     assert fit.params.shape == (6, 109)
     np.testing.assert_allclose(fit.params[:, -3:], p[:, -3:], atol=1e-4)
     assert np.abs(ad.deform(tree, fit.params)[0] - shapes).max() <= 1e-5 * tree.axis.length
+
+
+def test_fit_recovers_trees_whose_vertices_blend_two_chains(tree):
+    """fit_params weighs each axis's Bernstein columns by the vertices' blend weights (AxisTree.weights): a
+    blended tree's baked shapes give back numbers that bend it to them."""
+    from helpers.models import blended
+
+    mixed = blended(tree)
+    p = ad.random_params(mixed, 8, seed=5, variation=ad.Variation(bend=(0.05, 0.2, 0.25), tilt=(-0.5, 0.5)))
+    shapes = ad.deform(mixed, p)[0]
+    fit = ad.fit_params(mixed, shapes)
+    assert np.abs(ad.deform(mixed, fit.params)[0] - shapes).max() <= 1e-5 * tree.axis.length
+    assert np.abs(ad.deform(tree, fit.params)[0] - shapes).max() > 1e-3 * tree.axis.length  # the blend mattered
 
 
 def test_hostile_tree_files_are_refused_in_words(tree, tmp_path):
