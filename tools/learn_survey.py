@@ -122,6 +122,8 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     obs = l_function(test.xz, w, r, rate(test.xz))
     env = np.array([l_function(m, w, r, rate(m)) for m in made])
     row["L inside envelope"] = f"{int(np.sum((obs >= env.min(0)) & (obs <= env.max(0))))}/{len(r)}"
+    out = [f"{x / spacing:.2f}{'+' if o > hi else '-'}" for x, o, lo, hi in zip(r, obs, env.min(0), env.max(0)) if not lo <= o <= hi]
+    row["L outside (r / spacing: + above, - below)"] = " ".join(out) or "none"
     if test.size is not None and scales is not None:
         row["size KS"] = float(ks_2samp(test.size / np.median(ex.size), scales).statistic)
     return row
