@@ -97,8 +97,8 @@ function treeStorage(axesTex, children, K) {
 }
 
 /**
- * The bend of a K-axis mesh (axial_tree_bend): model-space v of axis b (an int node) and n -> {v, n, jac
- * (columns)} in the mesh's space.  children: the child offsets' texture (the mesh's axialChildren) or a
+ * The bend of a K-axis mesh (axial_tree_bend): model-space v and n -> {v, n, jac (columns)} in the mesh's
+ * space; b: the vertex's axes (an int node): its axis, or for a vertex blending two chains b + 64 b1 + 4096 q.  children: the child offsets' texture (the mesh's axialChildren) or a
  * function of a texel's index (an int node) giving it (a storage buffer's), id: the instance (int node),
  * wind: the push per unit of axis length (a vec3 node) or null.
  */
