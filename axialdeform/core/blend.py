@@ -104,11 +104,9 @@ def blend_pieces(points, faces, label, axis, keep, limbs, chains) -> np.ndarray 
         if not any(chains[c].piece == p for c in keep):
             carried |= label == p
     holders = [j for j in range(len(keep)) if np.any(limb & (axis == j))]
-    if not carried.any() or len(holders) < 2:
-        return None
     out = np.zeros((len(points), 2))
     mine = np.flatnonzero(carried)
-    if len(mine):
+    if len(mine) and len(holders) >= 2:
         d = np.stack([cKDTree(points[limb & (axis == j)]).query(points[mine])[0] for j in holders], axis=1)
         order = np.argsort(d, axis=1, kind="stable")[:, :2]
         da, db = np.take_along_axis(d, order, axis=1).T
