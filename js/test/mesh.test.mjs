@@ -90,7 +90,7 @@ test("a user's onBeforeRender runs beside the mesh's own, which keeps the render
   assert.equal(mesh._renderer, renderer);
 });
 
-test('the mesh refuses a geometry without normals, a frame it was not given, a tree without vertex axes', () => {
+test('the mesh refuses a geometry without normals, a frame it was not given, a tree without or with bad vertex axes', () => {
   const g = geometryOf('stone16');
   g.deleteAttribute('normal');
   assert.throws(() => new AxialInstancedMesh(g, new THREE.MeshBasicMaterial(), record('stone16')), /position and normal/);
@@ -102,6 +102,19 @@ test('the mesh refuses a geometry without normals, a frame it was not given, a t
     /each vertex's axis/);
   assert.throws(() => new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), record('tree'), { axis: spec('stone16') }),
     /10 axes an instance, but the mesh has 1/);
+  // each vertex's code: an axis, or b + 64 b1 + 4096 q for a vertex blending two chains (docs/method.md)
+  const codes = Float32Array.from(expected.tree.vertexAxis);
+  codes[0] = 3 + 64 * 7 + 4096 * 1000; // a blend of axes 3 and 7: taken
+  const blended = geometryOf('tree');
+  blended.setAttribute('_axial_axis', new THREE.BufferAttribute(codes, 1));
+  new AxialInstancedMesh(blended, new THREE.MeshBasicMaterial(), record('tree'), { axis: spec('tree') }).dispose();
+  for (const [bad, why] of [[3 + 64 * 12, /vertex 0: expected an axis of 0\.\.9/], [10, /found 10/], [2.5, /found 2\.5/],
+    [2 ** 23, /below 2\^23/]]) {
+    codes[0] = bad;
+    const g2 = geometryOf('tree');
+    g2.setAttribute('_axial_axis', new THREE.BufferAttribute(codes, 1));
+    assert.throws(() => new AxialInstancedMesh(g2, new THREE.MeshBasicMaterial(), record('tree'), { axis: spec('tree') }), why);
+  }
 });
 
 test('the plugin reads the record back from GLTFLoader\'s instanced mesh, and refuses a broken extension', () => {

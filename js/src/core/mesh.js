@@ -28,6 +28,21 @@ const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
  * attributes axialD12, axialD34, axialD5, axialTwistTaper, axialAngles, axialAxis, instanceMatrix).  The
  * material(s) are cloned and given the bend; shadows and raycasting use the bent shape.
  */
+/** Each vertex's axes (_AXIAL_AXIS): one whole number a vertex, its axis b or, blending two chains, b + 64 b1 +
+ * 4096 q (q / 2047 the second chain's weight; docs/method.md, "Blended vertices"), both axes below `axes`. */
+function checkVertexCodes(codes, axes, count) {
+  if (codes.length !== count) {
+    throw new AxialError(`AxialInstancedMesh: _AXIAL_AXIS: expected one number a vertex (${count}), found ${codes.length}`);
+  }
+  for (let i = 0; i < codes.length; i++) {
+    const c = codes[i];
+    if (!(Number.isInteger(c) && c >= 0 && c < 8388608 && c % 64 < axes && Math.floor(c / 64) % 64 < axes)) {
+      throw new AxialError(`AxialInstancedMesh: _AXIAL_AXIS: vertex ${i}: expected an axis of 0..${axes - 1}, or b + 64 b1 + 4096 q `
+        + `(both axes below ${axes}, below 2^23), found ${c}`);
+    }
+  }
+}
+
 export class AxialMeshCore extends THREE.InstancedMesh {
   /** @type {any} */ _baked = null; /** @type {any} */ _rayMesh = null; /** @type {any} */ _cpuAttributes = null; // set later
   /** @type {any} */ _childTexels = null; /** @type {any} */ _storage = null; // (bake.js, raycast.js, generated meshes)
@@ -65,6 +80,7 @@ export class AxialMeshCore extends THREE.InstancedMesh {
     if (axes > 1) {
       const va = own.getAttribute('axialAxis') || own.getAttribute('_axial_axis') || options.vertexAxis;
       if (!va) throw new AxialError('AxialInstancedMesh: a mesh of several axes needs each vertex\'s axis (_AXIAL_AXIS)');
+      checkVertexCodes(va.isBufferAttribute ? va.array : va, axes, positions.count);
       this.vertexAxis = va.isBufferAttribute ? va.array : va;
       own.setAttribute('axialAxis', va.isBufferAttribute ? va : new THREE.BufferAttribute(Float32Array.from(va), 1));
     } else {
