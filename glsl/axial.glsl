@@ -319,17 +319,19 @@ int axial_child_texel(int id, int k, int axes) {
 ivec2 axial_texel_at(int i) {
     return ivec2(i % AXIAL_AXES_ROW, i / AXIAL_AXES_ROW);
 }
+// the index of the texel at `at` (axial_texel_at's inverse: a storage buffer of the same texels reads it)
+int axial_texel_index(ivec2 at) {
+    return at.y * AXIAL_AXES_ROW + at.x;
+}
 
-#ifdef AXIAL_AXES
-// instance id's offsets of child axis k as stored in a texture `tex` of the layout above (what a GL program's
-// axial_tree_offsets reads)
-void axial_child_offsets(sampler2D tex, int id, int k, out vec4 d12, out vec4 d34, out vec2 d5) {
-    ivec2 at = axial_texel_at(axial_child_texel(id, k, AXIAL_AXES));
+// instance id's offsets of child axis k (of a mesh of `axes` axes) as stored in `tex` with the layout above
+// (what a program's axial_tree_offsets reads)
+void axial_child_offsets(sampler2D tex, int id, int k, int axes, out vec4 d12, out vec4 d34, out vec2 d5) {
+    ivec2 at = axial_texel_at(axial_child_texel(id, k, axes));
     d12 = texelFetch(tex, at, 0);
     d34 = texelFetch(tex, at + ivec2(1, 0), 0);
     d5 = texelFetch(tex, at + ivec2(2, 0), 0).xy;
 }
-#endif
 
 // ---- the walk up a vertex's chain of axes: a program that draws several axes defines AXIAL_TREE_WALK before
 // the include and then the two functions declared here (after it), reading its own storage -- uniform arrays

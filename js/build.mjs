@@ -24,7 +24,7 @@ const target = join(here, 'src', 'webgl', 'glsl.js');
 const nodesTarget = join(here, 'src', 'webgpu', 'glsl_nodes.js');
 // the GLSL functions the node materials and compute passes call (and, emitted with them, what they call)
 export const NODE_FUNCTIONS = ['axial_bend', 'axial_bend_tangent', 'axial_place', 'axial_rotation', 'axial_wind', 'axial_wind_push',
-  'axial_position_id', 'axial_tree_bend', 'axial_cos_sin', 'axial_curve',
+  'axial_position_id', 'axial_tree_bend', 'axial_child_offsets', 'axial_texel_index', 'axial_cos_sin', 'axial_curve',
   'axial_slope', 'axial_generate', 'axial_generate_child', 'axial_gen_key', 'axial_child_texel', 'axial_texel_at'];
 
 // generate.vert's uniforms of the recipe and the AxialRecipe made of them: written from the struct, between

@@ -147,7 +147,7 @@ void axial_tree_axis(int j, out mat3 frame, out float lo, out float len, out flo
   parent = axialParents[j];
 }
 void axial_tree_offsets(int id, int k, out vec4 d12, out vec4 d34, out vec2 d5) {
-  axial_child_offsets(axialChildren, id, k, d12, d34, d5);
+  axial_child_offsets(axialChildren, id, k, AXIAL_AXES, d12, d34, d5);
 }
 #endif
 `;

@@ -267,6 +267,22 @@ export function axialTexelAt(i) {
   return ivec2(i.mod(int(AXIAL_AXES_ROW)), i.div(int(AXIAL_AXES_ROW)));
 }
 
+/** glsl: axial_texel_index.
+ * the index of the texel at `at` (axial_texel_at's inverse: a storage buffer of the same texels reads it) */
+export function axialTexelIndex(at) {
+  return at.y.mul(int(AXIAL_AXES_ROW)).add(at.x);
+}
+
+/** glsl: axial_child_offsets.
+ * instance id's offsets of child axis k (of a mesh of `axes` axes) as stored in `tex` with the layout above
+ * (what a program's axial_tree_offsets reads) */
+export function axialChildOffsets(tex, id, k, axes, d12, d34, d5) {
+  const at = ivec2(axialTexelAt(axialChildTexel(id, k, axes))).toVar();
+  d12.assign(texelFetch(tex, at));
+  d34.assign(texelFetch(tex, at.add(ivec2(int(1), int(0)))));
+  d5.assign(texelFetch(tex, at.add(ivec2(int(2), int(0)))).xy);
+}
+
 /** glsl: axial_tree_code.
  * A vertex's axes from its code (AxisTree.vertex_code): its own axis b, a second axis b1 and the blend's
  * weight w of b1 (0: none), code = b + 64 b1 + 4096 q, w = q / 2047. */

@@ -70,6 +70,7 @@ export function axialWind(inst, id, f, len, w) {
  * (e_v, anchor), (parent, 0, 0, 0)) and the child offsets' texture or a function of a texel's index (an int
  * node) giving it (a storage buffer's); K: the axes. */
 function treeStorage(axesTex, children, K) {
+  const texels = typeof children === 'function' ? (at) => children(glsl.axialTexelIndex(at)) : children;
   return {
     axialTreeAxis(j, frame, lo, len, anchor, parent) {
       const r0 = textureLoad(axesTex, ivec2(0, j)).toVar(), r1 = textureLoad(axesTex, ivec2(1, j)).toVar();
@@ -81,26 +82,17 @@ function treeStorage(axesTex, children, K) {
       parent.assign(int(r3.x));
     },
     axialTreeOffsets(id, k, d12, d34, d5) {
-      const i = glsl.axialChildTexel(id, k, int(K)).toVar();
-      if (typeof children === 'function') {
-        d12.assign(children(i));
-        d34.assign(children(i.add(int(1))));
-        d5.assign(children(i.add(int(2))).xy);
-      } else {
-        const at = glsl.axialTexelAt(i).toVar();
-        d12.assign(textureLoad(children, at));
-        d34.assign(textureLoad(children, at.add(ivec2(1, 0))));
-        d5.assign(textureLoad(children, at.add(ivec2(2, 0))).xy);
-      }
+      glsl.axialChildOffsets(texels, id, k, int(K), d12, d34, d5);
     },
   };
 }
 
 /**
  * The bend of a K-axis mesh (axial_tree_bend): model-space v and n -> {v, n, jac (columns)} in the mesh's
- * space; b: the vertex's axes (an int node): its axis, or for a vertex blending two chains b + 64 b1 + 4096 q.  children: the child offsets' texture (the mesh's axialChildren) or a
- * function of a texel's index (an int node) giving it (a storage buffer's), id: the instance (int node),
- * wind: the push per unit of axis length (a vec3 node) or null.
+ * space; b: the vertex's axes (an int node): its axis, or for a vertex blending two chains b + 64 b1 + 4096 q.
+ * children: the child offsets' texture (the mesh's axialChildren) or a function of a texel's index (an int
+ * node) giving it (a storage buffer's), id: the instance (int node), wind: the push per unit of axis length
+ * (a vec3 node) or null.
  */
 export function axialTreeWorld(v, n, b, K, axesTex, center, inst, children, id, wind) {
   const out = { v: vec3(0).toVar(), n: vec3(0).toVar(), jac: matVar(matDiagonal(float(1))) };
