@@ -841,10 +841,13 @@ function assignedNames(body) {
  * TSL node functions from GLSL sources.
  * @param {{name: string, text: string}[]} sources the files, in include order
  * @param {object} options {defines: {NAME: value}, only: [GLSL function names to emit (and what they call)],
- *   header: the file's first comment lines, runtime: the module the helpers come from}
+ *   header: the file's first comment lines, runtime: the module the helpers come from, emitted: a Set this fills
+ *   with the JavaScript names of the functions emitted (an overload's with its parameter types), external: [{module, names}, ...] -- functions other emitted
+ *   modules hold (their `emitted`), imported from them instead of emitted again}
  * @returns {string} the JavaScript module
  */
-export function emitTsl(sources, { defines = {}, only = null, header = [], runtime = './tsl_runtime.js', imports = [] } = {}) {
+export function emitTsl(sources, { defines = {}, only = null, header = [], runtime = './tsl_runtime.js', imports = [],
+  emitted = null, external = [] } = {}) {
   const items = [];
   let structs = new Map();
   for (const { name, text } of sources) {
@@ -866,12 +869,19 @@ export function emitTsl(sources, { defines = {}, only = null, header = [], runti
   let want = new Set(only ? funcs.filter((f) => only.includes(f.name)) : funcs);
   if (only) for (const n of only) if (!funcs.some((f) => f.name === n)) throw new GlslError(`no function ${n} in the sources`);
   const bodies = new Map();
+  const outside = new Map(); // module -> the JavaScript names taken from it
   for (;;) {
     for (const f of want) {
-      if (!bodies.has(f)) {
-        em.where = f.where;
-        bodies.set(f, em.func(f));
+      if (bodies.has(f)) continue;
+      const holder = external.find((x) => x.names.has(em.jsName(f))); // an overload by its own name
+      if (holder) { // another module holds it
+        if (!outside.has(holder.module)) outside.set(holder.module, new Set());
+        outside.get(holder.module).add(em.jsName(f));
+        bodies.set(f, null);
+        continue;
       }
+      em.where = f.where;
+      bodies.set(f, em.func(f));
     }
     const more = [...(em.wanted || [])].filter((f) => !bodies.has(f));
     if (!more.length) break;
@@ -879,17 +889,20 @@ export function emitTsl(sources, { defines = {}, only = null, header = [], runti
   }
   const tsl = [...em.used].sort();
   const rt = [...(em.runtime || [])].sort();
-  const consts = [...em.consts.values()].filter((c) => [...bodies.values()].some((b) => new RegExp(`\\b${c.js}\\b`).test(b)));
+  const own = [...bodies.values()].filter((b) => b !== null);
+  const consts = [...em.consts.values()].filter((c) => own.some((b) => new RegExp(`\\b${c.js}\\b`).test(b)));
+  if (emitted) for (const [f, b] of bodies) if (b !== null) emitted.add(em.jsName(f));
   return [
     ...header.map((l) => `// ${l}`.trimEnd()),
     '',
     `import { ${tsl.join(', ')} } from 'three/tsl';`,
     ...(rt.length ? [`import { ${rt.join(', ')} } from '${runtime}';`] : []),
+    ...[...outside].map(([module, names]) => `import { ${[...names].sort().join(', ')} } from '${module}';`),
     ...imports,
     '',
     ...consts.map((c) => `export const ${c.js} = ${c.value};`),
     ...(consts.length ? [''] : []),
-    funcs.filter((f) => bodies.has(f)).map((f) => bodies.get(f)).join('\n'),
+    funcs.filter((f) => bodies.get(f)).map((f) => bodies.get(f)).join('\n'),
   ].join('\n');
 }
 

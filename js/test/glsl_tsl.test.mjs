@@ -14,9 +14,11 @@ const js = fileURLToPath(new URL('..', import.meta.url));
 const glsl = join(js, '..', 'glsl');
 const read = (name) => readFileSync(join(glsl, name), 'utf8');
 
-test('src/webgpu/glsl_nodes.js is what glsl/ gives', () => {
+test('src/webgpu/glsl_nodes.js, glsl_wind_nodes.js and glsl_generate_nodes.js are what glsl/ gives', () => {
   const want = generateNodes(read('axial.glsl'), read('wind.glsl'), read('generate.glsl'));
-  assert.equal(readFileSync(join(js, 'src', 'webgpu', 'glsl_nodes.js'), 'utf8'), want);
+  for (const [file, text] of [['glsl_nodes.js', want.nodes], ['glsl_wind_nodes.js', want.wind], ['glsl_generate_nodes.js', want.generate]]) {
+    assert.equal(readFileSync(join(js, 'src', 'webgpu', file), 'utf8'), text, file);
+  }
 });
 
 test('build.mjs --check fails on a copy whose glsl/ changed a formula, and passes once built', () => {
@@ -25,7 +27,9 @@ test('build.mjs --check fails on a copy whose glsl/ changed a formula, and passe
     for (const d of ['webgl', 'webgpu']) mkdirSync(join(root, 'js', 'src', d), { recursive: true });
     mkdirSync(join(root, 'glsl'));
     for (const f of ['build.mjs', 'glsl_tsl.mjs']) copyFileSync(join(js, f), join(root, 'js', f));
-    for (const f of ['webgl/glsl.js', 'webgpu/glsl_nodes.js']) copyFileSync(join(js, 'src', f), join(root, 'js', 'src', f));
+    for (const f of ['webgl/glsl.js', 'webgpu/glsl_nodes.js', 'webgpu/glsl_wind_nodes.js', 'webgpu/glsl_generate_nodes.js']) {
+      copyFileSync(join(js, 'src', f), join(root, 'js', 'src', f));
+    }
     for (const f of ['axial.glsl', 'wind.glsl', 'generate.glsl', 'generate.vert', 'generate_children.vert',
       'generate_axes.vert', 'generate_axes.frag', 'slot.glsl']) copyFileSync(join(glsl, f), join(root, 'glsl', f));
     const check = () => spawnSync(process.execPath, [join(root, 'js', 'build.mjs'), '--check'], { encoding: 'utf8' });
@@ -69,6 +73,22 @@ float alone(float x) { return x; }`, ['twice', 'alone']);
   assert.match(out, /export function twice\(b, hooks\) \{\n {2}return walk\(b, hooks\)\.add\(walk\(b\.add\(int\(1\)\), hooks\)\);/);
   assert.match(out, /export function alone\(x\) \{/);
   assert.doesNotMatch(out, /function storage/);
+});
+
+test('a function another emitted module holds is imported from it, an overload by its own name, not emitted again', () => {
+  const text = `
+float f(float x) { return x; }
+float f(vec2 x) { return x.x; }
+float g(float x) { return f(x) + f(vec2(x)); }`;
+  const names = new Set();
+  const first = emitTsl([{ name: 'x.glsl', text }], { only: ['f'], emitted: names });
+  assert.deepEqual([...names].sort(), ['f_f', 'f_v2']);
+  assert.match(first, /export function f_f\(x\)/);
+  const second = emitTsl([{ name: 'x.glsl', text }], { only: ['g'], external: [{ module: './first.js', names: new Set(['f_f']) }] });
+  assert.match(second, /import \{ f_f \} from '\.\/first\.js';/);
+  assert.doesNotMatch(second, /export function f_f/);
+  assert.match(second, /export function f_v2\(x\)/); // the overload the other module lacks
+  assert.match(second, /export function g\(x\)/);
 });
 
 test('what the emitter does not take is refused with the file and line', () => {

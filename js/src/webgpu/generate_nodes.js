@@ -1,5 +1,5 @@
 // generate_nodes.js -- a generated layer's instance for three's WebGPURenderer: glsl/generate.glsl's
-// axial_generate and axial_generate_child as node functions (src/webgpu/glsl_nodes.js, GENERATED from glsl/ by
+// axial_generate and axial_generate_child as node functions (src/webgpu/glsl_generate_nodes.js, GENERATED from glsl/ by
 // build.mjs), run by a compute pass (webgpu/generate.js); the tests hold them to
 // axialdeform.core.generate (hash bit-exact, numbers to float32 rounding).  Here: the recipe's numbers
 // as uniform nodes, and the calls with their out-variables made -- no formula.
@@ -10,7 +10,7 @@
 
 import { float, vec2, vec3, vec4, ivec2, uniform } from 'three/tsl';
 import { Vector2, Vector3, Vector4 } from 'three/webgpu';
-import * as glsl from './glsl_nodes.js';
+import * as glsl from './glsl_generate_nodes.js';
 import { RECIPE_FIELDS } from '../core/record.js';
 
 const VECTORS = { vec2: Vector2, vec3: Vector3, vec4: Vector4 };

@@ -1,6 +1,6 @@
 // nodes.js -- the bend as three.js node functions (TSL), for WebGPURenderer (three/webgpu, both its
 // WebGPU and WebGL 2 backends) and its node materials.  Every formula is glsl/axial.glsl's and
-// glsl/wind.glsl's, GENERATED into src/webgpu/glsl_nodes.js by build.mjs (glsl_tsl.mjs); this file only calls
+// glsl/wind.glsl's, GENERATED into src/webgpu/glsl_nodes.js and glsl_wind_nodes.js by build.mjs; this file only calls
 // them the way the mesh holds its data: a frame as three uniform rows, a tree's axes in a texture, the
 // child offsets in a texture or a storage buffer, the rigid part from three's instanceMatrix when the CPU
 // made it.  The tests hold the result to axialdeform.deform on every feature (tests/web/test_webgpu.py).
@@ -11,10 +11,12 @@
 
 import { float, int, uint, vec3, normalize, textureLoad, ivec2 } from 'three/tsl';
 import * as glsl from './glsl_nodes.js';
+import * as windGlsl from './glsl_wind_nodes.js';
 import { WIND_UNIFORMS } from '../core/record.js';
 import { matAssign, matDiagonal, matTranspose, matVar, matVec } from './tsl_runtime.js';
 
-export { axialCosSin, axialCurve, axialRotation, axialWindHash, axialPositionId } from './glsl_nodes.js';
+export { axialCosSin, axialCurve, axialRotation } from './glsl_nodes.js';
+export { axialWindHash, axialPositionId } from './glsl_wind_nodes.js';
 
 /** The frame {ea, eu, ev} as GLSL's mat3 `frame` (frame * v = F v): three columns. */
 export function axialFrameMatrix(f) {
@@ -55,12 +57,12 @@ const windArgs = (w) => WIND_UNIFORMS.map((u) => w[u.name]);
 /** The wind's push on instance `inst` (index id) in its model frame (axial_wind_push); w: the wind's
  * uniforms {dir, strength, gust, cycles, wavenumber}. */
 export function axialWindPush(inst, id, len, w) {
-  return glsl.axialWindPush(inst, uint(id), float(len), ...windArgs(w));
+  return windGlsl.axialWindPush(inst, uint(id), float(len), ...windArgs(w));
 }
 
 /** The instance as the wind bends it along frame f (axial_wind): d3 += u/6, d4 += u/2, d5 += u. */
 export function axialWind(inst, id, f, len, w) {
-  const moved = glsl.axialWind_AIum3fv3ffv2f(inst, uint(id), axialFrameMatrix(f), len, ...windArgs(w));
+  const moved = windGlsl.axialWind_AIum3fv3ffv2f(inst, uint(id), axialFrameMatrix(f), len, ...windArgs(w));
   return { ...inst, ...moved };
 }
 
