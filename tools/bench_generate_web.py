@@ -1,4 +1,4 @@
-"""Time to make a generated layer's tiles in the browser: the npm module's AxialGeneratedMesh under
+"""Time to make a generated layer's tiles in the browser: the npm module's generated AxialInstancedMesh under
 WebGLRenderer (examples/web/generated.html: glsl/generate.glsl by WebGL 2 transform feedback, the count
 kept one pixel read back) and under WebGPURenderer (examples/web/generated-webgpu.html: the port to node
 functions by one compute pass, the count read back asynchronously), the same recipe in both.

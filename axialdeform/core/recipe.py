@@ -2,7 +2,7 @@
 
 :data:`RECIPE` is the one table of a recipe's keys: each key's kind (what values it takes, how a file
 spells it), its default, whether the JSON form carries it (the page, the notebook widget, the npm
-module's ``AxialGeneratedMesh`` and the glTF generated form) and which of ``glsl/generate.glsl``'s
+module's generated ``AxialInstancedMesh`` and the glTF generated form) and which of ``glsl/generate.glsl``'s
 ``AxialRecipe`` numbers it passes into unchanged.  :data:`KINDS` says, once, what each kind expects.
 
 Read from here: :class:`~axialdeform.core.generate.Generate` (its fields, their defaults and their

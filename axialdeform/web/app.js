@@ -14,7 +14,7 @@
 // the npm module axialdeform-three (js/src): its parser reads and checks the .adp files (CRC-32,
 // header) and its AxialInstancedMesh holds every layer's instances (attributes, instanceMatrix, a
 // tree's offsets texture, bounds for three's culling); the page's own shaders draw them
-import { parseADP, AxialError, AxialInstancedMesh, AxialGeneratedMesh } from 'axialdeform-three';
+import { parseADP, AxialError, AxialInstancedMesh } from 'axialdeform-three';
 import { hex, stillWindUniforms, AxialBrush } from 'axialdeform-three/helpers';
 
 /** The page's errors (a message shown as it is): the module's AxialError. */
@@ -293,14 +293,12 @@ export function mount(root, lib, scene, options = {}) {
 
   function apply(layer, p) {
     // a new AxialInstancedMesh for the file (its width or count may differ from the last one's); a
-    // generated layer's AxialGeneratedMesh makes its instances on the GPU from the recipe (countInstances)
+    // generated layer's ({generate: recipe}) makes its instances on the GPU from the recipe (countInstances)
     const key = variant(layer, p);
     const materials = makeMaterials(layer, key);
     const gen = layer.cfg.generate;
-    const mesh = gen
-      ? new AxialGeneratedMesh(layer.geometry, materials, gen.recipe, { axis: layer.axisSpec, ownShader: true,
-        uniforms: gen.uniforms, maps: layer.maps })
-      : new AxialInstancedMesh(layer.geometry, materials, p, { axis: layer.axisSpec, ownShader: true });
+    const mesh = new AxialInstancedMesh(layer.geometry, materials, gen ? { generate: gen.recipe } : p,
+      { axis: layer.axisSpec, ownShader: true, ...(gen ? { uniforms: gen.uniforms, maps: layer.maps } : {}) });
     if (gen && layer.brushGround) layer.brush = new AxialBrush(mesh, layer.brushGround);
     // the module's wind (its bounds grow by the wind's reach, so three culls right)
     if (wind && layer.cfg.wind) {
@@ -324,7 +322,7 @@ export function mount(root, lib, scene, options = {}) {
   }
 
   function countInstances() {
-    for (const l of layers) if (l.mesh && l.mesh.isAxialGeneratedMesh) l.count = l.mesh.kept; // its slots drawn: count
+    for (const l of layers) if (l.mesh && l.mesh.recipe) l.count = l.mesh.kept; // its slots drawn: count
     state.count = layers.reduce((a, l) => a + (l.cfg.terrain ? 0 : l.count), 0);
   }
 
@@ -547,7 +545,7 @@ export function mount(root, lib, scene, options = {}) {
       controls.update();
       // generated layers: the tiles within reach of the target, made when the set changes
       let made = false;
-      for (const l of layers) if (l.mesh && l.mesh.isAxialGeneratedMesh && l.mesh.update(renderer, controls.target)) made = true;
+      for (const l of layers) if (l.mesh && l.mesh.recipe && l.mesh.update(renderer, controls.target)) made = true;
       if (made) countInstances();
       if (wind) {
         const t = frozen !== undefined ? frozen : (performance.now() - t0) / 1000;
@@ -622,7 +620,7 @@ export function mount(root, lib, scene, options = {}) {
      * numbers an instance, the last tiles' timing, the kept records in the tiles' order, read back from
      * the GPU; not with {records: false}), for tools and tests. */
     generated({ records = true } = {}) {
-      return layers.filter((l) => l.mesh && l.mesh.isAxialGeneratedMesh).map((l) => ({
+      return layers.filter((l) => l.mesh && l.mesh.recipe).map((l) => ({
         name: l.cfg.name, tiles: l.mesh.tiles, width: l.mesh.layout.numbersPerInstance, timing: l.mesh.timing,
         target: controls ? controls.target.toArray() : null,
         data: records ? Array.from(l.mesh.records()) : null })); // read back from the GPU: only when asked

@@ -2,7 +2,7 @@
 // columns, the parser's checks, the axis and bounds maths, the shader patch, the glTF plugin's steps).
 import * as THREE from 'three';
 import type { ADPRecord, AxialInstancedMeshOptions, WindSpec, AxialInstancedMesh, AxisSpec, AxesSpec, BendExtension, InstanceRecord, RecordLayout, ResolvedAxis,
-  Rows3, GenerateRecipe, GeneratorUniforms, GroundMaps, AxialGeneratedMesh, DensityGrid } from './index.js';
+  Rows3, GenerateRecipe, GeneratorUniforms, GroundMaps, GeneratedRecord, DensityGrid } from './index.js';
 
 export function crc32(bytes: Uint8Array): number;
 export function hex(bytes: Uint8Array): string;
@@ -85,9 +85,9 @@ export const MASK_SIZE: number;
 
 /** A generated layer's brush (the Python library's core/brush.py): paint where it grows, or erase. */
 export class AxialBrush {
-  constructor(mesh: AxialGeneratedMesh, ground: { area: [number, number, number, number]; wrap?: boolean;
+  constructor(mesh: AxialMeshCore, ground: { area: [number, number, number, number]; wrap?: boolean;
     density?: DensityGrid | null; mask?: DensityGrid | null });
-  readonly mesh: AxialGeneratedMesh;
+  readonly mesh: AxialMeshCore;
   /** The mask painted (1 grows, 0 does not). */
   readonly mask: DensityGrid;
   /** Paint (or erase) a round dab on the ground; whether the mask changed (the tiles are then made again). */
@@ -104,8 +104,25 @@ export class AxialBrush {
  * its attributes and instance matrices, the bend-aware bounds, setParams/updateParams, the wind's state. */
 export class AxialMeshCore extends THREE.InstancedMesh {
   constructor(geometry: THREE.BufferGeometry, material: THREE.Material | THREE.Material[],
-    record: ADPRecord | InstanceRecord, options?: AxialInstancedMeshOptions);
+    record: ADPRecord | InstanceRecord | GeneratedRecord, options?: AxialInstancedMeshOptions);
   readonly isAxialInstancedMesh: true;
+  /** A generated layer's recipe (checked, its defaults filled in); null: the instances are the record's. */
+  readonly recipe: Required<GenerateRecipe> | null;
+  /** A generated layer: generate.glsl's numbers. */
+  readonly generatorUniforms: GeneratorUniforms;
+  /** A generated layer: the tiles held, nearest first; their instances in that order, m^2 each. */
+  readonly tiles: [number, number][];
+  /** A generated layer: make the tiles around the camera by itself, without update() (drawn from the second frame on). */
+  autoUpdate: boolean;
+  /** A generated layer: how many of the `count` slots drawn are kept (the dropped ones collapse to a point); under
+   * WebGPU null until `counted` resolves. */
+  readonly kept: number | null;
+  /** A generated layer: the last tiles' cost (null before the first). */
+  readonly timing: { instances?: number; slots: number; generateMs: number } | null;
+  /** A generated layer: make the tiles within reach of `point` on `renderer`'s GPU if they changed; returns whether they did. */
+  update(renderer: unknown, point: { x: number; z: number }): boolean;
+  /** A generated layer: a new density map and where it lies (an AxialBrush's); the tiles are made again on the next update. */
+  setDensity(grid: DensityGrid, placement: { d_lo: [number, number]; d_inv: [number, number]; d_wrap?: boolean }): void;
   readonly capacity: number;
   readonly layout: RecordLayout;
   readonly axis: ResolvedAxis;

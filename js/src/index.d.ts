@@ -103,13 +103,27 @@ export interface AxialInstancedMeshOptions {
   /** Each vertex's axis (several axes), if the geometry has no `_axial_axis` attribute: a whole number, or for a
    * vertex blending two axes' chains `b + 64 b1 + 4096 q` (its axis b, a second axis b1, weight q / 2047). */
   vertexAxis?: ArrayLike<number> | THREE.BufferAttribute;
+  /** A generated layer ({generate: recipe}): generate.glsl's numbers as the Python library gave them (default: recipeUniforms). */
+  uniforms?: GeneratorUniforms;
+  /** A generated layer: the ground maps the uniforms place. */
+  maps?: GroundMaps;
+  /** A generated layer: make the tiles around the camera's position just before each draw (the glTF plugin's meshes). */
+  autoUpdate?: boolean;
+  /** A generated layer: the most slots the tiles within reach may hold, each axis counted (default 4 194 304). */
+  maxSlots?: number;
+  /** A generated layer under WebGPU: the renderer's maxStorageBufferBindingSize, checked before any buffer is
+   * allocated (default 134 217 728). */
+  maxStorageBufferBindingSize?: number;
 }
 
 /** A THREE.InstancedMesh whose instances are each bent along their own Bézier control axis, under
  * WebGLRenderer (the bend injected into classic materials; axialdeform-three/webgpu for WebGPURenderer). */
 export class AxialInstancedMesh extends AxialMeshCore {
   constructor(geometry: THREE.BufferGeometry, material: THREE.Material | THREE.Material[],
-    record: ADPRecord | InstanceRecord, options?: AxialInstancedMeshOptions);
+    record: ADPRecord | InstanceRecord | GeneratedRecord, options?: AxialInstancedMeshOptions);
+  /** The instances' records: a generated layer's kept ones read back from the GPU, as the Python library's
+   * generate_tiles gives them; otherwise the record's. */
+  records(): Float32Array;
   /** Cull each instance by its bend-aware bounding sphere before every draw (the camera's and each shadow
    * map's) under `renderer`; null: draw them all. */
   setInstanceCulling(renderer: THREE.WebGLRenderer | null): this;
@@ -219,41 +233,9 @@ export interface GroundMap { data: Float32Array; cols: number; rows: number }
 /** The ground maps the uniforms place: the terrain's heights, the density map. */
 export interface GroundMaps { heights?: GroundMap; density?: GroundMap }
 
-export interface AxialGeneratedMeshOptions extends AxialInstancedMeshOptions {
-  /** generate.glsl's numbers as the Python library gave them (default: recipeUniforms). */
-  uniforms?: GeneratorUniforms;
-  /** The ground maps the uniforms place. */
-  maps?: GroundMaps;
-  /** Make the tiles around the camera's position just before each draw (the glTF plugin's meshes). */
-  autoUpdate?: boolean;
-  /** The most slots the tiles within reach may hold, each axis counted (default 4 194 304). */
-  maxSlots?: number;
-  /** WebGPU: the renderer's maxStorageBufferBindingSize, checked before any buffer is allocated (default 134 217 728). */
-  maxStorageBufferBindingSize?: number;
-}
-
-/** A generated layer: instances made on the GPU from a recipe in the tiles within reach of a point. */
-export class AxialGeneratedMesh extends AxialInstancedMesh {
-  constructor(geometry: THREE.BufferGeometry, material: THREE.Material | THREE.Material[],
-    recipe: GenerateRecipe, options?: AxialGeneratedMeshOptions);
-  readonly isAxialGeneratedMesh: true;
-  readonly recipe: Required<GenerateRecipe>;
-  readonly generatorUniforms: GeneratorUniforms;
-  /** The tiles held, nearest first; their instances in that order, m^2 each. */
-  readonly tiles: [number, number][];
-  /** Make the tiles around the camera by itself, without update(): drawn from the second frame on. */
-  autoUpdate: boolean;
-  /** How many of the `count` slots drawn are kept (the dropped ones collapse to a point). */
-  readonly kept: number;
-  /** The last tiles' cost (null before the first): the GPU passes and the count's one pixel. */
-  readonly timing: { instances: number; slots: number; generateMs: number } | null;
-  /** The kept instances' records, as the Python library's generate_tiles gives them (read back). */
-  records(): Float32Array;
-  /** Make the tiles within reach of `point` if they changed; returns whether they did. */
-  update(renderer: THREE.WebGLRenderer, point: { x: number; z: number }): boolean;
-  /** A new density map and where it lies (an AxialBrush's); the tiles are made again on the next update. */
-  setDensity(grid: DensityGrid, placement: { d_lo: [number, number]; d_inv: [number, number]; d_wrap?: boolean }): void;
-}
+/** In place of the record: a generated layer, its instances made on the GPU from `generate` (a scene file's
+ * [layer.generate]) in the tiles within reach of a point (update, or autoUpdate). */
+export interface GeneratedRecord { generate: GenerateRecipe }
 
 /** Grey levels in 0..1, rows of `cols`, the first row at the low z. */
 export interface DensityGrid { data: Float32Array; cols: number; rows: number }

@@ -7,5 +7,4 @@ export { AxialError, parseADP } from './core/adp.js';
 export { AxialInstancedMesh } from './webgl/mesh.js';
 export { AxialGLTFPlugin } from './webgl/gltf.js';
 export { EXTENSION } from './core/gltf.js';
-export { AxialGeneratedMesh } from './webgl/generate.js';
 export { AXIAL_GLSL, WIND_GLSL } from './webgl/glsl.js';

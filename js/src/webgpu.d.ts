@@ -1,12 +1,12 @@
 // Types of axialdeform-three/webgpu: the module's classes for three's WebGPURenderer (three r184+).
 import type { BufferGeometry, Raycaster, Intersection } from 'three';
 import type { Material } from 'three';
-import type { AxialGLTFPlugin as WebGLAxialGLTFPlugin, GenerateRecipe, GeneratorUniforms, AxialGeneratedMeshOptions, ADPRecord,
-  InstanceRecord, AxialInstancedMeshOptions, DensityGrid } from './index';
+import type { AxialGLTFPlugin as WebGLAxialGLTFPlugin, ADPRecord, InstanceRecord, GeneratedRecord, AxialInstancedMeshOptions }
+  from './index';
 import { AxialMeshCore } from './helpers';
 
 export { AxialError, parseADP, EXTENSION } from './index';
-/** The brush of a generated layer's mask (the same as axialdeform-three/helpers'): paints this entry's AxialGeneratedMesh. */
+/** The brush of a generated layer's mask (the same as axialdeform-three/helpers'): paints this entry's generated AxialInstancedMesh. */
 export { AxialBrush } from './helpers';
 
 /** What bendAsync reads back: 4 numbers a vertex (x, y, z, w), instance after instance, in the mesh's space. */
@@ -26,8 +26,13 @@ export interface CullingLevel {
 
 /** AxialInstancedMesh for WebGPURenderer: the bend is the node material's positionNode. */
 export class AxialInstancedMesh extends AxialMeshCore {
-  constructor(geometry: BufferGeometry, material: Material | Material[], record: ADPRecord | InstanceRecord,
+  constructor(geometry: BufferGeometry, material: Material | Material[], record: ADPRecord | InstanceRecord | GeneratedRecord,
     options?: AxialInstancedMeshOptions);
+  /** A generated layer: the count of the last tiles kept, once read back (`kept` is null until then). */
+  readonly counted: Promise<number | null>;
+  /** The instances' records: a generated layer's kept ones read back from the GPU (a compute pass), as the Python
+   * library's generate_tiles gives them; otherwise the record's. */
+  recordsAsync(renderer?: unknown): Promise<Float32Array>;
   /** GPU culling and level of detail on the WebGPU backend (false: off). */
   setGPUCulling(options?: boolean | { levels: CullingLevel[] }): this;
   /** Whether instances are culled on the GPU. */
@@ -40,35 +45,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
   raycastAsync(raycaster: Raycaster, renderer?: unknown): Promise<Intersection[]>;
 }
 
-/**
- * A generated layer under WebGPURenderer's WebGPU backend: its tiles' instances made by a compute pass of
- * glsl/generate.glsl as generated node functions, into the storage buffer the materials read.
- */
-export class AxialGeneratedMesh extends AxialInstancedMesh {
-  constructor(geometry: BufferGeometry, material: Material | Material[], recipe: GenerateRecipe,
-    options?: AxialGeneratedMeshOptions);
-  readonly isAxialGeneratedMesh: true;
-  readonly recipe: Required<GenerateRecipe>;
-  readonly generatorUniforms: GeneratorUniforms;
-  /** The tiles held, nearest first; their instances in that order, m^2 each. */
-  readonly tiles: [number, number][];
-  /** Make the tiles around the camera by itself, without update(). */
-  autoUpdate: boolean;
-  /** How many of the `count` slots drawn are kept: null until `counted` resolves (read back asynchronously). */
-  readonly kept: number | null;
-  /** The count of the last tiles kept, once read back. */
-  readonly counted: Promise<number | null>;
-  /** The last tiles' cost on the CPU (null before the first). */
-  readonly timing: { slots: number; generateMs: number } | null;
-  /** Make the tiles within reach of `point` if they changed (one compute dispatch); returns whether they did. */
-  update(renderer: unknown, point: { x: number; z: number }): boolean;
-  /** The kept instances' records, as the Python library's generate_tiles gives them (read back). */
-  recordsAsync(renderer?: unknown): Promise<Float32Array>;
-  /** A new density map and where it lies (an AxialBrush's): the tiles are made again at the next update. */
-  setDensity(grid: DensityGrid, placement: { d_lo: [number, number]; d_inv: [number, number]; d_wrap?: boolean }): void;
-}
-
-/** GLTFLoader plugin (AXIALDEFORM_bend) making this entry's AxialInstancedMesh (AxialGeneratedMesh for the generated form). */
+/** GLTFLoader plugin (AXIALDEFORM_bend) making this entry's AxialInstancedMesh (a generated node's made from its recipe). */
 export class AxialGLTFPlugin extends WebGLAxialGLTFPlugin {
   constructor(parser: import('three/addons/loaders/GLTFLoader.js').GLTFParser, options?: { maxSlots?: number });
 }

@@ -1,7 +1,7 @@
 // webgpu.js -- axialdeform-three for three's WebGPURenderer (three/webgpu, three r184 or later: its
 // WebGPU backend and its WebGL 2 fallback) and node materials:
 //
-//     import { AxialInstancedMesh, AxialGeneratedMesh, AxialGLTFPlugin } from 'axialdeform-three/webgpu';
+//     import { AxialInstancedMesh, AxialGLTFPlugin } from 'axialdeform-three/webgpu';
 //
 // The same classes as 'axialdeform-three' (the record, the bounds, the wind, the tint, trees of
 // several axes, a chosen frame, generated layers), but the bend is a node function on position and
@@ -15,17 +15,16 @@
 import { AxialError, parseADP } from './core/adp.js';
 import { AxialGLTFPluginBase, EXTENSION } from './core/gltf.js';
 import { AxialInstancedMesh } from './webgpu/mesh.js';
-import { AxialGeneratedMesh } from './webgpu/generate.js';
 import { AxialBrush } from './core/brush.js';
 
-export { AxialError, parseADP, EXTENSION, AxialInstancedMesh, AxialGeneratedMesh, AxialBrush };
+export { AxialError, parseADP, EXTENSION, AxialInstancedMesh, AxialBrush };
 export * as nodes from './webgpu/nodes.js';
 export * as generateNodes from './webgpu/generate_nodes.js';
 
-/** GLTFLoader plugin (AXIALDEFORM_bend) making axialdeform-three/webgpu's AxialInstancedMesh, and its
- * AxialGeneratedMesh for a node in the generated form.  Imports no WebGL file of this module. */
+/** GLTFLoader plugin (AXIALDEFORM_bend) making axialdeform-three/webgpu's AxialInstancedMesh (a node in the
+ * generated form: one made from its recipe).  Imports no WebGL file of this module. */
 export class AxialGLTFPlugin extends AxialGLTFPluginBase {
   constructor(parser, options = {}) {
-    super(parser, options, AxialInstancedMesh, AxialGeneratedMesh);
+    super(parser, options, AxialInstancedMesh);
   }
 }

@@ -249,3 +249,32 @@ test('never a silent unbent picture: node materials and WebGPURenderer are refus
   assert.equal(seen, webgl);
   mesh.dispose();
 });
+
+test('a generated layer is the same mesh made from {generate: recipe}: its recipe, room and refusals', async () => {
+  const { AxialBrush } = await import('../src/helpers.js');
+  const recipe = { rate: 1, tile: 8, reach: 20, tint: 0.1 };
+  const mesh = new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), { generate: recipe });
+  assert.equal(mesh.constructor, AxialInstancedMesh);
+  assert.equal(mesh.recipe.rate, 1);
+  assert.equal(mesh.recipe.min_distance, 0); // the defaults filled in
+  assert.equal(mesh.layout.numbersPerInstance, 22); // a tint: the tinted record
+  assert.equal(mesh.capacity, 36 * 64); // the most tiles within reach (6 x 6) of 8 x 8 cells
+  assert.equal(mesh.count, 0);
+  assert.deepEqual(Array.from(mesh.records()), []); // nothing made before update
+  assert.equal(mesh.defines.AXIAL_POSITION_IDS, '1');
+  assert.throws(() => mesh.setParams(new Float32Array(22)), (e) => e instanceof AxialError && /made from its recipe/.test(e.message));
+  assert.throws(() => mesh.updateParams(new Float32Array(22), 0), /setParams|updateParams/);
+  assert.throws(() => mesh.setInstanceCulling({ isWebGLRenderer: true, capabilities: { isWebGL2: true } }), /generated layer/);
+  assert.throws(() => new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), { generate: { rate: -1, tile: 8 } }),
+    (e) => e instanceof AxialError && /rate/.test(e.message));
+  const brush = new AxialBrush(mesh, { area: [0, 0, 10, 10] });
+  assert.equal(brush.mesh, mesh);
+  mesh.dispose();
+  mesh.dispose(); // safe twice
+  // a mesh of records is no generated layer: its records are its own, update and the brush refused
+  const plain = new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), record('stone16'));
+  assert.equal(plain.recipe, null);
+  assert.deepEqual(Array.from(plain.records()), Array.from(record('stone16').data));
+  assert.throws(() => plain.update(null, { x: 0, z: 0 }), (e) => e instanceof AxialError && /not a generated layer/.test(e.message));
+  assert.throws(() => new AxialBrush(plain, { area: [0, 0, 10, 10] }), /expected a generated layer/);
+});

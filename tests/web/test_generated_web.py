@@ -1,5 +1,5 @@
 """Generated layers in the browser (docs/generate.md): the page of ``axialdeform web SCENE.toml`` and the
-npm module's AxialGeneratedMesh make the Python library's records from the recipe on the GPU
+npm module's generated AxialInstancedMesh make the Python library's records from the recipe on the GPU
 (glsl/generate.glsl by WebGL 2 transform feedback), in the tiles around the camera; no per-instance
 file travels.  Debian's chromium, WebGL 2 on SwiftShader; nothing here skips."""
 
@@ -447,7 +447,7 @@ def _generated_app(browser, page_url):
 
 @pytest.mark.slow
 def test_the_modules_generated_mesh_makes_the_python_records_in_a_three_app(browser, three_site):
-    """examples/web/generated.html: AxialGeneratedMesh with three's own MeshStandardMaterial, its generator's
+    """examples/web/generated.html: a generated AxialInstancedMesh with three's own MeshStandardMaterial, its generator's
     numbers computed by the module from the geometry (recipeUniforms), against the Python library."""
     folder, url = three_site
     page_url = url + "generated.html?recipe=" + quote(json.dumps(RECIPE))
@@ -533,7 +533,7 @@ def test_the_generated_mesh_draws_from_the_gpu_with_three_r187(browser, tmp_path
 
 @pytest.mark.slow
 def test_the_modules_generated_mesh_sways_as_render_sways_a_generated_layer(browser, three_site):
-    """AxialGeneratedMesh in the wind: its slots change as tiles come and go, so its wind phases hash where
+    """A generated AxialInstancedMesh in the wind: its slots change as tiles come and go, so its wind phases hash where
     each instance stands (AXIAL_POSITION_IDS), as render draws a generated layer -- the same picture
     (IoU >= 0.95), closer than with phases by index, and not the still one."""
     folder, url = three_site
@@ -561,7 +561,7 @@ def test_the_modules_generated_mesh_sways_as_render_sways_a_generated_layer(brow
 @pytest.mark.slow
 def test_the_gltf_generated_form_is_generated_by_the_plugin(browser, three_site, tmp_path):
     """export SCENE.toml --generated, loaded by a plain three.js app through AxialGLTFPlugin
-    (examples/web/gltf.html): the node becomes an AxialGeneratedMesh that makes the tiles around the camera
+    (examples/web/gltf.html): the node becomes a generated AxialInstancedMesh that makes the tiles around the camera
     before it is drawn -- the Python library's records -- and draws them as render does."""
     folder, url = three_site
     (folder / "gen.toml").write_text(GLTF_SCENE)
@@ -580,13 +580,13 @@ def test_the_gltf_generated_form_is_generated_by_the_plugin(browser, three_site,
             renderer.render(scene, camera);
             let s = null;
             gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh && !s) s = o; });
-            return { type: s.type, tiles: s.tiles, width: s.layout.numbersPerInstance, eye: camera.position.toArray(),
+            return { type: s.type, generated: Boolean(s.recipe), tiles: s.tiles, width: s.layout.numbersPerInstance, eye: camera.position.toArray(),
                      data: Array.from(s.records()) }; }""")
     finally:
         page.close()
     layer = ad.Scene.load(folder / "gen.toml").layers[0]
     recipe = layer.generate
-    assert got["type"] == "AxialGeneratedMesh"
+    assert got["type"] == "AxialInstancedMesh" and got["generated"]
     x, _, z = got["eye"]
     assert sorted(got["tiles"]) == sorted(tiles_around(recipe.generate, x, z, recipe.reach).tolist())
     want = generate_tiles(recipe.generate, layer.mesh, got["tiles"], recipe.maps)
@@ -641,7 +641,7 @@ def test_a_hostile_generated_form_is_refused_in_chromium_and_the_tab_lives(brows
 @pytest.mark.slow
 def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site):
     """A generated layer of ten axes in the glTF generated form (its child-axis table an accessor): the
-    plugin's AxialGeneratedMesh makes the Python library's records, child axes and all."""
+    plugin's generated AxialInstancedMesh makes the Python library's records, child axes and all."""
     folder, url = three_site
     (folder / "gen-trees.toml").write_text(TREES.replace('axes = "tree-axes.toml"', 'axes = "{}"'.format(
         (ROOT / "examples" / "forest" / "tree-axes.toml").as_posix())).split("[[layer]]\nname = \"ground\"")[0])
@@ -658,7 +658,7 @@ def test_the_gltf_generated_form_of_trees_bends_every_level(browser, three_site)
             renderer.render(scene, camera);
             renderer.render(scene, camera);
             let s = null;
-            gltf.scene.traverse((o) => { if (o.isAxialGeneratedMesh && !s) s = o; });
+            gltf.scene.traverse((o) => { if (o.recipe && !s) s = o; });
             // the offsets texture the draw fetches, as the GPU drew its texels (generate_axes.vert): slot order
             const gl = renderer.getContext(), tex = s.axialUniforms.axialChildren.value;
             const fbo = gl.createFramebuffer(), texels = new Float32Array(tex.image.width * 4 * 4);

@@ -382,7 +382,7 @@ def generated_cases(tmp_path):
 
 @pytest.mark.parametrize("version", VERSIONS)
 def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser, site, version, tmp_path):
-    """axialdeform-three/webgpu's AxialGeneratedMesh: its compute pass (the generated axial_generate, WebGPU backend)
+    """axialdeform-three/webgpu's generated AxialInstancedMesh: its compute pass (the generated axial_generate, WebGPU backend)
     makes the Python library's records for the tiles around a point -- flat ground, a height map with
     density, bands and leaning, a tree of ten axes --, counts the kept ones on the GPU, draws them as
     render does (silhouette IoU >= 0.95), and a ray straight down hits the first one."""
@@ -429,7 +429,7 @@ def test_the_generated_mesh_makes_the_python_records_under_webgpu(webgpu_browser
 
 
 def test_the_brush_paints_a_generated_mesh_under_webgpu(webgpu_browser, site):
-    """This entry's AxialBrush on its AxialGeneratedMesh (setDensity): the compute passes are made again from the
+    """This entry's AxialBrush on its generated AxialInstancedMesh (setDensity): the compute passes are made again from the
     painted mask and the tiles give the Python library's records for the same strokes (core/brush.py), fewer
     than before."""
     from axialdeform.core.brush import Stroke, fold, new_mask, paint
@@ -463,13 +463,13 @@ def test_a_generated_mesh_under_the_webgl2_fallback_is_refused_in_words(webgpu_b
     case = _gen_case("stones", stone, Generate(**GEN_STONES), 5.0)
     out, errors = run(webgpu_browser, site[1], VERSIONS[-1], "generate", {"gl": True, "cases": [case]})
     said = out["cases"][0]["error"]
-    assert said.startswith("AxialError: AxialGeneratedMesh (axialdeform-three/webgpu): the generated instances"), said
+    assert said.startswith("AxialError: AxialInstancedMesh (axialdeform-three/webgpu): a generated layer's instances"), said
     assert "WebGPU backend" in said and "WebGLRenderer" in said
     assert errors == []
     huge = _gen_case("huge", stone, Generate(rate=4.0, tile=16.0, seed=1), 290.0)  # 1 478 656 slots
     out, errors = run(webgpu_browser, site[1], VERSIONS[-1], "generate", {"gl": False, "cases": [huge]})
     said = out["cases"][0]["error"]
-    assert said.startswith("AxialError: AxialGeneratedMesh: 1478656 slots"), said  # by the constructor, before allocating
+    assert said.startswith("AxialError: AxialInstancedMesh: 1478656 slots"), said  # by the constructor, before allocating
     assert "maxStorageBufferBindingSize 134217728" in said and "requiredLimits" in said
     # the same reach with the limit the renderer was given named: made (the device's own limit checked at the first draw)
     big = dict(huge, options={"maxStorageBufferBindingSize": 2 ** 31 - 4})
@@ -481,7 +481,7 @@ def test_a_generated_mesh_under_the_webgl2_fallback_is_refused_in_words(webgpu_b
 
 def test_the_gltf_generated_form_is_generated_under_webgpu(webgpu_browser, site):
     """export SCENE.toml --generated, loaded by this entry's AxialGLTFPlugin: the node becomes this entry's
-    AxialGeneratedMesh, which makes the tiles around the camera as it is drawn (autoUpdate) and draws
+    generated AxialInstancedMesh, which makes the tiles around the camera as it is drawn (autoUpdate) and draws
     what render draws of the Python library's records for those tiles."""
     folder, url = site
     (folder / "gen.toml").write_text(GLTF_SCENE)

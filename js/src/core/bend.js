@@ -157,3 +157,18 @@ export function checkRows(mesh, data, first, where) {
   }
   return rows;
 }
+
+/** Each vertex's axes (_AXIAL_AXIS): one whole number a vertex, its axis b or, blending two chains, b + 64 b1 +
+ * 4096 q (q / 2047 the second chain's weight; docs/method.md, "Blended vertices"), both axes below `axes`. */
+export function checkVertexCodes(codes, axes, count) {
+  if (codes.length !== count) {
+    throw new AxialError(`AxialInstancedMesh: _AXIAL_AXIS: expected one number a vertex (${count}), found ${codes.length}`);
+  }
+  for (let i = 0; i < codes.length; i++) {
+    const c = codes[i];
+    if (!(Number.isInteger(c) && c >= 0 && c < 8388608 && c % 64 < axes && Math.floor(c / 64) % 64 < axes)) {
+      throw new AxialError(`AxialInstancedMesh: _AXIAL_AXIS: vertex ${i}: expected an axis of 0..${axes - 1}, or b + 64 b1 + 4096 q `
+        + `(both axes below ${axes}, below 2^23), found ${c}`);
+    }
+  }
+}

@@ -18,13 +18,13 @@ function checkGrid(grid, what) {
 
 export class AxialBrush {
   /**
-   * mesh: an AxialGeneratedMesh.  ground: {area: [x0, z0, x1, z1], the ground its density map covers (the
+   * mesh: a generated layer (an AxialInstancedMesh made with {generate: recipe}).  ground: {area: [x0, z0, x1, z1], the ground its density map covers (the
    * height map's, or on flat ground the layer's extent), wrap: whether the map repeats (flat ground),
    * density: the layer's own density map ({data, cols, rows}; null: none), mask: the mask painted so far
    * (null: a new one, where everything grows)}.
    */
   constructor(mesh, ground) {
-    if (!mesh || !mesh.isAxialGeneratedMesh) throw new AxialError('AxialBrush: expected an AxialGeneratedMesh');
+    if (!mesh || !mesh.recipe) throw new AxialError('AxialBrush: expected a generated layer (an AxialInstancedMesh made with {generate: recipe})');
     const area = ground && ground.area;
     if (!Array.isArray(area) || area.length !== 4 || !area.every(Number.isFinite) || !(area[2] > area[0]) ||
         !(area[3] > area[1])) {

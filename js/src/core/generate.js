@@ -1,11 +1,11 @@
 // core/generate.js -- generated layers (docs/generate.md) under any renderer: the recipe's checks, its
 // uniforms, the tiles around a point (axialdeform.core.generate's conventions), the slots read back as
-// records, the bounds from the recipe alone, and what makes a mesh a generated one (generatedBase,
-// adoptGenerated).  The instances are made on the GPU by glsl/generate.glsl: WebGL 2 transform feedback
+// records, the bounds from the recipe alone, and what makes an AxialInstancedMesh a generated layer ({generate: recipe}
+// in place of its record: generatedBase, adoptGenerated).  The instances are made on the GPU by glsl/generate.glsl: WebGL 2 transform feedback
 // (webgl/generate.js, webgl/tiles.js) or a WebGPU compute pass of its node functions (webgpu/generate.js).
 
 import * as THREE from 'three';
-import { AxialError, AXES_ROW, texelRows } from './adp.js';
+import { AxialError } from './adp.js';
 import { plainArray } from './baked.js';
 import { WIDTHS, RECIPE, RECIPE_KINDS, SLOT } from './record.js';
 import { MAX_SLOTS, accepts, checkAnchor, checkRecipeBounds, checkSlots, optionalNumbers, passedThrough, worldEdge } from './limits.js';
@@ -103,7 +103,7 @@ export function recipeUniforms(recipe, positions, axis) {
   return { ...passedThrough(recipe), m, cell, jitter: 1 - recipe.min_distance / cell, bend: bend * axis.length,
     anchor_y: lo[1], anchor_w: w.slice(0, 4), anchor_w4: w[4],
     // no ground maps: the flat ground y = 0, no density map, no bands (the Python library's maps come
-    // with its uniforms: AxialGeneratedMesh's options.uniforms and options.maps)
+    // with its uniforms: a generated AxialInstancedMesh's options.uniforms and options.maps)
     has_heights: false, h_lo: [0, 0], h_inv: [1, 1], h_size: [0, 0], has_density: false, d_lo: [0, 0], d_inv: [1, 1],
     d_size: [0, 0], d_wrap: false, altitude: [-NO_BAND, NO_BAND], slope_tan2: [0, NO_BAND], anchor_xz: [a[0], a[2]] };
 }
@@ -202,34 +202,23 @@ export function generatedBase(geometry, recipe, options, who) {
 }
 
 /**
- * The generated mesh `mesh` (just made by its base constructor from generatedBase's `base`): its
- * capacity in slots, recipe, generator's numbers, maps, tiles, and the hook of autoUpdate (`drawsOn`:
- * whether a renderer is the one this class generates with).  `childTexture`: the child axes' texture
- * the draw reads, sized for every slot (the WebGL module's; the GPU draws its texels).
+ * The generated layer `mesh` (an AxialInstancedMesh just made from generatedBase's `base`): its capacity in
+ * slots, recipe, generator's numbers, maps, tiles, and the hook of autoUpdate (`drawsOn`: whether a renderer
+ * is the one its entry generates with).  Each entry's mesh then adds its renderer's part (`mesh._part`).
  */
-export function adoptGenerated(mesh, base, options, drawsOn, childTexture) {
-  const { r, positions } = base, [m] = tileSize(r), axes = mesh.layout.axes, who = mesh.constructor.name;
+export function adoptGenerated(mesh, base, options, drawsOn) {
+  const { r, positions } = base, [m] = tileSize(r), axes = mesh.layout.axes;
   mesh.capacity = maxTiles(r.tile, r.reach) * m * m;
-  if (axes > 1 && childTexture) {
-    const old = mesh.axialUniforms.axialChildren.value, rows = texelRows(mesh.capacity, axes);
-    const tex = new THREE.DataTexture(new Float32Array(rows * AXES_ROW * 4), AXES_ROW, rows, THREE.RGBAFormat, THREE.FloatType);
-    tex.minFilter = tex.magFilter = THREE.NearestFilter;
-    tex.needsUpdate = true; // its storage: three allocates it at the first upload
-    mesh.axialUniforms.axialChildren.value = tex;
-    old.dispose();
-  }
-  mesh.isAxialGeneratedMesh = true;
-  mesh.type = 'AxialGeneratedMesh';
   mesh.recipe = r;
   mesh.generatorUniforms = options.uniforms ? { ...optionalNumbers(), ...options.uniforms } : recipeUniforms(r, positions, mesh.axis);
   mesh.maps = options.maps || {};
   if (axes > 1 && !(mesh.maps.children && mesh.maps.children.rows === axes - 1 && mesh.maps.children.cols === 26)) {
-    throw new AxialError(`${who}: a mesh of ${axes} axes needs options.maps.children (${axes - 1} rows of 26: each `
-      + 'child axis\'s amplitude and joint projection, as axialdeform web and export write them)');
+    throw new AxialError(`AxialInstancedMesh: a generated layer of ${axes} axes needs options.maps.children (${axes - 1} rows of 26: `
+      + 'each child axis\'s amplitude and joint projection, as axialdeform web and export write them)');
   }
-  if (mesh.generatorUniforms.m !== m) throw new AxialError(`${who}: uniforms.m is ${mesh.generatorUniforms.m}, the recipe's ${m}`);
-  Object.assign(mesh, { tiles: [], _key: null, _generator: null, timing: null, kept: 0, frustumCulled: false,
-    autoUpdate: Boolean(options.autoUpdate), _drawnBy: null });
+  if (mesh.generatorUniforms.m !== m) throw new AxialError(`AxialInstancedMesh: uniforms.m is ${mesh.generatorUniforms.m}, the recipe's ${m}`);
+  Object.assign(mesh, { tiles: [], _key: null, _part: null, timing: null, kept: 0, frustumCulled: false,
+    autoUpdate: Boolean(options.autoUpdate), _drawnBy: null, _materialized: false });
   // its slots change as tiles come and go: the wind's phases hash where the instances stand (glsl/wind.glsl's
   // axial_position_id), as the Python library draws a generated layer
   mesh.defines.AXIAL_POSITION_IDS = '1';
@@ -251,10 +240,15 @@ export function adoptGenerated(mesh, base, options, drawsOn, childTexture) {
   Object.defineProperty(mesh, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
 }
 
-/** A generated mesh's new density map `grid` ({data: Float32Array, cols, rows}: grey levels in 0..1) and where it
+/** The tiles within reach of `point` ({x, z}) of a generated layer, and their key (the same set, the same key). */
+export function tilesWithin(mesh, point) {
+  const tiles = tilesAround(mesh.recipe.tile, point.x, point.z, mesh.recipe.reach, worldEdge(tileSize(mesh.recipe)[1]));
+  return { tiles, key: tiles.map((t) => t.join(',')).sort().join(';') };
+}
+
+/** A generated layer's new density map `grid` ({data: Float32Array, cols, rows}: grey levels in 0..1) and where it
  * lies (`placement`: {d_lo, d_inv, d_wrap}, as the Python library's GroundMaps): its maps and the generator's
- * numbers (an AxialBrush's; each renderer's mesh then gives its generator the map); the tiles are made again on
- * the next update. */
+ * numbers (an AxialBrush's; the renderer's part then takes the map); the tiles are made again on the next update. */
 export function setDensityOf(mesh, grid, placement) {
   if (!(grid && grid.data instanceof Float32Array && grid.data.length === grid.cols * grid.rows)) {
     bad('setDensity', '{data: Float32Array of cols x rows, cols, rows}', grid && grid.cols);

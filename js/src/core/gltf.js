@@ -69,18 +69,16 @@ function checkAttributes(ext, names, where) {
 
 
 /** GLTFLoader plugin: EXT_mesh_gpu_instancing nodes with AXIALDEFORM_bend load bent, as meshes of class
- * `Mesh` (AxialInstancedMesh of a renderer's entry), generated nodes as `Generated` (its AxialGeneratedMesh). */
+ * `Mesh` (AxialInstancedMesh of a renderer's entry; a generated node as one made from its recipe). */
 export class AxialGLTFPluginBase {
   /** `options.maxSlots`: the most slots a generated node may hold (limits.js's MAX_SLOTS; a file asking
    * for more is refused in one line before anything is allocated). */
-  constructor(parser, options, Mesh, Generated) {
+  constructor(parser, options, Mesh) {
     this.parser = parser;
     this.options = options || {};
     this.name = EXTENSION;
     /** @type {any} the entry's mesh class */
     this.Mesh = Mesh;
-    /** @type {any} and its generated one */
-    this.Generated = Generated;
   }
 
   /** Before GLTFLoader reads anything of the file: every node's AXIALDEFORM_bend and the instance
@@ -155,21 +153,17 @@ export class AxialGLTFPluginBase {
       for (const name of ['TRANSLATION', 'SCALE']) {
         if (attrs[name] !== undefined) raw[name] = await parser.getDependency('accessor', attrs[name]);
       }
-      // the generated form: the node's instances made from its recipe around the camera (this.Generated:
-      // each entry's generated mesh); the fallback instances where there is none, said once
+      // the generated form: the node's instances made from its recipe around the camera ({generate: recipe})
       let maps = null;
-      if (ext.generate && this.Generated) {
+      if (ext.generate) {
         maps = {};
         for (const key of ['heights', 'density', 'children']) {
           const m = ext.generate[key];
           if (m) maps[key] = { data: (await parser.getDependency('accessor', m.accessor)).array, cols: m.cols, rows: m.rows };
         }
-      } else if (ext.generate && !this._warned) {
-        this._warned = true;
-        console.warn(`${where}: ${EXTENSION} generate: drawn as its fallback instances (this plugin has no generated mesh)`);
       }
       for (const part of parts) {
-        const bent = maps ? fromGenerated(part, ext, maps, this.Generated, this.options) : fromInstancedMesh(part, ext, where, raw, this.Mesh);
+        const bent = maps ? fromGenerated(part, ext, maps, this.Mesh, this.options) : fromInstancedMesh(part, ext, where, raw, this.Mesh);
         if (part === object) {
           const parent = object.parent;
           parent.add(bent);
@@ -352,12 +346,12 @@ function checkGenerated(gen, at, k, axisLength, maxSlots) {
   }
 }
 
-/** An AxialGeneratedMesh in place of GLTFLoader's InstancedMesh of a generated node: its recipe, the
+/** A generated layer (`Mesh` made from {generate: recipe}) in place of GLTFLoader's InstancedMesh of a generated node: its recipe, the
  * generator's numbers the file holds, the ground maps; the tiles within reach of the camera, made
  * before it is drawn (autoUpdate). */
-function fromGenerated(mesh, ext, maps, Generated, options = {}) {
+function fromGenerated(mesh, ext, maps, Mesh, options = {}) {
   const g = mesh.geometry;
-  return adopt(mesh, ext, new Generated(g, mesh.material, ext.generate.recipe, {
+  return adopt(mesh, ext, new Mesh(g, mesh.material, { generate: ext.generate.recipe }, {
     ...options, axis: { axis: ext.axis, axes: ext.axes || null }, uniforms: ext.generate.uniforms, maps, autoUpdate: true,
     vertexAxis: g.getAttribute('_axial_axis') || undefined,
   }));

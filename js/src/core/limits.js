@@ -9,7 +9,7 @@ import { RECIPE, RECIPE_KINDS } from './record.js';
 /** The most cells a tile may have (m^2). */
 export const MAX_TILE_SLOTS = 1 << 20;
 /** The most slots a generated mesh holds (the tiles within reach; a tree's slots count each axis); the
- * option `maxSlots` of AxialGeneratedMesh and AxialGLTFPlugin raises (or lowers) it. */
+ * option `maxSlots` of a generated AxialInstancedMesh and AxialGLTFPlugin raises (or lowers) it. */
 export const MAX_SLOTS = 1 << 22;
 /** The most numbers a ground map (a height or density map) or a child-axis table may hold (4096^2). */
 export const MAX_MAP_TEXELS = 1 << 24;

@@ -9,12 +9,13 @@
 import * as THREE from 'three';
 import { AxialError, recordLayout, childTexels, texelRows, column, AXES_ROW } from './adp.js';
 import { ATTRIBUTES } from './record.js';
-import { resolveAxis, instanceMatrices, bentRadii, checkRows } from './bend.js';
+import { resolveAxis, instanceMatrices, bentRadii, checkRows, checkVertexCodes } from './bend.js';
 import { checkWind, setWindClock, setWindUniforms, windReach } from './wind.js';
 import { unbake } from './baked.js';
+import { generatedBase, adoptGenerated, setDensityOf, recipeBounds } from './generate.js';
 
 // scratch objects of the bounds (no allocation per instance)
-const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
+const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3(), _v = new THREE.Vector3();
 
 /**
  * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers (the
@@ -27,30 +28,26 @@ const _m = new THREE.Matrix4(), _s = new THREE.Sphere(), _b = new THREE.Box3();
  * the materials bend themselves (a ShaderMaterial including AXIAL_GLSL that reads this mesh's
  * attributes axialD12, axialD34, axialD5, axialTwistTaper, axialAngles, axialAxis, instanceMatrix).  The
  * material(s) are cloned and given the bend; shadows and raycasting use the bent shape.
+ *
+ * A generated layer: record {generate: recipe} (a scene file's [layer.generate]; checkRecipe) -- its instances
+ * made on the GPU from the recipe in the tiles within reach of a point (update(renderer, point), or
+ * options.autoUpdate: around the camera); options.uniforms and options.maps: the generator's numbers and the
+ * ground maps as the Python library gives them (default: recipeUniforms, the flat ground); options.maxSlots.
  */
-/** Each vertex's axes (_AXIAL_AXIS): one whole number a vertex, its axis b or, blending two chains, b + 64 b1 +
- * 4096 q (q / 2047 the second chain's weight; docs/method.md, "Blended vertices"), both axes below `axes`. */
-function checkVertexCodes(codes, axes, count) {
-  if (codes.length !== count) {
-    throw new AxialError(`AxialInstancedMesh: _AXIAL_AXIS: expected one number a vertex (${count}), found ${codes.length}`);
-  }
-  for (let i = 0; i < codes.length; i++) {
-    const c = codes[i];
-    if (!(Number.isInteger(c) && c >= 0 && c < 8388608 && c % 64 < axes && Math.floor(c / 64) % 64 < axes)) {
-      throw new AxialError(`AxialInstancedMesh: _AXIAL_AXIS: vertex ${i}: expected an axis of 0..${axes - 1}, or b + 64 b1 + 4096 q `
-        + `(both axes below ${axes}, below 2^23), found ${c}`);
-    }
-  }
-}
-
 export class AxialMeshCore extends THREE.InstancedMesh {
   /** @type {any} */ _baked = null; /** @type {any} */ _rayMesh = null; /** @type {any} */ _cpuAttributes = null; // set later
   /** @type {any} */ _childTexels = null; /** @type {any} */ _storage = null; // (bake.js, raycast.js, generated meshes)
   /** @type {any} */ _culling = null; // each renderer's culling
+  // a generated layer's state (core/generate.js's adoptGenerated sets it; the renderer's part: _part)
+  /** @type {any[]} */ tiles = []; /** @type {boolean} */ autoUpdate = false; /** @type {any} */ _drawnBy = null;
+  /** @type {boolean} */ _materialized = false; /** @type {any} */ _part = null;
   constructor(geometry, material, record, options = {}) {
     if (!geometry || !geometry.isBufferGeometry) throw new AxialError('AxialInstancedMesh: expected a THREE.BufferGeometry');
+    const base = record && record.generate !== undefined ? generatedBase(geometry, record.generate, options, 'AxialInstancedMesh') : null;
+    if (base) ({ record, options } = base); // a generated layer: no instances until its tiles are made
     if (!record || !Number.isInteger(record.count) || !record.data) {
-      throw new AxialError('AxialInstancedMesh: expected a record ({count, numbersPerInstance, data}: parseADP\'s result)');
+      throw new AxialError('AxialInstancedMesh: expected a record ({count, numbersPerInstance, data}: parseADP\'s result) or '
+        + '{generate: recipe}');
     }
     const capacity = Math.max(record.count, options.capacity || 0, 1);
     // our own geometry: the user's attributes (shared, not copied) plus the instances' numbers
@@ -143,6 +140,9 @@ export class AxialMeshCore extends THREE.InstancedMesh {
       if (userHook) userHook.call(this, renderer, ...rest);
     };
     Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
+    /** @type {any} a generated layer's recipe (checked, defaults filled in); null: the instances are the record's */
+    this.recipe = null;
+    if (base) adoptGenerated(this, base, base.options, (r) => this._generatesWith(r));
   }
 
   /** A camera is about to draw this mesh (the renderer's part: its culling). */
@@ -174,6 +174,7 @@ export class AxialMeshCore extends THREE.InstancedMesh {
    */
   setParams(data, options = undefined) {
     if (options && options.first !== undefined) return this.updateParams(data, options.first);
+    this._ownInstances('setParams');
     const rows = checkRows(this, data, 0, 'setParams');
     const n = rows.length / this.layout.numbersPerInstance;
     this._write(rows, 0);
@@ -191,6 +192,7 @@ export class AxialMeshCore extends THREE.InstancedMesh {
    * (the mesh's box and sphere grow to hold them; they do not shrink until setParams).
    */
   updateParams(rows, start = 0) {
+    this._ownInstances('updateParams');
     rows = checkRows(this, rows, start, 'updateParams');
     const n = rows.length / this.layout.numbersPerInstance;
     this._write(rows, start);
@@ -307,6 +309,7 @@ export class AxialMeshCore extends THREE.InstancedMesh {
   }
 
   computeBoundingSphere() {
+    if (this.recipe && this.tiles.length && !this._materialized) return recipeBounds(this); // before any record is read back
     const box = new THREE.Box3();
     for (let i = 0; i < this.count; i++) box.union(this.getInstanceBoundingBox(i, _b));
     this.boundingBox = box;
@@ -323,6 +326,44 @@ export class AxialMeshCore extends THREE.InstancedMesh {
 
   computeBoundingBox() {
     this.computeBoundingSphere();
+  }
+
+  /** A generated layer ({generate: recipe} in place of the record; docs/generate.md): make the tiles within reach of
+   * `point` ({x, z}: a Vector3, e.g. OrbitControls' target) on `renderer`'s GPU if they changed; returns whether they
+   * did.  Far tiles are let go, so the instances held stay bounded; with options.autoUpdate, around the camera. */
+  update(renderer, point) {
+    return this._generated('update').update(renderer, point);
+  }
+
+  /** A generated layer's new density map ({data: Float32Array, cols, rows}: grey levels in 0..1) and where it lies
+   * ({d_lo, d_inv, d_wrap}, as the Python library's GroundMaps): an AxialBrush's; the tiles are made again at the next update. */
+  setDensity(grid, placement) {
+    const part = this._generated('setDensity');
+    setDensityOf(this, grid, placement);
+    part.densityChanged(grid);
+  }
+
+  updateMatrixWorld(force) {
+    super.updateMatrixWorld(force);
+    const d = this.recipe && this.autoUpdate ? this._drawnBy : null;
+    if (d) this.update(d.renderer, d.camera.getWorldPosition(_v));
+  }
+
+  /** The renderer's part of a generated layer (its `_part`, made by each entry's mesh); `what` names the call refused otherwise. */
+  _generated(what) {
+    if (!this.recipe) throw new AxialError(`${what}: not a generated layer (make one with {generate: recipe} in place of the record)`);
+    return this._part;
+  }
+
+  /** Throws on a generated layer, whose instances its recipe makes (`what` names the call). */
+  _ownInstances(what) {
+    if (this.recipe) throw new AxialError(`${what}: a generated layer's instances are made from its recipe on the GPU; set another recipe by making another mesh`);
+  }
+
+  /** Whether `renderer` is one this mesh's generated layer is made with (autoUpdate; each renderer's part). */
+  // eslint-disable-next-line no-unused-vars
+  _generatesWith(renderer) {
+    return false;
   }
 
   /** Go back to bending every frame (frees the baked geometry). */
@@ -343,6 +384,8 @@ export class AxialMeshCore extends THREE.InstancedMesh {
   /** Frees this mesh's GPU buffers, its materials (the clones), shadow materials and texture;
    * the user's geometry and materials stay theirs. */
   dispose() {
+    if (this._part) this._part.dispose();
+    this._part = null;
     unbake(this);
     this.geometry.dispose();
     (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => m.dispose());

@@ -170,8 +170,8 @@ export function setInstanceCulling(mesh, renderer) {
     delete mesh.defines.AXIAL_CULLED;
   }
   if (renderer) {
-    if (mesh.isAxialGeneratedMesh) {
-      throw new AxialError('setInstanceCulling: a generated mesh holds the tiles around its camera, made on the GPU (no CPU copy to cull)');
+    if (mesh.recipe) {
+      throw new AxialError('setInstanceCulling: a generated layer holds the tiles around its camera, made on the GPU (no CPU copy to cull)');
     }
     if (!renderer.isWebGLRenderer || !renderer.capabilities.isWebGL2) {
       throw new AxialError('setInstanceCulling: expected a WebGLRenderer on WebGL 2 (WebGPURenderer: axialdeform-three/webgpu\'s setGPUCulling)');

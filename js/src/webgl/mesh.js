@@ -11,6 +11,7 @@ import { feedback, refuseWebGPU, refuseNodeMaterial, UNBENT_DRAW } from './feedb
 import { bake } from './bake.js';
 import { raycast } from './raycast.js';
 import { setInstanceCulling, cullingHooks } from './instance_cull.js';
+import { GeneratedTiles } from './generate.js';
 
 /**
  * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers.
@@ -21,12 +22,26 @@ import { setInstanceCulling, cullingHooks } from './instance_cull.js';
  * room for more instances than the record has (setParams may grow count up to it); options.ownShader:
  * the materials bend themselves (a ShaderMaterial including AXIAL_GLSL that reads this mesh's
  * attributes axialD12, axialD34, axialD5, axialTwistTaper, axialAngles, axialAxis, instanceMatrix).  The
- * material(s) are cloned and given the bend; shadows and raycasting use the bent shape.
+ * material(s) are cloned and given the bend; shadows and raycasting use the bent shape.  With {generate:
+ * recipe} in place of the record, a generated layer (core/mesh.js says its options): its tiles made by WebGL 2
+ * transform feedback (generate.js), drawn from the buffers the GPU wrote.
  */
 export class AxialInstancedMesh extends AxialMeshCore {
   constructor(geometry, material, record, options = {}) {
     super(geometry, material, record, options);
     cullingHooks(this);
+    if (this.recipe) this._part = new GeneratedTiles(this); // a generated layer's instances: made by WebGL 2 transform feedback
+  }
+
+  _generatesWith(renderer) {
+    return Boolean(renderer && renderer.isWebGLRenderer);
+  }
+
+  /** The instances' records (Float32Array, rows of numbersPerInstance): a generated layer's kept ones read back
+   * from the GPU, as the Python library's generate_tiles gives them for `tiles` (tools and tests; drawing needs
+   * none); otherwise the record's. */
+  records() {
+    return this.recipe ? this._part.records() : this.data.slice(0, this.count * this.layout.numbersPerInstance);
   }
 
   /** The bent materials of three's shadow passes (customDepthMaterial, customDistanceMaterial). */
@@ -87,6 +102,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
    * (raycast.js), so the mesh must have been drawn (or baked) once.
    */
   raycast(raycaster, intersects) {
+    if (this.recipe) this._part.materialize(); // a generated layer's records read back once a tile set
     raycast(this, raycaster, intersects);
   }
 
@@ -98,6 +114,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
    * rest.  Returns true when baked (false: no instances, a wind, an own shader, no WebGL 2).
    */
   bake(renderer) {
+    if (this.recipe) this._part.materialize();
     return bake(this, renderer);
   }
 

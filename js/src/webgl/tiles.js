@@ -240,7 +240,7 @@ export class TileAttributes {
       this.tileTexture = gl.createTexture();
       this.fbo = gl.createFramebuffer();
       // float colour targets: drawn into only where the context renders to them, else the texels are read
-      // back and uploaded (AxialGeneratedMesh's fallback)
+      // back and uploaded (a generated layer's fallback)
       this.drawsTexels = floats;
     }
     this.counts = floats && Boolean(gl.getExtension('EXT_float_blend'));

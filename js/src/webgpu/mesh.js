@@ -14,6 +14,7 @@ import { AxialMeshCore } from '../core/mesh.js';
 import { attachBake, unbake } from '../core/baked.js';
 import { rayCandidates, intersectBent } from '../core/raycast.js';
 import { GPUCulling } from './cull.js';
+import { GeneratedStorage } from './generate.js';
 import { bendAsync, releaseCompute } from './compute.js';
 import {
   axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes, axialPositionId,
@@ -34,7 +35,8 @@ const MIN_REVISION = 184;
  * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers, for
  * WebGPURenderer: the arguments of axialdeform-three's AxialInstancedMesh; `material` a node material
  * (MeshStandardNodeMaterial, ...) or a classic one (turned into its node twin).  The bend is the
- * material's positionNode (with the exact normal and tangent), so shadows are bent too.
+ * material's positionNode (with the exact normal and tangent), so shadows are bent too.  With {generate:
+ * recipe} in place of the record, a generated layer: its tiles made by a compute pass (generate.js).
  */
 export class AxialInstancedMesh extends AxialMeshCore {
   /** @type {any} GPU culling and levels of detail (cull.js), or null */
@@ -46,6 +48,18 @@ export class AxialInstancedMesh extends AxialMeshCore {
         + 'the first this entry draws right with; update three, or use \'axialdeform-three\' with WebGLRenderer');
     }
     super(geometry, material, record, options);
+    if (this.recipe) this._part = new GeneratedStorage(this, options); // a generated layer: made by a compute pass
+  }
+
+  _generatesWith(renderer) {
+    return Boolean(renderer && renderer.isWebGPURenderer);
+  }
+
+  /** The instances' records (Float32Array, rows of numbersPerInstance): a generated layer's kept ones read back
+   * from the GPU, as the Python library's generate_tiles gives them for `tiles` (tools and tests; drawing needs
+   * none); otherwise the record's. */
+  async recordsAsync(renderer = null) {
+    return this.recipe ? this._part.recordsAsync(renderer) : this.data.slice(0, this.count * this.layout.numbersPerInstance);
   }
 
   /** A node-material clone of `material` whose positionNode bends this mesh's instances. */
@@ -228,6 +242,9 @@ export class AxialInstancedMesh extends AxialMeshCore {
    * @param {boolean | {levels: {geometry: any, distance: number}[]}} [options]
    */
   setGPUCulling(options = true) {
+    if (options && this.recipe) {
+      throw new AxialError('setGPUCulling: a generated layer draws every slot of the tiles within reach; its culling is the reach');
+    }
     if (this._culling) {
       this._culling.levels.forEach((m) => this.remove(m));
       this._culling.dispose();
@@ -280,6 +297,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
    * the baked vertices.
    */
   async bakeAsync(renderer = this._renderer) {
+    if (this.recipe) await this._part.materializeAsync(renderer || this._part.madeBy); // the tile set read back once
     if (this._culling) throw new AxialError('bakeAsync: the mesh is culled on the GPU; mesh.setGPUCulling(false) first');
     unbake(this);
     if (this.count === 0 || this._wind || this._ownShader) return false;
@@ -328,6 +346,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
 
   /** The intersections of `raycaster`'s ray with the bent instances (sorted by distance, with instanceId). */
   async raycastAsync(raycaster, renderer = this._renderer) {
+    if (this.recipe) await this._part.materializeAsync(renderer || this._part.madeBy);
     const ids = rayCandidates(this, raycaster), hits = [];
     if (!ids.length) return hits;
     const r = await this.bendAsync(renderer, ids);

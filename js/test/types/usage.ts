@@ -5,8 +5,7 @@ import { AxialGLTFPlugin, AxialInstancedMesh, parseADP, AxialError, type ADPReco
 import { recordLayout, WIND, checkRecipe, tilesAround, RECIPE_FIELDS } from 'axialdeform-three/helpers';
 import { crc32, fieldName } from 'axialdeform-three/adp';
 import { AXIAL_GLSL } from 'axialdeform-three/glsl';
-import { AxialInstancedMesh as WebGPUAxialInstancedMesh, AxialGeneratedMesh as WebGPUAxialGeneratedMesh,
-  type AxialBent } from 'axialdeform-three/webgpu';
+import { AxialInstancedMesh as WebGPUAxialInstancedMesh, type AxialBent } from 'axialdeform-three/webgpu';
 
 export async function usage(buffer: ArrayBuffer, geometry: THREE.BufferGeometry): Promise<THREE.Object3D> {
   const loader = new GLTFLoader();
@@ -41,10 +40,20 @@ export async function webgpu(geometry: THREE.BufferGeometry, record: ADPRecord, 
 
 // a generated layer under WebGPURenderer: the tiles around a point by a compute pass, read back asynchronously
 export async function generatedWebGPU(geometry: THREE.BufferGeometry, renderer: unknown): Promise<number> {
-  const stones = new WebGPUAxialGeneratedMesh(geometry, new THREE.MeshStandardMaterial(), { rate: 1, tile: 8, reach: 20 });
+  const stones = new WebGPUAxialInstancedMesh(geometry, new THREE.MeshStandardMaterial(), { generate: { rate: 1, tile: 8, reach: 20 } },
+    { maxSlots: 1e6 });
   const made: boolean = stones.update(renderer, new THREE.Vector3(0, 0, 0));
   const kept = await stones.counted;
   const records: Float32Array = await stones.recordsAsync();
   const hits = await stones.raycastAsync(new THREE.Raycaster(), renderer);
   return (made ? 1 : 0) + (kept ?? 0) + records.length + hits.length + stones.tiles.length;
+}
+
+// a generated layer under WebGLRenderer: the same mesh class, its instances made from a recipe by transform feedback
+export function generatedWebGL(geometry: THREE.BufferGeometry, renderer: THREE.WebGLRenderer): number {
+  const stones = new AxialInstancedMesh(geometry, new THREE.MeshStandardMaterial(), { generate: { rate: 1, tile: 8 } },
+    { autoUpdate: false });
+  const made: boolean = stones.update(renderer, new THREE.Vector3(0, 0, 0));
+  const records: Float32Array = stones.records();
+  return (made ? 1 : 0) + (stones.kept ?? 0) + records.length + (stones.recipe ? stones.recipe.rate : 0);
 }
