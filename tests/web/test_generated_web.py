@@ -580,8 +580,8 @@ def test_the_gltf_generated_form_is_generated_by_the_plugin(browser, three_site,
             renderer.render(scene, camera);
             let s = null;
             gltf.scene.traverse((o) => { if (o.isAxialInstancedMesh && !s) s = o; });
-            return { type: s.type, generated: Boolean(s.recipe), tiles: s.tiles, width: s.layout.numbersPerInstance, eye: camera.position.toArray(),
-                     data: Array.from(s.records()) }; }""")
+            return { type: s.type, generated: Boolean(s.recipe), tiles: s.tiles, width: s.layout.numbersPerInstance,
+                     eye: camera.position.toArray(), data: Array.from(s.records()) }; }""")
     finally:
         page.close()
     layer = ad.Scene.load(folder / "gen.toml").layers[0]
