@@ -454,8 +454,12 @@ def check_extent(recipe: Generate, extent) -> tuple:
 
 
 def _extent_span(recipe: Generate, extent) -> tuple[int, int, int, int]:
-    """``(lo_x, hi_x, lo_z, hi_z)``: the tile indices that meet ``extent`` within the world (checked)."""
+    """``(lo_x, hi_x, lo_z, hi_z)``: the tile indices within the world whose instances can stand in ``extent``
+    (checked): the tiles that meet it grown by :attr:`Generate.spread` (in clumps an instance stands up to that
+    far beyond its tile: without those tiles a layer would thin out along its extent's edges)."""
     x0, z0, x1, z1 = check_extent(recipe, extent)
+    g = recipe.spread
+    x0, z0, x1, z1 = x0 - g, z0 - g, x1 + g, z1 + g
     T = recipe.tile
     first, last = _world_tiles(recipe)
     return (max(first, math.floor(x0 / T)), min(last, math.floor(x1 / T)),
@@ -470,7 +474,8 @@ def check_extent_slots(recipe: Generate, extent, axes: int = 1) -> int:
 
 
 def tiles_in(recipe: Generate, extent, axes: int = 1) -> np.ndarray:
-    """(k, 2) ints: the tiles that meet the ground ``extent`` (x0, z0, x1, z1) within the world's edge; a
+    """(k, 2) ints: the tiles whose instances can stand in the ground ``extent`` (x0, z0, x1, z1) within the
+    world's edge (those that meet it; in clumps those within :attr:`Generate.spread` of it too); a
     ParamError naming ``extent`` when they hold more slots (of ``axes`` axes each) than :func:`slot_limit`."""
     check_extent_slots(recipe, extent, axes)
     lo_x, hi_x, lo_z, hi_z = _extent_span(recipe, extent)
