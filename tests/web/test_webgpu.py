@@ -259,8 +259,9 @@ def test_the_webgpu_entry_is_exported_and_typed():
 @pytest.mark.parametrize("version", VERSIONS)
 def test_gpu_culling_draws_the_same_picture_with_fewer_instances(webgpu_browser, site, version):
     """setGPUCulling: the compute pass keeps the instances whose bend-aware spheres meet the frustum and
-    the indirect draw draws just those: the same picture as drawing all 60, from fewer than 60; with two
-    levels by distance, each level draws some and those beyond the last none."""
+    the indirect draw draws just those: the same picture as drawing all 60, from fewer than 60; in a field of
+    4 000 (blocks outside, wholly inside and cut) exactly the ids whose spheres three's Frustum finds inside;
+    with two levels by distance, each level draws some and those beyond the last none."""
     _folder, url = site
     out, errors = run(webgpu_browser, url, version, "culling", {"gl": False})
     n = out["count"]
@@ -270,6 +271,10 @@ def test_gpu_culling_draws_the_same_picture_with_fewer_instances(webgpu_browser,
     assert (all_px.max(1) > 0).sum() > 5000
     assert np.abs(all_px.astype(int) - culled).max() <= 2  # the same picture
     assert out["after"] == {"children": 0, "culled": False}
+    assert "ids" in out, out.get("error")
+    ids = out["ids"]  # a field of 4 000 in blocks of 64: the pass keeps exactly what three's Frustum finds inside
+    assert ids["blocks"] == 63 and ids["inside"] > 0 and ids["cut"] > 0, {k: ids[k] for k in ("blocks", "inside", "cut")}
+    assert 0 < len(ids["want"]) < 4000 and ids["got"] == ids["want"], (len(ids["got"]), len(ids["want"]))
     lod, _ = run(webgpu_browser, url, version, "culling", {"gl": False, "levels": [5, 7]})
     near, far = lod["args"][1], lod["args"][6]
     assert near > 0 and far > 0 and near + far < out["args"][1], lod["args"]

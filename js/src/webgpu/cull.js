@@ -1,16 +1,19 @@
 // cull.js -- GPU culling and level of detail for axialdeform-three/webgpu's AxialInstancedMesh under
-// WebGPURenderer's WebGPU backend: a compute pass a frame tests every instance's bend-aware bounding
-// sphere (the one the mesh's CPU bounds and the Python library's culling use: the base mesh's sphere
-// grown by the sum of the largest offsets, through the instance's matrix, grown by the wind's reach)
-// against the camera's frustum, picks its level by distance and appends its id to that level's list,
-// counting into the indirect draw arguments; each level draws its list with one indirect draw.  The
-// CPU sets six planes and a camera position and dispatches two passes: O(1) a frame whatever the count.
+// WebGPURenderer's WebGPU backend: a compute pass a frame, one invocation a block of 64 instances near each
+// other (core/cull.js's blocks, made on the CPU when the instances change), tests the block's sphere against
+// the camera's frustum: a block outside is done, a block wholly inside takes every instance, and in a block
+// the frustum cuts each instance's bend-aware bounding sphere (the one the mesh's CPU bounds and the Python
+// library's culling use: the base mesh's sphere grown by the sum of the largest offsets, through the
+// instance's matrix, grown by the wind's reach) is tested.  Each instance taken gets its level by distance
+// and its id appended to that level's list, counting into the indirect draw arguments; each level draws its
+// list with one indirect draw.  The CPU sets six planes and a camera position and dispatches two passes.
 
 import * as THREE from 'three/webgpu';
-import { Fn, If, storage, uniform, uniformArray, instanceIndex, uint, int, atomicAdd, atomicStore, dot } from 'three/tsl';
+import { Fn, If, Loop, storage, uniform, uniformArray, instanceIndex, uint, int, atomicAdd, atomicStore, dot, bool } from 'three/tsl';
 import { AxialError } from '../core/adp.js';
+import { InstanceBlocks, BLOCK } from '../core/cull.js';
 
-const _frustum = new THREE.Frustum(), _m = new THREE.Matrix4(), _inv = new THREE.Matrix4(), _s = new THREE.Sphere();
+const _inv = new THREE.Matrix4(), _s = new THREE.Sphere();
 
 /**
  * GPU culling of `mesh` (an AxialInstancedMesh of axialdeform-three/webgpu) in `levels`:
@@ -37,47 +40,64 @@ export class GPUCulling {
       }
     });
     this.mesh = mesh;
-    const cap = mesh.capacity, L = levels.length;
+    const cap = mesh.capacity, L = levels.length, nb = Math.ceil(cap / BLOCK);
     this.capacity = cap;
+    this.blocks = new InstanceBlocks(mesh);
     // storage: the instances' packed numbers (the same array as the vertex buffer's), their spheres,
     // each level's visible ids, the indirect draw arguments (5 numbers a level)
     this.instancesAttr = new THREE.StorageBufferAttribute(mesh._packed.array, 4);
     this.boundsAttr = new THREE.StorageBufferAttribute(new Float32Array(cap * 4), 4);
+    this.orderAttr = new THREE.StorageBufferAttribute(this.blocks.order, 1); // the instances block after block
+    this.blocksAttr = new THREE.StorageBufferAttribute(this.blocks.blocks, 4); // (centre, radius), (scale, first, end, 0)
     this.idsAttr = new THREE.StorageBufferAttribute(new Uint32Array(cap * L), 1);
     const args = new Uint32Array(5 * L);
     levels.forEach((l, k) => { args[5 * k] = l.geometry.index ? l.geometry.index.count : l.geometry.getAttribute('position').count; });
     this.argsAttr = new THREE.IndirectStorageBufferAttribute(args, 5);
     const counts = storage(this.argsAttr, 'uint', 5 * L).toAtomic();
     const bounds = storage(this.boundsAttr, 'vec4', cap).toReadOnly();
+    const order = storage(this.orderAttr, 'uint', cap).toReadOnly(), blocks = storage(this.blocksAttr, 'vec4', 2 * nb).toReadOnly();
     const ids = storage(this.idsAttr, 'uint', cap * L);
     this.planes = uniformArray(Array.from({ length: 6 }, () => new THREE.Vector4()), 'vec4');
     this.eye = uniform(new THREE.Vector3());
-    this.count = uniform(0, 'uint');
+    this.blockCount = uniform(0, 'uint');
+    this.grow = uniform(0);
     this.distances = levels.map((l) => uniform(Number.isFinite(l.distance) ? l.distance : 3.4e38));
     this.reset = Fn(() => {
       for (let k = 0; k < L; k++) atomicStore(counts.element(uint(5 * k + 1)), uint(0));
     })().compute(1);
+    const planeTest = (c, r) => { // [outside some plane, cut by some plane] of a sphere (c, r)
+      let out = null, cut = null;
+      for (let p = 0; p < 6; p++) {
+        const plane = this.planes.element(int(p)), d = dot(plane.xyz, c).add(plane.w);
+        const o = d.lessThan(r.negate()), k = d.lessThan(r);
+        out = out ? out.or(o) : o;
+        cut = cut ? cut.or(k) : k;
+      }
+      return [out, cut];
+    };
     this.cull = Fn(() => {
-      const i = instanceIndex.toVar();
-      If(i.lessThan(this.count), () => {
-        const b = bounds.element(i).toVar(), c = b.xyz, r = b.w;
-        let inside = null;
-        for (let p = 0; p < 6; p++) {
-          const plane = this.planes.element(int(p));
-          const test = dot(plane.xyz, c).add(plane.w).greaterThanEqual(r.negate());
-          inside = inside ? inside.and(test) : test;
-        }
-        If(inside, () => {
-          const d = c.sub(this.eye).length().toVar();
-          const level = int(L).toVar();
-          for (let k = L - 1; k >= 0; k--) If(d.lessThan(this.distances[k]), () => { level.assign(int(k)); });
-          If(level.lessThan(int(L)), () => {
-            const slot = atomicAdd(counts.element(uint(level).mul(uint(5)).add(uint(1))), uint(1)).toVar();
-            ids.element(uint(level).mul(uint(cap)).add(slot)).assign(i);
+      const b = instanceIndex.toVar();
+      If(b.lessThan(this.blockCount), () => {
+        const head = blocks.element(b.mul(uint(2))).toVar(), tail = blocks.element(b.mul(uint(2)).add(uint(1))).toVar();
+        const [out, cut] = planeTest(head.xyz, head.w.add(this.grow.mul(tail.x)));
+        const whole = cut.not().toVar();
+        If(out.not(), () => {
+          Loop({ start: int(tail.y), end: int(tail.z), type: 'int', condition: '<' }, ({ i: j }) => {
+            const i = order.element(j).toVar(), s = bounds.element(i).toVar();
+            const inside = bool(whole).or(planeTest(s.xyz, s.w)[0].not());
+            If(inside, () => {
+              const d = s.xyz.sub(this.eye).length().toVar();
+              const level = int(L).toVar();
+              for (let k = L - 1; k >= 0; k--) If(d.lessThan(this.distances[k]), () => { level.assign(int(k)); });
+              If(level.lessThan(int(L)), () => {
+                const slot = atomicAdd(counts.element(uint(level).mul(uint(5)).add(uint(1))), uint(1)).toVar();
+                ids.element(uint(level).mul(uint(cap)).add(slot)).assign(i);
+              });
+            });
           });
         });
       });
-    })().compute(cap);
+    })().compute(nb);
     // the levels: one plain mesh each, drawing its list of ids by one indirect draw
     const idsRead = storage(this.idsAttr, 'uint', cap * L).toReadOnly();
     const instances = storage(this.instancesAttr, 'vec4', this.instancesAttr.count).toReadOnly();
@@ -110,8 +130,9 @@ export class GPUCulling {
     this.updateBounds(0, mesh.count);
   }
 
-  /** Every instance's sphere (the mesh's space) from first to first + count, for the pass. */
+  /** Every instance's sphere (the mesh's space) from first to first + count, for the pass, and the blocks'. */
   updateBounds(first, count) {
+    this.blocks.fill(first, count);
     const out = this.boundsAttr.array;
     for (let i = first; i < first + count; i++) {
       const s = this.mesh.getInstanceBoundingSphere(i, _s);
@@ -128,12 +149,12 @@ export class GPUCulling {
       throw new AxialError('setGPUCulling: GPU culling reads storage buffers in the vertex stage, which WebGPURenderer\'s '
         + 'WebGL 2 fallback has not; draw with the WebGPU backend, or turn it off (mesh.setGPUCulling(false))');
     }
-    _m.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).multiply(mesh.matrixWorld);
-    _frustum.setFromProjectionMatrix(_m, camera.coordinateSystem, camera.reversedDepth);
-    _frustum.planes.forEach((p, k) => this.planes.array[k].set(p.normal.x, p.normal.y, p.normal.z, p.constant));
+    if (this.blocks.refresh()) { this.orderAttr.needsUpdate = true; this.blocksAttr.needsUpdate = true; }
+    this.blocks.planes(camera).forEach((p, k) => this.planes.array[k].set(p.normal.x, p.normal.y, p.normal.z, p.constant));
     _inv.copy(mesh.matrixWorld).invert();
     this.eye.value.setFromMatrixPosition(camera.matrixWorld).applyMatrix4(_inv);
-    this.count.value = mesh.count;
+    this.blockCount.value = this.blocks.count;
+    this.grow.value = mesh._windGrow || 0;
     renderer.compute([this.reset, this.cull]);
   }
 
