@@ -53,25 +53,31 @@ export class InstanceBlocks {
     return Math.ceil(this.sorted / BLOCK);
   }
 
-  /** The instances in blocks along a Morton curve of their centres over the two widest axes of their box. */
+  /** The instances in blocks along a Morton curve of their centres over the two widest axes of their box (a
+   * 30-bit key an instance, ordered by two passes of a radix sort: ties keep their ids' order). */
   _sort() {
     const n = this.mesh.count, s = this.spheres, lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
     for (let i = 0; i < n; i++) for (let c = 0; c < 3; c++) { lo[c] = Math.min(lo[c], s[4 * i + c]); hi[c] = Math.max(hi[c], s[4 * i + c]); }
     const [u, v] = [0, 1, 2].sort((a, b) => (hi[b] - lo[b]) - (hi[a] - lo[a]));
-    const idBits = Math.max(1, Math.ceil(Math.log2(n + 1))), bits = Math.min(15, Math.floor((52 - idBits) / 2));
-    const cells = 2 ** bits - 1, keys = new Float64Array(n);
-    const spread = (x) => { let k = 0; for (let b = 0; b < bits; b++) k += ((x >> b) & 1) * 2 ** (2 * b); return k; };
+    const spread = (x) => { // the 15 bits of x to the even bits of 30
+      x = (x | (x << 8)) & 0x00ff00ff; x = (x | (x << 4)) & 0x0f0f0f0f;
+      x = (x | (x << 2)) & 0x33333333; return (x | (x << 1)) & 0x55555555;
+    };
+    const keys = new Uint32Array(n), su = 32767 / ((hi[u] - lo[u]) || 1), sv = 32767 / ((hi[v] - lo[v]) || 1);
     for (let i = 0; i < n; i++) {
-      const a = Math.round(((s[4 * i + u] - lo[u]) / ((hi[u] - lo[u]) || 1)) * cells);
-      const b = Math.round(((s[4 * i + v] - lo[v]) / ((hi[v] - lo[v]) || 1)) * cells);
-      keys[i] = (spread(a) + 2 * spread(b)) * 2 ** idBits + i;
+      keys[i] = spread(Math.round((s[4 * i + u] - lo[u]) * su)) + 2 * spread(Math.round((s[4 * i + v] - lo[v]) * sv));
     }
-    keys.sort();
-    for (let k = 0; k < n; k++) {
-      const i = keys[k] % 2 ** idBits;
-      this.order[k] = i;
-      this.blockOf[i] = Math.floor(k / BLOCK);
+    let from = new Uint32Array(n), to = new Uint32Array(n);
+    for (let i = 0; i < n; i++) from[i] = i;
+    for (const shift of [0, 15]) {
+      const counts = new Uint32Array(32769);
+      for (let k = 0; k < n; k++) counts[((keys[from[k]] >>> shift) & 32767) + 1]++;
+      for (let d = 1; d <= 32768; d++) counts[d] += counts[d - 1];
+      for (let k = 0; k < n; k++) to[counts[(keys[from[k]] >>> shift) & 32767]++] = from[k];
+      [from, to] = [to, from];
     }
+    this.order.set(from);
+    for (let k = 0; k < n; k++) this.blockOf[from[k]] = Math.floor(k / BLOCK);
     this.sorted = n;
     this.dirty.clear();
     for (let b = 0; b < Math.ceil(n / BLOCK); b++) this._blockSphere(b);
