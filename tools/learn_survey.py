@@ -124,6 +124,14 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     row["L inside envelope"] = f"{int(np.sum((obs >= env.min(0)) & (obs <= env.max(0))))}/{len(r)}"
     out = [f"{x / spacing:.2f}{'+' if o > hi else '-'}" for x, o, lo, hi in zip(r, obs, env.min(0), env.max(0)) if not lo <= o <= hi]
     row["L outside (r / spacing: + above, - below)"] = " ".join(out) or "none"
+    # Diggle's global test (the largest deviation from the mean over r, as learn's own test): the survey's rank
+    # among the generated patterns; and how the pointwise envelope treats the model's own patterns: each
+    # generated one against the envelope of the others, how many fall outside at one distance or more
+    both = np.vstack([env, obs])
+    dev = np.nanmax(np.abs(both - both.mean(0)), axis=1)
+    row["L global test p"] = float((1 + np.sum(dev[:-1] >= dev[-1])) / (len(env) + 1))
+    own = [np.any((env[j] < np.delete(env, j, 0).min(0)) | (env[j] > np.delete(env, j, 0).max(0))) for j in range(len(env))]
+    row["generated outside the others' envelope"] = f"{int(np.sum(own))}/{len(env)}"
     if test.size is not None and scales is not None:
         row["size KS"] = float(ks_2samp(test.size / np.median(ex.size), scales).statistic)
     return row
