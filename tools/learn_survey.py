@@ -194,12 +194,17 @@ def main(argv=None) -> int:
                             args.sims, ex.subset(~half)))
     if args.picture:
         _picture(Path(args.picture), e_bei, bei_scene, folder)
+    print_table(rows)
+    return 0
+
+
+def print_table(rows: list) -> None:
+    """The comparisons as a Markdown table (a column for every key of any row)."""
     keys = list(dict.fromkeys(k for r in rows for k in r))
     print("| " + " | ".join(keys) + " |")
     print("|" + "---|" * len(keys))
     for r in rows:
         print("| " + " | ".join(f"{r[k]:.3g}" if isinstance(r.get(k), float) else str(r.get(k, "")) for k in keys) + " |")
-    return 0
 
 
 if __name__ == "__main__":

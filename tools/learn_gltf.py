@@ -1,0 +1,123 @@
+#!/usr/bin/env python3
+"""Learn a layer from a glTF scene of placed objects on its own ground, and compare what it grows with the scene.
+
+The example is what an editor or an app exports: a glTF of placed objects (``EXT_mesh_gpu_instancing``, one node
+an object, or ``AXIALDEFORM_bend``), read by the library's own reader (``read_example``), and the ground they stand
+on as a glTF mesh.  The ground is sampled into a height map (linear over its triangulated vertices, on a square
+grid over its box) and written as a scene file's terrain, the example is moved into that terrain's frame (the
+terrain centred on the origin), and the layer is learned and compared as ``tools/learn_survey.py`` compares a
+surveyed plot (``compare``: the total, each quartile of each ground feature, the L-function against the
+envelope of the generated patterns, Diggle's global test, the sizes' KS), on the whole scene and on a random half
+learned and the other half compared.  A ground compressed with ``KHR_draco_mesh_compression`` needs ``DracoPy``
+(``pip install DracoPy``: not a dependency of the library).
+
+    python3 tools/learn_gltf.py TREES.glb --ground GROUND.glb [--grid 256] [--sims 39]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from learn_survey import compare, print_table  # noqa: E402
+
+from axialdeform.core.io.example import read_example  # noqa: E402
+from axialdeform.core.learn import Example  # noqa: E402
+
+COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
+TYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
+
+
+def _accessor(gltf, index: int, blob: bytes) -> np.ndarray:
+    a = gltf.accessors[index]
+    view = gltf.bufferViews[a.bufferView]
+    n, dt = COMPONENTS[a.type], np.dtype(TYPES[a.componentType])
+    start = (view.byteOffset or 0) + (a.byteOffset or 0)
+    stride = view.byteStride or n * dt.itemsize
+    rows = np.frombuffer(blob, np.uint8, count=stride * (a.count - 1) + n * dt.itemsize, offset=start)
+    out = np.lib.stride_tricks.as_strided(rows, (a.count, n * dt.itemsize), (stride, 1)).copy().view(dt).reshape(a.count, n)
+    return out.astype(np.float64) / (np.iinfo(dt).max if a.normalized else 1)
+
+
+def ground_points(path: Path) -> np.ndarray:
+    """(k, 3) float64: every vertex of every mesh node of the glTF ``path``, placed by its node's translation and
+    scale (the scene's ground; rotated nodes are refused)."""
+    import pygltflib
+
+    gltf = pygltflib.GLTF2().load(str(path))
+    blob = gltf.binary_blob()
+    out = []
+    for node in gltf.nodes:
+        if node.mesh is None:
+            continue
+        if node.rotation not in (None, [0, 0, 0, 1]) or node.matrix not in (None, [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]):
+            sys.exit(f"learn_gltf: {path}: node {node.name!r} is rotated; expected a ground placed by translation and scale")
+        for prim in gltf.meshes[node.mesh].primitives:
+            draco = (prim.extensions or {}).get("KHR_draco_mesh_compression")
+            if draco:
+                try:
+                    import DracoPy
+                except ImportError:
+                    sys.exit(f"learn_gltf: {path}: its mesh is Draco-compressed; pip install DracoPy to read it")
+                view = gltf.bufferViews[draco["bufferView"]]
+                p = np.asarray(DracoPy.decode(blob[(view.byteOffset or 0):(view.byteOffset or 0) + view.byteLength]).points,
+                               np.float64)
+            else:
+                p = _accessor(gltf, prim.attributes.POSITION, blob)
+            out.append(p * np.asarray(node.scale or [1, 1, 1]) + np.asarray(node.translation or [0, 0, 0]))
+    if not out:
+        sys.exit(f"learn_gltf: {path}: no mesh to stand on")
+    return np.concatenate(out)
+
+
+def terrain(points: np.ndarray, folder: Path, grid: int) -> tuple[Path, np.ndarray]:
+    """A scene file whose height-map terrain samples ``points`` on a ``grid`` x ``grid`` square grid over their box
+    (the first row at the low z), centred on the origin, and the shift (x, z) that moves the points' frame into it."""
+    lo, hi = points[:, [0, 2]].min(0), points[:, [0, 2]].max(0)
+    x, z = np.linspace(lo[0], hi[0], grid), np.linspace(lo[1], hi[1], grid)
+    gx, gz = np.meshgrid(x, z)
+    h = LinearNDInterpolator(points[:, [0, 2]], points[:, 1])(gx, gz)
+    holes = np.isnan(h)
+    h[holes] = NearestNDInterpolator(points[:, [0, 2]], points[:, 1])(gx[holes], gz[holes])
+    bottom, top = float(h.min()), float(h.max())
+    Image.fromarray(np.round((h - bottom) / (top - bottom) * 65535).astype(np.uint16)).save(folder / "ground.png")
+    (folder / "ground.toml").write_text(f'[terrain]\nheightmap = "ground.png"\nheight_scale = {top - bottom}\n'
+                                        f"extent = [{hi[0] - lo[0]}, {hi[1] - lo[1]}]\n")
+    return folder / "ground.toml", -(lo + hi) / 2
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("example", help="a glTF scene of placed objects (.glb/.gltf)")
+    p.add_argument("--ground", required=True, help="a glTF of the ground they stand on (required, no default)")
+    p.add_argument("--grid", type=int, default=256, help="height-map pixels a side (default: %(default)s)")
+    p.add_argument("--sims", type=int, default=39, help="generated patterns a comparison (default: %(default)s)")
+    p.add_argument("--out", help="a folder for the files (default: a temporary folder)")
+    args = p.parse_args(argv)
+    folder = Path(args.out or tempfile.mkdtemp())
+    folder.mkdir(parents=True, exist_ok=True)
+    points = ground_points(Path(args.ground))
+    scene, shift = terrain(points, folder, args.grid)
+    ex = read_example(args.example)
+    half_w, half_d = (points[:, [0, 2]].max(0) - points[:, [0, 2]].min(0)) / 2
+    w = ex.window  # the objects' box grown by half a spacing, within the ground
+    window = (max(w[0] + shift[0], -half_w), max(w[1] + shift[1], -half_d), min(w[2] + shift[0], half_w), min(w[3] + shift[1], half_d))
+    ex = Example(ex.xz + shift, window, ex.size, ex.kind, ex.yaw, ex.source)
+    name = Path(args.example).name
+    rows = [compare(name, ex, scene, folder, args.sims)]
+    half = np.random.default_rng(1).random(len(ex.xz)) < 0.5
+    rows.append(compare(f"{name}: a random half learned, the other compared", ex.subset(half), scene, folder, args.sims,
+                        ex.subset(~half)))
+    print_table(rows)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
