@@ -47,28 +47,34 @@ def _accessor(gltf, index: int, blob: bytes) -> np.ndarray:
 
 
 def ground_points(path: Path) -> np.ndarray:
-    """(k, 3) float64: every vertex of every mesh node of the glTF ``path``, placed by its node's translation and
-    scale (the scene's ground; rotated nodes are refused)."""
+    """(k, 3) float64: every vertex of the glTF ``path``'s meshes in the scene's frame (the ground).  trimesh
+    places them; a mesh compressed with ``KHR_draco_mesh_compression`` (which trimesh does not read) is decoded
+    by DracoPy and placed by its node's translation and scale (a rotated or nested one is refused)."""
     import pygltflib
 
     gltf = pygltflib.GLTF2().load(str(path))
-    blob = gltf.binary_blob()
-    out = []
-    for node in gltf.nodes:
+    if "KHR_draco_mesh_compression" not in (gltf.extensionsUsed or []):
+        import trimesh
+
+        return np.asarray(trimesh.load(str(path), force="mesh").vertices, np.float64)
+    try:
+        import DracoPy
+    except ImportError:
+        sys.exit(f"learn_gltf: {path}: its meshes are Draco-compressed; pip install DracoPy to read them")
+    blob, out = gltf.binary_blob(), []
+    children = {c for n in gltf.nodes for c in (n.children or [])}
+    for k, node in enumerate(gltf.nodes):
         if node.mesh is None:
             continue
-        if node.rotation not in (None, [0, 0, 0, 1]) or node.matrix not in (None, [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]):
-            sys.exit(f"learn_gltf: {path}: node {node.name!r} is rotated; expected a ground placed by translation and scale")
+        if k in children or node.rotation not in (None, [0, 0, 0, 1]) or node.matrix is not None:
+            sys.exit(f"learn_gltf: {path}: node {node.name!r} is rotated or nested; expected a Draco ground placed by "
+                     "translation and scale")
         for prim in gltf.meshes[node.mesh].primitives:
             draco = (prim.extensions or {}).get("KHR_draco_mesh_compression")
             if draco:
-                try:
-                    import DracoPy
-                except ImportError:
-                    sys.exit(f"learn_gltf: {path}: its mesh is Draco-compressed; pip install DracoPy to read it")
                 view = gltf.bufferViews[draco["bufferView"]]
-                p = np.asarray(DracoPy.decode(blob[(view.byteOffset or 0):(view.byteOffset or 0) + view.byteLength]).points,
-                               np.float64)
+                start = view.byteOffset or 0
+                p = np.asarray(DracoPy.decode(blob[start:start + view.byteLength]).points, np.float64)
             else:
                 p = _accessor(gltf, prim.attributes.POSITION, blob)
             out.append(p * np.asarray(node.scale or [1, 1, 1]) + np.asarray(node.translation or [0, 0, 0]))

@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +16,8 @@ import axialdeform as ad
 from axialdeform.core.record import POSITION
 
 from helpers import processes as P
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def run(*args, cwd=None):
@@ -219,3 +222,34 @@ def test_kinds_that_read_alike_get_layers_of_their_own(tmp_path):
     assert res.returncode == 0, res.stderr
     names = [lay["name"] for lay in tomllib.loads((tmp_path / "o.toml").read_text())["layer"]]
     assert names == ["red_oak-0", "red_oak-1"] and len(list(tmp_path.glob("o-*-density.png"))) == 2
+
+
+def test_tools_learn_gltf_compares_a_gltf_scene_on_its_ground_mesh(tmp_path, capsys):
+    """tools/learn_gltf.py (docs/learn.md, "A public glTF scene"): the ground glTF's vertices in the scene's frame
+    (its node's translation applied), sampled into a height map centred on the origin, the objects moved into
+    it; both comparisons (the whole scene, a random half against the other) printed."""
+    import trimesh
+
+    sys.path.insert(0, str(ROOT / "tools"))
+    import learn_gltf
+
+    x, z = np.meshgrid(np.linspace(0, 60, 31), np.linspace(0, 40, 21))
+    y = 0.2 * x + 0.05 * z  # a tilted plane, moved by its node
+    faces = [[j * 31 + i, (j + 1) * 31 + i, j * 31 + i + 1] for j in range(20) for i in range(30)]
+    ground = trimesh.Trimesh(np.stack([x.ravel(), y.ravel(), z.ravel()], 1), faces + [[f[1], f[1] + 1, f[2]] for f in faces],
+                             process=False)
+    scene = trimesh.Scene()
+    scene.add_geometry(ground, node_name="ground", transform=trimesh.transformations.translation_matrix((100.0, 5.0, -20.0)))
+    scene.export(tmp_path / "ground.glb")
+    points = learn_gltf.ground_points(tmp_path / "ground.glb")
+    assert points[:, 0].min() == pytest.approx(100) and points[:, 2].max() == pytest.approx(20)
+    assert points[:, 1].min() == pytest.approx(5) and points[:, 1].max() == pytest.approx(5 + 12 + 2)
+    toml, shift = learn_gltf.terrain(points, tmp_path, 64)
+    assert np.allclose(shift, (-130, 0)) and "extent = [60.0, 40.0]" in toml.read_text()
+    rng = np.random.default_rng(4)
+    xz = np.stack([rng.uniform(101, 159, 300), rng.uniform(-19, 19, 300)], 1)
+    _foreign_instanced(tmp_path / "rocks.glb", np.stack([xz[:, 0], np.zeros(300), xz[:, 1]], 1))
+    assert learn_gltf.main([str(tmp_path / "rocks.glb"), "--ground", str(tmp_path / "ground.glb"), "--sims", "3",
+                            "--grid", "64", "--out", str(tmp_path / "run")]) == 0
+    rows = [r for r in capsys.readouterr().out.splitlines() if r.startswith("| rocks.glb")]
+    assert len(rows) == 2 and rows[0].split("|")[2].strip() == "300", rows
