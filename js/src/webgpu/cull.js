@@ -6,10 +6,11 @@
 // library's culling use: the base mesh's sphere grown by the sum of the largest offsets, through the
 // instance's matrix, grown by the wind's reach) is tested.  Each instance taken gets its level by distance
 // and its id appended to that level's list, counting into the indirect draw arguments; each level draws its
-// list with one indirect draw.  The CPU sets six planes and a camera position and dispatches two passes.
+// list with one indirect draw.  The CPU sets six planes and a camera position, zeroes the counts (20 bytes a
+// level uploaded) and dispatches one pass.
 
 import * as THREE from 'three/webgpu';
-import { Fn, If, Loop, storage, uniform, uniformArray, instanceIndex, uint, int, atomicAdd, atomicStore, dot, bool } from 'three/tsl';
+import { Fn, If, Loop, storage, uniform, uniformArray, instanceIndex, uint, int, atomicAdd, dot, bool } from 'three/tsl';
 import { AxialError } from '../core/adp.js';
 import { InstanceBlocks, BLOCK } from '../core/cull.js';
 
@@ -62,9 +63,6 @@ export class GPUCulling {
     this.blockCount = uniform(0, 'uint');
     this.grow = uniform(0);
     this.distances = levels.map((l) => uniform(Number.isFinite(l.distance) ? l.distance : 3.4e38));
-    this.reset = Fn(() => {
-      for (let k = 0; k < L; k++) atomicStore(counts.element(uint(5 * k + 1)), uint(0));
-    })().compute(1);
     const planeTest = (c, r) => { // [outside some plane, cut by some plane] of a sphere (c, r)
       let out = null, cut = null;
       for (let p = 0; p < 6; p++) {
@@ -142,7 +140,7 @@ export class GPUCulling {
     this.instancesAttr.needsUpdate = true;
   }
 
-  /** The frame's pass: the camera's planes and position in the mesh's space, two dispatches. */
+  /** The frame's pass: the camera's planes and position in the mesh's space, the counts zeroed, one dispatch. */
   frame(renderer, camera) {
     const mesh = this.mesh;
     if (!renderer.backend || !renderer.backend.isWebGPUBackend) {
@@ -155,7 +153,10 @@ export class GPUCulling {
     this.eye.value.setFromMatrixPosition(camera.matrixWorld).applyMatrix4(_inv);
     this.blockCount.value = this.blocks.count;
     this.grow.value = mesh._windGrow || 0;
-    renderer.compute([this.reset, this.cull]);
+    // the counts start at 0: the arguments uploaded again (20 bytes a level) before the pass counts into them
+    for (let k = 1; k < this.argsAttr.array.length; k += 5) this.argsAttr.array[k] = 0;
+    this.argsAttr.needsUpdate = true;
+    renderer.compute(this.cull);
   }
 
   /** The levels' materials' positionNode again (the wind came or went). */
@@ -171,7 +172,6 @@ export class GPUCulling {
       drawn.geometry.dispose();
       (Array.isArray(drawn.material) ? drawn.material : [drawn.material]).forEach((m) => m.dispose());
     }
-    this.reset.dispose();
     this.cull.dispose();
   }
 }
