@@ -1,8 +1,9 @@
 // core/generate.js -- generated layers (docs/generate.md) under any renderer: the recipe's checks, its
 // uniforms, the tiles around a point (axialdeform.core.generate's conventions), the slots read back as
-// records, the bounds from the recipe alone, and what makes an AxialInstancedMesh a generated layer ({generate: recipe}
-// in place of its record: generatedBase, adoptGenerated).  The instances are made on the GPU by glsl/generate.glsl: WebGL 2 transform feedback
-// (webgl/generate.js, webgl/tiles.js) or a WebGPU compute pass of its node functions (webgpu/generate.js).
+// records, the bounds from the recipe alone, and what makes an AxialInstancedMesh a generated layer
+// ({generate: recipe} in place of its record: generatedBase, adoptGenerated).  The instances are made on the
+// GPU by glsl/generate.glsl: WebGL 2 transform feedback (webgl/generate.js, webgl/tiles.js) or a WebGPU
+// compute pass of its node functions (webgpu/generate.js).
 
 import * as THREE from 'three';
 import { AxialError } from './adp.js';

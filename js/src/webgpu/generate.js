@@ -1,7 +1,8 @@
-// webgpu/generate.js -- generated layers under three's WebGPURenderer (axialdeform-three/webgpu): the part of an
-// AxialInstancedMesh made with {generate: recipe} that makes its instances (the recipe, tiles, bounds: core/generate.js).
-// A tile's instances are made by a compute pass of glsl/generate.glsl as generated node functions (generate_nodes.js) -- what the tests hold to the Python
-// library -- straight into a storage buffer the materials' positionNode reads (webgpu/mesh.js's layout:
+// webgpu/generate.js -- generated layers under three's WebGPURenderer (axialdeform-three/webgpu): the part of
+// an AxialInstancedMesh made with {generate: recipe} that makes its instances (the recipe, tiles, bounds:
+// core/generate.js).  A tile's instances are made by a compute pass of glsl/generate.glsl as generated node
+// functions (generate_nodes.js) -- what the tests hold to the Python library -- straight into a storage
+// buffer the materials' positionNode reads (webgpu/mesh.js's layout:
 // d12, d34, (d5, tw, tp), (angles, 0), the instance matrix's columns, the tint); a tree's child-axis
 // offsets into a second one.  No record reaches the CPU to draw and none is uploaded: per tile set, the
 // tiles' coordinates go up and the count of kept instances comes back, asynchronously.  A dropped slot
