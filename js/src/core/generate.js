@@ -241,6 +241,24 @@ export function adoptGenerated(mesh, base, options, drawsOn) {
   Object.defineProperty(mesh, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
 }
 
+/** A generated layer's slots read back (slotRows' `rows` and `kept`, one a slot) as its CPU copy of the records
+ * (what raycasting, bake and the bounds read): `grow(n)` gives the renderer's arrays room for n instances where
+ * the mesh holds fewer; a dropped slot gets a zero matrix and radius; then the bounds made from them. */
+export function adoptSlotRecords(mesh, rows, kept, grow) {
+  const n = kept.length;
+  if (mesh._radii.length < n) {
+    mesh.data = new Float32Array(n * mesh.layout.numbersPerInstance);
+    mesh._radii = new Float32Array(n);
+    mesh._grow = new Float32Array(n);
+    grow(n);
+  }
+  mesh._materialized = true;
+  mesh._write(rows, 0);
+  const m = mesh.instanceMatrix.array;
+  kept.forEach((k, i) => { if (!k) { m.fill(0, 16 * i, 16 * i + 16); m[16 * i + 15] = 1; mesh._radii[i] = 0; } });
+  mesh.computeBoundingSphere();
+}
+
 /** The tiles within reach of `point` ({x, z}) of a generated layer, and their key (the same set, the same key). */
 export function tilesWithin(mesh, point) {
   const tiles = tilesAround(mesh.recipe.tile, point.x, point.z, mesh.recipe.reach, worldEdge(tileSize(mesh.recipe)[1]));

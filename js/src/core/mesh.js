@@ -41,6 +41,8 @@ export class AxialMeshCore extends THREE.InstancedMesh {
   // a generated layer's state (core/generate.js's adoptGenerated sets it; the renderer's part: _part)
   /** @type {any[]} */ tiles = []; /** @type {boolean} */ autoUpdate = false; /** @type {any} */ _drawnBy = null;
   /** @type {boolean} */ _materialized = false; /** @type {any} */ _part = null;
+  /** @type {any} a generated layer's recipe (checked, defaults filled in); null: the instances are the record's */
+  recipe = null;
   constructor(geometry, material, record, options = {}) {
     if (!geometry || !geometry.isBufferGeometry) throw new AxialError('AxialInstancedMesh: expected a THREE.BufferGeometry');
     const base = record && record.generate !== undefined ? generatedBase(geometry, record.generate, options, 'AxialInstancedMesh') : null;
@@ -140,8 +142,6 @@ export class AxialMeshCore extends THREE.InstancedMesh {
       if (userHook) userHook.call(this, renderer, ...rest);
     };
     Object.defineProperty(this, 'onBeforeRender', { get: () => hook, set: (fn) => { userHook = fn; }, configurable: true });
-    /** @type {any} a generated layer's recipe (checked, defaults filled in); null: the instances are the record's */
-    this.recipe = null;
     if (base) adoptGenerated(this, base, base.options, (r) => this._generatesWith(r));
   }
 

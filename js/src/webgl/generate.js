@@ -6,7 +6,7 @@
 import * as THREE from 'three';
 import { AXES_ROW, texelRows } from '../core/adp.js';
 import { ATTRIBUTES } from '../core/record.js';
-import { tilesWithin, slotRows } from '../core/generate.js';
+import { tilesWithin, slotRows, adoptSlotRecords } from '../core/generate.js';
 import { TileGenerator, TileAttributes } from './tiles.js';
 
 /**
@@ -97,20 +97,12 @@ export class GeneratedTiles {
   materialize() {
     const mesh = this.mesh;
     if (mesh._materialized || !this.slots) return;
-    mesh._materialized = true;
-    const { rows, kept } = this._slotRecords(false), n = kept.length;
-    if (mesh._radii.length < n) {
-      mesh.data = new Float32Array(n * mesh.layout.numbersPerInstance);
-      mesh._radii = new Float32Array(n);
-      mesh._grow = new Float32Array(n);
+    const { rows, kept } = this._slotRecords(false);
+    adoptSlotRecords(mesh, rows, kept, (n) => { // the CPU copies (three draws from the GPU's attributes)
       for (const a of ATTRIBUTES) mesh._cpuAttributes[a.name] = new THREE.InstancedBufferAttribute(new Float32Array(n * a.size), a.size);
       mesh.instanceMatrix = new THREE.InstancedBufferAttribute(new Float32Array(n * 16), 16);
       if (mesh.instanceColor) mesh.instanceColor = new THREE.InstancedBufferAttribute(new Float32Array(n * 3), 3);
-    }
-    mesh._write(rows, 0);
-    const m = mesh.instanceMatrix.array;
-    kept.forEach((k, i) => { if (!k) { m.fill(0, 16 * i, 16 * i + 16); m[16 * i + 15] = 1; mesh._radii[i] = 0; } });
-    mesh.computeBoundingSphere();
+    });
   }
 
   dispose() {

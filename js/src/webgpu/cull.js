@@ -14,7 +14,7 @@ import { Fn, If, Loop, storage, uniform, uniformArray, instanceIndex, uint, int,
 import { AxialError } from '../core/adp.js';
 import { InstanceBlocks, BLOCK } from '../core/cull.js';
 
-const _inv = new THREE.Matrix4(), _s = new THREE.Sphere();
+const _inv = new THREE.Matrix4();
 
 /**
  * GPU culling of `mesh` (an AxialInstancedMesh of axialdeform-three/webgpu) in `levels`:
@@ -44,10 +44,12 @@ export class GPUCulling {
     const cap = mesh.capacity, L = levels.length, nb = Math.ceil(cap / BLOCK);
     this.capacity = cap;
     this.blocks = new InstanceBlocks(mesh);
-    // storage: the instances' packed numbers (the same array as the vertex buffer's), their spheres,
-    // each level's visible ids, the indirect draw arguments (5 numbers a level)
+    // storage: the instances' packed numbers (the same array as the vertex buffer's), their spheres without the
+    // wind and scales (the blocks' arrays: the wind's reach, grow x scale, is added in the pass), each level's
+    // visible ids, the indirect draw arguments (5 numbers a level)
     this.instancesAttr = new THREE.StorageBufferAttribute(mesh._packed.array, 4);
-    this.boundsAttr = new THREE.StorageBufferAttribute(new Float32Array(cap * 4), 4);
+    this.boundsAttr = new THREE.StorageBufferAttribute(this.blocks.spheres, 4);
+    this.scalesAttr = new THREE.StorageBufferAttribute(this.blocks.scales, 1);
     this.orderAttr = new THREE.StorageBufferAttribute(this.blocks.order, 1); // the instances block after block
     this.blocksAttr = new THREE.StorageBufferAttribute(this.blocks.blocks, 4); // (centre, radius), (scale, first, end, 0)
     this.idsAttr = new THREE.StorageBufferAttribute(new Uint32Array(cap * L), 1);
@@ -55,7 +57,7 @@ export class GPUCulling {
     levels.forEach((l, k) => { args[5 * k] = l.geometry.index ? l.geometry.index.count : l.geometry.getAttribute('position').count; });
     this.argsAttr = new THREE.IndirectStorageBufferAttribute(args, 5);
     const counts = storage(this.argsAttr, 'uint', 5 * L).toAtomic();
-    const bounds = storage(this.boundsAttr, 'vec4', cap).toReadOnly();
+    const bounds = storage(this.boundsAttr, 'vec4', cap).toReadOnly(), scales = storage(this.scalesAttr, 'float', cap).toReadOnly();
     const order = storage(this.orderAttr, 'uint', cap).toReadOnly(), blocks = storage(this.blocksAttr, 'vec4', 2 * nb).toReadOnly();
     const ids = storage(this.idsAttr, 'uint', cap * L);
     this.planes = uniformArray(Array.from({ length: 6 }, () => new THREE.Vector4()), 'vec4');
@@ -82,7 +84,7 @@ export class GPUCulling {
         If(out.not(), () => {
           Loop({ start: int(tail.y), end: int(tail.z), type: 'int', condition: '<' }, ({ i: j }) => {
             const i = order.element(j).toVar(), s = bounds.element(i).toVar();
-            const inside = bool(whole).or(planeTest(s.xyz, s.w)[0].not());
+            const inside = bool(whole).or(planeTest(s.xyz, s.w.add(this.grow.mul(scales.element(i))))[0].not());
             If(inside, () => {
               const d = s.xyz.sub(this.eye).length().toVar();
               const level = int(L).toVar();
@@ -128,15 +130,11 @@ export class GPUCulling {
     this.updateBounds(0, mesh.count);
   }
 
-  /** Every instance's sphere (the mesh's space) from first to first + count, for the pass, and the blocks'. */
+  /** Instances first .. first + count - 1 changed: their spheres and the blocks' (core/cull.js), for the pass. */
   updateBounds(first, count) {
     this.blocks.fill(first, count);
-    const out = this.boundsAttr.array;
-    for (let i = first; i < first + count; i++) {
-      const s = this.mesh.getInstanceBoundingSphere(i, _s);
-      out[4 * i] = s.center.x; out[4 * i + 1] = s.center.y; out[4 * i + 2] = s.center.z; out[4 * i + 3] = s.radius;
-    }
     this.boundsAttr.needsUpdate = true;
+    this.scalesAttr.needsUpdate = true;
     this.instancesAttr.needsUpdate = true;
   }
 

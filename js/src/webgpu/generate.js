@@ -14,7 +14,7 @@ import { Fn, If, instanceIndex, storage, uniform, uint, int, ivec2, vec4, atomic
 import { AxialError, AXES_ROW, texelRows } from '../core/adp.js';
 import { unbake } from '../core/baked.js';
 import { ATTRIBUTES, SLOT } from '../core/record.js';
-import { tilesWithin, maxTiles, slotRows, GENERATED_FLOATS } from '../core/generate.js';
+import { tilesWithin, maxTiles, slotRows, adoptSlotRecords, GENERATED_FLOATS } from '../core/generate.js';
 import { recipeNodes, axialGenerate, axialGenerateChild, axialGenKey } from './generate_nodes.js';
 import { axialRotation } from './nodes.js';
 
@@ -229,28 +229,20 @@ export class GeneratedStorage {
   /** The records on the CPU, one a slot (what raycastAsync, bakeAsync and the bounds read): read back once a tile set. */
   async materializeAsync(renderer) {
     if (this.mesh._materialized || !this.madeBy) return;
-    const key = this.mesh._key, { rows, kept } = await this._rowsAsync(renderer, false), n = kept.length;
-    if (this.mesh._key !== key) return;
-    if (this.mesh._radii.length < n) {
-      this.mesh.data = new Float32Array(n * this.mesh.layout.numbersPerInstance);
-      this.mesh._radii = new Float32Array(n);
-      this.mesh._grow = new Float32Array(n);
-      for (const a of ATTRIBUTES) this.mesh.geometry.setAttribute(a.name, new THREE.InstancedBufferAttribute(new Float32Array(n * a.size), a.size));
-      this.mesh.instanceMatrix = new THREE.BufferAttribute(new Float32Array(n * 16), 16);
-      if (this.mesh.instanceColor) this.mesh.instanceColor = new THREE.InstancedBufferAttribute(new Float32Array(n * 3), 3);
-      this.mesh._packed = null;
-      if (this.mesh.layout.axes > 1) { // the CPU's copy of the child offsets (the draw reads the GPU's buffer)
-        const rows = texelRows(n, this.mesh.layout.axes), old = this.mesh.axialUniforms.axialChildren.value;
-        this.mesh.axialUniforms.axialChildren.value = new THREE.DataTexture(new Float32Array(rows * AXES_ROW * 4), AXES_ROW, rows,
+    const mesh = this.mesh, key = mesh._key, { rows, kept } = await this._rowsAsync(renderer, false);
+    if (mesh._key !== key) return;
+    adoptSlotRecords(mesh, rows, kept, (n) => { // the CPU copies (the draw reads the GPU's buffers)
+      for (const a of ATTRIBUTES) mesh.geometry.setAttribute(a.name, new THREE.InstancedBufferAttribute(new Float32Array(n * a.size), a.size));
+      mesh.instanceMatrix = new THREE.BufferAttribute(new Float32Array(n * 16), 16);
+      if (mesh.instanceColor) mesh.instanceColor = new THREE.InstancedBufferAttribute(new Float32Array(n * 3), 3);
+      mesh._packed = null;
+      if (mesh.layout.axes > 1) { // the child offsets' texture
+        const texels = texelRows(n, mesh.layout.axes), old = mesh.axialUniforms.axialChildren.value;
+        mesh.axialUniforms.axialChildren.value = new THREE.DataTexture(new Float32Array(texels * AXES_ROW * 4), AXES_ROW, texels,
           THREE.RGBAFormat, THREE.FloatType);
         old.dispose();
       }
-    }
-    this.mesh._write(rows, 0);
-    const m = this.mesh.instanceMatrix.array;
-    kept.forEach((k, i) => { if (!k) { m.fill(0, 16 * i, 16 * i + 16); m[16 * i + 15] = 1; this.mesh._radii[i] = 0; } });
-    this.mesh._materialized = true;
-    this.mesh.computeBoundingSphere();
+    });
   }
 
   /** The mesh's setDensity: the compute passes are made again from the new map at the next update, which makes

@@ -268,7 +268,6 @@ export class AxialInstancedMesh extends AxialMeshCore {
   setWind(wind) {
     const was = Boolean(this._wind);
     super.setWind(wind);
-    if (this._culling) this._culling.updateBounds(0, this.count); // the wind's reach grows the spheres
     if (Boolean(this._wind) !== was) {
       if (this._culling) this._culling.rebend();
       const node = this._positionNode();
