@@ -29,21 +29,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from learn_survey import compare, print_table  # noqa: E402
 
 from axialdeform.core.io.example import read_example  # noqa: E402
+from axialdeform.core.io.glb import read_accessor  # noqa: E402
 from axialdeform.core.learn import Example  # noqa: E402
-
-COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
-TYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
-
-
-def _accessor(gltf, index: int, blob: bytes) -> np.ndarray:
-    a = gltf.accessors[index]
-    view = gltf.bufferViews[a.bufferView]
-    n, dt = COMPONENTS[a.type], np.dtype(TYPES[a.componentType])
-    start = (view.byteOffset or 0) + (a.byteOffset or 0)
-    stride = view.byteStride or n * dt.itemsize
-    rows = np.frombuffer(blob, np.uint8, count=stride * (a.count - 1) + n * dt.itemsize, offset=start)
-    out = np.lib.stride_tricks.as_strided(rows, (a.count, n * dt.itemsize), (stride, 1)).copy().view(dt).reshape(a.count, n)
-    return out.astype(np.float64) / (np.iinfo(dt).max if a.normalized else 1)
 
 
 def ground_points(path: Path) -> np.ndarray:
@@ -76,7 +63,7 @@ def ground_points(path: Path) -> np.ndarray:
                 start = view.byteOffset or 0
                 p = np.asarray(DracoPy.decode(blob[start:start + view.byteLength]).points, np.float64)
             else:
-                p = _accessor(gltf, prim.attributes.POSITION, blob)
+                p = read_accessor(gltf, blob, prim.attributes.POSITION, "POSITION", str(path)).astype(np.float64)
             out.append(p * np.asarray(node.scale or [1, 1, 1]) + np.asarray(node.translation or [0, 0, 0]))
     if not out:
         sys.exit(f"learn_gltf: {path}: no mesh to stand on")
