@@ -39,7 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import axialdeform as ad  # noqa: E402
 from axialdeform.core.io.example import read_example, read_terrain, write_learned  # noqa: E402
-from axialdeform.core.learn import Example, l_function, learn_layers  # noqa: E402
+from axialdeform.core.learn import Example, l_function, largest_deviations, learn_layers  # noqa: E402
 from axialdeform.core.record import POSITION, SCALE  # noqa: E402
 
 
@@ -127,8 +127,7 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     # Diggle's global test (the largest deviation from the mean over r, as learn's own test): the survey's rank
     # among the generated patterns; and how the pointwise envelope treats the model's own patterns: each
     # generated one against the envelope of the others, how many fall outside at one distance or more
-    both = np.vstack([env, obs])
-    dev = np.nanmax(np.abs(both - both.mean(0)), axis=1)
+    dev = largest_deviations(np.vstack([env, obs]))
     row["L global test p"] = float((1 + np.sum(dev[:-1] >= dev[-1])) / (len(env) + 1))
     own = [np.any((env[j] < np.delete(env, j, 0).min(0)) | (env[j] > np.delete(env, j, 0).max(0))) for j in range(len(env))]
     row["generated outside the others' envelope"] = f"{int(np.sum(own))}/{len(env)}"

@@ -36,7 +36,7 @@ from scipy.stats import norm
 from .errors import ParamError
 from .generate import CLUMP_PARENTS
 
-__all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function",
+__all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function", "largest_deviations",
            "learn_layers", "layer_recipe", "matern_cluster_k", "SIGNIFICANT", "SIMULATIONS"]
 
 #: a term's coefficient stays while |b / se| is at least this
@@ -389,6 +389,12 @@ def _largest_rate(intensity: Intensity, ground, window) -> float:
     return 1.05 * float(intensity.rate_at(ground, np.stack([gx.ravel(), gz.ravel()], axis=1)).max())
 
 
+def largest_deviations(curves: np.ndarray) -> np.ndarray:
+    """Diggle's statistic: each of ``curves`` (k, m) (an L-function at m distances) its largest absolute deviation
+    from their mean over the distances, (k,) (NaN ignored)."""
+    return np.nanmax(np.abs(curves - np.nanmean(curves, axis=0)), axis=1)
+
+
 def _diggle(example: Example, intensity: Intensity, ground, seed: int, r: np.ndarray) -> str:
     """Diggle's global test of the example's L-function at ``r`` against :data:`SIMULATIONS` Poisson patterns of
     ``intensity`` (the largest deviation from the mean, ranked first of 20: the 5 % level): ``"poisson"``,
@@ -401,11 +407,11 @@ def _diggle(example: Example, intensity: Intensity, ground, seed: int, r: np.nda
     for _ in range(SIMULATIONS):  # 19 patterns, each one vectorized
         p = simulate(intensity, ground, example.window, rng, top)
         sims.append(l_function(p, example.window, r, intensity.rate_at(ground, p)) if len(p) > 1 else np.full(len(r), np.nan))
-    sims = np.array(sims)
-    mean = np.nanmean(np.vstack([sims, observed]), axis=0)
-    dev = np.nanmax(np.abs(np.vstack([sims, observed]) - mean), axis=1)  # the 19, then the example
+    curves = np.vstack([np.array(sims), observed])
+    dev = largest_deviations(curves)  # the 19, then the example
     if dev[-1] <= dev[:-1].max():
         return "poisson"
+    mean = np.nanmean(curves, axis=0)
     at = int(np.nanargmax(np.abs(observed - mean)))
     return "regular" if observed[at] < mean[at] else "cluster"
 
