@@ -11,7 +11,8 @@ camera walking through the field, three ways (tools/bench_three.html, three r187
   (WebGPU backend) with GPU culling (``setGPUCulling``), every instance bent;
 * ``axial-webgl-cull``: ``axialdeform-three``'s ``AxialInstancedMesh`` under ``WebGLRenderer`` with
   per-instance culling (``setInstanceCulling``), every instance bent -- the add-on's backend;
-  ``axial-webgl-unbent``: the same with every offset zero (the bend's own vertex work, same culling).
+  ``axial-webgl-unbent``: the same with every offset zero, so its shader variant leaves the bend out
+  (``core/variant.js``): the bend's own vertex work, the same culling.
 
 Per mode and count, each run in a page of its own, the modes alternating over ``--repeats`` runs:
 the first frame (from making the mesh to the GPU done), the median CPU ms of the ``render`` call,

@@ -34,7 +34,7 @@ def page_source(name: str) -> str:
 #: the npm module axialdeform-three's files of its WebGL entry (js/src; the wheel's axialdeform/three), which
 #: the page code imports, each after the files it imports; the folder page keeps them in MODULE_DIR
 MODULE_FILES = ("core/record.js", "core/adp.js", "core/bend.js", "core/wind.js", "core/limits.js", "core/baked.js",
-                "core/raycast.js", "core/cull.js", "core/generate.js", "core/mesh.js", "core/gltf.js", "core/brush.js",
+                "core/raycast.js", "core/cull.js", "core/variant.js", "core/generate.js", "core/mesh.js", "core/gltf.js", "core/brush.js",
                 "webgl/glsl.js",
                 "webgl/shader.js", "webgl/feedback.js", "webgl/bake.js", "webgl/raycast.js", "webgl/instance_cull.js",
                 "webgl/tiles.js", "webgl/generate.js", "webgl/mesh.js", "webgl/gltf.js", "index.js", "helpers.js")

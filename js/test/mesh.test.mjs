@@ -5,6 +5,8 @@ import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import * as THREE from 'three';
 import { parseADP, AxialInstancedMesh, AxialError, AxialGLTFPlugin } from '../src/index.js';
+import { uses } from '../src/core/variant.js';
+import { recordLayout } from '../src/core/adp.js';
 import { recordFromInstancedMesh, fromInstancedMesh, injectBend, checkBendExtension } from '../src/helpers.js';
 
 const dir = new URL('./fixtures/', import.meta.url);
@@ -277,4 +279,48 @@ test('a generated layer is the same mesh made from {generate: recipe}: its recip
   assert.deepEqual(Array.from(plain.records()), Array.from(record('stone16').data));
   assert.throws(() => plain.update(null, { x: 0, z: 0 }), (e) => e instanceof AxialError && /not a generated layer/.test(e.message));
   assert.throws(() => new AxialBrush(plain, { area: [0, 0, 10, 10] }), /expected a generated layer/);
+});
+
+test('the shader variant leaves out what no instance uses: the turn of 16-number records, the bend of unbent ones', () => {
+  const f = 16, n = 5, data = new Float32Array(f * n);
+  for (let i = 0; i < n; i++) data[i * f + 10] = i; // placed along x, no offset
+  const g = new THREE.BoxGeometry(1, 3, 1);
+  const rec = { count: n, numbersPerInstance: f, data, axis: 1, lo: -1.5, length: 3 };
+  const mesh = new AxialInstancedMesh(g, new THREE.MeshStandardMaterial(), rec);
+  const flags = () => ['AXIAL_NO_TURN', 'AXIAL_NO_BEND'].filter((k) => k in mesh.defines).join(',');
+  assert.equal(flags(), 'AXIAL_NO_TURN,AXIAL_NO_BEND');
+  const key = mesh.material.customProgramCacheKey();
+  mesh.setWind({ direction: [1, 0, 0], strength: 0.2 }); // the wind moves unbent instances' control points
+  assert.equal(flags(), 'AXIAL_NO_TURN');
+  assert.notEqual(mesh.material.customProgramCacheKey(), key);
+  mesh.setWind(null);
+  assert.equal(flags(), 'AXIAL_NO_TURN,AXIAL_NO_BEND');
+  const row = data.slice(2 * f, 3 * f);
+  row[4] = 0.3; // one instance bent by updateParams: the bend comes back, and stays until setParams
+  mesh.material.needsUpdate = false;
+  mesh.updateParams(row, 2);
+  assert.equal(flags(), 'AXIAL_NO_TURN');
+  assert.ok(mesh.material.version > 0);
+  row[4] = 0;
+  mesh.updateParams(row, 2);
+  assert.equal(flags(), 'AXIAL_NO_TURN');
+  mesh.setParams(data);
+  assert.equal(flags(), 'AXIAL_NO_TURN,AXIAL_NO_BEND');
+  // 19 numbers: the turn is there while an instance twists or tapers
+  const ext = new Float32Array(19 * n);
+  for (let i = 0; i < n; i++) ext[i * 19 + 16] = 1; // scale 1
+  ext[3 * 19 + 18] = 0.2; // one taper
+  const m19 = new AxialInstancedMesh(g, new THREE.MeshStandardMaterial(), { ...rec, numbersPerInstance: 19, data: ext });
+  assert.ok(!('AXIAL_NO_TURN' in m19.defines) && !('AXIAL_NO_BEND' in m19.defines));
+  ext[3 * 19 + 18] = 0;
+  m19.setParams(ext);
+  assert.ok('AXIAL_NO_TURN' in m19.defines && 'AXIAL_NO_BEND' in m19.defines);
+  // several axes: a child axis's offset bends too
+  const two = recordLayout(26, 2), rows = new Float32Array(26 * 2);
+  assert.deepEqual(uses(rows, two, 0, 2), { turn: false, bend: false });
+  rows[26 + 15] = 0.1; // instance 1's child axis, d3v
+  assert.deepEqual(uses(rows, two, 0, 2), { turn: false, bend: true });
+  assert.deepEqual(uses(rows, two, 0, 1), { turn: false, bend: false });
+  mesh.dispose();
+  m19.dispose();
 });

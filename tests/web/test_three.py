@@ -383,6 +383,25 @@ def test_per_instance_culling_draws_what_drawing_all_draws(checks, wind):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("cull", [False, True], ids=["all", "culled"])
+def test_the_variant_of_what_instances_use_draws_what_the_full_shader_draws(checks, cull):
+    """A mesh's shader leaves out what its instances do not use (core/variant.js): the turn of 16-number records,
+    and the whole bend where no instance has an offset.  Its pictures, shadows included, are the full shader's;
+    and a bent field drawn with the variant of an unbent one would differ (the check can fail)."""
+    page, errors = checks
+    flat = page.evaluate(f"window.checks.variants(false, {'true' if cull else 'false'})")
+    bent = page.evaluate(f"window.checks.variants(true, {'true' if cull else 'false'})")
+    assert flat["defines"] == ["AXIAL_NO_BEND", "AXIAL_NO_TURN"] and bent["defines"] == ["AXIAL_NO_TURN"]
+    for out in (flat, bent):
+        variant, full = (np.array(out[k], np.int16).reshape(-1, 4)[:, :3] for k in ("variant", "full"))
+        assert (full.max(axis=1) > 40).mean() > 0.3
+        assert np.abs(variant - full).max() <= 2, np.abs(variant - full).max()
+    differ = np.abs(np.array(flat["variant"], np.int16) - np.array(bent["full"], np.int16)).reshape(-1, 4)[:, :3]
+    assert (differ.max(axis=1) > 40).mean() > 0.02
+    assert errors == []
+
+
+@pytest.mark.slow
 def test_culling_draws_exactly_the_instances_whose_sphere_meets_the_frustum(checks):
     """The blocks only skip work: for cameras looking every way, the ids drawn are those whose bend-aware sphere
     (grown by the wind) three's own Frustum finds inside, neither more nor fewer (the mesh moved off the origin)."""

@@ -12,6 +12,7 @@ import { bake } from './bake.js';
 import { raycast } from './raycast.js';
 import { setInstanceCulling, cullingHooks } from './instance_cull.js';
 import { GeneratedTiles } from './generate.js';
+import { updateVariant } from '../core/variant.js';
 
 /**
  * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers.
@@ -31,6 +32,17 @@ export class AxialInstancedMesh extends AxialMeshCore {
     super(geometry, material, record, options);
     cullingHooks(this);
     if (this.recipe) this._part = new GeneratedTiles(this); // a generated layer's instances: made by WebGL 2 transform feedback
+    // the shader variant of what the instances use (core/variant.js): all of them on setParams, the rows written on updateParams
+    updateVariant(this, 0, this.count, true);
+    this.addEventListener('paramschange', (/** @type {any} */ e) => {
+      updateVariant(this, e.first, e.count, e.first === 0 && e.count === this.count);
+    });
+  }
+
+  setWind(wind) {
+    super.setWind(wind);
+    updateVariant(this); // a wind moves the control points of unbent instances too
+    return this;
   }
 
   _generatesWith(renderer) {
@@ -78,8 +90,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
       shader.vertexShader = injectBend(shader.vertexShader, name);
     };
     const key = material.customProgramCacheKey.bind(material);
-    m.customProgramCacheKey = () => `axialdeform:${defines.AXIAL_AXES || 1}:${defines.AXIAL_WIND ? 'wind' : ''}:`
-      + `${defines.AXIAL_POSITION_IDS ? 'position-ids' : ''}:${defines.AXIAL_CULLED ? 'culled' : ''}:${key()}`;
+    m.customProgramCacheKey = () => `axialdeform:${Object.entries(defines).sort().join(';')}:${key()}`;
     m.needsUpdate = true;
     return m;
   }

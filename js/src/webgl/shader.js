@@ -36,11 +36,13 @@ vec3 axialInstanceColor;
 void axial_fetch_instance() {
   axialInstanceId = int(axialIndex + 0.5);
   int x = (axialInstanceId % ${CULL_WIDTH / CULL_TEXELS}) * ${CULL_TEXELS}, y = axialInstanceId / ${CULL_WIDTH / CULL_TEXELS};
+#ifndef AXIAL_NO_BEND
   axialD12 = texelFetch(axialInstances, ivec2(x, y), 0);
   axialD34 = texelFetch(axialInstances, ivec2(x + 1, y), 0);
   vec4 t = texelFetch(axialInstances, ivec2(x + 2, y), 0);
   axialD5 = t.xy;
   axialTwistTaper = t.zw;
+#endif
 #ifdef AXIAL_WIND
   axialAngles = texelFetch(axialInstances, ivec2(x + 3, y), 0).xyz;
 #endif
@@ -95,7 +97,13 @@ export const BEND = `
 #ifdef AXIAL_CULLED
   axial_fetch_instance();
 #endif
-  vec3 axialV, axialN, axialT = vec3(1.0, 0.0, 0.0);
+  vec3 axialV = position, axialN = normal, axialT = vec3(1.0, 0.0, 0.0);
+#ifdef AXIAL_NO_BEND
+  // no instance bends (core/variant.js): only the rigid part, instanceMatrix's
+#ifdef USE_TANGENT
+  axialT = tangent.xyz;
+#endif
+#else
   {
     AxialInstance axialInst = AxialInstance(axialD12, axialD34, axialD5, vec3(0.0), vec3(0.0), 1.0,
                                             axialTwistTaper.x, axialTwistTaper.y);
@@ -133,6 +141,7 @@ export const BEND = `
 #endif
 #endif
   }
+#endif
 `;
 
 // the tree walk's storage (glsl/axial.glsl's axial_tree_axis and axial_tree_offsets): the uniform arrays and
