@@ -8,11 +8,15 @@ camera walking through the field, three ways (tools/bench_three.html, three r187
 * ``addon``: ``@three.ez/instanced-mesh``'s ``InstancedMesh2`` with its BVH frustum culling
   (``WebGLRenderer``: the add-on has no WebGPU path), unbent;
 * ``axial``: ``axialdeform-three/webgpu``'s ``AxialInstancedMesh`` under ``WebGPURenderer``
-  (WebGPU backend) with GPU culling (``setGPUCulling``), every instance bent;
+  (WebGPU backend) with GPU culling (``setGPUCulling``), every instance bent; ``axial-unbent``: the same with
+  every offset zero, so its positionNode leaves the bend out (``core/variant.js``);
 * ``axial-webgl-cull``: ``axialdeform-three``'s ``AxialInstancedMesh`` under ``WebGLRenderer`` with
   per-instance culling (``setInstanceCulling``), every instance bent -- the add-on's backend;
   ``axial-webgl-unbent``: the same with every offset zero, so its shader variant leaves the bend out
-  (``core/variant.js``): the bend's own vertex work, the same culling.
+  (``core/variant.js``): the bend's own vertex work, the same culling;
+* ``batched``, ``batched-webgpu``: three's own per-instance culling, a ``THREE.BatchedMesh`` of the one stone
+  (``perObjectFrustumCulled``: its CPU tests every instance's sphere a frame), under ``WebGLRenderer`` or
+  ``WebGPURenderer`` (the add-on's counterpart on WebGPU), unbent.
 
 Per mode and count, each run in a page of its own, the modes alternating over ``--repeats`` runs:
 the first frame (from making the mesh to the GPU done), the median CPU ms of the ``render`` call,
@@ -43,7 +47,8 @@ JS = ROOT / "js"
 ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox", "--enable-unsafe-webgpu",
         "--use-webgpu-adapter=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
         "--enable-precise-memory-info"]
-MODES = ("plain", "addon", "axial", "one", "axial-webgl", "plain-webgpu", "axial-nocull", "axial-webgl-cull", "axial-webgl-unbent")
+MODES = ("plain", "addon", "axial", "one", "axial-webgl", "plain-webgpu", "axial-nocull", "axial-webgl-cull", "axial-webgl-unbent",
+         "batched", "batched-webgpu", "axial-unbent")
 
 
 def site(folder: Path, counts, spacing: float) -> None:

@@ -1,6 +1,7 @@
 // variant.js -- what a mesh's instances use, so that the shader variant drawing them leaves out the rest
 // (glsl/axial.glsl's AXIAL_NO_TURN: no twist or taper; AXIAL_NO_BEND: no offset either, only the rigid part):
-// the same pictures without the vertex work.  A record of 16 numbers has no turn; a record whose every
+// the same pictures without the vertex work.  WebGL builds its materials with these defines; WebGPU's
+// positionNode leaves the bend out under AXIAL_NO_BEND (its compute passes always bend).  A record of 16 numbers has no turn; a record whose every
 // instance's offsets, twist and taper are zero does not bend, unless a wind moves its control points.
 // setParams scans every instance; updateParams only the rows it writes, and turns a feature back on when one
 // of them uses it (never off: the next setParams does).  A generated layer (its records made on the GPU) and
@@ -27,16 +28,18 @@ export function uses(data, layout, first, n) {
 /**
  * After rows first .. first + n - 1 of `mesh` were written (`all`: they are its every instance, as setParams
  * writes them; none: the wind changed), set `mesh.defines`' AXIAL_NO_TURN and AXIAL_NO_BEND, and mark its
- * materials for a rebuild where one changed.
- * @param {any} mesh @param {number} [first] @param {number} [n] @param {boolean} [all]
+ * materials for a rebuild where one changed; returns whether one did.
+ * @param {any} mesh @param {number} [first] @param {number} [n] @param {boolean} [all] @returns {boolean}
  */
 export function updateVariant(mesh, first = 0, n = 0, all = false) {
-  if (mesh.recipe || mesh._ownShader) return;
+  if (mesh.recipe || mesh._ownShader) return false;
   const u = uses(mesh.data, mesh.layout, first, n), had = mesh._uses || { turn: true, bend: true };
   mesh._uses = all ? u : { turn: had.turn || u.turn, bend: had.bend || u.bend };
   const d = mesh.defines, before = Object.keys(d).sort().join();
   const set = (name, on) => { if (on) d[name] = '1'; else delete d[name]; };
   set('AXIAL_NO_TURN', !mesh._uses.turn);
   set('AXIAL_NO_BEND', !mesh._uses.bend && !('AXIAL_WIND' in d));
-  if (before !== Object.keys(d).sort().join()) mesh._allMaterials().forEach((m) => { m.needsUpdate = true; });
+  if (before === Object.keys(d).sort().join()) return false;
+  mesh._allMaterials().forEach((m) => { m.needsUpdate = true; });
+  return true;
 }

@@ -16,6 +16,7 @@ import { rayCandidates, intersectBent } from '../core/raycast.js';
 import { GPUCulling } from './cull.js';
 import { GeneratedStorage } from './generate.js';
 import { bendAsync, releaseCompute } from './compute.js';
+import { updateVariant } from '../core/variant.js';
 import {
   axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes, axialPositionId,
 } from './nodes.js';
@@ -49,6 +50,11 @@ export class AxialInstancedMesh extends AxialMeshCore {
     }
     super(geometry, material, record, options);
     if (this.recipe) this._part = new GeneratedStorage(this, options); // a generated layer: made by a compute pass
+    // the bend left out of the positionNode while no instance bends (core/variant.js)
+    if (updateVariant(this, 0, this.count, true)) this._rebend();
+    this.addEventListener('paramschange', (/** @type {any} */ e) => {
+      if (updateVariant(this, e.first, e.count, e.first === 0 && e.count === this.count)) this._rebend();
+    });
   }
 
   _generatesWith(renderer) {
@@ -134,7 +140,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
    * The bend of vertex (v, n, tangent or null, axis b) of instance `inst` (index id): {v, n, t} in
    * this mesh's space (W = R (s V'') + p), the one composition the draw and the compute pass share.
    */
-  _bend(inst, id, v, n, tangent, b) {
+  _bend(inst, id, v, n, tangent, b, rigid = false) {
     const u = this._nodes();
     let moved = inst, push = null;
     if (this._wind) {
@@ -144,7 +150,10 @@ export class AxialInstancedMesh extends AxialMeshCore {
       moved = axialWind(inst, phaseId, u.frame, u.len, w);
     }
     let bent, tan = null;
-    if (u.axes) {
+    if (rigid) { // no instance bends and no wind blows (core/variant.js): the rigid part alone
+      bent = { v, n };
+      tan = tangent;
+    } else if (u.axes) {
       bent = axialTreeWorld(v, n, b, u.axes.count, u.axes.tex, u.center, moved, u.axes.children, int(id), push);
       if (tangent) tan = axialJacobianTimes(bent.jac, tangent);
     } else {
@@ -163,10 +172,10 @@ export class AxialInstancedMesh extends AxialMeshCore {
    * packed buffer as storage; otherwise the packed buffer is an instanced vertex buffer.
    */
   _positionNode(culled = null) {
-    const wind = Boolean(this._wind);
+    const wind = Boolean(this._wind), rigid = 'AXIAL_NO_BEND' in this.defines;
     this._positions = this._positions || new Map();
     const key = culled ? culled.level : -1, known = this._positions.get(key);
-    if (known && known.wind === wind) return known.node;
+    if (known && known.wind === wind && known.rigid === rigid) return known.node;
     const g = culled ? culled.geometry : this.geometry, hasTangent = Boolean(g.getAttribute('tangent'));
     // the rigid part is placed by the bend (inst.matrix), not by three's instancing, which runs before
     // the positionNode in some versions (r187) and after it in others (r171): three instances an
@@ -193,14 +202,14 @@ export class AxialInstancedMesh extends AxialMeshCore {
       const i2 = q(2), matrix = [4, 5, 6, 7].map((k) => q(k).xyz);
       const inst = { d12: q(0), d34: q(1), d5: i2.xy, twist: i2.z, taper: i2.w, angles: q(3).xyz, position: matrix[3], matrix };
       const b = this.axis.axes ? int(attribute('axialAxis', 'float').add(0.5)) : null;
-      const r = this._bend(inst, id, positionGeometry, normalGeometry, hasTangent ? tangentGeometry.xyz : null, b);
+      const r = this._bend(inst, id, positionGeometry, normalGeometry, hasTangent ? tangentGeometry.xyz : null, b, rigid);
       normalLocal.assign(r.n);
       if (r.t) tangentLocal.assign(r.t);
       // the tint: the varying three's materials multiply their colour by (its instancing sets it otherwise)
       if (this.instanceColor) varyingProperty('vec3', 'vInstanceColor').assign(q(8).xyz);
       return r.v;
     })();
-    this._positions.set(key, { wind, node });
+    this._positions.set(key, { wind, rigid, node });
     return node;
   }
 
@@ -268,15 +277,18 @@ export class AxialInstancedMesh extends AxialMeshCore {
   setWind(wind) {
     const was = Boolean(this._wind);
     super.setWind(wind);
-    if (Boolean(this._wind) !== was) {
-      if (this._culling) this._culling.rebend();
-      const node = this._positionNode();
-      (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => {
-        if (!this._ownShader) m.positionNode = node;
-        m.needsUpdate = true;
-      });
-    }
+    if (updateVariant(this) || Boolean(this._wind) !== was) this._rebend(); // a wind moves unbent instances too
     return this;
+  }
+
+  /** The materials' positionNode made again (the wind came or went, the variant changed). */
+  _rebend() {
+    if (this._culling) this._culling.rebend();
+    const node = this._positionNode();
+    (Array.isArray(this.material) ? this.material : [this.material]).forEach((m) => {
+      if (!this._ownShader) m.positionNode = node;
+      m.needsUpdate = true;
+    });
   }
 
   /**
