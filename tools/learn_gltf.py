@@ -93,6 +93,7 @@ def main(argv=None) -> int:
     p.add_argument("--grid", type=int, default=256, help="height-map pixels a side (default: %(default)s)")
     p.add_argument("--sims", type=int, default=39, help="generated patterns a comparison (default: %(default)s)")
     p.add_argument("--out", help="a folder for the files (default: a temporary folder)")
+    p.add_argument("--errors", choices=("clumps", "poisson"), default="clumps", help="learn's --errors (default: %(default)s)")
     args = p.parse_args(argv)
     folder = Path(args.out or tempfile.mkdtemp())
     folder.mkdir(parents=True, exist_ok=True)
@@ -104,10 +105,10 @@ def main(argv=None) -> int:
     window = (max(w[0] + shift[0], -half_w), max(w[1] + shift[1], -half_d), min(w[2] + shift[0], half_w), min(w[3] + shift[1], half_d))
     ex = Example(ex.xz + shift, window, ex.size, ex.kind, ex.yaw, ex.source)
     name = Path(args.example).name
-    rows = [compare(name, ex, scene, folder, args.sims)]
+    rows = [compare(name, ex, scene, folder, args.sims, errors=args.errors)]
     half = np.random.default_rng(1).random(len(ex.xz)) < 0.5
     rows.append(compare(f"{name}: a random half learned, the other compared", ex.subset(half), scene, folder, args.sims,
-                        ex.subset(~half)))
+                        ex.subset(~half), args.errors))
     print_table(rows)
     return 0
 

@@ -39,7 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import axialdeform as ad  # noqa: E402
 from axialdeform.core.io.example import read_example, read_terrain, write_learned  # noqa: E402
-from axialdeform.core.learn import Example, l_function, largest_deviations, learn_layers  # noqa: E402
+from axialdeform.core.learn import ERRORS, Example, l_function, largest_deviations, learn_layers  # noqa: E402
 from axialdeform.core.record import POSITION, SCALE  # noqa: E402
 
 
@@ -88,11 +88,13 @@ def _generated(out: Path, learned, terrain, seed: int, size: float) -> tuple[np.
     return params[:, POSITION][:, [0, 2]].astype(np.float64), (params[:, SCALE] if params.shape[1] > SCALE else None)
 
 
-def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Example | None = None) -> dict:
-    """Learn on ``ex``, generate ``sims`` times over its terrain, compare with ``test`` (default ``ex``)."""
+def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Example | None = None,
+            errors: str = "clumps") -> dict:
+    """Learn on ``ex`` (``errors``: learn_layers'), generate ``sims`` times over its terrain, compare with ``test``
+    (default ``ex``)."""
     test = test or ex
     ground = read_terrain(terrain)[2] if terrain else None
-    learned = learn_layers(ex, ground)
+    learned = learn_layers(ex, ground, errors=errors)
     lay = learned[0]
     w = test.window
     inside = lambda p: p[(p[:, 0] >= w[0]) & (p[:, 0] <= w[2]) & (p[:, 1] >= w[1]) & (p[:, 1] <= w[3])]  # noqa: E731
@@ -166,6 +168,7 @@ def main(argv=None) -> int:
     p.add_argument("--out", help="a folder for the plots' files (default: a temporary folder)")
     p.add_argument("--picture", help="a PNG of the bei survey beside one generated pattern (default: none)")
     p.add_argument("--sims", type=int, default=39, help="generated patterns a comparison (default: %(default)s)")
+    p.add_argument("--errors", choices=ERRORS, default="clumps", help="learn's --errors (default: %(default)s)")
     args = p.parse_args(argv)
     folder = Path(args.out or tempfile.mkdtemp())
     folder.mkdir(parents=True, exist_ok=True)
@@ -178,19 +181,19 @@ def main(argv=None) -> int:
     rows = []
     e_bei = read_example(bei, (-500, -250, 500, 250))
     e_ll = read_example(longleaf, (0, 0, 200, 200))
-    rows.append(compare("bei", e_bei, bei_scene, folder, args.sims))
-    rows.append(compare("longleaf", e_ll, None, folder, args.sims))
+    rows.append(compare("bei", e_bei, bei_scene, folder, args.sims, errors=args.errors))
+    rows.append(compare("longleaf", e_ll, None, folder, args.sims, errors=args.errors))
     west = e_bei.subset(e_bei.xz[:, 0] < 0)
     west = Example(west.xz, (-500, -250, 0, 250), source="bei west")
     east = e_bei.subset(e_bei.xz[:, 0] >= 0)
     east = Example(east.xz, (0, -250, 500, 250), source="bei east")
-    rows.append(compare("bei: west learned, east compared", west, bei_scene, folder, args.sims, east))
+    rows.append(compare("bei: west learned, east compared", west, bei_scene, folder, args.sims, east, args.errors))
     # the other hold-out: a random half of the trees learned, the other half compared (each half the same
     # ground, half the trees: the learned layer grows half as many)
     for name, ex, scene in (("bei", e_bei, bei_scene), ("longleaf", e_ll, None)):
         half = np.random.default_rng(1).random(len(ex.xz)) < 0.5
         rows.append(compare(f"{name}: a random half learned, the other compared", ex.subset(half), scene, folder,
-                            args.sims, ex.subset(~half)))
+                            args.sims, ex.subset(~half), args.errors))
     if args.picture:
         _picture(Path(args.picture), e_bei, bei_scene, folder)
     print_table(rows)

@@ -10,6 +10,7 @@ from ..core.ground_features import FEATURES
 from ..core.io.example import learn_layer, learned_paths, write_learned
 from ..core.io.safeio import check_output_path
 from ..core.io.scene import parse_scene
+from ..core.learn import ERRORS
 from ._common import add_overwrite
 
 
@@ -51,6 +52,10 @@ def add_parser(sub) -> None:
     p.add_argument("--size", type=float, default=1.0, help="the scale of an object of the example's median size "
                                                            "(default: %(default)g)")
     p.add_argument("--seed", type=int, default=0, help="the seed of the simulations and the layers (default: %(default)s)")
+    p.add_argument("--errors", choices=ERRORS, default="clumps",
+                   help="which errors decide the ground's terms of an example in clumps: the clumps' own variation "
+                        "(what transfers to another terrain), or poisson: every dependence the example shows, its own "
+                        "ground reproduced more closely (default: %(default)s)")
     add_overwrite(p)
     p.set_defaults(handler=run)
 
@@ -58,7 +63,7 @@ def add_parser(sub) -> None:
 def run(args) -> None:
     """``axialdeform learn EXAMPLE --terrain SCENE.toml -o OUT.toml``."""
     learned = learn_layer(args.example, args.terrain, window=args.window, layer=args.layer, mask=args.mask,
-                          features=args.features, seed=args.seed)
+                          features=args.features, seed=args.seed, errors=args.errors)
     target, mask = (args.apply_to, args.apply_mask) if args.apply_to else (args.terrain, args.mask)
     inputs = [args.example, args.terrain, args.apply_to, args.mask, args.apply_mask]
     for scene in (args.terrain, args.apply_to):  # and the height maps they name (parsed, not read)

@@ -37,12 +37,14 @@ from .errors import ParamError
 from .generate import CLUMP_PARENTS
 
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function", "largest_deviations",
-           "learn_layers", "layer_recipe", "matern_cluster_k", "SIGNIFICANT", "SIMULATIONS"]
+           "learn_layers", "layer_recipe", "matern_cluster_k", "SIGNIFICANT", "SIMULATIONS", "ERRORS"]
 
 #: a term's coefficient stays while |b / se| is at least this
 SIGNIFICANT = 2.0
 #: the most kinds one example may have (one generated layer each)
 MAX_KINDS = 64
+#: which standard errors decide an example in clumps' ground terms (learn_layers)
+ERRORS = ("clumps", "poisson")
 #: Poisson patterns Diggle's test compares the example with (rank 1 of 20: the 5 % level)
 SIMULATIONS = 19
 #: the spacings (in mean spacings 1 / sqrt(lambda)) the L-function is compared over
@@ -464,10 +466,16 @@ def _marks(example: Example) -> tuple[tuple | None, tuple | None, tuple | None, 
     return scale, quartiles, octiles, yaw
 
 
-def learn_layers(example: Example, ground=None, names=None, seed: int = 0) -> list[LearnedLayer]:
+def learn_layers(example: Example, ground=None, names=None, seed: int = 0, errors: str = "clumps") -> list[LearnedLayer]:
     """One :class:`LearnedLayer` a kind of ``example`` (in the order kinds first appear), over ``ground`` (a
     :class:`~axialdeform.core.ground_features.GroundFeatures`, None: a flat ground with no features) and its
-    features ``names`` (default all)."""
+    features ``names`` (default all).  ``errors`` (:data:`ERRORS`): which standard errors decide the ground's
+    terms of an example in clumps -- ``"clumps"`` the cluster process's (a term stays only where the clumps'
+    own variation does not explain it: what transfers to another ground), ``"poisson"`` Poisson's (every
+    dependence the example shows stays, also one its clumps make: the example's own ground reproduced more
+    closely)."""
+    if errors not in ERRORS:
+        raise ParamError(f"{example.source}: errors: expected one of {', '.join(ERRORS)}, found {errors!r}")
     if ground is not None:
         gx0, gz0, gx1, gz1 = ground.bounds
         x0, z0, x1, z1 = example.window
@@ -483,7 +491,7 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0) -> li
         part = example if kind is None else example.subset(example.kind == kind)
         intensity = fit_intensity(part, ground, names)
         spacing = fit_spacing(part, intensity, ground, seed)
-        if spacing.pattern == "cluster":  # clumps make counts vary more than Poisson's: the cluster process's errors
+        if spacing.pattern == "cluster" and errors == "clumps":  # clumps make counts vary more than Poisson's
             intensity = fit_intensity(part, ground, names, cluster=spacing.cluster)
             spacing = fit_spacing(part, intensity, ground, seed, clumped=True)  # the clumps' size for it
         scale, quartiles, octiles, yaw = _marks(part)

@@ -64,6 +64,24 @@ def test_learn_writes_a_scene_that_grows_each_kind_as_often(survey, tmp_path):
     assert (tmp_path / "learned-oak-density.png").is_file()
 
 
+def test_errors_poisson_keeps_the_ground_a_clumped_example_shows(survey, tmp_path):
+    """--errors: the default tests a clumped example's ground terms against its clumps (none kept for a Matern
+    pattern without a real effect); poisson keeps what the example shows; anything else is one line, exit 2."""
+    folder, scene, *_ = survey
+    csv = _survey(tmp_path / "clumps.csv", P.matern_cluster(np.random.default_rng(0), 0.01, 3.0, 8))
+    said = {}
+    for errors in ("clumps", "poisson"):
+        out = tmp_path / f"{errors}.toml"
+        res = run("learn", csv, "--terrain", scene, "-o", out, "--errors", errors, "--window=-100,-60,100,60")
+        assert res.returncode == 0, res.stderr
+        said[errors] = res.stdout
+    assert "log rate = " in said["clumps"] and "spacing: cluster" in said["clumps"]
+    assert re.search(r"log rate = [-0-9.e]+;", said["clumps"])  # no term
+    assert not re.search(r"log rate = [-0-9.e]+;", said["poisson"])  # terms
+    bad = run("learn", csv, "--terrain", scene, "-o", tmp_path / "x.toml", "--errors", "strict")
+    assert bad.returncode == 2 and "--errors" in bad.stderr and "Traceback" not in bad.stderr
+
+
 def test_apply_to_another_terrain(survey, tmp_path):
     folder, scene, csv, xz, kind = survey
     other = P.write_terrain(tmp_path, P.hills(phase=0.4), "other")

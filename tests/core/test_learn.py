@@ -112,6 +112,34 @@ def test_a_cluster_pattern_s_standard_errors_are_the_spread_of_its_estimates(hil
     assert np.mean(poisson) / spread < 0.6, (np.mean(poisson), spread)
 
 
+def _worst_quartile(intensity, g, xz) -> float:
+    """The largest |expected / observed - 1| of the counts in the quartiles of every feature of ``g``."""
+    gx = np.stack(np.meshgrid(np.linspace(-99.5, 99.5, 200), np.linspace(-59.5, 59.5, 120)), -1).reshape(-1, 2)
+    lam, worst = intensity.rate_at(g, gx) * (200 * 120 / len(gx)), 0.0
+    for f in g.names:
+        at, edges = g.at(gx, [f])[:, 0], np.quantile(g.at(gx, [f])[:, 0], [0, 0.25, 0.5, 0.75, 1])
+        observed = np.histogram(g.at(xz, [f])[:, 0], edges)[0]
+        expected = np.array([lam[(at >= edges[i]) & ((at < edges[i + 1]) if i < 3 else (at <= edges[i + 1]))].sum()
+                             for i in range(4)])
+        worst = max(worst, float(np.abs(expected / observed - 1).max()))
+    return worst
+
+
+def test_poisson_errors_keep_the_ground_an_example_in_clumps_shows(hills):
+    """errors="clumps" (the default) keeps a ground term only where the clumps' own variation does not explain it:
+    a Matern pattern with no real effect learns none, though its clumps fall unevenly on the ground's quartiles;
+    errors="poisson" keeps what the example shows there, and reproduces those quartiles."""
+    _, g = hills
+    xz = P.matern_cluster(np.random.default_rng(0), 0.01, 3.0, 8)
+    ex = L.Example(xz, P.window())
+    clumps, poisson = L.learn_layers(ex, g)[0], L.learn_layers(ex, g, errors="poisson")[0]
+    assert clumps.intensity.names == () and len(poisson.intensity.names) >= 3
+    assert clumps.spacing.pattern == poisson.spacing.pattern == "cluster"
+    assert _worst_quartile(clumps.intensity, g, xz) > 0.15 > _worst_quartile(poisson.intensity, g, xz)
+    with pytest.raises(ParamError, match="errors: expected one of clumps, poisson"):
+        L.learn_layers(ex, g, errors="strict")
+
+
 def test_a_learned_cluster_layer_grows_clumps_of_the_same_size(hills):
     maps, g = hills
     xz = P.matern_cluster(np.random.default_rng(2), 0.02, 3.0, 10)

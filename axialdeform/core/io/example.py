@@ -319,7 +319,7 @@ def read_terrain(scene_file, mask=None) -> tuple[dict, object, object]:
 
 
 def learn_layer(example, terrain=None, *, window=None, layer: str | None = None, mask=None, features=None,
-                seed: int = 0) -> list:
+                seed: int = 0, errors: str = "clumps") -> list:
     """Learn generated layers from an example of objects standing on a ground: one
     :class:`~axialdeform.core.learn.LearnedLayer` a kind (docs/learn.md).
 
@@ -342,6 +342,11 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
         :data:`~axialdeform.core.ground_features.FEATURES`; ``water`` needs ``mask``).
     seed : int
         The seed of the simulations of Diggle's test.
+    errors : {"clumps", "poisson"}
+        Which standard errors decide the ground's terms of an example in clumps: the cluster process's (the
+        default: a dependence stays only where the clumps' own variation does not explain it, so it transfers
+        to another terrain), or Poisson's (every dependence the example shows stays, also one its clumps make:
+        its own ground reproduced more closely). See :func:`~axialdeform.core.learn.learn_layers`.
 
     Returns
     -------
@@ -357,7 +362,7 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
         if f not in FEATURES or (ground is not None and f not in ground.names):
             raise ExampleError(f"features: {f!r}: expected some of {', '.join(ground.names if ground else FEATURES)}"
                                f"{' (water needs a mask)' if f == 'water' else ''}")
-    return learn_layers(ex, ground, list(features) if features else None, seed)
+    return learn_layers(ex, ground, list(features) if features else None, seed, errors)
 
 
 def _layer_names(learned: list) -> list[str]:
