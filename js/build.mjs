@@ -57,11 +57,12 @@ export function generateNodes(text, wind, gen) {
     'The GLSL functions as three.js node functions (TSL): each call is inlined into the caller\'s graph; an',
     '`out` parameter is a node variable the caller passes, a mat3 three column vectors, a struct an object.'];
   const defines = { AXIAL_TREE_WALK: '' }; // the tree walk's section (its storage: hooks)
+  const switches = ['AXIAL_NO_TURN']; // what a mesh's instances do not use, left out as it builds (core/variant.js)
   const bend = { module: './glsl_nodes.js', names: new Set() }, windHeld = { module: './glsl_wind_nodes.js', names: new Set() };
-  const nodes = emitTsl(sources, { only: NODE_FUNCTIONS, defines, emitted: bend.names, header: about('the bend') });
-  const windNodes = emitTsl(sources, { only: WIND_NODE_FUNCTIONS, defines, emitted: windHeld.names, external: [bend],
+  const nodes = emitTsl(sources, { only: NODE_FUNCTIONS, defines, switches, emitted: bend.names, header: about('the bend') });
+  const windNodes = emitTsl(sources, { only: WIND_NODE_FUNCTIONS, defines, switches, emitted: windHeld.names, external: [bend],
     header: about('the wind; what it calls of the bend comes from glsl_nodes.js') });
-  const generate = emitTsl(sources, { only: GENERATE_NODE_FUNCTIONS, defines, external: [bend, windHeld],
+  const generate = emitTsl(sources, { only: GENERATE_NODE_FUNCTIONS, defines, switches, external: [bend, windHeld],
     header: about('the generator; what it calls of the bend and the wind comes from their modules') });
   return { nodes, wind: windNodes, generate };
 }

@@ -19,7 +19,9 @@
 //   returns become a result variable), the ternary (select), every operator of GLSL on scalars and vectors;
 // - function declarations without a body: hooks, what the program gives the source (its storage); a call to
 //   one is `hooks.<name>(...)`, `hooks` the last parameter of every emitted function that reaches a hook;
-// - #ifdef/#ifndef/#else/#endif with the defines it is given.
+// - #ifdef/#ifndef/#else/#endif with the defines it is given; around statements, those of a `switch` (a define the
+//   program chooses as it builds its nodes) become a static if of the runtime's `switches.<NAME>`, so both
+//   builds are in the module and the one a mesh needs is the one its graph gets.
 // Static values are literals, `const`s, unrolled loop indices and static struct fields; everything else
 // is a node.  A static that meets a node becomes a node of its own GLSL type (float/int/uint/bool).
 
@@ -64,20 +66,30 @@ const camel = (s) => s.replace(/_([a-z0-9])/g, (_, c) => c.toUpperCase());
 class GlslError extends Error {}
 
 // ---------------------------------------------------------------- preprocessing and tokens
-function preprocess(text, defines, where) {
+function preprocess(text, defines, where, switches = []) {
   const out = [];
-  const stack = []; // [active, taken]
+  const stack = []; // [active, taken, a switch]
   const active = () => stack.every((s) => s[0]);
   text.split('\n').forEach((line, n) => {
     const m = /^\s*#\s*(\w+)\s*(.*)$/.exec(line);
     if (!m) { out.push(active() ? line : ''); return; }
     const [, dir, rest] = m;
     const name = rest.trim().split(/\s+/)[0];
+    const top = stack[stack.length - 1];
+    if ((dir === 'ifdef' || dir === 'ifndef') && switches.includes(name)) { // kept: a static if of the switch
+      stack.push([true, true, true]);
+      out.push(active() ? `if (${dir === 'ifdef' ? '' : '!'}${name}) {` : '');
+      return;
+    }
+    if (top && top[2] && (dir === 'else' || dir === 'endif')) {
+      if (dir === 'endif') stack.pop();
+      out.push(active() ? (dir === 'else' ? '} else {' : '}') : '');
+      return;
+    }
     if (dir === 'ifdef' || dir === 'ifndef') {
       const on = (name in defines) === (dir === 'ifdef');
-      stack.push([on, on]);
+      stack.push([on, on, false]);
     } else if (dir === 'else') {
-      const top = stack[stack.length - 1];
       top[0] = !top[1];
     } else if (dir === 'endif') {
       stack.pop();
@@ -843,15 +855,16 @@ function assignedNames(body) {
  * @param {object} options {defines: {NAME: value}, only: [GLSL function names to emit (and what they call)],
  *   header: the file's first comment lines, runtime: the module the helpers come from, emitted: a Set this fills
  *   with the JavaScript names of the functions emitted (an overload's with its parameter types), external: [{module, names}, ...] -- functions other emitted
- *   modules hold (their `emitted`), imported from them instead of emitted again}
+ *   modules hold (their `emitted`), imported from them instead of emitted again, switches: [define names] kept as
+ *   static ifs of the runtime's `switches`}
  * @returns {string} the JavaScript module
  */
 export function emitTsl(sources, { defines = {}, only = null, header = [], runtime = './tsl_runtime.js', imports = [],
-  emitted = null, external = [] } = {}) {
+  emitted = null, external = [], switches = [] } = {}) {
   const items = [];
   let structs = new Map();
   for (const { name, text } of sources) {
-    const parser = new Parser(tokenize(preprocess(text, defines, name), name), name);
+    const parser = new Parser(tokenize(preprocess(text, defines, name, switches), name), name);
     parser.structs = structs;
     const got = parser.program();
     got.forEach((x) => { x.where = name; });
@@ -859,6 +872,8 @@ export function emitTsl(sources, { defines = {}, only = null, header = [], runti
     structs = parser.structs;
   }
   const em = new Emitter(items, sources.map((s) => s.name).join('+'));
+  // a switch: a define the program chooses when it builds its nodes, read from the runtime's `switches`
+  for (const name of switches) em.consts.set(name, { js: `switches.${name}`, type: 'bool', stat: true, switch: true });
   for (const c of items.filter((x) => x.kind === 'const')) {
     const v = em.expr(c.value, { vars: new Map(), up: null });
     if (!v.stat) em.fail(`const ${c.name} is not a number`, c);
@@ -890,7 +905,9 @@ export function emitTsl(sources, { defines = {}, only = null, header = [], runti
   const tsl = [...em.used].sort();
   const rt = [...(em.runtime || [])].sort();
   const own = [...bodies.values()].filter((b) => b !== null);
-  const consts = [...em.consts.values()].filter((c) => own.some((b) => new RegExp(`\\b${c.js}\\b`).test(b)));
+  const consts = [...em.consts.values()].filter((c) => !c.switch && own.some((b) => new RegExp(`\\b${c.js}\\b`).test(b)));
+  if (switches.length && own.some((b) => /\bswitches\./.test(b))) rt.push('switches');
+  rt.sort();
   if (emitted) for (const [f, b] of bodies) if (b !== null) emitted.add(em.jsName(f));
   return [
     ...header.map((l) => `// ${l}`.trimEnd()),

@@ -75,6 +75,35 @@ float alone(float x) { return x; }`, ['twice', 'alone']);
   assert.doesNotMatch(out, /function storage/);
 });
 
+test('a switch keeps both builds of an #ifdef around statements, chosen by the runtime\'s switches as the nodes are built', () => {
+  const text = `
+float f(float x) {
+#ifdef NO_TURN
+    return x;
+#else
+    return x * 2.0;
+#endif
+}
+float g(float x) {
+    float y = x;
+#ifndef NO_TURN
+    y = f(y) + 1.0;
+#endif
+#ifdef OTHER
+    y = y * 3.0;
+#endif
+    return y;
+}`;
+  const out = emitTsl([{ name: 'x.glsl', text }], { only: ['g'], switches: ['NO_TURN'] });
+  assert.match(out, /import \{ switches \} from '\.\/tsl_runtime\.js';/);
+  assert.match(out, /if \(switches\.NO_TURN\) \{\n {4}_result\.assign\(x\);\n {2}\} else \{/);
+  assert.match(out, /if \(\(!switches\.NO_TURN\)\) \{\n {4}y\.assign\(f\(y\)\.add\(float\(1\.0\)\)\);/);
+  assert.doesNotMatch(out, /OTHER|mul\(float\(3\.0\)\)/); // a define that is no switch: resolved as before
+  const plain = emitTsl([{ name: 'x.glsl', text }], { only: ['f', 'g'], defines: { NO_TURN: '' } });
+  assert.doesNotMatch(plain, /switches/);
+  assert.match(plain, /export function f\(x\) \{\n {2}return x;/);
+});
+
 test('a function another emitted module holds is imported from it, an overload by its own name, not emitted again', () => {
   const text = `
 float f(float x) { return x; }

@@ -284,14 +284,19 @@ def test_gpu_culling_draws_the_same_picture_with_fewer_instances(webgpu_browser,
 @pytest.mark.parametrize("cull", [False, True], ids=["all", "gpu-culled"])
 def test_unbent_instances_draw_without_the_bend_as_with_it_under_webgpu(webgpu_browser, site, cull):
     """While no instance has an offset (and no wind blows) the positionNode leaves the bend out (core/variant.js):
-    the same picture as the whole bend's, all drawn and GPU-culled; bent again, the bend comes back."""
+    the same picture as the whole bend's, all drawn and GPU-culled; bent again, the bend comes back, and with 16
+    numbers the generated functions are built with the turn switched off: the same picture as with it."""
     _folder, url = site
     out, errors = run(webgpu_browser, url, VERSIONS[-1], "variant", {"gl": False, "cull": cull})
     assert out["defines"] == ["AXIAL_NO_BEND", "AXIAL_NO_TURN"], out["defines"]
     assert out["bentDefines"] == ["AXIAL_NO_TURN"], out["bentDefines"]
-    variant, full, bent = (np.array(out[k]).reshape(-1, 4)[:, :3].astype(int) for k in ("variant", "full", "bent"))
+    variant, full, bent, bent_full = (np.array(out[k]).reshape(-1, 4)[:, :3].astype(int)
+                                      for k in ("variant", "full", "bent", "bentFull"))
     assert (full.max(1) > 0).sum() > 5000
     assert np.abs(variant - full).max() <= 2, np.abs(variant - full).max()
+    assert np.abs(bent - bent_full).max() <= 2, np.abs(bent - bent_full).max()  # the turn switched off (16 numbers)
+    if not cull:  # and it is gone from the vertex shader: one call of axial_cos_sin fewer
+        assert out["bentFullCalls"] > out["bentCalls"], (out["bentCalls"], out["bentFullCalls"])
     assert (np.abs(bent - full).max(1) > 40).sum() > 500  # the bent stones are elsewhere: the check can fail
     assert errors == []
 

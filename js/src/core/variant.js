@@ -1,11 +1,13 @@
 // variant.js -- what a mesh's instances use, so that the shader variant drawing them leaves out the rest
 // (glsl/axial.glsl's AXIAL_NO_TURN: no twist or taper; AXIAL_NO_BEND: no offset either, only the rigid part):
 // the same pictures without the vertex work.  WebGL builds its materials with these defines; WebGPU's
-// positionNode leaves the bend out under AXIAL_NO_BEND (its compute passes always bend).  A record of 16 numbers has no turn; a record whose every
-// instance's offsets, twist and taper are zero does not bend, unless a wind moves its control points.
-// setParams scans every instance; updateParams only the rows it writes, and turns a feature back on when one
-// of them uses it (never off: the next setParams does).  A generated layer (its records made on the GPU) and
-// a mesh whose materials bend themselves (ownShader) keep every feature.
+// positionNode leaves the bend out under AXIAL_NO_BEND and builds the generated node functions with the turn
+// switched off under AXIAL_NO_TURN (tsl_runtime.js's switches; its compute passes build them whole).  A record of 16
+// numbers has no turn; a record whose every instance's offsets, twist and taper are zero does not bend,
+// unless a wind moves its control points.  setParams scans every instance; updateParams only the rows it
+// writes, and turns a feature back on when one of them uses it (never off: the next setParams does).  A
+// generated layer (its records made on the GPU) and a mesh whose materials bend themselves (ownShader) keep
+// every feature.
 
 /**
  * Whether rows first .. first + n - 1 of `data` (records of `layout`: adp.js's recordLayout) use the turn (a

@@ -4,7 +4,7 @@
 // `out` parameter is a node variable the caller passes, a mat3 three column vectors, a struct an object.
 
 import { Break, If, Loop, bool, clamp, cross, dot, float, floor, int, ivec2, max, normalize, select, vec2, vec3, vec4 } from 'three/tsl';
-import { matAdd, matAssign, matDiagonal, matMul, matOuter, matTranspose, matVar, matVec, texelFetch } from './tsl_runtime.js';
+import { matAdd, matAssign, matDiagonal, matMul, matOuter, matTranspose, matVar, matVec, switches, texelFetch } from './tsl_runtime.js';
 
 export const AXIAL_T_SLACK = 1e-4;
 export const AXIAL_AXES_ROW = 4095;
@@ -78,16 +78,28 @@ export function axialSlope_fAI(t, inst) {
  * AXIAL_NO_TURN (a program whose instances are all 16-number records): the turn is left out of the build,
  * the same numbers (k = 1, cs = (1, 0), rw = w are what tw = tp = 0 give) without the vertex work. */
 export function axialTurn(t, w, inst, k, cs, rw) {
-  k.assign(float(1.0).sub(inst.taper.mul(t)));
-  cs.assign(axialCosSin(inst.twist.mul(t)));
-  rw.assign(vec2(cs.x.mul(w.x).sub(cs.y.mul(w.y)), cs.y.mul(w.x).add(cs.x.mul(w.y))));
+  if (switches.AXIAL_NO_TURN) {
+    k.assign(float(1.0));
+    cs.assign(vec2(float(1.0), float(0.0)));
+    rw.assign(w);
+  } else {
+    k.assign(float(1.0).sub(inst.taper.mul(t)));
+    cs.assign(axialCosSin(inst.twist.mul(t)));
+    rw.assign(vec2(cs.x.mul(w.x).sub(cs.y.mul(w.y)), cs.y.mul(w.x).add(cs.x.mul(w.y))));
+  }
 }
 
 /** glsl: axial_turn_rate.
  * g = dV''_across/dt of the turned cross-section: D'(t) + k tw Rot(w turned by 90 degrees) - tp Rot w
  * (without D'(t) where `slope` is zero). */
 export function axialTurnRate(slope, k, rw, inst) {
-  return slope.add(k.mul(inst.twist).mul(vec2(rw.y.negate(), rw.x)).sub(inst.taper.mul(rw)));
+  const _result = vec2(0).toVar();
+  if (switches.AXIAL_NO_TURN) {
+    _result.assign(slope);
+  } else {
+    _result.assign(slope.add(k.mul(inst.twist).mul(vec2(rw.y.negate(), rw.x)).sub(inst.taper.mul(rw))));
+  }
+  return _result;
 }
 
 /** glsl: axial_across.
@@ -323,15 +335,17 @@ export function axialTreeChain(v, b, weight, axes, inst, id, wind, disp, jac, ho
 export function axialTreeBend(v, n, code, axes, center, inst, id, wind, v_out, n_out, jac_out, hooks) {
   const moved = vec3(v).toVar();
   const jac = matVar(matDiagonal(float(1.0)));
-  If(inst.twist.notEqual(float(0.0)).or(inst.taper.notEqual(float(0.0))), () => {
-    const f0 = matVar(matDiagonal(float(0)));
-    const lo0 = float(0).toVar();
-    const len0 = float(0).toVar();
-    const a0 = float(0).toVar();
-    const p0 = int(0).toVar();
-    hooks.axialTreeAxis(int(0), f0, lo0, len0, a0, p0);
-    axialTreeTurn(v, f0, lo0, len0, center, inst, moved, jac);
-  });
+  if ((!switches.AXIAL_NO_TURN)) {
+    If(inst.twist.notEqual(float(0.0)).or(inst.taper.notEqual(float(0.0))), () => {
+      const f0 = matVar(matDiagonal(float(0)));
+      const lo0 = float(0).toVar();
+      const len0 = float(0).toVar();
+      const a0 = float(0).toVar();
+      const p0 = int(0).toVar();
+      hooks.axialTreeAxis(int(0), f0, lo0, len0, a0, p0);
+      axialTreeTurn(v, f0, lo0, len0, center, inst, moved, jac);
+    });
+  }
   const disp = vec3(vec3(float(0.0))).toVar();
   const b = int(0).toVar();
   const b1 = int(0).toVar();

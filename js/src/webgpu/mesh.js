@@ -16,6 +16,7 @@ import { rayCandidates, intersectBent } from '../core/raycast.js';
 import { GPUCulling } from './cull.js';
 import { GeneratedStorage } from './generate.js';
 import { bendAsync, releaseCompute } from './compute.js';
+import { switches } from './tsl_runtime.js';
 import { updateVariant } from '../core/variant.js';
 import {
   axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes, axialPositionId,
@@ -140,7 +141,17 @@ export class AxialInstancedMesh extends AxialMeshCore {
    * The bend of vertex (v, n, tangent or null, axis b) of instance `inst` (index id): {v, n, t} in
    * this mesh's space (W = R (s V'') + p), the one composition the draw and the compute pass share.
    */
-  _bend(inst, id, v, n, tangent, b, rigid = false) {
+  _bend(inst, id, v, n, tangent, b, variant = null) {
+    // the draw's variant (core/variant.js): the generated functions leave the turn out while switches say so
+    switches.AXIAL_NO_TURN = Boolean(variant && variant.noTurn);
+    try {
+      return this._bendNodes(inst, id, v, n, tangent, b, Boolean(variant && variant.rigid));
+    } finally {
+      switches.AXIAL_NO_TURN = false;
+    }
+  }
+
+  _bendNodes(inst, id, v, n, tangent, b, rigid) {
     const u = this._nodes();
     let moved = inst, push = null;
     if (this._wind) {
@@ -172,10 +183,10 @@ export class AxialInstancedMesh extends AxialMeshCore {
    * packed buffer as storage; otherwise the packed buffer is an instanced vertex buffer.
    */
   _positionNode(culled = null) {
-    const wind = Boolean(this._wind), rigid = 'AXIAL_NO_BEND' in this.defines;
+    const wind = Boolean(this._wind), variant = { rigid: 'AXIAL_NO_BEND' in this.defines, noTurn: 'AXIAL_NO_TURN' in this.defines };
     this._positions = this._positions || new Map();
     const key = culled ? culled.level : -1, known = this._positions.get(key);
-    if (known && known.wind === wind && known.rigid === rigid) return known.node;
+    if (known && known.wind === wind && known.variant.rigid === variant.rigid && known.variant.noTurn === variant.noTurn) return known.node;
     const g = culled ? culled.geometry : this.geometry, hasTangent = Boolean(g.getAttribute('tangent'));
     // the rigid part is placed by the bend (inst.matrix), not by three's instancing, which runs before
     // the positionNode in some versions (r187) and after it in others (r171): three instances an
@@ -202,14 +213,14 @@ export class AxialInstancedMesh extends AxialMeshCore {
       const i2 = q(2), matrix = [4, 5, 6, 7].map((k) => q(k).xyz);
       const inst = { d12: q(0), d34: q(1), d5: i2.xy, twist: i2.z, taper: i2.w, angles: q(3).xyz, position: matrix[3], matrix };
       const b = this.axis.axes ? int(attribute('axialAxis', 'float').add(0.5)) : null;
-      const r = this._bend(inst, id, positionGeometry, normalGeometry, hasTangent ? tangentGeometry.xyz : null, b, rigid);
+      const r = this._bend(inst, id, positionGeometry, normalGeometry, hasTangent ? tangentGeometry.xyz : null, b, variant);
       normalLocal.assign(r.n);
       if (r.t) tangentLocal.assign(r.t);
       // the tint: the varying three's materials multiply their colour by (its instancing sets it otherwise)
       if (this.instanceColor) varyingProperty('vec3', 'vInstanceColor').assign(q(8).xyz);
       return r.v;
     })();
-    this._positions.set(key, { wind, rigid, node });
+    this._positions.set(key, { wind, variant, node });
     return node;
   }
 

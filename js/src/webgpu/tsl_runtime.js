@@ -4,6 +4,10 @@
 
 import { textureLoad, vec3, float } from 'three/tsl';
 
+/** The switches of the generated node functions (glsl_tsl.mjs: a define such as AXIAL_NO_TURN kept as a static
+ * if): set while a mesh builds its nodes (webgpu/mesh.js, core/variant.js), false otherwise. */
+export const switches = { AXIAL_NO_TURN: false };
+
 /** M v for M = [c0, c1, c2] (columns). */
 export function matVec(m, v) {
   return m[0].mul(v.x).add(m[1].mul(v.y)).add(m[2].mul(v.z));
