@@ -9,7 +9,8 @@ camera walking through the field, three ways (tools/bench_three.html, three r187
   (``WebGLRenderer``: the add-on has no WebGPU path), unbent;
 * ``axial``: ``axialdeform-three/webgpu``'s ``AxialInstancedMesh`` under ``WebGPURenderer``
   (WebGPU backend) with GPU culling (``setGPUCulling``), every instance bent; ``axial-unbent``: the same with
-  every offset zero, so its positionNode leaves the bend out (``core/variant.js``);
+  every offset zero, so its positionNode leaves the bend out (``core/variant.js``); ``axial-whole``: the bent
+  one built with the turn although no instance twists (what the variant saves);
 * ``axial-webgl-cull``: ``axialdeform-three``'s ``AxialInstancedMesh`` under ``WebGLRenderer`` with
   per-instance culling (``setInstanceCulling``), every instance bent -- the add-on's backend;
   ``axial-webgl-unbent``: the same with every offset zero, so its shader variant leaves the bend out
@@ -48,7 +49,7 @@ ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"
         "--use-webgpu-adapter=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
         "--enable-precise-memory-info"]
 MODES = ("plain", "addon", "axial", "one", "axial-webgl", "plain-webgpu", "axial-nocull", "axial-webgl-cull", "axial-webgl-unbent",
-         "batched", "batched-webgpu", "axial-unbent")
+         "batched", "batched-webgpu", "axial-unbent", "axial-whole")
 
 
 def site(folder: Path, counts, spacing: float) -> None:
