@@ -87,6 +87,7 @@ def main(argv=None) -> int:
     p.add_argument("--counts", default="100000,500000,1000000", help="instance counts, comma-separated")
     p.add_argument("--modes", default="plain,addon,axial,one", help="some of " + ", ".join(MODES) + " (comma-separated)")
     p.add_argument("--frames", type=int, default=8, help="frames of the walk a run (medians over them)")
+    p.add_argument("--still", action="store_true", help="the camera at rest at the walk's start (default: it walks)")
     p.add_argument("--spacing", type=float, default=1.5, help="grid spacing of the stones (model units)")
     p.add_argument("--repeats", type=int, default=3, help="runs of every mode, alternated (medians over them)")
     p.add_argument("-o", "--out", default="axialdeform-bench-three", help="folder for results.json and pictures")
@@ -121,7 +122,7 @@ def main(argv=None) -> int:
                     for _ in range(a.repeats):  # the modes alternate, so a slow spell of the machine hits all
                         for mode in modes:
                             page = browser.new_page(viewport={"width": 640, "height": 360})
-                            page.goto(f"{url}?mode={mode}&frames={a.frames}&adp=stones-{n}.adp")
+                            page.goto(f"{url}?mode={mode}&frames={a.frames}&adp=stones-{n}.adp{'&still=1' if a.still else ''}")
                             page.wait_for_function("window.result !== undefined", timeout=3_600_000)
                             r = page.evaluate("window.result")
                             page.close()

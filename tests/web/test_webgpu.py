@@ -259,7 +259,8 @@ def test_the_webgpu_entry_is_exported_and_typed():
 @pytest.mark.parametrize("version", VERSIONS)
 def test_gpu_culling_draws_the_same_picture_with_fewer_instances(webgpu_browser, site, version):
     """setGPUCulling: the compute pass keeps the instances whose bend-aware spheres meet the frustum and
-    the indirect draw draws just those: the same picture as drawing all 60, from fewer than 60; in a field of
+    the indirect draw draws just those: the same picture as drawing all 60, from fewer than 60 (and no pass while
+    the camera rests); in a field of
     4 000 (blocks outside, wholly inside and cut) exactly the ids whose spheres three's Frustum finds inside;
     with two levels by distance, each level draws some and those beyond the last none."""
     _folder, url = site
@@ -270,6 +271,9 @@ def test_gpu_culling_draws_the_same_picture_with_fewer_instances(webgpu_browser,
     all_px, culled = (np.array(out[k]).reshape(-1, 4)[:, :3] for k in ("all", "culledPx"))
     assert (all_px.max(1) > 0).sum() > 5000
     assert np.abs(all_px.astype(int) - culled).max() <= 2  # the same picture
+    rest = np.array(out["rest"]).reshape(-1, 4)[:, :3]
+    assert out["restPasses"] == 0 and np.array_equal(rest, culled)  # a camera at rest: no pass, the same picture
+    assert out["movedPasses"] == 2  # moved, and back: a pass each
     assert out["after"] == {"children": 0, "culled": False}
     assert "ids" in out, out.get("error")
     ids = out["ids"]  # a field of 4 000 in blocks of 64: the pass keeps exactly what three's Frustum finds inside

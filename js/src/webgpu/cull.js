@@ -7,7 +7,8 @@
 // instance's matrix, grown by the wind's reach) is tested.  Each instance taken gets its level by distance
 // and its id appended to that level's list, counting into the indirect draw arguments; each level draws its
 // list with one indirect draw.  The CPU sets six planes and a camera position, zeroes the counts (20 bytes a
-// level uploaded) and dispatches one pass.
+// level uploaded) and dispatches one pass -- none when the camera, the mesh and its instances are where the
+// last pass saw them (its lists still stand).
 
 import * as THREE from 'three/webgpu';
 import { Fn, If, Loop, storage, uniform, uniformArray, instanceIndex, uint, int, atomicAdd, dot, bool } from 'three/tsl';
@@ -132,6 +133,7 @@ export class GPUCulling {
 
   /** Instances first .. first + count - 1 changed: their spheres and the blocks' (core/cull.js), for the pass. */
   updateBounds(first, count) {
+    this._lastView = null; // the next frame culls again
     this.blocks.fill(first, count);
     this.boundsAttr.needsUpdate = true;
     this.scalesAttr.needsUpdate = true;
@@ -151,6 +153,11 @@ export class GPUCulling {
     this.eye.value.setFromMatrixPosition(camera.matrixWorld).applyMatrix4(_inv);
     this.blockCount.value = this.blocks.count;
     this.grow.value = mesh._windGrow || 0;
+    // the same view of the same instances as the last pass (a camera at rest): its lists and counts still stand
+    const e = this.eye.value, view = [...this.planes.array.flatMap((p) => [p.x, p.y, p.z, p.w]), e.x, e.y, e.z,
+      this.blockCount.value, this.grow.value].join();
+    if (view === this._lastView) return;
+    this._lastView = view;
     // the counts start at 0: the arguments uploaded again (20 bytes a level) before the pass counts into them
     for (let k = 1; k < this.argsAttr.array.length; k += 5) this.argsAttr.array[k] = 0;
     this.argsAttr.needsUpdate = true;
