@@ -115,7 +115,8 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
             b = np.median([np.histogram(ground.at(m, [f])[:, 0], edges)[0] for m in made], axis=0)
             off = np.abs(b / np.maximum(a, 1) - 1)
             if off.max() > worst:
-                worst, where = float(off.max()), f"{f} Q{int(np.argmax(off)) + 1}"
+                k = int(np.argmax(off))
+                worst, where = float(off.max()), f"{f} Q{k + 1}: {b[k]:g} grown, {a[k]} there"
         row["worst quartile"] = f"{worst:.3f} ({where})"
     spacing = math.sqrt((w[2] - w[0]) * (w[3] - w[1]) / len(test.xz))
     r = np.linspace(0.5, 5.0, 19) * spacing
