@@ -5,7 +5,8 @@
 import { textureLoad, vec3, float } from 'three/tsl';
 
 /** The switches of the generated node functions (glsl_tsl.mjs: a define such as AXIAL_NO_TURN kept as a static
- * if): set while a mesh builds its nodes (webgpu/mesh.js, core/variant.js), false otherwise. */
+ * if): set while a mesh's _bend composes its nodes (webgpu/mesh.js, core/variant.js), false otherwise.  A function
+ * that reads one inside a dynamic If (whose body TSL builds later) gets the whole build: the same numbers. */
 export const switches = { AXIAL_NO_TURN: false };
 
 /** M v for M = [c0, c1, c2] (columns). */
