@@ -11,8 +11,9 @@ axialdeform.
     python3 tools/learn_survey.py --deb r-cran-spatstat.data_*.deb [--out DIR] [--sims 39]
 
 For each plot: learn on the whole plot, generate the learned layer over the same ground (``--sims`` seeds,
-numpy), and compare: the total count, the count per quartile of each ground feature, the example's L-function
-against the envelope of the generated patterns for r in [0.5, 5] mean spacings, the sizes' KS distance; then
+numpy), and compare: the total count, the count per quartile of each ground feature (and whether the example's
+count lies within the generated patterns' range), the example's L-function against the envelope of the
+generated patterns for r in [0.5, 5] mean spacings, the sizes' KS distance; then
 two hold-outs: learn on the west half and compare on the east half, and learn on a random half of the trees and
 compare on the other half.
 """
@@ -107,17 +108,21 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     row = {"plot": name, "objects": len(test.xz), "generated (median)": float(np.median(counts)),
            "total ratio": float(np.median(counts) / len(test.xz)), "terms": " ".join(lay.intensity.labels) or "none",
            "pattern": lay.spacing.pattern}
-    worst, where = 0.0, ""
+    worst, where, inside, quartiles = 0.0, "", 0, 0
     if ground is not None:
         for f in ground.names:
             edges = np.quantile(ground.at(_grid(w), [f])[:, 0], [0, 0.25, 0.5, 0.75, 1])
             a = np.histogram(ground.at(test.xz, [f])[:, 0], edges)[0]
-            b = np.median([np.histogram(ground.at(m, [f])[:, 0], edges)[0] for m in made], axis=0)
+            grown = np.array([np.histogram(ground.at(m, [f])[:, 0], edges)[0] for m in made])
+            b = np.median(grown, axis=0)
+            inside += int(np.sum((a >= grown.min(0)) & (a <= grown.max(0))))  # within the generated patterns' range
+            quartiles += 4
             off = np.abs(b / np.maximum(a, 1) - 1)
             if off.max() > worst:
                 k = int(np.argmax(off))
                 worst, where = float(off.max()), f"{f} Q{k + 1}: {b[k]:g} grown, {a[k]} there"
         row["worst quartile"] = f"{worst:.3f} ({where})"
+        row["quartiles inside the generated range"] = f"{inside}/{quartiles}"
     spacing = math.sqrt((w[2] - w[0]) * (w[3] - w[1]) / len(test.xz))
     r = np.linspace(0.5, 5.0, 19) * spacing
     r = r[r <= min(w[2] - w[0], w[3] - w[1]) / 4]
