@@ -165,6 +165,18 @@ void axial_place(vec3 bent_v, vec3 bent_n, AxialInstance inst, out vec3 w_out, o
     wn_out = rot * bent_n;
 }
 
+// A bent normal or tangent placed by m, the columns of R or s R: the unit normalize(m d).
+vec3 axial_place_direction(mat3 m, vec3 d) {
+    return normalize(m * d);
+}
+
+// The rigid part as an engine's instance matrix holds it -- m the columns of s R, p the position, made on the
+// CPU in double precision (three's instanceMatrix): W = m V'' + p, the world normal normalize(m n'').
+void axial_place_matrix(vec3 bent_v, vec3 bent_n, mat3 m, vec3 p, out vec3 w_out, out vec3 wn_out) {
+    w_out = m * bent_v + p;
+    wn_out = axial_place_direction(m, bent_n);
+}
+
 // The whole map: model-space vertex/normal -> world-space vertex/normal.
 // `center`: the axis line (see axial_bend); W = R (s V'') + p.
 void axial_world(vec3 v, vec3 n, int axis, float lo, float len, vec2 center, AxialInstance inst,

@@ -25,7 +25,8 @@ const nodesTarget = join(here, 'src', 'webgpu', 'glsl_nodes.js');
 const windNodesTarget = join(here, 'src', 'webgpu', 'glsl_wind_nodes.js');
 const generateNodesTarget = join(here, 'src', 'webgpu', 'glsl_generate_nodes.js');
 // the GLSL functions the node materials and compute passes call (and, emitted with them, what they call)
-export const NODE_FUNCTIONS = ['axial_bend', 'axial_bend_tangent', 'axial_place', 'axial_rotation', 'axial_tree_bend',
+export const NODE_FUNCTIONS = ['axial_bend', 'axial_bend_tangent', 'axial_place', 'axial_place_matrix', 'axial_place_direction',
+  'axial_rotation', 'axial_tree_bend',
   'axial_child_offsets', 'axial_texel_index', 'axial_cos_sin', 'axial_curve', 'axial_slope', 'axial_child_texel', 'axial_texel_at'];
 // the wind's and the generator's, each in a module of its own importing what the ones before it hold
 export const WIND_NODE_FUNCTIONS = ['axial_wind', 'axial_wind_push', 'axial_position_id'];

@@ -172,6 +172,20 @@ export function axialPlace(bent_v, bent_n, inst, w_out, wn_out) {
   wn_out.assign(matVec(rot, bent_n));
 }
 
+/** glsl: axial_place_direction.
+ * A bent normal or tangent placed by m, the columns of R or s R: the unit normalize(m d). */
+export function axialPlaceDirection(m, d) {
+  return normalize(matVec(m, d));
+}
+
+/** glsl: axial_place_matrix.
+ * The rigid part as an engine's instance matrix holds it -- m the columns of s R, p the position, made on the
+ * CPU in double precision (three's instanceMatrix): W = m V'' + p, the world normal normalize(m n''). */
+export function axialPlaceMatrix(bent_v, bent_n, m, p, w_out, wn_out) {
+  w_out.assign(matVec(m, bent_v).add(p));
+  wn_out.assign(axialPlaceDirection(m, bent_n));
+}
+
 /** glsl: axial_bend_tangent.
  * A surface tangent (normal mapping) through the same map: a tangent is a
  * differential of the position, so it transforms by the Jacobian J = dV''/dV

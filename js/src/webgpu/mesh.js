@@ -6,7 +6,7 @@
 import * as THREE from 'three/webgpu';
 import {
   Fn, attribute, instancedDynamicBufferAttribute, positionGeometry, normalGeometry, tangentGeometry, normalLocal,
-  tangentLocal, instanceIndex, varyingProperty, reference, uniform, int, uint, float, normalize,
+  tangentLocal, instanceIndex, varyingProperty, reference, uniform, int, uint, float,
 } from 'three/tsl';
 import { AxialError } from '../core/adp.js';
 import { WIND_UNIFORMS } from '../core/record.js';
@@ -19,7 +19,7 @@ import { bendAsync, releaseCompute } from './compute.js';
 import { switches } from './tsl_runtime.js';
 import { updateVariant } from '../core/variant.js';
 import {
-  axialBend, axialBendTangent, axialPlace, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes, axialPositionId,
+  axialBend, axialBendTangent, axialPlace, axialPlaceDirection, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes, axialPositionId,
 } from './nodes.js';
 
 
@@ -172,7 +172,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
       if (tangent) tan = axialBendTangent(v, tangent, u.frame, u.lo, u.len, u.center, moved);
     }
     const placed = axialPlace(bent.v, bent.n, inst);
-    const t = tan ? normalize(placed.rot[0].mul(tan.x).add(placed.rot[1].mul(tan.y)).add(placed.rot[2].mul(tan.z))) : null;
+    const t = tan ? axialPlaceDirection(placed.rot, tan) : null;
     return { v: placed.v, n: placed.n, t };
   }
 

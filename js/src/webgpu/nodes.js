@@ -9,7 +9,7 @@
 // columns of s R and p, when the CPU made them); a frame is {ea, eu, ev} (its rows: local coordinates
 // F v = (ea.v, eu.v, ev.v), axis first).
 
-import { float, int, uint, vec3, normalize, textureLoad, ivec2 } from 'three/tsl';
+import { float, int, uint, vec3, textureLoad, ivec2 } from 'three/tsl';
 import * as glsl from './glsl_nodes.js';
 import * as windGlsl from './glsl_wind_nodes.js';
 import { WIND_UNIFORMS } from '../core/record.js';
@@ -42,14 +42,18 @@ export function axialBendTangent(v, tangent, f, lo, len, center, inst) {
  * With inst.matrix (the columns of s R and p, made on the CPU in double precision as three's
  * instanceMatrix is), the matrix places; without it, axial_place does, R from inst.angles. */
 export function axialPlace(bentV, bentN, inst) {
-  if (inst.matrix) {
-    const m = inst.matrix;
-    return { v: matVec(m, bentV).add(m[3]), n: normalize(matVec(m, bentN)), rot: m };
-  }
   const out = { v: vec3(0).toVar(), n: vec3(0).toVar() };
+  if (inst.matrix) {
+    const m = inst.matrix.slice(0, 3);
+    glsl.axialPlaceMatrix(bentV, bentN, m, inst.matrix[3], out.v, out.n);
+    return { ...out, rot: m };
+  }
   glsl.axialPlace(bentV, bentN, inst, out.v, out.n);
   return { ...out, rot: glsl.axialRotation(inst.angles) };
 }
+
+/** A bent tangent placed by `rot` (axialPlace's): the unit world tangent (axial_place_direction). */
+export const axialPlaceDirection = glsl.axialPlaceDirection;
 
 /** The wind's uniforms `w` ({dir, strength, ...}) as wind.glsl's functions take them (record.js's WIND_UNIFORMS). */
 const windArgs = (w) => WIND_UNIFORMS.map((u) => w[u.name]);
@@ -104,7 +108,5 @@ export function axialTreeWorld(v, n, b, K, axesTex, center, inst, children, id, 
   return out;
 }
 
-/** J x for the tree's Jacobian columns (tangents). */
-export function axialJacobianTimes(jac, x) {
-  return matVec(jac, x);
-}
+/** J x for the tree's Jacobian columns (tangents): the runtime's mat3 times a vector. */
+export const axialJacobianTimes = matVec;
