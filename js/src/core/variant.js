@@ -2,12 +2,12 @@
 // (glsl/axial.glsl's AXIAL_NO_TURN: no twist or taper; AXIAL_NO_BEND: no offset either, only the rigid part):
 // the same pictures without the vertex work.  WebGL builds its materials with these defines; WebGPU's
 // positionNode leaves the bend out under AXIAL_NO_BEND and builds the generated node functions with the turn
-// switched off under AXIAL_NO_TURN (tsl_runtime.js's switches; its compute passes build them whole).  A record of 16
-// numbers has no turn; a record whose every instance's offsets, twist and taper are zero does not bend,
-// unless a wind moves its control points.  setParams scans every instance; updateParams only the rows it
-// writes, and turns a feature back on when one of them uses it (never off: the next setParams does).  A
-// generated layer (its records made on the GPU) and a mesh whose materials bend themselves (ownShader) keep
-// every feature.
+// switched off under AXIAL_NO_TURN (tsl_runtime.js's switches; its compute passes build them whole).  A
+// record of 16 numbers has no turn; a record whose every instance's offsets, twist and taper are zero does
+// not bend, unless a wind moves its control points.  setParams scans every instance; updateParams only the
+// rows it writes, and turns a feature back on when one of them uses it (never off: the next setParams does).
+// A generated layer (its records made on the GPU) and a mesh whose materials bend themselves (ownShader)
+// keep every feature.
 
 /**
  * Whether rows first .. first + n - 1 of `data` (records of `layout`: adp.js's recordLayout) use the turn (a
@@ -44,4 +44,17 @@ export function updateVariant(mesh, first = 0, n = 0, all = false) {
   if (before === Object.keys(d).sort().join()) return false;
   mesh._allMaterials().forEach((m) => { m.needsUpdate = true; });
   return true;
+}
+
+/**
+ * Keep `mesh`'s variant to what its instances use from now on: for the instances it holds, and after every
+ * setParams / updateParams (its 'paramschange' events); `changed` runs when the variant changed (a renderer
+ * that builds more than the materials' defines from it).
+ * @param {any} mesh @param {() => void} [changed]
+ */
+export function watchVariant(mesh, changed = () => {}) {
+  if (updateVariant(mesh, 0, mesh.count, true)) changed();
+  mesh.addEventListener('paramschange', (/** @type {any} */ e) => {
+    if (updateVariant(mesh, e.first, e.count, e.first === 0 && e.count === mesh.count)) changed();
+  });
 }

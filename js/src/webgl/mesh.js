@@ -12,7 +12,7 @@ import { bake } from './bake.js';
 import { raycast } from './raycast.js';
 import { setInstanceCulling, cullingHooks } from './instance_cull.js';
 import { GeneratedTiles } from './generate.js';
-import { updateVariant } from '../core/variant.js';
+import { updateVariant, watchVariant } from '../core/variant.js';
 
 /**
  * A THREE.InstancedMesh of `record.count` instances of `geometry`, each bent by its own numbers.
@@ -32,11 +32,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
     super(geometry, material, record, options);
     cullingHooks(this);
     if (this.recipe) this._part = new GeneratedTiles(this); // a generated layer's instances: made by WebGL 2 transform feedback
-    // the shader variant of what the instances use (core/variant.js): all of them on setParams, the rows written on updateParams
-    updateVariant(this, 0, this.count, true);
-    this.addEventListener('paramschange', (/** @type {any} */ e) => {
-      updateVariant(this, e.first, e.count, e.first === 0 && e.count === this.count);
-    });
+    watchVariant(this); // the shader variant of what the instances use (core/variant.js)
   }
 
   setWind(wind) {

@@ -17,7 +17,7 @@ import { GPUCulling } from './cull.js';
 import { GeneratedStorage } from './generate.js';
 import { bendAsync, releaseCompute } from './compute.js';
 import { switches } from './tsl_runtime.js';
-import { updateVariant } from '../core/variant.js';
+import { updateVariant, watchVariant } from '../core/variant.js';
 import {
   axialBend, axialBendTangent, axialPlace, axialPlaceDirection, axialWind, axialWindPush, axialTreeWorld, axialJacobianTimes, axialPositionId,
 } from './nodes.js';
@@ -51,11 +51,7 @@ export class AxialInstancedMesh extends AxialMeshCore {
     }
     super(geometry, material, record, options);
     if (this.recipe) this._part = new GeneratedStorage(this, options); // a generated layer: made by a compute pass
-    // the bend left out of the positionNode while no instance bends (core/variant.js)
-    if (updateVariant(this, 0, this.count, true)) this._rebend();
-    this.addEventListener('paramschange', (/** @type {any} */ e) => {
-      if (updateVariant(this, e.first, e.count, e.first === 0 && e.count === this.count)) this._rebend();
-    });
+    watchVariant(this, () => this._rebend()); // the positionNode of what the instances use (core/variant.js)
   }
 
   _generatesWith(renderer) {
