@@ -113,14 +113,16 @@ def test_a_cluster_pattern_s_standard_errors_are_the_spread_of_its_estimates(hil
 
 
 def _worst_quartile(intensity, g, xz) -> float:
-    """The largest |expected / observed - 1| of the counts in the quartiles of every feature of ``g``."""
-    gx = np.stack(np.meshgrid(np.linspace(-99.5, 99.5, 200), np.linspace(-59.5, 59.5, 120)), -1).reshape(-1, 2)
-    lam, worst = intensity.rate_at(g, gx) * (200 * 120 / len(gx)), 0.0
+    """The largest |expected / observed - 1| of the counts in the quartiles of every feature of ``g`` over
+    P.window() (expected: the intensity summed over a grid of unit cells)."""
+    x0, z0, x1, z1 = P.window()
+    gx = np.stack(np.meshgrid(np.arange(x0, x1) + 0.5, np.arange(z0, z1) + 0.5), -1).reshape(-1, 2)
+    lam, worst = intensity.rate_at(g, gx), 0.0
     for f in g.names:
-        at, edges = g.at(gx, [f])[:, 0], np.quantile(g.at(gx, [f])[:, 0], [0, 0.25, 0.5, 0.75, 1])
+        at = g.at(gx, [f])[:, 0]
+        edges = np.quantile(at, [0, 0.25, 0.5, 0.75, 1])
         observed = np.histogram(g.at(xz, [f])[:, 0], edges)[0]
-        expected = np.array([lam[(at >= edges[i]) & ((at < edges[i + 1]) if i < 3 else (at <= edges[i + 1]))].sum()
-                             for i in range(4)])
+        expected = np.histogram(at, edges, weights=lam)[0]
         worst = max(worst, float(np.abs(expected / observed - 1).max()))
     return worst
 
