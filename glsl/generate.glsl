@@ -50,6 +50,8 @@ struct AxialRecipe {
     vec2 yaw;        // the turn about up lo + (hi - lo) u2 (radians)
     float clump_cells;  // clumps: 8 parents to every s x s cells (s = clump_cells; 1 and no radius: none)
     float clump_radius; // clumps: each instance uniform in a disc of this radius around its parent
+    float clump_core;   // clumps: the share of a clump's instances in its core (u25 < clump_core)
+    float clump_core_radius;  // clumps: the core's radius (<= clump_radius)
 };
 
 // atan2(y, x) to a few float32 ulps on every GPU (Cephes' atanf: reduction to [0, tan(pi/8)], its polynomial).
@@ -134,7 +136,7 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
                     out vec2 d5, out vec3 position, out vec3 angles, out vec3 extra, out vec3 tint, out float kept) {
     uint key = axial_gen_key(r.seed, tile);
     uint ui = uint(i);
-    float u[22];  // u22 .. u24: only a layer in clumps draws them (below)
+    float u[22];  // u22 .. u25: only a layer in clumps draws them (below)
     for (int k = 0; k < 22; ++k) u[k] = axial_gen_u(key, ui, uint(k));
     float cx = float(tile.x * r.m + i % r.m), cz = float(tile.y * r.m + i / r.m);
     position.x = (cx + 0.5 + r.jitter * (u[0] - 0.5)) * r.cell;
@@ -142,13 +144,14 @@ void axial_generate(AxialRecipe r, sampler2D heights, sampler2D density, ivec2 t
     if (r.clump_cells > 1.0 || r.clump_radius > 0.0) {
         // a clump: one of the 8 parents (q = floor(8 u24)) of the s x s cells (p = floor((c + 1/2) / s)), each
         // anywhere in them from a hash of its own; the instance uniform in a disc of radius R around it:
-        // R sqrt(u22) (cos, sin)(2 pi u23)
+        // R sqrt(u22) (cos, sin)(2 pi u23), or in the clump's core (u25 < clump_core) of radius clump_core_radius
         vec2 pc = floor((vec2(cx, cz) + 0.5) / r.clump_cells);
         uint pkey = axial_gen_key(r.seed ^ 2654435769u, ivec2(pc));
         uint q = uint(min(floor(axial_gen_u(key, ui, 24u) * 8.0), 7.0));
         vec2 parent = (pc + vec2(axial_gen_u(pkey, q, 0u), axial_gen_u(pkey, q, 1u))) * (r.clump_cells * r.cell);
         vec2 cs = axial_cos_sin(6.283185307179586 * axial_gen_u(key, ui, 23u));
-        float rho = r.clump_radius * sqrt(axial_gen_u(key, ui, 22u));
+        float radius = axial_gen_u(key, ui, 25u) < r.clump_core ? r.clump_core_radius : r.clump_radius;
+        float rho = radius * sqrt(axial_gen_u(key, ui, 22u));
         position.x = parent.x + rho * cs.x;
         position.z = parent.y + rho * cs.y;
     }

@@ -40,6 +40,8 @@ uniform vec2 u_anchor_xz;
 uniform vec2 u_yaw;
 uniform float u_clump_cells;
 uniform float u_clump_radius;
+uniform float u_clump_core;
+uniform float u_clump_core_radius;
 
 // the recipe from the uniforms above
 AxialRecipe axial_gen_recipe() {
@@ -48,7 +50,7 @@ AxialRecipe axial_gen_recipe() {
                        u_anchor_w4, u_tint, u_tint_color, u_tint_hue, u_has_heights, u_h_lo,
                        u_h_inv, u_h_size, u_has_density, u_d_lo, u_d_inv, u_d_size,
                        u_d_wrap, u_altitude, u_slope_tan2, u_choice, u_lift, u_align,
-                       u_anchor_xz, u_yaw, u_clump_cells, u_clump_radius);
+                       u_anchor_xz, u_yaw, u_clump_cells, u_clump_radius, u_clump_core, u_clump_core_radius);
 }
 // ---- end of what js/build.mjs writes ----
 uniform sampler2D u_heights;  // unit 0

@@ -26,7 +26,7 @@ from PIL import Image
 from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from learn_survey import compare, print_table  # noqa: E402
+from learn_survey import compare, halves, print_table  # noqa: E402
 
 from axialdeform.core.io.example import read_example  # noqa: E402
 from axialdeform.core.io.glb import read_accessor  # noqa: E402
@@ -106,7 +106,7 @@ def main(argv=None) -> int:
     ex = Example(ex.xz + shift, window, ex.size, ex.kind, ex.yaw, ex.source)
     name = Path(args.example).name
     rows = [compare(name, ex, scene, folder, args.sims, errors=args.errors)]
-    half = np.random.default_rng(1).random(len(ex.xz)) < 0.5
+    half = halves(len(ex.xz))
     rows.append(compare(f"{name}: a random half learned, the other compared", ex.subset(half), scene, folder, args.sims,
                         ex.subset(~half), args.errors))
     print_table(rows)

@@ -40,7 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import axialdeform as ad  # noqa: E402
 from axialdeform.core.io.example import read_example, read_terrain, write_learned  # noqa: E402
-from axialdeform.core.learn import ERRORS, Example, l_function, largest_deviations, learn_layers  # noqa: E402
+from axialdeform.core.learn import ERRORS, Example, expected_count, l_function, largest_deviations, learn_layers, own_rate  # noqa: E402
 from axialdeform.core.record import POSITION, SCALE  # noqa: E402
 
 
@@ -126,7 +126,8 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     spacing = math.sqrt((w[2] - w[0]) * (w[3] - w[1]) / len(test.xz))
     r = np.linspace(0.5, 5.0, 19) * spacing
     r = r[r <= min(w[2] - w[0], w[3] - w[1]) / 4]
-    rate = lambda p: lay.intensity.rate_at(ground, p)  # noqa: E731
+    total = expected_count(lay.intensity, ground, w)
+    rate = lambda p: own_rate(lay.intensity, ground, p, total)  # noqa: E731  each pattern's own level (Linhom refits)
     obs = l_function(test.xz, w, r, rate(test.xz))
     env = np.array([l_function(m, w, r, rate(m)) for m in made])
     row["L inside envelope"] = f"{int(np.sum((obs >= env.min(0)) & (obs <= env.max(0))))}/{len(r)}"
@@ -142,6 +143,14 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     if test.size is not None and scales is not None:
         row["size KS"] = float(ks_2samp(test.size / np.median(ex.size), scales).statistic)
     return row
+
+
+def halves(n: int, seed: int = 1) -> np.ndarray:
+    """A random half of ``n`` objects, (n,) bool: exactly ``n // 2`` of them, so the two halves differ by the
+    objects they hold, not by how many (a coin a tree would make one half up to a few per cent larger)."""
+    keep = np.zeros(n, bool)
+    keep[np.random.default_rng(seed).permutation(n)[:n // 2]] = True
+    return keep
 
 
 def _grid(w, n=200):
@@ -197,7 +206,7 @@ def main(argv=None) -> int:
     # the other hold-out: a random half of the trees learned, the other half compared (each half the same
     # ground, half the trees: the learned layer grows half as many)
     for name, ex, scene in (("bei", e_bei, bei_scene), ("longleaf", e_ll, None)):
-        half = np.random.default_rng(1).random(len(ex.xz)) < 0.5
+        half = halves(len(ex.xz))
         rows.append(compare(f"{name}: a random half learned, the other compared", ex.subset(half), scene, folder,
                             args.sims, ex.subset(~half), args.errors))
     if args.picture:

@@ -123,6 +123,9 @@ class Generate:
                 self.min_distance)
         if self.clump_radius > world_edge(self):
             bad("clump_radius", f"at most the world's edge, {world_edge(self):.6g}", self.clump_radius)
+        if self.clump_core_radius > self.clump_radius:
+            bad("clump_core_radius", f"at most clump_radius, {self.clump_radius:.6g} (the core lies within the clump)",
+                self.clump_core_radius)
         if self.scale is not None and self.scale[1] > MAX_BEND:
             bad("scale", f"[lo, hi] with hi at most {MAX_BEND:g}", self.scale)
         q, o = self.scale_quartiles, self.scale_octiles
@@ -211,11 +214,13 @@ def tile_hash_key(seed: int, tx, tz) -> np.ndarray:
     return wind_hash(wind_hash(wind_hash(_u32(tx)) ^ _u32(tz)) ^ np.uint32(seed))
 
 
-def uniforms(key, ids) -> np.ndarray:
-    """(n, 16) float32 in [0, 1): ``u_k`` of instances ``ids`` of the tile with hash ``key``."""
+def uniforms(key, ids, first: int = 0, count: int | None = None) -> np.ndarray:
+    """(n, count) float32 in [0, 1): ``u_k`` of instances ``ids`` of the tile with hash ``key``, k from ``first``
+    (default u_0 .. u_24, :data:`GENERATED_NUMBERS`; a layer in clumps draws u_25 too)."""
     ids = _u32(ids)
+    k = np.arange(first, GENERATED_NUMBERS if count is None else first + count, dtype=np.uint32)
     with np.errstate(over="ignore"):
-        x = (ids[:, None] * np.uint32(HASH_STRIDE) + np.arange(GENERATED_NUMBERS, dtype=np.uint32)[None, :]) ^ np.uint32(key)
+        x = (ids[:, None] * np.uint32(HASH_STRIDE) + k[None, :]) ^ np.uint32(key)
     return (wind_hash(x) >> np.uint32(8)).astype(np.float32) * np.float32(1.0 / 16777216.0)
 
 
@@ -244,7 +249,8 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
         pu = (wind_hash(ids_q ^ pkey[:, None]) >> np.uint32(8)).astype(f32) * f32(1.0 / 16777216.0)
         span = s_c * cell
         cs = cos_sin_f32(f32(2.0 * math.pi) * u[:, 23])
-        rho = f32(recipe.clump_radius) * np.sqrt(u[:, 22])
+        core = uniforms(tile_hash_key(recipe.seed, tx, tz), ids, 25, 1)[:, 0] < f32(recipe.clump_core)  # u25: in the core
+        rho = np.where(core, f32(recipe.clump_core_radius), f32(recipe.clump_radius)) * np.sqrt(u[:, 22])
         out[:, 10] = (px + pu[:, 0]) * span + rho * cs[0]
         out[:, 12] = (pz + pu[:, 1]) * span + rho * cs[1]
     out[:, 14] = f32(recipe.yaw[0]) + (f32(recipe.yaw[1]) - f32(recipe.yaw[0])) * u[:, 2]

@@ -37,7 +37,7 @@ from .errors import ParamError
 from .generate import CLUMP_PARENTS
 
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function", "largest_deviations",
-           "learn_layers", "layer_recipe", "matern_cluster_k", "SIGNIFICANT", "SIMULATIONS", "ERRORS"]
+           "learn_layers", "layer_recipe", "matern_cluster_k", "expected_count", "own_rate", "SIGNIFICANT", "SIMULATIONS", "ERRORS"]
 
 #: a term's coefficient stays while |b / se| is at least this
 SIGNIFICANT = 2.0
@@ -49,6 +49,9 @@ ERRORS = ("clumps", "poisson")
 SIMULATIONS = 19
 #: the spacings (in mean spacings 1 / sqrt(lambda)) the L-function is compared over
 SPAN = (0.5, 5.0)
+#: a core of the clumps stays when its minimum contrast is below this share of the plain clumps' (clumps within
+#: clumps: many more close pairs than one radius makes)
+CORE_GAIN = 0.5
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,11 +158,22 @@ class Spacing:
         ``"poisson"``, ``"cluster"`` (clumps) or ``"regular"`` (apart): Diggle's test at the 5 % level.
     cluster : tuple or None
         A cluster pattern's ``(kappa, radius)``: parents a square unit, the radius of a clump.
+    core : tuple or None
+        A cluster pattern's core, ``(share, radius)``: that share of each clump's objects stand within the smaller
+        radius of its parent (clumps within clumps; None: none).
     """
 
     hard_core: float
     pattern: str
     cluster: tuple | None = None
+    core: tuple | None = None
+
+    @property
+    def process(self) -> tuple | None:
+        """The cluster process's numbers ``(kappa, radius, share, core_radius)`` (:func:`cluster_k`), or None."""
+        if self.cluster is None:
+            return None
+        return (*self.cluster, *(self.core or (0.0, 0.0)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,6 +214,8 @@ class LearnedLayer:
         terms = "".join(f" + {c:.{digits}g} {n}" for n, c in zip(self.intensity.labels, self.intensity.coef[1:]))
         s = self.spacing
         clumps = f", clumps: {s.cluster[0]:.{digits}g} a square unit, radius {s.cluster[1]:.{digits}g}" if s.cluster else ""
+        if s.core:
+            clumps += f", core: {s.core[0]:.{digits}g} of them within {s.core[1]:.{digits}g}"
         return (f"learned from {self.count} objects: log rate = {self.intensity.coef[0]:.{digits}g}{terms}; "
                 f"spacing: {s.pattern}, hard core {s.hard_core:.{digits}g}{clumps}")
 
@@ -252,27 +268,71 @@ def _newton(x: np.ndarray, w: np.ndarray, y: np.ndarray, start: float) -> tuple[
     return b, np.linalg.pinv((x * mu[:, None]).T @ x + np.diag(ridge))
 
 
-def matern_cluster_excess(r, kappa: float, radius: float) -> np.ndarray:
-    """``g(r) - 1`` of a Matern cluster process (parents ``kappa`` a square unit, children uniform in a disc of
-    ``radius``): the density of the distance between two points of one disc over ``2 pi r kappa``, zero beyond
-    ``2 radius``; ``1 / (kappa pi radius^2)`` at 0."""
-    z = np.clip(np.asarray(r, np.float64) / (2.0 * radius), 0.0, 1.0)
-    return 2.0 / (math.pi ** 2 * radius ** 2 * kappa) * (np.arccos(z) - z * np.sqrt(1.0 - z * z))
+def _lens(d, r1, r2) -> np.ndarray:
+    """The area two discs of radii ``r1`` and ``r2`` share, their centres ``d`` apart (arrays broadcast)."""
+    d, r1, r2 = np.broadcast_arrays(*(np.asarray(a, np.float64) for a in (d, r1, r2)))
+    dd = np.maximum(d, 1e-300)
+    c1 = np.clip((dd * dd + r1 * r1 - r2 * r2) / (2.0 * dd * r1), -1.0, 1.0)
+    c2 = np.clip((dd * dd + r2 * r2 - r1 * r1) / (2.0 * dd * r2), -1.0, 1.0)
+    kite = np.sqrt(np.maximum((-dd + r1 + r2) * (dd + r1 - r2) * (dd - r1 + r2) * (dd + r1 + r2), 0.0))
+    area = r1 * r1 * np.arccos(c1) + r2 * r2 * np.arccos(c2) - 0.5 * kite
+    area = np.where(d >= r1 + r2, 0.0, area)
+    return np.where(d <= np.abs(r1 - r2), math.pi * np.minimum(r1, r2) ** 2, area)
 
+
+def _mixture(radius: float, share: float, core_radius: float) -> list[tuple[float, float, float]]:
+    """The pairs of discs two objects of one clump stand in, with their chances: ``(weight, r1, r2)``."""
+    if share <= 0.0 or core_radius <= 0.0:
+        return [(1.0, radius, radius)]
+    p = share
+    return [((1.0 - p) ** 2, radius, radius), (p * p, core_radius, core_radius), (2.0 * p * (1.0 - p), core_radius, radius)]
+
+
+def matern_cluster_excess(r, kappa: float, radius: float, share: float = 0.0, core_radius: float = 0.0) -> np.ndarray:
+    """``g(r) - 1`` of a Matern cluster process (parents ``kappa`` a square unit, children uniform in a disc of
+    ``radius``; with a core: a ``share`` of them in a disc of ``core_radius``): the density of the difference of
+    two children's places over ``kappa``, ``sum w |D(r1) & D(r2, r)| / (pi r1^2 pi r2^2 kappa)`` over the pairs of
+    discs they stand in (:func:`_mixture`); zero beyond ``2 radius``; ``1 / (kappa pi radius^2)`` at 0 without a
+    core."""
+    r = np.asarray(r, np.float64)
+    out = sum(w * _lens(r, a, b) / (math.pi * a * a * math.pi * b * b) for w, a, b in _mixture(radius, share, core_radius))
+    return out / kappa
+
+
+#: Gauss-Legendre nodes for the chance that two children of one clump (one in the core, one anywhere) stand
+#: within r of each other (an integral over the core child's distance from the parent)
+_NODES = np.polynomial.legendre.leggauss(48)
+
+
+def _within(r: np.ndarray, a: float, b: float) -> np.ndarray:
+    """``P(|A - B| <= r)`` for A uniform in a disc of radius ``a`` and B in a concentric one of ``b``: the closed
+    form (Stoyan, Kendall and Mecke) when ``a == b``, else ``int_0^a 2t/a^2 |D(t, r) & D(0, b)| / (pi b^2) dt``."""
+    r = np.asarray(r, np.float64)
+    if a == b:
+        z = np.clip(r / (2.0 * a), 0.0, 1.0)
+        return 2.0 + ((8 * z * z - 4) * np.arccos(z) - 2 * np.arcsin(z) + 4 * z * np.sqrt((1 - z * z) ** 3)
+                      - 6 * z * np.sqrt(1 - z * z)) / math.pi
+    t = (_NODES[0] + 1.0) * 0.5 * a
+    w = _NODES[1] * 0.5 * a * 2.0 * t / (a * a)
+    return (_lens(t[None, :], r[:, None], b) / (math.pi * b * b)) @ w
 
 def _cluster_excess(x: np.ndarray, rate: np.ndarray, shape: tuple[int, int], cell: tuple[float, float], kappa: float,
-                    radius: float) -> np.ndarray:
+                    radius: float, share: float = 0.0, core_radius: float = 0.0) -> np.ndarray:
     """``B = int int lambda(u) lambda(v) (g(|u - v|) - 1) x(u) x(v)^T du dv`` over the window, on the quadrature's
     grid (``x`` and the fitted ``rate`` at its ``shape = (rows, cols)`` cells, row after row, each ``cell`` =
     (width, depth)), by a convolution with ``g - 1`` (:func:`matern_cluster_excess`; pairs within ``2 radius``,
-    each cell with itself too): what a Matern cluster process adds to the Poisson likelihood's information
-    (Waagepetersen 2007; spatstat's ``vcov.kppm``: the covariance is ``F^-1 (F + B) F^-1``)."""
+    each cell with itself too; ``g - 1`` averaged over 4 x 4 points a cell, so a core smaller than a cell counts
+    as much as it adds): what a Matern cluster process (with a core: ``share``, ``core_radius``) adds to the
+    Poisson likelihood's information (Waagepetersen 2007; spatstat's ``vcov.kppm``: the covariance is
+    ``F^-1 (F + B) F^-1``)."""
     from scipy.signal import fftconvolve
 
     rows, cols = shape
     mx, mz = (min(int(math.ceil(2.0 * radius / c)), n) for c, n in zip(cell, (cols, rows)))
     dz, dx = np.meshgrid(np.arange(-mz, mz + 1) * cell[1], np.arange(-mx, mx + 1) * cell[0], indexing="ij")
-    kernel = matern_cluster_excess(np.hypot(dz, dx), kappa, radius)
+    sub = (np.arange(4) + 0.5) / 4 - 0.5  # 4 x 4 points a cell
+    kernel = np.mean([matern_cluster_excess(np.hypot(dz + a * cell[1], dx + b * cell[0]), kappa, radius, share, core_radius)
+                      for a in sub for b in sub], axis=0)
     y = (x * (rate * cell[0] * cell[1])[:, None]).reshape(rows, cols, -1)
     z = np.stack([fftconvolve(y[:, :, c], kernel, mode="same") for c in range(y.shape[2])], axis=2)
     return y.reshape(rows * cols, -1).T @ z.reshape(rows * cols, -1)
@@ -368,13 +428,12 @@ def l_function(xz: np.ndarray, window, r: np.ndarray, rate: np.ndarray | None = 
     return out
 
 
-def matern_cluster_k(r: np.ndarray, kappa: float, radius: float) -> np.ndarray:
+def matern_cluster_k(r: np.ndarray, kappa: float, radius: float, share: float = 0.0, core_radius: float = 0.0) -> np.ndarray:
     """Ripley's K of a Matern cluster process: parents ``kappa`` a square unit, children uniform in a disc of
-    ``radius``: ``pi r^2 + h(r / 2R) / kappa`` (Stoyan, Kendall and Mecke)."""
-    z = np.clip(np.asarray(r, np.float64) / (2.0 * radius), 0.0, 1.0)
-    h = 2.0 + ((8 * z * z - 4) * np.arccos(z) - 2 * np.arcsin(z) + 4 * z * np.sqrt((1 - z * z) ** 3)
-               - 6 * z * np.sqrt(1 - z * z)) / math.pi
-    return math.pi * np.asarray(r) ** 2 + h / kappa
+    ``radius`` (with a core: a ``share`` of them in a disc of ``core_radius``): ``pi r^2 + P(|D1 - D2| <= r) /
+    kappa``, D1 and D2 two children's places about their parent (Stoyan, Kendall and Mecke)."""
+    r = np.asarray(r, np.float64)
+    return math.pi * r ** 2 + sum(w * _within(r, a, b) for w, a, b in _mixture(radius, share, core_radius)) / kappa
 
 
 def simulate(intensity: Intensity, ground, window, rng: np.random.Generator, top: float) -> np.ndarray:
@@ -391,6 +450,21 @@ def _largest_rate(intensity: Intensity, ground, window) -> float:
     return 1.05 * float(intensity.rate_at(ground, np.stack([gx.ravel(), gz.ravel()], axis=1)).max())
 
 
+def expected_count(intensity: Intensity, ground, window, n: int = 200) -> float:
+    """``int_W lambda``: the objects ``intensity`` puts in ``window`` (x0, z0, x1, z1), on ``n x n`` midpoints."""
+    x0, z0, x1, z1 = window
+    gx, gz = np.meshgrid(x0 + (np.arange(n) + 0.5) * (x1 - x0) / n, z0 + (np.arange(n) + 0.5) * (z1 - z0) / n)
+    return float(intensity.rate_at(ground, np.stack([gx.ravel(), gz.ravel()], axis=1)).mean()) * (x1 - x0) * (z1 - z0)
+
+
+def own_rate(intensity: Intensity, ground, xz: np.ndarray, total: float) -> np.ndarray:
+    """``lambda`` at a pattern's points ``xz`` (n, 2), its level fitted to the pattern: ``lambda(x) n / total``
+    (``total``: :func:`expected_count` over the pattern's window).  Each pattern's inhomogeneous L-function is
+    taken with its own level, as spatstat's ``Linhom`` refits the model to each simulated pattern: else a pattern
+    with more objects than expected has a larger L at every distance, and that spread hides the clumps."""
+    return intensity.rate_at(ground, xz) * (len(xz) / total)
+
+
 def largest_deviations(curves: np.ndarray) -> np.ndarray:
     """Diggle's statistic: each of ``curves`` (k, m) (an L-function at m distances) its largest absolute deviation
     from their mean over the distances, (k,) (NaN ignored)."""
@@ -402,13 +476,14 @@ def _diggle(example: Example, intensity: Intensity, ground, seed: int, r: np.nda
     ``intensity`` (the largest deviation from the mean, ranked first of 20: the 5 % level): ``"poisson"``,
     ``"cluster"`` (above the mean where it deviates most) or ``"regular"`` (below)."""
     xz = example.xz
-    observed = l_function(xz, example.window, r, intensity.rate_at(ground, xz))
+    total = expected_count(intensity, ground, example.window)
+    observed = l_function(xz, example.window, r, own_rate(intensity, ground, xz, total))
     rng = np.random.default_rng(seed)
     top = _largest_rate(intensity, ground, example.window)
     sims = []
-    for _ in range(SIMULATIONS):  # 19 patterns, each one vectorized
+    for _ in range(SIMULATIONS):  # 19 patterns, each one vectorized, each with its own level
         p = simulate(intensity, ground, example.window, rng, top)
-        sims.append(l_function(p, example.window, r, intensity.rate_at(ground, p)) if len(p) > 1 else np.full(len(r), np.nan))
+        sims.append(l_function(p, example.window, r, own_rate(intensity, ground, p, total)) if len(p) > 1 else np.full(len(r), np.nan))
     curves = np.vstack([np.array(sims), observed])
     dev = largest_deviations(curves)  # the 19, then the example
     if dev[-1] <= dev[:-1].max():
@@ -449,6 +524,24 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     best = min((minimize(contrast, [math.log(lam / c), math.log(f * spacing)], method="Nelder-Mead")
                 for c in (3.0, 10.0, 30.0) for f in (0.5, 1.0, 2.0)), key=lambda res: res.fun)
     kappa, radius = math.exp(best.x[0]), math.exp(best.x[1])
+
+    def cored(p):  # log kappa, log R, logit(core radius / R), logit(share): the core within the clump
+        a, share = radius_core(p)
+        if math.exp(p[1]) > r[-1]:  # a clump no wider than the distances fitted (else it is no clump the generator can grow)
+            return math.inf
+        return float(np.sum((k_obs[ok] ** 0.25 - np.maximum(matern_cluster_k(r[ok], math.exp(p[0]), math.exp(p[1]),
+                                                                               share, a), 0.0) ** 0.25) ** 2))
+
+    def radius_core(p):
+        return math.exp(p[1]) / (1.0 + math.exp(-p[2])), 1.0 / (1.0 + math.exp(-p[3]))
+
+    inner = min((minimize(cored, [best.x[0] + dk, best.x[1] + dr, f, g], method="Nelder-Mead",
+                          options={"maxiter": 2000, "xatol": 1e-5, "fatol": 1e-12})
+                 for dk in (0.0, -0.7) for dr in (0.0, min(0.5, math.log(r[-1] / radius) - 1e-6)) for f in (-2.0,) for g in (-1.0, 0.0)),
+                key=lambda res: res.fun)
+    if inner.fun < CORE_GAIN * best.fun:  # clumps within clumps fit far closer: the core stays
+        a, share = radius_core(inner.x)
+        return Spacing(hard, "cluster", (math.exp(inner.x[0]), math.exp(inner.x[1])), (share, a))
     return Spacing(hard, "cluster", (kappa, radius))
 
 
@@ -492,7 +585,7 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0, error
         intensity = fit_intensity(part, ground, names)
         spacing = fit_spacing(part, intensity, ground, seed)
         if spacing.pattern == "cluster" and errors == "clumps":  # clumps make counts vary more than Poisson's
-            intensity = fit_intensity(part, ground, names, cluster=spacing.cluster)
+            intensity = fit_intensity(part, ground, names, cluster=spacing.process)
             spacing = fit_spacing(part, intensity, ground, seed, clumped=True)  # the clumps' size for it
         scale, quartiles, octiles, yaw = _marks(part)
         out.append(LearnedLayer(kind, len(part.xz), intensity, spacing, scale, yaw, example.window, quartiles, octiles))
@@ -525,6 +618,8 @@ def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: fl
         cell = math.sqrt(block) / s
         rate, min_distance, tile = 1.0 / cell ** 2, 0.0, cell * s * math.ceil(32 / s)
         clumps = {"clump_cells": s, "clump_radius": float(radius)}
+        if layer.spacing.core is not None:  # clumps within clumps: a share of each clump within a smaller radius
+            clumps.update(clump_core=float(layer.spacing.core[0]), clump_core_radius=float(min(layer.spacing.core[1], radius)))
     else:
         rate = oversample * top
         hard = layer.spacing.hard_core

@@ -159,6 +159,10 @@ RECIPE = (
               "each instance picks one (1 and clump_radius 0: no clumps)", True, uniform="clump_cells"),
     RecipeKey("clump_radius", "nonnegative", 0.0, "clumps: each instance uniform in a disc of this radius around its "
               "parent (world units; no min_distance then)", True, uniform="clump_radius"),
+    RecipeKey("clump_core", "amount", 0.0, "clumps: the share of each clump's instances that stand in its core (where "
+              "u25 < clump_core)", True, uniform="clump_core"),
+    RecipeKey("clump_core_radius", "nonnegative", 0.0, "clumps: the core's radius, at most clump_radius (world units): "
+              "its instances uniform in a disc of this radius around the parent", True, uniform="clump_core_radius"),
     RecipeKey("scale_quartiles", "quartiles", None, "the scale at u13 = 1/4, 1/2, 3/4: drawn piecewise linear through "
               "[lo, q1, q2, q3, hi] (a learned distribution of sizes; none: uniform in scale's [lo, hi])", True,
               uniform="scale_mid", absent=(-1.0, -1.0, -1.0)),

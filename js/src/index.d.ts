@@ -179,6 +179,10 @@ export interface GenerateRecipe {
   clump_cells?: number;
   /** Clumps: each instance uniform in a disc of this radius around its parent (world units; no min_distance then); default 0. */
   clump_radius?: number;
+  /** Clumps: the share of each clump's instances that stand in its core (where u25 < clump_core); default 0. */
+  clump_core?: number;
+  /** Clumps: the core's radius, at most clump_radius (world units): its instances uniform in a disc of this radius around the parent; default 0. */
+  clump_core_radius?: number;
   /** The scale at u13 = 1/4, 1/2, 3/4: drawn piecewise linear through [lo, q1, q2, q3, hi] (a learned distribution of sizes; none: uniform in scale's [lo, hi]). */
   scale_quartiles?: [number, number, number] | null;
   /** With scale_quartiles, the scale at u13 = 1/8, 3/8, 5/8, 7/8 too: piecewise linear through nine knots (none: through five). */
@@ -225,6 +229,8 @@ export interface GeneratorUniforms {
   yaw: [number, number];
   clump_cells: number;
   clump_radius: number;
+  clump_core: number;
+  clump_core_radius: number;
   // GeneratorUniforms: ---- end of what tools/make_tables.py writes ----
 }
 

@@ -57,6 +57,7 @@ export function checkRecipe(recipe) {
   const clumped = r.clump_cells > 1 || r.clump_radius > 0;
   if (clumped && r.min_distance > 0) bad('min_distance', '0 with clumps (clump_cells, clump_radius: instances of a clump stand anywhere in it)', r.min_distance);
   if (r.clump_radius > worldEdge(cell)) bad('clump_radius', `at most the world's edge, ${worldEdge(cell).toPrecision(6)}`, r.clump_radius);
+  if (r.clump_core_radius > r.clump_radius) bad('clump_core_radius', `at most clump_radius, ${Number(r.clump_radius.toPrecision(6))} (the core lies within the clump)`, r.clump_core_radius);
   if (r.reach === undefined) r.reach = 3 * r.tile;
   if (!(num(r.reach) && r.reach > 0)) bad('reach', 'a finite number > 0', r.reach);
   checkRecipeBounds(r, ...tileSize(r));

@@ -129,7 +129,8 @@ export function axialGenerate(r, heights, density, tile, i, d12, d34, d5, positi
     const q = uint(uint(min(floor(axialGenU(key, ui, uint(24)).mul(float(8.0))), float(7.0)))).toVar();
     const parent = vec2(pc.add(vec2(axialGenU(pkey, q, uint(0)), axialGenU(pkey, q, uint(1)))).mul(r.clump_cells.mul(r.cell))).toVar();
     const cs = vec2(axialCosSin(float(6.283185307179586).mul(axialGenU(key, ui, uint(23))))).toVar();
-    const rho = float(r.clump_radius.mul(sqrt(axialGenU(key, ui, uint(22))))).toVar();
+    const radius = float(select(axialGenU(key, ui, uint(25)).lessThan(r.clump_core), r.clump_core_radius, r.clump_radius)).toVar();
+    const rho = float(radius.mul(sqrt(axialGenU(key, ui, uint(22))))).toVar();
     {
       const _v2 = float(parent.x.add(rho.mul(cs.x))).toVar();
       position.assign(vec3(_v2, position.y, position.z));
