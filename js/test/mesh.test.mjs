@@ -269,6 +269,9 @@ test('a generated layer is the same mesh made from {generate: recipe}: its recip
   assert.throws(() => mesh.setInstanceCulling({ isWebGLRenderer: true, capabilities: { isWebGL2: true } }), /generated layer/);
   assert.throws(() => new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(), { generate: { rate: -1, tile: 8 } }),
     (e) => e instanceof AxialError && /rate/.test(e.message));
+  assert.throws(() => new AxialInstancedMesh(geometryOf('stone16'), new THREE.MeshBasicMaterial(),
+    { generate: { rate: 1, tile: 8, clump_cells: 3, clump_radius: 2, clump_core: 0.3, clump_core_radius: 2.5 } }),
+  (e) => e instanceof AxialError && e.message.includes('clump_core_radius: expected at most clump_radius, 2 (the core lies within the clump), found 2.5'));
   const brush = new AxialBrush(mesh, { area: [0, 0, 10, 10] });
   assert.equal(brush.mesh, mesh);
   mesh.dispose();

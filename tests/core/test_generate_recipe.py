@@ -264,3 +264,24 @@ def test_yaw_draws_the_turn_in_its_range_and_its_default_is_the_whole_turn(stone
     assert np.array_equal(np.delete(p, 14, axis=1), np.delete(q, 14, axis=1))
     with pytest.raises(ParamError, match=r"generate: yaw: expected \[lo, hi\] with lo <= hi"):
         Generate(rate=1.0, yaw=(1.0, 0.0))
+
+
+def test_a_clump_s_core_holds_the_share_of_its_instances_within_its_radius(stone):
+    """``clump_core`` and ``clump_core_radius``: an instance with u25 < clump_core stands within the core's radius of
+    its parent (R sqrt(u22) with R the core's), every other as without a core, bit for bit; a core wider than the
+    clump is refused."""
+    kw = dict(rate=4.0, tile=8.0, seed=9, bend=0.1, clump_cells=3, clump_radius=2.0)
+    plain, _ = generate_tile(Generate(**kw), stone, 2, -1)
+    small, _ = generate_tile(Generate(**{**kw, "clump_radius": 0.5}), stone, 2, -1)
+    none, _ = generate_tile(Generate(**kw, clump_core=0.0, clump_core_radius=0.5), stone, 2, -1)
+    every, _ = generate_tile(Generate(**kw, clump_core=1.0, clump_core_radius=0.5), stone, 2, -1)
+    some, _ = generate_tile(Generate(**kw, clump_core=0.3, clump_core_radius=0.5), stone, 2, -1)
+    assert np.array_equal(none, plain) and np.array_equal(every, small)
+    cored = np.all(some == small, axis=1)
+    assert np.all(cored | np.all(some == plain, axis=1))  # each instance one or the other, bit for bit
+    assert cored.mean() == pytest.approx(0.3, abs=0.05)  # u25 < 0.3 for 144 instances
+    with pytest.raises(ParamError, match=r"generate: clump_core_radius: expected at most clump_radius, 2 \(the core lies "
+                                         r"within the clump\), found 2\.5"):
+        Generate(**kw, clump_core=0.3, clump_core_radius=2.5)
+    with pytest.raises(ParamError, match=r"generate: clump_core: expected an amount in \[0, 1\], found 1\.5"):
+        Generate(**kw, clump_core=1.5, clump_core_radius=0.5)

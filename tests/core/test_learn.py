@@ -64,6 +64,51 @@ def test_a_cluster_pattern_is_found_and_its_clumps_measured(hills):
     kappa, radius = lay.spacing.cluster
     assert radius == pytest.approx(3.0, rel=0.15)
     assert kappa == pytest.approx(0.02, rel=0.3)  # minimum contrast on one pattern of ~500 clumps
+    assert lay.spacing.core is None  # one radius: no clumps within the clumps
+
+
+def test_clumps_within_clumps_are_learned_with_their_core_and_grown_again(hills):
+    """A Matern pattern whose clumps hold a core (0.4 of each clump's children within 1 of the parent, the rest
+    within 6) is learned with it, and the layer grown from what was learned has the example's L-function at
+    short range too, where the same clumps without their core fall short."""
+    maps, g = hills
+    xz = P.matern_cluster_in(np.random.default_rng(1), P.window(), 0.01, 6.0, 12, core=(0.4, 1.0))
+    lay = L.learn_layers(L.Example(xz, P.window()), g)[0]
+    kappa, radius = lay.spacing.cluster
+    share, core = lay.spacing.core
+    assert radius == pytest.approx(6.0, rel=0.15) and kappa == pytest.approx(0.01, rel=0.3)
+    assert share == pytest.approx(0.4, abs=0.1) and core == pytest.approx(1.0, rel=0.15)
+    keys, density = L.layer_recipe(lay, g, g.bounds)
+    assert keys["clump_core"] == pytest.approx(share) and keys["clump_core_radius"] == pytest.approx(core)
+    r = np.array([0.5, 1.0, 2.0, 4.0, 8.0])
+    want = L.l_function(xz, P.window(), r)
+    made = _generated(keys, density, maps)
+    assert L.l_function(made, P.window(), r) == pytest.approx(want, rel=0.1)
+    plain = _generated({k: v for k, v in keys.items() if not k.startswith("clump_core")}, density, maps)
+    assert L.l_function(plain, P.window(), r)[0] < 0.8 * want[0]  # without the core: too few close pairs
+
+
+def test_the_k_function_of_clumps_with_a_core_counts_their_pairs():
+    """``matern_cluster_k``'s clumps' part, ``kappa (K(r) - pi r^2)``, is the chance that two children of one clump
+    stand within r (counted on 200 000 pairs drawn), and ``g - 1`` integrates to ``1 / kappa`` over the plane."""
+    rng = np.random.default_rng(0)
+    kappa, radius, share, core = 0.02, 3.0, 0.3, 0.8
+
+    def child(n):
+        reach = np.where(rng.random(n) < share, core, radius) * np.sqrt(rng.random(n))
+        a = rng.uniform(0, 2 * math.pi, n)
+        return np.stack([reach * np.cos(a), reach * np.sin(a)], 1)
+
+    d = np.linalg.norm(child(200_000) - child(200_000), axis=1)
+    r = np.array([0.2, 0.5, 1.0, 1.6, 3.0, 5.0, 6.5])
+    counted = (d[:, None] <= r[None, :]).mean(axis=0)
+    assert kappa * (L.matern_cluster_k(r, kappa, radius, share, core) - math.pi * r * r) == pytest.approx(counted, abs=0.004)
+    assert kappa * (L.matern_cluster_k(r, kappa, radius) - math.pi * r * r) != pytest.approx(counted, abs=0.004)  # no core
+    x = np.linspace(-6.5, 6.5, 521)
+    cell = (x[1] - x[0]) ** 2
+    gx, gz = np.meshgrid(x, x)
+    excess = L.matern_cluster_excess(np.hypot(gx, gz), kappa, radius, share, core)
+    assert excess.sum() * cell * kappa == pytest.approx(1.0, abs=0.01)
 
 
 def test_clumps_found_once_stay_clumps_when_the_intensity_is_fitted_again(hills, monkeypatch):

@@ -21,12 +21,15 @@ RECIPES = [Generate(rate=4.0, tile=8.0, min_distance=0.3, seed=7, bend=0.1),
            Generate(rate=2.5, tile=10.0, min_distance=0.1, seed=4_000_000_000, bend=0.2, scale=(0.7, 1.3),
                     twist=0.5, taper=0.3, yaw=(-2.0, 1.5)),
            Generate(rate=4.0, tile=8.0, seed=11, bend=0.1, clump_cells=3, clump_radius=1.5),
+           Generate(rate=4.0, tile=8.0, seed=12, bend=0.1, clump_cells=3, clump_radius=1.5, clump_core=0.4,
+                    clump_core_radius=0.3),
            Generate(rate=4.0, tile=8.0, seed=5, bend=0.1, scale=(0.3, 2.0), scale_quartiles=(0.5, 0.7, 1.1)),
            Generate(rate=4.0, tile=8.0, seed=6, bend=0.1, scale=(0.3, 2.0), scale_quartiles=(0.5, 0.7, 1.1),
                     scale_octiles=(0.35, 0.6, 0.9, 1.5))]
 
 
-@pytest.mark.parametrize("recipe", RECIPES, ids=["16 numbers", "19 numbers", "clumps", "scale quartiles", "scale octiles"])
+@pytest.mark.parametrize("recipe", RECIPES, ids=["16 numbers", "19 numbers", "clumps", "clumps with a core", "scale quartiles",
+                                                      "scale octiles"])
 @WAYS
 def test_the_gpu_makes_the_numpy_records(ctx, recipe, compute):
     stone = ad.load_mesh("stone")

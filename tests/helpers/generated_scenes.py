@@ -114,16 +114,16 @@ def close(got, want) -> float:
 
 
 def learned_clumps(folder: Path, hills: Path) -> Path:
-    """A scene learned (``learn``'s library calls) from a clumped survey on ``hills``' terrain: stones in clumps,
-    with a clearing painted into its mask."""
+    """A scene learned (``learn``'s library calls) from a clumped survey on ``hills``' terrain: stones in clumps
+    with a core (0.4 of each clump within 0.25 of its parent), with a clearing painted into its mask."""
     from axialdeform.core.io.example import learn_layer, write_learned
     from axialdeform.core.learn import Example
 
     from .processes import matern_cluster_in
 
-    xz = matern_cluster_in(np.random.default_rng(5), (-20.0, -15.0, 20.0, 15.0), 0.25, 1.0, 8.0)
+    xz = matern_cluster_in(np.random.default_rng(5), (-20.0, -15.0, 20.0, 15.0), 0.25, 1.0, 8.0, core=(0.4, 0.25))
     layers = learn_layer(Example(xz, (-20.0, -15.0, 20.0, 15.0)), hills)
-    assert layers[0].spacing.pattern == "cluster", layers[0].spacing
+    assert layers[0].spacing.pattern == "cluster" and layers[0].spacing.core is not None, layers[0].spacing
     out = folder / "learned.toml"
     write_learned(out, layers, hills, mesh="stone", size=0.2)
     mask = new_mask()  # a clearing painted with the brush: the mask beside the scene file

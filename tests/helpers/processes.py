@@ -64,13 +64,15 @@ def matern_cluster(rng, kappa: float, radius: float, mu: float) -> np.ndarray:
     return matern_cluster_in(rng, window(), kappa, radius, mu)
 
 
-def matern_cluster_in(rng, box, kappa: float, radius: float, mu: float) -> np.ndarray:
-    """A Matern cluster pattern over ``box`` (x0, z0, x1, z1)."""
+def matern_cluster_in(rng, box, kappa: float, radius: float, mu: float, core: tuple = (0.0, 0.0)) -> np.ndarray:
+    """A Matern cluster pattern over ``box`` (x0, z0, x1, z1); with ``core`` (share, radius) that share of the
+    children in a disc of the smaller radius (clumps within clumps)."""
     x0, z0, x1, z1 = box
     n = rng.poisson(kappa * (x1 - x0 + 2 * radius) * (z1 - z0 + 2 * radius))
     parents = np.stack([rng.uniform(x0 - radius, x1 + radius, n), rng.uniform(z0 - radius, z1 + radius, n)], 1)
     k = rng.poisson(mu, n)
     at = np.repeat(parents, k, axis=0)
-    a, r = rng.uniform(0, 2 * math.pi, k.sum()), radius * np.sqrt(rng.uniform(0, 1, k.sum()))
+    reach = np.where(rng.uniform(0, 1, k.sum()) < core[0], core[1], radius)
+    a, r = rng.uniform(0, 2 * math.pi, k.sum()), reach * np.sqrt(rng.uniform(0, 1, k.sum()))
     xz = at + np.stack([r * np.cos(a), r * np.sin(a)], 1)
     return xz[(xz[:, 0] >= x0) & (xz[:, 0] <= x1) & (xz[:, 1] >= z0) & (xz[:, 1] <= z1)]

@@ -385,13 +385,14 @@ def _gen_case(name, mesh, recipe, reach, maps=None, point=(0.0, 0.0), uniforms=T
 
 def generated_cases(tmp_path):
     """(case, mesh, recipe, maps): stones on the flat ground (the module's own numbers), tinted and twisted, and
-    in clumps;
+    in clumps with a core;
     stones and grass on a height map (density map, altitude and slope bands, leaning with the ground); a
     tree of ten axes (every level its bend, the joints closed)."""
     stone = ad.load_mesh("stone")
     flat = Generate(**{**GEN_STONES, "yaw": [-1.0, 0.5]})  # the module's own numbers: yaw among them
     sparse = Generate(**{**GEN_STONES, "rate": 0.25, "scale": [1.0, 1.4]})  # each its own silhouette
-    clumps = Generate(**{**GEN_STONES, "rate": 4.0, "min_distance": 0.0, "clump_cells": 3, "clump_radius": 0.8})
+    clumps = Generate(**{**GEN_STONES, "rate": 4.0, "min_distance": 0.0, "clump_cells": 3, "clump_radius": 0.8,
+                         "clump_core": 0.4, "clump_core_radius": 0.2})
     out = [(_gen_case("stones", stone, flat, 5.0, uniforms=False, picture=True), stone, flat, None),
            (_gen_case("stones in the wind", stone, sparse, 8.0, uniforms=False, picture=True, wind=WIND), stone, sparse,
             None),
