@@ -53,6 +53,8 @@ SPAN = (0.5, 5.0)
 #: clumps: many more close pairs than one radius makes; plain Matern patterns: 0.5 to 1 in 5 of 6 seeds, 0.16 in
 #: one; with a core: 0.003 to 0.14)
 CORE_GAIN = 0.25
+#: Diggle's test takes each pattern's lambda as at least this share of its mean (:func:`_diggle`)
+TEST_FLOOR = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -475,16 +477,23 @@ def largest_deviations(curves: np.ndarray) -> np.ndarray:
 def _diggle(example: Example, intensity: Intensity, ground, seed: int, r: np.ndarray) -> str:
     """Diggle's global test of the example's L-function at ``r`` against :data:`SIMULATIONS` Poisson patterns of
     ``intensity`` (the largest deviation from the mean, ranked first of 20: the 5 % level): ``"poisson"``,
-    ``"cluster"`` (above the mean where it deviates most) or ``"regular"`` (below)."""
+    ``"cluster"`` (above the mean where it deviates most) or ``"regular"`` (below).  Each pattern's lambda at its
+    own level (:func:`own_rate`) and at least :data:`TEST_FLOOR` of its mean: a pattern with a pair of objects
+    where the fitted lambda is near 0 (a fit of many hinges) would else weigh that pair by 1 / lambda^2 and
+    deviate more than any clumps."""
     xz = example.xz
     total = expected_count(intensity, ground, example.window)
-    observed = l_function(xz, example.window, r, own_rate(intensity, ground, xz, total))
+
+    def rate(p):  # its own level, and never below TEST_FLOOR of its mean
+        return np.maximum(own_rate(intensity, ground, p, total), TEST_FLOOR * len(p) / example.area)
+
+    observed = l_function(xz, example.window, r, rate(xz))
     rng = np.random.default_rng(seed)
     top = _largest_rate(intensity, ground, example.window)
     sims = []
-    for _ in range(SIMULATIONS):  # 19 patterns, each one vectorized, each with its own level
+    for _ in range(SIMULATIONS):  # 19 patterns, each one vectorized
         p = simulate(intensity, ground, example.window, rng, top)
-        sims.append(l_function(p, example.window, r, own_rate(intensity, ground, p, total)) if len(p) > 1 else np.full(len(r), np.nan))
+        sims.append(l_function(p, example.window, r, rate(p)) if len(p) > 1 else np.full(len(r), np.nan))
     curves = np.vstack([np.array(sims), observed])
     dev = largest_deviations(curves)  # the 19, then the example
     if dev[-1] <= dev[:-1].max():
