@@ -26,7 +26,7 @@ from PIL import Image
 from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from learn_survey import compare, halves, print_table  # noqa: E402
+from learn_survey import calibrate, compare, halves, print_table  # noqa: E402
 
 from axialdeform.core.io.example import read_example  # noqa: E402
 from axialdeform.core.io.glb import read_accessor  # noqa: E402
@@ -94,6 +94,9 @@ def main(argv=None) -> int:
     p.add_argument("--sims", type=int, default=39, help="generated patterns a comparison (default: %(default)s)")
     p.add_argument("--out", help="a folder for the files (default: a temporary folder)")
     p.add_argument("--errors", choices=("clumps", "poisson"), default="clumps", help="learn's --errors (default: %(default)s)")
+    p.add_argument("--calibrate", type=int, default=0, metavar="N",
+                   help="also grow N examples from what was learned and compare them the same way: what a true model "
+                        "scores (default: %(default)s, none)")
     args = p.parse_args(argv)
     folder = Path(args.out or tempfile.mkdtemp())
     folder.mkdir(parents=True, exist_ok=True)
@@ -110,6 +113,9 @@ def main(argv=None) -> int:
     rows.append(compare(f"{name}: a random half learned, the other compared", ex.subset(half), scene, folder, args.sims,
                         ex.subset(~half), args.errors))
     print_table(rows)
+    if args.calibrate:
+        print()
+        print_table(calibrate(name, ex, scene, folder, args.sims, args.calibrate, args.errors))
     return 0
 
 

@@ -145,6 +145,42 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     return row
 
 
+def calibrate(name: str, ex: Example, terrain, folder: Path, sims: int, patterns: int, errors: str = "clumps") -> list:
+    """What the comparisons give when the learned layer is TRUE: learn on ``ex``, grow ``patterns`` examples from
+    what was learned (seeds 1000, 1001, ..), and compare each as ``ex`` is compared -- learned whole, and a random
+    half learned and the other half compared.  Two rows: each figure's median and range over the patterns, and
+    how many of them pass each line of the goal (total within 10 %, every quartile within 15 %, the L-function
+    inside the envelope at every distance, Diggle's global test not rejected at 5 %)."""
+    ground = read_terrain(terrain)[2] if terrain else None
+    learned = learn_layers(ex, ground, errors=errors)
+    w = ex.window
+    rows = {"whole": [], "half": []}
+    for k in range(patterns):
+        xz, _ = _generated(folder / f"{name}-truth-{k}.toml", learned, terrain, 1000 + k, 1.0)
+        grown = Example(xz[(xz[:, 0] >= w[0]) & (xz[:, 0] <= w[2]) & (xz[:, 1] >= w[1]) & (xz[:, 1] <= w[3])], w, source=name)
+        rows["whole"].append(compare(f"{name}-truth-{k}", grown, terrain, folder, sims, errors=errors))
+        half = halves(len(grown.xz))
+        rows["half"].append(compare(f"{name}-truth-{k}-half", grown.subset(half), terrain, folder, sims, grown.subset(~half), errors))
+    out = []
+    for what, got in rows.items():
+        total = np.array([r["total ratio"] for r in got])
+        worst = np.array([float(r["worst quartile"].split()[0]) if "worst quartile" in r else 0.0 for r in got])
+        inside = np.array([int(r["L inside envelope"].split("/")[0]) for r in got])
+        of = int(got[0]["L inside envelope"].split("/")[1])
+        p = np.array([r["L global test p"] for r in got])
+        label = f"{name}: {patterns} patterns grown from what was learned, {what}"
+        row = {"plot": label + (" (the other half compared)" if what == "half" else ""),
+               "total ratio": f"{np.median(total):.3f} ({total.min():.3f}-{total.max():.3f}); "
+                              f"within 10 %: {int(np.sum(np.abs(total - 1) <= 0.1))}"}
+        if "worst quartile" in got[0]:
+            row["worst quartile"] = (f"{np.median(worst):.3f} ({worst.min():.3f}-{worst.max():.3f}); "
+                                     f"within 15 %: {int(np.sum(worst <= 0.15))}")
+        row["L inside envelope"] = f"{np.median(inside):g} of {of} ({inside.min()}-{inside.max()}); all: {int(np.sum(inside == of))}"
+        row["L global test p"] = f"{np.median(p):.3f}; not rejected: {int(np.sum(p > 0.05))}"
+        out.append(row)
+    return out
+
+
 def halves(n: int, seed: int = 1) -> np.ndarray:
     """A random half of ``n`` objects, (n,) bool: exactly ``n // 2`` of them, so the two halves differ by the
     objects they hold, not by how many (a coin a tree would make one half up to a few per cent larger)."""
@@ -184,6 +220,9 @@ def main(argv=None) -> int:
     p.add_argument("--picture", help="a PNG of the bei survey beside one generated pattern (default: none)")
     p.add_argument("--sims", type=int, default=39, help="generated patterns a comparison (default: %(default)s)")
     p.add_argument("--errors", choices=ERRORS, default="clumps", help="learn's --errors (default: %(default)s)")
+    p.add_argument("--calibrate", type=int, default=0, metavar="N",
+                   help="also grow N examples from what was learned on each plot and compare them the same way: what "
+                        "a true model scores (default: %(default)s, none)")
     args = p.parse_args(argv)
     folder = Path(args.out or tempfile.mkdtemp())
     folder.mkdir(parents=True, exist_ok=True)
@@ -212,6 +251,10 @@ def main(argv=None) -> int:
     if args.picture:
         _picture(Path(args.picture), e_bei, bei_scene, folder)
     print_table(rows)
+    if args.calibrate:
+        print()
+        print_table(calibrate("bei", e_bei, bei_scene, folder, args.sims, args.calibrate, args.errors)
+                    + calibrate("longleaf", e_ll, None, folder, args.sims, args.calibrate, args.errors))
     return 0
 
 
