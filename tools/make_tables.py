@@ -30,7 +30,7 @@ from pathlib import Path
 from axialdeform.core import record as R
 from axialdeform.core.axis import FRAME_TOLERANCE
 from axialdeform.core.params import DRAWABLE_MAGNITUDE
-from axialdeform.core.recipe import KINDS, RECIPE, REQUIRED, accepts
+from axialdeform.core.recipe import KINDS, MAX_COUNT, RECIPE, REQUIRED, accepts
 from axialdeform.core.wind import SECOND_HARMONIC, WIND_UNIFORMS, Wind
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -291,7 +291,7 @@ def _kind_schema(kind: str) -> dict:
             "below_one": {"type": "number", "minimum": 0, "exclusiveMaximum": 1},
             "amount": {"type": "number", "minimum": 0, "maximum": 1},
             "seed": {"type": "integer", "minimum": 0, "maximum": 4294967295},
-            "count": {"type": "integer", "minimum": 1, "maximum": 64},
+            "count": {"type": "integer", "minimum": 1, "maximum": MAX_COUNT},
             "levels": {"oneOf": [{"type": "number", "minimum": 0},
                                  {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1, "maxItems": 16}]},
             "scale": pair({"type": "number", "exclusiveMinimum": 0}), "span": pair(num),

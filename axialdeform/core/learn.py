@@ -35,6 +35,7 @@ from scipy.stats import norm
 
 from .errors import ParamError
 from .generate import CLUMP_PARENTS
+from .recipe import MAX_COUNT
 
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function", "largest_deviations",
            "learn_layers", "layer_recipe", "matern_cluster_k", "expected_count", "own_rate", "SIGNIFICANT", "SIMULATIONS", "ERRORS"]
@@ -613,7 +614,7 @@ def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: fl
     ``extent`` (default the ground's grid, or 256 x 256 on flat ground): ``lambda / rate`` at each pixel's
     centre, where ``rate = oversample * max lambda`` (fewer where the hard core needs larger cells); in clumps
     8 parents (``CLUMP_PARENTS``) to every ``s x s`` cells of area ``8 / kappa``,
-    ``s = ceil(sqrt(oversample max lambda 8 / kappa))`` (2 .. 64), so ``rate = s^2 kappa / 8``."""
+    ``s = ceil(sqrt(oversample max lambda 8 / kappa))`` (2 .. 256), so ``rate = s^2 kappa / 8``."""
     x0, z0, x1, z1 = extent
     if shape is None:
         shape = ground.grids["altitude"].shape if ground is not None else (256, 256)
@@ -624,7 +625,7 @@ def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: fl
     if layer.spacing.cluster is not None:  # clumps: 8 parents every s x s cells, kappa a square unit
         kappa, radius = layer.spacing.cluster
         block = CLUMP_PARENTS / kappa  # the area of s x s cells
-        s = int(min(64, max(2, math.ceil(math.sqrt(oversample * top * block)))))
+        s = int(min(MAX_COUNT, max(2, math.ceil(math.sqrt(oversample * top * block)))))
         cell = math.sqrt(block) / s
         rate, min_distance, tile = 1.0 / cell ** 2, 0.0, cell * s * math.ceil(32 / s)
         clumps = {"clump_cells": s, "clump_radius": float(radius)}

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from .errors import ParamError
 
-__all__ = ["ANCHORS", "Kind", "RecipeKey", "KINDS", "RECIPE", "REQUIRED", "recipe_key",
+__all__ = ["MAX_COUNT", "ANCHORS", "Kind", "RecipeKey", "KINDS", "RECIPE", "REQUIRED", "recipe_key",
            "accepts", "check_value", "passed_through", "from_numbers",
            "optional_numbers"]
 
@@ -33,6 +33,8 @@ class _Required:
 
 #: the default of a key a recipe must give
 REQUIRED = _Required()
+#: the largest whole number a ``count`` key takes (``clump_cells``: a block of at most 256 x 256 cells)
+MAX_COUNT = 256
 
 
 @dataclass(frozen=True)
@@ -66,7 +68,7 @@ KINDS = {
     "below_one": Kind("a number in [0, 1)", "number"),
     "amount": Kind("an amount in [0, 1]", "number"),
     "seed": Kind("an integer 0 .. 4294967295", "whole"),
-    "count": Kind("a whole number 1 .. 64", "whole"),
+    "count": Kind(f"a whole number 1 .. {MAX_COUNT}", "whole"),
     "levels": Kind("a finite number >= 0, or one per level of the hierarchy", "levels"),
     "scale": Kind("[lo, hi] with 0 < lo <= hi", "pair"),
     "quartiles": Kind("[q1, q2, q3] with 0 < q1 <= q2 <= q3", "triple"),
@@ -200,7 +202,7 @@ def accepts(kind: str, v) -> bool:
     if kind == "seed":
         return isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 2 ** 32
     if kind == "count":
-        return isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= 64
+        return isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= MAX_COUNT
     if kind == "levels":
         bends = v if isinstance(v, (tuple, list)) else (v,)
         return 0 < len(bends) and all(_number(b) and b >= 0 for b in bends)

@@ -302,3 +302,15 @@ def _generated(keys: dict, density: np.ndarray, maps: GroundMaps) -> np.ndarray:
                 d_inv=np.array([density.shape[1] / (x1 - x0), density.shape[0] / (z1 - z0)], np.float32))
     params = generate_extent(rec, _Mesh(), (x0, z0, x1, z1), g)
     return params[:, POSITION][:, [0, 2]].astype(np.float64)
+
+
+def test_large_clumps_on_dense_ground_keep_their_rate():
+    """Clumps of 200 objects a parent ask for blocks of 80 x 80 cells (8 parents, 4 times the rate): above 64,
+    the bound ``clump_cells`` had, the rate fell below the intensity and the density map clipped objects away."""
+    lam, kappa = 0.01, 0.01 / 200
+    lay = L.LearnedLayer(None, 400, L.Intensity((), np.array([math.log(lam)]), np.zeros(0)),
+                         L.Spacing(0.0, "cluster", (kappa, 20.0)), None, (0.0, 2 * math.pi), (0.0, 0.0, 400.0, 400.0))
+    keys, density = L.layer_recipe(lay, None, (0.0, 0.0, 400.0, 400.0))
+    assert keys["clump_cells"] >= math.sqrt(4 * lam * 8 / kappa) > 64
+    assert keys["rate"] >= 4 * lam and density.max() <= 0.25 + 1e-9
+    Generate(**{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items()})  # a recipe the generator takes

@@ -35,7 +35,7 @@ export function accepts(kind, v) {
     case 'below_one': return num(v) && v >= 0 && v < 1;
     case 'amount': return num(v) && v >= 0 && v <= 1;
     case 'seed': return Number.isInteger(v) && v >= 0 && v < 2 ** 32;
-    case 'count': return Number.isInteger(v) && v >= 1 && v <= 64;
+    case 'count': return Number.isInteger(v) && v >= 1 && v <= 256;
     case 'levels': { const b = Array.isArray(v) ? v : [v]; return b.length > 0 && b.every((x) => num(x) && x >= 0); }
     case 'rgb': return numbers(v, 3) && v.every((x) => x >= 0 && x <= 1);
     case 'anchor': return RECIPE_KINDS.anchor.words.includes(v);
