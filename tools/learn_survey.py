@@ -40,8 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import axialdeform as ad  # noqa: E402
 from axialdeform.core.io.example import read_example, read_terrain, write_learned  # noqa: E402
-from axialdeform.core.learn import (ERRORS, Example, expected_count, l_function, largest_deviations,  # noqa: E402
-                                    learn_layers, own_rate)
+from axialdeform.core.learn import ERRORS, Example, expected_count, l_function, largest_deviations, learn_layers, own_rate  # noqa: E402
 from axialdeform.core.record import POSITION, SCALE  # noqa: E402
 
 
