@@ -11,9 +11,10 @@ ground.  :func:`learn_layers` fits, per kind:
   weakest first), so a pattern that ignores the slope does not learn a slope from noise;
 * **the spacing**: the hard core (the smallest distance between two objects), and whether the objects stand
   in clumps or apart: Diggle's global test of the inhomogeneous L-function against 19 Poisson patterns of the
-  fitted intensity (maximum absolute deviation over r in [0.5, 5] mean spacings).  Clumps are fitted as a
-  Matern cluster process (parents ``kappa`` a square unit, children uniform in a disc of radius ``R``) by
-  minimum contrast on ``K(r)^(1/4)``;
+  fitted intensity (maximum absolute deviation over r in [0.5, 5] mean spacings; each pattern's lambda at its
+  own level).  Clumps are fitted as a Matern cluster process (parents ``kappa`` a square unit, children
+  uniform in a disc of radius ``R``; with a core, a share of them within a smaller radius: clumps within
+  clumps) by minimum contrast on ``K(r)^(1/4)``;
 * **the marks**: the sizes as scales (median 1: their nine quantiles at 0, 1/8, .., 1, which the generator
   draws through piecewise linearly: ``scale``, ``scale_quartiles``, ``scale_octiles``), the turn about up, where
   the example has them.
@@ -174,7 +175,7 @@ class Spacing:
 
     @property
     def process(self) -> tuple | None:
-        """The cluster process's numbers ``(kappa, radius, share, core_radius)`` (:func:`cluster_k`), or None."""
+        """The cluster process's numbers ``(kappa, radius, share, core_radius)`` (:func:`matern_cluster_k`'s), or None."""
         if self.cluster is None:
             return None
         return (*self.cluster, *(self.core or (0.0, 0.0)))
@@ -319,6 +320,7 @@ def _within(r: np.ndarray, a: float, b: float) -> np.ndarray:
     t = (_NODES[0] + 1.0) * 0.5 * a
     w = _NODES[1] * 0.5 * a * 2.0 * t / (a * a)
     return (_lens(t[None, :], r[:, None], b) / (math.pi * b * b)) @ w
+
 
 def _cluster_excess(x: np.ndarray, rate: np.ndarray, shape: tuple[int, int], cell: tuple[float, float], kappa: float,
                     radius: float, share: float = 0.0, core_radius: float = 0.0) -> np.ndarray:
@@ -547,9 +549,9 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     def radius_core(p):
         return math.exp(p[1]) / (1.0 + math.exp(-p[2])), 1.0 / (1.0 + math.exp(-p[3]))
 
-    inner = min((minimize(cored, [best.x[0] + dk, best.x[1] + dr, f, g], method="Nelder-Mead", options=tight)
-                 for dk in (0.0, -0.7) for dr in (0.0, min(0.5, math.log(r[-1] / radius) - 1e-6)) for f in (-2.0,) for g in (-1.0, 0.0)),
-                key=lambda res: res.fun)
+    wider = min(0.5, math.log(r[-1] / radius) - 1e-6)  # starts: the plain clumps', fewer parents, wider; a core of R / 8
+    inner = min((minimize(cored, [best.x[0] + dk, best.x[1] + dr, -2.0, g], method="Nelder-Mead", options=tight)
+                 for dk in (0.0, -0.7) for dr in (0.0, wider) for g in (-1.0, 0.0)), key=lambda res: res.fun)
     if inner.fun < CORE_GAIN * best.fun:  # clumps within clumps fit far closer: the core stays
         a, share = radius_core(inner.x)
         return Spacing(hard, "cluster", (math.exp(inner.x[0]), math.exp(inner.x[1])), (share, a))
