@@ -99,5 +99,6 @@ class GroundFeatures:
         g = (xz - self.lo) / self.step
         rows, cols = self.grids["altitude"].shape
         coords = [np.clip(g[:, 1], 0, rows - 1), np.clip(g[:, 0], 0, cols - 1)]
+        names = list(names or self.names)
         return np.stack([ndimage.map_coordinates(self.grids[n], coords, order=1, mode="nearest")
-                         for n in (names or self.names)], axis=1).reshape(len(xz), -1)
+                         for n in names], axis=1).reshape(len(xz), len(names))
