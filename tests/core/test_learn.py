@@ -283,6 +283,7 @@ def test_features_are_read_where_the_ground_is():
                                      h_inv=np.ones(2, np.float32)))
     f = g.at(np.array([[5.0, 5.0]]), ["altitude", "slope", "eastness", "northness"])[0]
     assert f == pytest.approx([5.0, 45.0, -1.0, 0.0], abs=1e-6)
+    assert g.at(np.zeros((0, 2)), ["slope"]).shape == (0, 1) and g.at(np.zeros((0, 2))).shape == (0, len(g.names))
 
 
 def _Mesh():
