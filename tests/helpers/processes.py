@@ -72,7 +72,7 @@ def matern_cluster_in(rng, box, kappa: float, radius: float, mu: float, core: tu
     parents = np.stack([rng.uniform(x0 - radius, x1 + radius, n), rng.uniform(z0 - radius, z1 + radius, n)], 1)
     k = rng.poisson(mu, n)
     at = np.repeat(parents, k, axis=0)
-    reach = np.where(rng.uniform(0, 1, k.sum()) < core[0], core[1], radius)
+    reach = np.where(rng.uniform(0, 1, k.sum()) < core[0], core[1], radius) if core[0] > 0 else radius
     a, r = rng.uniform(0, 2 * math.pi, k.sum()), reach * np.sqrt(rng.uniform(0, 1, k.sum()))
     xz = at + np.stack([r * np.cos(a), r * np.sin(a)], 1)
     return xz[(xz[:, 0] >= x0) & (xz[:, 0] <= x1) & (xz[:, 1] >= z0) & (xz[:, 1] <= z1)]
