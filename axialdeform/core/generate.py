@@ -230,7 +230,8 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
     m, c = tile_size(recipe)
     n = m * m
     ids = np.arange(n, dtype=np.int64)
-    u = uniforms(tile_hash_key(recipe.seed, tx, tz), ids)
+    key = tile_hash_key(recipe.seed, tx, tz)
+    u = uniforms(key, ids)
     f32 = np.float32
     j = f32(1.0 - recipe.min_distance / c)
     cell = f32(c)
@@ -249,7 +250,7 @@ def generate_tile(recipe: Generate, mesh, tx: int, tz: int, maps: GroundMaps | N
         pu = (wind_hash(ids_q ^ pkey[:, None]) >> np.uint32(8)).astype(f32) * f32(1.0 / 16777216.0)
         span = s_c * cell
         cs = cos_sin_f32(f32(2.0 * math.pi) * u[:, 23])
-        core = uniforms(tile_hash_key(recipe.seed, tx, tz), ids, 25, 1)[:, 0] < f32(recipe.clump_core)  # u25: in the core
+        core = uniforms(key, ids, 25, 1)[:, 0] < f32(recipe.clump_core)  # u25: in the core
         rho = np.where(core, f32(recipe.clump_core_radius), f32(recipe.clump_radius)) * np.sqrt(u[:, 22])
         out[:, 10] = (px + pu[:, 0]) * span + rho * cs[0]
         out[:, 12] = (pz + pu[:, 1]) * span + rho * cs[1]
