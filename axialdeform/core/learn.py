@@ -454,9 +454,11 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     ok = np.isfinite(k_obs)
     lam = n / example.area
 
-    def contrast(p):
-        kappa, radius = math.exp(p[0]), math.exp(p[1])
-        return float(np.sum((k_obs[ok] ** 0.25 - np.maximum(matern_cluster_k(r[ok], kappa, radius), 0.0) ** 0.25) ** 2))
+    def misfit(*process):  # the contrast: K^(1/4) of the example against the process's, over the distances fitted
+        return float(np.sum((k_obs[ok] ** 0.25 - np.maximum(matern_cluster_k(r[ok], *process), 0.0) ** 0.25) ** 2))
+
+    def contrast(p):  # log kappa, log R
+        return misfit(math.exp(p[0]), math.exp(p[1]))
 
     tight = {"maxiter": 2000, "xatol": 1e-6, "fatol": 1e-12}  # the contrast of a close fit is ~1e-3: no early stop
     best = min((minimize(contrast, [math.log(lam / c), math.log(f * spacing)], method="Nelder-Mead", options=tight)
@@ -467,8 +469,7 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
         a, share = radius_core(p)
         if math.exp(p[1]) > r[-1]:  # a clump no wider than the distances fitted (else it is no clump the generator can grow)
             return 1e30
-        return float(np.sum((k_obs[ok] ** 0.25 - np.maximum(matern_cluster_k(r[ok], math.exp(p[0]), math.exp(p[1]),
-                                                                               share, a), 0.0) ** 0.25) ** 2))
+        return misfit(math.exp(p[0]), math.exp(p[1]), share, a)
 
     def radius_core(p):
         return math.exp(p[1]) / (1.0 + math.exp(-p[2])), 1.0 / (1.0 + math.exp(-p[3]))
