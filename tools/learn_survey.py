@@ -122,6 +122,7 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
                 k = int(np.argmax(off))
                 worst, where = float(off.max()), f"{f} Q{k + 1}: {b[k]:g} grown, {a[k]} there"
         row["worst quartile"] = f"{worst:.3f} ({where})"
+        row["_worst"] = worst  # the figures themselves, for calibrate (not printed: print_table skips "_" keys)
         row["quartiles inside the generated range"] = f"{inside}/{quartiles}"
     spacing = math.sqrt((w[2] - w[0]) * (w[3] - w[1]) / len(test.xz))
     r = np.linspace(0.5, 5.0, 19) * spacing
@@ -130,7 +131,8 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     rate = lambda p: own_rate(lay.intensity, ground, p, total)  # noqa: E731  each pattern's own level (Linhom refits)
     obs = l_function(test.xz, w, r, rate(test.xz))
     env = np.array([l_function(m, w, r, rate(m)) for m in made])
-    row["L inside envelope"] = f"{int(np.sum((obs >= env.min(0)) & (obs <= env.max(0))))}/{len(r)}"
+    row["_inside"] = (int(np.sum((obs >= env.min(0)) & (obs <= env.max(0)))), len(r))
+    row["L inside envelope"] = "{}/{}".format(*row["_inside"])
     out = [f"{x / spacing:.2f}{'+' if o > hi else '-'}" for x, o, lo, hi in zip(r, obs, env.min(0), env.max(0)) if not lo <= o <= hi]
     row["L outside (r / spacing: + above, - below)"] = " ".join(out) or "none"
     # Diggle's global test (the largest deviation from the mean over r, as learn's own test): the survey's rank
@@ -164,9 +166,9 @@ def calibrate(name: str, ex: Example, terrain, folder: Path, sims: int, patterns
     out = []
     for what, got in rows.items():
         total = np.array([r["total ratio"] for r in got])
-        worst = np.array([float(r["worst quartile"].split()[0]) if "worst quartile" in r else 0.0 for r in got])
-        inside = np.array([int(r["L inside envelope"].split("/")[0]) for r in got])
-        of = int(got[0]["L inside envelope"].split("/")[1])
+        worst = np.array([r.get("_worst", 0.0) for r in got])
+        inside = np.array([r["_inside"][0] for r in got])
+        of = got[0]["_inside"][1]
         p = np.array([r["L global test p"] for r in got])
         label = f"{name}: {patterns} patterns grown from what was learned, {what}"
         row = {"plot": label + (" (the other half compared)" if what == "half" else ""),
@@ -260,7 +262,7 @@ def main(argv=None) -> int:
 
 def print_table(rows: list) -> None:
     """The comparisons as a Markdown table (a column for every key of any row)."""
-    keys = list(dict.fromkeys(k for r in rows for k in r))
+    keys = list(dict.fromkeys(k for r in rows for k in r if not k.startswith("_")))
     print("| " + " | ".join(keys) + " |")
     print("|" + "---|" * len(keys))
     for r in rows:
