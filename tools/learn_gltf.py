@@ -26,7 +26,7 @@ from PIL import Image
 from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from learn_survey import calibrate, compare, halves, print_table  # noqa: E402
+from learn_survey import calibrate, compare, halves, held_out, print_table  # noqa: E402
 
 from axialdeform.core.io.example import read_example  # noqa: E402
 from axialdeform.core.io.glb import read_accessor  # noqa: E402
@@ -97,6 +97,9 @@ def main(argv=None) -> int:
     p.add_argument("--calibrate", type=int, default=0, metavar="N",
                    help="also grow N examples from what was learned and compare them the same way: what a true model "
                         "scores (default: %(default)s, none)")
+    p.add_argument("--halves", type=int, default=0, metavar="N",
+                   help="also hold out N random halves (seeds 1..N), each learned and the other compared, both ways "
+                        "(default: %(default)s, none)")
     args = p.parse_args(argv)
     folder = Path(args.out or tempfile.mkdtemp())
     folder.mkdir(parents=True, exist_ok=True)
@@ -116,6 +119,9 @@ def main(argv=None) -> int:
     if args.calibrate:
         print()
         print_table(calibrate(name, ex, scene, folder, args.sims, args.calibrate, args.errors))
+    if args.halves:
+        print()
+        print_table([held_out(name, ex, scene, folder, args.sims, args.halves, args.errors)])
     return 0
 
 

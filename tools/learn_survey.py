@@ -8,14 +8,17 @@ Debian's package ``r-cran-spatstat.data`` (``apt-get download r-cran-spatstat.da
 and are read with ``rdata`` from the package index (``pip install rdata``); neither is a dependency of
 axialdeform.
 
-    python3 tools/learn_survey.py --deb r-cran-spatstat.data_*.deb [--out DIR] [--sims 39]
+    python3 tools/learn_survey.py --deb r-cran-spatstat.data_*.deb [--out DIR] [--sims 39] [--errors poisson]
+                                  [--calibrate N] [--halves N]
 
 For each plot: learn on the whole plot, generate the learned layer over the same ground (``--sims`` seeds,
 numpy), and compare: the total count, the count per quartile of each ground feature (and whether the example's
 count lies within the generated patterns' range), the example's L-function against the envelope of the
 generated patterns for r in [0.5, 5] mean spacings, the sizes' KS distance; then
 two hold-outs: learn on the west half and compare on the east half, and learn on a random half of the trees and
-compare on the other half.
+compare on the other half (with the learned half's own counts against the other's: what a model that reproduced
+the learned half exactly would score on the quartiles).  ``--calibrate N``: the same comparisons of N patterns of
+which the learned layer is the true model; ``--halves N``: N random halves, each learned and the other compared.
 """
 
 from __future__ import annotations
@@ -108,11 +111,15 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     row = {"plot": name, "objects": len(test.xz), "generated (median)": float(np.median(counts)),
            "total ratio": float(np.median(counts) / len(test.xz)), "terms": " ".join(lay.intensity.labels) or "none",
            "pattern": lay.spacing.pattern}
-    worst, where, inside, quartiles = 0.0, "", 0, 0
+    worst, where, inside, quartiles, floor = 0.0, "", 0, 0, 0.0
+    held = test is not ex and tuple(test.window) == tuple(ex.window)  # a random half: the same ground
     if ground is not None:
         for f in ground.names:
             edges = np.quantile(ground.at(_grid(w), [f])[:, 0], [0, 0.25, 0.5, 0.75, 1])
             a = np.histogram(ground.at(test.xz, [f])[:, 0], edges)[0]
+            if held:  # the learned half's own counts (to the compared half's total): what reproducing it exactly gives
+                own = np.histogram(ground.at(ex.xz, [f])[:, 0], edges)[0] * len(test.xz) / len(ex.xz)
+                floor = max(floor, float(np.max(np.abs(own / np.maximum(a, 1) - 1))))
             grown = np.array([np.histogram(ground.at(m, [f])[:, 0], edges)[0] for m in made])
             b = np.median(grown, axis=0)
             inside += int(np.sum((a >= grown.min(0)) & (a <= grown.max(0))))  # within the generated patterns' range
@@ -124,6 +131,8 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
         row["worst quartile"] = f"{worst:.3f} ({where})"
         row["_worst"] = worst  # the figures themselves, for calibrate (not printed: print_table skips "_" keys)
         row["quartiles inside the generated range"] = f"{inside}/{quartiles}"
+        if held:
+            row["worst quartile of the learned half itself"] = floor
     spacing = math.sqrt((w[2] - w[0]) * (w[3] - w[1]) / len(test.xz))
     r = np.linspace(0.5, 5.0, 19) * spacing
     r = r[r <= min(w[2] - w[0], w[3] - w[1]) / 4]
@@ -163,24 +172,42 @@ def calibrate(name: str, ex: Example, terrain, folder: Path, sims: int, patterns
         rows["whole"].append(compare(f"{name}-truth-{k}", grown, terrain, folder, sims, errors=errors))
         half = halves(len(grown.xz))
         rows["half"].append(compare(f"{name}-truth-{k}-half", grown.subset(half), terrain, folder, sims, grown.subset(~half), errors))
-    out = []
-    for what, got in rows.items():
-        total = np.array([r["total ratio"] for r in got])
-        worst = np.array([r.get("_worst", 0.0) for r in got])
-        inside = np.array([r["_inside"][0] for r in got])
-        of = got[0]["_inside"][1]
-        p = np.array([r["L global test p"] for r in got])
-        label = f"{name}: {patterns} patterns grown from what was learned, {what}"
-        row = {"plot": label + (" (the other half compared)" if what == "half" else ""),
-               "total ratio": f"{np.median(total):.3f} ({total.min():.3f}-{total.max():.3f}); "
-                              f"within 10 %: {int(np.sum(np.abs(total - 1) <= 0.1))}"}
-        if "worst quartile" in got[0]:
-            row["worst quartile"] = (f"{np.median(worst):.3f} ({worst.min():.3f}-{worst.max():.3f}); "
-                                     f"within 15 %: {int(np.sum(worst <= 0.15))}")
-        row["L inside envelope"] = f"{np.median(inside):g} of {of} ({inside.min()}-{inside.max()}); all: {int(np.sum(inside == of))}"
-        row["L global test p"] = f"{np.median(p):.3f}; not rejected: {int(np.sum(p > 0.05))}"
-        out.append(row)
-    return out
+    return [summary(f"{name}: {patterns} patterns grown from what was learned, {what}"
+                    + (" (the other half compared)" if what == "half" else ""), got) for what, got in rows.items()]
+
+
+def held_out(name: str, ex: Example, terrain, folder: Path, sims: int, seeds: int, errors: str = "clumps") -> dict:
+    """The random hold-out ``seeds`` times (:func:`halves` of seeds 1, 2, ..), each half learned and the other
+    compared, both ways: ``2 seeds`` comparisons summarized as :func:`summary` (how many meet each line)."""
+    got = []
+    for seed in range(1, seeds + 1):
+        half = halves(len(ex.xz), seed)
+        for a, b in ((half, ~half), (~half, half)):
+            got.append(compare(f"{name}-halves-{seed}", ex.subset(a), terrain, folder, sims, ex.subset(b), errors))
+    return summary(f"{name}: {seeds} random halves, each learned and the other compared, both ways ({2 * seeds})", got)
+
+
+def summary(label: str, got: list) -> dict:
+    """Comparisons ``got`` (:func:`compare`'s rows) in one row: each figure's median and range, and how many
+    meet each line of the goal (total within 10 %, every quartile within 15 %, the L-function inside the
+    envelope at every distance, Diggle's global test not rejected at 5 %)."""
+    total = np.array([r["total ratio"] for r in got])
+    worst = np.array([r.get("_worst", 0.0) for r in got])
+    inside = np.array([r["_inside"][0] for r in got])
+    of = got[0]["_inside"][1]
+    p = np.array([r["L global test p"] for r in got])
+    row = {"plot": label, "total ratio": f"{np.median(total):.3f} ({total.min():.3f}-{total.max():.3f}); "
+                                         f"within 10 %: {int(np.sum(np.abs(total - 1) <= 0.1))}"}
+    if "worst quartile" in got[0]:
+        row["worst quartile"] = (f"{np.median(worst):.3f} ({worst.min():.3f}-{worst.max():.3f}); "
+                                 f"within 15 %: {int(np.sum(worst <= 0.15))}")
+    if "worst quartile of the learned half itself" in got[0]:
+        own = np.array([r["worst quartile of the learned half itself"] for r in got])
+        row["worst quartile of the learned half itself"] = (f"{np.median(own):.3f} ({own.min():.3f}-{own.max():.3f}); "
+                                                            f"within 15 %: {int(np.sum(own <= 0.15))}")
+    row["L inside envelope"] = f"{np.median(inside):g} of {of} ({inside.min()}-{inside.max()}); all: {int(np.sum(inside == of))}"
+    row["L global test p"] = f"{np.median(p):.3f}; not rejected: {int(np.sum(p > 0.05))}"
+    return row
 
 
 def halves(n: int, seed: int = 1) -> np.ndarray:
@@ -225,6 +252,9 @@ def main(argv=None) -> int:
     p.add_argument("--calibrate", type=int, default=0, metavar="N",
                    help="also grow N examples from what was learned on each plot and compare them the same way: what "
                         "a true model scores (default: %(default)s, none)")
+    p.add_argument("--halves", type=int, default=0, metavar="N",
+                   help="also hold out N random halves (seeds 1..N), each learned and the other compared, both ways "
+                        "(default: %(default)s, none)")
     args = p.parse_args(argv)
     folder = Path(args.out or tempfile.mkdtemp())
     folder.mkdir(parents=True, exist_ok=True)
@@ -257,6 +287,10 @@ def main(argv=None) -> int:
         print()
         print_table(calibrate("bei", e_bei, bei_scene, folder, args.sims, args.calibrate, args.errors)
                     + calibrate("longleaf", e_ll, None, folder, args.sims, args.calibrate, args.errors))
+    if args.halves:
+        print()
+        print_table([held_out("bei", e_bei, bei_scene, folder, args.sims, args.halves, args.errors),
+                     held_out("longleaf", e_ll, None, folder, args.sims, args.halves, args.errors)])
     return 0
 
 

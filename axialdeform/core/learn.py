@@ -41,10 +41,12 @@ from .recipe import MAX_COUNT
 
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function", "largest_deviations",
            "learn_layers", "layer_recipe", "matern_cluster_k", "matern_cluster_excess", "expected_count", "own_rate",
-           "SIGNIFICANT", "SIMULATIONS", "ERRORS"]
+           "SIGNIFICANT", "AIC_Z", "SIMULATIONS", "ERRORS"]
 
 #: a term's coefficient stays while |b / se| is at least this
 SIGNIFICANT = 2.0
+#: with Akaike's criterion (errors="poisson"): a term stays while |b / se| is at least this, sqrt(2)
+AIC_Z = math.sqrt(2.0)
 #: the most kinds one example may have (one generated layer each)
 MAX_KINDS = 64
 #: which standard errors decide an example in clumps' ground terms (learn_layers)
@@ -283,14 +285,16 @@ KNOTS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
 
 
 def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, significant: float = SIGNIFICANT,
-                  cluster: tuple | None = None) -> Intensity:
+                  cluster: tuple | None = None, aic: bool = False) -> Intensity:
     """The intensity of ``example`` over ``ground``'s features ``names`` (default: all of them; none without a
     ground): log-linear in each feature and its hinges at the octiles (:data:`KNOTS`) of the feature over
     the example's ground, the terms that are not significant dropped: ``|b / se| <`` the larger of
     ``significant`` and the normal quantile of a 5 % chance over all the features (Bonferroni).  With
     ``cluster`` ((kappa, radius): a Matern cluster process, :func:`fit_spacing`'s) the standard errors are
     the cluster process's (:func:`~axialdeform.core.clusters.cluster_information`), not Poisson's: clumps make
-    counts vary more."""
+    counts vary more.  ``aic``: a term stays while it lowers Akaike's criterion instead, ``|b / se| >=`` sqrt(2)
+    (Wald's approximation of twice the log-likelihood it adds against the 2 its coefficient costs; no Bonferroni,
+    ``significant`` unused): the terms that best predict the example's own ground, not the ones a test is sure of."""
     n = len(example.xz)
     if n == 0:
         raise ParamError(f"{example.source}: expected at least one object to learn from, found none")
@@ -314,7 +318,9 @@ def fit_intensity(example: Example, ground=None, names=None, cells: int = 0, sig
                 knots.append(float(q))
                 cols.append(np.maximum(0.0, f - q))
     feats = np.stack(cols, axis=1) if cols else np.zeros((len(pts), 0))
-    if cols:  # a 5 % chance over all the features, not each (Bonferroni; a feature's hinges go together)
+    if aic:
+        significant = AIC_Z
+    elif cols:  # a 5 % chance over all the features, not each (Bonferroni; a feature's hinges go together)
         significant = max(significant, float(norm.isf(0.025 / len(set(term_names)))) * significant / SIGNIFICANT)
     mean, sd = feats[n:].mean(axis=0), feats[n:].std(axis=0)
     keep = [i for i in range(feats.shape[1]) if sd[i] > 1e-12]
@@ -502,9 +508,9 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0, error
     :class:`~axialdeform.core.ground_features.GroundFeatures`, None: a flat ground with no features) and its
     features ``names`` (default all).  ``errors`` (:data:`ERRORS`): which standard errors decide the ground's
     terms of an example in clumps -- ``"clumps"`` the cluster process's (a term stays only where the clumps'
-    own variation does not explain it: what transfers to another ground), ``"poisson"`` Poisson's (every
-    dependence the example shows stays, also one its clumps make: the example's own ground reproduced more
-    closely)."""
+    own variation does not explain it: what transfers to another ground), ``"poisson"`` Poisson's, and a term
+    stays while it lowers Akaike's criterion (:func:`fit_intensity`'s ``aic``: every dependence the example
+    shows stays, also one its clumps make: the example's own ground reproduced more closely)."""
     if errors not in ERRORS:
         raise ParamError(f"{example.source}: errors: expected one of {', '.join(ERRORS)}, found {errors!r}")
     if ground is not None:
@@ -520,7 +526,7 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0, error
     out = []
     for kind in kinds:
         part = example if kind is None else example.subset(example.kind == kind)
-        intensity = fit_intensity(part, ground, names)
+        intensity = fit_intensity(part, ground, names, aic=errors == "poisson")
         spacing = fit_spacing(part, intensity, ground, seed)
         if spacing.pattern == "cluster" and errors == "clumps":  # clumps make counts vary more than Poisson's
             intensity = fit_intensity(part, ground, names, cluster=spacing.process)

@@ -268,6 +268,13 @@ def test_tools_learn_gltf_compares_a_gltf_scene_on_its_ground_mesh(tmp_path, cap
     xz = np.stack([rng.uniform(101, 159, 300), rng.uniform(-19, 19, 300)], 1)
     _foreign_instanced(tmp_path / "rocks.glb", np.stack([xz[:, 0], np.zeros(300), xz[:, 1]], 1))
     assert learn_gltf.main([str(tmp_path / "rocks.glb"), "--ground", str(tmp_path / "ground.glb"), "--sims", "3",
-                            "--grid", "64", "--out", str(tmp_path / "run")]) == 0
-    rows = [r for r in capsys.readouterr().out.splitlines() if r.startswith("| rocks.glb")]
-    assert len(rows) == 2 and rows[0].split("|")[2].strip() == "300", rows
+                            "--grid", "64", "--out", str(tmp_path / "run"), "--calibrate", "1", "--halves", "1"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    rows = [r for r in out if r.startswith("| rocks.glb")]
+    assert len(rows) == 5 and rows[0].split("|")[2].strip() == "300", rows
+    # the random half's row: the learned half's own quartile counts against the other half's, a figure of its own
+    head = [h.strip() for h in next(r for r in out if r.startswith("| plot | objects")).split("|")]
+    own = float(rows[1].split("|")[head.index("worst quartile of the learned half itself")])
+    assert 0.0 < own < 1.0 and rows[0].split("|")[head.index("worst quartile of the learned half itself")].strip() == ""
+    assert "1 patterns grown from what was learned, whole" in rows[2] and "(the other half compared)" in rows[3]
+    assert "1 random halves, each learned and the other compared, both ways (2)" in rows[4]

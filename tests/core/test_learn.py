@@ -175,12 +175,16 @@ def _worst_quartile(intensity, g, xz) -> float:
 def test_poisson_errors_keep_the_ground_an_example_in_clumps_shows(hills):
     """errors="clumps" (the default) keeps a ground term only where the clumps' own variation does not explain it:
     a Matern pattern with no real effect learns none, though its clumps fall unevenly on the ground's quartiles;
-    errors="poisson" keeps what the example shows there, and reproduces those quartiles."""
+    errors="poisson" keeps what the example shows there (by Akaike's criterion: every term the Bonferroni bar keeps
+    with Poisson's errors, and more), and reproduces those quartiles."""
     _, g = hills
     xz = P.matern_cluster(np.random.default_rng(0), 0.01, 3.0, 8)
     ex = L.Example(xz, P.window())
     clumps, poisson = L.learn_layers(ex, g)[0], L.learn_layers(ex, g, errors="poisson")[0]
     assert clumps.intensity.names == () and len(poisson.intensity.names) >= 3
+    tested = L.fit_intensity(ex, g)  # Poisson's errors, the Bonferroni bar
+    assert set(tested.labels) < set(poisson.intensity.labels)
+    assert np.abs(poisson.intensity.z).min() >= L.AIC_Z > np.abs(L.fit_intensity(ex, g, significant=0.0).z).min()
     assert clumps.spacing.pattern == poisson.spacing.pattern == "cluster"
     assert _worst_quartile(clumps.intensity, g, xz) > 0.15 > _worst_quartile(poisson.intensity, g, xz)
     with pytest.raises(ParamError, match="errors: expected one of clumps, poisson"):
