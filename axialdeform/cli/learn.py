@@ -54,8 +54,8 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="the seed of the simulations and the layers (default: %(default)s)")
     p.add_argument("--errors", choices=ERRORS, default="clumps",
                    help="which errors decide the ground's terms of an example in clumps: the clumps' own variation "
-                        "(what transfers to another terrain), or poisson: every dependence the example shows, its own "
-                        "ground reproduced more closely (default: %(default)s)")
+                        "(what transfers to another terrain), or poisson: Poisson's errors and Akaike's criterion, every "
+                        "dependence the example shows, its own ground reproduced more closely (default: %(default)s)")
     add_overwrite(p)
     p.set_defaults(handler=run)
 

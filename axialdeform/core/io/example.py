@@ -345,8 +345,9 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
     errors : {"clumps", "poisson"}
         Which standard errors decide the ground's terms of an example in clumps: the cluster process's (the
         default: a dependence stays only where the clumps' own variation does not explain it, so it transfers
-        to another terrain), or Poisson's (every dependence the example shows stays, also one its clumps make:
-        its own ground reproduced more closely). See :func:`~axialdeform.core.learn.learn_layers`.
+        to another terrain), or Poisson's with Akaike's criterion (a term stays while it lowers the AIC: every
+        dependence the example shows stays, also one its clumps make: its own ground reproduced more closely).
+        See :func:`~axialdeform.core.learn.learn_layers`.
 
     Returns
     -------
