@@ -118,7 +118,7 @@ def main(argv=None) -> int:
     print_table(rows)
     if args.calibrate:
         print()
-        print_table(calibrate(name, ex, scene, folder, args.sims, args.calibrate, args.errors))
+        print_table(calibrate(name, ex, scene, folder, args.sims, args.calibrate, args.errors, (rows[0], rows[1])))
     if args.halves:
         print()
         print_table([held_out(name, ex, scene, folder, args.sims, args.halves, args.errors)])

@@ -156,12 +156,14 @@ def compare(name: str, ex: Example, terrain, folder: Path, sims: int, test: Exam
     return row
 
 
-def calibrate(name: str, ex: Example, terrain, folder: Path, sims: int, patterns: int, errors: str = "clumps") -> list:
+def calibrate(name: str, ex: Example, terrain, folder: Path, sims: int, patterns: int, errors: str = "clumps",
+              observed: tuple | None = None) -> list:
     """What the comparisons give when the learned layer is TRUE: learn on ``ex``, grow ``patterns`` examples from
     what was learned (seeds 1000, 1001, ..), and compare each as ``ex`` is compared -- learned whole, and a random
     half learned and the other half compared.  Two rows: each figure's median and range over the patterns, and
     how many of them pass each line of the goal (total within 10 %, every quartile within 15 %, the L-function
-    inside the envelope at every distance, Diggle's global test not rejected at 5 %)."""
+    inside the envelope at every distance, Diggle's global test not rejected at 5 %).  ``observed``: the
+    example's own rows (:func:`compare`'s, whole and half), each placed among the patterns' (:func:`summary`)."""
     ground = read_terrain(terrain)[2] if terrain else None
     learned = learn_layers(ex, ground, errors=errors)
     w = ex.window
@@ -173,7 +175,8 @@ def calibrate(name: str, ex: Example, terrain, folder: Path, sims: int, patterns
         half = halves(len(grown.xz))
         rows["half"].append(compare(f"{name}-truth-{k}-half", grown.subset(half), terrain, folder, sims, grown.subset(~half), errors))
     return [summary(f"{name}: {patterns} patterns grown from what was learned, {what}"
-                    + (" (the other half compared)" if what == "half" else ""), got) for what, got in rows.items()]
+                    + (" (the other half compared)" if what == "half" else ""), got, mine)
+            for (what, got), mine in zip(rows.items(), observed or (None, None))]
 
 
 def held_out(name: str, ex: Example, terrain, folder: Path, sims: int, seeds: int, errors: str = "clumps") -> dict:
@@ -187,10 +190,13 @@ def held_out(name: str, ex: Example, terrain, folder: Path, sims: int, seeds: in
     return summary(f"{name}: {seeds} random halves, each learned and the other compared, both ways ({2 * seeds})", got)
 
 
-def summary(label: str, got: list) -> dict:
+def summary(label: str, got: list, observed: dict | None = None) -> dict:
     """Comparisons ``got`` (:func:`compare`'s rows) in one row: each figure's median and range, and how many
     meet each line of the goal (total within 10 %, every quartile within 15 %, the L-function inside the
-    envelope at every distance, Diggle's global test not rejected at 5 %)."""
+    envelope at every distance, Diggle's global test not rejected at 5 %).  ``observed`` (a row of the example
+    itself): for each figure, how many of ``got`` are as far off as the example or farther (the total from 1,
+    the worst quartile, the distances outside the envelope, Diggle's p): the example's place among patterns of
+    which the learned layer is the true model (0: farther off than every one of them)."""
     total = np.array([r["total ratio"] for r in got])
     worst = np.array([r.get("_worst", 0.0) for r in got])
     inside = np.array([r["_inside"][0] for r in got])
@@ -207,6 +213,12 @@ def summary(label: str, got: list) -> dict:
                                                             f"within 15 %: {int(np.sum(own <= 0.15))}")
     row["L inside envelope"] = f"{np.median(inside):g} of {of} ({inside.min()}-{inside.max()}); all: {int(np.sum(inside == of))}"
     row["L global test p"] = f"{np.median(p):.3f}; not rejected: {int(np.sum(p > 0.05))}"
+    if observed is not None:
+        place = [("total", np.abs(total - 1) >= abs(observed["total ratio"] - 1)),
+                 ("L", inside <= observed["_inside"][0]), ("Diggle", p <= observed["L global test p"])]
+        if "_worst" in observed:
+            place.insert(1, ("quartiles", worst >= observed["_worst"]))
+        row["the example's figures: as far off or farther"] = ", ".join(f"{k} {int(np.sum(v))}/{len(got)}" for k, v in place)
     return row
 
 
@@ -285,8 +297,8 @@ def main(argv=None) -> int:
     print_table(rows)
     if args.calibrate:
         print()
-        print_table(calibrate("bei", e_bei, bei_scene, folder, args.sims, args.calibrate, args.errors)
-                    + calibrate("longleaf", e_ll, None, folder, args.sims, args.calibrate, args.errors))
+        print_table(calibrate("bei", e_bei, bei_scene, folder, args.sims, args.calibrate, args.errors, (rows[0], rows[3]))
+                    + calibrate("longleaf", e_ll, None, folder, args.sims, args.calibrate, args.errors, (rows[1], rows[4])))
     if args.halves:
         print()
         print_table([held_out("bei", e_bei, bei_scene, folder, args.sims, args.halves, args.errors),

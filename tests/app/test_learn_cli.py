@@ -277,4 +277,7 @@ def test_tools_learn_gltf_compares_a_gltf_scene_on_its_ground_mesh(tmp_path, cap
     own = float(rows[1].split("|")[head.index("worst quartile of the learned half itself")])
     assert 0.0 < own < 1.0 and rows[0].split("|")[head.index("worst quartile of the learned half itself")].strip() == ""
     assert "1 patterns grown from what was learned, whole" in rows[2] and "(the other half compared)" in rows[3]
+    calibrated = [h.strip() for h in next(r for r in out if r.startswith("| plot | total ratio")).split("|")]
+    place = [r.split("|")[calibrated.index("the example's figures: as far off or farther")].strip() for r in rows[2:4]]
+    assert all(re.fullmatch(r"total [01]/1, quartiles [01]/1, L [01]/1, Diggle [01]/1", t) for t in place), place
     assert "1 random halves, each learned and the other compared, both ways (2)" in rows[4]
