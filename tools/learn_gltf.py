@@ -17,6 +17,7 @@ learned and the other half compared.  A ground compressed with ``KHR_draco_mesh_
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import tempfile
 from pathlib import Path
@@ -30,7 +31,6 @@ from learn_survey import calibrate, compare, halves, held_out, print_table  # no
 
 from axialdeform.core.io.example import read_example  # noqa: E402
 from axialdeform.core.io.glb import read_accessor  # noqa: E402
-from axialdeform.core.learn import Example  # noqa: E402
 
 
 def ground_points(path: Path) -> np.ndarray:
@@ -109,7 +109,7 @@ def main(argv=None) -> int:
     half_w, half_d = (points[:, [0, 2]].max(0) - points[:, [0, 2]].min(0)) / 2
     w = ex.window  # the objects' box grown by half a spacing, within the ground
     window = (max(w[0] + shift[0], -half_w), max(w[1] + shift[1], -half_d), min(w[2] + shift[0], half_w), min(w[3] + shift[1], half_d))
-    ex = Example(ex.xz + shift, window, ex.size, ex.kind, ex.yaw, ex.source)
+    ex = dataclasses.replace(ex, xz=ex.xz + shift, window=window)
     name = Path(args.example).name
     rows = [compare(name, ex, scene, folder, args.sims, errors=args.errors)]
     half = halves(len(ex.xz))

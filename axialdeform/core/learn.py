@@ -15,9 +15,9 @@ ground.  :func:`learn_layers` fits, per kind:
   own level).  Clumps are fitted as a Matern cluster process (parents ``kappa`` a square unit, children
   uniform in a disc of radius ``R``; with a core, a share of them within a smaller radius: clumps within
   clumps) by minimum contrast on ``K(r)^(1/4)``;
-* **the marks**: the sizes as scales (median 1: their nine quantiles at 0, 1/8, .., 1, which the generator
-  draws through piecewise linearly: ``scale``, ``scale_quartiles``, ``scale_octiles``), the turn about up, where
-  the example has them.
+* **the marks** (:mod:`~axialdeform.core.marks`): the sizes as scales (median 1: their nine quantiles at 0, 1/8,
+  .., 1, which the generator draws through piecewise linearly), the turn about up, and the bend, twist, taper
+  and tint of an example of the library's records, where the example has them.
 
 :func:`layer_recipe` turns a learned layer into a generated layer's recipe over a ground -- the same ground or
 ANOTHER one (the learned relation to slope, altitude and water applied there): a rate and a density map of
@@ -37,6 +37,7 @@ from scipy.stats import norm
 from .clusters import cluster_information, matern_cluster_excess, matern_cluster_k
 from .errors import ParamError
 from .generate import CLUMP_PARENTS
+from .marks import Marks, learn_marks
 from .recipe import MAX_COUNT
 
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function", "largest_deviations",
@@ -81,6 +82,9 @@ class Example:
         Each object's turn about up (radians), where the example has it.
     source : str
         Where it came from (error messages).
+    records : (n, 16|19|22) float64 or None
+        Each object's record (axis 0's: :func:`~axialdeform.core.marks.standard_records`), where the example
+        is made of the library's records: its bend, twist, taper and tint are learned too.
     """
 
     xz: np.ndarray
@@ -89,6 +93,7 @@ class Example:
     kind: np.ndarray | None = None
     yaw: np.ndarray | None = None
     source: str = "<example>"
+    records: np.ndarray | None = None
 
     @property
     def area(self) -> float:
@@ -97,8 +102,8 @@ class Example:
 
     def subset(self, keep: np.ndarray) -> Example:
         """The objects where ``keep`` (n,) bool is True, in the same window."""
-        size, kind, yaw = (None if a is None else a[keep] for a in (self.size, self.kind, self.yaw))
-        return Example(self.xz[keep], self.window, size, kind, yaw, self.source)
+        size, kind, yaw, records = (None if a is None else a[keep] for a in (self.size, self.kind, self.yaw, self.records))
+        return Example(self.xz[keep], self.window, size, kind, yaw, self.source, records)
 
 
 @dataclass(frozen=True, eq=False)
@@ -197,26 +202,18 @@ class LearnedLayer:
         How many objects of it the example has.
     intensity : Intensity
     spacing : Spacing
-    scale : (2,) float or None
-        The sizes as scales, median 1: the smallest and the largest (None: no sizes).
-    yaw : (2,) float
-        The turn about up, [lo, hi] radians ([0, 2 pi] without turns).
+    marks : Marks
+        Sizes, turns, and the records' bends, twists, tapers and tints (:mod:`~axialdeform.core.marks`).
     window : (4,) float
         The example's ground (x0, z0, x1, z1).
-    scale_quartiles, scale_octiles : (3,) and (4,) float, or None
-        The sizes' quantiles at 1/4, 1/2, 3/4 and at 1/8, 3/8, 5/8, 7/8 as scales: the generator draws a scale
-        piecewise linear through these nine knots with ``scale``'s (the recipe's keys of the same names).
     """
 
     kind: str | None
     count: int
     intensity: Intensity
     spacing: Spacing
-    scale: tuple | None
-    yaw: tuple
+    marks: Marks = Marks()
     window: tuple = (0.0, 0.0, 1.0, 1.0)
-    scale_quartiles: tuple | None = None
-    scale_octiles: tuple | None = None
 
     def describe(self, digits: int = 4) -> str:
         """What was learned, in words: ``learned from N objects: log rate = ...; spacing: ...``."""
@@ -225,8 +222,15 @@ class LearnedLayer:
         clumps = f", clumps: {s.cluster[0]:.{digits}g} a square unit, radius {s.cluster[1]:.{digits}g}" if s.cluster else ""
         if s.core:
             clumps += f", core: {s.core[0]:.{digits}g} of them within {s.core[1]:.{digits}g}"
+        m, marks = self.marks, []
+        if m.bend is not None:
+            marks.append(f"offsets within {m.bend:.{digits}g}")
+        if m.twist is not None:
+            marks.append(f"twist within {m.twist:.{digits}g}, taper up to {m.taper:.{digits}g}")
+        if m.tint is not None:
+            marks.append(f"tint {m.tint[0]:.{digits}g} of ({', '.join(f'{c:.{digits}g}' for c in m.tint[1])}), hue {m.tint[2]:.{digits}g}")
         return (f"learned from {self.count} objects: log rate = {self.intensity.coef[0]:.{digits}g}{terms}; "
-                f"spacing: {s.pattern}, hard core {s.hard_core:.{digits}g}{clumps}")
+                f"spacing: {s.pattern}, hard core {s.hard_core:.{digits}g}{clumps}" + "".join(f"; {t}" for t in marks))
 
 
 def _quadrature(example: Example, cells: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int]]:
@@ -489,20 +493,6 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     return Spacing(hard, "cluster", (kappa, radius))
 
 
-def _marks(example: Example) -> tuple[tuple | None, tuple | None, tuple | None, tuple]:
-    scale = quartiles = octiles = None
-    if example.size is not None and len(example.size):
-        s = example.size / np.median(example.size)  # median 1; the generator draws through its nine quantiles
-        q = [float(x) for x in np.quantile(s, np.arange(9) / 8)]
-        scale, quartiles, octiles = (q[0], q[8]), (q[2], q[4], q[6]), (q[1], q[3], q[5], q[7])
-    yaw = (0.0, 2.0 * math.pi)
-    if example.yaw is not None and len(example.yaw) > 1:
-        a = np.mod(example.yaw, 2.0 * math.pi)
-        if np.ptp(a) < math.pi:  # turned one way, within half a turn: that range
-            yaw = (float(a.min()), float(a.max()))
-    return scale, quartiles, octiles, yaw
-
-
 def learn_layers(example: Example, ground=None, names=None, seed: int = 0, errors: str = "clumps") -> list[LearnedLayer]:
     """One :class:`LearnedLayer` a kind of ``example`` (in the order kinds first appear), over ``ground`` (a
     :class:`~axialdeform.core.ground_features.GroundFeatures`, None: a flat ground with no features) and its
@@ -531,8 +521,8 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0, error
         if spacing.pattern == "cluster" and errors == "clumps":  # clumps make counts vary more than Poisson's
             intensity = fit_intensity(part, ground, names, cluster=spacing.process)
             spacing = fit_spacing(part, intensity, ground, seed, clumped=True)  # the clumps' size for it
-        scale, quartiles, octiles, yaw = _marks(part)
-        out.append(LearnedLayer(kind, len(part.xz), intensity, spacing, scale, yaw, example.window, quartiles, octiles))
+        marks = learn_marks(part.size, part.yaw, part.records)
+        out.append(LearnedLayer(kind, len(part.xz), intensity, spacing, marks, example.window))
     return out
 
 
@@ -541,13 +531,15 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0, error
 OVERSAMPLE = 4.0
 
 
-def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: float = OVERSAMPLE) -> tuple[dict, np.ndarray]:
+def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: float = OVERSAMPLE,
+                 axis_length: float | None = None) -> tuple[dict, np.ndarray]:
     """A generated layer's recipe keys for ``layer`` over ``extent`` (x0, z0, x1, z1) of ``ground`` (the same
     ground it was learned on, or another: its features), and its density map, (rows, cols) in [0, 1] over
     ``extent`` (default the ground's grid, or 256 x 256 on flat ground): ``lambda / rate`` at each pixel's
     centre, where ``rate = oversample * max lambda`` (fewer where the hard core needs larger cells); in clumps
     8 parents (``CLUMP_PARENTS``) to every ``s x s`` cells of area ``8 / kappa``,
-    ``s = ceil(sqrt(oversample max lambda 8 / kappa))`` (2 .. 256), so ``rate = s^2 kappa / 8``."""
+    ``s = ceil(sqrt(oversample max lambda 8 / kappa))`` (2 .. 256), so ``rate = s^2 kappa / 8``.  The marks'
+    keys (:meth:`~axialdeform.core.marks.Marks.recipe`; the bend in ``axis_length``, the layer's mesh's)."""
     x0, z0, x1, z1 = extent
     if shape is None:
         shape = ground.grids["altitude"].shape if ground is not None else (256, 256)
@@ -571,10 +563,6 @@ def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: fl
             rate = max(top, min(rate, (0.9 / hard) ** 2))  # cells of at least hard / 0.9, never fewer than the rate
         min_distance = min(hard, 0.9 / math.sqrt(rate))
         tile, clumps = 32.0 / math.sqrt(rate), {}
-    keys = {"rate": float(rate), "tile": float(tile), "min_distance": float(min_distance), "yaw": list(layer.yaw), **clumps}
-    if layer.scale is not None:
-        keys["scale"] = list(layer.scale)
-    if layer.scale_quartiles is not None:
-        keys["scale_quartiles"] = list(layer.scale_quartiles)
-        keys["scale_octiles"] = list(layer.scale_octiles)
+    keys = {"rate": float(rate), "tile": float(tile), "min_distance": float(min_distance), **clumps,
+            **layer.marks.recipe(axis_length)}
     return keys, np.clip(lam / rate, 0.0, 1.0)

@@ -314,7 +314,7 @@ def test_large_clumps_on_dense_ground_keep_their_rate():
     the bound ``clump_cells`` had, the rate fell below the intensity and the density map clipped objects away."""
     lam, kappa = 0.01, 0.01 / 200
     lay = L.LearnedLayer(None, 400, L.Intensity((), np.array([math.log(lam)]), np.zeros(0)),
-                         L.Spacing(0.0, "cluster", (kappa, 20.0)), None, (0.0, 2 * math.pi), (0.0, 0.0, 400.0, 400.0))
+                         L.Spacing(0.0, "cluster", (kappa, 20.0)), window=(0.0, 0.0, 400.0, 400.0))
     keys, density = L.layer_recipe(lay, None, (0.0, 0.0, 400.0, 400.0))
     assert keys["clump_cells"] >= math.sqrt(4 * lam * 8 / kappa) > 64
     assert keys["rate"] >= 4 * lam and density.max() <= 0.25 + 1e-9

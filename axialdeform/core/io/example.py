@@ -21,6 +21,7 @@ layer a learned kind, each with its density map (a 16-bit PNG) beside the file, 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import math
@@ -32,16 +33,18 @@ import numpy as np
 import trimesh
 from PIL import Image
 
-from ..errors import ExampleError
+from ..errors import AxialDeformError, ExampleError
 from ..generate_ground import GroundMaps
 from ..ground_features import FEATURES, GroundFeatures
 from ..learn import Example, layer_recipe, learn_layers
-from ..record import ANGLES, POSITION, SCALE
+from ..marks import standard_records
+from ..record import ANGLES, GLTF_ATTRIBUTES, GLTF_EXTENDED_ATTRIBUTES, GLTF_TINT_ATTRIBUTE, POSITION, SCALE, WIDTHS, is_record_width
 from ..scene import load_scene
 from ..surface import load_density, load_surface
 from ..transforms import matrices_from_quaternions
 from .atomic import atomic_path, atomic_write_text
 from .glb import load_glb, read_accessor
+from .mesh import load_mesh
 from .params import read_params
 from .safeio import open_regular
 from .scene import parse_scene
@@ -124,10 +127,16 @@ def _read_csv(path: Path) -> dict:
             "kind": np.array(kind, dtype=object) if kind else None}
 
 
-def _read_records(params: np.ndarray) -> dict:
+def _read_records(params: np.ndarray, name: str) -> dict:
+    """Each record's place, its scale as its size, its turn about up, and axis 0's standard record (a tree's
+    child axes' offsets left out: its position stands after them)."""
     params = np.asarray(params, np.float64)
-    size = params[:, SCALE] if params.shape[1] > SCALE else None
-    return {"xz": params[:, POSITION][:, [0, 2]], "size": size, "yaw": params[:, ANGLES][:, 1]}
+    if params.ndim != 2 or not is_record_width(params.shape[1]):
+        raise ExampleError(f"{name}: expected records of 10 K + 6 (+ 3, + 6) numbers an object, found an array of shape "
+                           f"{params.shape}")
+    rec = standard_records(params)
+    size = rec[:, SCALE] if rec.shape[1] > SCALE else None
+    return {"xz": rec[:, POSITION][:, [0, 2]], "size": size, "yaw": rec[:, ANGLES][:, 1], "records": rec}
 
 
 def _trs(t, r, s) -> np.ndarray:
@@ -159,7 +168,7 @@ def _read_glb(path: Path) -> dict:
 
 def _placed_in(gltf, where: str) -> dict:
     blob = gltf.binary_blob() or b""
-    world, mats, names = {}, [], []
+    world, mats, names, records = {}, [], [], []
     roots = gltf.scenes[gltf.scene or 0].nodes if gltf.scenes else range(len(gltf.nodes))
     stack = [(int(i), np.eye(4)) for i in roots or ()]
     while stack:  # the node tree, parents first (a node seen twice is a cycle: refused)
@@ -184,13 +193,40 @@ def _placed_in(gltf, where: str) -> dict:
                 raise ExampleError(f"{where}: node {node.name or i}: EXT_mesh_gpu_instancing: expected its attributes "
                                    "to have one value an instance each")
             mats.append(m[None] @ _trs(t, r, sc))
+            records.append(_records_of(gltf, blob, attrs, n, f"{where}: node {node.name or i}"))
         else:
             mats.append(m[None])
+            records.append(None)
         mesh = gltf.meshes[node.mesh] if isinstance(node.mesh, int) and 0 <= node.mesh < len(gltf.meshes) else None
         names += [node.name or (mesh.name if mesh is not None else None) or f"mesh{node.mesh}"] * len(mats[-1])
     if not mats:
         raise ExampleError(f"{where}: no placed objects; expected EXT_mesh_gpu_instancing nodes or nodes with a mesh")
-    return {**_placed(np.concatenate(mats)), "kind": _kinds(names)}
+    rec = None
+    if all(r is not None for r in records):  # every object has its record: its marks are learned too
+        width = min(r.shape[1] for r in records)
+        rec = np.concatenate([r[:, :width] for r in records])
+    return {**_placed(np.concatenate(mats)), "kind": _kinds(names), "records": rec}
+
+
+def _records_of(gltf, blob, attrs: dict, n: int, where: str) -> np.ndarray | None:
+    """The records of an instancing node's ``n`` instances written by this library (``_AXIAL_D12``, ``_AXIAL_D34``,
+    ``_AXIAL_D5``; ``_AXIAL_TWIST_TAPER`` and ``_COLOR_0`` where written), as far as the marks need them: the
+    offsets, twist, taper and tint (the place and size come from the node); None without the offsets."""
+    if not all(k in attrs for k in GLTF_ATTRIBUTES if k != "_AXIAL_ANGLES"):
+        return None
+    tint_name = GLTF_TINT_ATTRIBUTE[0]
+    extra = {**GLTF_EXTENDED_ATTRIBUTES, tint_name: GLTF_TINT_ATTRIBUTE[1:]}
+    width = WIDTHS[2 if tint_name in attrs else 1 if any(k in attrs for k in GLTF_EXTENDED_ATTRIBUTES) else 0]
+    out = np.zeros((n, width))
+    if width > WIDTHS[0]:
+        out[:, SCALE] = 1.0
+    for name, (kind, cols) in {**GLTF_ATTRIBUTES, **extra}.items():
+        if name in attrs and name != "_AXIAL_ANGLES":
+            v = read_accessor(gltf, blob, attrs[name], name, where)
+            if v.shape != (n, len(cols)) or not np.isfinite(v).all():
+                raise ExampleError(f"{where}: {name}: expected {kind}, one finite value an instance ({n}), found shape {v.shape}")
+            out[:, list(cols)] = v
+    return out
 
 
 def _kinds(names: list) -> np.ndarray | None:
@@ -228,7 +264,7 @@ def read_example(source, window=None, *, layer: str | None = None) -> Example:
         The ground the example covers (None: the objects' bounding box grown by half a mean spacing).
     """
     if not isinstance(source, (str, os.PathLike)):
-        data, name = _read_records(source), "<params>"
+        data, name = _read_records(source, "<params>"), "<params>"
     else:
         path, name = Path(source), str(source)
         suffix = path.suffix.lower()
@@ -243,15 +279,15 @@ def read_example(source, window=None, *, layer: str | None = None) -> Example:
             names = [lay.name for lay in scene.layers]
             if layer not in names:
                 raise ExampleError(f"{name}: layer: expected one of {', '.join(names) or 'none'} (--layer NAME), found {layer!r}")
-            data = _read_records(scene.layers[names.index(layer)].params)
+            data = _read_records(scene.layers[names.index(layer)].params, name)
         else:
-            data = _read_records(read_params(path, allow_mesh_mismatch=True))
+            data = _read_records(read_params(path, allow_mesh_mismatch=True), name)
     xz = data["xz"]
     if len(xz) == 0:
         raise ExampleError(f"{name}: no objects; expected at least one")
     if not np.isfinite(xz).all():
         raise ExampleError(f"{name}: a position is not finite")
-    return Example(xz, _window(xz, window, name), data.get("size"), data.get("kind"), data.get("yaw"), name)
+    return Example(xz, _window(xz, window, name), data.get("size"), data.get("kind"), data.get("yaw"), name, data.get("records"))
 
 
 def _toml(v) -> str:
@@ -357,8 +393,7 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
     ground = read_terrain(terrain, mask)[2] if terrain is not None else None
     if ground is not None and window is None and not isinstance(example, Example):  # the grown box, on the terrain
         g, w = ground.bounds, ex.window
-        ex = Example(ex.xz, (max(w[0], g[0]), max(w[1], g[1]), min(w[2], g[2]), min(w[3], g[3])), ex.size, ex.kind,
-                     ex.yaw, ex.source)
+        ex = dataclasses.replace(ex, window=(max(w[0], g[0]), max(w[1], g[1]), min(w[2], g[2]), min(w[3], g[3])))
     for f in features or ():
         if f not in FEATURES or (ground is not None and f not in ground.names):
             raise ExampleError(f"features: {f!r}: expected some of {', '.join(ground.names if ground else FEATURES)}"
@@ -377,6 +412,15 @@ def learned_paths(out, learned: list) -> list[Path]:
     """The files :func:`write_learned` writes for ``learned`` at ``out``: a density map a layer, then ``out``."""
     out = Path(out)
     return [out.with_name(f"{out.stem}-{name}-density.png") for name in _layer_names(learned)] + [out]
+
+
+def _axis_length(mesh) -> float:
+    """The axis length of the learned layers' ``mesh`` (a bundled name or a file): the offsets of an example's
+    records become the recipe's ``bend`` in it (the example taken to be of that mesh)."""
+    try:
+        return float(load_mesh(mesh, textures=False).axis.length)
+    except AxialDeformError as exc:
+        raise ExampleError(f"mesh: {mesh}: expected a mesh to turn the example's bend into axis lengths ({exc})") from None
 
 
 def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None, seed: int = 0, extent=None,
@@ -400,8 +444,9 @@ def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None,
             raise ExampleError(f"{terrain or 'flat ground'}: expected the feature {missing[0]} the layer "
                                f"{lay.kind or 'learned'} depends on{' (give its mask)' if missing[0] == 'water' else ''}")
     layers, names = [], _layer_names(learned)
+    axis_length = _axis_length(mesh) if any(lay.marks.bend is not None for lay in learned) else None
     for k, lay in enumerate(learned):
-        keys, density = layer_recipe(lay, ground, extent)
+        keys, density = layer_recipe(lay, ground, extent, axis_length=axis_length)
         keys["seed"] = seed + k
         if "scale" in keys:
             keys["scale"] = [size * v for v in keys["scale"]]

@@ -1,0 +1,142 @@
+"""The marks of an example: what each object carries beside its place -- its size and its turn about up, and,
+where the example holds the library's records (a parameter file, a scene file's layer, this library's glTF), its
+bend, twist, taper and tint -- learned as the numbers of a generated layer's recipe (docs/learn.md, "The marks").
+Pure numpy: no GL here.
+
+The recipe draws each mark from uniform numbers of the instance (``core/generate.py``): the offsets
+``d = bend L (2u - 1)`` (then all shifted alike, so the anchor stays put), ``tw = twist (2u - 1)``,
+``tp = taper u`` and the tint ``color (1 - amount (u_r + hue (u_c - u_r)))``.  Each is fitted by its moments,
+in forms that a shift shared by the five control points (the anchor's, or the canonical zero mean) leaves alone.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .generate import MAX_BEND
+from .record import OFFSETS, TAPER, TINT, TWIST, WIDTHS, split_record, tree_shape
+
+__all__ = ["Marks", "learn_marks", "standard_records", "bend_amplitude", "offset_differences", "tint_of_records"]
+
+
+@dataclass(frozen=True)
+class Marks:
+    """The marks of one kind, as a recipe draws them.
+
+    Attributes
+    ----------
+    scale : (2,) float or None
+        The sizes as scales, median 1: the smallest and the largest (None: no sizes).
+    scale_quartiles, scale_octiles : (3,) and (4,) float, or None
+        The scales at 1/4, 1/2, 3/4 and at 1/8, 3/8, 5/8, 7/8: the generator draws a scale piecewise linear
+        through these nine knots.
+    yaw : (2,) float
+        The turn about up, [lo, hi] radians ([0, 2 pi] without turns).
+    bend : float or None
+        The offsets' amplitude ``A`` in the records' own units: offsets uniform in ``[-A, A]`` (the recipe's
+        ``bend`` is ``A / L``, L the layer's mesh's axis length; None: the example has no records).
+    twist, taper : float or None
+        Twists uniform in ``[-twist, twist]`` radians, tapers in ``[0, taper]`` (None: no extended records).
+    tint : (amount, (r, g, b), hue) or None
+        The recipe's ``tint``, ``tint_color`` and ``tint_hue`` (None: no tinted records).
+    """
+
+    scale: tuple | None = None
+    scale_quartiles: tuple | None = None
+    scale_octiles: tuple | None = None
+    yaw: tuple = (0.0, 2.0 * math.pi)
+    bend: float | None = None
+    twist: float | None = None
+    taper: float | None = None
+    tint: tuple | None = None
+
+    def recipe(self, axis_length: float | None = None) -> dict:
+        """The recipe's keys of these marks (``scale`` and its quantiles, ``yaw``, ``twist``, ``taper``,
+        ``tint``, ``tint_color``, ``tint_hue``, and ``bend`` = ``A / axis_length`` when both are known)."""
+        keys: dict = {"yaw": list(self.yaw)}
+        if self.scale is not None:
+            keys["scale"] = list(self.scale)
+        if self.scale_quartiles is not None:
+            keys["scale_quartiles"] = list(self.scale_quartiles)
+            keys["scale_octiles"] = list(self.scale_octiles)
+        if self.bend is not None and axis_length:
+            keys["bend"] = float(min(self.bend / axis_length, MAX_BEND))
+        if self.twist is not None:
+            keys["twist"] = float(self.twist)
+        if self.taper is not None:
+            keys["taper"] = float(self.taper)
+        if self.tint is not None:
+            amount, color, hue = self.tint
+            keys.update(tint=float(amount), tint_color=[float(c) for c in color], tint_hue=float(hue))
+        return keys
+
+
+def standard_records(params: np.ndarray) -> np.ndarray:
+    """Axis 0's standard record ``(n, 16|19|22)`` float64 of records of any number of axes (a tree's child axes'
+    offsets left out: they stand between axis 0's offsets and its position); ValueError for a width that is no
+    record's."""
+    params = np.asarray(params, np.float64)
+    axes, _ = tree_shape(params.shape[1])
+    return split_record(params, axes)[0].astype(np.float64) if axes > 1 else params
+
+
+def offset_differences(offsets: np.ndarray) -> np.ndarray:
+    """The differences ``d_p - d_q`` (p < q) of each instance's five control points' offsets ``(n, 10)``, each
+    component: ``(n, 20)``.  A shift shared by the five (the anchor kept in place, the canonical zero mean)
+    cancels, so they are the generator's draws' differences whatever shift was made."""
+    d = np.asarray(offsets, np.float64).reshape(-1, 5, 2)
+    p, q = np.triu_indices(5, 1)
+    return (d[:, p] - d[:, q]).reshape(len(d), -1)
+
+
+def bend_amplitude(offsets: np.ndarray) -> float:
+    """``A`` of offsets ``(n, 10)`` drawn uniform in ``[-A, A]``: two such draws differ by ``2 A^2 / 3`` in
+    mean square, so ``A = sqrt(3/2 mean (d_p - d_q)^2)`` over the pairs of control points."""
+    return float(math.sqrt(1.5 * np.mean(offset_differences(offsets) ** 2)))
+
+
+def tint_of_records(tint: np.ndarray) -> tuple[float, tuple, float]:
+    """The recipe's ``(tint, tint_color, tint_hue)`` of tints ``(n, 3)``: the colour is each channel's brightest;
+    each object's tint over it, ``r_c = 1 - amount m_c``, has the first channel's ``m`` uniform (mean 1/2: the
+    amount is twice the mean shortfall) and the others ``m_r + hue (u_c - u_r)`` (``var(r_c - r_r) = amount^2
+    hue^2 / 6``).  Amount and hue within [0, 1]; a colour of one value gives amount 0."""
+    t = np.clip(np.asarray(tint, np.float64), 0.0, None)
+    color = np.clip(t.max(axis=0), 0.0, 1.0)
+    lit = color > 0
+    if not lit.any():
+        return 0.0, tuple(float(c) for c in color), 0.0
+    ratio = t[:, lit] / color[lit]
+    amount = float(np.clip(2.0 * (1.0 - ratio[:, 0].mean()), 0.0, 1.0))
+    hue = 0.0
+    if amount > 1e-6 and ratio.shape[1] > 1:
+        spread = np.mean(np.var(ratio[:, 1:] - ratio[:, :1], axis=0))
+        hue = float(np.clip(math.sqrt(6.0 * spread) / amount, 0.0, 1.0))
+    return amount, tuple(float(c) for c in color), hue
+
+
+def learn_marks(size: np.ndarray | None, yaw: np.ndarray | None, records: np.ndarray | None) -> Marks:
+    """The :class:`Marks` of one kind's objects: ``size`` (n,) (any unit, or None), ``yaw`` (n,) radians (or
+    None) and ``records`` (n, 16+) (axis 0's standard records, :func:`standard_records`; or None)."""
+    scale = quartiles = octiles = None
+    if size is not None and len(size):
+        s = np.asarray(size, np.float64) / np.median(size)  # median 1; the generator draws through nine quantiles
+        q = [float(x) for x in np.quantile(s, np.arange(9) / 8)]
+        scale, quartiles, octiles = (q[0], q[8]), (q[2], q[4], q[6]), (q[1], q[3], q[5], q[7])
+    turn = (0.0, 2.0 * math.pi)
+    if yaw is not None and len(yaw) > 1:
+        a = np.mod(yaw, 2.0 * math.pi)
+        if np.ptp(a) < math.pi:  # turned one way, within half a turn: that range
+            turn = (float(a.min()), float(a.max()))
+    bend = twist = taper = tint = None
+    if records is not None and len(records):
+        r = np.asarray(records, np.float64)
+        bend = bend_amplitude(r[:, OFFSETS])
+        if r.shape[1] >= WIDTHS[1]:
+            twist = float(math.sqrt(3.0 * np.mean(r[:, TWIST] ** 2)))
+            taper = float(np.clip(2.0 * np.mean(r[:, TAPER]), 0.0, 0.999))
+        if r.shape[1] >= WIDTHS[2]:
+            tint = tint_of_records(r[:, TINT])
+    return Marks(scale, quartiles, octiles, turn, bend, twist, taper, tint)

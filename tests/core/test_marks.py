@@ -1,0 +1,116 @@
+"""The marks of an example of the library's records (axialdeform.core.marks): the bend, twist, taper and tint
+a recipe drew are learned back, a layer grown from what was learned draws each mark as the example has it
+(KS <= 0.1, docs/learn.md "The marks"), and every reader of records hands them over (a tree's records too)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import ks_2samp
+
+import axialdeform as ad
+from axialdeform.core import learn as L
+from axialdeform.core.errors import ExampleError
+from axialdeform.core.generate import Generate, generate_extent
+from axialdeform.core.io.example import read_example
+from axialdeform.core.io.mesh import load_mesh
+from axialdeform.core.marks import bend_amplitude, learn_marks, offset_differences, standard_records
+from axialdeform.core.record import OFFSETS, POSITION, TAPER, TINT, TWIST, join_record
+from axialdeform.core.variation import Variation
+
+EXTENT = (0.0, 0.0, 40.0, 40.0)
+DRAWN = {"bend": 0.2, "twist": 0.5, "taper": 0.3, "tint": 0.4, "tint_color": (0.8, 0.6, 0.3), "tint_hue": 0.5,
+         "scale": (0.8, 1.2)}
+
+
+@pytest.fixture(scope="module")
+def stone():
+    return load_mesh("stone", textures=False)
+
+
+def _grown(stone, seed: int, **keys) -> np.ndarray:
+    return generate_extent(Generate(rate=2.0, seed=seed, **keys), stone, EXTENT).astype(np.float64)
+
+
+def test_a_recipes_marks_are_learned_back(stone):
+    params = _grown(stone, 1, **DRAWN)
+    marks = learn_marks(params[:, 16], params[:, 14], standard_records(params))
+    keys = marks.recipe(stone.axis.length)
+    assert len(params) > 2500
+    assert keys["bend"] == pytest.approx(0.2, rel=0.1)
+    assert keys["twist"] == pytest.approx(0.5, rel=0.1) and keys["taper"] == pytest.approx(0.3, rel=0.1)
+    assert keys["tint"] == pytest.approx(0.4, abs=0.04) and keys["tint_hue"] == pytest.approx(0.5, abs=0.1)
+    assert keys["tint_color"] == pytest.approx([0.8, 0.6, 0.3], abs=0.02)
+    one_hue = _grown(stone, 2, **{**DRAWN, "tint_hue": 0.0})
+    assert learn_marks(None, None, standard_records(one_hue)).tint[2] < 0.05  # shades of one colour: no hue
+
+
+def test_a_layer_grown_from_the_learned_marks_draws_them_as_the_example(stone):
+    """Each mark's distribution, the example's against a layer grown from what was learned: KS <= 0.1 (the
+    offsets as their differences between control points, over the axis length: the shift that keeps the
+    anchor in place is the same for both)."""
+    example = _grown(stone, 3, **DRAWN)
+    keys = learn_marks(example[:, 16], example[:, 14], standard_records(example)).recipe(stone.axis.length)
+    grown = _grown(stone, 4, **{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items()})
+    L_ = stone.axis.length
+    pairs = [(offset_differences(example[:, OFFSETS]).ravel() / L_, offset_differences(grown[:, OFFSETS]).ravel() / L_),
+             (example[:, TWIST], grown[:, TWIST]), (example[:, TAPER], grown[:, TAPER]), (example[:, 16], grown[:, 16])]
+    pairs += [(example[:, TINT][:, c], grown[:, TINT][:, c]) for c in range(3)]
+    ks = [ks_2samp(a, b).statistic for a, b in pairs]
+    assert max(ks) <= 0.1, ks
+    # and a layer without the learned bend (the recipe's default 0.1) would not pass: the test can fail
+    plain = _grown(stone, 4, **{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items() if k != "bend"})
+    assert ks_2samp(pairs[0][0], offset_differences(plain[:, OFFSETS]).ravel() / L_).statistic > 0.1
+
+
+def test_the_bend_ignores_the_shift_of_the_offsets(stone):
+    """random_params' offsets are canonical (zero mean over the five), the generator's keep the anchor in place:
+    both give back the amplitude they drew."""
+    canonical = ad.random_params(stone, 3000, seed=5, variation=Variation(bend=0.15))
+    assert bend_amplitude(canonical[:, OFFSETS]) / stone.axis.length == pytest.approx(0.15, rel=0.05)
+    anchored = _grown(stone, 6, bend=0.15)
+    assert bend_amplitude(anchored[:, OFFSETS]) / stone.axis.length == pytest.approx(0.15, rel=0.05)
+
+
+def test_a_trees_records_are_read_at_their_own_columns():
+    """A record of K axes has its child axes' offsets between axis 0's offsets and its position: the example's
+    places are the positions, not the child offsets (they were read from columns 10..12 before)."""
+    rng = np.random.default_rng(0)
+    std = np.zeros((60, 22), np.float32)
+    std[:, POSITION] = rng.uniform(0, 50, (60, 3))
+    std[:, OFFSETS] = rng.uniform(-0.3, 0.3, (60, 10))
+    std[:, TINT] = 0.5
+    tree = join_record(std, rng.normal(0, 5, (60, 2, 5, 2)))
+    assert tree.shape == (60, 42)
+    ex = read_example(tree)
+    assert np.array_equal(ex.xz, std[:, POSITION][:, [0, 2]].astype(np.float64))
+    assert np.array_equal(ex.records, std.astype(np.float64))
+    with pytest.raises(ExampleError, match=r"<params>: expected records of 10 K \+ 6"):
+        read_example(np.zeros((5, 17)))
+
+
+def test_learn_from_a_parameter_file_writes_the_marks(tmp_path, stone):
+    """``learn`` from a parameter file of bent, twisted, tapered, tinted stones: the scene file's recipe has them."""
+    params = _grown(stone, 7, **DRAWN).astype(np.float32)
+    ad.write_params(tmp_path / "stones.adp", params, mesh=stone)
+    layers = ad.learn_layer(tmp_path / "stones.adp", window=EXTENT)
+    from axialdeform.core.io.example import write_learned
+
+    write_learned(tmp_path / "out.toml", layers, None, mesh="stone")
+    recipe = ad.Scene.load(tmp_path / "out.toml").layers[0]
+    grown = recipe.params
+    assert grown.shape[1] == 22
+    assert bend_amplitude(grown[:, OFFSETS]) / stone.axis.length == pytest.approx(0.2, rel=0.1)
+    assert np.abs(grown[:, TWIST]).max() == pytest.approx(0.5, rel=0.1)
+    assert "offsets within" in (tmp_path / "out.toml").read_text()
+
+
+def test_learn_reads_the_records_of_this_librarys_gltf(tmp_path, stone):
+    params = _grown(stone, 8, **DRAWN).astype(np.float32)
+    ad.export_glb(tmp_path / "stones.glb", stone, params, layout="instanced")
+    ex = read_example(tmp_path / "stones.glb")
+    assert ex.records is not None and ex.records.shape == (len(params), 22)
+    assert np.array_equal(ex.records[:, OFFSETS], params[:, OFFSETS].astype(np.float64))
+    assert np.allclose(ex.records[:, TINT], params[:, TINT]) and np.allclose(ex.records[:, TWIST], params[:, TWIST])
+    marks = L.learn_layers(ex)[0].marks
+    assert marks.tint[0] == pytest.approx(0.4, abs=0.04) and marks.twist == pytest.approx(0.5, rel=0.1)
