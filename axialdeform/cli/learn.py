@@ -7,7 +7,8 @@ import math
 from pathlib import Path
 
 from ..core.ground_features import FEATURES
-from ..core.io.example import learn_layer, learned_paths, write_learned
+from ..core.io.example import learn_layer, learned_paths, read_example, read_terrain, write_learned
+from ..core.io.mesh import load_mesh
 from ..core.io.safeio import check_output_path
 from ..core.io.scene import parse_scene
 from ..core.learn import ERRORS
@@ -56,13 +57,22 @@ def add_parser(sub) -> None:
                    help="which errors decide the ground's terms of an example in clumps: the clumps' own variation "
                         "(what transfers to another terrain), or poisson: Poisson's errors and Akaike's criterion, every "
                         "dependence the example shows, its own ground reproduced more closely (default: %(default)s)")
+    p.add_argument("--fit", action="store_true",
+                   help="EXAMPLE is a .glb of one node an object, each its own bent copy of --mesh (the baked export, an "
+                        "editor's bent duplicates): fit each one's record to it, and learn its bend, scale, twist and "
+                        "taper too (default: the objects' places, sizes and turns only)")
     add_overwrite(p)
     p.set_defaults(handler=run)
 
 
 def run(args) -> None:
     """``axialdeform learn EXAMPLE --terrain SCENE.toml -o OUT.toml``."""
-    learned = learn_layer(args.example, args.terrain, window=args.window, layer=args.layer, mask=args.mask,
+    example = args.example
+    if args.fit:  # each object fitted to the mesh; the default window cut to the terrain, as learn_layer does
+        bounds = read_terrain(args.terrain, args.mask)[2].bounds if args.terrain else None
+        example = read_example(args.example, args.window, layer=args.layer, fit=load_mesh(args.mesh, textures=False),
+                               bounds=bounds)
+    learned = learn_layer(example, args.terrain, window=args.window, layer=args.layer, mask=args.mask,
                           features=args.features, seed=args.seed, errors=args.errors)
     target, mask = (args.apply_to, args.apply_mask) if args.apply_to else (args.terrain, args.mask)
     inputs = [args.example, args.terrain, args.apply_to, args.mask, args.apply_mask]

@@ -4,8 +4,13 @@ a recipe drew are learned back, a layer grown from what was learned draws each m
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
+import tomllib
+from scipy.spatial import cKDTree
 from scipy.stats import ks_2samp
 
 import axialdeform as ad
@@ -114,3 +119,46 @@ def test_learn_reads_the_records_of_this_librarys_gltf(tmp_path, stone):
     assert np.allclose(ex.records[:, TINT], params[:, TINT]) and np.allclose(ex.records[:, TWIST], params[:, TWIST])
     marks = L.learn_layers(ex)[0].marks
     assert marks.tint[0] == pytest.approx(0.4, abs=0.04) and marks.twist == pytest.approx(0.5, rel=0.1)
+
+
+def test_learn_fits_baked_objects_to_the_mesh(tmp_path, stone):
+    """A glTF of baked objects (the library's baked export: one node an object, its world vertices) learned with
+    ``--fit``: each object's record is fitted to the mesh, and its bend, scale, twist and taper are learned."""
+    params = generate_extent(Generate(rate=0.3, seed=9, **{k: v for k, v in DRAWN.items() if "tint" not in k}),
+                             stone, EXTENT)
+    ad.export_glb(tmp_path / "baked.glb", stone, params, layout="baked")
+    out = tmp_path / "out.toml"
+    done = subprocess.run([sys.executable, "-m", "axialdeform", "learn", str(tmp_path / "baked.glb"), "--fit", "--mesh",
+                           "stone", "-o", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    keys = tomllib.loads(out.read_text())["layer"][0]["generate"]
+    assert keys["bend"] == pytest.approx(0.2, rel=0.1) and keys["twist"] == pytest.approx(0.5, rel=0.1)
+    assert keys["taper"] == pytest.approx(0.3, rel=0.1) and keys["scale"] == pytest.approx([0.8, 1.2], rel=0.05)
+    ex = read_example(tmp_path / "baked.glb", fit=stone)
+    # the fitted places are the drawn ones (in the scene's node order), less the shift of the offsets the fit's
+    # canonical form moves into them
+    near = 2 * DRAWN["bend"] * stone.axis.length
+    assert cKDTree(params[:, POSITION][:, [0, 2]]).query(ex.xz)[0].max() < near
+    # an editor's duplicates: each object its own bent copy in its node's frame, placed by the node's matrix
+    import trimesh
+
+    from axialdeform.core.bake import bake_cpu
+
+    local = params[:5].copy()
+    local[:, POSITION] = 0.0
+    shapes = bake_cpu(stone, local)[0]
+    scene = trimesh.Scene()
+    for k, v in enumerate(shapes):
+        scene.add_geometry(trimesh.Trimesh(v, stone.faces, process=False), node_name=f"Rock.{k:03d}",
+                           transform=trimesh.transformations.translation_matrix(params[k, POSITION]))
+    scene.export(tmp_path / "editor.glb")
+    ex = read_example(tmp_path / "editor.glb", fit=stone)
+    d, at = cKDTree(params[:5, POSITION][:, [0, 2]]).query(ex.xz)
+    assert d.max() < near and sorted(at) == list(range(5)) and ex.kind is None
+    drawn, fitted = offset_differences(params[at, OFFSETS]), offset_differences(ex.records[:, OFFSETS])
+    assert np.abs(fitted - drawn).max() < 1e-3 * stone.axis.length  # the bends, up to the shift the fit leaves out
+    with pytest.raises(ExampleError, match=r"editor.glb: object 1 \(node Rock.000\): .* vertices; expected the mesh's"):
+        read_example(tmp_path / "editor.glb", fit=load_mesh("leaf", textures=False))
+    with pytest.raises(ExampleError, match=r"stones.csv: fit: expected a .glb"):
+        (tmp_path / "stones.csv").write_text("x,z\n1,2\n3,4\n5,1\n")
+        read_example(tmp_path / "stones.csv", fit=stone)

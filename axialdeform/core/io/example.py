@@ -21,7 +21,6 @@ layer a learned kind, each with its density map (a 16-bit PNG) beside the file, 
 from __future__ import annotations
 
 import csv
-import dataclasses
 import io
 import json
 import math
@@ -43,7 +42,7 @@ from ..scene import load_scene
 from ..surface import load_density, load_surface
 from ..transforms import matrices_from_quaternions
 from .atomic import atomic_path, atomic_write_text
-from .glb import load_glb, read_accessor
+from .glb import INSTANCING, load_glb, read_accessor
 from .mesh import load_mesh
 from .params import read_params
 from .safeio import open_regular
@@ -153,12 +152,12 @@ def _node_matrix(node) -> np.ndarray:
     return _trs([node.translation or (0, 0, 0)], [node.rotation or (0, 0, 0, 1)], [node.scale or (1, 1, 1)])[0]
 
 
-def _read_glb(path: Path) -> dict:
+def _read_glb(path: Path, vertices: bool = False) -> dict:
     """Every placed object of a GLB: the instances of each ``EXT_mesh_gpu_instancing`` node (their TRS composed
     with the node's world matrix) and every other node that has a mesh (its world matrix)."""
     gltf = load_glb(path)
     try:
-        return _placed_in(gltf, str(path))
+        return _placed_in(gltf, str(path), vertices)
     except (TypeError, ValueError, IndexError, KeyError, AttributeError) as exc:  # a hostile file's odd JSON
         if isinstance(exc, ExampleError):
             raise
@@ -166,18 +165,18 @@ def _read_glb(path: Path) -> dict:
                            f"{str(exc)[:80]})") from None
 
 
-def _placed_in(gltf, where: str) -> dict:
+def _placed_in(gltf, where: str, vertices: bool = False) -> dict:
     blob = gltf.binary_blob() or b""
-    world, mats, names, records = {}, [], [], []
+    world, mats, names, records, shapes = {}, [], [], [], []
     roots = gltf.scenes[gltf.scene or 0].nodes if gltf.scenes else range(len(gltf.nodes))
-    stack = [(int(i), np.eye(4)) for i in roots or ()]
-    while stack:  # the node tree, parents first (a node seen twice is a cycle: refused)
+    stack = [(int(i), np.eye(4)) for i in reversed(roots or ())]
+    while stack:  # the node tree, parents first, in the file's order (a node seen twice is a cycle: refused)
         i, parent = stack.pop()
         if not 0 <= i < len(gltf.nodes) or i in world:
             raise ExampleError(f"{where}: node {i}: expected each node once in the scene's tree")
         node = gltf.nodes[i]
         world[i] = m = parent @ _node_matrix(node)
-        stack += [(int(c), m) for c in node.children or ()]
+        stack += [(int(c), m) for c in reversed(node.children or ())]
         inst = (node.extensions or {}).get("EXT_mesh_gpu_instancing")
         if node.mesh is None:
             continue
@@ -194,9 +193,12 @@ def _placed_in(gltf, where: str) -> dict:
                                    "to have one value an instance each")
             mats.append(m[None] @ _trs(t, r, sc))
             records.append(_records_of(gltf, blob, attrs, n, f"{where}: node {node.name or i}"))
+            shapes += [None] * n
         else:
             mats.append(m[None])
             records.append(None)
+            if vertices:  # its own geometry in the world, to fit (one node an object)
+                shapes.append(_world_vertices(gltf, blob, node, m, f"{where}: node {node.name or i}"))
         mesh = gltf.meshes[node.mesh] if isinstance(node.mesh, int) and 0 <= node.mesh < len(gltf.meshes) else None
         names += [node.name or (mesh.name if mesh is not None else None) or f"mesh{node.mesh}"] * len(mats[-1])
     if not mats:
@@ -205,7 +207,46 @@ def _placed_in(gltf, where: str) -> dict:
     if all(r is not None for r in records):  # every object has its record: its marks are learned too
         width = min(r.shape[1] for r in records)
         rec = np.concatenate([r[:, :width] for r in records])
-    return {**_placed(np.concatenate(mats)), "kind": _kinds(names), "records": rec}
+    out = {**_placed(np.concatenate(mats)), "kind": _kinds(names), "records": rec}
+    return {**out, "vertices": shapes, "names": names} if vertices else out
+
+
+def _world_vertices(gltf, blob, node, m: np.ndarray, where: str) -> np.ndarray:
+    """A node's mesh's vertices (each POSITION accessor once, in the order its primitives first name them: a
+    part's primitives may share one) under the node's world matrix ``m``: (v, 3)."""
+    mesh = gltf.meshes[node.mesh]
+    seen, parts = [], []
+    for prim in mesh.primitives or ():
+        a = getattr(prim.attributes, "POSITION", None)
+        if a is not None and a not in seen:
+            seen.append(a)
+            parts.append(read_accessor(gltf, blob, a, "POSITION", where))
+    if not parts:
+        raise ExampleError(f"{where}: mesh {node.mesh}: expected POSITION to fit it, found none")
+    v = np.concatenate(parts).astype(np.float64)
+    return v @ m[:3, :3].T + m[:3, 3]
+
+
+def _fitted(data: dict, mesh, name: str) -> dict:
+    """The records of placed objects each its own bent copy of ``mesh`` (the library's baked export, an editor's
+    bent duplicates): fitted (``core/fit.py``, the 19 numbers) to their world vertices; their places, sizes and
+    turns are the fitted ones."""
+    from ..fit import fit_params
+
+    shapes, names = data["vertices"], data["names"]
+    for k, v in enumerate(shapes):
+        if v is None:
+            raise ExampleError(f"{name}: object {k + 1} (node {names[k]}): an instance of {INSTANCING}; fit expects one "
+                               "node an object, each its own bent copy of the mesh")
+        if len(v) not in (mesh.vertex_count, mesh.source_count):
+            raise ExampleError(f"{name}: object {k + 1} (node {names[k]}): {len(v)} vertices; expected the mesh's "
+                               f"{mesh.vertex_count} in its order, to fit it")
+    res = fit_params(mesh, shapes, extended=True)
+    if res.exceeds.any():
+        k = res.worst
+        raise ExampleError(f"{name}: object {k + 1} (node {names[k]}): expected a bent copy of the mesh, found one its "
+                           f"best fit misses by {res.max[k]:.3g} axis lengths at a vertex (at most {res.max_residual:g})")
+    return {**_read_records(res.params, name), "kind": data.get("kind")}
 
 
 def _records_of(gltf, blob, attrs: dict, n: int, where: str) -> np.ndarray | None:
@@ -256,12 +297,18 @@ def _read_gltf(path: Path) -> dict:
     return {**_placed(np.stack(mats)), "kind": _kinds(nodes)}
 
 
-def read_example(source, window=None, *, layer: str | None = None) -> Example:
+def read_example(source, window=None, *, layer: str | None = None, fit=None, bounds=None) -> Example:
     """An :class:`~axialdeform.core.learn.Example` from a CSV table, a parameter file, a glTF scene, a scene
     file's layer (``layer``: its name; the layer's instances as drawn), or an (n, 16+) parameter array.
 
     window : (x0, z0, x1, z1) or None
         The ground the example covers (None: the objects' bounding box grown by half a mean spacing).
+    fit : BaseMesh or None
+        A ``.glb`` of one node an object, each its own bent copy of this mesh (the same vertices in the same
+        order: the library's baked export, an editor's bent duplicates): each object's record is fitted to its
+        vertices (``core/fit.py``), so its bend, scale, twist and taper are learned too.
+    bounds : (x0, z0, x1, z1) or None
+        The terrain's ground: the default window is cut to it.
     """
     if not isinstance(source, (str, os.PathLike)):
         data, name = _read_records(source, "<params>"), "<params>"
@@ -271,7 +318,9 @@ def read_example(source, window=None, *, layer: str | None = None) -> Example:
         if suffix == ".csv":
             data = _read_csv(path)
         elif suffix == ".glb":
-            data = _read_glb(path)
+            data = _read_glb(path, vertices=fit is not None)
+            if fit is not None:
+                data = _fitted(data, fit, name)
         elif suffix == ".gltf":
             data = _read_gltf(path)
         elif suffix == ".toml":
@@ -282,12 +331,17 @@ def read_example(source, window=None, *, layer: str | None = None) -> Example:
             data = _read_records(scene.layers[names.index(layer)].params, name)
         else:
             data = _read_records(read_params(path, allow_mesh_mismatch=True), name)
+    if fit is not None and not (isinstance(source, (str, os.PathLike)) and Path(source).suffix.lower() == ".glb"):
+        raise ExampleError(f"{name}: fit: expected a .glb of placed objects, one node an object, to fit")
     xz = data["xz"]
     if len(xz) == 0:
         raise ExampleError(f"{name}: no objects; expected at least one")
     if not np.isfinite(xz).all():
         raise ExampleError(f"{name}: a position is not finite")
-    return Example(xz, _window(xz, window, name), data.get("size"), data.get("kind"), data.get("yaw"), name, data.get("records"))
+    w = _window(xz, window, name)
+    if window is None and bounds is not None:  # the grown box, on the terrain
+        w = (max(w[0], bounds[0]), max(w[1], bounds[1]), min(w[2], bounds[2]), min(w[3], bounds[3]))
+    return Example(xz, w, data.get("size"), data.get("kind"), data.get("yaw"), name, data.get("records"))
 
 
 def _toml(v) -> str:
@@ -363,7 +417,8 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
     ----------
     example : str, PathLike, (n, 16+) array or Example
         What :func:`read_example` reads (a CSV table, a parameter file, a glTF scene, a scene file with
-        ``layer``), or an :class:`~axialdeform.core.learn.Example`.
+        ``layer``), or an :class:`~axialdeform.core.learn.Example` (:func:`read_example`'s own, e.g. with ``fit``:
+        a glTF of baked objects, each fitted to a base mesh).
     terrain : str, PathLike or None
         A scene file with a height-map terrain the example stands on (None: flat ground, no features).
     window : (x0, z0, x1, z1) or None
@@ -389,11 +444,9 @@ def learn_layer(example, terrain=None, *, window=None, layer: str | None = None,
     -------
     list of LearnedLayer
     """
-    ex = example if isinstance(example, Example) else read_example(example, window, layer=layer)
     ground = read_terrain(terrain, mask)[2] if terrain is not None else None
-    if ground is not None and window is None and not isinstance(example, Example):  # the grown box, on the terrain
-        g, w = ground.bounds, ex.window
-        ex = dataclasses.replace(ex, window=(max(w[0], g[0]), max(w[1], g[1]), min(w[2], g[2]), min(w[3], g[3])))
+    bounds = ground.bounds if ground is not None else None
+    ex = example if isinstance(example, Example) else read_example(example, window, layer=layer, bounds=bounds)
     for f in features or ():
         if f not in FEATURES or (ground is not None and f not in ground.names):
             raise ExampleError(f"features: {f!r}: expected some of {', '.join(ground.names if ground else FEATURES)}"
