@@ -281,3 +281,33 @@ def test_tools_learn_gltf_compares_a_gltf_scene_on_its_ground_mesh(tmp_path, cap
     place = [r.split("|")[calibrated.index("the example's figures: as far off or farther")].strip() for r in rows[2:4]]
     assert all(re.fullmatch(r"total [01]/1, quartiles [01]/1, L [01]/1, Diggle [01]/1", t) for t in place), place
     assert "1 random halves, each learned and the other compared, both ways (2)" in rows[4]
+
+
+def test_fit_and_the_records_refuse_what_they_cannot_read(tmp_path):
+    """``--fit`` fits one node an object: instances of EXT_mesh_gpu_instancing, a table, a missing mesh are
+    refused in one line, exit 2; a node whose record attributes have the wrong shape too."""
+    xz = np.random.default_rng(1).uniform(0, 10, (20, 2))
+    _foreign_instanced(tmp_path / "rocks.glb", np.stack([xz[:, 0], np.zeros(20), xz[:, 1]], 1))
+    (tmp_path / "plot.csv").write_text("x,z\n" + "".join(f"{a},{b}\n" for a, b in xz))
+    for args, message in (((tmp_path / "rocks.glb", "--fit"), r"rocks\.glb: object 1 \(node .*\): an instance of "
+                                                              r"EXT_mesh_gpu_instancing; fit expects one node an object"),
+                          ((tmp_path / "plot.csv", "--fit"), r"plot\.csv: fit: expected a \.glb"),
+                          ((tmp_path / "rocks.glb", "--fit", "--mesh", tmp_path / "none.obj"), r"none\.obj: no such mesh file")):
+        res = run("learn", *args, "-o", tmp_path / "o.toml")
+        assert res.returncode == 2 and "Traceback" not in res.stderr, res.stderr
+        assert len(res.stderr.strip().splitlines()) == 1 and re.search(message, res.stderr), res.stderr
+    import pygltflib
+
+    g = pygltflib.GLTF2().load(str(tmp_path / "rocks.glb"))  # the library's offsets, one number short an instance
+    blob = g.binary_blob()
+    d = np.zeros((20, 3), np.float32).tobytes()
+    g.bufferViews.append(pygltflib.BufferView(buffer=0, byteOffset=len(blob), byteLength=len(d)))
+    g.accessors.append(pygltflib.Accessor(bufferView=len(g.bufferViews) - 1, componentType=5126, count=20, type="VEC3"))
+    a = len(g.accessors) - 1
+    g.nodes[1].extensions["EXT_mesh_gpu_instancing"]["attributes"].update(_AXIAL_D12=a, _AXIAL_D34=a, _AXIAL_D5=a)
+    g.buffers[0].byteLength = len(blob) + len(d)
+    g.set_binary_blob(blob + d)
+    g.save(str(tmp_path / "odd.glb"))
+    res = run("learn", tmp_path / "odd.glb", "-o", tmp_path / "o.toml")
+    assert res.returncode == 2 and re.search(r"odd\.glb: node .*: _AXIAL_D12: expected VEC4, one finite value an "
+                                             r"instance \(20\), found shape \(20, 3\)", res.stderr), res.stderr

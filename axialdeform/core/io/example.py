@@ -223,8 +223,10 @@ def _world_vertices(gltf, blob, node, m: np.ndarray, where: str) -> np.ndarray:
             parts.append(read_accessor(gltf, blob, a, "POSITION", where))
     if not parts:
         raise ExampleError(f"{where}: mesh {node.mesh}: expected POSITION to fit it, found none")
-    v = np.concatenate(parts).astype(np.float64)
-    return v @ m[:3, :3].T + m[:3, 3]
+    v = np.concatenate(parts).astype(np.float64) @ m[:3, :3].T + m[:3, 3]
+    if not np.isfinite(v).all():
+        raise ExampleError(f"{where}: mesh {node.mesh}: POSITION: expected finite vertices (under the node's matrix)")
+    return v
 
 
 def _fitted(data: dict, mesh, name: str) -> dict:
