@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from ..core.ground_features import FEATURES
-from ..core.io.example import learn_layer, learned_paths, read_example, read_terrain, write_learned
+from ..core.io.example import layer_mesh, learn_layer, learned_paths, read_example, read_terrain, write_learned
 from ..core.io.mesh import load_mesh
 from ..core.io.safeio import check_output_path
 from ..core.io.scene import parse_scene
@@ -39,8 +39,8 @@ def add_parser(sub) -> None:
                                                          "density maps are written beside it")
     p.add_argument("--apply-to", help="a scene file with another height-map terrain to fill with the learned "
                                       "scenery (default: the example's own terrain)")
-    p.add_argument("--mesh", default="tree", help="the mesh of each learned layer: a bundled name or a file "
-                                                  "(default: %(default)s)")
+    p.add_argument("--mesh", help="the mesh of each learned layer: a bundled name or a file (default: with --layer, "
+                                  "that layer's own mesh, axis frame, axes and parts; else tree)")
     p.add_argument("--window", type=_window, help="the ground the example covers, x0,z0,x1,z1 (default: the "
                                                   "objects' bounding box grown by half a mean spacing)")
     p.add_argument("--layer", help="the layer of a scene-file example (required there; default: none)")
@@ -50,8 +50,8 @@ def add_parser(sub) -> None:
     p.add_argument("--features", type=lambda t: tuple(f.strip() for f in t.split(",") if f.strip()),
                    help=f"the ground's features the intensity may depend on, comma-separated (default: all of "
                         f"{', '.join(FEATURES[:-1])}, and water with --mask)")
-    p.add_argument("--size", type=float, default=1.0, help="the scale of an object of the example's median size "
-                                                           "(default: %(default)g)")
+    p.add_argument("--size", type=float, help="the scale of an object of the example's median size (default: the "
+                                              "records' own median scale where the example is made of them, else 1)")
     p.add_argument("--seed", type=int, default=0, help="the seed of the simulations and the layers (default: %(default)s)")
     p.add_argument("--errors", choices=ERRORS, default="clumps",
                    help="which errors decide the ground's terms of an example in clumps: the clumps' own variation "
@@ -70,7 +70,7 @@ def run(args) -> None:
     example = args.example
     if args.fit:  # each object fitted to the mesh; the default window cut to the terrain, as learn_layer does
         bounds = read_terrain(args.terrain, args.mask)[2].bounds if args.terrain else None
-        example = read_example(args.example, args.window, layer=args.layer, fit=load_mesh(args.mesh, textures=False),
+        example = read_example(args.example, args.window, layer=args.layer, fit=load_mesh(args.mesh or "tree", textures=False),
                                bounds=bounds)
     learned = learn_layer(example, args.terrain, window=args.window, layer=args.layer, mask=args.mask,
                           features=args.features, seed=args.seed, errors=args.errors)
@@ -82,7 +82,8 @@ def run(args) -> None:
             inputs.append(terrain.file)
     for path in learned_paths(args.output, learned):
         check_output_path(path, [p for p in inputs if p], "learned scene", overwrite=args.overwrite)
-    written = write_learned(args.output, learned, target, mesh=args.mesh, mask=mask, seed=args.seed,
+    mesh = args.mesh or (layer_mesh(args.example, args.layer) if args.layer else "tree")  # more of the layer's own objects
+    written = write_learned(args.output, learned, target, mesh=mesh, mask=mask, seed=args.seed,
                             size=args.size)
     for lay in learned:
         print(f"{lay.kind or 'layer'}: {lay.describe()}")

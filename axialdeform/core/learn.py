@@ -82,9 +82,9 @@ class Example:
         Each object's turn about up (radians), where the example has it.
     source : str
         Where it came from (error messages).
-    records : (n, 16|19|22) float64 or None
-        Each object's record (axis 0's: :func:`~axialdeform.core.marks.standard_records`), where the example
-        is made of the library's records: its bend, twist, taper and tint are learned too.
+    records : (n, 10 K + 6 (+3, +6)) float64 or None
+        Each object's record (of K axes), where the example is made of the library's records: its bend (each
+        axis's), twist, taper and tint are learned too.
     """
 
     xz: np.ndarray
@@ -225,8 +225,10 @@ class LearnedLayer:
         m, marks = self.marks, []
         if m.bend is not None:
             marks.append(f"offsets within {m.bend:.{digits}g}")
-        if m.twist is not None:
-            marks.append(f"twist within {m.twist:.{digits}g}, taper up to {m.taper:.{digits}g}")
+        if m.twist:
+            marks.append(f"twist within {m.twist:.{digits}g}")
+        if m.taper:
+            marks.append(f"taper up to {m.taper:.{digits}g}")
         if m.tint is not None:
             marks.append(f"tint {m.tint[0]:.{digits}g} of ({', '.join(f'{c:.{digits}g}' for c in m.tint[1])}), hue {m.tint[2]:.{digits}g}")
         return (f"learned from {self.count} objects: log rate = {self.intensity.coef[0]:.{digits}g}{terms}; "
@@ -532,14 +534,14 @@ OVERSAMPLE = 4.0
 
 
 def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: float = OVERSAMPLE,
-                 axis_length: float | None = None) -> tuple[dict, np.ndarray]:
+                 mesh=None) -> tuple[dict, np.ndarray]:
     """A generated layer's recipe keys for ``layer`` over ``extent`` (x0, z0, x1, z1) of ``ground`` (the same
     ground it was learned on, or another: its features), and its density map, (rows, cols) in [0, 1] over
     ``extent`` (default the ground's grid, or 256 x 256 on flat ground): ``lambda / rate`` at each pixel's
     centre, where ``rate = oversample * max lambda`` (fewer where the hard core needs larger cells); in clumps
     8 parents (``CLUMP_PARENTS``) to every ``s x s`` cells of area ``8 / kappa``,
     ``s = ceil(sqrt(oversample max lambda 8 / kappa))`` (2 .. 256), so ``rate = s^2 kappa / 8``.  The marks'
-    keys (:meth:`~axialdeform.core.marks.Marks.recipe`; the bend in ``axis_length``, the layer's mesh's)."""
+    keys (:meth:`~axialdeform.core.marks.Marks.recipe`; the bend in the axis lengths of ``mesh``, the layer's)."""
     x0, z0, x1, z1 = extent
     if shape is None:
         shape = ground.grids["altitude"].shape if ground is not None else (256, 256)
@@ -564,5 +566,5 @@ def layer_recipe(layer: LearnedLayer, ground, extent, shape=None, oversample: fl
         min_distance = min(hard, 0.9 / math.sqrt(rate))
         tile, clumps = 32.0 / math.sqrt(rate), {}
     keys = {"rate": float(rate), "tile": float(tile), "min_distance": float(min_distance), **clumps,
-            **layer.marks.recipe(axis_length)}
+            **layer.marks.recipe(mesh)}
     return keys, np.clip(lam / rate, 0.0, 1.0)

@@ -17,9 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .generate import MAX_BEND
-from .record import OFFSETS, TAPER, TINT, TWIST, WIDTHS, split_record, tree_shape
+from .record import OFFSETS, SCALE, TAPER, TINT, TWIST, WIDTHS, split_record, tree_shape
 
-__all__ = ["Marks", "learn_marks", "standard_records", "bend_amplitude", "offset_differences", "tint_of_records"]
+__all__ = ["Marks", "learn_marks", "standard_records", "bend_amplitude", "joint_amplitude", "offset_differences",
+           "tint_of_records"]
 
 
 @dataclass(frozen=True)
@@ -38,10 +39,16 @@ class Marks:
     bend : float or None
         The offsets' amplitude ``A`` in the records' own units: offsets uniform in ``[-A, A]`` (the recipe's
         ``bend`` is ``A / L``, L the layer's mesh's axis length; None: the example has no records).
+    child_bends : tuple of float or None
+        A tree's records: each child axis's amplitude ``A_j`` likewise (the recipe's ``bend`` of its level is
+        ``A_j / L_j``, on a mesh of as many axes; None: records of one axis).
     twist, taper : float or None
         Twists uniform in ``[-twist, twist]`` radians, tapers in ``[0, taper]`` (None: no extended records).
     tint : (amount, (r, g, b), hue) or None
         The recipe's ``tint``, ``tint_color`` and ``tint_hue`` (None: no tinted records).
+    record_scale : float or None
+        The median of the records' own scales (19 numbers and more; None: no such records): the scale of an
+        object of the median size, where the sizes are scales already.
     """
 
     scale: tuple | None = None
@@ -49,29 +56,46 @@ class Marks:
     scale_octiles: tuple | None = None
     yaw: tuple = (0.0, 2.0 * math.pi)
     bend: float | None = None
+    child_bends: tuple | None = None
     twist: float | None = None
     taper: float | None = None
     tint: tuple | None = None
+    record_scale: float | None = None
 
-    def recipe(self, axis_length: float | None = None) -> dict:
+    def recipe(self, mesh=None) -> dict:
         """The recipe's keys of these marks (``scale`` and its quantiles, ``yaw``, ``twist``, ``taper``,
-        ``tint``, ``tint_color``, ``tint_hue``, and ``bend`` = ``A / axis_length`` when both are known)."""
+        ``tint``, ``tint_color``, ``tint_hue``, and ``bend`` when ``mesh``, the layer's BaseMesh, is given: ``A / L``
+        -- or, for a tree's records on a mesh of as many axes, one amplitude a level of its hierarchy, the root
+        mean square of ``A_j / L_j`` over its axes)."""
         keys: dict = {"yaw": list(self.yaw)}
         if self.scale is not None:
             keys["scale"] = list(self.scale)
         if self.scale_quartiles is not None:
             keys["scale_quartiles"] = list(self.scale_quartiles)
             keys["scale_octiles"] = list(self.scale_octiles)
-        if self.bend is not None and axis_length:
-            keys["bend"] = float(min(self.bend / axis_length, MAX_BEND))
-        if self.twist is not None:
+        if self.bend is not None and mesh is not None:
+            keys["bend"] = _level_bends(self.bend, self.child_bends, mesh)
+        if self.twist:  # none or 0: the recipe's own default, 0
             keys["twist"] = float(self.twist)
-        if self.taper is not None:
+        if self.taper:
             keys["taper"] = float(self.taper)
         if self.tint is not None:
             amount, color, hue = self.tint
             keys.update(tint=float(amount), tint_color=[float(c) for c in color], tint_hue=float(hue))
         return keys
+
+
+def _level_bends(bend: float, children: tuple | None, mesh) -> float | list:
+    """The recipe's ``bend`` of amplitudes ``bend`` (axis 0) and ``children`` (the child axes') on ``mesh``: one
+    number, or one a level of its hierarchy where the records have its child axes."""
+    root = min(bend / mesh.axis.length, MAX_BEND)
+    tree = getattr(mesh, "tree", None)
+    if not children or tree is None or len(tree.axes) != len(children) + 1:
+        return float(root)
+    depth = np.asarray(tree.depth[1:])
+    ratio = np.asarray(children) / np.array([a.length for a in tree.axes[1:]])
+    levels = [root] + [float(min(math.sqrt(np.mean(ratio[depth == d] ** 2)), MAX_BEND)) for d in range(1, int(depth.max()) + 1)]
+    return [float(b) for b in levels]
 
 
 def standard_records(params: np.ndarray) -> np.ndarray:
@@ -98,6 +122,14 @@ def bend_amplitude(offsets: np.ndarray) -> float:
     return float(math.sqrt(1.5 * np.mean(offset_differences(offsets) ** 2)))
 
 
+def joint_amplitude(offsets: np.ndarray) -> float:
+    """``A`` of a child axis's offsets ``(n, 5, 2)``: drawn uniform in ``[-A, A]``, then projected orthogonally
+    onto the offsets that keep its joint closed, value and slope (``core/axes.py``'s ``anchor_projection``, of
+    rank 3 of 5), so their squares sum to ``A^2 trace(P) / 3 = A^2`` a component in the mean:
+    ``A = sqrt(5 mean d^2)``."""
+    return float(math.sqrt(5.0 * np.mean(np.asarray(offsets, np.float64) ** 2)))
+
+
 def tint_of_records(tint: np.ndarray) -> tuple[float, tuple, float]:
     """The recipe's ``(tint, tint_color, tint_hue)`` of tints ``(n, 3)``: the colour is each channel's brightest;
     each object's tint over it, ``r_c = 1 - amount m_c``, has the first channel's ``m`` uniform (mean 1/2: the
@@ -119,7 +151,7 @@ def tint_of_records(tint: np.ndarray) -> tuple[float, tuple, float]:
 
 def learn_marks(size: np.ndarray | None, yaw: np.ndarray | None, records: np.ndarray | None) -> Marks:
     """The :class:`Marks` of one kind's objects: ``size`` (n,) (any unit, or None), ``yaw`` (n,) radians (or
-    None) and ``records`` (n, 16+) (axis 0's standard records, :func:`standard_records`; or None)."""
+    None) and ``records`` (n, 10 K + 6 (+3, +6)): the library's records, of any number of axes (or None)."""
     scale = quartiles = octiles = None
     if size is not None and len(size):
         s = np.asarray(size, np.float64) / np.median(size)  # median 1; the generator draws through nine quantiles
@@ -130,13 +162,18 @@ def learn_marks(size: np.ndarray | None, yaw: np.ndarray | None, records: np.nda
         a = np.mod(yaw, 2.0 * math.pi)
         if np.ptp(a) < math.pi:  # turned one way, within half a turn: that range
             turn = (float(a.min()), float(a.max()))
-    bend = twist = taper = tint = None
+    bend = children = twist = taper = tint = record_scale = None
     if records is not None and len(records):
-        r = np.asarray(records, np.float64)
+        full = np.asarray(records, np.float64)
+        r, axes = standard_records(full), tree_shape(full.shape[1])[0]
         bend = bend_amplitude(r[:, OFFSETS])
+        if axes > 1:  # a tree's child axes: each one's amplitude
+            child = split_record(full, axes)[1].astype(np.float64)  # (n, K - 1, 5, 2)
+            children = tuple(joint_amplitude(child[:, j]) for j in range(axes - 1))
         if r.shape[1] >= WIDTHS[1]:
+            record_scale = float(np.median(r[:, SCALE]))
             twist = float(math.sqrt(3.0 * np.mean(r[:, TWIST] ** 2)))
             taper = float(np.clip(2.0 * np.mean(r[:, TAPER]), 0.0, 0.999))
         if r.shape[1] >= WIDTHS[2]:
             tint = tint_of_records(r[:, TINT])
-    return Marks(scale, quartiles, octiles, turn, bend, twist, taper, tint)
+    return Marks(scale, quartiles, octiles, turn, bend, children, twist, taper, tint, record_scale)

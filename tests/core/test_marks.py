@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,6 +25,7 @@ from axialdeform.core.record import OFFSETS, POSITION, TAPER, TINT, TWIST, join_
 from axialdeform.core.variation import Variation
 
 EXTENT = (0.0, 0.0, 40.0, 40.0)
+ROOT = Path(__file__).resolve().parents[2]
 DRAWN = {"bend": 0.2, "twist": 0.5, "taper": 0.3, "tint": 0.4, "tint_color": (0.8, 0.6, 0.3), "tint_hue": 0.5,
          "scale": (0.8, 1.2)}
 
@@ -40,7 +42,7 @@ def _grown(stone, seed: int, **keys) -> np.ndarray:
 def test_a_recipes_marks_are_learned_back(stone):
     params = _grown(stone, 1, **DRAWN)
     marks = learn_marks(params[:, 16], params[:, 14], standard_records(params))
-    keys = marks.recipe(stone.axis.length)
+    keys = marks.recipe(stone)
     assert len(params) > 2500
     assert keys["bend"] == pytest.approx(0.2, rel=0.1)
     assert keys["twist"] == pytest.approx(0.5, rel=0.1) and keys["taper"] == pytest.approx(0.3, rel=0.1)
@@ -55,7 +57,7 @@ def test_a_layer_grown_from_the_learned_marks_draws_them_as_the_example(stone):
     offsets as their differences between control points, over the axis length: the shift that keeps the
     anchor in place is the same for both)."""
     example = _grown(stone, 3, **DRAWN)
-    keys = learn_marks(example[:, 16], example[:, 14], standard_records(example)).recipe(stone.axis.length)
+    keys = learn_marks(example[:, 16], example[:, 14], standard_records(example)).recipe(stone)
     grown = _grown(stone, 4, **{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items()})
     L_ = stone.axis.length
     pairs = [(offset_differences(example[:, OFFSETS]).ravel() / L_, offset_differences(grown[:, OFFSETS]).ravel() / L_),
@@ -89,7 +91,7 @@ def test_a_trees_records_are_read_at_their_own_columns():
     assert tree.shape == (60, 42)
     ex = read_example(tree)
     assert np.array_equal(ex.xz, std[:, POSITION][:, [0, 2]].astype(np.float64))
-    assert np.array_equal(ex.records, std.astype(np.float64))
+    assert np.array_equal(standard_records(ex.records), std.astype(np.float64))
     with pytest.raises(ExampleError, match=r"<params>: expected records of 10 K \+ 6"):
         read_example(np.zeros((5, 17)))
 
@@ -162,3 +164,33 @@ def test_learn_fits_baked_objects_to_the_mesh(tmp_path, stone):
     with pytest.raises(ExampleError, match=r"stones.csv: fit: expected a .glb"):
         (tmp_path / "stones.csv").write_text("x,z\n1,2\n3,4\n5,1\n")
         read_example(tmp_path / "stones.csv", fit=stone)
+
+
+def test_more_of_a_scene_layer_grows_its_own_trees_bent_level_by_level(tmp_path):
+    """``learn SCENE --layer trees`` without ``--mesh``: the learned layer is the layer's own mesh with its axes
+    (the forest example's ten-axis tree), each level of the hierarchy bent as the example's (its child axes'
+    amplitudes over their lengths), and its objects at the example's own median scale."""
+    forest = ROOT / "examples" / "forest" / "forest.toml"
+    out = tmp_path / "more.toml"
+    done = subprocess.run([sys.executable, "-m", "axialdeform", "learn", str(forest), "--layer", "trees", "--terrain",
+                           str(forest), "-o", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    layer = tomllib.loads(out.read_text())["layer"][0]
+    assert layer["mesh"] == "tree" and Path(layer["axes"]) == (ROOT / "examples" / "forest" / "tree-axes.toml").resolve()
+    assert layer["wind"] is True  # the layer's own keys of its objects
+    example = ad.Scene.load(forest).layers[0]
+    grown = ad.Scene.load(out).layers[0]
+    assert grown.mesh.axis_count == example.mesh.axis_count == 10
+    bends = layer["generate"]["bend"]
+    assert isinstance(bends, list) and len(bends) == 3 and bends[1] > 2 * bends[0]  # branches bend more than the trunk
+    for level in range(3):  # each level's offsets over its axes' lengths, as the example's
+        axes = [j for j in range(10) if example.mesh.tree.depth[j] == level]
+        spread = [np.sqrt(np.mean([np.mean(offset_differences(_axis_offsets(lay.params, j)) ** 2) / lay.mesh.tree.axes[j].length ** 2
+                                   for j in axes])) for lay in (example, grown)]
+        assert spread[1] == pytest.approx(spread[0], rel=0.15), (level, spread)
+    assert np.median(grown.params[:, -3]) == pytest.approx(np.median(example.params[:, -3]), rel=0.1)  # the scale
+
+
+def _axis_offsets(params: np.ndarray, j: int) -> np.ndarray:
+    """Axis j's ten offsets of records of ten axes (axis 0's first, then the child axes', then the rest)."""
+    return params[:, 10 * j:10 * j + 10]

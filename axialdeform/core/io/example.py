@@ -43,13 +43,16 @@ from ..surface import load_density, load_surface
 from ..transforms import matrices_from_quaternions
 from .atomic import atomic_path, atomic_write_text
 from .glb import INSTANCING, load_glb, read_accessor
-from .mesh import load_mesh
+from .mesh import load_mesh, with_axes
 from .params import read_params
 from .safeio import open_regular
 from .scene import parse_scene
 
-__all__ = ["read_example", "write_learned_scene", "read_terrain", "learn_layer", "write_learned", "learned_paths", "MAX_EXAMPLE_BYTES"]
+__all__ = ["read_example", "write_learned_scene", "read_terrain", "learn_layer", "write_learned", "learned_paths", "layer_mesh",
+           "MAX_EXAMPLE_BYTES"]
 
+#: a learned layer's keys of its objects (a scene file layer's): what ``learn --layer`` carries from the example's
+MESH_KEYS = ("mesh", "axis", "axes", "parts", "color", "wind")
 #: the largest example file read (bytes)
 MAX_EXAMPLE_BYTES = 1 << 30
 
@@ -127,15 +130,15 @@ def _read_csv(path: Path) -> dict:
 
 
 def _read_records(params: np.ndarray, name: str) -> dict:
-    """Each record's place, its scale as its size, its turn about up, and axis 0's standard record (a tree's
-    child axes' offsets left out: its position stands after them)."""
+    """Each record's place, its scale as its size, its turn about up (axis 0's standard record: a tree's child
+    axes' offsets stand before its position), and the records themselves."""
     params = np.asarray(params, np.float64)
     if params.ndim != 2 or not is_record_width(params.shape[1]):
         raise ExampleError(f"{name}: expected records of 10 K + 6 (+ 3, + 6) numbers an object, found an array of shape "
                            f"{params.shape}")
     rec = standard_records(params)
     size = rec[:, SCALE] if rec.shape[1] > SCALE else None
-    return {"xz": rec[:, POSITION][:, [0, 2]], "size": size, "yaw": rec[:, ANGLES][:, 1], "records": rec}
+    return {"xz": rec[:, POSITION][:, [0, 2]], "size": size, "yaw": rec[:, ANGLES][:, 1], "records": params}
 
 
 def _trs(t, r, s) -> np.ndarray:
@@ -349,6 +352,8 @@ def read_example(source, window=None, *, layer: str | None = None, fit=None, bou
 def _toml(v) -> str:
     if isinstance(v, str):
         return json.dumps(v)  # a TOML basic string is a JSON string
+    if isinstance(v, dict):  # an inline table (an axes list's entries)
+        return "{" + ", ".join(f"{json.dumps(str(k))} = {_toml(x)}" for k, x in v.items()) + "}"
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_toml(x) for x in v) + "]"
     if isinstance(v, bool):
@@ -377,7 +382,8 @@ def write_learned_scene(path, terrain: dict | None, layers: list, header: str = 
         density = path.with_name(f"{path.stem}-{lay['name']}-density.png")
         _write_density(density, lay["density"])
         written.append(density)
-        lines += ["[[layer]]", f"name = {_toml(lay['name'])}", f"mesh = {_toml(lay['mesh'])}"]
+        lines += ["[[layer]]", f"name = {_toml(lay['name'])}"]
+        lines += [f"{k} = {_toml(lay[k])}" for k in MESH_KEYS if k in lay]
         lines += [f"# {c}" for c in lay.get("comments", ())]
         lines.append("[layer.generate]")
         lines += [f"{k} = {_toml(v)}" for k, v in lay["generate"].items()]
@@ -469,22 +475,62 @@ def learned_paths(out, learned: list) -> list[Path]:
     return [out.with_name(f"{out.stem}-{name}-density.png") for name in _layer_names(learned)] + [out]
 
 
-def _axis_length(mesh) -> float:
-    """The axis length of the learned layers' ``mesh`` (a bundled name or a file): the offsets of an example's
-    records become the recipe's ``bend`` in it (the example taken to be of that mesh)."""
+def _mesh_keys(mesh) -> dict:
+    """A learned layer's mesh as a scene file's layer keys: ``mesh`` (a bundled name or a file) and, from a
+    dict of them, ``axis``, ``axes``, ``parts``, ``color`` and ``wind`` (:data:`MESH_KEYS`)."""
+    keys = dict(mesh) if isinstance(mesh, dict) else {"mesh": mesh}
+    odd = sorted(set(keys) - set(MESH_KEYS))
+    if "mesh" not in keys or odd:
+        raise ExampleError(f"mesh: expected a bundled name, a file or a layer's keys of its objects ({', '.join(MESH_KEYS)}), "
+                           f"found {sorted(keys)}")
+    return {k: str(v) if isinstance(v, Path) else v for k, v in keys.items()}
+
+
+def _layer_mesh(keys: dict):
+    """The BaseMesh a learned layer's mesh keys load (as the scene loads its layer): the offsets of an example's
+    records become the recipe's ``bend`` in its axes' lengths (the example taken to be of that mesh)."""
     try:
-        return float(load_mesh(mesh, textures=False).axis.length)
+        mesh = load_mesh(keys["mesh"], textures=False)
+        if keys.get("parts") is not None:
+            mesh = mesh.with_parts(tuple(keys["parts"]))
+        mesh = mesh.with_axis(keys.get("axis", "auto"))
+        return with_axes(mesh, keys["axes"], keys.get("axis", "auto")) if keys.get("axes") is not None else mesh
     except AxialDeformError as exc:
-        raise ExampleError(f"mesh: {mesh}: expected a mesh to turn the example's bend into axis lengths ({exc})") from None
+        raise ExampleError(f"mesh: {keys['mesh']}: expected a mesh to turn the example's bend into axis lengths ({exc})") from None
 
 
-def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None, seed: int = 0, extent=None,
-                  size: float = 1.0) -> list[Path]:
+def layer_mesh(scene_file, layer: str) -> dict:
+    """The keys of the objects of the layer ``layer`` of a scene file (``mesh``; ``axis``, ``axes``, ``parts``,
+    ``color``, ``wind`` where it has them; files as absolute paths): a layer learned from it grows the same
+    objects (``learn --layer`` without ``--mesh``)."""
+    recipe = parse_scene(scene_file)
+    named = [lay for lay in recipe.layers if lay.name == layer]
+    if not named:
+        raise ExampleError(f"{scene_file}: layer: expected one of {', '.join(lay.name for lay in recipe.layers) or 'none'} "
+                           f"(--layer NAME), found {layer!r}")
+    lay = named[0]
+    keys = {"mesh": lay.mesh if isinstance(lay.mesh, str) else str(Path(lay.mesh).resolve())}
+    if not (isinstance(lay.frame, str) and lay.frame == "auto"):
+        keys["axis"] = lay.frame if isinstance(lay.frame, str) else np.asarray(lay.frame, np.float64).tolist()
+    if lay.axes is not None:
+        keys["axes"] = str(Path(lay.axes).resolve()) if isinstance(lay.axes, Path) else lay.axes
+    if lay.parts is not None:
+        keys["parts"] = list(lay.parts)
+    if lay.color is not None:
+        keys["color"] = [float(c) for c in lay.color]
+    if lay.wind:
+        keys["wind"] = True
+    return keys
+
+
+def write_learned(out, learned: list, terrain, *, mesh="tree", mask=None, seed: int = 0, extent=None,
+                  size: float | None = None) -> list[Path]:
     """The scene file ``out`` of ``learned`` (:func:`learn_layer`) over ``terrain`` (a scene file: the example's
-    own, or another one, ``mask`` its water), one generated layer a kind with ``mesh``; on flat ground
-    (``terrain`` None) over ``extent`` (default: the example's window); ``size``: the scale of an object of the
-    example's median size.  Returns the paths written."""
-    if not (math.isfinite(size) and size > 0):
+    own, or another one, ``mask`` its water), one generated layer a kind with ``mesh`` (a bundled name, a file,
+    or a layer's mesh keys, :func:`layer_mesh`'s); on flat ground (``terrain`` None) over ``extent`` (default:
+    the example's window); ``size``: the scale of an object of the example's median size (None: the records'
+    own median scale where the example is made of records with scales, else 1).  Returns the paths written."""
+    if size is not None and not (math.isfinite(size) and size > 0):
         raise ExampleError(f"size: expected a number > 0, found {size!r}")
 
     table, ground = None, None
@@ -498,21 +544,22 @@ def write_learned(out, learned: list, terrain, *, mesh: str = "tree", mask=None,
         if missing:
             raise ExampleError(f"{terrain or 'flat ground'}: expected the feature {missing[0]} the layer "
                                f"{lay.kind or 'learned'} depends on{' (give its mask)' if missing[0] == 'water' else ''}")
-    layers, names = [], _layer_names(learned)
-    axis_length = _axis_length(mesh) if any(lay.marks.bend is not None for lay in learned) else None
+    layers, names, mesh = [], _layer_names(learned), _mesh_keys(mesh)
+    base = _layer_mesh(mesh) if any(lay.marks.bend is not None for lay in learned) else None
     for k, lay in enumerate(learned):
-        keys, density = layer_recipe(lay, ground, extent, axis_length=axis_length)
+        keys, density = layer_recipe(lay, ground, extent, mesh=base)
         keys["seed"] = seed + k
+        median = size if size is not None else lay.marks.record_scale or 1.0
         if "scale" in keys:
-            keys["scale"] = [size * v for v in keys["scale"]]
+            keys["scale"] = [median * v for v in keys["scale"]]
             for key in ("scale_quartiles", "scale_octiles"):
                 if key in keys:
-                    keys[key] = [size * v for v in keys[key]]
-        elif size != 1.0:
-            keys["scale"] = [size, size]
+                    keys[key] = [median * v for v in keys[key]]
+        elif median != 1.0:
+            keys["scale"] = [median, median]
         if terrain is None:
             keys["extent"] = list(extent)
         notes = lay.describe(6).split("; ", 1)
         name = names[k]
-        layers.append({"name": name, "mesh": mesh, "generate": keys, "density": density, "comments": notes})
+        layers.append({"name": name, **mesh, "generate": keys, "density": density, "comments": notes})
     return write_learned_scene(out, table, layers, "a scene learned by axialdeform learn (docs/learn.md)")
