@@ -51,7 +51,7 @@ from .scene import parse_scene
 __all__ = ["read_example", "write_learned_scene", "read_terrain", "learn_layer", "write_learned", "learned_paths", "layer_mesh",
            "MAX_EXAMPLE_BYTES"]
 
-#: a learned layer's keys of its objects (a scene file layer's): what ``learn --layer`` carries from the example's
+#: a learned layer's keys of its objects (a scene file layer's): what ``learn --layer`` carries over from the example's layer
 MESH_KEYS = ("mesh", "axis", "axes", "parts", "color", "wind")
 #: the largest example file read (bytes)
 MAX_EXAMPLE_BYTES = 1 << 30
