@@ -194,3 +194,17 @@ def test_more_of_a_scene_layer_grows_its_own_trees_bent_level_by_level(tmp_path)
 def _axis_offsets(params: np.ndarray, j: int) -> np.ndarray:
     """Axis j's ten offsets of records of ten axes (axis 0's first, then the child axes', then the rest)."""
     return params[:, 10 * j:10 * j + 10]
+
+
+def test_a_trees_instanced_gltf_gives_its_child_axes_bends(tmp_path):
+    """The library's instanced glTF of a tree of ten axes carries each child axis's offsets (``_AXIAL_A{k}_*``):
+    read back as the records, the marks learn each child axis's amplitude."""
+    layer = ad.Scene.load(ROOT / "examples" / "forest" / "forest.toml").layers[0]
+    ad.export_glb(tmp_path / "trees.glb", layer.mesh, layer.params[:300], layout="instanced")
+    ex = read_example(tmp_path / "trees.glb")
+    assert ex.records.shape == (300, 109)  # ten axes' offsets, then the place, the angles, the scale, twist, taper
+    assert np.array_equal(ex.records[:, :100], layer.params[:300, :100].astype(np.float64))
+    marks = L.learn_layers(ex)[0].marks
+    assert len(marks.child_bends) == 9
+    bends = marks.recipe(layer.mesh)["bend"]
+    assert bends == pytest.approx([0.04, 0.22, 0.3], rel=0.15)

@@ -37,12 +37,23 @@ from ..generate_ground import GroundMaps
 from ..ground_features import FEATURES, GroundFeatures
 from ..learn import Example, layer_recipe, learn_layers
 from ..marks import standard_records
-from ..record import ANGLES, GLTF_ATTRIBUTES, GLTF_EXTENDED_ATTRIBUTES, GLTF_TINT_ATTRIBUTE, POSITION, SCALE, WIDTHS, is_record_width
+from ..record import (
+    ANGLES,
+    GLTF_ATTRIBUTES,
+    GLTF_EXTENDED_ATTRIBUTES,
+    GLTF_TINT_ATTRIBUTE,
+    MAX_RECORD_AXES,
+    POSITION,
+    SCALE,
+    WIDTHS,
+    is_record_width,
+    join_record,
+)
 from ..scene import load_scene
 from ..surface import load_density, load_surface
 from ..transforms import matrices_from_quaternions
 from .atomic import atomic_path, atomic_write_text
-from .glb import INSTANCING, load_glb, read_accessor
+from .glb import INSTANCING, child_columns, load_glb, read_accessor
 from .mesh import load_mesh, with_axes
 from .params import read_params
 from .safeio import open_regular
@@ -208,6 +219,8 @@ def _placed_in(gltf, where: str, vertices: bool = False) -> dict:
         raise ExampleError(f"{where}: no placed objects; expected EXT_mesh_gpu_instancing nodes or nodes with a mesh")
     rec = None
     if all(r is not None for r in records):  # every object has its record: its marks are learned too
+        if len({r.shape[1] for r in records}) > 1:  # nodes of other widths: axis 0's records, as far as all have them
+            records = [standard_records(r) for r in records]
         width = min(r.shape[1] for r in records)
         rec = np.concatenate([r[:, :width] for r in records])
     out = {**_placed(np.concatenate(mats)), "kind": _kinds(names), "records": rec}
@@ -256,8 +269,9 @@ def _fitted(data: dict, mesh, name: str) -> dict:
 
 def _records_of(gltf, blob, attrs: dict, n: int, where: str) -> np.ndarray | None:
     """The records of an instancing node's ``n`` instances written by this library (``_AXIAL_D12``, ``_AXIAL_D34``,
-    ``_AXIAL_D5``; ``_AXIAL_TWIST_TAPER`` and ``_COLOR_0`` where written), as far as the marks need them: the
-    offsets, twist, taper and tint (the place and size come from the node); None without the offsets."""
+    ``_AXIAL_D5``; ``_AXIAL_TWIST_TAPER``, ``_COLOR_0`` and a tree's child axes' ``_AXIAL_A{k}_*`` where written), as
+    far as the marks need them: the offsets, twist, taper and tint (the place and size come from the node); None
+    without the offsets."""
     if not all(k in attrs for k in GLTF_ATTRIBUTES if k != "_AXIAL_ANGLES"):
         return None
     tint_name = GLTF_TINT_ATTRIBUTE[0]
@@ -272,7 +286,21 @@ def _records_of(gltf, blob, attrs: dict, n: int, where: str) -> np.ndarray | Non
             if v.shape != (n, len(cols)) or not np.isfinite(v).all():
                 raise ExampleError(f"{where}: {name}: expected {kind}, one finite value an instance ({n}), found shape {v.shape}")
             out[:, list(cols)] = v
-    return out
+    axes = 1
+    while f"_AXIAL_A{axes}_D12" in attrs and axes < MAX_RECORD_AXES:  # a tree's child axes, one after the other
+        axes += 1
+    if axes == 1:
+        return out
+    children = np.zeros((n, axes - 1, 10))
+    for k in range(1, axes):
+        for name, (kind, first) in child_columns(k).items():
+            v = read_accessor(gltf, blob, attrs[name], name, where) if name in attrs else None
+            width = 4 if kind == "VEC4" else 2
+            if v is None or v.shape != (n, width) or not np.isfinite(v).all():
+                raise ExampleError(f"{where}: {name}: expected {kind}, one finite value an instance ({n}), found "
+                                   f"{'none' if v is None else f'shape {v.shape}'}")
+            children[:, k - 1, first:first + width] = v
+    return join_record(out, children.reshape(n, axes - 1, 5, 2)).astype(np.float64)
 
 
 def _kinds(names: list) -> np.ndarray | None:
