@@ -60,11 +60,11 @@ SPAN = (0.5, 5.0)
 #: clumps: many more close pairs than one radius makes; plain Matern patterns: 0.5 to 1 in 5 of 6 seeds, 0.16 in
 #: one; with a core: 0.003 to 0.14)
 CORE_GAIN = 0.25
-#: a core is fitted only where the example has more close pairs than the plain clumps make: at CORE_AT mean
-#: spacings its pair count ``lambda n K(r) / 2`` above theirs by at least CORE_Z standard errors of a count (the
-#: square root of theirs).  Plain Matern patterns: -0.3 to 1.8; with a core, bei and longleaf: 10 to 25
-CORE_Z = 4.0
-CORE_AT = 0.5
+#: a core stays only where the example has more close pairs than the plain clumps make: within the fitted core's
+#: radius its pair count ``lambda n K(a) / 2`` above theirs by at least CORE_Z standard errors of a count (the
+#: square root of theirs).  Plain Matern patterns whose contrast alone kept a core: -0.1 to 1.0; cores of bei,
+#: longleaf and the synthetic patterns with one: 4 to 22
+CORE_Z = 3.0
 #: Diggle's test takes each pattern's lambda as at least this share of its mean (:func:`_diggle`)
 TEST_FLOOR = 0.05
 
@@ -449,8 +449,9 @@ def _diggle(example: Example, intensity: Intensity, ground, seed: int, r: np.nda
 
 def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int = 0, clumped: bool = False) -> Spacing:
     """The hard core, and clumps or not: Diggle's test (:data:`SIMULATIONS` Poisson patterns of ``intensity``);
-    clumps fitted as a Matern cluster process by minimum contrast, with a core where the example has more close
-    pairs than the plain clumps make (:data:`CORE_Z`) and it fits far closer (:data:`CORE_GAIN`).  ``clumped``:
+    clumps fitted as a Matern cluster process by minimum contrast, with a core where it fits far closer
+    (:data:`CORE_GAIN`) and the example has more close pairs within its radius than the plain clumps make
+    (:data:`CORE_Z`).  ``clumped``:
     the test found clumps already (with the intensity first fitted); only their parameters are fitted again for
     this ``intensity``."""
     xz, n = example.xz, len(example.xz)
@@ -493,15 +494,14 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     def radius_core(p):
         return math.exp(p[1]) / (1.0 + math.exp(-p[2])), 1.0 / (1.0 + math.exp(-p[3]))
 
-    at = int(np.argmin(np.where(ok, np.abs(r - CORE_AT * spacing), np.inf)))
-    plain = float(matern_cluster_k(r[at:at + 1], kappa, radius)[0])
-    if (k_obs[at] - plain) * math.sqrt(lam * n / (2.0 * plain)) < CORE_Z:  # the plain clumps make the close pairs
-        return Spacing(hard, "cluster", (kappa, radius))
     wider = min(0.5, math.log(r[-1] / radius) - 1e-6)  # starts: the plain clumps', fewer parents, wider; a core of R / 8
     inner = min((minimize(cored, [best.x[0] + dk, best.x[1] + dr, -2.0, g], method="Nelder-Mead", options=tight)
                  for dk in (0.0, -0.7) for dr in (0.0, wider) for g in (-1.0, 0.0)), key=lambda res: res.fun)
-    if inner.fun < CORE_GAIN * best.fun:  # clumps within clumps fit far closer: the core stays
-        a, share = radius_core(inner.x)
+    a, share = radius_core(inner.x)
+    at = int(np.argmin(np.where(ok, np.abs(r - a), np.inf)))  # the close pairs within the core's radius
+    plain = float(matern_cluster_k(r[at:at + 1], kappa, radius)[0])
+    close = (k_obs[at] - plain) * math.sqrt(lam * n / (2.0 * plain))  # above the plain clumps', in standard errors
+    if inner.fun < CORE_GAIN * best.fun and close >= CORE_Z:  # clumps within clumps fit far closer, where they show
         return Spacing(hard, "cluster", (math.exp(inner.x[0]), math.exp(inner.x[1])), (share, a))
     return Spacing(hard, "cluster", (kappa, radius))
 
