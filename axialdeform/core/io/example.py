@@ -32,23 +32,13 @@ import numpy as np
 import trimesh
 from PIL import Image
 
+from .. import record
 from ..errors import AxialDeformError, ExampleError
 from ..generate_ground import GroundMaps
 from ..ground_features import FEATURES, GroundFeatures
 from ..learn import Example, layer_recipe, learn_layers
 from ..marks import standard_records
-from ..record import (
-    ANGLES,
-    GLTF_ATTRIBUTES,
-    GLTF_EXTENDED_ATTRIBUTES,
-    GLTF_TINT_ATTRIBUTE,
-    MAX_RECORD_AXES,
-    POSITION,
-    SCALE,
-    WIDTHS,
-    is_record_width,
-    join_record,
-)
+from ..record import ANGLES, POSITION, SCALE, WIDTHS, is_record_width, join_record
 from ..scene import load_scene
 from ..surface import load_density, load_surface
 from ..transforms import matrices_from_quaternions
@@ -272,22 +262,22 @@ def _records_of(gltf, blob, attrs: dict, n: int, where: str) -> np.ndarray | Non
     ``_AXIAL_D5``; ``_AXIAL_TWIST_TAPER``, ``_COLOR_0`` and a tree's child axes' ``_AXIAL_A{k}_*`` where written), as
     far as the marks need them: the offsets, twist, taper and tint (the place and size come from the node); None
     without the offsets."""
-    if not all(k in attrs for k in GLTF_ATTRIBUTES if k != "_AXIAL_ANGLES"):
+    if not all(k in attrs for k in record.GLTF_ATTRIBUTES if k != "_AXIAL_ANGLES"):
         return None
-    tint_name = GLTF_TINT_ATTRIBUTE[0]
-    extra = {**GLTF_EXTENDED_ATTRIBUTES, tint_name: GLTF_TINT_ATTRIBUTE[1:]}
-    width = WIDTHS[2 if tint_name in attrs else 1 if any(k in attrs for k in GLTF_EXTENDED_ATTRIBUTES) else 0]
+    tint_name = record.GLTF_TINT_ATTRIBUTE[0]
+    extra = {**record.GLTF_EXTENDED_ATTRIBUTES, tint_name: record.GLTF_TINT_ATTRIBUTE[1:]}
+    width = WIDTHS[2 if tint_name in attrs else 1 if any(k in attrs for k in record.GLTF_EXTENDED_ATTRIBUTES) else 0]
     out = np.zeros((n, width))
     if width > WIDTHS[0]:
         out[:, SCALE] = 1.0
-    for name, (kind, cols) in {**GLTF_ATTRIBUTES, **extra}.items():
+    for name, (kind, cols) in {**record.GLTF_ATTRIBUTES, **extra}.items():
         if name in attrs and name != "_AXIAL_ANGLES":
             v = read_accessor(gltf, blob, attrs[name], name, where)
             if v.shape != (n, len(cols)) or not np.isfinite(v).all():
                 raise ExampleError(f"{where}: {name}: expected {kind}, one finite value an instance ({n}), found shape {v.shape}")
             out[:, list(cols)] = v
     axes = 1
-    while f"_AXIAL_A{axes}_D12" in attrs and axes < MAX_RECORD_AXES:  # a tree's child axes, one after the other
+    while f"_AXIAL_A{axes}_D12" in attrs and axes < record.MAX_RECORD_AXES:  # a tree's child axes, one after the other
         axes += 1
     if axes == 1:
         return out
