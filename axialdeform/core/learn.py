@@ -499,8 +499,9 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
                  for dk in (0.0, -0.7) for dr in (0.0, wider) for g in (-1.0, 0.0)), key=lambda res: res.fun)
     a, share = radius_core(inner.x)
     at = int(np.argmin(np.where(ok, np.abs(r - a), np.inf)))  # the close pairs within the core's radius
-    plain = float(matern_cluster_k(r[at:at + 1], kappa, radius)[0])
-    close = (k_obs[at] - plain) * math.sqrt(lam * n / (2.0 * plain))  # above the plain clumps', in standard errors
+    pairs = lam * n / 2.0  # a pair count is pairs K(r)
+    expected = pairs * max(float(matern_cluster_k(r[at:at + 1], kappa, radius)[0]), 0.0)
+    close = (pairs * k_obs[at] - expected) / math.sqrt(max(expected, 1.0))  # above the plain clumps', in standard errors
     if inner.fun < CORE_GAIN * best.fun and close >= CORE_Z:  # clumps within clumps fit far closer, where they show
         return Spacing(hard, "cluster", (math.exp(inner.x[0]), math.exp(inner.x[1])), (share, a))
     return Spacing(hard, "cluster", (kappa, radius))
