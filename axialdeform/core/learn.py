@@ -8,13 +8,14 @@ ground.  :func:`learn_layers` fits, per kind:
   a hinge of it at one of its octiles; the maximum-likelihood fit of an inhomogeneous Poisson process by
   Berman-Turner quadrature (a grid of dummy points over the window; Newton's method on the standardized
   terms, a small ridge).  A term stays only while it is significant (Bonferroni over the features; dropped
-  weakest first), so a pattern that ignores the slope does not learn a slope from noise;
+  weakest first), so a pattern that ignores the slope does not learn a slope from noise -- or, with
+  ``errors="poisson"``, while it lowers Akaike's criterion (the example's own ground reproduced);
 * **the spacing**: the hard core (the smallest distance between two objects), and whether the objects stand
   in clumps or apart: Diggle's global test of the inhomogeneous L-function against 19 Poisson patterns of the
   fitted intensity (maximum absolute deviation over r in [0.5, 5] mean spacings; each pattern's lambda at its
   own level).  Clumps are fitted as a Matern cluster process (parents ``kappa`` a square unit, children
   uniform in a disc of radius ``R``; with a core, a share of them within a smaller radius: clumps within
-  clumps) by minimum contrast on ``K(r)^(1/4)``;
+  clumps, where the example has the close pairs they make) by minimum contrast on ``K(r)^(1/4)``;
 * **the marks** (:mod:`~axialdeform.core.marks`): the sizes as scales (median 1: their nine quantiles at 0, 1/8,
   .., 1, which the generator draws through piecewise linearly), the turn about up, and the bend, twist, taper
   and tint of an example of the library's records, where the example has them.
@@ -451,9 +452,8 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     """The hard core, and clumps or not: Diggle's test (:data:`SIMULATIONS` Poisson patterns of ``intensity``);
     clumps fitted as a Matern cluster process by minimum contrast, with a core where it fits far closer
     (:data:`CORE_GAIN`) and the example has more close pairs within its radius than the plain clumps make
-    (:data:`CORE_Z`).  ``clumped``:
-    the test found clumps already (with the intensity first fitted); only their parameters are fitted again for
-    this ``intensity``."""
+    (:data:`CORE_Z`).  ``clumped``: the test found clumps already (with the intensity first fitted); only their
+    parameters are fitted again for this ``intensity``."""
     xz, n = example.xz, len(example.xz)
     if n < 2:
         return Spacing(0.0, "poisson")
