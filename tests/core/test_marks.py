@@ -104,8 +104,7 @@ def test_learn_from_a_parameter_file_writes_the_marks(tmp_path, stone):
     from axialdeform.core.io.example import write_learned
 
     write_learned(tmp_path / "out.toml", layers, None, mesh="stone")
-    recipe = ad.Scene.load(tmp_path / "out.toml").layers[0]
-    grown = recipe.params
+    grown = ad.Scene.load(tmp_path / "out.toml").layers[0].params
     assert grown.shape[1] == 22
     assert bend_amplitude(grown[:, OFFSETS]) / stone.axis.length == pytest.approx(0.2, rel=0.1)
     assert np.abs(grown[:, TWIST]).max() == pytest.approx(0.5, rel=0.1)
@@ -161,8 +160,8 @@ def test_learn_fits_baked_objects_to_the_mesh(tmp_path, stone):
     assert np.abs(fitted - drawn).max() < 1e-3 * stone.axis.length  # the bends, up to the shift the fit leaves out
     with pytest.raises(ExampleError, match=r"editor.glb: object 1 \(node Rock.000\): .* vertices; expected the mesh's"):
         read_example(tmp_path / "editor.glb", fit=load_mesh("leaf", textures=False))
+    (tmp_path / "stones.csv").write_text("x,z\n1,2\n3,4\n5,1\n")
     with pytest.raises(ExampleError, match=r"stones.csv: fit: expected a .glb"):
-        (tmp_path / "stones.csv").write_text("x,z\n1,2\n3,4\n5,1\n")
         read_example(tmp_path / "stones.csv", fit=stone)
 
 
