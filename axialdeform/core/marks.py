@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .generate import MAX_BEND
-from .record import OFFSETS, SCALE, TAPER, TINT, TWIST, WIDTHS, split_record, tree_shape
+from .record import OFFSETS, TAPER, TINT, TWIST, WIDTHS, split_record, tree_shape
 
 __all__ = ["Marks", "learn_marks", "standard_records", "bend_amplitude", "joint_amplitude", "offset_differences",
            "tint_of_records"]
@@ -47,8 +47,9 @@ class Marks:
     tint : (amount, (r, g, b), hue) or None
         The recipe's ``tint``, ``tint_color`` and ``tint_hue`` (None: no tinted records).
     record_scale : float or None
-        The median of the records' own scales (19 numbers and more; None: no such records): the scale of an
-        object of the median size, where the sizes are scales already.
+        The median size of an example of records (None: no records, or no sizes): its sizes are scales already
+        (the records' own, or a glTF's under its nodes' transforms), so this is the scale of an object of the
+        median size.
     """
 
     scale: tuple | None = None
@@ -170,8 +171,9 @@ def learn_marks(size: np.ndarray | None, yaw: np.ndarray | None, records: np.nda
         if axes > 1:  # a tree's child axes: each one's amplitude
             child = split_record(full, axes)[1].astype(np.float64)  # (n, K - 1, 5, 2)
             children = tuple(joint_amplitude(child[:, j]) for j in range(axes - 1))
+        if size is not None and len(size):
+            record_scale = float(np.median(size))
         if r.shape[1] >= WIDTHS[1]:
-            record_scale = float(np.median(r[:, SCALE]))
             twist = float(math.sqrt(3.0 * np.mean(r[:, TWIST] ** 2)))
             taper = float(np.clip(2.0 * np.mean(r[:, TAPER]), 0.0, 0.999))
         if r.shape[1] >= WIDTHS[2]:

@@ -205,5 +205,6 @@ def test_a_trees_instanced_gltf_gives_its_child_axes_bends(tmp_path):
     assert np.array_equal(ex.records[:, :100], layer.params[:300, :100].astype(np.float64))
     marks = L.learn_layers(ex)[0].marks
     assert len(marks.child_bends) == 9
+    assert marks.record_scale == pytest.approx(np.median(layer.params[:300, -3]), rel=1e-5)  # glTF's SCALE, as drawn
     bends = marks.recipe(layer.mesh)["bend"]
     assert bends == pytest.approx([0.04, 0.22, 0.3], rel=0.15)

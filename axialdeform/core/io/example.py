@@ -32,18 +32,18 @@ import numpy as np
 import trimesh
 from PIL import Image
 
-from .. import record
 from ..errors import AxialDeformError, ExampleError
 from ..generate_ground import GroundMaps
 from ..ground_features import FEATURES, GroundFeatures
 from ..learn import Example, layer_recipe, learn_layers
 from ..marks import standard_records
-from ..record import ANGLES, POSITION, SCALE, WIDTHS, is_record_width, join_record
+from ..record import ANGLES, POSITION, SCALE, is_record_width, join_record
 from ..scene import load_scene
 from ..surface import load_density, load_surface
 from ..transforms import matrices_from_quaternions
 from .atomic import atomic_path, atomic_write_text
-from .glb import INSTANCING, child_columns, load_glb, read_accessor
+from .glb import INSTANCING, load_glb, read_accessor
+from .gltf_read import child_offsets, instance_columns, instance_records
 from .mesh import load_mesh, with_axes
 from .params import read_params
 from .safeio import open_regular
@@ -163,7 +163,7 @@ def _read_glb(path: Path, vertices: bool = False) -> dict:
     try:
         return _placed_in(gltf, str(path), vertices)
     except (TypeError, ValueError, IndexError, KeyError, AttributeError) as exc:  # a hostile file's odd JSON
-        if isinstance(exc, ExampleError):
+        if isinstance(exc, AxialDeformError):  # already in words: the file, the node, the field
             raise
         raise ExampleError(f"{path}: not a glTF scene of placed objects this reader understands ({type(exc).__name__}: "
                            f"{str(exc)[:80]})") from None
@@ -196,7 +196,7 @@ def _placed_in(gltf, where: str, vertices: bool = False) -> dict:
                 raise ExampleError(f"{where}: node {node.name or i}: EXT_mesh_gpu_instancing: expected its attributes "
                                    "to have one value an instance each")
             mats.append(m[None] @ _trs(t, r, sc))
-            records.append(_records_of(gltf, blob, attrs, n, f"{where}: node {node.name or i}"))
+            records.append(_records_of(gltf, blob, attrs, f"{where}: node {node.name or i}"))
             shapes += [None] * n
         else:
             mats.append(m[None])
@@ -257,40 +257,20 @@ def _fitted(data: dict, mesh, name: str) -> dict:
     return {**_read_records(res.params, name), "kind": data.get("kind")}
 
 
-def _records_of(gltf, blob, attrs: dict, n: int, where: str) -> np.ndarray | None:
-    """The records of an instancing node's ``n`` instances written by this library (``_AXIAL_D12``, ``_AXIAL_D34``,
-    ``_AXIAL_D5``; ``_AXIAL_TWIST_TAPER``, ``_COLOR_0`` and a tree's child axes' ``_AXIAL_A{k}_*`` where written), as
-    far as the marks need them: the offsets, twist, taper and tint (the place and size come from the node); None
-    without the offsets."""
-    if not all(k in attrs for k in record.GLTF_ATTRIBUTES if k != "_AXIAL_ANGLES"):
+def _records_of(gltf, blob, attrs: dict, where: str) -> np.ndarray | None:
+    """The records of an instancing node's instances written by this library (``_AXIAL_D12``, ``_AXIAL_D34``,
+    ``_AXIAL_D5``, and ``_AXIAL_TWIST_TAPER``, ``_COLOR_0``, a tree's child axes' ``_AXIAL_A{k}_*`` where written:
+    :func:`~axialdeform.core.io.gltf_read.instance_records`); None without the offsets."""
+    if not all(k in attrs for k in ("_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5")):
         return None
-    tint_name = record.GLTF_TINT_ATTRIBUTE[0]
-    extra = {**record.GLTF_EXTENDED_ATTRIBUTES, tint_name: record.GLTF_TINT_ATTRIBUTE[1:]}
-    width = WIDTHS[2 if tint_name in attrs else 1 if any(k in attrs for k in record.GLTF_EXTENDED_ATTRIBUTES) else 0]
-    out = np.zeros((n, width))
-    if width > WIDTHS[0]:
-        out[:, SCALE] = 1.0
-    for name, (kind, cols) in {**record.GLTF_ATTRIBUTES, **extra}.items():
-        if name in attrs and name != "_AXIAL_ANGLES":
-            v = read_accessor(gltf, blob, attrs[name], name, where)
-            if v.shape != (n, len(cols)) or not np.isfinite(v).all():
-                raise ExampleError(f"{where}: {name}: expected {kind}, one finite value an instance ({n}), found shape {v.shape}")
-            out[:, list(cols)] = v
-    axes = 1
-    while f"_AXIAL_A{axes}_D12" in attrs and axes < record.MAX_RECORD_AXES:  # a tree's child axes, one after the other
-        axes += 1
-    if axes == 1:
-        return out
-    children = np.zeros((n, axes - 1, 10))
-    for k in range(1, axes):
-        for name, (kind, first) in child_columns(k).items():
-            v = read_accessor(gltf, blob, attrs[name], name, where) if name in attrs else None
-            width = 4 if kind == "VEC4" else 2
-            if v is None or v.shape != (n, width) or not np.isfinite(v).all():
-                raise ExampleError(f"{where}: {name}: expected {kind}, one finite value an instance ({n}), found "
-                                   f"{'none' if v is None else f'shape {v.shape}'}")
-            children[:, k - 1, first:first + width] = v
-    return join_record(out, children.reshape(n, axes - 1, 5, 2)).astype(np.float64)
+    cols, n = instance_columns(gltf, blob, attrs, where)
+    rec = instance_records(cols, n, where).astype(np.float64)
+    axes = 1 + sum(1 for name in cols if re.fullmatch(r"_AXIAL_A[1-9][0-9]*_D12", str(name)))
+    if axes > 1:  # a tree's child axes, between axis 0's offsets and its position
+        rec = join_record(rec, child_offsets(cols, n, axes, where).reshape(n, axes - 1, 5, 2)).astype(np.float64)
+    if not np.isfinite(rec).all():
+        raise ExampleError(f"{where}: {INSTANCING}: expected finite records, found a value that is not")
+    return rec
 
 
 def _kinds(names: list) -> np.ndarray | None:

@@ -49,7 +49,7 @@ from .glb import (
     read_accessor,
 )
 
-__all__ = ["read_instanced_glb", "read_extras"]
+__all__ = ["read_instanced_glb", "read_extras", "instance_columns", "instance_records", "child_offsets"]
 
 
 def read_instanced_glb(path: str | os.PathLike, node: str | None = None, *, fallback: bool = False):
@@ -102,47 +102,10 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None, *, fall
     if missing or ("_AXIAL_ANGLES" not in attrs and "ROTATION" not in attrs):
         raise GltfError(f"{where}: {INSTANCING} attributes: expected {', '.join(ATTRIBUTES)} (TRANSLATION optional); "
                         f"missing {', '.join(missing) or '_AXIAL_ANGLES'}")
-    children = [name for name in attrs if str(name).startswith("_AXIAL_A") and str(name)[8:9].isdigit()]
-    if len(attrs) > 16 + 3 * MAX_RECORD_AXES or len(children) > 3 * (MAX_RECORD_AXES - 1):  # before reading any
-        raise GltfError(f"{where}: {INSTANCING} attributes: {len(attrs)} of them ({len(children)} of child axes); "
-                        f"expected at most {MAX_RECORD_AXES} axes' worth")
-    cols = {name: read_accessor(gltf, blob, attrs[name], name, where) for name in attrs}
-    for name, col in cols.items():  # each attribute's type, as docs/gltf/AXIALDEFORM_bend says (the npm plugin too)
-        kind = _attribute_type(str(name))
-        if kind is not None and col.shape[1] != COMPONENTS[kind]:
-            raise GltfError(f"{where}: {name}: expected {kind}, found {col.shape[1]} components")
-    counts = {len(v) for v in cols.values()}
-    if len(counts) != 1:
-        raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
-    n = counts.pop()
-    tint_name, tint_kind, tint_cols = GLTF_TINT_ATTRIBUTE
-    tinted = tint_name in cols
-    extended = tinted or "SCALE" in cols or "_AXIAL_TWIST_TAPER" in cols
-    params = np.zeros((n, WIDTHS[2 if tinted else 1 if extended else 0]), dtype=np.float32)
-    if extended:
-        params[:, SCALE] = 1.0
-        for name, (kind, idx) in {**EXTENDED_ATTRIBUTES, **({tint_name: (tint_kind, tint_cols)} if tinted else {})}.items():
-            if name in cols:
-                if cols[name].shape[1] != COMPONENTS[kind]:
-                    raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
-                params[:, list(idx)] = cols[name]
-        if "SCALE" in cols:
-            sc = cols["SCALE"]
-            if sc.shape[1] != 3 or not (sc == sc[:, :1]).all():
-                raise GltfError(f"{where}: SCALE: expected a uniform scale (VEC3 with three equal components) per instance")
-            params[:, SCALE] = sc[:, 0]
-    for name, (kind, idx) in ATTRIBUTES.items():
-        if name in cols:
-            if cols[name].shape[1] != COMPONENTS[kind]:
-                raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
-            params[:, list(idx)] = cols[name]
-    if "TRANSLATION" in cols:  # EXT_mesh_gpu_instancing: absent, the instances sit at the origin
-        params[:, POSITION] = cols["TRANSLATION"]
-    if "_AXIAL_ANGLES" not in cols:
-
-        params[:, ANGLES] = angles_from_matrices(matrices_from_quaternions(cols["ROTATION"]))
-
+    cols, n = instance_columns(gltf, blob, attrs, where)
+    params = instance_records(cols, n, where)
     mesh_def = gltf.meshes[node.mesh]
+
     if not mesh_def.primitives:
         raise GltfError(f"{where}: mesh {node.mesh}: expected at least one primitive, found none")
     prim = mesh_def.primitives[0]
@@ -241,6 +204,69 @@ def _material(gltf, blob, index, where: str) -> Material:
                         double_sided=bool(m.doubleSided), sources=sources)
     except AxialDeformError as exc:
         raise GltfError(f"{where}: material {index}: {exc}") from None
+
+
+def instance_columns(gltf, blob, attrs: dict, where: str) -> tuple[dict, int]:
+    """Every instance attribute of an ``EXT_mesh_gpu_instancing`` node read (``attrs``: its accessors by name),
+    each known one's type checked (:data:`~axialdeform.core.record.GLTF_INSTANCE_TYPES`), one count for all:
+    ``(columns by name, count)``."""
+    children = [name for name in attrs if str(name).startswith("_AXIAL_A") and str(name)[8:9].isdigit()]
+    if len(attrs) > 16 + 3 * MAX_RECORD_AXES or len(children) > 3 * (MAX_RECORD_AXES - 1):  # before reading any
+        raise GltfError(f"{where}: {INSTANCING} attributes: {len(attrs)} of them ({len(children)} of child axes); "
+                        f"expected at most {MAX_RECORD_AXES} axes' worth")
+    cols = {name: read_accessor(gltf, blob, attrs[name], name, where) for name in attrs}
+    for name, col in cols.items():  # each attribute's type, as docs/gltf/AXIALDEFORM_bend says (the npm plugin too)
+        kind = _attribute_type(str(name))
+        if kind is not None and col.shape[1] != COMPONENTS[kind]:
+            raise GltfError(f"{where}: {name}: expected {kind}, found {col.shape[1]} components")
+    counts = {len(v) for v in cols.values()}
+    if len(counts) != 1:
+        raise GltfError(f"{where}: {INSTANCING} attributes have different counts {sorted(counts)}; expected one count")
+    return cols, counts.pop()
+
+
+def instance_records(cols: dict, n: int, where: str) -> np.ndarray:
+    """Axis 0's records ``(n, 16|19|22)`` float32 of instance attributes ``cols`` (:func:`instance_columns`):
+    the offsets, ``TRANSLATION``, the angles (``_AXIAL_ANGLES``, else from ``ROTATION``), and ``SCALE``,
+    ``_AXIAL_TWIST_TAPER``, ``_COLOR_0`` where written."""
+    tint_name, tint_kind, tint_cols = GLTF_TINT_ATTRIBUTE
+    tinted = tint_name in cols
+    extended = tinted or "SCALE" in cols or "_AXIAL_TWIST_TAPER" in cols
+    params = np.zeros((n, WIDTHS[2 if tinted else 1 if extended else 0]), dtype=np.float32)
+    if extended:
+        params[:, SCALE] = 1.0
+        for name, (kind, idx) in {**EXTENDED_ATTRIBUTES, **({tint_name: (tint_kind, tint_cols)} if tinted else {})}.items():
+            if name in cols:
+                if cols[name].shape[1] != COMPONENTS[kind]:
+                    raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
+                params[:, list(idx)] = cols[name]
+        if "SCALE" in cols:
+            sc = cols["SCALE"]
+            if sc.shape[1] != 3 or not (sc == sc[:, :1]).all():
+                raise GltfError(f"{where}: SCALE: expected a uniform scale (VEC3 with three equal components) per instance")
+            params[:, SCALE] = sc[:, 0]
+    for name, (kind, idx) in ATTRIBUTES.items():
+        if name in cols:
+            if cols[name].shape[1] != COMPONENTS[kind]:
+                raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
+            params[:, list(idx)] = cols[name]
+    if "TRANSLATION" in cols:  # EXT_mesh_gpu_instancing: absent, the instances sit at the origin
+        params[:, POSITION] = cols["TRANSLATION"]
+    if "_AXIAL_ANGLES" not in cols and "ROTATION" in cols:
+        params[:, ANGLES] = angles_from_matrices(matrices_from_quaternions(cols["ROTATION"]))
+    return params
+
+
+def child_offsets(cols: dict, n: int, k: int, where: str) -> np.ndarray:
+    """The child axes' offsets ``(n, k - 1, 10)`` float32 of a mesh of ``k`` axes from instance attributes ``cols``
+    (``_AXIAL_A{j}_D12``, ``_D34``, ``_D5``)."""
+    children = np.zeros((n, k - 1, 10), dtype=np.float32)
+    for j in range(1, k):
+        for name, (kind, first) in child_columns(j).items():
+            if name not in cols or cols[name].shape[1] != COMPONENTS[kind]:
+                raise GltfError(f"{where}: {INSTANCING} attributes: expected {name} ({kind}) for axis {j}")
+            children[:, j - 1, first:first + COMPONENTS[kind]] = cols[name]
+    return children
 
 
 def _attribute_type(name: str) -> str | None:
@@ -357,13 +383,7 @@ def _read_tree(gltf, blob, prim, record, cols, mesh, params, where):
         raise GltfError(f"{where}: {AXIS_ATTRIBUTE}: expected one whole axis index (or a blend's code, b + 64 b1 + 4096 q, "
                         f"below 2^23) per vertex ({mesh.vertex_count})")
     va, blend = split_vertex_code(va)
-    n = len(params)
-    children = np.zeros((n, k - 1, 10), dtype=np.float32)
-    for j in range(1, k):
-        for name, (kind, first) in child_columns(j).items():
-            if name not in cols or cols[name].shape[1] != COMPONENTS[kind]:
-                raise GltfError(f"{where}: {INSTANCING} attributes: expected {name} ({kind}) for axis {j}")
-            children[:, j - 1, first:first + COMPONENTS[kind]] = cols[name]
+    children = child_offsets(cols, len(params), k, where)
     anchors = record.get("anchors")  # each child's joint (optional: measured from the geometry if absent)
     if anchors is not None and not (isinstance(anchors, list) and len(anchors) == k and all(
             isinstance(t, (int, float)) and not isinstance(t, bool) and 0 <= t <= 1 for t in anchors)):
