@@ -40,7 +40,8 @@ def add_parser(sub) -> None:
     p.add_argument("--apply-to", help="a scene file with another height-map terrain to fill with the learned "
                                       "scenery (default: the example's own terrain)")
     p.add_argument("--mesh", help="the mesh of each learned layer: a bundled name or a file (default: with --layer, "
-                                  "that layer's own objects: its mesh, axis frame, axes, parts, colour and wind; else tree)")
+                                  "that layer's own objects: its mesh, axis frame, axes, parts, colour and wind, standing on "
+                                  "its anchor with its lift; else tree)")
     p.add_argument("--window", type=_window, help="the ground the example covers, x0,z0,x1,z1 (default: the "
                                                   "objects' bounding box grown by half a mean spacing)")
     p.add_argument("--layer", help="the layer of a scene-file example (required there; default: none)")

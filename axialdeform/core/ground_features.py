@@ -25,6 +25,7 @@ import numpy as np
 from scipy import ndimage
 
 from .errors import ParamError
+from .generate_ground import ground_height
 
 __all__ = ["FEATURES", "GroundFeatures"]
 
@@ -44,11 +45,14 @@ class GroundFeatures:
         The grid's first vertex (x0, z0).
     step : (2,) float64
         The grid's spacing along x and z (world units).
+    maps : GroundMaps or None
+        The height map they were computed from (its own triangles give :meth:`normals`).
     """
 
     grids: dict
     lo: np.ndarray
     step: np.ndarray
+    maps: object = None
 
     @classmethod
     def of(cls, maps, mask: np.ndarray | None = None) -> GroundFeatures:
@@ -79,7 +83,7 @@ class GroundFeatures:
             r = np.clip((rows / max(h.shape[0] - 1, 1)) * wet.shape[0] - 0.5, 0, wet.shape[0] - 1)
             c = np.clip((cols / max(h.shape[1] - 1, 1)) * wet.shape[1] - 0.5, 0, wet.shape[1] - 1)
             grids["water"] = ndimage.map_coordinates(dist, [r, c], order=1)
-        return cls(grids, np.asarray(maps.h_lo, np.float64), step)
+        return cls(grids, np.asarray(maps.h_lo, np.float64), step, maps)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -102,3 +106,12 @@ class GroundFeatures:
         names = list(names or self.names)
         return np.stack([ndimage.map_coordinates(self.grids[n], coords, order=1, mode="nearest")
                          for n in names], axis=1).reshape(len(xz), len(names))
+
+    def normals(self, xz: np.ndarray) -> np.ndarray:
+        """The ground's unit normals (n, 3) float64 at points ``xz`` (n, 2): of the height map's own triangles,
+        unsmoothed, as the generator leans an object toward them
+        (:func:`~axialdeform.core.generate_ground.ground_height`; clamped to the grid beyond its edge)."""
+        xz = np.asarray(xz, np.float32).reshape(-1, 2)
+        grad = ground_height(self.maps, xz)[3].astype(np.float64)
+        n = np.column_stack([-grad[:, 0], np.ones(len(xz)), -grad[:, 1]])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)

@@ -91,6 +91,9 @@ class Example:
     records : (n, 10 K + 6 (+3, +6)) float64 or None
         Each object's record (of K axes), where the example is made of the library's records: its bend (each
         axis's), twist, taper and tint are learned too.
+    up : (n, 3) float64 or None
+        Each object's up (its y in the world), where the example has its turn: how far it leans toward the
+        ground's normal is learned too.
     """
 
     xz: np.ndarray
@@ -100,6 +103,7 @@ class Example:
     yaw: np.ndarray | None = None
     source: str = "<example>"
     records: np.ndarray | None = None
+    up: np.ndarray | None = None
 
     @property
     def area(self) -> float:
@@ -108,8 +112,9 @@ class Example:
 
     def subset(self, keep: np.ndarray) -> Example:
         """The objects where ``keep`` (n,) bool is True, in the same window."""
-        size, kind, yaw, records = (None if a is None else a[keep] for a in (self.size, self.kind, self.yaw, self.records))
-        return Example(self.xz[keep], self.window, size, kind, yaw, self.source, records)
+        size, kind, yaw, records, up = (None if a is None else a[keep] for a in
+                                        (self.size, self.kind, self.yaw, self.records, self.up))
+        return Example(self.xz[keep], self.window, size, kind, yaw, self.source, records, up)
 
 
 @dataclass(frozen=True, eq=False)
@@ -450,7 +455,8 @@ def _diggle(example: Example, intensity: Intensity, ground, seed: int, r: np.nda
 
 def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int = 0, clumped: bool = False) -> Spacing:
     """The hard core, and clumps or not: Diggle's test (:data:`SIMULATIONS` Poisson patterns of ``intensity``);
-    clumps fitted as a Matern cluster process by minimum contrast, with a core where it fits far closer
+    clumps fitted as a Matern cluster process by minimum contrast (none where the best fit's clumps are wider
+    than every distance fitted: no clumps the generator can grow), with a core where it fits far closer
     (:data:`CORE_GAIN`) and the example has more close pairs within its radius than the plain clumps make
     (:data:`CORE_Z`).  ``clumped``: the test found clumps already (with the intensity first fitted); only their
     parameters are fitted again for this ``intensity``."""
@@ -484,6 +490,8 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     best = min((minimize(contrast, [math.log(lam / c), math.log(f * spacing)], method="Nelder-Mead", options=tight)
                 for c in (3.0, 10.0, 30.0) for f in (0.5, 1.0, 2.0)), key=lambda res: res.fun)
     kappa, radius = math.exp(best.x[0]), math.exp(best.x[1])
+    if radius > r[-1]:  # clumps wider than every distance fitted (pairs in excess as r^2, the radius running off
+        return Spacing(hard, "poisson")  # to 1e7): the ground's own unexplained unevenness, no clump to grow
 
     def cored(p):  # log kappa, log R, logit(core radius / R), logit(share): the core within the clump
         a, share = radius_core(p)
@@ -535,7 +543,8 @@ def learn_layers(example: Example, ground=None, names=None, seed: int = 0, error
         if spacing.pattern == "cluster" and errors == "clumps":  # clumps make counts vary more than Poisson's
             intensity = fit_intensity(part, ground, names, cluster=spacing.process)
             spacing = fit_spacing(part, intensity, ground, seed, clumped=True)  # the clumps' size for it
-        marks = learn_marks(part.size, part.yaw, part.records)
+        normal = None if ground is None or part.up is None else ground.normals(part.xz)
+        marks = learn_marks(part.size, part.yaw, part.records, part.up, normal)
         out.append(LearnedLayer(kind, len(part.xz), intensity, spacing, marks, example.window))
     return out
 

@@ -1,4 +1,5 @@
-"""The marks of an example: what each object carries beside its place -- its size and its turn about up, and,
+"""The marks of an example: what each object carries beside its place -- its size, its turn about up and how
+far it leans toward the ground's normal, and,
 where the example holds the library's records (a parameter file, a scene file's layer, this library's glTF), its
 bend, twist, taper and tint -- learned as the numbers of a generated layer's recipe (docs/learn.md, "The marks").
 Pure numpy: no GL here.
@@ -20,7 +21,11 @@ from .generate import MAX_BEND
 from .record import OFFSETS, TAPER, TINT, TWIST, WIDTHS, split_record, tree_shape
 
 __all__ = ["Marks", "learn_marks", "standard_records", "bend_amplitude", "joint_amplitude", "offset_differences",
-           "tint_of_records"]
+           "tint_of_records", "turn_and_up", "lean_amount", "LEAN_FLOOR"]
+
+#: a learned lean below this fraction of the ground's slope is no lean: the recipe's ``align_to_normal`` is left
+#: at its default 0 (objects stand upright)
+LEAN_FLOOR = 0.01
 
 
 @dataclass(frozen=True)
@@ -36,6 +41,9 @@ class Marks:
         through these nine knots.
     yaw : (2,) float
         The turn about up, [lo, hi] radians ([0, 2 pi] without turns).
+    align : float or None
+        How far the objects lean toward the ground's normal, a fraction of its slope (the recipe's
+        ``align_to_normal``; None: no turns, or level ground under every object).
     bend : float or None
         The offsets' amplitude ``A`` in the records' own units: offsets uniform in ``[-A, A]`` (the recipe's
         ``bend`` is ``A / L``, L the layer's mesh's axis length; None: the example has no records).
@@ -62,12 +70,13 @@ class Marks:
     taper: float | None = None
     tint: tuple | None = None
     record_scale: float | None = None
+    align: float | None = None
 
     def recipe(self, mesh=None) -> dict:
-        """The recipe's keys of these marks (``scale`` and its quantiles, ``yaw``, ``twist``, ``taper``,
-        ``tint``, ``tint_color``, ``tint_hue``, and ``bend`` when ``mesh``, the layer's BaseMesh, is given: ``A / L``
-        -- or, for a tree's records on a mesh of as many axes, one amplitude a level of its hierarchy, the root
-        mean square of ``A_j / L_j`` over its axes)."""
+        """The recipe's keys of these marks (``scale`` and its quantiles, ``yaw``, ``align_to_normal`` (from
+        :data:`LEAN_FLOOR` up), ``twist``, ``taper``, ``tint``, ``tint_color``, ``tint_hue``, and ``bend`` when
+        ``mesh``, the layer's BaseMesh, is given: ``A / L`` -- or, for a tree's records on a mesh of as many axes,
+        one amplitude a level of its hierarchy, the root mean square of ``A_j / L_j`` over its axes)."""
         keys: dict = {"yaw": list(self.yaw)}
         if self.scale is not None:
             keys["scale"] = list(self.scale)
@@ -76,6 +85,8 @@ class Marks:
             keys["scale_octiles"] = list(self.scale_octiles)
         if self.bend is not None and mesh is not None:
             keys["bend"] = _level_bends(self.bend, self.child_bends, mesh)
+        if self.align is not None and self.align >= LEAN_FLOOR:
+            keys["align_to_normal"] = float(self.align)
         if self.twist:  # none or 0: the recipe's own default, 0
             keys["twist"] = float(self.twist)
         if self.taper:
@@ -150,9 +161,49 @@ def tint_of_records(tint: np.ndarray) -> tuple[float, tuple, float]:
     return amount, tuple(float(c) for c in color), hue
 
 
-def learn_marks(size: np.ndarray | None, yaw: np.ndarray | None, records: np.ndarray | None) -> Marks:
+def turn_and_up(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each object's turn about up and its up, of its rotation ``rot`` (n, 3, 3) (columns: its x, y, z in the
+    world; any scale of a column is taken off): ``up`` (n, 3) is its y; the turn ``yaw`` (n,) radians is
+    measured with its lean undone -- the least rotation that takes the world's up to ``up`` (about their cross
+    product), as the generator leans an object turned about up toward the ground's normal -- so a leaning
+    object's turn is the one it was turned by before it leant."""
+    r = np.asarray(rot, np.float64)
+    r = r / np.maximum(np.linalg.norm(r, axis=1, keepdims=True), 1e-300)
+    up, z = r[:, :, 1], r[:, :, 2]
+    k = np.column_stack([up[:, 2], np.zeros(len(up)), -up[:, 0]])  # the world's up x up: the lean's axis
+    sin = np.linalg.norm(k, axis=1)
+    k = k / np.where(sin > 0, sin, 1.0)[:, None]
+    cos = up[:, 1]
+    # z turned back about k by the lean's angle (Rodrigues' formula, the angle negated)
+    back = (z * cos[:, None] - np.cross(k, z) * sin[:, None]
+            + k * np.einsum("ij,ij->i", k, z)[:, None] * (1.0 - cos)[:, None])
+    return np.arctan2(back[:, 0], back[:, 2]), up
+
+
+def lean_amount(up: np.ndarray, normal: np.ndarray) -> float | None:
+    """The recipe's ``align_to_normal`` of objects whose up is ``up`` (n, 3), standing on ground of unit
+    normals ``normal`` (n, 3): the generator tilts an object toward its ground's normal by ``a theta``
+    (``theta = atan2(|n_xz|, n_y)``, the ground's slope), so each object's tilt toward the normal's side,
+    ``phi = atan2(up . n_xz / |n_xz|, up_y)``, is fitted as ``a theta`` by least squares (``a`` within [0, 1]).
+    None where the ground is level under every object (objects of no finite turn are left out)."""
+    up, n = np.asarray(up, np.float64), np.asarray(normal, np.float64)
+    ok = np.isfinite(up).all(axis=1) & np.isfinite(n).all(axis=1) & (np.linalg.norm(up, axis=1) > 0)
+    up, n = up[ok], n[ok]
+    up = up / np.linalg.norm(up, axis=1, keepdims=True)
+    side = np.linalg.norm(n[:, [0, 2]], axis=1)
+    theta = np.arctan2(side, n[:, 1])
+    if not (theta > 1e-6).any():
+        return None
+    toward = np.einsum("ij,ij->i", up[:, [0, 2]], n[:, [0, 2]]) / np.where(side > 0, side, 1.0)
+    phi = np.arctan2(toward, up[:, 1])
+    return float(np.clip(np.sum(phi * theta) / np.sum(theta * theta), 0.0, 1.0))
+
+
+def learn_marks(size: np.ndarray | None, yaw: np.ndarray | None, records: np.ndarray | None,
+                up: np.ndarray | None = None, normal: np.ndarray | None = None) -> Marks:
     """The :class:`Marks` of one kind's objects: ``size`` (n,) (any unit, or None), ``yaw`` (n,) radians (or
-    None) and ``records`` (n, 10 K + 6 (+3, +6)): the library's records, of any number of axes (or None)."""
+    None), ``records`` (n, 10 K + 6 (+3, +6)): the library's records, of any number of axes (or None), and
+    ``up`` (n, 3) with the ground's ``normal`` (n, 3) under each object (or None): how far they lean."""
     scale = quartiles = octiles = None
     if size is not None and len(size):
         s = np.asarray(size, np.float64) / np.median(size)  # median 1; the generator draws through nine quantiles
@@ -178,4 +229,5 @@ def learn_marks(size: np.ndarray | None, yaw: np.ndarray | None, records: np.nda
             taper = float(np.clip(2.0 * np.mean(r[:, TAPER]), 0.0, 0.999))
         if r.shape[1] >= WIDTHS[2]:
             tint = tint_of_records(r[:, TINT])
-    return Marks(scale, quartiles, octiles, turn, bend, children, twist, taper, tint, record_scale)
+    align = None if up is None or normal is None or not len(up) else lean_amount(up, normal)
+    return Marks(scale, quartiles, octiles, turn, bend, children, twist, taper, tint, record_scale, align)

@@ -143,10 +143,12 @@ def test_clumps_found_once_stay_clumps_when_the_intensity_is_fitted_again(hills,
     lay = L.learn_layers(ex, g)[0]
     assert calls == [False, True] and len(tests) == 1
     assert lay.spacing.pattern == "cluster"
-    # without the first test's answer, a pattern is tested; told it is clumped, only fitted
+    # told it is clumped, a pattern is only fitted, never tested again: the clumps' size for its intensity; a
+    # Poisson pattern's clumps run wider than every distance fitted, and are none
+    monkeypatch.setattr(L, "_diggle", lambda *a: pytest.fail("tested again"))
+    assert L.fit_spacing(ex, lay.intensity, g, clumped=True).cluster[1] == pytest.approx(3.0, rel=0.15)
     poisson = L.Example(np.random.default_rng(3).uniform(0, 1, (400, 2)) * 40 - 20, (-20, -20, 20, 20))
-    flat = L.fit_intensity(poisson, None)
-    assert L.fit_spacing(poisson, flat, None, clumped=True).pattern == "cluster"
+    assert L.fit_spacing(poisson, L.fit_intensity(poisson, None), None, clumped=True).pattern == "poisson"
 
 
 def test_a_cluster_pattern_s_standard_errors_are_the_spread_of_its_estimates(hills, monkeypatch):
@@ -331,3 +333,14 @@ def test_large_clumps_on_dense_ground_keep_their_rate():
     assert keys["clump_cells"] >= math.sqrt(4 * lam * 8 / kappa) > 64
     assert keys["rate"] >= 4 * lam and density.max() <= 0.25 + 1e-9
     Generate(**{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items()})  # a recipe the generator takes
+
+
+def test_clumps_wider_than_every_distance_fitted_are_no_clumps():
+    """Objects uniform within a disc of a larger window (a density map the ground's features do not explain):
+    the pairs' excess grows as r^2 and the best clumps are wider than every distance fitted: no clumps (they
+    were learned as three clumps of radius 20)."""
+    rng = np.random.default_rng(0)
+    xz = rng.uniform(-50, 50, (4000, 2))
+    xz = xz[np.hypot(xz[:, 0], xz[:, 1]) < 30]
+    lay = L.learn_layers(L.Example(xz, (-50, -50, 50, 50)))[0]
+    assert lay.spacing.pattern == "poisson" and lay.spacing.cluster is None

@@ -208,3 +208,45 @@ def test_a_trees_instanced_gltf_gives_its_child_axes_bends(tmp_path):
     assert marks.record_scale == pytest.approx(np.median(layer.params[:300, -3]), rel=1e-5)  # glTF's SCALE, as drawn
     bends = marks.recipe(layer.mesh)["bend"]
     assert bends == pytest.approx([0.04, 0.22, 0.3], rel=0.15)
+
+
+def test_the_lean_toward_the_grounds_normal_is_learned_back(stone):
+    """A recipe's ``align_to_normal`` on hills comes back from the records' turns, and the turn about up with
+    the lean undone keeps the recipe's narrow ``yaw``; objects standing upright learn no lean."""
+    from helpers import processes as P
+
+    maps, ground = P.ground()
+    for align in (0.0, 0.6):
+        params = generate_extent(Generate(rate=0.3, seed=3, align_to_normal=align, yaw=(0.5, 2.0)), stone, P.window(), maps)
+        lay = L.learn_layers(read_example(params.astype(np.float64), P.window()), ground)[0]
+        keys = lay.marks.recipe(stone)
+        assert keys["yaw"] == pytest.approx([0.5, 2.0], abs=0.01)
+        if align:
+            assert keys["align_to_normal"] == pytest.approx(align, abs=0.01)
+        else:
+            assert "align_to_normal" not in keys
+
+
+def test_the_lean_of_objects_of_no_finite_turn_is_left_out():
+    up = np.array([[0.0, 1.0, 0.0], [np.nan, 1.0, 0.0], [0.0, 0.0, 0.0]])
+    normal = np.tile([0.6, 0.8, 0.0], (3, 1))
+    assert learn_marks(None, None, None, up, normal).align == 0.0
+    assert learn_marks(None, None, None, up, np.tile([0.0, 1.0, 0.0], (3, 1))).align is None  # level ground
+
+
+def test_more_of_a_scene_layer_stands_as_its_objects_do(tmp_path):
+    """``learn SCENE --layer NAME``: the landscape's stones lean toward the ground's normal by 0.8 and stand on
+    their centre, and so do the learned layer's; its leaves hang 1 to 7 units above the ground, and, placed
+    by a density map the ground's features do not explain, they are learned as no clumps (the clumps' radius
+    ran off to millions of units before)."""
+    scene = ROOT / "examples" / "landscape" / "landscape.toml"
+    got = {}
+    for layer in ("stones", "leaves"):
+        out = tmp_path / f"{layer}.toml"
+        done = subprocess.run([sys.executable, "-m", "axialdeform", "learn", str(scene), "--layer", layer, "--terrain",
+                               str(scene), "-o", str(out)], capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        got[layer] = tomllib.loads(out.read_text())["layer"][0]["generate"]
+    assert got["stones"]["align_to_normal"] == pytest.approx(0.8, abs=0.02) and got["stones"]["anchor"] == "center"
+    assert got["leaves"]["lift"] == [1.0, 7.0] and "align_to_normal" not in got["leaves"]
+    assert "clump_radius" not in got["leaves"]

@@ -36,11 +36,11 @@ from ..errors import AxialDeformError, ExampleError
 from ..generate_ground import GroundMaps
 from ..ground_features import FEATURES, GroundFeatures
 from ..learn import Example, layer_recipe, learn_layers
-from ..marks import standard_records
+from ..marks import standard_records, turn_and_up
 from ..record import ANGLES, POSITION, SCALE, is_record_width, join_record
 from ..scene import load_scene
 from ..surface import load_density, load_surface
-from ..transforms import matrices_from_quaternions
+from ..transforms import matrices_from_quaternions, rotation_matrices
 from .atomic import atomic_path, atomic_write_text
 from .glb import INSTANCING, load_glb, read_accessor
 from .gltf_read import child_offsets, instance_columns, instance_records
@@ -54,6 +54,9 @@ __all__ = ["read_example", "write_learned_scene", "read_terrain", "learn_layer",
 
 #: a learned layer's keys of its objects (a scene file layer's): what ``learn --layer`` carries over from the example's layer
 MESH_KEYS = ("mesh", "axis", "axes", "parts", "color", "wind")
+#: ... and the keys of its recipe that say how its objects stand (``[layer.scatter]``'s or ``[layer.generate]``'s):
+#: the learned recipe's too, as its mesh is the layer's
+STAND_KEYS = ("anchor", "lift")
 #: the largest example file read (bytes)
 MAX_EXAMPLE_BYTES = 1 << 30
 
@@ -139,7 +142,8 @@ def _read_records(params: np.ndarray, name: str) -> dict:
                            f"{params.shape}")
     rec = standard_records(params)
     size = rec[:, SCALE] if rec.shape[1] > SCALE else None
-    return {"xz": rec[:, POSITION][:, [0, 2]], "size": size, "yaw": rec[:, ANGLES][:, 1], "records": params}
+    yaw, up = turn_and_up(rotation_matrices(rec[:, ANGLES]))
+    return {"xz": rec[:, POSITION][:, [0, 2]], "size": size, "yaw": yaw, "up": up, "records": params}
 
 
 def _trs(t, r, s) -> np.ndarray:
@@ -281,10 +285,11 @@ def _kinds(names: list) -> np.ndarray | None:
 
 
 def _placed(m: np.ndarray) -> dict:
-    """Where objects of world matrices ``m`` (n, 4, 4) stand, their size (the mean scale) and turn about up."""
+    """Where objects of world matrices ``m`` (n, 4, 4) stand, their size (the mean scale), their turn about up
+    and their up (:func:`~axialdeform.core.marks.turn_and_up`)."""
     s = np.linalg.norm(m[:, :3, :3], axis=1)  # each column's length: the scale along x, y, z
-    z = m[:, :3, 2] / np.where(s[:, 2:3] > 0, s[:, 2:3], 1.0)  # where the object's +z points
-    return {"xz": m[:, [0, 2], 3], "size": s.mean(axis=1), "yaw": np.arctan2(z[:, 0], z[:, 2])}
+    yaw, up = turn_and_up(m[:, :3, :3])
+    return {"xz": m[:, [0, 2], 3], "size": s.mean(axis=1), "yaw": yaw, "up": up}
 
 
 def _read_gltf(path: Path) -> dict:
@@ -344,7 +349,7 @@ def read_example(source, window=None, *, layer: str | None = None, fit=None, bou
     w = _window(xz, window, name)
     if window is None and bounds is not None:  # the grown box, on the terrain
         w = (max(w[0], bounds[0]), max(w[1], bounds[1]), min(w[2], bounds[2]), min(w[3], bounds[3]))
-    return Example(xz, w, data.get("size"), data.get("kind"), data.get("yaw"), name, data.get("records"))
+    return Example(xz, w, data.get("size"), data.get("kind"), data.get("yaw"), name, data.get("records"), data.get("up"))
 
 
 def _toml(v) -> str:
@@ -477,10 +482,10 @@ def _mesh_keys(mesh) -> dict:
     """A learned layer's mesh as a scene file's layer keys: ``mesh`` (a bundled name or a file) and, from a
     dict of them, ``axis``, ``axes``, ``parts``, ``color`` and ``wind`` (:data:`MESH_KEYS`)."""
     keys = dict(mesh) if isinstance(mesh, dict) else {"mesh": mesh}
-    odd = sorted(set(keys) - set(MESH_KEYS))
+    odd = sorted(set(keys) - set(MESH_KEYS) - set(STAND_KEYS))
     if "mesh" not in keys or odd:
-        raise ExampleError(f"mesh: expected a bundled name, a file or a layer's keys of its objects ({', '.join(MESH_KEYS)}), "
-                           f"found {sorted(keys)}")
+        raise ExampleError(f"mesh: expected a bundled name, a file or a layer's keys of its objects "
+                           f"({', '.join(MESH_KEYS + STAND_KEYS)}), found {sorted(keys)}")
     return {k: str(v) if isinstance(v, Path) else v for k, v in keys.items()}
 
 
@@ -499,8 +504,9 @@ def _layer_mesh(keys: dict):
 
 def layer_mesh(scene_file, layer: str) -> dict:
     """The keys of the objects of the layer ``layer`` of a scene file (``mesh``; ``axis``, ``axes``, ``parts``,
-    ``color``, ``wind`` where it has them; files as absolute paths): a layer learned from it grows the same
-    objects (``learn --layer`` without ``--mesh``)."""
+    ``color``, ``wind`` where it has them; files as absolute paths) and how they stand (its recipe's ``anchor``,
+    and its ``lift`` where it has one): a layer learned from it grows the same objects, standing as they do
+    (``learn --layer`` without ``--mesh``)."""
     recipe = parse_scene(scene_file)
     named = [lay for lay in recipe.layers if lay.name == layer]
     if not named:
@@ -518,6 +524,12 @@ def layer_mesh(scene_file, layer: str) -> dict:
         keys["color"] = [float(c) for c in lay.color]
     if lay.wind:
         keys["wind"] = True
+    stand = lay.scatter.placement if lay.scatter is not None else lay.generate.generate if lay.generate is not None else None
+    if stand is not None:
+        keys["anchor"] = stand.anchor
+    lift = lay.scatter.lift if lay.scatter is not None else getattr(stand, "lift", None)
+    if lift is not None and any(float(v) != 0.0 for v in lift):
+        keys["lift"] = [float(v) for v in lift]
     return keys
 
 
@@ -557,7 +569,8 @@ def write_learned(out, learned: list, terrain, *, mesh="tree", mask=None, seed: 
             keys["scale"] = [median, median]
         if terrain is None:
             keys["extent"] = list(extent)
+        keys.update({k: v for k, v in mesh.items() if k in STAND_KEYS})
         notes = lay.describe(6).split("; ", 1)
-        name = names[k]
-        layers.append({"name": name, **mesh, "generate": keys, "density": density, "comments": notes})
+        objects = {k: v for k, v in mesh.items() if k in MESH_KEYS}
+        layers.append({"name": names[k], **objects, "generate": keys, "density": density, "comments": notes})
     return write_learned_scene(out, table, layers, "a scene learned by axialdeform learn (docs/learn.md)")
