@@ -38,7 +38,7 @@ from scipy.stats import norm
 from .clusters import cluster_information, matern_cluster_excess, matern_cluster_k
 from .errors import ParamError
 from .generate import CLUMP_PARENTS
-from .marks import Marks, learn_marks
+from .marks import LEAN_FLOOR, Marks, learn_marks
 from .recipe import MAX_COUNT
 
 __all__ = ["Example", "Intensity", "Spacing", "LearnedLayer", "fit_intensity", "fit_spacing", "l_function", "largest_deviations",
@@ -240,6 +240,8 @@ class LearnedLayer:
             marks.append(f"twist within {m.twist:.{digits}g}")
         if m.taper:
             marks.append(f"taper up to {m.taper:.{digits}g}")
+        if m.align is not None and m.align >= LEAN_FLOOR:
+            marks.append(f"leaning toward the ground's normal by {m.align:.{digits}g} of its slope")
         if m.tint is not None:
             marks.append(f"tint {m.tint[0]:.{digits}g} of ({', '.join(f'{c:.{digits}g}' for c in m.tint[1])}), hue {m.tint[2]:.{digits}g}")
         return (f"learned from {self.count} objects: log rate = {self.intensity.coef[0]:.{digits}g}{terms}; "
