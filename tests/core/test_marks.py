@@ -250,3 +250,18 @@ def test_more_of_a_scene_layer_stands_as_its_objects_do(tmp_path):
     assert got["stones"]["align_to_normal"] == pytest.approx(0.8, abs=0.02) and got["stones"]["anchor"] == "center"
     assert got["leaves"]["lift"] == [1.0, 7.0] and "align_to_normal" not in got["leaves"]
     assert "clump_radius" not in got["leaves"]
+
+
+def test_a_scaled_leaning_objects_turn_and_up():
+    """An editor's node: turned by psi about up, then leant by alpha about a level axis, scaled 2, 3, 4 along
+    its own x, y, z: its up is the leant y, and its turn psi (the lean undone, the scale taken off)."""
+    from axialdeform.core.marks import turn_and_up
+    from axialdeform.core.transforms import matrices_from_rotation_vectors
+
+    psi, alpha = np.array([0.3, 2.5, -1.2]), np.array([0.0, 0.4, 1.1])
+    axis = np.array([[1.0, 0.0, 0.0], [0.6, 0.0, 0.8], [0.0, 0.0, -1.0]])  # level axes of the lean
+    lean = matrices_from_rotation_vectors(axis * alpha[:, None])
+    turn = matrices_from_rotation_vectors(np.outer(psi, [0.0, 1.0, 0.0]))
+    yaw, up = turn_and_up(lean @ turn @ np.diag([2.0, 3.0, 4.0]))
+    assert yaw == pytest.approx(psi, abs=1e-9)
+    assert up == pytest.approx(lean[:, :, 1], abs=1e-12)
