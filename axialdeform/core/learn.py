@@ -458,7 +458,7 @@ def _diggle(example: Example, intensity: Intensity, ground, seed: int, r: np.nda
 def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int = 0, clumped: bool = False) -> Spacing:
     """The hard core, and clumps or not: Diggle's test (:data:`SIMULATIONS` Poisson patterns of ``intensity``);
     clumps fitted as a Matern cluster process by minimum contrast (none where the best fit's clumps are wider
-    than every distance fitted: no clumps the generator can grow), with a core where it fits far closer
+    than the example's ground: no clumps the generator can grow), with a core where it fits far closer
     (:data:`CORE_GAIN`) and the example has more close pairs within its radius than the plain clumps make
     (:data:`CORE_Z`).  ``clumped``: the test found clumps already (with the intensity first fitted); only their
     parameters are fitted again for this ``intensity``."""
@@ -492,8 +492,8 @@ def fit_spacing(example: Example, intensity: Intensity, ground=None, seed: int =
     best = min((minimize(contrast, [math.log(lam / c), math.log(f * spacing)], method="Nelder-Mead", options=tight)
                 for c in (3.0, 10.0, 30.0) for f in (0.5, 1.0, 2.0)), key=lambda res: res.fun)
     kappa, radius = math.exp(best.x[0]), math.exp(best.x[1])
-    if radius > r[-1]:  # clumps wider than every distance fitted (pairs in excess as r^2, the radius running off
-        return Spacing(hard, "poisson")  # to 1e7): the ground's own unexplained unevenness, no clump to grow
+    if radius > max(x1 - x0, z1 - z0):  # a clump wider than the example's ground (pairs in excess as r^2, the
+        return Spacing(hard, "poisson")  # radius running off to 1e7): the ground's unexplained unevenness, no clump
 
     def cored(p):  # log kappa, log R, logit(core radius / R), logit(share): the core within the clump
         a, share = radius_core(p)

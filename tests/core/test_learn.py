@@ -4,6 +4,7 @@ layer generates the example's intensity, on its own ground and on another."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -335,12 +336,12 @@ def test_large_clumps_on_dense_ground_keep_their_rate():
     Generate(**{k: tuple(v) if isinstance(v, list) else v for k, v in keys.items()})  # a recipe the generator takes
 
 
-def test_clumps_wider_than_every_distance_fitted_are_no_clumps():
-    """Objects uniform within a disc of a larger window (a density map the ground's features do not explain):
-    the pairs' excess grows as r^2 and the best clumps are wider than every distance fitted: no clumps (they
-    were learned as three clumps of radius 20)."""
-    rng = np.random.default_rng(0)
-    xz = rng.uniform(-50, 50, (4000, 2))
-    xz = xz[np.hypot(xz[:, 0], xz[:, 1]) < 30]
-    lay = L.learn_layers(L.Example(xz, (-50, -50, 50, 50)))[0]
+def test_clumps_wider_than_the_example_s_ground_are_no_clumps():
+    """The landscape example's leaves, kept over the terrain's middle by a density map the ground's features do
+    not explain: the pairs' excess grows as r^2 and the best clumps' radius runs off (to 2e7 units on a
+    terrain 40 wide): no clumps."""
+    from axialdeform.core.io.example import learn_layer
+
+    scene = Path(__file__).resolve().parents[2] / "examples" / "landscape" / "landscape.toml"
+    lay = learn_layer(scene, scene, layer="leaves")[0]
     assert lay.spacing.pattern == "poisson" and lay.spacing.cluster is None
