@@ -480,7 +480,8 @@ def learned_paths(out, learned: list) -> list[Path]:
 
 def _mesh_keys(mesh) -> dict:
     """A learned layer's mesh as a scene file's layer keys: ``mesh`` (a bundled name or a file) and, from a
-    dict of them, ``axis``, ``axes``, ``parts``, ``color`` and ``wind`` (:data:`MESH_KEYS`)."""
+    dict of them, ``axis``, ``axes``, ``parts``, ``color`` and ``wind`` (:data:`MESH_KEYS`), and its recipe's
+    ``anchor`` and ``lift`` (:data:`STAND_KEYS`)."""
     keys = dict(mesh) if isinstance(mesh, dict) else {"mesh": mesh}
     odd = sorted(set(keys) - set(MESH_KEYS) - set(STAND_KEYS))
     if "mesh" not in keys or odd:
