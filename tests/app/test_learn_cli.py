@@ -311,3 +311,38 @@ def test_fit_and_the_records_refuse_what_they_cannot_read(tmp_path):
     res = run("learn", tmp_path / "odd.glb", "-o", tmp_path / "o.toml")
     assert res.returncode == 2 and "Traceback" not in res.stderr, res.stderr
     assert re.search(r"odd\.glb: node .*: _AXIAL_D12: expected VEC4, found 3 components", res.stderr), res.stderr
+
+
+def test_a_gltf_scenes_own_ground_is_no_object(tmp_path):
+    """An editor's export of a patch holds its ground beside the pines (a flat box 100 x 80): the ground is no
+    object and no kind of its own, and its footprint is the example's ground (the window), in a .glb and in a
+    text .gltf.  The library's own instanced export of the landscape (its terrain a node beside the layers'):
+    four layers, not five, each with the marks of its records (the terrain, a node without records, hid them)."""
+    import trimesh
+
+    from axialdeform.core.io.example import read_example
+
+    rng = np.random.default_rng(5)
+    editor = trimesh.Scene()
+    editor.add_geometry(trimesh.creation.box((100.0, 0.2, 80.0)), node_name="Ground")
+    for i in range(300):
+        editor.add_geometry(trimesh.creation.box((0.5, 3.0, 0.5)), node_name=f"Pine.{i:03d}",
+                            transform=trimesh.transformations.translation_matrix((rng.uniform(-45, 45), 1.5, rng.uniform(-35, 35))))
+    editor.export(tmp_path / "patch.glb")
+    editor.export(tmp_path / "patch.gltf")
+    for name in ("patch.glb", "patch.gltf"):
+        ex = read_example(tmp_path / name)
+        assert len(ex.xz) == 300 and ex.kind is None, name
+        assert ex.window == pytest.approx((-50.0, -40.0, 50.0, 40.0)), name
+    res = run("learn", tmp_path / "patch.glb", "-o", tmp_path / "patch.toml", "--mesh", "stone")
+    assert res.returncode == 0 and "layer: learned from 300 objects" in res.stdout, res.stderr
+    alone = trimesh.Scene()
+    alone.add_geometry(trimesh.creation.box((100.0, 0.2, 80.0)), node_name="Ground")
+    alone.export(tmp_path / "alone.glb")
+    res = run("learn", tmp_path / "alone.glb", "-o", tmp_path / "alone.toml")
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1
+    assert "no placed objects beside the ground (node Ground)" in res.stderr
+    land = tmp_path / "land.glb"
+    assert run("export", ROOT / "examples" / "landscape" / "landscape.toml", "--instanced", "-o", land).returncode == 0
+    ex = read_example(land)
+    assert sorted(set(ex.kind)) == ["grass", "leaves", "stones", "trunks"] and ex.records is not None

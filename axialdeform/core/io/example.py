@@ -11,11 +11,13 @@ written as.
   export, with ``AXIALDEFORM_bend``, or any other's) and every other node that has a mesh (as editors
   export a hand-placed patch), each with its world matrix; a text ``.gltf``: one object a node that has a
   mesh (trimesh's scene graph). Each object's place, its scale (the mean of the three) and its turn, and its
-  kind from its node's name less a trailing number (``Pine.003``: ``Pine``; one kind: no kinds).
+  kind from its node's name less a trailing number (``Pine.003``: ``Pine``; one kind: no kinds); a node that
+  is the ground they stand on is none of them (:mod:`~axialdeform.core.io.example_gltf`).
 
 The window (the ground the example covers) is given, or the objects' bounding box grown by half a mean
-spacing on each side.  :func:`write_learned_scene` writes a scene file: the terrain's table and one generated
-layer a learned kind, each with its density map (a 16-bit PNG) beside the file, every file atomically.
+spacing on each side (a glTF's own ground: its footprint, grown to hold every object).
+:func:`write_learned_scene` writes a scene file: the terrain's table and one generated layer a learned kind,
+each with its density map (a 16-bit PNG) beside the file, every file atomically.
 """
 
 from __future__ import annotations
@@ -25,11 +27,9 @@ import io
 import json
 import math
 import os
-import re
 from pathlib import Path
 
 import numpy as np
-import trimesh
 from PIL import Image
 
 from ..errors import AxialDeformError, ExampleError
@@ -37,13 +37,13 @@ from ..generate_ground import GroundMaps
 from ..ground_features import FEATURES, GroundFeatures
 from ..learn import Example, layer_recipe, learn_layers
 from ..marks import standard_records, turn_and_up
-from ..record import ANGLES, POSITION, SCALE, is_record_width, join_record
+from ..record import ANGLES, POSITION, SCALE, is_record_width
 from ..scene import load_scene
 from ..surface import load_density, load_surface
-from ..transforms import matrices_from_quaternions, rotation_matrices
+from ..transforms import rotation_matrices
 from .atomic import atomic_path, atomic_write_text
-from .glb import INSTANCING, load_glb, read_accessor
-from .gltf_read import child_offsets, instance_columns, instance_records
+from .example_gltf import glb_objects, gltf_objects
+from .glb import INSTANCING
 from .mesh import load_mesh, with_axes
 from .params import read_params
 from .safeio import open_regular
@@ -146,99 +146,6 @@ def _read_records(params: np.ndarray, name: str) -> dict:
     return {"xz": rec[:, POSITION][:, [0, 2]], "size": size, "yaw": yaw, "up": up, "records": params}
 
 
-def _trs(t, r, s) -> np.ndarray:
-    """(n, 4, 4) matrices (column vectors) of translations (n, 3), quaternions (n, 4, xyzw) and scales (n, 3)."""
-    m = np.zeros((len(t), 4, 4))
-    m[:, :3, :3] = matrices_from_quaternions(r) * np.asarray(s, np.float64)[:, None, :]
-    m[:, :3, 3], m[:, 3, 3] = t, 1.0
-    return m
-
-
-def _node_matrix(node) -> np.ndarray:
-    if node.matrix is not None and len(node.matrix) == 16:
-        return np.asarray(node.matrix, np.float64).reshape(4, 4).T  # glTF stores it column after column
-    return _trs([node.translation or (0, 0, 0)], [node.rotation or (0, 0, 0, 1)], [node.scale or (1, 1, 1)])[0]
-
-
-def _read_glb(path: Path, vertices: bool = False) -> dict:
-    """Every placed object of a GLB: the instances of each ``EXT_mesh_gpu_instancing`` node (their TRS composed
-    with the node's world matrix) and every other node that has a mesh (its world matrix)."""
-    gltf = load_glb(path)
-    try:
-        return _placed_in(gltf, str(path), vertices)
-    except (TypeError, ValueError, IndexError, KeyError, AttributeError) as exc:  # a hostile file's odd JSON
-        if isinstance(exc, AxialDeformError):  # already in words: the file, the node, the field
-            raise
-        raise ExampleError(f"{path}: not a glTF scene of placed objects this reader understands ({type(exc).__name__}: "
-                           f"{str(exc)[:80]})") from None
-
-
-def _placed_in(gltf, where: str, vertices: bool = False) -> dict:
-    blob = gltf.binary_blob() or b""
-    world, mats, names, records, shapes = {}, [], [], [], []
-    roots = gltf.scenes[gltf.scene or 0].nodes if gltf.scenes else range(len(gltf.nodes))
-    stack = [(int(i), np.eye(4)) for i in reversed(roots or ())]
-    while stack:  # the node tree, parents first, in the file's order (a node seen twice is a cycle: refused)
-        i, parent = stack.pop()
-        if not 0 <= i < len(gltf.nodes) or i in world:
-            raise ExampleError(f"{where}: node {i}: expected each node once in the scene's tree")
-        node = gltf.nodes[i]
-        world[i] = m = parent @ _node_matrix(node)
-        stack += [(int(c), m) for c in reversed(node.children or ())]
-        inst = (node.extensions or {}).get("EXT_mesh_gpu_instancing")
-        if node.mesh is None:
-            continue
-        if isinstance(inst, dict) and isinstance(inst.get("attributes"), dict):
-            attrs = inst["attributes"]
-            read = {k: read_accessor(gltf, blob, attrs[k], k, f"{where}: node {node.name or i}") for k in
-                    ("TRANSLATION", "ROTATION", "SCALE") if k in attrs}
-            n = max((len(v) for v in read.values()), default=0)
-            t = read.get("TRANSLATION", np.zeros((n, 3)))
-            r = read.get("ROTATION", np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)))
-            sc = read.get("SCALE", np.ones((n, 3)))
-            if not (len(t) == len(r) == len(sc) == n):
-                raise ExampleError(f"{where}: node {node.name or i}: EXT_mesh_gpu_instancing: expected its attributes "
-                                   "to have one value an instance each")
-            mats.append(m[None] @ _trs(t, r, sc))
-            records.append(_records_of(gltf, blob, attrs, f"{where}: node {node.name or i}"))
-            shapes += [None] * n
-        else:
-            mats.append(m[None])
-            records.append(None)
-            if vertices:  # its own geometry in the world, to fit (one node an object)
-                shapes.append(_world_vertices(gltf, blob, node, m, f"{where}: node {node.name or i}"))
-        mesh = gltf.meshes[node.mesh] if isinstance(node.mesh, int) and 0 <= node.mesh < len(gltf.meshes) else None
-        names += [node.name or (mesh.name if mesh is not None else None) or f"mesh{node.mesh}"] * len(mats[-1])
-    if not mats:
-        raise ExampleError(f"{where}: no placed objects; expected EXT_mesh_gpu_instancing nodes or nodes with a mesh")
-    rec = None
-    if all(r is not None for r in records):  # every object has its record: its marks are learned too
-        if len({r.shape[1] for r in records}) > 1:  # nodes of other widths: axis 0's records, as far as all have them
-            records = [standard_records(r) for r in records]
-        width = min(r.shape[1] for r in records)
-        rec = np.concatenate([r[:, :width] for r in records])
-    out = {**_placed(np.concatenate(mats)), "kind": _kinds(names), "records": rec}
-    return {**out, "vertices": shapes, "names": names} if vertices else out
-
-
-def _world_vertices(gltf, blob, node, m: np.ndarray, where: str) -> np.ndarray:
-    """A node's mesh's vertices (each POSITION accessor once, in the order its primitives first name them: a
-    part's primitives may share one) under the node's world matrix ``m``: (v, 3)."""
-    mesh = gltf.meshes[node.mesh]
-    seen, parts = [], []
-    for prim in mesh.primitives or ():
-        a = getattr(prim.attributes, "POSITION", None)
-        if a is not None and a not in seen:
-            seen.append(a)
-            parts.append(read_accessor(gltf, blob, a, "POSITION", where))
-    if not parts:
-        raise ExampleError(f"{where}: mesh {node.mesh}: expected POSITION to fit it, found none")
-    v = np.concatenate(parts).astype(np.float64) @ m[:3, :3].T + m[:3, 3]
-    if not np.isfinite(v).all():
-        raise ExampleError(f"{where}: mesh {node.mesh}: POSITION: expected finite vertices (under the node's matrix)")
-    return v
-
-
 def _fitted(data: dict, mesh, name: str) -> dict:
     """The records of placed objects each its own bent copy of ``mesh`` (the library's baked export, an editor's
     bent duplicates): fitted (``core/fit.py``, the 19 numbers) to their world vertices; their places, sizes and
@@ -258,51 +165,7 @@ def _fitted(data: dict, mesh, name: str) -> dict:
         k = res.worst
         raise ExampleError(f"{name}: object {k + 1} (node {names[k]}): expected a bent copy of the mesh, found one its "
                            f"best fit misses by {res.max[k]:.3g} axis lengths at a vertex (at most {res.max_residual:g})")
-    return {**_read_records(res.params, name), "kind": data.get("kind")}
-
-
-def _records_of(gltf, blob, attrs: dict, where: str) -> np.ndarray | None:
-    """The records of an instancing node's instances written by this library (``_AXIAL_D12``, ``_AXIAL_D34``,
-    ``_AXIAL_D5``, and ``_AXIAL_TWIST_TAPER``, ``_COLOR_0``, a tree's child axes' ``_AXIAL_A{k}_*`` where written:
-    :func:`~axialdeform.core.io.gltf_read.instance_records`); None without the offsets."""
-    if not all(k in attrs for k in ("_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5")):
-        return None
-    cols, n = instance_columns(gltf, blob, attrs, where)
-    rec = instance_records(cols, n, where).astype(np.float64)
-    axes = 1 + sum(1 for name in cols if re.fullmatch(r"_AXIAL_A[1-9][0-9]*_D12", str(name)))
-    if axes > 1:  # a tree's child axes, between axis 0's offsets and its position
-        rec = join_record(rec, child_offsets(cols, n, axes, where).reshape(n, axes - 1, 5, 2)).astype(np.float64)
-    if not np.isfinite(rec).all():
-        raise ExampleError(f"{where}: {INSTANCING}: expected finite records, found a value that is not")
-    return rec
-
-
-def _kinds(names: list) -> np.ndarray | None:
-    """Each object's kind from its node's name as editors write duplicates (``Pine.003``, ``rock_12``: the
-    name less a trailing number); None when every object is of one kind."""
-    kinds = np.array([re.sub(r"[._\- ]*\d+$", "", str(n)) or str(n) for n in names], dtype=object)
-    return kinds if len(set(kinds)) > 1 else None
-
-
-def _placed(m: np.ndarray) -> dict:
-    """Where objects of world matrices ``m`` (n, 4, 4) stand, their size (the mean scale), their turn about up
-    and their up (:func:`~axialdeform.core.marks.turn_and_up`)."""
-    s = np.linalg.norm(m[:, :3, :3], axis=1)  # each column's length: the scale along x, y, z
-    yaw, up = turn_and_up(m[:, :3, :3])
-    return {"xz": m[:, [0, 2], 3], "size": s.mean(axis=1), "yaw": yaw, "up": up}
-
-
-def _read_gltf(path: Path) -> dict:
-    """A text glTF (``.gltf``): one object a node that has a mesh, through trimesh's scene graph."""
-    try:
-        scene = trimesh.load(str(path), force="scene")
-    except Exception as exc:  # noqa: BLE001 - any reader failure on a hostile file
-        raise ExampleError(f"{path}: could not read the glTF scene ({type(exc).__name__}: {exc})") from None
-    nodes = list(scene.graph.nodes_geometry)
-    mats = [np.asarray(scene.graph.get(node)[0], np.float64) for node in nodes]
-    if not mats:
-        raise ExampleError(f"{path}: no placed objects; expected nodes with a mesh")
-    return {**_placed(np.stack(mats)), "kind": _kinds(nodes)}
+    return {**_read_records(res.params, name), "kind": data.get("kind"), "ground": data.get("ground")}
 
 
 def read_example(source, window=None, *, layer: str | None = None, fit=None, bounds=None) -> Example:
@@ -326,11 +189,11 @@ def read_example(source, window=None, *, layer: str | None = None, fit=None, bou
         if suffix == ".csv":
             data = _read_csv(path)
         elif suffix == ".glb":
-            data = _read_glb(path, vertices=fit is not None)
+            data = glb_objects(path, vertices=fit is not None)
             if fit is not None:
                 data = _fitted(data, fit, name)
         elif suffix == ".gltf":
-            data = _read_gltf(path)
+            data = gltf_objects(path)
         elif suffix == ".toml":
             scene = load_scene(path)
             names = [lay.name for lay in scene.layers]
@@ -347,7 +210,10 @@ def read_example(source, window=None, *, layer: str | None = None, fit=None, bou
     if not np.isfinite(xz).all():
         raise ExampleError(f"{name}: a position is not finite")
     w = _window(xz, window, name)
-    if window is None and bounds is not None:  # the grown box, on the terrain
+    if window is None and data.get("ground") is not None:  # a glTF's own ground: where its objects could stand
+        g = data["ground"]
+        w = (min(g[0], xz[:, 0].min()), min(g[1], xz[:, 1].min()), max(g[2], xz[:, 0].max()), max(g[3], xz[:, 1].max()))
+    if window is None and bounds is not None:  # the grown box (or the glTF's ground), on the terrain
         w = (max(w[0], bounds[0]), max(w[1], bounds[1]), min(w[2], bounds[2]), min(w[3], bounds[3]))
     return Example(xz, w, data.get("size"), data.get("kind"), data.get("yaw"), name, data.get("records"), data.get("up"))
 
