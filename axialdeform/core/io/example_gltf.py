@@ -101,7 +101,7 @@ def _placed_in(gltf, where: str, vertices: bool = False) -> dict:
     box = np.concatenate(boxes)
     ground = ground_nodes(box)
     if ground.all():
-        raise ExampleError(f"{where}: no placed objects beside the ground (node {names[0]}); expected objects standing on it")
+        raise ExampleError(f"{where}: {_all_ground(names)}")
     if ground.any():  # the ground is a node of its own: its group of one left out
         keep = [not (len(g) == 1 and ground[k]) for g, k in zip(mats, np.cumsum([0] + [len(g) for g in mats[:-1]]))]
         mats, records = [g for g, c in zip(mats, keep) if c], [r for r, c in zip(records, keep) if c]
@@ -156,6 +156,13 @@ def ground_nodes(boxes: np.ndarray) -> np.ndarray:
     area = float(np.prod(hi - lo))
     size = np.where(known[:, None], b[:, 1] - b[:, 0], 0.0)
     return known & (area > 0) & (size[:, 0] * size[:, 2] >= GROUND_SHARE * area) & (size[:, 1] <= size[:, [0, 2]].max(axis=1))
+
+
+def _all_ground(names: list) -> str:
+    """The words of a scene whose every node is ground (:func:`ground_nodes`)."""
+    shown = ", ".join(dict.fromkeys(str(n) for n in names[:3])) + (", ..." if len(names) > 3 else "")
+    return (f"no placed objects beside the ground: every node ({shown}) covers a quarter of the scene or more; "
+            "expected objects standing on it (one node an object, or instances)")
 
 
 def _footprint(boxes: np.ndarray) -> tuple | None:
@@ -229,7 +236,7 @@ def gltf_objects(path: Path) -> dict:
     box = np.stack([_moved_box(*np.asarray(scene.geometry[g].bounds, np.float64), m) for m, (_, g) in zip(mats, placed)])
     ground = ground_nodes(box)
     if ground.all():
-        raise ExampleError(f"{path}: no placed objects beside the ground (node {nodes[0]}); expected objects standing on it")
+        raise ExampleError(f"{path}: {_all_ground(nodes)}")
     keep = ~ground
     return {**_placed(np.stack(mats)[keep]), "kind": _kinds([n for n, k in zip(nodes, keep) if k]),
             "ground": _footprint(box[ground])}
