@@ -346,3 +346,16 @@ def test_a_gltf_scenes_own_ground_is_no_object(tmp_path):
     assert run("export", ROOT / "examples" / "landscape" / "landscape.toml", "--instanced", "-o", land).returncode == 0
     ex = read_example(land)
     assert sorted(set(ex.kind)) == ["grass", "leaves", "stones", "trunks"] and ex.records is not None
+
+
+def test_which_nodes_are_the_ground():
+    """A flat box over most of the scene is ground; as wide a box that is taller than wide (a great tree's
+    crown) is not, nor an instance (a point), nor a node of no bounds (NaN: an empty mesh)."""
+    from axialdeform.core.io.example_gltf import ground_nodes
+
+    nan = np.full((2, 3), np.nan)
+    boxes = np.array([[[-50, 0, -40], [50, 1, 40]],  # the ground
+                      [[-30, 0, -30], [30, 70, 30]],  # a crown as wide as much of the scene, taller than wide
+                      [[10, 0, 10], [10, 0, 10]],  # an instance
+                      nan, [[0, 0, 0], [1, 3, 1]]], np.float64)
+    assert ground_nodes(boxes).tolist() == [True, False, False, False, False]

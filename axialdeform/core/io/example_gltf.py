@@ -143,6 +143,16 @@ def _moved_box(lo: np.ndarray, hi: np.ndarray, m: np.ndarray) -> np.ndarray:
     return np.stack([w.min(axis=0), w.max(axis=0)])
 
 
+def _geometry_box(geometry, m: np.ndarray) -> np.ndarray:
+    """The world box (2, 3) of a trimesh geometry under ``m``; NaN where it has no finite bounds (an empty one)."""
+    b = getattr(geometry, "bounds", None)
+    try:
+        b = np.asarray(b, np.float64)
+    except (TypeError, ValueError):
+        return np.full((2, 3), np.nan)
+    return _moved_box(b[0], b[1], m) if b.shape == (2, 3) and np.isfinite(b).all() else np.full((2, 3), np.nan)
+
+
 def ground_nodes(boxes: np.ndarray) -> np.ndarray:
     """Which placed objects are the ground they stand on, (n,) bool, of their world boxes ``boxes`` (n, 2, 3)
     (lo, hi; an instance's a point, NaN where unknown): a box that covers at least :data:`GROUND_SHARE` of the
@@ -233,7 +243,7 @@ def gltf_objects(path: Path) -> dict:
     mats = [np.asarray(m, np.float64) for m, _ in placed]
     if not mats:
         raise ExampleError(f"{path}: no placed objects; expected nodes with a mesh")
-    box = np.stack([_moved_box(*np.asarray(scene.geometry[g].bounds, np.float64), m) for m, (_, g) in zip(mats, placed)])
+    box = np.stack([_geometry_box(scene.geometry.get(g), m) for m, (_, g) in zip(mats, placed)])
     ground = ground_nodes(box)
     if ground.all():
         raise ExampleError(f"{path}: {_all_ground(nodes)}")
