@@ -181,6 +181,9 @@ def read_example(source, window=None, *, layer: str | None = None, fit=None, bou
     bounds : (x0, z0, x1, z1) or None
         The terrain's ground: the default window is cut to it.
     """
+    if fit is not None and not (isinstance(source, (str, os.PathLike)) and Path(source).suffix.lower() == ".glb"):
+        name = str(source) if isinstance(source, (str, os.PathLike)) else "<params>"  # refused before it is read
+        raise ExampleError(f"{name}: fit: expected a .glb of placed objects, one node an object, to fit")
     if not isinstance(source, (str, os.PathLike)):
         data, name = _read_records(source, "<params>"), "<params>"
     else:
@@ -202,8 +205,6 @@ def read_example(source, window=None, *, layer: str | None = None, fit=None, bou
             data = _read_records(scene.layers[names.index(layer)].params, name)
         else:
             data = _read_records(read_params(path, allow_mesh_mismatch=True), name)
-    if fit is not None and not (isinstance(source, (str, os.PathLike)) and Path(source).suffix.lower() == ".glb"):
-        raise ExampleError(f"{name}: fit: expected a .glb of placed objects, one node an object, to fit")
     xz = data["xz"]
     if len(xz) == 0:
         raise ExampleError(f"{name}: no objects; expected at least one")

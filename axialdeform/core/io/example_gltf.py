@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from ..bounds import box_corners
 from ..errors import AxialDeformError, ExampleError
 from ..marks import standard_records, turn_and_up
 from ..record import join_record
@@ -74,18 +75,20 @@ def _placed_in(gltf, where: str, vertices: bool = False) -> dict:
         if node.mesh is None:
             continue
         if isinstance(inst, dict) and isinstance(inst.get("attributes"), dict):
-            attrs = inst["attributes"]
-            read = {k: read_accessor(gltf, blob, attrs[k], k, f"{where}: node {node.name or i}") for k in
-                    ("TRANSLATION", "ROTATION", "SCALE") if k in attrs}
-            n = max((len(v) for v in read.values()), default=0)
+            attrs, at = inst["attributes"], f"{where}: node {node.name or i}"
+            ours = all(k in attrs for k in ("_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5"))  # this library's records
+            if ours:  # every attribute read once, the instances' places among them
+                read, n = instance_columns(gltf, blob, attrs, at)
+            else:
+                read = {k: read_accessor(gltf, blob, attrs[k], k, at) for k in ("TRANSLATION", "ROTATION", "SCALE") if k in attrs}
+                n = max((len(v) for v in read.values()), default=0)
             t = read.get("TRANSLATION", np.zeros((n, 3)))
             r = read.get("ROTATION", np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)))
             sc = read.get("SCALE", np.ones((n, 3)))
             if not (len(t) == len(r) == len(sc) == n):
-                raise ExampleError(f"{where}: node {node.name or i}: EXT_mesh_gpu_instancing: expected its attributes "
-                                   "to have one value an instance each")
+                raise ExampleError(f"{at}: EXT_mesh_gpu_instancing: expected its attributes to have one value an instance each")
             mats.append(m[None] @ _trs(t, r, sc))
-            records.append(_records_of(gltf, blob, attrs, f"{where}: node {node.name or i}"))
+            records.append(_records_of(read, n, at) if ours else None)
             shapes += [None] * n
             boxes.append(np.repeat(mats[-1][:, None, :3, 3], 2, axis=1))  # an instance is never the ground
         else:
@@ -102,8 +105,8 @@ def _placed_in(gltf, where: str, vertices: bool = False) -> dict:
     ground = ground_nodes(box)
     if ground.all():
         raise ExampleError(f"{where}: {_all_ground(names)}")
-    if ground.any():  # the ground is a node of its own: its group of one left out
-        keep = [not (len(g) == 1 and ground[k]) for g, k in zip(mats, np.cumsum([0] + [len(g) for g in mats[:-1]]))]
+    if ground.any():  # the ground is a node of its own (an instance is a point, never the ground): its group left out
+        keep = ~ground[np.cumsum([0] + [len(g) for g in mats[:-1]])]
         mats, records = [g for g, c in zip(mats, keep) if c], [r for r, c in zip(records, keep) if c]
         names, shapes = [v for v, g in zip(names, ground) if not g], [v for v, g in zip(shapes, ground) if not g]
     rec = None
@@ -138,8 +141,7 @@ def _mesh_box(gltf, blob, node, m: np.ndarray, where: str) -> np.ndarray:
 
 def _moved_box(lo: np.ndarray, hi: np.ndarray, m: np.ndarray) -> np.ndarray:
     """The world box (2, 3) of the box ``lo``, ``hi`` (3,) moved by the matrix ``m`` (4, 4): its eight corners'."""
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-    w = corners @ m[:3, :3].T + m[:3, 3]
+    w = box_corners(lo, hi) @ m[:3, :3].T + m[:3, 3]
     return np.stack([w.min(axis=0), w.max(axis=0)])
 
 
@@ -200,13 +202,10 @@ def _world_vertices(gltf, blob, node, m: np.ndarray, where: str) -> np.ndarray:
     return v
 
 
-def _records_of(gltf, blob, attrs: dict, where: str) -> np.ndarray | None:
-    """The records of an instancing node's instances written by this library (``_AXIAL_D12``, ``_AXIAL_D34``,
-    ``_AXIAL_D5``, and ``_AXIAL_TWIST_TAPER``, ``_COLOR_0``, a tree's child axes' ``_AXIAL_A{k}_*`` where written:
-    :func:`~axialdeform.core.io.gltf_read.instance_records`); None without the offsets."""
-    if not all(k in attrs for k in ("_AXIAL_D12", "_AXIAL_D34", "_AXIAL_D5")):
-        return None
-    cols, n = instance_columns(gltf, blob, attrs, where)
+def _records_of(cols: dict, n: int, where: str) -> np.ndarray:
+    """The records of an instancing node's ``n`` instances written by this library, of its attributes ``cols``
+    (:func:`~axialdeform.core.io.gltf_read.instance_columns`: ``_AXIAL_D12``, ``_AXIAL_D34``, ``_AXIAL_D5``, and
+    ``_AXIAL_TWIST_TAPER``, ``_COLOR_0``, a tree's child axes' ``_AXIAL_A{k}_*`` where written)."""
     rec = instance_records(cols, n, where).astype(np.float64)
     axes = 1 + sum(1 for name in cols if re.fullmatch(r"_AXIAL_A[1-9][0-9]*_D12", str(name)))
     if axes > 1:  # a tree's child axes, between axis 0's offsets and its position

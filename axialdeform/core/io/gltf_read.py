@@ -105,7 +105,6 @@ def read_instanced_glb(path: str | os.PathLike, node: str | None = None, *, fall
     cols, n = instance_columns(gltf, blob, attrs, where)
     params = instance_records(cols, n, where)
     mesh_def = gltf.meshes[node.mesh]
-
     if not mesh_def.primitives:
         raise GltfError(f"{where}: mesh {node.mesh}: expected at least one primitive, found none")
     prim = mesh_def.primitives[0]
@@ -226,7 +225,8 @@ def instance_columns(gltf, blob, attrs: dict, where: str) -> tuple[dict, int]:
 
 
 def instance_records(cols: dict, n: int, where: str) -> np.ndarray:
-    """Axis 0's records ``(n, 16|19|22)`` float32 of instance attributes ``cols`` (:func:`instance_columns`):
+    """Axis 0's records ``(n, 16|19|22)`` float32 of instance attributes ``cols`` (:func:`instance_columns`'s,
+    each known one's type checked there):
     the offsets, ``TRANSLATION``, the angles (``_AXIAL_ANGLES``, else from ``ROTATION``), and ``SCALE``,
     ``_AXIAL_TWIST_TAPER``, ``_COLOR_0`` where written."""
     tint_name, tint_kind, tint_cols = GLTF_TINT_ATTRIBUTE
@@ -235,20 +235,16 @@ def instance_records(cols: dict, n: int, where: str) -> np.ndarray:
     params = np.zeros((n, WIDTHS[2 if tinted else 1 if extended else 0]), dtype=np.float32)
     if extended:
         params[:, SCALE] = 1.0
-        for name, (kind, idx) in {**EXTENDED_ATTRIBUTES, **({tint_name: (tint_kind, tint_cols)} if tinted else {})}.items():
+        for name, (_, idx) in {**EXTENDED_ATTRIBUTES, **({tint_name: (tint_kind, tint_cols)} if tinted else {})}.items():
             if name in cols:
-                if cols[name].shape[1] != COMPONENTS[kind]:
-                    raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
                 params[:, list(idx)] = cols[name]
         if "SCALE" in cols:
             sc = cols["SCALE"]
             if sc.shape[1] != 3 or not (sc == sc[:, :1]).all():
                 raise GltfError(f"{where}: SCALE: expected a uniform scale (VEC3 with three equal components) per instance")
             params[:, SCALE] = sc[:, 0]
-    for name, (kind, idx) in ATTRIBUTES.items():
+    for name, (_, idx) in ATTRIBUTES.items():
         if name in cols:
-            if cols[name].shape[1] != COMPONENTS[kind]:
-                raise GltfError(f"{where}: {name}: expected {kind}, found {cols[name].shape[1]} components")
             params[:, list(idx)] = cols[name]
     if "TRANSLATION" in cols:  # EXT_mesh_gpu_instancing: absent, the instances sit at the origin
         params[:, POSITION] = cols["TRANSLATION"]
